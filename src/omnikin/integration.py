@@ -1,0 +1,65 @@
+"""Pose integration kernels: body-frame increments -> poses, exactly or not.
+
+An increment ``(a, b, phi)`` is the body twist times the sample interval
+(constant over the interval) [m, m, rad]. With heading ``theta_k`` before it, the
+pose moves in the world by
+
+* ``exact``:    ``sinc(phi/2) R(theta_k + phi/2) (a, b)``: the SE(2) exponential
+  (:func:`omnikin.geometry.exp`), exact for constant twist;
+* ``midpoint``: ``R(theta_k + phi/2) (a, b)``: second order, drops the chord factor;
+* ``euler``:    ``R(theta_k) (a, b)``: first order, what most tools call odometry.
+
+and the heading by ``phi``. The three differ only in the factor and the heading
+used, so they share one vectorised kernel.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import OmnikinError
+from .geometry import sinc, wrap_angle
+
+METHODS = ("exact", "midpoint", "euler")
+
+
+def check_method(method: str) -> str:
+    if method not in METHODS:
+        raise OmnikinError(f"unknown integration method {method!r}; one of {list(METHODS)}")
+    return method
+
+
+def integrate(increments: np.ndarray, start=None, method: str = "exact") -> np.ndarray:
+    """Poses ``(..., N + 1, 3)`` reached from ``start`` by the increments ``(..., N, 3)``.
+
+    ``start`` ``(..., 3)`` defaults to the origin; the first output pose is ``start``.
+    Headings are wrapped to ``[-pi, pi)``.
+    """
+    check_method(method)
+    inc = np.asarray(increments, dtype=float)
+    if inc.ndim < 2 or inc.shape[-1] != 3:
+        raise OmnikinError(f"increments: expected shape (..., N, 3), got {inc.shape}")
+    lead = inc.shape[:-2]
+    n = inc.shape[-2]
+    start = np.zeros(lead + (3,)) if start is None else np.broadcast_to(np.asarray(start, float), lead + (3,))
+    heading = np.empty(lead + (n + 1,))
+    heading[..., 0] = start[..., 2]
+    np.cumsum(inc[..., 2], axis=-1, out=heading[..., 1:])
+    heading[..., 1:] += start[..., 2:3]
+    if method == "euler":
+        direction = heading[..., :-1]
+    else:
+        direction = heading[..., :-1] + 0.5 * inc[..., 2]
+    c, s = np.cos(direction), np.sin(direction)
+    a, b = inc[..., 0], inc[..., 1]
+    if method == "exact":
+        f = sinc(0.5 * inc[..., 2])
+        a, b = a * f, b * f
+    out = np.empty(lead + (n + 1, 3))
+    out[..., 0, :2] = start[..., :2]
+    np.cumsum(c * a - s * b, axis=-1, out=out[..., 1:, 0])
+    np.cumsum(s * a + c * b, axis=-1, out=out[..., 1:, 1])
+    out[..., 1:, 0] += start[..., 0:1]
+    out[..., 1:, 1] += start[..., 1:2]
+    out[..., 2] = wrap_angle(heading)
+    return out

@@ -1,0 +1,346 @@
+"""A robot = wheels mounted on a body: inverse and forward kinematics, analysis.
+
+Conventions (``docs/conventions.md``): body twist ``(vx, vy, omega)`` [m/s, m/s,
+rad/s] of the body origin in body axes; wheel quantities ``(..., n)`` in robot-file
+order over the *rolling* wheels (every wheel but castors, which are passive and
+unmeasured); steering angles ``(..., n_steer)`` [rad] over the steerable wheels in
+file order, relative to each wheel's mounting drive direction.
+
+Inverse kinematics stacks the wheels' rolling rows into the ``n x 3`` wheel
+Jacobian ``J`` (``omega = J twist``, :mod:`omnikin.wheels`). Fixed standard wheels
+add no-side-slip rows ``C_f twist = 0``: a twist that violates them is refused
+(or its violation returned on request).
+
+Forward kinematics solves the least-squares problem (conventions: unweighted, in
+rad/s, with rank tolerance) with the fixed wheels' constraints imposed exactly::
+
+    twist = N pinv(A N) b,   A = [J; S / r],   b = [omega; 0]
+
+where ``N`` spans the null space of ``C_f`` and ``S`` holds the sliding rows of
+centred steerable wheels at their measured steering angles, each divided by its
+radius so that it weighs like a wheel-speed reading of zero (a measured steering
+angle says that hub does not slide sideways). For a layout of Swedish wheels
+only, ``N = I`` and ``A = J``: ``twist = pinv(J) omega`` exactly as in the
+conventions. The residual ``b - A twist`` measures slip / model error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Optional, Sequence
+
+import numpy as np
+
+from ._arrays import as_components, require_finite
+from .errors import InfeasibleTwistError, OmnikinError, SingularLayoutError
+from .linalg import RANK_TOL, null_space, rank
+from .mobility import Configuration, Mobility, analyse, generic_configuration
+from .wheels import Wheel
+
+
+@dataclass(frozen=True)
+class IKResult:
+    """Inverse kinematics of one twist or a stack of twists.
+
+    ``wheel_speeds`` ``(..., n)`` [rad/s] over the rolling wheels;
+    ``steer_angles`` ``(..., n_steer)`` [rad]; ``violation`` ``(..., n_fixed)``
+    [m/s]: side-slip speed each fixed wheel would need; ``steer_limited``
+    ``(..., n_steer)`` bool: no alignment within the steering limits.
+    """
+
+    wheel_speeds: np.ndarray
+    steer_angles: np.ndarray
+    violation: np.ndarray
+    steer_limited: np.ndarray
+
+    @property
+    def feasible(self) -> np.ndarray:
+        """True where no fixed wheel slides and every steering is within limits."""
+        ok = np.all(np.abs(self.violation) <= 1e-9, axis=-1)
+        return ok & ~np.any(self.steer_limited, axis=-1)
+
+
+@dataclass(frozen=True)
+class FKResult:
+    """Forward kinematics: ``twist`` ``(..., 3)``, ``residual`` ``(..., n_rows)``.
+
+    The residual rows are the wheel readings [rad/s] followed by one row per
+    centred steerable wheel (its side slip over its radius [rad/s]).
+    """
+
+    twist: np.ndarray
+    residual: np.ndarray
+
+    @property
+    def residual_norm(self) -> np.ndarray:
+        return np.linalg.norm(self.residual, axis=-1)
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A wheeled mobile robot: a name and its wheels (see :mod:`omnikin.wheels`).
+
+    Construction validates the layout: unique wheel names, at least one rolling
+    wheel, some motion left by the fixed wheels, and every admissible motion
+    turning at least one wheel. A singular layout raises
+    :class:`~omnikin.errors.SingularLayoutError` saying why.
+    """
+
+    name: str
+    wheels: tuple[Wheel, ...]
+    description: str = ""
+    references: tuple[str, ...] = field(default_factory=tuple)
+
+    def __post_init__(self):
+        object.__setattr__(self, "wheels", tuple(self.wheels))
+        object.__setattr__(self, "references", tuple(self.references))
+        names = [w.name for w in self.wheels]
+        dup = {n for n in names if names.count(n) > 1}
+        if dup:
+            raise OmnikinError(f"robot {self.name!r}: duplicate wheel names {sorted(dup)}")
+        if not self.rolling:
+            raise SingularLayoutError(
+                f"robot {self.name!r}: no rolling wheel (castors alone cannot move or measure it)"
+            )
+        self._check_layout()
+
+    # --- wheel groups ---------------------------------------------------------
+    @cached_property
+    def rolling(self) -> tuple[Wheel, ...]:
+        """Wheels with a rolling row (all but castors), in file order."""
+        return tuple(w for w in self.wheels if not w.is_castor)
+
+    @cached_property
+    def steerable(self) -> tuple[Wheel, ...]:
+        return tuple(w for w in self.wheels if w.is_steerable)
+
+    @cached_property
+    def fixed(self) -> tuple[Wheel, ...]:
+        return tuple(w for w in self.wheels if w.is_fixed)
+
+    @property
+    def wheel_names(self) -> list[str]:
+        """Names of the rolling wheels: the order of every wheel-speed array."""
+        return [w.name for w in self.rolling]
+
+    @property
+    def steer_names(self) -> list[str]:
+        return [w.name for w in self.steerable]
+
+    def wheel(self, name: str) -> Wheel:
+        for w in self.wheels:
+            if w.name == name:
+                return w
+        raise OmnikinError(f"robot {self.name!r} has no wheel {name!r} (wheels: {[w.name for w in self.wheels]})")
+
+    # --- matrices ---------------------------------------------------------------
+    def _steer_array(self, steer) -> np.ndarray:
+        if steer is None:
+            return np.zeros(len(self.steerable))
+        arr = as_components(steer, len(self.steerable), "steer") if self.steerable else np.zeros((0,))
+        require_finite(arr, "steer")
+        return arr
+
+    def _steer_of(self, steer: np.ndarray) -> dict[str, np.ndarray]:
+        return {w.name: steer[..., i] for i, w in enumerate(self.steerable)}
+
+    def jacobian(self, steer=None, wheels: Optional[Sequence[str]] = None) -> np.ndarray:
+        """Wheel Jacobian ``(..., n, 3)``: ``omega = J twist`` [rad/s per twist]."""
+        steer = self._steer_array(steer)
+        by = self._steer_of(steer)
+        chosen = self.rolling if wheels is None else [self.wheel(n) for n in wheels]
+        rows = [w.rolling_row(by.get(w.name, 0.0)) for w in chosen]
+        shape = np.broadcast_shapes(*[r.shape for r in rows])
+        return np.stack([np.broadcast_to(r, shape) for r in rows], axis=-2)
+
+    @property
+    def ik_matrix(self) -> np.ndarray:
+        """``J`` at zero steering ``(n, 3)``."""
+        return self.jacobian()
+
+    @cached_property
+    def fixed_constraints(self) -> np.ndarray:
+        """Sliding rows ``C_f`` ``(n_fixed, 3)`` of the fixed standard wheels."""
+        return np.array([w.sliding_row() for w in self.fixed]).reshape(-1, 3)
+
+    @cached_property
+    def admissible_basis(self) -> np.ndarray:
+        """Orthonormal basis ``N`` ``(3, k)`` of twists the fixed wheels allow."""
+        return null_space(self.fixed_constraints, 3)
+
+    def _fk_rows(self, steer: np.ndarray, wheels: Optional[Sequence[str]]) -> np.ndarray:
+        """Stacked ``A = [J; S/r]`` ``(..., n_rows, 3)`` for the chosen wheels."""
+        jac = self.jacobian(steer, wheels)
+        chosen = {w.name for w in (self.rolling if wheels is None else [self.wheel(n) for n in wheels])}
+        by = self._steer_of(steer)
+        extra = [w.sliding_row(by[w.name]) / w.radius for w in self.steerable
+                 if w.is_centred_steerable and w.name in chosen]
+        if not extra:
+            return jac
+        shape = np.broadcast_shapes(jac.shape[:-2], *[e.shape[:-1] for e in extra])
+        extra = np.stack([np.broadcast_to(e, shape + (3,)) for e in extra], axis=-2)
+        return np.concatenate([np.broadcast_to(jac, shape + jac.shape[-2:]), extra], axis=-2)
+
+    def fk_matrix(self, steer=None, wheels: Optional[Sequence[str]] = None) -> np.ndarray:
+        """Forward-kinematics operator ``(..., 3, n_rows)``: ``twist = F [omega; 0]``."""
+        a = self._fk_rows(self._steer_array(steer), wheels)
+        n = self.admissible_basis
+        return n @ np.linalg.pinv(a @ n, rcond=RANK_TOL)
+
+    @cached_property
+    def _fk_constant(self) -> np.ndarray:
+        return self.fk_matrix()
+
+    # --- analysis ------------------------------------------------------------------
+    @cached_property
+    def generic_configuration(self) -> Configuration:
+        return generic_configuration(self.wheels)
+
+    @cached_property
+    def mobility(self) -> Mobility:
+        """Rank, Campion type, holonomy and conditioning (:mod:`omnikin.mobility`)."""
+        return analyse(self.wheels, self.generic_configuration)
+
+    def _check_layout(self) -> None:
+        config = self.generic_configuration
+        if config.admissible.shape[1] == 0:
+            names = [w.name for w in self.fixed] + [w.name for w in self.steerable if w.is_centred_steerable]
+            raise SingularLayoutError(
+                f"robot {self.name!r}: immobile layout: the no-side-slip constraints of wheels "
+                f"{names} admit no motion (degree of mobility 0)")
+        self._check_observable(None, config)
+
+    def _check_observable(self, wheels: Optional[Sequence[str]], config: Configuration) -> None:
+        """Every admissible motion must turn at least one of ``wheels``."""
+        a = self._fk_rows(config.steer, wheels)
+        basis = config.admissible
+        m = a @ basis
+        if rank(m) == basis.shape[1]:
+            return
+        z = np.linalg.svd(m)[2][-1]
+        eta = basis @ z
+        used = self.wheel_names if wheels is None else list(wheels)
+        if abs(eta[2]) > 1e-9:
+            cx, cy = -eta[1] / eta[2], eta[0] / eta[2]
+            why = (f"a rotation about the point ({cx:.6g}, {cy:.6g}) m turns none of them: "
+                   f"every drive line passes through it")
+        else:
+            d = eta[:2] / np.hypot(eta[0], eta[1])
+            why = (f"a translation along ({d[0]:.6g}, {d[1]:.6g}) turns none of them: "
+                   f"every rolling direction is perpendicular to it")
+        raise SingularLayoutError(
+            f"robot {self.name!r}: singular layout: wheels {used} cannot realise or measure "
+            f"every motion the robot can make; {why} (wheel Jacobian rank {rank(m)} < {basis.shape[1]})")
+
+    def check_observable(self, wheels: Sequence[str]) -> None:
+        """Raise unless the wheels ``wheels`` (e.g. the encoded ones) observe every motion."""
+        self._check_observable(list(wheels), self.generic_configuration)
+
+    # --- kinematics ------------------------------------------------------------------
+    def body_twist(self, velocity, heading) -> np.ndarray:
+        """World-frame rates ``(xdot, ydot, thetadot)`` at ``heading`` -> body twist."""
+        v = as_components(velocity, 3, "velocity")
+        th = np.asarray(heading, dtype=float)
+        c, s = np.cos(th), np.sin(th)
+        out = np.empty(np.broadcast_shapes(v.shape, th.shape + (3,)))
+        out[..., 0] = c * v[..., 0] + s * v[..., 1]
+        out[..., 1] = -s * v[..., 0] + c * v[..., 1]
+        out[..., 2] = v[..., 2]
+        return out
+
+    def ik(self, twist, *, heading=None, steer_hint=None, on_infeasible: str = "raise") -> IKResult:
+        """Inverse kinematics: body twist ``(..., 3)`` -> wheel speeds and steering.
+
+        With ``heading`` [rad] the input is the world-frame velocity
+        ``(xdot, ydot, thetadot)``. Steerable wheels are aligned with the motion of
+        their hub (off-centred ones at their steady swivel angle, where
+        ``n . v_p = offset * omega``), choosing the branch within the steering limits
+        closest to ``steer_hint`` (default: zero). ``on_infeasible``: ``"raise"``
+        (default) raises :class:`InfeasibleTwistError` naming the wheel and the
+        side-slip speed; ``"return"`` reports it in ``IKResult.violation``.
+        """
+        if on_infeasible not in ("raise", "return"):
+            raise OmnikinError(f"on_infeasible must be 'raise' or 'return', got {on_infeasible!r}")
+        t = as_components(twist, 3, "twist")
+        require_finite(t, "twist")
+        if heading is not None:
+            require_finite(np.asarray(heading, dtype=float), "heading")
+            t = self.body_twist(t, heading)
+        hint = self._steer_array(steer_hint)
+        steer, limited = self._steer_for(t, hint)
+        speeds = np.einsum("...ij,...j->...i", self.jacobian(steer), t)
+        violation = t @ self.fixed_constraints.T
+        result = IKResult(speeds, steer, violation, limited)
+        if on_infeasible == "raise" and not np.all(result.feasible):
+            raise InfeasibleTwistError(self._infeasible_message(t, violation, limited))
+        return result
+
+    def _infeasible_message(self, t, violation, limited) -> str:
+        scale = 1e-9
+        bad = np.argwhere(np.abs(violation) > scale)
+        if bad.size:
+            idx = tuple(bad[0][:-1])
+            w = self.fixed[int(bad[0][-1])]
+            return (f"robot {self.name!r}: twist {np.round(t[idx], 9).tolist()} is infeasible: fixed wheel "
+                    f"{w.name!r} would slide sideways at {violation[tuple(bad[0])]:.6g} m/s "
+                    f"(pass on_infeasible='return' to get the violation)")
+        idx = np.argwhere(limited)[0]
+        w = self.steerable[int(idx[-1])]
+        return (f"robot {self.name!r}: twist {np.round(t[tuple(idx[:-1])], 9).tolist()} needs wheel {w.name!r} "
+                f"steered outside its limits [{np.degrees(w.steer.lower):.6g}, {np.degrees(w.steer.upper):.6g}] deg")
+
+    def _steer_for(self, t: np.ndarray, hint: np.ndarray):
+        """Steering angles ``(..., n_steer)`` aligning each steerable wheel with the motion."""
+        shape = t.shape[:-1] + (len(self.steerable),)
+        steer = np.zeros(shape)
+        limited = np.zeros(shape, dtype=bool)
+        for i, w in enumerate(self.steerable):
+            steer[..., i], limited[..., i] = w.align(t, np.broadcast_to(hint[..., i], t.shape[:-1]))
+        return steer, limited
+
+    def wheel_speeds(self, twist) -> np.ndarray:
+        """Fast inverse kinematics ``(..., n)`` [rad/s] for layouts without steering."""
+        if self.steerable:
+            return self.ik(twist).wheel_speeds
+        return as_components(twist, 3, "twist") @ self.ik_matrix.T
+
+    def fk(self, wheel_speeds, steer=None, wheels: Optional[Sequence[str]] = None) -> FKResult:
+        """Forward kinematics: wheel speeds ``(..., n)`` [rad/s] -> body twist.
+
+        ``steer`` ``(..., n_steer)`` [rad] is required when the robot has steerable
+        wheels. ``wheels`` names a subset of rolling wheels (e.g. the encoded ones)
+        that ``wheel_speeds`` refers to; default all rolling wheels.
+        """
+        names = self.wheel_names if wheels is None else list(wheels)
+        w = as_components(wheel_speeds, len(names), "wheel_speeds")
+        require_finite(w, "wheel_speeds")
+        if self.steerable and steer is None:
+            raise OmnikinError(
+                f"robot {self.name!r}: steerable wheels {self.steer_names} need their steering angles (steer=...)")
+        steer = self._steer_array(steer)
+        a = self._fk_rows(steer, wheels)
+        n_extra = a.shape[-2] - len(names)
+        b = np.concatenate([w, np.zeros(w.shape[:-1] + (n_extra,))], axis=-1) if n_extra else w
+        if not self.steerable and wheels is None:
+            f = self._fk_constant
+        else:
+            f = self.admissible_basis @ np.linalg.pinv(a @ self.admissible_basis, rcond=RANK_TOL)
+        twist = np.einsum("...ij,...j->...i", f, b)
+        residual = b - np.einsum("...ij,...j->...i", a, twist)
+        return FKResult(twist, residual)
+
+    def roller_speeds(self, twist) -> np.ndarray:
+        """Roller surface speeds ``(..., n_swedish)`` [m/s] of the Swedish wheels.
+
+        Positive along ``n = (-sin(delta+gamma), cos(delta+gamma))``; divide by the
+        roller radius for its spin rate [rad/s].
+        """
+        t = as_components(twist, 3, "twist")
+        rows = np.array([w.roller_row() for w in self.wheels if w.is_swedish]).reshape(-1, 3)
+        return t @ rows.T
+
+    @property
+    def swedish_names(self) -> list[str]:
+        return [w.name for w in self.wheels if w.is_swedish]
+

@@ -1,0 +1,327 @@
+"""Wheel odometry: a streaming estimator and batch odometry over arrays.
+
+Per sample (``docs/conventions.md``): encoder ticks -> wheel angle increments
+(:mod:`omnikin.encoders`) -> body increment by forward kinematics
+(:meth:`omnikin.model.Robot.fk`, constant over the sample) -> pose update by the
+SE(2) exponential (:mod:`omnikin.integration`; ``euler`` and ``midpoint`` are there
+for comparison only). Odometry uses the rolling wheels that have an ``encoder``
+in the robot file; with steerable wheels the steering angles of each sample are
+needed too, and each interval uses the mean of its two end angles.
+
+The streaming :class:`Odometry` is the only mutable state of the core. For a
+layout without steerable wheels its update is plain Python float arithmetic on a
+precomputed forward-kinematics matrix (no NumPy call on the hot path).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from functools import cached_property
+from operator import mul
+from typing import Optional
+
+import numpy as np
+
+from ._arrays import as_components
+from .encoders import check_bits, jump_limits, ticks_to_angle_increments, wrap_ticks
+from .errors import OdometryInputError, OmnikinError
+from .geometry import wrap_angle
+from .integration import check_method, integrate
+from .model import Robot
+
+
+def encoded_wheels(robot: Robot):
+    """The rolling wheels with an encoder, in file order; checks they observe all motion."""
+    wheels = [w for w in robot.rolling if w.encoder is not None]
+    if not wheels:
+        raise OmnikinError(
+            f"robot {robot.name!r}: no wheel has an 'encoder' entry; odometry from ticks needs "
+            f"encoder.ticks_per_rev on the measured wheels")
+    robot.check_observable([w.name for w in wheels])
+    return wheels
+
+
+def _mid_steer(steer: Optional[np.ndarray]) -> Optional[np.ndarray]:
+    """Interval steering: circular mean of consecutive samples ``(..., N-1, n_steer)``."""
+    if steer is None:
+        return None
+    return steer[..., :-1, :] + 0.5 * wrap_angle(np.diff(steer, axis=-2))
+
+
+@dataclass(frozen=True)
+class OdometryResult:
+    """Batch odometry: ``poses`` ``(..., N, 3)`` at the times ``t`` ``(..., N)``.
+
+    ``increments`` ``(..., N-1, 3)`` are the body displacements of each interval;
+    ``twists`` their mean twists; ``residual`` ``(..., N-1, n_rows)`` the forward
+    kinematics residual [rad/s] (zero for a square, full-rank layout).
+    """
+
+    t: np.ndarray
+    poses: np.ndarray
+    increments: np.ndarray
+    _angles: np.ndarray
+    _rows: np.ndarray
+
+    @cached_property
+    def twists(self) -> np.ndarray:
+        return self.increments / np.diff(self.t, axis=-1)[..., None]
+
+    @cached_property
+    def residual(self) -> np.ndarray:
+        n = self._angles.shape[-1]
+        pred = np.einsum("...ij,...j->...i", self._rows, self.increments)
+        b = np.zeros(pred.shape)
+        b[..., :n] = self._angles
+        return (b - pred) / np.diff(self.t, axis=-1)[..., None]
+
+
+def batch_odometry(robot: Robot, t, ticks, *, steer=None, method: str = "exact",
+                   counter_bits: int | None = None, start=None, max_jump=None) -> OdometryResult:
+    """Odometry of whole logs: ``ticks`` ``(..., N, n_enc)`` at times ``t`` ``(..., N)``.
+
+    Leading axes (trials) broadcast. ``steer`` ``(..., N, n_steer)`` [rad] is needed
+    for robots with steerable wheels. The first sample is the zero of the ticks and
+    sits at ``start`` (default origin).
+    """
+    wheels = encoded_wheels(robot)
+    angles = ticks_to_angle_increments(wheels, t, ticks, counter_bits, max_jump)
+    return _integrate_angles(robot, wheels, np.asarray(t, dtype=float), angles, steer, method, start)
+
+
+def batch_odometry_from_angles(robot: Robot, t, angles, *, steer=None, method: str = "exact",
+                               start=None) -> OdometryResult:
+    """Like :func:`batch_odometry` but from wheel angles ``(..., N, n_enc)`` [rad]."""
+    wheels = encoded_wheels(robot)
+    a = np.asarray(angles, dtype=float)
+    if a.ndim < 2 or a.shape[-1] != len(wheels):
+        raise OdometryInputError(
+            f"angles: expected shape (..., N, {len(wheels)}) for wheels {[w.name for w in wheels]}, got {a.shape}")
+    tt = np.asarray(t, dtype=float)
+    if not np.all(np.isfinite(a)) or not np.all(np.isfinite(tt)):
+        raise OdometryInputError("angles/t: non-finite values")
+    if np.any(np.diff(tt, axis=-1) <= 0):
+        raise OdometryInputError("t: timestamps must increase strictly")
+    return _integrate_angles(robot, wheels, tt, np.diff(a, axis=-2), steer, method, start)
+
+
+def _integrate_angles(robot, wheels, t, dangle, steer, method, start) -> OdometryResult:
+    check_method(method)
+    names = [w.name for w in wheels]
+    if robot.steerable:
+        if steer is None:
+            raise OmnikinError(f"robot {robot.name!r}: steerable wheels {robot.steer_names} need steering "
+                               f"angles (steer, shape (..., N, {len(robot.steerable)}))")
+        s = as_components(steer, len(robot.steerable), "steer")
+        if s.shape[-2] != dangle.shape[-2] + 1:
+            raise OdometryInputError(f"steer: expected {dangle.shape[-2] + 1} samples, got shape {s.shape}")
+        if not np.all(np.isfinite(s)):
+            raise OdometryInputError("steer: non-finite steering angle")
+        mid = _mid_steer(s)
+        f = robot.fk_matrix(mid, names)
+        rows = robot._fk_rows(mid, names)
+        n_extra = f.shape[-1] - len(names)
+        b = np.concatenate([dangle, np.zeros(dangle.shape[:-1] + (n_extra,))], axis=-1) if n_extra else dangle
+        inc = np.einsum("...ij,...j->...i", f, b)
+    else:
+        f = robot.fk_matrix(None, names)
+        rows = robot._fk_rows(np.zeros(0), names)
+        inc = dangle @ f.T
+    poses = integrate(inc, start, method)
+    return OdometryResult(t, poses, inc, dangle, rows)
+
+
+class Odometry:
+    """Streaming odometry fed encoder ticks (or wheel angles) and timestamps.
+
+    >>> odo = Odometry(robot)                       # doctest: +SKIP
+    >>> odo.update(0.00, [0, 0, 0]); odo.update(0.01, [12, -3, 7])   # doctest: +SKIP
+
+    The first sample is the zero (pose stays at ``start``). Each later sample
+    must come later in time; a sample repeating the previous timestamp *and*
+    readings is a duplicate: skipped, counted in ``duplicates`` and warned about
+    once. Anything else that cannot be integrated raises
+    :class:`OdometryInputError` and leaves the state unchanged.
+
+    Attributes after each update: ``pose`` (x, y, theta) [m, m, rad, theta in
+    [-pi, pi)], ``twist`` (mean body twist over the last interval), ``residual``
+    (forward-kinematics residual [rad/s], zeros for square layouts), ``t``.
+    """
+
+    def __init__(self, robot: Robot, *, method: str = "exact", counter_bits: int | None = None,
+                 start=(0.0, 0.0, 0.0), max_jump=None):
+        self.robot = robot
+        self.method = check_method(method)
+        self.bits = check_bits(counter_bits)
+        self._wheels = encoded_wheels(robot)
+        self.wheel_names = [w.name for w in self._wheels]
+        self._n = len(self._wheels)
+        self._scale = [w.encoder.rad_per_tick for w in self._wheels]
+        self._max_jump = max_jump
+        self._full = 2 ** self.bits if self.bits is not None else None
+        self._steerable = bool(robot.steerable)
+        if not self._steerable:
+            f = robot.fk_matrix(None, self.wheel_names)
+            self._f = [[float(v) * s for v, s in zip(row, self._scale)] for row in f]
+            rows = robot._fk_rows(np.zeros(0), self.wheel_names)
+            self._redundant = rows.shape[0] > 3 or np.linalg.matrix_rank(rows) < rows.shape[0]
+            self._rows = rows
+        self._rates = [(w.max_speed / abs(w.encoder.rad_per_tick)) if w.max_speed else None for w in self._wheels]
+        self.reset(start)
+
+    def reset(self, pose=(0.0, 0.0, 0.0)) -> None:
+        """Forget the previous sample; the next one is the new zero, at ``pose``."""
+        p = as_components(pose, 3, "pose")
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise OmnikinError(f"pose: expected 3 finite numbers, got {pose!r}")
+        self._x, self._y, self._th = float(p[0]), float(p[1]), float(wrap_angle(p[2]))
+        self._t = None
+        self._ticks = None
+        self._steer = None
+        self.twist = (0.0, 0.0, 0.0)
+        self.residual = None
+        self.samples = 0
+        self.duplicates = 0
+        self._warned = False
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        return (self._x, self._y, self._th)
+
+    @property
+    def t(self) -> Optional[float]:
+        return self._t
+
+    def update(self, t: float, ticks, steer=None) -> tuple[float, float, float]:
+        """Feed one sample: time [s], raw counter readings (encoded wheels, file order)."""
+        if len(ticks) != self._n:
+            raise OdometryInputError(
+                f"sample {self.samples}: expected {self._n} tick readings for wheels {self.wheel_names}, got {len(ticks)}")
+        if self._ticks is None:
+            return self._first(t, ticks, steer)
+        dt = t - self._t
+        if not dt > 0.0:
+            return self._not_later(t, dt, ticks, steer)
+        deltas = [a - b for a, b in zip(ticks, self._ticks)]
+        if self._full is not None:
+            full = self._full
+            deltas = [(d + full // 2) % full - full // 2 for d in deltas]
+        self._check(deltas, dt, ticks)
+        self._ticks = list(ticks)
+        if self._steerable:
+            return self._slow(t, dt, [d * s for d, s in zip(deltas, self._scale)], steer)
+        f0, f1, f2 = self._f
+        a = sum(map(mul, f0, deltas))
+        b = sum(map(mul, f1, deltas))
+        phi = sum(map(mul, f2, deltas))
+        if self._redundant:
+            self._set_residual([d * s for d, s in zip(deltas, self._scale)], (a, b, phi), dt)
+        return self._advance(t, dt, a, b, phi)
+
+    def update_angles(self, t: float, angles, steer=None) -> tuple[float, float, float]:
+        """Feed one sample of wheel angles [rad] (encoded wheels, file order)."""
+        ticks = [a / s for a, s in zip(angles, self._scale)]
+        if self._full is not None:
+            raise OmnikinError("update_angles works without counter wrap-around: create Odometry with counter_bits=None")
+        return self.update(t, ticks, steer)
+
+    # --- internals -----------------------------------------------------------------
+    def _advance(self, t, dt, a, b, phi):
+        th = self._th
+        if self.method == "euler":
+            h = th
+            k = 1.0
+        else:
+            h = th + 0.5 * phi
+            k = 1.0
+            if self.method == "exact":
+                x = 0.5 * phi
+                k = 1.0 - x * x / 6.0 if -1e-4 < x < 1e-4 else math.sin(x) / x
+        c, s = math.cos(h), math.sin(h)
+        self._x += k * (c * a - s * b)
+        self._y += k * (s * a + c * b)
+        th += phi
+        if th >= math.pi or th < -math.pi:
+            th = (th + math.pi) % (2.0 * math.pi) - math.pi
+        self._th = th
+        self._t = t
+        self.twist = (a / dt, b / dt, phi / dt)
+        self.samples += 1
+        return (self._x, self._y, th)
+
+    def _first(self, t, ticks, steer):
+        values = [float(v) for v in ticks]
+        if not math.isfinite(float(t)) or not all(math.isfinite(v) for v in values):
+            raise OdometryInputError(f"sample 0: non-finite time or tick reading (t={t!r}, ticks={list(ticks)!r})")
+        if self._full is not None and not all(-self._full // 2 <= v < self._full for v in values):
+            raise OdometryInputError(f"sample 0: tick reading outside the range of a {self.bits}-bit counter: {list(ticks)}")
+        self._steer = self._check_steer(steer)
+        self._t = float(t)
+        self._ticks = list(ticks)
+        self.residual = [0.0] * self._n
+        self.samples = 1
+        return self.pose
+
+    def _not_later(self, t, dt, ticks, steer):
+        if dt == 0.0 and list(ticks) == self._ticks:
+            self.duplicates += 1
+            if not self._warned:
+                warnings.warn(f"odometry: duplicate sample at t={t!r} skipped (counted in .duplicates)",
+                              RuntimeWarning, stacklevel=3)
+                self._warned = True
+            return self.pose
+        if dt != dt:
+            raise OdometryInputError(f"sample {self.samples}: non-finite timestamp {t!r}")
+        what = "repeats" if dt == 0.0 else "goes back from"
+        raise OdometryInputError(
+            f"sample {self.samples}: timestamp {t!r} {what} the previous one {self._t!r} with different readings")
+
+    def _check(self, deltas, dt, ticks):
+        for j, d in enumerate(deltas):
+            if d != d or d in (math.inf, -math.inf):
+                raise OdometryInputError(
+                    f"sample {self.samples}: non-finite tick reading {ticks[j]!r}, wheel {self.wheel_names[j]!r}")
+            if self._full is not None:
+                if not -self._full // 2 <= ticks[j] < self._full:
+                    raise OdometryInputError(f"sample {self.samples}: tick reading {ticks[j]!r} outside the range "
+                                             f"of a {self.bits}-bit counter, wheel {self.wheel_names[j]!r}")
+                if d == -self._full // 2:
+                    self._jump(j, d)
+            limit = self._max_jump
+            if limit is None and self._rates[j] is not None:
+                limit = 1.5 * self._rates[j] * dt + 2.0
+            if limit is not None and abs(d) > limit:
+                self._jump(j, d)
+
+    def _jump(self, j, d):
+        raise OdometryInputError(
+            f"sample {self.samples}: impossible jump of {d} ticks, wheel {self.wheel_names[j]!r} "
+            f"(faster than the wheel can turn, or half the counter range)")
+
+    def _check_steer(self, steer):
+        if not self._steerable:
+            if steer is not None:
+                raise OmnikinError(f"robot {self.robot.name!r} has no steerable wheel: do not pass steer")
+            return None
+        if steer is None:
+            raise OmnikinError(f"robot {self.robot.name!r}: steerable wheels {self.robot.steer_names} need "
+                               f"their steering angles (steer=...)")
+        s = as_components(steer, len(self.robot.steerable), "steer")
+        if not np.all(np.isfinite(s)):
+            raise OdometryInputError(f"sample {self.samples}: non-finite steering angle {list(s)}")
+        return s
+
+    def _slow(self, t, dt, dangle, steer):
+        s = self._check_steer(steer)
+        mid = self._steer + 0.5 * wrap_angle(s - self._steer)
+        fk = self.robot.fk(np.array(dangle), mid, self.wheel_names)
+        self._steer = s
+        self.residual = list(fk.residual / dt)
+        a, b, phi = (float(v) for v in fk.twist)
+        return self._advance(t, dt, a, b, phi)
+
+    def _set_residual(self, dangle, inc, dt):
+        pred = self._rows @ np.array(inc)
+        self.residual = list((np.array(dangle) - pred) / dt)

@@ -1,0 +1,30 @@
+"""Robots from the literature, shipped as schema-1 robot files with their citation.
+
+Load one with :func:`omnikin.io.robot_file.load_robot` (``load_robot("tomasi-omni3")``).
+This package holds only the data files and their names.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+PRESET_DIR = Path(__file__).resolve().parent
+
+PRESET_NAMES = (
+    "tomasi-omni3",
+    "garcia-sillas-omni3",
+    "villasenor-omni3",
+    "diff-drive",
+    "ackermann",
+    "synchro",
+    "xr4000",
+    "mecanum4",
+    "omni4",
+)
+
+
+def preset_path(name: str) -> Path:
+    """Path of the robot file of preset ``name``."""
+    if name not in PRESET_NAMES:
+        raise KeyError(f"unknown preset {name!r}; presets: {', '.join(PRESET_NAMES)}")
+    return PRESET_DIR / f"{name}.yaml"

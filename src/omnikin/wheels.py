@@ -1,0 +1,204 @@
+"""One wheel's kinematic constraints; a wheel knows nothing of robots.
+
+Frames and signs follow ``docs/conventions.md``. A wheel sits at the point
+``p = (x, y)`` of the body frame [m] (for steerable wheels and castors: the point
+where the steering axis meets the floor), has the drive direction
+``u = (cos delta, sin delta)`` (``delta`` = mounting ``drive`` plus steering angle)
+and rolling radius ``r`` [m]. With the body twist ``(vx, vy, omega)`` the floor
+point under ``p`` moves with ``v_p = (vx - omega y, vy + omega x)``.
+
+Rows implemented here (each a ``(..., 3)`` array acting on the twist):
+
+* rolling row, Swedish wheel of roller angle ``gamma`` (omni: 0), and with
+  ``gamma = 0`` every other wheel (Muir & Neuman 1987; Campion, Bastin and
+  d'Andrea-Novel 1996, eq. 2-7)::
+
+      omega_i = [cos(a) vx + sin(a) vy + (x sin(a) - y cos(a)) omega] / (r cos gamma),
+      a = delta + gamma
+
+  It says that the contact cannot slip along the axis of the roller on the floor.
+  For a castor or off-centred steerable wheel whose contact trails ``p`` by
+  ``offset`` along ``-u``, the same row at ``p`` holds whatever the steering rate
+  (the swivel moves the contact along ``u``'s normal only).
+* sliding row, standard and centred-steerable wheels: no side slip,
+  ``(-sin delta, cos delta) . v_p = 0`` i.e.
+  ``[-sin delta, cos delta, x cos delta + y sin delta] . twist = 0`` [m/s].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from .errors import InfeasibleTwistError
+
+WHEEL_TYPES = ("omni", "mecanum", "swedish", "standard", "steerable", "castor")
+SWEDISH_TYPES = ("omni", "mecanum", "swedish")
+
+
+@dataclass(frozen=True)
+class Encoder:
+    """Incremental encoder on a wheel: ``angle = 2 pi ticks / (ticks_per_rev gear_ratio)``."""
+
+    ticks_per_rev: float
+    gear_ratio: float = 1.0
+    invert: bool = False
+
+    @property
+    def rad_per_tick(self) -> float:
+        """Wheel angle per tick [rad], negative when ``invert``."""
+        sign = -1.0 if self.invert else 1.0
+        return sign * 2.0 * np.pi / (self.ticks_per_rev * self.gear_ratio)
+
+
+@dataclass(frozen=True)
+class Steer:
+    """Steering of a steerable wheel or castor.
+
+    ``offset`` [m]: distance by which the contact trails the steering axis against
+    the drive direction (0: centred). ``lower``/``upper`` [rad]: steering limits
+    relative to the mounting drive direction.
+    """
+
+    offset: float = 0.0
+    lower: float = -np.pi
+    upper: float = np.pi
+
+
+@dataclass(frozen=True)
+class Wheel:
+    """A wheel mounted on the body (SI units, radians).
+
+    ``drive`` is the drive direction ``delta`` at zero steering; ``roller`` is the
+    roller angle ``gamma`` of Swedish wheels (0 otherwise).
+    """
+
+    name: str
+    type: str
+    x: float
+    y: float
+    drive: float
+    radius: float
+    roller: float = 0.0
+    encoder: Optional[Encoder] = None
+    max_speed: Optional[float] = None
+    steer: Optional[Steer] = None
+
+    # --- classification ---------------------------------------------------
+    @property
+    def is_swedish(self) -> bool:
+        return self.type in SWEDISH_TYPES
+
+    @property
+    def is_castor(self) -> bool:
+        return self.type == "castor"
+
+    @property
+    def is_steerable(self) -> bool:
+        """Actively steered (steering angle is a command / measurement)."""
+        return self.type == "steerable"
+
+    @property
+    def is_fixed(self) -> bool:
+        """Standard wheel with a fixed axle: its sliding row constrains the body."""
+        return self.type == "standard"
+
+    @property
+    def is_centred_steerable(self) -> bool:
+        """Steerable wheel whose steering axis passes through the contact point."""
+        return self.is_steerable and (self.steer is None or self.steer.offset == 0.0)
+
+    @property
+    def offset(self) -> float:
+        """Trail of the contact behind the steering axis [m] (0 without ``steer``)."""
+        return self.steer.offset if self.steer is not None else 0.0
+
+    # --- geometry -----------------------------------------------------------
+    def direction(self, steer=0.0):
+        """Drive direction ``delta`` [rad] at steering angle ``steer`` [rad]."""
+        return self.drive + np.asarray(steer, dtype=float)
+
+    def contact_point(self, steer=0.0) -> np.ndarray:
+        """Floor contact ``(..., 2)`` [m, body frame]: ``p - offset u(delta)``."""
+        delta = self.direction(steer)
+        out = np.empty(np.shape(delta) + (2,))
+        out[..., 0] = self.x - self.offset * np.cos(delta)
+        out[..., 1] = self.y - self.offset * np.sin(delta)
+        return out
+
+    def rolling_row(self, steer=0.0) -> np.ndarray:
+        """Row ``(..., 3)`` mapping the body twist to this wheel's speed [rad/s]."""
+        a = self.direction(steer) + self.roller
+        ca, sa = np.cos(a), np.sin(a)
+        out = np.empty(np.shape(a) + (3,))
+        scale = 1.0 / (self.radius * np.cos(self.roller))
+        out[..., 0] = ca * scale
+        out[..., 1] = sa * scale
+        out[..., 2] = (self.x * sa - self.y * ca) * scale
+        return out
+
+    def sliding_row(self, steer=0.0) -> np.ndarray:
+        """No-side-slip row ``(..., 3)`` [m/s per twist] of standard/steerable wheels."""
+        delta = self.direction(steer)
+        cd, sd = np.cos(delta), np.sin(delta)
+        out = np.empty(np.shape(delta) + (3,))
+        out[..., 0] = -sd
+        out[..., 1] = cd
+        out[..., 2] = self.x * cd + self.y * sd
+        return out
+
+    def roller_row(self) -> np.ndarray:
+        """Row ``(3,)`` mapping the twist to the roller surface speed [m/s].
+
+        The rollers move the hub along ``n = (-sin a, cos a)``, the normal of the
+        roller axis; with the hub velocity ``v_p = r omega_i u + s n`` the roller
+        speed is ``s = n . v_p + r omega_i sin(gamma)``.
+        """
+        a = self.drive + self.roller
+        n = np.array([-np.sin(a), np.cos(a), self.x * np.cos(a) + self.y * np.sin(a)])
+        return n + self.radius * np.sin(self.roller) * self.rolling_row()
+
+    def hub_velocity(self, twist) -> np.ndarray:
+        """Velocity ``(..., 2)`` [m/s, body axes] of the floor point under ``p``."""
+        t = np.asarray(twist, dtype=float)
+        out = np.empty(t.shape[:-1] + (2,))
+        out[..., 0] = t[..., 0] - t[..., 2] * self.y
+        out[..., 1] = t[..., 1] + t[..., 2] * self.x
+        return out
+
+    def align(self, twist, hint=0.0):
+        """Steering angle [rad] aligning this wheel with the motion, and a limit flag.
+
+        Centred wheels align ``u`` with the hub velocity ``v_p``; off-centred ones
+        (trail ``d``) take the steady swivel angle where no steering rate is needed,
+        ``n . v_p = d omega``, i.e. ``delta = psi - asin(d omega / |v_p|)`` (forward)
+        or ``psi + pi + asin(d omega / |v_p|)`` (reversed), ``psi`` the direction of
+        ``v_p``. Of the branches within the steering limits the one closest to
+        ``hint`` is taken; where the hub is still the angle stays at ``hint``.
+        Returns ``(angle, limited)``: ``limited`` is True where neither branch fits.
+        """
+        t = np.asarray(twist, dtype=float)
+        hint = np.broadcast_to(np.asarray(hint, dtype=float), t.shape[:-1])
+        v = self.hub_velocity(t)
+        speed = np.hypot(v[..., 0], v[..., 1])
+        psi = np.arctan2(v[..., 1], v[..., 0])
+        moving = speed > 1e-12
+        k = np.where(moving, self.offset * t[..., 2] / np.where(moving, speed, 1.0), 0.0)
+        if np.any(np.abs(k) > 1.0 + 1e-12):
+            bad = np.argwhere(np.abs(k) > 1.0 + 1e-12)[0]
+            raise InfeasibleTwistError(
+                f"wheel {self.name!r}: no steady steering angle for twist {t[tuple(bad)].tolist()}: its "
+                f"steering axis moves slower than offset*|omega|, so the wheel would keep swivelling")
+        a = np.arcsin(np.clip(k, -1.0, 1.0))
+        cands = np.stack([psi - a, psi + np.pi + a], axis=-1) - self.drive
+        cands = (cands + np.pi) % (2 * np.pi) - np.pi
+        lo, hi = (self.steer.lower, self.steer.upper) if self.steer is not None else (-np.pi, np.pi)
+        within = (cands >= lo - 1e-12) & (cands <= hi + 1e-12)
+        dist = np.abs((cands - hint[..., None] + np.pi) % (2 * np.pi) - np.pi)
+        dist = np.where(within, dist, dist + 10.0)
+        pick = np.take_along_axis(cands, np.argmin(dist, axis=-1)[..., None], axis=-1)[..., 0]
+        angle = np.where(moving, pick, hint)
+        limited = moving & ~np.any(within, axis=-1)
+        return angle, limited
