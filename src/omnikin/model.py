@@ -188,6 +188,11 @@ class Robot:
         n = self.admissible_basis
         return n @ np.linalg.pinv(a @ n, rcond=RANK_TOL)
 
+    def fk_rank(self, steer=None, wheels: Optional[Sequence[str]] = None) -> int:
+        """How many independent motion components the wheels determine at ``steer``."""
+        a = self._fk_rows(self._steer_array(steer), wheels)
+        return rank(a @ self.admissible_basis)
+
     @cached_property
     def _fk_constant(self) -> np.ndarray:
         return self.fk_matrix()
@@ -284,7 +289,7 @@ class Robot:
             w = self.fixed[int(bad[0][-1])]
             return (f"robot {self.name!r}: twist {np.round(t[idx], 9).tolist()} is infeasible: fixed wheel "
                     f"{w.name!r} would slide sideways at {violation[tuple(bad[0])]:.6g} m/s "
-                    f"(pass on_infeasible='return' to get the violation)")
+                    f"(on_infeasible='return' reports the violation instead)")
         idx = np.argwhere(limited)[0]
         w = self.steerable[int(idx[-1])]
         return (f"robot {self.name!r}: twist {np.round(t[tuple(idx[:-1])], 9).tolist()} needs wheel {w.name!r} "

@@ -1,0 +1,1 @@
+"""Command-line interface ``omnikin`` (see ``omnikin --help``)."""

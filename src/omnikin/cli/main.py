@@ -1,0 +1,387 @@
+"""``omnikin``: command-line entry point.
+
+Every sub-command takes ROBOT = a preset name (``omnikin presets``) or a robot file.
+Bad input ends with exit status 2 and one line ``omnikin: error: ...`` on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+import numpy as np
+
+from .. import __version__
+from ..errors import InfeasibleTwistError, OmnikinError
+from ..presets import PRESET_NAMES
+
+EPILOG = """examples:
+  omnikin presets                          list the robots shipped with omnikin
+  omnikin show tomasi-omni3                geometry, IK/FK matrices, mobility analysis
+  omnikin show my_robot.yaml --plot layout.png
+  omnikin ik tomasi-omni3 0.2 0 0.5        wheel speeds [rad/s] for vx vy omega
+  omnikin ik ackermann 1 0 0.3 --json      steering angles too
+  omnikin fk tomasi-omni3 10 -5 -5         body twist from wheel speeds
+  omnikin odometry tomasi-omni3 log.csv -o traj.tum --format tum
+
+units: SI and radians; degrees only where an option or column ends in -deg/_deg.
+frames: body x forward, y left, angles counter-clockwise (REP-103)."""
+
+
+class CliError(Exception):
+    """A usage problem found after argument parsing (exit status 2)."""
+
+
+def _robot(spec: str):
+    from ..io.robot_file import load_robot
+
+    return load_robot(spec)
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.6g}" if np.isfinite(x) else str(x)
+
+
+def _clean(matrix) -> np.ndarray:
+    """Matrix for display: entries below 1e-12 of its largest set to 0 (rounding noise of cos(pi/2))."""
+    m = np.array(matrix, dtype=float)
+    m[np.abs(m) < 1e-12 * max(np.max(np.abs(m), initial=0.0), 1e-300)] = 0.0
+    return m
+
+
+def _matrix_table(matrix, row_names, col_names):
+    from rich.table import Table
+
+    table = Table()
+    table.add_column("")
+    for c in col_names:
+        table.add_column(c, justify="right")
+    for name, row in zip(row_names, np.atleast_2d(_clean(matrix))):
+        table.add_row(name, *[_fmt(v) for v in row])
+    return table
+
+
+def _console():
+    from rich.console import Console
+
+    con = Console(highlight=False, markup=False)
+    if not con.is_terminal:
+        con = Console(highlight=False, markup=False, width=140)
+    return con
+
+
+# --- presets ----------------------------------------------------------------------------
+def cmd_presets(args) -> int:
+    from rich.table import Table
+
+    table = Table(title="omnikin presets (omnikin show NAME)", title_justify="left")
+    for col in ("name", "wheels", "Campion type", "holonomic", "reference"):
+        table.add_column(col)
+    out = []
+    for name in PRESET_NAMES:
+        r = _robot(name)
+        m = r.mobility
+        ref = r.references[0] if r.references else ""
+        out.append({"name": name, "wheels": len(r.wheels), "campion_type": list(m.campion_type),
+                    "holonomic": m.holonomic, "reference": ref})
+        table.add_row(name, str(len(r.wheels)), str(m.campion_type), "yes" if m.holonomic else "no",
+                      ref[:70] + ("..." if len(ref) > 70 else ""))
+    if args.json:
+        print(json.dumps(out, indent=2))
+    else:
+        _console().print(table)
+    return 0
+
+
+# --- show --------------------------------------------------------------------------------
+def show_data(robot) -> dict:
+    """The ``show --json`` document."""
+    m = robot.mobility
+    wheels = []
+    for w in robot.wheels:
+        d = {"name": w.name, "type": w.type, "x": w.x, "y": w.y, "distance": math.hypot(w.x, w.y),
+             "angle_deg": math.degrees(math.atan2(w.y, w.x)), "drive_deg": math.degrees(w.drive),
+             "roller_deg": math.degrees(w.roller), "radius": w.radius}
+        if w.encoder is not None:
+            d["encoder"] = {"ticks_per_rev": w.encoder.ticks_per_rev, "gear_ratio": w.encoder.gear_ratio,
+                            "invert": w.encoder.invert}
+        if w.steer is not None:
+            d["steer"] = {"offset": w.steer.offset, "min_deg": math.degrees(w.steer.lower),
+                          "max_deg": math.degrees(w.steer.upper)}
+        if w.max_speed is not None:
+            d["max_speed"] = w.max_speed
+        wheels.append(d)
+    fk = robot.fk_matrix()
+    return {
+        "name": robot.name,
+        "description": robot.description,
+        "references": list(robot.references),
+        "wheels": wheels,
+        "wheel_names": robot.wheel_names,
+        "steer_names": robot.steer_names,
+        "ik_matrix": robot.ik_matrix.tolist(),
+        "fk_matrix": fk[:, : len(robot.wheel_names)].tolist(),
+        "fk_rank": robot.fk_rank(),
+        "rank": m.rank,
+        "mobility": m.degree_of_mobility,
+        "steerability": m.degree_of_steerability,
+        "campion_type": list(m.campion_type),
+        "campion_name": m.campion_name,
+        "holonomic": m.holonomic,
+        "condition_number": m.condition_number,
+        "characteristic_length": m.characteristic_length,
+        "isotropic": m.isotropic,
+    }
+
+
+def cmd_show(args) -> int:
+    robot = _robot(args.robot)
+    data = show_data(robot)
+    if args.plot:
+        from ..viz.layout import save_layout
+
+        save_layout(robot, args.plot)
+    if args.json:
+        print(json.dumps(data, indent=2))
+        return 0
+    from rich.table import Table
+
+    con = _console()
+    con.print(f"{robot.name}: {robot.description}")
+    for ref in robot.references:
+        con.print(f"  ref: {ref}")
+    con.print("wheels (body frame: x forward, y left)")
+    geo = Table()
+    for col in ("name", "type", "x [m]", "y [m]", "angle [deg]", "drive [deg]", "roller [deg]", "radius [m]",
+                "steer", "encoder"):
+        geo.add_column(col, justify="right" if "[" in col else "left")
+    for w in data["wheels"]:
+        steer = (f"offset {w['steer']['offset']:g} m, {w['steer']['min_deg']:g}..{w['steer']['max_deg']:g} deg"
+                 if "steer" in w else "")
+        enc = (f"{w['encoder']['ticks_per_rev']:g}/rev x{w['encoder']['gear_ratio']:g}"
+               + (" inv" if w["encoder"]["invert"] else "")) if "encoder" in w else ""
+        geo.add_row(w["name"], w["type"], _fmt(w["x"]), _fmt(w["y"]), _fmt(w["angle_deg"]), _fmt(w["drive_deg"]),
+                    _fmt(w["roller_deg"]), _fmt(w["radius"]), steer, enc)
+    con.print(geo)
+    twist = ["vx", "vy", "omega"]
+    note = " at zero steering" if robot.steerable else ""
+    con.print(f"inverse kinematics{note}: wheel speeds [rad/s] = J (vx, vy, omega)")
+    con.print(_matrix_table(data["ik_matrix"], robot.wheel_names, twist))
+    con.print(f"forward kinematics{note}: (vx, vy, omega) = F wheel speeds (least squares)")
+    con.print(_matrix_table(data["fk_matrix"], twist, robot.wheel_names))
+    if data["fk_rank"] < data["mobility"]:
+        con.print(f"note: at zero steering the wheel speeds determine only {data['fk_rank']} of the "
+                  f"{data['mobility']} motion components; F is the minimum-norm solution there")
+    con.print("mobility analysis (Campion, Bastin, d'Andrea-Novel 1996)")
+    ana = Table()
+    ana.add_column("quantity")
+    ana.add_column("value", justify="right")
+    rank_label = "rank of J (generic steering)" if robot.steerable else "rank of J"
+    for k, v in ((rank_label, data["rank"]), ("degree of mobility", data["mobility"]),
+                 ("degree of steerability", data["steerability"]),
+                 ("Campion type", f"{tuple(data['campion_type'])} {data['campion_name']}"),
+                 ("holonomic", "yes" if data["holonomic"] else "no"),
+                 ("condition number", _fmt(data["condition_number"])),
+                 ("characteristic length [m]", _fmt(data["characteristic_length"])),
+                 ("isotropic", "yes" if data["isotropic"] else "no")):
+        ana.add_row(k, str(v))
+    con.print(ana)
+    if args.plot:
+        con.print(f"layout drawing written to {args.plot}")
+    return 0
+
+
+# --- ik / fk -------------------------------------------------------------------------------
+def cmd_ik(args) -> int:
+    robot = _robot(args.robot)
+    twist = np.array([args.vx, args.vy, args.omega])
+    hint = np.radians(args.steer_hint_deg) if args.steer_hint_deg is not None else None
+    if hint is not None and len(hint) != len(robot.steerable):
+        raise CliError(f"--steer-hint-deg needs {len(robot.steerable)} values for {robot.steer_names}")
+    try:
+        res = robot.ik(twist, heading=args.heading, steer_hint=hint,
+                       on_infeasible="return" if args.allow_infeasible else "raise")
+    except InfeasibleTwistError as exc:
+        msg = str(exc).split(" (on_infeasible=")[0]
+        raise CliError(f"{msg}; --allow-infeasible reports the violation instead") from None
+    body = robot.body_twist(twist, args.heading) if args.heading is not None else twist
+    data = {"robot": robot.name, "twist": body.tolist(), "wheel_names": robot.wheel_names,
+            "wheel_speeds": res.wheel_speeds.tolist()}
+    if robot.steerable:
+        data["steer_names"] = robot.steer_names
+        data["steer_angles"] = res.steer_angles.tolist()
+    if robot.swedish_names:
+        data["roller_names"] = robot.swedish_names
+        data["roller_speeds"] = robot.roller_speeds(body).tolist()
+    if robot.fixed:
+        data["violation"] = res.violation.tolist()
+        data["feasible"] = bool(res.feasible)
+    if args.json:
+        print(json.dumps(data, indent=2))
+        return 0
+    from rich.table import Table
+
+    con = _console()
+    con.print(f"{robot.name}: body twist vx={_fmt(body[0])} m/s, vy={_fmt(body[1])} m/s, omega={_fmt(body[2])} rad/s")
+    table = Table(title_justify="left")
+    for col in ("wheel", "speed [rad/s]", "steer [deg]", "roller [m/s]"):
+        table.add_column(col, justify="right")
+    steer = dict(zip(robot.steer_names, res.steer_angles))
+    roller = dict(zip(robot.swedish_names, data.get("roller_speeds", [])))
+    for name, speed in zip(robot.wheel_names, res.wheel_speeds):
+        table.add_row(name, _fmt(speed), _fmt(math.degrees(steer[name])) if name in steer else "",
+                      _fmt(roller[name]) if name in roller else "")
+    con.print(table)
+    if robot.fixed and not res.feasible:
+        con.print(f"infeasible: side-slip speeds of fixed wheels {res.violation.tolist()} m/s")
+    return 0
+
+
+def cmd_fk(args) -> int:
+    robot = _robot(args.robot)
+    n = len(robot.wheel_names)
+    if len(args.speeds) != n:
+        raise CliError(f"robot {robot.name!r} has {n} rolling wheels {robot.wheel_names}: "
+                       f"give {n} wheel speeds, got {len(args.speeds)}")
+    steer = None
+    if robot.steerable:
+        if args.steer_deg is None or len(args.steer_deg) != len(robot.steerable):
+            raise CliError(f"robot {robot.name!r} has steerable wheels {robot.steer_names}: give their steering "
+                           f"angles with --steer-deg ({len(robot.steerable)} values)")
+        steer = np.radians(args.steer_deg)
+    elif args.steer_deg is not None:
+        raise CliError(f"robot {robot.name!r} has no steerable wheel: drop --steer-deg")
+    res = robot.fk(np.array(args.speeds), steer)
+    data = {"robot": robot.name, "wheel_names": robot.wheel_names, "twist": res.twist.tolist(),
+            "residual": res.residual.tolist(), "residual_norm": float(res.residual_norm)}
+    if args.json:
+        print(json.dumps(data, indent=2))
+        return 0
+    con = _console()
+    t = res.twist
+    con.print(f"{robot.name}: vx={_fmt(t[0])} m/s, vy={_fmt(t[1])} m/s, omega={_fmt(t[2])} rad/s")
+    con.print(f"residual [rad/s]: {[float(_fmt(v)) for v in res.residual]} (norm {_fmt(float(res.residual_norm))})")
+    return 0
+
+
+# --- odometry -----------------------------------------------------------------------------------
+def cmd_odometry(args) -> int:
+    from ..io.logs import read_tick_log, write_trajectory
+    from ..odometry import batch_odometry
+
+    robot = _robot(args.robot)
+    log = read_tick_log(args.log, robot)
+    res = batch_odometry(robot, log.t, log.ticks, steer=log.steer, method=args.method,
+                         counter_bits=args.counter_bits)
+    try:
+        write_trajectory(args.output, log.t, res.poses, args.format)
+    except OSError as exc:
+        raise CliError(f"{args.output}: cannot write: {exc.strerror}") from None
+    end = res.poses[-1]
+    path = float(np.sum(np.hypot(*np.diff(res.poses[:, :2], axis=0).T)))
+    summary = {"robot": robot.name, "samples": int(len(log.t)), "duration": float(log.t[-1] - log.t[0]),
+               "method": args.method, "final_pose": end.tolist(), "path_length": path,
+               "max_residual": float(np.max(np.abs(res.residual))) if res.residual.size else 0.0,
+               "output": str(args.output), "format": args.format}
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        _console().print(
+            f"{robot.name}: {summary['samples']} samples over {summary['duration']:.6g} s, {args.method} integration\n"
+            f"final pose x={end[0]:.6g} m, y={end[1]:.6g} m, theta={end[2]:.6g} rad; path {path:.6g} m\n"
+            f"written to {args.output} ({args.format})")
+    return 0
+
+
+# --- parser --------------------------------------------------------------------------------------------
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="omnikin", description="Kinematics and exact odometry for wheeled mobile robots of any wheel layout.",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--version", action="version", version=f"omnikin {__version__}")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
+    robot_help = f"preset name ({', '.join(PRESET_NAMES)}) or robot file (YAML/JSON, schema 1)"
+
+    sp = sub.add_parser("presets", help="list the shipped robots", description="List the robots shipped with omnikin.")
+    sp.add_argument("--json", action="store_true", help="machine-readable output")
+    sp.set_defaults(func=cmd_presets)
+
+    sp = sub.add_parser("show", help="geometry, IK/FK matrices and mobility analysis of a robot",
+                        description="Show a robot: wheel table, inverse and forward kinematics matrices, "
+                                    "rank, Campion type, holonomy and conditioning; optionally draw it.",
+                        epilog="example: omnikin show tomasi-omni3 --plot layout.png",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp.add_argument("robot", metavar="ROBOT", help=robot_help)
+    sp.add_argument("--json", action="store_true", help="print JSON (keys ik_matrix, rank, mobility, steerability, ...)")
+    sp.add_argument("--plot", metavar="FILE.png", help="draw the layout with drive and roller directions")
+    sp.set_defaults(func=cmd_show)
+
+    sp = sub.add_parser("ik", help="inverse kinematics: twist -> wheel speeds (and steering)",
+                        description="Wheel speeds [rad/s, robot-file order] for a body twist VX VY [m/s] OMEGA "
+                                    "[rad/s]; with --heading the velocity is given in the world frame.",
+                        epilog="examples:\n  omnikin ik tomasi-omni3 0.2 0 0.5\n"
+                               "  omnikin ik diff-drive 0.5 0.1 0 --allow-infeasible --json",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp.add_argument("robot", metavar="ROBOT", help=robot_help)
+    sp.add_argument("vx", type=float, metavar="VX", help="velocity along body x [m/s] (world x with --heading)")
+    sp.add_argument("vy", type=float, metavar="VY", help="velocity along body y [m/s] (world y with --heading)")
+    sp.add_argument("omega", type=float, metavar="OMEGA", help="turn rate [rad/s], counter-clockwise positive")
+    sp.add_argument("--heading", type=float, metavar="RAD", help="robot heading [rad]: VX VY are world-frame rates")
+    sp.add_argument("--steer-hint-deg", type=float, nargs="+", metavar="DEG",
+                    help="current steering angles [deg]: the nearest valid alignment is chosen")
+    sp.add_argument("--allow-infeasible", action="store_true",
+                    help="report the side-slip violation of fixed wheels instead of refusing the twist")
+    sp.add_argument("--json", action="store_true", help="print JSON (keys wheel_speeds, steer_angles [rad], ...)")
+    sp.set_defaults(func=cmd_ik)
+
+    sp = sub.add_parser("fk", help="forward kinematics: wheel speeds -> twist and residual",
+                        description="Body twist from wheel speeds [rad/s] of all rolling wheels in robot-file "
+                                    "order, by least squares; the residual measures slip or model error.",
+                        epilog="example: omnikin fk omni4 10 -5 -10 5 --json",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp.add_argument("robot", metavar="ROBOT", help=robot_help)
+    sp.add_argument("speeds", type=float, nargs="+", metavar="W", help="wheel speeds [rad/s]")
+    sp.add_argument("--steer-deg", type=float, nargs="+", metavar="DEG",
+                    help="steering angles [deg] of the steerable wheels (required for them)")
+    sp.add_argument("--json", action="store_true", help="print JSON (keys twist, residual)")
+    sp.set_defaults(func=cmd_fk)
+
+    sp = sub.add_parser("odometry", help="integrate an encoder tick log into a trajectory",
+                        description="Read a CSV tick log (header: t, then one column per encoded wheel named by "
+                                    "the wheel, plus <wheel>_steer_deg for steerable wheels), integrate it exactly "
+                                    "on SE(2) and write the trajectory.",
+                        epilog="example:\n  omnikin odometry tomasi-omni3 log.csv -o traj.tum --format tum\n"
+                               "  evo_traj tum traj.tum --plot",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp.add_argument("robot", metavar="ROBOT", help=robot_help)
+    sp.add_argument("log", metavar="LOG.csv", help="tick log")
+    sp.add_argument("-o", "--output", required=True, metavar="OUT", help="trajectory file to write")
+    sp.add_argument("--format", choices=("csv", "tum"), default="csv",
+                    help="csv: t,x,y,theta; tum: t x y z qx qy qz qw (default csv)")
+    sp.add_argument("--method", choices=("exact", "midpoint", "euler"), default="exact",
+                    help="pose integration (default exact; the others exist for comparison)")
+    sp.add_argument("--counter-bits", type=int, metavar="N", help="encoder counters wrap at 2**N (e.g. 16, 32)")
+    sp.add_argument("--json", action="store_true", help="print a JSON summary")
+    sp.set_defaults(func=cmd_odometry)
+    return p
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return args.func(args)
+    except (OmnikinError, CliError, ImportError) as exc:
+        print(f"omnikin: error: {exc}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

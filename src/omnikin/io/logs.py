@@ -1,0 +1,122 @@
+"""Encoder logs in and trajectories out (CSV and TUM).
+
+Tick log (CSV, comma separated, one header line): column ``t`` [s] first, then one
+tick column per encoded wheel, named by the wheel (any order), and for every
+steerable wheel a column ``<wheel>_steer_deg`` with its steering angle [deg].
+Blank lines and lines starting with ``#`` are skipped.
+
+Trajectory output: ``csv`` with header ``t,x,y,theta`` [s, m, m, rad]; ``tum``:
+``t x y z qx qy qz qw`` per line with ``z = qx = qy = 0``, ``qz = sin(theta/2)``,
+``qw = cos(theta/2)`` (Sturm et al. 2012), readable by ``evo``.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import OdometryInputError
+from ..model import Robot
+from ..odometry import encoded_wheels
+
+FORMATS = ("csv", "tum")
+
+
+@dataclass(frozen=True)
+class TickLog:
+    """A parsed tick log: ``t`` (N,), ``ticks`` (N, n_enc), ``steer`` (N, n_steer) [rad] or None."""
+
+    t: np.ndarray
+    ticks: np.ndarray
+    steer: np.ndarray | None
+    wheel_names: list[str]
+
+
+def _number(text: str, source: str, line: int, column: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise OdometryInputError(f"{source}: line {line}, column {column!r}: not a number: {text!r}") from None
+    if not math.isfinite(value):
+        raise OdometryInputError(f"{source}: line {line}, column {column!r}: non-finite value {text!r}")
+    return value
+
+
+def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
+    """Read and check a tick log for ``robot`` (see module docstring)."""
+    source = str(path)
+    wheels = [w.name for w in encoded_wheels(robot)]
+    steer_cols = [f"{name}_steer_deg" for name in robot.steer_names]
+    expected = ["t"] + wheels + steer_cols
+    try:
+        handle = open(path, newline="", encoding="utf-8")
+    except OSError as exc:
+        raise OdometryInputError(f"{source}: cannot open: {exc.strerror}") from None
+    with handle:
+        rows = [(i + 1, r) for i, r in enumerate(csv.reader(handle))
+                if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
+    if not rows:
+        raise OdometryInputError(f"{source}: empty log; expected a header {','.join(expected)}")
+    header_line, header = rows[0]
+    header = [h.strip() for h in header]
+    if not header or header[0] != "t":
+        raise OdometryInputError(f"{source}: line {header_line}: the first column must be 't', got {header[:1]}; "
+                                 f"expected columns {expected}")
+    dup = sorted({h for h in header if header.count(h) > 1})
+    missing = [c for c in expected if c not in header]
+    unknown = [c for c in header if c not in expected]
+    if dup or missing or unknown:
+        parts = []
+        if missing:
+            parts.append(f"missing column(s) {missing}")
+        if unknown:
+            parts.append(f"unknown column(s) {unknown}")
+        if dup:
+            parts.append(f"duplicate column(s) {dup}")
+        raise OdometryInputError(f"{source}: line {header_line}: " + "; ".join(parts) +
+                                 f"; robot {robot.name!r} expects {expected}")
+    if len(rows) < 3:
+        raise OdometryInputError(f"{source}: needs at least two samples, got {len(rows) - 1}")
+    index = {name: header.index(name) for name in expected}
+    data = np.empty((len(rows) - 1, len(expected)))
+    for k, (line, row) in enumerate(rows[1:]):
+        if len(row) != len(header):
+            raise OdometryInputError(f"{source}: line {line}: {len(row)} fields, header has {len(header)}")
+        for j, name in enumerate(expected):
+            data[k, j] = _number(row[index[name]].strip(), source, line, name)
+    ticks = data[:, 1:1 + len(wheels)]
+    if np.all(ticks == np.round(ticks)) and np.all(np.abs(ticks) < 2 ** 62):
+        ticks = ticks.astype(np.int64)
+    steer = np.radians(data[:, 1 + len(wheels):]) if steer_cols else None
+    return TickLog(data[:, 0].copy(), ticks, steer, wheels)
+
+
+def write_trajectory(path: str | Path, t: np.ndarray, poses: np.ndarray, fmt: str = "csv") -> None:
+    """Write poses ``(N, 3)`` at times ``t`` as ``csv`` or ``tum`` (module docstring)."""
+    if fmt not in FORMATS:
+        raise ValueError(f"unknown trajectory format {fmt!r}; one of {list(FORMATS)}")
+    t = np.asarray(t, dtype=float)
+    poses = np.asarray(poses, dtype=float)
+    if fmt == "csv":
+        table = np.column_stack([t, poses])
+        np.savetxt(path, table, delimiter=",", header="t,x,y,theta", comments="", fmt="%.9f")
+    else:
+        half = 0.5 * poses[:, 2]
+        zeros = np.zeros_like(t)
+        table = np.column_stack([t, poses[:, 0], poses[:, 1], zeros, zeros, zeros, np.sin(half), np.cos(half)])
+        np.savetxt(path, table, delimiter=" ", fmt="%.9f")
+
+
+def read_trajectory(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Read a ``csv`` (header ``t,x,y,theta``) or ``tum`` trajectory: ``(t, poses)``."""
+    text = Path(path).read_text(encoding="utf-8").strip().splitlines()
+    if text and text[0].startswith("t,"):
+        arr = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        return arr[:, 0], arr[:, 1:4]
+    arr = np.loadtxt(path, ndmin=2)
+    theta = 2.0 * np.arctan2(arr[:, 6], arr[:, 7])
+    return arr[:, 0], np.column_stack([arr[:, 1], arr[:, 2], (theta + np.pi) % (2 * np.pi) - np.pi])
