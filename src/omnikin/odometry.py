@@ -19,16 +19,16 @@ import math
 import warnings
 from dataclasses import dataclass
 from functools import cached_property
-from operator import mul
 from typing import Optional
 
 import numpy as np
 
 from ._arrays import as_components
-from .encoders import check_bits, jump_limits, ticks_to_angle_increments, wrap_ticks
+from .encoders import check_bits, ticks_to_angle_increments
 from .errors import OdometryInputError, OmnikinError
 from .geometry import wrap_angle
 from .integration import check_method, integrate
+from ._stream_kernel import compile_advance, compile_update
 from .model import Robot
 
 
@@ -148,6 +148,8 @@ class Odometry:
     Attributes after each update: ``pose`` (x, y, theta) [m, m, rad, theta in
     [-pi, pi)], ``twist`` (mean body twist over the last interval), ``residual``
     (forward-kinematics residual [rad/s], zeros for square layouts), ``t``.
+    For layouts without steerable wheels :meth:`update` is a generated,
+    unrolled function (:mod:`omnikin._stream_kernel`).
     """
 
     def __init__(self, robot: Robot, *, method: str = "exact", counter_bits: int | None = None,
@@ -162,14 +164,24 @@ class Odometry:
         self._max_jump = max_jump
         self._full = 2 ** self.bits if self.bits is not None else None
         self._steerable = bool(robot.steerable)
+        self._rates = [(w.max_speed / abs(w.encoder.rad_per_tick)) if w.max_speed else None for w in self._wheels]
+        if max_jump is not None:
+            self._rates = [None] * self._n
+        # static per-wheel jump limits [ticks]; a huge finite default also traps inf and NaN
+        static = float(max_jump) if max_jump is not None else 1e300
+        if self.bits is not None:
+            static = min(static, 2 ** (self.bits - 1) - 0.5)
+        self._lims = [static] * self._n
+        self._advance = compile_advance(self, self.method)
+        self.reset(start)
         if not self._steerable:
             f = robot.fk_matrix(None, self.wheel_names)
-            self._f = [[float(v) * s for v, s in zip(row, self._scale)] for row in f]
-            rows = robot._fk_rows(np.zeros(0), self.wheel_names)
-            self._redundant = rows.shape[0] > 3 or np.linalg.matrix_rank(rows) < rows.shape[0]
-            self._rows = rows
-        self._rates = [(w.max_speed / abs(w.encoder.rad_per_tick)) if w.max_speed else None for w in self._wheels]
-        self.reset(start)
+            self._rows = robot._fk_rows(np.zeros(0), self.wheel_names)
+            redundant = self._rows.shape[0] > np.linalg.matrix_rank(self._rows)
+            fk_ticks = [[float(v) * s for v, s in zip(row, self._scale)] for row in f]
+            self.update = compile_update(self, self._n, fk_ticks, self.method, self._full, self._lims, self._rates,
+                                         self._update_general, self._not_later, self._check,
+                                         self._set_residual if redundant else None)
 
     def reset(self, pose=(0.0, 0.0, 0.0)) -> None:
         """Forget the previous sample; the next one is the new zero, at ``pose``."""
@@ -181,7 +193,7 @@ class Odometry:
         self._ticks = None
         self._steer = None
         self.twist = (0.0, 0.0, 0.0)
-        self.residual = None
+        self.residual = [0.0] * self._n
         self.samples = 0
         self.duplicates = 0
         self._warned = False
@@ -195,7 +207,18 @@ class Odometry:
         return self._t
 
     def update(self, t: float, ticks, steer=None) -> tuple[float, float, float]:
-        """Feed one sample: time [s], raw counter readings (encoded wheels, file order)."""
+        """Feed one sample: time [s], raw counter readings of the encoded wheels in file
+        order, and (steerable robots) their steering angles [rad]. Returns the pose."""
+        return self._update_general(t, ticks, steer)
+
+    def update_angles(self, t: float, angles, steer=None) -> tuple[float, float, float]:
+        """Feed one sample of wheel angles [rad] (encoded wheels, file order)."""
+        if self._full is not None:
+            raise OmnikinError("update_angles works without counter wrap-around: create Odometry with counter_bits=None")
+        return self.update(t, [a / s for a, s in zip(angles, self._scale)], steer)
+
+    # --- slow paths (first sample, steering, errors) ---------------------------------
+    def _update_general(self, t, ticks, steer):
         if len(ticks) != self._n:
             raise OdometryInputError(
                 f"sample {self.samples}: expected {self._n} tick readings for wheels {self.wheel_names}, got {len(ticks)}")
@@ -206,50 +229,21 @@ class Odometry:
             return self._not_later(t, dt, ticks, steer)
         deltas = [a - b for a, b in zip(ticks, self._ticks)]
         if self._full is not None:
-            full = self._full
-            deltas = [(d + full // 2) % full - full // 2 for d in deltas]
+            half = self._full // 2
+            deltas = [(d + half) % self._full - half for d in deltas]
         self._check(deltas, dt, ticks)
-        self._ticks = list(ticks)
+        s = self._check_steer(steer)
+        dangle = np.array([d * k for d, k in zip(deltas, self._scale)], dtype=float)
         if self._steerable:
-            return self._slow(t, dt, [d * s for d, s in zip(deltas, self._scale)], steer)
-        f0, f1, f2 = self._f
-        a = sum(map(mul, f0, deltas))
-        b = sum(map(mul, f1, deltas))
-        phi = sum(map(mul, f2, deltas))
-        if self._redundant:
-            self._set_residual([d * s for d, s in zip(deltas, self._scale)], (a, b, phi), dt)
-        return self._advance(t, dt, a, b, phi)
-
-    def update_angles(self, t: float, angles, steer=None) -> tuple[float, float, float]:
-        """Feed one sample of wheel angles [rad] (encoded wheels, file order)."""
-        ticks = [a / s for a, s in zip(angles, self._scale)]
-        if self._full is not None:
-            raise OmnikinError("update_angles works without counter wrap-around: create Odometry with counter_bits=None")
-        return self.update(t, ticks, steer)
-
-    # --- internals -----------------------------------------------------------------
-    def _advance(self, t, dt, a, b, phi):
-        th = self._th
-        if self.method == "euler":
-            h = th
-            k = 1.0
+            mid = self._steer + 0.5 * wrap_angle(s - self._steer)
+            fk = self.robot.fk(dangle, mid, self.wheel_names)
+            self._steer = s
+            self.residual = list(fk.residual / dt)
+            a, b, phi = (float(v) for v in fk.twist)
         else:
-            h = th + 0.5 * phi
-            k = 1.0
-            if self.method == "exact":
-                x = 0.5 * phi
-                k = 1.0 - x * x / 6.0 if -1e-4 < x < 1e-4 else math.sin(x) / x
-        c, s = math.cos(h), math.sin(h)
-        self._x += k * (c * a - s * b)
-        self._y += k * (s * a + c * b)
-        th += phi
-        if th >= math.pi or th < -math.pi:
-            th = (th + math.pi) % (2.0 * math.pi) - math.pi
-        self._th = th
-        self._t = t
-        self.twist = (a / dt, b / dt, phi / dt)
-        self.samples += 1
-        return (self._x, self._y, th)
+            a, b, phi = (float(v) for v in self.robot.fk_matrix(None, self.wheel_names) @ dangle)
+        self._ticks = tuple(ticks)
+        return self._advance(t, dt, a, b, phi)
 
     def _first(self, t, ticks, steer):
         values = [float(v) for v in ticks]
@@ -259,13 +253,12 @@ class Odometry:
             raise OdometryInputError(f"sample 0: tick reading outside the range of a {self.bits}-bit counter: {list(ticks)}")
         self._steer = self._check_steer(steer)
         self._t = float(t)
-        self._ticks = list(ticks)
-        self.residual = [0.0] * self._n
+        self._ticks = tuple(ticks)
         self.samples = 1
         return self.pose
 
     def _not_later(self, t, dt, ticks, steer):
-        if dt == 0.0 and list(ticks) == self._ticks:
+        if dt == 0.0 and tuple(ticks) == self._ticks:
             self.duplicates += 1
             if not self._warned:
                 warnings.warn(f"odometry: duplicate sample at t={t!r} skipped (counted in .duplicates)",
@@ -279,26 +272,19 @@ class Odometry:
             f"sample {self.samples}: timestamp {t!r} {what} the previous one {self._t!r} with different readings")
 
     def _check(self, deltas, dt, ticks):
+        """Raise naming the sample and wheel if an increment cannot be integrated."""
         for j, d in enumerate(deltas):
             if d != d or d in (math.inf, -math.inf):
                 raise OdometryInputError(
                     f"sample {self.samples}: non-finite tick reading {ticks[j]!r}, wheel {self.wheel_names[j]!r}")
-            if self._full is not None:
-                if not -self._full // 2 <= ticks[j] < self._full:
-                    raise OdometryInputError(f"sample {self.samples}: tick reading {ticks[j]!r} outside the range "
-                                             f"of a {self.bits}-bit counter, wheel {self.wheel_names[j]!r}")
-                if d == -self._full // 2:
-                    self._jump(j, d)
-            limit = self._max_jump
-            if limit is None and self._rates[j] is not None:
-                limit = 1.5 * self._rates[j] * dt + 2.0
-            if limit is not None and abs(d) > limit:
-                self._jump(j, d)
-
-    def _jump(self, j, d):
-        raise OdometryInputError(
-            f"sample {self.samples}: impossible jump of {d} ticks, wheel {self.wheel_names[j]!r} "
-            f"(faster than the wheel can turn, or half the counter range)")
+            if self._full is not None and not -self._full // 2 <= ticks[j] < self._full:
+                raise OdometryInputError(f"sample {self.samples}: tick reading {ticks[j]!r} outside the range "
+                                         f"of a {self.bits}-bit counter, wheel {self.wheel_names[j]!r}")
+            limit = self._lims[j] if self._rates[j] is None else 1.5 * self._rates[j] * dt + 2.0
+            if abs(d) > limit:
+                raise OdometryInputError(
+                    f"sample {self.samples}: impossible jump of {d} ticks in {dt:.6g} s, wheel {self.wheel_names[j]!r} "
+                    f"(faster than the wheel can turn, or half the counter range)")
 
     def _check_steer(self, steer):
         if not self._steerable:
@@ -313,15 +299,6 @@ class Odometry:
             raise OdometryInputError(f"sample {self.samples}: non-finite steering angle {list(s)}")
         return s
 
-    def _slow(self, t, dt, dangle, steer):
-        s = self._check_steer(steer)
-        mid = self._steer + 0.5 * wrap_angle(s - self._steer)
-        fk = self.robot.fk(np.array(dangle), mid, self.wheel_names)
-        self._steer = s
-        self.residual = list(fk.residual / dt)
-        a, b, phi = (float(v) for v in fk.twist)
-        return self._advance(t, dt, a, b, phi)
-
-    def _set_residual(self, dangle, inc, dt):
-        pred = self._rows @ np.array(inc)
-        self.residual = list((np.array(dangle) - pred) / dt)
+    def _set_residual(self, deltas, a, b, phi, dt):
+        dangle = np.array([d * k for d, k in zip(deltas, self._scale)], dtype=float)
+        self.residual = list((dangle - self._rows @ np.array([a, b, phi])) / dt)

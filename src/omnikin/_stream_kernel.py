@@ -1,0 +1,110 @@
+"""Code generation of the streaming-odometry hot path (used by :class:`omnikin.odometry.Odometry`).
+
+Why generated: a CPython update that loops over wheels or calls NumPy costs
+3-10 us; unrolled float arithmetic for the robot's own wheel count costs under
+2 us (``docs/performance.md``). Like :func:`collections.namedtuple` and
+:mod:`dataclasses`, the source is built from one template and compiled once per
+estimator. The template does, per sample (conventions, Odometry):
+
+1. tick increments ``d_j = ticks_j - prev_j`` (wrapped modulo ``2**bits`` when the
+   counters wrap);
+2. a single comparison per wheel against its jump limit (a finite bound also
+   traps NaN and infinity); anything suspicious goes to the caller's ``check``,
+   which raises with the sample and wheel named;
+3. body increment ``(a, b, phi) = F d`` (``F`` = forward kinematics in rad/tick);
+4. the pose update of :mod:`omnikin.integration` (``ADVANCE`` below, shared with
+   the general path so both integrate identically).
+"""
+
+from __future__ import annotations
+
+from math import cos, pi, sin
+
+ADVANCE = {
+    "exact": (
+        "    x = 0.5 * phi\n"
+        "    h = th + x\n"
+        "    k = 1.0 - x * x / 6.0 if -1e-4 < x < 1e-4 else sin(x) / x\n"),
+    "midpoint": "    h = th + 0.5 * phi\n    k = 1.0\n",
+    "euler": "    h = th\n    k = 1.0\n",
+}
+"""Heading ``h`` and chord factor ``k`` of one step, per method (see integration.py)."""
+
+_MOVE = (
+    "    c = cos(h)\n"
+    "    s = sin(h)\n"
+    "    o._x += k * (c * a - s * b)\n"
+    "    o._y += k * (s * a + c * b)\n"
+    "    th += phi\n"
+    "    if th >= PI or th < -PI:\n"
+    "        th = (th + PI) % TWO_PI - PI\n"
+    "    o._th = th\n"
+    "    o._t = t\n"
+    "    o.twist = (a / dt, b / dt, phi / dt)\n"
+    "    o.samples += 1\n"
+    "    return (o._x, o._y, th)\n")
+
+
+def _namespace() -> dict:
+    return {"cos": cos, "sin": sin, "PI": pi, "TWO_PI": 2.0 * pi}
+
+
+def compile_advance(owner, method: str):
+    """``advance(t, dt, a, b, phi)`` moving ``owner``'s pose by one body increment."""
+    src = "def advance(t, dt, a, b, phi):\n    o = OWNER\n    th = o._th\n" + ADVANCE[method] + _MOVE
+    ns = _namespace()
+    ns["OWNER"] = owner
+    exec(compile(src, f"<omnikin advance {method}>", "exec"), ns)
+    return ns["advance"]
+
+
+def compile_update(owner, n: int, fk_rows, method: str, full: int | None, limits, rates, general, not_later,
+                   check, residual):
+    """Specialised ``update(t, ticks, steer=None)`` for ``n`` wheels.
+
+    ``fk_rows``: 3 rows of n floats [m or rad per tick]; ``full``: counter modulus or
+    None; ``limits``: static per-wheel jump limits [ticks]; ``rates``: per-wheel
+    ticks/s bound or None (limit ``1.5 rate dt + 2``); ``general(t, ticks, steer)``,
+    ``not_later(t, dt, ticks, steer)``, ``check(deltas, dt, ticks)`` and
+    ``residual(deltas, a, b, phi, dt)`` (or None) are the owner's slow paths.
+    """
+    d = [f"d{j}" for j in range(n)]
+    tk = [f"t{j}" for j in range(n)]
+    lines = [
+        "def update(t, ticks, steer=None):",
+        "    o = OWNER",
+        "    p = o._ticks",
+        "    if p is None or steer is not None:",
+        "        return general(t, ticks, steer)",
+        "    try:",
+        f"        {', '.join(tk)}, = ticks",
+        "    except (TypeError, ValueError):",
+        "        return general(t, ticks, steer)  # raises, naming the expected readings",
+        "    dt = t - o._t",
+        "    if not dt > 0.0:",
+        "        return not_later(t, dt, ticks, steer)",
+        f"    {', '.join(f'p{j}' for j in range(n))}, = p",
+    ]
+    lines += [f"    d{j} = t{j} - p{j}" for j in range(n)]
+    if full is not None:
+        half = full // 2
+        lines += [f"    d{j} = (d{j} + {half}) % {full} - {half}" for j in range(n)]
+        inside = " and ".join(f"{-half} <= t{j} < {full}" for j in range(n))
+        lines += [f"    if not ({inside}):", f"        check([{', '.join(d)}], dt, ticks)"]
+    bounds = []
+    for j in range(n):
+        if rates[j] is not None:
+            bounds.append(f"abs(d{j}) <= {rates[j]!r} * dt + 2.0")
+        else:
+            bounds.append(f"abs(d{j}) <= {limits[j]!r}")
+    lines += [f"    if not ({' and '.join(bounds)}):", f"        check([{', '.join(d)}], dt, ticks)"]
+    for name, row in zip(("a", "b", "phi"), fk_rows):
+        lines.append(f"    {name} = " + " + ".join(f"{v!r} * d{j}" for j, v in enumerate(row)))
+    if residual is not None:
+        lines.append(f"    residual([{', '.join(d)}], a, b, phi, dt)")
+    lines += [f"    o._ticks = ({', '.join(tk)},)", "    th = o._th"]
+    src = "\n".join(lines) + "\n" + ADVANCE[method] + _MOVE
+    ns = _namespace()
+    ns.update(OWNER=owner, general=general, not_later=not_later, check=check, residual=residual)
+    exec(compile(src, f"<omnikin update n={n} {method}>", "exec"), ns)
+    return ns["update"]
