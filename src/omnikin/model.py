@@ -214,7 +214,10 @@ class Robot:
             raise SingularLayoutError(
                 f"robot {self.name!r}: immobile layout: the no-side-slip constraints of wheels "
                 f"{names} admit no motion (degree of mobility 0)")
-        self._check_observable(None, config)
+        if not self.steerable:
+            # with steerable wheels some motions are made by steering alone (e.g. spinning about a
+            # centred steered wheel): observability is then checked where it matters, by odometry
+            self._check_observable(None, config)
 
     def _check_observable(self, wheels: Optional[Sequence[str]], config: Configuration) -> None:
         """Every admissible motion must turn at least one of ``wheels``."""
@@ -227,16 +230,19 @@ class Robot:
         eta = basis @ z
         used = self.wheel_names if wheels is None else list(wheels)
         if abs(eta[2]) > 1e-9:
-            cx, cy = -eta[1] / eta[2], eta[0] / eta[2]
+            cx, cy = (0.0 if abs(c) < 1e-12 else c for c in (-eta[1] / eta[2], eta[0] / eta[2]))
             why = (f"a rotation about the point ({cx:.6g}, {cy:.6g}) m turns none of them: "
                    f"every drive line passes through it")
         else:
-            d = eta[:2] / np.hypot(eta[0], eta[1])
+            d = [0.0 if abs(c) < 1e-12 else c for c in eta[:2] / np.hypot(eta[0], eta[1])]
             why = (f"a translation along ({d[0]:.6g}, {d[1]:.6g}) turns none of them: "
                    f"every rolling direction is perpendicular to it")
+        hint = ""
+        if any(w.is_centred_steerable for w in self.steerable):
+            hint = " (that motion is made by steering alone; wheel speeds cannot measure it)"
         raise SingularLayoutError(
             f"robot {self.name!r}: singular layout: wheels {used} cannot realise or measure "
-            f"every motion the robot can make; {why} (wheel Jacobian rank {rank(m)} < {basis.shape[1]})")
+            f"every motion the robot can make; {why}{hint} (wheel Jacobian rank {rank(m)} < {basis.shape[1]})")
 
     def check_observable(self, wheels: Sequence[str]) -> None:
         """Raise unless the wheels ``wheels`` (e.g. the encoded ones) observe every motion."""

@@ -1,0 +1,43 @@
+"""Shared test helpers: random wheel layouts built from first principles."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import settings
+
+from omnikin import Robot, Wheel
+
+settings.register_profile("ci", max_examples=60, deadline=None)
+settings.load_profile("ci")
+
+
+def omni_robot(angles_deg, distance=0.113, radius=0.04125, drive_offsets_deg=None, name="test"):
+    """Omni wheels on a circle; drive = CCW tangent (+ optional offsets)."""
+    wheels = []
+    for i, a in enumerate(angles_deg):
+        b = math.radians(a)
+        off = math.radians(drive_offsets_deg[i]) if drive_offsets_deg else 0.0
+        wheels.append(Wheel(f"w{i + 1}", "omni", distance * math.cos(b), distance * math.sin(b),
+                            b + math.pi / 2 + off, radius))
+    return Robot(name, tuple(wheels))
+
+
+@pytest.fixture
+def tomasi():
+    from omnikin import load_robot
+
+    return load_robot("tomasi-omni3")
+
+
+def constant_twist_pose(twist, t):
+    """Closed-form pose after moving with a constant body twist for time t (from the origin)."""
+    vx, vy, w = twist
+    if abs(w) < 1e-15:
+        return np.array([vx * t, vy * t, 0.0])
+    th = w * t
+    x = (vx * math.sin(th) - vy * (1 - math.cos(th))) / w
+    y = (vx * (1 - math.cos(th)) + vy * math.sin(th)) / w
+    return np.array([x, y, (th + math.pi) % (2 * math.pi) - math.pi])
