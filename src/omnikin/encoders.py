@@ -17,11 +17,18 @@ from .errors import OdometryInputError
 
 
 def wrap_ticks(delta, bits: int | None):
-    """Counter increments wrapped to ``[-2**(bits-1), 2**(bits-1))`` (unchanged if None)."""
+    """Counter increments wrapped to ``[-2**(bits-1), 2**(bits-1))`` (unchanged if None).
+
+    Integer arrays are wrapped with a bit mask (exact, fast), others with a modulo.
+    """
     if bits is None:
         return delta
-    full = float(2 ** bits)
-    return (np.asarray(delta, dtype=float) + full / 2) % full - full / 2
+    delta = np.asarray(delta)
+    half = 2 ** (bits - 1)
+    if np.issubdtype(delta.dtype, np.integer) and bits < 63:
+        return ((delta + half) & (2 * half - 1)) - half
+    full = float(2 * half)
+    return (delta.astype(float) + full / 2) % full - full / 2
 
 
 def check_bits(bits: int | None) -> int | None:
@@ -49,8 +56,8 @@ def jump_limits(wheels, dt, bits: int | None, max_jump=None) -> np.ndarray:
     return out
 
 
-def ticks_to_angle_increments(wheels, t, ticks, bits: int | None = None, max_jump=None) -> np.ndarray:
-    """Wheel angle increments ``(..., N - 1, n)`` [rad] between consecutive samples.
+def tick_increments(wheels, t, ticks, bits: int | None = None, max_jump=None) -> np.ndarray:
+    """Checked counter increments ``(..., N - 1, n)`` [ticks] between consecutive samples.
 
     ``t`` ``(..., N)`` [s] must increase strictly; ``ticks`` ``(..., N, n)`` are raw
     counter readings. Raises :class:`OdometryInputError` naming the sample and
@@ -75,13 +82,22 @@ def ticks_to_angle_increments(wheels, t, ticks, bits: int | None = None, max_jum
                    f"ticks: reading outside the range of a {bits}-bit counter", names)
     dt = np.diff(t, axis=-1)
     _first_bad(dt <= 0, "t: timestamps must increase strictly (repeated or going back)", offset=1)
-    raw = np.diff(tk, axis=-2)
-    delta = wrap_ticks(raw, bits).astype(float) if bits is not None else raw.astype(float)
-    limit = jump_limits(wheels, dt, bits, max_jump)
-    _first_bad(np.abs(delta) > limit, "ticks: impossible jump (faster than the wheel can turn, or half the "
-               "counter range)", names, offset=1)
+    delta = wrap_ticks(np.diff(tk, axis=-2), bits)
+    bounded = max_jump is not None or any(w.max_speed is not None for w in wheels)
+    if bounded or bits is not None:
+        limit = jump_limits(wheels, dt, bits, max_jump)
+        _first_bad(np.abs(delta) > limit, "ticks: impossible jump (faster than the wheel can turn, or half the "
+                   "counter range)", names, offset=1)
+    return delta.astype(float, copy=False)
+
+
+def ticks_to_angle_increments(wheels, t, ticks, bits: int | None = None, max_jump=None) -> np.ndarray:
+    """Wheel angle increments ``(..., N - 1, n)`` [rad] between consecutive samples.
+
+    See :func:`tick_increments` for the checks.
+    """
     scale = np.array([w.encoder.rad_per_tick for w in wheels])
-    return delta * scale
+    return tick_increments(wheels, t, ticks, bits, max_jump) * scale
 
 
 def _first_bad(mask, what: str, names=None, offset: int = 0) -> None:

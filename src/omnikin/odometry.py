@@ -24,10 +24,10 @@ from typing import Optional
 import numpy as np
 
 from ._arrays import as_components
-from .encoders import check_bits, ticks_to_angle_increments
+from .encoders import check_bits, tick_increments
 from .errors import OdometryInputError, OmnikinError
 from .geometry import wrap_angle
-from .integration import check_method, integrate
+from .integration import check_method, integrate_components
 from ._stream_kernel import compile_advance, compile_update
 from .model import Robot
 
@@ -50,20 +50,34 @@ def _mid_steer(steer: Optional[np.ndarray]) -> Optional[np.ndarray]:
     return steer[..., :-1, :] + 0.5 * wrap_angle(np.diff(steer, axis=-2))
 
 
+CHUNK = 1 << 14
+"""Samples integrated per block: keeps the temporaries in cache (see docs/performance.md)."""
+
+
 @dataclass(frozen=True)
 class OdometryResult:
     """Batch odometry: ``poses`` ``(..., N, 3)`` at the times ``t`` ``(..., N)``.
 
     ``increments`` ``(..., N-1, 3)`` are the body displacements of each interval;
     ``twists`` their mean twists; ``residual`` ``(..., N-1, n_rows)`` the forward
-    kinematics residual [rad/s] (zero for a square, full-rank layout).
+    kinematics residual [rad/s] (zero for a square, full-rank layout). They are
+    computed on first access.
     """
 
     t: np.ndarray
     poses: np.ndarray
-    increments: np.ndarray
-    _angles: np.ndarray
-    _rows: np.ndarray
+    _delta: np.ndarray   # (..., N-1, n) wheel increments [ticks or rad] ...
+    _scale: np.ndarray   # (n,) ... times this [rad per unit]
+    _fk: np.ndarray      # ((..., N-1,) 3, n_rows) forward-kinematics operator
+    _rows: np.ndarray    # ((..., N-1,) n_rows, 3) forward-kinematics rows A
+
+    @cached_property
+    def _angles(self) -> np.ndarray:
+        return _fk_input(self._delta, self._scale, self._fk)
+
+    @cached_property
+    def increments(self) -> np.ndarray:
+        return np.einsum("...ij,...j->...i", self._fk, self._angles)
 
     @cached_property
     def twists(self) -> np.ndarray:
@@ -71,11 +85,17 @@ class OdometryResult:
 
     @cached_property
     def residual(self) -> np.ndarray:
-        n = self._angles.shape[-1]
         pred = np.einsum("...ij,...j->...i", self._rows, self.increments)
-        b = np.zeros(pred.shape)
-        b[..., :n] = self._angles
-        return (b - pred) / np.diff(self.t, axis=-1)[..., None]
+        return (self._angles - pred) / np.diff(self.t, axis=-1)[..., None]
+
+
+def _fk_input(delta, scale, fk) -> np.ndarray:
+    """Wheel angle increments ``delta * scale`` [rad], padded with zeros for the steering rows of ``fk``."""
+    angles = delta * scale
+    extra = fk.shape[-1] - angles.shape[-1]
+    if extra:
+        angles = np.concatenate([angles, np.zeros(angles.shape[:-1] + (extra,))], axis=-1)
+    return angles
 
 
 def batch_odometry(robot: Robot, t, ticks, *, steer=None, method: str = "exact",
@@ -84,11 +104,13 @@ def batch_odometry(robot: Robot, t, ticks, *, steer=None, method: str = "exact",
 
     Leading axes (trials) broadcast. ``steer`` ``(..., N, n_steer)`` [rad] is needed
     for robots with steerable wheels. The first sample is the zero of the ticks and
-    sits at ``start`` (default origin).
+    sits at ``start`` (default origin). Checks as in
+    :func:`omnikin.encoders.tick_increments`.
     """
     wheels = encoded_wheels(robot)
-    angles = ticks_to_angle_increments(wheels, t, ticks, counter_bits, max_jump)
-    return _integrate_angles(robot, wheels, np.asarray(t, dtype=float), angles, steer, method, start)
+    dticks = tick_increments(wheels, t, ticks, counter_bits, max_jump)
+    scale = np.array([w.encoder.rad_per_tick for w in wheels])
+    return _integrate(robot, wheels, np.asarray(t, dtype=float), dticks, scale, steer, method, start)
 
 
 def batch_odometry_from_angles(robot: Robot, t, angles, *, steer=None, method: str = "exact",
@@ -104,10 +126,11 @@ def batch_odometry_from_angles(robot: Robot, t, angles, *, steer=None, method: s
         raise OdometryInputError("angles/t: non-finite values")
     if np.any(np.diff(tt, axis=-1) <= 0):
         raise OdometryInputError("t: timestamps must increase strictly")
-    return _integrate_angles(robot, wheels, tt, np.diff(a, axis=-2), steer, method, start)
+    return _integrate(robot, wheels, tt, np.diff(a, axis=-2), np.ones(len(wheels)), steer, method, start)
 
 
-def _integrate_angles(robot, wheels, t, dangle, steer, method, start) -> OdometryResult:
+def _integrate(robot, wheels, t, delta, scale, steer, method, start) -> OdometryResult:
+    """Forward kinematics of the increments ``delta * scale`` [rad], then pose integration."""
     check_method(method)
     names = [w.name for w in wheels]
     if robot.steerable:
@@ -115,22 +138,39 @@ def _integrate_angles(robot, wheels, t, dangle, steer, method, start) -> Odometr
             raise OmnikinError(f"robot {robot.name!r}: steerable wheels {robot.steer_names} need steering "
                                f"angles (steer, shape (..., N, {len(robot.steerable)}))")
         s = as_components(steer, len(robot.steerable), "steer")
-        if s.shape[-2] != dangle.shape[-2] + 1:
-            raise OdometryInputError(f"steer: expected {dangle.shape[-2] + 1} samples, got shape {s.shape}")
+        if s.shape[-2] != delta.shape[-2] + 1:
+            raise OdometryInputError(f"steer: expected {delta.shape[-2] + 1} samples, got shape {s.shape}")
         if not np.all(np.isfinite(s)):
             raise OdometryInputError("steer: non-finite steering angle")
         mid = _mid_steer(s)
         f = robot.fk_matrix(mid, names)
         rows = robot._fk_rows(mid, names)
-        n_extra = f.shape[-1] - len(names)
-        b = np.concatenate([dangle, np.zeros(dangle.shape[:-1] + (n_extra,))], axis=-1) if n_extra else dangle
-        inc = np.einsum("...ij,...j->...i", f, b)
     else:
         f = robot.fk_matrix(None, names)
         rows = robot._fk_rows(np.zeros(0), names)
-        inc = dangle @ f.T
-    poses = integrate(inc, start, method)
-    return OdometryResult(t, poses, inc, dangle, rows)
+    if robot.steerable:
+        inc = np.einsum("...ij,...j->...i", f, _fk_input(delta, scale, f))
+        comps = np.ascontiguousarray(np.swapaxes(inc, -1, -2))
+        poses = integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], start, method)
+    else:
+        poses = _integrate_blocks(f * scale, delta, start, method)
+    return OdometryResult(t, poses, delta, scale, f, rows)
+
+
+def _integrate_blocks(f_ticks: np.ndarray, delta: np.ndarray, start, method: str) -> np.ndarray:
+    """Poses from increments ``delta`` ``(..., M, n)`` and a constant FK ``f_ticks`` ``(3, n)``,
+    :data:`CHUNK` samples at a time, each block starting where the previous one ended."""
+    lead, m = delta.shape[:-2], delta.shape[-2]
+    out = np.empty(lead + (m + 1, 3))
+    pose = np.zeros(lead + (3,)) if start is None else np.broadcast_to(np.asarray(start, float), lead + (3,))
+    out[..., 0, :] = pose
+    for s0 in range(0, m, CHUNK):
+        s1 = min(m, s0 + CHUNK)
+        comps = np.matmul(f_ticks, np.swapaxes(delta[..., s0:s1, :], -1, -2))   # (..., 3, block)
+        integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], pose, method,
+                             out=out[..., s0:s1 + 1, :])
+        pose = out[..., s1, :]
+    return out
 
 
 class Odometry:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 
 import numpy as np
@@ -28,6 +29,11 @@ EPILOG = """examples:
 
 units: SI and radians; degrees only where an option or column ends in -deg/_deg.
 frames: body x forward, y left, angles counter-clockwise (REP-103)."""
+
+
+NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|nan)$", re.IGNORECASE)
+"""Arguments argparse must read as negative numbers, not options (``-2.5e-3`` included;
+argparse before Python 3.13 only knows ``-2`` and ``-2.5``)."""
 
 
 class CliError(Exception):
@@ -365,6 +371,8 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument("--counter-bits", type=int, metavar="N", help="encoder counters wrap at 2**N (e.g. 16, 32)")
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     sp.set_defaults(func=cmd_odometry)
+    for parser in [p, *sub.choices.values()]:
+        parser._negative_number_matcher = NEGATIVE_NUMBER  # see NEGATIVE_NUMBER
     return p
 
 

@@ -46,7 +46,10 @@ def _number(where: _Where, value: Any, wheel: str | None, field: str, *, positiv
             nonnegative=False) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise where.error(f"must be a number, got {value!r}", wheel, field)
-    x = float(value)
+    try:
+        x = float(value)
+    except OverflowError:
+        raise where.error(f"number too large, got {value!r}", wheel, field) from None
     if not math.isfinite(x):
         raise where.error(f"must be finite, got {value!r}", wheel, field)
     if positive and x <= 0:

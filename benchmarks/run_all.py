@@ -1,0 +1,23 @@
+"""Run every benchmark and save the figures in benchmarks/results/*.json.
+
+    python3 benchmarks/run_all.py
+
+Benchmarks are not part of the test run; their figures go into docs/performance.md.
+"""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bench_accuracy  # noqa: E402
+import bench_batch  # noqa: E402
+import bench_streaming  # noqa: E402
+from _common import machine, save  # noqa: E402
+
+if __name__ == "__main__":
+    print("machine:", machine())
+    for module in (bench_streaming, bench_batch, bench_accuracy):
+        name = module.__name__.replace("bench_", "")
+        path = save(name, module.main())
+        print(f"-> {path}\n")
