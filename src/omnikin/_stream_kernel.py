@@ -76,19 +76,22 @@ def compile_update(owner, n: int, fk_rows, method: str, full: int | None, limits
         "    p = o._ticks",
         "    if p is None or steer is not None:",
         "        return general(t, ticks, steer)",
-        "    try:",
-        f"        {', '.join(tk)}, = ticks",
-        "    except (TypeError, ValueError):",
-        "        return general(t, ticks, steer)  # raises, naming the expected readings",
         "    dt = t - o._t",
         "    if not dt > 0.0:",
         "        return not_later(t, dt, ticks, steer)",
-        f"    {', '.join(f'p{j}' for j in range(n))}, = p",
+        "    try:",
+        f"        {', '.join(tk)}, = ticks",
+        f"        {', '.join(f'p{j}' for j in range(n))}, = p",
     ]
-    lines += [f"    d{j} = t{j} - p{j}" for j in range(n)]
-    if full is not None:
+    if full is None:
+        lines += [f"        d{j} = t{j} - p{j}" for j in range(n)]
+    else:
+        # integer counters: wrap with a bit mask; float readings raise TypeError -> general path
         half = full // 2
-        lines += [f"    d{j} = (d{j} + {half}) % {full} - {half}" for j in range(n)]
+        lines += [f"        d{j} = ((t{j} - p{j} + {half}) & {full - 1}) - {half}" for j in range(n)]
+    lines += ["    except (TypeError, ValueError):",
+              "        return general(t, ticks, steer)  # names what is wrong, or handles floats"]
+    if full is not None:
         inside = " and ".join(f"{-half} <= t{j} < {full}" for j in range(n))
         lines += [f"    if not ({inside}):", f"        check([{', '.join(d)}], dt, ticks)"]
     bounds = []

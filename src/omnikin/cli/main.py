@@ -148,7 +148,10 @@ def cmd_show(args) -> int:
     if args.plot:
         from ..viz.layout import save_layout
 
-        save_layout(robot, args.plot)
+        try:
+            save_layout(robot, args.plot)
+        except (OSError, ValueError) as exc:
+            raise CliError(f"{args.plot}: cannot write the drawing: {exc}") from None
     if args.json:
         print(json.dumps(data, indent=2))
         return 0
@@ -310,7 +313,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
     robot_help = f"preset name ({', '.join(PRESET_NAMES)}) or robot file (YAML/JSON, schema 1)"
 
-    sp = sub.add_parser("presets", help="list the shipped robots", description="List the robots shipped with omnikin.")
+    sp = sub.add_parser("presets", help="list the shipped robots", description="List the robots shipped with omnikin.",
+                        epilog="examples:\n  omnikin presets\n  omnikin presets --json",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     sp.add_argument("--json", action="store_true", help="machine-readable output")
     sp.set_defaults(func=cmd_presets)
 

@@ -57,8 +57,13 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
     except OSError as exc:
         raise OdometryInputError(f"{source}: cannot open: {exc.strerror}") from None
     with handle:
-        rows = [(i + 1, r) for i, r in enumerate(csv.reader(handle))
-                if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
+        try:
+            rows = [(i + 1, r) for i, r in enumerate(csv.reader(handle))
+                    if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
+        except UnicodeDecodeError as exc:
+            raise OdometryInputError(f"{source}: not a UTF-8 text file (byte {exc.start}: {exc.reason})") from None
+        except csv.Error as exc:
+            raise OdometryInputError(f"{source}: malformed CSV: {exc}") from None
     if not rows:
         raise OdometryInputError(f"{source}: empty log; expected a header {','.join(expected)}")
     header_line, header = rows[0]
