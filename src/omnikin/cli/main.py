@@ -282,6 +282,10 @@ def cmd_odometry(args) -> int:
 
     robot = _robot(args.robot)
     log = read_tick_log(args.log, robot)
+    if log.duplicate_lines:
+        lines = ", ".join(map(str, log.duplicate_lines[:10])) + (" ..." if len(log.duplicate_lines) > 10 else "")
+        print(f"omnikin: warning: {args.log}: skipped {len(log.duplicate_lines)} row(s) repeating the previous "
+              f"sample exactly (line {lines})", file=sys.stderr)
     res = batch_odometry(robot, log.t, log.ticks, steer=log.steer, method=args.method,
                          counter_bits=args.counter_bits)
     try:
@@ -293,7 +297,8 @@ def cmd_odometry(args) -> int:
     summary = {"robot": robot.name, "samples": int(len(log.t)), "duration": float(log.t[-1] - log.t[0]),
                "method": args.method, "final_pose": end.tolist(), "path_length": path,
                "max_residual": float(np.max(np.abs(res.residual))) if res.residual.size else 0.0,
-               "output": str(args.output), "format": args.format}
+               "output": str(args.output), "format": args.format,
+               "duplicate_lines": list(log.duplicate_lines)}
     if args.json:
         print(json.dumps(summary, indent=2))
     else:

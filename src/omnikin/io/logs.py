@@ -28,12 +28,19 @@ FORMATS = ("csv", "tum")
 
 @dataclass(frozen=True)
 class TickLog:
-    """A parsed tick log: ``t`` (N,), ``ticks`` (N, n_enc), ``steer`` (N, n_steer) [rad] or None."""
+    """A parsed tick log: ``t`` (N,), ``ticks`` (N, n_enc), ``steer`` (N, n_steer) [rad] or None.
+
+    Rows that repeat the previous row exactly (a logger writing a sample twice) are
+    dropped and their line numbers kept in ``duplicate_lines``; a repeated time with
+    other readings stays in and is refused by the odometry.
+    """
 
     t: np.ndarray
     ticks: np.ndarray
     steer: np.ndarray | None
     wheel_names: list[str]
+    duplicate_lines: tuple[int, ...] = ()
+    """Lines skipped because they repeat the previous sample exactly (time and readings)."""
 
 
 def _number(text: str, source: str, line: int, column: str) -> float:
@@ -53,7 +60,7 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
     steer_cols = [f"{name}_steer_deg" for name in robot.steer_names]
     expected = ["t"] + wheels + steer_cols
     try:
-        handle = open(path, newline="", encoding="utf-8")
+        handle = open(path, newline="", encoding="utf-8-sig")  # a BOM (Excel) is fine
     except OSError as exc:
         raise OdometryInputError(f"{source}: cannot open: {exc.strerror}") from None
     with handle:
@@ -93,11 +100,17 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
             raise OdometryInputError(f"{source}: line {line}: {len(row)} fields, header has {len(header)}")
         for j, name in enumerate(expected):
             data[k, j] = _number(row[index[name]].strip(), source, line, name)
+    repeat = np.zeros(len(data), dtype=bool)
+    repeat[1:] = np.all(data[1:] == data[:-1], axis=1)
+    duplicates = tuple(rows[k + 1][0] for k in np.flatnonzero(repeat))
+    data = data[~repeat]
+    if len(data) < 2:
+        raise OdometryInputError(f"{source}: needs at least two distinct samples, got {len(data)}")
     ticks = data[:, 1:1 + len(wheels)]
     if np.all(ticks == np.round(ticks)) and np.all(np.abs(ticks) < 2 ** 62):
         ticks = ticks.astype(np.int64)
     steer = np.radians(data[:, 1 + len(wheels):]) if steer_cols else None
-    return TickLog(data[:, 0].copy(), ticks, steer, wheels)
+    return TickLog(data[:, 0].copy(), ticks, steer, wheels, duplicates)
 
 
 def write_trajectory(path: str | Path, t: np.ndarray, poses: np.ndarray, fmt: str = "csv") -> None:
