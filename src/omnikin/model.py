@@ -169,8 +169,13 @@ class Robot:
         """Orthonormal basis ``N`` ``(3, k)`` of twists the fixed wheels allow."""
         return null_space(self.fixed_constraints, 3)
 
-    def _fk_rows(self, steer: np.ndarray, wheels: Optional[Sequence[str]]) -> np.ndarray:
-        """Stacked ``A = [J; S/r]`` ``(..., n_rows, 3)`` for the chosen wheels."""
+    def fk_rows(self, steer=None, wheels: Optional[Sequence[str]] = None) -> np.ndarray:
+        """Rows ``A = [J; S/r]`` ``(..., n_rows, 3)`` that forward kinematics fits (module docstring).
+
+        ``J``: rolling rows of the chosen wheels; ``S/r``: sliding rows of the chosen centred
+        steerable wheels over their radii. ``steer`` ``(..., n_steer)`` [rad].
+        """
+        steer = self._steer_array(steer)
         jac = self.jacobian(steer, wheels)
         chosen = {w.name for w in (self.rolling if wheels is None else [self.wheel(n) for n in wheels])}
         by = self._steer_of(steer)
@@ -184,13 +189,13 @@ class Robot:
 
     def fk_matrix(self, steer=None, wheels: Optional[Sequence[str]] = None) -> np.ndarray:
         """Forward-kinematics operator ``(..., 3, n_rows)``: ``twist = F [omega; 0]``."""
-        a = self._fk_rows(self._steer_array(steer), wheels)
+        a = self.fk_rows(self._steer_array(steer), wheels)
         n = self.admissible_basis
         return n @ np.linalg.pinv(a @ n, rcond=RANK_TOL)
 
     def fk_rank(self, steer=None, wheels: Optional[Sequence[str]] = None) -> int:
         """How many independent motion components the wheels determine at ``steer``."""
-        a = self._fk_rows(self._steer_array(steer), wheels)
+        a = self.fk_rows(self._steer_array(steer), wheels)
         return rank(a @ self.admissible_basis)
 
     @cached_property
@@ -221,7 +226,7 @@ class Robot:
 
     def _check_observable(self, wheels: Optional[Sequence[str]], config: Configuration) -> None:
         """Every admissible motion must turn at least one of ``wheels``."""
-        a = self._fk_rows(config.steer, wheels)
+        a = self.fk_rows(config.steer, wheels)
         basis = config.admissible
         m = a @ basis
         if rank(m) == basis.shape[1]:
@@ -330,7 +335,7 @@ class Robot:
             raise OmnikinError(
                 f"robot {self.name!r}: steerable wheels {self.steer_names} need their steering angles (steer=...)")
         steer = self._steer_array(steer)
-        a = self._fk_rows(steer, wheels)
+        a = self.fk_rows(steer, wheels)
         n_extra = a.shape[-2] - len(names)
         b = np.concatenate([w, np.zeros(w.shape[:-1] + (n_extra,))], axis=-1) if n_extra else w
         if not self.steerable and wheels is None:

@@ -144,10 +144,10 @@ def _integrate(robot, wheels, t, delta, scale, steer, method, start) -> Odometry
             raise OdometryInputError("steer: non-finite steering angle")
         mid = _mid_steer(s)
         f = robot.fk_matrix(mid, names)
-        rows = robot._fk_rows(mid, names)
+        rows = robot.fk_rows(mid, names)
     else:
         f = robot.fk_matrix(None, names)
-        rows = robot._fk_rows(np.zeros(0), names)
+        rows = robot.fk_rows(np.zeros(0), names)
     if robot.steerable:
         inc = np.einsum("...ij,...j->...i", f, _fk_input(delta, scale, f))
         comps = np.ascontiguousarray(np.swapaxes(inc, -1, -2))
@@ -216,7 +216,7 @@ class Odometry:
         self.reset(start)
         if not self._steerable:
             f = robot.fk_matrix(None, self.wheel_names)
-            self._rows = robot._fk_rows(np.zeros(0), self.wheel_names)
+            self._rows = robot.fk_rows(np.zeros(0), self.wheel_names)
             redundant = self._rows.shape[0] > np.linalg.matrix_rank(self._rows)
             fk_ticks = [[float(v) * s for v, s in zip(row, self._scale)] for row in f]
             self.update = compile_update(self, self._n, fk_ticks, self.method, self._full, self._lims, self._rates,
