@@ -79,18 +79,27 @@ def test_exp_is_the_constant_twist_arc():
     assert_pose_close(g.exp([1.0, 0.0, math.pi / 2]), np.array([r, r, math.pi / 2]), 1e-12)
 
 
-@pytest.mark.parametrize("phi", [1e-3, 1e-4, 9.99e-5, 1.0001e-4, 1e-6, 1e-9, 0.0, -1e-4, -2e-4])
+_EDGE = 2 * g.TAYLOR_LIMIT   # phi at which sinc(phi/2) switches from its polynomial to sin(x)/x
+
+
+@pytest.mark.parametrize("phi", [_EDGE * (1 - 1e-12), _EDGE, _EDGE * (1 + 1e-12), -_EDGE, -_EDGE * (1 - 1e-12),
+                                 0.5 * _EDGE, 1e-4, 1e-9, 0.0, 1.0, 3.0])
 def test_small_angle_branch_is_continuous(phi):
-    """Both sides of the Taylor switch agree with a high-precision reference (mpmath-free)."""
+    """Both sides of the Taylor switch agree with an exact-rational series reference to one ulp."""
     from fractions import Fraction
 
-    # reference: sinc(x) from its series evaluated in exact rationals (x small)
     x = Fraction(phi / 2)
-    ref = sum((-1) ** k * x ** (2 * k) / math.factorial(2 * k + 1) for k in range(8))
+    ref = sum((-1) ** k * x ** (2 * k) / math.factorial(2 * k + 1) for k in range(20))
     assert abs(float(g.sinc(phi / 2)) - float(ref)) <= 2.3e-16  # within one ulp
     out = g.exp([1.0, 0.5, phi])
     c, s = math.cos(phi / 2), math.sin(phi / 2)
-    np.testing.assert_allclose(out[:2], float(ref) * np.array([c - 0.5 * s, s + 0.5 * c]), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(out[:2], float(ref) * np.array([c - 0.5 * s, s + 0.5 * c]), rtol=0, atol=4e-16)
+
+
+def test_sinc_is_monotone_across_the_switch():
+    """No step at the branch: values just below and above the switch differ by their slope only."""
+    xs = g.TAYLOR_LIMIT * (1 + np.array([-4e-9, -2e-9, -1e-9, 0, 1e-9, 2e-9, 4e-9]))
+    assert np.all(np.diff(g.sinc(xs)) < 0)
 
 
 def test_vectorised_broadcasting():
