@@ -42,22 +42,15 @@ def integrate(increments: np.ndarray, start=None, method: str = "exact") -> np.n
     return integrate_components(comps[0], comps[1], comps[2], start, method)
 
 
-def integrate_components(a: np.ndarray, b: np.ndarray, phi: np.ndarray, start=None,
-                         method: str = "exact", out: np.ndarray | None = None) -> np.ndarray:
-    """:func:`integrate` on the components ``(..., N)`` of the increments (the fast path).
-
-    Works on contiguous component arrays and reuses temporaries: about a dozen passes
-    over memory and three transcendental functions per sample (cos, sin, and sin only
-    where ``|phi/2| >= 0.1``). ``out`` ``(..., N + 1, 3)`` receives the poses if given.
-    """
+def _world_steps(a, b, phi, heading0, method: str):
+    """World-frame steps ``(dx, dy)`` ``(..., N)`` and headings ``(..., N + 1)`` (unwrapped)."""
     check_method(method)
-    lead = np.broadcast_shapes(a.shape[:-1], b.shape[:-1], phi.shape[:-1])
+    lead = np.broadcast_shapes(a.shape[:-1], b.shape[:-1], phi.shape[:-1], np.shape(heading0))
     n = phi.shape[-1]
-    start = np.zeros(lead + (3,)) if start is None else np.broadcast_to(np.asarray(start, float), lead + (3,))
     heading = np.empty(lead + (n + 1,))
-    heading[..., 0] = start[..., 2]
+    heading[..., 0] = heading0
     np.cumsum(phi, axis=-1, out=heading[..., 1:])
-    heading[..., 1:] += start[..., 2:3]
+    heading[..., 1:] += np.asarray(heading0)[..., None]
     if method == "euler":
         direction = heading[..., :-1]
     else:
@@ -67,16 +60,43 @@ def integrate_components(a: np.ndarray, b: np.ndarray, phi: np.ndarray, start=No
     if method == "exact":
         k = sinc(0.5 * phi)
         a, b = a * k, b * k
+    dx = c * a
+    dx -= s * b
+    dy = s * a
+    dy += c * b
+    return dx, dy, heading
+
+
+def integrate_components(a: np.ndarray, b: np.ndarray, phi: np.ndarray, start=None,
+                         method: str = "exact", out: np.ndarray | None = None) -> np.ndarray:
+    """:func:`integrate` on the components ``(..., N)`` of the increments (the fast path).
+
+    About two dozen passes over memory and three transcendental functions per sample
+    (cos, sin, and sin only where ``|phi/2| >= 0.1``). ``out`` ``(..., N + 1, 3)``
+    receives the poses if given.
+    """
+    lead = np.broadcast_shapes(a.shape[:-1], b.shape[:-1], phi.shape[:-1])
+    n = phi.shape[-1]
+    start = np.zeros(lead + (3,)) if start is None else np.broadcast_to(np.asarray(start, float), lead + (3,))
+    dx, dy, heading = _world_steps(a, b, phi, start[..., 2], method)
     if out is None:
         out = np.empty(lead + (n + 1, 3))
     out[..., 0, :2] = start[..., :2]
-    step = c * a
-    step -= s * b
-    np.cumsum(step, axis=-1, out=out[..., 1:, 0])
-    np.multiply(s, a, out=step)
-    step += c * b
-    np.cumsum(step, axis=-1, out=out[..., 1:, 1])
+    np.cumsum(dx, axis=-1, out=out[..., 1:, 0])
+    np.cumsum(dy, axis=-1, out=out[..., 1:, 1])
     out[..., 1:, 0] += start[..., 0:1]
     out[..., 1:, 1] += start[..., 1:2]
     out[..., 2] = wrap_angle(heading)
+    return out
+
+
+def integrate_end(a: np.ndarray, b: np.ndarray, phi: np.ndarray, start=None, method: str = "exact") -> np.ndarray:
+    """Only the last pose ``(..., 3)`` of :func:`integrate_components` (sums, no pose arrays)."""
+    lead = np.broadcast_shapes(a.shape[:-1], b.shape[:-1], phi.shape[:-1])
+    start = np.zeros(lead + (3,)) if start is None else np.broadcast_to(np.asarray(start, float), lead + (3,))
+    dx, dy, heading = _world_steps(a, b, phi, start[..., 2], method)
+    out = np.empty(lead + (3,))
+    out[..., 0] = start[..., 0] + dx.sum(axis=-1)
+    out[..., 1] = start[..., 1] + dy.sum(axis=-1)
+    out[..., 2] = wrap_angle(heading[..., -1])
     return out

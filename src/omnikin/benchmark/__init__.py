@@ -1,0 +1,1 @@
+"""Benchmarks of odometry (core layer 7): UMBmark, calibration."""

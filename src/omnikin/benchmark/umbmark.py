@@ -1,0 +1,182 @@
+"""UMBmark (Borenstein and Feng 1995) as fixed in ``docs/conventions.md``.
+
+Per run the return error is ``eps = abs - calc``: the true end pose minus the odometry
+end pose [m, m, rad] (seed 000, eq. 1-2). Per direction the centre of gravity of the
+n runs (eq. 3-4) and its distance from the origin ``r_cg`` (eq. 5-6);
+``E_max,syst = max(r_cg_cw, r_cg_ccw)``.
+
+For a differential drive (two coaxial fixed wheels; :func:`differential_pair`) Borenstein's
+correction: ``alpha = (x_cw + x_ccw) / (-4L)``, ``beta = (x_cw - x_ccw) / (-4L)`` [rad],
+``R = (L/2) / sin(beta/2)``, ``E_d = (R + b/2) / (R - b/2)`` (= D_R / D_L),
+``E_b = 90 deg / (90 deg - alpha)``, ``c_L = 2 / (E_d + 1)``, ``c_R = 2 / (1/E_d + 1)``,
+``b_new = E_b b``; ``x_cw``, ``x_ccw`` are the x coordinates of the centres of gravity.
+``alpha > 0``: under-rotation at every corner; ``beta > 0``: straight legs curve left.
+With the first leg along +x and cw turning right, a corner under-rotation alpha gives
+``x_cw = x_ccw = -2 L alpha`` and a leg curvature beta gives ``x_cw = -x_ccw = -2 L beta``
+to first order, which is what the two formulas invert (checked by simulation in the tests).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from ..errors import OmnikinError
+from ..model import Robot
+from ..simulation.errors import NoiseModel
+from ..simulation.limits import MotionLimits
+from ..simulation.motion import check_mode, umbmark_square
+from ..simulation.simulate import simulate
+
+
+@dataclass(frozen=True)
+class Borenstein:
+    """Borenstein's differential-drive correction (module docstring)."""
+
+    alpha: float
+    beta: float
+    R: float
+    E_d: float
+    E_b: float
+    c_L: float
+    c_R: float
+    b_new: float
+
+    def as_dict(self) -> dict:
+        return {k: float(getattr(self, k)) for k in ("alpha", "beta", "R", "E_d", "E_b", "c_L", "c_R", "b_new")}
+
+
+def borenstein(x_cw: float, x_ccw: float, side: float, track: float) -> Borenstein:
+    """Borenstein's E_d, E_b and corrections from the x of the two centres of gravity [m]."""
+    alpha = (x_cw + x_ccw) / (-4.0 * side)
+    beta = (x_cw - x_ccw) / (-4.0 * side)
+    if beta == 0.0:
+        R, e_d = math.inf, 1.0
+    else:
+        R = (side / 2.0) / math.sin(beta / 2.0)
+        e_d = (R + track / 2.0) / (R - track / 2.0)
+    e_b = (math.pi / 2) / (math.pi / 2 - alpha)
+    return Borenstein(alpha, beta, R, e_d, e_b, 2.0 / (e_d + 1.0), 2.0 / (1.0 / e_d + 1.0), e_b * track)
+
+
+@dataclass(frozen=True)
+class DirectionResult:
+    """The runs of one direction: ``epsilon`` ``(n, 3)``, centre of gravity, ``r_cg``."""
+
+    direction: str
+    epsilon: np.ndarray
+
+    @property
+    def cg(self) -> np.ndarray:
+        """Centre of gravity ``(x, y)`` [m] of the return errors (eq. 3-4)."""
+        return self.epsilon[:, :2].mean(axis=0)
+
+    @property
+    def r_cg(self) -> float:
+        """Distance of the centre of gravity from the origin [m] (eq. 5-6)."""
+        return float(np.hypot(*self.cg))
+
+    def as_dict(self) -> dict:
+        return {"runs": [{"epsilon": [float(v) for v in e]} for e in self.epsilon],
+                "cg": [float(v) for v in self.cg], "r_cg": self.r_cg}
+
+
+@dataclass(frozen=True)
+class UMBmarkResult:
+    """One UMBmark procedure: n runs clockwise and n counter-clockwise."""
+
+    cw: DirectionResult
+    ccw: DirectionResult
+    side: float
+    mode: str = "rotate"
+    borenstein: Optional[Borenstein] = None
+
+    @property
+    def e_max_syst(self) -> float:
+        return max(self.cw.r_cg, self.ccw.r_cg)
+
+    def as_dict(self) -> dict:
+        out = {"side": self.side, "mode": self.mode, "cw": self.cw.as_dict(), "ccw": self.ccw.as_dict(),
+               "e_max_syst": self.e_max_syst}
+        if self.borenstein is not None:
+            out["borenstein"] = self.borenstein.as_dict()
+        return out
+
+
+def differential_pair(robot: Robot):
+    """``(left, right, track)`` of a differential drive, or None.
+
+    A differential drive here: exactly two encoded rolling wheels, both fixed standard
+    wheels on one axle (same x, drive directions along +-body x), one on each side.
+    """
+    enc = [w for w in robot.rolling if w.encoder is not None]
+    if len(enc) != 2 or not all(w.is_fixed for w in enc):
+        return None
+    a, b = enc
+    if abs(a.x - b.x) > 1e-9 or any(abs(math.sin(w.drive)) > 1e-9 for w in enc) or a.y * b.y >= 0:
+        return None
+    left, right = (a, b) if a.y > b.y else (b, a)
+    return left, right, left.y - right.y
+
+
+def analyze(eps_cw, eps_ccw, side: float = 4.0, robot: Robot | None = None, mode: str = "rotate") -> UMBmarkResult:
+    """UMBmark from return errors ``(n, 2)`` or ``(n, 3)`` per direction [m, m(, rad)].
+
+    With a differential-drive ``robot`` Borenstein's correction is added.
+    """
+    check_mode(mode)
+    if not (math.isfinite(side) and side > 0):
+        raise OmnikinError(f"side must be > 0, got {side!r}")
+    dirs = []
+    for name, eps in (("cw", eps_cw), ("ccw", eps_ccw)):
+        e = np.asarray(eps, dtype=float)
+        if e.ndim != 2 or e.shape[1] not in (2, 3):
+            raise OmnikinError(f"{name}: expected return errors of shape (n, 2) or (n, 3), got {e.shape}")
+        if len(e) == 0:
+            raise OmnikinError(f"{name}: no runs; UMBmark needs at least one run in each direction")
+        if not np.all(np.isfinite(e)):
+            raise OmnikinError(f"{name}: non-finite return error in run {int(np.argwhere(~np.isfinite(e))[0, 0]) + 1}")
+        if e.shape[1] == 2:
+            e = np.column_stack([e, np.zeros(len(e))])
+        dirs.append(DirectionResult(name, e))
+    cw, ccw = dirs
+    bor = None
+    if robot is not None and mode == "rotate":
+        pair = differential_pair(robot)
+        if pair is not None:
+            bor = borenstein(float(cw.cg[0]), float(ccw.cg[0]), side, pair[2])
+    return UMBmarkResult(cw, ccw, side, mode, bor)
+
+
+def run_umbmark(true_robot: Robot, command_robot: Robot, *, side: float = 4.0, mode: str = "rotate", runs: int = 5,
+                noise: NoiseModel | None = None, rate: float = 100.0, limits: MotionLimits | None = None,
+                trials: int = 1, rng=None, keep_runs: bool = False):
+    """Simulate ``trials`` UMBmark procedures of ``runs`` runs per direction.
+
+    ``command_robot`` is the model the robot executes the path by and computes its
+    odometry with; ``true_robot`` the robot as built. Returns a list of
+    :class:`UMBmarkResult` (one per trial) and, with ``keep_runs``, also the
+    :class:`~omnikin.simulation.simulate.SimulatedRun` of each direction (its ``truth``
+    holds the first trial's runs).
+    """
+    if not isinstance(runs, (int, np.integer)) or runs < 1:
+        raise OmnikinError(f"runs must be a whole number >= 1, got {runs!r}")
+    check_mode(mode)
+    if mode == "translate" and not command_robot.mobility.holonomic:
+        raise OmnikinError(f"robot {command_robot.name!r} is not holonomic (Campion type "
+                           f"{command_robot.mobility.campion_type}): it cannot drive the 'translate' square; "
+                           f"use --mode rotate")
+    rng = np.random.default_rng(rng)
+    sims = {}
+    for direction in ("cw", "ccw"):
+        sims[direction] = simulate(umbmark_square(direction, side, mode), true_robot, command_robot, rate=rate,
+                                   limits=limits, noise=noise, trials=trials * runs, rng=rng,
+                                   keep_truth=keep_runs)
+    results = []
+    for k in range(trials):
+        eps = {d: sims[d].epsilon[k * runs:(k + 1) * runs] for d in sims}
+        results.append(analyze(eps["cw"], eps["ccw"], side, command_robot, mode))
+    return (results, sims) if keep_runs else results

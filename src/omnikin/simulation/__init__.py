@@ -1,0 +1,1 @@
+"""Simulation (core layer 6): motion plans and limits, error models, simulated runs."""

@@ -1,0 +1,163 @@
+"""Error models: how the robot as built and its runs differ from the nominal model.
+
+*Systematic* errors (:class:`SystematicErrors`) make a "true robot" out of the nominal one:
+per wheel a relative radius error, a hub displaced by ``dx, dy`` [m] (or in polar terms,
+distance and angle), a drive direction and a roller angle off by some radians, and an
+encoder counting ``(1 + ticks)`` times the nominal ticks per revolution.
+
+*Random* errors (:class:`NoiseModel`) differ from run to run:
+
+* wheel slip: each wheel's rolling distance in a sample gets a zero-mean error of
+  variance ``slip**2 * |distance|`` [slip in sqrt(m)], the distance-proportional model of
+  Chong and Kleeman (1997, ref. [4] of the seed paper), so the scatter does not depend on
+  the sample rate;
+* floor irregularity: the heading gets a zero-mean error of variance
+  ``floor**2 * |path length|`` [floor in rad/sqrt(m)] per sample;
+* encoder quantisation: ticks are whole numbers (``quantise``);
+* measurement: the end pose measured by hand has a zero-mean error of ``measurement`` [m]
+  in x and y and ``measurement_theta`` [rad] in heading.
+
+``PROFILES`` and ``NOISE`` hold the named profiles used by ``omnikin umbmark``; the
+``typical`` as-built profile is: radius sigma 0.5 %, hub distance sigma 1 mm, hub angle and
+drive direction sigma 0.5 deg; run-to-run return scatter of about 10 mm on the 4 m square;
+end-pose measurement sigma 1 mm.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import OmnikinError
+from ..model import Robot
+from ..wheels import Encoder
+
+
+@dataclass(frozen=True)
+class WheelErrors:
+    """Systematic errors of one wheel (true = nominal + error)."""
+
+    radius: float = 0.0      # relative: r_true = r (1 + radius)
+    dx: float = 0.0          # hub displacement [m], body frame
+    dy: float = 0.0
+    drive: float = 0.0       # drive direction error [rad]
+    roller: float = 0.0      # roller angle error [rad] (Swedish wheels)
+    ticks: float = 0.0       # relative: ticks_per_rev_true = ticks_per_rev (1 + ticks)
+
+    def __post_init__(self):
+        for name in ("radius", "dx", "dy", "drive", "roller", "ticks"):
+            v = getattr(self, name)
+            if not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise OmnikinError(f"WheelErrors.{name} must be a finite number, got {v!r}")
+        if self.radius <= -1 or self.ticks <= -1:
+            raise OmnikinError("WheelErrors.radius and .ticks are relative errors and must be > -1")
+
+
+@dataclass(frozen=True)
+class SystematicErrors:
+    """Per-wheel systematic errors, keyed by wheel name."""
+
+    wheels: dict
+
+    def __post_init__(self):
+        object.__setattr__(self, "wheels", dict(self.wheels))
+
+    def apply(self, robot: Robot) -> Robot:
+        """The true robot: ``robot`` with these errors built in."""
+        unknown = sorted(set(self.wheels) - {w.name for w in robot.wheels})
+        if unknown:
+            raise OmnikinError(f"errors name wheels {unknown} that robot {robot.name!r} does not have")
+        wheels = []
+        for w in robot.wheels:
+            e = self.wheels.get(w.name, WheelErrors())
+            enc = w.encoder
+            if enc is not None and e.ticks:
+                enc = Encoder(enc.ticks_per_rev * (1 + e.ticks), enc.gear_ratio, enc.invert)
+            roller = w.roller + e.roller if w.is_swedish and w.type != "omni" else w.roller
+            if w.type == "omni" and e.roller:
+                # an omni wheel with a roller error is a Swedish wheel of that small angle
+                w = replace(w, type="swedish")
+                roller = e.roller
+            wheels.append(replace(w, x=w.x + e.dx, y=w.y + e.dy, drive=w.drive + e.drive, roller=roller,
+                                  radius=w.radius * (1 + e.radius), encoder=enc))
+        return Robot(f"{robot.name} (as built)", tuple(wheels), robot.description, robot.references)
+
+    def as_dict(self) -> dict:
+        return {name: {k: getattr(e, k) for k in ("radius", "dx", "dy", "drive", "roller", "ticks")}
+                for name, e in self.wheels.items()}
+
+
+@dataclass(frozen=True)
+class ErrorProfile:
+    """Standard deviations of the systematic errors drawn by :meth:`sample`."""
+
+    radius: float = 0.0          # relative
+    distance: float = 0.0        # m, radial hub displacement
+    angle: float = 0.0           # rad, hub displacement along the circle through it
+    drive: float = 0.0           # rad
+    roller: float = 0.0          # rad
+    ticks: float = 0.0           # relative
+
+    def sample(self, robot: Robot, rng) -> SystematicErrors:
+        """Draw one robot's worth of errors (``rng``: a numpy Generator or a seed)."""
+        rng = np.random.default_rng(rng)
+        out = {}
+        for w in robot.wheels:
+            z = rng.standard_normal(6)
+            dist = math.hypot(w.x, w.y)
+            beta = math.atan2(w.y, w.x)
+            dr, da = self.distance * z[1], self.angle * z[2]
+            dx = dr * math.cos(beta) - dist * da * math.sin(beta)
+            dy = dr * math.sin(beta) + dist * da * math.cos(beta)
+            out[w.name] = WheelErrors(radius=self.radius * z[0], dx=dx, dy=dy, drive=self.drive * z[3],
+                                      roller=self.roller * z[4] if w.is_swedish else 0.0,
+                                      ticks=self.ticks * z[5] if w.encoder is not None else 0.0)
+        return SystematicErrors(out)
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """Random errors of a run (module docstring)."""
+
+    slip: float = 0.0                 # sqrt(m)
+    floor: float = 0.0                # rad / sqrt(m)
+    quantise: bool = True
+    measurement: float = 0.0          # m
+    measurement_theta: float = 0.0    # rad
+
+    def __post_init__(self):
+        for name in ("slip", "floor", "measurement", "measurement_theta"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise OmnikinError(f"NoiseModel.{name} must be a finite number >= 0, got {v!r}")
+
+    @property
+    def is_zero(self) -> bool:
+        return self.slip == 0 and self.floor == 0
+
+
+PROFILES = {
+    "typical": ErrorProfile(radius=0.005, distance=0.001, angle=math.radians(0.5), drive=math.radians(0.5)),
+    "none": ErrorProfile(),
+}
+"""Systematic error profiles by name (``--errors``)."""
+
+NOISE = {
+    "typical": NoiseModel(slip=2e-4, floor=1e-4, measurement=0.001),
+    "none": NoiseModel(quantise=False),
+}
+"""Random error models by name (``--noise``)."""
+
+
+def profile(name: str) -> ErrorProfile:
+    if name not in PROFILES:
+        raise OmnikinError(f"unknown error profile {name!r}; one of {sorted(PROFILES)}")
+    return PROFILES[name]
+
+
+def noise(name: str) -> NoiseModel:
+    if name not in NOISE:
+        raise OmnikinError(f"unknown noise profile {name!r}; one of {sorted(NOISE)}")
+    return NOISE[name]

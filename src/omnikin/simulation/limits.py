@@ -1,0 +1,78 @@
+"""Motion limits and wheel-speed saturation that keeps the command's direction.
+
+ros2_controllers clamps each axis on its own, which bends the path (a clamped vx with an
+unclamped omega changes the curvature). omnikin scales the *whole* twist by one factor
+``k in (0, 1]``: direction of travel and curvature ``omega / |v|`` are kept, only the pace
+changes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from .._arrays import as_components, require_finite
+from ..errors import OmnikinError
+
+
+@dataclass(frozen=True)
+class MotionLimits:
+    """Speed and acceleration limits of the body and the wheels (None: unlimited).
+
+    ``linear`` [m/s] bounds ``hypot(vx, vy)``; ``angular`` [rad/s] bounds ``|omega|``;
+    ``linear_accel`` [m/s^2] and ``angular_accel`` [rad/s^2] likewise the rates of change;
+    ``wheel`` [rad/s] bounds every wheel speed (a wheel's own ``max_speed`` in the robot
+    file applies too, whichever is smaller).
+    """
+
+    linear: Optional[float] = 0.3
+    angular: Optional[float] = 1.0
+    linear_accel: Optional[float] = 0.5
+    angular_accel: Optional[float] = 2.0
+    wheel: Optional[float] = None
+
+    def __post_init__(self):
+        for name in ("linear", "angular", "linear_accel", "angular_accel", "wheel"):
+            value = getattr(self, name)
+            if value is not None and not (np.isfinite(value) and value > 0):
+                raise OmnikinError(f"MotionLimits.{name} must be a positive number or None, got {value!r}")
+
+
+def wheel_limits(robot, limits: MotionLimits) -> np.ndarray:
+    """Per rolling wheel speed bound [rad/s] (inf where none)."""
+    out = np.full(len(robot.rolling), np.inf)
+    for i, w in enumerate(robot.rolling):
+        if w.max_speed is not None:
+            out[i] = w.max_speed
+        if limits.wheel is not None:
+            out[i] = min(out[i], limits.wheel)
+    return out
+
+
+def speed_scale(robot, twist, limits: MotionLimits) -> np.ndarray:
+    """Largest factor ``k`` (may exceed 1) with ``k * twist`` inside every speed limit.
+
+    ``twist`` ``(..., 3)``; returns ``(...)``; ``inf`` for a zero twist.
+    """
+    t = as_components(twist, 3, "twist")
+    require_finite(t, "twist")
+    speeds = np.abs(robot.ik(t, on_infeasible="return").wheel_speeds)
+    bounds = [wheel_limits(robot, limits) / np.where(speeds > 0, speeds, np.nan)]
+    v = np.hypot(t[..., 0], t[..., 1])
+    if limits.linear is not None:
+        bounds.append((limits.linear / np.where(v > 0, v, np.nan))[..., None])
+    if limits.angular is not None:
+        w = np.abs(t[..., 2])
+        bounds.append((limits.angular / np.where(w > 0, w, np.nan))[..., None])
+    k = np.nanmin(np.concatenate([np.broadcast_to(b, t.shape[:-1] + (b.shape[-1],)) for b in bounds], axis=-1),
+                  axis=-1, initial=np.inf)
+    return k
+
+
+def saturate(robot, twist, limits: MotionLimits) -> np.ndarray:
+    """``twist`` scaled down (never up) by one factor so that every speed limit holds."""
+    t = as_components(twist, 3, "twist")
+    k = np.minimum(1.0, speed_scale(robot, t, limits))
+    return t * k[..., None]
