@@ -8,7 +8,8 @@ and ``integration``). Edges: ``io``, ``viz``, ``cli``.
 from .errors import (InfeasibleTwistError, OdometryInputError, OmnikinError, RobotFileError,
                      SingularLayoutError)
 from .model import FKResult, IKResult, Robot
-from .odometry import Odometry, OdometryResult, batch_odometry, batch_odometry_from_angles
+from .odometry import OdometryResult, batch_odometry, batch_odometry_from_angles
+from .streaming import Odometry
 from .presets import PRESET_NAMES
 from .wheels import Encoder, Steer, Wheel
 

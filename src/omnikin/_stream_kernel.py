@@ -8,9 +8,9 @@ estimator. The template does, per sample (conventions, Odometry):
 
 1. tick increments ``d_j = ticks_j - prev_j`` (wrapped modulo ``2**bits`` when the
    counters wrap);
-2. a single comparison per wheel against its jump limit (a finite bound also
-   traps NaN and infinity); anything suspicious goes to the caller's ``check``,
-   which raises with the sample and wheel named;
+2. a type check and a single comparison per wheel against its jump limit (a finite
+   bound also traps NaN and infinity); anything doubtful goes to the owner's general
+   path, which integrates the sample the same way or raises naming sample and wheel;
 3. body increment ``(a, b, phi) = F d`` (``F`` = forward kinematics in rad/tick);
 4. the pose update of :mod:`omnikin.integration` (``ADVANCE`` below, shared with
    the general path so both integrate identically).
@@ -18,7 +18,10 @@ estimator. The template does, per sample (conventions, Odometry):
 
 from __future__ import annotations
 
-from math import cos, pi, sin
+import math
+from math import cos, floor, pi, sin
+
+from .encoders import QUANTISATION_SLACK, jump_limit
 
 ADVANCE = {
     "exact": (
@@ -37,7 +40,7 @@ _MOVE = (
     "    o._y += k * (s * a + c * b)\n"
     "    th += phi\n"
     "    if th >= PI or th < -PI:\n"
-    "        th = (th + PI) % TWO_PI - PI\n"
+    "        th -= TWO_PI * floor((th + PI) / TWO_PI)  # as geometry.wrap_angle\n"
     "    o._th = th\n"
     "    o._t = t\n"
     "    o.twist = (a / dt, b / dt, phi / dt)\n"
@@ -46,7 +49,7 @@ _MOVE = (
 
 
 def _namespace() -> dict:
-    return {"cos": cos, "sin": sin, "PI": pi, "TWO_PI": 2.0 * pi}
+    return {"cos": cos, "sin": sin, "floor": floor, "PI": pi, "TWO_PI": 2.0 * pi}
 
 
 def compile_advance(owner, method: str):
@@ -58,15 +61,16 @@ def compile_advance(owner, method: str):
     return ns["advance"]
 
 
-def compile_update(owner, n: int, fk_rows, method: str, full: int | None, limits, rates, general, not_later,
-                   check, residual):
+def compile_update(owner, n: int, fk_rows, method: str, bits: int | None, max_jump: float | None, rates,
+                   general, not_later, residual):
     """Specialised ``update(t, ticks, steer=None)`` for ``n`` wheels.
 
-    ``fk_rows``: 3 rows of n floats [m or rad per tick]; ``full``: counter modulus or
-    None; ``limits``: static per-wheel jump limits [ticks]; ``rates``: per-wheel
-    ticks/s bound or None (limit ``1.5 rate dt + 2``); ``general(t, ticks, steer)``,
-    ``not_later(t, dt, ticks, steer)``, ``check(deltas, dt, ticks)`` and
-    ``residual(deltas, a, b, phi, dt)`` (or None) are the owner's slow paths.
+    ``fk_rows``: 3 rows of n floats [m or rad per tick]; ``bits``: counter width or None;
+    ``max_jump`` [ticks] and ``rates`` (per wheel ticks/s bound or None): the jump rules of
+    :func:`omnikin.encoders.jump_limit`; ``general(t, ticks, steer)`` handles every case
+    the fast path doubts (and raises where needed), ``not_later(t, dt, ticks, steer)``
+    repeated or earlier timestamps, ``residual(deltas, a, b, phi, dt)`` (or None) the
+    residual of redundant layouts.
     """
     d = [f"d{j}" for j in range(n)]
     tk = [f"t{j}" for j in range(n)]
@@ -76,31 +80,39 @@ def compile_update(owner, n: int, fk_rows, method: str, full: int | None, limits
         "    p = o._ticks",
         "    if p is None or steer is not None:",
         "        return general(t, ticks, steer)",
-        "    dt = t - o._t",
-        "    if not dt > 0.0:",
-        "        return not_later(t, dt, ticks, steer)",
         "    try:",
+        "        dt = t - o._t",
         f"        {', '.join(tk)}, = ticks",
         f"        {', '.join(f'p{j}' for j in range(n))}, = p",
     ]
-    if full is None:
+    if bits is None:
+        # int and float readings subtract exactly; numpy scalars too; anything else raises here
         lines += [f"        d{j} = t{j} - p{j}" for j in range(n)]
     else:
-        # integer counters: wrap with a bit mask; float readings raise TypeError -> general path
-        half = full // 2
-        lines += [f"        d{j} = ((t{j} - p{j} + {half}) & {full - 1}) - {half}" for j in range(n)]
-    lines += ["    except (TypeError, ValueError):",
-              "        return general(t, ticks, steer)  # names what is wrong, or handles floats"]
-    if full is not None:
-        inside = " and ".join(f"{-half} <= t{j} < {full}" for j in range(n))
-        lines += [f"    if not ({inside}):", f"        check([{', '.join(d)}], dt, ticks)"]
+        # wrapping counters: Python ints only (floats and numpy scalars take the general path)
+        half = 1 << (bits - 1)
+        lines += [f"        if {' or '.join(f'{v}.__class__ is not int' for v in tk)}:",
+                  "            return general(t, ticks, steer)"]
+        lines += [f"        d{j} = ((t{j} - p{j} + {half}) & {2 * half - 1}) - {half}" for j in range(n)]
+    lines += [
+        "    except (TypeError, ValueError):",
+        "        return general(t, ticks, steer)  # names what is wrong",
+        "    if not 0.0 < dt < INF:",
+        "        return not_later(t, dt, ticks, steer)",
+    ]
+    if bits is not None:
+        inside = " and ".join(f"{-half} <= t{j} < {2 * half}" for j in range(n))
+        lines += [f"    if not ({inside}):", "        return general(t, ticks, steer)"]
     bounds = []
     for j in range(n):
         if rates[j] is not None:
-            bounds.append(f"abs(d{j}) <= {rates[j]!r} * dt + 2.0")
+            bounds.append(f"abs(d{j}) <= {rates[j]!r} * dt + {QUANTISATION_SLACK!r}")
+            if bits is not None:
+                bounds.append(f"abs(d{j}) <= {jump_limit(None, None, 0.0, bits)!r}")
         else:
-            bounds.append(f"abs(d{j}) <= {limits[j]!r}")
-    lines += [f"    if not ({' and '.join(bounds)}):", f"        check([{', '.join(d)}], dt, ticks)"]
+            limit = jump_limit(max_jump, None, 0.0, bits)
+            bounds.append(f"abs(d{j}) <= {limit if math.isfinite(limit) else 1e300!r}")
+    lines += [f"    if not ({' and '.join(bounds)}):", "        return general(t, ticks, steer)  # raises, naming it"]
     for name, row in zip(("a", "b", "phi"), fk_rows):
         lines.append(f"    {name} = " + " + ".join(f"{v!r} * d{j}" for j, v in enumerate(row)))
     if residual is not None:
@@ -108,6 +120,6 @@ def compile_update(owner, n: int, fk_rows, method: str, full: int | None, limits
     lines += [f"    o._ticks = ({', '.join(tk)},)", "    th = o._th"]
     src = "\n".join(lines) + "\n" + ADVANCE[method] + _MOVE
     ns = _namespace()
-    ns.update(OWNER=owner, general=general, not_later=not_later, check=check, residual=residual)
+    ns.update(OWNER=owner, general=general, not_later=not_later, residual=residual, INF=math.inf)
     exec(compile(src, f"<omnikin update n={n} {method}>", "exec"), ns)
     return ns["update"]

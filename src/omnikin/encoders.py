@@ -2,33 +2,29 @@
 
 ``angle = 2 pi ticks / (ticks_per_rev gear_ratio)``, negated when ``invert``.
 Counters of ``bits`` bits wrap: the increment between two samples is taken
-modulo ``2**bits`` into ``[-2**(bits-1), 2**(bits-1))``. A wrapped increment can
-never exceed half the counter range, so a jump of more than half the range is
-detected only through a physical bound: ``max_jump`` ticks per sample, or the
-wheel's ``max_speed`` (with a 50 % margin plus 2 ticks of quantisation), or an
-increment equal to exactly half the range (its direction is undecidable).
+modulo ``2**bits`` into ``[-2**(bits-1), 2**(bits-1))``; readings may be stored
+signed or unsigned. A wrapped increment can never exceed half the counter range, so
+a jump of more than half the range is caught only through a physical bound: an
+explicit ``max_jump`` [ticks per sample], or the wheel's ``max_speed`` (bound
+``JUMP_MARGIN * max_speed * dt / rad_per_tick + QUANTISATION_SLACK`` ticks), and an
+increment of exactly half the range is refused (its direction is undecidable).
+
+This module is the single source of those rules: batch odometry uses the array
+functions, the streaming estimator :func:`jump_limit` and :func:`wrap_scalar`.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from .errors import OdometryInputError
 
-
-def wrap_ticks(delta, bits: int | None):
-    """Counter increments wrapped to ``[-2**(bits-1), 2**(bits-1))`` (unchanged if None).
-
-    Integer arrays are wrapped with a bit mask (exact, fast), others with a modulo.
-    """
-    if bits is None:
-        return delta
-    delta = np.asarray(delta)
-    half = 2 ** (bits - 1)
-    if np.issubdtype(delta.dtype, np.integer) and bits < 63:
-        return ((delta + half) & (2 * half - 1)) - half
-    full = float(2 * half)
-    return (delta.astype(float) + full / 2) % full - full / 2
+JUMP_MARGIN = 1.5
+"""A wheel may turn this much faster than its ``max_speed`` before a jump is impossible."""
+QUANTISATION_SLACK = 2.0
+"""Ticks allowed on top of the speed bound (quantisation at both ends of an interval)."""
 
 
 def check_bits(bits: int | None) -> int | None:
@@ -39,21 +35,74 @@ def check_bits(bits: int | None) -> int | None:
     return int(bits)
 
 
-def jump_limits(wheels, dt, bits: int | None, max_jump=None) -> np.ndarray:
-    """Largest plausible |tick increment| per wheel for intervals ``dt`` ``(..., N)``.
+def check_max_jump(max_jump) -> float | None:
+    if max_jump is None:
+        return None
+    if isinstance(max_jump, bool) or not isinstance(max_jump, (int, float, np.number)) \
+            or not math.isfinite(max_jump) or max_jump <= 0:
+        raise OdometryInputError(f"max_jump must be a finite number of ticks > 0, got {max_jump!r}")
+    return float(max_jump)
 
-    Shape ``(..., N, n)``; infinity where nothing bounds it.
-    """
-    dt = np.asarray(dt, dtype=float)
-    out = np.full(dt.shape + (len(wheels),), np.inf)
-    for j, w in enumerate(wheels):
-        if max_jump is not None:
-            out[..., j] = max_jump
-        elif w.max_speed is not None and w.encoder is not None:
-            out[..., j] = 1.5 * w.max_speed * dt / abs(w.encoder.rad_per_tick) + 2.0
+
+def tick_rate(wheel, max_jump) -> float | None:
+    """Bound on |ticks| per second of ``wheel`` from its ``max_speed`` (None if unbounded or
+    when an explicit ``max_jump`` replaces it)."""
+    if max_jump is not None or wheel.max_speed is None or wheel.encoder is None:
+        return None
+    return JUMP_MARGIN * wheel.max_speed / abs(wheel.encoder.rad_per_tick)
+
+
+def jump_limit(max_jump: float | None, rate: float | None, dt, bits: int | None):
+    """Largest plausible |increment| [ticks] over ``dt`` (scalar or array; inf if unbounded)."""
+    if max_jump is not None:
+        limit = max_jump + 0.0 * np.asarray(dt) if np.ndim(dt) else max_jump
+    elif rate is not None:
+        limit = rate * dt + QUANTISATION_SLACK
+    else:
+        limit = np.full(np.shape(dt), np.inf) if np.ndim(dt) else math.inf
     if bits is not None:
-        out = np.minimum(out, 2.0 ** (bits - 1) - 0.5)
-    return out
+        half = 2.0 ** (bits - 1) - 0.5
+        limit = np.minimum(limit, half) if np.ndim(limit) else min(limit, half)
+    return limit
+
+
+def wrap_scalar(delta, bits: int | None):
+    """One increment (Python int or float) wrapped into the counter's range."""
+    if bits is None:
+        return delta
+    half = 1 << (bits - 1)
+    if isinstance(delta, int):
+        return ((delta + half) & (2 * half - 1)) - half
+    return (delta + half) % (2 * half) - half
+
+
+def wrap_ticks(delta, bits: int | None):
+    """Increments wrapped to ``[-2**(bits-1), 2**(bits-1))`` (unchanged if ``bits`` is None).
+
+    int64 arrays wrap exactly: their arithmetic is modulo 2**64, and a mask reduces it
+    to ``bits``; float arrays use a modulo.
+    """
+    if bits is None:
+        return delta
+    delta = np.asarray(delta)
+    if delta.dtype == np.int64:
+        if bits == 64:
+            return delta
+        half = np.int64(1 << (bits - 1))
+        with np.errstate(over="ignore"):
+            return ((delta + half) & np.int64((1 << bits) - 1)) - half
+    full = float(2 ** bits)
+    return (delta.astype(float) + full / 2) % full - full / 2
+
+
+def as_counter_array(ticks, names) -> np.ndarray:
+    """Readings as int64 (integer input, unsigned kept modulo 2**64) or float64."""
+    tk = np.asarray(ticks)
+    if tk.dtype == bool or not np.issubdtype(tk.dtype, np.number) or np.iscomplexobj(tk):
+        raise OdometryInputError(f"ticks: expected real numbers for wheels {names}, got dtype {tk.dtype}")
+    if np.issubdtype(tk.dtype, np.integer):
+        return tk.astype(np.int64, casting="unsafe")
+    return tk.astype(np.float64)
 
 
 def tick_increments(wheels, t, ticks, bits: int | None = None, max_jump=None) -> np.ndarray:
@@ -66,41 +115,37 @@ def tick_increments(wheels, t, ticks, bits: int | None = None, max_jump=None) ->
     """
     names = [w.name for w in wheels]
     bits = check_bits(bits)
-    tk = np.asarray(ticks)
+    max_jump = check_max_jump(max_jump)
+    tk = as_counter_array(ticks, names)
     if tk.ndim < 2 or tk.shape[-1] != len(wheels):
         raise OdometryInputError(f"ticks: expected shape (..., N, {len(wheels)}) for wheels {names}, got {tk.shape}")
-    if not np.issubdtype(tk.dtype, np.number):
-        raise OdometryInputError(f"ticks: expected numbers, got dtype {tk.dtype}")
+    if tk.shape[-2] < 1:
+        raise OdometryInputError("ticks: no sample")
     t = np.asarray(t, dtype=float)
     if t.shape[-1:] != tk.shape[-2:-1]:
         raise OdometryInputError(f"t: expected {tk.shape[-2]} timestamps to match ticks {tk.shape}, got shape {t.shape}")
-    _first_bad(~np.isfinite(t), "t: non-finite timestamp")
-    if np.issubdtype(tk.dtype, np.floating):
-        _first_bad(~np.isfinite(tk), "ticks: non-finite reading", names)
-    if bits is not None:
-        _first_bad((tk < -(2 ** (bits - 1))) | (tk >= 2 ** bits),
-                   f"ticks: reading outside the range of a {bits}-bit counter", names)
+    first_bad(~np.isfinite(t), "t: non-finite timestamp")
+    if tk.dtype == np.float64:
+        first_bad(~np.isfinite(tk), "ticks: non-finite reading", names)
+    if bits is not None and bits < 64:
+        low, high = -(2 ** (bits - 1)), 2 ** bits
+        if np.asarray(ticks).dtype != np.uint64:
+            first_bad((tk < low) | (tk >= high), f"ticks: reading outside the range of a {bits}-bit counter", names)
     dt = np.diff(t, axis=-1)
-    _first_bad(dt <= 0, "t: timestamps must increase strictly (repeated or going back)", offset=1)
-    delta = wrap_ticks(np.diff(tk, axis=-2), bits)
-    bounded = max_jump is not None or any(w.max_speed is not None for w in wheels)
-    if bounded or bits is not None:
-        limit = jump_limits(wheels, dt, bits, max_jump)
-        _first_bad(np.abs(delta) > limit, "ticks: impossible jump (faster than the wheel can turn, or half the "
-                   "counter range)", names, offset=1)
+    first_bad(dt <= 0, "t: timestamps must increase strictly (repeated or going back)", offset=1)
+    with np.errstate(over="ignore"):
+        delta = wrap_ticks(np.diff(tk, axis=-2), bits)
+    if bits is not None or max_jump is not None or any(w.max_speed is not None for w in wheels):
+        limit = np.stack([np.broadcast_to(jump_limit(max_jump, tick_rate(w, max_jump), dt, bits), dt.shape)
+                          for w in wheels], axis=-1)
+        half_range = (delta == -(2 ** (bits - 1))) if bits is not None else False
+        first_bad((np.abs(delta) > limit) | half_range,
+                   "ticks: impossible jump (faster than the wheel can turn, or half the counter range)",
+                   names, offset=1)
     return delta.astype(float, copy=False)
 
 
-def ticks_to_angle_increments(wheels, t, ticks, bits: int | None = None, max_jump=None) -> np.ndarray:
-    """Wheel angle increments ``(..., N - 1, n)`` [rad] between consecutive samples.
-
-    See :func:`tick_increments` for the checks.
-    """
-    scale = np.array([w.encoder.rad_per_tick for w in wheels])
-    return tick_increments(wheels, t, ticks, bits, max_jump) * scale
-
-
-def _first_bad(mask, what: str, names=None, offset: int = 0) -> None:
+def first_bad(mask, what: str, names=None, offset: int = 0) -> None:
     """Raise naming the first sample (and trial and wheel) where ``mask`` is True."""
     if not np.any(mask):
         return

@@ -46,7 +46,8 @@ class IKResult:
     ``wheel_speeds`` ``(..., n)`` [rad/s] over the rolling wheels;
     ``steer_angles`` ``(..., n_steer)`` [rad]; ``violation`` ``(..., n_fixed)``
     [m/s]: side-slip speed each fixed wheel would need; ``steer_limited``
-    ``(..., n_steer)`` bool: no alignment within the steering limits.
+    ``(..., n_steer)`` bool: no alignment within the steering limits (or, for an
+    off-centred wheel, no steady alignment at all).
     """
 
     wheel_speeds: np.ndarray
@@ -138,7 +139,11 @@ class Robot:
     def _steer_array(self, steer) -> np.ndarray:
         if steer is None:
             return np.zeros(len(self.steerable))
-        arr = as_components(steer, len(self.steerable), "steer") if self.steerable else np.zeros((0,))
+        if not self.steerable:
+            if np.size(steer):
+                raise OmnikinError(f"robot {self.name!r} has no steerable wheel: do not pass steering angles")
+            return np.zeros(0)
+        arr = as_components(steer, len(self.steerable), "steer")
         require_finite(arr, "steer")
         return arr
 
@@ -284,7 +289,9 @@ class Robot:
             require_finite(np.asarray(heading, dtype=float), "heading")
             t = self.body_twist(t, heading)
         hint = self._steer_array(steer_hint)
-        steer, limited = self._steer_for(t, hint)
+        if hint.ndim > 1 and np.broadcast_shapes(hint.shape[:-1], t.shape[:-1]) != t.shape[:-1]:
+            raise OmnikinError(f"steer_hint: shape {hint.shape} does not fit twists of shape {t.shape}")
+        steer, limited = self._steer_for(t, hint, strict=on_infeasible == "raise")
         speeds = np.einsum("...ij,...j->...i", self.jacobian(steer), t)
         violation = t @ self.fixed_constraints.T
         result = IKResult(speeds, steer, violation, limited)
@@ -303,16 +310,17 @@ class Robot:
                     f"(on_infeasible='return' reports the violation instead)")
         idx = np.argwhere(limited)[0]
         w = self.steerable[int(idx[-1])]
+        lo, hi = (w.steer.lower, w.steer.upper) if w.steer is not None else (-np.pi, np.pi)
         return (f"robot {self.name!r}: twist {np.round(t[tuple(idx[:-1])], 9).tolist()} needs wheel {w.name!r} "
-                f"steered outside its limits [{np.degrees(w.steer.lower):.6g}, {np.degrees(w.steer.upper):.6g}] deg")
+                f"steered outside its limits [{np.degrees(lo):.6g}, {np.degrees(hi):.6g}] deg")
 
-    def _steer_for(self, t: np.ndarray, hint: np.ndarray):
+    def _steer_for(self, t: np.ndarray, hint: np.ndarray, strict: bool = True):
         """Steering angles ``(..., n_steer)`` aligning each steerable wheel with the motion."""
         shape = t.shape[:-1] + (len(self.steerable),)
         steer = np.zeros(shape)
         limited = np.zeros(shape, dtype=bool)
         for i, w in enumerate(self.steerable):
-            steer[..., i], limited[..., i] = w.align(t, np.broadcast_to(hint[..., i], t.shape[:-1]))
+            steer[..., i], limited[..., i] = w.align(t, np.broadcast_to(hint[..., i], t.shape[:-1]), strict)
         return steer, limited
 
     def wheel_speeds(self, twist) -> np.ndarray:

@@ -30,9 +30,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Optional
 
+import math
+
 import numpy as np
 
-from .errors import InfeasibleTwistError
+from .errors import InfeasibleTwistError, OmnikinError
 
 WHEEL_TYPES = ("omni", "mecanum", "swedish", "standard", "steerable", "castor")
 SWEDISH_TYPES = ("omni", "mecanum", "swedish")
@@ -85,6 +87,22 @@ class Wheel:
     encoder: Optional[Encoder] = None
     max_speed: Optional[float] = None
     steer: Optional[Steer] = None
+
+    def __post_init__(self):
+        if self.type not in WHEEL_TYPES:
+            raise OmnikinError(f"wheel {self.name!r}: unknown type {self.type!r}; one of {list(WHEEL_TYPES)}")
+        for field in ("x", "y", "drive", "radius", "roller"):
+            v = getattr(self, field)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.number)) or not math.isfinite(v):
+                raise OmnikinError(f"wheel {self.name!r}: {field} must be a finite number, got {v!r}")
+        if not self.radius > 0:
+            raise OmnikinError(f"wheel {self.name!r}: radius must be > 0, got {self.radius!r}")
+        if not abs(self.roller) < math.pi / 2:
+            raise OmnikinError(f"wheel {self.name!r}: roller angle must lie strictly between -90 and 90 deg")
+        if self.roller and not self.is_swedish:
+            raise OmnikinError(f"wheel {self.name!r}: only Swedish wheels have a roller angle")
+        if max(abs(self.x), abs(self.y), self.radius) > 1e6 or self.radius < 1e-9:
+            raise OmnikinError(f"wheel {self.name!r}: dimensions outside 1 nm .. 1000 km are not a wheeled robot")
 
     # --- classification ---------------------------------------------------
     @property
@@ -168,7 +186,7 @@ class Wheel:
         out[..., 1] = t[..., 1] + t[..., 2] * self.x
         return out
 
-    def align(self, twist, hint=0.0):
+    def align(self, twist, hint=0.0, strict: bool = True):
         """Steering angle [rad] aligning this wheel with the motion, and a limit flag.
 
         Centred wheels align ``u`` with the hub velocity ``v_p``; off-centred ones
@@ -177,7 +195,10 @@ class Wheel:
         or ``psi + pi + asin(d omega / |v_p|)`` (reversed), ``psi`` the direction of
         ``v_p``. Of the branches within the steering limits the one closest to
         ``hint`` is taken; where the hub is still the angle stays at ``hint``.
-        Returns ``(angle, limited)``: ``limited`` is True where neither branch fits.
+        Returns ``(angle, limited)``: ``limited`` is True where neither branch fits. An
+        off-centred wheel whose axis moves slower than ``offset * |omega|`` has no steady
+        angle: ``strict`` raises :class:`InfeasibleTwistError`, otherwise it is flagged
+        in ``limited`` and left at ``hint``.
         """
         t = np.asarray(twist, dtype=float)
         hint = np.broadcast_to(np.asarray(hint, dtype=float), t.shape[:-1])
@@ -186,8 +207,9 @@ class Wheel:
         psi = np.arctan2(v[..., 1], v[..., 0])
         moving = speed > 1e-12
         k = np.where(moving, self.offset * t[..., 2] / np.where(moving, speed, 1.0), 0.0)
-        if np.any(np.abs(k) > 1.0 + 1e-12):
-            bad = np.argwhere(np.abs(k) > 1.0 + 1e-12)[0]
+        unsteady = np.abs(k) > 1.0 + 1e-12
+        if strict and np.any(unsteady):
+            bad = np.argwhere(unsteady)[0]
             raise InfeasibleTwistError(
                 f"wheel {self.name!r}: no steady steering angle for twist {t[tuple(bad)].tolist()}: its "
                 f"steering axis moves slower than offset*|omega|, so the wheel would keep swivelling")
@@ -199,6 +221,6 @@ class Wheel:
         dist = np.abs((cands - hint[..., None] + np.pi) % (2 * np.pi) - np.pi)
         dist = np.where(within, dist, dist + 10.0)
         pick = np.take_along_axis(cands, np.argmin(dist, axis=-1)[..., None], axis=-1)[..., 0]
-        angle = np.where(moving, pick, hint)
-        limited = moving & ~np.any(within, axis=-1)
+        angle = np.where(moving & ~unsteady, pick, hint)
+        limited = (moving & ~np.any(within, axis=-1)) | unsteady
         return angle, limited

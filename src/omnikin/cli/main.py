@@ -226,7 +226,9 @@ def cmd_ik(args) -> int:
         data["roller_speeds"] = robot.roller_speeds(body).tolist()
     if robot.fixed:
         data["violation"] = res.violation.tolist()
-        data["feasible"] = bool(res.feasible)
+    if robot.steerable:
+        data["steer_limited"] = res.steer_limited.tolist()
+    data["feasible"] = bool(res.feasible)
     if args.json:
         print(json.dumps(data, indent=2))
         return 0
@@ -243,8 +245,13 @@ def cmd_ik(args) -> int:
         table.add_row(name, _fmt(speed), _fmt(math.degrees(steer[name])) if name in steer else "",
                       _fmt(roller[name]) if name in roller else "")
     con.print(table)
-    if robot.fixed and not res.feasible:
-        con.print(f"infeasible: side-slip speeds of fixed wheels {res.violation.tolist()} m/s")
+    if not res.feasible:
+        if robot.fixed and np.any(np.abs(res.violation) > 1e-9):
+            slips = ", ".join(f"{w.name} {v:.6g}" for w, v in zip(robot.fixed, res.violation))
+            con.print(f"infeasible: fixed wheels would slide sideways [m/s]: {slips}")
+        limited = [n for n, flag in zip(robot.steer_names, np.atleast_1d(res.steer_limited)) if flag]
+        if limited:
+            con.print(f"infeasible: no steering angle within limits (or no steady one) for {', '.join(limited)}")
     return 0
 
 
@@ -286,8 +293,14 @@ def cmd_odometry(args) -> int:
         lines = ", ".join(map(str, log.duplicate_lines[:10])) + (" ..." if len(log.duplicate_lines) > 10 else "")
         print(f"omnikin: warning: {args.log}: skipped {len(log.duplicate_lines)} row(s) repeating the previous "
               f"sample exactly (line {lines})", file=sys.stderr)
-    res = batch_odometry(robot, log.t, log.ticks, steer=log.steer, method=args.method,
-                         counter_bits=args.counter_bits)
+    try:
+        res = batch_odometry(robot, log.t, log.ticks, steer=log.steer, method=args.method,
+                             counter_bits=args.counter_bits)
+    except OmnikinError as exc:
+        # name the file and line of the sample as well as its index
+        msg = re.sub(r"at sample (\d+)", lambda m: f"at sample {m.group(1)} (line {log.lines[int(m.group(1))]})",
+                     str(exc))
+        raise CliError(f"{args.log}: {msg}") from None
     try:
         write_trajectory(args.output, log.t, res.poses, args.format)
     except OSError as exc:

@@ -41,6 +41,8 @@ class TickLog:
     wheel_names: list[str]
     duplicate_lines: tuple[int, ...] = ()
     """Lines skipped because they repeat the previous sample exactly (time and readings)."""
+    lines: tuple[int, ...] = ()
+    """File line of each kept sample."""
 
 
 def _number(text: str, source: str, line: int, column: str) -> float:
@@ -103,6 +105,7 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
     repeat = np.zeros(len(data), dtype=bool)
     repeat[1:] = np.all(data[1:] == data[:-1], axis=1)
     duplicates = tuple(rows[k + 1][0] for k in np.flatnonzero(repeat))
+    kept_lines = tuple(rows[k + 1][0] for k in np.flatnonzero(~repeat))
     data = data[~repeat]
     if len(data) < 2:
         raise OdometryInputError(f"{source}: needs at least two distinct samples, got {len(data)}")
@@ -110,7 +113,7 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
     if np.all(ticks == np.round(ticks)) and np.all(np.abs(ticks) < 2 ** 62):
         ticks = ticks.astype(np.int64)
     steer = np.radians(data[:, 1 + len(wheels):]) if steer_cols else None
-    return TickLog(data[:, 0].copy(), ticks, steer, wheels, duplicates)
+    return TickLog(data[:, 0].copy(), ticks, steer, wheels, duplicates, kept_lines)
 
 
 def write_trajectory(path: str | Path, t: np.ndarray, poses: np.ndarray, fmt: str = "csv") -> None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -209,18 +210,61 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> Robot:
         raise RobotFileError(f"{source}: {exc}") from None
 
 
+_EXPONENT = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+$")
+"""Floats YAML 1.1 reads as strings (``5e-2``: no dot) but YAML 1.2 and JSON as numbers."""
+
+
+def _strict_loader():
+    """A PyYAML SafeLoader that refuses duplicate keys and reads ``5e-2`` as a float."""
+    import yaml
+
+    class StrictLoader(yaml.SafeLoader):
+        pass
+
+    def mapping(loader, node, deep=False):
+        keys = set()
+        for key_node, _ in node.value:
+            key = loader.construct_object(key_node, deep=deep)
+            if key in keys:
+                mark = key_node.start_mark
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {key!r} (line {mark.line + 1})", mark)
+            keys.add(key)
+        return loader.construct_mapping(node, deep=deep)
+
+    def scalar(loader, node):
+        value = loader.construct_scalar(node)
+        if node.style is None and _EXPONENT.match(value):
+            return float(value)
+        return value
+
+    StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
+    StrictLoader.add_constructor("tag:yaml.org,2002:str", scalar)
+    return StrictLoader
+
+
+def _unique_json_keys(source: str):
+    def hook(pairs):
+        keys = [k for k, _ in pairs]
+        dup = sorted({k for k in keys if keys.count(k) > 1})
+        if dup:
+            raise RobotFileError(f"{source}: duplicate key(s) {dup}")
+        return dict(pairs)
+    return hook
+
+
 def parse_robot_text(text: str, source: str) -> Robot:
     """Parse YAML or JSON text (JSON is YAML 1.2 too; tried first when it looks like JSON)."""
     if text.lstrip().startswith("{"):
         try:
-            data = json.loads(text)
+            data = json.loads(text, object_pairs_hook=_unique_json_keys(source))
         except json.JSONDecodeError as exc:
             raise RobotFileError(f"{source}: invalid JSON at line {exc.lineno} column {exc.colno}: {exc.msg}") from None
     else:
         import yaml
 
         try:
-            data = yaml.safe_load(text)
+            data = yaml.load(text, Loader=_strict_loader())
         except yaml.YAMLError as exc:
             mark = getattr(exc, "problem_mark", None)
             at = f" at line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""

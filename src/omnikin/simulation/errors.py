@@ -19,7 +19,8 @@ encoder counting ``(1 + ticks)`` times the nominal ticks per revolution.
 
 ``PROFILES`` and ``NOISE`` hold the named profiles used by ``omnikin umbmark``; the
 ``typical`` as-built profile is: radius sigma 0.5 %, hub distance sigma 1 mm, hub angle and
-drive direction sigma 0.5 deg; run-to-run return scatter of about 10 mm on the 4 m square;
+drive direction sigma 0.5 deg (for fixed standard wheels only the hub displacement along
+the axle: a toed-in or fore-aft shifted rigid wheel pair could not move at all); run-to-run return scatter of about 10 mm on the 4 m square;
 end-pose measurement sigma 1 mm.
 """
 
@@ -111,7 +112,13 @@ class ErrorProfile:
             dr, da = self.distance * z[1], self.angle * z[2]
             dx = dr * math.cos(beta) - dist * da * math.sin(beta)
             dy = dr * math.sin(beta) + dist * da * math.cos(beta)
-            out[w.name] = WheelErrors(radius=self.radius * z[0], dx=dx, dy=dy, drive=self.drive * z[3],
+            drive = self.drive * z[3]
+            if w.is_fixed:
+                # rigid fixed wheels that are toed in or not coaxial admit no motion: keep only
+                # the displacement along the axle (the track error) and the radius error
+                along = -math.sin(w.drive) * dx + math.cos(w.drive) * dy
+                dx, dy, drive = -math.sin(w.drive) * along, math.cos(w.drive) * along, 0.0
+            out[w.name] = WheelErrors(radius=self.radius * z[0], dx=dx, dy=dy, drive=drive,
                                       roller=self.roller * z[4] if w.is_swedish else 0.0,
                                       ticks=self.ticks * z[5] if w.encoder is not None else 0.0)
         return SystematicErrors(out)
@@ -145,7 +152,7 @@ PROFILES = {
 """Systematic error profiles by name (``--errors``)."""
 
 NOISE = {
-    "typical": NoiseModel(slip=2e-4, floor=1e-4, measurement=0.001),
+    "typical": NoiseModel(slip=2e-4, floor=1e-4, measurement=0.001, measurement_theta=math.radians(0.2)),
     "none": NoiseModel(quantise=False),
 }
 """Random error models by name (``--noise``)."""

@@ -1,0 +1,265 @@
+"""Calibration of the kinematic model from runs with measured end poses.
+
+Two methods:
+
+* :func:`borenstein_calibrate`: differential drives, Borenstein and Feng (1996): the
+  UMBmark result's ``c_L``, ``c_R`` scale the left/right wheel radii and ``E_b`` the track
+  (both wheels moved symmetrically about the axle midpoint). Iterating it (UMBmark again
+  with the corrected model) removes what the first-order formulas leave.
+* :func:`calibrate`: any layout. The robot drives known plans by its nominal model; the
+  end poses are measured. Unknowns per driven (encoded) wheel (:func:`wheel_parameters`):
+  Swedish wheels: relative radius error, ``lever`` (hub displacement [m] normal to the
+  roller axis; along the axis it changes nothing) and drive direction error [rad];
+  fixed standard wheels: radius and ``axle`` (displacement along the axle [m]; a toe or
+  fore-aft error would make two rigid fixed wheels immobile, so it is not a kinematic
+  parameter); steerable wheels: radius and ``dx, dy`` [m]. For a candidate the
+  true end pose of a plan is predicted in closed form: within a segment the commanded
+  wheel angles grow in fixed proportion, so the true robot moves along
+  ``exp(s * F_true J_cmd xi)`` (:mod:`omnikin.simulation.motion`). SciPy's
+  ``least_squares`` fits the predicted to the measured end poses (x, y in metres over the
+  measurement sigma; heading, where measured, in radians over its sigma), with a weak
+  Gaussian prior (``PRIOR``) that keeps combinations the runs cannot see at zero. The
+  :class:`Identifiability` report names those combinations.
+
+Encoder tick-count errors act exactly like radius errors on a wheel and are not
+separable from them: the fitted radius absorbs both.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import OmnikinError
+from ..geometry import compose, exp, wrap_angle
+from ..model import Robot
+from ..simulation.errors import SystematicErrors, WheelErrors
+from ..simulation.motion import Plan, line, spin, umbmark_square
+from .umbmark import UMBmarkResult, differential_pair
+
+PRIOR = {"radius": 0.05, "dx": 0.01, "dy": 0.01, "lever": 0.01, "axle": 0.01, "drive": math.radians(5.0)}
+"""Prior standard deviations of the fitted parameters (relative, m, m, rad): ten times the
+``typical`` as-built profile, weak enough never to pull an observable parameter."""
+
+
+@dataclass(frozen=True)
+class CalibrationRun:
+    """A plan driven by the nominal model and its measured end pose ``(x, y, theta)``.
+
+    ``theta`` may be NaN when the heading was not measured. ``sigma`` is the measurement
+    standard deviation ``(m, rad)``.
+    """
+
+    plan: Plan
+    measured: tuple
+    label: str = ""
+    sigma: tuple = (0.001, math.radians(0.2))
+
+    def __post_init__(self):
+        m = tuple(float(v) for v in self.measured)
+        if len(m) != 3 or not (math.isfinite(m[0]) and math.isfinite(m[1])) or math.isinf(m[2]):
+            raise OmnikinError(f"calibration run {self.label!r}: measured end pose needs finite x and y "
+                               f"(theta may be NaN when not measured), got {self.measured!r}")
+        if not all(s > 0 for s in self.sigma):
+            raise OmnikinError(f"calibration run {self.label!r}: sigma must be positive, got {self.sigma!r}")
+        object.__setattr__(self, "measured", m)
+
+
+def predicted_end(plan: Plan, true_robot: Robot, command_robot: Robot) -> np.ndarray:
+    """End pose ``(3,)`` of ``true_robot`` driving ``plan`` as commanded by ``command_robot``.
+
+    Noise-free and exact: per segment the true body twist per unit progress is
+    ``F_true (J_cmd xi * rpt_true / rpt_cmd)`` over the encoded (driven) wheels.
+    """
+    wheels = [w for w in command_robot.rolling if w.encoder is not None]
+    names = [w.name for w in wheels]
+    ratio = np.array([true_robot.wheel(n).encoder.rad_per_tick / w.encoder.rad_per_tick for n, w in zip(names, wheels)])
+    hint = np.zeros(len(command_robot.steerable))
+    pose = np.zeros(3)
+    for seg in plan.segments:
+        xi = np.array(seg.xi)
+        steer = command_robot.ik(xi, steer_hint=hint).steer_angles if command_robot.steerable else None
+        if steer is not None:
+            hint = steer
+        w = command_robot.jacobian(steer, names) @ xi * ratio
+        f = true_robot.fk_matrix(steer, names)[:, : len(names)]
+        pose = compose(pose, exp(f @ w * seg.length))
+    return pose
+
+
+def _driven(robot: Robot):
+    wheels = [w for w in robot.rolling if w.encoder is not None]
+    if not wheels:
+        raise OmnikinError(f"robot {robot.name!r}: calibration needs the driven wheels' encoders")
+    return wheels
+
+
+def wheel_parameters(wheel) -> tuple[str, ...]:
+    """Names of the fitted parameters of one driven wheel (module docstring)."""
+    if wheel.is_fixed:
+        return ("radius", "axle")
+    if wheel.is_swedish:
+        return ("radius", "lever", "drive")
+    return ("radius", "dx", "dy")
+
+
+def parameter_names(robot: Robot) -> list[str]:
+    return [f"{w.name}.{p}" for w in _driven(robot) for p in wheel_parameters(w)]
+
+
+def errors_from_vector(robot: Robot, p: np.ndarray) -> SystematicErrors:
+    """Systematic errors of the parameter vector ``p`` (order of :func:`parameter_names`)."""
+    out, k = {}, 0
+    for w in _driven(robot):
+        names = wheel_parameters(w)
+        values = dict(zip(names, map(float, p[k:k + len(names)])))
+        k += len(names)
+        dx, dy = values.get("dx", 0.0), values.get("dy", 0.0)
+        if "axle" in values:                   # along (-sin delta, cos delta)
+            dx, dy = -math.sin(w.drive) * values["axle"], math.cos(w.drive) * values["axle"]
+        if "lever" in values:                  # normal to the roller axis delta + gamma
+            a = w.drive + w.roller
+            dx, dy = -math.sin(a) * values["lever"], math.cos(a) * values["lever"]
+        out[w.name] = WheelErrors(radius=values["radius"], dx=dx, dy=dy, drive=values.get("drive", 0.0))
+    return SystematicErrors(out)
+
+
+@dataclass(frozen=True)
+class Identifiability:
+    """What the runs can see: singular values of the scaled Jacobian and the blind spots.
+
+    ``blind`` lists, per unobservable direction (relative singular value below 1e-6),
+    the parameters that make it up with their weights; ``sigma`` the posterior standard
+    deviation of each parameter (prior included) in its unit.
+    """
+
+    parameters: list
+    singular_values: list
+    blind: list
+    sigma: dict
+
+    def as_dict(self) -> dict:
+        return {"parameters": self.parameters, "singular_values": self.singular_values, "blind": self.blind,
+                "sigma": self.sigma}
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """Fitted errors, the calibrated robot, residuals and the identifiability report."""
+
+    nominal: Robot
+    errors: SystematicErrors
+    robot: Robot
+    residual_before: float
+    residual_after: float
+    identifiability: Identifiability
+    method: str = "least-squares"
+    details: dict = field(default_factory=dict)
+
+    def as_dict(self) -> dict:
+        return {"method": self.method, "errors": self.errors.as_dict(), "residual_rms_before": self.residual_before,
+                "residual_rms_after": self.residual_after, "identifiability": self.identifiability.as_dict(),
+                **self.details}
+
+
+def _residuals(nominal: Robot, runs: Sequence[CalibrationRun], p: np.ndarray, command: Robot) -> np.ndarray:
+    true = errors_from_vector(nominal, p).apply(nominal)
+    out = []
+    for run in runs:
+        end = predicted_end(run.plan, true, command)
+        m = run.measured
+        out += [(end[0] - m[0]) / run.sigma[0], (end[1] - m[1]) / run.sigma[0]]
+        if not math.isnan(m[2]):
+            out.append(float(wrap_angle(end[2] - m[2])) / run.sigma[1])
+    return np.array(out)
+
+
+def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Robot | None = None) -> CalibrationResult:
+    """Least-squares calibration of ``nominal`` from ``runs`` (module docstring).
+
+    ``command_robot``: the model the runs were driven by (default ``nominal``).
+    Returns the calibrated robot (``result.robot``): ``nominal`` with the fitted errors.
+    """
+    try:
+        from scipy.optimize import least_squares
+    except ImportError:
+        raise ImportError("calibration needs SciPy: pip install scipy") from None
+    if not runs:
+        raise OmnikinError("calibration needs at least one run with a measured end pose")
+    command = command_robot or nominal
+    names = parameter_names(nominal)
+    scale = np.array([PRIOR[n.rsplit(".", 1)[1]] for n in names])
+
+    def fun(q):
+        p = q * scale
+        return np.concatenate([_residuals(nominal, runs, p, command), q])   # prior: q ~ N(0, 1)
+
+    q0 = np.zeros(len(names))
+    r0 = fun(q0)[: -len(names)]
+    sol = least_squares(fun, q0, method="trf", x_scale=1.0, diff_step=1e-6, xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    p = sol.x * scale
+    r1 = sol.fun[: -len(names)]
+    ident = _identifiability(names, sol.jac[: -len(names)], sol.jac, scale)
+    errors = errors_from_vector(nominal, p)
+    robot = errors.apply(nominal)
+    robot = Robot(nominal.name, robot.wheels, nominal.description + " (calibrated by omnikin)",
+                  nominal.references)
+    return CalibrationResult(nominal, errors, robot, float(np.sqrt(np.mean(r0 ** 2))), float(np.sqrt(np.mean(r1 ** 2))),
+                             ident, details={"runs": len(runs), "cost": float(sol.cost), "nfev": int(sol.nfev)})
+
+
+def _identifiability(names, jac_data, jac_full, scale) -> Identifiability:
+    s = np.linalg.svd(jac_data, compute_uv=False)
+    _, s_all, vt = np.linalg.svd(jac_data, full_matrices=True)
+    rel = s_all / s_all[0] if s_all.size and s_all[0] > 0 else s_all
+    blind = []
+    padded = np.concatenate([rel, np.zeros(vt.shape[0] - rel.size)])
+    for k in np.flatnonzero(padded < 1e-6):
+        v = vt[k]
+        order = np.argsort(-np.abs(v))
+        parts = [{"parameter": names[j], "weight": float(v[j])} for j in order if abs(v[j]) > 0.2]
+        blind.append(parts)
+    cov = np.linalg.pinv(jac_full.T @ jac_full)
+    sigma = {n: float(np.sqrt(max(cov[j, j], 0.0)) * scale[j]) for j, n in enumerate(names)}
+    return Identifiability(names, [float(v) for v in s], blind, sigma)
+
+
+def recommended_runs(robot: Robot, side: float = 4.0) -> list[tuple[str, Plan]]:
+    """A calibration protocol that sees every parameter it can for this layout.
+
+    Both UMBmark squares in ``rotate`` mode (and ``translate`` mode for holonomic robots),
+    a straight line along body x (and y for holonomic robots), and full turns in place
+    both ways. Measure x, y and the heading at the end of each.
+    """
+    out = [("square cw rotate", umbmark_square("cw", side, "rotate")),
+           ("square ccw rotate", umbmark_square("ccw", side, "rotate")),
+           (f"line {side:g} m along x", line(side)),
+           ("spin +360 deg", spin(2 * math.pi)),
+           ("spin -360 deg", spin(-2 * math.pi))]
+    if robot.mobility.holonomic:
+        out += [("square cw translate", umbmark_square("cw", side, "translate")),
+                ("square ccw translate", umbmark_square("ccw", side, "translate")),
+                (f"line {side:g} m along y", line(side, math.pi / 2))]
+    return out
+
+
+def borenstein_calibrate(robot: Robot, result: UMBmarkResult) -> Robot:
+    """Apply Borenstein's corrections of a differential-drive UMBmark ``result`` to ``robot``."""
+    pair = differential_pair(robot)
+    if pair is None or result.borenstein is None:
+        raise OmnikinError(f"robot {robot.name!r} is not a differential drive (two coaxial fixed encoded wheels): "
+                           f"Borenstein's correction does not apply; use the least-squares calibration")
+    left, right, track = pair
+    b = result.borenstein
+    mid = 0.5 * (left.y + right.y)
+    wheels = []
+    for w in robot.wheels:
+        if w.name == left.name:
+            w = replace(w, radius=w.radius * b.c_L, y=mid + b.b_new / 2)
+        elif w.name == right.name:
+            w = replace(w, radius=w.radius * b.c_R, y=mid - b.b_new / 2)
+        wheels.append(w)
+    return Robot(robot.name, tuple(wheels), robot.description, robot.references)
