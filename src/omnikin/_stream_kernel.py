@@ -86,7 +86,10 @@ def compile_update(owner, n: int, fk_rows, method: str, bits: int | None, max_ju
         f"        {', '.join(f'p{j}' for j in range(n))}, = p",
     ]
     if bits is None:
-        # int and float readings subtract exactly; numpy scalars too; anything else raises here
+        # Python ints and floats only: numpy scalars could overflow in their own type, bools
+        # are no readings; both take the general path
+        lines += [f"        if {' or '.join(f'{v}.__class__ not in NUMBER' for v in tk)}:",
+                  "            return general(t, ticks, steer)"]
         lines += [f"        d{j} = t{j} - p{j}" for j in range(n)]
     else:
         # wrapping counters: Python ints only (floats and numpy scalars take the general path)
@@ -118,8 +121,14 @@ def compile_update(owner, n: int, fk_rows, method: str, bits: int | None, max_ju
     if residual is not None:
         lines.append(f"    residual([{', '.join(d)}], a, b, phi, dt)")
     lines += [f"    o._ticks = ({', '.join(tk)},)", "    th = o._th"]
-    src = "\n".join(lines) + "\n" + ADVANCE[method] + _MOVE
-    ns = _namespace()
-    ns.update(OWNER=owner, general=general, not_later=not_later, residual=residual, INF=math.inf)
+    body = "\n".join(lines) + "\n" + ADVANCE[method] + _MOVE
+    # compiled inside a factory so that every constant is a fast closure variable
+    names = ["OWNER", "general", "not_later", "residual", "INF", "NUMBER", "cos", "sin", "floor", "PI", "TWO_PI"]
+    src = f"def factory({', '.join(names)}):\n" + "".join(f"    {ln}\n" for ln in body.splitlines()) + \
+        "    return update\n"
+    ns = {}
     exec(compile(src, f"<omnikin update n={n} {method}>", "exec"), ns)
-    return ns["update"]
+    consts = _namespace()
+    consts.update(OWNER=owner, general=general, not_later=not_later, residual=residual, INF=math.inf,
+                  NUMBER=frozenset({int, float}))
+    return ns["factory"](*[consts[k] for k in names])

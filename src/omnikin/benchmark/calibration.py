@@ -40,6 +40,11 @@ from ..simulation.errors import SystematicErrors, WheelErrors
 from ..simulation.motion import Plan, line, spin, umbmark_square
 from .umbmark import UMBmarkResult, differential_pair
 
+BLIND = 2.0
+"""A parameter direction whose data singular value (residuals in measurement sigmas per
+prior sigma) is below this is reported as not observable: the runs pin it down less than
+half as well as the prior does."""
+
 PRIOR = {"radius": 0.05, "dx": 0.01, "dy": 0.01, "lever": 0.01, "axle": 0.01, "drive": math.radians(5.0)}
 """Prior standard deviations of the fitted parameters (relative, m, m, rad): ten times the
 ``typical`` as-built profile, weak enough never to pull an observable parameter."""
@@ -68,26 +73,59 @@ class CalibrationRun:
         object.__setattr__(self, "measured", m)
 
 
+class PlanSet:
+    """Plans driven by a command model, prepared for fast closed-form end poses.
+
+    Per segment ``s`` of every plan the commanded wheel angles per unit progress
+    ``w_s = J_cmd(steer_s) xi_s`` over the encoded (driven) wheels do not depend on the
+    true robot; :meth:`ends` then needs one forward-kinematics operator of the true
+    robot, one matrix product, one vectorised exponential and a few compositions.
+    """
+
+    def __init__(self, plans: Sequence[Plan], command_robot: Robot):
+        self.command = command_robot
+        self.names = [w.name for w in command_robot.rolling if w.encoder is not None]
+        w, steer, length, owner, slot = [], [], [], [], []
+        for p, plan in enumerate(plans):
+            hint = np.zeros(len(command_robot.steerable))
+            for k, seg in enumerate(plan.segments):
+                xi = np.array(seg.xi)
+                st = command_robot.ik(xi, steer_hint=hint).steer_angles if command_robot.steerable else None
+                if st is not None:
+                    hint = st
+                    steer.append(st)
+                w.append(command_robot.jacobian(st, self.names) @ xi)
+                length.append(seg.length)
+                owner.append(p)
+                slot.append(k)
+        self.w = np.array(w)
+        self.steer = np.array(steer) if steer else None
+        self.length = np.array(length)
+        self.owner = np.array(owner)
+        self.slot = np.array(slot)
+        self.n_plans = len(plans)
+
+    def ends(self, true_robot: Robot) -> np.ndarray:
+        """End poses ``(n_plans, 3)`` of ``true_robot`` driving the plans (noise-free, exact)."""
+        ratio = np.array([true_robot.wheel(n).encoder.rad_per_tick / self.command.wheel(n).encoder.rad_per_tick
+                          for n in self.names])
+        f = true_robot.fk_matrix(self.steer, self.names)[..., : len(self.names)]
+        twist = np.einsum("...ij,sj->si", f, self.w * ratio) if f.ndim == 2 else np.einsum("sij,sj->si", f, self.w * ratio)
+        steps = exp(twist * self.length[:, None])
+        pose = np.zeros((self.n_plans, 3))
+        for k in range(int(self.slot.max()) + 1):
+            sel = self.slot == k
+            pose[self.owner[sel]] = compose(pose[self.owner[sel]], steps[sel])
+        return pose
+
+
 def predicted_end(plan: Plan, true_robot: Robot, command_robot: Robot) -> np.ndarray:
     """End pose ``(3,)`` of ``true_robot`` driving ``plan`` as commanded by ``command_robot``.
 
     Noise-free and exact: per segment the true body twist per unit progress is
     ``F_true (J_cmd xi * rpt_true / rpt_cmd)`` over the encoded (driven) wheels.
     """
-    wheels = [w for w in command_robot.rolling if w.encoder is not None]
-    names = [w.name for w in wheels]
-    ratio = np.array([true_robot.wheel(n).encoder.rad_per_tick / w.encoder.rad_per_tick for n, w in zip(names, wheels)])
-    hint = np.zeros(len(command_robot.steerable))
-    pose = np.zeros(3)
-    for seg in plan.segments:
-        xi = np.array(seg.xi)
-        steer = command_robot.ik(xi, steer_hint=hint).steer_angles if command_robot.steerable else None
-        if steer is not None:
-            hint = steer
-        w = command_robot.jacobian(steer, names) @ xi * ratio
-        f = true_robot.fk_matrix(steer, names)[:, : len(names)]
-        pose = compose(pose, exp(f @ w * seg.length))
-    return pose
+    return PlanSet([plan], command_robot).ends(true_robot)[0]
 
 
 def _driven(robot: Robot):
@@ -131,7 +169,7 @@ def errors_from_vector(robot: Robot, p: np.ndarray) -> SystematicErrors:
 class Identifiability:
     """What the runs can see: singular values of the scaled Jacobian and the blind spots.
 
-    ``blind`` lists, per unobservable direction (relative singular value below 1e-6),
+    ``blind`` lists, per unobservable direction (singular value below :data:`BLIND`),
     the parameters that make it up with their weights; ``sigma`` the posterior standard
     deviation of each parameter (prior included) in its unit.
     """
@@ -165,11 +203,12 @@ class CalibrationResult:
                 **self.details}
 
 
-def _residuals(nominal: Robot, runs: Sequence[CalibrationRun], p: np.ndarray, command: Robot) -> np.ndarray:
-    true = errors_from_vector(nominal, p).apply(nominal)
+def _residuals(nominal: Robot, runs: Sequence[CalibrationRun], plans: PlanSet, index: np.ndarray,
+               p: np.ndarray) -> np.ndarray:
+    """Weighted residuals of all runs for the parameter vector ``p``."""
+    ends = plans.ends(errors_from_vector(nominal, p).apply(nominal))[index]
     out = []
-    for run in runs:
-        end = predicted_end(run.plan, true, command)
+    for run, end in zip(runs, ends):
         m = run.measured
         out += [(end[0] - m[0]) / run.sigma[0], (end[1] - m[1]) / run.sigma[0]]
         if not math.isnan(m[2]):
@@ -193,9 +232,12 @@ def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Rob
     names = parameter_names(nominal)
     scale = np.array([PRIOR[n.rsplit(".", 1)[1]] for n in names])
 
+    unique = list({id(r.plan): r.plan for r in runs}.values())
+    plans = PlanSet(unique, command)
+    index = np.array([next(i for i, u in enumerate(unique) if u is r.plan) for r in runs])
+
     def fun(q):
-        p = q * scale
-        return np.concatenate([_residuals(nominal, runs, p, command), q])   # prior: q ~ N(0, 1)
+        return np.concatenate([_residuals(nominal, runs, plans, index, q * scale), q])   # prior: q ~ N(0, 1)
 
     q0 = np.zeros(len(names))
     r0 = fun(q0)[: -len(names)]
@@ -212,16 +254,14 @@ def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Rob
 
 
 def _identifiability(names, jac_data, jac_full, scale) -> Identifiability:
-    s = np.linalg.svd(jac_data, compute_uv=False)
-    _, s_all, vt = np.linalg.svd(jac_data, full_matrices=True)
-    rel = s_all / s_all[0] if s_all.size and s_all[0] > 0 else s_all
+    """Singular values of the data Jacobian (scaled: residual sigmas per prior sigma), blind
+    directions (below :data:`BLIND`) and posterior sigmas of the parameters."""
+    _, s, vt = np.linalg.svd(jac_data, full_matrices=True)
+    s_all = np.concatenate([s, np.zeros(vt.shape[0] - s.size)])
     blind = []
-    padded = np.concatenate([rel, np.zeros(vt.shape[0] - rel.size)])
-    for k in np.flatnonzero(padded < 1e-6):
+    for k in np.flatnonzero(s_all < BLIND):
         v = vt[k]
-        order = np.argsort(-np.abs(v))
-        parts = [{"parameter": names[j], "weight": float(v[j])} for j in order if abs(v[j]) > 0.2]
-        blind.append(parts)
+        blind.append([{"parameter": names[j], "weight": float(v[j])} for j in np.argsort(-np.abs(v)) if abs(v[j]) > 0.2])
     cov = np.linalg.pinv(jac_full.T @ jac_full)
     sigma = {n: float(np.sqrt(max(cov[j, j], 0.0)) * scale[j]) for j, n in enumerate(names)}
     return Identifiability(names, [float(v) for v in s], blind, sigma)
@@ -231,14 +271,16 @@ def recommended_runs(robot: Robot, side: float = 4.0) -> list[tuple[str, Plan]]:
     """A calibration protocol that sees every parameter it can for this layout.
 
     Both UMBmark squares in ``rotate`` mode (and ``translate`` mode for holonomic robots),
-    a straight line along body x (and y for holonomic robots), and full turns in place
-    both ways. Measure x, y and the heading at the end of each.
+    a straight line along body x (and y for holonomic robots), and half turns in place
+    both ways. Measure x, y and the heading at the end of each. The half turns see where
+    the robot really turns about: a closed square hides an offset of that centre (its four
+    corner shifts cancel), a half turn moves the origin by twice the offset.
     """
     out = [("square cw rotate", umbmark_square("cw", side, "rotate")),
            ("square ccw rotate", umbmark_square("ccw", side, "rotate")),
            (f"line {side:g} m along x", line(side)),
-           ("spin +360 deg", spin(2 * math.pi)),
-           ("spin -360 deg", spin(-2 * math.pi))]
+           ("spin +180 deg", spin(math.pi)),
+           ("spin -180 deg", spin(-math.pi))]
     if robot.mobility.holonomic:
         out += [("square cw translate", umbmark_square("cw", side, "translate")),
                 ("square ccw translate", umbmark_square("ccw", side, "translate")),

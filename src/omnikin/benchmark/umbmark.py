@@ -80,7 +80,7 @@ class DirectionResult:
         return float(np.hypot(*self.cg))
 
     def as_dict(self) -> dict:
-        return {"runs": [{"epsilon": [float(v) for v in e]} for e in self.epsilon],
+        return {"runs": [{"epsilon": [float(v) if np.isfinite(v) else None for v in e]} for e in self.epsilon],
                 "cg": [float(v) for v in self.cg], "r_cg": self.r_cg}
 
 
@@ -125,6 +125,8 @@ def differential_pair(robot: Robot):
 def analyze(eps_cw, eps_ccw, side: float = 4.0, robot: Robot | None = None, mode: str = "rotate") -> UMBmarkResult:
     """UMBmark from return errors ``(n, 2)`` or ``(n, 3)`` per direction [m, m(, rad)].
 
+    The heading column may be NaN where it was not measured.
+
     With a differential-drive ``robot`` Borenstein's correction is added.
     """
     check_mode(mode)
@@ -137,8 +139,9 @@ def analyze(eps_cw, eps_ccw, side: float = 4.0, robot: Robot | None = None, mode
             raise OmnikinError(f"{name}: expected return errors of shape (n, 2) or (n, 3), got {e.shape}")
         if len(e) == 0:
             raise OmnikinError(f"{name}: no runs; UMBmark needs at least one run in each direction")
-        if not np.all(np.isfinite(e)):
-            raise OmnikinError(f"{name}: non-finite return error in run {int(np.argwhere(~np.isfinite(e))[0, 0]) + 1}")
+        if not np.all(np.isfinite(e[:, :2])):
+            raise OmnikinError(f"{name}: non-finite return error in run "
+                               f"{int(np.argwhere(~np.isfinite(e[:, :2]))[0, 0]) + 1}")
         if e.shape[1] == 2:
             e = np.column_stack([e, np.zeros(len(e))])
         dirs.append(DirectionResult(name, e))

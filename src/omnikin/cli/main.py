@@ -26,6 +26,9 @@ EPILOG = """examples:
   omnikin ik ackermann 1 0 0.3 --json      steering angles too
   omnikin fk tomasi-omni3 10 -5 -5         body twist from wheel speeds
   omnikin odometry tomasi-omni3 log.csv -o traj.tum --format tum
+  omnikin umbmark                          the main job: UMBmark, calibration, report
+  omnikin umbmark analyze measured.csv --robot diff-drive
+  omnikin calibrate tomasi-omni3 runs.csv -o calibrated.yaml
 
 units: SI and radians; degrees only where an option or column ends in -deg/_deg.
 frames: body x forward, y left, angles counter-clockwise (REP-103)."""
@@ -394,14 +397,25 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument("--counter-bits", type=int, metavar="N", help="encoder counters wrap at 2**N (e.g. 16, 32)")
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     sp.set_defaults(func=cmd_odometry)
+    from .umbmark import add_parsers
+
+    add_parsers(sub, robot_help)
     for parser in [p, *sub.choices.values()]:
         parser._negative_number_matcher = NEGATIVE_NUMBER  # see NEGATIVE_NUMBER
     return p
 
 
 def main(argv=None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:2] == ["umbmark", "analyze"]:
+        from .umbmark import analyze_parser
+
+        parser = analyze_parser()
+        parser._negative_number_matcher = NEGATIVE_NUMBER
+        argv = argv[2:]
+    else:
+        parser = build_parser()
+    args = parser.parse_args([str(a) for a in argv])
     if not getattr(args, "func", None):
         parser.print_help()
         return 2

@@ -291,7 +291,7 @@ def load_robot(spec: str | Path) -> Robot:
 
 
 def _clean(x: float) -> float:
-    return float(round(x, 12))
+    return float(round(float(x), 12))
 
 
 def robot_to_dict(robot: Robot) -> dict:
@@ -302,14 +302,14 @@ def robot_to_dict(robot: Robot) -> dict:
                              "drive_deg": _clean(math.degrees(w.drive))}
         if w.type in ("mecanum", "swedish"):
             d["roller_deg"] = _clean(math.degrees(w.roller))
-        d["radius"] = w.radius
+        d["radius"] = float(w.radius)
         if w.encoder is not None:
-            d["encoder"] = {"ticks_per_rev": w.encoder.ticks_per_rev, "gear_ratio": w.encoder.gear_ratio,
-                            "invert": w.encoder.invert}
+            d["encoder"] = {"ticks_per_rev": float(w.encoder.ticks_per_rev), "gear_ratio": float(w.encoder.gear_ratio),
+                            "invert": bool(w.encoder.invert)}
         if w.max_speed is not None:
-            d["max_speed"] = w.max_speed
+            d["max_speed"] = float(w.max_speed)
         if w.steer is not None:
-            d["steer"] = {"offset": w.steer.offset, "min_deg": _clean(math.degrees(w.steer.lower)),
+            d["steer"] = {"offset": float(w.steer.offset), "min_deg": _clean(math.degrees(w.steer.lower)),
                           "max_deg": _clean(math.degrees(w.steer.upper))}
         wheels.append(d)
     return {"omnikin": SCHEMA_VERSION, "name": robot.name, "description": robot.description,

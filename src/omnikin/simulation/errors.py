@@ -86,7 +86,7 @@ class SystematicErrors:
         return Robot(f"{robot.name} (as built)", tuple(wheels), robot.description, robot.references)
 
     def as_dict(self) -> dict:
-        return {name: {k: getattr(e, k) for k in ("radius", "dx", "dy", "drive", "roller", "ticks")}
+        return {name: {k: float(getattr(e, k)) for k in ("radius", "dx", "dy", "drive", "roller", "ticks")}
                 for name, e in self.wheels.items()}
 
 

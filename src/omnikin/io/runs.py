@@ -1,0 +1,177 @@
+"""Measurement files of real runs: UMBmark measurements and calibration runs (CSV).
+
+UMBmark measurements (``omnikin umbmark analyze``): one row per run with columns
+``direction`` (``cw``/``ccw``), ``x_abs``, ``y_abs``, ``x_calc``, ``y_calc`` [m] and
+optionally ``theta_abs``, ``theta_calc`` [rad] or ``theta_abs_deg``, ``theta_calc_deg``
+[deg]: the measured end pose and the odometry's, in the start frame (first leg along +x).
+
+Calibration runs (``omnikin calibrate``): one row per run with columns ``path``, ``x_abs``,
+``y_abs`` [m] and optionally ``theta_abs`` [rad] or ``theta_abs_deg`` [deg]. ``path`` is
+one of::
+
+    square cw|ccw rotate|translate [SIDE]    (default side 4 m)
+    line LENGTH [HEADING_DEG]                 straight, along body direction HEADING_DEG
+    spin ANGLE_DEG                            turn in place (positive: counter-clockwise)
+    arc RADIUS ANGLE_DEG                      forward on a circle
+
+Blank lines and lines starting with ``#`` are skipped. Errors name the file, the line
+and the column.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..benchmark.calibration import CalibrationRun
+from ..errors import OmnikinError
+from ..simulation.motion import Plan, arc, line, spin, umbmark_square
+
+
+class RunsFileError(OmnikinError):
+    """A measurement file that cannot be read; the message names file, line and column."""
+
+
+def _rows(path) -> tuple[list[str], list[tuple[int, dict]]]:
+    source = str(path)
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as handle:
+            raw = [(i + 1, r) for i, r in enumerate(csv.reader(handle))
+                   if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
+    except OSError as exc:
+        raise RunsFileError(f"{source}: cannot open: {exc.strerror}") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise RunsFileError(f"{source}: not a readable UTF-8 CSV file: {exc}") from None
+    if not raw:
+        raise RunsFileError(f"{source}: empty file")
+    header = [h.strip() for h in raw[0][1]]
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        raise RunsFileError(f"{source}: line {raw[0][0]}: duplicate column(s) {dup}")
+    rows = []
+    for line_no, r in raw[1:]:
+        if len(r) != len(header):
+            raise RunsFileError(f"{source}: line {line_no}: {len(r)} fields, the header has {len(header)}")
+        rows.append((line_no, {h: c.strip() for h, c in zip(header, r)}))
+    if not rows:
+        raise RunsFileError(f"{source}: no data rows after the header")
+    return header, rows
+
+
+def _check_columns(source, header, required, optional):
+    missing = [c for c in required if c not in header]
+    unknown = [c for c in header if c not in required and c not in optional]
+    if missing or unknown:
+        parts = ([f"missing column(s) {missing}"] if missing else []) + \
+                ([f"unknown column(s) {unknown}"] if unknown else [])
+        raise RunsFileError(f"{source}: " + "; ".join(parts) + f"; expected {list(required)} and optionally "
+                            f"{list(optional)}")
+
+
+def _number(source, line_no, column, text) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise RunsFileError(f"{source}: line {line_no}, column {column!r}: not a number: {text!r}") from None
+    if not math.isfinite(v):
+        raise RunsFileError(f"{source}: line {line_no}, column {column!r}: non-finite value {text!r}")
+    return v
+
+
+def _theta(source, header, line_no, row, which) -> float:
+    rad, deg = f"theta_{which}", f"theta_{which}_deg"
+    if rad in header and deg in header:
+        raise RunsFileError(f"{source}: give {rad} [rad] or {deg} [deg], not both")
+    if rad in header and row[rad] != "":
+        return _number(source, line_no, rad, row[rad])
+    if deg in header and row[deg] != "":
+        return math.radians(_number(source, line_no, deg, row[deg]))
+    return math.nan
+
+
+def read_umbmark_measurements(path):
+    """Return errors per direction: ``{'cw': (n, 3), 'ccw': (n, 3)}`` (theta NaN if not measured)."""
+    source = str(path)
+    header, rows = _rows(path)
+    _check_columns(source, header, ("direction", "x_abs", "y_abs", "x_calc", "y_calc"),
+                   ("theta_abs", "theta_calc", "theta_abs_deg", "theta_calc_deg"))
+    eps = {"cw": [], "ccw": []}
+    for line_no, row in rows:
+        d = row["direction"].lower()
+        if d not in eps:
+            raise RunsFileError(f"{source}: line {line_no}, column 'direction': expected cw or ccw, got {row['direction']!r}")
+        x = _number(source, line_no, "x_abs", row["x_abs"]) - _number(source, line_no, "x_calc", row["x_calc"])
+        y = _number(source, line_no, "y_abs", row["y_abs"]) - _number(source, line_no, "y_calc", row["y_calc"])
+        th = _theta(source, header, line_no, row, "abs") - _theta(source, header, line_no, row, "calc")
+        eps[d].append((x, y, (th + math.pi) % (2 * math.pi) - math.pi if math.isfinite(th) else math.nan))
+    for d, runs in eps.items():
+        if not runs:
+            raise RunsFileError(f"{source}: no {d} runs; UMBmark needs runs in both directions (cw and ccw)")
+    return {d: np.array(v) for d, v in eps.items()}
+
+
+def parse_path(text: str) -> Plan:
+    """A plan from the ``path`` column grammar (module docstring)."""
+    words = text.split()
+    if not words:
+        raise OmnikinError("empty path")
+    kind, args = words[0].lower(), words[1:]
+    try:
+        nums = [float(a) for a in args[2:]] if kind == "square" else [float(a) for a in args]
+    except ValueError:
+        raise OmnikinError(f"path {text!r}: numbers expected after {kind!r}") from None
+    if kind == "square":
+        if len(args) not in (2, 3):
+            raise OmnikinError(f"path {text!r}: expected 'square cw|ccw rotate|translate [SIDE]'")
+        return umbmark_square(args[0].lower(), nums[0] if nums else 4.0, args[1].lower())
+    if kind == "line" and len(nums) in (1, 2):
+        return line(nums[0], math.radians(nums[1]) if len(nums) == 2 else 0.0)
+    if kind == "spin" and len(nums) == 1:
+        return spin(math.radians(nums[0]))
+    if kind == "arc" and len(nums) == 2:
+        return arc(nums[0], math.radians(nums[1]))
+    raise OmnikinError(f"path {text!r}: expected 'square cw|ccw rotate|translate [SIDE]', 'line LENGTH "
+                       f"[HEADING_DEG]', 'spin ANGLE_DEG' or 'arc RADIUS ANGLE_DEG'")
+
+
+def read_calibration_runs(path, sigma=(0.001, math.radians(0.2))) -> list[CalibrationRun]:
+    """Calibration runs of a runs file (module docstring)."""
+    source = str(path)
+    header, rows = _rows(path)
+    _check_columns(source, header, ("path", "x_abs", "y_abs"), ("theta_abs", "theta_abs_deg"))
+    plans: dict[str, Plan] = {}
+    out = []
+    for line_no, row in rows:
+        key = " ".join(row["path"].lower().split())
+        if key not in plans:
+            try:
+                plans[key] = parse_path(key)
+            except OmnikinError as exc:
+                raise RunsFileError(f"{source}: line {line_no}, column 'path': {exc}") from None
+        m = (_number(source, line_no, "x_abs", row["x_abs"]), _number(source, line_no, "y_abs", row["y_abs"]),
+             _theta(source, header, line_no, row, "abs"))
+        out.append(CalibrationRun(plans[key], m, row["path"], sigma))
+    return out
+
+
+def write_calibration_runs(path, runs: list[tuple[str, np.ndarray]]) -> None:
+    """Write ``[(path_text, measured (x, y, theta)), ...]`` as a runs file (theta in degrees)."""
+    with open(path, "w", newline="", encoding="utf-8") as handle:
+        w = csv.writer(handle)
+        w.writerow(["path", "x_abs", "y_abs", "theta_abs_deg"])
+        for text, m in runs:
+            w.writerow([text, f"{m[0]:.6f}", f"{m[1]:.6f}", f"{math.degrees(m[2]):.5f}"])
+
+
+def write_umbmark_measurements(path, result) -> None:
+    """Write a :class:`~omnikin.benchmark.umbmark.UMBmarkResult` as a measurements file
+    (odometry at the origin, so ``abs`` = ``epsilon``)."""
+    with open(path, "w", newline="", encoding="utf-8") as handle:
+        w = csv.writer(handle)
+        w.writerow(["direction", "x_abs", "y_abs", "x_calc", "y_calc", "theta_abs_deg", "theta_calc_deg"])
+        for d in (result.cw, result.ccw):
+            for e in d.epsilon:
+                w.writerow([d.direction, f"{e[0]:.6f}", f"{e[1]:.6f}", "0", "0", f"{math.degrees(e[2]):.5f}", "0"])
