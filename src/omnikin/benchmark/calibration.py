@@ -7,7 +7,7 @@ Two methods:
   (both wheels moved symmetrically about the axle midpoint). Iterating it (UMBmark again
   with the corrected model) removes what the first-order formulas leave.
 * :func:`calibrate`: any layout. The robot drives known plans by its nominal model; the
-  end poses are measured. Unknowns per driven (encoded) wheel (:func:`wheel_parameters`):
+  end poses are measured (weights: :func:`_weights`). Unknowns per driven (encoded) wheel (:func:`wheel_parameters`):
   Swedish wheels: relative radius error, ``lever`` (hub displacement [m] normal to the
   roller axis; along the axis it changes nothing) and drive direction error [rad];
   fixed standard wheels: radius and ``axle`` (displacement along the axle [m]; a toe or
@@ -203,17 +203,35 @@ class CalibrationResult:
                 **self.details}
 
 
+def _weights(runs: Sequence[CalibrationRun], index: np.ndarray) -> np.ndarray:
+    """Standard deviation ``(n_runs, 3)`` of each run's measured x, y, theta.
+
+    The measurement sigma, combined with the run-to-run scatter of repeats of the same
+    plan where there are at least three (wheel slip makes a 16 m square scatter far more
+    than a half turn; weighting every run by the tape measure alone would let the
+    noisiest runs dominate the fit).
+    """
+    sig = np.array([[r.sigma[0], r.sigma[0], r.sigma[1]] for r in runs], dtype=float)
+    meas = np.array([r.measured for r in runs], dtype=float)
+    for k in np.unique(index):
+        sel = index == k
+        if sel.sum() >= 3:
+            m = meas[sel]
+            m[:, 2] = np.unwrap(m[:, 2])
+            spread = np.nanstd(m, axis=0, ddof=1)
+            spread = np.where(np.isfinite(spread), spread, 0.0)
+            sig[sel] = np.sqrt(sig[sel] ** 2 + spread ** 2)
+    return sig
+
+
 def _residuals(nominal: Robot, runs: Sequence[CalibrationRun], plans: PlanSet, index: np.ndarray,
-               p: np.ndarray) -> np.ndarray:
+               sigma: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Weighted residuals of all runs for the parameter vector ``p``."""
     ends = plans.ends(errors_from_vector(nominal, p).apply(nominal))[index]
-    out = []
-    for run, end in zip(runs, ends):
-        m = run.measured
-        out += [(end[0] - m[0]) / run.sigma[0], (end[1] - m[1]) / run.sigma[0]]
-        if not math.isnan(m[2]):
-            out.append(float(wrap_angle(end[2] - m[2])) / run.sigma[1])
-    return np.array(out)
+    meas = np.array([r.measured for r in runs])
+    res = (ends - meas) / sigma
+    res[:, 2] = wrap_angle(ends[:, 2] - meas[:, 2]) / sigma[:, 2]
+    return res[np.isfinite(res)]
 
 
 def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Robot | None = None) -> CalibrationResult:
@@ -236,12 +254,14 @@ def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Rob
     plans = PlanSet(unique, command)
     index = np.array([next(i for i, u in enumerate(unique) if u is r.plan) for r in runs])
 
+    sigma = _weights(runs, index)
+
     def fun(q):
-        return np.concatenate([_residuals(nominal, runs, plans, index, q * scale), q])   # prior: q ~ N(0, 1)
+        return np.concatenate([_residuals(nominal, runs, plans, index, sigma, q * scale), q])   # prior: q ~ N(0, 1)
 
     q0 = np.zeros(len(names))
     r0 = fun(q0)[: -len(names)]
-    sol = least_squares(fun, q0, method="trf", x_scale=1.0, diff_step=1e-6, xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    sol = least_squares(fun, q0, method="trf", x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-12)
     p = sol.x * scale
     r1 = sol.fun[: -len(names)]
     ident = _identifiability(names, sol.jac[: -len(names)], sol.jac, scale)

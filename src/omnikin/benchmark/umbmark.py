@@ -29,7 +29,7 @@ from ..model import Robot
 from ..simulation.errors import NoiseModel
 from ..simulation.limits import MotionLimits
 from ..simulation.motion import check_mode, umbmark_square
-from ..simulation.simulate import simulate
+from ..simulation.simulate import make_rng, simulate
 
 
 @dataclass(frozen=True)
@@ -172,7 +172,7 @@ def run_umbmark(true_robot: Robot, command_robot: Robot, *, side: float = 4.0, m
         raise OmnikinError(f"robot {command_robot.name!r} is not holonomic (Campion type "
                            f"{command_robot.mobility.campion_type}): it cannot drive the 'translate' square; "
                            f"use --mode rotate")
-    rng = np.random.default_rng(rng)
+    rng = make_rng(rng)
     sims = {}
     for direction in ("cw", "ccw"):
         sims[direction] = simulate(umbmark_square(direction, side, mode), true_robot, command_robot, rate=rate,

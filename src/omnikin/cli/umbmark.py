@@ -174,6 +174,10 @@ def cmd_umbmark(args) -> int:
         raise OmnikinError(f"--trials must be at least 1, got {args.trials}")
     if not (math.isfinite(args.side) and args.side > 0):
         raise OmnikinError(f"--side must be a positive length [m], got {args.side}")
+    if not (math.isfinite(args.rate) and args.rate > 0):
+        raise OmnikinError(f"--rate must be a positive number of samples per second, got {args.rate}")
+    if args.seed < 0:
+        raise OmnikinError(f"--seed must be a whole number >= 0, got {args.seed}")
     if args.mode == "translate" and not robot.mobility.holonomic:
         raise OmnikinError(f"robot {robot.name!r} is not holonomic (Campion type {robot.mobility.campion_type}): "
                            f"it cannot drive the 'translate' square; use --mode rotate")
@@ -248,7 +252,7 @@ def _calibration_runs(true, robot, noise, rng, args):
     for label, plan in recommended_runs(robot, args.side):
         sim = simulate(plan, true, robot, rate=args.rate, noise=noise, trials=CALIBRATION_REPEATS, rng=rng,
                        keep_truth=False)
-        text = _path_text(label)
+        text = _path_text(label, args.side)
         for m in sim.measured:
             runs.append(CalibrationRun(plan, tuple(m), label, (max(noise.measurement, 1e-4),
                                                                 max(noise.measurement_theta, math.radians(0.05)))))
@@ -256,11 +260,11 @@ def _calibration_runs(true, robot, noise, rng, args):
     return runs, rows
 
 
-def _path_text(label: str) -> str:
+def _path_text(label: str, side: float) -> str:
     """The runs-file spelling of a recommended run's label (see omnikin.io.runs)."""
     words = label.split()
     if words[0] == "square":
-        return f"square {words[1]} {words[2]}"
+        return f"square {words[1]} {words[2]} {side:g}"
     if words[0] == "line":
         return f"line {words[1]} {0 if words[-1] == 'x' else 90}"
     return f"spin {words[1]}"
@@ -375,8 +379,8 @@ def _report_md(args, robot, result, before, after, cal, figures) -> str:
     sysm = result["systematic"]
     lines += ["", f"Without random errors (the systematic part alone): E_max,syst {_mm(sysm['before'])} mm before"
               + (f", {_mm(sysm['after'])} mm after calibration ({sysm['improvement']:.1f}-fold)." if "after" in sysm
-                 else ".") + " With random errors the centres of gravity of 5 runs scatter by about the run-to-run "
-              "scatter over sqrt(5), which bounds what one procedure can show."]
+                 else ".") + f" With random errors the centres of gravity of {args.runs} runs scatter by about the run-to-run "
+              f"scatter over sqrt({args.runs}), which bounds what one procedure can show."]
     if after is not None:
         lines += ["", f"Calibration reduced E_max,syst {result['calibration']['improvement']:.1f}-fold "
                       f"(least squares over {len(cal.identifiability.parameters)} wheel parameters, "

@@ -1,0 +1,418 @@
+"""``omnikin umbmark``, ``omnikin umbmark analyze`` and ``omnikin calibrate`` as a user runs them.
+
+The main job runs once in a subprocess (module fixture); the other commands run in-process
+through ``omnikin.cli.main.main``. Measurement files are written by hand; the expected
+UMBmark and Borenstein figures were worked out with 30-digit arithmetic from eq. 1-6 of the
+seed paper and the formulas of docs/conventions.md (values in the tests).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from omnikin import load_robot
+from omnikin.cli.main import main
+
+PNG = b"\x89PNG\r\n\x1a\n"
+SIDE_DEFAULT = 4.0
+
+
+# --- helpers ----------------------------------------------------------------------------------------
+def run(capsys, *argv):
+    rc = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def run_json(capsys, *argv):
+    rc, out, err = run(capsys, *argv)
+    assert rc == 0, err
+    return json.loads(out)
+
+
+def assert_usage_error(capsys, *argv, contains=()):
+    rc, out, err = run(capsys, *argv)
+    assert rc == 2, (rc, out, err)
+    assert "Traceback" not in err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("omnikin: error: "), err
+    for text in contains:
+        assert text in lines[0], (text, lines[0])
+    return lines[0]
+
+
+def r_cg_by_hand(runs):
+    """Eq. 3-6: centre of gravity of the run epsilons and its distance from the origin."""
+    x = sum(r["epsilon"][0] for r in runs) / len(runs)
+    y = sum(r["epsilon"][1] for r in runs) / len(runs)
+    return x, y, math.sqrt(x * x + y * y)
+
+
+def check_direction_dict(d, n_runs):
+    assert len(d["runs"]) == n_runs
+    for r in d["runs"]:
+        assert len(r["epsilon"]) == 3
+        assert all(isinstance(v, float) and math.isfinite(v) for v in r["epsilon"])
+    x, y, r = r_cg_by_hand(d["runs"])
+    assert d["cg"] == pytest.approx([x, y], rel=1e-12, abs=1e-15)
+    assert d["r_cg"] == pytest.approx(r, rel=1e-12)
+    return r
+
+
+# =====================================================================================================
+# the main job (subprocess)
+# =====================================================================================================
+@pytest.fixture(scope="module")
+def main_job(tmp_path_factory):
+    cwd = tmp_path_factory.mktemp("mainjob")
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", "umbmark"], cwd=cwd, capture_output=True,
+                          text=True, timeout=120)
+    elapsed = time.perf_counter() - t0
+    return cwd, proc, elapsed
+
+
+def test_main_job_runs_and_prints_a_table(main_job):
+    cwd, proc, elapsed = main_job
+    assert proc.returncode == 0, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert elapsed < 30.0, elapsed
+    out = proc.stdout
+    assert "r_cg cw [mm]" in out and "r_cg ccw [mm]" in out and "E_max,syst [mm]" in out
+    assert "before" in out and "after calibration" in out
+    assert "tomasi-omni3" in out
+
+
+def test_main_job_report_folder(main_job):
+    cwd, proc, _ = main_job
+    report = cwd / "umbmark-report"
+    for name in ("report.md", "result.json", "return_errors.png", "euclidean_errors.png", "trajectories.png",
+                 "true_robot.yaml", "calibrated_robot.yaml"):
+        assert (report / name).is_file(), name
+    for name in ("return_errors.png", "euclidean_errors.png", "trajectories.png"):
+        assert (report / name).read_bytes()[:8] == PNG
+        assert (report / name).stat().st_size > 5000
+    md = (report / "report.md").read_text(encoding="utf-8")
+    assert md.startswith("# UMBmark report: tomasi-omni3")
+    for name in ("return_errors.png", "euclidean_errors.png", "trajectories.png"):
+        assert name in md
+
+
+def test_main_job_result_json(main_job):
+    cwd, _, _ = main_job
+    res = json.loads((cwd / "umbmark-report" / "result.json").read_text(encoding="utf-8"))
+    for key in ("before", "after", "calibrated_robot"):
+        assert key in res
+    e = {}
+    for stage in ("before", "after"):
+        d = res[stage]
+        r_cw = check_direction_dict(d["cw"], 5)
+        r_ccw = check_direction_dict(d["ccw"], 5)
+        # E_max,syst = max(r_cg_cw, r_cg_ccw)
+        assert d["e_max_syst"] == pytest.approx(max(r_cw, r_ccw), rel=1e-12)
+        e[stage] = d["e_max_syst"]
+    cal = res["calibration"]
+    assert cal["improvement"] >= 20
+    assert cal["improvement"] == pytest.approx(e["before"] / e["after"], rel=1e-12)
+    assert res["settings"]["robot"] == "tomasi-omni3"
+    assert res["settings"]["errors"] == "typical" and res["settings"]["noise"] == "typical"
+
+
+def test_main_job_robot_files(main_job):
+    cwd, _, _ = main_job
+    report = cwd / "umbmark-report"
+    res = json.loads((report / "result.json").read_text(encoding="utf-8"))
+    nominal = load_robot("tomasi-omni3")
+    true = load_robot(report / "true_robot.yaml")
+    calibrated = load_robot(report / "calibrated_robot.yaml")
+    assert calibrated.wheel_names == nominal.wheel_names == true.wheel_names
+    # the true robot is the nominal one with the injected radius errors
+    for name, e in res["injected_errors"].items():
+        assert true.wheel(name).radius == pytest.approx(nominal.wheel(name).radius * (1 + e["radius"]), rel=1e-6)
+    # the calibrated kinematics differ from the nominal and are closer to the truth
+    j_nom, j_true, j_cal = nominal.ik_matrix, true.ik_matrix, calibrated.ik_matrix
+    assert np.max(np.abs(j_cal - j_nom)) > 1e-3 * np.max(np.abs(j_nom))
+    assert np.linalg.norm(j_cal - j_true) < np.linalg.norm(j_nom - j_true)
+
+
+def test_main_job_measurements_feed_analyze(main_job, capsys):
+    """The report's measurements file is the input format of 'umbmark analyze': same E_max,syst."""
+    cwd, _, _ = main_job
+    report = cwd / "umbmark-report"
+    res = json.loads((report / "result.json").read_text(encoding="utf-8"))
+    d = run_json(capsys, "umbmark", "analyze", report / "measurements_before.csv", "--json")
+    assert d["e_max_syst"] == pytest.approx(res["before"]["e_max_syst"], abs=2e-6)
+
+
+def test_calibrate_from_report_runs(main_job, capsys, tmp_path):
+    cwd, _, _ = main_job
+    report = cwd / "umbmark-report"
+    res = json.loads((report / "result.json").read_text(encoding="utf-8"))
+    out = tmp_path / "out.yaml"
+    d = run_json(capsys, "calibrate", "tomasi-omni3", report / "calibration_runs.csv", "-o", out, "--json")
+    assert out.is_file()
+    calibrated = load_robot(out)
+    nominal = load_robot("tomasi-omni3")
+    assert calibrated.wheel_names == nominal.wheel_names
+    assert np.max(np.abs(calibrated.ik_matrix - nominal.ik_matrix)) > 1e-3 * np.max(np.abs(nominal.ik_matrix))
+    # the same runs (written to 1 um / 1e-5 deg) give the same estimates as the main job's calibration
+    for name, e in res["calibration"]["errors"].items():
+        assert d["errors"][name]["radius"] == pytest.approx(e["radius"], abs=1e-4)
+    # the table form prints every parameter
+    rc, text, err = run(capsys, "calibrate", "tomasi-omni3", report / "calibration_runs.csv")
+    assert rc == 0, err
+    for p in ("w1.radius", "w2.lever", "w3.drive"):
+        assert p in text
+
+
+# =====================================================================================================
+# omnikin umbmark with options (in-process)
+# =====================================================================================================
+FAST = ("--runs", "2", "--rate", "20")
+
+
+def test_umbmark_json_calibrate(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    d = run_json(capsys, "umbmark", "tomasi-omni3", "--calibrate", "--json", *FAST)
+    for key in ("cw", "ccw", "e_max_syst", "calibration"):
+        assert key in d
+    assert "borenstein" not in d
+    assert d["e_max_syst"] == pytest.approx(max(check_direction_dict(d["cw"], 2), check_direction_dict(d["ccw"], 2)))
+    assert d["calibration"]["improvement"] > 1
+    assert (tmp_path / "umbmark-report" / "result.json").is_file()
+
+
+def test_umbmark_json_diff_drive_borenstein(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    d = run_json(capsys, "umbmark", "diff-drive", "--calibrate", "--json", "--out", "dd", *FAST)
+    for key in ("cw", "ccw", "e_max_syst", "calibration", "borenstein"):
+        assert key in d
+    b = d["borenstein"]
+    assert set(b) >= {"alpha", "beta", "R", "E_d", "E_b", "c_L", "c_R", "b_new"}
+    # Borenstein's figures from the printed centres of gravity (L = 4 m, b = 0.33 m)
+    x_cw, x_ccw = d["cw"]["cg"][0], d["ccw"]["cg"][0]
+    assert b["alpha"] == pytest.approx((x_cw + x_ccw) / -16.0, rel=1e-12)
+    assert b["beta"] == pytest.approx((x_cw - x_ccw) / -16.0, rel=1e-12)
+    assert b["c_R"] / b["c_L"] == pytest.approx(b["E_d"], rel=1e-12)
+    assert b["b_new"] == pytest.approx(0.33 * b["E_b"], rel=1e-12)
+    assert (tmp_path / "dd" / "report.md").is_file()
+    # without --calibrate no calibration
+    d = run_json(capsys, "umbmark", "diff-drive", "--json", "--out", "dd2", *FAST)
+    assert "calibration" not in d and "borenstein" in d
+
+
+def test_umbmark_calibration_runs_file_keeps_side(capsys, tmp_path, monkeypatch):
+    from omnikin.io.runs import read_calibration_runs
+
+    monkeypatch.chdir(tmp_path)
+    run_json(capsys, "umbmark", "--side", "2", "--json", *FAST)
+    runs = read_calibration_runs(tmp_path / "umbmark-report" / "calibration_runs.csv")
+    squares = [r for r in runs if r.label.startswith("square")]
+    assert squares
+    for r in squares:
+        legs = [s.length for s in r.plan.segments if s.xi[2] == 0.0]
+        assert legs == pytest.approx([2.0] * 4), r.label
+    lines = [r for r in runs if r.label.startswith("line")]
+    assert all(r.plan.segments[0].length == pytest.approx(2.0) for r in lines)
+
+
+def test_umbmark_report_names_the_number_of_runs(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    run_json(capsys, "umbmark", "tomasi-omni3", "--json", *FAST)
+    md = (tmp_path / "umbmark-report" / "report.md").read_text(encoding="utf-8")
+    assert "2 runs per direction" in md
+    assert "of 5 runs" not in md
+
+
+# =====================================================================================================
+# omnikin umbmark analyze on hand-written measurement files
+# =====================================================================================================
+HAND = """direction,x_abs,y_abs,x_calc,y_calc
+cw,0.10,-0.05,0.02,0.01
+cw,0.12,-0.03,0.02,0.01
+cw,0.09,-0.06,-0.01,0.00
+ccw,0.03,0.07,0.01,-0.02
+ccw,0.05,0.06,0.01,-0.02
+ccw,0.02,0.08,0.01,-0.02
+ccw,0.04,0.05,0.01,-0.02
+"""
+# eps = abs - calc: cw (0.08, -0.06), (0.10, -0.04), (0.10, -0.06); ccw (0.02, 0.09), (0.04, 0.08),
+# (0.01, 0.10), (0.03, 0.07). cg_cw = (0.28/3, -0.16/3), r = sqrt(0.104)/3; cg_ccw = (0.025, 0.085),
+# r = sqrt(0.00785).
+HAND_CG = {"cw": (0.28 / 3, -0.16 / 3), "ccw": (0.025, 0.085)}
+HAND_R = {"cw": 0.107496769977313995364888176404, "ccw": 0.0886002257333467520099556254877}
+HAND_BORENSTEIN = {
+    4.0: dict(alpha=-0.00739583333333333333333, beta=-0.00427083333333333333333, R=-936.586077659592773238987,
+              E_d=0.99964771857981259868773, E_b=0.995313730786286244601320, c_L=1.00017617174110927808797,
+              c_R=0.999823828258890721912028, b_new=0.32845353115947446071843577),
+    2.0: dict(alpha=-0.0147916666666666666666667, beta=-0.00854166666666666666666, R=-234.147053270484916279079,
+              E_d=0.998591621748032505496304, E_b=0.990671178939508514956046, c_L=1.00070468535774991470854,
+              c_R=0.999295314642250085291460, b_new=0.326921489050037809935495),
+}
+
+
+@pytest.mark.parametrize("side", [4.0, 2.0])
+def test_analyze_hand_file(capsys, tmp_path, side):
+    f = tmp_path / "measured.csv"
+    f.write_text(HAND, encoding="utf-8")
+    argv = ["umbmark", "analyze", f, "--robot", "diff-drive", "--json"] + ([] if side == 4.0 else ["--side", "2"])
+    d = run_json(capsys, *argv)
+    eps = {"cw": [(0.08, -0.06), (0.10, -0.04), (0.10, -0.06)],
+           "ccw": [(0.02, 0.09), (0.04, 0.08), (0.01, 0.10), (0.03, 0.07)]}
+    for direction in ("cw", "ccw"):
+        runs = d[direction]["runs"]
+        assert len(runs) == len(eps[direction])
+        for r, (x, y) in zip(runs, eps[direction]):
+            assert r["epsilon"][:2] == pytest.approx([x, y], abs=1e-15)
+            assert r["epsilon"][2] is None               # heading not measured
+        assert d[direction]["cg"] == pytest.approx(HAND_CG[direction], abs=1e-15)
+        assert d[direction]["r_cg"] == pytest.approx(HAND_R[direction], rel=1e-13)
+    assert d["e_max_syst"] == pytest.approx(HAND_R["cw"], rel=1e-13)
+    assert d["side"] == side
+    for key, value in HAND_BORENSTEIN[side].items():
+        assert d["borenstein"][key] == pytest.approx(value, rel=1e-12), key
+
+
+def test_analyze_table_output_and_non_diff_robot(capsys, tmp_path):
+    f = tmp_path / "measured.csv"
+    f.write_text(HAND, encoding="utf-8")
+    rc, out, err = run(capsys, "umbmark", "analyze", f, "--robot", "diff-drive")
+    assert rc == 0, err
+    assert "107.50" in out and "88.60" in out          # r_cg in mm
+    assert "Borenstein" in out
+    d = run_json(capsys, "umbmark", "analyze", f, "--robot", "tomasi-omni3", "--json")
+    assert "borenstein" not in d and d["e_max_syst"] == pytest.approx(HAND_R["cw"], rel=1e-13)
+    d = run_json(capsys, "umbmark", "analyze", f, "--json")
+    assert "borenstein" not in d
+
+
+def test_analyze_theta_columns(capsys, tmp_path):
+    deg = tmp_path / "deg.csv"
+    deg.write_text("direction,x_abs,y_abs,x_calc,y_calc,theta_abs_deg,theta_calc_deg\n"
+                   "cw,0.01,0.02,0,0,10,4\n"
+                   "ccw,0.01,0.02,0,0,179,-179\n"
+                   "ccw,0.01,0.02,0,0,-3,2\n", encoding="utf-8")
+    d = run_json(capsys, "umbmark", "analyze", deg, "--json")
+    assert d["cw"]["runs"][0]["epsilon"][2] == pytest.approx(math.radians(6.0), rel=1e-12)
+    assert d["ccw"]["runs"][0]["epsilon"][2] == pytest.approx(math.radians(-2.0), rel=1e-9)   # wrapped
+    assert d["ccw"]["runs"][1]["epsilon"][2] == pytest.approx(math.radians(-5.0), rel=1e-12)
+    rad = tmp_path / "rad.csv"
+    rad.write_text("direction,x_abs,y_abs,x_calc,y_calc,theta_abs,theta_calc\n"
+                   "cw,0.01,0.02,0,0,0.1,0.02\n"
+                   "ccw,0.03,0.04,0,0,,\n", encoding="utf-8")
+    d = run_json(capsys, "umbmark", "analyze", rad, "--json")
+    assert d["cw"]["runs"][0]["epsilon"][2] == pytest.approx(0.08, rel=1e-12)
+    assert d["ccw"]["runs"][0]["epsilon"][2] is None
+    assert d["e_max_syst"] == pytest.approx(0.05, rel=1e-12)
+    # comments, blank lines and a BOM as spreadsheets write them
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes("\ufeff# measured 2024-05-01\ndirection,x_abs,y_abs,x_calc,y_calc\n\ncw,0.03,0.04,0,0\n"
+                    "CCW,0,0.01,0,0\n".encode("utf-8"))
+    d = run_json(capsys, "umbmark", "analyze", bom, "--json")
+    assert d["e_max_syst"] == pytest.approx(0.05, rel=1e-12)
+
+
+# =====================================================================================================
+# omnikin calibrate on a runs file written from simulate()
+# =====================================================================================================
+def test_calibrate_own_runs_file(capsys, tmp_path):
+    from omnikin.simulation.errors import NoiseModel, SystematicErrors, WheelErrors
+    from omnikin.simulation.motion import line, spin, umbmark_square
+    from omnikin.simulation.simulate import simulate
+
+    robot = load_robot("diff-drive")
+    true = SystematicErrors({"left": WheelErrors(radius=-0.004, dy=0.002),
+                             "right": WheelErrors(radius=0.006, dy=-0.001)}).apply(robot)
+    plans = {"square cw rotate": umbmark_square("cw"), "square ccw rotate": umbmark_square("ccw"),
+             "line 4": line(4.0), "spin 180": spin(math.pi), "spin -180": spin(-math.pi)}
+    path = tmp_path / "runs.csv"
+    with open(path, "w", newline="", encoding="utf-8") as handle:
+        w = csv.writer(handle)
+        w.writerow(["path", "x_abs", "y_abs", "theta_abs_deg"])
+        for text, plan in plans.items():
+            m = simulate(plan, true, robot, noise=NoiseModel(quantise=False), rate=50.0).measured[0]
+            w.writerow([text, f"{m[0]:.7f}", f"{m[1]:.7f}", f"{math.degrees(m[2]):.6f}"])
+    out = tmp_path / "calibrated.json"
+    rc, text, err = run(capsys, "calibrate", "diff-drive", path, "-o", out)
+    assert rc == 0, err
+    assert "calibrated robot written to" in text
+    cal = load_robot(out)
+    for name, e in (("left", -0.004), ("right", 0.006)):
+        assert cal.wheel(name).radius == pytest.approx(0.0825 * (1 + e), rel=1e-4)
+    assert cal.wheel("left").y - cal.wheel("right").y == pytest.approx(0.33 + 0.003, abs=1e-5)
+    assert np.max(np.abs(cal.ik_matrix - robot.ik_matrix)) > 1e-4
+
+
+# =====================================================================================================
+# bad input: exit 2, one line, no traceback
+# =====================================================================================================
+@pytest.mark.parametrize("content, contains", [
+    ("direction,x_abs,y_abs,x_calc\ncw,1,2,3\n", ["y_calc"]),                                   # missing column
+    ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,nan,0,0\nccw,1,2,0,0\n", ["line 2", "y_abs"]),  # NaN
+    ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,2,0,0\ncw,1,2,0,0\n", ["ccw"]),                  # one direction
+    ("direction,x_abs,y_abs,x_calc,y_calc\n", []),                                              # no runs
+    ("", ["empty"]),                                                                            # empty file
+    ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,2,0,0\nccw,,2,0,0\n", ["line 3", "x_abs"]),
+    ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,2,0,0\nup,1,2,0,0\n", ["line 3", "direction"]),
+    ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,2,0,0\nccw,1,2,0\n", ["line 3"]),
+])
+def test_analyze_bad_files(capsys, tmp_path, content, contains):
+    f = tmp_path / "bad.csv"
+    f.write_text(content, encoding="utf-8")
+    assert_usage_error(capsys, "umbmark", "analyze", f, "--robot", "diff-drive", contains=[str(f), *contains])
+
+
+def test_analyze_missing_file_and_bad_side(capsys, tmp_path):
+    assert_usage_error(capsys, "umbmark", "analyze", tmp_path / "nope.csv", contains=["nope.csv"])
+    f = tmp_path / "measured.csv"
+    f.write_text(HAND, encoding="utf-8")
+    assert_usage_error(capsys, "umbmark", "analyze", f, "--side", "-2", contains=["side"])
+
+
+@pytest.mark.parametrize("argv, contains", [
+    (["--runs", "0"], ["--runs"]),
+    (["--runs", "-3"], ["--runs"]),
+    (["--trials", "0"], ["--trials"]),
+    (["--side", "-1"], ["--side"]),
+    (["--side", "0"], ["--side"]),
+    (["--side", "nan"], ["--side"]),
+    (["--errors", "bogus"], ["bogus"]),
+    (["--noise", "bogus"], ["bogus"]),
+    (["diff-drive", "--mode", "translate"], ["translate"]),
+    (["no-such-robot"], ["no-such-robot"]),
+    (["--rate", "0"], ["rate"]),
+])
+def test_umbmark_bad_options(capsys, tmp_path, monkeypatch, argv, contains):
+    monkeypatch.chdir(tmp_path)
+    assert_usage_error(capsys, "umbmark", *argv, contains=contains)
+    assert not (tmp_path / "umbmark-report").exists()
+
+
+def test_umbmark_negative_seed(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert_usage_error(capsys, "umbmark", "--seed", "-1", "--runs", "1", "--rate", "20", contains=["seed"])
+
+
+@pytest.mark.parametrize("content, contains", [
+    ("path,x_abs,y_abs\nline 4,4.01,0\nhop 3,1,1\n", ["line 3", "'path'", "hop 3"]),    # unknown path
+    ("path,x_abs,y_abs\nline 4,4.01,0\nsquare cw,1,1\n", ["line 3", "'path'"]),
+    ("path,x_abs,y_abs\nline 4,4.01,0\nline four,1,1\n", ["line 3", "'path'"]),
+    ("path,x_abs,y_abs\nline 4,4.01,0\narc -1 90,1,1\n", ["line 3", "'path'"]),
+    ("path,x_abs,y_abs\n\n# comment\nline 4,4.01,0\nspin 90,nan,0\n", ["line 5", "x_abs"]),
+    ("", ["empty"]),
+    ("path,x_abs\nline 4,4.01\n", ["y_abs"]),
+])
+def test_calibrate_bad_runs_files(capsys, tmp_path, content, contains):
+    f = tmp_path / "runs.csv"
+    f.write_text(content, encoding="utf-8")
+    assert_usage_error(capsys, "calibrate", "tomasi-omni3", f, "-o", tmp_path / "o.yaml", contains=contains)
+    assert not (tmp_path / "o.yaml").exists()
