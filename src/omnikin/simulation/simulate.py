@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from ..errors import OmnikinError
-from ..geometry import sinc, wrap_angle
+from ..geometry import TAYLOR_LIMIT, wrap_angle
 from ..integration import integrate_components, integrate_end
 from ..model import Robot
 from ..odometry import batch_odometry, encoded_wheels
@@ -132,20 +132,26 @@ def simulate(plan: Plan | SampledPlan, true_robot: Robot, command_robot: Robot, 
     return SimulatedRun(sampled, sampled.t, ticks, steer, odometry, truth, measured)
 
 
-TRIAL_BLOCK_SAMPLES = 1 << 13
+TRIAL_BLOCK_SAMPLES = 1 << 15
 """Trials are simulated in blocks of about this many robot-samples, to stay in cache."""
 
-_NEAR = 0.25
+_NEAR = 0.1
 """Largest heading deviation [rad] from the noise-free run for which :func:`_ends_near`
-uses its series (truncation error below 1e-14); beyond it the exact trigonometry is used."""
+uses its series (truncation error below 3e-17); beyond it the exact trigonometry is used."""
 
 
 def _truth(robot: Robot, names, dtrue, steer, noise: NoiseModel, trials: int, rng, keep: bool) -> np.ndarray:
     """Ground-truth poses ``(trials, N + 1, 3)`` (or ``(trials, 1, 3)``, the ends, if not ``keep``).
 
-    The noise-free body increments are computed once; each trial adds the body image of its
-    wheel slip, ``F (sigma * z)``, and its floor error on the heading. The floor's standard
-    deviation per sample uses the noise-free path length of the sample.
+    The noise-free body increments ``base`` are computed once. Each trial's body
+    increments are ``base + S_k z_k`` with ``z_k`` three standard normal variates per
+    sample and ``S_k`` a square root of the per-sample covariance of the body increment,
+    ``C_k = F_k diag(sigma_slip,k^2) F_k^T + diag(0, 0, sigma_floor,k^2)``: exactly the
+    distribution of the wheel slip mapped through the true forward kinematics ``F_k`` plus
+    the floor's heading error, drawn with one variate per body component instead of one
+    per wheel and one for the floor. The floor's standard deviation per sample uses the
+    noise-free path length of the sample. Trials go in blocks through preallocated buffers
+    (:class:`_Work`): fresh arrays of this size cost more in page faults than the arithmetic.
     """
     n, m = dtrue.shape
     radius = np.array([robot.wheel(nm).radius for nm in names])
@@ -157,55 +163,93 @@ def _truth(robot: Robot, names, dtrue, steer, noise: NoiseModel, trials: int, rn
         f = robot.fk_matrix(None, names)[:, : len(names)]          # (3, n)
         base = f @ dtrue                                            # (3, N) noise-free increments
     reps = trials if not noise.is_zero else 1
-    slip = noise.slip * np.sqrt(np.abs(dtrue) * radius[:, None]) / radius[:, None] if noise.slip else None
-    floor = noise.floor * np.sqrt(np.hypot(base[0], base[1])) if noise.floor else None
     out = np.empty((trials, m + 1 if keep else 1, 3))
+    root = _noise_root(f, dtrue, radius, base, noise) if reps > 1 or not noise.is_zero else None
     base_mid = np.cumsum(base[2]) - 0.5 * base[2]                  # noise-free heading mid-sample
     cb, sb = np.cos(base_mid), np.sin(base_mid)
     block = max(1, TRIAL_BLOCK_SAMPLES // max(m, 1))
+    work = _Work(min(block, reps), m)
     for r0 in range(0, reps, block):
         r1 = min(reps, r0 + block)
-        comps = np.broadcast_to(base, (r1 - r0, 3, m)).copy()
-        if slip is not None:
-            z = slip * rng.standard_normal((r1 - r0, n, m))
-            comps += np.einsum("kij,rjk->rik", f, z) if robot.steerable else np.matmul(f, z)
-        if floor is not None:
-            comps[:, 2] += floor * rng.standard_normal((r1 - r0, m))
+        w = work.view(r1 - r0)
+        comps = w["comps"]
+        if root is None:
+            comps[...] = base
+        else:
+            z = rng.standard_normal(out=w["z"])
+            tmp = w["tmp"]
+            for i in range(3):
+                np.multiply(root[i, 0], z[:, 0], out=comps[:, i])
+                comps[:, i] += base[i]
+                for j in (1, 2):
+                    np.multiply(root[i, j], z[:, j], out=tmp)
+                    comps[:, i] += tmp
         if keep:
             integrate_components(comps[:, 0], comps[:, 1], comps[:, 2], out=out[r0:r1])
         else:
-            out[r0:r1, 0] = _ends_near(comps, base_mid, cb, sb)
+            out[r0:r1, 0] = _ends_near(comps, base_mid, cb, sb, w)
     if reps != trials:
         out[1:] = out[0]
     return out
 
 
-def _ends_near(comps: np.ndarray, base_mid, cb, sb) -> np.ndarray:
+def _noise_root(f, dtrue, radius, base, noise: NoiseModel) -> np.ndarray:
+    """``S`` ``(3, 3, N)`` with ``S_k S_k^T = C_k`` (see :func:`_truth`), by eigendecomposition
+    (``C_k`` may be singular: a differential drive cannot slip sideways)."""
+    m = dtrue.shape[1]
+    var = (noise.slip ** 2) * np.abs(dtrue) * radius[:, None] / radius[:, None] ** 2      # (n, N) [rad^2]
+    fk = f if f.ndim == 3 else np.broadcast_to(f, (m,) + f.shape)                          # (N, 3, n)
+    cov = np.einsum("kin,nk,kjn->kij", fk, var, fk)
+    cov[:, 2, 2] += (noise.floor ** 2) * np.hypot(base[0], base[1])
+    lam, vec = np.linalg.eigh(cov)
+    root = vec * np.sqrt(np.clip(lam, 0.0, None))[:, None, :]
+    return np.ascontiguousarray(np.moveaxis(root, 0, -1))                                  # (3, 3, N)
+
+
+class _Work:
+    """Buffers reused from block to block (trials x 3 x samples and trials x samples)."""
+
+    ROWS = ("tmp", "mid", "half", "d", "d2", "cos_d", "sin_d", "c", "s", "k", "ka", "kb")
+
+    def __init__(self, reps: int, m: int):
+        self.buf = {"comps": np.empty((reps, 3, m)), "z": np.empty((reps, 3, m))}
+        self.buf.update({k: np.empty((reps, m)) for k in self.ROWS})
+
+    def view(self, r: int) -> dict:
+        return {k: v[:r] for k, v in self.buf.items()}
+
+
+def _ends_near(comps: np.ndarray, base_mid, cb, sb, w: dict) -> np.ndarray:
     """End poses ``(r, 3)`` of exact integration of ``comps`` ``(r, 3, N)`` from the origin.
 
-    Same result as :func:`omnikin.integration.integrate_end`; faster for runs close to the
-    noise-free one (heading ``base_mid``, with ``cb, sb`` its cosine and sine): the
-    mid-sample heading is ``base_mid + d`` with a small ``d``, and
+    Same result as :func:`omnikin.integration.integrate_end` (to about 1e-14); faster for
+    runs close to the noise-free one (heading ``base_mid``, with ``cb, sb`` its cosine and
+    sine): the mid-sample heading is ``base_mid + d`` with a small ``d``, and
     ``cos(base + d) = cb cos d - sb sin d`` with the Taylor series of ``cos d`` and
-    ``sin d`` replaces two trigonometric evaluations by a few multiplications.
+    ``sin d`` replaces two trigonometric evaluations by a few multiplications; likewise the
+    chord factor ``sinc(phi/2)`` by its series. ``w``: buffers of :class:`_Work`.
     """
     a, b, phi = comps[:, 0], comps[:, 1], comps[:, 2]
-    mid = np.cumsum(phi, axis=-1)
-    half = 0.5 * phi
+    half = np.multiply(phi, 0.5, out=w["half"])
+    mid = np.cumsum(phi, axis=-1, out=w["mid"])
     mid -= half
-    d = mid - base_mid
-    if np.max(np.abs(d), initial=0.0) > _NEAR:
+    d = np.subtract(mid, base_mid, out=w["d"])
+    if np.max(np.abs(d), initial=0.0) > _NEAR or np.max(np.abs(half), initial=0.0) >= TAYLOR_LIMIT:
         return integrate_end(a, b, phi)
-    d2 = d * d
-    cos_d = _series(d2, _COS)
-    sin_d = _series(d2, _SIN)
+    d2 = np.multiply(d, d, out=w["d2"])
+    cos_d = _series(d2, _COS, w["cos_d"])
+    sin_d = _series(d2, _SIN, w["sin_d"])
     sin_d *= d
-    c = cb * cos_d
-    c -= sb * sin_d
-    s = sb * cos_d
-    s += cb * sin_d
-    k = sinc(half)
-    ka, kb = k * a, k * b
+    c = np.multiply(cb, cos_d, out=w["c"])
+    s = np.multiply(sb, cos_d, out=w["s"])
+    np.multiply(sb, sin_d, out=cos_d)
+    c -= cos_d
+    np.multiply(cb, sin_d, out=cos_d)
+    s += cos_d
+    np.multiply(half, half, out=d2)
+    k = _series(d2, _SINC, w["k"])               # sinc(phi/2), |phi/2| < 0.1
+    ka = np.multiply(k, a, out=w["ka"])
+    kb = np.multiply(k, b, out=w["kb"])
     out = np.empty((len(comps), 3))
     out[:, 0] = np.einsum("ij,ij->i", c, ka) - np.einsum("ij,ij->i", s, kb)
     out[:, 1] = np.einsum("ij,ij->i", s, ka) + np.einsum("ij,ij->i", c, kb)
@@ -213,13 +257,14 @@ def _ends_near(comps: np.ndarray, base_mid, cb, sb) -> np.ndarray:
     return out
 
 
-_COS = [(-1) ** k / math.factorial(2 * k) for k in range(7)]        # cos d = sum c_k d^2k, to d^12
-_SIN = [(-1) ** k / math.factorial(2 * k + 1) for k in range(7)]    # sin d / d = sum s_k d^2k
+_COS = [(-1) ** k / math.factorial(2 * k) for k in range(5)]        # cos d = sum c_k d^2k, to d^8
+_SIN = [(-1) ** k / math.factorial(2 * k + 1) for k in range(5)]    # sin d / d = sum s_k d^2k
+_SINC = _SIN[:5]                                                     # sinc x to x^8 (geometry.sinc)
 
 
-def _series(x2: np.ndarray, coef) -> np.ndarray:
-    """Horner evaluation of ``sum coef[k] x2**k``."""
-    out = np.full_like(x2, coef[-1])
+def _series(x2: np.ndarray, coef, out: np.ndarray) -> np.ndarray:
+    """Horner evaluation of ``sum coef[k] x2**k`` into ``out``."""
+    out.fill(coef[-1])
     for c in coef[-2::-1]:
         out *= x2
         out += c
