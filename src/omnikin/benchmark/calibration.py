@@ -291,16 +291,20 @@ def recommended_runs(robot: Robot, side: float = 4.0) -> list[tuple[str, Plan]]:
     """A calibration protocol that sees every parameter it can for this layout.
 
     Both UMBmark squares in ``rotate`` mode (and ``translate`` mode for holonomic robots),
-    a straight line along body x (and y for holonomic robots), and half turns in place
-    both ways. Measure x, y and the heading at the end of each. The half turns see where
-    the robot really turns about: a closed square hides an offset of that centre (its four
-    corner shifts cancel), a half turn moves the origin by twice the offset.
+    a straight line along body x (and y for holonomic robots), half turns in place both ways
+    and five full turns in place both ways. Measure x, y and the heading at the end of each.
+    The half turns see where the robot really turns about: a closed square hides an offset
+    of that centre (its four corner shifts cancel), a half turn moves the origin by twice
+    the offset. The five turns see the rotation scale (track over radius) ten times more
+    sharply than a half turn against the same heading measurement error.
     """
     out = [("square cw rotate", umbmark_square("cw", side, "rotate")),
            ("square ccw rotate", umbmark_square("ccw", side, "rotate")),
            (f"line {side:g} m along x", line(side)),
            ("spin +180 deg", spin(math.pi)),
-           ("spin -180 deg", spin(-math.pi))]
+           ("spin -180 deg", spin(-math.pi)),
+           ("spin +1800 deg", spin(10 * math.pi)),
+           ("spin -1800 deg", spin(-10 * math.pi))]
     if robot.mobility.holonomic:
         out += [("square cw translate", umbmark_square("cw", side, "translate")),
                 ("square ccw translate", umbmark_square("ccw", side, "translate")),

@@ -24,7 +24,7 @@ from ..simulation.motion import umbmark_square
 from ..simulation.simulate import simulate
 
 MAIN_ROBOT = "tomasi-omni3"
-CALIBRATION_REPEATS = 3
+CALIBRATION_REPEATS = 5
 
 UMBMARK_EPILOG = f"""examples:
   omnikin umbmark                          the main job: {MAIN_ROBOT} as built, UMBmark, calibration,
