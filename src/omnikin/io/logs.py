@@ -12,8 +12,6 @@ Trajectory output: ``csv`` with header ``t,x,y,theta`` [s, m, m, rad]; ``tum``:
 
 from __future__ import annotations
 
-import csv
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,6 +20,7 @@ import numpy as np
 from ..errors import OdometryInputError
 from ..model import Robot
 from ..odometry import encoded_wheels
+from .csvfile import column_problems, number, read_rows
 
 FORMATS = ("csv", "tum")
 
@@ -45,53 +44,22 @@ class TickLog:
     """File line of each kept sample."""
 
 
-def _number(text: str, source: str, line: int, column: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise OdometryInputError(f"{source}: line {line}, column {column!r}: not a number: {text!r}") from None
-    if not math.isfinite(value):
-        raise OdometryInputError(f"{source}: line {line}, column {column!r}: non-finite value {text!r}")
-    return value
-
-
 def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
     """Read and check a tick log for ``robot`` (see module docstring)."""
     source = str(path)
     wheels = [w.name for w in encoded_wheels(robot)]
     steer_cols = [f"{name}_steer_deg" for name in robot.steer_names]
     expected = ["t"] + wheels + steer_cols
-    try:
-        handle = open(path, newline="", encoding="utf-8-sig")  # a BOM (Excel) is fine
-    except OSError as exc:
-        raise OdometryInputError(f"{source}: cannot open: {exc.strerror}") from None
-    with handle:
-        try:
-            rows = [(i + 1, r) for i, r in enumerate(csv.reader(handle))
-                    if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
-        except UnicodeDecodeError as exc:
-            raise OdometryInputError(f"{source}: not a UTF-8 text file (byte {exc.start}: {exc.reason})") from None
-        except csv.Error as exc:
-            raise OdometryInputError(f"{source}: malformed CSV: {exc}") from None
+    rows = read_rows(path, OdometryInputError)
     if not rows:
         raise OdometryInputError(f"{source}: empty log; expected a header {','.join(expected)}")
     header_line, header = rows[0]
-    header = [h.strip() for h in header]
     if not header or header[0] != "t":
         raise OdometryInputError(f"{source}: line {header_line}: the first column must be 't', got {header[:1]}; "
                                  f"expected columns {expected}")
-    dup = sorted({h for h in header if header.count(h) > 1})
-    missing = [c for c in expected if c not in header]
-    unknown = [c for c in header if c not in expected]
-    if dup or missing or unknown:
-        parts = []
-        if missing:
-            parts.append(f"missing column(s) {missing}")
-        if unknown:
-            parts.append(f"unknown column(s) {unknown}")
-        if dup:
-            parts.append(f"duplicate column(s) {dup}")
-        raise OdometryInputError(f"{source}: line {header_line}: " + "; ".join(parts) +
+    problems = column_problems(header, expected)
+    if problems:
+        raise OdometryInputError(f"{source}: line {header_line}: " + "; ".join(problems) +
                                  f"; robot {robot.name!r} expects {expected}")
     if len(rows) < 3:
         raise OdometryInputError(f"{source}: needs at least two samples, got {len(rows) - 1}")
@@ -101,7 +69,7 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
         if len(row) != len(header):
             raise OdometryInputError(f"{source}: line {line}: {len(row)} fields, header has {len(header)}")
         for j, name in enumerate(expected):
-            data[k, j] = _number(row[index[name]].strip(), source, line, name)
+            data[k, j] = number(row[index[name]], source, line, name, OdometryInputError)
     repeat = np.zeros(len(data), dtype=bool)
     repeat[1:] = np.all(data[1:] == data[:-1], axis=1)
     duplicates = tuple(rows[k + 1][0] for k in np.flatnonzero(repeat))

@@ -22,13 +22,13 @@ from __future__ import annotations
 
 import csv
 import math
-from pathlib import Path
 
 import numpy as np
 
 from ..benchmark.calibration import CalibrationRun
 from ..errors import OmnikinError
 from ..simulation.motion import Plan, arc, line, spin, umbmark_square
+from .csvfile import column_problems, number, read_rows
 
 
 class RunsFileError(OmnikinError):
@@ -37,48 +37,29 @@ class RunsFileError(OmnikinError):
 
 def _rows(path) -> tuple[list[str], list[tuple[int, dict]]]:
     source = str(path)
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as handle:
-            raw = [(i + 1, r) for i, r in enumerate(csv.reader(handle))
-                   if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
-    except OSError as exc:
-        raise RunsFileError(f"{source}: cannot open: {exc.strerror}") from None
-    except (UnicodeDecodeError, csv.Error) as exc:
-        raise RunsFileError(f"{source}: not a readable UTF-8 CSV file: {exc}") from None
+    raw = read_rows(path, RunsFileError)
     if not raw:
         raise RunsFileError(f"{source}: empty file")
-    header = [h.strip() for h in raw[0][1]]
-    dup = sorted({h for h in header if header.count(h) > 1})
-    if dup:
-        raise RunsFileError(f"{source}: line {raw[0][0]}: duplicate column(s) {dup}")
+    header = raw[0][1]
     rows = []
     for line_no, r in raw[1:]:
         if len(r) != len(header):
             raise RunsFileError(f"{source}: line {line_no}: {len(r)} fields, the header has {len(header)}")
-        rows.append((line_no, {h: c.strip() for h, c in zip(header, r)}))
+        rows.append((line_no, dict(zip(header, r))))
     if not rows:
         raise RunsFileError(f"{source}: no data rows after the header")
     return header, rows
 
 
 def _check_columns(source, header, required, optional):
-    missing = [c for c in required if c not in header]
-    unknown = [c for c in header if c not in required and c not in optional]
-    if missing or unknown:
-        parts = ([f"missing column(s) {missing}"] if missing else []) + \
-                ([f"unknown column(s) {unknown}"] if unknown else [])
-        raise RunsFileError(f"{source}: " + "; ".join(parts) + f"; expected {list(required)} and optionally "
+    problems = column_problems(header, required, optional)
+    if problems:
+        raise RunsFileError(f"{source}: " + "; ".join(problems) + f"; expected {list(required)} and optionally "
                             f"{list(optional)}")
 
 
 def _number(source, line_no, column, text) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise RunsFileError(f"{source}: line {line_no}, column {column!r}: not a number: {text!r}") from None
-    if not math.isfinite(v):
-        raise RunsFileError(f"{source}: line {line_no}, column {column!r}: non-finite value {text!r}")
-    return v
+    return number(text, source, line_no, column, RunsFileError)
 
 
 def _theta(source, header, line_no, row, which) -> float:

@@ -25,6 +25,24 @@ def _figure(*args, **kwargs):
     return Figure(*args, **kwargs)
 
 
+def _finish(fig, title: str):
+    if title:
+        fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    return fig
+
+
+def _style_axes(ax, xlabel: str, ylabel: str, title: str, equal: bool = False) -> None:
+    """Labels, title, grid and legend shared by the figures."""
+    if equal:
+        ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
+
+
 def return_errors_figure(results: dict, title: str = ""):
     """Scatter of return errors [mm]; ``results``: ``{"before": UMBmarkResult, "after": ...}``."""
     fig = _figure(figsize=(5.2 * len(results), 5.0), dpi=100)
@@ -38,16 +56,9 @@ def return_errors_figure(results: dict, title: str = ""):
                        label=f"{d.direction} c.g., r = {d.r_cg * 1000:.1f} mm")
         ax.axhline(0, color="0.6", lw=0.8)
         ax.axvline(0, color="0.6", lw=0.8)
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("return error x [mm]")
-        ax.set_ylabel("return error y [mm]")
-        ax.set_title(f"{label}: E_max,syst = {res.e_max_syst * 1000:.1f} mm", fontsize=10)
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8, loc="best")
-    if title:
-        fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
-    return fig
+        _style_axes(ax, "return error x [mm]", "return error y [mm]",
+                    f"{label}: E_max,syst = {res.e_max_syst * 1000:.1f} mm", equal=True)
+    return _finish(fig, title)
 
 
 def euclidean_errors_figure(results: dict, title: str = ""):
@@ -84,16 +95,8 @@ def trajectories_figure(runs: dict, side: float, title: str = ""):
                     label=f"{d} odometry")
             ax.plot([truth[-1, 0]], [truth[-1, 1]], "o", color=COLORS[d])
         ax.plot([0], [0], "k*", ms=10, label="start")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
-        ax.set_title(f"{label}: first run of each direction ({side:g} m square)", fontsize=10)
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8, loc="best")
-    if title:
-        fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
-    return fig
+        _style_axes(ax, "x [m]", "y [m]", f"{label}: first run of each direction ({side:g} m square)", equal=True)
+    return _finish(fig, title)
 
 
 def monte_carlo_figure(values: dict, title: str = ""):
