@@ -8,7 +8,7 @@ from conftest import omni_robot
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from omnikin import InfeasibleTwistError, Robot, SingularLayoutError, Steer, Wheel, load_robot
+from omnikin import InfeasibleTwistError, Robot, SingularLayoutError, Wheel, load_robot
 from omnikin.errors import OmnikinError
 
 # --- ros2_controllers parity --------------------------------------------------------------

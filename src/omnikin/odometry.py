@@ -13,8 +13,6 @@ The streaming estimator lives in :mod:`omnikin.streaming`.
 
 from __future__ import annotations
 
-import math
-import warnings
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Optional

@@ -11,7 +11,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -163,7 +162,6 @@ class _Steps:
 
 # --- umbmark -----------------------------------------------------------------------------------------
 def cmd_umbmark(args) -> int:
-    from ..io.robot_file import robot_to_dict
 
     main_job = args.robot is None
     robot = _load(args.robot or MAIN_ROBOT)
