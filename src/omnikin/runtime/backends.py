@@ -1,0 +1,118 @@
+"""Wheel back-ends behind one interface, and the simulated one.
+
+A back-end takes wheel commands and gives wheel measurements:
+
+* ``write(t, speeds, steer=None)``: speeds [rad/s] of the robot's rolling wheels (file
+  order) and, with steerable wheels, their steering angles [rad];
+* ``read(t) -> WheelState``: positions [rad] and speeds [rad/s] of the encoded wheels
+  (file order), steering angles, and the time of the measurement;
+* ``stats() -> dict``: link statistics for diagnostics; ``close()``.
+
+:class:`SimBackend` is the omnikin simulator of the robot as built: the driven (encoded)
+wheels turn at the commanded speeds (ideal speed control, zero-order hold between calls),
+each wheel's rolling distance slips as in :class:`omnikin.simulation.errors.NoiseModel`,
+and the true robot's forward kinematics and exact SE(2) integration move the ground truth.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional, Protocol
+
+import numpy as np
+
+from ..errors import OmnikinError
+from ..geometry import compose, exp
+from ..model import Robot
+from ..simulation.errors import NoiseModel
+from ..simulation.simulate import make_rng
+
+
+@dataclass(frozen=True)
+class WheelState:
+    """One measurement: time [s], encoded wheels' positions [rad] and speeds [rad/s], steering [rad]."""
+
+    t: float
+    positions: np.ndarray
+    velocities: np.ndarray
+    steer: Optional[np.ndarray] = None
+
+
+class WheelBackend(Protocol):
+    """What the runtime needs from wheels (module docstring)."""
+
+    def write(self, t: float, speeds: np.ndarray, steer: Optional[np.ndarray] = None) -> None: ...
+
+    def read(self, t: float) -> WheelState: ...
+
+    def stats(self) -> dict: ...
+
+    def close(self) -> None: ...
+
+
+class SimBackend:
+    """The robot as built, simulated (module docstring). ``truth`` is its true pose."""
+
+    def __init__(self, robot: Robot, true_robot: Robot | None = None, noise: NoiseModel | None = None, rng=None,
+                 start=(0.0, 0.0, 0.0)):
+        self.robot = robot
+        self.true_robot = true_robot or robot
+        self.noise = noise or NoiseModel(quantise=False)
+        self.rng = make_rng(rng)
+        self.encoded = [w.name for w in robot.rolling if w.encoder is not None]
+        if not self.encoded:
+            raise OmnikinError(f"robot {robot.name!r}: the simulated back-end needs encoded (driven) wheels")
+        self._index = [robot.wheel_names.index(n) for n in self.encoded]
+        self._radius = np.array([self.true_robot.wheel(n).radius for n in self.encoded])
+        self._rpt = np.array([abs(robot.wheel(n).encoder.rad_per_tick) for n in self.encoded])
+        self.truth = np.asarray(start, dtype=float).copy()
+        self._angles = np.zeros(len(self.encoded))
+        self._speeds = np.zeros(len(self.encoded))
+        self._steer = np.zeros(len(robot.steerable)) if robot.steerable else None
+        self._t = None
+        self.writes = 0
+        self.reads = 0
+
+    def write(self, t: float, speeds, steer=None) -> None:
+        speeds = np.asarray(speeds, dtype=float)
+        if speeds.shape != (len(self.robot.wheel_names),) or not np.all(np.isfinite(speeds)):
+            raise OmnikinError(f"sim back-end: expected {len(self.robot.wheel_names)} finite wheel speeds, got {speeds}")
+        self._advance(t)
+        self._speeds = speeds[self._index]
+        if self._steer is not None and steer is not None:
+            self._steer = np.asarray(steer, dtype=float).copy()
+        self.writes += 1
+
+    def read(self, t: float) -> WheelState:
+        self._advance(t)
+        self.reads += 1
+        positions = self._angles.copy()
+        if self.noise.quantise:
+            positions = np.round(positions / self._rpt) * self._rpt
+        steer = None if self._steer is None else self._steer.copy()
+        return WheelState(float(t), positions, self._speeds.copy(), steer)
+
+    def _advance(self, t: float) -> None:
+        if self._t is None:
+            self._t = float(t)
+            return
+        dt = float(t) - self._t
+        if dt <= 0:
+            return
+        d = self._speeds * dt
+        self._angles += d
+        if self.noise.slip:
+            sigma = self.noise.slip * np.sqrt(np.abs(d) * self._radius) / self._radius
+            d = d + sigma * self.rng.standard_normal(len(d))
+        f = self.true_robot.fk_matrix(self._steer, self.encoded)[:, : len(self.encoded)]
+        inc = f @ d
+        if self.noise.floor:
+            inc[2] += self.noise.floor * np.sqrt(np.hypot(inc[0], inc[1])) * self.rng.standard_normal()
+        self.truth = compose(self.truth, exp(inc))
+        self._t = float(t)
+
+    def stats(self) -> dict:
+        return {"backend": "sim", "writes": self.writes, "reads": self.reads}
+
+    def close(self) -> None:
+        pass

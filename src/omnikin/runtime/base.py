@@ -1,0 +1,130 @@
+"""The base runtime: command in -> wheel commands out; wheel measurements in -> odometry out.
+
+A plain class, free of ROS and of time sources (every call carries its time [s]):
+
+* :meth:`BaseRuntime.command` offers a velocity command (:mod:`.command`: validation,
+  timeout, acceleration limit, direction-keeping saturation);
+* :meth:`BaseRuntime.step` reads the wheels, updates the odometry (the core streaming
+  estimator, re-based at the first measurement) and its covariance, then sends the wheel
+  commands (inverse kinematics of the filtered twist, steering angles included).
+
+Covariance (motion-dependent, not a constant): each encoded wheel's angle increment has the
+variance ``slip^2 |r dtheta| / r^2 + q^2 / 6`` [rad^2] (distance-proportional slip as in
+:mod:`omnikin.simulation.errors`, plus the quantisation ``q`` of the difference of two
+readings); the body increment's covariance is ``Sigma_xi = F diag(.) F^T`` (``F`` forward
+kinematics) and the pose covariance is propagated through the exact SE(2) update
+``x' = x + sinc(phi/2) R(theta + phi/2) (a, b)``, ``theta' = theta + phi`` with its
+Jacobians: ``P' = A P A^T + B Sigma_xi B^T``. The twist covariance is ``Sigma_xi / dt^2``.
+The forward-kinematics residual (redundant layouts) is reported as a slip indicator.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from ..errors import OmnikinError
+from ..model import Robot
+from ..simulation.limits import MotionLimits
+from ..streaming import Odometry
+from .backends import WheelBackend, WheelState
+from .command import CommandFilter
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """What one :meth:`BaseRuntime.step` measured and commanded."""
+
+    t: float
+    pose: tuple
+    twist: tuple
+    pose_covariance: np.ndarray
+    twist_covariance: np.ndarray
+    residual: list
+    state: WheelState
+    command: np.ndarray
+    wheel_speeds: np.ndarray
+    steer: Optional[np.ndarray]
+
+
+class BaseRuntime:
+    """Command filtering, inverse kinematics, odometry with covariance (module docstring)."""
+
+    def __init__(self, robot: Robot, backend: WheelBackend, *, limits: MotionLimits | None = None,
+                 cmd_vel_timeout: float = 0.5, wheel_slip: float = 2e-4, method: str = "exact"):
+        if not (math.isfinite(wheel_slip) and wheel_slip >= 0):
+            raise OmnikinError(f"wheel_slip must be a finite number >= 0 [sqrt(m)], got {wheel_slip!r}")
+        self.robot = robot
+        self.backend = backend
+        self.filter = CommandFilter(robot, limits or MotionLimits(), cmd_vel_timeout)
+        self.odometry = Odometry(robot, method=method)
+        self.encoded = self.odometry.wheel_names
+        self._radius = np.array([robot.wheel(n).radius for n in self.encoded])
+        self._quant = np.array([abs(robot.wheel(n).encoder.rad_per_tick) for n in self.encoded])
+        self.wheel_slip = wheel_slip
+        self.pose_covariance = np.zeros((3, 3))
+        self.twist_covariance = np.zeros((3, 3))
+        self._last: Optional[WheelState] = None
+        self._steer_cmd = np.zeros(len(robot.steerable))
+        self.steps = 0
+
+    def command(self, twist, t: float) -> bool:
+        """Offer a velocity command ``(vx, vy, omega)`` at time ``t``; False if rejected."""
+        return self.filter.command(twist, t)
+
+    def step(self, t: float) -> StepResult:
+        """Measure, update odometry, then command the wheels, at time ``t`` [s]."""
+        state = self.backend.read(t)
+        self._measure(state)
+        twist = self.filter.update(t)
+        if self.robot.steerable:
+            res = self.robot.ik(twist, steer_hint=self._steer_cmd, on_infeasible="return")
+            if np.linalg.norm(twist) > 0:
+                self._steer_cmd = res.steer_angles
+            speeds, steer = res.wheel_speeds, self._steer_cmd
+        else:
+            speeds, steer = self.robot.ik(twist, on_infeasible="return").wheel_speeds, None
+        self.backend.write(t, speeds, steer)
+        self.steps += 1
+        o = self.odometry
+        return StepResult(t, o.pose, o.twist, self.pose_covariance.copy(), self.twist_covariance.copy(),
+                          list(o.residual), state, twist, speeds, steer)
+
+    def _measure(self, state: WheelState) -> None:
+        before = self.odometry.pose
+        self.odometry.update_angles(state.t, list(state.positions), state.steer)
+        if self._last is not None and state.t > self._last.t:
+            d = state.positions - self._last.positions
+            var = (self.wheel_slip ** 2 * np.abs(d) * self._radius) / self._radius ** 2 + self._quant ** 2 / 6.0
+            steer = None if state.steer is None else 0.5 * (state.steer + self._last.steer)
+            f = self.robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
+            sigma_xi = f @ np.diag(var) @ f.T
+            inc = f @ d
+            a_mat, b_mat = _jacobians(before[2], inc)
+            self.pose_covariance = a_mat @ self.pose_covariance @ a_mat.T + b_mat @ sigma_xi @ b_mat.T
+            dt = state.t - self._last.t
+            self.twist_covariance = sigma_xi / dt ** 2
+        self._last = state
+
+    @property
+    def pose(self):
+        return self.odometry.pose
+
+
+def _jacobians(theta: float, inc: np.ndarray):
+    """``A = d x'/d x`` and ``B = d x'/d xi`` of the exact SE(2) update (module docstring)."""
+    a, b, phi = inc
+    h = 0.5 * phi
+    k = 1.0 - h * h / 6.0 if abs(h) < 1e-4 else math.sin(h) / h
+    dk = -h / 3.0 if abs(h) < 1e-4 else (math.cos(h) * h - math.sin(h)) / (h * h)   # d sinc(h)/dh
+    c, s = math.cos(theta + h), math.sin(theta + h)
+    dx, dy = k * (c * a - s * b), k * (s * a + c * b)
+    a_mat = np.array([[1.0, 0.0, -dy], [0.0, 1.0, dx], [0.0, 0.0, 1.0]])
+    # d/dphi: 0.5 * dk * R t + k * 0.5 * R' t
+    dphi_x = 0.5 * dk * (c * a - s * b) + 0.5 * k * (-s * a - c * b)
+    dphi_y = 0.5 * dk * (s * a + c * b) + 0.5 * k * (c * a - s * b)
+    b_mat = np.array([[k * c, -k * s, dphi_x], [k * s, k * c, dphi_y], [0.0, 0.0, 1.0]])
+    return a_mat, b_mat
