@@ -29,6 +29,11 @@ EPILOG = """examples:
   omnikin umbmark                          the main job: UMBmark, calibration, report
   omnikin umbmark analyze measured.csv --robot diff-drive
   omnikin calibrate tomasi-omni3 runs.csv -o calibrated.yaml
+  omnikin simulate tomasi-omni3 --bag sim.bag      simulated run recorded to a ROS 2 bag
+  omnikin bag odometry tomasi-omni3 run.bag -o odom.bag
+  omnikin bag export sim.bag --topic /ground_truth --format tum -o truth.tum
+  omnikin metrics truth.tum odom.tum --align       ATE and RPE (evo's definitions)
+  omnikin ros tomasi-omni3                         the ROS 2 base driver (extra ros)
 
 units: SI and radians; degrees only where an option or column ends in -deg/_deg.
 frames: body x forward, y left, angles counter-clockwise (REP-103)."""
@@ -287,7 +292,8 @@ def cmd_fk(args) -> int:
 
 # --- odometry -----------------------------------------------------------------------------------
 def cmd_odometry(args) -> int:
-    from ..io.logs import read_tick_log, write_trajectory
+    from ..io.logs import read_tick_log
+    from ..io.trajectories import write_trajectory
     from ..odometry import batch_odometry
 
     robot = _robot(args.robot)
@@ -304,10 +310,7 @@ def cmd_odometry(args) -> int:
         msg = re.sub(r"at sample (\d+)", lambda m: f"at sample {m.group(1)} (line {log.lines[int(m.group(1))]})",
                      str(exc))
         raise CliError(f"{args.log}: {msg}") from None
-    try:
-        write_trajectory(args.output, log.t, res.poses, args.format)
-    except OSError as exc:
-        raise CliError(f"{args.output}: cannot write: {exc.strerror}") from None
+    write_trajectory(args.output, log.t, res.poses, args.format)
     end = res.poses[-1]
     path = float(np.sum(np.hypot(*np.diff(res.poses[:, :2], axis=0).T)))
     summary = {"robot": robot.name, "samples": int(len(log.t)), "duration": float(log.t[-1] - log.t[0]),
@@ -390,16 +393,17 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument("log", metavar="LOG.csv", help="tick log")
     sp.add_argument("-o", "--output", required=True, metavar="OUT", help="trajectory file to write")
-    sp.add_argument("--format", choices=("csv", "tum"), default="csv",
-                    help="csv: t,x,y,theta; tum: t x y z qx qy qz qw (default csv)")
+    sp.add_argument("--format", choices=("csv", "tum", "kitti"), default="csv",
+                    help="csv: t,x,y,theta; tum: t x y z qx qy qz qw; kitti: 3x4 matrices (default csv)")
     sp.add_argument("--method", choices=("exact", "midpoint", "euler"), default="exact",
                     help="pose integration (default exact; the others exist for comparison)")
     sp.add_argument("--counter-bits", type=int, metavar="N", help="encoder counters wrap at 2**N (e.g. 16, 32)")
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     sp.set_defaults(func=cmd_odometry)
-    from . import ros, umbmark
+    from . import bag, ros, umbmark
 
     umbmark.add_parsers(sub, robot_help)
+    bag.add_parsers(sub, robot_help)
     ros.add_parsers(sub, robot_help)
     for parser in [p, *sub.choices.values()]:
         parser._negative_number_matcher = NEGATIVE_NUMBER  # see NEGATIVE_NUMBER

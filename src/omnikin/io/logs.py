@@ -5,9 +5,7 @@ tick column per encoded wheel, named by the wheel (any order), and for every
 steerable wheel a column ``<wheel>_steer_deg`` with its steering angle [deg].
 Blank lines and lines starting with ``#`` are skipped.
 
-Trajectory output: ``csv`` with header ``t,x,y,theta`` [s, m, m, rad]; ``tum``:
-``t x y z qx qy qz qw`` per line with ``z = qx = qy = 0``, ``qz = sin(theta/2)``,
-``qw = cos(theta/2)`` (Sturm et al. 2012), readable by ``evo``.
+Trajectory files (CSV, TUM, KITTI) are :mod:`omnikin.io.trajectories`.
 """
 
 from __future__ import annotations
@@ -22,7 +20,6 @@ from ..model import Robot
 from ..odometry import encoded_wheels
 from .csvfile import column_problems, number, read_rows
 
-FORMATS = ("csv", "tum")
 
 
 @dataclass(frozen=True)
@@ -82,30 +79,3 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
         ticks = ticks.astype(np.int64)
     steer = np.radians(data[:, 1 + len(wheels):]) if steer_cols else None
     return TickLog(data[:, 0].copy(), ticks, steer, wheels, duplicates, kept_lines)
-
-
-def write_trajectory(path: str | Path, t: np.ndarray, poses: np.ndarray, fmt: str = "csv") -> None:
-    """Write poses ``(N, 3)`` at times ``t`` as ``csv`` or ``tum`` (module docstring)."""
-    if fmt not in FORMATS:
-        raise ValueError(f"unknown trajectory format {fmt!r}; one of {list(FORMATS)}")
-    t = np.asarray(t, dtype=float)
-    poses = np.asarray(poses, dtype=float)
-    if fmt == "csv":
-        table = np.column_stack([t, poses])
-        np.savetxt(path, table, delimiter=",", header="t,x,y,theta", comments="", fmt="%.9f")
-    else:
-        half = 0.5 * poses[:, 2]
-        zeros = np.zeros_like(t)
-        table = np.column_stack([t, poses[:, 0], poses[:, 1], zeros, zeros, zeros, np.sin(half), np.cos(half)])
-        np.savetxt(path, table, delimiter=" ", fmt="%.9f")
-
-
-def read_trajectory(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """Read a ``csv`` (header ``t,x,y,theta``) or ``tum`` trajectory: ``(t, poses)``."""
-    text = Path(path).read_text(encoding="utf-8").strip().splitlines()
-    if text and text[0].startswith("t,"):
-        arr = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-        return arr[:, 0], arr[:, 1:4]
-    arr = np.loadtxt(path, ndmin=2)
-    theta = 2.0 * np.arctan2(arr[:, 6], arr[:, 7])
-    return arr[:, 0], np.column_stack([arr[:, 1], arr[:, 2], (theta + np.pi) % (2 * np.pi) - np.pi])

@@ -155,12 +155,11 @@ def _truth(robot: Robot, names, dtrue, steer, noise: NoiseModel, trials: int, rn
     """
     n, m = dtrue.shape
     radius = np.array([robot.wheel(nm).radius for nm in names])
-    if robot.steerable:
-        mid = steer[:-1] + 0.5 * np.diff(steer, axis=0)
-        f = robot.fk_matrix(mid, names)[..., : len(names)]        # (N, 3, n)
+    mid = steer[:-1] + 0.5 * np.diff(steer, axis=0) if robot.steerable else None
+    f = robot.fk_matrix(mid, names)[..., : len(names)]            # (N, 3, n), or (3, n) when no
+    if f.ndim == 3:                                                 # driven wheel steers
         base = np.einsum("kij,jk->ik", f, dtrue)
     else:
-        f = robot.fk_matrix(None, names)[:, : len(names)]          # (3, n)
         base = f @ dtrue                                            # (3, N) noise-free increments
     reps = trials if not noise.is_zero else 1
     out = np.empty((trials, m + 1 if keep else 1, 3))

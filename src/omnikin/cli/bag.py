@@ -1,0 +1,329 @@
+"""``omnikin bag odometry``, ``omnikin bag export``, ``omnikin simulate`` and ``omnikin metrics``.
+
+Bags are ROS 2 bags (rosbag2 directories with sqlite3 or MCAP storage, or a bare ``.mcap`` /
+``.db3`` file), read and written with the ``rosbags`` package (``pip install "omnikin[bags]"``);
+see :mod:`omnikin.io.bags`. Metrics are those of :mod:`omnikin.benchmark.metrics` (evo's ATE and
+RPE, in the plane).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+import numpy as np
+
+from ..errors import OmnikinError
+
+BAG_EPILOG = """examples:
+  omnikin bag odometry tomasi-omni3 run.bag -o odom.bag
+  omnikin bag odometry my_robot.yaml run.mcap -o odom.bag --joint-states-topic /wheels/joint_states \\
+      --odom-topic /wheel_odom --method exact --storage mcap
+  omnikin bag export odom.bag --topic /odom --format tum -o odom.tum
+  omnikin bag export sim.bag --topic /ground_truth --format kitti > truth.kitti
+
+joint names = wheel names of the robot file (positions in rad, positive drives the hub along
+its drive direction); a steerable wheel W needs a joint W_steer [rad]. Output: nav_msgs/Odometry
+in frame 'odom' with child 'base_link' (REP-105), twist in body axes (REP-103)."""
+
+SIMULATE_EPILOG = """examples:
+  omnikin simulate tomasi-omni3 --bag sim.bag
+  omnikin simulate diff-drive --path 'square ccw rotate 2' --errors none --noise none --bag sim.bag
+  omnikin simulate mecanum4 --path 'line 2 90; spin 180; arc 1 90' --rate 50 --seed 7 --bag sim.bag
+  omnikin bag export sim.bag --topic /ground_truth --format tum -o truth.tum
+
+paths (';' chains several): 'square cw|ccw rotate|translate [SIDE]', 'line LENGTH [HEADING_DEG]',
+'spin ANGLE_DEG', 'arc RADIUS ANGLE_DEG'. Topics: /ground_truth and /odom (nav_msgs/Odometry),
+/joint_states (sensor_msgs/JointState, wheel angles [rad]), /cmd_vel (geometry_msgs/Twist)."""
+
+METRICS_EPILOG = """examples:
+  omnikin metrics truth.tum odom.tum
+  omnikin metrics truth.tum odom.tum --align --delta 10 --json
+  omnikin metrics truth.tum odom.csv --t-max-diff 0.02 --t-offset 0.005
+
+files: TUM (t x y z qx qy qz qw), KITTI (12 numbers per line; pose k at t = k) or CSV
+(header t,x,y,theta), detected from the first line. ATE: translation error after optional SE(2)
+alignment (Umeyama without scale); RPE: over DELTA frames of the associated poses,
+non-overlapping pairs unless --all-pairs. Same definitions as evo_ape / evo_rpe (--pose_relation
+trans_part, --delta N --delta_unit f)."""
+
+
+def add_parsers(sub, robot_help: str) -> None:
+    """Add ``bag`` (with ``odometry`` and ``export``), ``simulate`` and ``metrics`` to ``sub``."""
+    bag = sub.add_parser("bag", help="ROS 2 bags: wheel odometry from joint states, export of pose topics",
+                         description="Work with ROS 2 bags (rosbag2: sqlite3 or MCAP); needs the rosbags package "
+                                     "(pip install \"omnikin[bags]\").",
+                         epilog=BAG_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    bag.set_defaults(func=cmd_bag_help, bag_parser=bag)
+    bsub = bag.add_subparsers(dest="bag_command", metavar="SUBCOMMAND")
+
+    sp = bsub.add_parser("odometry", help="sensor_msgs/JointState wheel angles -> nav_msgs/Odometry in a new bag",
+                         description="Read the wheel angles of ROBOT from a JointState topic (joint name = wheel "
+                                     "name, rad), integrate them exactly on SE(2) and write nav_msgs/Odometry to a "
+                                     "new bag (one message per input sample, same stamps).",
+                         epilog=BAG_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp.add_argument("robot", metavar="ROBOT", help=robot_help)
+    sp.add_argument("bag", metavar="IN.bag", help="input bag (directory, .db3 or .mcap)")
+    sp.add_argument("-o", "--output", required=True, metavar="OUT.bag", help="new bag to write (must not exist)")
+    sp.add_argument("--joint-states-topic", default="/joint_states", metavar="TOPIC",
+                    help="sensor_msgs/JointState topic (default /joint_states)")
+    sp.add_argument("--odom-topic", default="/odom", metavar="TOPIC", help="output topic (default /odom)")
+    sp.add_argument("--method", choices=("exact", "midpoint", "euler"), default="exact",
+                    help="pose integration (default exact; the others exist for comparison)")
+    sp.add_argument("--stamp", choices=("auto", "header", "bag"), default="auto",
+                    help="sample times: header stamps, bag record times, or auto (header unless all zero)")
+    sp.add_argument("--frame-id", default="odom", metavar="FRAME", help="header.frame_id (default odom)")
+    sp.add_argument("--child-frame-id", default="base_link", metavar="FRAME",
+                    help="child_frame_id (default base_link)")
+    sp.add_argument("--pose-cov-diag", type=float, nargs=6, metavar="V",
+                    help="pose covariance diagonal (x y z roll pitch yaw) [m^2, rad^2]; default zeros")
+    sp.add_argument("--twist-cov-diag", type=float, nargs=6, metavar="V",
+                    help="twist covariance diagonal (vx vy vz wx wy wz); default zeros")
+    sp.add_argument("--storage", choices=("sqlite3", "mcap"), default="sqlite3", help="output storage (default sqlite3)")
+    sp.add_argument("--json", action="store_true", help="print a JSON summary")
+    sp.set_defaults(func=cmd_bag_odometry)
+
+    sp = bsub.add_parser("export", help="export a nav_msgs/Odometry or geometry_msgs/PoseStamped topic",
+                         description="Write the planar poses (x, y, yaw) of an Odometry or PoseStamped topic as TUM "
+                                     "(t x y z qx qy qz qw), KITTI (3x4 row-major [R|t], no times) or CSV "
+                                     "(t,x,y,theta); times are the header stamps.",
+                         epilog=BAG_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp.add_argument("bag", metavar="IN.bag", help="input bag (directory, .db3 or .mcap)")
+    sp.add_argument("--topic", required=True, metavar="TOPIC", help="nav_msgs/Odometry or geometry_msgs/PoseStamped")
+    sp.add_argument("--format", required=True, choices=("tum", "kitti", "csv"), help="output format")
+    sp.add_argument("-o", "--output", metavar="FILE", help="file to write (default: standard output)")
+    sp.set_defaults(func=cmd_bag_export)
+
+    from ..simulation.errors import NOISE, PROFILES
+
+    sp = sub.add_parser("simulate", help="simulate a run and record it to a ROS 2 bag",
+                        description="Simulate ROBOT as built (systematic --errors, random --noise) driving a path "
+                                    "commanded by its nominal model, and record ground truth, odometry, wheel "
+                                    "joint states and cmd_vel to a new bag.",
+                        epilog=SIMULATE_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp.add_argument("robot", metavar="ROBOT", help=robot_help)
+    sp.add_argument("--path", default="square cw rotate 4", metavar="PATH",
+                    help="the path (see below; default 'square cw rotate 4')")
+    sp.add_argument("--errors", default="typical", metavar="PROFILE",
+                    help=f"systematic error profile: {', '.join(sorted(PROFILES))} (default typical)")
+    sp.add_argument("--true-robot", metavar="FILE", help="the robot as built (replaces --errors)")
+    sp.add_argument("--noise", default="typical", metavar="PROFILE",
+                    help=f"random errors: {', '.join(sorted(NOISE))} (default typical)")
+    sp.add_argument("--seed", type=int, default=1, metavar="N", help="random seed (default 1)")
+    sp.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="sample rate of all topics (default 100)")
+    sp.add_argument("--start", type=float, default=0.0, metavar="SEC", help="stamp of the first sample [s] (default 0)")
+    sp.add_argument("--bag", required=True, metavar="OUT.bag", help="new bag to write (must not exist)")
+    sp.add_argument("--storage", choices=("sqlite3", "mcap"), default="sqlite3", help="bag storage (default sqlite3)")
+    sp.add_argument("--json", action="store_true", help="print a JSON summary")
+    sp.set_defaults(func=cmd_simulate)
+
+    sp = sub.add_parser("metrics", help="ATE and RPE of an estimated trajectory against a reference",
+                        description="Absolute trajectory error (translation, optionally after SE(2) alignment) "
+                                    "and relative pose error (translation and rotation over DELTA frames) of EST "
+                                    "against REF, after associating their timestamps.",
+                        epilog=METRICS_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp.add_argument("ref", metavar="REF", help="reference trajectory (TUM, KITTI or CSV)")
+    sp.add_argument("est", metavar="EST", help="estimated trajectory (TUM, KITTI or CSV)")
+    sp.add_argument("--align", action="store_true", help="align EST to REF by SE(2) least squares before the ATE")
+    sp.add_argument("--delta", type=int, default=1, metavar="N", help="RPE pose distance in frames (default 1)")
+    sp.add_argument("--all-pairs", action="store_true", help="RPE over all pairs (i, i+N), not only consecutive")
+    sp.add_argument("--t-max-diff", type=float, default=0.01, metavar="SEC",
+                    help="largest time difference of associated poses [s] (default 0.01)")
+    sp.add_argument("--t-offset", type=float, default=0.0, metavar="SEC",
+                    help="time offset added to EST's timestamps [s] (default 0)")
+    sp.add_argument("--json", action="store_true", help="print JSON (rotation in rad and in deg)")
+    sp.set_defaults(func=cmd_metrics)
+
+
+# --- helpers ------------------------------------------------------------------------------------------
+def _console():
+    from rich.console import Console
+
+    con = Console(highlight=False, markup=False)
+    if not con.is_terminal:
+        con = Console(highlight=False, markup=False, width=120)
+    return con
+
+
+def _load(spec):
+    from ..io.robot_file import load_robot
+
+    return load_robot(spec)
+
+
+def _covariance(diag):
+    return None if diag is None else np.asarray(diag, dtype=float)
+
+
+# --- bag ----------------------------------------------------------------------------------------------
+def cmd_bag_help(args) -> int:
+    raise OmnikinError("bag: give a sub-command, 'odometry' or 'export' (omnikin bag -h)")
+
+
+def cmd_bag_odometry(args) -> int:
+    from ..io.bags import bag_odometry, require_rosbags
+
+    require_rosbags()
+    robot = _load(args.robot)
+    for name, diag in (("--pose-cov-diag", args.pose_cov_diag), ("--twist-cov-diag", args.twist_cov_diag)):
+        if diag is not None and not all(math.isfinite(v) and v >= 0 for v in diag):
+            raise OmnikinError(f"{name}: variances must be finite and >= 0, got {diag}")
+    res = bag_odometry(robot, args.bag, args.output, joint_states_topic=args.joint_states_topic,
+                       odom_topic=args.odom_topic, method=args.method, stamp=args.stamp, frame_id=args.frame_id,
+                       child_frame_id=args.child_frame_id, pose_covariance=_covariance(args.pose_cov_diag),
+                       twist_covariance=_covariance(args.twist_cov_diag), storage=args.storage)
+    s = res.summary()
+    s.update(robot=robot.name, method=args.method)
+    if args.json:
+        print(json.dumps(s, indent=2))
+        return 0
+    end = s["final_pose"]
+    notes = []
+    if s["skipped_messages"]:
+        notes.append(f"{s['skipped_messages']} message(s) without the wheel joints skipped")
+    if s["duplicates_dropped"]:
+        notes.append(f"{s['duplicates_dropped']} exact repeat(s) dropped")
+    _console().print(
+        f"{robot.name}: {s['samples']} joint-state samples on {args.joint_states_topic} over {s['duration']:.6g} s "
+        f"({s['stamp_source']} stamps), {args.method} integration\n"
+        f"final pose x={end[0]:.6g} m, y={end[1]:.6g} m, theta={end[2]:.6g} rad; path {s['path_length']:.6g} m\n"
+        f"nav_msgs/Odometry on {args.odom_topic} written to {args.output}"
+        + (f"\nnote: {'; '.join(notes)}" if notes else ""))
+    return 0
+
+
+def cmd_bag_export(args) -> int:
+    from ..io.bags import export_poses, require_rosbags
+
+    require_rosbags()
+    to_stdout = args.output is None or args.output == "-"
+    track = export_poses(args.bag, args.topic, args.format, None if to_stdout else args.output)
+    if not to_stdout:
+        _console().print(f"{len(track.poses)} poses of {args.topic} ({track.msgtype}, frame "
+                         f"{track.frame_id!r}) written to {args.output} ({args.format})")
+    return 0
+
+
+# --- simulate ----------------------------------------------------------------------------------------
+def parse_paths(text: str):
+    """A plan from one or more ``;``-separated paths of the runs-file grammar (:func:`omnikin.io.runs.parse_path`)."""
+    from ..io.runs import parse_path
+
+    parts = [p.strip() for p in text.split(";")]
+    if not any(parts):
+        raise OmnikinError("--path: empty path")
+    plan = None
+    for part in parts:
+        if not part:
+            raise OmnikinError(f"--path {text!r}: empty part between ';'")
+        try:
+            p = parse_path(part)
+        except OmnikinError as exc:
+            raise OmnikinError(f"--path: {exc}") from None
+        plan = p if plan is None else plan + p
+    return plan
+
+
+def cmd_simulate(args) -> int:
+    from ..io.bags import record_run, require_rosbags
+    from ..simulation.errors import noise as noise_profile
+    from ..simulation.errors import profile as error_profile
+    from ..simulation.simulate import simulate
+
+    require_rosbags()
+    robot = _load(args.robot)
+    if args.seed < 0:
+        raise OmnikinError(f"--seed must be a whole number >= 0, got {args.seed}")
+    if not (math.isfinite(args.rate) and args.rate > 0):
+        raise OmnikinError(f"--rate must be a positive number of samples per second, got {args.rate}")
+    if not math.isfinite(args.start):
+        raise OmnikinError(f"--start must be a finite time [s], got {args.start}")
+    plan = parse_paths(args.path)
+    noise = noise_profile(args.noise)
+    seeds = np.random.SeedSequence(args.seed).spawn(2)
+    if args.true_robot:
+        true = _load(args.true_robot)
+        errors = None
+    else:
+        errors = error_profile(args.errors).sample(robot, np.random.default_rng(seeds[0]))
+        true = errors.apply(robot)
+    run = simulate(plan, true, robot, rate=args.rate, noise=noise, trials=1, rng=seeds[1])
+    custom = {"omnikin.robot": robot.name, "omnikin.path": args.path, "omnikin.seed": str(args.seed),
+              "omnikin.errors": "file " + args.true_robot if args.true_robot else args.errors,
+              "omnikin.noise": args.noise, "omnikin.rate": f"{args.rate:g}"}
+    counts = record_run(args.bag, run, robot, start=args.start, storage=args.storage, custom=custom)
+    truth_end = run.truth[0, -1]
+    odom_end = run.odometry[-1]
+    diff = truth_end - odom_end
+    diff[2] = (diff[2] + math.pi) % (2 * math.pi) - math.pi
+    summary = {"robot": robot.name, "path": args.path, "errors": None if args.true_robot else args.errors,
+               "true_robot": args.true_robot, "noise": args.noise, "seed": args.seed, "rate": args.rate,
+               "samples": len(run.t), "duration": float(run.t[-1]), "bag": args.bag, "topics": counts,
+               "truth_end": truth_end.tolist(), "odometry_end": odom_end.tolist(),
+               "end_error": diff.tolist(), "end_error_distance": float(math.hypot(diff[0], diff[1]))}
+    if errors is not None:
+        summary["injected_errors"] = errors.as_dict()
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return 0
+    _console().print(
+        f"{robot.name}: '{args.path}' at {args.rate:g} Hz, {summary['samples']} samples over "
+        f"{summary['duration']:.6g} s (errors {summary['errors'] or 'from ' + args.true_robot}, noise {args.noise}, "
+        f"seed {args.seed})\n"
+        f"end pose: truth x={truth_end[0]:.6g} m, y={truth_end[1]:.6g} m, theta={truth_end[2]:.6g} rad; odometry "
+        f"x={odom_end[0]:.6g} m, y={odom_end[1]:.6g} m, theta={odom_end[2]:.6g} rad "
+        f"(off by {summary['end_error_distance'] * 1000:.3g} mm)\n"
+        f"bag {args.bag}: " + ", ".join(f"{t} ({n})" for t, n in counts.items()))
+    return 0
+
+
+# --- metrics -----------------------------------------------------------------------------------------
+def cmd_metrics(args) -> int:
+    from ..benchmark.metrics import evaluate, statistics
+    from ..io.trajectories import read_trajectory
+
+    if args.delta < 1:
+        raise OmnikinError(f"--delta must be a whole number of frames >= 1, got {args.delta}")
+    if not (math.isfinite(args.t_max_diff) and args.t_max_diff >= 0):
+        raise OmnikinError(f"--t-max-diff must be a time >= 0 [s], got {args.t_max_diff}")
+    if not math.isfinite(args.t_offset):
+        raise OmnikinError(f"--t-offset must be a finite time [s], got {args.t_offset}")
+    t_ref, ref = read_trajectory(args.ref)
+    t_est, est = read_trajectory(args.est)
+    try:
+        ev = evaluate(t_ref, ref, t_est, est, align=args.align, delta=args.delta, all_pairs=args.all_pairs,
+                      max_diff=args.t_max_diff, offset=args.t_offset)
+    except OmnikinError as exc:
+        raise OmnikinError(f"{args.ref} vs {args.est}: {exc}") from None
+    rot_deg = statistics(np.degrees(ev.rpe.rotation))
+    doc = {"reference": args.ref, "estimate": args.est, "reference_poses": len(t_ref),
+           "estimate_poses": len(t_est), **ev.as_dict()}
+    doc["rpe"]["rotation_deg"] = rot_deg.as_dict()
+    if args.json:
+        print(json.dumps(doc, indent=2))
+        return 0
+    from rich.table import Table
+
+    con = _console()
+    a = ev.ate
+    con.print(f"{args.est} against {args.ref}: {a.errors.size} associated poses (of {len(t_est)} and {len(t_ref)}; "
+              f"max time difference {args.t_max_diff:g} s" + (f", offset {args.t_offset:g} s" if args.t_offset else "")
+              + ")")
+    if a.alignment is not None:
+        al = a.alignment
+        con.print(f"SE(2) alignment: x={al.x:.6g} m, y={al.y:.6g} m, theta={math.degrees(al.theta):.6g} deg")
+    table = Table(title_justify="left")
+    cols = ("rmse", "mean", "median", "std", "min", "max")
+    table.add_column("")
+    for c in cols:
+        table.add_column(c, justify="right")
+    pairs = "all pairs (i, i+N)" if args.all_pairs else "consecutive pairs"
+    con.print(f"RPE over delta N = {args.delta} frames: {ev.rpe.translation.size} {pairs}")
+    rows = (("ATE translation [m]" + (" (aligned)" if args.align else ""), a.stats),
+            ("RPE translation [m]", ev.rpe.translation_stats),
+            ("RPE rotation [deg]", rot_deg))
+    for label, s in rows:
+        table.add_row(label, *[f"{getattr(s, c):.6g}" for c in cols])
+    con.print(table)
+    return 0

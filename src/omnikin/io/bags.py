@@ -1,0 +1,552 @@
+"""ROS 2 bags (rosbag2, sqlite3 or MCAP storage) in and out, through ``rosbags`` (pure Python).
+
+``rosbags`` is imported on first use; without it every function raises an ``ImportError``
+naming the extra to install: ``pip install "omnikin[bags]"``. No ROS installation is needed.
+
+What is read:
+
+* ``sensor_msgs/msg/JointState`` (:func:`read_joint_states`): the wheel angles [rad] of the
+  robot's encoded wheels (rolling wheels with an ``encoder``, file order), each found by
+  **joint name = wheel name**; for a steerable wheel ``W`` its steering angle [rad, relative
+  to the mounting ``drive_deg``] from the joint ``W_steer``. Positions are taken in omnikin's
+  sign convention (positive drives the hub along ``+u_i``; ``encoder.invert`` concerns raw
+  ticks only). Other joints in the messages are ignored; messages that carry none of the
+  wheels are skipped; a message that carries some but not all of them is an error. The time
+  of a sample is its ``header.stamp``, or the bag's record time when every header stamp is
+  zero (``stamp="auto"``, the default; ``"header"`` or ``"bag"`` to force one). A message
+  repeating the previous one exactly (time and positions) is dropped and counted.
+* ``nav_msgs/msg/Odometry`` and ``geometry_msgs/msg/PoseStamped`` (:func:`read_poses`): the 2D
+  pose ``(x, y, yaw)``, yaw of the orientation quaternion
+  ``atan2(2 (w z + x y), w^2 + x^2 - y^2 - z^2)``, at ``header.stamp``.
+
+What is written (:func:`write_odometry`, :func:`record_run`): ``nav_msgs/msg/Odometry`` with
+``header.frame_id`` (default ``odom``) and ``child_frame_id`` (default ``base_link``, REP-105),
+position ``(x, y, 0)``, orientation the yaw quaternion ``(0, 0, sin(theta/2), cos(theta/2))``,
+twist ``(vx, vy, 0; 0, 0, omega)`` in the child frame (REP-103 body axes: the mean twist of the
+interval that ends at the sample, zero at the first sample) and 36-element row-major
+covariances over ``(x, y, z, roll, pitch, yaw)`` (zero unless given; a 6-vector is taken as
+the diagonal). Bags are written with the message definitions of ROS 2 Humble (identical for
+these types in later distributions), rosbag2 format version 8, sqlite3 storage by default.
+A bag is a new directory: an existing path is refused, never overwritten.
+
+Every problem with an input (no such bag, unreadable bag, missing topic, wrong message type,
+wrong joint names, undecodable message) raises :class:`BagError` naming the bag and topic.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import OmnikinError
+from ..geometry import between, log
+from ..model import Robot
+
+BAGS_EXTRA = 'pip install "omnikin[bags]"'
+
+JOINT_STATE = "sensor_msgs/msg/JointState"
+ODOMETRY = "nav_msgs/msg/Odometry"
+POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
+TWIST = "geometry_msgs/msg/Twist"
+POSE_TYPES = (ODOMETRY, POSE_STAMPED)
+STORAGES = ("sqlite3", "mcap")
+STEER_SUFFIX = "_steer"
+STAMPS = ("auto", "header", "bag")
+
+NS = 1_000_000_000
+
+
+class BagError(OmnikinError):
+    """A bag that cannot be read or written as asked; the message names the bag and topic."""
+
+
+# --- rosbags, lazily ---------------------------------------------------------------------------------------
+class _Rosbags:
+    """The parts of ``rosbags`` omnikin uses, imported once."""
+
+    _instance = None
+
+    def __init__(self):
+        try:
+            from rosbags.rosbag2 import Reader, Writer
+            from rosbags.typesys import Stores, get_typestore
+        except ImportError:
+            raise ImportError(f"reading and writing ROS 2 bags needs the rosbags package: {BAGS_EXTRA}") from None
+        self.Reader = Reader
+        self.Writer = Writer
+        self.store = get_typestore(Stores.ROS2_HUMBLE)
+        self.types = self.store.types
+
+    @classmethod
+    def get(cls) -> _Rosbags:
+        if cls._instance is None:
+            cls._instance = cls()
+        return cls._instance
+
+
+def require_rosbags() -> None:
+    """Import ``rosbags`` or raise an ``ImportError`` naming the ``bags`` extra."""
+    _Rosbags.get()
+
+
+# --- time ----------------------------------------------------------------------------------------------
+def _stamp_ns(stamp) -> int:
+    return int(stamp.sec) * NS + int(stamp.nanosec)
+
+
+def _time_msg(rb: _Rosbags, ns: int):
+    sec, nsec = divmod(int(ns), NS)
+    return rb.types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec)
+
+
+def seconds_to_ns(t) -> np.ndarray:
+    """Seconds (float array) to integer nanoseconds, rounded."""
+    return np.round(np.asarray(t, dtype=float) * 1e9).astype(np.int64)
+
+
+# --- reading -------------------------------------------------------------------------------------------
+def _open_reader(rb: _Rosbags, bag):
+    path = Path(bag)
+    if not path.exists():
+        raise BagError(f"{bag}: no such bag (expected a rosbag2 directory, or a .db3 or .mcap file)")
+    try:
+        reader = rb.Reader(path)
+        reader.open()
+    except BagError:
+        raise
+    except Exception as exc:  # noqa: BLE001 (rosbags raises ReaderError, FileNotFoundError, sqlite3 and MCAP errors)
+        raise BagError(f"{bag}: cannot read the bag: {exc}") from None
+    return reader
+
+
+def topic_types(bag) -> dict[str, str]:
+    """``{topic: message type}`` of a bag."""
+    rb = _Rosbags.get()
+    reader = _open_reader(rb, bag)
+    try:
+        return {c.topic: c.msgtype for c in reader.connections}
+    finally:
+        reader.close()
+
+
+def _messages(bag, topic: str, allowed: Iterable[str]) -> Iterable[tuple[int, int, object, str]]:
+    """Yield ``(index, bag time [ns], message, msgtype)`` of ``topic``, checking its type."""
+    rb = _Rosbags.get()
+    allowed = tuple(allowed)
+    reader = _open_reader(rb, bag)
+    try:
+        conns = [c for c in reader.connections if c.topic == topic]
+        if not conns:
+            have = ", ".join(f"{c.topic} ({c.msgtype})" for c in sorted(reader.connections, key=lambda c: c.topic))
+            raise BagError(f"{bag}: no topic {topic!r} in the bag; it has: {have or 'no topics'}")
+        bad = sorted({c.msgtype for c in conns if c.msgtype not in allowed})
+        if bad:
+            raise BagError(f"{bag}: topic {topic!r} carries {', '.join(bad)}; expected "
+                           f"{' or '.join(allowed)}")
+        try:
+            stream = reader.messages(connections=conns)
+            for k, (conn, t_ns, raw) in enumerate(stream):
+                try:
+                    msg = rb.store.deserialize_cdr(raw, conn.msgtype)
+                except Exception as exc:  # noqa: BLE001 (any decoding failure of rosbags' serde)
+                    raise BagError(f"{bag}: topic {topic!r}, message {k}: cannot decode {conn.msgtype}: "
+                                   f"{exc}") from None
+                yield k, int(t_ns), msg, conn.msgtype
+        except BagError:
+            raise
+        except Exception as exc:  # noqa: BLE001 (storage errors of sqlite3 / MCAP while reading)
+            raise BagError(f"{bag}: topic {topic!r}: cannot read the messages: {exc}") from None
+    finally:
+        reader.close()
+
+
+@dataclass(frozen=True)
+class JointStates:
+    """Wheel readings of a JointState topic.
+
+    ``stamps`` ``(N,)`` int64 [ns] (header or bag time, see ``stamp_source``); ``bag_times``
+    ``(N,)`` int64 [ns] the record times; ``t`` ``(N,)`` [s] since the first sample;
+    ``angles`` ``(N, n_enc)`` [rad] of ``wheel_names``; ``steer`` ``(N, n_steer)`` [rad] or None;
+    ``skipped`` messages without any of the wheels; ``duplicates`` exact repeats dropped.
+    """
+
+    bag: str
+    topic: str
+    stamps: np.ndarray
+    bag_times: np.ndarray
+    angles: np.ndarray
+    steer: np.ndarray | None
+    wheel_names: list
+    steer_names: list
+    stamp_source: str
+    skipped: int = 0
+    duplicates: int = 0
+
+    @property
+    def t(self) -> np.ndarray:
+        return (self.stamps - self.stamps[0]).astype(float) * 1e-9
+
+
+def _encoded_names(robot: Robot) -> list[str]:
+    from ..odometry import encoded_wheels
+
+    return [w.name for w in encoded_wheels(robot)]
+
+
+def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp: str = "auto",
+                      steer_suffix: str = STEER_SUFFIX) -> JointStates:
+    """Wheel angles (and steering angles) of ``robot`` from a JointState topic (module docstring)."""
+    if stamp not in STAMPS:
+        raise BagError(f"stamp must be one of {list(STAMPS)}, got {stamp!r}")
+    wheels = _encoded_names(robot)
+    steer_joints = [f"{n}{steer_suffix}" for n in robot.steer_names]
+    needed = wheels + steer_joints
+    header_ns, bag_ns, rows = [], [], []
+    skipped = 0
+    seen_names: set[str] = set()
+    for k, t_ns, msg, _ in _messages(bag, topic, (JOINT_STATE,)):
+        names = list(msg.name)
+        pos = np.asarray(msg.position, dtype=float)
+        seen_names.update(names)
+        if len(pos) != len(names):
+            raise BagError(f"{bag}: topic {topic!r}, message {k}: {len(names)} joint names but {len(pos)} "
+                           f"positions")
+        index = {}
+        for i, n in enumerate(names):
+            if n in index:
+                raise BagError(f"{bag}: topic {topic!r}, message {k}: joint {n!r} appears twice")
+            index[n] = i
+        present = [n for n in needed if n in index]
+        if not present:
+            skipped += 1
+            continue
+        missing = [n for n in needed if n not in index]
+        if missing:
+            raise BagError(f"{bag}: topic {topic!r}, message {k}: no joint(s) {missing} (robot {robot.name!r} "
+                           f"needs {needed}); the message has {names}")
+        row = pos[[index[n] for n in needed]]
+        bad = [n for n, v in zip(needed, row) if not math.isfinite(v)]
+        if bad:
+            raise BagError(f"{bag}: topic {topic!r}, message {k}: non-finite position of joint(s) {bad}")
+        header_ns.append(_stamp_ns(msg.header.stamp))
+        bag_ns.append(t_ns)
+        rows.append(row)
+    if not rows:
+        raise BagError(f"{bag}: topic {topic!r}: no JointState message names the wheel joints {needed} of robot "
+                       f"{robot.name!r} (joint name = wheel name); the topic's joints are "
+                       f"{sorted(seen_names) or 'none (no messages)'}")
+    header_ns = np.array(header_ns, dtype=np.int64)
+    bag_ns = np.array(bag_ns, dtype=np.int64)
+    source = stamp
+    if stamp == "auto":
+        source = "bag" if not np.any(header_ns) else "header"
+    stamps = header_ns if source == "header" else bag_ns
+    data = np.array(rows)
+    repeat = np.zeros(len(data), dtype=bool)
+    repeat[1:] = (stamps[1:] == stamps[:-1]) & np.all(data[1:] == data[:-1], axis=1)
+    keep = ~repeat
+    data, stamps, bag_ns = data[keep], stamps[keep], bag_ns[keep]
+    if len(data) < 2:
+        raise BagError(f"{bag}: topic {topic!r}: odometry needs at least two distinct wheel samples, got "
+                       f"{len(data)}")
+    n = len(wheels)
+    steer = data[:, n:] if steer_joints else None
+    return JointStates(str(bag), topic, stamps, bag_ns, data[:, :n], steer, wheels, steer_joints, source,
+                       skipped, int(repeat.sum()))
+
+
+@dataclass(frozen=True)
+class PoseTrack:
+    """Planar poses of an Odometry or PoseStamped topic: ``stamps`` int64 [ns], ``poses`` ``(N, 3)``."""
+
+    bag: str
+    topic: str
+    msgtype: str
+    stamps: np.ndarray
+    bag_times: np.ndarray
+    poses: np.ndarray
+    frame_id: str
+    child_frame_id: str = ""
+    twists: np.ndarray | None = None
+
+    @property
+    def t(self) -> np.ndarray:
+        """Header times [s] (absolute, as floats)."""
+        return self.stamps.astype(float) * 1e-9
+
+
+def yaw_of(q) -> float:
+    """Yaw [rad] of a quaternion message (any norm)."""
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), q.w * q.w + q.x * q.x - q.y * q.y - q.z * q.z)
+
+
+def read_poses(bag, topic: str) -> PoseTrack:
+    """Planar poses ``(x, y, yaw)`` of a ``nav_msgs/Odometry`` or ``geometry_msgs/PoseStamped`` topic."""
+    stamps, bag_ns, poses, twists = [], [], [], []
+    frame = child = ""
+    msgtype = ""
+    for k, t_ns, msg, mtype in _messages(bag, topic, POSE_TYPES):
+        msgtype = mtype
+        pose = msg.pose.pose if mtype == ODOMETRY else msg.pose
+        q = pose.orientation
+        if q.x == q.y == q.z == q.w == 0.0:
+            raise BagError(f"{bag}: topic {topic!r}, message {k}: zero orientation quaternion")
+        p = (pose.position.x, pose.position.y, yaw_of(q))
+        if not all(math.isfinite(v) for v in p):
+            raise BagError(f"{bag}: topic {topic!r}, message {k}: non-finite pose {p}")
+        stamps.append(_stamp_ns(msg.header.stamp))
+        bag_ns.append(t_ns)
+        poses.append(p)
+        frame = msg.header.frame_id
+        if mtype == ODOMETRY:
+            child = msg.child_frame_id
+            tw = msg.twist.twist
+            twists.append((tw.linear.x, tw.linear.y, tw.angular.z))
+    if not poses:
+        raise BagError(f"{bag}: topic {topic!r}: no messages")
+    return PoseTrack(str(bag), topic, msgtype, np.array(stamps, dtype=np.int64), np.array(bag_ns, dtype=np.int64),
+                     np.array(poses), frame, child, np.array(twists) if twists else None)
+
+
+def export_poses(bag, topic: str, fmt: str, output=None) -> PoseTrack:
+    """Write the poses of ``topic`` as a ``tum``, ``kitti`` or ``csv`` file (``output`` None: stdout).
+
+    Timestamps are the header stamps, written exactly in seconds with nanoseconds.
+    """
+    from .trajectories import FORMATS, write_trajectory
+
+    if fmt not in FORMATS:
+        raise BagError(f"unknown export format {fmt!r}; one of {list(FORMATS)}")
+    track = read_poses(bag, topic)
+    write_trajectory(output, track.stamps, track.poses, fmt)
+    return track
+
+
+# --- writing -------------------------------------------------------------------------------------------
+def _covariance(value, name: str) -> np.ndarray:
+    if value is None:
+        return np.zeros(36)
+    c = np.asarray(value, dtype=float).ravel()
+    if c.size == 6:
+        c = np.diag(c).ravel()
+    if c.size != 36 or not np.all(np.isfinite(c)):
+        raise BagError(f"{name}: expected 6 (diagonal) or 36 finite numbers, got {np.asarray(value).size}")
+    return c
+
+
+def _odometry_msg(rb: _Rosbags, ns: int, pose, twist, frame_id, child_frame_id, pose_cov, twist_cov):
+    T = rb.types
+    half = 0.5 * float(pose[2])
+    header = T["std_msgs/msg/Header"](stamp=_time_msg(rb, ns), frame_id=frame_id)
+    p = T["geometry_msgs/msg/Pose"](
+        position=T["geometry_msgs/msg/Point"](x=float(pose[0]), y=float(pose[1]), z=0.0),
+        orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(half), w=math.cos(half)))
+    tw = T["geometry_msgs/msg/Twist"](
+        linear=T["geometry_msgs/msg/Vector3"](x=float(twist[0]), y=float(twist[1]), z=0.0),
+        angular=T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=float(twist[2])))
+    return T[ODOMETRY](header=header, child_frame_id=child_frame_id,
+                       pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=p, covariance=pose_cov),
+                       twist=T["geometry_msgs/msg/TwistWithCovariance"](twist=tw, covariance=twist_cov))
+
+
+def _twist_msg(rb: _Rosbags, twist):
+    T = rb.types
+    return T[TWIST](linear=T["geometry_msgs/msg/Vector3"](x=float(twist[0]), y=float(twist[1]), z=0.0),
+                    angular=T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=float(twist[2])))
+
+
+def _joint_state_msg(rb: _Rosbags, ns: int, names, position, velocity):
+    T = rb.types
+    header = T["std_msgs/msg/Header"](stamp=_time_msg(rb, ns), frame_id="")
+    return T[JOINT_STATE](header=header, name=list(names), position=np.asarray(position, dtype=np.float64),
+                          velocity=np.asarray(velocity, dtype=np.float64), effort=np.zeros(0))
+
+
+@dataclass
+class _Topic:
+    name: str
+    msgtype: str
+    messages: list   # [(bag time ns, serialized bytes)]
+
+
+def _serialize(rb: _Rosbags, msg, msgtype: str) -> bytes:
+    return bytes(rb.store.serialize_cdr(msg, msgtype))
+
+
+def _write_bag(path, topics: list[_Topic], storage: str = "sqlite3", custom: dict | None = None) -> None:
+    """Write serialized messages to a new bag, interleaved by bag time."""
+    rb = _Rosbags.get()
+    if storage not in STORAGES:
+        raise BagError(f"{path}: unknown bag storage {storage!r}; one of {list(STORAGES)}")
+    out = Path(path)
+    if out.exists():
+        raise BagError(f"{path}: exists already; a bag is written to a new directory, never overwritten")
+    if not out.parent.exists():
+        raise BagError(f"{path}: the folder {str(out.parent)!r} does not exist")
+    import inspect
+
+    params = inspect.signature(rb.Writer).parameters
+    kwargs = {}
+    if "version" in params:
+        kwargs["version"] = 8
+    if storage != "sqlite3":
+        try:
+            from rosbags.rosbag2 import StoragePlugin
+        except ImportError:
+            raise BagError(f"{path}: writing MCAP needs a newer rosbags (>= 0.11): pip install -U rosbags") from None
+        kwargs["storage_plugin"] = StoragePlugin.MCAP
+    order = sorted(((t_ns, j, m) for j, topic in enumerate(topics) for m, (t_ns, _) in enumerate(topic.messages)))
+    try:
+        with rb.Writer(out, **kwargs) as writer:
+            conns = [writer.add_connection(t.name, t.msgtype, typestore=rb.store) for t in topics]
+            for key, value in (custom or {}).items():
+                if hasattr(writer, "set_custom_data"):
+                    writer.set_custom_data(str(key), str(value))
+            for t_ns, j, m in order:
+                writer.write(conns[j], int(t_ns), topics[j].messages[m][1])
+    except Exception as exc:  # noqa: BLE001 (rosbags WriterError, OSError, serde errors: clean up, then report)
+        if out.exists():
+            shutil.rmtree(out, ignore_errors=True)
+        raise BagError(f"{path}: cannot write the bag: {exc}") from None
+
+
+def odometry_messages(stamps, poses, twists, *, bag_times=None, frame_id: str = "odom",
+                      child_frame_id: str = "base_link", pose_covariance=None, twist_covariance=None) -> list:
+    """Serialized ``nav_msgs/Odometry`` messages ``[(bag time ns, bytes), ...]``."""
+    rb = _Rosbags.get()
+    pc = _covariance(pose_covariance, "pose covariance")
+    tc = _covariance(twist_covariance, "twist covariance")
+    stamps = np.asarray(stamps, dtype=np.int64)
+    bag_times = stamps if bag_times is None else np.asarray(bag_times, dtype=np.int64)
+    return [(int(b), _serialize(rb, _odometry_msg(rb, int(s), p, w, frame_id, child_frame_id, pc, tc), ODOMETRY))
+            for s, b, p, w in zip(stamps.tolist(), bag_times.tolist(), np.asarray(poses), np.asarray(twists))]
+
+
+def write_odometry(path, stamps, poses, twists, *, topic: str = "/odom", bag_times=None, frame_id: str = "odom",
+                   child_frame_id: str = "base_link", pose_covariance=None, twist_covariance=None,
+                   storage: str = "sqlite3") -> None:
+    """Write poses ``(N, 3)`` and body twists ``(N, 3)`` at ``stamps`` [int ns] as Odometry to a new bag."""
+    msgs = odometry_messages(stamps, poses, twists, bag_times=bag_times, frame_id=frame_id,
+                             child_frame_id=child_frame_id, pose_covariance=pose_covariance,
+                             twist_covariance=twist_covariance)
+    _write_bag(path, [_Topic(topic, ODOMETRY, msgs)], storage)
+
+
+def interval_twists(t, poses) -> np.ndarray:
+    """Per sample the constant body twist of the interval that ends there (zero at the first):
+    ``log(P_{k-1}^-1 P_k) / (t_k - t_{k-1})``, ``(N, 3)``."""
+    p = np.asarray(poses, dtype=float)
+    out = np.zeros_like(p)
+    if len(p) > 1:
+        out[1:] = log(between(p[:-1], p[1:])) / np.diff(np.asarray(t, dtype=float))[:, None]
+    return out
+
+
+# --- bag odometry --------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class BagOdometry:
+    """Result of :func:`bag_odometry`: the input readings and the odometry written."""
+
+    joint_states: JointStates
+    poses: np.ndarray
+    twists: np.ndarray
+    output: str
+    topic: str
+
+    def summary(self) -> dict:
+        js = self.joint_states
+        end = self.poses[-1]
+        path = float(np.sum(np.hypot(*np.diff(self.poses[:, :2], axis=0).T)))
+        return {"input": js.bag, "joint_states_topic": js.topic, "samples": len(js.stamps),
+                "duration": float(js.t[-1]), "stamp_source": js.stamp_source, "wheels": js.wheel_names,
+                "steer_joints": js.steer_names, "skipped_messages": js.skipped, "duplicates_dropped": js.duplicates,
+                "output": self.output, "odom_topic": self.topic, "final_pose": end.tolist(), "path_length": path}
+
+
+def bag_odometry(robot: Robot, bag_in, bag_out, *, joint_states_topic: str = "/joint_states",
+                 odom_topic: str = "/odom", method: str = "exact", stamp: str = "auto", frame_id: str = "odom",
+                 child_frame_id: str = "base_link", pose_covariance=None, twist_covariance=None,
+                 storage: str = "sqlite3", steer_suffix: str = STEER_SUFFIX) -> BagOdometry:
+    """Wheel odometry of the JointState topic of ``bag_in`` written as Odometry to the new bag ``bag_out``.
+
+    Each output message has the stamp and the bag record time of the input sample it comes
+    from; the pose starts at the origin at the first sample.
+    """
+    from ..odometry import batch_odometry_from_angles
+
+    js = read_joint_states(bag_in, robot, joint_states_topic, stamp=stamp, steer_suffix=steer_suffix)
+    try:
+        res = batch_odometry_from_angles(robot, js.t, js.angles, steer=js.steer, method=method)
+    except OmnikinError as exc:
+        raise BagError(f"{bag_in}: topic {joint_states_topic!r}: {exc}") from None
+    twists = np.zeros_like(res.poses)
+    twists[1:] = res.twists
+    msgs = odometry_messages(js.stamps, res.poses, twists, bag_times=js.bag_times, frame_id=frame_id,
+                             child_frame_id=child_frame_id, pose_covariance=pose_covariance,
+                             twist_covariance=twist_covariance)
+    _write_bag(bag_out, [_Topic(odom_topic, ODOMETRY, msgs)], storage,
+               {"omnikin.robot": robot.name, "omnikin.method": method, "omnikin.input": str(bag_in)})
+    return BagOdometry(js, res.poses, twists, str(bag_out), odom_topic)
+
+
+# --- simulated runs ------------------------------------------------------------------------------------
+RUN_TOPICS = {"ground_truth": "/ground_truth", "odom": "/odom", "joint_states": "/joint_states",
+              "cmd_vel": "/cmd_vel"}
+
+
+def record_run(path, run, robot: Robot, *, start: float = 0.0, topics: dict | None = None, frame_id: str = "odom",
+               child_frame_id: str = "base_link", storage: str = "sqlite3", custom: dict | None = None,
+               steer_suffix: str = STEER_SUFFIX) -> dict:
+    """Write a simulated run (:class:`omnikin.simulation.simulate.SimulatedRun`, first trial) to a new bag.
+
+    Topics (``topics`` renames them): ``/ground_truth`` (Odometry, the true poses),
+    ``/odom`` (Odometry, the robot's odometry), ``/joint_states`` (JointState: the encoded
+    wheels' angles ``ticks * rad_per_tick`` of ``robot`` [rad] and their mean speeds over the
+    interval ending at the sample [rad/s]; steering joints ``W_steer``) and ``/cmd_vel``
+    (Twist: the commanded body twist of the interval that starts at the sample, zero at the
+    last). Sample k is stamped ``start + t_k`` [s]. ``robot`` is the commanding (nominal) robot
+    whose odometry ``run.odometry`` is, so reading the bag's joint states back with it
+    reproduces ``/odom``. Returns ``{topic: message count}``.
+    """
+    rb = _Rosbags.get()
+    names = dict(RUN_TOPICS, **(topics or {}))
+    unknown = sorted(set(names) - set(RUN_TOPICS))
+    if unknown:
+        raise BagError(f"unknown run topic key(s) {unknown}; keys are {sorted(RUN_TOPICS)}")
+    if not math.isfinite(start):
+        raise BagError(f"start time must be finite, got {start!r}")
+    t = np.asarray(run.t, dtype=float)
+    stamps = seconds_to_ns(t) + round(start * 1e9)
+    truth = np.asarray(run.truth)[0]
+    if truth.shape[0] != len(t):
+        raise BagError("record_run needs the full ground truth (simulate with keep_truth=True)")
+    wheels = _encoded_names(robot)
+    rpt = np.array([robot.wheel(n).encoder.rad_per_tick for n in wheels])
+    angles = np.asarray(run.ticks, dtype=float) * rpt
+    joint_names = list(wheels)
+    if run.steer is not None:
+        angles = np.concatenate([angles, np.asarray(run.steer, dtype=float)], axis=1)
+        joint_names += [f"{n}{steer_suffix}" for n in robot.steer_names]
+    dt = np.diff(t)
+    speeds = np.zeros_like(angles)
+    speeds[1:] = np.diff(angles, axis=0) / dt[:, None]
+    sampled = run.sampled
+    cmd = np.zeros((len(t), 3))
+    cmd[:-1] = sampled.increments / dt[:, None]
+    msgs = {
+        "ground_truth": odometry_messages(stamps, truth, interval_twists(t, truth), frame_id=frame_id,
+                                          child_frame_id=child_frame_id),
+        "odom": odometry_messages(stamps, run.odometry, interval_twists(t, run.odometry), frame_id=frame_id,
+                                  child_frame_id=child_frame_id),
+        "joint_states": [(int(s), _serialize(rb, _joint_state_msg(rb, int(s), joint_names, a, v), JOINT_STATE))
+                         for s, a, v in zip(stamps.tolist(), angles, speeds)],
+        "cmd_vel": [(int(s), _serialize(rb, _twist_msg(rb, c), TWIST)) for s, c in zip(stamps.tolist(), cmd)],
+    }
+    types = {"ground_truth": ODOMETRY, "odom": ODOMETRY, "joint_states": JOINT_STATE, "cmd_vel": TWIST}
+    _write_bag(path, [_Topic(names[k], types[k], msgs[k]) for k in RUN_TOPICS], storage, custom)
+    return {names[k]: len(msgs[k]) for k in RUN_TOPICS}
