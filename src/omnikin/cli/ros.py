@@ -10,6 +10,7 @@ EPILOG = """examples:
   omnikin ros tomasi-omni3                         simulated robot as built ('typical' errors)
   omnikin ros my_robot.yaml --params base.yaml
   omnikin ros diff-drive --errors none --noise none --ros-args -p publish_rate:=100.0
+  omnikin ros tomasi-omni3 --backend serial --port /dev/ttyUSB0 /dev/ttyUSB1 /dev/ttyUSB2
   (another terminal)  ros2 topic pub /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"
 
 topics: cmd_vel in; odom, joint_states, /diagnostics (and /tf with tf2_msgs) out.
@@ -26,8 +27,12 @@ def add_parsers(sub, robot_help: str) -> None:
                                     "measurements in, odometry with covariance out.",
                         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
-    sp.add_argument("--backend", choices=("sim",), default="sim",
-                    help="wheel back-end: sim (the omnikin simulator of the robot as built; default)")
+    sp.add_argument("--backend", choices=("sim", "serial"), default="sim",
+                    help="wheel back-end: sim (the omnikin simulator of the robot as built; default) or serial "
+                         "(wheel controllers speaking docs/protocol.md)")
+    sp.add_argument("--port", nargs="+", metavar="DEV",
+                    help="serial back-end: one port for all wheels, or one port per driven wheel in file order")
+    sp.add_argument("--baud", type=int, metavar="N", help="serial back-end: baud rate (default from the protocol)")
     sp.add_argument("--params", metavar="FILE", help="parameter file (YAML, flat or ros__parameters)")
     sp.add_argument("--errors", default="typical", metavar="PROFILE",
                     help="sim back-end: systematic error profile of the robot as built (default typical)")
@@ -51,9 +56,17 @@ def cmd_ros(args) -> int:
     require_rclpy()
     if args.seed < 0:
         raise OmnikinError(f"--seed must be >= 0, got {args.seed}")
-    seeds = np.random.SeedSequence(args.seed).spawn(2)
-    true = error_profile(args.errors).sample(robot, np.random.default_rng(seeds[0])).apply(robot)
-    backend = SimBackend(robot, true, noise_profile(args.noise), rng=seeds[1])
+    if args.backend == "serial":
+        from ..runtime.serial_backend import SerialBackend
+
+        if not args.port:
+            raise OmnikinError("--backend serial needs --port DEV (one for all wheels, or one per driven wheel)")
+        backend = SerialBackend(robot, args.port[0] if len(args.port) == 1 else args.port, args.baud)
+        backend.wait_ready()
+    else:
+        seeds = np.random.SeedSequence(args.seed).spawn(2)
+        true = error_profile(args.errors).sample(robot, np.random.default_rng(seeds[0])).apply(robot)
+        backend = SimBackend(robot, true, noise_profile(args.noise), rng=seeds[1])
     from ..ros.node import run
 
     return run(robot, backend, values, args.ros_args)

@@ -23,6 +23,7 @@ import time
 
 import numpy as np
 
+from ..errors import OmnikinError
 from ..simulation.limits import MotionLimits
 from . import require_rclpy
 from .params import DEFAULTS
@@ -88,6 +89,7 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
                     self.tf_pub = self.create_publisher(TFMessage, "/tf", qos)
             self.t0 = time.monotonic()
             self.published = 0
+            self.link_error = ""
             self.joint_names = list(self.runtime.encoded)
             self.steer_names = [f"{n}_steer" for n in robot.steer_names]
             self.create_timer(1.0 / p["publish_rate"], self._loop)
@@ -104,7 +106,13 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             self.runtime.command((tw.linear.x, tw.linear.y, tw.angular.z), self.now_s())
 
         def _loop(self):
-            res = self.runtime.step(self.now_s())
+            try:
+                res = self.runtime.step(self.now_s())
+            except OmnikinError as exc:      # link lost: the back-end already commands zero speeds
+                self.link_error = str(exc)
+                self.get_logger().error(str(exc), throttle_duration_sec=1.0)
+                return
+            self.link_error = ""
             stamp = self.get_clock().now().to_msg()
             odom = self._Odometry()
             odom.header.stamp = stamp
@@ -153,6 +161,9 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             if s.rejected:
                 status.level = DiagnosticStatus.WARN
                 status.message = f"{s.rejected} command(s) rejected"
+            if self.link_error:
+                status.level = DiagnosticStatus.ERROR
+                status.message = f"wheels stopped: {self.link_error}"
             status.values = [self._KeyValue(key=k, value=str(v)) for k, v in values.items()]
             arr = self._DiagnosticArray()
             arr.header.stamp = self.get_clock().now().to_msg()

@@ -12,6 +12,8 @@ A back-end takes wheel commands and gives wheel measurements:
 wheels turn at the commanded speeds (ideal speed control, zero-order hold between calls),
 each wheel's rolling distance slips as in :class:`omnikin.simulation.errors.NoiseModel`,
 and the true robot's forward kinematics and exact SE(2) integration move the ground truth.
+Steering angles move linearly from one command to the next over the following interval,
+which is integrated at its middle steering angle (the discretisation the odometry uses).
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from typing import Optional, Protocol
 import numpy as np
 
 from ..errors import OmnikinError
-from ..geometry import compose, exp
+from ..geometry import compose, exp, wrap_angle
 from ..model import Robot
 from ..simulation.errors import NoiseModel
 from ..simulation.simulate import make_rng
@@ -69,6 +71,7 @@ class SimBackend:
         self._angles = np.zeros(len(self.encoded))
         self._speeds = np.zeros(len(self.encoded))
         self._steer = np.zeros(len(robot.steerable)) if robot.steerable else None
+        self._steer_start = None if self._steer is None else self._steer.copy()
         self._t = None
         self.writes = 0
         self.reads = 0
@@ -104,7 +107,11 @@ class SimBackend:
         if self.noise.slip:
             sigma = self.noise.slip * np.sqrt(np.abs(d) * self._radius) / self._radius
             d = d + sigma * self.rng.standard_normal(len(d))
-        f = self.true_robot.fk_matrix(self._steer, self.encoded)[:, : len(self.encoded)]
+        steer = None
+        if self._steer is not None:   # steering moves linearly over the interval: use its middle
+            steer = self._steer_start + 0.5 * wrap_angle(self._steer - self._steer_start)
+            self._steer_start = self._steer.copy()
+        f = self.true_robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
         inc = f @ d
         if self.noise.floor:
             inc[2] += self.noise.floor * np.sqrt(np.hypot(inc[0], inc[1])) * self.rng.standard_normal()

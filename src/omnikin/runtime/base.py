@@ -9,9 +9,11 @@ A plain class, free of ROS and of time sources (every call carries its time [s])
   commands (inverse kinematics of the filtered twist, steering angles included).
 
 Covariance (motion-dependent, not a constant): each encoded wheel's angle increment has the
-variance ``slip^2 |r dtheta| / r^2 + q^2 / 6`` [rad^2] (distance-proportional slip as in
-:mod:`omnikin.simulation.errors`, plus the quantisation ``q`` of the difference of two
-readings); the body increment's covariance is ``Sigma_xi = F diag(.) F^T`` (``F`` forward
+variance ``slip^2 |r dtheta| / r^2`` [rad^2] (distance-proportional slip as in
+:mod:`omnikin.simulation.errors`; it does not depend on the sample rate, and nothing grows
+while the robot stands still). Encoder quantisation is not process noise: the quantisation
+errors of successive increments telescope to that of the last reading, a bounded
+``q / sqrt(12)`` per wheel, negligible against slip after a few centimetres; the body increment's covariance is ``Sigma_xi = F diag(.) F^T`` (``F`` forward
 kinematics) and the pose covariance is propagated through the exact SE(2) update
 ``x' = x + sinc(phi/2) R(theta + phi/2) (a, b)``, ``theta' = theta + phi`` with its
 Jacobians: ``P' = A P A^T + B Sigma_xi B^T``. The twist covariance is ``Sigma_xi / dt^2``.
@@ -28,6 +30,7 @@ import numpy as np
 
 from ..errors import OmnikinError
 from ..model import Robot
+from ..odometry import mid_steer
 from ..simulation.limits import MotionLimits
 from ..streaming import Odometry
 from .backends import WheelBackend, WheelState
@@ -63,7 +66,6 @@ class BaseRuntime:
         self.odometry = Odometry(robot, method=method)
         self.encoded = self.odometry.wheel_names
         self._radius = np.array([robot.wheel(n).radius for n in self.encoded])
-        self._quant = np.array([abs(robot.wheel(n).encoder.rad_per_tick) for n in self.encoded])
         self.wheel_slip = wheel_slip
         self.pose_covariance = np.zeros((3, 3))
         self.twist_covariance = np.zeros((3, 3))
@@ -98,8 +100,8 @@ class BaseRuntime:
         self.odometry.update_angles(state.t, list(state.positions), state.steer)
         if self._last is not None and state.t > self._last.t:
             d = state.positions - self._last.positions
-            var = (self.wheel_slip ** 2 * np.abs(d) * self._radius) / self._radius ** 2 + self._quant ** 2 / 6.0
-            steer = None if state.steer is None else 0.5 * (state.steer + self._last.steer)
+            var = (self.wheel_slip ** 2 * np.abs(d) * self._radius) / self._radius ** 2
+            steer = None if state.steer is None else mid_steer(np.stack([self._last.steer, state.steer]))[0]
             f = self.robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
             sigma_xi = f @ np.diag(var) @ f.T
             inc = f @ d

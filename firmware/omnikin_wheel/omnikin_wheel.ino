@@ -1,0 +1,300 @@
+/* omnikin_wheel.ino: reference firmware of one omnikin wheel controller (Arduino Nano/Uno class).
+ *
+ * One wheel per board, as the seed robot's Arduino Nanos: a quadrature encoder on the interrupt
+ * pins, a PWM + direction motor driver, a PI speed loop, and the omnikin wheel protocol
+ * (docs/protocol.md; frame ids, sizes, scales and timing come from omnikin_protocol.h, which is
+ * generated from src/omnikin/runtime/protocol.yaml: never write them here as numbers).
+ *
+ * Behaviour:
+ *  - boot: ERROR_REPORT RESET (counter and sequence numbers start at 0); motor off until the host speaks;
+ *  - SPEED_CMD for WHEEL_INDEX: new set-point [rad/s], clamped to MAX_SPEED (ERROR_REPORT SPEED_CLAMPED);
+ *  - every valid frame for WHEEL_INDEX keeps the link alive; frames for other wheels are ignored
+ *    (several boards may share a bus); duplicate and out-of-order sequence numbers are dropped;
+ *  - link loss (no valid frame for OMNIKIN_LINK_TIMEOUT_MS): set-point 0, motor off at once,
+ *    ERROR_REPORT LINK_LOST; the host must send a new SPEED_CMD to move again;
+ *  - ENCODER_REPORT every OMNIKIN_REPORT_PERIOD_MS, HEARTBEAT every OMNIKIN_HEARTBEAT_PERIOD_MS;
+ *    CRC and version errors seen on the input are reported at most once per heartbeat period.
+ *
+ * Configuration: the #defines below (or -D flags); they must match the robot file
+ * (docs/conventions.md): the count reported is the raw counter of this sketch, which the host
+ * converts with the robot file's ticks_per_rev, gear_ratio and invert.
+ */
+#include "omnikin_protocol.h"
+
+/* ---- configuration ------------------------------------------------------------------------ */
+#ifndef WHEEL_INDEX
+#define WHEEL_INDEX 0          /* position of this wheel among the robot file's rolling wheels */
+#endif
+#ifndef TICKS_PER_REV
+#define TICKS_PER_REV 600.0f   /* robot file encoder.ticks_per_rev: counts of THIS sketch per encoder turn */
+#endif
+#ifndef GEAR_RATIO
+#define GEAR_RATIO 1.0f        /* robot file encoder.gear_ratio (encoder turns per wheel turn) */
+#endif
+#ifndef ENCODER_INVERT
+#define ENCODER_INVERT 0       /* robot file encoder.invert */
+#endif
+#ifndef ENCODER_X4
+#define ENCODER_X4 0           /* 1: count every edge of A and B (4 counts per pulse); 0: rising edges of A */
+#endif
+#ifndef MOTOR_INVERT
+#define MOTOR_INVERT 0         /* 1 if a positive output turns the wheel negatively */
+#endif
+#ifndef MAX_SPEED
+#define MAX_SPEED 30.0f        /* rad/s: robot file max_speed */
+#endif
+#ifndef PIN_ENC_A
+#define PIN_ENC_A 2            /* Nano/Uno: the two external interrupt pins */
+#define PIN_ENC_B 3
+#define PIN_PWM 9
+#define PIN_DIR 8
+#endif
+#ifndef CONTROL_PERIOD_US
+#define CONTROL_PERIOD_US 10000UL  /* speed loop period (100 Hz) */
+#endif
+#ifndef KP
+#define KP 12.0f               /* PWM counts per rad/s of speed error */
+#endif
+#ifndef KI
+#define KI 120.0f              /* PWM counts per rad of integrated error */
+#endif
+#ifndef KFF
+#define KFF 6.0f               /* feed-forward PWM counts per rad/s of set-point */
+#endif
+#ifndef SPEED_FILTER
+#define SPEED_FILTER 0.3f      /* weight of the newest speed sample in the low-pass filter */
+#endif
+#define PWM_MAX 255
+
+static const float RAD_PER_TICK =
+    (ENCODER_INVERT ? -1.0f : 1.0f) * 6.2831853f / (TICKS_PER_REV * GEAR_RATIO);
+
+/* ---- encoder (interrupts) ------------------------------------------------------------------ */
+static volatile uint32_t encoder_count = 0;   /* unsigned: wraps without undefined behaviour */
+static volatile uint16_t encoder_glitches = 0;
+#if ENCODER_X4
+static volatile uint8_t encoder_state = 0;
+
+static void encoder_isr() {
+    static const int8_t step[16] = {0, -1, 1, 0, 1, 0, 0, -1, -1, 0, 0, 1, 0, 1, -1, 0};   /* [previous << 2 | now] */
+    uint8_t now = (uint8_t)((digitalRead(PIN_ENC_A) ? 2 : 0) | (digitalRead(PIN_ENC_B) ? 1 : 0));
+    uint8_t idx = (uint8_t)((encoder_state << 2) | now);
+    if ((encoder_state ^ now) == 3) encoder_glitches++;   /* both lines changed: an edge was missed */
+    encoder_count += (uint32_t)(int32_t)step[idx];
+    encoder_state = now;
+}
+#else
+static void encoder_isr() {   /* rising edge of A: B low = forward */
+    if (digitalRead(PIN_ENC_B)) encoder_count -= 1u; else encoder_count += 1u;
+}
+#endif
+
+static void latch_encoder(uint32_t *count, uint32_t *time_us) {
+    noInterrupts();
+    *count = encoder_count;
+    *time_us = micros();
+    interrupts();
+}
+
+/* ---- motor ----------------------------------------------------------------------------------- */
+static int16_t motor_output = 0;
+
+static void motor(float u) {
+    int16_t pwm;
+    uint8_t forward;
+    if (u > PWM_MAX) u = PWM_MAX;
+    if (u < -PWM_MAX) u = -PWM_MAX;
+    pwm = (int16_t)(u >= 0.0f ? u + 0.5f : u - 0.5f);
+    motor_output = pwm;
+    forward = (uint8_t)(pwm >= 0);
+    if (MOTOR_INVERT) forward = (uint8_t)!forward;
+    digitalWrite(PIN_DIR, forward ? HIGH : LOW);
+    analogWrite(PIN_PWM, pwm >= 0 ? pwm : -pwm);
+}
+
+/* ---- protocol state ------------------------------------------------------------------------- */
+static omnikin_parser_t parser;
+static omnikin_seq_t host_seq;
+static uint8_t tx_seq = 0;
+static uint8_t link_ok = 0;
+static uint8_t fault = 0;
+static uint32_t last_rx_ms = 0, last_report_ms = 0, last_heartbeat_ms = 0, last_control_us = 0;
+static uint32_t last_count = 0;
+static uint16_t reported_crc_errors = 0, reported_bad_version = 0, reported_glitches = 0;
+static uint8_t clamp_pending = 0;
+static float target = 0.0f;      /* rad/s */
+static float measured = 0.0f;    /* rad/s, filtered */
+static float integral = 0.0f;    /* PWM counts */
+
+static int32_t to_scaled(float value, float scale) {
+    float x = value / scale;
+    return (int32_t)(x >= 0.0f ? x + 0.5f : x - 0.5f);
+}
+
+static uint8_t format_uint(char *out, uint16_t v) {   /* decimal, no printf on the AVR */
+    char tmp[6];
+    uint8_t n = 0, i;
+    do { tmp[n++] = (char)('0' + v % 10); v /= 10; } while (v && n < sizeof(tmp));
+    for (i = 0; i < n; i++) out[i] = tmp[n - 1 - i];
+    return n;
+}
+
+static void send_error(uint8_t code, const char *text, uint16_t number) {
+    uint8_t frame[OMNIKIN_MAX_FRAME];
+    omnikin_error_report_t m;
+    uint8_t n = 0;
+    m.wheel = WHEEL_INDEX;
+    m.code = code;
+    while (text[n] && n < OMNIKIN_ERROR_REPORT_TEXT_MAX - 6) { m.text[n] = text[n]; n++; }
+    if (number) n = (uint8_t)(n + format_uint(m.text + n, number));
+    m.text_len = n;
+    Serial.write(frame, omnikin_encode_error_report(frame, tx_seq++, &m));
+}
+
+static void send_report() {
+    uint8_t frame[OMNIKIN_MAX_FRAME];
+    omnikin_encoder_report_t m;
+    uint32_t count, time_us;
+    latch_encoder(&count, &time_us);
+    m.wheel = WHEEL_INDEX;
+    m.time_us = time_us;
+    m.count = (int32_t)count;
+    m.speed = to_scaled(measured, OMNIKIN_ENCODER_REPORT_SPEED_SCALE);
+    Serial.write(frame, omnikin_encode_encoder_report(frame, tx_seq++, &m));
+}
+
+static void send_heartbeat() {
+    uint8_t frame[OMNIKIN_MAX_FRAME];
+    omnikin_heartbeat_t m;
+    m.wheel = WHEEL_INDEX;
+    m.status = (uint8_t)((link_ok ? OMNIKIN_STATUS_LINK_OK : 0) |
+                         (link_ok && !fault ? OMNIKIN_STATUS_MOTOR_ENABLED : 0) |
+                         (fault ? OMNIKIN_STATUS_FAULT : 0));
+    m.time_us = micros();
+    Serial.write(frame, omnikin_encode_heartbeat(frame, tx_seq++, &m));
+}
+
+static void stop_motor() {
+    target = 0.0f;
+    integral = 0.0f;
+    motor(0.0f);
+}
+
+/* A frame with a valid CRC and version is in parser.buf. */
+static void handle_frame() {
+    const uint8_t type = parser.buf[3];
+    const uint8_t seq = parser.buf[4];
+    const uint8_t len = parser.buf[5];
+    const uint8_t *payload = parser.buf + OMNIKIN_HEADER_SIZE;
+    uint8_t verdict;
+    if (len < 1 || payload[0] != WHEEL_INDEX) return;   /* another wheel's frame */
+    if (type != OMNIKIN_TYPE_SPEED_CMD && type != OMNIKIN_TYPE_HEARTBEAT) {
+        send_error(OMNIKIN_ERR_UNKNOWN_TYPE, "type ", type);
+        return;
+    }
+    verdict = omnikin_seq_check(&host_seq, seq);
+    if (verdict == OMNIKIN_SEQ_DUPLICATE || verdict == OMNIKIN_SEQ_OUT_OF_ORDER) return;
+    if (type == OMNIKIN_TYPE_SPEED_CMD) {
+        omnikin_speed_cmd_t m;
+        float speed;
+        if (!omnikin_unpack_speed_cmd(payload, len, &m)) return;
+        speed = (float)m.speed * OMNIKIN_SPEED_CMD_SPEED_SCALE;
+        if (speed > MAX_SPEED) { speed = MAX_SPEED; clamp_pending = 1; }
+        if (speed < -MAX_SPEED) { speed = -MAX_SPEED; clamp_pending = 1; }
+        target = speed;
+    } else {
+        omnikin_heartbeat_t m;
+        if (!omnikin_unpack_heartbeat(payload, len, &m)) return;
+    }
+    link_ok = 1;
+    last_rx_ms = millis();
+}
+
+static void control(uint32_t now_us) {
+    float dt = (float)(now_us - last_control_us) * 1e-6f;
+    uint32_t count, time_us;
+    int32_t delta;
+    last_control_us = now_us;
+    latch_encoder(&count, &time_us);
+    delta = (int32_t)(count - last_count);
+    last_count = count;
+    if (dt <= 0.0f) return;
+    measured += SPEED_FILTER * ((float)delta * RAD_PER_TICK / dt - measured);
+    if (!link_ok || fault || target == 0.0f) {   /* zero set-point: motor off (no holding torque) */
+        integral = 0.0f;
+        motor(0.0f);
+        return;
+    }
+    {
+        float error = target - measured;
+        float u;
+        integral += KI * error * dt;
+        if (integral > PWM_MAX) integral = PWM_MAX;
+        if (integral < -PWM_MAX) integral = -PWM_MAX;
+        u = KFF * target + KP * error + integral;
+        motor(u);
+    }
+}
+
+void setup() {
+    pinMode(PIN_ENC_A, INPUT_PULLUP);
+    pinMode(PIN_ENC_B, INPUT_PULLUP);
+    pinMode(PIN_PWM, OUTPUT);
+    pinMode(PIN_DIR, OUTPUT);
+    motor(0.0f);
+#if ENCODER_X4
+    encoder_state = (uint8_t)((digitalRead(PIN_ENC_A) ? 2 : 0) | (digitalRead(PIN_ENC_B) ? 1 : 0));
+    attachInterrupt(digitalPinToInterrupt(PIN_ENC_A), encoder_isr, CHANGE);
+    attachInterrupt(digitalPinToInterrupt(PIN_ENC_B), encoder_isr, CHANGE);
+#else
+    attachInterrupt(digitalPinToInterrupt(PIN_ENC_A), encoder_isr, RISING);
+#endif
+    Serial.begin(OMNIKIN_BAUD);
+    omnikin_parser_init(&parser);
+    memset(&host_seq, 0, sizeof(host_seq));
+    last_control_us = micros();
+    last_report_ms = last_heartbeat_ms = millis();
+    send_error(OMNIKIN_ERR_RESET, "boot", 0);
+}
+
+void loop() {
+    uint32_t now_ms, now_us;
+    while (Serial.available() > 0) {
+        if (omnikin_parse_byte(&parser, (uint8_t)Serial.read())) handle_frame();
+    }
+    now_ms = millis();
+    now_us = micros();
+    if (link_ok && now_ms - last_rx_ms > OMNIKIN_LINK_TIMEOUT_MS) {
+        link_ok = 0;
+        stop_motor();
+        memset(&host_seq, 0, sizeof(host_seq));   /* a restarted host starts a new sequence */
+        send_error(OMNIKIN_ERR_LINK_LOST, "host silent; motor off", 0);
+    }
+    if (now_us - last_control_us >= CONTROL_PERIOD_US) control(now_us);
+    if (now_ms - last_report_ms >= OMNIKIN_REPORT_PERIOD_MS) {
+        last_report_ms += OMNIKIN_REPORT_PERIOD_MS;
+        if (now_ms - last_report_ms >= OMNIKIN_REPORT_PERIOD_MS) last_report_ms = now_ms;   /* fell behind */
+        send_report();
+    }
+    if (now_ms - last_heartbeat_ms >= OMNIKIN_HEARTBEAT_PERIOD_MS) {
+        last_heartbeat_ms = now_ms;
+        send_heartbeat();
+        if (parser.crc_errors != reported_crc_errors) {
+            send_error(OMNIKIN_ERR_CRC, "frames: ", (uint16_t)(parser.crc_errors - reported_crc_errors));
+            reported_crc_errors = parser.crc_errors;
+        }
+        if (parser.bad_version != reported_bad_version) {
+            send_error(OMNIKIN_ERR_BAD_VERSION, "frames: ", (uint16_t)(parser.bad_version - reported_bad_version));
+            reported_bad_version = parser.bad_version;
+        }
+        if (encoder_glitches != reported_glitches) {
+            uint16_t g = encoder_glitches;
+            send_error(OMNIKIN_ERR_ENCODER_FAULT, "missed edges: ", (uint16_t)(g - reported_glitches));
+            reported_glitches = g;
+        }
+        if (clamp_pending) {
+            clamp_pending = 0;
+            send_error(OMNIKIN_ERR_SPEED_CLAMPED, "", 0);
+        }
+    }
+}

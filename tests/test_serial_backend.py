@@ -1,0 +1,341 @@
+"""SerialBackend against the fake wheel controller on pseudo-terminals.
+
+Real time, bounded: every wait polls with a deadline; the link timeout is shortened to keep the
+file well under its time budget."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("serial")
+
+from omnikin import load_robot
+from omnikin.errors import OmnikinError
+from omnikin.io.robot_file import robot_from_dict
+from omnikin.runtime.base import BaseRuntime
+from omnikin.runtime.fake_controller import FakeController, FakeWheel
+from omnikin.runtime.protocol import load_protocol
+from omnikin.runtime.serial_backend import LinkLostError, SerialBackend
+
+LINK_TIMEOUT = 0.3
+REPORT = 0.01
+TWO_PI = 2 * math.pi
+
+
+def robot_mixed():
+    """Three omni wheels with different encoders (one inverted, one geared) and a passive castor."""
+    return robot_from_dict({
+        "omnikin": 1, "name": "serial-test",
+        "wheels": [
+            {"name": "a", "type": "omni", "distance": 0.1, "angle_deg": 0, "radius": 0.03,
+             "encoder": {"ticks_per_rev": 600}},
+            {"name": "b", "type": "omni", "distance": 0.1, "angle_deg": 120, "radius": 0.03,
+             "encoder": {"ticks_per_rev": 1000, "gear_ratio": 2.5}},
+            {"name": "c", "type": "omni", "distance": 0.1, "angle_deg": 240, "radius": 0.03,
+             "encoder": {"ticks_per_rev": 600, "invert": True}},
+        ]})
+
+
+def poll(backend, until, timeout=2.0, speeds=None):
+    """Read (and write ``speeds``) every few ms until ``until(state)``; returns the state."""
+    deadline = time.monotonic() + timeout
+    while True:
+        now = time.monotonic()
+        if speeds is not None:
+            backend.write(now, speeds)
+        state = backend.read(now)
+        if until(state):
+            return state
+        if now > deadline:
+            raise AssertionError(f"condition not met within {timeout} s; last state {state}, stats {backend.stats()}")
+        time.sleep(0.003)
+
+
+def wait_for(cond, timeout=2.0):
+    deadline = time.monotonic() + timeout
+    while not cond():
+        if time.monotonic() > deadline:
+            raise AssertionError("condition not met in time")
+        time.sleep(0.003)
+
+
+@pytest.fixture
+def tomasi():
+    return load_robot("tomasi-omni3")
+
+
+@pytest.fixture
+def rig(tomasi):
+    fake = FakeController.for_robot(tomasi, report_period=REPORT, link_timeout=1.0).start()
+    backend = SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT, connect_timeout=1.0)
+    backend.wait_ready(2.0)
+    yield fake, backend
+    backend.close()
+    fake.close()
+
+
+def test_speeds_commanded_arrive_and_heartbeats_flow(rig):
+    fake, backend = rig
+    speeds = np.array([1.0, -2.5, 0.1234])
+    poll(backend, lambda s: all(math.isclose(fake.speed(i), speeds[i], abs_tol=1e-12) for i in range(3)),
+         speeds=speeds)
+    state = poll(backend, lambda s: np.allclose(s.velocities, speeds), speeds=speeds)
+    assert state.steer is None and state.positions.shape == (3,)
+    t0 = time.monotonic()
+    poll(backend, lambda s: time.monotonic() - t0 > 0.35, speeds=speeds)
+    beats = [m for m in fake.received if m.name == "HEARTBEAT"]
+    assert {m.wheel for m in beats} == {0, 1, 2}
+    s = backend.stats()
+    assert s["heartbeats_tx"] >= 3 * 3 and s["heartbeats_rx"] >= 3 and s["reports"] > 30
+    assert s["frames_ok"] > 0 and s["corrupt"] == s["short"] == s["out_of_order"] == 0 and not s["link_lost"]
+    assert fake.decoder.stats.frames_ok > 0 and fake.decoder.stats.corrupt == 0
+    assert all(fake.decoder.stats.as_dict()[k] == 0 for k in ("lost", "duplicates", "out_of_order"))
+
+
+def test_counts_become_angles_with_each_encoder():
+    robot = robot_mixed()
+    with FakeController.for_robot(robot, report_period=REPORT) as fake:
+        with SerialBackend(robot, fake.path, link_timeout=LINK_TIMEOUT) as backend:
+            backend.wait_ready(2.0)
+            fake.advance(0, 600)          # one turn of a
+            fake.advance(1, 1000 * 2.5)   # one turn of b (geared)
+            fake.advance(2, 300)          # half a turn of c, counting backwards (invert)
+            state = poll(backend, lambda s: np.allclose(s.positions, [TWO_PI, TWO_PI, -math.pi], atol=1e-12))
+            assert np.allclose(state.positions, [TWO_PI, TWO_PI, -math.pi], rtol=0, atol=1e-12)
+
+
+def test_counter_wrap_around(tomasi):
+    top = 2 ** 31 - 1
+    starts = {"w1": top - 100, "w2": -2 ** 31 + 50, "w3": 0}
+    with FakeController.for_robot(tomasi, start_counts=starts, report_period=REPORT) as fake:
+        with SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT) as backend:
+            backend.wait_ready(2.0)
+            fake.advance(0, 600)           # crosses +2**31 -> -2**31
+            fake.advance(1, -600)          # crosses -2**31 -> +2**31 - 1 going back
+            poll(backend, lambda s: np.allclose(s.positions, [TWO_PI, -TWO_PI, 0.0], atol=1e-12))
+            # and while turning: 15 rad/s for a while, then stop; the angle is exactly the count moved
+            speeds = np.array([15.0, -15.0, 0.0])
+            t0 = time.monotonic()
+            poll(backend, lambda s: time.monotonic() - t0 > 0.25, speeds=speeds)
+            zero = np.zeros(3)
+            poll(backend, lambda s: fake.speed(0) == 0.0 and fake.speed(1) == 0.0, speeds=zero)
+            time.sleep(3 * REPORT)
+            expected = [(fake.ticks(i) - (starts[n])) * TWO_PI / 600 for i, n in enumerate(("w1", "w2", "w3"))]
+            assert fake.ticks(0) > top and fake.ticks(1) < -2 ** 31      # the 32-bit counters did wrap
+            state = poll(backend, lambda s: np.allclose(s.positions, expected, atol=1e-12), speeds=zero)
+            assert state.positions[0] > TWO_PI + 1.0 and state.positions[1] < -TWO_PI - 1.0
+
+
+def test_controller_reset_keeps_the_angle(rig):
+    fake, backend = rig
+    fake.advance(0, 150)
+    poll(backend, lambda s: math.isclose(s.positions[0], math.pi / 2, abs_tol=1e-12))
+    resets = backend.stats()["resets"]   # the start-up RESETs arrive or not, depending on when the port opened
+    fake.simulate_reset(0)          # counter back to 0, sequence numbers from 0, RESET report first
+    wait_for(lambda: fake.faults_pending == 0)
+    time.sleep(5 * REPORT)
+    fake.advance(0, 150)
+    state = poll(backend, lambda s: math.isclose(s.positions[0], math.pi, abs_tol=1e-12))
+    s = backend.stats()
+    assert s["resets"] == resets + 1 and "RESET" in s["last_error"] and "w1" in s["last_error"]
+    assert s["out_of_order"] == 0 and state.positions[0] == pytest.approx(math.pi)
+
+
+@pytest.mark.parametrize("fault, counter, n", [
+    ("corrupt", "corrupt", 3),
+    ("short", "short", 2),
+    ("out_of_order", "out_of_order", 2),
+    ("duplicate", "duplicates", 2),
+    ("bad_version", "bad_version", 1),
+    ("unknown_type", "unknown_type", 1),
+])
+def test_bad_frames_are_counted_and_the_link_survives(rig, fault, counter, n):
+    fake, backend = rig
+    before = backend.stats()
+    getattr(fake, f"inject_{fault}")(n)
+    wait_for(lambda: fake.faults_pending == 0)
+    time.sleep(5 * REPORT)
+    fake.advance(2, 600)
+    state = poll(backend, lambda s: math.isclose(s.positions[2], TWO_PI, abs_tol=1e-12))
+    after = backend.stats()
+    assert after[counter] - before[counter] == n
+    assert not after["link_lost"] and after["reports"] > before["reports"]
+    assert state.positions[2] == pytest.approx(TWO_PI)
+
+
+def test_garbage_is_skipped(rig):
+    fake, backend = rig
+    before = backend.stats()
+    for _ in range(5):
+        fake.inject_garbage(40)
+        wait_for(lambda: fake.faults_pending == 0)
+    time.sleep(5 * REPORT)
+    fake.advance(1, -300)
+    poll(backend, lambda s: math.isclose(s.positions[1], -math.pi, abs_tol=1e-12))
+    after = backend.stats()
+    assert after["skipped_bytes"] - before["skipped_bytes"] >= 200
+    assert not after["link_lost"] and after["internal_errors"] == 0
+
+
+def test_error_reports_are_kept(rig):
+    fake, backend = rig
+    before = backend.stats()["errors_rx"]
+    fake.send_error(1, "MOTOR_FAULT", "overcurrent")
+    poll(backend, lambda st: "MOTOR_FAULT" in backend.stats()["last_error"])
+    s = backend.stats()
+    assert s["last_error"] == f"w2 on {fake.path}: MOTOR_FAULT (overcurrent)" and s["errors_rx"] == before + 1
+
+
+def test_silent_controller_loses_the_link_and_stops_the_wheels(rig):
+    fake, backend = rig
+    speeds = np.array([3.0, 3.0, 3.0])
+    poll(backend, lambda s: all(fake.speed(i) == 3.0 for i in range(3)), speeds=speeds)
+    fake.silent = True
+    t_silent = time.monotonic()
+    with pytest.raises(LinkLostError) as info:
+        poll(backend, lambda s: False, timeout=3.0, speeds=speeds)
+    detected = time.monotonic() - t_silent
+    assert LINK_TIMEOUT - 2 * REPORT <= detected <= LINK_TIMEOUT + 0.15
+    err = info.value
+    assert isinstance(err, OmnikinError)
+    assert err.port == fake.path and err.wheel in ("w1", "w2", "w3")
+    assert "link lost" in str(err) and fake.path in str(err) and repr(err.wheel) in str(err)
+    # zero speeds went out at once, and keep going out whatever the runtime asks for
+    wait_for(lambda: all(fake.speed(i) == 0.0 for i in range(3)), timeout=0.5)
+    backend.write(time.monotonic(), speeds)
+    time.sleep(0.05)
+    assert all(fake.speed(i) == 0.0 and fake.commands(i)[-1] == 0.0 for i in range(3))
+    with pytest.raises(LinkLostError):
+        backend.read(time.monotonic())
+    s = backend.stats()
+    assert s["link_lost"] and s["timeouts"] == 1 and "link lost" in s["link_lost_reason"]
+    # an explicit reset re-arms the link once the controller speaks again
+    fake.silent = False
+    backend.reset_link()
+    backend.wait_ready(2.0)
+    assert not backend.link_lost
+
+
+def test_controller_that_never_answers(tomasi):
+    with FakeController.for_robot(tomasi, report_period=REPORT) as fake:
+        fake.silent = True
+        with SerialBackend(tomasi, fake.path, connect_timeout=0.2) as backend:
+            with pytest.raises(LinkLostError, match="never heard from it") as info:
+                poll(backend, lambda s: False, timeout=2.0, speeds=np.zeros(3))
+            assert info.value.port == fake.path
+
+
+def test_one_port_per_wheel_and_misrouted_frames(tomasi):
+    fakes = [FakeController([FakeWheel(0, 600 / TWO_PI), FakeWheel(1, 600 / TWO_PI)], report_period=REPORT),
+             FakeController([FakeWheel(1, 600 / TWO_PI)], report_period=REPORT),
+             FakeController([FakeWheel(2, 600 / TWO_PI)], report_period=REPORT)]
+    for f in fakes:
+        f.start()
+    try:
+        with SerialBackend(tomasi, [f.path for f in fakes], link_timeout=LINK_TIMEOUT) as backend:
+            backend.wait_ready(2.0)
+            speeds = np.array([1.0, 2.0, 3.0])
+            poll(backend, lambda s: [f.speed(i) for f, i in zip(fakes, range(3))] == [1.0, 2.0, 3.0], speeds=speeds)
+            assert fakes[0].speed(1) == 0.0            # wheel 1's commands go to its own port only
+            zero = np.zeros(3)
+            poll(backend, lambda s: all(f.speed(i) == 0.0 for f, i in zip(fakes, range(3))), speeds=zero)
+            time.sleep(3 * REPORT)
+            start = backend.read(time.monotonic()).positions[1]
+            fakes[0].advance(1, 600)                   # a wheel-1 controller on wheel 0's port: ignored
+            fakes[1].advance(1, 300)
+            poll(backend, lambda s: math.isclose(s.positions[1] - start, math.pi, abs_tol=1e-9), speeds=zero)
+            time.sleep(3 * REPORT)
+            assert backend.read(time.monotonic()).positions[1] - start == pytest.approx(math.pi, abs=1e-9)
+            assert backend.stats()["misrouted"] > 0
+            assert backend.stats()["ports"] == ",".join(f.path for f in fakes)
+    finally:
+        for f in fakes:
+            f.close()
+
+
+def test_port_mapping_and_set_up_errors(tomasi, tmp_path):
+    with FakeController.for_robot(tomasi) as fake:
+        p = fake.path
+        for ports in ([p, p], {"w1": p, "w2": p}, {"w1": p, "w2": p, "w3": p, "w9": p}, 5, [p, "", p]):
+            with pytest.raises(OmnikinError, match="port"):
+                SerialBackend(tomasi, ports)
+        b = SerialBackend(tomasi, {"w1": p, "w2": p, "w3": p})
+        assert b.port_of == {"w1": p, "w2": p, "w3": p}
+        with pytest.raises(OmnikinError, match="3 finite wheel speeds"):
+            b.write(0.0, [1.0, float("nan"), 0.0])
+        with pytest.raises(OmnikinError, match="cannot be sent"):
+            b.write(0.0, [1e6, 0.0, 0.0])
+        b.close()
+        b.close()
+    missing = str(tmp_path / "no-such-tty")
+    with pytest.raises(OmnikinError, match="cannot open") as info:
+        SerialBackend(tomasi, missing)
+    assert missing in str(info.value) and "w1" in str(info.value)
+    with pytest.raises(OmnikinError, match="steerable"):
+        SerialBackend(load_robot("ackermann"), missing)
+    with pytest.raises(OmnikinError, match="link_timeout"):
+        SerialBackend(tomasi, missing, link_timeout=0)
+
+
+def test_close_commands_zero(tomasi):
+    with FakeController.for_robot(tomasi, report_period=REPORT) as fake:
+        backend = SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT)
+        backend.wait_ready(2.0)
+        poll(backend, lambda s: fake.speed(2) == -4.0, speeds=np.array([0.0, 0.0, -4.0]))
+        backend.close()
+        wait_for(lambda: fake.speed(2) == 0.0, timeout=1.0)
+
+
+def test_fake_controller_stops_when_the_host_goes_quiet(tomasi):
+    with FakeController.for_robot(tomasi, report_period=REPORT, link_timeout=0.15) as fake:
+        with SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT) as backend:
+            backend.wait_ready(2.0)
+            poll(backend, lambda s: fake.speed(0) == 2.0, speeds=np.array([2.0, 0.0, 0.0]))
+            # the host stops calling: no commands, no heartbeats
+            wait_for(lambda: not fake.link_ok(0), timeout=1.0)
+            assert fake.speed(0) == 0.0 and fake.link_lost_events(0) == 1
+            poll(backend, lambda s: "LINK_LOST" in backend.stats()["last_error"] and s.velocities[0] == 0.0,
+                 timeout=1.0)       # reported by the controller, and its reports show the wheel stopped
+
+
+def test_runtime_drives_the_fake_robot(tomasi):
+    """End to end: BaseRuntime + SerialBackend + fake controllers. A forward command moves the
+    odometry forward, and after the stop the odometry equals the forward kinematics of the
+    counts the controllers integrated."""
+    with FakeController.for_robot(tomasi, report_period=REPORT) as fake:
+        with SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT) as backend:
+            backend.wait_ready(2.0)
+            start = np.array([fake.ticks(i) for i in range(3)])
+            rt = BaseRuntime(tomasi, backend, cmd_vel_timeout=0.0)
+
+            def drive(twist, until, timeout=4.0):
+                deadline = time.monotonic() + timeout
+                while not until():
+                    assert time.monotonic() < deadline, f"pose {rt.pose}, stats {backend.stats()}"
+                    t = time.monotonic()
+                    rt.command(twist, t)
+                    rt.step(t)
+                    time.sleep(0.005)
+
+            drive((0.2, 0.0, 0.0), lambda: rt.pose[0] > 0.04)
+            drive((0.0, 0.0, 0.0), lambda: all(fake.speed(i) == 0.0 for i in range(3)))
+            t_stop = time.monotonic()
+            drive((0.0, 0.0, 0.0), lambda: time.monotonic() - t_stop > 5 * REPORT)
+            angles = (np.array([fake.ticks(i) for i in range(3)]) - start) * TWO_PI / 600
+            x, y, th = rt.pose
+            assert np.allclose((x, y, th), tomasi.fk(angles).twist, atol=1e-3)
+            assert x > 0.04 and abs(y) < 2e-3 and abs(th) < 1e-2
+            assert backend.stats()["link_lost"] is False
+
+
+def test_protocol_timing_is_the_default(tomasi):
+    with FakeController.for_robot(tomasi) as fake:
+        with SerialBackend(tomasi, fake.path) as backend:
+            t = load_protocol().timing
+            assert (backend.link_timeout, backend.connect_timeout, backend.heartbeat_period) == \
+                (t.link_timeout, t.connect_timeout, t.heartbeat_period)
+            assert backend.baud == 115200
