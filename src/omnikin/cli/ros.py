@@ -11,7 +11,7 @@ EPILOG = """examples:
   omnikin ros my_robot.yaml --params base.yaml
   omnikin ros diff-drive --errors none --noise none --ros-args -p publish_rate:=100.0
   omnikin ros tomasi-omni3 --backend serial --port /dev/ttyUSB0 /dev/ttyUSB1 /dev/ttyUSB2
-  (another terminal)  ros2 topic pub /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"
+  (another terminal)  ros2 topic pub -r 10 /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"
 
 topics: cmd_vel in; odom, joint_states, /diagnostics (and /tf with tf2_msgs) out.
 parameters (ros2_controllers names where the meaning is the same): cmd_vel_timeout,

@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import OmnikinError
 from ..simulation.limits import MotionLimits
 from . import require_rclpy
-from .params import DEFAULTS
+from .params import DEFAULTS, validate
 
 
 def _quaternion(theta: float):
@@ -47,6 +47,7 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
     from geometry_msgs.msg import Twist, TwistStamped
     from nav_msgs.msg import Odometry
+    from rcl_interfaces.msg import ParameterDescriptor
     from rclpy.node import Node
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState
@@ -62,9 +63,10 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
     class BaseNode(Node):
         def __init__(self):
             super().__init__(name)
+            dynamic = ParameterDescriptor(dynamic_typing=True)    # our own checks name the parameter
             for key, default in values.items():
-                self.declare_parameter(key, default)
-            p = {k: self.get_parameter(k).value for k in DEFAULTS}
+                self.declare_parameter(key, default, dynamic)
+            p = validate({k: self.get_parameter(k).value for k in DEFAULTS}, "--ros-args / parameters")
             limits = MotionLimits(linear=p["linear.x.max_velocity"], angular=p["angular.z.max_velocity"],
                                   linear_accel=p["linear.x.max_acceleration"],
                                   angular_accel=p["angular.z.max_acceleration"],
@@ -123,11 +125,11 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             q = _quaternion(th)
             o = odom.pose.pose.orientation
             o.x, o.y, o.z, o.w = q
-            odom.pose.covariance = _cov6(res.pose_covariance)
+            odom.pose.covariance = _cov6(0.5 * (res.pose_covariance + res.pose_covariance.T))
             vx, vy, w = res.twist
             odom.twist.twist.linear.x, odom.twist.twist.linear.y = float(vx), float(vy)
             odom.twist.twist.angular.z = float(w)
-            odom.twist.covariance = _cov6(res.twist_covariance)
+            odom.twist.covariance = _cov6(0.5 * (res.twist_covariance + res.twist_covariance.T))
             self.odom_pub.publish(odom)
             js = self._JointState()
             js.header.stamp = stamp
@@ -184,7 +186,12 @@ def run(robot, backend, values: dict, ros_args=None) -> int:
     from rclpy.executors import ExternalShutdownException
 
     rclpy.init(args=["omnikin"] + (["--ros-args"] + list(ros_args) if ros_args else []))
-    node = build_node(robot, backend, values)
+    try:
+        node = build_node(robot, backend, values)
+    except BaseException:
+        backend.close()
+        rclpy.shutdown()
+        raise
 
     def stop(signum, frame):
         raise KeyboardInterrupt

@@ -22,6 +22,7 @@ A ``--params FILE`` is YAML, either flat (``cmd_vel_timeout: 0.2``) or in the RO
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from ..errors import OmnikinError
@@ -66,7 +67,9 @@ def load_params(path: str | Path | None) -> dict:
     except OSError as exc:
         raise OmnikinError(f"{path}: cannot read: {exc.strerror}") from None
     except yaml.YAMLError as exc:
-        raise OmnikinError(f"{path}: invalid YAML: {exc}") from None
+        mark = getattr(exc, "problem_mark", None)
+        at = f" at line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""
+        raise OmnikinError(f"{path}: invalid YAML{at}: {getattr(exc, 'problem', None) or 'syntax error'}") from None
     if not isinstance(data, dict):
         raise OmnikinError(f"{path}: expected a mapping of parameters")
     if len(data) == 1:
@@ -77,10 +80,44 @@ def load_params(path: str | Path | None) -> dict:
     for key, value in flat.items():
         if key not in DEFAULTS:
             raise OmnikinError(f"{path}: unknown parameter {key!r}; known: {sorted(DEFAULTS)}")
+        values[key] = value
+    return validate(values, str(path))
+
+
+RANGES = {
+    "cmd_vel_timeout": (0.0, 3600.0, True),
+    "publish_rate": (0.0, 10000.0, False),
+    "linear.x.max_velocity": (0.0, 1e3, False),
+    "linear.x.max_acceleration": (0.0, 1e4, False),
+    "angular.z.max_velocity": (0.0, 1e3, False),
+    "angular.z.max_acceleration": (0.0, 1e4, False),
+    "wheel_max_velocity": (0.0, 1e5, True),
+    "wheel_slip": (0.0, 1.0, True),
+    "reject_above": (1.0, 1e9, True),
+}
+"""Allowed ``(low, high, low_inclusive)`` of the numeric parameters."""
+
+
+def validate(values: dict, source: str) -> dict:
+    """Check types and ranges of every parameter; returns ``values`` with ints made floats.
+
+    ``source`` names where the values came from (a file, or ``--ros-args``) in the error.
+    """
+    out = dict(values)
+    for key, value in values.items():
+        if key not in DEFAULTS:
+            raise OmnikinError(f"{source}: unknown parameter {key!r}; known: {sorted(DEFAULTS)}")
         want = type(DEFAULTS[key])
         if want is float and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
-        if not isinstance(value, want) or (want is float and value != value):
-            raise OmnikinError(f"{path}: parameter {key!r} must be a {want.__name__}, got {value!r}")
-        values[key] = value
-    return values
+        if not isinstance(value, want):
+            raise OmnikinError(f"{source}: parameter {key!r} must be a {want.__name__}, got {value!r}")
+        if key in RANGES:
+            low, high, inclusive = RANGES[key]
+            ok = math.isfinite(value) and value <= high and (value >= low if inclusive else value > low)
+            if not ok:
+                rel = ">=" if inclusive else ">"
+                raise OmnikinError(f"{source}: parameter {key!r} must be finite, {rel} {low:g} and <= {high:g}, "
+                                   f"got {value!r}")
+        out[key] = value
+    return out

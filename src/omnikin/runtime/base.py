@@ -67,6 +67,7 @@ class BaseRuntime:
         self.encoded = self.odometry.wheel_names
         self._radius = np.array([robot.wheel(n).radius for n in self.encoded])
         self.wheel_slip = wheel_slip
+        self._fk = None if robot.steerable else robot.fk_matrix(None, self.encoded)[:, : len(self.encoded)]
         self.pose_covariance = np.zeros((3, 3))
         self.twist_covariance = np.zeros((3, 3))
         self._last: Optional[WheelState] = None
@@ -102,7 +103,7 @@ class BaseRuntime:
             d = state.positions - self._last.positions
             var = (self.wheel_slip ** 2 * np.abs(d) * self._radius) / self._radius ** 2
             steer = None if state.steer is None else mid_steer(np.stack([self._last.steer, state.steer]))[0]
-            f = self.robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
+            f = self._fk if steer is None else self.robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
             sigma_xi = f @ np.diag(var) @ f.T
             inc = f @ d
             a_mat, b_mat = _jacobians(before[2], inc)

@@ -37,8 +37,8 @@ class CommandStats:
     accepted: int = 0
     rejected: int = 0
     timeouts: int = 0
-    saturated: int = 0
-    projected: int = 0
+    saturated: int = 0          # accepted commands scaled down to the limits
+    projected: int = 0          # accepted commands with an infeasible part dropped
     last_reject_reason: str = ""
 
 
@@ -83,6 +83,8 @@ class CommandFilter:
             res = self.robot.ik(v, on_infeasible="return")
             if not np.all(res.feasible):
                 return self._reject(f"twist {v.tolist()} needs steering beyond the limits of {self.robot.name!r}")
+        if not np.allclose(saturate(self.robot, v, self.limits), v):
+            self.stats.saturated += 1
         self.target = v
         self._last_command_t = float(t)
         self._timed_out = False
@@ -104,8 +106,6 @@ class CommandFilter:
             self.stats.timeouts += 1
         target = np.zeros(3) if (self._timed_out or self._last_command_t is None) else self.target
         limited = saturate(self.robot, target, self.limits)
-        if not np.allclose(limited, target):
-            self.stats.saturated += 1
         self.current = self._accelerate(self.current, limited, dt)
         return self.current.copy()
 

@@ -1,0 +1,580 @@
+"""``omnikin ros`` on a real ROS 2 graph: the node runs in its own process, the test drives it.
+
+Every node process gets a random ROS domain (1..100) of its own, discovery limited to this
+host (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``, ``ROS_LOCALHOST_ONLY`` unset) and a
+temporary ``ROS_LOG_DIR``; the test side joins that domain with an rclpy context of its
+own (no signal handlers), subscribes ``odom``, ``joint_states`` and ``/diagnostics`` and
+publishes ``cmd_vel``.
+
+Closed forms (accelerate at a, cruise at v, brake at a; the two ramps are mirror images):
+the distance covered is ``v * T``, T the time from the first command to the start of the
+braking (an explicit zero command, or the last command plus ``cmd_vel_timeout``).
+
+The soak test (100 Hz for 60 s) is part of the suite on purpose: it is the check that no
+odometry message is lost and that the loop keeps its rate.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import os
+import random
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+_REASON = ('the ROS 2 node tests need rclpy and the message packages (pip install -e ".[ros]", '
+           "Linux x86_64; or a sourced ROS 2 install)")
+rclpy = pytest.importorskip("rclpy", reason=_REASON)
+for _mod in ("geometry_msgs.msg", "nav_msgs.msg", "sensor_msgs.msg", "diagnostic_msgs.msg"):
+    pytest.importorskip(_mod, reason=_REASON)
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import Twist, TwistStamped
+from nav_msgs.msg import Odometry
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+
+try:
+    from rclpy.signals import SignalHandlerOptions
+except ImportError:                                # older rclpy
+    SignalHandlerOptions = None
+
+RELIABLE_100 = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.VOLATILE)
+V, A_LIN = 0.2, 0.5                # commanded speed [m/s], linear.x.max_acceleration [m/s^2]
+
+_used_domains: set[int] = set()
+
+
+def _domain() -> int:
+    """A random ROS domain id in 1..100 not used yet by this module."""
+    rng = random.SystemRandom()
+    while True:
+        d = rng.randint(1, 100)
+        if d not in _used_domains:
+            _used_domains.add(d)
+            return d
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _ros_environment(tmp_path_factory):
+    """Discovery on this host only, logs in a temporary directory (test process and nodes)."""
+    saved = {k: os.environ.get(k) for k in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOCALHOST_ONLY", "ROS_LOG_DIR",
+                                            "ROS_STATIC_PEERS")}
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    os.environ.pop("ROS_LOCALHOST_ONLY", None)
+    os.environ.pop("ROS_STATIC_PEERS", None)
+    os.environ["ROS_LOG_DIR"] = str(tmp_path_factory.mktemp("ros_log_test"))
+    yield
+    for k, v in saved.items():
+        if v is None:
+            os.environ.pop(k, None)
+        else:
+            os.environ[k] = v
+
+
+def wait_for(predicate, timeout: float, step: float = 0.01) -> bool:
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if predicate():
+            return True
+        time.sleep(step)
+    return bool(predicate())
+
+
+def stamp_s(stamp) -> float:
+    return stamp.sec + 1e-9 * stamp.nanosec
+
+
+def yaw_of(q) -> float:
+    return 2.0 * math.atan2(q.z, q.w)
+
+
+def cov(flat) -> np.ndarray:
+    return np.array(flat, dtype=float).reshape(6, 6)
+
+
+def assert_psd(m: np.ndarray, what: str) -> None:
+    scale = max(np.abs(m).max(), 1e-300)
+    assert np.allclose(m, m.T, rtol=0.0, atol=1e-12 * scale), f"{what} is not symmetric:\n{m}"
+    ev = np.linalg.eigvalsh(0.5 * (m + m.T))
+    assert ev.min() >= -1e-12 * scale, f"{what} is not positive semi-definite: eigenvalues {ev}"
+
+
+# --- the node process ----------------------------------------------------------------------------------
+class NodeProcess:
+    """``omnikin ros ARGS`` in a subprocess (this interpreter), output captured to files."""
+
+    def __init__(self, args, workdir: Path, domain: int | None = None):
+        self.domain = _domain() if domain is None else domain
+        self.workdir = workdir
+        env = dict(os.environ)
+        env.update(ROS_DOMAIN_ID=str(self.domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+                   ROS_LOG_DIR=str(workdir / "ros_log"), PYTHONUNBUFFERED="1")
+        env.pop("ROS_LOCALHOST_ONLY", None)
+        env.pop("ROS_STATIC_PEERS", None)
+        self.out_path, self.err_path = workdir / "node.out", workdir / "node.err"
+        self._out, self._err = open(self.out_path, "wb"), open(self.err_path, "wb")
+        self.cmd = [sys.executable, "-m", "omnikin.cli.main", "ros", *map(str, args)]
+        self.proc = subprocess.Popen(self.cmd, env=env, stdout=self._out, stderr=self._err, cwd=workdir,
+                                     start_new_session=True)
+
+    def stderr(self) -> str:
+        self._err.flush()
+        return self.err_path.read_text(errors="replace")
+
+    def wait(self, timeout: float) -> int | None:
+        try:
+            return self.proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            return None
+
+    def terminate(self, timeout: float = 5.0):
+        """SIGTERM; returns (exit code or None if it did not exit in time, seconds taken)."""
+        t0 = time.monotonic()
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        rc = self.wait(timeout)
+        return rc, time.monotonic() - t0
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            if self.wait(5.0) is None:
+                self.proc.kill()
+                self.proc.wait(5.0)
+        self._out.close()
+        self._err.close()
+
+
+# --- the test side of the graph ----------------------------------------------------------------------
+class Graph:
+    """An rclpy node in ``domain`` that records odom, joint_states and /diagnostics."""
+
+    def __init__(self, domain: int, stamped: bool = False, joint_states: bool = True):
+        self.context = rclpy.Context()
+        kw = {"signal_handler_options": SignalHandlerOptions.NO} if SignalHandlerOptions is not None else {}
+        rclpy.init(context=self.context, domain_id=domain, **kw)
+        self.node = rclpy.create_node(f"omnikin_test_{os.getpid()}", context=self.context)
+        self.lock = threading.Lock()
+        self.odom: list = []             # (receive time [monotonic s], msg)
+        self.joints: list = []
+        self.diags: list = []            # (receive time, stamp [s], {key: value}, status)
+        self.node.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_100)
+        if joint_states:
+            self.node.create_subscription(JointState, "joint_states", self._on_joints, RELIABLE_100)
+        self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diag, 10)
+        self.stamped = stamped
+        self.pub = self.node.create_publisher(TwistStamped if stamped else Twist, "cmd_vel", 10)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self):
+        try:
+            self.executor.spin()
+        except Exception:              # shutdown races end the thread quietly
+            pass
+
+    def _on_odom(self, msg):
+        with self.lock:
+            self.odom.append((time.monotonic(), msg))
+
+    def _on_joints(self, msg):
+        with self.lock:
+            self.joints.append((time.monotonic(), msg))
+
+    def _on_diag(self, msg):
+        for st in msg.status:
+            if st.name == "omnikin base":
+                with self.lock:
+                    self.diags.append((time.monotonic(), stamp_s(msg.header.stamp),
+                                       {kv.key: kv.value for kv in st.values}, st))
+
+    # -- helpers
+    def last_odom(self):
+        with self.lock:
+            return self.odom[-1][1] if self.odom else None
+
+    def n_odom(self) -> int:
+        with self.lock:
+            return len(self.odom)
+
+    def last_diag(self):
+        with self.lock:
+            return self.diags[-1] if self.diags else None
+
+    def next_diag(self, timeout: float = 3.0, after: float | None = None):
+        """The first diagnostics received after now (or after monotonic time ``after``)."""
+        after = time.monotonic() if after is None else after
+        assert wait_for(lambda: self.diags and self.diags[-1][0] > after, timeout), "no /diagnostics received"
+        with self.lock:
+            return next(d for d in self.diags if d[0] > after)
+
+    def send(self, vx=0.0, vy=0.0, wz=0.0) -> float:
+        tw = Twist()
+        tw.linear.x, tw.linear.y, tw.angular.z = float(vx), float(vy), float(wz)
+        if self.stamped:
+            msg = TwistStamped()
+            msg.header.stamp = self.node.get_clock().now().to_msg()
+            msg.header.frame_id = "base_link"
+            msg.twist = tw
+        else:
+            msg = tw
+        t = time.monotonic()
+        self.pub.publish(msg)
+        return t
+
+    def drive(self, vx=0.0, vy=0.0, wz=0.0, duration=1.0, rate=20.0):
+        """Publish the same command at ``rate`` for ``duration``; first and last send times."""
+        first = last = self.send(vx, vy, wz)
+        while time.monotonic() - first < duration:
+            time.sleep(max(0.0, first + (round((time.monotonic() - first) * rate) + 1) / rate - time.monotonic()))
+            last = self.send(vx, vy, wz)
+        return first, last
+
+    def wait_discovery(self, proc: NodeProcess, timeout: float = 20.0) -> None:
+        def ready():
+            if proc.proc.poll() is not None:
+                raise AssertionError(f"the node exited with {proc.proc.returncode}:\n{proc.stderr()}")
+            return self.n_odom() > 0 and self.pub.get_subscription_count() >= 1
+        assert wait_for(ready, timeout), (f"no discovery within {timeout} s (odom received: {self.n_odom()}, "
+                                          f"cmd_vel matched: {self.pub.get_subscription_count()})\n{proc.stderr()}")
+
+    def wait_still(self, settle: float = 0.3, timeout: float = 5.0):
+        """Wait until the odometry twist is zero and x, y, yaw stop changing; the last odom."""
+        def still():
+            with self.lock:
+                recent = [m for (t, m) in self.odom if t > time.monotonic() - settle]
+            if len(recent) < 3:
+                return False
+            poses = np.array([(m.pose.pose.position.x, m.pose.pose.position.y, yaw_of(m.pose.pose.orientation))
+                              for m in recent])
+            tw = recent[-1].twist.twist
+            return np.ptp(poses, axis=0).max() == 0.0 and tw.linear.x == tw.linear.y == tw.angular.z == 0.0
+        assert wait_for(still, timeout), "the robot did not come to a stop"
+        return self.last_odom()
+
+    def close(self) -> None:
+        self.executor.shutdown(timeout_sec=2.0)
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)
+        self._thread.join(timeout=5.0)
+
+
+def start(tmp_path: Path, args, stamped: bool = False, joint_states: bool = True):
+    proc = NodeProcess(args, tmp_path)
+    graph = Graph(proc.domain, stamped=stamped, joint_states=joint_states)
+    try:
+        graph.wait_discovery(proc)
+    except BaseException:
+        graph.close()
+        proc.close()
+        raise
+    return proc, graph
+
+
+# --- the main node: a differential drive, parameters in the ros__parameters layout -----------------
+ROS_LAYOUT = """\
+omnikin_base:
+  ros__parameters:
+    odom_frame_id: test_odom
+    base_frame_id: test_base
+    cmd_vel_timeout: 0.5
+    publish_rate: 50.0
+    linear:
+      x:
+        max_velocity: 0.3
+        max_acceleration: 0.5
+"""
+
+
+@pytest.fixture(scope="module")
+def diff_node(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("diff_node")
+    (tmp / "base.yaml").write_text(ROS_LAYOUT)
+    proc, graph = start(tmp, ["diff-drive", "--errors", "none", "--noise", "none", "--params", tmp / "base.yaml"])
+    yield proc, graph
+    graph.close()
+    proc.close()
+
+
+class TestDiffDriveNode:
+    def test_odometry_message(self, diff_node):
+        _, g = diff_node
+        assert wait_for(lambda: g.n_odom() >= 5, 5.0)
+        m = g.last_odom()
+        assert m.header.frame_id == "test_odom"
+        assert m.child_frame_id == "test_base"
+        q = m.pose.pose.orientation
+        assert q.x == 0.0 and q.y == 0.0
+        assert math.hypot(q.z, q.w) == pytest.approx(1.0, abs=1e-12)
+        assert len(m.pose.covariance) == 36 and len(m.twist.covariance) == 36
+        assert_psd(cov(m.pose.covariance), "pose covariance")
+        assert_psd(cov(m.twist.covariance), "twist covariance")
+        assert all(math.isfinite(v) for v in (m.pose.pose.position.x, m.pose.pose.position.y, q.z, q.w))
+
+    def test_joint_states_name_the_wheels(self, diff_node):
+        _, g = diff_node
+        assert wait_for(lambda: len(g.joints) >= 3, 5.0)
+        js = g.joints[-1][1]
+        assert list(js.name) == ["left", "right"]           # rolling, encoded wheels; no castor
+        assert len(js.position) == len(js.velocity) == 2
+        assert all(math.isfinite(v) for v in [*js.position, *js.velocity])
+
+    def test_commands_move_the_robot_as_the_closed_form_says(self, diff_node):
+        _, g = diff_node
+        m0 = g.wait_still()
+        x0, p0 = m0.pose.pose.position.x, cov(m0.pose.covariance)
+        n0 = g.n_odom()
+        first, _ = g.drive(vx=V, duration=2.0)
+        stop = g.send(0.0)
+        m1 = g.wait_still()
+        dx = m1.pose.pose.position.x - x0
+        print(f"drive: x = {dx:.4f} m, closed form v T = {V * (stop - first):.4f} m (T = {stop - first:.3f} s)")
+        assert dx == pytest.approx(V * (stop - first), abs=0.02), (dx, stop - first)
+        assert abs(m1.pose.pose.position.y - m0.pose.pose.position.y) < 1e-9
+        with g.lock:
+            run = [m for (_, m) in g.odom[n0:]]
+        t = np.array([stamp_s(m.header.stamp) for m in run])
+        vx = np.array([m.twist.twist.linear.x for m in run])
+        x = np.array([m.pose.pose.position.x for m in run])
+        assert vx.max() == pytest.approx(V, rel=1e-9)                  # cruises at the command
+        ramp = (vx > 0.1 * V) & (vx < 0.9 * V) & (np.arange(len(vx)) < np.argmax(vx))
+        slope = np.polyfit(t[ramp], vx[ramp], 1)[0]
+        print(f"drive: acceleration {slope:.3f} m/s^2 (limit {A_LIN})")
+        assert slope == pytest.approx(A_LIN, rel=0.1)                 # accelerates at the limit
+        cruise = np.isclose(vx, V)
+        i, j = np.flatnonzero(cruise)[[2, -2]]
+        assert (x[j] - x[i]) / (t[j] - t[i]) == pytest.approx(V, rel=0.03)
+        p1 = cov(m1.pose.covariance)
+        assert_psd(p1, "pose covariance after driving")
+        assert p1[0, 0] > p0[0, 0] and p1[1, 1] > p0[1, 1] and p1[5, 5] > p0[5, 5]
+
+    def test_timeout_stops_the_robot(self, diff_node):
+        _, g = diff_node
+        m0 = g.wait_still()
+        x0 = m0.pose.pose.position.x
+        before = g.next_diag()[2]
+        first, last = g.drive(vx=V, duration=1.0)
+        # no more commands: after 0.5 s the robot brakes (0.4 s) and stops
+        assert wait_for(lambda: g.last_odom().twist.twist.linear.x > 0, 1.0)
+        m1 = g.wait_still(timeout=0.5 + V / A_LIN + 2.0)
+        dx = m1.pose.pose.position.x - x0
+        print(f"timeout: x = {dx:.4f} m, closed form v (T + timeout) = {V * (last - first + 0.5):.4f} m")
+        assert dx == pytest.approx(V * (last - first + 0.5), abs=0.02), (dx, last - first)
+        time.sleep(0.5)
+        assert g.last_odom().pose.pose.position.x == m1.pose.pose.position.x
+        after = g.next_diag()[2]
+        assert int(after["command_timeouts"]) == int(before["command_timeouts"]) + 1
+        assert after["timed_out"] == "True"
+
+    def test_malformed_commands_are_rejected_and_counted(self, diff_node):
+        proc, g = diff_node
+        m0 = g.wait_still()
+        before = g.next_diag()[2]
+        for bad in ((math.nan, 0.0, 0.0), (math.inf, 0.0, 0.0), (0.0, 0.0, -math.inf), (1e9, 0.0, 0.0)):
+            g.send(*bad)
+            time.sleep(0.05)
+        n = g.n_odom()
+        _, _, after, status = g.next_diag(after=time.monotonic() + 0.1)
+        assert int(after["commands_rejected"]) == int(before["commands_rejected"]) + 4
+        assert int(after["commands_accepted"]) == int(before["commands_accepted"])
+        assert after["last_reject_reason"]
+        assert status.level == DiagnosticStatus.WARN
+        assert proc.proc.poll() is None, proc.stderr()
+        assert wait_for(lambda: g.n_odom() >= n + 20, 2.0), "the node stopped publishing"
+        m1 = g.last_odom()
+        assert m1.pose.pose.position.x == m0.pose.pose.position.x
+        assert m1.twist.twist.linear.x == 0.0
+        assert "Traceback" not in proc.stderr()
+
+    def test_diagnostics(self, diff_node):
+        _, g = diff_node
+        _, _, values, status = g.next_diag()
+        assert status.hardware_id == "diff-drive"
+        for key in ("odom_published", "commands_accepted", "commands_rejected", "command_timeouts",
+                    "commands_saturated", "commands_projected", "fk_residual_norm", "timed_out", "link_backend"):
+            assert key in values, key
+        assert values["link_backend"] == "sim"
+        assert int(values["odom_published"]) >= g.n_odom()
+
+
+# --- a holonomic robot, TwistStamped, parameters in the flat layout -----------------------------------
+FLAT = """\
+use_stamped_vel: true
+enable_odom_tf: false
+odom_frame_id: flat_odom
+base_frame_id: flat_base
+publish_rate: 25.0
+cmd_vel_timeout: 0.3
+angular.z.max_acceleration: 2.0
+"""
+
+
+def test_stamped_commands_and_flat_params(tmp_path):
+    (tmp_path / "flat.yaml").write_text(FLAT)
+    proc, g = start(tmp_path, ["tomasi-omni3", "--errors", "none", "--noise", "none", "--params", "flat.yaml"],
+                    stamped=True)
+    try:
+        m0 = g.wait_still()
+        assert (m0.header.frame_id, m0.child_frame_id) == ("flat_odom", "flat_base")
+        # sideways, then a turn in place; the 0.3 s timeout ends each
+        first, last = g.drive(vy=0.15, duration=1.0)
+        m1 = g.wait_still()
+        assert m1.pose.pose.position.y - m0.pose.pose.position.y == pytest.approx(0.15 * (last - first + 0.3),
+                                                                                abs=0.02)
+        assert abs(m1.pose.pose.position.x - m0.pose.pose.position.x) < 1e-9
+        first, last = g.drive(wz=0.5, duration=1.0)
+        m2 = g.wait_still()
+        q = m2.pose.pose.orientation
+        assert math.hypot(q.z, q.w) == pytest.approx(1.0, abs=1e-12)
+        assert yaw_of(q) == pytest.approx(0.5 * (last - first + 0.3), abs=0.03)
+        assert_psd(cov(m2.pose.covariance), "pose covariance")
+        js = g.joints[-1][1]
+        assert list(js.name) == ["w1", "w2", "w3"]
+        # publish_rate 25 Hz
+        with g.lock:
+            stamps = np.array([stamp_s(m.header.stamp) for (_, m) in g.odom])
+        rate = (len(stamps) - 1) / (stamps[-1] - stamps[0])
+        assert rate == pytest.approx(25.0, rel=0.05)
+        # enable_odom_tf false: no /tf publisher, hence no warning about tf2_msgs
+        rc, _ = proc.terminate()
+        assert rc == 0, proc.stderr()
+        assert "tf2_msgs" not in proc.stderr()
+    finally:
+        g.close()
+        proc.close()
+
+
+# --- shutdown and the tf2_msgs warning ---------------------------------------------------------------
+def test_sigterm_exits_zero_promptly_and_tf2_warning_once(tmp_path):
+    proc, g = start(tmp_path, ["tomasi-omni3"], joint_states=False)
+    try:
+        time.sleep(2.5)                                  # long enough for a repeated warning to show
+        rc, took = proc.terminate(timeout=5.0)
+        assert rc == 0, f"exit code {rc}\n{proc.stderr()}"
+        assert took < 2.0, f"SIGTERM took {took:.2f} s"
+        err = proc.stderr()
+        tf_lines = [ln for ln in err.splitlines() if "tf2_msgs" in ln]
+        if importlib.util.find_spec("tf2_msgs") is not None:
+            assert tf_lines == []
+        else:
+            assert len(tf_lines) == 1, err
+            assert "WARN" in tf_lines[0]
+        assert "Traceback" not in err
+    finally:
+        g.close()
+        proc.close()
+
+
+# --- bad parameters: exit status 2 and one line ------------------------------------------------------
+BAD_PARAMS = {
+    "unknown_flat": "cmd_vel_timeout: 0.2\nbogus: 1\n",
+    "unknown_ros_layout": "omnikin_base:\n  ros__parameters:\n    publish_rat: 50.0\n",
+    "wrong_type": "cmd_vel_timeout: fast\n",
+    "wrong_type_ros_layout": "omnikin_base:\n  ros__parameters:\n    use_stamped_vel: 1\n",
+    "not_a_mapping": "- cmd_vel_timeout\n- 0.2\n",
+    "invalid_yaml": "cmd_vel_timeout: [0.2\n",
+    "negative_timeout": "cmd_vel_timeout: -1.0\n",
+    "zero_rate": "publish_rate: 0.0\n",
+    "negative_rate": "publish_rate: -5.0\n",
+    "infinite_rate": "publish_rate: .inf\n",
+    "negative_reject_above": "reject_above: -1.0\n",
+    "zero_acceleration": "linear:\n  x:\n    max_acceleration: 0.0\n",
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD_PARAMS))
+def test_bad_params_file_exits_2_with_one_line(tmp_path, name):
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(BAD_PARAMS[name])
+    proc = NodeProcess(["diff-drive", "--params", path], tmp_path)
+    try:
+        rc = proc.wait(5.0)
+        err = proc.stderr()
+        assert rc == 2, f"exit code {rc} (None: still running)\n{err}"
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("omnikin: error: "), err
+    finally:
+        proc.close()
+
+
+def test_missing_params_file_exits_2(tmp_path):
+    proc = NodeProcess(["diff-drive", "--params", tmp_path / "nowhere.yaml"], tmp_path)
+    try:
+        assert proc.wait(8.0) == 2
+        lines = proc.stderr().strip().splitlines()
+        assert len(lines) == 1 and "nowhere.yaml" in lines[0]
+    finally:
+        proc.close()
+
+
+@pytest.mark.parametrize("override", ["publish_rate:=0.0", "publish_rate:=-5.0", "cmd_vel_timeout:=soon",
+                                      "reject_above:=-1.0"])
+def test_bad_ros_args_parameter_exits_2_with_one_line(tmp_path, override):
+    proc = NodeProcess(["diff-drive", "--ros-args", "-p", override], tmp_path)
+    try:
+        rc = proc.wait(5.0)
+        err = proc.stderr()
+        assert rc == 2, f"exit code {rc} (None: still running)\n{err}"
+        errors = [ln for ln in err.strip().splitlines() if not ln.startswith("[WARN]")]
+        assert len(errors) == 1 and errors[0].startswith("omnikin: error: "), err
+    finally:
+        proc.close()
+
+
+# --- soak: 100 Hz for 60 s, nothing lost ----------------------------------------------------------------
+SOAK_SECONDS = 60.0
+
+
+def test_soak_100hz_no_odometry_lost(tmp_path):
+    proc, g = start(tmp_path, ["omni4", "--ros-args", "-p", "publish_rate:=100.0"], joint_states=True)
+    try:
+        # a diagnostics message published after our subscription matched: from its stamp on,
+        # every odometry message must arrive
+        t_ready = time.monotonic()
+        d1 = g.next_diag(after=t_ready + 0.05)
+        # keep the robot moving (and the command path busy) during the soak
+        end = time.monotonic() + SOAK_SECONDS
+        k = 0
+        while time.monotonic() < end:
+            g.send(0.1 * math.cos(0.2 * k), 0.1 * math.sin(0.2 * k), 0.3 * math.sin(0.05 * k))
+            k += 1
+            time.sleep(0.05)
+        d2 = g.next_diag(after=time.monotonic())
+        assert wait_for(lambda: g.odom and stamp_s(g.odom[-1][1].header.stamp) > d2[1], 2.0)
+        assert proc.proc.poll() is None, proc.stderr()
+        _, s1, v1, _ = d1
+        _, s2, v2, _ = d2
+        published = int(v2["odom_published"]) - int(v1["odom_published"])
+        with g.lock:
+            stamps = np.array([stamp_s(m.header.stamp) for (_, m) in g.odom])
+        received = int(np.count_nonzero((stamps > s1) & (stamps <= s2)))
+        rate = published / (s2 - s1)
+        gaps = np.diff(stamps[(stamps > s1) & (stamps <= s2)])
+        report = (f"soak: {published} odom published, {received} received between diagnostics "
+                  f"{s2 - s1:.2f} s apart: {rate:.3f} Hz; interval mean {gaps.mean() * 1e3:.3f} ms, "
+                  f"max {gaps.max() * 1e3:.2f} ms; commands sent {k}; "
+                  f"rejected {v2['commands_rejected']}, timeouts {v2['command_timeouts']}")
+        print(report)
+        assert s2 - s1 >= SOAK_SECONDS - 2
+        assert np.all(np.diff(stamps) > 0), "odometry stamps not strictly increasing"
+        assert received == published, report
+        assert rate == pytest.approx(100.0, abs=2.0), report
+        assert int(v2["commands_rejected"]) == 0
+        rc, took = proc.terminate()
+        assert rc == 0 and took < 2.0, (rc, took, proc.stderr())
+    finally:
+        g.close()
+        proc.close()
