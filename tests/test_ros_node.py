@@ -28,6 +28,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from omnikin import load_robot
 import pytest
 
 _REASON = ('the ROS 2 node tests need rclpy and the message packages (pip install -e ".[ros]", '
@@ -578,3 +580,34 @@ def test_soak_100hz_no_odometry_lost(tmp_path):
     finally:
         g.close()
         proc.close()
+
+
+# --- the serial back-end under the node: a fake wheel controller on a pseudo-terminal -------------------
+def test_node_drives_wheel_controllers_over_serial_and_stops_on_link_loss(tmp_path):
+    """omnikin ros --backend serial against the protocol's fake controller (one port, three wheels):
+    a forward command turns the wheels (their counts grow) and the odometry follows; when the
+    controller goes silent the node reports the lost link in /diagnostics, keeps running and
+    commands zero speed."""
+    from omnikin.runtime.fake_controller import FakeController
+
+    robot = load_robot("tomasi-omni3")
+    fake = FakeController.for_robot(robot).start()
+    try:
+        proc, g = start(tmp_path, ["tomasi-omni3", "--backend", "serial", "--port", fake.path])
+        try:
+            g.drive(vx=0.2, duration=1.5)
+            assert wait_for(lambda: g.last_odom().pose.pose.position.x > 0.1, 3.0), \
+                f"odometry did not follow: x = {g.last_odom().pose.pose.position.x}"
+            assert any(abs(fake.speed(i)) > 0.1 for i in fake.wheels), "no wheel was commanded to turn"
+            g.drive(vx=0.2, duration=0.2)                # keep commanding while the link dies
+            fake.silent = True
+            assert wait_for(lambda: g.last_diag() is not None and "wheels stopped" in g.last_diag()[3].message,
+                            5.0), f"no link-loss diagnostics: {g.last_diag()}"
+            assert proc.proc.poll() is None, proc.stderr()
+            assert wait_for(lambda: all(fake.speed(i) == 0.0 for i in fake.wheels), 2.0), \
+                [fake.speed(i) for i in fake.wheels]
+        finally:
+            g.close()
+            proc.close()
+    finally:
+        fake.close()
