@@ -228,7 +228,7 @@ def parse_paths(text: str):
 def cmd_simulate(args) -> int:
     from ..io.bags import record_run, require_rosbags
     from ..simulation.errors import noise as noise_profile
-    from ..simulation.errors import profile as error_profile
+    from .common import robot_as_built
     from ..simulation.simulate import simulate
 
     require_rosbags()
@@ -242,12 +242,7 @@ def cmd_simulate(args) -> int:
     plan = parse_paths(args.path)
     noise = noise_profile(args.noise)
     seeds = np.random.SeedSequence(args.seed).spawn(2)
-    if args.true_robot:
-        true = _load(args.true_robot)
-        errors = None
-    else:
-        errors = error_profile(args.errors).sample(robot, np.random.default_rng(seeds[0]))
-        true = errors.apply(robot)
+    true, errors = robot_as_built(robot, args.true_robot, args.errors, seeds[0])
     run = simulate(plan, true, robot, rate=args.rate, noise=noise, trials=1, rng=seeds[1])
     custom = {"omnikin.robot": robot.name, "omnikin.path": args.path, "omnikin.seed": str(args.seed),
               "omnikin.errors": "file " + args.true_robot if args.true_robot else args.errors,

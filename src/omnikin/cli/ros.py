@@ -49,7 +49,8 @@ def cmd_ros(args) -> int:
     from ..ros import require_rclpy
     from ..ros.params import load_params
     from ..runtime.backends import SimBackend
-    from ..simulation.errors import noise as noise_profile, profile as error_profile
+    from ..simulation.errors import noise as noise_profile
+    from .common import robot_as_built
 
     robot = load_robot(args.robot)
     values = load_params(args.params)
@@ -65,7 +66,7 @@ def cmd_ros(args) -> int:
         backend.wait_ready()
     else:
         seeds = np.random.SeedSequence(args.seed).spawn(2)
-        true = error_profile(args.errors).sample(robot, np.random.default_rng(seeds[0])).apply(robot)
+        true, _ = robot_as_built(robot, None, args.errors, seeds[0])
         backend = SimBackend(robot, true, noise_profile(args.noise), rng=seeds[1])
     from ..ros.node import run
 

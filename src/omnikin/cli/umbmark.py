@@ -18,9 +18,10 @@ import numpy as np
 from ..benchmark.calibration import borenstein_calibrate, calibrate, recommended_runs, CalibrationRun
 from ..benchmark.umbmark import analyze, differential_pair, run_umbmark
 from ..errors import OmnikinError
-from ..simulation.errors import NOISE, PROFILES, noise as noise_profile, profile as error_profile
+from ..simulation.errors import NOISE, PROFILES, noise as noise_profile
 from ..simulation.motion import umbmark_square
 from ..simulation.simulate import simulate
+from .common import robot_as_built
 
 MAIN_ROBOT = "tomasi-omni3"
 CALIBRATION_REPEATS = 5
@@ -181,12 +182,7 @@ def cmd_umbmark(args) -> int:
                            f"it cannot drive the 'translate' square; use --mode rotate")
     noise = noise_profile(args.noise)
     seeds = np.random.SeedSequence(args.seed).spawn(4)
-    if args.true_robot:
-        true = _load(args.true_robot)
-        errors = None
-    else:
-        errors = error_profile(args.errors).sample(robot, np.random.default_rng(seeds[0]))
-        true = errors.apply(robot)
+    true, errors = robot_as_built(robot, args.true_robot, args.errors, seeds[0])
     rng = np.random.default_rng(seeds[1])
     opts = dict(side=args.side, mode=args.mode, runs=args.runs, noise=noise, rate=args.rate)
     steps = 3 + (5 if do_calibrate else 0)
