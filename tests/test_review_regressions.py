@@ -514,3 +514,91 @@ def test_18_stream_heading_one_ulp_below_minus_pi_wraps_into_range(tom, bits):
     th = o.update(0.1, tk[1])[2]
     assert -math.pi <= th < math.pi
     assert abs(th - math.pi) < 1e-15            # -pi - 1 ulp is the same direction as pi - 1 ulp
+
+
+# --- second review: runtime, ROS parameters, bags and CLI ------------------------------------------------
+from omnikin.cli.main import main as cli_main  # noqa: E402
+
+
+def run_cli(capsys, *argv):
+    rc = cli_main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+@pytest.mark.parametrize("content, fragment", [
+    (b"\xff\xfe", "not a UTF-8 text file"),
+    (b"omnikin_base: {ros__parameters: 5}\n", "ros__parameters must be a mapping"),
+    (b"publish_rate: 0.0\n", "publish_rate"),
+    (b"reject_above: -1.0\n", "reject_above"),
+    (b"bogus: 1\n", "unknown parameter 'bogus'"),
+])
+def test_ros_parameter_files_bad(tmp_path, content, fragment):
+    from omnikin.ros.params import load_params
+
+    p = tmp_path / "p.yaml"
+    p.write_bytes(content)
+    with pytest.raises(OmnikinError, match=fragment):
+        load_params(p)
+
+
+def test_ros_parameter_exponent_floats(tmp_path):
+    """YAML 1.1 reads 2e-4 as a string; the documented default must load as a number."""
+    from omnikin.ros.params import load_params
+
+    p = tmp_path / "p.yaml"
+    p.write_text("wheel_slip: 2e-4\nlinear:\n  x:\n    max_velocity: 5E-1\n")
+    values = load_params(p)
+    assert values["wheel_slip"] == 2e-4 and values["linear.x.max_velocity"] == 0.5
+
+
+def test_ros_serial_only_options_with_sim_backend(capsys):
+    rc, _, err = run_cli(capsys, "ros", "tomasi-omni3", "--port", "/dev/ttyUSB0")
+    assert rc == 2 and "apply only to --backend serial" in err
+
+
+def test_simulate_refuses_absurd_plans_and_stamps(capsys, tmp_path):
+    pytest.importorskip("rosbags")
+    rc, _, err = run_cli(capsys, "simulate", "tomasi-omni3", "--path", "spin 1e300", "--bag", tmp_path / "a.bag")
+    assert rc == 2 and "samples" in err
+    rc, _, err = run_cli(capsys, "simulate", "tomasi-omni3", "--start", "3e9", "--bag", tmp_path / "b.bag")
+    assert rc == 2 and "int32" in err
+
+
+def test_bag_topic_names_are_checked(capsys, tmp_path):
+    pytest.importorskip("rosbags")
+    rc, _, err = run_cli(capsys, "bag", "odometry", "tomasi-omni3", tmp_path / "in.bag", "-o", tmp_path / "o.bag",
+                         "--odom-topic", "bad topic!!")
+    assert rc == 2 and "not a valid ROS 2 topic name" in err
+
+
+def test_borenstein_degenerate_input_is_an_error():
+    from omnikin.benchmark.umbmark import borenstein
+
+    with pytest.raises(OmnikinError, match="undefined"):
+        borenstein(-1.0, 1.0, 1e-300, 0.33)
+
+
+def test_lever_is_the_displacement_component_along_its_direction():
+    """The lever is the hub displacement along (-sin a, cos a), a = drive + roller; the calibrate
+    table shows that component (it used to show a magnitude with the sign of dx)."""
+    import math as _m
+
+    from omnikin.benchmark.calibration import errors_from_vector, parameter_names
+
+    robot = load_robot("tomasi-omni3")
+    names = parameter_names(robot)
+    p = np.zeros(len(names))
+    p[names.index("w1.lever")] = -0.0004
+    e = errors_from_vector(robot, p).wheels["w1"]
+    w = robot.wheel("w1")
+    a = w.drive + w.roller
+    assert -_m.sin(a) * e.dx + _m.cos(a) * e.dy == pytest.approx(-0.0004, abs=1e-15)
+
+
+def test_metrics_messages_show_plain_numbers():
+    from omnikin.benchmark.metrics import check_trajectory
+
+    with pytest.raises(OmnikinError) as exc:
+        check_trajectory([0.0, 1.0, 1.0], np.zeros((3, 3)))
+    assert "np.float64" not in str(exc.value)

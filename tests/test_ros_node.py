@@ -599,6 +599,8 @@ def test_node_drives_wheel_controllers_over_serial_and_stops_on_link_loss(tmp_pa
             assert wait_for(lambda: g.last_odom().pose.pose.position.x > 0.1, 3.0), \
                 f"odometry did not follow: x = {g.last_odom().pose.pose.position.x}"
             assert any(abs(fake.speed(i)) > 0.1 for i in fake.wheels), "no wheel was commanded to turn"
+            diag = g.next_diag()
+            assert int(diag[2]["link_heartbeats_tx"]) > 0, diag[2]   # host and node share one clock
             g.drive(vx=0.2, duration=0.2)                # keep commanding while the link dies
             fake.silent = True
             assert wait_for(lambda: g.last_diag() is not None and "wheels stopped" in g.last_diag()[3].message,
@@ -608,6 +610,35 @@ def test_node_drives_wheel_controllers_over_serial_and_stops_on_link_loss(tmp_pa
                 [fake.speed(i) for i in fake.wheels]
         finally:
             g.close()
+            proc.close()
+    finally:
+        fake.close()
+
+
+def test_unknown_ros_arguments_exit_2_with_one_line(tmp_path):
+    proc = NodeProcess(["diff-drive", "--ros-args", "--bogus"], tmp_path)
+    try:
+        rc = proc.wait(10.0)
+        err = proc.stderr()
+        assert rc == 2, f"exit code {rc}\n{err}"
+        lines = [ln for ln in err.strip().splitlines() if ln.startswith("omnikin: error:")]
+        assert len(lines) == 1 and "--ros-args" in lines[0] and "Traceback" not in err, err
+    finally:
+        proc.close()
+
+
+def test_serial_backend_refuses_a_publish_rate_slower_than_its_link_timeout(tmp_path):
+    from omnikin.runtime.fake_controller import FakeController
+
+    fake = FakeController.for_robot(load_robot("tomasi-omni3")).start()
+    try:
+        proc = NodeProcess(["tomasi-omni3", "--backend", "serial", "--port", fake.path, "--ros-args", "-p",
+                            "publish_rate:=1.0"], tmp_path)
+        try:
+            rc = proc.wait(15.0)
+            err = proc.stderr()
+            assert rc == 2 and "too slow for the serial link" in err, err
+        finally:
             proc.close()
     finally:
         fake.close()

@@ -80,16 +80,16 @@ def check_trajectory(t, poses, name: str = "trajectory") -> tuple[np.ndarray, np
         raise MetricsInputError(f"{name}: {len(tt)} timestamps but {len(p)} poses")
     bad = np.flatnonzero(~np.isfinite(tt))
     if bad.size:
-        raise MetricsInputError(f"{name}: non-finite timestamp {tt[bad[0]]!r} at pose {bad[0]}")
+        raise MetricsInputError(f"{name}: non-finite timestamp {float(tt[bad[0]])} at pose {bad[0]}")
     bad = np.argwhere(~np.isfinite(p))
     if bad.size:
         i, j = bad[0]
-        raise MetricsInputError(f"{name}: non-finite {'xy'[j] if j < 2 else 'theta'} {p[i, j]!r} at pose {i}")
+        raise MetricsInputError(f"{name}: non-finite {'xy'[j] if j < 2 else 'theta'} {float(p[i, j])} at pose {i}")
     back = np.flatnonzero(np.diff(tt) <= 0)
     if back.size:
         k = back[0] + 1
-        raise MetricsInputError(f"{name}: timestamps must increase strictly; pose {k} at t={tt[k]!r} follows "
-                                f"t={tt[k - 1]!r}")
+        raise MetricsInputError(f"{name}: timestamps must increase strictly; pose {k} at t={float(tt[k]):.9g} follows "
+                                f"t={float(tt[k - 1]):.9g}")
     return tt, p
 
 

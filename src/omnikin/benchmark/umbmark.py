@@ -53,10 +53,17 @@ def borenstein(x_cw: float, x_ccw: float, side: float, track: float) -> Borenste
     """Borenstein's E_d, E_b and corrections from the x of the two centres of gravity [m]."""
     alpha = (x_cw + x_ccw) / (-4.0 * side)
     beta = (x_cw - x_ccw) / (-4.0 * side)
+    if abs(alpha) >= math.pi / 2 or abs(beta) >= math.pi:
+        raise OmnikinError(f"Borenstein's correction is undefined here: alpha = {alpha:.6g} rad, beta = {beta:.6g} "
+                           f"rad from x_cw = {x_cw:.6g} m, x_ccw = {x_ccw:.6g} m and side {side:.6g} m (the "
+                           f"errors are not small against the square)")
     if beta == 0.0:
         R, e_d = math.inf, 1.0
     else:
         R = (side / 2.0) / math.sin(beta / 2.0)
+        if abs(R) <= track / 2.0:
+            raise OmnikinError(f"Borenstein's correction is undefined here: the legs curve with radius {R:.6g} m, "
+                               f"within half the track ({track / 2:.6g} m)")
         e_d = (R + track / 2.0) / (R - track / 2.0)
     e_b = (math.pi / 2) / (math.pi / 2 - alpha)
     return Borenstein(alpha, beta, R, e_d, e_b, 2.0 / (e_d + 1.0), 2.0 / (1.0 / e_d + 1.0), e_b * track)

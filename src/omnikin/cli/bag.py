@@ -162,13 +162,15 @@ def cmd_bag_help(args) -> int:
 
 
 def cmd_bag_odometry(args) -> int:
-    from ..io.bags import bag_odometry, require_rosbags
+    from ..io.bags import bag_odometry, check_topic, require_rosbags
 
     require_rosbags()
     robot = _load(args.robot)
     for name, diag in (("--pose-cov-diag", args.pose_cov_diag), ("--twist-cov-diag", args.twist_cov_diag)):
         if diag is not None and not all(math.isfinite(v) and v >= 0 for v in diag):
             raise OmnikinError(f"{name}: variances must be finite and >= 0, got {diag}")
+    check_topic(args.joint_states_topic, "--joint-states-topic")
+    check_topic(args.odom_topic, "--odom-topic")
     res = bag_odometry(robot, args.bag, args.output, joint_states_topic=args.joint_states_topic,
                        odom_topic=args.odom_topic, method=args.method, stamp=args.stamp, frame_id=args.frame_id,
                        child_frame_id=args.child_frame_id, pose_covariance=_covariance(args.pose_cov_diag),
@@ -194,10 +196,11 @@ def cmd_bag_odometry(args) -> int:
 
 
 def cmd_bag_export(args) -> int:
-    from ..io.bags import export_poses, require_rosbags
+    from ..io.bags import check_topic, export_poses, require_rosbags
 
     require_rosbags()
     to_stdout = args.output is None or args.output == "-"
+    check_topic(args.topic, "--topic")
     track = export_poses(args.bag, args.topic, args.format, None if to_stdout else args.output)
     if not to_stdout:
         _console().print(f"{len(track.poses)} poses of {args.topic} ({track.msgtype}, frame "

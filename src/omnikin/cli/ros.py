@@ -34,10 +34,10 @@ def add_parsers(sub, robot_help: str) -> None:
                     help="serial back-end: one port for all wheels, or one port per driven wheel in file order")
     sp.add_argument("--baud", type=int, metavar="N", help="serial back-end: baud rate (default from the protocol)")
     sp.add_argument("--params", metavar="FILE", help="parameter file (YAML, flat or ros__parameters)")
-    sp.add_argument("--errors", default="typical", metavar="PROFILE",
+    sp.add_argument("--errors", metavar="PROFILE",
                     help="sim back-end: systematic error profile of the robot as built (default typical)")
-    sp.add_argument("--noise", default="typical", metavar="PROFILE", help="sim back-end: random errors (default typical)")
-    sp.add_argument("--seed", type=int, default=1, metavar="N", help="sim back-end: random seed (default 1)")
+    sp.add_argument("--noise", metavar="PROFILE", help="sim back-end: random errors (default typical)")
+    sp.add_argument("--seed", type=int, metavar="N", help="sim back-end: random seed (default 1)")
     sp.add_argument("--ros-args", dest="ros_args", nargs=argparse.REMAINDER, default=None,
                     help="ROS arguments passed to rclpy (e.g. -p publish_rate:=100.0)")
     sp.set_defaults(func=cmd_ros)
@@ -55,7 +55,12 @@ def cmd_ros(args) -> int:
     robot = load_robot(args.robot)
     values = load_params(args.params)
     require_rclpy()
-    if args.seed < 0:
+    given = lambda names: [f"--{n}" for n in names if getattr(args, n) is not None]   # noqa: E731
+    if args.backend == "serial" and given(("errors", "noise", "seed")):
+        raise OmnikinError(f"{', '.join(given(('errors', 'noise', 'seed')))} apply only to --backend sim")
+    if args.backend == "sim" and given(("port", "baud")):
+        raise OmnikinError(f"{', '.join(given(('port', 'baud')))} apply only to --backend serial")
+    if args.seed is not None and args.seed < 0:
         raise OmnikinError(f"--seed must be >= 0, got {args.seed}")
     if args.backend == "serial":
         from ..runtime.serial_backend import SerialBackend
@@ -65,9 +70,9 @@ def cmd_ros(args) -> int:
         backend = SerialBackend(robot, args.port[0] if len(args.port) == 1 else args.port, args.baud)
         backend.wait_ready()
     else:
-        seeds = np.random.SeedSequence(args.seed).spawn(2)
-        true, _ = robot_as_built(robot, None, args.errors, seeds[0])
-        backend = SimBackend(robot, true, noise_profile(args.noise), rng=seeds[1])
+        seeds = np.random.SeedSequence(1 if args.seed is None else args.seed).spawn(2)
+        true, _ = robot_as_built(robot, None, args.errors or "typical", seeds[0])
+        backend = SimBackend(robot, true, noise_profile(args.noise or "typical"), rng=seeds[1])
     from ..ros.node import run
 
     return run(robot, backend, values, args.ros_args)

@@ -497,8 +497,10 @@ def cmd_calibrate(args) -> int:
         wheel, par = name.rsplit(".", 1)
         e = cal.errors.wheels[wheel]
         value = {"radius": e.radius, "drive": e.drive}.get(par)
-        if par in ("axle", "lever"):
-            value = math.hypot(e.dx, e.dy) * math.copysign(1.0, e.dx or e.dy or 1.0)
+        if par in ("axle", "lever"):       # the displacement's component along the parameter's direction
+            w = robot.wheel(wheel)
+            a = w.drive + (w.roller if par == "lever" else 0.0)
+            value = -math.sin(a) * e.dx + math.cos(a) * e.dy
         elif par in ("dx", "dy"):
             value = getattr(e, par)
         unit = {"radius": "", "drive": " rad"}.get(par, " m")

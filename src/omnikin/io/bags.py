@@ -36,6 +36,7 @@ wrong joint names, undecodable message) raises :class:`BagError` naming the bag 
 from __future__ import annotations
 
 import math
+import re
 import shutil
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -59,6 +60,19 @@ STEER_SUFFIX = "_steer"
 STAMPS = ("auto", "header", "bag")
 
 NS = 1_000_000_000
+
+
+TOPIC = re.compile(r"^/?[A-Za-z_~][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
+"""ROS 2 topic names: tokens of letters, digits and underscores separated by '/', not starting
+with a digit; '~' only at the start."""
+
+
+def check_topic(name: str, what: str = "topic") -> str:
+    """``name`` if it is a valid ROS 2 topic name, else :class:`BagError` naming it."""
+    if not isinstance(name, str) or not TOPIC.match(name):
+        raise BagError(f"{what}: {name!r} is not a valid ROS 2 topic name (letters, digits and underscores "
+                       f"separated by '/', e.g. /odom)")
+    return name
 
 
 class BagError(OmnikinError):
@@ -520,6 +534,9 @@ def record_run(path, run, robot: Robot, *, start: float = 0.0, topics: dict | No
         raise BagError(f"unknown run topic key(s) {unknown}; keys are {sorted(RUN_TOPICS)}")
     if not math.isfinite(start):
         raise BagError(f"start time must be finite, got {start!r}")
+    end = start + float(run.t[-1])
+    if not (-2 ** 31 <= start and end < 2 ** 31):
+        raise BagError(f"stamps from {start:.6g} s to {end:.6g} s do not fit a ROS time (int32 seconds)")
     t = np.asarray(run.t, dtype=float)
     stamps = seconds_to_ns(t) + round(start * 1e9)
     truth = np.asarray(run.truth)[0]

@@ -214,7 +214,7 @@ _EXPONENT = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+$")
 """Floats YAML 1.1 reads as strings (``5e-2``: no dot) but YAML 1.2 and JSON as numbers."""
 
 
-def _strict_loader():
+def strict_yaml_loader():
     """A PyYAML SafeLoader that refuses duplicate keys and reads ``5e-2`` as a float."""
     import yaml
 
@@ -264,7 +264,7 @@ def parse_robot_text(text: str, source: str) -> Robot:
         import yaml
 
         try:
-            data = yaml.load(text, Loader=_strict_loader())
+            data = yaml.load(text, Loader=strict_yaml_loader())
         except yaml.YAMLError as exc:
             mark = getattr(exc, "problem_mark", None)
             at = f" at line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""

@@ -67,6 +67,11 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             for key, default in values.items():
                 self.declare_parameter(key, default, dynamic)
             p = validate({k: self.get_parameter(k).value for k in DEFAULTS}, "--ros-args / parameters")
+            link_timeout = getattr(backend, "link_timeout", None)
+            if link_timeout is not None and 1.0 / p["publish_rate"] > 0.5 * link_timeout:
+                raise OmnikinError(
+                    f"publish_rate {p['publish_rate']:g} Hz is too slow for the serial link: the wheel controllers "
+                    f"stop after {link_timeout:g} s without a frame; use at least {2.0 / link_timeout:g} Hz")
             limits = MotionLimits(linear=p["linear.x.max_velocity"], angular=p["angular.z.max_velocity"],
                                   linear_accel=p["linear.x.max_acceleration"],
                                   angular_accel=p["angular.z.max_acceleration"],
@@ -101,7 +106,8 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             self._TransformStamped, self._TFMessage = (TransformStamped, TFMessage) if TFMessage else (None, None)
 
         def now_s(self) -> float:
-            return time.monotonic() - self.t0
+            """Runtime time [s]: the monotonic clock, the same one the back-ends use."""
+            return time.monotonic()
 
         def _on_cmd(self, msg):
             tw = msg.twist if self.p["use_stamped_vel"] else msg
@@ -185,7 +191,12 @@ def run(robot, backend, values: dict, ros_args=None) -> int:
     import rclpy
     from rclpy.executors import ExternalShutdownException
 
-    rclpy.init(args=["omnikin"] + (["--ros-args"] + list(ros_args) if ros_args else []))
+    try:
+        rclpy.init(args=["omnikin"] + (["--ros-args"] + list(ros_args) if ros_args else []))
+    except Exception as exc:                       # rclpy's errors for bad --ros-args
+        backend.close()
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise OmnikinError(f"--ros-args: {type(exc).__name__}: {first}") from None
     try:
         node = build_node(robot, backend, values)
     except BaseException:

@@ -62,10 +62,14 @@ def load_params(path: str | Path | None) -> dict:
         return values
     import yaml
 
+    from ..io.robot_file import strict_yaml_loader
+
     try:
-        data = yaml.safe_load(Path(path).read_text(encoding="utf-8")) or {}
+        data = yaml.load(Path(path).read_text(encoding="utf-8-sig"), Loader=strict_yaml_loader()) or {}
     except OSError as exc:
         raise OmnikinError(f"{path}: cannot read: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise OmnikinError(f"{path}: not a UTF-8 text file (byte {exc.start}: {exc.reason})") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         at = f" at line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""
@@ -76,6 +80,8 @@ def load_params(path: str | Path | None) -> dict:
         (only,) = data.values()
         if isinstance(only, dict) and "ros__parameters" in only:
             data = only["ros__parameters"]
+            if not isinstance(data, dict):
+                raise OmnikinError(f"{path}: ros__parameters must be a mapping of parameters, got {data!r}")
     flat = _flatten(data)
     for key, value in flat.items():
         if key not in DEFAULTS:

@@ -153,6 +153,9 @@ def umbmark_square(direction: str = "cw", side: float = 4.0, mode: str = "rotate
 
 
 # --- timing ----------------------------------------------------------------------------------------
+MAX_SAMPLES = 50_000_000
+"""Largest number of samples one run may have (about 1.2 GB of increments)."""
+
 @dataclass(frozen=True)
 class SampledPlan:
     """A plan sampled at ``rate`` [Hz] under limits.
@@ -215,11 +218,18 @@ def sample_plan(plan: Plan, robot, rate: float = 100.0, limits: MotionLimits | N
     dt = 1.0 / rate
     xi = np.array([seg.xi for seg in plan.segments])
     vmax = speed_scale(robot, xi, limits)
-    progress, segment = [], []
+    estimate = 0.0
     for k, seg in enumerate(plan.segments):
         if not np.isfinite(vmax[k]):
             raise OmnikinError(f"plan {plan.name!r}, segment {seg.label!r}: no speed limit bounds its pace; "
                                f"set MotionLimits.linear/angular or wheel max_speed")
+        amax = _accel_scale(seg.xi, limits)
+        estimate += (seg.length / vmax[k] + (vmax[k] / amax if amax else 0.0)) * rate + 1
+    if not estimate <= MAX_SAMPLES:
+        raise OmnikinError(f"plan {plan.name!r} would take about {estimate:.3g} samples at {rate:g} Hz; the most "
+                           f"omnikin samples in one run is {MAX_SAMPLES:.0e} (shorten the path or lower the rate)")
+    progress, segment = [], []
+    for k, seg in enumerate(plan.segments):
         amax = _accel_scale(seg.xi, limits)
         s = _profile(seg.length, float(vmax[k]), amax, dt)
         ds = np.diff(s)
