@@ -38,12 +38,13 @@ def column_problems(header: list[str], required, optional=()) -> list[str]:
         ([f"duplicate column(s) {dup}"] if dup else [])
 
 
-def number(text: str, source: str, line: int, column: str, error: type[Exception]) -> float:
-    """A finite float, or ``error`` naming file, line and column."""
+def number(text: str, source: str, line: int, column: str | int, error: type[Exception]) -> float:
+    """A finite float, or ``error`` naming file, line and column (a name, or a 1-based field number)."""
+    where = f"field {column}" if isinstance(column, int) else f"column {column!r}"
     try:
         value = float(text)
     except ValueError:
-        raise error(f"{source}: line {line}, column {column!r}: not a number: {text!r}") from None
+        raise error(f"{source}: line {line}, {where}: not a number: {text!r}") from None
     if not math.isfinite(value):
-        raise error(f"{source}: line {line}, column {column!r}: non-finite value {text!r}")
+        raise error(f"{source}: line {line}, {where}: non-finite value {text!r}")
     return value

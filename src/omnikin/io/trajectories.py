@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import OmnikinError
+from .csvfile import number
 
 FORMATS = ("tum", "kitti", "csv")
 
@@ -84,16 +85,7 @@ _SPLIT = re.compile(r"[\s,]+")
 def _numbers(source, line_no, fields, count, fmt) -> list[float]:
     if len(fields) != count:
         raise TrajectoryFileError(f"{source}: line {line_no}: {len(fields)} fields, a {fmt} line has {count}")
-    out = []
-    for k, f in enumerate(fields):
-        try:
-            v = float(f)
-        except ValueError:
-            raise TrajectoryFileError(f"{source}: line {line_no}, field {k + 1}: not a number: {f!r}") from None
-        if not math.isfinite(v):
-            raise TrajectoryFileError(f"{source}: line {line_no}, field {k + 1}: non-finite value {f!r}")
-        out.append(v)
-    return out
+    return [number(f, source, line_no, k + 1, TrajectoryFileError) for k, f in enumerate(fields)]
 
 
 def detect_format(path) -> str:
