@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from ..errors import OmnikinError
+from .common import console, load_robot, robot_as_built
 
 BAG_EPILOG = """examples:
   omnikin bag odometry tomasi-omni3 run.bag -o odom.bag
@@ -137,21 +138,6 @@ def add_parsers(sub, robot_help: str) -> None:
 
 
 # --- helpers ------------------------------------------------------------------------------------------
-def _console():
-    from rich.console import Console
-
-    con = Console(highlight=False, markup=False)
-    if not con.is_terminal:
-        con = Console(highlight=False, markup=False, width=120)
-    return con
-
-
-def _load(spec):
-    from ..io.robot_file import load_robot
-
-    return load_robot(spec)
-
-
 def _covariance(diag):
     return None if diag is None else np.asarray(diag, dtype=float)
 
@@ -165,7 +151,7 @@ def cmd_bag_odometry(args) -> int:
     from ..io.bags import bag_odometry, check_topic, require_rosbags
 
     require_rosbags()
-    robot = _load(args.robot)
+    robot = load_robot(args.robot)
     for name, diag in (("--pose-cov-diag", args.pose_cov_diag), ("--twist-cov-diag", args.twist_cov_diag)):
         if diag is not None and not all(math.isfinite(v) and v >= 0 for v in diag):
             raise OmnikinError(f"{name}: variances must be finite and >= 0, got {diag}")
@@ -186,7 +172,7 @@ def cmd_bag_odometry(args) -> int:
         notes.append(f"{s['skipped_messages']} message(s) without the wheel joints skipped")
     if s["duplicates_dropped"]:
         notes.append(f"{s['duplicates_dropped']} exact repeat(s) dropped")
-    _console().print(
+    console(120).print(
         f"{robot.name}: {s['samples']} joint-state samples on {args.joint_states_topic} over {s['duration']:.6g} s "
         f"({s['stamp_source']} stamps), {args.method} integration\n"
         f"final pose x={end[0]:.6g} m, y={end[1]:.6g} m, theta={end[2]:.6g} rad; path {s['path_length']:.6g} m\n"
@@ -203,7 +189,7 @@ def cmd_bag_export(args) -> int:
     check_topic(args.topic, "--topic")
     track = export_poses(args.bag, args.topic, args.format, None if to_stdout else args.output)
     if not to_stdout:
-        _console().print(f"{len(track.poses)} poses of {args.topic} ({track.msgtype}, frame "
+        console(120).print(f"{len(track.poses)} poses of {args.topic} ({track.msgtype}, frame "
                          f"{track.frame_id!r}) written to {args.output} ({args.format})")
     return 0
 
@@ -231,11 +217,10 @@ def parse_paths(text: str):
 def cmd_simulate(args) -> int:
     from ..io.bags import record_run, require_rosbags
     from ..simulation.errors import noise as noise_profile
-    from .common import robot_as_built
     from ..simulation.simulate import simulate
 
     require_rosbags()
-    robot = _load(args.robot)
+    robot = load_robot(args.robot)
     if args.seed < 0:
         raise OmnikinError(f"--seed must be a whole number >= 0, got {args.seed}")
     if not (math.isfinite(args.rate) and args.rate > 0):
@@ -265,7 +250,7 @@ def cmd_simulate(args) -> int:
     if args.json:
         print(json.dumps(summary, indent=2))
         return 0
-    _console().print(
+    console(120).print(
         f"{robot.name}: '{args.path}' at {args.rate:g} Hz, {summary['samples']} samples over "
         f"{summary['duration']:.6g} s (errors {summary['errors'] or 'from ' + args.true_robot}, noise {args.noise}, "
         f"seed {args.seed})\n"
@@ -303,7 +288,7 @@ def cmd_metrics(args) -> int:
         return 0
     from rich.table import Table
 
-    con = _console()
+    con = console(120)
     a = ev.ate
     con.print(f"{args.est} against {args.ref}: {a.errors.size} associated poses (of {len(t_est)} and {len(t_ref)}; "
               f"max time difference {args.t_max_diff:g} s" + (f", offset {args.t_offset:g} s" if args.t_offset else "")

@@ -17,6 +17,7 @@ import numpy as np
 from .. import __version__
 from ..errors import InfeasibleTwistError, OmnikinError
 from ..presets import PRESET_NAMES
+from .common import console, load_robot
 
 EPILOG = """examples:
   omnikin presets                          list the robots shipped with omnikin
@@ -48,12 +49,6 @@ class CliError(Exception):
     """A usage problem found after argument parsing (exit status 2)."""
 
 
-def _robot(spec: str):
-    from ..io.robot_file import load_robot
-
-    return load_robot(spec)
-
-
 def _fmt(x: float) -> str:
     return f"{x:.6g}" if np.isfinite(x) else str(x)
 
@@ -77,15 +72,6 @@ def _matrix_table(matrix, row_names, col_names):
     return table
 
 
-def _console():
-    from rich.console import Console
-
-    con = Console(highlight=False, markup=False)
-    if not con.is_terminal:
-        con = Console(highlight=False, markup=False, width=140)
-    return con
-
-
 # --- presets ----------------------------------------------------------------------------
 def cmd_presets(args) -> int:
     from rich.table import Table
@@ -95,7 +81,7 @@ def cmd_presets(args) -> int:
         table.add_column(col)
     out = []
     for name in PRESET_NAMES:
-        r = _robot(name)
+        r = load_robot(name)
         m = r.mobility
         ref = r.references[0] if r.references else ""
         out.append({"name": name, "wheels": len(r.wheels), "campion_type": list(m.campion_type),
@@ -105,7 +91,7 @@ def cmd_presets(args) -> int:
     if args.json:
         print(json.dumps(out, indent=2))
     else:
-        _console().print(table)
+        console().print(table)
     return 0
 
 
@@ -151,7 +137,7 @@ def show_data(robot) -> dict:
 
 
 def cmd_show(args) -> int:
-    robot = _robot(args.robot)
+    robot = load_robot(args.robot)
     data = show_data(robot)
     if args.plot:
         from ..viz.layout import save_layout
@@ -165,7 +151,7 @@ def cmd_show(args) -> int:
         return 0
     from rich.table import Table
 
-    con = _console()
+    con = console()
     con.print(f"{robot.name}: {robot.description}")
     for ref in robot.references:
         con.print(f"  ref: {ref}")
@@ -212,7 +198,7 @@ def cmd_show(args) -> int:
 
 # --- ik / fk -------------------------------------------------------------------------------
 def cmd_ik(args) -> int:
-    robot = _robot(args.robot)
+    robot = load_robot(args.robot)
     twist = np.array([args.vx, args.vy, args.omega])
     hint = np.radians(args.steer_hint_deg) if args.steer_hint_deg is not None else None
     if hint is not None and len(hint) != len(robot.steerable):
@@ -242,7 +228,7 @@ def cmd_ik(args) -> int:
         return 0
     from rich.table import Table
 
-    con = _console()
+    con = console()
     con.print(f"{robot.name}: body twist vx={_fmt(body[0])} m/s, vy={_fmt(body[1])} m/s, omega={_fmt(body[2])} rad/s")
     table = Table(title_justify="left")
     for col in ("wheel", "speed [rad/s]", "steer [deg]", "roller [m/s]"):
@@ -264,7 +250,7 @@ def cmd_ik(args) -> int:
 
 
 def cmd_fk(args) -> int:
-    robot = _robot(args.robot)
+    robot = load_robot(args.robot)
     n = len(robot.wheel_names)
     if len(args.speeds) != n:
         raise CliError(f"robot {robot.name!r} has {n} rolling wheels {robot.wheel_names}: "
@@ -283,7 +269,7 @@ def cmd_fk(args) -> int:
     if args.json:
         print(json.dumps(data, indent=2))
         return 0
-    con = _console()
+    con = console()
     t = res.twist
     con.print(f"{robot.name}: vx={_fmt(t[0])} m/s, vy={_fmt(t[1])} m/s, omega={_fmt(t[2])} rad/s")
     con.print(f"residual [rad/s]: {[float(_fmt(v)) for v in res.residual]} (norm {_fmt(float(res.residual_norm))})")
@@ -296,7 +282,7 @@ def cmd_odometry(args) -> int:
     from ..io.trajectories import write_trajectory
     from ..odometry import batch_odometry
 
-    robot = _robot(args.robot)
+    robot = load_robot(args.robot)
     log = read_tick_log(args.log, robot)
     if log.duplicate_lines:
         lines = ", ".join(map(str, log.duplicate_lines[:10])) + (" ..." if len(log.duplicate_lines) > 10 else "")
@@ -321,7 +307,7 @@ def cmd_odometry(args) -> int:
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
-        _console().print(
+        console().print(
             f"{robot.name}: {summary['samples']} samples over {summary['duration']:.6g} s, {args.method} integration\n"
             f"final pose x={end[0]:.6g} m, y={end[1]:.6g} m, theta={end[2]:.6g} rad; path {path:.6g} m\n"
             f"written to {args.output} ({args.format})")

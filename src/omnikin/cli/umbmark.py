@@ -21,7 +21,7 @@ from ..errors import OmnikinError
 from ..simulation.errors import NOISE, PROFILES, noise as noise_profile
 from ..simulation.motion import umbmark_square
 from ..simulation.simulate import simulate
-from .common import robot_as_built
+from .common import console, load_robot, robot_as_built
 
 MAIN_ROBOT = "tomasi-omni3"
 CALIBRATION_REPEATS = 5
@@ -99,21 +99,6 @@ def analyze_parser() -> argparse.ArgumentParser:
 
 
 # --- helpers -----------------------------------------------------------------------------------------
-def _load(spec):
-    from ..io.robot_file import load_robot
-
-    return load_robot(spec)
-
-
-def _console(stderr=False):
-    from rich.console import Console
-
-    con = Console(highlight=False, markup=False, stderr=stderr)
-    if not con.is_terminal:
-        con = Console(highlight=False, markup=False, width=120, stderr=stderr)
-    return con
-
-
 def _mm(x: float) -> str:
     return f"{x * 1000:.2f}" if math.isfinite(x) else "-"
 
@@ -139,7 +124,7 @@ class _Steps:
             from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
             self.progress = Progress(TextColumn("{task.description:<38}"), BarColumn(), TextColumn("{task.completed}/"
-                                     "{task.total}"), TimeElapsedColumn(), console=_console(stderr=True),
+                                     "{task.total}"), TimeElapsedColumn(), console=console(120, stderr=True),
                                      transient=True)
             self.task = self.progress.add_task("starting", total=total)
 
@@ -165,7 +150,7 @@ class _Steps:
 def cmd_umbmark(args) -> int:
 
     main_job = args.robot is None
-    robot = _load(args.robot or MAIN_ROBOT)
+    robot = load_robot(args.robot or MAIN_ROBOT)
     do_calibrate = args.calibrate or main_job
     if args.runs < 1:
         raise OmnikinError(f"--runs must be at least 1, got {args.runs}")
@@ -416,7 +401,7 @@ def _report_md(args, robot, result, before, after, cal, figures) -> str:
 
 
 def _print_summary(args, robot, result, before, after, cal, bor, out) -> None:
-    con = _console()
+    con = console(120)
     results = {"before": before[0]} if after is None else {"before": before[0], "after calibration": after[0]}
     con.print(f"UMBmark: {robot.name} as built, {args.runs} runs per direction, {args.side:g} m square, "
               f"{args.mode} mode")
@@ -449,13 +434,13 @@ def _print_summary(args, robot, result, before, after, cal, bor, out) -> None:
 def cmd_umbmark_analyze(args) -> int:
     from ..io.runs import read_umbmark_measurements
 
-    robot = _load(args.robot) if args.robot else None
+    robot = load_robot(args.robot) if args.robot else None
     eps = read_umbmark_measurements(args.measurements)
     res = analyze(eps["cw"], eps["ccw"], args.side, robot)
     if args.json:
         print(json.dumps(res.as_dict(), indent=2))
         return 0
-    con = _console()
+    con = console(120)
     con.print(f"UMBmark of {args.measurements} ({len(res.cw.epsilon)} cw, {len(res.ccw.epsilon)} ccw runs, "
               f"{args.side:g} m square)")
     con.print(_umbmark_table({"measured": res}))
@@ -475,7 +460,7 @@ def cmd_calibrate(args) -> int:
     from ..io.robot_file import save_robot
     from ..io.runs import read_calibration_runs
 
-    robot = _load(args.robot)
+    robot = load_robot(args.robot)
     runs = read_calibration_runs(args.runs)
     cal = calibrate(robot, runs)
     if args.output:
@@ -488,7 +473,7 @@ def cmd_calibrate(args) -> int:
         return 0
     from rich.table import Table
 
-    con = _console()
+    con = console(120)
     t = Table(title=f"calibration of {robot.name} from {len(runs)} runs", title_justify="left")
     for col in ("parameter", "estimate", "sigma"):
         t.add_column(col, justify="right" if col != "parameter" else "left")
