@@ -24,8 +24,9 @@ from typing import Optional, Protocol
 import numpy as np
 
 from ..errors import OmnikinError
-from ..geometry import compose, exp, wrap_angle
+from ..geometry import compose, exp
 from ..model import Robot
+from ..odometry import mid_steer
 from ..simulation.errors import NoiseModel
 from ..simulation.simulate import make_rng
 
@@ -109,7 +110,7 @@ class SimBackend:
             d = d + sigma * self.rng.standard_normal(len(d))
         steer = None
         if self._steer is not None:   # steering moves linearly over the interval: use its middle
-            steer = self._steer_start + 0.5 * wrap_angle(self._steer - self._steer_start)
+            steer = mid_steer(np.stack([self._steer_start, self._steer]))[0]
             self._steer_start = self._steer.copy()
         f = self.true_robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
         inc = f @ d

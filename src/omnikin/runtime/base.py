@@ -105,10 +105,10 @@ class BaseRuntime:
             steer = None if state.steer is None else mid_steer(np.stack([self._last.steer, state.steer]))[0]
             f = self._fk if steer is None else self.robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
             sigma_xi = f @ np.diag(var) @ f.T
-            inc = f @ d
+            dt = state.t - self._last.t
+            inc = np.array(self.odometry.twist) * dt          # the body increment the odometry just used
             a_mat, b_mat = _jacobians(before[2], inc)
             self.pose_covariance = a_mat @ self.pose_covariance @ a_mat.T + b_mat @ sigma_xi @ b_mat.T
-            dt = state.t - self._last.t
             self.twist_covariance = sigma_xi / dt ** 2
         self._last = state
 
