@@ -165,11 +165,7 @@ class Odometry:
         return self._advance(t, dt, a, b, phi)
 
     def _first(self, t, values, steer):
-        if self.bits is not None:
-            for name, v in zip(self.wheel_names, values):
-                if not -(2 ** (self.bits - 1)) <= v < 2 ** self.bits:
-                    raise OdometryInputError(f"sample {self._index}: tick reading {v!r} outside the range of a "
-                                             f"{self.bits}-bit counter, wheel {name!r}")
+        self._check_range(values)
         self._steer = steer
         self._t = t
         self._ticks = values
@@ -193,16 +189,23 @@ class Odometry:
 
     def _check(self, deltas, dt, ticks):
         """Raise naming the sample and wheel if an increment cannot be integrated."""
+        self._check_range(ticks)
         half = 2 ** (self.bits - 1) if self.bits is not None else None
         for j, d in enumerate(deltas):
             name = self.wheel_names[j]
-            if half is not None and not -half <= ticks[j] < 2 * half:
-                raise OdometryInputError(f"sample {self._index}: tick reading {ticks[j]!r} outside the range "
-                                         f"of a {self.bits}-bit counter, wheel {name!r}")
             if abs(d) > jump_limit(self._max_jump, self._rates[j], dt, self.bits) or (half is not None and d == -half):
                 raise OdometryInputError(
                     f"sample {self._index}: impossible jump of {d} ticks in {dt:.6g} s, wheel {name!r} "
                     f"(faster than the wheel can turn, or half the counter range)")
+
+    def _check_range(self, ticks) -> None:
+        """Raise if a reading lies outside a ``bits``-bit counter (signed or unsigned)."""
+        if self.bits is None:
+            return
+        for name, v in zip(self.wheel_names, ticks):
+            if not -(2 ** (self.bits - 1)) <= v < 2 ** self.bits:
+                raise OdometryInputError(f"sample {self._index}: tick reading {v!r} outside the range of a "
+                                         f"{self.bits}-bit counter, wheel {name!r}")
 
     def _check_steer(self, steer):
         if not self._steerable:
