@@ -12,6 +12,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_accuracy  # noqa: E402
 import bench_batch  # noqa: E402
+import bench_runtime  # noqa: E402
 import bench_simulation  # noqa: E402
 import bench_streaming  # noqa: E402
 import bench_umbmark  # noqa: E402
@@ -19,7 +20,7 @@ from _common import machine, save  # noqa: E402
 
 if __name__ == "__main__":
     print("machine:", machine())
-    for module in (bench_streaming, bench_batch, bench_accuracy, bench_simulation, bench_umbmark):
+    for module in (bench_streaming, bench_batch, bench_accuracy, bench_simulation, bench_umbmark, bench_runtime):
         name = module.__name__.replace("bench_", "")
         path = save(name, module.main())
         print(f"-> {path}\n")

@@ -239,3 +239,34 @@ def test_wrong_wheel_count_is_named(tomasi):
         tomasi.fk([1.0, 2.0])
     with pytest.raises(OmnikinError, match="non-finite"):
         tomasi.ik([np.nan, 0, 0])
+
+
+# --- constant matrices are built once and cannot be corrupted by a caller ------------------------------
+def test_constant_matrices_are_read_only_and_match_fresh_ones():
+    """Without steering the Jacobian and the FK operator are cached: writing into them must fail
+    (a caller's in-place edit would otherwise change every later result), and the cached values
+    must equal matrices built from the wheel rows and the pseudo-inverse directly."""
+    robot = load_robot("omni4")
+    jac = robot.jacobian()
+    with pytest.raises(ValueError):
+        jac[0, 0] = 1.0
+    fresh = np.stack([w.rolling_row() for w in robot.rolling])
+    np.testing.assert_array_equal(robot.jacobian(), fresh)
+    subset = ["w1", "w2", "w3"]
+    f = robot.fk_matrix(None, subset)
+    with pytest.raises(ValueError):
+        f[0, 0] = 1.0
+    np.testing.assert_allclose(f, np.linalg.pinv(fresh[:3]), atol=1e-12)
+    np.testing.assert_allclose(robot.fk_matrix(), np.linalg.pinv(fresh), atol=1e-12)
+    # a subset's operator is not the whole robot's one
+    assert robot.fk_matrix().shape == (3, 4) and f.shape == (3, 3)
+
+
+def test_steered_jacobian_still_follows_the_steering():
+    """Caching applies to fixed layouts only: a steerable robot's Jacobian changes with steer."""
+    robot = load_robot("xr4000")
+    zero = robot.jacobian(np.zeros(len(robot.steerable)))
+    turned = robot.jacobian(np.full(len(robot.steerable), 0.5))
+    assert not np.allclose(zero, turned)
+    w = robot.steerable[0]
+    np.testing.assert_allclose(turned[0], w.rolling_row(0.5), atol=1e-15)

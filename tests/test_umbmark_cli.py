@@ -13,7 +13,6 @@ import json
 import math
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
@@ -74,18 +73,15 @@ def check_direction_dict(d, n_runs):
 @pytest.fixture(scope="module")
 def main_job(tmp_path_factory):
     cwd = tmp_path_factory.mktemp("mainjob")
-    t0 = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", "umbmark"], cwd=cwd, capture_output=True,
                           text=True, timeout=120)
-    elapsed = time.perf_counter() - t0
-    return cwd, proc, elapsed
+    return cwd, proc
 
 
 def test_main_job_runs_and_prints_a_table(main_job):
-    cwd, proc, elapsed = main_job
+    cwd, proc = main_job
     assert proc.returncode == 0, proc.stderr
     assert "Traceback" not in proc.stderr
-    assert elapsed < 30.0, elapsed
     out = proc.stdout
     assert "r_cg cw [mm]" in out and "r_cg ccw [mm]" in out and "E_max,syst [mm]" in out
     assert "before" in out and "after calibration" in out
@@ -93,7 +89,7 @@ def test_main_job_runs_and_prints_a_table(main_job):
 
 
 def test_main_job_report_folder(main_job):
-    cwd, proc, _ = main_job
+    cwd, proc = main_job
     report = cwd / "umbmark-report"
     for name in ("report.md", "result.json", "return_errors.png", "euclidean_errors.png", "trajectories.png",
                  "true_robot.yaml", "calibrated_robot.yaml"):
@@ -108,7 +104,7 @@ def test_main_job_report_folder(main_job):
 
 
 def test_main_job_result_json(main_job):
-    cwd, _, _ = main_job
+    cwd, _ = main_job
     res = json.loads((cwd / "umbmark-report" / "result.json").read_text(encoding="utf-8"))
     for key in ("before", "after", "calibrated_robot"):
         assert key in res
@@ -128,7 +124,7 @@ def test_main_job_result_json(main_job):
 
 
 def test_main_job_robot_files(main_job):
-    cwd, _, _ = main_job
+    cwd, _ = main_job
     report = cwd / "umbmark-report"
     res = json.loads((report / "result.json").read_text(encoding="utf-8"))
     nominal = load_robot("tomasi-omni3")
@@ -146,7 +142,7 @@ def test_main_job_robot_files(main_job):
 
 def test_main_job_measurements_feed_analyze(main_job, capsys):
     """The report's measurements file is the input format of 'umbmark analyze': same E_max,syst."""
-    cwd, _, _ = main_job
+    cwd, _ = main_job
     report = cwd / "umbmark-report"
     res = json.loads((report / "result.json").read_text(encoding="utf-8"))
     d = run_json(capsys, "umbmark", "analyze", report / "measurements_before.csv", "--json")
@@ -154,7 +150,7 @@ def test_main_job_measurements_feed_analyze(main_job, capsys):
 
 
 def test_calibrate_from_report_runs(main_job, capsys, tmp_path):
-    cwd, _, _ = main_job
+    cwd, _ = main_job
     report = cwd / "umbmark-report"
     res = json.loads((report / "result.json").read_text(encoding="utf-8"))
     out = tmp_path / "out.yaml"

@@ -151,13 +151,25 @@ class Robot:
         return {w.name: steer[..., i] for i, w in enumerate(self.steerable)}
 
     def jacobian(self, steer=None, wheels: Optional[Sequence[str]] = None) -> np.ndarray:
-        """Wheel Jacobian ``(..., n, 3)``: ``omega = J twist`` [rad/s per twist]."""
+        """Wheel Jacobian ``(..., n, 3)``: ``omega = J twist`` [rad/s per twist].
+
+        Without steerable wheels the matrix is constant: it is built once and returned
+        read-only (copy it to modify it).
+        """
+        if not self.steerable and wheels is None and (steer is None or not np.size(steer)):
+            return self._jacobian_constant
         steer = self._steer_array(steer)
         by = self._steer_of(steer)
         chosen = self.rolling if wheels is None else [self.wheel(n) for n in wheels]
         rows = [w.rolling_row(by.get(w.name, 0.0)) for w in chosen]
         shape = np.broadcast_shapes(*[r.shape for r in rows])
         return np.stack([np.broadcast_to(r, shape) for r in rows], axis=-2)
+
+    @cached_property
+    def _jacobian_constant(self) -> np.ndarray:
+        rows = np.stack([w.rolling_row() for w in self.rolling])
+        rows.setflags(write=False)
+        return rows
 
     @property
     def ik_matrix(self) -> np.ndarray:
@@ -193,8 +205,27 @@ class Robot:
         return np.concatenate([np.broadcast_to(jac, shape + jac.shape[-2:]), extra], axis=-2)
 
     def fk_matrix(self, steer=None, wheels: Optional[Sequence[str]] = None) -> np.ndarray:
-        """Forward-kinematics operator ``(..., 3, n_rows)``: ``twist = F [omega; 0]``."""
-        a = self.fk_rows(self._steer_array(steer), wheels)
+        """Forward-kinematics operator ``(..., 3, n_rows)``: ``twist = F [omega; 0]``.
+
+        Without steerable wheels the operator is constant: it is computed once per wheel
+        subset and returned read-only (copy it to modify it).
+        """
+        constant = not self.steerable and (steer is None or not np.size(steer))
+        key = None if wheels is None else tuple(wheels)
+        if constant and key in self._fk_cache:
+            return self._fk_cache[key]
+        f = self._fk_operator(self.fk_rows(self._steer_array(steer), wheels))
+        if constant:
+            f.setflags(write=False)
+            self._fk_cache[key] = f
+        return f
+
+    @cached_property
+    def _fk_cache(self) -> dict:
+        return {}
+
+    def _fk_operator(self, a: np.ndarray) -> np.ndarray:
+        """``N pinv(A N)`` for fitted rows ``A`` ``(..., n_rows, 3)`` (module docstring)."""
         n = self.admissible_basis
         return n @ np.linalg.pinv(a @ n, rcond=RANK_TOL)
 
@@ -202,10 +233,6 @@ class Robot:
         """How many independent motion components the wheels determine at ``steer``."""
         a = self.fk_rows(self._steer_array(steer), wheels)
         return rank(a @ self.admissible_basis)
-
-    @cached_property
-    def _fk_constant(self) -> np.ndarray:
-        return self.fk_matrix()
 
     # --- analysis ------------------------------------------------------------------
     @cached_property
@@ -346,10 +373,7 @@ class Robot:
         a = self.fk_rows(steer, wheels)
         n_extra = a.shape[-2] - len(names)
         b = np.concatenate([w, np.zeros(w.shape[:-1] + (n_extra,))], axis=-1) if n_extra else w
-        if not self.steerable and wheels is None:
-            f = self._fk_constant
-        else:
-            f = self.admissible_basis @ np.linalg.pinv(a @ self.admissible_basis, rcond=RANK_TOL)
+        f = self._fk_operator(a) if self.steerable else self.fk_matrix(None, wheels)
         twist = np.einsum("...ij,...j->...i", f, b)
         residual = b - np.einsum("...ij,...j->...i", a, twist)
         return FKResult(twist, residual)

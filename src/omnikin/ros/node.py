@@ -96,6 +96,10 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
                     self.tf_pub = self.create_publisher(TFMessage, "/tf", qos)
             self.t0 = time.monotonic()
             self.published = 0
+            self.period = 1.0 / p["publish_rate"]
+            self.loops = 0                         # control cycles run
+            self._first_loop = None
+            self._window = (time.monotonic(), 0)   # (time, published) at the last diagnostics
             self.link_error = ""
             self.joint_names = list(self.runtime.encoded)
             self.steer_names = [f"{n}_steer" for n in robot.steer_names]
@@ -114,6 +118,9 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             self.runtime.command((tw.linear.x, tw.linear.y, tw.angular.z), self.now_s())
 
         def _loop(self):
+            if self._first_loop is None:
+                self._first_loop = self.now_s()
+            self.loops += 1
             try:
                 res = self.runtime.step(self.now_s())
             except OmnikinError as exc:      # link lost: the back-end already commands zero speeds
@@ -155,9 +162,21 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
                 self.tf_pub.publish(self._TFMessage(transforms=[tf]))
             self.published += 1
 
+        def periods_missed(self, now: float) -> int:
+            """Control periods due since the first cycle that did not run (rcl skips the
+            periods of a late timer instead of running them in a burst)."""
+            if self._first_loop is None:
+                return 0
+            return max(0, int((now - self._first_loop) / self.period) + 1 - self.loops)
+
         def _diagnostics(self):
             s = self.runtime.filter.stats
-            values = {"odom_published": self.published, "commands_accepted": s.accepted,
+            now = time.monotonic()
+            t_prev, n_prev = self._window
+            self._window = (now, self.published)
+            loop_rate = (self.published - n_prev) / (now - t_prev) if now > t_prev else 0.0
+            values = {"odom_published": self.published, "loop_rate_hz": round(loop_rate, 3),
+                      "periods_missed": self.periods_missed(now), "commands_accepted": s.accepted,
                       "commands_rejected": s.rejected, "command_timeouts": s.timeouts,
                       "commands_saturated": s.saturated, "commands_projected": s.projected,
                       "last_reject_reason": s.last_reject_reason,

@@ -56,6 +56,7 @@ class CommandFilter:
         if not (math.isfinite(self.timeout) and self.timeout >= 0):
             raise OmnikinError(f"cmd_vel_timeout must be a finite number >= 0 [s] (0 disables), got {self.timeout!r}")
         self.target = np.zeros(3)
+        self._limited_target = np.zeros(3)     # target saturated to the speed limits
         self.current = np.zeros(3)
         self._last_command_t = None
         self._timed_out = True
@@ -83,9 +84,11 @@ class CommandFilter:
             res = self.robot.ik(v, on_infeasible="return")
             if not np.all(res.feasible):
                 return self._reject(f"twist {v.tolist()} needs steering beyond the limits of {self.robot.name!r}")
-        if not np.allclose(saturate(self.robot, v, self.limits), v):
+        limited = saturate(self.robot, v, self.limits)
+        if not np.allclose(limited, v):
             self.stats.saturated += 1
         self.target = v
+        self._limited_target = limited
         self._last_command_t = float(t)
         self._timed_out = False
         self.stats.accepted += 1
@@ -104,8 +107,7 @@ class CommandFilter:
                 and t - self._last_command_t > self.timeout:
             self._timed_out = True
             self.stats.timeouts += 1
-        target = np.zeros(3) if (self._timed_out or self._last_command_t is None) else self.target
-        limited = saturate(self.robot, target, self.limits)
+        limited = np.zeros(3) if (self._timed_out or self._last_command_t is None) else self._limited_target
         self.current = self._accelerate(self.current, limited, dt)
         return self.current.copy()
 

@@ -59,15 +59,12 @@ def speed_scale(robot, twist, limits: MotionLimits) -> np.ndarray:
     t = as_components(twist, 3, "twist")
     require_finite(t, "twist")
     speeds = np.abs(robot.ik(t, on_infeasible="return").wheel_speeds)
-    bounds = [wheel_limits(robot, limits) / np.where(speeds > 0, speeds, np.nan)]
-    v = np.hypot(t[..., 0], t[..., 1])
-    if limits.linear is not None:
-        bounds.append((limits.linear / np.where(v > 0, v, np.nan))[..., None])
-    if limits.angular is not None:
-        w = np.abs(t[..., 2])
-        bounds.append((limits.angular / np.where(w > 0, w, np.nan))[..., None])
-    k = np.nanmin(np.concatenate([np.broadcast_to(b, t.shape[:-1] + (b.shape[-1],)) for b in bounds], axis=-1),
-                  axis=-1, initial=np.inf)
+    with np.errstate(divide="ignore"):            # a bound over a zero speed is no bound: inf
+        k = np.min(wheel_limits(robot, limits) / speeds, axis=-1, initial=np.inf)
+        if limits.linear is not None:
+            k = np.minimum(k, limits.linear / np.hypot(t[..., 0], t[..., 1]))
+        if limits.angular is not None:
+            k = np.minimum(k, limits.angular / np.abs(t[..., 2]))
     return k
 
 
