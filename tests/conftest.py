@@ -6,11 +6,12 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import settings
+from hypothesis import HealthCheck, settings
 
 from omnikin import Robot, Wheel
 
-settings.register_profile("ci", max_examples=60, deadline=None)
+# no wall-clock limits: a loaded CI machine must not fail a test for being slow
+settings.register_profile("ci", max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile("ci")
 
 

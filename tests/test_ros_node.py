@@ -50,8 +50,8 @@ try:
 except ImportError:                                # older rclpy
     SignalHandlerOptions = None
 
-RELIABLE_100 = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
-                          durability=DurabilityPolicy.VOLATILE)
+RELIABLE_ALL = QoSProfile(depth=100, history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.VOLATILE)    # the test's side never drops a message
 V, A_LIN = 0.2, 0.5                # commanded speed [m/s], linear.x.max_acceleration [m/s^2]
 
 _used_domains: set[int] = set()
@@ -140,7 +140,7 @@ class NodeProcess:
         except subprocess.TimeoutExpired:
             return None
 
-    def terminate(self, timeout: float = 5.0):
+    def terminate(self, timeout: float = 10.0):
         """SIGTERM; returns (exit code or None if it did not exit in time, seconds taken)."""
         t0 = time.monotonic()
         if self.proc.poll() is None:
@@ -171,9 +171,9 @@ class Graph:
         self.odom: list = []             # (receive time [monotonic s], msg)
         self.joints: list = []
         self.diags: list = []            # (receive time, stamp [s], {key: value}, status)
-        self.node.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_100)
+        self.node.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_ALL)
         if joint_states:
-            self.node.create_subscription(JointState, "joint_states", self._on_joints, RELIABLE_100)
+            self.node.create_subscription(JointState, "joint_states", self._on_joints, RELIABLE_ALL)
         self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diag, 10)
         self.stamped = stamped
         self.pub = self.node.create_publisher(TwistStamped if stamped else Twist, "cmd_vel", 10)
@@ -216,7 +216,7 @@ class Graph:
         with self.lock:
             return self.diags[-1] if self.diags else None
 
-    def next_diag(self, timeout: float = 3.0, after: float | None = None):
+    def next_diag(self, timeout: float = 5.0, after: float | None = None):
         """The first diagnostics received after now (or after monotonic time ``after``)."""
         after = time.monotonic() if after is None else after
         assert wait_for(lambda: self.diags and self.diags[-1][0] > after, timeout), "no /diagnostics received"
@@ -371,7 +371,7 @@ class TestDiffDriveNode:
         first, last = g.drive(vx=V, duration=1.0)
         # no more commands: after 0.5 s the robot brakes (0.4 s) and stops
         assert wait_for(lambda: g.last_odom().twist.twist.linear.x > 0, 1.0)
-        m1 = g.wait_still(timeout=0.5 + V / A_LIN + 2.0)
+        m1 = g.wait_still(timeout=10.0)
         dx = m1.pose.pose.position.x - x0
         print(f"timeout: x = {dx:.4f} m, closed form v (T + timeout) = {V * (last - first + 0.5):.4f} m")
         assert dx == pytest.approx(V * (last - first + 0.5), abs=0.02), (dx, last - first)
@@ -389,7 +389,9 @@ class TestDiffDriveNode:
             g.send(*bad)
             time.sleep(0.05)
         n = g.n_odom()
-        _, _, after, status = g.next_diag(after=time.monotonic() + 0.1)
+        assert wait_for(lambda: int(g.last_diag()[2]["commands_rejected"]) >= int(before["commands_rejected"]) + 4,
+                        5.0), f"rejections not counted: {g.last_diag()[2]}"
+        _, _, after, status = g.last_diag()
         assert int(after["commands_rejected"]) == int(before["commands_rejected"]) + 4
         assert int(after["commands_accepted"]) == int(before["commands_accepted"])
         assert after["last_reject_reason"]
@@ -403,13 +405,15 @@ class TestDiffDriveNode:
 
     def test_diagnostics(self, diff_node):
         _, g = diff_node
-        _, _, values, status = g.next_diag()
+        _, diag_stamp, values, status = g.next_diag()
         assert status.hardware_id == "diff-drive"
         for key in ("odom_published", "commands_accepted", "commands_rejected", "command_timeouts",
                     "commands_saturated", "commands_projected", "fk_residual_norm", "timed_out", "link_backend"):
             assert key in values, key
         assert values["link_backend"] == "sim"
-        assert int(values["odom_published"]) >= g.n_odom()
+        with g.lock:        # odometry stamped before the diagnostics was published before it
+            earlier = sum(1 for (_, m) in g.odom if stamp_s(m.header.stamp) <= diag_stamp)
+        assert int(values["odom_published"]) >= earlier > 0
 
 
 # --- a holonomic robot, TwistStamped, parameters in the flat layout -----------------------------------
@@ -432,16 +436,18 @@ def test_stamped_commands_and_flat_params(tmp_path):
         m0 = g.wait_still()
         assert (m0.header.frame_id, m0.child_frame_id) == ("flat_odom", "flat_base")
         # sideways, then a turn in place; the 0.3 s timeout ends each
+        # start and timeout each fall on a 25 Hz tick (up to 40 ms late), plus 50 ms of delivery jitter
+        tol_t = 2 / 25.0 + 0.05
         first, last = g.drive(vy=0.15, duration=1.0)
         m1 = g.wait_still()
         assert m1.pose.pose.position.y - m0.pose.pose.position.y == pytest.approx(0.15 * (last - first + 0.3),
-                                                                                abs=0.02)
+                                                                                abs=0.15 * tol_t)
         assert abs(m1.pose.pose.position.x - m0.pose.pose.position.x) < 1e-9
         first, last = g.drive(wz=0.5, duration=1.0)
         m2 = g.wait_still()
         q = m2.pose.pose.orientation
         assert math.hypot(q.z, q.w) == pytest.approx(1.0, abs=1e-12)
-        assert yaw_of(q) == pytest.approx(0.5 * (last - first + 0.3), abs=0.03)
+        assert yaw_of(q) == pytest.approx(0.5 * (last - first + 0.3), abs=0.5 * tol_t)
         assert_psd(cov(m2.pose.covariance), "pose covariance")
         js = g.joints[-1][1]
         assert list(js.name) == ["w1", "w2", "w3"]
@@ -449,7 +455,10 @@ def test_stamped_commands_and_flat_params(tmp_path):
         with g.lock:
             stamps = np.array([stamp_s(m.header.stamp) for (_, m) in g.odom])
         rate = (len(stamps) - 1) / (stamps[-1] - stamps[0])
-        assert 22.5 <= rate <= 25.5, f"{rate:.2f} Hz (rcl skips the periods of a late timer, never adds any)"
+        # rcl skips the periods of a late timer and never adds any: the typical interval is the
+        # period, and the mean rate is at most the set rate
+        assert np.median(np.diff(stamps)) == pytest.approx(0.04, rel=0.05), np.diff(stamps)
+        assert rate <= 25.5, f"{rate:.2f} Hz"
         # enable_odom_tf false: no /tf publisher, hence no warning about tf2_msgs
         rc, _ = proc.terminate()
         assert rc == 0, proc.stderr()
@@ -464,9 +473,9 @@ def test_sigterm_exits_zero_promptly_and_tf2_warning_once(tmp_path):
     proc, g = start(tmp_path, ["tomasi-omni3"], joint_states=False)
     try:
         time.sleep(2.5)                                  # long enough for a repeated warning to show
-        rc, took = proc.terminate(timeout=5.0)
+        rc, took = proc.terminate()
         assert rc == 0, f"exit code {rc}\n{proc.stderr()}"
-        assert took < 2.0, f"SIGTERM took {took:.2f} s"
+        assert took < 5.0, f"SIGTERM took {took:.2f} s"          # ~0.3-0.5 s normally; a hang fails
         err = proc.stderr()
         tf_lines = [ln for ln in err.splitlines() if "tf2_msgs" in ln]
         if importlib.util.find_spec("tf2_msgs") is not None:
@@ -503,7 +512,7 @@ def test_bad_params_file_exits_2_with_one_line(tmp_path, name):
     path.write_text(BAD_PARAMS[name])
     proc = NodeProcess(["diff-drive", "--params", path], tmp_path)
     try:
-        rc = proc.wait(5.0)
+        rc = proc.wait(30.0)
         err = proc.stderr()
         assert rc == 2, f"exit code {rc} (None: still running)\n{err}"
         lines = err.strip().splitlines()
@@ -527,7 +536,7 @@ def test_missing_params_file_exits_2(tmp_path):
 def test_bad_ros_args_parameter_exits_2_with_one_line(tmp_path, override):
     proc = NodeProcess(["diff-drive", "--ros-args", "-p", override], tmp_path)
     try:
-        rc = proc.wait(5.0)
+        rc = proc.wait(30.0)
         err = proc.stderr()
         assert rc == 2, f"exit code {rc} (None: still running)\n{err}"
         errors = [ln for ln in err.strip().splitlines() if not ln.startswith("[WARN]")]
@@ -578,11 +587,11 @@ def test_soak_100hz_no_odometry_lost(tmp_path):
         # add up to the periods in the window; the loop must keep up most of the time even on a
         # loaded 2-core machine
         missed = int(v2["periods_missed"]) - int(v1["periods_missed"])
-        assert published + missed == pytest.approx(100.0 * (s2 - s1), abs=5), report
+        assert published + missed == pytest.approx(100.0 * (s2 - s1), abs=max(5.0, 1.0 * (s2 - s1))), report
         assert rate >= 80.0, report
         assert int(v2["commands_rejected"]) == 0
         rc, took = proc.terminate()
-        assert rc == 0 and took < 2.0, (rc, took, proc.stderr())
+        assert rc == 0 and took < 5.0, (rc, took, proc.stderr())
     finally:
         g.close()
         proc.close()
