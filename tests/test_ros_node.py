@@ -503,6 +503,7 @@ BAD_PARAMS = {
     "infinite_rate": "publish_rate: .inf\n",
     "negative_reject_above": "reject_above: -1.0\n",
     "zero_acceleration": "linear:\n  x:\n    max_acceleration: 0.0\n",
+    "negative_link_retry": "link_retry_period: -1.0\n",
 }
 
 
@@ -602,7 +603,8 @@ def test_node_drives_wheel_controllers_over_serial_and_stops_on_link_loss(tmp_pa
     """omnikin ros --backend serial against the protocol's fake controller (one port, three wheels):
     a forward command turns the wheels (their counts grow) and the odometry follows; when the
     controller goes silent the node reports the lost link in /diagnostics, keeps running and
-    commands zero speed."""
+    commands zero speed; when it speaks again the node re-arms the link and waits for a new
+    command."""
     from omnikin.runtime.fake_controller import FakeController
 
     robot = load_robot("tomasi-omni3")
@@ -623,6 +625,21 @@ def test_node_drives_wheel_controllers_over_serial_and_stops_on_link_loss(tmp_pa
             assert proc.proc.poll() is None, proc.stderr()
             assert wait_for(lambda: all(fake.speed(i) == 0.0 for i in fake.wheels), 2.0), \
                 [fake.speed(i) for i in fake.wheels]
+            # the controller speaks again: the node re-arms the link on its own (link_retry_period
+            # 1 s), publishes odometry again, and keeps the wheels stopped until a new command
+            x_lost = g.last_odom().pose.pose.position.x
+            fake.silent = False
+            assert wait_for(lambda: int(g.last_diag()[2]["link_rearms"]) >= 1
+                            and g.last_diag()[3].level == DiagnosticStatus.OK, 8.0), \
+                f"link not re-armed: {g.last_diag()[3].message} {g.last_diag()[2]}"
+            n = g.n_odom()
+            assert wait_for(lambda: g.n_odom() > n + 10, 3.0), "no odometry after re-arming"
+            time.sleep(0.5)
+            assert all(fake.speed(i) == 0.0 for i in fake.wheels), [fake.speed(i) for i in fake.wheels]
+            assert g.last_odom().pose.pose.position.x == pytest.approx(x_lost, abs=1e-9)
+            g.drive(vx=0.2, duration=1.0)
+            assert wait_for(lambda: g.last_odom().pose.pose.position.x > x_lost + 0.05, 3.0), \
+                f"the robot did not move after re-arming: x = {g.last_odom().pose.pose.position.x}"
         finally:
             g.close()
             proc.close()

@@ -229,6 +229,42 @@ def test_silent_controller_loses_the_link_and_stops_the_wheels(rig):
     assert not backend.link_lost
 
 
+def test_reconnect_re_arms_and_keeps_the_angles(rig):
+    """After a loss, reconnect() re-arms the link: the controller must be heard again, and the
+    wheel angles continue from where they were held (no jump back to zero)."""
+    fake, backend = rig
+    fake.advance(0, 150)
+    poll(backend, lambda s: math.isclose(s.positions[0], math.pi / 2, abs_tol=1e-12))
+    fake.silent = True
+    with pytest.raises(LinkLostError):
+        poll(backend, lambda s: False, timeout=3.0)
+    fake.silent = False
+    backend.reconnect()
+    state = backend.wait_ready(2.0)
+    assert not backend.link_lost and backend.stats()["reconnects"] == 1
+    assert state.positions[0] == pytest.approx(math.pi / 2, abs=1e-12)
+    fake.advance(0, 150)
+    poll(backend, lambda s: math.isclose(s.positions[0], math.pi, abs_tol=1e-12))
+
+
+def test_failed_port_is_reopened_or_named(tomasi):
+    """A port that fails (here the controller's pseudo-terminal disappears) loses the link;
+    reconnect() tries to reopen it and, while it cannot, says which port and stays lost."""
+    fake = FakeController.for_robot(tomasi, report_period=REPORT).start()
+    with SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT, connect_timeout=1.0) as backend:
+        backend.wait_ready(2.0)
+        fake.close()
+        with pytest.raises(LinkLostError) as info:
+            poll(backend, lambda s: False, timeout=3.0)
+        assert fake.path in str(info.value)
+        with pytest.raises(OmnikinError, match="cannot open") as again:
+            backend.reconnect()
+        assert fake.path in str(again.value)
+        assert backend.link_lost and backend.stats()["reconnects"] == 0
+        with pytest.raises(LinkLostError):
+            backend.read(time.monotonic())
+
+
 def test_controller_that_never_answers(tomasi):
     with FakeController.for_robot(tomasi, report_period=REPORT) as fake:
         fake.silent = True

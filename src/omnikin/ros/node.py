@@ -94,8 +94,9 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
                         "odom->base_link; run this node from a ROS 2 install to publish it")
                 else:
                     self.tf_pub = self.create_publisher(TFMessage, "/tf", qos)
-            self.t0 = time.monotonic()
             self.published = 0
+            self.link_rearms = 0                   # lost links re-armed (serial back-end)
+            self._next_retry = None
             self.period = 1.0 / p["publish_rate"]
             self.loops = 0                         # control cycles run
             self._first_loop = None
@@ -126,8 +127,10 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             except OmnikinError as exc:      # link lost: the back-end already commands zero speeds
                 self.link_error = str(exc)
                 self.get_logger().error(str(exc), throttle_duration_sec=1.0)
+                self._retry_link()
                 return
             self.link_error = ""
+            self._next_retry = None
             stamp = self.get_clock().now().to_msg()
             odom = self._Odometry()
             odom.header.stamp = stamp
@@ -162,6 +165,28 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
                 self.tf_pub.publish(self._TFMessage(transforms=[tf]))
             self.published += 1
 
+        def _retry_link(self):
+            """Every ``link_retry_period`` while the link is lost: reopen and re-arm it. The
+            command is dropped, so the wheels stay stopped until a new cmd_vel arrives."""
+            period = self.p["link_retry_period"]
+            reconnect = getattr(self.runtime.backend, "reconnect", None)
+            if not period or reconnect is None:
+                return
+            now = self.now_s()
+            if self._next_retry is None:
+                self._next_retry = now + period
+            if now < self._next_retry:
+                return
+            self._next_retry = now + period
+            try:
+                reconnect()
+            except OmnikinError as exc:
+                self.get_logger().warning(f"link not re-armed yet: {exc}", throttle_duration_sec=5.0)
+                return
+            self.runtime.filter.halt()
+            self.link_rearms += 1
+            self.get_logger().info("serial link re-armed: the wheels stay stopped until a new cmd_vel arrives")
+
         def periods_missed(self, now: float) -> int:
             """Control periods due since the first cycle that did not run (rcl skips the
             periods of a late timer instead of running them in a burst)."""
@@ -181,13 +206,17 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
                       "commands_saturated": s.saturated, "commands_projected": s.projected,
                       "last_reject_reason": s.last_reject_reason,
                       "fk_residual_norm": float(np.linalg.norm(self.runtime.odometry.residual)),
-                      "timed_out": self.runtime.filter.timed_out}
+                      "timed_out": self.runtime.filter.timed_out, "link_rearms": self.link_rearms}
             values.update({f"link_{k}": v for k, v in self.runtime.backend.stats().items()})
             status = self._DiagnosticStatus(level=DiagnosticStatus.OK, name="omnikin base",
                                             message="running", hardware_id=robot.name)
             if s.rejected:
                 status.level = DiagnosticStatus.WARN
                 status.message = f"{s.rejected} command(s) rejected"
+            waiting = values.get("link_waiting_for")
+            if waiting and not self.link_error:
+                status.level = DiagnosticStatus.WARN
+                status.message = f"waiting for the wheel controllers of {waiting}"
             if self.link_error:
                 status.level = DiagnosticStatus.ERROR
                 status.message = f"wheels stopped: {self.link_error}"

@@ -15,6 +15,7 @@
 | ``wheel_max_velocity`` | 0.0 | rad/s bound on every wheel (0: only the robot file's ``max_speed``) |
 | ``wheel_slip`` | 2e-4 | sqrt(m), per-wheel slip intensity of the odometry covariance |
 | ``reject_above`` | 100.0 | commands beyond this many times a limit are rejected as malformed |
+| ``link_retry_period`` | 1.0 | s between attempts to re-arm a lost serial link (0: stay stopped) |
 
 A ``--params FILE`` is YAML, either flat (``cmd_vel_timeout: 0.2``) or in the ROS layout
 (``omnikin_base: {ros__parameters: {...}}``); unknown names are errors.
@@ -41,6 +42,7 @@ DEFAULTS = {
     "wheel_max_velocity": 0.0,
     "wheel_slip": 2e-4,
     "reject_above": 100.0,
+    "link_retry_period": 1.0,
 }
 
 
@@ -100,6 +102,7 @@ RANGES = {
     "wheel_max_velocity": (0.0, 1e5, True),
     "wheel_slip": (0.0, 1.0, True),
     "reject_above": (1.0, 1e9, True),
+    "link_retry_period": (0.0, 3600.0, True),
 }
 """Allowed ``(low, high, low_inclusive)`` of the numeric parameters."""
 

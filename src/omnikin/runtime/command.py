@@ -121,6 +121,14 @@ class CommandFilter:
             k = min(k, self.limits.angular_accel * dt / ang)
         return current + k * step
 
+    def halt(self) -> None:
+        """Forget the target and the current twist (the wheels were stopped from outside, e.g.
+        by a lost link): zero until a new command arrives. Not counted as a timeout."""
+        self.target = np.zeros(3)
+        self._limited_target = np.zeros(3)
+        self.current = np.zeros(3)
+        self._timed_out = True
+
     @property
     def timed_out(self) -> bool:
         return self._timed_out

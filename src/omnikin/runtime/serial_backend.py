@@ -31,8 +31,12 @@ Link loss. Each wheel must send a valid frame (report, heartbeat or error) at le
 the Nano reset when their port opens). Otherwise, or when a port fails, the link is lost: the
 back-end sends zero speeds to every wheel at once and from then on, whatever ``write`` is given,
 and every ``read`` raises :class:`LinkLostError` naming the wheel and port, until
-:meth:`SerialBackend.reset_link`. ``write`` never raises for link problems (the node's stop path
-calls it). Heartbeats go to every wheel at least every ``heartbeat_period`` [s].
+:meth:`SerialBackend.reconnect` (reopens the ports that failed, then re-arms) or
+:meth:`SerialBackend.reset_link` (re-arms only). After re-arming, the controllers must be heard
+from again within ``connect_timeout``; their counts continue from the angles held at the loss
+(motion during the outage is not counted: a controller may have restarted). ``write`` never
+raises for link problems (the node's stop path calls it). Heartbeats go to every wheel at least
+every ``heartbeat_period`` [s].
 
 Steerable wheels are not supported: protocol version 1 carries wheel speeds only.
 """
@@ -83,6 +87,7 @@ class _Port:
         self.link = link
         self.decoder = decoder
         self.wheels = wheels
+        self.failed = False      # reading raised (unplugged, closed): reopened by reconnect()
 
 
 class SerialBackend:
@@ -132,11 +137,12 @@ class SerialBackend:
         self._closed = False
         self.counters = {"writes": 0, "reads": 0, "tx_frames": 0, "tx_errors": 0, "heartbeats_tx": 0,
                          "reports": 0, "heartbeats_rx": 0, "errors_rx": 0, "resets": 0, "misrouted": 0,
-                         "timeouts": 0, "port_errors": 0}
+                         "timeouts": 0, "port_errors": 0, "reconnects": 0}
         self.last_error = ""
         self.last_tx_error = ""
         self._ports: dict[str, _Port] = {}
-        self._open_ports(write_timeout)
+        self._write_timeout = write_timeout
+        self._open_ports()
 
     # --- set-up ------------------------------------------------------------------------------
     @staticmethod
@@ -175,20 +181,27 @@ class SerialBackend:
             raise OmnikinError(f"serial back-end: empty port name for wheel(s) {bad}")
         return mapping
 
-    def _open_ports(self, write_timeout: float) -> None:
-        serial = _require_serial()
-        parity = {"none": serial.PARITY_NONE, "even": serial.PARITY_EVEN, "odd": serial.PARITY_ODD}
-        ser = self.protocol.serial
+    def _open_ports(self) -> None:
         for url in dict.fromkeys(self.port_of.values()):
             wheels = [n for n in self.encoded if self.port_of[n] == url]
             try:
-                link = serial.serial_for_url(url, baudrate=self.baud, bytesize=int(ser["bytesize"]),
-                                             parity=parity[ser["parity"]],
-                                             stopbits=ser["stopbits"], timeout=0, write_timeout=write_timeout)
-            except (serial.SerialException, OSError, ValueError) as exc:
+                link = self._open(url, wheels)
+            except OmnikinError:
                 self.close()
-                raise OmnikinError(f"serial back-end: cannot open {url!r} for wheel(s) {wheels}: {exc}") from None
+                raise
             self._ports[url] = _Port(url, link, StreamDecoder(self.protocol, "controller_to_host"), wheels)
+
+    def _open(self, url: str, wheels: list):
+        """A pyserial link to ``url`` with the protocol's settings, or an error naming port and wheels."""
+        serial = _require_serial()
+        parity = {"none": serial.PARITY_NONE, "even": serial.PARITY_EVEN, "odd": serial.PARITY_ODD}
+        ser = self.protocol.serial
+        try:
+            return serial.serial_for_url(url, baudrate=self.baud, bytesize=int(ser["bytesize"]),
+                                         parity=parity[ser["parity"]], stopbits=ser["stopbits"], timeout=0,
+                                         write_timeout=self._write_timeout)
+        except (serial.SerialException, OSError, ValueError) as exc:
+            raise OmnikinError(f"serial back-end: cannot open {url!r} for wheel(s) {wheels}: {exc}") from None
 
     # --- WheelBackend ------------------------------------------------------------------------------
     def write(self, t: float, speeds, steer=None) -> None:
@@ -238,6 +251,7 @@ class SerialBackend:
             out.update(total.as_dict())
         out["last_error"] = self.last_error
         out["last_tx_error"] = self.last_tx_error
+        out["waiting_for"] = ",".join(n for n in self.encoded if n not in self._reported)   # not heard since (re)arming
         if self._lost is not None:
             out["link_lost_reason"] = self._lost[0]
         if self._t is not None:
@@ -269,6 +283,20 @@ class SerialBackend:
     @property
     def link_lost(self) -> bool:
         return self._lost is not None
+
+    def reconnect(self) -> None:
+        """Reopen the ports that failed, then :meth:`reset_link`. Raises :class:`OmnikinError`
+        naming the port when one cannot be reopened yet (the link then stays lost: try again later)."""
+        for port in self._ports.values():
+            if port.failed:
+                try:
+                    port.link.close()
+                except Exception:  # the old link is dead anyway
+                    pass
+                port.link = self._open(port.url, port.wheels)
+                port.failed = False
+        self.reset_link()
+        self.counters["reconnects"] += 1
 
     def reset_link(self) -> None:
         """Leave the lost state: wheels are timed from the next call as if the ports had just opened."""
@@ -345,6 +373,7 @@ class SerialBackend:
                         self._handle(port, msg, t)
             except Exception as exc:  # SerialException / OSError: unplugged, closed
                 self.counters["port_errors"] += 1
+                port.failed = True
                 self._lose(t, f"serial back-end: link lost: port {url} failed ({exc}) for wheel(s) {port.wheels}; "
                               "all wheels commanded to zero", port.wheels[0], url)
                 return
