@@ -160,7 +160,7 @@ def test_bag_odometry_falls_back_to_bag_time(tmp_path):
     res = bags.bag_odometry(load_robot("tomasi-omni3"), path, tmp_path / "o")
     assert res.joint_states.stamp_source == "bag"
     np.testing.assert_allclose(odom_arrays(tmp_path / "o")[1], circle(twist, t), atol=1e-9)
-    with pytest.raises(bags.BagError, match="timestamps must increase strictly"):
+    with pytest.raises(bags.BagError, match="header stamps must increase strictly.*all header stamps are zero"):
         bags.bag_odometry(load_robot("tomasi-omni3"), path, tmp_path / "o2", stamp="header")
     assert not (tmp_path / "o2").exists()
 
@@ -401,3 +401,43 @@ def test_without_rosbags_the_error_names_the_extra(monkeypatch, tmp_path):
         bags.read_poses(tmp_path / "x", "/odom")
     with pytest.raises(ImportError, match=r"omnikin\[bags\]"):
         run_cli(["simulate", "tomasi-omni3", "--bag", tmp_path / "x.bag"])
+
+
+# --- errors that name the bag's message and fail before the long work ---------------------------------
+def test_stamp_going_back_names_the_bags_message(tmp_path):
+    """Wheel messages interleaved with foreign ones (skipped), two header stamps swapped: the
+    error names the message index in the topic (not the index among kept samples) and the way out."""
+    twist = np.array([0.1, 0.0, 0.3])
+    stamps = T0 + DT * np.arange(20)
+    header = stamps.copy()
+    header[[8, 9]] = header[[9, 8]]
+    ang = np.outer((stamps - T0) * 1e-9, TOMASI_J @ twist)
+    path = tmp_path / "swapped"
+    with Writer(path, version=8) as w:
+        c = w.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=TS)
+        for s, h, a in zip(stamps, header, ang):
+            for names, pos in ([["arm"], [1.0]], [["w1", "w2", "w3"], a]):    # topic messages 2k and 2k+1
+                st = T["builtin_interfaces/msg/Time"](sec=int(h) // 10**9, nanosec=int(h) % 10**9)
+                msg = T["sensor_msgs/msg/JointState"](header=T["std_msgs/msg/Header"](stamp=st, frame_id=""),
+                                                      name=names, position=np.asarray(pos, float),
+                                                      velocity=np.zeros(0), effort=np.zeros(0))
+                w.write(c, int(s), TS.serialize_cdr(msg, "sensor_msgs/msg/JointState"))
+    robot = load_robot("tomasi-omni3")
+    # wheel sample 9 is topic message 2 * 9 + 1 = 19; it follows message 17
+    with pytest.raises(bags.BagError, match=r"message 19: header stamps must increase strictly.*of message 17; "
+                                            r"--stamp bag") as info:
+        bags.read_joint_states(path, robot)
+    assert str(int(header[9])) in str(info.value)
+    js = bags.read_joint_states(path, robot, stamp="bag")               # the record times are in order
+    assert len(js.stamps) == 20
+
+
+def test_taken_output_fails_before_reading_or_simulating(tmp_path):
+    """The output check comes first: with an output that exists, even a missing input bag or an
+    impossible path is not reached."""
+    out = tmp_path / "taken"
+    out.mkdir()
+    with pytest.raises(bags.BagError, match="exists already"):
+        bags.bag_odometry(load_robot("tomasi-omni3"), tmp_path / "no-such-bag", out)
+    with pytest.raises(bags.BagError, match="exists already"):
+        run_cli(["simulate", "tomasi-omni3", "--path", "not a path", "--bag", out])

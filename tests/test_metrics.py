@@ -407,3 +407,29 @@ def test_cli_matches_evo_main_ape(tmp_path, capsys):
     doc = json.loads(capsys.readouterr().out)
     for k in ("rmse", "mean", "median", "std", "min", "max", "sse"):
         assert doc["ate"]["translation"][k] == pytest.approx(float(result.stats[k]), abs=1e-9, rel=1e-9)
+
+
+def test_kitti_against_a_timed_file_is_refused(tmp_path, capsys):
+    """KITTI has no timestamps (pose k at t = k): pairing it with seconds would match the wrong
+    poses, so the command refuses and says how to compare."""
+    from omnikin.cli.main import main
+
+    t = np.arange(50) * 0.1
+    poses = np.column_stack([t, 0 * t, 0 * t])
+    write_trajectory(tmp_path / "a.kitti", t, poses, "kitti")
+    write_trajectory(tmp_path / "b.tum", t, poses, "tum")
+    write_trajectory(tmp_path / "c.kitti", t, poses, "kitti")
+    for ref, est in (("a.kitti", "b.tum"), ("b.tum", "a.kitti")):
+        assert main(["metrics", str(tmp_path / ref), str(tmp_path / est)]) == 2
+        err = capsys.readouterr().err
+        assert "a.kitti is KITTI (no timestamps" in err and "b.tum has timestamps" in err
+    assert main(["metrics", str(tmp_path / "a.kitti"), str(tmp_path / "c.kitti"), "--json"]) == 0   # by index
+
+
+def test_written_files_have_no_negative_zero(tmp_path):
+    """-0.0 poses (e.g. x = -0.0 after a sign flip) are written as 0, not '-0'."""
+    for fmt in ("tum", "kitti", "csv"):
+        path = tmp_path / f"z.{fmt}"
+        write_trajectory(path, [0.0, 1.0], [[-0.0, -0.0, -0.0], [1.0, -0.0, 0.0]], fmt)
+        text = path.read_text()
+        assert "-0 " not in text + " " and "-0." not in text and "-0\n" not in text, (fmt, text)

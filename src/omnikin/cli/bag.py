@@ -215,11 +215,12 @@ def parse_paths(text: str):
 
 
 def cmd_simulate(args) -> int:
-    from ..io.bags import record_run, require_rosbags
+    from ..io.bags import record_run, require_new_bag, require_rosbags
     from ..simulation.errors import noise as noise_profile
     from ..simulation.simulate import simulate
 
     require_rosbags()
+    require_new_bag(args.bag)
     robot = load_robot(args.robot)
     if args.seed < 0:
         raise OmnikinError(f"--seed must be a whole number >= 0, got {args.seed}")
@@ -264,7 +265,7 @@ def cmd_simulate(args) -> int:
 # --- metrics -----------------------------------------------------------------------------------------
 def cmd_metrics(args) -> int:
     from ..benchmark.metrics import evaluate, statistics
-    from ..io.trajectories import read_trajectory
+    from ..io.trajectories import detect_format, read_trajectory
 
     if args.delta < 1:
         raise OmnikinError(f"--delta must be a whole number of frames >= 1, got {args.delta}")
@@ -272,8 +273,15 @@ def cmd_metrics(args) -> int:
         raise OmnikinError(f"--t-max-diff must be a time >= 0 [s], got {args.t_max_diff}")
     if not math.isfinite(args.t_offset):
         raise OmnikinError(f"--t-offset must be a finite time [s], got {args.t_offset}")
-    t_ref, ref = read_trajectory(args.ref)
-    t_est, est = read_trajectory(args.est)
+    formats = {path: detect_format(path) for path in (args.ref, args.est)}
+    if list(formats.values()).count("kitti") == 1:
+        kitti = next(p for p, f in formats.items() if f == "kitti")
+        timed = next(p for p, f in formats.items() if f != "kitti")
+        raise OmnikinError(f"{kitti} is KITTI (no timestamps: pose k stands at t = k) but {timed} has timestamps "
+                           f"[s]: they cannot be associated; export both as TUM or CSV, or both as KITTI to "
+                           f"compare by index")
+    t_ref, ref = read_trajectory(args.ref, formats[args.ref])
+    t_est, est = read_trajectory(args.est, formats[args.est])
     try:
         ev = evaluate(t_ref, ref, t_est, est, align=args.align, delta=args.delta, all_pairs=args.all_pairs,
                       max_diff=args.t_max_diff, offset=args.t_offset)

@@ -220,7 +220,7 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
     wheels = _encoded_names(robot)
     steer_joints = [f"{n}{steer_suffix}" for n in robot.steer_names]
     needed = wheels + steer_joints
-    header_ns, bag_ns, rows = [], [], []
+    header_ns, bag_ns, rows, msg_index = [], [], [], []
     skipped = 0
     seen_names: set[str] = set()
     for k, t_ns, msg, _ in _messages(bag, topic, (JOINT_STATE,)):
@@ -250,6 +250,7 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
         header_ns.append(_stamp_ns(msg.header.stamp))
         bag_ns.append(t_ns)
         rows.append(row)
+        msg_index.append(k)
     if not rows:
         raise BagError(f"{bag}: topic {topic!r}: no JointState message names the wheel joints {needed} of robot "
                        f"{robot.name!r} (joint name = wheel name); the topic's joints are "
@@ -264,7 +265,17 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
     repeat = np.zeros(len(data), dtype=bool)
     repeat[1:] = (stamps[1:] == stamps[:-1]) & np.all(data[1:] == data[:-1], axis=1)
     keep = ~repeat
-    data, stamps, bag_ns = data[keep], stamps[keep], bag_ns[keep]
+    data, stamps, bag_ns, msg_index = data[keep], stamps[keep], bag_ns[keep], np.array(msg_index)[keep]
+    back = np.flatnonzero(np.diff(stamps) <= 0)
+    if back.size:
+        i = int(back[0]) + 1
+        what = "header stamps" if source == "header" else "bag record times"
+        hint = ("; all header stamps are zero: use --stamp bag (record times)" if source == "header"
+                and not np.any(header_ns) else
+                "; --stamp bag uses the record times instead" if source == "header" else "")
+        raise BagError(f"{bag}: topic {topic!r}, message {int(msg_index[i])}: {what} must increase strictly: "
+                       f"{int(stamps[i])} ns follows {int(stamps[i - 1])} ns of message {int(msg_index[i - 1])}"
+                       f"{hint}")
     if len(data) < 2:
         raise BagError(f"{bag}: topic {topic!r}: odometry needs at least two distinct wheel samples, got "
                        f"{len(data)}")
@@ -392,16 +403,24 @@ def _serialize(rb: _Rosbags, msg, msgtype: str) -> bytes:
     return bytes(rb.store.serialize_cdr(msg, msgtype))
 
 
-def _write_bag(path, topics: list[_Topic], storage: str = "sqlite3", custom: dict | None = None) -> None:
-    """Write serialized messages to a new bag, interleaved by bag time."""
-    rb = _Rosbags.get()
-    if storage not in STORAGES:
-        raise BagError(f"{path}: unknown bag storage {storage!r}; one of {list(STORAGES)}")
+def require_new_bag(path) -> Path:
+    """``path`` as a :class:`Path` if a new bag can be written there, else :class:`BagError`.
+
+    Called before any long work (reading, simulating) so that a taken name fails at once."""
     out = Path(path)
     if out.exists():
         raise BagError(f"{path}: exists already; a bag is written to a new directory, never overwritten")
     if not out.parent.exists():
         raise BagError(f"{path}: the folder {str(out.parent)!r} does not exist")
+    return out
+
+
+def _write_bag(path, topics: list[_Topic], storage: str = "sqlite3", custom: dict | None = None) -> None:
+    """Write serialized messages to a new bag, interleaved by bag time."""
+    rb = _Rosbags.get()
+    if storage not in STORAGES:
+        raise BagError(f"{path}: unknown bag storage {storage!r}; one of {list(STORAGES)}")
+    out = require_new_bag(path)
     import inspect
 
     params = inspect.signature(rb.Writer).parameters
@@ -493,6 +512,7 @@ def bag_odometry(robot: Robot, bag_in, bag_out, *, joint_states_topic: str = "/j
     """
     from ..odometry import batch_odometry_from_angles
 
+    require_new_bag(bag_out)
     js = read_joint_states(bag_in, robot, joint_states_topic, stamp=stamp, steer_suffix=steer_suffix)
     try:
         res = batch_odometry_from_angles(robot, js.t, js.angles, steer=js.steer, method=method)
