@@ -602,3 +602,103 @@ def test_metrics_messages_show_plain_numbers():
     with pytest.raises(OmnikinError) as exc:
         check_trajectory([0.0, 1.0, 1.0], np.zeros((3, 3)))
     assert "np.float64" not in str(exc.value)
+
+
+# =====================================================================================================
+# third review (runtime speed-up, link re-arm, bag tools)
+# =====================================================================================================
+def test_halt_then_command_keeps_the_acceleration_limit():
+    """After halt() (link re-armed after an outage) a command must ramp up from rest at the
+    acceleration limit, not jump across the outage as one long time step."""
+    from omnikin.runtime.command import CommandFilter
+    from omnikin.simulation.limits import MotionLimits
+
+    f = CommandFilter(load_robot("tomasi-omni3"), MotionLimits(linear=1.0, linear_accel=0.5), timeout=0.0)
+    f.command((0.2, 0.0, 0.0), 0.0)
+    for k in range(1, 100):
+        f.update(0.01 * k)                       # up to speed
+    f.halt()                                     # the link was lost at t = 0.99 and re-armed at 2.0
+    f.command((0.2, 0.0, 0.0), 2.0)
+    first = f.update(2.0)
+    second = f.update(2.01)
+    assert first[0] == 0.0
+    assert second[0] == pytest.approx(0.5 * 0.01, abs=1e-12)     # a_max * dt, from rest
+
+
+def test_replaced_limits_apply_to_the_current_command():
+    from dataclasses import replace
+
+    from omnikin.runtime.command import CommandFilter
+    from omnikin.simulation.limits import MotionLimits
+
+    f = CommandFilter(load_robot("tomasi-omni3"), MotionLimits(linear=1.0, linear_accel=None), timeout=0.0)
+    f.command((0.8, 0.0, 0.0), 0.0)
+    assert f.update(0.0)[0] == pytest.approx(0.8)
+    f.limits = replace(f.limits, linear=0.3)
+    assert f.update(0.01)[0] == pytest.approx(0.3)
+
+
+def test_copied_robot_cannot_corrupt_cached_matrices():
+    """Pickle and deepcopy drop the read-only caches; the copy rebuilds its own, still read-only."""
+    import copy
+    import pickle
+
+    robot = load_robot("omni4")
+    robot.jacobian(), robot.fk_matrix(), robot.fk_matrix(None, ["w1", "w2", "w3"])
+    for clone in (copy.deepcopy(robot), pickle.loads(pickle.dumps(robot))):
+        jac = clone.jacobian()
+        with pytest.raises(ValueError):
+            jac *= 2
+        with pytest.raises(ValueError):
+            clone.fk_matrix()[0, 0] = 1.0
+        np.testing.assert_array_equal(clone.jacobian(), robot.jacobian())
+
+
+def test_fk_matrix_accepts_any_iterable_of_wheel_names():
+    robot = load_robot("omni4")
+    ref = np.linalg.pinv(robot.jacobian()[:3])
+    np.testing.assert_allclose(robot.fk_matrix(None, (n for n in ["w1", "w2", "w3"])), ref, atol=1e-12)
+    np.testing.assert_allclose(robot.fk_matrix(None, np.array(["w1", "w2", "w3"])), ref, atol=1e-12)
+
+
+def test_zero_wheel_limit_with_zero_twist_is_not_nan():
+    from omnikin.simulation.limits import MotionLimits, saturate, speed_scale
+
+    wheels = tuple(Wheel(f"w{i}", "omni", 0.1 * math.cos(a), 0.1 * math.sin(a), a + math.pi / 2, 0.03,
+                         max_speed=0.0 if i == 0 else None) for i, a in enumerate(TOM_BETAS))
+    robot = Robot("zero-limit", wheels)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert speed_scale(robot, [0.0, 0.0, 0.0], MotionLimits()) == np.inf
+        np.testing.assert_array_equal(saturate(robot, [0.0, 0.0, 0.0], MotionLimits()), [0.0, 0.0, 0.0])
+
+
+def test_reconnect_after_close_is_refused(tmp_path):
+    pytest.importorskip("serial")
+    from omnikin.runtime.fake_controller import FakeController
+    from omnikin.runtime.serial_backend import SerialBackend
+
+    robot = load_robot("tomasi-omni3")
+    with FakeController.for_robot(robot) as fake:
+        backend = SerialBackend(robot, fake.path)
+        backend.close()
+        with pytest.raises(OmnikinError, match="closed"):
+            backend.reconnect()
+
+
+def test_metrics_of_one_kitti_file_against_itself(tmp_path, capsys):
+    from omnikin.io.trajectories import write_trajectory
+
+    t = np.arange(20) * 0.1
+    write_trajectory(tmp_path / "a.kitti", t, np.column_stack([t, t, 0 * t]), "kitti")
+    assert main(["metrics", str(tmp_path / "a.kitti"), str(tmp_path / "a.kitti"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["ate"]["translation"]["rmse"] == 0.0
+
+
+def test_round_off_is_not_written_as_negative_zero(tmp_path):
+    from omnikin.io.trajectories import trajectory_lines
+
+    poses = [[-1e-12, -4e-10, -1e-14], [1.0, 0.0, 0.0]]
+    for fmt in ("csv", "tum"):
+        text = "\n".join(trajectory_lines([0.0, 1.0], poses, fmt))
+        assert "-0.000" not in text, (fmt, text)

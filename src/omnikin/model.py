@@ -211,7 +211,7 @@ class Robot:
         subset and returned read-only (copy it to modify it).
         """
         constant = not self.steerable and (steer is None or not np.size(steer))
-        key = None if wheels is None else tuple(wheels)
+        key = wheels = None if wheels is None else tuple(wheels)
         if constant and key in self._fk_cache:
             return self._fk_cache[key]
         f = self._fk_operator(self.fk_rows(self._steer_array(steer), wheels))
@@ -223,6 +223,13 @@ class Robot:
     @cached_property
     def _fk_cache(self) -> dict:
         return {}
+
+    _CACHES = ("_jacobian_constant", "_fk_cache")
+
+    def __getstate__(self):
+        """Pickle and deepcopy without the read-only matrix caches (NumPy does not keep the
+        read-only flag through them); a copy rebuilds its own."""
+        return {k: v for k, v in self.__dict__.items() if k not in self._CACHES}
 
     def _fk_operator(self, a: np.ndarray) -> np.ndarray:
         """``N pinv(A N)`` for fitted rows ``A`` ``(..., n_rows, 3)`` (module docstring)."""

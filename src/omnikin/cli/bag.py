@@ -273,15 +273,15 @@ def cmd_metrics(args) -> int:
         raise OmnikinError(f"--t-max-diff must be a time >= 0 [s], got {args.t_max_diff}")
     if not math.isfinite(args.t_offset):
         raise OmnikinError(f"--t-offset must be a finite time [s], got {args.t_offset}")
-    formats = {path: detect_format(path) for path in (args.ref, args.est)}
-    if list(formats.values()).count("kitti") == 1:
-        kitti = next(p for p, f in formats.items() if f == "kitti")
-        timed = next(p for p, f in formats.items() if f != "kitti")
+    paths = (args.ref, args.est)
+    formats = [detect_format(p) for p in paths]
+    if formats.count("kitti") == 1:
+        kitti, timed = paths if formats[0] == "kitti" else paths[::-1]
         raise OmnikinError(f"{kitti} is KITTI (no timestamps: pose k stands at t = k) but {timed} has timestamps "
                            f"[s]: they cannot be associated; export both as TUM or CSV, or both as KITTI to "
                            f"compare by index")
-    t_ref, ref = read_trajectory(args.ref, formats[args.ref])
-    t_est, est = read_trajectory(args.est, formats[args.est])
+    t_ref, ref = read_trajectory(args.ref, formats[0])
+    t_est, est = read_trajectory(args.est, formats[1])
     try:
         ev = evaluate(t_ref, ref, t_est, est, align=args.align, delta=args.delta, all_pairs=args.all_pairs,
                       max_diff=args.t_max_diff, offset=args.t_offset)

@@ -56,12 +56,14 @@ def trajectory_lines(t, poses, fmt: str) -> list[str]:
     times = format_times(t)
     if len(times) != len(p):
         raise TrajectoryFileError(f"{len(times)} timestamps for {len(p)} poses")
-    p = p + 0.0                                    # + 0.0 turns -0.0 into 0.0: no "-0" in the files
-    c, s = np.cos(p[:, 2]) + 0.0, np.sin(p[:, 2]) + 0.0
+    c, s = np.cos(p[:, 2]) + 0.0, np.sin(p[:, 2]) + 0.0     # + 0.0 turns -0.0 into 0.0: no "-0" in the files
+    p = p + 0.0
+    if fmt in ("csv", "tum"):                      # fixed decimals: what rounds to zero is written as 0
+        p = np.column_stack([np.round(p[:, :2], 9), np.round(p[:, 2], 12)]) + 0.0
     if fmt == "csv":
         return ["t,x,y,theta"] + [f"{tk},{x:.9f},{y:.9f},{th:.12f}" for tk, (x, y, th) in zip(times, p.tolist())]
     if fmt == "tum":
-        qz, qw = np.sin(0.5 * p[:, 2]) + 0.0, np.cos(0.5 * p[:, 2]) + 0.0
+        qz, qw = np.round(np.sin(0.5 * p[:, 2]), 12) + 0.0, np.round(np.cos(0.5 * p[:, 2]), 12) + 0.0
         return [f"{tk} {x:.9f} {y:.9f} 0 0 0 {z:.12f} {w:.12f}"
                 for tk, (x, y, _), z, w in zip(times, p.tolist(), qz.tolist(), qw.tolist())]
     return [f"{ck:.12g} {-sk + 0.0:.12g} 0 {x:.12g} {sk:.12g} {ck:.12g} 0 {y:.12g} 0 0 1 0"

@@ -170,7 +170,7 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             command is dropped, so the wheels stay stopped until a new cmd_vel arrives."""
             period = self.p["link_retry_period"]
             reconnect = getattr(self.runtime.backend, "reconnect", None)
-            if not period or reconnect is None:
+            if not period or reconnect is None or not getattr(self.runtime.backend, "link_lost", False):
                 return
             now = self.now_s()
             if self._next_retry is None:
@@ -192,7 +192,8 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             periods of a late timer instead of running them in a burst)."""
             if self._first_loop is None:
                 return 0
-            return max(0, int((now - self._first_loop) / self.period) + 1 - self.loops)
+            due = int((now - self._first_loop) / self.period - 0.5) + 1    # due over half a period ago
+            return max(0, due - self.loops)
 
         def _diagnostics(self):
             s = self.runtime.filter.stats

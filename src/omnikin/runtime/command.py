@@ -56,7 +56,8 @@ class CommandFilter:
         if not (math.isfinite(self.timeout) and self.timeout >= 0):
             raise OmnikinError(f"cmd_vel_timeout must be a finite number >= 0 [s] (0 disables), got {self.timeout!r}")
         self.target = np.zeros(3)
-        self._limited_target = np.zeros(3)     # target saturated to the speed limits
+        self._limited_target = np.zeros(3)     # target saturated to the speed limits ...
+        self._limited_for = (self.robot, self.limits)   # ... of this robot and these limits
         self.current = np.zeros(3)
         self._last_command_t = None
         self._timed_out = True
@@ -89,6 +90,7 @@ class CommandFilter:
             self.stats.saturated += 1
         self.target = v
         self._limited_target = limited
+        self._limited_for = (self.robot, self.limits)
         self._last_command_t = float(t)
         self._timed_out = False
         self.stats.accepted += 1
@@ -107,6 +109,9 @@ class CommandFilter:
                 and t - self._last_command_t > self.timeout:
             self._timed_out = True
             self.stats.timeouts += 1
+        if self._limited_for != (self.robot, self.limits):     # limits replaced since the command
+            self._limited_target = saturate(self.robot, self.target, self.limits)
+            self._limited_for = (self.robot, self.limits)
         limited = np.zeros(3) if (self._timed_out or self._last_command_t is None) else self._limited_target
         self.current = self._accelerate(self.current, limited, dt)
         return self.current.copy()
@@ -128,6 +133,7 @@ class CommandFilter:
         self._limited_target = np.zeros(3)
         self.current = np.zeros(3)
         self._timed_out = True
+        self._last_t = None            # the next update starts from rest: no step over the gap
 
     @property
     def timed_out(self) -> bool:

@@ -31,7 +31,7 @@ Link loss. Each wheel must send a valid frame (report, heartbeat or error) at le
 the Nano reset when their port opens). Otherwise, or when a port fails, the link is lost: the
 back-end sends zero speeds to every wheel at once and from then on, whatever ``write`` is given,
 and every ``read`` raises :class:`LinkLostError` naming the wheel and port, until
-:meth:`SerialBackend.reconnect` (reopens the ports that failed, then re-arms) or
+:meth:`SerialBackend.reconnect` (reopens the ports, then re-arms) or
 :meth:`SerialBackend.reset_link` (re-arms only). After re-arming, the controllers must be heard
 from again within ``connect_timeout``; their counts continue from the angles held at the loss
 (motion during the outage is not counted: a controller may have restarted). ``write`` never
@@ -87,7 +87,6 @@ class _Port:
         self.link = link
         self.decoder = decoder
         self.wheels = wheels
-        self.failed = False      # reading raised (unplugged, closed): reopened by reconnect()
 
 
 class SerialBackend:
@@ -285,16 +284,18 @@ class SerialBackend:
         return self._lost is not None
 
     def reconnect(self) -> None:
-        """Reopen the ports that failed, then :meth:`reset_link`. Raises :class:`OmnikinError`
-        naming the port when one cannot be reopened yet (the link then stays lost: try again later)."""
+        """Reopen every port (one that failed, or whose device came back under the same name
+        without an error), then :meth:`reset_link`. Raises :class:`OmnikinError` naming the port
+        when one cannot be reopened yet (the link then stays lost: try again later), or when the
+        back-end was closed."""
+        if self._closed:
+            raise OmnikinError("serial back-end: closed; create a new one instead of reconnecting")
         for port in self._ports.values():
-            if port.failed:
-                try:
-                    port.link.close()
-                except Exception:  # the old link is dead anyway
-                    pass
-                port.link = self._open(port.url, port.wheels)
-                port.failed = False
+            try:
+                port.link.close()
+            except Exception:  # the old link may be dead anyway
+                pass
+            port.link = self._open(port.url, port.wheels)
         self.reset_link()
         self.counters["reconnects"] += 1
 
@@ -373,7 +374,6 @@ class SerialBackend:
                         self._handle(port, msg, t)
             except Exception as exc:  # SerialException / OSError: unplugged, closed
                 self.counters["port_errors"] += 1
-                port.failed = True
                 self._lose(t, f"serial back-end: link lost: port {url} failed ({exc}) for wheel(s) {port.wheels}; "
                               "all wheels commanded to zero", port.wheels[0], url)
                 return

@@ -60,7 +60,9 @@ def speed_scale(robot, twist, limits: MotionLimits) -> np.ndarray:
     require_finite(t, "twist")
     speeds = np.abs(robot.ik(t, on_infeasible="return").wheel_speeds)
     with np.errstate(divide="ignore"):            # a bound over a zero speed is no bound: inf
-        k = np.min(wheel_limits(robot, limits) / speeds, axis=-1, initial=np.inf)
+        bound = np.broadcast_to(wheel_limits(robot, limits), speeds.shape)
+        k = np.min(np.divide(bound, speeds, out=np.full(speeds.shape, np.inf), where=speeds > 0),
+                   axis=-1, initial=np.inf)
         if limits.linear is not None:
             k = np.minimum(k, limits.linear / np.hypot(t[..., 0], t[..., 1]))
         if limits.angular is not None:
