@@ -156,7 +156,7 @@ class Robot:
         Without steerable wheels the matrix is constant: it is built once and returned
         read-only (copy it to modify it).
         """
-        if not self.steerable and wheels is None and (steer is None or not np.size(steer)):
+        if wheels is None and self._constant_at(steer):
             return self._jacobian_constant
         steer = self._steer_array(steer)
         by = self._steer_of(steer)
@@ -164,6 +164,10 @@ class Robot:
         rows = [w.rolling_row(by.get(w.name, 0.0)) for w in chosen]
         shape = np.broadcast_shapes(*[r.shape for r in rows])
         return np.stack([np.broadcast_to(r, shape) for r in rows], axis=-2)
+
+    def _constant_at(self, steer) -> bool:
+        """True when the matrices do not depend on ``steer``: no steerable wheel, no angles given."""
+        return not self.steerable and (steer is None or not np.size(steer))
 
     @cached_property
     def _jacobian_constant(self) -> np.ndarray:
@@ -210,7 +214,7 @@ class Robot:
         Without steerable wheels the operator is constant: it is computed once per wheel
         subset and returned read-only (copy it to modify it).
         """
-        constant = not self.steerable and (steer is None or not np.size(steer))
+        constant = self._constant_at(steer)
         key = wheels = None if wheels is None else tuple(wheels)
         if constant and key in self._fk_cache:
             return self._fk_cache[key]
