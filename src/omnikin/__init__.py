@@ -5,8 +5,8 @@ Layers (each imports only those above it in this list): ``geometry`` -> ``wheels
 and ``integration``). Edges: ``io``, ``viz``, ``cli``.
 """
 
-from .errors import (InfeasibleTwistError, OdometryInputError, OmnikinError, RobotFileError,
-                     SingularLayoutError)
+from .errors import (InfeasibleTwistError, InputError, LinkError, OdometryInputError, OmnikinError,
+                     RobotFileError, SingularLayoutError)
 from .model import FKResult, IKResult, Robot
 from .odometry import OdometryResult, batch_odometry, batch_odometry_from_angles
 from .streaming import Odometry
@@ -24,7 +24,7 @@ def load_robot(spec):
 
 
 __all__ = [
-    "Encoder", "FKResult", "IKResult", "InfeasibleTwistError", "Odometry", "OdometryInputError",
+    "Encoder", "FKResult", "IKResult", "InfeasibleTwistError", "InputError", "LinkError", "Odometry", "OdometryInputError",
     "OdometryResult", "OmnikinError", "PRESET_NAMES", "Robot", "RobotFileError", "SingularLayoutError",
     "Steer", "Wheel", "batch_odometry", "batch_odometry_from_angles", "load_robot", "__version__",
 ]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import OmnikinError
+from .errors import InputError, OmnikinError
 
 
 def as_components(value, size: int, name: str) -> np.ndarray:
@@ -15,7 +15,7 @@ def as_components(value, size: int, name: str) -> np.ndarray:
     """
     arr = np.asarray(value, dtype=float)
     if arr.ndim == 0 or arr.shape[-1] != size:
-        raise OmnikinError(f"{name}: expected shape (..., {size}), got {arr.shape}")
+        raise InputError(f"{name}: expected shape (..., {size}), got {arr.shape}")
     return arr
 
 
@@ -24,4 +24,4 @@ def require_finite(arr: np.ndarray, name: str) -> None:
     bad = ~np.isfinite(arr)
     if bad.any():
         index = tuple(int(i) for i in np.argwhere(bad)[0])
-        raise OmnikinError(f"{name}: non-finite value {arr[index]!r} at index {index}")
+        raise InputError(f"{name}: non-finite value {arr[index]!r} at index {index}")

@@ -1,25 +1,72 @@
 """Exception types of omnikin.
 
-Every error raised on bad input is a ``ValueError`` subclass whose message names
-what is wrong and where (file, wheel, field, sample index).
+The hierarchy is rooted at :class:`Exception`, and each branch also derives from the
+built-in exception that says what kind of failure it is, so that callers can catch what
+they mean:
+
+- :class:`OmnikinError` (``Exception``): every error omnikin raises on purpose.
+- :class:`InputError` (also ``ValueError``): bad input: an argument, a file, a sample. Its
+  message names what is wrong and where (file, line, wheel, field, sample index), in one
+  line, and never quotes an unbounded value.
+- :class:`LinkError` (also ``RuntimeError``): a link to hardware failed while running
+  (a wheel controller fell silent, a port closed). Not the caller's fault; retrying may help.
+
+Errors may carry where they happened as attributes (``sample``, ``line``, ``wheel``, ...),
+so that an edge (the command line) can add its own context without parsing the message.
 """
 
-
-class OmnikinError(ValueError):
-    """Base class of all omnikin input errors."""
+from __future__ import annotations
 
 
-class RobotFileError(OmnikinError):
+class OmnikinError(Exception):
+    """Base class of every error omnikin raises on purpose."""
+
+
+class InputError(OmnikinError, ValueError):
+    """Bad input: the message names what is wrong and where."""
+
+
+class RobotFileError(InputError):
     """A robot file (or dict) breaks schema version 1 of ``docs/conventions.md``."""
 
 
-class SingularLayoutError(OmnikinError):
+class SingularLayoutError(InputError):
     """The wheel layout cannot realise or observe the motion its type promises."""
 
 
-class InfeasibleTwistError(OmnikinError):
+class InfeasibleTwistError(InputError):
     """A commanded twist violates a no-side-slip constraint or a steering limit."""
 
 
-class OdometryInputError(OmnikinError):
-    """Encoder samples that cannot be integrated (time order, jumps, NaN, shape)."""
+class OdometryInputError(InputError):
+    """Encoder samples that cannot be integrated (time order, jumps, NaN, shape).
+
+    ``sample``: index of the offending sample (0-based, counting every sample given), or
+    None when the problem is not tied to one sample; ``detail``: the message without the
+    sample, so that an edge can name the sample its own way (a file line).
+    """
+
+    def __init__(self, message: str, *, sample: int | None = None, detail: str | None = None):
+        super().__init__(message)
+        self.sample = sample
+        self.detail = detail if detail is not None else message
+
+
+class OutputExistsError(InputError):
+    """An output path exists and the user did not ask to replace it, or it is an input."""
+
+
+class LinkError(OmnikinError, RuntimeError):
+    """A link to hardware failed while running (not an input error)."""
+
+
+def shorten(value: object, limit: int = 60) -> str:
+    """``repr(value)`` cut to ``limit`` characters, for error messages that quote user input.
+
+    Messages never print an unbounded value: a 10 MB field or a list of a million numbers
+    would make the one-line error useless (and slow).
+    """
+    text = repr(value)
+    if len(text) <= limit:
+        return text
+    return text[: limit - 15] + f"... ({len(text)} chars)"

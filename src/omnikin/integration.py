@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import OmnikinError
+from .errors import InputError, OmnikinError
 from .geometry import sinc, wrap_angle
 
 METHODS = ("exact", "midpoint", "euler")
@@ -25,7 +25,7 @@ METHODS = ("exact", "midpoint", "euler")
 
 def check_method(method: str) -> str:
     if method not in METHODS:
-        raise OmnikinError(f"unknown integration method {method!r}; one of {list(METHODS)}")
+        raise InputError(f"unknown integration method {method!r}; one of {list(METHODS)}")
     return method
 
 
@@ -37,7 +37,7 @@ def integrate(increments: np.ndarray, start=None, method: str = "exact") -> np.n
     """
     inc = np.asarray(increments, dtype=float)
     if inc.ndim < 2 or inc.shape[-1] != 3:
-        raise OmnikinError(f"increments: expected shape (..., N, 3), got {inc.shape}")
+        raise InputError(f"increments: expected shape (..., N, 3), got {inc.shape}")
     comps = np.ascontiguousarray(np.moveaxis(inc, -1, 0))
     return integrate_components(comps[0], comps[1], comps[2], start, method)
 

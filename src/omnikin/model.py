@@ -33,7 +33,7 @@ from typing import Optional, Sequence
 import numpy as np
 
 from ._arrays import as_components, require_finite
-from .errors import InfeasibleTwistError, OmnikinError, SingularLayoutError
+from .errors import InfeasibleTwistError, InputError, OmnikinError, SingularLayoutError
 from .linalg import RANK_TOL, null_space, rank
 from .mobility import Configuration, Mobility, analyse, generic_configuration
 from .wheels import Wheel
@@ -99,7 +99,7 @@ class Robot:
         names = [w.name for w in self.wheels]
         dup = {n for n in names if names.count(n) > 1}
         if dup:
-            raise OmnikinError(f"robot {self.name!r}: duplicate wheel names {sorted(dup)}")
+            raise InputError(f"robot {self.name!r}: duplicate wheel names {sorted(dup)}")
         if not self.rolling:
             raise SingularLayoutError(
                 f"robot {self.name!r}: no rolling wheel (castors alone cannot move or measure it)"
@@ -133,7 +133,7 @@ class Robot:
         for w in self.wheels:
             if w.name == name:
                 return w
-        raise OmnikinError(f"robot {self.name!r} has no wheel {name!r} (wheels: {[w.name for w in self.wheels]})")
+        raise InputError(f"robot {self.name!r} has no wheel {name!r} (wheels: {[w.name for w in self.wheels]})")
 
     # --- matrices ---------------------------------------------------------------
     def _steer_array(self, steer) -> np.ndarray:
@@ -141,7 +141,7 @@ class Robot:
             return np.zeros(len(self.steerable))
         if not self.steerable:
             if np.size(steer):
-                raise OmnikinError(f"robot {self.name!r} has no steerable wheel: do not pass steering angles")
+                raise InputError(f"robot {self.name!r} has no steerable wheel: do not pass steering angles")
             return np.zeros(0)
         arr = as_components(steer, len(self.steerable), "steer")
         require_finite(arr, "steer")
@@ -320,7 +320,7 @@ class Robot:
         side-slip speed; ``"return"`` reports it in ``IKResult.violation``.
         """
         if on_infeasible not in ("raise", "return"):
-            raise OmnikinError(f"on_infeasible must be 'raise' or 'return', got {on_infeasible!r}")
+            raise InputError(f"on_infeasible must be 'raise' or 'return', got {on_infeasible!r}")
         t = as_components(twist, 3, "twist")
         require_finite(t, "twist")
         if heading is not None:
@@ -328,7 +328,7 @@ class Robot:
             t = self.body_twist(t, heading)
         hint = self._steer_array(steer_hint)
         if hint.ndim > 1 and np.broadcast_shapes(hint.shape[:-1], t.shape[:-1]) != t.shape[:-1]:
-            raise OmnikinError(f"steer_hint: shape {hint.shape} does not fit twists of shape {t.shape}")
+            raise InputError(f"steer_hint: shape {hint.shape} does not fit twists of shape {t.shape}")
         steer, limited = self._steer_for(t, hint, strict=on_infeasible == "raise")
         speeds = np.einsum("...ij,...j->...i", self.jacobian(steer), t)
         violation = t @ self.fixed_constraints.T
@@ -378,7 +378,7 @@ class Robot:
         w = as_components(wheel_speeds, len(names), "wheel_speeds")
         require_finite(w, "wheel_speeds")
         if self.steerable and steer is None:
-            raise OmnikinError(
+            raise InputError(
                 f"robot {self.name!r}: steerable wheels {self.steer_names} need their steering angles (steer=...)")
         steer = self._steer_array(steer)
         a = self.fk_rows(steer, wheels)

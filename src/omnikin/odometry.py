@@ -21,7 +21,7 @@ import numpy as np
 
 from ._arrays import as_components, require_finite
 from .encoders import first_bad, tick_increments
-from .errors import OdometryInputError, OmnikinError
+from .errors import InputError, OdometryInputError, OmnikinError
 from .geometry import wrap_angle
 from .integration import check_method, integrate_components
 from .model import Robot
@@ -31,7 +31,7 @@ def encoded_wheels(robot: Robot):
     """The rolling wheels with an encoder, in file order; checks they observe all motion."""
     wheels = [w for w in robot.rolling if w.encoder is not None]
     if not wheels:
-        raise OmnikinError(
+        raise InputError(
             f"robot {robot.name!r}: no wheel has an 'encoder' entry; odometry from ticks needs "
             f"encoder.ticks_per_rev on the measured wheels")
     robot.check_observable([w.name for w in wheels])
@@ -131,7 +131,7 @@ def _integrate(robot, wheels, t, delta, scale, steer, method, start) -> Odometry
     names = [w.name for w in wheels]
     if robot.steerable:
         if steer is None:
-            raise OmnikinError(f"robot {robot.name!r}: steerable wheels {robot.steer_names} need steering "
+            raise InputError(f"robot {robot.name!r}: steerable wheels {robot.steer_names} need steering "
                                f"angles (steer, shape (..., N, {len(robot.steerable)}))")
         s = as_components(steer, len(robot.steerable), "steer")
         want = delta.shape[:-2] + (delta.shape[-2] + 1, len(robot.steerable))
@@ -144,7 +144,7 @@ def _integrate(robot, wheels, t, delta, scale, steer, method, start) -> Odometry
         rows = robot.fk_rows(mid, names)
     else:
         if steer is not None:
-            raise OmnikinError(f"robot {robot.name!r} has no steerable wheel: do not pass steer")
+            raise InputError(f"robot {robot.name!r} has no steerable wheel: do not pass steer")
         f = robot.fk_matrix(None, names)
         rows = robot.fk_rows(None, names)
     if robot.steerable:

@@ -23,7 +23,7 @@ import numpy as np
 from ._arrays import as_components
 from ._stream_kernel import compile_advance, compile_update
 from .encoders import (check_bits, check_max_jump, jump_limit, tick_rate, wrap_scalar)
-from .errors import OdometryInputError, OmnikinError
+from .errors import InputError, OdometryInputError, OmnikinError
 from .geometry import wrap_angle
 from .integration import check_method
 from .linalg import rank
@@ -76,7 +76,7 @@ class Odometry:
         """Forget the previous sample; the next one is the new zero, at ``pose``."""
         p = as_components(pose, 3, "pose")
         if p.shape != (3,) or not np.all(np.isfinite(p)):
-            raise OmnikinError(f"pose: expected 3 finite numbers, got {pose!r}")
+            raise InputError(f"pose: expected 3 finite numbers, got {pose!r}")
         self._x, self._y, self._th = float(p[0]), float(p[1]), float(wrap_angle(p[2]))
         self._t = None
         self._ticks = None
@@ -107,7 +107,7 @@ class Odometry:
     def update_angles(self, t: float, angles, steer=None) -> tuple[float, float, float]:
         """Feed one sample of wheel angles [rad] (encoded wheels, file order)."""
         if self.bits is not None:
-            raise OmnikinError("update_angles works without counter wrap-around: create Odometry with counter_bits=None")
+            raise InputError("update_angles works without counter wrap-around: create Odometry with counter_bits=None")
         values = self._numbers(angles, "wheel angle")
         return self.update(t, [a / s for a, s in zip(values, self._scale)], steer)
 
@@ -210,10 +210,10 @@ class Odometry:
     def _check_steer(self, steer):
         if not self._steerable:
             if steer is not None:
-                raise OmnikinError(f"robot {self.robot.name!r} has no steerable wheel: do not pass steer")
+                raise InputError(f"robot {self.robot.name!r} has no steerable wheel: do not pass steer")
             return None
         if steer is None:
-            raise OmnikinError(f"robot {self.robot.name!r}: steerable wheels {self.robot.steer_names} need "
+            raise InputError(f"robot {self.robot.name!r}: steerable wheels {self.robot.steer_names} need "
                                f"their steering angles (steer=...)")
         s = as_components(steer, len(self.robot.steerable), "steer")
         if s.shape != (len(self.robot.steerable),):

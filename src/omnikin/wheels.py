@@ -34,7 +34,7 @@ import math
 
 import numpy as np
 
-from .errors import InfeasibleTwistError, OmnikinError
+from .errors import InfeasibleTwistError, InputError, OmnikinError
 
 WHEEL_TYPES = ("omni", "mecanum", "swedish", "standard", "steerable", "castor")
 SWEDISH_TYPES = ("omni", "mecanum", "swedish")
@@ -90,19 +90,19 @@ class Wheel:
 
     def __post_init__(self):
         if self.type not in WHEEL_TYPES:
-            raise OmnikinError(f"wheel {self.name!r}: unknown type {self.type!r}; one of {list(WHEEL_TYPES)}")
+            raise InputError(f"wheel {self.name!r}: unknown type {self.type!r}; one of {list(WHEEL_TYPES)}")
         for field in ("x", "y", "drive", "radius", "roller"):
             v = getattr(self, field)
             if isinstance(v, bool) or not isinstance(v, (int, float, np.number)) or not math.isfinite(v):
-                raise OmnikinError(f"wheel {self.name!r}: {field} must be a finite number, got {v!r}")
+                raise InputError(f"wheel {self.name!r}: {field} must be a finite number, got {v!r}")
         if not self.radius > 0:
-            raise OmnikinError(f"wheel {self.name!r}: radius must be > 0, got {self.radius!r}")
+            raise InputError(f"wheel {self.name!r}: radius must be > 0, got {self.radius!r}")
         if not abs(self.roller) < math.pi / 2:
-            raise OmnikinError(f"wheel {self.name!r}: roller angle must lie strictly between -90 and 90 deg")
+            raise InputError(f"wheel {self.name!r}: roller angle must lie strictly between -90 and 90 deg")
         if self.roller and not self.is_swedish:
-            raise OmnikinError(f"wheel {self.name!r}: only Swedish wheels have a roller angle")
+            raise InputError(f"wheel {self.name!r}: only Swedish wheels have a roller angle")
         if max(abs(self.x), abs(self.y), self.radius) > 1e6 or self.radius < 1e-9:
-            raise OmnikinError(f"wheel {self.name!r}: dimensions outside 1 nm .. 1000 km are not a wheeled robot")
+            raise InputError(f"wheel {self.name!r}: dimensions outside 1 nm .. 1000 km are not a wheeled robot")
 
     # --- classification ---------------------------------------------------
     @property

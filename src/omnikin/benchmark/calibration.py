@@ -33,7 +33,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from ..geometry import compose, exp, wrap_angle
 from ..model import Robot
 from ..simulation.errors import SystematicErrors, WheelErrors
@@ -66,10 +66,10 @@ class CalibrationRun:
     def __post_init__(self):
         m = tuple(float(v) for v in self.measured)
         if len(m) != 3 or not (math.isfinite(m[0]) and math.isfinite(m[1])) or math.isinf(m[2]):
-            raise OmnikinError(f"calibration run {self.label!r}: measured end pose needs finite x and y "
+            raise InputError(f"calibration run {self.label!r}: measured end pose needs finite x and y "
                                f"(theta may be NaN when not measured), got {self.measured!r}")
         if not all(s > 0 for s in self.sigma):
-            raise OmnikinError(f"calibration run {self.label!r}: sigma must be positive, got {self.sigma!r}")
+            raise InputError(f"calibration run {self.label!r}: sigma must be positive, got {self.sigma!r}")
         object.__setattr__(self, "measured", m)
 
 
@@ -131,7 +131,7 @@ def predicted_end(plan: Plan, true_robot: Robot, command_robot: Robot) -> np.nda
 def _driven(robot: Robot):
     wheels = [w for w in robot.rolling if w.encoder is not None]
     if not wheels:
-        raise OmnikinError(f"robot {robot.name!r}: calibration needs the driven wheels' encoders")
+        raise InputError(f"robot {robot.name!r}: calibration needs the driven wheels' encoders")
     return wheels
 
 
@@ -245,7 +245,7 @@ def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Rob
     except ImportError:
         raise ImportError("calibration needs SciPy: pip install scipy") from None
     if not runs:
-        raise OmnikinError("calibration needs at least one run with a measured end pose")
+        raise InputError("calibration needs at least one run with a measured end pose")
     command = command_robot or nominal
     names = parameter_names(nominal)
     scale = np.array([PRIOR[n.rsplit(".", 1)[1]] for n in names])
@@ -316,7 +316,7 @@ def borenstein_calibrate(robot: Robot, result: UMBmarkResult) -> Robot:
     """Apply Borenstein's corrections of a differential-drive UMBmark ``result`` to ``robot``."""
     pair = differential_pair(robot)
     if pair is None or result.borenstein is None:
-        raise OmnikinError(f"robot {robot.name!r} is not a differential drive (two coaxial fixed encoded wheels): "
+        raise InputError(f"robot {robot.name!r} is not a differential drive (two coaxial fixed encoded wheels): "
                            f"Borenstein's correction does not apply; use the least-squares calibration")
     left, right, track = pair
     b = result.borenstein

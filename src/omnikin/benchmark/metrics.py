@@ -54,11 +54,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from ..geometry import between, compose, wrap_angle
 
 
-class MetricsInputError(OmnikinError):
+class MetricsInputError(InputError):
     """Trajectories that the metrics cannot be computed on (empty, mismatched, NaN, unsorted)."""
 
 

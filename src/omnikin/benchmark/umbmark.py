@@ -24,7 +24,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from ..model import Robot
 from ..simulation.errors import NoiseModel
 from ..simulation.limits import MotionLimits
@@ -54,7 +54,7 @@ def borenstein(x_cw: float, x_ccw: float, side: float, track: float) -> Borenste
     alpha = (x_cw + x_ccw) / (-4.0 * side)
     beta = (x_cw - x_ccw) / (-4.0 * side)
     if abs(alpha) >= math.pi / 2 or abs(beta) >= math.pi:
-        raise OmnikinError(f"Borenstein's correction is undefined here: alpha = {alpha:.6g} rad, beta = {beta:.6g} "
+        raise InputError(f"Borenstein's correction is undefined here: alpha = {alpha:.6g} rad, beta = {beta:.6g} "
                            f"rad from x_cw = {x_cw:.6g} m, x_ccw = {x_ccw:.6g} m and side {side:.6g} m (the "
                            f"errors are not small against the square)")
     if beta == 0.0:
@@ -62,7 +62,7 @@ def borenstein(x_cw: float, x_ccw: float, side: float, track: float) -> Borenste
     else:
         R = (side / 2.0) / math.sin(beta / 2.0)
         if abs(R) <= track / 2.0:
-            raise OmnikinError(f"Borenstein's correction is undefined here: the legs curve with radius {R:.6g} m, "
+            raise InputError(f"Borenstein's correction is undefined here: the legs curve with radius {R:.6g} m, "
                                f"within half the track ({track / 2:.6g} m)")
         e_d = (R + track / 2.0) / (R - track / 2.0)
     e_b = (math.pi / 2) / (math.pi / 2 - alpha)
@@ -138,16 +138,16 @@ def analyze(eps_cw, eps_ccw, side: float = 4.0, robot: Robot | None = None, mode
     """
     check_mode(mode)
     if not (math.isfinite(side) and side > 0):
-        raise OmnikinError(f"side must be > 0, got {side!r}")
+        raise InputError(f"side must be > 0, got {side!r}")
     dirs = []
     for name, eps in (("cw", eps_cw), ("ccw", eps_ccw)):
         e = np.asarray(eps, dtype=float)
         if e.ndim != 2 or e.shape[1] not in (2, 3):
-            raise OmnikinError(f"{name}: expected return errors of shape (n, 2) or (n, 3), got {e.shape}")
+            raise InputError(f"{name}: expected return errors of shape (n, 2) or (n, 3), got {e.shape}")
         if len(e) == 0:
-            raise OmnikinError(f"{name}: no runs; UMBmark needs at least one run in each direction")
+            raise InputError(f"{name}: no runs; UMBmark needs at least one run in each direction")
         if not np.all(np.isfinite(e[:, :2])):
-            raise OmnikinError(f"{name}: non-finite return error in run "
+            raise InputError(f"{name}: non-finite return error in run "
                                f"{int(np.argwhere(~np.isfinite(e[:, :2]))[0, 0]) + 1}")
         if e.shape[1] == 2:
             e = np.column_stack([e, np.zeros(len(e))])
@@ -173,10 +173,10 @@ def run_umbmark(true_robot: Robot, command_robot: Robot, *, side: float = 4.0, m
     holds the first trial's runs).
     """
     if not isinstance(runs, (int, np.integer)) or runs < 1:
-        raise OmnikinError(f"runs must be a whole number >= 1, got {runs!r}")
+        raise InputError(f"runs must be a whole number >= 1, got {runs!r}")
     check_mode(mode)
     if mode == "translate" and not command_robot.mobility.holonomic:
-        raise OmnikinError(f"robot {command_robot.name!r} is not holonomic (Campion type "
+        raise InputError(f"robot {command_robot.name!r} is not holonomic (Campion type "
                            f"{command_robot.mobility.campion_type}): it cannot drive the 'translate' square; "
                            f"use --mode rotate")
     rng = make_rng(rng)

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from .common import console, load_robot, robot_as_built
 
 BAG_EPILOG = """examples:
@@ -144,7 +144,7 @@ def _covariance(diag):
 
 # --- bag ----------------------------------------------------------------------------------------------
 def cmd_bag_help(args) -> int:
-    raise OmnikinError("bag: give a sub-command, 'odometry' or 'export' (omnikin bag -h)")
+    raise InputError("bag: give a sub-command, 'odometry' or 'export' (omnikin bag -h)")
 
 
 def cmd_bag_odometry(args) -> int:
@@ -154,7 +154,7 @@ def cmd_bag_odometry(args) -> int:
     robot = load_robot(args.robot)
     for name, diag in (("--pose-cov-diag", args.pose_cov_diag), ("--twist-cov-diag", args.twist_cov_diag)):
         if diag is not None and not all(math.isfinite(v) and v >= 0 for v in diag):
-            raise OmnikinError(f"{name}: variances must be finite and >= 0, got {diag}")
+            raise InputError(f"{name}: variances must be finite and >= 0, got {diag}")
     check_topic(args.joint_states_topic, "--joint-states-topic")
     check_topic(args.odom_topic, "--odom-topic")
     res = bag_odometry(robot, args.bag, args.output, joint_states_topic=args.joint_states_topic,
@@ -201,15 +201,15 @@ def parse_paths(text: str):
 
     parts = [p.strip() for p in text.split(";")]
     if not any(parts):
-        raise OmnikinError("--path: empty path")
+        raise InputError("--path: empty path")
     plan = None
     for part in parts:
         if not part:
-            raise OmnikinError(f"--path {text!r}: empty part between ';'")
+            raise InputError(f"--path {text!r}: empty part between ';'")
         try:
             p = parse_path(part)
         except OmnikinError as exc:
-            raise OmnikinError(f"--path: {exc}") from None
+            raise InputError(f"--path: {exc}") from None
         plan = p if plan is None else plan + p
     return plan
 
@@ -223,11 +223,11 @@ def cmd_simulate(args) -> int:
     require_new_bag(args.bag)
     robot = load_robot(args.robot)
     if args.seed < 0:
-        raise OmnikinError(f"--seed must be a whole number >= 0, got {args.seed}")
+        raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
     if not (math.isfinite(args.rate) and args.rate > 0):
-        raise OmnikinError(f"--rate must be a positive number of samples per second, got {args.rate}")
+        raise InputError(f"--rate must be a positive number of samples per second, got {args.rate}")
     if not math.isfinite(args.start):
-        raise OmnikinError(f"--start must be a finite time [s], got {args.start}")
+        raise InputError(f"--start must be a finite time [s], got {args.start}")
     plan = parse_paths(args.path)
     noise = noise_profile(args.noise)
     seeds = np.random.SeedSequence(args.seed).spawn(2)
@@ -268,16 +268,16 @@ def cmd_metrics(args) -> int:
     from ..io.trajectories import detect_format, read_trajectory
 
     if args.delta < 1:
-        raise OmnikinError(f"--delta must be a whole number of frames >= 1, got {args.delta}")
+        raise InputError(f"--delta must be a whole number of frames >= 1, got {args.delta}")
     if not (math.isfinite(args.t_max_diff) and args.t_max_diff >= 0):
-        raise OmnikinError(f"--t-max-diff must be a time >= 0 [s], got {args.t_max_diff}")
+        raise InputError(f"--t-max-diff must be a time >= 0 [s], got {args.t_max_diff}")
     if not math.isfinite(args.t_offset):
-        raise OmnikinError(f"--t-offset must be a finite time [s], got {args.t_offset}")
+        raise InputError(f"--t-offset must be a finite time [s], got {args.t_offset}")
     paths = (args.ref, args.est)
     formats = [detect_format(p) for p in paths]
     if formats.count("kitti") == 1:
         kitti, timed = paths if formats[0] == "kitti" else paths[::-1]
-        raise OmnikinError(f"{kitti} is KITTI (no timestamps: pose k stands at t = k) but {timed} has timestamps "
+        raise InputError(f"{kitti} is KITTI (no timestamps: pose k stands at t = k) but {timed} has timestamps "
                            f"[s]: they cannot be associated; export both as TUM or CSV, or both as KITTI to "
                            f"compare by index")
     t_ref, ref = read_trajectory(args.ref, formats[0])
@@ -286,7 +286,7 @@ def cmd_metrics(args) -> int:
         ev = evaluate(t_ref, ref, t_est, est, align=args.align, delta=args.delta, all_pairs=args.all_pairs,
                       max_diff=args.t_max_diff, offset=args.t_offset)
     except OmnikinError as exc:
-        raise OmnikinError(f"{args.ref} vs {args.est}: {exc}") from None
+        raise InputError(f"{args.ref} vs {args.est}: {exc}") from None
     rot_deg = statistics(np.degrees(ev.rpe.rotation))
     doc = {"reference": args.ref, "estimate": args.est, "reference_poses": len(t_ref),
            "estimate_poses": len(t_est), **ev.as_dict()}

@@ -45,7 +45,7 @@ def add_parsers(sub, robot_help: str) -> None:
 
 
 def cmd_ros(args) -> int:
-    from ..errors import OmnikinError
+    from ..errors import InputError, OmnikinError
     from ..ros import require_rclpy
     from ..ros.params import load_params
     from ..runtime.backends import SimBackend
@@ -57,16 +57,16 @@ def cmd_ros(args) -> int:
     require_rclpy()
     given = lambda names: [f"--{n}" for n in names if getattr(args, n) is not None]   # noqa: E731
     if args.backend == "serial" and given(("errors", "noise", "seed")):
-        raise OmnikinError(f"{', '.join(given(('errors', 'noise', 'seed')))} apply only to --backend sim")
+        raise InputError(f"{', '.join(given(('errors', 'noise', 'seed')))} apply only to --backend sim")
     if args.backend == "sim" and given(("port", "baud")):
-        raise OmnikinError(f"{', '.join(given(('port', 'baud')))} apply only to --backend serial")
+        raise InputError(f"{', '.join(given(('port', 'baud')))} apply only to --backend serial")
     if args.seed is not None and args.seed < 0:
-        raise OmnikinError(f"--seed must be >= 0, got {args.seed}")
+        raise InputError(f"--seed must be >= 0, got {args.seed}")
     if args.backend == "serial":
         from ..runtime.serial_backend import SerialBackend
 
         if not args.port:
-            raise OmnikinError("--backend serial needs --port DEV (one for all wheels, or one per driven wheel)")
+            raise InputError("--backend serial needs --port DEV (one for all wheels, or one per driven wheel)")
         backend = SerialBackend(robot, args.port[0] if len(args.port) == 1 else args.port, args.baud)
         backend.wait_ready()
     else:

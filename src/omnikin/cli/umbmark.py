@@ -17,7 +17,7 @@ import numpy as np
 
 from ..benchmark.calibration import borenstein_calibrate, calibrate, recommended_runs, CalibrationRun
 from ..benchmark.umbmark import analyze, differential_pair, run_umbmark
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from ..simulation.errors import NOISE, PROFILES, noise as noise_profile
 from ..simulation.motion import umbmark_square
 from ..simulation.simulate import simulate
@@ -153,17 +153,17 @@ def cmd_umbmark(args) -> int:
     robot = load_robot(args.robot or MAIN_ROBOT)
     do_calibrate = args.calibrate or main_job
     if args.runs < 1:
-        raise OmnikinError(f"--runs must be at least 1, got {args.runs}")
+        raise InputError(f"--runs must be at least 1, got {args.runs}")
     if args.trials < 1:
-        raise OmnikinError(f"--trials must be at least 1, got {args.trials}")
+        raise InputError(f"--trials must be at least 1, got {args.trials}")
     if not (math.isfinite(args.side) and args.side > 0):
-        raise OmnikinError(f"--side must be a positive length [m], got {args.side}")
+        raise InputError(f"--side must be a positive length [m], got {args.side}")
     if not (math.isfinite(args.rate) and args.rate > 0):
-        raise OmnikinError(f"--rate must be a positive number of samples per second, got {args.rate}")
+        raise InputError(f"--rate must be a positive number of samples per second, got {args.rate}")
     if args.seed < 0:
-        raise OmnikinError(f"--seed must be a whole number >= 0, got {args.seed}")
+        raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
     if args.mode == "translate" and not robot.mobility.holonomic:
-        raise OmnikinError(f"robot {robot.name!r} is not holonomic (Campion type {robot.mobility.campion_type}): "
+        raise InputError(f"robot {robot.name!r} is not holonomic (Campion type {robot.mobility.campion_type}): "
                            f"it cannot drive the 'translate' square; use --mode rotate")
     noise = noise_profile(args.noise)
     seeds = np.random.SeedSequence(args.seed).spawn(4)
@@ -312,7 +312,7 @@ def _write_report(out: Path, args, robot, true, result, before, after, traj, cal
         (out / "report.md").write_text(_report_md(args, robot, result, before, after, cal, figures),
                                        encoding="utf-8")
     except OSError as exc:
-        raise OmnikinError(f"{out}: cannot write the report: {exc}") from None
+        raise InputError(f"{out}: cannot write the report: {exc}") from None
 
 
 def _figures(out: Path, args, robot, before, after, traj) -> list:
@@ -467,7 +467,7 @@ def cmd_calibrate(args) -> int:
         try:
             save_robot(cal.robot, args.output)
         except OSError as exc:
-            raise OmnikinError(f"{args.output}: cannot write: {exc.strerror}") from None
+            raise InputError(f"{args.output}: cannot write: {exc.strerror}") from None
     if args.json:
         print(json.dumps({**cal.as_dict(), "output": args.output}, indent=2))
         return 0

@@ -44,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from ..geometry import between, log
 from ..model import Robot
 
@@ -75,7 +75,7 @@ def check_topic(name: str, what: str = "topic") -> str:
     return name
 
 
-class BagError(OmnikinError):
+class BagError(InputError):
     """A bag that cannot be read or written as asked; the message names the bag and topic."""
 
 

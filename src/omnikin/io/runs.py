@@ -26,12 +26,12 @@ import math
 import numpy as np
 
 from ..benchmark.calibration import CalibrationRun
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from ..simulation.motion import Plan, arc, line, spin, umbmark_square
 from .csvfile import column_problems, number, read_rows
 
 
-class RunsFileError(OmnikinError):
+class RunsFileError(InputError):
     """A measurement file that cannot be read; the message names file, line and column."""
 
 
@@ -98,15 +98,15 @@ def parse_path(text: str) -> Plan:
     """A plan from the ``path`` column grammar (module docstring)."""
     words = text.split()
     if not words:
-        raise OmnikinError("empty path")
+        raise InputError("empty path")
     kind, args = words[0].lower(), words[1:]
     try:
         nums = [float(a) for a in args[2:]] if kind == "square" else [float(a) for a in args]
     except ValueError:
-        raise OmnikinError(f"path {text!r}: numbers expected after {kind!r}") from None
+        raise InputError(f"path {text!r}: numbers expected after {kind!r}") from None
     if kind == "square":
         if len(args) not in (2, 3):
-            raise OmnikinError(f"path {text!r}: expected 'square cw|ccw rotate|translate [SIDE]'")
+            raise InputError(f"path {text!r}: expected 'square cw|ccw rotate|translate [SIDE]'")
         return umbmark_square(args[0].lower(), nums[0] if nums else 4.0, args[1].lower())
     if kind == "line" and len(nums) in (1, 2):
         return line(nums[0], math.radians(nums[1]) if len(nums) == 2 else 0.0)
@@ -114,7 +114,7 @@ def parse_path(text: str) -> Plan:
         return spin(math.radians(nums[0]))
     if kind == "arc" and len(nums) == 2:
         return arc(nums[0], math.radians(nums[1]))
-    raise OmnikinError(f"path {text!r}: expected 'square cw|ccw rotate|translate [SIDE]', 'line LENGTH "
+    raise InputError(f"path {text!r}: expected 'square cw|ccw rotate|translate [SIDE]', 'line LENGTH "
                        f"[HEADING_DEG]', 'spin ANGLE_DEG' or 'arc RADIUS ANGLE_DEG'")
 
 

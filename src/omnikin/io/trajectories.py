@@ -23,13 +23,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from .csvfile import number
 
 FORMATS = ("tum", "kitti", "csv")
 
 
-class TrajectoryFileError(OmnikinError):
+class TrajectoryFileError(InputError):
     """A trajectory file that cannot be read or written; the message names the file (and line)."""
 
 

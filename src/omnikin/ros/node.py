@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, LinkError, OmnikinError
 from ..simulation.limits import MotionLimits
 from . import require_rclpy
 from .params import DEFAULTS, validate
@@ -69,7 +69,7 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             p = validate({k: self.get_parameter(k).value for k in DEFAULTS}, "--ros-args / parameters")
             link_timeout = getattr(backend, "link_timeout", None)
             if link_timeout is not None and 1.0 / p["publish_rate"] > 0.5 * link_timeout:
-                raise OmnikinError(
+                raise InputError(
                     f"publish_rate {p['publish_rate']:g} Hz is too slow for the serial link: the wheel controllers "
                     f"stop after {link_timeout:g} s without a frame; use at least {2.0 / link_timeout:g} Hz")
             limits = MotionLimits(linear=p["linear.x.max_velocity"], angular=p["angular.z.max_velocity"],
@@ -124,7 +124,7 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             self.loops += 1
             try:
                 res = self.runtime.step(self.now_s())
-            except OmnikinError as exc:      # link lost: the back-end already commands zero speeds
+            except LinkError as exc:      # link lost: the back-end already commands zero speeds
                 self.link_error = str(exc)
                 self.get_logger().error(str(exc), throttle_duration_sec=1.0)
                 self._retry_link()
@@ -180,7 +180,7 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             self._next_retry = now + period
             try:
                 reconnect()
-            except OmnikinError as exc:
+            except LinkError as exc:
                 self.get_logger().warning(f"link not re-armed yet: {exc}", throttle_duration_sec=5.0)
                 return
             self.runtime.filter.halt()
@@ -245,7 +245,7 @@ def run(robot, backend, values: dict, ros_args=None) -> int:
     except Exception as exc:                       # rclpy's errors for bad --ros-args
         backend.close()
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise OmnikinError(f"--ros-args: {type(exc).__name__}: {first}") from None
+        raise InputError(f"--ros-args: {type(exc).__name__}: {first}") from None
     try:
         node = build_node(robot, backend, values)
     except BaseException:

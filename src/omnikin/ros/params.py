@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 
 DEFAULTS = {
     "cmd_vel_timeout": 0.5,
@@ -69,25 +69,25 @@ def load_params(path: str | Path | None) -> dict:
     try:
         data = yaml.load(Path(path).read_text(encoding="utf-8-sig"), Loader=strict_yaml_loader()) or {}
     except OSError as exc:
-        raise OmnikinError(f"{path}: cannot read: {exc.strerror}") from None
+        raise InputError(f"{path}: cannot read: {exc.strerror}") from None
     except UnicodeDecodeError as exc:
-        raise OmnikinError(f"{path}: not a UTF-8 text file (byte {exc.start}: {exc.reason})") from None
+        raise InputError(f"{path}: not a UTF-8 text file (byte {exc.start}: {exc.reason})") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         at = f" at line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""
-        raise OmnikinError(f"{path}: invalid YAML{at}: {getattr(exc, 'problem', None) or 'syntax error'}") from None
+        raise InputError(f"{path}: invalid YAML{at}: {getattr(exc, 'problem', None) or 'syntax error'}") from None
     if not isinstance(data, dict):
-        raise OmnikinError(f"{path}: expected a mapping of parameters")
+        raise InputError(f"{path}: expected a mapping of parameters")
     if len(data) == 1:
         (only,) = data.values()
         if isinstance(only, dict) and "ros__parameters" in only:
             data = only["ros__parameters"]
             if not isinstance(data, dict):
-                raise OmnikinError(f"{path}: ros__parameters must be a mapping of parameters, got {data!r}")
+                raise InputError(f"{path}: ros__parameters must be a mapping of parameters, got {data!r}")
     flat = _flatten(data)
     for key, value in flat.items():
         if key not in DEFAULTS:
-            raise OmnikinError(f"{path}: unknown parameter {key!r}; known: {sorted(DEFAULTS)}")
+            raise InputError(f"{path}: unknown parameter {key!r}; known: {sorted(DEFAULTS)}")
         values[key] = value
     return validate(values, str(path))
 
@@ -115,18 +115,18 @@ def validate(values: dict, source: str) -> dict:
     out = dict(values)
     for key, value in values.items():
         if key not in DEFAULTS:
-            raise OmnikinError(f"{source}: unknown parameter {key!r}; known: {sorted(DEFAULTS)}")
+            raise InputError(f"{source}: unknown parameter {key!r}; known: {sorted(DEFAULTS)}")
         want = type(DEFAULTS[key])
         if want is float and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
         if not isinstance(value, want):
-            raise OmnikinError(f"{source}: parameter {key!r} must be a {want.__name__}, got {value!r}")
+            raise InputError(f"{source}: parameter {key!r} must be a {want.__name__}, got {value!r}")
         if key in RANGES:
             low, high, inclusive = RANGES[key]
             ok = math.isfinite(value) and value <= high and (value >= low if inclusive else value > low)
             if not ok:
                 rel = ">=" if inclusive else ">"
-                raise OmnikinError(f"{source}: parameter {key!r} must be finite, {rel} {low:g} and <= {high:g}, "
+                raise InputError(f"{source}: parameter {key!r} must be finite, {rel} {low:g} and <= {high:g}, "
                                    f"got {value!r}")
         out[key] = value
     return out

@@ -23,7 +23,7 @@ from typing import Optional, Protocol
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from ..geometry import compose, exp
 from ..model import Robot
 from ..odometry import mid_steer
@@ -64,7 +64,7 @@ class SimBackend:
         self.rng = make_rng(rng)
         self.encoded = [w.name for w in robot.rolling if w.encoder is not None]
         if not self.encoded:
-            raise OmnikinError(f"robot {robot.name!r}: the simulated back-end needs encoded (driven) wheels")
+            raise InputError(f"robot {robot.name!r}: the simulated back-end needs encoded (driven) wheels")
         self._index = [robot.wheel_names.index(n) for n in self.encoded]
         self._radius = np.array([self.true_robot.wheel(n).radius for n in self.encoded])
         self._rpt = np.array([abs(robot.wheel(n).encoder.rad_per_tick) for n in self.encoded])
@@ -80,7 +80,7 @@ class SimBackend:
     def write(self, t: float, speeds, steer=None) -> None:
         speeds = np.asarray(speeds, dtype=float)
         if speeds.shape != (len(self.robot.wheel_names),) or not np.all(np.isfinite(speeds)):
-            raise OmnikinError(f"sim back-end: expected {len(self.robot.wheel_names)} finite wheel speeds, got {speeds}")
+            raise InputError(f"sim back-end: expected {len(self.robot.wheel_names)} finite wheel speeds, got {speeds}")
         self._advance(t)
         self._speeds = speeds[self._index]
         if self._steer is not None and steer is not None:

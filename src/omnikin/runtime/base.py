@@ -28,7 +28,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from ..model import Robot
 from ..odometry import mid_steer
 from ..simulation.limits import MotionLimits
@@ -59,7 +59,7 @@ class BaseRuntime:
     def __init__(self, robot: Robot, backend: WheelBackend, *, limits: MotionLimits | None = None,
                  cmd_vel_timeout: float = 0.5, wheel_slip: float = 2e-4, method: str = "exact"):
         if not (math.isfinite(wheel_slip) and wheel_slip >= 0):
-            raise OmnikinError(f"wheel_slip must be a finite number >= 0 [sqrt(m)], got {wheel_slip!r}")
+            raise InputError(f"wheel_slip must be a finite number >= 0 [sqrt(m)], got {wheel_slip!r}")
         self.robot = robot
         self.backend = backend
         self.filter = CommandFilter(robot, limits or MotionLimits(), cmd_vel_timeout)

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from ..model import Robot
 from ..simulation.limits import MotionLimits, saturate
 
@@ -54,7 +54,7 @@ class CommandFilter:
 
     def __post_init__(self):
         if not (math.isfinite(self.timeout) and self.timeout >= 0):
-            raise OmnikinError(f"cmd_vel_timeout must be a finite number >= 0 [s] (0 disables), got {self.timeout!r}")
+            raise InputError(f"cmd_vel_timeout must be a finite number >= 0 [s] (0 disables), got {self.timeout!r}")
         self.target = np.zeros(3)
         self._limited_target = np.zeros(3)     # target saturated to the speed limits ...
         self._limited_for = (self.robot, self.limits)   # ... of this robot and these limits

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from .protocol import (
     FrameEncoder,
     Protocol,
@@ -83,7 +83,7 @@ class FakeController:
         self.protocol = p = protocol or load_protocol()
         wheels = list(wheels)
         if not wheels or len({w.index for w in wheels}) != len(wheels):
-            raise OmnikinError("fake controller: expected wheels with distinct indices")
+            raise InputError("fake controller: expected wheels with distinct indices")
         self.report_period = report_period or p.timing.report_period
         self.heartbeat_period = heartbeat_period or p.timing.heartbeat_period
         self.link_timeout = link_timeout or p.timing.link_timeout
@@ -119,7 +119,7 @@ class FakeController:
         for n in names:
             w = robot.wheel(n)
             if w.encoder is None:
-                raise OmnikinError(f"fake controller: wheel {n!r} has no encoder")
+                raise InputError(f"fake controller: wheel {n!r} has no encoder")
             specs.append(FakeWheel(robot.wheel_names.index(n), 1.0 / w.encoder.rad_per_tick,
                                    int(start_counts.get(n, 0)), w.max_speed))
         return cls(specs, **kwargs)

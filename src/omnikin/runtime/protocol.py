@@ -44,7 +44,7 @@ from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 
 DIRECTIONS = ("host_to_controller", "controller_to_host", "both")
 INT_TYPES = {  # name: (struct code, size, C type, min, max)
@@ -59,7 +59,7 @@ HEADER_BYTES = 4  # version, type, seq, length (after the sync bytes)
 CRC_BYTES = 2
 
 
-class ProtocolError(OmnikinError):
+class ProtocolError(InputError):
     """A protocol description that breaks the rules, or a frame that cannot be encoded."""
 
 

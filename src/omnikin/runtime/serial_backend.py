@@ -49,7 +49,7 @@ import time
 import numpy as np
 
 from ..encoders import wrap_scalar
-from ..errors import OmnikinError
+from ..errors import InputError, LinkError, OmnikinError
 from ..model import Robot
 from .backends import WheelState
 from .protocol import (
@@ -61,7 +61,7 @@ from .protocol import (
 )
 
 
-class LinkLostError(OmnikinError):
+class LinkLostError(LinkError):
     """A wheel controller went silent or its port failed; the wheels were commanded to zero.
 
     ``wheel`` and ``port`` name the first wheel found silent and its port.
@@ -77,7 +77,7 @@ def _require_serial():
     try:
         import serial
     except ImportError:
-        raise OmnikinError('the serial back-end needs pyserial: pip install "omnikin[serial]"') from None
+        raise InputError('the serial back-end needs pyserial: pip install "omnikin[serial]"') from None
     return serial
 
 
@@ -105,15 +105,15 @@ class SerialBackend:
         self.robot = robot
         self.protocol = p = protocol or load_protocol()
         if robot.steerable:
-            raise OmnikinError(f"robot {robot.name!r}: the serial back-end (protocol version {p.version}) carries "
+            raise InputError(f"robot {robot.name!r}: the serial back-end (protocol version {p.version}) carries "
                                f"wheel speeds only; steerable wheels {robot.steer_names} are not supported")
         self.encoded = [w.name for w in robot.rolling if w.encoder is not None]
         if not self.encoded:
-            raise OmnikinError(f"robot {robot.name!r}: the serial back-end needs driven wheels with an encoder")
+            raise InputError(f"robot {robot.name!r}: the serial back-end needs driven wheels with an encoder")
         self.index = {n: robot.wheel_names.index(n) for n in self.encoded}
         too_high = [n for n, i in self.index.items() if i > p.wheel_index_max]
         if too_high:
-            raise OmnikinError(f"robot {robot.name!r}: wheels {too_high} have indices beyond {p.wheel_index_max}")
+            raise InputError(f"robot {robot.name!r}: wheels {too_high} have indices beyond {p.wheel_index_max}")
         self._by_index = {i: n for n, i in self.index.items()}
         self.link_timeout = self._positive(link_timeout, p.timing.link_timeout, "link_timeout")
         self.connect_timeout = self._positive(connect_timeout, p.timing.connect_timeout, "connect_timeout")
@@ -148,7 +148,7 @@ class SerialBackend:
     def _positive(value, default, name):
         v = default if value is None else value
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) or v <= 0:
-            raise OmnikinError(f"serial back-end: {name} must be a time > 0 [s], got {value!r}")
+            raise InputError(f"serial back-end: {name} must be a time > 0 [s], got {value!r}")
         return float(v)
 
     def _map_ports(self, ports) -> dict:
@@ -159,7 +159,7 @@ class SerialBackend:
             unknown = [k for k in ports if k not in enc]
             missing = [n for n in enc if n not in ports]
             if unknown or missing:
-                raise OmnikinError(f"serial back-end: ports must map every driven wheel {enc} to a port"
+                raise InputError(f"serial back-end: ports must map every driven wheel {enc} to a port"
                                    + (f"; unknown wheel(s) {unknown}" if unknown else "")
                                    + (f"; missing {missing}" if missing else ""))
             mapping = {n: os.fspath(ports[n]) for n in enc}
@@ -167,17 +167,17 @@ class SerialBackend:
             try:
                 ports = [os.fspath(x) for x in ports]
             except TypeError:
-                raise OmnikinError(f"serial back-end: ports must be a port, a list of ports or a dict "
+                raise InputError(f"serial back-end: ports must be a port, a list of ports or a dict "
                                    f"{{wheel: port}}, got {ports!r}") from None
             if len(ports) == 1:
                 ports = ports * len(enc)
             if len(ports) != len(enc):
-                raise OmnikinError(f"serial back-end: {len(ports)} ports for {len(enc)} driven wheels {enc}; give one "
+                raise InputError(f"serial back-end: {len(ports)} ports for {len(enc)} driven wheels {enc}; give one "
                                    "port for all or one per driven wheel in file order")
             mapping = dict(zip(enc, ports))
         bad = [n for n, u in mapping.items() if not u]
         if bad:
-            raise OmnikinError(f"serial back-end: empty port name for wheel(s) {bad}")
+            raise InputError(f"serial back-end: empty port name for wheel(s) {bad}")
         return mapping
 
     def _open_ports(self) -> None:
@@ -200,7 +200,7 @@ class SerialBackend:
                                          parity=parity[ser["parity"]], stopbits=ser["stopbits"], timeout=0,
                                          write_timeout=self._write_timeout)
         except (serial.SerialException, OSError, ValueError) as exc:
-            raise OmnikinError(f"serial back-end: cannot open {url!r} for wheel(s) {wheels}: {exc}") from None
+            raise LinkError(f"serial back-end: cannot open {url!r} for wheel(s) {wheels}: {exc}") from None
 
     # --- WheelBackend ------------------------------------------------------------------------------
     def write(self, t: float, speeds, steer=None) -> None:
@@ -208,7 +208,7 @@ class SerialBackend:
         n = len(self.robot.wheel_names)
         speeds = np.asarray(speeds, dtype=float)
         if speeds.shape != (n,) or not np.all(np.isfinite(speeds)):
-            raise OmnikinError(f"serial back-end: expected {n} finite wheel speeds for {self.robot.wheel_names}, "
+            raise InputError(f"serial back-end: expected {n} finite wheel speeds for {self.robot.wheel_names}, "
                                f"got {speeds}")
         self._clock(t)
         if self._lost is not None:
@@ -216,7 +216,7 @@ class SerialBackend:
         try:
             self._send_speeds(speeds)
         except ProtocolError as exc:
-            raise OmnikinError(f"serial back-end: wheel speeds {speeds.tolist()} cannot be sent: {exc}") from None
+            raise InputError(f"serial back-end: wheel speeds {speeds.tolist()} cannot be sent: {exc}") from None
         self._heartbeat(float(t))
         self.counters["writes"] += 1
 
@@ -285,11 +285,11 @@ class SerialBackend:
 
     def reconnect(self) -> None:
         """Reopen every port (one that failed, or whose device came back under the same name
-        without an error), then :meth:`reset_link`. Raises :class:`OmnikinError` naming the port
+        without an error), then :meth:`reset_link`. Raises :class:`LinkError` naming the port
         when one cannot be reopened yet (the link then stays lost: try again later), or when the
         back-end was closed."""
         if self._closed:
-            raise OmnikinError("serial back-end: closed; create a new one instead of reconnecting")
+            raise LinkError("serial back-end: closed; create a new one instead of reconnecting")
         for port in self._ports.values():
             try:
                 port.link.close()

@@ -31,7 +31,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from ..model import Robot
 from ..wheels import Encoder
 
@@ -51,9 +51,9 @@ class WheelErrors:
         for name in ("radius", "dx", "dy", "drive", "roller", "ticks"):
             v = getattr(self, name)
             if not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise OmnikinError(f"WheelErrors.{name} must be a finite number, got {v!r}")
+                raise InputError(f"WheelErrors.{name} must be a finite number, got {v!r}")
         if self.radius <= -1 or self.ticks <= -1:
-            raise OmnikinError("WheelErrors.radius and .ticks are relative errors and must be > -1")
+            raise InputError("WheelErrors.radius and .ticks are relative errors and must be > -1")
 
 
 @dataclass(frozen=True)
@@ -69,7 +69,7 @@ class SystematicErrors:
         """The true robot: ``robot`` with these errors built in."""
         unknown = sorted(set(self.wheels) - {w.name for w in robot.wheels})
         if unknown:
-            raise OmnikinError(f"errors name wheels {unknown} that robot {robot.name!r} does not have")
+            raise InputError(f"errors name wheels {unknown} that robot {robot.name!r} does not have")
         wheels = []
         for w in robot.wheels:
             e = self.wheels.get(w.name, WheelErrors())
@@ -138,7 +138,7 @@ class NoiseModel:
         for name in ("slip", "floor", "measurement", "measurement_theta"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise OmnikinError(f"NoiseModel.{name} must be a finite number >= 0, got {v!r}")
+                raise InputError(f"NoiseModel.{name} must be a finite number >= 0, got {v!r}")
 
     @property
     def is_zero(self) -> bool:
@@ -160,11 +160,11 @@ NOISE = {
 
 def profile(name: str) -> ErrorProfile:
     if name not in PROFILES:
-        raise OmnikinError(f"unknown error profile {name!r}; one of {sorted(PROFILES)}")
+        raise InputError(f"unknown error profile {name!r}; one of {sorted(PROFILES)}")
     return PROFILES[name]
 
 
 def noise(name: str) -> NoiseModel:
     if name not in NOISE:
-        raise OmnikinError(f"unknown noise profile {name!r}; one of {sorted(NOISE)}")
+        raise InputError(f"unknown noise profile {name!r}; one of {sorted(NOISE)}")
     return NOISE[name]

@@ -14,7 +14,7 @@ from typing import Optional
 import numpy as np
 
 from .._arrays import as_components, require_finite
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 
 
 @dataclass(frozen=True)
@@ -37,7 +37,7 @@ class MotionLimits:
         for name in ("linear", "angular", "linear_accel", "angular_accel", "wheel"):
             value = getattr(self, name)
             if value is not None and not (np.isfinite(value) and value > 0):
-                raise OmnikinError(f"MotionLimits.{name} must be a positive number or None, got {value!r}")
+                raise InputError(f"MotionLimits.{name} must be a positive number or None, got {value!r}")
 
 
 def wheel_limits(robot, limits: MotionLimits) -> np.ndarray:

@@ -26,7 +26,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from .limits import MotionLimits, speed_scale
 
 
@@ -41,9 +41,9 @@ class Segment:
     def __post_init__(self):
         xi = tuple(float(v) for v in self.xi)
         if len(xi) != 3 or not all(math.isfinite(v) for v in xi) or xi == (0.0, 0.0, 0.0):
-            raise OmnikinError(f"segment {self.label!r}: xi must be a finite non-zero twist, got {self.xi!r}")
+            raise InputError(f"segment {self.label!r}: xi must be a finite non-zero twist, got {self.xi!r}")
         if not (math.isfinite(self.length) and self.length >= 0):
-            raise OmnikinError(f"segment {self.label!r}: length must be finite and >= 0, got {self.length!r}")
+            raise InputError(f"segment {self.label!r}: length must be finite and >= 0, got {self.length!r}")
         object.__setattr__(self, "xi", xi)
 
 
@@ -57,7 +57,7 @@ class Plan:
     def __post_init__(self):
         object.__setattr__(self, "segments", tuple(self.segments))
         if not self.segments:
-            raise OmnikinError(f"plan {self.name!r} has no segment")
+            raise InputError(f"plan {self.name!r} has no segment")
 
     def __add__(self, other: "Plan") -> "Plan":
         return Plan(self.segments + other.segments, f"{self.name}+{other.name}")
@@ -87,7 +87,7 @@ def spin(angle: float) -> Plan:
 def arc(radius: float, angle: float) -> Plan:
     """Drive forward on a circle of ``radius`` [m] (centre on the left if ``angle`` > 0) by ``angle`` [rad]."""
     if not radius > 0:
-        raise OmnikinError(f"arc radius must be > 0, got {radius!r}")
+        raise InputError(f"arc radius must be > 0, got {radius!r}")
     sign = 1.0 if angle >= 0 else -1.0
     return Plan((Segment((1.0, 0.0, sign / radius), abs(angle) * radius, "arc"),), "arc")
 
@@ -103,7 +103,7 @@ def polyline(waypoints: Sequence[Sequence[float]], mode: str = "rotate") -> Plan
     for k, wp in enumerate(waypoints):
         d = np.asarray(wp, dtype=float) - pos
         if d.shape != (2,) or not np.all(np.isfinite(d)):
-            raise OmnikinError(f"waypoint #{k + 1}: expected two finite numbers, got {wp!r}")
+            raise InputError(f"waypoint #{k + 1}: expected two finite numbers, got {wp!r}")
         dist = float(np.hypot(*d))
         if dist == 0.0:
             continue
@@ -118,19 +118,19 @@ def polyline(waypoints: Sequence[Sequence[float]], mode: str = "rotate") -> Plan
             segs.append(Segment((math.cos(bearing), math.sin(bearing), 0.0), dist, f"leg {k + 1}"))
         pos = pos + d
     if not segs:
-        raise OmnikinError("polyline: no waypoint away from the start")
+        raise InputError("polyline: no waypoint away from the start")
     return Plan(tuple(segs), "polyline")
 
 
 def check_mode(mode: str) -> str:
     if mode not in ("rotate", "translate"):
-        raise OmnikinError(f"unknown path mode {mode!r}; one of ['rotate', 'translate']")
+        raise InputError(f"unknown path mode {mode!r}; one of ['rotate', 'translate']")
     return mode
 
 
 def check_direction(direction: str) -> str:
     if direction not in ("cw", "ccw"):
-        raise OmnikinError(f"unknown UMBmark direction {direction!r}; one of ['cw', 'ccw']")
+        raise InputError(f"unknown UMBmark direction {direction!r}; one of ['cw', 'ccw']")
     return direction
 
 
@@ -139,7 +139,7 @@ def umbmark_square(direction: str = "cw", side: float = 4.0, mode: str = "rotate
     check_direction(direction)
     check_mode(mode)
     if not (math.isfinite(side) and side > 0):
-        raise OmnikinError(f"UMBmark side must be > 0, got {side!r}")
+        raise InputError(f"UMBmark side must be > 0, got {side!r}")
     turn = -1.0 if direction == "cw" else 1.0
     segs = []
     for k in range(4):
@@ -214,19 +214,19 @@ def sample_plan(plan: Plan, robot, rate: float = 100.0, limits: MotionLimits | N
     """
     limits = limits or MotionLimits()
     if not (math.isfinite(rate) and rate > 0):
-        raise OmnikinError(f"rate must be a positive number of samples per second, got {rate!r}")
+        raise InputError(f"rate must be a positive number of samples per second, got {rate!r}")
     dt = 1.0 / rate
     xi = np.array([seg.xi for seg in plan.segments])
     vmax = speed_scale(robot, xi, limits)
     estimate = 0.0
     for k, seg in enumerate(plan.segments):
         if not np.isfinite(vmax[k]):
-            raise OmnikinError(f"plan {plan.name!r}, segment {seg.label!r}: no speed limit bounds its pace; "
+            raise InputError(f"plan {plan.name!r}, segment {seg.label!r}: no speed limit bounds its pace; "
                                f"set MotionLimits.linear/angular or wheel max_speed")
         amax = _accel_scale(seg.xi, limits)
         estimate += (seg.length / vmax[k] + (vmax[k] / amax if amax else 0.0)) * rate + 1
     if not estimate <= MAX_SAMPLES:
-        raise OmnikinError(f"plan {plan.name!r} would take about {estimate:.3g} samples at {rate:g} Hz; the most "
+        raise InputError(f"plan {plan.name!r} would take about {estimate:.3g} samples at {rate:g} Hz; the most "
                            f"omnikin samples in one run is {MAX_SAMPLES:.0e} (shorten the path or lower the rate)")
     progress, segment = [], []
     for k, seg in enumerate(plan.segments):

@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from ..errors import OmnikinError
+from ..errors import InputError, OmnikinError
 from ..geometry import TAYLOR_LIMIT, wrap_angle
 from ..integration import integrate_components, integrate_end
 from ..model import Robot
@@ -71,7 +71,7 @@ def make_rng(rng) -> np.random.Generator:
         return rng
     if isinstance(rng, np.random.SeedSequence) or rng is None or isinstance(rng, (int, np.integer)):
         return np.random.Generator(np.random.SFC64(rng))
-    raise OmnikinError(f"rng must be a numpy Generator, a SeedSequence, an integer seed or None, got {rng!r}")
+    raise InputError(f"rng must be a numpy Generator, a SeedSequence, an integer seed or None, got {rng!r}")
 
 
 def commanded_angles(sampled: SampledPlan, robot: Robot, wheels) -> tuple[np.ndarray, Optional[np.ndarray]]:
@@ -106,7 +106,7 @@ def simulate(plan: Plan | SampledPlan, true_robot: Robot, command_robot: Robot, 
     """
     noise = noise or NoiseModel()
     if not isinstance(trials, (int, np.integer)) or trials < 1:
-        raise OmnikinError(f"trials must be a whole number >= 1, got {trials!r}")
+        raise InputError(f"trials must be a whole number >= 1, got {trials!r}")
     rng = make_rng(rng)
     odometry_robot = odometry_robot or command_robot
     sampled = plan if isinstance(plan, SampledPlan) else sample_plan(plan, command_robot, rate, limits)
@@ -115,7 +115,7 @@ def simulate(plan: Plan | SampledPlan, true_robot: Robot, command_robot: Robot, 
     true_wheels = [true_robot.wheel(n) for n in names]
     missing = [w.name for w in true_wheels if w.encoder is None]
     if missing:
-        raise OmnikinError(f"true robot {true_robot.name!r}: wheels {missing} have no encoder")
+        raise InputError(f"true robot {true_robot.name!r}: wheels {missing} have no encoder")
     angles, steer = commanded_angles(sampled, command_robot, cmd_wheels)
     cmd_rpt = np.array([w.encoder.rad_per_tick for w in cmd_wheels])
     ticks = angles / cmd_rpt
