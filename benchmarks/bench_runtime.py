@@ -14,7 +14,7 @@ import numpy as np
 from _common import best_time, save
 
 from omnikin import Odometry, load_robot
-from omnikin.runtime.backends import SimBackend
+from omnikin.simulation.backend import SimBackend
 from omnikin.runtime.base import BaseRuntime
 
 ROBOTS = ("tomasi-omni3", "omni4", "mecanum4", "diff-drive", "xr4000", "villasenor-omni3")

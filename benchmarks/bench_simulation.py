@@ -1,7 +1,7 @@
 """Monte Carlo of full UMBmark procedures: target >= 10 million simulated robot-samples/s.
 
 1000 procedures (5 cw + 5 ccw runs each) of tomasi-omni3 as built ('typical' errors and
-noise) at 100 Hz by ``omnikin.benchmark.umbmark.run_umbmark``, against a reference measured
+noise) at 100 Hz by ``omnikin.evaluation.umbmark.run_umbmark``, against a reference measured
 in the same run: the straightforward vectorised NumPy simulation of one run at a time
 (wheel increments with slip noise, forward kinematics, the SE(2) exponential of every
 sample, rotation into the world and cumulative sums), timed on 100 runs.
@@ -15,9 +15,10 @@ import numpy as np
 from _common import save
 
 from omnikin import load_robot
-from omnikin.benchmark.umbmark import run_umbmark
-from omnikin.simulation.errors import NOISE, PROFILES
-from omnikin.simulation.motion import sample_plan, umbmark_square
+from omnikin.evaluation.umbmark import run_umbmark
+from omnikin.simulation.error_models import NOISE, PROFILES
+from omnikin.plans import umbmark_square
+from omnikin.simulation.motion import sample_plan
 from omnikin.simulation.simulate import commanded_angles
 
 

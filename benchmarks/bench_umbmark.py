@@ -26,10 +26,11 @@ REPEATS = 5
 """Repeats of each recommended calibration run (as UMBmark repeats each square 5 times)."""
 
 from omnikin import load_robot
-from omnikin.benchmark.calibration import CalibrationRun, borenstein_calibrate, calibrate, recommended_runs
-from omnikin.benchmark.umbmark import run_umbmark
-from omnikin.simulation.errors import NOISE, PROFILES, NoiseModel
-from omnikin.simulation.motion import umbmark_square
+from omnikin.plans import CalibrationRun
+from omnikin.evaluation.calibration import borenstein_calibrate, calibrate, recommended_runs
+from omnikin.evaluation.umbmark import run_umbmark
+from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel
+from omnikin.plans import umbmark_square
 from omnikin.simulation.simulate import simulate
 
 

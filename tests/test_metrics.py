@@ -1,4 +1,4 @@
-"""Trajectory metrics (omnikin.benchmark.metrics) and trajectory files (omnikin.io.trajectories).
+"""Trajectory metrics (omnikin.evaluation.metrics) and trajectory files (omnikin.io.trajectories).
 
 Hand-computed cases: a rigidly moved copy has ATE 0 after alignment and the motion's
 displacement without; a constant drift gives a constant, closed-form RPE. When ``evo`` is
@@ -18,7 +18,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from omnikin.benchmark import metrics as m
+from omnikin.evaluation import metrics as m
 from omnikin.errors import OmnikinError
 from omnikin.io.trajectories import (
     TrajectoryFileError,

@@ -573,7 +573,7 @@ def test_bag_topic_names_are_checked(capsys, tmp_path):
 
 
 def test_borenstein_degenerate_input_is_an_error():
-    from omnikin.benchmark.umbmark import borenstein
+    from omnikin.evaluation.umbmark import borenstein
 
     with pytest.raises(OmnikinError, match="undefined"):
         borenstein(-1.0, 1.0, 1e-300, 0.33)
@@ -584,7 +584,7 @@ def test_lever_is_the_displacement_component_along_its_direction():
     table shows that component (it used to show a magnitude with the sign of dx)."""
     import math as _m
 
-    from omnikin.benchmark.calibration import errors_from_vector, parameter_names
+    from omnikin.evaluation.calibration import errors_from_vector, parameter_names
 
     robot = load_robot("tomasi-omni3")
     names = parameter_names(robot)
@@ -597,7 +597,7 @@ def test_lever_is_the_displacement_component_along_its_direction():
 
 
 def test_metrics_messages_show_plain_numbers():
-    from omnikin.benchmark.metrics import check_trajectory
+    from omnikin.evaluation.metrics import check_trajectory
 
     with pytest.raises(OmnikinError) as exc:
         check_trajectory([0.0, 1.0, 1.0], np.zeros((3, 3)))
@@ -611,7 +611,7 @@ def test_halt_then_command_keeps_the_acceleration_limit():
     """After halt() (link re-armed after an outage) a command must ramp up from rest at the
     acceleration limit, not jump across the outage as one long time step."""
     from omnikin.runtime.command import CommandFilter
-    from omnikin.simulation.limits import MotionLimits
+    from omnikin.limits import MotionLimits
 
     f = CommandFilter(load_robot("tomasi-omni3"), MotionLimits(linear=1.0, linear_accel=0.5), timeout=0.0)
     f.command((0.2, 0.0, 0.0), 0.0)
@@ -629,7 +629,7 @@ def test_replaced_limits_apply_to_the_current_command():
     from dataclasses import replace
 
     from omnikin.runtime.command import CommandFilter
-    from omnikin.simulation.limits import MotionLimits
+    from omnikin.limits import MotionLimits
 
     f = CommandFilter(load_robot("tomasi-omni3"), MotionLimits(linear=1.0, linear_accel=None), timeout=0.0)
     f.command((0.8, 0.0, 0.0), 0.0)
@@ -662,7 +662,7 @@ def test_fk_matrix_accepts_any_iterable_of_wheel_names():
 
 
 def test_zero_wheel_limit_with_zero_twist_is_not_nan():
-    from omnikin.simulation.limits import MotionLimits, saturate, speed_scale
+    from omnikin.limits import MotionLimits, saturate, speed_scale
 
     wheels = tuple(Wheel(f"w{i}", "omni", 0.1 * math.cos(a), 0.1 * math.sin(a), a + math.pi / 2, 0.03,
                          max_speed=0.0 if i == 0 else None) for i, a in enumerate(TOM_BETAS))

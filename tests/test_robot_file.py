@@ -83,7 +83,7 @@ W2 = ["'w2'"]  # how the message names wheel #2
 def test_base_robot_is_valid(tmp_path):
     """The fixture itself loads (so every error below is caused by the mutation)."""
     robot = load_robot(write(tmp_path, base_robot()))
-    assert robot.wheel_names == ["w1", "w2", "w3"]
+    assert robot.rolling_names == ["w1", "w2", "w3"]
     assert robot.mobility.campion_type == (3, 0)
 
 

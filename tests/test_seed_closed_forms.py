@@ -241,7 +241,7 @@ def test_B03_diff_drive_preset_matches_burgard():
     fk_f, ik_f = _dd_derivation()
     robot = load_robot("diff-drive")
     ll, r = 0.33, 0.0825
-    assert robot.wheel_names == ["left", "right"]
+    assert robot.rolling_names == ["left", "right"]
     for v_l, v_r in RNG.uniform(-1, 1, size=(6, 2)):
         V, om = fk_f(v_l, v_r, ll)
         res = robot.fk([v_l / r, v_r / r])
@@ -336,7 +336,7 @@ def test_B10_mecanum4_preset_matches_burgard_with_mapping():
     f = sp.lambdify((bx, by, bth), [sol[v[k]] for k in range(4)])
     for bxv, byv, bthv in twists():
         speeds = dict(zip(order, f(bxv, byv, bthv)))
-        wheel = np.array([speeds[n] for n in robot.wheel_names]) / r
+        wheel = np.array([speeds[n] for n in robot.rolling_names]) / r
         res = robot.fk(wheel)
         assert_close(res.twist, [byv, -bxv, bthv / (a + b)])
         assert_close(res.residual, np.zeros(4), atol=1e-9)
@@ -345,7 +345,7 @@ def test_B10_mecanum4_preset_matches_burgard_with_mapping():
 def test_B10_mecanum4_fk_residual_is_burgard_v_error():
     rim, a_, b_ = _mecanum_rim()
     robot = load_robot("mecanum4")
-    names = robot.wheel_names
+    names = robot.rolling_names
     R = sp.Symbol("R", positive=True)
     J = (sp.Matrix([rim[n] for n in names]).jacobian(TWIST) / R).subs({a_: 0.2355, b_: 0.15, R: 0.0475})
     J = np.array(J, dtype=float)

@@ -14,11 +14,12 @@ import numpy as np
 import pytest
 
 from omnikin import OmnikinError, load_robot
-from omnikin.benchmark.calibration import (CalibrationRun, borenstein_calibrate, calibrate, predicted_end,
+from omnikin.plans import CalibrationRun
+from omnikin.evaluation.calibration import (borenstein_calibrate, calibrate, predicted_end,
                                            recommended_runs)
-from omnikin.benchmark.umbmark import analyze, borenstein, differential_pair, run_umbmark
-from omnikin.simulation.errors import NOISE, PROFILES, NoiseModel, SystematicErrors, WheelErrors
-from omnikin.simulation.motion import line, spin, umbmark_square
+from omnikin.evaluation.umbmark import analyze, borenstein, differential_pair, run_umbmark
+from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel, SystematicErrors, WheelErrors
+from omnikin.plans import line, spin, umbmark_square
 from omnikin.simulation.simulate import simulate
 
 EXACT = NoiseModel(quantise=False)

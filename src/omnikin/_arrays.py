@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import InputError, OmnikinError
+from .errors import InputError
 
 
 def as_components(value, size: int, name: str) -> np.ndarray:

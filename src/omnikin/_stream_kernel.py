@@ -22,12 +22,13 @@ import math
 from math import cos, floor, pi, sin
 
 from .encoders import QUANTISATION_SLACK, jump_limit
+from .geometry import SCALAR_TAYLOR_LIMIT, TWO_PI
 
 ADVANCE = {
     "exact": (
         "    x = 0.5 * phi\n"
         "    h = th + x\n"
-        "    k = 1.0 - x * x / 6.0 if -1e-4 < x < 1e-4 else sin(x) / x\n"),
+        "    k = 1.0 - x * x / 6.0 if -SMALL < x < SMALL else sin(x) / x  # as geometry.sinc_scalar\n"),
     "midpoint": "    h = th + 0.5 * phi\n    k = 1.0\n",
     "euler": "    h = th\n    k = 1.0\n",
 }
@@ -49,7 +50,7 @@ _MOVE = (
 
 
 def _namespace() -> dict:
-    return {"cos": cos, "sin": sin, "floor": floor, "PI": pi, "TWO_PI": 2.0 * pi}
+    return {"cos": cos, "sin": sin, "floor": floor, "PI": pi, "TWO_PI": TWO_PI, "SMALL": SCALAR_TAYLOR_LIMIT}
 
 
 def compile_advance(owner, method: str):
@@ -123,7 +124,8 @@ def compile_update(owner, n: int, fk_rows, method: str, bits: int | None, max_ju
     lines += [f"    o._ticks = ({', '.join(tk)},)", "    th = o._th"]
     body = "\n".join(lines) + "\n" + ADVANCE[method] + _MOVE
     # compiled inside a factory so that every constant is a fast closure variable
-    names = ["OWNER", "general", "not_later", "residual", "INF", "NUMBER", "cos", "sin", "floor", "PI", "TWO_PI"]
+    names = ["OWNER", "general", "not_later", "residual", "INF", "NUMBER", "cos", "sin", "floor", "PI", "TWO_PI",
+             "SMALL"]
     src = f"def factory({', '.join(names)}):\n" + "".join(f"    {ln}\n" for ln in body.splitlines()) + \
         "    return update\n"
     ns = {}

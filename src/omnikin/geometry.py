@@ -20,18 +20,31 @@ truncation error is below 3e-18: no crude fallback, no cancellation.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ._arrays import as_components
+
+TWO_PI = 2.0 * math.pi
+
+SCALAR_TAYLOR_LIMIT = 1e-4
+"""Below this |x| the scalar :func:`sinc_scalar` uses ``1 - x^2/6`` (truncation < 1e-18)."""
 
 TAYLOR_LIMIT = 0.1
 """Below this |x| :func:`sinc` uses its Taylor polynomial to x**8 (truncation < 3e-18)."""
 
 
 def wrap_angle(angle):
-    """Wrap angles [rad] to ``[-pi, pi)``."""
+    """Wrap angles [rad] to ``[-pi, pi)``: a Python float for a Python number, else an array.
+
+    The one angle wrap of omnikin (the streaming kernel inlines the same expression).
+    """
+    if isinstance(angle, (int, float)):
+        a = float(angle)
+        return a - TWO_PI * math.floor((a + math.pi) / TWO_PI)
     a = np.asarray(angle, dtype=float)
-    return a - (2.0 * np.pi) * np.floor((a + np.pi) * (0.5 / np.pi))
+    return a - TWO_PI * np.floor((a + np.pi) * (0.5 / np.pi))
 
 
 def sinc(x):
@@ -58,6 +71,18 @@ def sinc(x):
         xb = x[big]
         out[big] = np.sin(xb) / xb
     return out[0] if scalar else out
+
+
+def sinc_scalar(x: float) -> float:
+    """``sin(x) / x`` of one Python float (the scalar twin of :func:`sinc`)."""
+    return 1.0 - x * x / 6.0 if -SCALAR_TAYLOR_LIMIT < x < SCALAR_TAYLOR_LIMIT else math.sin(x) / x
+
+
+def dsinc_scalar(x: float) -> float:
+    """``d sinc(x) / dx = (x cos x - sin x) / x^2`` of one Python float (``-x/3`` near 0)."""
+    if -SCALAR_TAYLOR_LIMIT < x < SCALAR_TAYLOR_LIMIT:
+        return -x / 3.0
+    return (math.cos(x) * x - math.sin(x)) / (x * x)
 
 
 def exp(tangent) -> np.ndarray:
@@ -144,3 +169,29 @@ def rotate(angle, vectors) -> np.ndarray:
     out[..., 0] = c * v[..., 0] - s * v[..., 1]
     out[..., 1] = s * v[..., 0] + c * v[..., 1]
     return out
+
+
+def compose_exp_jacobians(theta: float, tangent) -> tuple[np.ndarray, np.ndarray]:
+    """Jacobians ``(J_out_pose, J_out_tangent)`` of ``out = compose(pose, exp(tangent))``.
+
+    ``pose = (x, y, theta)``, ``tangent = (a, b, phi)``; the update is
+    ``(x, y)' = (x, y) + sinc(phi/2) R(theta + phi/2) (a, b)``, ``theta' = theta + phi``.
+    Both Jacobians are taken in the pose's own coordinates ``(x, y, theta)`` of the parent
+    frame (not in the tangent space, unlike the right-plus Jacobians ``J_out_x``, ``J_out_tau``
+    of Sola, Deray and Atchuthan, "A micro Lie theory for state estimation in robotics",
+    2018, eqs. 170-171): ``J_out_pose = d out / d pose`` (3x3; it does not depend on x, y),
+    ``J_out_tangent = d out / d tangent`` (3x3). Used to propagate the odometry covariance
+    ``P' = J_out_pose P J_out_pose^T + J_out_tangent Sigma J_out_tangent^T``.
+    """
+    a, b, phi = (float(v) for v in tangent)
+    h = 0.5 * phi
+    k = sinc_scalar(h)
+    dk = dsinc_scalar(h)
+    c, s = math.cos(theta + h), math.sin(theta + h)
+    ra, rb = c * a - s * b, s * a + c * b            # R(theta + phi/2) (a, b)
+    j_pose = np.array([[1.0, 0.0, -k * rb], [0.0, 1.0, k * ra], [0.0, 0.0, 1.0]])
+    # d/dphi of k(phi/2) R(theta + phi/2) (a, b): 0.5 dk R t + 0.5 k R' t
+    j_tangent = np.array([[k * c, -k * s, 0.5 * dk * ra - 0.5 * k * rb],
+                          [k * s, k * c, 0.5 * dk * rb + 0.5 * k * ra],
+                          [0.0, 0.0, 1.0]])
+    return j_pose, j_tangent

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import InputError, OmnikinError
+from .errors import InputError
 from .geometry import sinc, wrap_angle
 
 METHODS = ("exact", "midpoint", "euler")

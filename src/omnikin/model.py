@@ -33,7 +33,7 @@ from typing import Optional, Sequence
 import numpy as np
 
 from ._arrays import as_components, require_finite
-from .errors import InfeasibleTwistError, InputError, OmnikinError, SingularLayoutError
+from .errors import InfeasibleTwistError, InputError, SingularLayoutError
 from .linalg import RANK_TOL, null_space, rank
 from .mobility import Configuration, Mobility, analyse, generic_configuration
 from .wheels import Wheel
@@ -120,10 +120,25 @@ class Robot:
     def fixed(self) -> tuple[Wheel, ...]:
         return tuple(w for w in self.wheels if w.is_fixed)
 
+    @cached_property
+    def encoded(self) -> tuple[Wheel, ...]:
+        """Rolling wheels with an encoder (the measured, usually driven, wheels), in file order."""
+        return tuple(w for w in self.rolling if w.encoder is not None)
+
     @property
     def wheel_names(self) -> list[str]:
-        """Names of the rolling wheels: the order of every wheel-speed array."""
+        """Names of every wheel, in file order (castors included)."""
+        return [w.name for w in self.wheels]
+
+    @property
+    def rolling_names(self) -> list[str]:
+        """Names of the rolling wheels (all but castors): the order of every wheel-speed array."""
         return [w.name for w in self.rolling]
+
+    @property
+    def encoded_names(self) -> list[str]:
+        """Names of the encoded wheels: the order of every tick or wheel-angle array."""
+        return [w.name for w in self.encoded]
 
     @property
     def steer_names(self) -> list[str]:
@@ -276,7 +291,7 @@ class Robot:
             return
         z = np.linalg.svd(m)[2][-1]
         eta = basis @ z
-        used = self.wheel_names if wheels is None else list(wheels)
+        used = self.rolling_names if wheels is None else list(wheels)
         if abs(eta[2]) > 1e-9:
             cx, cy = (0.0 if abs(c) < 1e-12 else c for c in (-eta[1] / eta[2], eta[0] / eta[2]))
             why = (f"a rotation about the point ({cx:.6g}, {cy:.6g}) m turns none of them: "
@@ -374,7 +389,7 @@ class Robot:
         wheels. ``wheels`` names a subset of rolling wheels (e.g. the encoded ones)
         that ``wheel_speeds`` refers to; default all rolling wheels.
         """
-        names = self.wheel_names if wheels is None else list(wheels)
+        names = self.rolling_names if wheels is None else list(wheels)
         w = as_components(wheel_speeds, len(names), "wheel_speeds")
         require_finite(w, "wheel_speeds")
         if self.steerable and steer is None:

@@ -21,7 +21,7 @@ import numpy as np
 
 from ._arrays import as_components, require_finite
 from .encoders import first_bad, tick_increments
-from .errors import InputError, OdometryInputError, OmnikinError
+from .errors import InputError, OdometryInputError
 from .geometry import wrap_angle
 from .integration import check_method, integrate_components
 from .model import Robot
@@ -29,7 +29,7 @@ from .model import Robot
 
 def encoded_wheels(robot: Robot):
     """The rolling wheels with an encoder, in file order; checks they observe all motion."""
-    wheels = [w for w in robot.rolling if w.encoder is not None]
+    wheels = list(robot.encoded)
     if not wheels:
         raise InputError(
             f"robot {robot.name!r}: no wheel has an 'encoder' entry; odometry from ticks needs "

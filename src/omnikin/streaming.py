@@ -23,7 +23,7 @@ import numpy as np
 from ._arrays import as_components
 from ._stream_kernel import compile_advance, compile_update
 from .encoders import (check_bits, check_max_jump, jump_limit, tick_rate, wrap_scalar)
-from .errors import InputError, OdometryInputError, OmnikinError
+from .errors import InputError, OdometryInputError
 from .geometry import wrap_angle
 from .integration import check_method
 from .linalg import rank

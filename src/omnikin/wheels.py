@@ -34,7 +34,8 @@ import math
 
 import numpy as np
 
-from .errors import InfeasibleTwistError, InputError, OmnikinError
+from .geometry import wrap_angle
+from .errors import InfeasibleTwistError, InputError
 
 WHEEL_TYPES = ("omni", "mecanum", "swedish", "standard", "steerable", "castor")
 SWEDISH_TYPES = ("omni", "mecanum", "swedish")
@@ -215,10 +216,10 @@ class Wheel:
                 f"steering axis moves slower than offset*|omega|, so the wheel would keep swivelling")
         a = np.arcsin(np.clip(k, -1.0, 1.0))
         cands = np.stack([psi - a, psi + np.pi + a], axis=-1) - self.drive
-        cands = (cands + np.pi) % (2 * np.pi) - np.pi
+        cands = wrap_angle(cands)
         lo, hi = (self.steer.lower, self.steer.upper) if self.steer is not None else (-np.pi, np.pi)
         within = (cands >= lo - 1e-12) & (cands <= hi + 1e-12)
-        dist = np.abs((cands - hint[..., None] + np.pi) % (2 * np.pi) - np.pi)
+        dist = np.abs(wrap_angle(cands - hint[..., None]))
         dist = np.where(within, dist, dist + 10.0)
         pick = np.take_along_axis(cands, np.argmin(dist, axis=-1)[..., None], axis=-1)[..., 0]
         angle = np.where(moving & ~unsteady, pick, hint)

@@ -2,7 +2,7 @@
 
 Bags are ROS 2 bags (rosbag2 directories with sqlite3 or MCAP storage, or a bare ``.mcap`` /
 ``.db3`` file), read and written with the ``rosbags`` package (``pip install "omnikin[bags]"``);
-see :mod:`omnikin.io.bags`. Metrics are those of :mod:`omnikin.benchmark.metrics` (evo's ATE and
+see :mod:`omnikin.io.bags`. Metrics are those of :mod:`omnikin.evaluation.metrics` (evo's ATE and
 RPE, in the plane).
 """
 
@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 
+from ..geometry import wrap_angle
 from ..errors import InputError, OmnikinError
 from .common import console, load_robot, robot_as_built
 
@@ -96,7 +97,7 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("-o", "--output", metavar="FILE", help="file to write (default: standard output)")
     sp.set_defaults(func=cmd_bag_export)
 
-    from ..simulation.errors import NOISE, PROFILES
+    from ..simulation.error_models import NOISE, PROFILES
 
     sp = sub.add_parser("simulate", help="simulate a run and record it to a ROS 2 bag",
                         description="Simulate ROBOT as built (systematic --errors, random --noise) driving a path "
@@ -196,8 +197,8 @@ def cmd_bag_export(args) -> int:
 
 # --- simulate ----------------------------------------------------------------------------------------
 def parse_paths(text: str):
-    """A plan from one or more ``;``-separated paths of the runs-file grammar (:func:`omnikin.io.runs.parse_path`)."""
-    from ..io.runs import parse_path
+    """A plan from one or more ``;``-separated paths of the runs-file grammar (:func:`omnikin.plans.parse_plan`)."""
+    from ..plans import parse_plan
 
     parts = [p.strip() for p in text.split(";")]
     if not any(parts):
@@ -207,7 +208,7 @@ def parse_paths(text: str):
         if not part:
             raise InputError(f"--path {text!r}: empty part between ';'")
         try:
-            p = parse_path(part)
+            p = parse_plan(part)
         except OmnikinError as exc:
             raise InputError(f"--path: {exc}") from None
         plan = p if plan is None else plan + p
@@ -216,7 +217,7 @@ def parse_paths(text: str):
 
 def cmd_simulate(args) -> int:
     from ..io.bags import record_run, require_new_bag, require_rosbags
-    from ..simulation.errors import noise as noise_profile
+    from ..simulation.error_models import noise as noise_profile
     from ..simulation.simulate import simulate
 
     require_rosbags()
@@ -240,7 +241,7 @@ def cmd_simulate(args) -> int:
     truth_end = run.truth[0, -1]
     odom_end = run.odometry[-1]
     diff = truth_end - odom_end
-    diff[2] = (diff[2] + math.pi) % (2 * math.pi) - math.pi
+    diff[2] = wrap_angle(diff[2])
     summary = {"robot": robot.name, "path": args.path, "errors": None if args.true_robot else args.errors,
                "true_robot": args.true_robot, "noise": args.noise, "seed": args.seed, "rate": args.rate,
                "samples": len(run.t), "duration": float(run.t[-1]), "bag": args.bag, "topics": counts,
@@ -264,7 +265,7 @@ def cmd_simulate(args) -> int:
 
 # --- metrics -----------------------------------------------------------------------------------------
 def cmd_metrics(args) -> int:
-    from ..benchmark.metrics import evaluate, statistics
+    from ..evaluation.metrics import evaluate, statistics
     from ..io.trajectories import detect_format, read_trajectory
 
     if args.delta < 1:

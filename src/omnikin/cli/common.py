@@ -8,7 +8,7 @@ import numpy as np
 def robot_as_built(robot, true_robot: str | None, errors: str, seed):
     """The robot as built and the errors drawn: a ``--true-robot`` file, or ``robot`` with a
     seeded draw of the ``--errors`` profile. ``seed``: a SeedSequence or an int."""
-    from ..simulation.errors import profile as error_profile
+    from ..simulation.error_models import profile as error_profile
 
     if true_robot:
         return load_robot(true_robot), None

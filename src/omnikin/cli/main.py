@@ -119,10 +119,10 @@ def show_data(robot) -> dict:
         "description": robot.description,
         "references": list(robot.references),
         "wheels": wheels,
-        "wheel_names": robot.wheel_names,
+        "wheel_names": robot.rolling_names,
         "steer_names": robot.steer_names,
         "ik_matrix": robot.ik_matrix.tolist(),
-        "fk_matrix": fk[:, : len(robot.wheel_names)].tolist(),
+        "fk_matrix": fk[:, : len(robot.rolling_names)].tolist(),
         "fk_rank": robot.fk_rank(),
         "rank": m.rank,
         "mobility": m.degree_of_mobility,
@@ -171,9 +171,9 @@ def cmd_show(args) -> int:
     twist = ["vx", "vy", "omega"]
     note = " at zero steering" if robot.steerable else ""
     con.print(f"inverse kinematics{note}: wheel speeds [rad/s] = J (vx, vy, omega)")
-    con.print(_matrix_table(data["ik_matrix"], robot.wheel_names, twist))
+    con.print(_matrix_table(data["ik_matrix"], robot.rolling_names, twist))
     con.print(f"forward kinematics{note}: (vx, vy, omega) = F wheel speeds (least squares)")
-    con.print(_matrix_table(data["fk_matrix"], twist, robot.wheel_names))
+    con.print(_matrix_table(data["fk_matrix"], twist, robot.rolling_names))
     if data["fk_rank"] < data["mobility"]:
         con.print(f"note: at zero steering the wheel speeds determine only {data['fk_rank']} of the "
                   f"{data['mobility']} motion components; F is the minimum-norm solution there")
@@ -210,7 +210,7 @@ def cmd_ik(args) -> int:
         msg = str(exc).split(" (on_infeasible=")[0]
         raise CliError(f"{msg}; --allow-infeasible reports the violation instead") from None
     body = robot.body_twist(twist, args.heading) if args.heading is not None else twist
-    data = {"robot": robot.name, "twist": body.tolist(), "wheel_names": robot.wheel_names,
+    data = {"robot": robot.name, "twist": body.tolist(), "wheel_names": robot.rolling_names,
             "wheel_speeds": res.wheel_speeds.tolist()}
     if robot.steerable:
         data["steer_names"] = robot.steer_names
@@ -235,7 +235,7 @@ def cmd_ik(args) -> int:
         table.add_column(col, justify="right")
     steer = dict(zip(robot.steer_names, res.steer_angles))
     roller = dict(zip(robot.swedish_names, data.get("roller_speeds", [])))
-    for name, speed in zip(robot.wheel_names, res.wheel_speeds):
+    for name, speed in zip(robot.rolling_names, res.wheel_speeds):
         table.add_row(name, _fmt(speed), _fmt(math.degrees(steer[name])) if name in steer else "",
                       _fmt(roller[name]) if name in roller else "")
     con.print(table)
@@ -251,9 +251,9 @@ def cmd_ik(args) -> int:
 
 def cmd_fk(args) -> int:
     robot = load_robot(args.robot)
-    n = len(robot.wheel_names)
+    n = len(robot.rolling_names)
     if len(args.speeds) != n:
-        raise CliError(f"robot {robot.name!r} has {n} rolling wheels {robot.wheel_names}: "
+        raise CliError(f"robot {robot.name!r} has {n} rolling wheels {robot.rolling_names}: "
                        f"give {n} wheel speeds, got {len(args.speeds)}")
     steer = None
     if robot.steerable:
@@ -264,7 +264,7 @@ def cmd_fk(args) -> int:
     elif args.steer_deg is not None:
         raise CliError(f"robot {robot.name!r} has no steerable wheel: drop --steer-deg")
     res = robot.fk(np.array(args.speeds), steer)
-    data = {"robot": robot.name, "wheel_names": robot.wheel_names, "twist": res.twist.tolist(),
+    data = {"robot": robot.name, "wheel_names": robot.rolling_names, "twist": res.twist.tolist(),
             "residual": res.residual.tolist(), "residual_norm": float(res.residual_norm)}
     if args.json:
         print(json.dumps(data, indent=2))

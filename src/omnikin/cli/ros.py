@@ -45,11 +45,11 @@ def add_parsers(sub, robot_help: str) -> None:
 
 
 def cmd_ros(args) -> int:
-    from ..errors import InputError, OmnikinError
+    from ..errors import InputError
     from ..ros import require_rclpy
     from ..ros.params import load_params
-    from ..runtime.backends import SimBackend
-    from ..simulation.errors import noise as noise_profile
+    from ..simulation.backend import SimBackend
+    from ..simulation.error_models import noise as noise_profile
     from .common import load_robot, robot_as_built
 
     robot = load_robot(args.robot)

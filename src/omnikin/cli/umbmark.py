@@ -15,11 +15,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..benchmark.calibration import borenstein_calibrate, calibrate, recommended_runs, CalibrationRun
-from ..benchmark.umbmark import analyze, differential_pair, run_umbmark
-from ..errors import InputError, OmnikinError
-from ..simulation.errors import NOISE, PROFILES, noise as noise_profile
-from ..simulation.motion import umbmark_square
+from ..evaluation.calibration import borenstein_calibrate, calibrate, recommended_runs
+from ..evaluation.umbmark import analyze, differential_pair, run_umbmark
+from ..errors import InputError
+from ..simulation.error_models import NOISE, PROFILES, noise as noise_profile
+from ..plans import CalibrationRun, umbmark_square
 from ..simulation.simulate import simulate
 from .common import console, load_robot, robot_as_built
 

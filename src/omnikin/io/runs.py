@@ -25,9 +25,9 @@ import math
 
 import numpy as np
 
-from ..benchmark.calibration import CalibrationRun
+from ..geometry import wrap_angle
 from ..errors import InputError, OmnikinError
-from ..simulation.motion import Plan, arc, line, spin, umbmark_square
+from ..plans import CalibrationRun, Plan, parse_plan
 from .csvfile import column_problems, number, read_rows
 
 
@@ -87,35 +87,11 @@ def read_umbmark_measurements(path):
         x = _number(source, line_no, "x_abs", row["x_abs"]) - _number(source, line_no, "x_calc", row["x_calc"])
         y = _number(source, line_no, "y_abs", row["y_abs"]) - _number(source, line_no, "y_calc", row["y_calc"])
         th = _theta(source, header, line_no, row, "abs") - _theta(source, header, line_no, row, "calc")
-        eps[d].append((x, y, (th + math.pi) % (2 * math.pi) - math.pi if math.isfinite(th) else math.nan))
+        eps[d].append((x, y, wrap_angle(th) if math.isfinite(th) else math.nan))
     for d, runs in eps.items():
         if not runs:
             raise RunsFileError(f"{source}: no {d} runs; UMBmark needs runs in both directions (cw and ccw)")
     return {d: np.array(v) for d, v in eps.items()}
-
-
-def parse_path(text: str) -> Plan:
-    """A plan from the ``path`` column grammar (module docstring)."""
-    words = text.split()
-    if not words:
-        raise InputError("empty path")
-    kind, args = words[0].lower(), words[1:]
-    try:
-        nums = [float(a) for a in args[2:]] if kind == "square" else [float(a) for a in args]
-    except ValueError:
-        raise InputError(f"path {text!r}: numbers expected after {kind!r}") from None
-    if kind == "square":
-        if len(args) not in (2, 3):
-            raise InputError(f"path {text!r}: expected 'square cw|ccw rotate|translate [SIDE]'")
-        return umbmark_square(args[0].lower(), nums[0] if nums else 4.0, args[1].lower())
-    if kind == "line" and len(nums) in (1, 2):
-        return line(nums[0], math.radians(nums[1]) if len(nums) == 2 else 0.0)
-    if kind == "spin" and len(nums) == 1:
-        return spin(math.radians(nums[0]))
-    if kind == "arc" and len(nums) == 2:
-        return arc(nums[0], math.radians(nums[1]))
-    raise InputError(f"path {text!r}: expected 'square cw|ccw rotate|translate [SIDE]', 'line LENGTH "
-                       f"[HEADING_DEG]', 'spin ANGLE_DEG' or 'arc RADIUS ANGLE_DEG'")
 
 
 def read_calibration_runs(path, sigma=(0.001, math.radians(0.2))) -> list[CalibrationRun]:
@@ -129,7 +105,7 @@ def read_calibration_runs(path, sigma=(0.001, math.radians(0.2))) -> list[Calibr
         key = " ".join(row["path"].lower().split())
         if key not in plans:
             try:
-                plans[key] = parse_path(key)
+                plans[key] = parse_plan(key)
             except OmnikinError as exc:
                 raise RunsFileError(f"{source}: line {line_no}, column 'path': {exc}") from None
         m = (_number(source, line_no, "x_abs", row["x_abs"]), _number(source, line_no, "y_abs", row["y_abs"]),
@@ -148,7 +124,7 @@ def write_calibration_runs(path, runs: list[tuple[str, np.ndarray]]) -> None:
 
 
 def write_umbmark_measurements(path, result) -> None:
-    """Write a :class:`~omnikin.benchmark.umbmark.UMBmarkResult` as a measurements file
+    """Write a :class:`~omnikin.evaluation.umbmark.UMBmarkResult` as a measurements file
     (odometry at the origin, so ``abs`` = ``epsilon``)."""
     with open(path, "w", newline="", encoding="utf-8") as handle:
         w = csv.writer(handle)

@@ -23,7 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, OmnikinError
+from ..geometry import wrap_angle
+from ..errors import InputError
 from .csvfile import number
 
 FORMATS = ("tum", "kitti", "csv")
@@ -156,5 +157,5 @@ def read_trajectory(path, fmt: str | None = None) -> tuple[np.ndarray, np.ndarra
             m = _numbers(source, line_no, fields, 12, "KITTI")
             t[k] = float(k)
             poses[k] = (m[3], m[7], math.atan2(m[4], m[0]))
-    poses[:, 2] = (poses[:, 2] + math.pi) % (2 * math.pi) - math.pi
+    poses[:, 2] = wrap_angle(poses[:, 2])
     return t, poses

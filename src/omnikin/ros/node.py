@@ -23,8 +23,8 @@ import time
 
 import numpy as np
 
-from ..errors import InputError, LinkError, OmnikinError
-from ..simulation.limits import MotionLimits
+from ..errors import InputError, LinkError
+from ..limits import MotionLimits
 from . import require_rclpy
 from .params import DEFAULTS, validate
 
@@ -228,7 +228,7 @@ def build_node(robot, backend, values: dict, name: str = "omnikin_base"):
             self.diag_pub.publish(arr)
 
         def stop_wheels(self):
-            zero = np.zeros(len(robot.wheel_names))
+            zero = np.zeros(len(robot.rolling_names))
             self.runtime.backend.write(self.now_s(), zero, None)
 
     return BaseNode()

@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..errors import InputError, OmnikinError
+from ..errors import InputError
 
 DEFAULTS = {
     "cmd_vel_timeout": 0.5,

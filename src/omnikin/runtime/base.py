@@ -10,7 +10,7 @@ A plain class, free of ROS and of time sources (every call carries its time [s])
 
 Covariance (motion-dependent, not a constant): each encoded wheel's angle increment has the
 variance ``slip^2 |r dtheta| / r^2`` [rad^2] (distance-proportional slip as in
-:mod:`omnikin.simulation.errors`; it does not depend on the sample rate, and nothing grows
+:mod:`omnikin.simulation.error_models`; it does not depend on the sample rate, and nothing grows
 while the robot stands still). Encoder quantisation is not process noise: the quantisation
 errors of successive increments telescope to that of the last reading, a bounded
 ``q / sqrt(12)`` per wheel, negligible against slip after a few centimetres; the body increment's covariance is ``Sigma_xi = F diag(.) F^T`` (``F`` forward
@@ -28,10 +28,11 @@ from typing import Optional
 
 import numpy as np
 
-from ..errors import InputError, OmnikinError
+from ..errors import InputError
+from ..geometry import compose_exp_jacobians
 from ..model import Robot
 from ..odometry import mid_steer
-from ..simulation.limits import MotionLimits
+from ..limits import MotionLimits
 from ..streaming import Odometry
 from .backends import WheelBackend, WheelState
 from .command import CommandFilter
@@ -107,7 +108,7 @@ class BaseRuntime:
             sigma_xi = f @ np.diag(var) @ f.T
             dt = state.t - self._last.t
             inc = np.array(self.odometry.twist) * dt          # the body increment the odometry just used
-            a_mat, b_mat = _jacobians(before[2], inc)
+            a_mat, b_mat = compose_exp_jacobians(before[2], inc)
             self.pose_covariance = a_mat @ self.pose_covariance @ a_mat.T + b_mat @ sigma_xi @ b_mat.T
             self.twist_covariance = sigma_xi / dt ** 2
         self._last = state
@@ -116,18 +117,3 @@ class BaseRuntime:
     def pose(self):
         return self.odometry.pose
 
-
-def _jacobians(theta: float, inc: np.ndarray):
-    """``A = d x'/d x`` and ``B = d x'/d xi`` of the exact SE(2) update (module docstring)."""
-    a, b, phi = inc
-    h = 0.5 * phi
-    k = 1.0 - h * h / 6.0 if abs(h) < 1e-4 else math.sin(h) / h
-    dk = -h / 3.0 if abs(h) < 1e-4 else (math.cos(h) * h - math.sin(h)) / (h * h)   # d sinc(h)/dh
-    c, s = math.cos(theta + h), math.sin(theta + h)
-    dx, dy = k * (c * a - s * b), k * (s * a + c * b)
-    a_mat = np.array([[1.0, 0.0, -dy], [0.0, 1.0, dx], [0.0, 0.0, 1.0]])
-    # d/dphi: 0.5 * dk * R t + k * 0.5 * R' t
-    dphi_x = 0.5 * dk * (c * a - s * b) + 0.5 * k * (-s * a - c * b)
-    dphi_y = 0.5 * dk * (s * a + c * b) + 0.5 * k * (c * a - s * b)
-    b_mat = np.array([[k * c, -k * s, dphi_x], [k * s, k * c, dphi_y], [0.0, 0.0, 1.0]])
-    return a_mat, b_mat

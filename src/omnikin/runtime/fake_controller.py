@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, OmnikinError
+from ..errors import InputError
 from .protocol import (
     FrameEncoder,
     Protocol,
@@ -113,14 +113,14 @@ class FakeController:
     def for_robot(cls, robot, wheels=None, start_counts=None, **kwargs) -> FakeController:
         """Controllers for the robot's driven (encoded) wheels, or the named subset ``wheels``;
         ``start_counts`` maps wheel names to starting counter values."""
-        names = [w.name for w in robot.rolling if w.encoder is not None] if wheels is None else list(wheels)
+        names = robot.encoded_names if wheels is None else list(wheels)
         start_counts = start_counts or {}
         specs = []
         for n in names:
             w = robot.wheel(n)
             if w.encoder is None:
                 raise InputError(f"fake controller: wheel {n!r} has no encoder")
-            specs.append(FakeWheel(robot.wheel_names.index(n), 1.0 / w.encoder.rad_per_tick,
+            specs.append(FakeWheel(robot.rolling_names.index(n), 1.0 / w.encoder.rad_per_tick,
                                    int(start_counts.get(n, 0)), w.max_speed))
         return cls(specs, **kwargs)
 

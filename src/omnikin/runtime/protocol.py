@@ -44,7 +44,7 @@ from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
-from ..errors import InputError, OmnikinError
+from ..errors import InputError
 
 DIRECTIONS = ("host_to_controller", "controller_to_host", "both")
 INT_TYPES = {  # name: (struct code, size, C type, min, max)

@@ -7,7 +7,7 @@ interface with the omnikin wheel protocol (:mod:`.protocol`), through pyserial
 
 Wheels and ports. The driven wheels are the robot's rolling wheels with an encoder, in file
 order. A wheel's protocol index is its position among the robot's rolling wheels
-(``robot.wheel_names``), the position of its speed in ``write``. ``ports`` is
+(``robot.rolling_names``), the position of its speed in ``write``. ``ports`` is
 
 * one port (``str``): every wheel's controller on it (one board for all wheels, or several
   controllers on a shared bus); frames carry the wheel index;
@@ -107,10 +107,10 @@ class SerialBackend:
         if robot.steerable:
             raise InputError(f"robot {robot.name!r}: the serial back-end (protocol version {p.version}) carries "
                                f"wheel speeds only; steerable wheels {robot.steer_names} are not supported")
-        self.encoded = [w.name for w in robot.rolling if w.encoder is not None]
+        self.encoded = robot.encoded_names
         if not self.encoded:
             raise InputError(f"robot {robot.name!r}: the serial back-end needs driven wheels with an encoder")
-        self.index = {n: robot.wheel_names.index(n) for n in self.encoded}
+        self.index = {n: robot.rolling_names.index(n) for n in self.encoded}
         too_high = [n for n, i in self.index.items() if i > p.wheel_index_max]
         if too_high:
             raise InputError(f"robot {robot.name!r}: wheels {too_high} have indices beyond {p.wheel_index_max}")
@@ -205,10 +205,10 @@ class SerialBackend:
     # --- WheelBackend ------------------------------------------------------------------------------
     def write(self, t: float, speeds, steer=None) -> None:
         """Send each driven wheel its speed [rad/s] (zero while the link is lost); never raises for the link."""
-        n = len(self.robot.wheel_names)
+        n = len(self.robot.rolling_names)
         speeds = np.asarray(speeds, dtype=float)
         if speeds.shape != (n,) or not np.all(np.isfinite(speeds)):
-            raise InputError(f"serial back-end: expected {n} finite wheel speeds for {self.robot.wheel_names}, "
+            raise InputError(f"serial back-end: expected {n} finite wheel speeds for {self.robot.rolling_names}, "
                                f"got {speeds}")
         self._clock(t)
         if self._lost is not None:
@@ -265,7 +265,7 @@ class SerialBackend:
             return
         self._closed = True
         try:
-            self._send_speeds(np.zeros(len(self.robot.wheel_names)))
+            self._send_speeds(np.zeros(len(self.robot.rolling_names)))
         except Exception:  # closing must not fail
             pass
         for port in self._ports.values():
@@ -425,7 +425,7 @@ class SerialBackend:
 
     def _lose(self, t: float, message: str, wheel: str, url: str) -> None:
         self._lost = (message, wheel, url)
-        self._send_speeds(np.zeros(len(self.robot.wheel_names)))
+        self._send_speeds(np.zeros(len(self.robot.rolling_names)))
 
     def __enter__(self):
         return self

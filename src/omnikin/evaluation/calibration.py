@@ -33,11 +33,11 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import InputError, OmnikinError
+from ..errors import InputError
 from ..geometry import compose, exp, wrap_angle
 from ..model import Robot
-from ..simulation.errors import SystematicErrors, WheelErrors
-from ..simulation.motion import Plan, line, spin, umbmark_square
+from ..simulation.error_models import SystematicErrors, WheelErrors
+from ..plans import CalibrationRun, Plan, line, spin, umbmark_square
 from .umbmark import UMBmarkResult, differential_pair
 
 BLIND = 2.0
@@ -48,29 +48,6 @@ half as well as the prior does."""
 PRIOR = {"radius": 0.05, "dx": 0.01, "dy": 0.01, "lever": 0.01, "axle": 0.01, "drive": math.radians(5.0)}
 """Prior standard deviations of the fitted parameters (relative, m, m, rad): ten times the
 ``typical`` as-built profile, weak enough never to pull an observable parameter."""
-
-
-@dataclass(frozen=True)
-class CalibrationRun:
-    """A plan driven by the nominal model and its measured end pose ``(x, y, theta)``.
-
-    ``theta`` may be NaN when the heading was not measured. ``sigma`` is the measurement
-    standard deviation ``(m, rad)``.
-    """
-
-    plan: Plan
-    measured: tuple
-    label: str = ""
-    sigma: tuple = (0.001, math.radians(0.2))
-
-    def __post_init__(self):
-        m = tuple(float(v) for v in self.measured)
-        if len(m) != 3 or not (math.isfinite(m[0]) and math.isfinite(m[1])) or math.isinf(m[2]):
-            raise InputError(f"calibration run {self.label!r}: measured end pose needs finite x and y "
-                               f"(theta may be NaN when not measured), got {self.measured!r}")
-        if not all(s > 0 for s in self.sigma):
-            raise InputError(f"calibration run {self.label!r}: sigma must be positive, got {self.sigma!r}")
-        object.__setattr__(self, "measured", m)
 
 
 class PlanSet:
@@ -84,7 +61,7 @@ class PlanSet:
 
     def __init__(self, plans: Sequence[Plan], command_robot: Robot):
         self.command = command_robot
-        self.names = [w.name for w in command_robot.rolling if w.encoder is not None]
+        self.names = command_robot.encoded_names
         w, steer, length, owner, slot = [], [], [], [], []
         for p, plan in enumerate(plans):
             hint = np.zeros(len(command_robot.steerable))
@@ -129,7 +106,7 @@ def predicted_end(plan: Plan, true_robot: Robot, command_robot: Robot) -> np.nda
 
 
 def _driven(robot: Robot):
-    wheels = [w for w in robot.rolling if w.encoder is not None]
+    wheels = list(robot.encoded)
     if not wheels:
         raise InputError(f"robot {robot.name!r}: calibration needs the driven wheels' encoders")
     return wheels

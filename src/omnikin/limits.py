@@ -13,8 +13,8 @@ from typing import Optional
 
 import numpy as np
 
-from .._arrays import as_components, require_finite
-from ..errors import InputError, OmnikinError
+from ._arrays import as_components, require_finite
+from .errors import InputError
 
 
 @dataclass(frozen=True)

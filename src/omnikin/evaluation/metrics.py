@@ -54,7 +54,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError, OmnikinError
+from ..errors import InputError
 from ..geometry import between, compose, wrap_angle
 
 

@@ -31,7 +31,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import InputError, OmnikinError
+from ..errors import InputError
 from ..model import Robot
 from ..wheels import Encoder
 

@@ -24,12 +24,13 @@ from typing import Optional
 
 import numpy as np
 
-from ..errors import InputError, OmnikinError
+from ..errors import InputError
 from ..model import Robot
-from ..simulation.errors import NoiseModel
-from ..simulation.limits import MotionLimits
-from ..simulation.motion import check_mode, umbmark_square
-from ..simulation.simulate import make_rng, simulate
+from ..simulation.error_models import NoiseModel
+from ..limits import MotionLimits
+from ..plans import check_mode, umbmark_square
+from ..rng import make_rng
+from ..simulation.simulate import simulate
 
 
 @dataclass(frozen=True)
@@ -119,7 +120,7 @@ def differential_pair(robot: Robot):
     A differential drive here: exactly two encoded rolling wheels, both fixed standard
     wheels on one axle (same x, drive directions along +-body x), one on each side.
     """
-    enc = [w for w in robot.rolling if w.encoder is not None]
+    enc = list(robot.encoded)
     if len(enc) != 2 or not all(w.is_fixed for w in enc):
         return None
     a, b = enc

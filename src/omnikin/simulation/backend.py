@@ -1,0 +1,94 @@
+"""The simulated wheel back-end of the runtime: the robot as built (:class:`SimBackend`).
+
+It implements :class:`omnikin.runtime.backends.WheelBackend`: the driven (encoded) wheels
+turn at the commanded speeds (ideal speed control, zero-order hold between calls), each
+wheel's rolling distance slips as in :class:`omnikin.simulation.error_models.NoiseModel`,
+and the true robot's forward kinematics and exact SE(2) integration move the ground truth.
+Steering angles move linearly from one command to the next over the following interval,
+which is integrated at its middle steering angle (the discretisation the odometry uses).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError
+from ..geometry import compose, exp
+from ..model import Robot
+from ..odometry import mid_steer
+from ..rng import make_rng
+from ..runtime.backends import WheelState
+from .error_models import NoiseModel
+
+
+class SimBackend:
+    """The robot as built, simulated (module docstring). ``truth`` is its true pose."""
+
+    def __init__(self, robot: Robot, true_robot: Robot | None = None, noise: NoiseModel | None = None, rng=None,
+                 start=(0.0, 0.0, 0.0)):
+        self.robot = robot
+        self.true_robot = true_robot or robot
+        self.noise = noise or NoiseModel(quantise=False)
+        self.rng = make_rng(rng)
+        self.encoded = robot.encoded_names
+        if not self.encoded:
+            raise InputError(f"robot {robot.name!r}: the simulated back-end needs encoded (driven) wheels")
+        self._index = [robot.rolling_names.index(n) for n in self.encoded]
+        self._radius = np.array([self.true_robot.wheel(n).radius for n in self.encoded])
+        self._rpt = np.array([abs(robot.wheel(n).encoder.rad_per_tick) for n in self.encoded])
+        self.truth = np.asarray(start, dtype=float).copy()
+        self._angles = np.zeros(len(self.encoded))
+        self._speeds = np.zeros(len(self.encoded))
+        self._steer = np.zeros(len(robot.steerable)) if robot.steerable else None
+        self._steer_start = None if self._steer is None else self._steer.copy()
+        self._t = None
+        self.writes = 0
+        self.reads = 0
+
+    def write(self, t: float, speeds, steer=None) -> None:
+        speeds = np.asarray(speeds, dtype=float)
+        if speeds.shape != (len(self.robot.rolling_names),) or not np.all(np.isfinite(speeds)):
+            raise InputError(f"sim back-end: expected {len(self.robot.rolling_names)} finite wheel speeds, got {speeds}")
+        self._advance(t)
+        self._speeds = speeds[self._index]
+        if self._steer is not None and steer is not None:
+            self._steer = np.asarray(steer, dtype=float).copy()
+        self.writes += 1
+
+    def read(self, t: float) -> WheelState:
+        self._advance(t)
+        self.reads += 1
+        positions = self._angles.copy()
+        if self.noise.quantise:
+            positions = np.round(positions / self._rpt) * self._rpt
+        steer = None if self._steer is None else self._steer.copy()
+        return WheelState(float(t), positions, self._speeds.copy(), steer)
+
+    def _advance(self, t: float) -> None:
+        if self._t is None:
+            self._t = float(t)
+            return
+        dt = float(t) - self._t
+        if dt <= 0:
+            return
+        d = self._speeds * dt
+        self._angles += d
+        if self.noise.slip:
+            sigma = self.noise.slip * np.sqrt(np.abs(d) * self._radius) / self._radius
+            d = d + sigma * self.rng.standard_normal(len(d))
+        steer = None
+        if self._steer is not None:   # steering moves linearly over the interval: use its middle
+            steer = mid_steer(np.stack([self._steer_start, self._steer]))[0]
+            self._steer_start = self._steer.copy()
+        f = self.true_robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
+        inc = f @ d
+        if self.noise.floor:
+            inc[2] += self.noise.floor * np.sqrt(np.hypot(inc[0], inc[1])) * self.rng.standard_normal()
+        self.truth = compose(self.truth, exp(inc))
+        self._t = float(t)
+
+    def stats(self) -> dict:
+        return {"backend": "sim", "writes": self.writes, "reads": self.reads}
+
+    def close(self) -> None:
+        pass
