@@ -25,6 +25,7 @@ import shutil
 import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
+from typing import IO, Any
 
 from ..errors import InputError, OutputExistsError
 
@@ -87,17 +88,21 @@ def check_output(path, *, inputs: Iterable = (), force: bool = False, folder: bo
 
 
 @contextlib.contextmanager
-def atomic_write(path, mode: str = "w", *, encoding: str | None = "utf-8", newline: str | None = None) -> Iterator:
+def atomic_write(path, mode: str = "w", *, encoding: str | None = "utf-8",
+                 newline: str | None = None) -> Iterator[IO[Any]]:
     """Open a temporary file beside ``path``; on success it is renamed over ``path``.
 
     On an exception (or an interrupt) the temporary file is removed and ``path`` is left as
     it was. ``mode`` is ``"w"`` (text) or ``"wb"`` (bytes).
     """
     target = Path(os.fspath(path))
-    binary = "b" in mode
+    if mode not in ("w", "wb"):
+        raise ValueError(f"atomic_write: mode must be 'w' or 'wb', got {mode!r}")
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent or ".")
     try:
-        with os.fdopen(fd, mode, **({} if binary else {"encoding": encoding, "newline": newline})) as handle:
+        handle: IO[Any] = (os.fdopen(fd, "wb") if mode == "wb"
+                           else os.fdopen(fd, "w", encoding=encoding, newline=newline))
+        with handle:
             yield handle
         _keep_mode(target, tmp)
         os.replace(tmp, target)
