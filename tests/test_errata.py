@@ -1,7 +1,7 @@
-"""Symbolic checks of every entry of ``docs/errata.md`` (seeds 000, 002, 003, 004).
+"""Symbolic checks of every entry of ``docs/errata.md`` (the four source papers).
 
-Each test carries the id of its errata entry: ``T..`` Tomasi & Todt (seed 000), ``G..``
-Garcia-Sillas et al. (002), ``V..`` Villasenor et al. (004), ``B..`` Burgard's slides (003).
+Each test carries the id of its errata entry: ``T..`` Tomasi & Todt, ``G..`` Garcia-Sillas
+et al., ``V..`` Villasenor et al., ``B..`` Burgard & Krawez's slides.
 
 The expected forms are derived here with SymPy from first principles, never copied from the
 papers and never taken from omnikin:
