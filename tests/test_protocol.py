@@ -39,7 +39,7 @@ PROTO = load_protocol()
 
 
 def crc_bitwise(data: bytes) -> int:
-    """Reference CRC-16/CCITT-FALSE, bit by bit, independent of the table in protocol.py."""
+    """Reference CRC-16/CCITT-FALSE, bit by bit, independent of the table in omnikin.runtime.protocol.crc."""
     crc = 0xFFFF
     for b in data:
         crc ^= b << 8
