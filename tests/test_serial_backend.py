@@ -150,15 +150,16 @@ def test_controller_reset_keeps_the_angle(rig):
     assert s["out_of_order"] == 0 and state.positions[0] == pytest.approx(math.pi)
 
 
-@pytest.mark.parametrize("fault, counter, n", [
-    ("corrupt", "corrupt", 3),
-    ("short", "short", 2),
-    ("out_of_order", "out_of_order", 2),
-    ("duplicate", "duplicates", 2),
-    ("bad_version", "bad_version", 1),
-    ("unknown_type", "unknown_type", 1),
+@pytest.mark.parametrize("fault, n, counters, counted", [
+    # the fake damages the next n frames it sends, back to back: one garbled stretch of bytes
+    ("corrupt", 3, ("corrupt",), 1),
+    ("short", 2, ("short", "corrupt"), 1),   # short or corrupt: depends on the lengths of the two cut frames
+    ("out_of_order", 2, ("out_of_order",), 2),
+    ("duplicate", 2, ("duplicates",), 2),
+    ("bad_version", 1, ("bad_version",), 1),
+    ("unknown_type", 1, ("unknown_type",), 1),
 ])
-def test_bad_frames_are_counted_and_the_link_survives(rig, fault, counter, n):
+def test_bad_frames_are_counted_and_the_link_survives(rig, fault, n, counters, counted):
     fake, backend = rig
     before = backend.stats()
     getattr(fake, f"inject_{fault}")(n)
@@ -167,7 +168,7 @@ def test_bad_frames_are_counted_and_the_link_survives(rig, fault, counter, n):
     fake.advance(2, 600)
     state = poll(backend, lambda s: math.isclose(s.positions[2], TWO_PI, abs_tol=1e-12))
     after = backend.stats()
-    assert after[counter] - before[counter] == n
+    assert sum(after[c] - before[c] for c in counters) == counted
     assert not after["link_lost"] and after["reports"] > before["reports"]
     assert state.positions[2] == pytest.approx(TWO_PI)
 

@@ -4,10 +4,15 @@ Implements ``docs/protocol.md`` (section *Receiving: resynchronisation and error
 the sequence rules of :mod:`.sequence`). :class:`StreamDecoder` never raises on bad bytes. It
 resynchronises on the sync bytes and counts what it rejects (:class:`DecoderStats`):
 
-* ``corrupt``: the CRC fails (or the length byte is impossible) and no frame starts inside;
-* ``short``: a frame was cut off: a valid frame starts before the end it announced (each
-  frame start before that valid frame counts: two cut frames in a row count two), or, on
-  :meth:`StreamDecoder.flush`, the bytes stopped mid-frame;
+* ``corrupt`` + ``short``: the *garbled stretches*. A stretch is a run of bytes between two
+  frames with a valid CRC (or the stream's start, or its end at :meth:`StreamDecoder.flush`)
+  that holds no such frame: a frame whose CRC fails or whose length byte is impossible, a
+  frame cut off, noise, several of them in a row. Each counts once, when it ends, whatever
+  it contains (sync bytes in a payload, a CRC or a damaged length byte start no second
+  fault), as ``short`` if a frame start the decoder resynchronised on in it announced an end
+  beyond the next valid frame's start (it was cut off; also a frame the stream stopped in),
+  else as ``corrupt``. How many frames a stretch held cannot be known (one damaged length
+  byte moves every frame boundary after it); the sequence numbers count the frames lost;
 * ``bad_version``, ``unknown_type``, ``bad_length`` (the length does not fit the type),
   ``wrong_direction`` (a type the other side sends, e.g. an echo), ``bad_wheel`` (index 255);
 * sequence, per wheel: ``duplicates`` (same number again; dropped), ``out_of_order`` (a number
@@ -93,6 +98,11 @@ class StreamDecoder:
         self.streams: dict[int, SequenceTracker] = {}
         self._buf = bytearray()
         self._reset_code = self.protocol.error_code("RESET")
+        # the garbled stretch under way: bytes skipped since the last frame with a valid CRC, and
+        # the farthest end announced by a frame start the decoder resynchronised on in it (an
+        # offset into the buffer; > 0 at the next valid frame: that frame start was cut off)
+        self._garbled = False
+        self._reach = 0
 
     @property
     def pending(self) -> int:
@@ -103,19 +113,14 @@ class StreamDecoder:
         """Decode what ``data`` completes; never raises on bad bytes (they are counted)."""
         self._buf += data
         self.stats.bytes_in += len(data)
-        try:
-            return self._parse()
-        except Exception:  # a bug must not take the link down; counted and visible in stats
-            self.stats.internal_errors += 1
-            self._skip(len(self._buf))
-            return []
+        return self._decode(final=False)
 
-    def flush(self) -> None:
-        """The stream stopped: bytes of an unfinished frame are counted as a short frame."""
-        if self._buf:
-            if self._buf.startswith(self.protocol.sync):
-                self.stats.short += 1
-            self._skip(len(self._buf))
+    def flush(self) -> list[Message]:
+        """The stream stopped: decode the frames complete in the bytes held back (behind a frame
+        start that announced more bytes than came), count the rest, and return the frames."""
+        out = self._decode(final=True)
+        self._end_stretch()
+        return out
 
     def restart_stream(self, wheel: int | None = None) -> None:
         """Forget the sequence state of one wheel (None: all)."""
@@ -125,82 +130,102 @@ class StreamDecoder:
             self.streams.pop(wheel, None)
 
     # -- internals --
-    def _skip(self, n: int) -> None:
-        del self._buf[:n]
-        self.stats.skipped_bytes += n
+    def _decode(self, final: bool) -> list[Message]:
+        try:
+            return self._parse(final)
+        except Exception:  # a bug must not take the link down; counted and visible in stats
+            self.stats.internal_errors += 1
+            self._skip(len(self._buf))
+            return []
 
-    def _candidate(self, j: int):
-        """At offset ``j`` (a sync): True valid frame, False not one, None not enough bytes yet."""
+    def _skip(self, n: int) -> None:
+        """Drop ``n`` bytes that are no frame: they belong to the garbled stretch under way."""
+        if n > 0:
+            del self._buf[:n]
+            self.stats.skipped_bytes += n
+            self._garbled = True
+            self._reach = max(0, self._reach - n)
+
+    def _end_stretch(self) -> None:
+        """A frame with a valid CRC follows (or the stream stopped): count the garbled stretch
+        before it once, ``short`` if a frame start in it was cut off, else ``corrupt``."""
+        if self._garbled:
+            if self._reach > 0:
+                self.stats.short += 1
+            else:
+                self.stats.corrupt += 1
+        self._garbled, self._reach = False, 0
+
+    def _candidate(self, j: int, final: bool) -> tuple[int, bool | None]:
+        """The frame start (a sync) at offset ``j``: ``(end, verdict)``. ``end``: the offset just
+        after the frame it announces (impossible length: after its header; header incomplete:
+        the shortest frame). ``verdict``: True for a complete frame with a valid CRC, False for
+        none, None when bytes are missing (``final``: none will come, so False)."""
         p, buf = self.protocol, self._buf
         h = p.header_size
         if len(buf) < j + h:
-            return None
+            return j + h + CRC_BYTES, False if final else None
         length = buf[j + h - 1]
         if length > p.max_payload:
-            return False
-        n = h + length + CRC_BYTES
-        if len(buf) < j + n:
-            return None
-        return p.crc(buf[j + len(p.sync): j + h + length]) == int.from_bytes(buf[j + n - 2: j + n], "little")
+            return j + h, False
+        end = j + h + length + CRC_BYTES
+        if len(buf) < end:
+            return end, False if final else None
+        return end, p.crc(buf[j + len(p.sync): j + h + length]) == int.from_bytes(buf[end - 2: end], "little")
 
-    def _inner_frame(self, end: int):
-        """After a rejected candidate at 0 that claimed ``end`` bytes: ``(offset, cut)`` of a valid
-        frame starting inside it, ``cut`` counting the frame starts before it that did not
-        complete (the candidate included); ``(0, 0)`` if there is none; None to wait for bytes."""
-        sync = self.protocol.sync
-        j = self._buf.find(sync, 1, end + len(sync) - 1)
-        cut = 1
+    def _inner_frame(self, end: int, final: bool) -> int | None:
+        """After the frame start at 0 was rejected, having announced ``end``: the offset of the
+        first valid frame that starts inside it (then the rejected one was cut off), 0 if none,
+        None to wait for bytes. A sync may start on its last byte (as the C parser scans)."""
+        sync, buf = self.protocol.sync, self._buf
+        stop = end + len(sync) - 1
+        j = buf.find(sync, 1, stop)
         while j > 0:
-            verdict = self._candidate(j)
+            verdict = self._candidate(j, final)[1]
             if verdict is None:
                 return None
             if verdict:
-                return j, cut
-            cut += 1
-            j = self._buf.find(sync, j + 1, end + len(sync) - 1)
-        return 0, 0
+                return j
+            j = buf.find(sync, j + 1, stop)
+        if not final and len(buf) < stop and buf[-1] == sync[0]:
+            return None  # the last byte held, inside the rejected frame, may begin a sync
+        return 0
 
-    def _parse(self) -> list[Message]:
+    def _parse(self, final: bool) -> list[Message]:
+        """Resynchronisation (``docs/protocol.md``). Every byte is either part of a frame with a
+        valid CRC or skipped; a frame start that is rejected is skipped whole (the frame it
+        announced, up to a valid frame starting inside it), so that sync bytes inside a bad frame
+        never start a second fault: the skipped bytes between two valid frames are one stretch,
+        counted once (:meth:`_end_stretch`), whatever they contain."""
         p, buf, st = self.protocol, self._buf, self.stats
         sync, h = p.sync, p.header_size
         out = []
         while buf:
             i = buf.find(sync)
-            if i < 0:
-                keep = 1 if buf[-1] == sync[0] else 0
-                self._skip(len(buf) - keep)
+            if i < 0:  # no frame start: skip all, but a last byte that may begin a sync waits for more
+                self._skip(len(buf) - (1 if not final and buf[-1] == sync[0] else 0))
                 break
-            if i:
-                self._skip(i)
-            if len(buf) < h:
+            self._skip(i)
+            end, verdict = self._candidate(0, final)
+            if verdict is None:
                 break
-            length = buf[h - 1]
-            if length > p.max_payload:
-                end = h
-            else:
-                end = h + length + CRC_BYTES
-                if len(buf) < end:
-                    break
-                body = buf[len(sync): h + length]
-                if p.crc(body) == int.from_bytes(buf[end - 2: end], "little"):
-                    version, type_id, seq = body[0], body[1], body[2]
-                    payload, frame = bytes(buf[h: h + length]), bytes(buf[:end])
-                    del buf[:end]
-                    msg = self._accept(version, type_id, seq, payload, frame)
-                    if msg is None:
-                        st.skipped_bytes += end
-                    else:
-                        out.append(msg)
-                    continue
-            inner = self._inner_frame(end)
+            if verdict:
+                self._end_stretch()
+                length = buf[h - 1]
+                version, type_id, seq = buf[len(sync)], buf[len(sync) + 1], buf[len(sync) + 2]
+                payload, frame = bytes(buf[h: h + length]), bytes(buf[:end])
+                del buf[:end]
+                msg = self._accept(version, type_id, seq, payload, frame)
+                if msg is None:
+                    st.skipped_bytes += end
+                else:
+                    out.append(msg)
+                continue
+            self._reach = max(self._reach, end)
+            inner = self._inner_frame(end, final)
             if inner is None:
                 break
-            if inner[0]:
-                st.short += inner[1]
-                self._skip(inner[0])
-            else:
-                st.corrupt += 1
-                self._skip(1)
+            self._skip(inner or min(end, len(buf)))
         return out
 
     def _accept(self, version: int, type_id: int, seq: int, payload: bytes, frame: bytes) -> Message | None:
