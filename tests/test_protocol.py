@@ -15,6 +15,7 @@ import yaml
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
+from omnikin.errors import InputError
 from omnikin.runtime import protocol as P
 from omnikin.runtime.protocol import (
     FrameEncoder,
@@ -84,7 +85,8 @@ def _doc():
     (lambda d: d["crc"].update(check=0x1234), "check"),
     (lambda d: d["crc"].update(init=0), "check"),
     (lambda d: d["frames"]["SPEED_CMD"]["fields"].reverse(), "first field must be 'wheel'"),
-    (lambda d: d["frames"]["ERROR_REPORT"]["fields"].append({"name": "x", "type": "u8"}), "text field must be the last"),
+    (lambda d: d["frames"]["ERROR_REPORT"]["fields"].append({"name": "x", "type": "u8"}),
+     "text field must be the last"),
     (lambda d: d["frames"]["ERROR_REPORT"]["fields"][2].update(max_length=64), "exceeds max_payload"),
     (lambda d: d["frames"]["SPEED_CMD"]["fields"][1].update(type="f32"), "type"),
     (lambda d: d["frames"]["SPEED_CMD"]["fields"][1].update(scale=-1.0), "scale"),
@@ -103,6 +105,36 @@ def test_description_errors_name_the_problem(mutate, message):
     with pytest.raises(ProtocolError, match=message):
         P.parse_protocol(d, "test.yaml")
 
+
+
+@pytest.mark.parametrize("mutate, message", [
+    (lambda d: d.update({1: 2}), r"unknown key\(s\) \['1'\]"),
+    (lambda d: d["frames"]["HEARTBEAT"].update(fields=5), "expected a list of fields"),
+    (lambda d: d["frames"]["HEARTBEAT"]["fields"][1].update(type=["u8"]), r"fields\[1\].type"),
+    (lambda d: d["frames"]["HEARTBEAT"]["fields"][1].update(table=["status_flags"]), r"fields\[1\].table"),
+    (lambda d: d["error_codes"][0].update(name=["LINK_LOST"]), r"error_codes\[0\].name"),
+    (lambda d: d.update(version="1" * 100_000), r"version: .*\(100002 chars\)"),
+])
+def test_description_errors_are_one_line_input_errors(mutate, message):
+    d = copy.deepcopy(_doc())
+    mutate(d)
+    with pytest.raises(ProtocolError, match=message) as info:
+        P.parse_protocol(d, "test.yaml")
+    assert isinstance(info.value, InputError) and isinstance(info.value, ValueError)
+    assert "\n" not in str(info.value) and len(str(info.value)) < 200
+
+
+def test_unreadable_descriptions_are_one_line_errors(tmp_path):
+    (tmp_path / "bad.yaml").write_text("name: [1, 2\nversion: 1\n")
+    (tmp_path / "latin1.yaml").write_bytes("name: caf\xe9\n".encode("latin-1"))
+    for path, message in [(tmp_path / "bad.yaml", "not valid YAML: .* at line 2, column 8"),
+                          (tmp_path / "latin1.yaml", r"not UTF-8 text \(byte 9\)"),
+                          (tmp_path / "missing.yaml", "cannot read the protocol description: No such file"),
+                          (tmp_path, "cannot read the protocol description"),
+                          (123, "expected a path, got 123")]:
+        with pytest.raises(ProtocolError, match=message) as info:
+            load_protocol(path)
+        assert "\n" not in str(info.value)
 
 # --- encoding --------------------------------------------------------------------------------------
 
@@ -154,6 +186,41 @@ def test_wrapping_fields_wrap_and_others_refuse():
     with pytest.raises(ProtocolError, match="unknown frame type"):
         encode("TORQUE_CMD", 0, wheel=0)
 
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: encode(["HEARTBEAT"], 0, wheel=0, status=0, time_us=0), "unknown frame type"),
+    (lambda: encode("HEARTBEAT", "7", wheel=0, status=0, time_us=0), "sequence number must be an integer"),
+    (lambda: encode("HEARTBEAT", 1.5, wheel=0, status=0, time_us=0), "sequence number must be an integer"),
+    (lambda: encode("HEARTBEAT", 0, wheel=255.0, status=0, time_us=0), "255 is reserved"),
+    (lambda: encode("SPEED_CMD", 0, wheel=0, speed=10 ** 400), r"\(401 chars\) rad/s is outside the range of i32"),
+    (lambda: encode("SPEED_CMD", 0, wheel=0, speed=1e308), "outside the range of i32"),
+    (lambda: encode("SPEED_CMD", 0, wheel=0, speed="x" * 10_000), r"finite number, got 'x.*\(10002 chars\)"),
+    (lambda: encode("ERROR_REPORT", 0, wheel=0, code=1, text=5), "expected text or bytes, got 5"),
+    (lambda: encode("ERROR_REPORT", 0, wheel=0, code=1, text=None), "expected text or bytes, got None"),
+    (lambda: frame_bytes(PROTO, 300, 0, b""), "type id must be an integer from 0 to 255"),
+    (lambda: frame_bytes(PROTO, 1, 0, b"", version=256), "version must be an integer from 0 to 255"),
+    (lambda: frame_bytes(PROTO, 1, 0, "text"), "payload: expected bytes"),
+    (lambda: FrameEncoder().encode("HEARTBEAT", wheel=[0], status=0, time_us=0), "field wheel: expected an integer"),
+    (lambda: P.unpack_payload(PROTO.frame("HEARTBEAT"), b"\x00"), "payload of 1 bytes does not fit"),
+    (lambda: P.round_half_away(float("nan")), "finite number"),
+    (lambda: PROTO.status_bit(["LINK_OK"]), "unknown status flag"),
+    (lambda: StreamDecoder().feed("AA55"), "expected bytes, got str"),
+    (lambda: P.update_doc(b"text"), "expected the page as text"),
+])
+def test_bad_arguments_raise_one_line_protocol_errors(call, message):
+    with pytest.raises(ProtocolError, match=message) as info:
+        call()
+    assert isinstance(info.value, InputError)
+    assert "\n" not in str(info.value) and len(str(info.value)) < 200
+
+
+def test_generator_cli_reports_unreadable_files_in_one_line(tmp_path, capsys):
+    (tmp_path / "p.md").write_bytes(b"\xff\xfe not text")
+    assert P.main(["--check-doc", str(tmp_path / "p.md")]) == 2
+    assert P.main(["--update-doc", str(tmp_path / "missing.md")]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2 and "p.md: not UTF-8 text" in err[0] and "missing.md" in err[1]
 
 def test_frame_encoder_numbers_each_wheel():
     enc = FrameEncoder()
@@ -754,7 +821,8 @@ def test_firmware_follows_speed_commands_and_stops_on_link_loss(tmp_path, config
     assert np.allclose(dt, 0.02, atol=1e-3)
     # speed loop: reported speed and the count both give 5 rad/s in the wheel's convention
     sign = -1.0 if config["ENCODER_INVERT"] else 1.0
-    rad_per_tick = sign * 2 * np.pi / (float(config["TICKS_PER_REV"][:-1]) * float(config.get("GEAR_RATIO", "1.0f")[:-1]))
+    ticks_per_rev = float(config["TICKS_PER_REV"][:-1]) * float(config.get("GEAR_RATIO", "1.0f")[:-1])
+    rad_per_tick = sign * 2 * np.pi / ticks_per_rev
     steady = [(m["time_us"] * 1e-6, m.raw["count"], m["speed"]) for t, m in reports if 0.8 <= t <= 1.5]
     assert abs(np.mean([s for _, _, s in steady]) - 5.0) < 0.15
     (t0, c0, _), (t1, c1, _) = steady[0], steady[-1]

@@ -21,6 +21,7 @@ from .schema import ProtocolError
 
 
 def main(argv=None) -> int:
+    """Run the command line with ``argv`` (default: ``sys.argv[1:]``); returns the exit status."""
     ap = argparse.ArgumentParser(prog="python -m omnikin.runtime.protocol",
                                  description="Generate the firmware header or the documentation tables from "
                                              "protocol.yaml.")
@@ -46,6 +47,9 @@ def main(argv=None) -> int:
                   file=sys.stderr)
             return 1
         return 0
+    except UnicodeDecodeError as exc:
+        print(f"error: {path}: not UTF-8 text (byte {exc.start})", file=sys.stderr)
+        return 2
     except (OSError, ProtocolError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -30,6 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from dataclasses import fields as dc_fields
 
+from ...errors import shorten
 from .codec import unpack_payload
 from .schema import CRC_BYTES, DIRECTIONS, Protocol, ProtocolError, load_protocol
 from .sequence import SEQ_DUPLICATE, SEQ_OUT_OF_ORDER, SEQ_RESYNC, SequenceTracker
@@ -90,7 +91,7 @@ class StreamDecoder:
     def __init__(self, protocol: Protocol | None = None, direction: str | None = "controller_to_host",
                  check_sequence: bool = True):
         if direction is not None and direction not in DIRECTIONS[:2]:
-            raise ProtocolError(f"direction must be one of {DIRECTIONS[:2]} or None, got {direction!r}")
+            raise ProtocolError(f"direction must be one of {DIRECTIONS[:2]} or None, got {shorten(direction)}")
         self.protocol = protocol or load_protocol()
         self.direction = direction
         self.check_sequence = check_sequence
@@ -110,9 +111,13 @@ class StreamDecoder:
         return len(self._buf)
 
     def feed(self, data) -> list[Message]:
-        """Decode what ``data`` completes; never raises on bad bytes (they are counted)."""
-        self._buf += data
-        self.stats.bytes_in += len(data)
+        """Decode what ``data`` (bytes) completes; never raises on bad bytes (they are counted)."""
+        held = len(self._buf)
+        try:
+            self._buf += data
+        except TypeError:
+            raise ProtocolError(f"StreamDecoder.feed: expected bytes, got {type(data).__name__}") from None
+        self.stats.bytes_in += len(self._buf) - held
         return self._decode(final=False)
 
     def flush(self) -> list[Message]:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import re
 
+from ...errors import shorten
 from .codec import encode
 from .schema import CRC_BYTES, FrameType, Protocol, ProtocolError, load_protocol
 
@@ -138,13 +139,15 @@ _BLOCK = re.compile(r"(<!-- BEGIN GENERATED (\w+)[^>]*-->\n)(.*?)(<!-- END GENER
 
 def update_doc(text: str, protocol: Protocol | None = None) -> str:
     """``text`` with every generated block replaced by its current content."""
+    if not isinstance(text, str):
+        raise ProtocolError(f"update_doc: expected the page as text, got {type(text).__name__}")
     blocks = doc_blocks(protocol)
     found = set()
 
     def repl(m):
         name = m.group(2)
         if name not in blocks:
-            raise ProtocolError(f"docs/protocol.md: unknown generated block {name!r} (blocks: {sorted(blocks)})")
+            raise ProtocolError(f"docs/protocol.md: unknown generated block {shorten(name)} (blocks: {sorted(blocks)})")
         found.add(name)
         return m.group(1) + blocks[name] + "\n" + m.group(4)
 

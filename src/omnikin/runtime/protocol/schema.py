@@ -23,7 +23,7 @@ from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
-from ...errors import InputError
+from ...errors import InputError, shorten
 from .crc import Crc
 
 DIRECTIONS = ("host_to_controller", "controller_to_host", "both")
@@ -100,7 +100,8 @@ class FrameType:
         for f in self.fields:
             if f.name == name:
                 return f
-        raise ProtocolError(f"frame type {self.name} has no field {name!r} (fields: {[f.name for f in self.fields]})")
+        raise ProtocolError(f"frame type {self.name} has no field {shorten(name)} "
+                            f"(fields: {[f.name for f in self.fields]})")
 
 
 @dataclass(frozen=True)
@@ -155,10 +156,10 @@ class Protocol:
         return self.header_size + self.max_payload + CRC_BYTES
 
     def frame(self, name: str) -> FrameType:
-        try:
-            return self.frames[name]
-        except KeyError:
-            raise ProtocolError(f"unknown frame type {name!r} (types: {sorted(self.frames)})") from None
+        frame = self.frames.get(name) if isinstance(name, str) else None
+        if frame is None:
+            raise ProtocolError(f"unknown frame type {shorten(name)} (types: {sorted(self.frames)})")
+        return frame
 
     def error_name(self, code: int) -> str:
         return next((c.name for c in self.error_codes if c.value == code), f"UNKNOWN_{code}")
@@ -167,22 +168,22 @@ class Protocol:
         for c in self.error_codes:
             if c.name == name:
                 return c.value
-        raise ProtocolError(f"unknown error code {name!r} (codes: {[c.name for c in self.error_codes]})")
+        raise ProtocolError(f"unknown error code {shorten(name)} (codes: {[c.name for c in self.error_codes]})")
 
     def status_bit(self, name: str) -> int:
         for c in self.status_flags:
             if c.name == name:
                 return 1 << c.value
-        raise ProtocolError(f"unknown status flag {name!r}")
+        raise ProtocolError(f"unknown status flag {shorten(name)} (flags: {[c.name for c in self.status_flags]})")
 
 
 def _take(d: dict, where: str, required: tuple, optional: tuple = ()) -> dict:
     if not isinstance(d, dict):
-        raise ProtocolError(f"{where}: expected a mapping, got {d!r}")
+        raise ProtocolError(f"{where}: expected a mapping, got {shorten(d)}")
     unknown = set(d) - set(required) - set(optional)
     missing = [k for k in required if k not in d]
     if unknown:
-        raise ProtocolError(f"{where}: unknown key(s) {sorted(unknown)}")
+        raise ProtocolError(f"{where}: unknown key(s) {shorten(sorted(map(str, unknown)))}")
     if missing:
         raise ProtocolError(f"{where}: missing key(s) {missing}")
     return d
@@ -190,13 +191,13 @@ def _take(d: dict, where: str, required: tuple, optional: tuple = ()) -> dict:
 
 def _int(v, where: str, lo: int, hi: int) -> int:
     if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
-        raise ProtocolError(f"{where}: expected an integer from {lo} to {hi}, got {v!r}")
+        raise ProtocolError(f"{where}: expected an integer from {lo} to {hi}, got {shorten(v)}")
     return v
 
 
 def _seconds(v, where: str) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-        raise ProtocolError(f"{where}: expected a time > 0 [s], got {v!r}")
+        raise ProtocolError(f"{where}: expected a time > 0 [s], got {shorten(v)}")
     if abs(v * 1000 - round(v * 1000)) > 1e-9:
         raise ProtocolError(f"{where}: {v} s is not a whole number of milliseconds (the firmware counts ms)")
     return float(v)
@@ -210,10 +211,10 @@ def _codes(items, where: str, key: str, hi: int) -> tuple:
         w = f"{where}[{i}]"
         _take(c, w, (key, "name", "description"))
         value = _int(c[key], f"{w}.{key}", 0 if key == "bit" else 1, hi)
+        if not isinstance(c["name"], str) or not re.fullmatch(r"[A-Z][A-Z0-9_]*", c["name"]):
+            raise ProtocolError(f"{w}.name: expected UPPER_CASE, got {shorten(c['name'])}")
         if value in seen or c["name"] in {o.name for o in out}:
-            raise ProtocolError(f"{w}: duplicate {key} {value} or name {c['name']!r}")
-        if not re.fullmatch(r"[A-Z][A-Z0-9_]*", str(c["name"])):
-            raise ProtocolError(f"{w}.name: expected UPPER_CASE, got {c['name']!r}")
+            raise ProtocolError(f"{w}: duplicate {key} {value} or name {shorten(c['name'])}")
         seen.add(value)
         out.append(Code(value, c["name"], str(c["description"])))
     return tuple(out)
@@ -226,10 +227,10 @@ def parse_protocol(doc: dict, source: str = "<dict>") -> Protocol:
     _take(doc, source, top)
     version = _int(doc["version"], f"{source}: version", 1, 255)
     if doc["byte_order"] != "little":
-        raise ProtocolError(f"{source}: byte_order: only 'little' is implemented, got {doc['byte_order']!r}")
+        raise ProtocolError(f"{source}: byte_order: only 'little' is implemented, got {shorten(doc['byte_order'])}")
     sync = doc["sync"]
     if not isinstance(sync, list) or len(sync) != 2 or len(set(sync)) != 2:
-        raise ProtocolError(f"{source}: sync: expected two different bytes, got {sync!r}")
+        raise ProtocolError(f"{source}: sync: expected two different bytes, got {shorten(sync)}")
     sync = bytes(_int(b, f"{source}: sync", 0, 255) for b in sync)
     max_payload = _int(doc["max_payload"], f"{source}: max_payload", 1, 255 - HEADER_BYTES - CRC_BYTES - 2)
     wheel_max = _int(doc["wheel_index_max"], f"{source}: wheel_index_max", 0, 254)
@@ -238,7 +239,7 @@ def parse_protocol(doc: dict, source: str = "<dict>") -> Protocol:
     _int(ser["bytesize"], f"{source}: serial.bytesize", 5, 8)
     _int(ser["stopbits"], f"{source}: serial.stopbits", 1, 2)
     if ser["parity"] not in ("none", "even", "odd"):
-        raise ProtocolError(f"{source}: serial.parity: expected none, even or odd, got {ser['parity']!r}")
+        raise ProtocolError(f"{source}: serial.parity: expected none, even or odd, got {shorten(ser['parity'])}")
     c = _take(doc["crc"], f"{source}: crc", ("name", "width", "poly", "init", "refin", "refout", "xorout", "check",
                                               "covers"))
     if c["width"] != 16 or c["refin"] or c["refout"]:
@@ -251,7 +252,7 @@ def parse_protocol(doc: dict, source: str = "<dict>") -> Protocol:
                             f"the file says 0x{crc.check:04X}")
     seq = _take(doc["sequence"], f"{source}: sequence", ("modulo", "resync_after"))
     if seq["modulo"] != 256:
-        raise ProtocolError(f"{source}: sequence.modulo: the sequence is one byte (256), got {seq['modulo']!r}")
+        raise ProtocolError(f"{source}: sequence.modulo: the sequence is one byte (256), got {shorten(seq['modulo'])}")
     resync = _int(seq["resync_after"], f"{source}: sequence.resync_after", 1, 127)
     enc = _take(doc["encoder"], f"{source}: encoder", ("counter_bits",))
     bits = _int(enc["counter_bits"], f"{source}: encoder.counter_bits", 2, 32)
@@ -277,21 +278,25 @@ def parse_protocol(doc: dict, source: str = "<dict>") -> Protocol:
             raise ProtocolError(f"{w}.id: 0x{fid:02X} is used twice")
         ids.add(fid)
         if ft["direction"] not in DIRECTIONS:
-            raise ProtocolError(f"{w}.direction: expected one of {DIRECTIONS}, got {ft['direction']!r}")
+            raise ProtocolError(f"{w}.direction: expected one of {DIRECTIONS}, got {shorten(ft['direction'])}")
+        if not isinstance(ft["fields"], list):
+            raise ProtocolError(f"{w}.fields: expected a list of fields, got {shorten(ft['fields'])}")
         flist = []
-        for i, fd in enumerate(ft["fields"] or []):
+        for i, fd in enumerate(ft["fields"]):
             fw = f"{w}.fields[{i}]"
             _take(fd, fw, ("name", "type"), ("description", "unit", "scale", "wraps", "table", "max_length"))
-            if fd["type"] not in INT_TYPES and fd["type"] != "text":
-                raise ProtocolError(f"{fw}.type: expected one of {sorted(INT_TYPES) + ['text']}, got {fd['type']!r}")
-            if not re.fullmatch(r"[a-z][a-z0-9_]*", str(fd["name"])) or fd["name"] in {f.name for f in flist}:
-                raise ProtocolError(f"{fw}.name: expected a new lower_case name, got {fd['name']!r}")
+            if not isinstance(fd["type"], str) or (fd["type"] not in INT_TYPES and fd["type"] != "text"):
+                raise ProtocolError(f"{fw}.type: expected one of {sorted(INT_TYPES) + ['text']}, "
+                                    f"got {shorten(fd['type'])}")
+            if (not isinstance(fd["name"], str) or not re.fullmatch(r"[a-z][a-z0-9_]*", fd["name"])
+                    or fd["name"] in {f.name for f in flist}):
+                raise ProtocolError(f"{fw}.name: expected a new lower_case name, got {shorten(fd['name'])}")
             scale = fd.get("scale")
             if scale is not None and (isinstance(scale, bool) or not isinstance(scale, (int, float))
                                       or not math.isfinite(scale) or scale <= 0 or fd["type"] == "text"):
-                raise ProtocolError(f"{fw}.scale: expected a number > 0 on an integer field, got {scale!r}")
-            if fd.get("table") is not None and fd["table"] not in tables:
-                raise ProtocolError(f"{fw}.table: expected one of {sorted(tables)}, got {fd['table']!r}")
+                raise ProtocolError(f"{fw}.scale: expected a number > 0 on an integer field, got {shorten(scale)}")
+            if fd.get("table") is not None and (not isinstance(fd["table"], str) or fd["table"] not in tables):
+                raise ProtocolError(f"{fw}.table: expected one of {sorted(tables)}, got {shorten(fd['table'])}")
             max_length = 0
             if fd["type"] == "text":
                 max_length = _int(fd.get("max_length"), f"{fw}.max_length", 1, max_payload)
@@ -321,12 +326,28 @@ def load_protocol(path=None) -> Protocol:
         return _default_protocol()
     import yaml
 
-    path = Path(path)
+    try:
+        path = Path(path)
+    except TypeError:
+        raise ProtocolError(f"protocol description: expected a path, got {shorten(path)}") from None
     try:
         doc = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as exc:
-        raise ProtocolError(f"{path}: cannot read the protocol description: {exc}") from None
+    except OSError as exc:
+        raise ProtocolError(f"{path}: cannot read the protocol description: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ProtocolError(f"{path}: the protocol description is not UTF-8 text (byte {exc.start})") from None
+    except yaml.YAMLError as exc:
+        raise ProtocolError(f"{path}: not valid YAML: {_yaml_problem(exc)}") from None
     return parse_protocol(doc, str(path))
+
+
+def _yaml_problem(exc) -> str:
+    """A YAML error in one line: the problem and where (PyYAML's own message spans lines)."""
+    mark = getattr(exc, "problem_mark", None)
+    text = getattr(exc, "problem", None) or str(exc)
+    if mark is not None:
+        text += f" at line {mark.line + 1}, column {mark.column + 1}"
+    return " ".join(text.split())
 
 
 _DATA_PACKAGE = __package__.rpartition(".")[0]  # omnikin.runtime: protocol.yaml sits next to this package
