@@ -38,7 +38,7 @@ def generate_header(protocol: Protocol | None = None) -> str:
     """The C header of the firmware (C99 / C++, no allocation, little-endian wire)."""
     p = protocol or load_protocol()
     t = p.timing
-    L = []
+    L: list[str] = []
     a = L.append
     a("/* omnikin_protocol.h: the omnikin wheel-controller protocol for C and C++ (Arduino).")
     a(" *")
@@ -77,7 +77,7 @@ def generate_header(protocol: Protocol | None = None) -> str:
     a(f"#define OMNIKIN_CRC_POLY 0x{p.crc.poly:04X}u")
     a(f"#define OMNIKIN_CRC_INIT 0x{p.crc.init:04X}u")
     a(f"#define OMNIKIN_CRC_XOROUT 0x{p.crc.xorout:04X}u")
-    a(f"#define OMNIKIN_CRC_CHECK 0x{p.crc.check:04X}u /* of the ASCII bytes \"123456789\" */")
+    a(f'#define OMNIKIN_CRC_CHECK 0x{p.crc.check:04X}u /* of the ASCII bytes "123456789" */')
     a("")
     a("/* frame types */")
     for ft in p.frames.values():

@@ -22,9 +22,10 @@ from .schema import ProtocolError
 
 def main(argv=None) -> int:
     """Run the command line with ``argv`` (default: ``sys.argv[1:]``); returns the exit status."""
-    ap = argparse.ArgumentParser(prog="python -m omnikin.runtime.protocol",
-                                 description="Generate the firmware header or the documentation tables from "
-                                             "protocol.yaml.")
+    ap = argparse.ArgumentParser(
+        prog="python -m omnikin.runtime.protocol",
+        description="Generate the firmware header or the documentation tables from protocol.yaml.",
+    )
     g = ap.add_mutually_exclusive_group(required=True)
     g.add_argument("--header", action="store_true", help="print the C header (omnikin_protocol.h)")
     g.add_argument("--update-doc", metavar="MD", help="rewrite the generated blocks of this Markdown file")
@@ -43,8 +44,9 @@ def main(argv=None) -> int:
                 path.write_text(new, encoding="utf-8")
             return 0
         if new != text:
-            print(f"{path} is stale; regenerate it ({DOC_COMMAND if args.check_doc else HEADER_COMMAND})",
-                  file=sys.stderr)
+            print(
+                f"{path} is stale; regenerate it ({DOC_COMMAND if args.check_doc else HEADER_COMMAND})", file=sys.stderr
+            )
             return 1
         return 0
     except UnicodeDecodeError as exc:

@@ -38,8 +38,9 @@ def to_raw(f: Field, value) -> int:
         value = int(value)
     _, _, _, lo, hi = INT_TYPES[f.type]
     unit = f" {f.unit}" if f.unit else ""
-    outside = (f"field {f.name}: {shorten(value)}{unit} is outside the range of {f.type}"
-               + (f" at scale {f.scale:g}" if f.scale else ""))
+    outside = f"field {f.name}: {shorten(value)}{unit} is outside the range of {f.type}" + (
+        f" at scale {f.scale:g}" if f.scale else ""
+    )
     if f.scale is not None:
         if not isinstance(value, (int, float)) or isinstance(value, float) and not math.isfinite(value):
             raise ProtocolError(f"field {f.name}: expected a finite number, got {shorten(value)}")
@@ -69,8 +70,9 @@ def pack_payload(ft: FrameType, values: dict, raw: bool = False) -> bytes:
     names = {f.name for f in ft.fields}
     unknown = set(values) - names
     if unknown:
-        raise ProtocolError(f"{ft.name}: unknown field(s) {shorten(sorted(map(str, unknown)))} "
-                            f"(fields: {[f.name for f in ft.fields]})")
+        raise ProtocolError(
+            f"{ft.name}: unknown field(s) {shorten(sorted(map(str, unknown)))} (fields: {[f.name for f in ft.fields]})"
+        )
     ints = []
     for f in ft.fixed:
         if f.name not in values:
@@ -95,15 +97,16 @@ def pack_payload(ft: FrameType, values: dict, raw: bool = False) -> bytes:
 def unpack_payload(ft: FrameType, payload: bytes) -> tuple[dict, dict]:
     """``(raw, physical)`` field values of a payload whose length ``ft`` accepts."""
     if not ft.accepts(len(payload)):
-        raise ProtocolError(f"{ft.name}: a payload of {len(payload)} bytes does not fit the type "
-                            f"({ft.min_size} to {ft.max_size} bytes)")
+        raise ProtocolError(
+            f"{ft.name}: a payload of {len(payload)} bytes does not fit the type ({ft.min_size} to {ft.max_size} bytes)"
+        )
     ints = struct.unpack_from(ft.struct_format, payload)
     raw, phys = {}, {}
     for f, v in zip(ft.fixed, ints, strict=True):
         raw[f.name] = v
         phys[f.name] = v * f.scale if f.scale is not None else v
     if ft.text is not None:
-        text = bytes(payload[ft.min_size:])
+        text = bytes(payload[ft.min_size :])
         raw[ft.text.name] = text
         phys[ft.text.name] = text.decode("ascii", "replace")
     return raw, phys

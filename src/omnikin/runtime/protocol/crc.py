@@ -12,7 +12,7 @@ computes the same CRC bitwise (no table in RAM) in the generated C header.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 
 @dataclass(frozen=True)
@@ -28,6 +28,7 @@ class Crc:
     xorout: int
     check: int
     covers: str
+    _table: tuple = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         table = []

@@ -88,8 +88,12 @@ class StreamDecoder:
     direction carries are counted as ``wrong_direction`` and dropped. None accepts all.
     """
 
-    def __init__(self, protocol: Protocol | None = None, direction: str | None = "controller_to_host",
-                 check_sequence: bool = True):
+    def __init__(
+        self,
+        protocol: Protocol | None = None,
+        direction: str | None = "controller_to_host",
+        check_sequence: bool = True,
+    ):
         if direction is not None and direction not in DIRECTIONS[:2]:
             raise ProtocolError(f"direction must be one of {DIRECTIONS[:2]} or None, got {shorten(direction)}")
         self.protocol = protocol or load_protocol()
@@ -176,7 +180,7 @@ class StreamDecoder:
         end = j + h + length + CRC_BYTES
         if len(buf) < end:
             return end, False if final else None
-        return end, p.crc(buf[j + len(p.sync): j + h + length]) == int.from_bytes(buf[end - 2: end], "little")
+        return end, p.crc(buf[j + len(p.sync) : j + h + length]) == int.from_bytes(buf[end - 2 : end], "little")
 
     def _inner_frame(self, end: int, final: bool) -> int | None:
         """After the frame start at 0 was rejected, having announced ``end``: the offset of the
@@ -218,7 +222,7 @@ class StreamDecoder:
                 self._end_stretch()
                 length = buf[h - 1]
                 version, type_id, seq = buf[len(sync)], buf[len(sync) + 1], buf[len(sync) + 2]
-                payload, frame = bytes(buf[h: h + length]), bytes(buf[:end])
+                payload, frame = bytes(buf[h : h + length]), bytes(buf[:end])
                 del buf[:end]
                 msg = self._accept(version, type_id, seq, payload, frame)
                 if msg is None:

@@ -13,6 +13,7 @@ written by hand. A test checks that the committed page is up to date::
 from __future__ import annotations
 
 import re
+from typing import Any
 
 from ...errors import shorten
 from .codec import encode
@@ -33,33 +34,54 @@ def doc_blocks(protocol: Protocol | None = None) -> dict:
     t = p.timing
     h = p.header_size
     blocks = {}
-    blocks["constants"] = _md_table(["constant", "value"], [
-        ["protocol name", f"`{p.name}`"],
-        ["version", p.version],
-        ["sync bytes", " ".join(f"`0x{b:02X}`" for b in p.sync)],
-        ["byte order", "little-endian (the CRC included)"],
-        ["header", f"{h} bytes (sync, version, type, sequence, length)"],
-        ["max payload", f"{p.max_payload} bytes (frame: {p.max_frame} bytes)"],
-        ["wheel indices", f"0 to {p.wheel_index_max} (255 reserved)"],
-        ["sequence", f"one byte, modulo {p.seq_modulo}, per direction and wheel; "
-                     f"resync after {p.resync_after} out-of-order frames in a row"],
-        ["encoder counter", f"{p.counter_bits}-bit two's complement, wraps"],
-        ["serial defaults", f"{p.serial['baud']} baud, {p.serial['bytesize']} data bits, "
-                            f"parity {p.serial['parity']}, {p.serial['stopbits']} stop bit"],
-    ])
-    blocks["envelope"] = _md_table(["offset", "size", "field", "content"], [
-        [0, len(p.sync), "sync", " ".join(f"`0x{b:02X}`" for b in p.sync)],
-        [h - 4, 1, "version", f"`{p.version}`"],
-        [h - 3, 1, "type", "frame type id (table below)"],
-        [h - 2, 1, "seq", "sequence number of the stream (direction, wheel), 0-255"],
-        [h - 1, 1, "length", f"payload length n, 0-{p.max_payload}"],
-        [h, "n", "payload", "fields of the type, the wheel index first"],
-        [f"{h} + n", CRC_BYTES, "crc", f"{p.crc.name} of bytes {len(p.sync)} to {h - 1} + n, little-endian"],
-    ])
-    blocks["types"] = _md_table(["id", "type", "direction", "payload [bytes]", "meaning"], [
-        [f"`0x{ft.id:02X}`", ft.name, ft.direction.replace("_", " "),
-         ft.min_size if ft.text is None else f"{ft.min_size}-{ft.max_size}", ft.description]
-        for ft in p.frames.values()])
+    blocks["constants"] = _md_table(
+        ["constant", "value"],
+        [
+            ["protocol name", f"`{p.name}`"],
+            ["version", p.version],
+            ["sync bytes", " ".join(f"`0x{b:02X}`" for b in p.sync)],
+            ["byte order", "little-endian (the CRC included)"],
+            ["header", f"{h} bytes (sync, version, type, sequence, length)"],
+            ["max payload", f"{p.max_payload} bytes (frame: {p.max_frame} bytes)"],
+            ["wheel indices", f"0 to {p.wheel_index_max} (255 reserved)"],
+            [
+                "sequence",
+                f"one byte, modulo {p.seq_modulo}, per direction and wheel; "
+                f"resync after {p.resync_after} out-of-order frames in a row",
+            ],
+            ["encoder counter", f"{p.counter_bits}-bit two's complement, wraps"],
+            [
+                "serial defaults",
+                f"{p.serial['baud']} baud, {p.serial['bytesize']} data bits, "
+                f"parity {p.serial['parity']}, {p.serial['stopbits']} stop bit",
+            ],
+        ],
+    )
+    blocks["envelope"] = _md_table(
+        ["offset", "size", "field", "content"],
+        [
+            [0, len(p.sync), "sync", " ".join(f"`0x{b:02X}`" for b in p.sync)],
+            [h - 4, 1, "version", f"`{p.version}`"],
+            [h - 3, 1, "type", "frame type id (table below)"],
+            [h - 2, 1, "seq", "sequence number of the stream (direction, wheel), 0-255"],
+            [h - 1, 1, "length", f"payload length n, 0-{p.max_payload}"],
+            [h, "n", "payload", "fields of the type, the wheel index first"],
+            [f"{h} + n", CRC_BYTES, "crc", f"{p.crc.name} of bytes {len(p.sync)} to {h - 1} + n, little-endian"],
+        ],
+    )
+    blocks["types"] = _md_table(
+        ["id", "type", "direction", "payload [bytes]", "meaning"],
+        [
+            [
+                f"`0x{ft.id:02X}`",
+                ft.name,
+                ft.direction.replace("_", " "),
+                ft.min_size if ft.text is None else f"{ft.min_size}-{ft.max_size}",
+                ft.description,
+            ]
+            for ft in p.frames.values()
+        ],
+    )
     parts = []
     for ft in p.frames.values():
         rows, off = [], 0
@@ -75,42 +97,79 @@ def doc_blocks(protocol: Protocol | None = None) -> dict:
             rows.append([off, size, f"`{f.name}`", f.type, f.unit or "-", "; ".join(n for n in notes if n)])
             off += f.size if f.type != "text" else 0
         example = encode(ft.name, 7, p, **_example_values(ft))
-        parts.append(f"#### {ft.name} (`0x{ft.id:02X}`, {ft.direction.replace('_', ' ')})\n\n{ft.description}\n\n"
-                     + _md_table(["offset", "size", "field", "type", "unit", "notes"], rows)
-                     + f"\n\nExample, sequence 7, {_example_text(ft)}:\n`{example.hex(' ').upper()}`")
+        parts.append(
+            f"#### {ft.name} (`0x{ft.id:02X}`, {ft.direction.replace('_', ' ')})\n\n{ft.description}\n\n"
+            + _md_table(["offset", "size", "field", "type", "unit", "notes"], rows)
+            + f"\n\nExample, sequence 7, {_example_text(ft)}:\n`{example.hex(' ').upper()}`"
+        )
     blocks["payloads"] = "\n\n".join(parts)
-    blocks["crc"] = _md_table(["parameter", "value"], [
-        ["algorithm", p.crc.name], ["width", p.crc.width], ["polynomial", f"`0x{p.crc.poly:04X}`"],
-        ["initial value", f"`0x{p.crc.init:04X}`"], ["reflect in / out", "no / no"],
-        ["final xor", f"`0x{p.crc.xorout:04X}`"], ["check (`123456789`)", f"`0x{p.crc.check:04X}`"],
-        ["covers", p.crc.covers], ["on the wire", "after the payload, low byte first"]])
-    blocks["timing"] = _md_table(["name", "value", "meaning"], [
-        ["heartbeat_period", f"{t.heartbeat_period:g} s", "each side sends HEARTBEAT at least this often, per wheel"],
-        ["report_period", f"{t.report_period:g} s", "a controller sends ENCODER_REPORT this often"],
-        ["link_timeout", f"{t.link_timeout:g} s",
-         "no valid frame for this long: the link is lost (host: error and zero commands; controller: motor off)"],
-        ["connect_timeout", f"{t.connect_timeout:g} s",
-         "the host's wait for a controller's first frame after opening its port (boot loaders reset on open)"]])
+    blocks["crc"] = _md_table(
+        ["parameter", "value"],
+        [
+            ["algorithm", p.crc.name],
+            ["width", p.crc.width],
+            ["polynomial", f"`0x{p.crc.poly:04X}`"],
+            ["initial value", f"`0x{p.crc.init:04X}`"],
+            ["reflect in / out", "no / no"],
+            ["final xor", f"`0x{p.crc.xorout:04X}`"],
+            ["check (`123456789`)", f"`0x{p.crc.check:04X}`"],
+            ["covers", p.crc.covers],
+            ["on the wire", "after the payload, low byte first"],
+        ],
+    )
+    blocks["timing"] = _md_table(
+        ["name", "value", "meaning"],
+        [
+            [
+                "heartbeat_period",
+                f"{t.heartbeat_period:g} s",
+                "each side sends HEARTBEAT at least this often, per wheel",
+            ],
+            ["report_period", f"{t.report_period:g} s", "a controller sends ENCODER_REPORT this often"],
+            [
+                "link_timeout",
+                f"{t.link_timeout:g} s",
+                "no valid frame for this long: the link is lost (host: error and zero commands; controller: motor off)",
+            ],
+            [
+                "connect_timeout",
+                f"{t.connect_timeout:g} s",
+                "the host's wait for a controller's first frame after opening its port (boot loaders reset on open)",
+            ],
+        ],
+    )
     fr = {name: p.header_size + ft.min_size + CRC_BYTES for name, ft in p.frames.items()}
     up = fr["ENCODER_REPORT"] / t.report_period + fr["HEARTBEAT"] / t.heartbeat_period
     down = fr["SPEED_CMD"] * 50 + fr["HEARTBEAT"] / t.heartbeat_period
     bits = 1 + int(p.serial["bytesize"]) + (0 if str(p.serial["parity"]) == "none" else 1) + int(p.serial["stopbits"])
     capacity = int(p.serial["baud"]) / bits
-    blocks["bandwidth"] = _md_table(["per wheel", "bytes/s", f"share of {p.serial['baud']} baud"], [
-        [f"controller -> host: ENCODER_REPORT ({fr['ENCODER_REPORT']} B) every {t.report_period:g} s, "
-         f"HEARTBEAT ({fr['HEARTBEAT']} B) every {t.heartbeat_period:g} s",
-         f"{up:.0f}", f"{100 * up / capacity:.1f} %"],
-        [f"host -> controller: SPEED_CMD ({fr['SPEED_CMD']} B) at a 50 Hz control rate, "
-         f"HEARTBEAT every {t.heartbeat_period:g} s", f"{down:.0f}", f"{100 * down / capacity:.1f} %"]])
-    blocks["errors"] = _md_table(["code", "name", "meaning"],
-                                 [[c.value, c.name, c.description] for c in p.error_codes])
-    blocks["status"] = _md_table(["bit", "mask", "name", "meaning"],
-                                 [[c.value, f"`0x{1 << c.value:02X}`", c.name, c.description] for c in p.status_flags])
+    blocks["bandwidth"] = _md_table(
+        ["per wheel", "bytes/s", f"share of {p.serial['baud']} baud"],
+        [
+            [
+                f"controller -> host: ENCODER_REPORT ({fr['ENCODER_REPORT']} B) every {t.report_period:g} s, "
+                f"HEARTBEAT ({fr['HEARTBEAT']} B) every {t.heartbeat_period:g} s",
+                f"{up:.0f}",
+                f"{100 * up / capacity:.1f} %",
+            ],
+            [
+                f"host -> controller: SPEED_CMD ({fr['SPEED_CMD']} B) at a 50 Hz control rate, "
+                f"HEARTBEAT every {t.heartbeat_period:g} s",
+                f"{down:.0f}",
+                f"{100 * down / capacity:.1f} %",
+            ],
+        ],
+    )
+    blocks["errors"] = _md_table(["code", "name", "meaning"], [[c.value, c.name, c.description] for c in p.error_codes])
+    blocks["status"] = _md_table(
+        ["bit", "mask", "name", "meaning"],
+        [[c.value, f"`0x{1 << c.value:02X}`", c.name, c.description] for c in p.status_flags],
+    )
     return blocks
 
 
-def _example_values(ft: FrameType) -> dict:
-    v = {}
+def _example_values(ft: FrameType) -> dict[str, Any]:
+    v: dict[str, Any] = {}
     for f in ft.fields:
         if f.name == "wheel":
             v[f.name] = 1
@@ -130,8 +189,7 @@ def _example_values(ft: FrameType) -> dict:
 
 
 def _example_text(ft: FrameType) -> str:
-    return ", ".join(f"{k} = {v!r}" if isinstance(v, str) else f"{k} = {v:g}"
-                     for k, v in _example_values(ft).items())
+    return ", ".join(f"{k} = {v!r}" if isinstance(v, str) else f"{k} = {v:g}" for k, v in _example_values(ft).items())
 
 
 _BLOCK = re.compile(r"(<!-- BEGIN GENERATED (\w+)[^>]*-->\n)(.*?)(<!-- END GENERATED \2 -->)", re.DOTALL)
@@ -154,6 +212,8 @@ def update_doc(text: str, protocol: Protocol | None = None) -> str:
     out = _BLOCK.sub(repl, text)
     missing = set(blocks) - found
     if missing:
-        raise ProtocolError(f"docs/protocol.md: generated block(s) {sorted(missing)} missing; add "
-                            "'<!-- BEGIN GENERATED name -->' ... '<!-- END GENERATED name -->' for each")
+        raise ProtocolError(
+            f"docs/protocol.md: generated block(s) {sorted(missing)} missing; add "
+            "'<!-- BEGIN GENERATED name -->' ... '<!-- END GENERATED name -->' for each"
+        )
     return out

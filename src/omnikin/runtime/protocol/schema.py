@@ -28,12 +28,12 @@ from .crc import Crc
 
 DIRECTIONS = ("host_to_controller", "controller_to_host", "both")
 INT_TYPES = {  # name: (struct code, size, C type, min, max)
-    "u8": ("B", 1, "uint8_t", 0, 2 ** 8 - 1),
-    "i8": ("b", 1, "int8_t", -2 ** 7, 2 ** 7 - 1),
-    "u16": ("H", 2, "uint16_t", 0, 2 ** 16 - 1),
-    "i16": ("h", 2, "int16_t", -2 ** 15, 2 ** 15 - 1),
-    "u32": ("I", 4, "uint32_t", 0, 2 ** 32 - 1),
-    "i32": ("i", 4, "int32_t", -2 ** 31, 2 ** 31 - 1),
+    "u8": ("B", 1, "uint8_t", 0, 2**8 - 1),
+    "i8": ("b", 1, "int8_t", -(2**7), 2**7 - 1),
+    "u16": ("H", 2, "uint16_t", 0, 2**16 - 1),
+    "i16": ("h", 2, "int16_t", -(2**15), 2**15 - 1),
+    "u32": ("I", 4, "uint32_t", 0, 2**32 - 1),
+    "i32": ("i", 4, "int32_t", -(2**31), 2**31 - 1),
 }
 HEADER_BYTES = 4  # version, type, seq, length (after the sync bytes)
 CRC_BYTES = 2
@@ -100,8 +100,9 @@ class FrameType:
         for f in self.fields:
             if f.name == name:
                 return f
-        raise ProtocolError(f"frame type {self.name} has no field {shorten(name)} "
-                            f"(fields: {[f.name for f in self.fields]})")
+        raise ProtocolError(
+            f"frame type {self.name} has no field {shorten(name)} (fields: {[f.name for f in self.fields]})"
+        )
 
 
 @dataclass(frozen=True)
@@ -206,7 +207,8 @@ def _seconds(v, where: str) -> float:
 def _codes(items, where: str, key: str, hi: int) -> tuple:
     if not isinstance(items, list) or not items:
         raise ProtocolError(f"{where}: expected a non-empty list")
-    out, seen = [], set()
+    out: list[Code] = []
+    seen: set[int] = set()
     for i, c in enumerate(items):
         w = f"{where}[{i}]"
         _take(c, w, (key, "name", "description"))
@@ -222,8 +224,22 @@ def _codes(items, where: str, key: str, hi: int) -> tuple:
 
 def parse_protocol(doc: dict, source: str = "<dict>") -> Protocol:
     """Check a protocol description (the content of ``protocol.yaml``) and build a :class:`Protocol`."""
-    top = ("name", "version", "byte_order", "sync", "max_payload", "wheel_index_max", "serial", "crc",
-           "sequence", "encoder", "timing", "frames", "error_codes", "status_flags")
+    top = (
+        "name",
+        "version",
+        "byte_order",
+        "sync",
+        "max_payload",
+        "wheel_index_max",
+        "serial",
+        "crc",
+        "sequence",
+        "encoder",
+        "timing",
+        "frames",
+        "error_codes",
+        "status_flags",
+    )
     _take(doc, source, top)
     version = _int(doc["version"], f"{source}: version", 1, 255)
     if doc["byte_order"] != "little":
@@ -240,26 +256,41 @@ def parse_protocol(doc: dict, source: str = "<dict>") -> Protocol:
     _int(ser["stopbits"], f"{source}: serial.stopbits", 1, 2)
     if ser["parity"] not in ("none", "even", "odd"):
         raise ProtocolError(f"{source}: serial.parity: expected none, even or odd, got {shorten(ser['parity'])}")
-    c = _take(doc["crc"], f"{source}: crc", ("name", "width", "poly", "init", "refin", "refout", "xorout", "check",
-                                              "covers"))
+    c = _take(
+        doc["crc"], f"{source}: crc", ("name", "width", "poly", "init", "refin", "refout", "xorout", "check", "covers")
+    )
     if c["width"] != 16 or c["refin"] or c["refout"]:
         raise ProtocolError(f"{source}: crc: only non-reflected 16-bit CRCs are implemented")
-    crc = Crc(str(c["name"]), 16, _int(c["poly"], "crc.poly", 1, 0xFFFF), _int(c["init"], "crc.init", 0, 0xFFFF),
-              False, False, _int(c["xorout"], "crc.xorout", 0, 0xFFFF), _int(c["check"], "crc.check", 0, 0xFFFF),
-              str(c["covers"]))
+    crc = Crc(
+        str(c["name"]),
+        16,
+        _int(c["poly"], "crc.poly", 1, 0xFFFF),
+        _int(c["init"], "crc.init", 0, 0xFFFF),
+        False,
+        False,
+        _int(c["xorout"], "crc.xorout", 0, 0xFFFF),
+        _int(c["check"], "crc.check", 0, 0xFFFF),
+        str(c["covers"]),
+    )
     if crc(b"123456789") != crc.check:
-        raise ProtocolError(f"{source}: crc: the parameters give check 0x{crc(b'123456789'):04X}, "
-                            f"the file says 0x{crc.check:04X}")
+        raise ProtocolError(
+            f"{source}: crc: the parameters give check 0x{crc(b'123456789'):04X}, the file says 0x{crc.check:04X}"
+        )
     seq = _take(doc["sequence"], f"{source}: sequence", ("modulo", "resync_after"))
     if seq["modulo"] != 256:
         raise ProtocolError(f"{source}: sequence.modulo: the sequence is one byte (256), got {shorten(seq['modulo'])}")
     resync = _int(seq["resync_after"], f"{source}: sequence.resync_after", 1, 127)
     enc = _take(doc["encoder"], f"{source}: encoder", ("counter_bits",))
     bits = _int(enc["counter_bits"], f"{source}: encoder.counter_bits", 2, 32)
-    tm = _take(doc["timing"], f"{source}: timing", ("heartbeat_period", "report_period", "link_timeout",
-                                                     "connect_timeout"))
-    timing = Timing(*(_seconds(tm[k], f"{source}: timing.{k}") for k in
-                      ("heartbeat_period", "report_period", "link_timeout", "connect_timeout")))
+    tm = _take(
+        doc["timing"], f"{source}: timing", ("heartbeat_period", "report_period", "link_timeout", "connect_timeout")
+    )
+    timing = Timing(
+        *(
+            _seconds(tm[k], f"{source}: timing.{k}")
+            for k in ("heartbeat_period", "report_period", "link_timeout", "connect_timeout")
+        )
+    )
     if not (timing.heartbeat_period < timing.link_timeout and timing.report_period < timing.link_timeout):
         raise ProtocolError(f"{source}: timing: heartbeat_period and report_period must be shorter than link_timeout")
     error_codes = _codes(doc["error_codes"], f"{source}: error_codes", "code", 255)
@@ -281,19 +312,28 @@ def parse_protocol(doc: dict, source: str = "<dict>") -> Protocol:
             raise ProtocolError(f"{w}.direction: expected one of {DIRECTIONS}, got {shorten(ft['direction'])}")
         if not isinstance(ft["fields"], list):
             raise ProtocolError(f"{w}.fields: expected a list of fields, got {shorten(ft['fields'])}")
-        flist = []
+        flist: list[Field] = []
         for i, fd in enumerate(ft["fields"]):
             fw = f"{w}.fields[{i}]"
             _take(fd, fw, ("name", "type"), ("description", "unit", "scale", "wraps", "table", "max_length"))
             if not isinstance(fd["type"], str) or (fd["type"] not in INT_TYPES and fd["type"] != "text"):
-                raise ProtocolError(f"{fw}.type: expected one of {sorted(INT_TYPES) + ['text']}, "
-                                    f"got {shorten(fd['type'])}")
-            if (not isinstance(fd["name"], str) or not re.fullmatch(r"[a-z][a-z0-9_]*", fd["name"])
-                    or fd["name"] in {f.name for f in flist}):
+                raise ProtocolError(
+                    f"{fw}.type: expected one of {sorted(INT_TYPES) + ['text']}, got {shorten(fd['type'])}"
+                )
+            if (
+                not isinstance(fd["name"], str)
+                or not re.fullmatch(r"[a-z][a-z0-9_]*", fd["name"])
+                or fd["name"] in {f.name for f in flist}
+            ):
                 raise ProtocolError(f"{fw}.name: expected a new lower_case name, got {shorten(fd['name'])}")
             scale = fd.get("scale")
-            if scale is not None and (isinstance(scale, bool) or not isinstance(scale, (int, float))
-                                      or not math.isfinite(scale) or scale <= 0 or fd["type"] == "text"):
+            if scale is not None and (
+                isinstance(scale, bool)
+                or not isinstance(scale, (int, float))
+                or not math.isfinite(scale)
+                or scale <= 0
+                or fd["type"] == "text"
+            ):
                 raise ProtocolError(f"{fw}.scale: expected a number > 0 on an integer field, got {shorten(scale)}")
             if fd.get("table") is not None and (not isinstance(fd["table"], str) or fd["table"] not in tables):
                 raise ProtocolError(f"{fw}.table: expected one of {sorted(tables)}, got {shorten(fd['table'])}")
@@ -302,9 +342,18 @@ def parse_protocol(doc: dict, source: str = "<dict>") -> Protocol:
                 max_length = _int(fd.get("max_length"), f"{fw}.max_length", 1, max_payload)
                 if i != len(ft["fields"]) - 1:
                     raise ProtocolError(f"{fw}: a text field must be the last field")
-            flist.append(Field(fd["name"], fd["type"], str(fd.get("description", "")), str(fd.get("unit", "")),
-                               None if scale is None else float(scale), bool(fd.get("wraps", False)),
-                               fd.get("table"), max_length))
+            flist.append(
+                Field(
+                    fd["name"],
+                    fd["type"],
+                    str(fd.get("description", "")),
+                    str(fd.get("unit", "")),
+                    None if scale is None else float(scale),
+                    bool(fd.get("wraps", False)),
+                    fd.get("table"),
+                    max_length,
+                )
+            )
         if not flist or flist[0].name != "wheel" or flist[0].type != "u8":
             raise ProtocolError(f"{w}: the first field must be 'wheel' (u8): receivers track sequences per wheel")
         frame = FrameType(name, fid, ft["direction"], str(ft["description"]), tuple(flist))
@@ -316,8 +365,24 @@ def parse_protocol(doc: dict, source: str = "<dict>") -> Protocol:
             raise ProtocolError(f"{source}: frames: the runtime needs frame type {needed}")
     if "RESET" not in {c.name for c in error_codes}:
         raise ProtocolError(f"{source}: error_codes: the sequence rules need a RESET code")
-    return Protocol(str(doc["name"]), version, "little", sync, max_payload, wheel_max, dict(ser), crc, 256, resync,
-                    bits, timing, frames, error_codes, status_flags, source)
+    return Protocol(
+        str(doc["name"]),
+        version,
+        "little",
+        sync,
+        max_payload,
+        wheel_max,
+        dict(ser),
+        crc,
+        256,
+        resync,
+        bits,
+        timing,
+        frames,
+        error_codes,
+        status_flags,
+        source,
+    )
 
 
 def load_protocol(path=None) -> Protocol:

@@ -40,4 +40,3 @@ class SequenceTracker:
 
     def restart(self, seq: int) -> None:
         self.last, self.rejects = seq, 0
-
