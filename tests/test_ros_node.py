@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+import omnikin
 from omnikin import load_robot
 import pytest
 
@@ -53,6 +54,7 @@ except ImportError:                                # older rclpy
 RELIABLE_ALL = QoSProfile(depth=100, history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
                           durability=DurabilityPolicy.VOLATILE)    # the test's side never drops a message
 V, A_LIN = 0.2, 0.5                # commanded speed [m/s], linear.x.max_acceleration [m/s^2]
+SRC = str(Path(omnikin.__file__).resolve().parents[1])     # the omnikin under test, for the node processes
 
 _used_domains: set[int] = set()
 
@@ -114,19 +116,23 @@ def assert_psd(m: np.ndarray, what: str) -> None:
 
 # --- the node process ----------------------------------------------------------------------------------
 class NodeProcess:
-    """``omnikin ros ARGS`` in a subprocess (this interpreter), output captured to files."""
+    """``omnikin ros ARGS`` (or the Python ``script``) in a subprocess of this interpreter, output
+    captured to files. The subprocess imports the omnikin this test imported (its directory first
+    on PYTHONPATH: a relative PYTHONPATH would not survive the change of working directory)."""
 
-    def __init__(self, args, workdir: Path, domain: int | None = None):
+    def __init__(self, args, workdir: Path, domain: int | None = None, script: Path | None = None):
         self.domain = _domain() if domain is None else domain
         self.workdir = workdir
         env = dict(os.environ)
         env.update(ROS_DOMAIN_ID=str(self.domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
-                   ROS_LOG_DIR=str(workdir / "ros_log"), PYTHONUNBUFFERED="1")
+                   ROS_LOG_DIR=str(workdir / "ros_log"), PYTHONUNBUFFERED="1",
+                   PYTHONPATH=os.pathsep.join([SRC, *filter(None, [env.get("PYTHONPATH")])]))
         env.pop("ROS_LOCALHOST_ONLY", None)
         env.pop("ROS_STATIC_PEERS", None)
         self.out_path, self.err_path = workdir / "node.out", workdir / "node.err"
         self._out, self._err = open(self.out_path, "wb"), open(self.err_path, "wb")
-        self.cmd = [sys.executable, "-m", "omnikin.cli.main", "ros", *map(str, args)]
+        head = [sys.executable, str(script)] if script is not None else [sys.executable, "-m", "omnikin.cli.main", "ros"]
+        self.cmd = [*head, *map(str, args)]
         self.proc = subprocess.Popen(self.cmd, env=env, stdout=self._out, stderr=self._err, cwd=workdir,
                                      start_new_session=True)
 
@@ -274,8 +280,8 @@ class Graph:
         self._thread.join(timeout=5.0)
 
 
-def start(tmp_path: Path, args, stamped: bool = False, joint_states: bool = True):
-    proc = NodeProcess(args, tmp_path)
+def start(tmp_path: Path, args, stamped: bool = False, joint_states: bool = True, script: Path | None = None):
+    proc = NodeProcess(args, tmp_path, script=script)
     graph = Graph(proc.domain, stamped=stamped, joint_states=joint_states)
     try:
         graph.wait_discovery(proc)
@@ -463,6 +469,83 @@ def test_stamped_commands_and_flat_params(tmp_path):
         rc, _ = proc.terminate()
         assert rc == 0, proc.stderr()
         assert "tf2_msgs" not in proc.stderr()
+    finally:
+        g.close()
+        proc.close()
+
+
+# --- a control step failing on a bug (not a lost link) -------------------------------------------------
+FAULTY_NODE = """\
+import pathlib
+import sys
+
+from omnikin import load_robot
+from omnikin.errors import InputError
+from omnikin.ros.node import run
+from omnikin.ros.params import load_params
+from omnikin.simulation.backend import SimBackend
+
+
+class FaultyBackend(SimBackend):
+    \"\"\"The simulated robot, whose read raises InputError while the file 'fail' exists.\"\"\"
+
+    def read(self, t):
+        if pathlib.Path("fail").exists():
+            raise InputError("faulty back-end: encoder sample out of range (test)")
+        return super().read(t)
+
+
+robot = load_robot("diff-drive")
+sys.exit(run(robot, FaultyBackend(robot), load_params(None)))
+"""
+
+
+def test_a_failing_control_step_stops_the_wheels_and_reports_error(tmp_path):
+    """An InputError from the runtime step is a bug, not a lost link: the node commands zero
+    speeds (the simulated wheels would otherwise keep the last ones), drops the command, logs
+    the error at most once a second, reports ERROR, publishes no odometry while it lasts, and
+    runs on; when the steps succeed again the robot stays where it stopped until a new command."""
+    script = tmp_path / "faulty_node.py"
+    script.write_text(FAULTY_NODE)
+    proc, g = start(tmp_path, [], script=script)
+    period = 1 / 50.0                                      # publish_rate default
+    try:
+        g.drive(vx=V, duration=1.0)                        # cruising at V (ramp 0.4 s)
+        (tmp_path / "fail").write_text("")
+        t_fail = time.monotonic()
+        g.drive(vx=V, duration=1.5)                        # commands keep coming during the failure
+        assert wait_for(lambda: g.last_diag()[0] > t_fail + 0.1 and g.last_diag()[3].level == DiagnosticStatus.ERROR,
+                        3.0), g.last_diag()
+        _, _, values, status = g.last_diag()
+        assert status.message == ("wheels stopped: control step failed: faulty back-end: encoder sample out of "
+                                  "range (test)"), status.message
+        assert int(values["step_errors"]) > 0 and "faulty back-end" in values["last_step_error"]
+        with g.lock:
+            before = [(t, m) for (t, m) in g.odom if t < t_fail]
+            during = [m for (t, m) in g.odom if t > t_fail + 0.2]
+        assert during == [], "odometry published while the control step fails"
+        x_fail = before[-1][1].pose.pose.position.x
+        assert before[-1][1].twist.twist.linear.x == pytest.approx(V, rel=1e-9)
+        assert proc.proc.poll() is None, proc.stderr()
+        time.sleep(0.6)                                    # no command for longer than cmd_vel_timeout
+        n = g.n_odom()
+        (tmp_path / "fail").unlink()
+        assert wait_for(lambda: g.n_odom() > n + 10, 3.0), "no odometry after the failure"
+        m = g.wait_still()
+        # the wheels ran at V only until the first failing cycle (one period, or a little more
+        # when the loop ran late), then stood still; kept running they would have gone 0.2 m further
+        dx = m.pose.pose.position.x - x_fail
+        assert 0.0 < dx <= V * 3 * period, dx
+        time.sleep(0.5)
+        assert g.last_odom().pose.pose.position.x == m.pose.pose.position.x
+        # ERROR while a step failed since the previous status (1 Hz), OK again after that
+        assert wait_for(lambda: g.last_diag()[3].level == DiagnosticStatus.OK, 3.0), g.last_diag()[3].message
+        err = proc.stderr()
+        logged = [ln for ln in err.splitlines() if "control step failed" in ln]
+        assert 1 <= len(logged) <= 4, err                    # ~2 s of failure, at most once a second
+        assert "Traceback" not in err
+        g.drive(vx=V, duration=0.5)                          # a new command moves it again
+        assert wait_for(lambda: g.last_odom().pose.pose.position.x > m.pose.pose.position.x + 0.01, 3.0)
     finally:
         g.close()
         proc.close()

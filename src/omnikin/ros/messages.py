@@ -1,0 +1,155 @@
+"""What the node's messages contain, as plain numbers: no rclpy here.
+
+The node (:mod:`omnikin.ros.node`) only copies these values into message objects, so the
+content of every message is computed, and tested, without ROS 2.
+
+Frames (REP-103, REP-105): ``odom`` is the world frame fixed where the robot started;
+``base_link`` has x forward, y left, z up. A pose is ``(x [m], y [m], theta [rad])`` of the
+base in ``odom``; a twist is ``(vx [m/s], vy [m/s], omega [rad/s])`` in base axes; 3 x 3
+covariances are over ``(x, y, theta)`` (pose, [m^2, m rad, rad^2]) or ``(vx, vy, omega)``
+(twist). ROS's 6 x 6 covariances are row-major over ``(x, y, z, roll, pitch, yaw)``.
+
+Times: the runtime runs on the monotonic clock [s]; message stamps are the node's ROS clock
+[s]. :func:`command_time` maps a ``TwistStamped``'s stamp onto the monotonic clock.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from ..errors import InputError
+
+OK, WARN, ERROR = 0, 1, 2
+"""Diagnostic levels, equal to ``diagnostic_msgs/DiagnosticStatus`` OK, WARN and ERROR."""
+
+COVARIANCE_INDEX = (0, 1, 5)
+"""Rows/columns of x, y and yaw in ROS's 6 x 6 (x, y, z, roll, pitch, yaw) covariance."""
+
+
+def quaternion(theta: float) -> tuple:
+    """Unit quaternion ``(x, y, z, w)`` of a rotation by ``theta`` [rad] about z."""
+    return 0.0, 0.0, math.sin(0.5 * theta), math.cos(0.5 * theta)
+
+
+def covariance6(c3) -> list:
+    """36 floats, row-major: the 6 x 6 (x, y, z, roll, pitch, yaw) covariance whose (x, y, yaw)
+    block is the symmetric part of the 3 x 3 ``c3`` over (x, y, theta); z, roll and pitch rows and
+    columns are zero (a planar base does not move in them). Units as in ``c3``."""
+    c = np.asarray(c3, dtype=float)
+    if c.shape != (3, 3):
+        raise InputError(f"covariance6 needs a 3 x 3 matrix, got shape {c.shape}")
+    out = np.zeros((6, 6))
+    out[np.ix_(COVARIANCE_INDEX, COVARIANCE_INDEX)] = 0.5 * (c + c.T)
+    return [float(v) for v in out.ravel()]
+
+
+def odometry_content(pose, twist, pose_covariance, twist_covariance) -> dict:
+    """``nav_msgs/Odometry`` content: ``position`` (x, y, z) [m] and ``orientation`` (x, y, z, w)
+    of the base in odom, ``pose_covariance`` (36), ``linear`` (vx, vy, vz) [m/s] and ``angular``
+    (wx, wy, wz) [rad/s] in base axes, ``twist_covariance`` (36)."""
+    x, y, theta = (float(v) for v in pose)
+    vx, vy, omega = (float(v) for v in twist)
+    return {"position": (x, y, 0.0), "orientation": quaternion(theta),
+            "pose_covariance": covariance6(pose_covariance),
+            "linear": (vx, vy, 0.0), "angular": (0.0, 0.0, omega),
+            "twist_covariance": covariance6(twist_covariance)}
+
+
+def transform_content(pose) -> dict:
+    """``geometry_msgs/Transform`` odom -> base: ``translation`` (x, y, z) [m], ``rotation`` (x, y, z, w)."""
+    x, y, theta = (float(v) for v in pose)
+    return {"translation": (x, y, 0.0), "rotation": quaternion(theta)}
+
+
+def joint_state_content(wheels: Sequence[str], positions, velocities, steer_joints: Sequence[str] = (),
+                        steer=None) -> tuple:
+    """``sensor_msgs/JointState`` ``(name, position, velocity)``: one joint per encoded wheel
+    (angle since the start [rad], speed [rad/s]), then one per steerable wheel (steering angle
+    [rad]; velocity 0.0: the back-ends do not measure steering rates)."""
+    positions = [float(v) for v in positions]
+    velocities = [float(v) for v in velocities]
+    if len(positions) != len(wheels) or len(velocities) != len(wheels):
+        raise InputError(f"{len(wheels)} wheel joints, {len(positions)} positions, {len(velocities)} velocities")
+    steer = [] if steer is None else [float(v) for v in steer]
+    if len(steer) != len(steer_joints):
+        raise InputError(f"{len(steer_joints)} steering joints, {len(steer)} steering angles")
+    return list(wheels) + list(steer_joints), positions + steer, velocities + [0.0] * len(steer)
+
+
+def command_time(received: float, ros_now: float, stamp: float, timeout: float) -> float | None:
+    """Runtime time [s] of a ``TwistStamped`` received at runtime time ``received`` (monotonic
+    clock), when the node's ROS clock read ``ros_now`` [s] and the message's stamp is ``stamp``
+    [s] (ROS clock of the sender): the command counts from when it was stamped, so delivery
+    latency does not extend it (as ros2_controllers' controllers do).
+
+    * ``stamp == 0``: an unstamped message; it counts from its arrival.
+    * A stamp ahead of ``ros_now`` (clocks not synchronised) counts from its arrival.
+    * A command older than ``timeout`` [s] (when > 0) is stale: ``None``, to be ignored.
+    """
+    if stamp == 0.0:
+        return received
+    age = max(0.0, ros_now - stamp)
+    if timeout > 0.0 and age > timeout:
+        return None
+    return received - age
+
+
+def periods_missed(first_loop: float | None, loops: int, period: float, now: float) -> int:
+    """Control periods due since the first cycle (at ``first_loop`` [s]) that did not run, at
+    time ``now`` [s], with ``loops`` cycles run: rcl skips the periods of a late timer instead of
+    running them in a burst. A period counts as due half a period after its time."""
+    if first_loop is None:
+        return 0
+    due = int((now - first_loop) / period - 0.5) + 1
+    return max(0, due - loops)
+
+
+def rate(count: int, count_before: int, t: float, t_before: float) -> float:
+    """Events per second [Hz] between two readings of a counter; 0 over an empty interval."""
+    return (count - count_before) / (t - t_before) if t > t_before else 0.0
+
+
+def diagnostic_values(*, published: int, loop_rate_hz: float, periods_missed: int, command_stats: Mapping,
+                      stale_commands: int, fk_residual_norm: float, timed_out: bool, link_rearms: int,
+                      step_errors: int, last_step_error: str, link_stats: Mapping) -> list:
+    """``(key, value)`` strings of the ``omnikin base`` status (``docs/ros.md``, section Topics):
+    ``command_stats`` holds the command filter's counts (``accepted``, ``rejected``,
+    ``timeouts``, ``saturated``, ``projected``, ``last_reject_reason``), ``link_stats`` the
+    back-end's statistics (keys prefixed ``link_``)."""
+    values = {"odom_published": published, "loop_rate_hz": round(float(loop_rate_hz), 3),
+              "periods_missed": periods_missed,
+              "commands_accepted": command_stats["accepted"], "commands_rejected": command_stats["rejected"],
+              "command_timeouts": command_stats["timeouts"], "commands_saturated": command_stats["saturated"],
+              "commands_projected": command_stats["projected"], "commands_stale": stale_commands,
+              "last_reject_reason": command_stats["last_reject_reason"],
+              "fk_residual_norm": float(fk_residual_norm), "timed_out": bool(timed_out),
+              "link_rearms": link_rearms, "step_errors": step_errors, "last_step_error": last_step_error}
+    values.update({f"link_{k}": v for k, v in link_stats.items()})
+    return [(k, str(v)) for k, v in values.items()]
+
+
+def diagnostic_status(*, rejected: int = 0, stale: int = 0, waiting_for: str = "", link_error: str = "",
+                      step_error: str = "") -> tuple:
+    """``(level, message)`` of the ``omnikin base`` status, first rule that applies:
+
+    1. ERROR ``wheels stopped: <error>`` while the link is lost (``link_error``);
+    2. ERROR ``wheels stopped: control step failed: <error>`` when a control step failed since
+       the previous status (``step_error``; a bug or a bad back-end, not a lost link);
+    3. WARN ``waiting for the wheel controllers of <wheels>`` after (re-)arming a link;
+    4. WARN ``<n> command(s) rejected`` and/or ``<n> stale command(s) ignored``, counts since start;
+    5. OK ``running``.
+    """
+    if link_error:
+        return ERROR, f"wheels stopped: {link_error}"
+    if step_error:
+        return ERROR, f"wheels stopped: control step failed: {step_error}"
+    if waiting_for:
+        return WARN, f"waiting for the wheel controllers of {waiting_for}"
+    problems = ([f"{rejected} command(s) rejected"] if rejected else []) + \
+               ([f"{stale} stale command(s) ignored"] if stale else [])
+    if problems:
+        return WARN, "; ".join(problems)
+    return OK, "running"
