@@ -629,6 +629,26 @@ def test_bad_ros_args_parameter_exits_2_with_one_line(tmp_path, override):
         proc.close()
 
 
+@pytest.mark.parametrize("kind", ["node_prefixed", "params_file"])
+def test_unknown_ros_args_parameter_suggests_the_closest_name(tmp_path, kind):
+    """Overrides rclpy would ignore silently (a node-prefixed -p, ROS's own --params-file) are
+    refused by the node with the closest known name."""
+    if kind == "node_prefixed":
+        ros_args, name, known = ["-p", "omnikin_base:publish_rat:=100.0"], "publish_rat", "publish_rate"
+    else:
+        (tmp_path / "ros.yaml").write_text("/**:\n  ros__parameters:\n    cmd_vel_timout: 0.2\n")
+        ros_args, name, known = ["--params-file", tmp_path / "ros.yaml"], "cmd_vel_timout", "cmd_vel_timeout"
+    proc = NodeProcess(["diff-drive", "--ros-args", *ros_args], tmp_path)
+    try:
+        rc = proc.wait(30.0)
+        err = proc.stderr()
+        assert rc == 2, f"exit code {rc} (None: still running)\n{err}"
+        errors = [ln for ln in err.strip().splitlines() if not ln.startswith("[WARN]")]
+        assert errors == [f"omnikin: error: --ros-args: unknown parameter {name!r}; did you mean {known!r}?"], err
+    finally:
+        proc.close()
+
+
 # --- soak: 100 Hz for 60 s, nothing lost ----------------------------------------------------------------
 SOAK_SECONDS = 60.0
 

@@ -47,15 +47,18 @@ def add_parsers(sub, robot_help: str) -> None:
 def cmd_ros(args) -> int:
     from ..errors import InputError
     from ..ros import require_rclpy
-    from ..ros.params import load_params
+    from ..ros.params import check_names, load_params, ros_args_names
     from ..simulation.backend import SimBackend
     from ..simulation.error_models import noise as noise_profile
     from .common import load_robot, robot_as_built
 
     robot = load_robot(args.robot)
     values = load_params(args.params)
+    # -p names checked before a back-end opens (the node checks every override again, with
+    # --params-file and node-prefixed ones)
+    check_names(ros_args_names(args.ros_args), "--ros-args", ros_own=True)
     require_rclpy()
-    given = lambda names: [f"--{n}" for n in names if getattr(args, n) is not None]   # noqa: E731
+    given = lambda names: [f"--{n}" for n in names if getattr(args, n) is not None]
     if args.backend == "serial" and given(("errors", "noise", "seed")):
         raise InputError(f"{', '.join(given(('errors', 'noise', 'seed')))} apply only to --backend sim")
     if args.backend == "sim" and given(("port", "baud")):

@@ -38,7 +38,7 @@ from ..errors import InputError, LinkError, OmnikinError
 from ..limits import MotionLimits
 from ..runtime.base import BaseRuntime
 from . import messages, require_rclpy
-from .params import DEFAULTS, validate
+from .params import DEFAULTS, check_names, validate
 
 try:
     import rclpy
@@ -71,10 +71,13 @@ class BaseNode(Node):
     """
 
     def __init__(self, robot, backend, values: dict, name: str = NODE_NAME):
-        super().__init__(name)
+        # overrides (--ros-args -p, --params-file) are declared as given, so unknown names show
+        super().__init__(name, automatically_declare_parameters_from_overrides=True)
         dynamic = ParameterDescriptor(dynamic_typing=True)    # our own checks name the parameter
         for key, default in values.items():
-            self.declare_parameter(key, default, dynamic)
+            if not self.has_parameter(key):
+                self.declare_parameter(key, default, dynamic)
+        check_names(self.list_parameters([], 0).names, "--ros-args", ros_own=True)
         p = validate({k: self.get_parameter(k).value for k in DEFAULTS}, "--ros-args / parameters")
         link_timeout = getattr(backend, "link_timeout", None)
         if link_timeout is not None and 1.0 / p["publish_rate"] > 0.5 * link_timeout:

@@ -17,16 +17,23 @@
 | ``reject_above`` | 100.0 | commands beyond this many times a limit are rejected as malformed |
 | ``link_retry_period`` | 1.0 | s between attempts to re-arm a lost serial link (0: stay stopped) |
 
-A ``--params FILE`` is YAML, either flat (``cmd_vel_timeout: 0.2``) or in the ROS layout
-(``omnikin_base: {ros__parameters: {...}}``); unknown names are errors.
+A ``--params FILE`` is YAML (read with :func:`omnikin.io.robot_file.strict_yaml_loader`:
+duplicate keys refused, ``2e-4`` a number), either flat (``cmd_vel_timeout: 0.2``) or in the
+ROS layout (``omnikin_base: {ros__parameters: {...}}``); nested keys join with dots
+(``linear: {x: {max_velocity: 0.5}}`` is ``linear.x.max_velocity``). Unknown names are errors
+that suggest the closest known name, and so is a parameter spelled twice (flat and nested).
+``--ros-args -p NAME:=VALUE`` overrides the file; unknown names there are errors too (ROS's own
+``use_sim_time``, ``start_type_description_service`` and ``qos_overrides.*`` are allowed).
 """
 
 from __future__ import annotations
 
+import difflib
+import itertools
 import math
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import InputError, shorten
 
 DEFAULTS = {
     "cmd_vel_timeout": 0.5,
@@ -46,15 +53,54 @@ DEFAULTS = {
 }
 
 
-def _flatten(d: dict, prefix: str = "") -> dict:
-    out = {}
+ROS_OWN = ("use_sim_time", "start_type_description_service")
+"""Parameters that rclpy itself declares: accepted in ``--ros-args``, as ``qos_overrides.*`` is."""
+
+
+def unknown_parameter(name: str, source: str) -> InputError:
+    """The error for an unknown parameter ``name`` in ``source``, suggesting the closest known name."""
+    close = difflib.get_close_matches(name, DEFAULTS, n=1, cutoff=0.6)
+    hint = f"did you mean {close[0]!r}?" if close else f"known: {', '.join(DEFAULTS)}"
+    return InputError(f"{source}: unknown parameter {shorten(name)}; {hint}")
+
+
+def check_names(names, source: str, ros_own: bool = False) -> None:
+    """Refuse the first unknown name (sorted) in ``names``; ``ros_own`` also allows rclpy's own
+    parameters (:data:`ROS_OWN`, ``qos_overrides.*``)."""
+    for name in sorted(names):
+        if name in DEFAULTS or (ros_own and (name in ROS_OWN or name.startswith("qos_overrides."))):
+            continue
+        raise unknown_parameter(name, source)
+
+
+def ros_args_names(ros_args) -> list:
+    """Names given with ``-p NAME:=VALUE`` (or ``--param``) in ``--ros-args``; names with a node
+    prefix (``node:NAME:=VALUE``) are left to the node, which may be renamed."""
+    args = list(ros_args or [])
+    names = []
+    for flag, item in itertools.pairwise(args):
+        if flag in ("-p", "--param") and ":=" in item:
+            name = item.split(":=", 1)[0]
+            if ":" not in name:
+                names.append(name)
+    return names
+
+
+def _flatten(d: dict, path: tuple = ()) -> list:
+    """``(dotted name, path of keys, value)`` of every leaf of a nested mapping."""
+    out = []
     for k, v in d.items():
-        key = f"{prefix}{k}"
+        p = path + (str(k),)
         if isinstance(v, dict):
-            out.update(_flatten(v, key + "."))
+            out.extend(_flatten(v, p))
         else:
-            out[key] = v
+            out.append((".".join(p), p, v))
     return out
+
+
+def _spelling(path: tuple) -> str:
+    """How a file wrote a name: ``linear.x.max_velocity`` (flat) or ``linear: x: max_velocity`` (nested)."""
+    return ": ".join(path)
 
 
 def load_params(path: str | Path | None) -> dict:
@@ -83,11 +129,15 @@ def load_params(path: str | Path | None) -> dict:
         if isinstance(only, dict) and "ros__parameters" in only:
             data = only["ros__parameters"]
             if not isinstance(data, dict):
-                raise InputError(f"{path}: ros__parameters must be a mapping of parameters, got {data!r}")
-    flat = _flatten(data)
-    for key, value in flat.items():
+                raise InputError(f"{path}: ros__parameters must be a mapping of parameters, got {shorten(data)}")
+    seen: dict = {}
+    for key, keys, value in _flatten(data):
         if key not in DEFAULTS:
-            raise InputError(f"{path}: unknown parameter {key!r}; known: {sorted(DEFAULTS)}")
+            raise unknown_parameter(key, str(path))
+        if key in seen:
+            raise InputError(f"{path}: parameter {key!r} given twice, as {shorten(_spelling(seen[key]))} and as "
+                             f"{shorten(_spelling(keys))}; keep one")
+        seen[key] = keys
         values[key] = value
     return validate(values, str(path))
 
@@ -115,18 +165,18 @@ def validate(values: dict, source: str) -> dict:
     out = dict(values)
     for key, value in values.items():
         if key not in DEFAULTS:
-            raise InputError(f"{source}: unknown parameter {key!r}; known: {sorted(DEFAULTS)}")
+            raise unknown_parameter(key, source)
         want = type(DEFAULTS[key])
         if want is float and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
         if not isinstance(value, want):
-            raise InputError(f"{source}: parameter {key!r} must be a {want.__name__}, got {value!r}")
+            raise InputError(f"{source}: parameter {key!r} must be a {want.__name__}, got {shorten(value)}")
         if key in RANGES:
             low, high, inclusive = RANGES[key]
             ok = math.isfinite(value) and value <= high and (value >= low if inclusive else value > low)
             if not ok:
                 rel = ">=" if inclusive else ">"
                 raise InputError(f"{source}: parameter {key!r} must be finite, {rel} {low:g} and <= {high:g}, "
-                                   f"got {value!r}")
+                                 f"got {value!r}")
         out[key] = value
     return out
