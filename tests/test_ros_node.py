@@ -229,7 +229,9 @@ class Graph:
         with self.lock:
             return next(d for d in self.diags if d[0] > after)
 
-    def send(self, vx=0.0, vy=0.0, wz=0.0) -> float:
+    def send(self, vx=0.0, vy=0.0, wz=0.0, delay: float = 0.0) -> float:
+        """Publish a command; returns when it was stamped [monotonic s]. ``delay`` [s]: publish it
+        that long after stamping it, as a late delivery would bring it."""
         tw = Twist()
         tw.linear.x, tw.linear.y, tw.angular.z = float(vx), float(vy), float(wz)
         if self.stamped:
@@ -240,6 +242,8 @@ class Graph:
         else:
             msg = tw
         t = time.monotonic()
+        if delay:
+            time.sleep(delay)
         self.pub.publish(msg)
         return t
 
@@ -441,8 +445,11 @@ def test_stamped_commands_and_flat_params(tmp_path):
     try:
         m0 = g.wait_still()
         assert (m0.header.frame_id, m0.child_frame_id) == ("flat_odom", "flat_base")
-        # sideways, then a turn in place; the 0.3 s timeout ends each
-        # start and timeout each fall on a 25 Hz tick (up to 40 ms late), plus 50 ms of delivery jitter
+        # sideways, then a turn in place; the 0.3 s timeout ends each. A TwistStamped counts from
+        # its stamp: the braking starts 0.3 s after the last command was stamped, however late it
+        # arrives (test_a_stamped_command_counts_from_its_stamp_not_its_arrival); the start waits
+        # for the first command to arrive. Start and braking each fall on a 25 Hz tick (up to
+        # 40 ms late), plus 50 ms of delivery jitter at the start
         tol_t = 2 / 25.0 + 0.05
         first, last = g.drive(vy=0.15, duration=1.0)
         m1 = g.wait_still()
@@ -469,6 +476,43 @@ def test_stamped_commands_and_flat_params(tmp_path):
         rc, _ = proc.terminate()
         assert rc == 0, proc.stderr()
         assert "tf2_msgs" not in proc.stderr()
+    finally:
+        g.close()
+        proc.close()
+
+
+def test_a_stamped_command_counts_from_its_stamp_not_its_arrival(tmp_path):
+    """Delivery latency must not extend a command. The node used to time a TwistStamped from its
+    arrival, so a last command delivered late (a reliable DDS reader holds the samples after a
+    lost one until the repair, an executor or a process runs late) moved the robot for longer
+    than its sender meant, up to a whole further timeout when it came after the robot had
+    stopped: test_stamped_commands_and_flat_params once measured 0.26 s (about the 0.3 s
+    timeout less a tick) of extra travel. Here the latency is made on purpose: a command stamped
+    and then held back before publishing."""
+    (tmp_path / "flat.yaml").write_text(FLAT)
+    proc, g = start(tmp_path, ["tomasi-omni3", "--errors", "none", "--noise", "none", "--params", "flat.yaml"],
+                    stamped=True)
+    try:
+        tol_t = 2 / 25.0 + 0.05                  # as in test_stamped_commands_and_flat_params
+        m0 = g.wait_still()
+        before = g.next_diag()[2]
+        # older than cmd_vel_timeout (0.3 s) when it arrives: ignored, counted, the robot stays
+        g.send(vy=0.15, delay=0.6)
+        time.sleep(1.0)
+        m1 = g.wait_still()
+        assert m1.pose.pose.position.y == m0.pose.pose.position.y
+        _, _, after, status = g.next_diag()
+        assert int(after["commands_stale"]) == int(before["commands_stale"]) + 1
+        assert int(after["commands_accepted"]) == int(before["commands_accepted"])
+        assert status.level == DiagnosticStatus.WARN and status.message == "1 stale command(s) ignored"
+        # the last command of a drive arrives 0.2 s after it was stamped: the braking still starts
+        # 0.3 s after its stamp (counted from its arrival it would add 0.2 s x 0.15 m/s = 0.03 m)
+        first, _ = g.drive(vy=0.15, duration=1.0)
+        last = g.send(vy=0.15, delay=0.2)
+        m2 = g.wait_still()
+        dy = m2.pose.pose.position.y - m1.pose.pose.position.y
+        assert dy == pytest.approx(0.15 * (last - first + 0.3), abs=0.15 * tol_t), (dy, last - first)
+        assert "Traceback" not in proc.stderr()
     finally:
         g.close()
         proc.close()

@@ -10,9 +10,11 @@ once and publishes no ``/tf``; run it from a ROS 2 install (``source /opt/ros/<d
 setup.bash``) to get it. Parameters: :mod:`omnikin.ros.params`; message content:
 :mod:`omnikin.ros.messages` (this module only copies it into messages).
 
-The control loop runs at ``publish_rate``: read the wheels, update the odometry, filter the
-command (timeout, limits), command the wheels, publish. Time inside the runtime is the
-monotonic clock; message stamps are the node's ROS clock. On shutdown (SIGINT, SIGTERM) the wheels are commanded to zero
+The control loop runs at ``publish_rate`` on a steady-clock timer: read the wheels, update
+the odometry, filter the command (timeout, limits), command the wheels, publish. Time inside
+the runtime is the monotonic clock; message stamps are the node's ROS clock. A
+``TwistStamped`` counts from its stamp (:func:`omnikin.ros.messages.command_time`), a
+``Twist`` from its arrival. On shutdown (SIGINT, SIGTERM) the wheels are commanded to zero
 before the node exits.
 
 Failures of a control step: a :class:`~omnikin.errors.LinkError` is a lost link (the
@@ -46,6 +48,7 @@ try:
     from geometry_msgs.msg import Twist, TwistStamped
     from nav_msgs.msg import Odometry
     from rcl_interfaces.msg import ParameterDescriptor
+    from rclpy.clock import Clock, ClockType
     from rclpy.executors import ExternalShutdownException
     from rclpy.node import Node
     from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -61,6 +64,11 @@ except ImportError:                 # not among the ROS 2 wheels on PyPI
     TransformStamped = TFMessage = None
 
 NODE_NAME = "omnikin_base"
+
+
+def _seconds(stamp) -> float:
+    """A ``builtin_interfaces/Time`` in seconds."""
+    return stamp.sec + 1e-9 * stamp.nanosec
 
 
 class BaseNode(Node):
@@ -115,22 +123,41 @@ class BaseNode(Node):
         self._first_loop = None
         self._window = (time.monotonic(), 0)   # (time, published) at the last diagnostics
         self.link_error = ""
-        self.stale_commands = 0                # TwistStamped older than cmd_vel_timeout, ignored (none yet)
+        self.stale_commands = 0                # TwistStamped older than cmd_vel_timeout, ignored
         self.step_errors = 0                   # control steps failed on a non-link error
         self.last_step_error = ""
         self._step_error_window = ""           # the last such error since the previous diagnostics
         self.joint_names = list(self.runtime.encoded)
         self.steer_names = [f"{n}_steer" for n in robot.steer_names]
-        self.create_timer(self.period, self._loop)
-        self.create_timer(1.0, self._diagnostics)
+        # the loop runs on the steady clock, as the runtime does: a step of the system clock
+        # (the ROS clock without sim time) neither stalls it nor makes it skip periods
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self.create_timer(self.period, self._loop, clock=steady)
+        self.create_timer(1.0, self._diagnostics, clock=steady)
 
     def now_s(self) -> float:
         """Runtime time [s]: the monotonic clock, the same one the back-ends use."""
         return time.monotonic()
 
+    def ros_now_s(self) -> float:
+        """The node's ROS clock [s] (the clock of the message stamps)."""
+        return self.get_clock().now().nanoseconds * 1e-9
+
     def _on_cmd(self, msg):
-        tw = msg.twist if self.p["use_stamped_vel"] else msg
-        self.runtime.command((tw.linear.x, tw.linear.y, tw.angular.z), self.now_s())
+        received = self.now_s()
+        if self.p["use_stamped_vel"]:
+            t = messages.command_time(received, self.ros_now_s(), _seconds(msg.header.stamp),
+                                      self.p["cmd_vel_timeout"])
+            if t is None:
+                self.stale_commands += 1
+                self.get_logger().warning(
+                    f"cmd_vel stamped more than cmd_vel_timeout = {self.p['cmd_vel_timeout']:g} s ago ignored "
+                    "(late delivery, or the sender's clock is behind this one)", throttle_duration_sec=5.0)
+                return
+            tw = msg.twist
+        else:
+            t, tw = received, msg
+        self.runtime.command((tw.linear.x, tw.linear.y, tw.angular.z), t)
 
     def _loop(self):
         now = self.now_s()
