@@ -7,7 +7,7 @@
 | ``odom_frame_id`` | ``odom`` | frame of the odometry pose |
 | ``base_frame_id`` | ``base_link`` | body frame |
 | ``enable_odom_tf`` | true | publish odom -> base_link on ``/tf`` (needs ``tf2_msgs``) |
-| ``use_stamped_vel`` | false | subscribe ``geometry_msgs/TwistStamped`` instead of ``Twist`` |
+| ``use_stamped_vel`` | false | subscribe ``geometry_msgs/TwistStamped`` instead of ``Twist`` (timed from its stamp) |
 | ``linear.x.max_velocity`` | 0.3 | m/s, bound on the body speed ``hypot(vx, vy)`` |
 | ``linear.x.max_acceleration`` | 0.5 | m/s^2 |
 | ``angular.z.max_velocity`` | 1.0 | rad/s |
