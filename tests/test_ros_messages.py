@@ -21,20 +21,27 @@ H = math.sqrt(0.5)
 def rotate(q, v):
     """``v`` rotated by the unit quaternion ``q = (x, y, z, w)``: ``q v q*`` written out."""
     x, y, z, w = q
-    r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                  [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                  [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    r = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
     return r @ np.asarray(v, dtype=float)
 
 
-@pytest.mark.parametrize("theta, expected", [
-    (0.0, (0.0, 0.0, 0.0, 1.0)),
-    (math.pi / 2, (0.0, 0.0, H, H)),
-    (-math.pi / 2, (0.0, 0.0, -H, H)),
-    (math.pi, (0.0, 0.0, 1.0, 0.0)),
-    (2 * math.pi / 3, (0.0, 0.0, math.sqrt(3) / 2, 0.5)),
-    (2 * math.pi, (0.0, 0.0, 0.0, -1.0)),          # the same rotation as 0, the other sign
-])
+@pytest.mark.parametrize(
+    "theta, expected",
+    [
+        (0.0, (0.0, 0.0, 0.0, 1.0)),
+        (math.pi / 2, (0.0, 0.0, H, H)),
+        (-math.pi / 2, (0.0, 0.0, -H, H)),
+        (math.pi, (0.0, 0.0, 1.0, 0.0)),
+        (2 * math.pi / 3, (0.0, 0.0, math.sqrt(3) / 2, 0.5)),
+        (2 * math.pi, (0.0, 0.0, 0.0, -1.0)),  # the same rotation as 0, the other sign
+    ],
+)
 def test_quaternion_of_a_yaw(theta, expected):
     q = m.quaternion(theta)
     assert q == pytest.approx(expected, abs=1e-15)
@@ -44,16 +51,22 @@ def test_quaternion_of_a_yaw(theta, expected):
 
 
 def test_covariance6_places_x_y_yaw_at_rows_0_1_5_and_symmetrises():
-    c3 = [[1.0, 2.0, 3.0],
-          [4.0, 5.0, 6.0],
-          [7.0, 8.0, 9.0]]                         # not symmetric: its symmetric part is published
+    c3 = [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0]]  # not symmetric: its symmetric part is published
     out = m.covariance6(c3)
     assert len(out) == 36 and all(type(v) is float for v in out)
     expected = [0.0] * 36
-    for (r, c), v in {(0, 0): 1.0, (0, 1): 3.0, (0, 5): 5.0,
-                      (1, 0): 3.0, (1, 1): 5.0, (1, 5): 7.0,
-                      (5, 0): 5.0, (5, 1): 7.0, (5, 5): 9.0}.items():
-        expected[6 * r + c] = v                    # row-major (x, y, z, roll, pitch, yaw)
+    for (r, c), v in {
+        (0, 0): 1.0,
+        (0, 1): 3.0,
+        (0, 5): 5.0,
+        (1, 0): 3.0,
+        (1, 1): 5.0,
+        (1, 5): 7.0,
+        (5, 0): 5.0,
+        (5, 1): 7.0,
+        (5, 5): 9.0,
+    }.items():
+        expected[6 * r + c] = v  # row-major (x, y, z, roll, pitch, yaw)
     assert out == expected
 
 
@@ -82,8 +95,9 @@ def test_transform_content():
 
 
 def test_joint_state_content_wheels_then_steering_joints():
-    names, pos, vel = m.joint_state_content(["front", "rear"], np.array([1.0, 2.0]), np.array([3.0, -4.0]),
-                                            ["front_steer"], np.array([0.5]))
+    names, pos, vel = m.joint_state_content(
+        ["front", "rear"], np.array([1.0, 2.0]), np.array([3.0, -4.0]), ["front_steer"], np.array([0.5])
+    )
     assert names == ["front", "rear", "front_steer"]
     assert pos == [1.0, 2.0, 0.5]
     assert vel == [3.0, -4.0, 0.0]
@@ -91,37 +105,46 @@ def test_joint_state_content_wheels_then_steering_joints():
     assert m.joint_state_content(["l", "r"], [0, 1], [2, 3]) == (["l", "r"], [0.0, 1.0], [2.0, 3.0])
 
 
-@pytest.mark.parametrize("args", [
-    (["a", "b"], [1.0], [1.0, 2.0]),                       # positions short
-    (["a"], [1.0], [1.0], ["a_steer"], None),              # steering joint without an angle
-    (["a"], [1.0], [1.0], [], [0.3]),                      # angle without a steering joint
-])
+@pytest.mark.parametrize(
+    "args",
+    [
+        (["a", "b"], [1.0], [1.0, 2.0]),  # positions short
+        (["a"], [1.0], [1.0], ["a_steer"], None),  # steering joint without an angle
+        (["a"], [1.0], [1.0], [], [0.3]),  # angle without a steering joint
+    ],
+)
 def test_joint_state_content_refuses_mismatched_lengths(args):
     with pytest.raises(InputError):
         m.joint_state_content(*args)
 
 
 # --- command time: a TwistStamped counts from its stamp --------------------------------------------------
-@pytest.mark.parametrize("ros_now, stamp, timeout, expected", [
-    (1000.0, 999.875, 0.5, 100.0 - 0.125),    # 0.125 s old: counts from when it was stamped
-    (1000.0, 999.5, 0.5, 99.5),               # exactly the timeout old: still valid (the filter uses >)
-    (1000.0, 999.25, 0.5, None),              # older than the timeout: stale
-    (1000.0, 1000.25, 0.5, 100.0),            # from the future (clocks apart): counts from arrival
-    (1000.0, 0.0, 0.5, 100.0),                # zero stamp (unstamped): counts from arrival
-    (1000.0, 995.0, 0.0, 95.0),               # timeout disabled: never stale
-])
+@pytest.mark.parametrize(
+    "ros_now, stamp, timeout, expected",
+    [
+        (1000.0, 999.875, 0.5, 100.0 - 0.125),  # 0.125 s old: counts from when it was stamped
+        (1000.0, 999.5, 0.5, 99.5),  # exactly the timeout old: still valid (the filter uses >)
+        (1000.0, 999.25, 0.5, None),  # older than the timeout: stale
+        (1000.0, 1000.25, 0.5, 100.0),  # from the future (clocks apart): counts from arrival
+        (1000.0, 0.0, 0.5, 100.0),  # zero stamp (unstamped): counts from arrival
+        (1000.0, 995.0, 0.0, 95.0),  # timeout disabled: never stale
+    ],
+)
 def test_command_time(ros_now, stamp, timeout, expected):
     assert m.command_time(100.0, ros_now, stamp, timeout) == expected
 
 
 # --- loop timing -------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("now, loops, expected", [
-    (0.0, 1, 0),            # the first cycle itself
-    (0.37, 1, 0),           # 1.48 periods: the second period is not half a period late yet
-    (0.375, 1, 1),          # 1.5 periods: the second period is due and did not run
-    (2.5, 10, 0),           # 10 periods in, 10 cycles: up to date
-    (5.0, 16, 4),           # 20 periods, the 21st (at 5.0) not due yet: 20 due, 16 run
-])
+@pytest.mark.parametrize(
+    "now, loops, expected",
+    [
+        (0.0, 1, 0),  # the first cycle itself
+        (0.37, 1, 0),  # 1.48 periods: the second period is not half a period late yet
+        (0.375, 1, 1),  # 1.5 periods: the second period is due and did not run
+        (2.5, 10, 0),  # 10 periods in, 10 cycles: up to date
+        (5.0, 16, 4),  # 20 periods, the 21st (at 5.0) not due yet: 20 due, 16 run
+    ],
+)
 def test_periods_missed(now, loops, expected):
     assert m.periods_missed(0.0, loops, 0.25, now) == expected
 
@@ -133,40 +156,75 @@ def test_periods_missed_before_the_first_cycle_and_rate():
 
 
 # --- diagnostics ------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("kw, level, message", [
-    ({}, m.OK, "running"),
-    ({"rejected": 2}, m.WARN, "2 command(s) rejected"),
-    ({"stale": 3}, m.WARN, "3 stale command(s) ignored"),
-    ({"rejected": 1, "stale": 1}, m.WARN, "1 command(s) rejected; 1 stale command(s) ignored"),
-    ({"rejected": 1, "waiting_for": "w1,w2"}, m.WARN, "waiting for the wheel controllers of w1,w2"),
-    ({"waiting_for": "w1", "step_error": "bad read"}, m.ERROR, "wheels stopped: control step failed: bad read"),
-    ({"step_error": "bad read", "link_error": "port gone"}, m.ERROR, "wheels stopped: port gone"),
-    ({"rejected": 5, "stale": 1, "waiting_for": "w1", "link_error": "port gone"}, m.ERROR,
-     "wheels stopped: port gone"),
-])
+@pytest.mark.parametrize(
+    "kw, level, message",
+    [
+        ({}, m.OK, "running"),
+        ({"rejected": 2}, m.WARN, "2 command(s) rejected"),
+        ({"stale": 3}, m.WARN, "3 stale command(s) ignored"),
+        ({"rejected": 1, "stale": 1}, m.WARN, "1 command(s) rejected; 1 stale command(s) ignored"),
+        ({"rejected": 1, "waiting_for": "w1,w2"}, m.WARN, "waiting for the wheel controllers of w1,w2"),
+        ({"waiting_for": "w1", "step_error": "bad read"}, m.ERROR, "wheels stopped: control step failed: bad read"),
+        ({"step_error": "bad read", "link_error": "port gone"}, m.ERROR, "wheels stopped: port gone"),
+        (
+            {"rejected": 5, "stale": 1, "waiting_for": "w1", "link_error": "port gone"},
+            m.ERROR,
+            "wheels stopped: port gone",
+        ),
+    ],
+)
 def test_diagnostic_status_rules(kw, level, message):
     assert m.diagnostic_status(**kw) == (level, message)
 
 
 def test_diagnostic_levels_are_rosdiagnostics_levels():
-    assert (m.OK, m.WARN, m.ERROR) == (0, 1, 2)    # diagnostic_msgs/DiagnosticStatus OK, WARN, ERROR
+    assert (m.OK, m.WARN, m.ERROR) == (0, 1, 2)  # diagnostic_msgs/DiagnosticStatus OK, WARN, ERROR
 
 
 def test_diagnostic_values():
-    stats = {"accepted": 7, "rejected": 2, "timeouts": 1, "saturated": 3, "projected": 4,
-             "last_reject_reason": "vx = nan"}
-    kv = m.diagnostic_values(published=120, loop_rate_hz=49.87654, periods_missed=2, command_stats=stats,
-                             stale_commands=5, fk_residual_norm=0.25, timed_out=True, link_rearms=1,
-                             step_errors=6, last_step_error="boom", link_stats={"backend": "sim", "reads": 9})
+    stats = {
+        "accepted": 7,
+        "rejected": 2,
+        "timeouts": 1,
+        "saturated": 3,
+        "projected": 4,
+        "last_reject_reason": "vx = nan",
+    }
+    kv = m.diagnostic_values(
+        published=120,
+        loop_rate_hz=49.87654,
+        periods_missed=2,
+        command_stats=stats,
+        stale_commands=5,
+        fk_residual_norm=0.25,
+        timed_out=True,
+        link_rearms=1,
+        step_errors=6,
+        last_step_error="boom",
+        link_stats={"backend": "sim", "reads": 9},
+    )
     assert all(isinstance(k, str) and isinstance(v, str) for k, v in kv)
     d = dict(kv)
     assert len(d) == len(kv)
-    assert d == {"odom_published": "120", "loop_rate_hz": "49.877", "periods_missed": "2",
-                 "commands_accepted": "7", "commands_rejected": "2", "command_timeouts": "1",
-                 "commands_saturated": "3", "commands_projected": "4", "commands_stale": "5",
-                 "last_reject_reason": "vx = nan", "fk_residual_norm": "0.25", "timed_out": "True",
-                 "link_rearms": "1", "step_errors": "6", "last_step_error": "boom",
-                 "link_backend": "sim", "link_reads": "9"}
+    assert d == {
+        "odom_published": "120",
+        "loop_rate_hz": "49.877",
+        "periods_missed": "2",
+        "commands_accepted": "7",
+        "commands_rejected": "2",
+        "command_timeouts": "1",
+        "commands_saturated": "3",
+        "commands_projected": "4",
+        "commands_stale": "5",
+        "last_reject_reason": "vx = nan",
+        "fk_residual_norm": "0.25",
+        "timed_out": "True",
+        "link_rearms": "1",
+        "step_errors": "6",
+        "last_step_error": "boom",
+        "link_backend": "sim",
+        "link_reads": "9",
+    }
 
 
 def test_messages_module_imports_without_rclpy():
@@ -175,26 +233,28 @@ def test_messages_module_imports_without_rclpy():
     import subprocess
     import sys
 
-    code = ("import sys\n"
-            "class Block:\n"
-            "    def find_spec(self, name, path=None, target=None):\n"
-            "        if name.split('.')[0] in ('rclpy', 'nav_msgs', 'geometry_msgs', 'sensor_msgs',\n"
-            "                                  'diagnostic_msgs', 'rcl_interfaces'):\n"
-            "            raise ImportError(f'blocked: {name}')\n"
-            "sys.meta_path.insert(0, Block())\n"
-            "import omnikin.ros, omnikin.ros.messages, omnikin.ros.params\n"
-            "try:\n"
-            "    omnikin.ros.require_rclpy()\n"
-            "except ImportError as exc:\n"
-            "    assert 'omnikin[ros]' in str(exc) and '\\n' not in str(exc), exc\n"
-            "else:\n"
-            "    raise SystemExit('require_rclpy did not fail')\n"
-            "try:\n"
-            "    import omnikin.ros.node\n"
-            "except ImportError as exc:\n"
-            "    assert 'omnikin[ros]' in str(exc), exc\n"
-            "else:\n"
-            "    raise SystemExit('omnikin.ros.node imported without rclpy')\n"
-            "print('ok')\n")
+    code = (
+        "import sys\n"
+        "class Block:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name.split('.')[0] in ('rclpy', 'nav_msgs', 'geometry_msgs', 'sensor_msgs',\n"
+        "                                  'diagnostic_msgs', 'rcl_interfaces'):\n"
+        "            raise ImportError(f'blocked: {name}')\n"
+        "sys.meta_path.insert(0, Block())\n"
+        "import omnikin.ros, omnikin.ros.messages, omnikin.ros.params\n"
+        "try:\n"
+        "    omnikin.ros.require_rclpy()\n"
+        "except ImportError as exc:\n"
+        "    assert 'omnikin[ros]' in str(exc) and '\\n' not in str(exc), exc\n"
+        "else:\n"
+        "    raise SystemExit('require_rclpy did not fail')\n"
+        "try:\n"
+        "    import omnikin.ros.node\n"
+        "except ImportError as exc:\n"
+        "    assert 'omnikin[ros]' in str(exc), exc\n"
+        "else:\n"
+        "    raise SystemExit('omnikin.ros.node imported without rclpy')\n"
+        "print('ok')\n"
+    )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert r.returncode == 0 and r.stdout.strip() == "ok", r.stdout + r.stderr

@@ -28,33 +28,39 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import omnikin
 from omnikin import load_robot
-import pytest
 
-_REASON = ('the ROS 2 node tests need rclpy and the message packages (pip install -e ".[ros]", '
-           "Linux x86_64; or a sourced ROS 2 install)")
+_REASON = (
+    'the ROS 2 node tests need rclpy and the message packages (pip install -e ".[ros]", '
+    "Linux x86_64; or a sourced ROS 2 install)"
+)
 rclpy = pytest.importorskip("rclpy", reason=_REASON)
 for _mod in ("geometry_msgs.msg", "nav_msgs.msg", "sensor_msgs.msg", "diagnostic_msgs.msg"):
     pytest.importorskip(_mod, reason=_REASON)
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import Twist, TwistStamped
-from nav_msgs.msg import Odometry
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import JointState
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402 (after the importorskip above)
+from geometry_msgs.msg import Twist, TwistStamped  # noqa: E402 (after the importorskip above)
+from nav_msgs.msg import Odometry  # noqa: E402 (after the importorskip above)
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402 (after the importorskip above)
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402 (after the importorskip above)
+from sensor_msgs.msg import JointState  # noqa: E402 (after the importorskip above)
 
 try:
     from rclpy.signals import SignalHandlerOptions
-except ImportError:                                # older rclpy
+except ImportError:  # older rclpy
     SignalHandlerOptions = None
 
-RELIABLE_ALL = QoSProfile(depth=100, history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
-                          durability=DurabilityPolicy.VOLATILE)    # the test's side never drops a message
-V, A_LIN = 0.2, 0.5                # commanded speed [m/s], linear.x.max_acceleration [m/s^2]
-SRC = str(Path(omnikin.__file__).resolve().parents[1])     # the omnikin under test, for the node processes
+RELIABLE_ALL = QoSProfile(
+    depth=100,
+    history=HistoryPolicy.KEEP_ALL,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)  # the test's side never drops a message
+V, A_LIN = 0.2, 0.5  # commanded speed [m/s], linear.x.max_acceleration [m/s^2]
+SRC = str(Path(omnikin.__file__).resolve().parents[1])  # the omnikin under test, for the node processes
 
 _used_domains: set[int] = set()
 
@@ -72,8 +78,10 @@ def _domain() -> int:
 @pytest.fixture(scope="module", autouse=True)
 def _ros_environment(tmp_path_factory):
     """Discovery on this host only, logs in a temporary directory (test process and nodes)."""
-    saved = {k: os.environ.get(k) for k in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOCALHOST_ONLY", "ROS_LOG_DIR",
-                                            "ROS_STATIC_PEERS")}
+    saved = {
+        k: os.environ.get(k)
+        for k in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOCALHOST_ONLY", "ROS_LOG_DIR", "ROS_STATIC_PEERS")
+    }
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     os.environ.pop("ROS_LOCALHOST_ONLY", None)
     os.environ.pop("ROS_STATIC_PEERS", None)
@@ -124,17 +132,24 @@ class NodeProcess:
         self.domain = _domain() if domain is None else domain
         self.workdir = workdir
         env = dict(os.environ)
-        env.update(ROS_DOMAIN_ID=str(self.domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
-                   ROS_LOG_DIR=str(workdir / "ros_log"), PYTHONUNBUFFERED="1",
-                   PYTHONPATH=os.pathsep.join([SRC, *filter(None, [env.get("PYTHONPATH")])]))
+        env.update(
+            ROS_DOMAIN_ID=str(self.domain),
+            ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+            ROS_LOG_DIR=str(workdir / "ros_log"),
+            PYTHONUNBUFFERED="1",
+            PYTHONPATH=os.pathsep.join([SRC, *filter(None, [env.get("PYTHONPATH")])]),
+        )
         env.pop("ROS_LOCALHOST_ONLY", None)
         env.pop("ROS_STATIC_PEERS", None)
         self.out_path, self.err_path = workdir / "node.out", workdir / "node.err"
         self._out, self._err = open(self.out_path, "wb"), open(self.err_path, "wb")
-        head = [sys.executable, str(script)] if script is not None else [sys.executable, "-m", "omnikin.cli.main", "ros"]
+        head = (
+            [sys.executable, str(script)] if script is not None else [sys.executable, "-m", "omnikin.cli.main", "ros"]
+        )
         self.cmd = [*head, *map(str, args)]
-        self.proc = subprocess.Popen(self.cmd, env=env, stdout=self._out, stderr=self._err, cwd=workdir,
-                                     start_new_session=True)
+        self.proc = subprocess.Popen(
+            self.cmd, env=env, stdout=self._out, stderr=self._err, cwd=workdir, start_new_session=True
+        )
 
     def stderr(self) -> str:
         self._err.flush()
@@ -174,9 +189,9 @@ class Graph:
         rclpy.init(context=self.context, domain_id=domain, **kw)
         self.node = rclpy.create_node(f"omnikin_test_{os.getpid()}", context=self.context)
         self.lock = threading.Lock()
-        self.odom: list = []             # (receive time [monotonic s], msg)
+        self.odom: list = []  # (receive time [monotonic s], msg)
         self.joints: list = []
-        self.diags: list = []            # (receive time, stamp [s], {key: value}, status)
+        self.diags: list = []  # (receive time, stamp [s], {key: value}, status)
         self.node.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_ALL)
         if joint_states:
             self.node.create_subscription(JointState, "joint_states", self._on_joints, RELIABLE_ALL)
@@ -191,7 +206,7 @@ class Graph:
     def _spin(self):
         try:
             self.executor.spin()
-        except Exception:              # shutdown races end the thread quietly
+        except Exception:  # shutdown races end the thread quietly
             pass
 
     def _on_odom(self, msg):
@@ -206,8 +221,9 @@ class Graph:
         for st in msg.status:
             if st.name == "omnikin base":
                 with self.lock:
-                    self.diags.append((time.monotonic(), stamp_s(msg.header.stamp),
-                                       {kv.key: kv.value for kv in st.values}, st))
+                    self.diags.append(
+                        (time.monotonic(), stamp_s(msg.header.stamp), {kv.key: kv.value for kv in st.values}, st)
+                    )
 
     # -- helpers
     def last_odom(self):
@@ -260,20 +276,26 @@ class Graph:
             if proc.proc.poll() is not None:
                 raise AssertionError(f"the node exited with {proc.proc.returncode}:\n{proc.stderr()}")
             return self.n_odom() > 0 and self.pub.get_subscription_count() >= 1
-        assert wait_for(ready, timeout), (f"no discovery within {timeout} s (odom received: {self.n_odom()}, "
-                                          f"cmd_vel matched: {self.pub.get_subscription_count()})\n{proc.stderr()}")
+
+        assert wait_for(ready, timeout), (
+            f"no discovery within {timeout} s (odom received: {self.n_odom()}, "
+            f"cmd_vel matched: {self.pub.get_subscription_count()})\n{proc.stderr()}"
+        )
 
     def wait_still(self, settle: float = 0.3, timeout: float = 5.0):
         """Wait until the odometry twist is zero and x, y, yaw stop changing; the last odom."""
+
         def still():
             with self.lock:
                 recent = [m for (t, m) in self.odom if t > time.monotonic() - settle]
             if len(recent) < 3:
                 return False
-            poses = np.array([(m.pose.pose.position.x, m.pose.pose.position.y, yaw_of(m.pose.pose.orientation))
-                              for m in recent])
+            poses = np.array(
+                [(m.pose.pose.position.x, m.pose.pose.position.y, yaw_of(m.pose.pose.orientation)) for m in recent]
+            )
             tw = recent[-1].twist.twist
             return np.ptp(poses, axis=0).max() == 0.0 and tw.linear.x == tw.linear.y == tw.angular.z == 0.0
+
         assert wait_for(still, timeout), "the robot did not come to a stop"
         return self.last_odom()
 
@@ -340,7 +362,7 @@ class TestDiffDriveNode:
         _, g = diff_node
         assert wait_for(lambda: len(g.joints) >= 3, 5.0)
         js = g.joints[-1][1]
-        assert list(js.name) == ["left", "right"]           # rolling, encoded wheels; no castor
+        assert list(js.name) == ["left", "right"]  # rolling, encoded wheels; no castor
         assert len(js.position) == len(js.velocity) == 2
         assert all(math.isfinite(v) for v in [*js.position, *js.velocity])
 
@@ -361,11 +383,11 @@ class TestDiffDriveNode:
         t = np.array([stamp_s(m.header.stamp) for m in run])
         vx = np.array([m.twist.twist.linear.x for m in run])
         x = np.array([m.pose.pose.position.x for m in run])
-        assert vx.max() == pytest.approx(V, rel=1e-9)                  # cruises at the command
+        assert vx.max() == pytest.approx(V, rel=1e-9)  # cruises at the command
         ramp = (vx > 0.1 * V) & (vx < 0.9 * V) & (np.arange(len(vx)) < np.argmax(vx))
         slope = np.polyfit(t[ramp], vx[ramp], 1)[0]
         print(f"drive: acceleration {slope:.3f} m/s^2 (limit {A_LIN})")
-        assert slope == pytest.approx(A_LIN, rel=0.1)                 # accelerates at the limit
+        assert slope == pytest.approx(A_LIN, rel=0.1)  # accelerates at the limit
         cruise = np.isclose(vx, V)
         i, j = np.flatnonzero(cruise)[[2, -2]]
         assert (x[j] - x[i]) / (t[j] - t[i]) == pytest.approx(V, rel=0.03)
@@ -399,8 +421,9 @@ class TestDiffDriveNode:
             g.send(*bad)
             time.sleep(0.05)
         n = g.n_odom()
-        assert wait_for(lambda: int(g.last_diag()[2]["commands_rejected"]) >= int(before["commands_rejected"]) + 4,
-                        5.0), f"rejections not counted: {g.last_diag()[2]}"
+        assert wait_for(
+            lambda: int(g.last_diag()[2]["commands_rejected"]) >= int(before["commands_rejected"]) + 4, 5.0
+        ), f"rejections not counted: {g.last_diag()[2]}"
         _, _, after, status = g.last_diag()
         assert int(after["commands_rejected"]) == int(before["commands_rejected"]) + 4
         assert int(after["commands_accepted"]) == int(before["commands_accepted"])
@@ -417,11 +440,20 @@ class TestDiffDriveNode:
         _, g = diff_node
         _, diag_stamp, values, status = g.next_diag()
         assert status.hardware_id == "diff-drive"
-        for key in ("odom_published", "commands_accepted", "commands_rejected", "command_timeouts",
-                    "commands_saturated", "commands_projected", "fk_residual_norm", "timed_out", "link_backend"):
+        for key in (
+            "odom_published",
+            "commands_accepted",
+            "commands_rejected",
+            "command_timeouts",
+            "commands_saturated",
+            "commands_projected",
+            "fk_residual_norm",
+            "timed_out",
+            "link_backend",
+        ):
             assert key in values, key
         assert values["link_backend"] == "sim"
-        with g.lock:        # odometry stamped before the diagnostics was published before it
+        with g.lock:  # odometry stamped before the diagnostics was published before it
             earlier = sum(1 for (_, m) in g.odom if stamp_s(m.header.stamp) <= diag_stamp)
         assert int(values["odom_published"]) >= earlier > 0
 
@@ -440,8 +472,9 @@ angular.z.max_acceleration: 2.0
 
 def test_stamped_commands_and_flat_params(tmp_path):
     (tmp_path / "flat.yaml").write_text(FLAT)
-    proc, g = start(tmp_path, ["tomasi-omni3", "--errors", "none", "--noise", "none", "--params", "flat.yaml"],
-                    stamped=True)
+    proc, g = start(
+        tmp_path, ["tomasi-omni3", "--errors", "none", "--noise", "none", "--params", "flat.yaml"], stamped=True
+    )
     try:
         m0 = g.wait_still()
         assert (m0.header.frame_id, m0.child_frame_id) == ("flat_odom", "flat_base")
@@ -453,8 +486,9 @@ def test_stamped_commands_and_flat_params(tmp_path):
         tol_t = 2 / 25.0 + 0.05
         first, last = g.drive(vy=0.15, duration=1.0)
         m1 = g.wait_still()
-        assert m1.pose.pose.position.y - m0.pose.pose.position.y == pytest.approx(0.15 * (last - first + 0.3),
-                                                                                abs=0.15 * tol_t)
+        assert m1.pose.pose.position.y - m0.pose.pose.position.y == pytest.approx(
+            0.15 * (last - first + 0.3), abs=0.15 * tol_t
+        )
         assert abs(m1.pose.pose.position.x - m0.pose.pose.position.x) < 1e-9
         first, last = g.drive(wz=0.5, duration=1.0)
         m2 = g.wait_still()
@@ -490,10 +524,11 @@ def test_a_stamped_command_counts_from_its_stamp_not_its_arrival(tmp_path):
     timeout less a tick) of extra travel. Here the latency is made on purpose: a command stamped
     and then held back before publishing."""
     (tmp_path / "flat.yaml").write_text(FLAT)
-    proc, g = start(tmp_path, ["tomasi-omni3", "--errors", "none", "--noise", "none", "--params", "flat.yaml"],
-                    stamped=True)
+    proc, g = start(
+        tmp_path, ["tomasi-omni3", "--errors", "none", "--noise", "none", "--params", "flat.yaml"], stamped=True
+    )
     try:
-        tol_t = 2 / 25.0 + 0.05                  # as in test_stamped_commands_and_flat_params
+        tol_t = 2 / 25.0 + 0.05  # as in test_stamped_commands_and_flat_params
         m0 = g.wait_still()
         before = g.next_diag()[2]
         # older than cmd_vel_timeout (0.3 s) when it arrives: ignored, counted, the robot stays
@@ -552,17 +587,19 @@ def test_a_failing_control_step_stops_the_wheels_and_reports_error(tmp_path):
     script = tmp_path / "faulty_node.py"
     script.write_text(FAULTY_NODE)
     proc, g = start(tmp_path, [], script=script)
-    period = 1 / 50.0                                      # publish_rate default
+    period = 1 / 50.0  # publish_rate default
     try:
-        g.drive(vx=V, duration=1.0)                        # cruising at V (ramp 0.4 s)
+        g.drive(vx=V, duration=1.0)  # cruising at V (ramp 0.4 s)
         (tmp_path / "fail").write_text("")
         t_fail = time.monotonic()
-        g.drive(vx=V, duration=1.5)                        # commands keep coming during the failure
-        assert wait_for(lambda: g.last_diag()[0] > t_fail + 0.1 and g.last_diag()[3].level == DiagnosticStatus.ERROR,
-                        3.0), g.last_diag()
+        g.drive(vx=V, duration=1.5)  # commands keep coming during the failure
+        assert wait_for(
+            lambda: g.last_diag()[0] > t_fail + 0.1 and g.last_diag()[3].level == DiagnosticStatus.ERROR, 3.0
+        ), g.last_diag()
         _, _, values, status = g.last_diag()
-        assert status.message == ("wheels stopped: control step failed: faulty back-end: encoder sample out of "
-                                  "range (test)"), status.message
+        assert status.message == (
+            "wheels stopped: control step failed: faulty back-end: encoder sample out of range (test)"
+        ), status.message
         assert int(values["step_errors"]) > 0 and "faulty back-end" in values["last_step_error"]
         with g.lock:
             before = [(t, m) for (t, m) in g.odom if t < t_fail]
@@ -571,7 +608,7 @@ def test_a_failing_control_step_stops_the_wheels_and_reports_error(tmp_path):
         x_fail = before[-1][1].pose.pose.position.x
         assert before[-1][1].twist.twist.linear.x == pytest.approx(V, rel=1e-9)
         assert proc.proc.poll() is None, proc.stderr()
-        time.sleep(0.6)                                    # no command for longer than cmd_vel_timeout
+        time.sleep(0.6)  # no command for longer than cmd_vel_timeout
         n = g.n_odom()
         (tmp_path / "fail").unlink()
         assert wait_for(lambda: g.n_odom() > n + 10, 3.0), "no odometry after the failure"
@@ -586,9 +623,9 @@ def test_a_failing_control_step_stops_the_wheels_and_reports_error(tmp_path):
         assert wait_for(lambda: g.last_diag()[3].level == DiagnosticStatus.OK, 3.0), g.last_diag()[3].message
         err = proc.stderr()
         logged = [ln for ln in err.splitlines() if "control step failed" in ln]
-        assert 1 <= len(logged) <= 4, err                    # ~2 s of failure, at most once a second
+        assert 1 <= len(logged) <= 4, err  # ~2 s of failure, at most once a second
         assert "Traceback" not in err
-        g.drive(vx=V, duration=0.5)                          # a new command moves it again
+        g.drive(vx=V, duration=0.5)  # a new command moves it again
         assert wait_for(lambda: g.last_odom().pose.pose.position.x > m.pose.pose.position.x + 0.01, 3.0)
     finally:
         g.close()
@@ -599,10 +636,10 @@ def test_a_failing_control_step_stops_the_wheels_and_reports_error(tmp_path):
 def test_sigterm_exits_zero_promptly_and_tf2_warning_once(tmp_path):
     proc, g = start(tmp_path, ["tomasi-omni3"], joint_states=False)
     try:
-        time.sleep(2.5)                                  # long enough for a repeated warning to show
+        time.sleep(2.5)  # long enough for a repeated warning to show
         rc, took = proc.terminate()
         assert rc == 0, f"exit code {rc}\n{proc.stderr()}"
-        assert took < 5.0, f"SIGTERM took {took:.2f} s"          # ~0.3-0.5 s normally; a hang fails
+        assert took < 5.0, f"SIGTERM took {took:.2f} s"  # ~0.3-0.5 s normally; a hang fails
         err = proc.stderr()
         tf_lines = [ln for ln in err.splitlines() if "tf2_msgs" in ln]
         if importlib.util.find_spec("tf2_msgs") is not None:
@@ -659,8 +696,9 @@ def test_missing_params_file_exits_2(tmp_path):
         proc.close()
 
 
-@pytest.mark.parametrize("override", ["publish_rate:=0.0", "publish_rate:=-5.0", "cmd_vel_timeout:=soon",
-                                      "reject_above:=-1.0"])
+@pytest.mark.parametrize(
+    "override", ["publish_rate:=0.0", "publish_rate:=-5.0", "cmd_vel_timeout:=soon", "reject_above:=-1.0"]
+)
 def test_bad_ros_args_parameter_exits_2_with_one_line(tmp_path, override):
     proc = NodeProcess(["diff-drive", "--ros-args", "-p", override], tmp_path)
     try:
@@ -722,11 +760,13 @@ def test_soak_100hz_no_odometry_lost(tmp_path):
         received = int(np.count_nonzero((stamps > s1) & (stamps <= s2)))
         rate = published / (s2 - s1)
         gaps = np.diff(stamps[(stamps > s1) & (stamps <= s2)])
-        report = (f"soak: {published} odom published, {received} received between diagnostics "
-                  f"{s2 - s1:.2f} s apart: {rate:.3f} Hz; interval mean {gaps.mean() * 1e3:.3f} ms, "
-                  f"max {gaps.max() * 1e3:.2f} ms; commands sent {k}; "
-                  f"rejected {v2['commands_rejected']}, timeouts {v2['command_timeouts']}; "
-                  f"periods missed {int(v2['periods_missed']) - int(v1['periods_missed'])}")
+        report = (
+            f"soak: {published} odom published, {received} received between diagnostics "
+            f"{s2 - s1:.2f} s apart: {rate:.3f} Hz; interval mean {gaps.mean() * 1e3:.3f} ms, "
+            f"max {gaps.max() * 1e3:.2f} ms; commands sent {k}; "
+            f"rejected {v2['commands_rejected']}, timeouts {v2['command_timeouts']}; "
+            f"periods missed {int(v2['periods_missed']) - int(v1['periods_missed'])}"
+        )
         print(report)
         assert s2 - s1 >= SOAK_SECONDS - 2
         assert np.all(np.diff(stamps) > 0), "odometry stamps not strictly increasing"
@@ -760,33 +800,37 @@ def test_node_drives_wheel_controllers_over_serial_and_stops_on_link_loss(tmp_pa
         proc, g = start(tmp_path, ["tomasi-omni3", "--backend", "serial", "--port", fake.path])
         try:
             g.drive(vx=0.2, duration=1.5)
-            assert wait_for(lambda: g.last_odom().pose.pose.position.x > 0.1, 3.0), \
+            assert wait_for(lambda: g.last_odom().pose.pose.position.x > 0.1, 3.0), (
                 f"odometry did not follow: x = {g.last_odom().pose.pose.position.x}"
+            )
             assert any(abs(fake.speed(i)) > 0.1 for i in fake.wheels), "no wheel was commanded to turn"
             diag = g.next_diag()
-            assert int(diag[2]["link_heartbeats_tx"]) > 0, diag[2]   # host and node share one clock
-            g.drive(vx=0.2, duration=0.2)                # keep commanding while the link dies
+            assert int(diag[2]["link_heartbeats_tx"]) > 0, diag[2]  # host and node share one clock
+            g.drive(vx=0.2, duration=0.2)  # keep commanding while the link dies
             fake.silent = True
-            assert wait_for(lambda: g.last_diag() is not None and "wheels stopped" in g.last_diag()[3].message,
-                            5.0), f"no link-loss diagnostics: {g.last_diag()}"
+            assert wait_for(lambda: g.last_diag() is not None and "wheels stopped" in g.last_diag()[3].message, 5.0), (
+                f"no link-loss diagnostics: {g.last_diag()}"
+            )
             assert proc.proc.poll() is None, proc.stderr()
-            assert wait_for(lambda: all(fake.speed(i) == 0.0 for i in fake.wheels), 2.0), \
-                [fake.speed(i) for i in fake.wheels]
+            assert wait_for(lambda: all(fake.speed(i) == 0.0 for i in fake.wheels), 2.0), [
+                fake.speed(i) for i in fake.wheels
+            ]
             # the controller speaks again: the node re-arms the link on its own (link_retry_period
             # 1 s), publishes odometry again, and keeps the wheels stopped until a new command
             x_lost = g.last_odom().pose.pose.position.x
             fake.silent = False
-            assert wait_for(lambda: int(g.last_diag()[2]["link_rearms"]) >= 1
-                            and g.last_diag()[3].level == DiagnosticStatus.OK, 8.0), \
-                f"link not re-armed: {g.last_diag()[3].message} {g.last_diag()[2]}"
+            assert wait_for(
+                lambda: int(g.last_diag()[2]["link_rearms"]) >= 1 and g.last_diag()[3].level == DiagnosticStatus.OK, 8.0
+            ), f"link not re-armed: {g.last_diag()[3].message} {g.last_diag()[2]}"
             n = g.n_odom()
             assert wait_for(lambda: g.n_odom() > n + 10, 3.0), "no odometry after re-arming"
             time.sleep(0.5)
             assert all(fake.speed(i) == 0.0 for i in fake.wheels), [fake.speed(i) for i in fake.wheels]
             assert g.last_odom().pose.pose.position.x == pytest.approx(x_lost, abs=1e-9)
             g.drive(vx=0.2, duration=1.0)
-            assert wait_for(lambda: g.last_odom().pose.pose.position.x > x_lost + 0.05, 3.0), \
+            assert wait_for(lambda: g.last_odom().pose.pose.position.x > x_lost + 0.05, 3.0), (
                 f"the robot did not move after re-arming: x = {g.last_odom().pose.pose.position.x}"
+            )
         finally:
             g.close()
             proc.close()
@@ -811,8 +855,10 @@ def test_serial_backend_refuses_a_publish_rate_slower_than_its_link_timeout(tmp_
 
     fake = FakeController.for_robot(load_robot("tomasi-omni3")).start()
     try:
-        proc = NodeProcess(["tomasi-omni3", "--backend", "serial", "--port", fake.path, "--ros-args", "-p",
-                            "publish_rate:=1.0"], tmp_path)
+        proc = NodeProcess(
+            ["tomasi-omni3", "--backend", "serial", "--port", fake.path, "--ros-args", "-p", "publish_rate:=1.0"],
+            tmp_path,
+        )
         try:
             rc = proc.wait(15.0)
             err = proc.stderr()

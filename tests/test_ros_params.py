@@ -27,15 +27,30 @@ def refused(tmp_path, text: str) -> str:
     return msg
 
 
-@pytest.mark.parametrize("text, name, first, second", [
-    ("linear.x.max_velocity: 0.3\nlinear:\n  x:\n    max_velocity: 0.4\n",
-     "linear.x.max_velocity", "linear.x.max_velocity", "linear: x: max_velocity"),
-    ("linear:\n  x:\n    max_velocity: 0.4\nlinear.x:\n  max_velocity: 0.3\n",
-     "linear.x.max_velocity", "linear: x: max_velocity", "linear.x: max_velocity"),
-    ("omnikin_base:\n  ros__parameters:\n    angular.z.max_velocity: 1.0\n"
-     "    angular:\n      z:\n        max_velocity: 2.0\n",
-     "angular.z.max_velocity", "angular.z.max_velocity", "angular: z: max_velocity"),
-])
+@pytest.mark.parametrize(
+    "text, name, first, second",
+    [
+        (
+            "linear.x.max_velocity: 0.3\nlinear:\n  x:\n    max_velocity: 0.4\n",
+            "linear.x.max_velocity",
+            "linear.x.max_velocity",
+            "linear: x: max_velocity",
+        ),
+        (
+            "linear:\n  x:\n    max_velocity: 0.4\nlinear.x:\n  max_velocity: 0.3\n",
+            "linear.x.max_velocity",
+            "linear: x: max_velocity",
+            "linear.x: max_velocity",
+        ),
+        (
+            "omnikin_base:\n  ros__parameters:\n    angular.z.max_velocity: 1.0\n"
+            "    angular:\n      z:\n        max_velocity: 2.0\n",
+            "angular.z.max_velocity",
+            "angular.z.max_velocity",
+            "angular: z: max_velocity",
+        ),
+    ],
+)
 def test_a_parameter_given_twice_is_refused_naming_both_places(tmp_path, text, name, first, second):
     msg = refused(tmp_path, text)
     assert msg.endswith(f": parameter {name!r} given twice, as {first!r} and as {second!r}; keep one"), msg
@@ -46,12 +61,15 @@ def test_flat_and_nested_spellings_of_different_parameters_mix(tmp_path):
     assert values["linear.x.max_velocity"] == 0.4 and values["linear.x.max_acceleration"] == 0.8
 
 
-@pytest.mark.parametrize("text, suggestion", [
-    ("publish_rat: 50.0\n", "did you mean 'publish_rate'?"),
-    ("cmd_vel_timout: 0.2\n", "did you mean 'cmd_vel_timeout'?"),
-    ("linear:\n  x:\n    max_velocty: 0.3\n", "did you mean 'linear.x.max_velocity'?"),
-    ("omnikin_base:\n  ros__parameters:\n    use_stamped_vell: true\n", "did you mean 'use_stamped_vel'?"),
-])
+@pytest.mark.parametrize(
+    "text, suggestion",
+    [
+        ("publish_rat: 50.0\n", "did you mean 'publish_rate'?"),
+        ("cmd_vel_timout: 0.2\n", "did you mean 'cmd_vel_timeout'?"),
+        ("linear:\n  x:\n    max_velocty: 0.3\n", "did you mean 'linear.x.max_velocity'?"),
+        ("omnikin_base:\n  ros__parameters:\n    use_stamped_vell: true\n", "did you mean 'use_stamped_vel'?"),
+    ],
+)
 def test_an_unknown_parameter_suggests_the_closest_name(tmp_path, text, suggestion):
     msg = refused(tmp_path, text)
     assert "unknown parameter" in msg and msg.endswith(suggestion), msg
@@ -71,18 +89,34 @@ def test_parameter_files_go_through_the_strict_yaml_loader(tmp_path):
 
 
 def test_check_names_allows_rclpy_own_parameters_only_when_asked():
-    check_names(["publish_rate", "use_sim_time", "start_type_description_service",
-                 "qos_overrides./odom.publisher.depth"], "--ros-args", ros_own=True)
+    check_names(
+        ["publish_rate", "use_sim_time", "start_type_description_service", "qos_overrides./odom.publisher.depth"],
+        "--ros-args",
+        ros_own=True,
+    )
     with pytest.raises(InputError, match=r"^--ros-args: unknown parameter 'use_sim_time'"):
         check_names(["use_sim_time"], "--ros-args")
-    with pytest.raises(InputError, match=r"^--ros-args: unknown parameter 'publish_rat'; did you mean 'publish_rate'\?$"):
+    with pytest.raises(
+        InputError, match=r"^--ros-args: unknown parameter 'publish_rat'; did you mean 'publish_rate'\?$"
+    ):
         check_names(["publish_rate", "publish_rat"], "--ros-args", ros_own=True)
 
 
 def test_ros_args_names():
-    args = ["-p", "publish_rat:=1.0", "-r", "__ns:=/robot1", "--param", "cmd_vel_timeout:=0.2",
-            "-p", "omnikin_base:wheel_slip:=1e-4", "--params-file", "x.yaml", "-p"]
-    assert ros_args_names(args) == ["publish_rat", "cmd_vel_timeout"]     # node-prefixed ones: the node's
+    args = [
+        "-p",
+        "publish_rat:=1.0",
+        "-r",
+        "__ns:=/robot1",
+        "--param",
+        "cmd_vel_timeout:=0.2",
+        "-p",
+        "omnikin_base:wheel_slip:=1e-4",
+        "--params-file",
+        "x.yaml",
+        "-p",
+    ]
+    assert ros_args_names(args) == ["publish_rat", "cmd_vel_timeout"]  # node-prefixed ones: the node's
     assert ros_args_names(None) == []
 
 
@@ -91,7 +125,8 @@ def test_cli_refuses_an_unknown_ros_args_parameter_before_starting(capsys):
     err = capsys.readouterr().err
     assert rc == 2, err
     assert err.strip().splitlines() == [
-        "omnikin: error: --ros-args: unknown parameter 'publish_rat'; did you mean 'publish_rate'?"]
+        "omnikin: error: --ros-args: unknown parameter 'publish_rat'; did you mean 'publish_rate'?"
+    ]
 
 
 def test_cli_refuses_a_parameter_given_twice(capsys, tmp_path):

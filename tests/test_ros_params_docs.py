@@ -34,8 +34,10 @@ def _same(doc: str, value) -> bool:
 def test_every_parameter_is_documented_with_its_default():
     guide = (ROOT / "docs" / "ros.md").read_text()
     section = guide.split("\n## Parameters\n", 1)[1].split("\n## ", 1)[0]
-    for source, text in (("docs/ros.md, section Parameters", section),
-                         ("omnikin/ros/params.py docstring", params.__doc__)):
+    for source, text in (
+        ("docs/ros.md, section Parameters", section),
+        ("omnikin/ros/params.py docstring", params.__doc__),
+    ):
         rows = _rows(text)
         assert set(rows) >= set(params.DEFAULTS), f"{source}: undocumented {set(params.DEFAULTS) - set(rows)}"
         unknown = set(rows) - set(params.DEFAULTS)

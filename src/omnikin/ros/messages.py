@@ -52,10 +52,14 @@ def odometry_content(pose, twist, pose_covariance, twist_covariance) -> dict:
     (wx, wy, wz) [rad/s] in base axes, ``twist_covariance`` (36)."""
     x, y, theta = (float(v) for v in pose)
     vx, vy, omega = (float(v) for v in twist)
-    return {"position": (x, y, 0.0), "orientation": quaternion(theta),
-            "pose_covariance": covariance6(pose_covariance),
-            "linear": (vx, vy, 0.0), "angular": (0.0, 0.0, omega),
-            "twist_covariance": covariance6(twist_covariance)}
+    return {
+        "position": (x, y, 0.0),
+        "orientation": quaternion(theta),
+        "pose_covariance": covariance6(pose_covariance),
+        "linear": (vx, vy, 0.0),
+        "angular": (0.0, 0.0, omega),
+        "twist_covariance": covariance6(twist_covariance),
+    }
 
 
 def transform_content(pose) -> dict:
@@ -64,8 +68,9 @@ def transform_content(pose) -> dict:
     return {"translation": (x, y, 0.0), "rotation": quaternion(theta)}
 
 
-def joint_state_content(wheels: Sequence[str], positions, velocities, steer_joints: Sequence[str] = (),
-                        steer=None) -> tuple:
+def joint_state_content(
+    wheels: Sequence[str], positions, velocities, steer_joints: Sequence[str] = (), steer=None
+) -> tuple:
     """``sensor_msgs/JointState`` ``(name, position, velocity)``: one joint per encoded wheel
     (angle since the start [rad], speed [rad/s]), then one per steerable wheel (steering angle
     [rad]; velocity 0.0: the back-ends do not measure steering rates)."""
@@ -112,27 +117,48 @@ def rate(count: int, count_before: int, t: float, t_before: float) -> float:
     return (count - count_before) / (t - t_before) if t > t_before else 0.0
 
 
-def diagnostic_values(*, published: int, loop_rate_hz: float, periods_missed: int, command_stats: Mapping,
-                      stale_commands: int, fk_residual_norm: float, timed_out: bool, link_rearms: int,
-                      step_errors: int, last_step_error: str, link_stats: Mapping) -> list:
+def diagnostic_values(
+    *,
+    published: int,
+    loop_rate_hz: float,
+    periods_missed: int,
+    command_stats: Mapping,
+    stale_commands: int,
+    fk_residual_norm: float,
+    timed_out: bool,
+    link_rearms: int,
+    step_errors: int,
+    last_step_error: str,
+    link_stats: Mapping,
+) -> list:
     """``(key, value)`` strings of the ``omnikin base`` status (``docs/ros.md``, section Topics):
     ``command_stats`` holds the command filter's counts (``accepted``, ``rejected``,
     ``timeouts``, ``saturated``, ``projected``, ``last_reject_reason``), ``link_stats`` the
     back-end's statistics (keys prefixed ``link_``)."""
-    values = {"odom_published": published, "loop_rate_hz": round(float(loop_rate_hz), 3),
-              "periods_missed": periods_missed,
-              "commands_accepted": command_stats["accepted"], "commands_rejected": command_stats["rejected"],
-              "command_timeouts": command_stats["timeouts"], "commands_saturated": command_stats["saturated"],
-              "commands_projected": command_stats["projected"], "commands_stale": stale_commands,
-              "last_reject_reason": command_stats["last_reject_reason"],
-              "fk_residual_norm": float(fk_residual_norm), "timed_out": bool(timed_out),
-              "link_rearms": link_rearms, "step_errors": step_errors, "last_step_error": last_step_error}
+    values = {
+        "odom_published": published,
+        "loop_rate_hz": round(float(loop_rate_hz), 3),
+        "periods_missed": periods_missed,
+        "commands_accepted": command_stats["accepted"],
+        "commands_rejected": command_stats["rejected"],
+        "command_timeouts": command_stats["timeouts"],
+        "commands_saturated": command_stats["saturated"],
+        "commands_projected": command_stats["projected"],
+        "commands_stale": stale_commands,
+        "last_reject_reason": command_stats["last_reject_reason"],
+        "fk_residual_norm": float(fk_residual_norm),
+        "timed_out": bool(timed_out),
+        "link_rearms": link_rearms,
+        "step_errors": step_errors,
+        "last_step_error": last_step_error,
+    }
     values.update({f"link_{k}": v for k, v in link_stats.items()})
     return [(k, str(v)) for k, v in values.items()]
 
 
-def diagnostic_status(*, rejected: int = 0, stale: int = 0, waiting_for: str = "", link_error: str = "",
-                      step_error: str = "") -> tuple:
+def diagnostic_status(
+    *, rejected: int = 0, stale: int = 0, waiting_for: str = "", link_error: str = "", step_error: str = ""
+) -> tuple:
     """``(level, message)`` of the ``omnikin base`` status, first rule that applies:
 
     1. ERROR ``wheels stopped: <error>`` while the link is lost (``link_error``);
@@ -148,8 +174,9 @@ def diagnostic_status(*, rejected: int = 0, stale: int = 0, waiting_for: str = "
         return ERROR, f"wheels stopped: control step failed: {step_error}"
     if waiting_for:
         return WARN, f"waiting for the wheel controllers of {waiting_for}"
-    problems = ([f"{rejected} command(s) rejected"] if rejected else []) + \
-               ([f"{stale} stale command(s) ignored"] if stale else [])
+    problems = ([f"{rejected} command(s) rejected"] if rejected else []) + (
+        [f"{stale} stale command(s) ignored"] if stale else []
+    )
     if problems:
         return WARN, "; ".join(problems)
     return OK, "running"

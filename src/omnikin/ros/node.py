@@ -54,13 +54,13 @@ try:
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState
 except ImportError:
-    require_rclpy()                 # without rclpy: the one-line error naming the ros extra
-    raise                           # rclpy there, a message package missing: its name
+    require_rclpy()  # without rclpy: the one-line error naming the ros extra
+    raise  # rclpy there, a message package missing: its name
 
 try:
     from geometry_msgs.msg import TransformStamped
     from tf2_msgs.msg import TFMessage
-except ImportError:                 # not among the ROS 2 wheels on PyPI
+except ImportError:  # not among the ROS 2 wheels on PyPI
     TransformStamped = TFMessage = None
 
 NODE_NAME = "omnikin_base"
@@ -81,7 +81,7 @@ class BaseNode(Node):
     def __init__(self, robot, backend, values: dict, name: str = NODE_NAME):
         # overrides (--ros-args -p, --params-file) are declared as given, so unknown names show
         super().__init__(name, automatically_declare_parameters_from_overrides=True)
-        dynamic = ParameterDescriptor(dynamic_typing=True)    # our own checks name the parameter
+        dynamic = ParameterDescriptor(dynamic_typing=True)  # our own checks name the parameter
         for key, default in values.items():
             if not self.has_parameter(key):
                 self.declare_parameter(key, default, dynamic)
@@ -91,14 +91,19 @@ class BaseNode(Node):
         if link_timeout is not None and 1.0 / p["publish_rate"] > 0.5 * link_timeout:
             raise InputError(
                 f"publish_rate {p['publish_rate']:g} Hz is too slow for the serial link: the wheel controllers "
-                f"stop after {link_timeout:g} s without a frame; use at least {2.0 / link_timeout:g} Hz")
-        limits = MotionLimits(linear=p["linear.x.max_velocity"], angular=p["angular.z.max_velocity"],
-                              linear_accel=p["linear.x.max_acceleration"],
-                              angular_accel=p["angular.z.max_acceleration"],
-                              wheel=p["wheel_max_velocity"] or None)
+                f"stop after {link_timeout:g} s without a frame; use at least {2.0 / link_timeout:g} Hz"
+            )
+        limits = MotionLimits(
+            linear=p["linear.x.max_velocity"],
+            angular=p["angular.z.max_velocity"],
+            linear_accel=p["linear.x.max_acceleration"],
+            angular_accel=p["angular.z.max_acceleration"],
+            wheel=p["wheel_max_velocity"] or None,
+        )
         self.robot = robot
-        self.runtime = BaseRuntime(robot, backend, limits=limits, cmd_vel_timeout=p["cmd_vel_timeout"],
-                                   wheel_slip=p["wheel_slip"])
+        self.runtime = BaseRuntime(
+            robot, backend, limits=limits, cmd_vel_timeout=p["cmd_vel_timeout"], wheel_slip=p["wheel_slip"]
+        )
         self.runtime.filter.reject_above = p["reject_above"]
         self.p = p
         qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
@@ -112,21 +117,22 @@ class BaseNode(Node):
             if TFMessage is None:
                 self.get_logger().warning(
                     "tf2_msgs is not importable (it is not among the ROS 2 wheels on PyPI): no /tf "
-                    "odom->base_link; run this node from a ROS 2 install to publish it")
+                    "odom->base_link; run this node from a ROS 2 install to publish it"
+                )
             else:
                 self.tf_pub = self.create_publisher(TFMessage, "/tf", qos)
         self.published = 0
-        self.link_rearms = 0                   # lost links re-armed (serial back-end)
+        self.link_rearms = 0  # lost links re-armed (serial back-end)
         self._next_retry = None
         self.period = 1.0 / p["publish_rate"]
-        self.loops = 0                         # control cycles run
+        self.loops = 0  # control cycles run
         self._first_loop = None
-        self._window = (time.monotonic(), 0)   # (time, published) at the last diagnostics
+        self._window = (time.monotonic(), 0)  # (time, published) at the last diagnostics
         self.link_error = ""
-        self.stale_commands = 0                # TwistStamped older than cmd_vel_timeout, ignored
-        self.step_errors = 0                   # control steps failed on a non-link error
+        self.stale_commands = 0  # TwistStamped older than cmd_vel_timeout, ignored
+        self.step_errors = 0  # control steps failed on a non-link error
         self.last_step_error = ""
-        self._step_error_window = ""           # the last such error since the previous diagnostics
+        self._step_error_window = ""  # the last such error since the previous diagnostics
         self.joint_names = list(self.runtime.encoded)
         self.steer_names = [f"{n}_steer" for n in robot.steer_names]
         # the loop runs on the steady clock, as the runtime does: a step of the system clock
@@ -146,13 +152,14 @@ class BaseNode(Node):
     def _on_cmd(self, msg):
         received = self.now_s()
         if self.p["use_stamped_vel"]:
-            t = messages.command_time(received, self.ros_now_s(), _seconds(msg.header.stamp),
-                                      self.p["cmd_vel_timeout"])
+            t = messages.command_time(received, self.ros_now_s(), _seconds(msg.header.stamp), self.p["cmd_vel_timeout"])
             if t is None:
                 self.stale_commands += 1
                 self.get_logger().warning(
                     f"cmd_vel stamped more than cmd_vel_timeout = {self.p['cmd_vel_timeout']:g} s ago ignored "
-                    "(late delivery, or the sender's clock is behind this one)", throttle_duration_sec=5.0)
+                    "(late delivery, or the sender's clock is behind this one)",
+                    throttle_duration_sec=5.0,
+                )
                 return
             tw = msg.twist
         else:
@@ -166,12 +173,12 @@ class BaseNode(Node):
         self.loops += 1
         try:
             res = self.runtime.step(now)
-        except LinkError as exc:      # link lost: the back-end already commands zero speeds
+        except LinkError as exc:  # link lost: the back-end already commands zero speeds
             self.link_error = str(exc)
             self.get_logger().error(str(exc), throttle_duration_sec=1.0)
             self._retry_link()
             return
-        except OmnikinError as exc:   # a bug or a bad back-end, not a lost link
+        except OmnikinError as exc:  # a bug or a bad back-end, not a lost link
             self._step_failed(exc, now)
             return
         self.link_error = ""
@@ -196,7 +203,8 @@ class BaseNode(Node):
         js = JointState()
         js.header.stamp = stamp
         js.name, js.position, js.velocity = messages.joint_state_content(
-            self.joint_names, res.state.positions, res.state.velocities, self.steer_names, res.state.steer)
+            self.joint_names, res.state.positions, res.state.velocities, self.steer_names, res.state.steer
+        )
         self.joint_pub.publish(js)
         if self.tf_pub is not None:
             c = messages.transform_content(res.pose)
@@ -254,18 +262,29 @@ class BaseNode(Node):
         self._window = (now, self.published)
         link_stats = self.runtime.backend.stats()
         values = messages.diagnostic_values(
-            published=self.published, loop_rate_hz=messages.rate(self.published, n_prev, now, t_prev),
-            periods_missed=self.periods_missed(now), command_stats=dataclasses.asdict(s),
+            published=self.published,
+            loop_rate_hz=messages.rate(self.published, n_prev, now, t_prev),
+            periods_missed=self.periods_missed(now),
+            command_stats=dataclasses.asdict(s),
             stale_commands=self.stale_commands,
             fk_residual_norm=float(np.linalg.norm(self.runtime.odometry.residual)),
-            timed_out=self.runtime.filter.timed_out, link_rearms=self.link_rearms, step_errors=self.step_errors,
-            last_step_error=self.last_step_error, link_stats=link_stats)
+            timed_out=self.runtime.filter.timed_out,
+            link_rearms=self.link_rearms,
+            step_errors=self.step_errors,
+            last_step_error=self.last_step_error,
+            link_stats=link_stats,
+        )
         level, message = messages.diagnostic_status(
-            rejected=s.rejected, stale=self.stale_commands, waiting_for=str(link_stats.get("waiting_for", "")),
-            link_error=self.link_error, step_error=self._step_error_window)
+            rejected=s.rejected,
+            stale=self.stale_commands,
+            waiting_for=str(link_stats.get("waiting_for", "")),
+            link_error=self.link_error,
+            step_error=self._step_error_window,
+        )
         self._step_error_window = ""
-        status = DiagnosticStatus(level=bytes([level]), name="omnikin base", message=message,
-                                  hardware_id=self.robot.name)
+        status = DiagnosticStatus(
+            level=bytes([level]), name="omnikin base", message=message, hardware_id=self.robot.name
+        )
         status.values = [KeyValue(key=k, value=v) for k, v in values]
         arr = DiagnosticArray()
         arr.header.stamp = self.get_clock().now().to_msg()
@@ -287,7 +306,7 @@ def run(robot, backend, values: dict, ros_args=None) -> int:
     """Initialise rclpy, spin the node until SIGINT/SIGTERM, stop the wheels, shut down."""
     try:
         rclpy.init(args=["omnikin"] + (["--ros-args"] + list(ros_args) if ros_args else []))
-    except (RuntimeError, ValueError) as exc:      # rclpy's errors for bad --ros-args (RCLError, ...)
+    except (RuntimeError, ValueError) as exc:  # rclpy's errors for bad --ros-args (RCLError, ...)
         backend.close()
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(f"--ros-args: {type(exc).__name__}: {first}") from None

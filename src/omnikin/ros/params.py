@@ -135,8 +135,10 @@ def load_params(path: str | Path | None) -> dict:
         if key not in DEFAULTS:
             raise unknown_parameter(key, str(path))
         if key in seen:
-            raise InputError(f"{path}: parameter {key!r} given twice, as {shorten(_spelling(seen[key]))} and as "
-                             f"{shorten(_spelling(keys))}; keep one")
+            raise InputError(
+                f"{path}: parameter {key!r} given twice, as {shorten(_spelling(seen[key]))} and as "
+                f"{shorten(_spelling(keys))}; keep one"
+            )
         seen[key] = keys
         values[key] = value
     return validate(values, str(path))
@@ -171,12 +173,13 @@ def validate(values: dict, source: str) -> dict:
             value = float(value)
         if not isinstance(value, want):
             raise InputError(f"{source}: parameter {key!r} must be a {want.__name__}, got {shorten(value)}")
-        if key in RANGES:
+        if key in RANGES and isinstance(value, float):  # every ranged parameter is a float
             low, high, inclusive = RANGES[key]
             ok = math.isfinite(value) and value <= high and (value >= low if inclusive else value > low)
             if not ok:
                 rel = ">=" if inclusive else ">"
-                raise InputError(f"{source}: parameter {key!r} must be finite, {rel} {low:g} and <= {high:g}, "
-                                 f"got {value!r}")
+                raise InputError(
+                    f"{source}: parameter {key!r} must be finite, {rel} {low:g} and <= {high:g}, got {value!r}"
+                )
         out[key] = value
     return out
