@@ -247,7 +247,8 @@ def test_exact_ticks_give_exact_pose(capsys, tmp_path, per_sample, fmt):
 
 @pytest.mark.parametrize("representation", ["unsigned", "signed"])
 def test_counter_wrap_16_bit(capsys, tmp_path, representation):
-    """A 16-bit counter wraps past 65535; with --counter-bits 16 the pose is unaffected."""
+    """A 16-bit counter wraps past 65535; with --counter-bits 16 the pose is the closed form;
+    without any counter width the wrap is a jump no wheel can make: refused, pointing at the width."""
     per_sample, dt, n = (3000, -2000, 1000), 0.1, 30
     if representation == "unsigned":
         transform = lambda k: k % 65536  # noqa: E731
@@ -261,12 +262,12 @@ def test_counter_wrap_16_bit(capsys, tmp_path, representation):
     rc, _, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", out, "--format", "tum", "--counter-bits", 16)
     assert rc == 0, err
     check_tum(read_tum(out), t, closed_form_pose(twist, t), 1e-6, 1e-7)
-    # without --counter-bits the wrap is taken at face value and the pose is wrong
-    assert cli(capsys, "odometry", "tomasi-omni3", log, "-o", out, "--format", "tum")[0] == 0
-    final = read_tum(out)[-1]
-    assert np.hypot(final[1] - closed_form_pose(twist, t)[-1, 0], final[2] - closed_form_pose(twist, t)[-1, 1]) > 0.01
-
-
+    rc, _, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", tmp_path / "other.tum", "--format", "tum")
+    line = one_line_error(rc, err)
+    assert "--counter-bits" in line and "encoder.counter_bits" in line and "impossible jump" in line
+    first_wrap = 1 + int(np.argmax(np.any(np.abs(np.diff(raw[:, 1:], axis=0)) > 30000, axis=1)))
+    assert f"line {first_wrap + 2}:" in line            # header is line 1, sample k is line k + 2
+    assert not (tmp_path / "other.tum").exists()
 def test_user_log_conventions(capsys, tmp_path):
     """t first, wheel columns in any order, spaces after commas, comment and blank lines, CRLF ends."""
     per_sample, dt, n = (40, -10, 25), 0.5, 6
@@ -481,7 +482,7 @@ def test_output_not_writable(capsys, tmp_path):
     target = tmp_path / "no" / "dir" / "o.tum"
     rc, _, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", target, "--format", "tum")
     line = one_line_error(rc, err)
-    assert str(target) in line and "cannot write" in line
+    assert str(target) in line and "does not exist" in line
 
 
 def test_log_not_utf8(capsys, tmp_path):

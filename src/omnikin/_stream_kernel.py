@@ -1,136 +1,268 @@
-"""Code generation of the streaming-odometry hot path (used by :class:`omnikin.odometry.Odometry`).
+"""Generated kernels of the streaming odometry (:class:`omnikin.streaming.Odometry`).
 
-Why generated: a CPython update that loops over wheels or calls NumPy costs
-3-10 us; unrolled float arithmetic for the robot's own wheel count costs under
-2 us (``docs/performance.md``). Like :func:`collections.namedtuple` and
+Why generated: a CPython update that loops over wheels or calls NumPy costs 3-10 us; the
+same arithmetic unrolled for the robot's own wheel count, with its constants written in,
+costs well under 1 us (``docs/performance.md``). Like :func:`collections.namedtuple` and
 :mod:`dataclasses`, the source is built from one template and compiled once per
-estimator. The template does, per sample (conventions, Odometry):
+configuration; it is registered with :mod:`linecache`, so tracebacks show its lines
+(:attr:`Kernels.source` holds it too).
 
-1. tick increments ``d_j = ticks_j - prev_j`` (wrapped modulo ``2**bits`` when the
-   counters wrap);
-2. a type check and a single comparison per wheel against its jump limit (a finite
-   bound also traps NaN and infinity); anything doubtful goes to the owner's general
-   path, which integrates the sample the same way or raises naming sample and wheel;
-3. body increment ``(a, b, phi) = F d`` (``F`` = forward kinematics in rad/tick);
-4. the pose update of :mod:`omnikin.integration` (``ADVANCE`` below, shared with
-   the general path so both integrate identically).
+Every kernel is a pure function of an immutable state tuple (layout: the ``S_*`` indices
+below) and one sample; it returns the new state, or None when it doubts anything, and the
+estimator's general path then decides (integrates the sample the same way, or raises). So
+an update that raises cannot have changed the estimator, and estimators copy and pickle
+as plain data. Per sample, ``step_ticks`` does (conventions, Odometry):
+
+1. accept Python ints and NumPy integer scalars or rows (converted exactly; bools, floats
+   and anything else are left to the general path), the timestamp as a float;
+2. counter increments ``d_j = ticks_j - prev_j`` in exact integer arithmetic (wrapped
+   modulo ``2**bits`` for counters of a known width, after checking the reading lies in
+   the counter's range), then as floats;
+3. a sufficient test that no wheel jumped impossibly (:mod:`omnikin.encoders`):
+   ``sum_j (w_j d_j)^2 <= (A dt + B)^2 (1 - 1e-12)``, where ``w_j``, ``A``, ``B`` are chosen
+   so that it implies every wheel's own rule ``|d_j| <= limit_j(dt)``; a sample near a
+   limit goes to the general path, which applies the exact rule;
+4. body increment ``(a, b, phi) = F d`` (``F`` = forward kinematics per tick);
+5. the pose update of :mod:`omnikin.integration` (:data:`ADVANCE`).
+
+``step_angles`` is the same for wheel angles [rad] (floats, no counter). ``fk`` and
+``move`` are steps 4 and 5 alone, compiled from the same lines, for the general path: both
+paths integrate bit for bit alike.
 """
 
 from __future__ import annotations
 
+import hashlib
+import linecache
 import math
+import operator
+from dataclasses import dataclass
 from math import cos, floor, pi, sin
+from typing import Callable, Optional
 
-from .encoders import QUANTISATION_SLACK, jump_limit
+import numpy as np
+
+from .encoders import QUANTISATION_SLACK
 from .geometry import SCALAR_TAYLOR_LIMIT, TWO_PI
+
+# --- state layout ------------------------------------------------------------------------------
+S_POSE, S_TIME, S_COUNT, S_KIND, S_DT, S_INC, S_READ = 0, 1, 2, 3, 4, 5, 8
+"""State = ``(pose, t, samples, kind, dt, a, b, phi, reading_0..n-1, delta_0..n-1)``: the pose
+tuple (x, y, theta) [m, m, rad], the time [s] and readings of the last accepted sample, how
+many samples were accepted, what they were (:data:`KIND_NONE` before the first), the last
+interval [s], its body increment (a, b, phi) [m, m, rad] and wheel increments [ticks or rad]."""
+KIND_NONE, KIND_TICKS, KIND_ANGLES = 0, 1, 2
+
+SAFETY = 1.0 - 1e-12
+"""Shrinks the bound of the fast jump test far below float rounding: it never accepts what
+the exact rule refuses."""
+
+NUMPY_INTS = frozenset({np.int8, np.int16, np.int32, np.int64, np.uint8, np.uint16, np.uint32, np.uint64,
+                        np.intc, np.uintc, np.longlong, np.ulonglong, np.intp, np.uintp})
+"""NumPy integer scalar types (bool excluded): converted exactly with ``operator.index``."""
+NUMBERS = frozenset({int, np.float64, np.float32, np.float16}) | NUMPY_INTS
+"""Other types converted to float for timestamps and wheel angles."""
 
 ADVANCE = {
     "exact": (
-        "    x = 0.5 * phi\n"
-        "    h = th + x\n"
-        "    k = 1.0 - x * x / 6.0 if -SMALL < x < SMALL else sin(x) / x  # as geometry.sinc_scalar\n"),
-    "midpoint": "    h = th + 0.5 * phi\n    k = 1.0\n",
-    "euler": "    h = th\n    k = 1.0\n",
+        "x = 0.5 * phi\n"
+        "h = th + x\n"
+        "k = 1.0 - x * x / 6.0 if -SMALL < x < SMALL else sin(x) / x  # as geometry.sinc_scalar\n"),
+    "midpoint": "h = th + 0.5 * phi\nk = 1.0\n",
+    "euler": "h = th\nk = 1.0\n",
 }
 """Heading ``h`` and chord factor ``k`` of one step, per method (see integration.py)."""
 
 _MOVE = (
-    "    c = cos(h)\n"
-    "    s = sin(h)\n"
-    "    o._x += k * (c * a - s * b)\n"
-    "    o._y += k * (s * a + c * b)\n"
-    "    th += phi\n"
-    "    if th >= PI or th < -PI:\n"
-    "        th -= TWO_PI * floor((th + PI) / TWO_PI)  # as geometry.wrap_angle\n"
-    "    o._th = th\n"
-    "    o._t = t\n"
-    "    o.twist = (a / dt, b / dt, phi / dt)\n"
-    "    o.samples += 1\n"
-    "    return (o._x, o._y, th)\n")
+    "c = cos(h)\n"
+    "s = sin(h)\n"
+    "x = px + k * (c * a - s * b)\n"
+    "y = py + k * (s * a + c * b)\n"
+    "th += phi\n"
+    "if th >= PI or th < -PI:\n"
+    "    th -= TWO_PI * floor((th + PI) / TWO_PI)  # as geometry.wrap_angle\n")
+
+_CONSTANTS = {"cos": cos, "sin": sin, "floor": floor, "PI": pi, "TWO_PI": TWO_PI, "SMALL": SCALAR_TAYLOR_LIMIT,
+              "INF": math.inf, "INT": int, "FLOAT": float, "ARRAY": np.ndarray, "NUMPY_INTS": NUMPY_INTS,
+              "NUMBERS": NUMBERS, "INDEX": operator.index}
+"""Names the kernels use, bound as default arguments (fast local lookups; no globals)."""
 
 
-def _namespace() -> dict:
-    return {"cos": cos, "sin": sin, "floor": floor, "PI": pi, "TWO_PI": TWO_PI, "SMALL": SCALAR_TAYLOR_LIMIT}
+@dataclass(frozen=True)
+class WheelBound:
+    """The jump rule of one wheel in the form the kernel tests: ``|d| <= slope * dt + offset``,
+    and never above ``cap`` [ticks or rad]."""
+
+    slope: float
+    offset: float
+    cap: float = math.inf
 
 
-def compile_advance(owner, method: str):
-    """``advance(t, dt, a, b, phi)`` moving ``owner``'s pose by one body increment."""
-    src = "def advance(t, dt, a, b, phi):\n    o = OWNER\n    th = o._th\n" + ADVANCE[method] + _MOVE
-    ns = _namespace()
-    ns["OWNER"] = owner
-    exec(compile(src, f"<omnikin advance {method}>", "exec"), ns)
-    return ns["advance"]
+@dataclass(frozen=True)
+class Kernels:
+    """The generated functions of one estimator configuration (all pure)."""
+
+    step_ticks: Optional[Callable]
+    step_angles: Optional[Callable]
+    fk_ticks: Optional[Callable]
+    fk_angles: Optional[Callable]
+    move: Callable
+    source: str
 
 
-def compile_update(owner, n: int, fk_rows, method: str, bits: int | None, max_jump: float | None, rates,
-                   general, not_later, residual):
-    """Specialised ``update(t, ticks, steer=None)`` for ``n`` wheels.
+def _indent(text: str, level: int = 1) -> list[str]:
+    return ["    " * level + line for line in text.splitlines()]
 
-    ``fk_rows``: 3 rows of n floats [m or rad per tick]; ``bits``: counter width or None;
-    ``max_jump`` [ticks] and ``rates`` (per wheel ticks/s bound or None): the jump rules of
-    :func:`omnikin.encoders.jump_limit`; ``general(t, ticks, steer)`` handles every case
-    the fast path doubts (and raises where needed), ``not_later(t, dt, ticks, steer)``
-    repeated or earlier timestamps, ``residual(deltas, a, b, phi, dt)`` (or None) the
-    residual of redundant layouts.
-    """
-    d = [f"d{j}" for j in range(n)]
-    tk = [f"t{j}" for j in range(n)]
-    lines = [
-        "def update(t, ticks, steer=None):",
-        "    o = OWNER",
-        "    p = o._ticks",
-        "    if p is None or steer is not None:",
-        "        return general(t, ticks, steer)",
-        "    try:",
-        "        dt = t - o._t",
-        f"        {', '.join(tk)}, = ticks",
-        f"        {', '.join(f'p{j}' for j in range(n))}, = p",
-    ]
-    if bits is None:
-        # Python ints and floats only: numpy scalars could overflow in their own type, bools
-        # are no readings; both take the general path
-        lines += [f"        if {' or '.join(f'{v}.__class__ not in NUMBER' for v in tk)}:",
-                  "            return general(t, ticks, steer)"]
-        lines += [f"        d{j} = t{j} - p{j}" for j in range(n)]
+
+def _fast_bound(bounds: list[WheelBound]):
+    """Weights ``w_j`` and ``A, B, C`` with ``sum (w_j d_j)^2 <= min(A dt + B, C)^2`` implying
+    ``|d_j| <= min(slope_j dt + offset_j, cap_j)`` for every wheel j."""
+    if all(b.slope > 0 for b in bounds):
+        a = min(b.slope for b in bounds)
+        w = [a / b.slope for b in bounds]
     else:
-        # wrapping counters: Python ints only (floats and numpy scalars take the general path)
-        half = 1 << (bits - 1)
-        lines += [f"        if {' or '.join(f'{v}.__class__ is not int' for v in tk)}:",
-                  "            return general(t, ticks, steer)"]
-        lines += [f"        d{j} = ((t{j} - p{j} + {half}) & {2 * half - 1}) - {half}" for j in range(n)]
-    lines += [
-        "    except (TypeError, ValueError):",
-        "        return general(t, ticks, steer)  # names what is wrong",
-        "    if not 0.0 < dt < INF:",
-        "        return not_later(t, dt, ticks, steer)",
+        a = 0.0
+        least = min(b.offset for b in bounds)
+        w = [least / b.offset for b in bounds]
+    offset = min(wj * b.offset for wj, b in zip(w, bounds))
+    cap = min(wj * b.cap for wj, b in zip(w, bounds))
+    return w, a, offset, cap
+
+
+def _check_lines(d: list[str], bounds: list[WheelBound]) -> list[str]:
+    w, a, offset, cap = _fast_bound(bounds)
+    terms = [f"{v} * {v}" if wj == 1.0 else f"({v} * {wj!r}) ** 2" for v, wj in zip(d, w)]
+    lines = [f"L = {a!r} * dt + {offset!r}" if a else f"L = {offset!r}"]
+    if math.isfinite(cap):
+        lines.append(f"if L > {cap!r}:")
+        lines.append(f"    L = {cap!r}")
+    lines.append(f"if not {' + '.join(terms)} <= L * L * {SAFETY!r}:")
+    lines.append("    return None  # near or past a limit: the general path decides")
+    return lines
+
+
+def _fk_lines(fk_rows, d: list[str]) -> list[str]:
+    return [f"{name} = " + " + ".join(f"{float(c)!r} * {v}" for c, v in zip(row, d))
+            for name, row in zip(("a", "b", "phi"), fk_rows)]
+
+
+def _state_lines(n: int) -> tuple[str, str]:
+    read = ", ".join(f"p{j}" for j in range(n))
+    unpack = f"(px, py, th), t_prev, count, kind, _, _, _, _, {read}, " + ", ".join("_" for _ in range(n))
+    return unpack, read
+
+
+def _step_source(name: str, n: int, fk_rows, bounds: list[WheelBound], bits: list, method: str, angles: bool) -> str:
+    """Source of ``name(state, t, values)``: one sample of ticks (or wheel angles) -> state or None."""
+    v = [f"v{j}" for j in range(n)]
+    d = [f"d{j}" for j in range(n)]
+    unpack, _ = _state_lines(n)
+    kind = KIND_ANGLES if angles else KIND_TICKS
+    args = ", ".join(f"{k}={k}" for k in _CONSTANTS)
+    body = [
+        f"{unpack} = state",
+        f"if kind != {kind}:",
+        "    return None  # first sample, or readings of the other kind",
+        "try:",
+        "    if t.__class__ is not FLOAT:",
+        "        if t.__class__ not in NUMBERS:",
+        "            return None",
+        "        t = FLOAT(t)",
+        "    if values.__class__ is ARRAY:",
+        "        values = values.tolist()  # exact Python ints (or floats, bools: refused below)",
+        f"    {', '.join(v)}, = values",
     ]
-    if bits is not None:
-        inside = " and ".join(f"{-half} <= t{j} < {2 * half}" for j in range(n))
-        lines += [f"    if not ({inside}):", "        return general(t, ticks, steer)"]
-    bounds = []
     for j in range(n):
-        if rates[j] is not None:
-            bounds.append(f"abs(d{j}) <= {rates[j]!r} * dt + {QUANTISATION_SLACK!r}")
-            if bits is not None:
-                bounds.append(f"abs(d{j}) <= {jump_limit(None, None, 0.0, bits)!r}")
+        if angles:
+            body += [f"    if {v[j]}.__class__ is not FLOAT:",
+                     f"        if {v[j]}.__class__ not in NUMBERS:",
+                     "            return None",
+                     f"        {v[j]} = FLOAT({v[j]})",
+                     f"    {d[j]} = {v[j]} - p{j}"]
+            continue
+        body += [f"    if {v[j]}.__class__ is not INT:",
+                 f"        if {v[j]}.__class__ not in NUMPY_INTS:",
+                 "            return None  # floats, bools, anything else",
+                 f"        {v[j]} = INDEX({v[j]})"]
+        if bits[j] is None:
+            body.append(f"    {d[j]} = {v[j]} - p{j} + 0.0")
         else:
-            limit = jump_limit(max_jump, None, 0.0, bits)
-            bounds.append(f"abs(d{j}) <= {limit if math.isfinite(limit) else 1e300!r}")
-    lines += [f"    if not ({' and '.join(bounds)}):", "        return general(t, ticks, steer)  # raises, naming it"]
-    for name, row in zip(("a", "b", "phi"), fk_rows):
-        lines.append(f"    {name} = " + " + ".join(f"{v!r} * d{j}" for j, v in enumerate(row)))
-    if residual is not None:
-        lines.append(f"    residual([{', '.join(d)}], a, b, phi, dt)")
-    lines += [f"    o._ticks = ({', '.join(tk)},)", "    th = o._th"]
-    body = "\n".join(lines) + "\n" + ADVANCE[method] + _MOVE
-    # compiled inside a factory so that every constant is a fast closure variable
-    names = ["OWNER", "general", "not_later", "residual", "INF", "NUMBER", "cos", "sin", "floor", "PI", "TWO_PI",
-             "SMALL"]
-    src = f"def factory({', '.join(names)}):\n" + "".join(f"    {ln}\n" for ln in body.splitlines()) + \
-        "    return update\n"
-    ns = {}
-    exec(compile(src, f"<omnikin update n={n} {method}>", "exec"), ns)
-    consts = _namespace()
-    consts.update(OWNER=owner, general=general, not_later=not_later, residual=residual, INF=math.inf,
-                  NUMBER=frozenset({int, float}))
-    return ns["factory"](*[consts[k] for k in names])
+            half = 1 << (bits[j] - 1)
+            body += [f"    if not {-half} <= {v[j]} < {2 * half}:",
+                     f"        return None  # outside the {bits[j]}-bit counter: the general path raises",
+                     f"    {d[j]} = (({v[j]} - p{j} + {half}) & {2 * half - 1}) - {half} + 0.0"]
+    body += [
+        "except (TypeError, ValueError, OverflowError):",
+        "    return None  # the general path names what is wrong",
+        "dt = t - t_prev",
+        "if not 0.0 < dt < INF:",
+        "    return None",
+    ]
+    body += _check_lines(d, bounds)
+    body += _fk_lines(fk_rows, d)
+    body += ADVANCE[method].splitlines() + _MOVE.splitlines()
+    body.append(f"return ((x, y, th), t, count + 1, {kind}, dt, a, b, phi, {', '.join(v)}, {', '.join(d)})")
+    doc = (f'"""One sample of {"wheel angles [rad]" if angles else "tick readings"} for {n} wheels, '
+           f'{method} integration: the new state, or None."""')
+    return f"def {name}(state, t, values, {args}):\n    {doc}\n" + "\n".join(_indent("\n".join(body))) + "\n"
+
+
+def _fk_source(name: str, fk_rows, n: int) -> str:
+    d = [f"d{j}" for j in range(n)]
+    body = _fk_lines(fk_rows, d) + ["return a, b, phi"]
+    return f"def {name}({', '.join(d)}):\n    \"\"\"Body increment (a, b, phi) of wheel increments.\"\"\"\n" + \
+        "\n".join(_indent("\n".join(body))) + "\n"
+
+
+def _move_source(method: str) -> str:
+    args = ", ".join(f"{k}={k}" for k in _CONSTANTS)
+    body = "px, py, th = pose\n" + ADVANCE[method] + _MOVE + "return (x, y, th)\n"
+    return f"def move(pose, a, b, phi, {args}):\n    \"\"\"Pose after the body increment (a, b, phi).\"\"\"\n" + \
+        "\n".join(_indent(body)) + "\n"
+
+
+_COMPILED: dict[str, dict] = {}
+"""Kernels compiled so far, by source: pure functions, shared by every estimator that needs them."""
+
+
+def _compile(source: str) -> dict:
+    found = _COMPILED.get(source)
+    if found is not None:
+        return found
+    filename = f"<omnikin-kernel-{hashlib.sha1(source.encode()).hexdigest()[:12]}>"
+    linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
+    namespace = dict(_CONSTANTS)
+    exec(compile(source, filename, "exec"), namespace)
+    functions = {k: v for k, v in namespace.items() if k not in _CONSTANTS and callable(v) and k != "__builtins__"}
+    _COMPILED[source] = functions
+    return functions
+
+
+def build(n: int, fk_ticks, fk_angles, tick_bounds: list[WheelBound], angle_bounds: list[WheelBound], bits: list,
+          method: str) -> Kernels:
+    """Kernels for ``n`` encoded wheels. ``fk_ticks``/``fk_angles``: 3 rows of ``n``
+    coefficients [m or rad per tick, per rad], or None for robots whose forward kinematics
+    changes with steering (only ``move`` then); ``bits``: counter width per wheel or None."""
+    parts = [_move_source(method)]
+    if fk_ticks is not None:
+        parts += [_step_source("step_ticks", n, fk_ticks, tick_bounds, bits, method, angles=False),
+                  _step_source("step_angles", n, fk_angles, angle_bounds, bits, method, angles=True),
+                  _fk_source("fk_ticks", fk_ticks, n), _fk_source("fk_angles", fk_angles, n)]
+    source = "\n\n".join(parts)
+    f = _compile(source)
+    return Kernels(f.get("step_ticks"), f.get("step_angles"), f.get("fk_ticks"), f.get("fk_angles"), f["move"],
+                   source)
+
+
+def tick_bounds(rules) -> list[WheelBound]:
+    """The jump rule of each wheel in ticks (:meth:`omnikin.encoders.CounterRule.limit`)."""
+    if rules and rules[0].max_jump is not None:
+        return [WheelBound(0.0, r.max_jump, r.half_limit) for r in rules]
+    return [WheelBound(r.rate, QUANTISATION_SLACK, r.half_limit) for r in rules]
+
+
+def angle_bounds(rules) -> list[WheelBound]:
+    """The jump rule of each wheel in radians (:meth:`omnikin.encoders.CounterRule.angle_limit`)."""
+    if rules and rules[0].max_jump is not None:
+        return [WheelBound(0.0, r.max_jump * abs(r.rad_per_tick)) for r in rules]
+    return [WheelBound(r.speed, QUANTISATION_SLACK * abs(r.rad_per_tick)) for r in rules]

@@ -14,13 +14,14 @@ The streaming estimator lives in :mod:`omnikin.streaming`.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
-from typing import Optional
+from functools import cached_property, partial
+from typing import Callable, Optional
 
 import numpy as np
 
 from ._arrays import as_components, require_finite
-from .encoders import first_bad, tick_increments
+from .encoders import (check_angle_jumps, check_times, checked_increments, counter_readings, counter_rules, first_bad,
+                       wheel_increments)
 from .errors import InputError, OdometryInputError
 from .geometry import wrap_angle
 from .integration import check_method, integrate_components
@@ -46,7 +47,8 @@ def mid_steer(steer: Optional[np.ndarray]) -> Optional[np.ndarray]:
 
 
 CHUNK = 1 << 14
-"""Samples integrated per block: keeps the temporaries in cache (see docs/performance.md)."""
+"""Samples checked and integrated per block: the temporaries stay in cache and are the only
+allocations besides the poses (see docs/performance.md)."""
 
 
 @dataclass(frozen=True)
@@ -56,19 +58,19 @@ class OdometryResult:
     ``increments`` ``(..., N-1, 3)`` are the body displacements of each interval;
     ``twists`` their mean twists; ``residual`` ``(..., N-1, n_rows)`` the forward
     kinematics residual [rad/s] (zero for a square, full-rank layout). They are
-    computed on first access.
+    computed on first access (the wheel increments again from the readings).
     """
 
     t: np.ndarray
     poses: np.ndarray
-    _delta: np.ndarray   # (..., N-1, n) wheel increments [ticks or rad] ...
+    _delta: Callable[[], np.ndarray]   # () -> (..., N-1, n) wheel increments [ticks or rad] ...
     _scale: np.ndarray   # (n,) ... times this [rad per unit]
     _fk: np.ndarray      # ((..., N-1,) 3, n_rows) forward-kinematics operator
     _rows: np.ndarray    # ((..., N-1,) n_rows, 3) forward-kinematics rows A
 
     @cached_property
     def _angles(self) -> np.ndarray:
-        return _fk_input(self._delta, self._scale, self._fk)
+        return _fk_input(self._delta(), self._scale, self._fk)
 
     @cached_property
     def increments(self) -> np.ndarray:
@@ -93,67 +95,122 @@ def _fk_input(delta, scale, fk) -> np.ndarray:
     return angles
 
 
-def batch_odometry(robot: Robot, t, ticks, *, steer=None, method: str = "exact",
-                   counter_bits: int | None = None, start=None, max_jump=None) -> OdometryResult:
+def batch_odometry(robot: Robot, t, ticks, *, steer=None, method: str = "exact", counter_bits: int | None = None,
+                   start=None, max_jump=None, max_wheel_speed=None) -> OdometryResult:
     """Odometry of whole logs: ``ticks`` ``(..., N, n_enc)`` at times ``t`` ``(..., N)``.
 
     Leading axes (trials) broadcast. ``steer`` ``(..., N, n_steer)`` [rad] is needed
     for robots with steerable wheels. The first sample is the zero of the ticks and
-    sits at ``start`` (default origin). Checks as in
-    :func:`omnikin.encoders.tick_increments`.
+    sits at ``start`` (default origin). Readings of any integer type are exact (see
+    :func:`omnikin.encoders.counter_readings`); ``counter_bits`` (else each wheel's
+    ``encoder.counter_bits``), ``max_jump`` [ticks] and ``max_wheel_speed`` [rad/s] are the
+    counter and jump rules of :mod:`omnikin.encoders`. Every bad sample raises
+    :class:`OdometryInputError` with its index in ``.sample``.
     """
     wheels = encoded_wheels(robot)
-    dticks = tick_increments(wheels, t, ticks, counter_bits, max_jump)
-    scale = np.array([w.encoder.rad_per_tick for w in wheels])
-    return _integrate(robot, wheels, np.asarray(t, dtype=float), dticks, scale, steer, method, start)
+    rules = counter_rules(wheels, counter_bits, max_jump, max_wheel_speed)
+    names = [w.name for w in wheels]
+    tk = counter_readings(ticks, names)
+    tt = _timestamps(t, tk, "ticks", names)
+    scale = np.array([r.rad_per_tick for r in rules])
+    check_method(method)
+    delta = partial(wheel_increments, rules, tt, tk, CHUNK)
+    if robot.steerable:
+        return _integrate(robot, wheels, tt, delta, scale, steer, method, start)
+    _no_steer(robot, steer)
+    f = robot.fk_matrix(None, names)
+    out = _pose_array(tk.shape[:-2], tt.shape[:-1], tk.shape[-2], start)
+    pose = out[..., 0, :]
+    f_ticks = f * scale
+    m = tk.shape[-2] - 1
+    for s0 in range(0, m, CHUNK):
+        s1 = min(m, s0 + CHUNK)
+        dt = check_times(tt[..., s0:s1 + 1], s0)
+        d = checked_increments(rules, tk[..., s0:s1 + 1, :], dt, s0)
+        comps = np.matmul(f_ticks, np.swapaxes(d, -1, -2))                  # (..., 3, block)
+        integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], pose, method,
+                             out=out[..., s0:s1 + 1, :])
+        pose = out[..., s1, :]
+    return OdometryResult(tt, out, delta, scale, f, robot.fk_rows(None, names))
 
 
-def batch_odometry_from_angles(robot: Robot, t, angles, *, steer=None, method: str = "exact",
-                               start=None) -> OdometryResult:
-    """Like :func:`batch_odometry` but from wheel angles ``(..., N, n_enc)`` [rad]."""
+def batch_odometry_from_angles(robot: Robot, t, angles, *, steer=None, method: str = "exact", start=None,
+                               max_jump=None, max_wheel_speed=None) -> OdometryResult:
+    """Like :func:`batch_odometry` but from wheel angles ``(..., N, n_enc)`` [rad] (no counters;
+    the same physical jump rule)."""
     wheels = encoded_wheels(robot)
+    rules = counter_rules(wheels, None, max_jump, max_wheel_speed)
     names = [w.name for w in wheels]
     a = np.asarray(angles, dtype=float)
-    if a.ndim < 2 or a.shape[-1] != len(wheels) or a.shape[-2] < 1:
-        raise OdometryInputError(f"angles: expected shape (..., N, {len(wheels)}) for wheels {names}, got {a.shape}")
-    tt = np.asarray(t, dtype=float)
-    if tt.shape[-1:] != a.shape[-2:-1]:
-        raise OdometryInputError(f"t: expected {a.shape[-2]} timestamps to match angles {a.shape}, got shape {tt.shape}")
-    first_bad(~np.isfinite(tt), "t: non-finite timestamp")
+    tt = _timestamps(t, a, "angles", names)
     first_bad(~np.isfinite(a), "angles: non-finite wheel angle", names)
-    first_bad(np.diff(tt, axis=-1) <= 0, "t: timestamps must increase strictly (repeated or going back)", offset=1)
-    return _integrate(robot, wheels, tt, np.diff(a, axis=-2), np.ones(len(wheels)), steer, method, start)
+    dt = check_times(tt, 0)
+    delta = np.diff(a, axis=-2)
+    check_angle_jumps(rules, delta, dt)
+    return _integrate(robot, wheels, tt, lambda: delta, np.ones(len(wheels)), steer, method, start)
+
+
+def _timestamps(t, readings: np.ndarray, what: str, names) -> np.ndarray:
+    """Timestamps as float64 ``(..., N)`` after checking the shapes of ``readings`` ``(..., N, n)``."""
+    n = len(names)
+    if readings.ndim < 2 or readings.shape[-1] != n or readings.shape[-2] < 1:
+        raise OdometryInputError(f"{what}: expected shape (..., N, {n}) for wheels {names}, got {readings.shape}")
+    tt = np.asarray(t, dtype=float)
+    if tt.shape[-1:] != readings.shape[-2:-1]:
+        raise OdometryInputError(f"t: expected {readings.shape[-2]} timestamps to match {what} {readings.shape}, "
+                                 f"got shape {tt.shape}")
+    try:
+        np.broadcast_shapes(tt.shape[:-1], readings.shape[:-2])
+    except ValueError:
+        raise OdometryInputError(f"t: leading shape {tt.shape[:-1]} does not broadcast with {what} "
+                                 f"{readings.shape[:-2]}") from None
+    return tt
+
+
+def _no_steer(robot, steer) -> None:
+    if steer is not None:
+        raise InputError(f"robot {robot.name!r} has no steerable wheel: do not pass steer")
+
+
+def _pose_array(lead_a, lead_b, n: int, start) -> np.ndarray:
+    """Empty poses ``(..., n, 3)`` with the first pose set to ``start`` (default origin)."""
+    start = None if start is None else _start(start)
+    lead = np.broadcast_shapes(lead_a, lead_b, () if start is None else start.shape[:-1])
+    out = np.empty(lead + (n, 3))
+    out[..., 0, :] = 0.0 if start is None else start
+    return out
 
 
 def _integrate(robot, wheels, t, delta, scale, steer, method, start) -> OdometryResult:
-    """Forward kinematics of the increments ``delta * scale`` [rad], then pose integration."""
+    """Forward kinematics of the increments ``delta() * scale`` [rad] (steerable robots: per
+    interval), then pose integration."""
     check_method(method)
     names = [w.name for w in wheels]
-    if robot.steerable:
-        if steer is None:
-            raise InputError(f"robot {robot.name!r}: steerable wheels {robot.steer_names} need steering "
-                               f"angles (steer, shape (..., N, {len(robot.steerable)}))")
-        s = as_components(steer, len(robot.steerable), "steer")
-        want = delta.shape[:-2] + (delta.shape[-2] + 1, len(robot.steerable))
-        if s.ndim < 2 or s.shape[-2] != want[-2] or np.broadcast_shapes(s.shape, want) != want:
-            raise OdometryInputError(f"steer: expected shape {want} (one angle per steerable wheel and sample), "
-                                     f"got {s.shape}")
-        first_bad(~np.isfinite(s), "steer: non-finite steering angle", robot.steer_names)
-        mid = mid_steer(s)
-        f = robot.fk_matrix(mid, names)
-        rows = robot.fk_rows(mid, names)
-    else:
-        if steer is not None:
-            raise InputError(f"robot {robot.name!r} has no steerable wheel: do not pass steer")
+    if not robot.steerable:
+        _no_steer(robot, steer)
         f = robot.fk_matrix(None, names)
-        rows = robot.fk_rows(None, names)
-    if robot.steerable:
-        inc = np.einsum("...ij,...j->...i", f, _fk_input(delta, scale, f))
-        comps = np.ascontiguousarray(np.swapaxes(inc, -1, -2))
-        poses = integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :],
-                                     None if start is None else _start(start), method)
-    else:
-        poses = _integrate_blocks(f * scale, delta, start, method)
+        d = delta()
+        out = _pose_array(d.shape[:-2], t.shape[:-1], d.shape[-2] + 1, start)
+        comps = np.matmul(f * scale, np.swapaxes(d, -1, -2))
+        integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], out[..., 0, :], method, out=out)
+        return OdometryResult(t, out, delta, scale, f, robot.fk_rows(None, names))
+    if steer is None:
+        raise InputError(f"robot {robot.name!r}: steerable wheels {robot.steer_names} need steering "
+                         f"angles (steer, shape (..., N, {len(robot.steerable)}))")
+    d = delta()
+    s = as_components(steer, len(robot.steerable), "steer")
+    want = d.shape[:-2] + (d.shape[-2] + 1, len(robot.steerable))
+    if s.ndim < 2 or s.shape[-2] != want[-2] or np.broadcast_shapes(s.shape, want) != want:
+        raise OdometryInputError(f"steer: expected shape {want} (one angle per steerable wheel and sample), "
+                                 f"got {s.shape}")
+    first_bad(~np.isfinite(s), "steer: non-finite steering angle", robot.steer_names)
+    mid = mid_steer(s)
+    f = robot.fk_matrix(mid, names)
+    rows = robot.fk_rows(mid, names)
+    inc = np.einsum("...ij,...j->...i", f, _fk_input(d, scale, f))
+    comps = np.ascontiguousarray(np.swapaxes(inc, -1, -2))
+    poses = integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :],
+                                 None if start is None else _start(start), method)
     return OdometryResult(t, poses, delta, scale, f, rows)
 
 
@@ -161,21 +218,3 @@ def _start(start) -> np.ndarray:
     p = as_components(start, 3, "start")
     require_finite(p, "start")
     return p
-
-
-def _integrate_blocks(f_ticks: np.ndarray, delta: np.ndarray, start, method: str) -> np.ndarray:
-    """Poses from increments ``delta`` ``(..., M, n)`` and a constant FK ``f_ticks`` ``(3, n)``,
-    :data:`CHUNK` samples at a time, each block starting where the previous one ended."""
-    m = delta.shape[-2]
-    start = None if start is None else _start(start)
-    lead = delta.shape[:-2] if start is None else np.broadcast_shapes(delta.shape[:-2], start.shape[:-1])
-    out = np.empty(lead + (m + 1, 3))
-    pose = np.zeros(lead + (3,)) if start is None else np.broadcast_to(start, lead + (3,))
-    out[..., 0, :] = pose
-    for s0 in range(0, m, CHUNK):
-        s1 = min(m, s0 + CHUNK)
-        comps = np.matmul(f_ticks, np.swapaxes(delta[..., s0:s1, :], -1, -2))   # (..., 3, block)
-        integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], pose, method,
-                             out=out[..., s0:s1 + 1, :])
-        pose = out[..., s1, :]
-    return out

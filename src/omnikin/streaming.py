@@ -1,14 +1,18 @@
 """Streaming odometry: :class:`Odometry`, fed one sample at a time (the core's only mutable state).
 
 Per sample (``docs/conventions.md``): counter increments (:mod:`omnikin.encoders`, which
-holds every rule on wrap-around and jumps), forward kinematics with the robot's constant
-(or, with steerable wheels, per-interval) operator, and the pose update of
-:mod:`omnikin.integration`. Without steerable wheels the update is a generated, unrolled
-function (:mod:`omnikin._stream_kernel`) whose every doubt falls back to the general path
-here, which either integrates the sample the same way or raises.
+holds every rule on readings, wrap-around and jumps), forward kinematics with the robot's
+constant (or, with steerable wheels, per-interval) operator, and the pose update of
+:mod:`omnikin.integration`. Without steerable wheels a generated kernel
+(:mod:`omnikin._stream_kernel`), a pure function of the state, takes every sample it has no
+doubt about; the general path here takes the rest and either integrates it the same way or
+raises.
 
-An update that raises leaves the estimator exactly as it was. "Sample k" in messages
-counts every sample fed so far that was accepted or skipped as a duplicate.
+The whole estimate lives in one immutable state tuple replaced on success, so an update
+that raises leaves the estimator exactly as it was, and estimators copy
+(:func:`copy.deepcopy`) and pickle as plain data. "Sample k" in messages counts every
+sample fed so far that was accepted or skipped as a duplicate; the error carries it in
+``.sample``.
 """
 
 from __future__ import annotations
@@ -20,15 +24,23 @@ from typing import Optional
 
 import numpy as np
 
+from . import _stream_kernel as kernel
 from ._arrays import as_components
-from ._stream_kernel import compile_advance, compile_update
-from .encoders import (check_bits, check_max_jump, jump_limit, tick_rate, wrap_scalar)
-from .errors import InputError, OdometryInputError
+from ._stream_kernel import KIND_ANGLES, KIND_NONE, KIND_TICKS, S_COUNT, S_DT, S_INC, S_KIND, S_POSE, S_READ, S_TIME
+from .encoders import counter_rules, in_counter_range, show_number, wrap_scalar
+from .errors import InputError, OdometryInputError, shorten
 from .geometry import wrap_angle
 from .integration import check_method
 from .linalg import rank
 from .model import Robot
 from .odometry import encoded_wheels, mid_steer
+
+_WHAT = {KIND_TICKS: "tick reading", KIND_ANGLES: "wheel angle"}
+
+
+def _decline(state, t, values):
+    """The kernel of robots with steerable wheels: every sample takes the general path."""
+    return None
 
 
 class Odometry:
@@ -42,170 +54,251 @@ class Odometry:
     duplicate: skipped, counted in ``duplicates`` and warned about once. Anything else
     that cannot be integrated raises :class:`OdometryInputError` and changes nothing.
 
+    Readings: Python ints of any size, NumPy integer scalars or rows of any integer type
+    (exact), or floats. ``counter_bits`` (else each wheel's ``encoder.counter_bits``),
+    ``max_jump`` [ticks] and ``max_wheel_speed`` [rad/s]: the counter and jump rules of
+    :mod:`omnikin.encoders`.
+
     After each update: ``pose`` (x, y, theta) [m, m, rad; theta in [-pi, pi)], ``twist``
     (mean body twist over the last interval), ``residual`` (forward-kinematics residual
-    [rad/s], one entry per fitted row: the wheels, then centred steerable wheels), ``t``.
+    [rad/s], one entry per fitted row: the wheels, then centred steerable wheels), ``t``,
+    ``samples``.
     """
 
     def __init__(self, robot: Robot, *, method: str = "exact", counter_bits: int | None = None,
-                 start=(0.0, 0.0, 0.0), max_jump=None):
+                 start=(0.0, 0.0, 0.0), max_jump=None, max_wheel_speed=None):
         self.robot = robot
         self.method = check_method(method)
-        self.bits = check_bits(counter_bits)
-        self._max_jump = check_max_jump(max_jump)
-        self._wheels = encoded_wheels(robot)
-        self.wheel_names = [w.name for w in self._wheels]
-        self._n = len(self._wheels)
-        self._scale = [w.encoder.rad_per_tick for w in self._wheels]
-        self._rates = [tick_rate(w, self._max_jump) for w in self._wheels]
+        wheels = encoded_wheels(robot)
+        self.rules = counter_rules(wheels, counter_bits, max_jump, max_wheel_speed)
+        self.wheel_names = [w.name for w in wheels]
+        self.counter_bits = tuple(r.bits for r in self.rules)
+        """Counter width of each encoded wheel (None: no wrap-around)."""
+        self._n = len(wheels)
+        self._scale = [r.rad_per_tick for r in self.rules]
         self._steerable = bool(robot.steerable)
-        self._advance = compile_advance(self, self.method)
         rows = robot.fk_rows(np.zeros(len(robot.steerable)), self.wheel_names)
         self._n_rows = rows.shape[0]
+        self._rows = None if self._steerable else rows
+        self._fk = None if self._steerable else robot.fk_matrix(None, self.wheel_names)
+        self._redundant = not self._steerable and rows.shape[0] > rank(rows @ robot.admissible_basis)
+        self._build()
         self.reset(start)
+
+    def _build(self) -> None:
+        """Compile (or fetch) the kernels of this configuration."""
+        fk_angles = fk_ticks = None
         if not self._steerable:
-            self._rows = rows
-            self._fk = robot.fk_matrix(None, self.wheel_names)
-            redundant = rows.shape[0] > rank(rows @ robot.admissible_basis)
-            fk_ticks = [[float(v) * s for v, s in zip(row, self._scale)] for row in self._fk]
-            self.update = compile_update(self, self._n, fk_ticks, self.method, self.bits, self._max_jump,
-                                         self._rates, self._update_general, self._not_later,
-                                         self._set_residual if redundant else None)
+            fk_angles = [[float(v) for v in row[: self._n]] for row in self._fk]
+            fk_ticks = [[v * s for v, s in zip(row, self._scale)] for row in fk_angles]
+        self._kernels = kernel.build(self._n, fk_ticks, fk_angles, kernel.tick_bounds(self.rules),
+                                     kernel.angle_bounds(self.rules), [r.bits for r in self.rules], self.method)
+        self._step_ticks = self._kernels.step_ticks or _decline
+        self._step_angles = self._kernels.step_angles or _decline
+
+    # --- copy and pickle: the kernels are rebuilt from the configuration --------------------------
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        for name in ("_kernels", "_step_ticks", "_step_angles"):
+            state.pop(name, None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._build()
 
     def reset(self, pose=(0.0, 0.0, 0.0)) -> None:
         """Forget the previous sample; the next one is the new zero, at ``pose``."""
         p = as_components(pose, 3, "pose")
         if p.shape != (3,) or not np.all(np.isfinite(p)):
-            raise InputError(f"pose: expected 3 finite numbers, got {pose!r}")
-        self._x, self._y, self._th = float(p[0]), float(p[1]), float(wrap_angle(p[2]))
-        self._t = None
-        self._ticks = None
+            raise InputError(f"pose: expected 3 finite numbers, got {shorten(pose)}")
+        start = (float(p[0]), float(p[1]), float(wrap_angle(p[2])))
+        self._state = (start, math.nan, 0, KIND_NONE, math.nan, 0.0, 0.0, 0.0) + (0,) * self._n + (0.0,) * self._n
         self._steer = None
-        self.twist = (0.0, 0.0, 0.0)
-        self.residual = [0.0] * self._n_rows
-        self.samples = 0
+        self._steer_residual = None
         self.duplicates = 0
         self._warned = False
 
+    # --- what the estimate is -------------------------------------------------------------------
     @property
     def pose(self) -> tuple[float, float, float]:
-        return (self._x, self._y, self._th)
+        return self._state[S_POSE]
 
     @property
     def t(self) -> Optional[float]:
-        return self._t
+        return None if self._state[S_KIND] == KIND_NONE else self._state[S_TIME]
+
+    @property
+    def samples(self) -> int:
+        """Samples accepted since the last reset (duplicates not counted)."""
+        return self._state[S_COUNT]
+
+    @property
+    def twist(self) -> tuple[float, float, float]:
+        """Mean body twist (vx, vy, omega) [m/s, m/s, rad/s] over the last interval."""
+        st = self._state
+        if st[S_COUNT] < 2:
+            return (0.0, 0.0, 0.0)
+        dt = st[S_DT]
+        return (st[S_INC] / dt, st[S_INC + 1] / dt, st[S_INC + 2] / dt)
+
+    @property
+    def residual(self) -> list[float]:
+        """Forward-kinematics residual [rad/s] of the last interval (zeros for square layouts)."""
+        st = self._state
+        if st[S_COUNT] < 2:
+            return [0.0] * self._n_rows
+        if self._steerable:
+            return list(self._steer_residual)
+        if not self._redundant:
+            return [0.0] * self._n_rows
+        delta = np.array(st[S_READ + self._n:], dtype=float)
+        angles = delta * self._scale if st[S_KIND] == KIND_TICKS else delta
+        b = np.concatenate([angles, np.zeros(self._n_rows - self._n)])
+        inc = np.array(st[S_INC:S_INC + 3])
+        return [float(v) / st[S_DT] for v in b - self._rows @ inc]
 
     @property
     def _index(self) -> int:
         return self.samples + self.duplicates
 
+    # --- feeding it -------------------------------------------------------------------------------
     def update(self, t: float, ticks, steer=None) -> tuple[float, float, float]:
         """Feed one sample: time [s], raw counter readings of the encoded wheels in file
         order, and (steerable robots) their steering angles [rad]. Returns the pose."""
-        return self._update_general(t, ticks, steer)
+        if steer is None:
+            new = self._step_ticks(self._state, t, ticks)
+            if new is not None:
+                self._state = new
+                return new[0]
+        return self._update_general(t, ticks, steer, KIND_TICKS)
 
     def update_angles(self, t: float, angles, steer=None) -> tuple[float, float, float]:
-        """Feed one sample of wheel angles [rad] (encoded wheels, file order)."""
-        if self.bits is not None:
-            raise InputError("update_angles works without counter wrap-around: create Odometry with counter_bits=None")
-        values = self._numbers(angles, "wheel angle")
-        return self.update(t, [a / s for a, s in zip(values, self._scale)], steer)
+        """Feed one sample of wheel angles [rad] (encoded wheels, file order; they do not wrap)."""
+        if steer is None:
+            new = self._step_angles(self._state, t, angles)
+            if new is not None:
+                self._state = new
+                return new[0]
+        return self._update_general(t, angles, steer, KIND_ANGLES)
 
-    # --- the general path: first sample, steering, numpy scalars, anything doubtful ------------
-    def _numbers(self, values, what: str) -> tuple:
-        """Readings as a tuple of Python ints/floats, or an error naming the sample and wheel."""
-        try:
-            seq = list(values)
-        except TypeError:
-            raise OdometryInputError(f"sample {self._index}: expected {self._n} {what}s for wheels "
-                                     f"{self.wheel_names}, got {values!r}") from None
-        if len(seq) != self._n:
-            raise OdometryInputError(f"sample {self._index}: expected {self._n} {what}s for wheels "
-                                     f"{self.wheel_names}, got {len(seq)}")
-        out = []
-        for name, v in zip(self.wheel_names, seq):
-            if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
-                raise OdometryInputError(f"sample {self._index}: {what} {v!r} of wheel {name!r} is not a number")
-            v = int(v) if isinstance(v, numbers.Integral) else float(v)
-            if isinstance(v, float) and not math.isfinite(v):
-                raise OdometryInputError(f"sample {self._index}: non-finite {what} {v!r}, wheel {name!r}")
-            out.append(v)
-        return tuple(out)
+    # --- the general path: first sample, steering, floats, anything doubtful -----------------------
+    def _fail(self, detail: str):
+        k = self._index
+        return OdometryInputError(f"sample {k}: {detail}", sample=k, detail=detail)
 
     def _time(self, t) -> float:
         if isinstance(t, (bool, np.bool_)) or not isinstance(t, numbers.Real):
-            raise OdometryInputError(f"sample {self._index}: timestamp must be a number [s], got {t!r}")
-        if not math.isfinite(float(t)):
-            raise OdometryInputError(f"sample {self._index}: non-finite timestamp {t!r}")
-        return float(t)
+            raise self._fail(f"timestamp must be a number [s], got {shorten(t)}")
+        try:
+            value = float(t)
+        except OverflowError:
+            value = math.inf
+        if not math.isfinite(value):
+            raise self._fail(f"non-finite timestamp {show_number(t)}")
+        return value
 
-    def _update_general(self, t, ticks, steer):
-        t = self._time(t)
-        values = self._numbers(ticks, "tick reading")
-        s = self._check_steer(steer)
-        if self._ticks is None:
-            return self._first(t, values, s)
-        dt = t - self._t
-        if not dt > 0.0:
-            return self._not_later(t, dt, values, s)
-        deltas = [wrap_scalar(a - b, self.bits) for a, b in zip(values, self._ticks)]
-        self._check(deltas, dt, values)
-        dangle = np.array([d * k for d, k in zip(deltas, self._scale)], dtype=float)
-        if self._steerable:
-            mid = mid_steer(np.stack([self._steer, s]))[0]
-            fk = self.robot.fk(dangle, mid, self.wheel_names)
-            inc, residual = fk.twist, fk.residual
+    def _numbers(self, values, kind: int) -> tuple:
+        """Readings as a tuple of Python ints (exact) or floats, or an error naming the wheel."""
+        what = _WHAT[kind]
+        if isinstance(values, np.ndarray):
+            if values.dtype.kind not in "iuf":
+                raise self._fail(f"{what}s: expected numbers for wheels {self.wheel_names}, got dtype {values.dtype}")
+            seq = values.tolist()
         else:
-            inc = self._fk @ np.concatenate([dangle, np.zeros(self._n_rows - self._n)])
-            residual = self._residual_of(dangle, inc)
-        self._ticks = values
-        self._steer = s
-        self.residual = [float(v) / dt for v in residual]
-        a, b, phi = (float(v) for v in inc)
-        return self._advance(t, dt, a, b, phi)
+            try:
+                seq = list(values)
+            except TypeError:
+                raise self._fail(f"expected {self._n} {what}s for wheels {self.wheel_names}, "
+                                 f"got {shorten(values)}") from None
+        if not isinstance(seq, list) or len(seq) != self._n:
+            got = len(seq) if isinstance(seq, list) else shorten(seq)
+            raise self._fail(f"expected {self._n} {what}s for wheels {self.wheel_names}, got {got}")
+        out = []
+        for name, v in zip(self.wheel_names, seq):
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
+                raise self._fail(f"{what} {shorten(v)} of wheel {name!r} is not a number")
+            if isinstance(v, numbers.Integral) and kind == KIND_TICKS:
+                out.append(int(v))
+                continue
+            try:
+                v = float(v)
+            except OverflowError:
+                v = math.inf
+            if not math.isfinite(v):
+                raise self._fail(f"non-finite {what} {show_number(v)}, wheel {name!r}")
+            out.append(v)
+        return tuple(out)
 
-    def _first(self, t, values, steer):
-        self._check_range(values)
+    def _update_general(self, t, readings, steer, kind: int):
+        t = self._time(t)
+        values = self._numbers(readings, kind)
+        s = self._check_steer(steer)
+        st = self._state
+        if kind == KIND_TICKS:
+            self._check_range(values)
+        if st[S_KIND] == KIND_NONE:
+            return self._first(t, values, s, kind)
+        if st[S_KIND] != kind:
+            fed = _WHAT[st[S_KIND]]
+            raise InputError(f"this estimator was fed {fed}s since its last reset: reset() before feeding "
+                             f"{_WHAT[kind]}s")
+        previous = st[S_READ:S_READ + self._n]
+        dt = t - st[S_TIME]
+        if not dt > 0.0:
+            return self._not_later(t, dt, values, previous, s)
+        if kind == KIND_TICKS:
+            exact = [wrap_scalar(v - p, r.bits) for v, p, r in zip(values, previous, self.rules)]
+            for d, r in zip(exact, self.rules):
+                if abs(d) > r.limit(dt) or (r.half is not None and d == -r.half):
+                    raise self._fail(r.jump_message(d, dt))
+            deltas = tuple(float(d) for d in exact)
+        else:
+            deltas = tuple(v - p for v, p in zip(values, previous))
+            for d, r in zip(deltas, self.rules):
+                if abs(d) > r.angle_limit(dt):
+                    raise self._fail(r.jump_message(d, dt, "rad"))
+        residual = None
+        if self._steerable:
+            scale = self._scale if kind == KIND_TICKS else [1.0] * self._n
+            mid = mid_steer(np.stack([self._steer, s]))[0]
+            fk = self.robot.fk(np.array([d * k for d, k in zip(deltas, scale)]), mid, self.wheel_names)
+            a, b, phi = (float(v) for v in fk.twist)
+            residual = [float(v) / dt for v in fk.residual]
+        else:
+            fk = self._kernels.fk_ticks if kind == KIND_TICKS else self._kernels.fk_angles
+            a, b, phi = fk(*deltas)
+        pose = self._kernels.move(st[S_POSE], a, b, phi)
+        self._state = (pose, t, st[S_COUNT] + 1, kind, dt, a, b, phi) + values + deltas
+        self._steer = s
+        self._steer_residual = residual
+        return pose
+
+    def _first(self, t, values, steer, kind):
+        st = self._state
+        self._state = (st[S_POSE], t, 1, kind, math.nan, 0.0, 0.0, 0.0) + values + (0.0,) * self._n
         self._steer = steer
-        self._t = t
-        self._ticks = values
-        self.samples = 1
         return self.pose
 
-    def _not_later(self, t, dt, ticks, steer):
-        values = ticks if isinstance(ticks, tuple) else self._numbers(ticks, "tick reading")
+    def _not_later(self, t, dt, values, previous, steer):
         same_steer = steer is None or (self._steer is not None and np.array_equal(steer, self._steer))
-        if dt == 0.0 and values == self._ticks and same_steer:
+        if dt == 0.0 and values == previous and same_steer:
             self.duplicates += 1
             if not self._warned:
                 warnings.warn(f"odometry: duplicate sample at t={t!r} skipped (counted in .duplicates)",
-                              RuntimeWarning, stacklevel=3)
+                              RuntimeWarning, stacklevel=4)
                 self._warned = True
             return self.pose
-        t = self._time(t)
         what = "repeats" if dt == 0.0 else "goes back from"
         differs = " with different readings or steering" if dt == 0.0 else ""
-        raise OdometryInputError(f"sample {self._index}: timestamp {t!r} {what} the previous one {self._t!r}{differs}")
+        raise self._fail(f"timestamp {t!r} {what} the previous one {self._state[S_TIME]!r}{differs}")
 
-    def _check(self, deltas, dt, ticks):
-        """Raise naming the sample and wheel if an increment cannot be integrated."""
-        self._check_range(ticks)
-        half = 2 ** (self.bits - 1) if self.bits is not None else None
-        for j, d in enumerate(deltas):
-            name = self.wheel_names[j]
-            if abs(d) > jump_limit(self._max_jump, self._rates[j], dt, self.bits) or (half is not None and d == -half):
-                raise OdometryInputError(
-                    f"sample {self._index}: impossible jump of {d} ticks in {dt:.6g} s, wheel {name!r} "
-                    f"(faster than the wheel can turn, or half the counter range)")
-
-    def _check_range(self, ticks) -> None:
-        """Raise if a reading lies outside a ``bits``-bit counter (signed or unsigned)."""
-        if self.bits is None:
-            return
-        for name, v in zip(self.wheel_names, ticks):
-            if not -(2 ** (self.bits - 1)) <= v < 2 ** self.bits:
-                raise OdometryInputError(f"sample {self._index}: tick reading {v!r} outside the range of a "
-                                         f"{self.bits}-bit counter, wheel {name!r}")
+    def _check_range(self, values) -> None:
+        """Raise if a reading lies outside its wheel's counter (signed or unsigned)."""
+        for v, r in zip(values, self.rules):
+            if r.bits is not None and not (isinstance(v, int) and in_counter_range(v, r.bits)) \
+                    and not (isinstance(v, float) and -r.half <= v < 2 * r.half):
+                raise self._fail(r.range_message(v))
 
     def _check_steer(self, steer):
         if not self._steerable:
@@ -214,20 +307,11 @@ class Odometry:
             return None
         if steer is None:
             raise InputError(f"robot {self.robot.name!r}: steerable wheels {self.robot.steer_names} need "
-                               f"their steering angles (steer=...)")
+                             f"their steering angles (steer=...)")
         s = as_components(steer, len(self.robot.steerable), "steer")
         if s.shape != (len(self.robot.steerable),):
-            raise OdometryInputError(f"sample {self._index}: steer: expected {len(self.robot.steerable)} angles "
-                                     f"for {self.robot.steer_names}, got shape {s.shape}")
+            raise self._fail(f"steer: expected {len(self.robot.steerable)} angles for {self.robot.steer_names}, "
+                             f"got shape {s.shape}")
         if not np.all(np.isfinite(s)):
-            raise OdometryInputError(f"sample {self._index}: non-finite steering angle {list(s)}")
+            raise self._fail(f"non-finite steering angle {shorten(list(s))}")
         return s
-
-    def _residual_of(self, dangle, inc) -> np.ndarray:
-        b = np.concatenate([dangle, np.zeros(self._n_rows - self._n)])
-        return b - self._rows @ inc
-
-    def _set_residual(self, deltas, a, b, phi, dt):
-        """Residual of the generated path (redundant layouts only)."""
-        dangle = np.array([d * k for d, k in zip(deltas, self._scale)], dtype=float)
-        self.residual = [float(v) / dt for v in self._residual_of(dangle, np.array([a, b, phi]))]

@@ -43,11 +43,22 @@ SWEDISH_TYPES = ("omni", "mecanum", "swedish")
 
 @dataclass(frozen=True)
 class Encoder:
-    """Incremental encoder on a wheel: ``angle = 2 pi ticks / (ticks_per_rev gear_ratio)``."""
+    """Incremental encoder on a wheel: ``angle = 2 pi ticks / (ticks_per_rev gear_ratio)``.
+
+    ``counter_bits``: width of the hardware counter whose readings are logged (2..64); its
+    readings wrap modulo ``2**counter_bits`` (:mod:`omnikin.encoders`). None: they never wrap.
+    """
 
     ticks_per_rev: float
     gear_ratio: float = 1.0
     invert: bool = False
+    counter_bits: Optional[int] = None
+
+    def __post_init__(self):
+        bits = self.counter_bits
+        if bits is not None and (isinstance(bits, (bool, np.bool_)) or not isinstance(bits, (int, np.integer))
+                                 or not 2 <= bits <= 64):
+            raise InputError(f"encoder counter_bits must be a whole number from 2 to 64, got {bits!r}")
 
     @property
     def rad_per_tick(self) -> float:

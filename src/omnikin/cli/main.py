@@ -11,6 +11,7 @@ import json
 import math
 import re
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -278,10 +279,17 @@ def cmd_fk(args) -> int:
 
 # --- odometry -----------------------------------------------------------------------------------
 def cmd_odometry(args) -> int:
+    from ..errors import OdometryInputError
     from ..io.logs import read_tick_log
-    from ..io.trajectories import write_trajectory
+    from ..io.output import check_output, is_stdout, write_text
+    from ..io.trajectories import trajectory_lines
     from ..odometry import batch_odometry
 
+    to_stdout = is_stdout(args.output)
+    if to_stdout and args.json:
+        raise CliError("--json and '-o -' would both write to standard output; name a file with -o")
+    robot_file = [args.robot] if Path(args.robot).is_file() else []
+    check_output(args.output, inputs=[args.log, *robot_file], force=args.force)
     robot = load_robot(args.robot)
     log = read_tick_log(args.log, robot)
     if log.duplicate_lines:
@@ -290,13 +298,16 @@ def cmd_odometry(args) -> int:
               f"sample exactly (line {lines})", file=sys.stderr)
     try:
         res = batch_odometry(robot, log.t, log.ticks, steer=log.steer, method=args.method,
-                             counter_bits=args.counter_bits)
-    except OmnikinError as exc:
-        # name the file and line of the sample as well as its index
-        msg = re.sub(r"at sample (\d+)", lambda m: f"at sample {m.group(1)} (line {log.lines[int(m.group(1))]})",
-                     str(exc))
-        raise CliError(f"{args.log}: {msg}") from None
-    write_trajectory(args.output, log.t, res.poses, args.format)
+                             counter_bits=args.counter_bits, max_wheel_speed=args.max_wheel_speed)
+    except OdometryInputError as exc:
+        if exc.sample is None:
+            raise CliError(f"{args.log}: {exc}") from None
+        raise CliError(f"{args.log}: line {log.lines[exc.sample]}: {exc.detail}") from None
+    text = "\n".join(trajectory_lines(log.t, res.poses, args.format)) + "\n"
+    try:
+        write_text(args.output, text)
+    except OSError as exc:
+        raise CliError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
     end = res.poses[-1]
     path = float(np.sum(np.hypot(*np.diff(res.poses[:, :2], axis=0).T)))
     summary = {"robot": robot.name, "samples": int(len(log.t)), "duration": float(log.t[-1] - log.t[0]),
@@ -307,10 +318,10 @@ def cmd_odometry(args) -> int:
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
-        console().print(
+        console(stderr=to_stdout).print(
             f"{robot.name}: {summary['samples']} samples over {summary['duration']:.6g} s, {args.method} integration\n"
             f"final pose x={end[0]:.6g} m, y={end[1]:.6g} m, theta={end[2]:.6g} rad; path {path:.6g} m\n"
-            f"written to {args.output} ({args.format})")
+            f"written to {'standard output' if to_stdout else args.output} ({args.format})")
     return 0
 
 
@@ -373,17 +384,28 @@ def build_parser() -> argparse.ArgumentParser:
                         description="Read a CSV tick log (header: t, then one column per encoded wheel named by "
                                     "the wheel, plus <wheel>_steer_deg for steerable wheels), integrate it exactly "
                                     "on SE(2) and write the trajectory.",
-                        epilog="example:\n  omnikin odometry tomasi-omni3 log.csv -o traj.tum --format tum\n"
-                               "  evo_traj tum traj.tum --plot",
+                        epilog="examples:\n  omnikin odometry tomasi-omni3 log.csv -o traj.tum --format tum\n"
+                               "  evo_traj tum traj.tum --plot\n"
+                               "  omnikin odometry my_robot.yaml log.csv -o - --counter-bits 16 | head\n\n"
+                               "tick readings: integers (ASCII digits, optional leading '-'), exact up to 64 bits. "
+                               "A jump no wheel could make in one sample is an error: if the counters wrap, give "
+                               "their width (--counter-bits or encoder.counter_bits in the robot file).",
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument("log", metavar="LOG.csv", help="tick log")
-    sp.add_argument("-o", "--output", required=True, metavar="OUT", help="trajectory file to write")
+    sp.add_argument("-o", "--output", required=True, metavar="OUT",
+                    help="trajectory file to write ('-': standard output, messages then go to standard error)")
+    sp.add_argument("--force", action="store_true", help="replace OUT if it exists")
     sp.add_argument("--format", choices=("csv", "tum", "kitti"), default="csv",
                     help="csv: t,x,y,theta; tum: t x y z qx qy qz qw; kitti: 3x4 matrices (default csv)")
     sp.add_argument("--method", choices=("exact", "midpoint", "euler"), default="exact",
                     help="pose integration (default exact; the others exist for comparison)")
-    sp.add_argument("--counter-bits", type=int, metavar="N", help="encoder counters wrap at 2**N (e.g. 16, 32)")
+    sp.add_argument("--counter-bits", type=int, metavar="N",
+                    help="encoder counters wrap at 2**N (e.g. 16, 32); default: each wheel's encoder.counter_bits "
+                         "in the robot file (a different value there is an error), else no wrap-around")
+    sp.add_argument("--max-wheel-speed", type=float, metavar="RAD_S",
+                    help="fastest a wheel turns [rad/s]: a tick jump needing more than 1.5x this is refused "
+                         "(default: each wheel's max_speed, else 100 m/s at the rim)")
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     sp.set_defaults(func=cmd_odometry)
     from . import bag, ros, umbmark

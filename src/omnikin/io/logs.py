@@ -1,34 +1,51 @@
-"""Encoder logs in and trajectories out (CSV and TUM).
+"""Encoder tick logs in and out (CSV).
 
 Tick log (CSV, comma separated, one header line): column ``t`` [s] first, then one
 tick column per encoded wheel, named by the wheel (any order), and for every
 steerable wheel a column ``<wheel>_steer_deg`` with its steering angle [deg].
 Blank lines and lines starting with ``#`` are skipped.
 
+Tick readings are exact integers: plain ASCII decimal digits with an optional leading
+``-`` (``0x10``, ``1e3``, ``5.0``, ``1_0``, digits of other scripts and inner spaces are
+refused, with file, line and column), read without passing through a float, and kept in an
+array that holds them exactly (int64, or uint64 for a 64-bit unsigned counter beyond 2**63).
+A reading must fit a 64-bit counter, signed or unsigned: ``-2**63 .. 2**64 - 1``.
+
 Trajectory files (CSV, TUM, KITTI) are :mod:`omnikin.io.trajectories`.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import OdometryInputError
+from ..encoders import INT64_MIN, UINT64_END, counter_readings
+from ..errors import InputError, OdometryInputError, shorten
 from ..model import Robot
 from ..odometry import encoded_wheels
 from .csvfile import column_problems, number, read_rows
+from .output import write_text
+from .trajectories import format_times
 
+TICK = re.compile(r"-?[0-9]+")
+"""A tick reading: ASCII digits only (Python's int() would also take '1_0', '+5', ' 5' and
+other scripts' digits)."""
+TICK_DIGITS = 20
+"""Digits of the largest 64-bit reading, 2**64 - 1: longer text is refused before int()."""
 
 
 @dataclass(frozen=True)
 class TickLog:
     """A parsed tick log: ``t`` (N,), ``ticks`` (N, n_enc), ``steer`` (N, n_steer) [rad] or None.
 
-    Rows that repeat the previous row exactly (a logger writing a sample twice) are
-    dropped and their line numbers kept in ``duplicate_lines``; a repeated time with
-    other readings stays in and is refused by the odometry.
+    ``ticks`` is int64 (uint64 when a reading exceeds 2**63 - 1 and none is negative; an
+    object array of Python ints when a log mixes both). Rows that repeat the previous row
+    exactly (a logger writing a sample twice) are dropped and their line numbers kept in
+    ``duplicate_lines``; a repeated time with other readings stays in and is refused by the
+    odometry.
     """
 
     t: np.ndarray
@@ -39,6 +56,18 @@ class TickLog:
     """Lines skipped because they repeat the previous sample exactly (time and readings)."""
     lines: tuple[int, ...] = ()
     """File line of each kept sample."""
+
+
+def tick_reading(text: str, source: str, line: int, column: str) -> int:
+    """One tick reading as an exact int, or :class:`OdometryInputError` naming file, line and column."""
+    where = f"{source}: line {line}, column {column!r}"
+    if not TICK.fullmatch(text):
+        raise OdometryInputError(f"{where}: not a tick reading: {shorten(text)} (expected an integer: ASCII digits "
+                                 f"with an optional leading '-')")
+    if len(text.lstrip("-")) > TICK_DIGITS or not INT64_MIN <= int(text) < UINT64_END:
+        raise OdometryInputError(f"{where}: tick reading {shorten(text)} outside the range of a 64-bit counter "
+                                 f"({INT64_MIN} .. {UINT64_END - 1})")
+    return int(text)
 
 
 def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
@@ -52,30 +81,82 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
         raise OdometryInputError(f"{source}: empty log; expected a header {','.join(expected)}")
     header_line, header = rows[0]
     if not header or header[0] != "t":
-        raise OdometryInputError(f"{source}: line {header_line}: the first column must be 't', got {header[:1]}; "
-                                 f"expected columns {expected}")
+        raise OdometryInputError(f"{source}: line {header_line}: the first column must be 't', got "
+                                 f"{shorten(header[:1])}; expected columns {expected}")
     problems = column_problems(header, expected)
     if problems:
         raise OdometryInputError(f"{source}: line {header_line}: " + "; ".join(problems) +
                                  f"; robot {robot.name!r} expects {expected}")
     if len(rows) < 3:
         raise OdometryInputError(f"{source}: needs at least two samples, got {len(rows) - 1}")
-    index = {name: header.index(name) for name in expected}
-    data = np.empty((len(rows) - 1, len(expected)))
-    for k, (line, row) in enumerate(rows[1:]):
+    t_col, tick_cols = header.index("t"), [header.index(name) for name in wheels]
+    steer_idx = [header.index(name) for name in steer_cols]
+    samples, kept_lines, duplicates = [], [], []
+    for line, row in rows[1:]:
         if len(row) != len(header):
             raise OdometryInputError(f"{source}: line {line}: {len(row)} fields, header has {len(header)}")
-        for j, name in enumerate(expected):
-            data[k, j] = number(row[index[name]], source, line, name, OdometryInputError)
-    repeat = np.zeros(len(data), dtype=bool)
-    repeat[1:] = np.all(data[1:] == data[:-1], axis=1)
-    duplicates = tuple(rows[k + 1][0] for k in np.flatnonzero(repeat))
-    kept_lines = tuple(rows[k + 1][0] for k in np.flatnonzero(~repeat))
-    data = data[~repeat]
-    if len(data) < 2:
-        raise OdometryInputError(f"{source}: needs at least two distinct samples, got {len(data)}")
-    ticks = data[:, 1:1 + len(wheels)]
-    if np.all(ticks == np.round(ticks)) and np.all(np.abs(ticks) < 2 ** 62):
-        ticks = ticks.astype(np.int64)
-    steer = np.radians(data[:, 1 + len(wheels):]) if steer_cols else None
-    return TickLog(data[:, 0].copy(), ticks, steer, wheels, duplicates, kept_lines)
+        sample = (number(row[t_col], source, line, "t", OdometryInputError),
+                  tuple(tick_reading(row[j], source, line, name) for j, name in zip(tick_cols, wheels)),
+                  tuple(number(row[j], source, line, name, OdometryInputError) for j, name in zip(steer_idx, steer_cols)))
+        if samples and sample == samples[-1]:
+            duplicates.append(line)
+            continue
+        samples.append(sample)
+        kept_lines.append(line)
+    if len(samples) < 2:
+        raise OdometryInputError(f"{source}: needs at least two distinct samples, got {len(samples)}")
+    ticks = counter_readings([s[1] for s in samples], wheels)
+    steer = np.radians(np.array([s[2] for s in samples], dtype=float)) if steer_cols else None
+    return TickLog(np.array([s[0] for s in samples], dtype=float), ticks, steer, wheels, tuple(duplicates),
+                   tuple(kept_lines))
+
+
+def tick_log_lines(t, ticks, wheel_names, steer=None, steer_names=(), comment: str | None = None) -> list[str]:
+    """The lines of a tick log (without newlines): optional ``# comment`` lines, the header, the rows.
+
+    ``t`` (N,) [s] (float, or int64 nanoseconds written exactly); ``ticks`` (N, n) whole
+    numbers (written exactly; floats must be whole); ``steer`` (N, n_steer) [rad], written in
+    degrees, for the wheels ``steer_names``.
+    """
+    names = [str(n) for n in wheel_names]
+    tk = np.asarray(ticks)
+    if tk.ndim != 2 or tk.shape[1] != len(names):
+        raise InputError(f"ticks: expected shape (N, {len(names)}) for wheels {names}, got {tk.shape}")
+    if tk.dtype.kind == "f":
+        if not np.all(np.isfinite(tk)) or np.any(tk != np.round(tk)) or np.any(np.abs(tk) > 2.0 ** 53):
+            raise InputError("ticks: a tick log holds whole-number counter readings; got fractions or values "
+                             "beyond 2**53 (quantise the ticks first)")
+        tk = tk.astype(np.int64)
+    elif tk.dtype.kind not in "iuO":
+        raise InputError(f"ticks: expected integer readings, got dtype {tk.dtype}")
+    times = format_times(t)
+    if len(times) != len(tk):
+        raise InputError(f"{len(times)} timestamps for {len(tk)} rows of ticks")
+    steer_names = [str(n) for n in steer_names]
+    columns = ["t"] + names + [f"{n}_steer_deg" for n in steer_names]
+    deg = None
+    if steer is not None or steer_names:
+        deg = np.degrees(np.asarray(steer, dtype=float))
+        if deg.shape != (len(tk), len(steer_names)):
+            raise InputError(f"steer: expected shape ({len(tk)}, {len(steer_names)}) for {steer_names}, "
+                             f"got {deg.shape}")
+    out = [f"# {line}" for line in (comment.splitlines() if comment else [])]
+    out.append(",".join(columns))
+    rows = tk.tolist()
+    for k, (tk_text, row) in enumerate(zip(times, rows)):
+        cells = [tk_text] + [str(int(v)) for v in row]
+        if deg is not None:
+            cells += [repr(float(v) + 0.0) for v in deg[k]]
+        out.append(",".join(cells))
+    return out
+
+
+def write_tick_log(path, t, ticks, wheel_names, steer=None, *, steer_names=(), comment: str | None = None) -> None:
+    """Write a tick log (module docstring; see :func:`tick_log_lines`) atomically, or to
+    standard output for ``-``. Check the path first with
+    :func:`omnikin.io.output.check_output`."""
+    text = "\n".join(tick_log_lines(t, ticks, wheel_names, steer, steer_names, comment)) + "\n"
+    try:
+        write_text(path, text)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot write: {exc.strerror or exc}") from None

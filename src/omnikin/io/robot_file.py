@@ -15,7 +15,7 @@ import re
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..errors import OmnikinError, RobotFileError
+from ..errors import OmnikinError, RobotFileError, shorten
 from ..model import Robot
 from ..presets import PRESET_NAMES, preset_path
 from ..wheels import SWEDISH_TYPES, WHEEL_TYPES, Encoder, Steer, Wheel
@@ -24,7 +24,7 @@ SCHEMA_VERSION = 1
 TOP_KEYS = {"omnikin": True, "name": True, "description": False, "references": False, "wheels": True}
 WHEEL_KEYS = {"name", "type", "distance", "angle_deg", "x", "y", "drive_deg", "roller_deg",
               "radius", "encoder", "max_speed", "steer"}
-ENCODER_KEYS = {"ticks_per_rev", "gear_ratio", "invert"}
+ENCODER_KEYS = {"ticks_per_rev", "gear_ratio", "invert", "counter_bits"}
 STEER_KEYS = {"offset", "min_deg", "max_deg"}
 
 
@@ -78,7 +78,11 @@ def _encoder(where: _Where, data: Any, wheel: str) -> Encoder:
     invert = data.get("invert", False)
     if not isinstance(invert, bool):
         raise where.error(f"must be true or false, got {invert!r}", wheel, "encoder.invert")
-    return Encoder(tpr, gear, invert)
+    bits = data.get("counter_bits")
+    if bits is not None and (isinstance(bits, bool) or not isinstance(bits, int) or not 2 <= bits <= 64):
+        raise where.error(f"the width of the encoder's counter, a whole number from 2 to 64, got {shorten(bits)}",
+                          wheel, "encoder.counter_bits")
+    return Encoder(tpr, gear, invert, bits)
 
 
 def _steer(where: _Where, data: Any, wheel: str) -> Steer:
@@ -306,6 +310,8 @@ def robot_to_dict(robot: Robot) -> dict:
         if w.encoder is not None:
             d["encoder"] = {"ticks_per_rev": float(w.encoder.ticks_per_rev), "gear_ratio": float(w.encoder.gear_ratio),
                             "invert": bool(w.encoder.invert)}
+            if w.encoder.counter_bits is not None:
+                d["encoder"]["counter_bits"] = int(w.encoder.counter_bits)
         if w.max_speed is not None:
             d["max_speed"] = float(w.max_speed)
         if w.steer is not None:
