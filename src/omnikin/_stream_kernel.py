@@ -18,10 +18,9 @@ as plain data. Per sample, ``step_ticks`` does (conventions, Odometry):
 2. counter increments ``d_j = ticks_j - prev_j`` in exact integer arithmetic (wrapped
    modulo ``2**bits`` for counters of a known width, after checking the reading lies in
    the counter's range), then as floats;
-3. a sufficient test that no wheel jumped impossibly (:mod:`omnikin.encoders`):
-   ``sum_j (w_j d_j)^2 <= (A dt + B)^2 (1 - 1e-12)``, where ``w_j``, ``A``, ``B`` are chosen
-   so that it implies every wheel's own rule ``|d_j| <= limit_j(dt)``; a sample near a
-   limit goes to the general path, which applies the exact rule;
+3. every wheel's jump rule (:mod:`omnikin.encoders`) ``|d_j| <= limit_j(dt)``, with the
+   limits shrunk by :data:`SAFETY` so that float rounding never accepts what the exact rule
+   refuses; a sample that close to a limit goes to the general path, which decides exactly;
 4. body increment ``(a, b, phi) = F d`` (``F`` = forward kinematics per tick);
 5. the pose update of :mod:`omnikin.integration` (:data:`ADVANCE`).
 
@@ -46,16 +45,31 @@ from .encoders import QUANTISATION_SLACK
 from .geometry import SCALAR_TAYLOR_LIMIT, TWO_PI
 
 # --- state layout ------------------------------------------------------------------------------
-S_POSE, S_TIME, S_COUNT, S_KIND, S_DT, S_INC, S_READ = 0, 1, 2, 3, 4, 5, 8
-"""State = ``(pose, t, samples, kind, dt, a, b, phi, reading_0..n-1, delta_0..n-1)``: the pose
-tuple (x, y, theta) [m, m, rad], the time [s] and readings of the last accepted sample, how
-many samples were accepted, what they were (:data:`KIND_NONE` before the first), the last
-interval [s], its body increment (a, b, phi) [m, m, rad] and wheel increments [ticks or rad]."""
+S_POSE, S_TIME_TICKS, S_TIME_ANGLES, S_COUNT, S_DT, S_INC, S_READ = 0, 1, 2, 3, 4, 5, 8
+"""State = ``(pose, t_ticks, t_angles, samples, dt, a, b, phi, reading_0..n-1, delta_0..n-1)``: the
+pose tuple (x, y, theta) [m, m, rad]; the time [s] of the last accepted sample in the slot of
+its kind (tick readings or wheel angles), the other slot NaN, both before the first sample, so
+that a kernel fed the other kind (or nothing yet) fails its time test and declines; how many
+samples were accepted; the last interval [s], its body increment (a, b, phi) [m, m, rad], the
+readings of the last sample and the wheel increments [ticks or rad]."""
 KIND_NONE, KIND_TICKS, KIND_ANGLES = 0, 1, 2
 
+
+def state_kind(state) -> int:
+    """What the estimator was fed since its last reset (:data:`KIND_NONE` before the first sample)."""
+    if state[S_TIME_TICKS] == state[S_TIME_TICKS]:
+        return KIND_TICKS
+    return KIND_ANGLES if state[S_TIME_ANGLES] == state[S_TIME_ANGLES] else KIND_NONE
+
+
+def state_time(state) -> float:
+    """Time [s] of the last accepted sample (NaN before the first)."""
+    return state[S_TIME_ANGLES] if state_kind(state) == KIND_ANGLES else state[S_TIME_TICKS]
+
+
 SAFETY = 1.0 - 1e-12
-"""Shrinks the bound of the fast jump test far below float rounding: it never accepts what
-the exact rule refuses."""
+"""Shrinks the limits of the fast jump test by far more than float rounding (and the rounding of
+increments beyond 2**53 to floats): it never accepts what the exact rule refuses."""
 
 NUMPY_INTS = frozenset({np.int8, np.int16, np.int32, np.int64, np.uint8, np.uint16, np.uint32, np.uint64,
                         np.intc, np.uintc, np.longlong, np.ulonglong, np.intp, np.uintp})
@@ -79,11 +93,11 @@ _MOVE = (
     "x = px + k * (c * a - s * b)\n"
     "y = py + k * (s * a + c * b)\n"
     "th += phi\n"
-    "if th >= PI or th < -PI:\n"
+    "if th >= PI or th < NEG_PI:\n"
     "    th -= TWO_PI * floor((th + PI) / TWO_PI)  # as geometry.wrap_angle\n")
 
-_CONSTANTS = {"cos": cos, "sin": sin, "floor": floor, "PI": pi, "TWO_PI": TWO_PI, "SMALL": SCALAR_TAYLOR_LIMIT,
-              "INF": math.inf, "INT": int, "FLOAT": float, "ARRAY": np.ndarray, "NUMPY_INTS": NUMPY_INTS,
+_CONSTANTS = {"cos": cos, "sin": sin, "floor": floor, "PI": pi, "NEG_PI": -pi, "TWO_PI": TWO_PI, "SMALL": SCALAR_TAYLOR_LIMIT,
+              "INF": math.inf, "NAN": math.nan, "INT": int, "FLOAT": float, "ARRAY": np.ndarray, "NUMPY_INTS": NUMPY_INTS,
               "NUMBERS": NUMBERS, "INDEX": operator.index}
 """Names the kernels use, bound as default arguments (fast local lookups; no globals)."""
 
@@ -114,55 +128,51 @@ def _indent(text: str, level: int = 1) -> list[str]:
     return ["    " * level + line for line in text.splitlines()]
 
 
-def _fast_bound(bounds: list[WheelBound]):
-    """Weights ``w_j`` and ``A, B, C`` with ``sum (w_j d_j)^2 <= min(A dt + B, C)^2`` implying
-    ``|d_j| <= min(slope_j dt + offset_j, cap_j)`` for every wheel j."""
-    if all(b.slope > 0 for b in bounds):
-        a = min(b.slope for b in bounds)
-        w = [a / b.slope for b in bounds]
-    else:
-        a = 0.0
-        least = min(b.offset for b in bounds)
-        w = [least / b.offset for b in bounds]
-    offset = min(wj * b.offset for wj, b in zip(w, bounds))
-    cap = min(wj * b.cap for wj, b in zip(w, bounds))
-    return w, a, offset, cap
-
-
 def _check_lines(d: list[str], bounds: list[WheelBound]) -> list[str]:
-    w, a, offset, cap = _fast_bound(bounds)
-    terms = [f"{v} * {v}" if wj == 1.0 else f"({v} * {wj!r}) ** 2" for v, wj in zip(d, w)]
-    lines = [f"L = {a!r} * dt + {offset!r}" if a else f"L = {offset!r}"]
-    if math.isfinite(cap):
-        lines.append(f"if L > {cap!r}:")
-        lines.append(f"    L = {cap!r}")
-    lines.append(f"if not {' + '.join(terms)} <= L * L * {SAFETY!r}:")
+    """``|d_j| <= min(slope_j dt + offset_j, cap_j) * SAFETY`` for every wheel, one limit per
+    distinct rule; a sample near or past a limit is left to the general path's exact rule."""
+    names: dict[WheelBound, str] = {}
+    lines, tests = [], []
+    for v, b in zip(d, bounds):
+        if b not in names:
+            names[b] = f"L{len(names)}"
+            lim = names[b]
+            if b.slope:
+                lines.append(f"{lim} = {b.slope * SAFETY!r} * dt + {b.offset * SAFETY!r}")
+                if math.isfinite(b.cap):
+                    lines += [f"if {lim} > {b.cap * SAFETY!r}:", f"    {lim} = {b.cap * SAFETY!r}"]
+            else:
+                lines.append(f"{lim} = {min(b.offset, b.cap) * SAFETY!r}")
+            lines.append(f"M{lim[1:]} = -{lim}")
+        lim = names[b]
+        tests.append(f"M{lim[1:]} <= {v} <= {lim}")
+    lines.append(f"if not ({' and '.join(tests)}):")
     lines.append("    return None  # near or past a limit: the general path decides")
     return lines
 
 
 def _fk_lines(fk_rows, d: list[str]) -> list[str]:
-    return [f"{name} = " + " + ".join(f"{float(c)!r} * {v}" for c, v in zip(row, d))
-            for name, row in zip(("a", "b", "phi"), fk_rows)]
+    """``(a, b, phi) = F d``; terms whose coefficient is exactly zero are left out (d is finite)."""
+    lines = []
+    for name, row in zip(("a", "b", "phi"), fk_rows):
+        terms = [f"{float(c)!r} * {v}" for c, v in zip(row, d) if float(c) != 0.0]
+        lines.append(f"{name} = " + (" + ".join(terms) if terms else "0.0"))
+    return lines
 
 
-def _state_lines(n: int) -> tuple[str, str]:
-    read = ", ".join(f"p{j}" for j in range(n))
-    unpack = f"(px, py, th), t_prev, count, kind, _, _, _, _, {read}, " + ", ".join("_" for _ in range(n))
-    return unpack, read
+def _unpack(n: int, angles: bool) -> str:
+    times = "_, t_prev" if angles else "t_prev, _"
+    return f"(px, py, th), {times}, count, _, _, _, _, " + ", ".join(f"p{j}" for j in range(n)) + ", " + \
+        ", ".join("_" for _ in range(n))
 
 
 def _step_source(name: str, n: int, fk_rows, bounds: list[WheelBound], bits: list, method: str, angles: bool) -> str:
     """Source of ``name(state, t, values)``: one sample of ticks (or wheel angles) -> state or None."""
     v = [f"v{j}" for j in range(n)]
     d = [f"d{j}" for j in range(n)]
-    unpack, _ = _state_lines(n)
-    kind = KIND_ANGLES if angles else KIND_TICKS
     args = ", ".join(f"{k}={k}" for k in _CONSTANTS)
     body = [
-        f"{unpack} = state",
-        f"if kind != {kind}:",
-        "    return None  # first sample, or readings of the other kind",
+        f"{_unpack(n, angles)} = state  # t_prev: NaN before the first sample or after the other kind",
         "try:",
         "    if t.__class__ is not FLOAT:",
         "        if t.__class__ not in NUMBERS:",
@@ -201,7 +211,8 @@ def _step_source(name: str, n: int, fk_rows, bounds: list[WheelBound], bits: lis
     body += _check_lines(d, bounds)
     body += _fk_lines(fk_rows, d)
     body += ADVANCE[method].splitlines() + _MOVE.splitlines()
-    body.append(f"return ((x, y, th), t, count + 1, {kind}, dt, a, b, phi, {', '.join(v)}, {', '.join(d)})")
+    times = "NAN, t" if angles else "t, NAN"
+    body.append(f"return ((x, y, th), {times}, count + 1, dt, a, b, phi, {', '.join(v)}, {', '.join(d)})")
     doc = (f'"""One sample of {"wheel angles [rad]" if angles else "tick readings"} for {n} wheels, '
            f'{method} integration: the new state, or None."""')
     return f"def {name}(state, t, values, {args}):\n    {doc}\n" + "\n".join(_indent("\n".join(body))) + "\n"

@@ -26,7 +26,8 @@ import numpy as np
 
 from . import _stream_kernel as kernel
 from ._arrays import as_components
-from ._stream_kernel import KIND_ANGLES, KIND_NONE, KIND_TICKS, S_COUNT, S_DT, S_INC, S_KIND, S_POSE, S_READ, S_TIME
+from ._stream_kernel import (KIND_ANGLES, KIND_NONE, KIND_TICKS, S_COUNT, S_DT, S_INC, S_POSE, S_READ, state_kind,
+                             state_time)
 from .encoders import counter_rules, in_counter_range, show_number, wrap_scalar
 from .errors import InputError, OdometryInputError, shorten
 from .geometry import wrap_angle
@@ -36,6 +37,11 @@ from .model import Robot
 from .odometry import encoded_wheels, mid_steer
 
 _WHAT = {KIND_TICKS: "tick reading", KIND_ANGLES: "wheel angle"}
+
+
+def _times(t: float, kind: int) -> tuple[float, float]:
+    """The two time slots of the state (see :data:`omnikin._stream_kernel.S_POSE`)."""
+    return (t, math.nan) if kind == KIND_TICKS else (math.nan, t)
 
 
 def _decline(state, t, values):
@@ -113,7 +119,7 @@ class Odometry:
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise InputError(f"pose: expected 3 finite numbers, got {shorten(pose)}")
         start = (float(p[0]), float(p[1]), float(wrap_angle(p[2])))
-        self._state = (start, math.nan, 0, KIND_NONE, math.nan, 0.0, 0.0, 0.0) + (0,) * self._n + (0.0,) * self._n
+        self._state = (start, math.nan, math.nan, 0, math.nan, 0.0, 0.0, 0.0) + (0,) * self._n + (0.0,) * self._n
         self._steer = None
         self._steer_residual = None
         self.duplicates = 0
@@ -126,7 +132,7 @@ class Odometry:
 
     @property
     def t(self) -> Optional[float]:
-        return None if self._state[S_KIND] == KIND_NONE else self._state[S_TIME]
+        return None if state_kind(self._state) == KIND_NONE else state_time(self._state)
 
     @property
     def samples(self) -> int:
@@ -153,7 +159,7 @@ class Odometry:
         if not self._redundant:
             return [0.0] * self._n_rows
         delta = np.array(st[S_READ + self._n:], dtype=float)
-        angles = delta * self._scale if st[S_KIND] == KIND_TICKS else delta
+        angles = delta * self._scale if state_kind(st) == KIND_TICKS else delta
         b = np.concatenate([angles, np.zeros(self._n_rows - self._n)])
         inc = np.array(st[S_INC:S_INC + 3])
         return [float(v) / st[S_DT] for v in b - self._rows @ inc]
@@ -237,14 +243,14 @@ class Odometry:
         st = self._state
         if kind == KIND_TICKS:
             self._check_range(values)
-        if st[S_KIND] == KIND_NONE:
+        fed = state_kind(st)
+        if fed == KIND_NONE:
             return self._first(t, values, s, kind)
-        if st[S_KIND] != kind:
-            fed = _WHAT[st[S_KIND]]
-            raise InputError(f"this estimator was fed {fed}s since its last reset: reset() before feeding "
+        if fed != kind:
+            raise InputError(f"this estimator was fed {_WHAT[fed]}s since its last reset: reset() before feeding "
                              f"{_WHAT[kind]}s")
         previous = st[S_READ:S_READ + self._n]
-        dt = t - st[S_TIME]
+        dt = t - state_time(st)
         if not dt > 0.0:
             return self._not_later(t, dt, values, previous, s)
         if kind == KIND_TICKS:
@@ -269,14 +275,14 @@ class Odometry:
             fk = self._kernels.fk_ticks if kind == KIND_TICKS else self._kernels.fk_angles
             a, b, phi = fk(*deltas)
         pose = self._kernels.move(st[S_POSE], a, b, phi)
-        self._state = (pose, t, st[S_COUNT] + 1, kind, dt, a, b, phi) + values + deltas
+        self._state = (pose,) + _times(t, kind) + (st[S_COUNT] + 1, dt, a, b, phi) + values + deltas
         self._steer = s
         self._steer_residual = residual
         return pose
 
     def _first(self, t, values, steer, kind):
         st = self._state
-        self._state = (st[S_POSE], t, 1, kind, math.nan, 0.0, 0.0, 0.0) + values + (0.0,) * self._n
+        self._state = (st[S_POSE],) + _times(t, kind) + (1, math.nan, 0.0, 0.0, 0.0) + values + (0.0,) * self._n
         self._steer = steer
         return self.pose
 
@@ -291,7 +297,7 @@ class Odometry:
             return self.pose
         what = "repeats" if dt == 0.0 else "goes back from"
         differs = " with different readings or steering" if dt == 0.0 else ""
-        raise self._fail(f"timestamp {t!r} {what} the previous one {self._state[S_TIME]!r}{differs}")
+        raise self._fail(f"timestamp {t!r} {what} the previous one {state_time(self._state)!r}{differs}")
 
     def _check_range(self, values) -> None:
         """Raise if a reading lies outside its wheel's counter (signed or unsigned)."""

@@ -31,6 +31,7 @@ in frame 'odom' with child 'base_link' (REP-105), twist in body axes (REP-103)."
 
 SIMULATE_EPILOG = """examples:
   omnikin simulate tomasi-omni3 --bag sim.bag
+  omnikin simulate tomasi-omni3 --log log.csv && omnikin odometry tomasi-omni3 log.csv -o traj.csv
   omnikin simulate diff-drive --path 'square ccw rotate 2' --errors none --noise none --bag sim.bag
   omnikin simulate mecanum4 --path 'line 2 90; spin 180; arc 1 90' --rate 50 --seed 7 --bag sim.bag
   omnikin bag export sim.bag --topic /ground_truth --format tum -o truth.tum
@@ -115,7 +116,10 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("--seed", type=int, default=1, metavar="N", help="random seed (default 1)")
     sp.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="sample rate of all topics (default 100)")
     sp.add_argument("--start", type=float, default=0.0, metavar="SEC", help="stamp of the first sample [s] (default 0)")
-    sp.add_argument("--bag", required=True, metavar="OUT.bag", help="new bag to write (must not exist)")
+    sp.add_argument("--bag", metavar="OUT.bag", help="new bag to write (must not exist)")
+    sp.add_argument("--log", metavar="LOG.csv",
+                    help="also (or only) write the encoder tick log, the input of 'omnikin odometry'")
+    sp.add_argument("--force", action="store_true", help="replace an existing --log file")
     sp.add_argument("--storage", choices=("sqlite3", "mcap"), default="sqlite3", help="bag storage (default sqlite3)")
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     sp.set_defaults(func=cmd_simulate)
@@ -220,9 +224,14 @@ def cmd_simulate(args) -> int:
     from ..simulation.error_models import noise as noise_profile
     from ..simulation.simulate import simulate
 
-    require_rosbags()
-    require_new_bag(args.bag)
+    if not args.bag and not args.log:
+        raise InputError("simulate: give --bag OUT.bag and/or --log LOG.csv")
+    if args.bag:
+        require_rosbags()
+        require_new_bag(args.bag)
     robot = load_robot(args.robot)
+    if args.log:
+        _check_tick_log(args, robot)
     if args.seed < 0:
         raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
     if not (math.isfinite(args.rate) and args.rate > 0):
@@ -237,14 +246,16 @@ def cmd_simulate(args) -> int:
     custom = {"omnikin.robot": robot.name, "omnikin.path": args.path, "omnikin.seed": str(args.seed),
               "omnikin.errors": "file " + args.true_robot if args.true_robot else args.errors,
               "omnikin.noise": args.noise, "omnikin.rate": f"{args.rate:g}"}
-    counts = record_run(args.bag, run, robot, start=args.start, storage=args.storage, custom=custom)
+    counts = record_run(args.bag, run, robot, start=args.start, storage=args.storage, custom=custom) if args.bag else {}
+    if args.log:
+        _write_tick_log(args, robot, run)
     truth_end = run.truth[0, -1]
     odom_end = run.odometry[-1]
     diff = truth_end - odom_end
     diff[2] = wrap_angle(diff[2])
     summary = {"robot": robot.name, "path": args.path, "errors": None if args.true_robot else args.errors,
                "true_robot": args.true_robot, "noise": args.noise, "seed": args.seed, "rate": args.rate,
-               "samples": len(run.t), "duration": float(run.t[-1]), "bag": args.bag, "topics": counts,
+               "samples": len(run.t), "duration": float(run.t[-1]), "bag": args.bag, "topics": counts, "log": args.log,
                "truth_end": truth_end.tolist(), "odometry_end": odom_end.tolist(),
                "end_error": diff.tolist(), "end_error_distance": float(math.hypot(diff[0], diff[1]))}
     if errors is not None:
@@ -259,8 +270,38 @@ def cmd_simulate(args) -> int:
         f"end pose: truth x={truth_end[0]:.6g} m, y={truth_end[1]:.6g} m, theta={truth_end[2]:.6g} rad; odometry "
         f"x={odom_end[0]:.6g} m, y={odom_end[1]:.6g} m, theta={odom_end[2]:.6g} rad "
         f"(off by {summary['end_error_distance'] * 1000:.3g} mm)\n"
-        f"bag {args.bag}: " + ", ".join(f"{t} ({n})" for t, n in counts.items()))
+        + (f"bag {args.bag}: " + ", ".join(f"{t} ({n})" for t, n in counts.items()) if args.bag else "")
+        + (("\n" if args.bag else "") + f"tick log written to {args.log}" if args.log else ""))
     return 0
+
+
+def _check_tick_log(args, robot) -> None:
+    """Refuse a --log that cannot be written, before simulating (output policy of io.output)."""
+    from pathlib import Path
+
+    from ..io.output import check_output
+    from ..simulation.error_models import noise as noise_profile
+
+    if not noise_profile(args.noise).quantise:
+        raise InputError(f"--log writes whole-number encoder counts, but --noise {args.noise} leaves the ticks "
+                         f"unquantised; choose another --noise profile")
+    inputs = [p for p in (args.robot, args.true_robot) if p and Path(p).is_file()]
+    check_output(args.log, inputs=inputs, force=args.force)
+
+
+def _write_tick_log(args, robot, run) -> None:
+    import shlex
+
+    from ..io.logs import write_tick_log
+
+    command = " ".join(["omnikin simulate", shlex.quote(args.robot), "--path", shlex.quote(args.path)]
+                       + (["--true-robot", shlex.quote(args.true_robot)] if args.true_robot else
+                          ["--errors", args.errors])
+                       + ["--noise", args.noise, "--seed", str(args.seed), "--rate", f"{args.rate:g}",
+                          "--log", shlex.quote(args.log)])
+    write_tick_log(args.log, run.t + args.start, run.ticks, robot.encoded_names, run.steer,
+                   steer_names=robot.steer_names,
+                   comment=f"encoder tick log of {robot.name} written by: {command}")
 
 
 # --- metrics -----------------------------------------------------------------------------------------
