@@ -13,8 +13,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from _common import best_time, save, tomasi_log
 
+from _common import best_time, save, tomasi_log
 from omnikin import batch_odometry
 
 

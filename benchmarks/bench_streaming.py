@@ -18,8 +18,8 @@ import math
 from math import cos, floor, pi, sin
 
 import numpy as np
-from _common import best_time, save, tomasi_log
 
+from _common import best_time, save, tomasi_log
 from omnikin import Odometry
 
 
@@ -116,7 +116,7 @@ def main(n: int = 20000, rounds: int = 7) -> dict:
     robot, t, ticks = tomasi_log(n)
     fk = robot.fk_matrix()
     scale = [w.encoder.rad_per_tick for w in robot.wheels]
-    fk_ticks = [[float(v) * s for v, s in zip(row, scale)] for row in fk]
+    fk_ticks = [[float(v) * s for v, s in zip(row, scale, strict=True)] for row in fk]
     ts = [float(v) for v in t]
     ints = [[int(v) for v in row] for row in ticks]
     inputs = {   # name: (timestamps, readings, method of Odometry)
@@ -126,7 +126,8 @@ def main(n: int = 20000, rounds: int = 7) -> dict:
         "NumPy uint32 row": (ts, list((ticks + 1_000_000).astype(np.uint32)), "update"),
         "list of np.int64": (ts, [list(r) for r in ticks], "update"),
         "np.float64 time, int64 row": (list(t), list(ticks), "update"),
-        "wheel angles (update_angles)": (ts, [[v * s for v, s in zip(r, scale)] for r in ints], "update_angles"),
+        "wheel angles (update_angles)": (ts, [[v * s for v, s in zip(r, scale, strict=True)] for r in ints],
+                                         "update_angles"),
         "wheel angles as NumPy rows": (ts, list(ticks * np.array(scale)), "update_angles"),
     }
 

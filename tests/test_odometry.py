@@ -5,12 +5,11 @@ import warnings
 
 import numpy as np
 import pytest
-from conftest import constant_twist_pose
 from hypothesis import given
 from hypothesis import strategies as st
 
-from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
-from omnikin import geometry
+from conftest import constant_twist_pose
+from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, geometry, load_robot
 from omnikin.errors import OmnikinError
 from omnikin.integration import integrate
 
@@ -19,8 +18,8 @@ RAD_PER_TICK = 2 * math.pi / 600      # tomasi-omni3 encoders
 
 def tomasi_angles(twist, t):
     """Wheel angles of tomasi-omni3 under a constant twist, from the closed-form omni row."""
-    l, r = 0.113, 0.04125
-    rows = np.array([[-math.sin(b), math.cos(b), l] for b in np.radians([0, 120, 240])]) / r
+    dist, r = 0.113, 0.04125
+    rows = np.array([[-math.sin(b), math.cos(b), dist] for b in np.radians([0, 120, 240])]) / r
     return np.outer(t, rows @ twist)
 
 
@@ -200,7 +199,8 @@ def test_batch_trial_index_in_errors(tomasi):
 
 
 def test_counter_range_and_ambiguous_half_jump(tomasi):
-    with pytest.raises(OdometryInputError, match=r"sample 1: tick reading 70000 outside the range of a 16-bit counter .*, wheel 'w1'"):
+    with pytest.raises(OdometryInputError,
+                       match=r"sample 1: tick reading 70000 outside the range of a 16-bit counter .*, wheel 'w1'"):
         batch_odometry(tomasi, [0, 1], [[0, 0, 0], [70000, 0, 0]], counter_bits=16)
     with pytest.raises(OdometryInputError, match="impossible jump"):
         batch_odometry(tomasi, [0, 1], [[0, 0, 0], [0, 128, 0]], counter_bits=8)   # exactly half: undecidable

@@ -77,7 +77,7 @@ def tomasi_log(path, twist, dt, n):
     t = np.arange(n + 1) * dt
     angles = np.outer(t, TOMASI_J @ np.asarray(twist, float))
     ticks = np.rint(angles / TOMASI_RPT).astype(int)
-    rows = [[f"{ti:.6f}", *tk] for ti, tk in zip(t, ticks.tolist())]
+    rows = [[f"{ti:.6f}", *tk] for ti, tk in zip(t, ticks.tolist(), strict=True)]
     return write_log(path, ["t", "w1", "w2", "w3"], rows), t
 
 
@@ -221,7 +221,7 @@ def exact_tick_log(path, per_sample, dt, n, header=("t", "w1", "w2", "w3"), tran
     if transform is not None:
         ticks = transform(ticks)
     t = np.arange(n + 1) * dt
-    rows = [[f"{ti:.6f}", *tk] for ti, tk in zip(t, ticks.tolist())]
+    rows = [[f"{ti:.6f}", *tk] for ti, tk in zip(t, ticks.tolist(), strict=True)]
     return write_log(path, header, rows), t
 
 
@@ -295,7 +295,7 @@ def test_diff_drive_circle_with_gearbox(capsys, tmp_path):
     left = np.rint((v - half * w) / r * t / rpt).astype(int)
     right = np.rint((v + half * w) / r * t / rpt).astype(int)
     log = write_log(tmp_path / "dd.csv", ["t", "left", "right"],
-                    [[f"{a:.3f}", b, c] for a, b, c in zip(t, left.tolist(), right.tolist())])
+                    [[f"{a:.3f}", b, c] for a, b, c in zip(t, left.tolist(), right.tolist(), strict=True)])
     out = tmp_path / "dd.tum"
     rc, _, err = cli(capsys, "odometry", "diff-drive", log, "-o", out, "--format", "tum")
     assert rc == 0, err
@@ -329,8 +329,8 @@ def test_synchro_parallel_steering(capsys, tmp_path, steer_deg):
 
 def test_synchro_spin_in_place(capsys, tmp_path):
     """Wheels steered tangentially (delta = beta + 90 deg) and rolling equally: rotation about the origin."""
-    rpt, r, l, n_per, dt, n = 2 * math.pi / 1024, 0.05, 0.2, 40, 0.1, 25
-    w = n_per * rpt * r / l / dt
+    rpt, r, dist, n_per, dt, n = 2 * math.pi / 1024, 0.05, 0.2, 40, 0.1, 25
+    w = n_per * rpt * r / dist / dt
     steer = [90.0, -150.0, -30.0]  # beta + 90 for beta = 0, 120, 240, wrapped
     t = np.arange(n + 1) * dt
     header = ["t", "w1", "w2", "w3", "w1_steer_deg", "w2_steer_deg", "w3_steer_deg"]

@@ -35,9 +35,9 @@ import hashlib
 import linecache
 import math
 import operator
+from collections.abc import Callable
 from dataclasses import dataclass
 from math import cos, floor, pi, sin
-from typing import Callable, Optional
 
 import numpy as np
 
@@ -96,9 +96,9 @@ _MOVE = (
     "if th >= PI or th < NEG_PI:\n"
     "    th -= TWO_PI * floor((th + PI) / TWO_PI)  # as geometry.wrap_angle\n")
 
-_CONSTANTS = {"cos": cos, "sin": sin, "floor": floor, "PI": pi, "NEG_PI": -pi, "TWO_PI": TWO_PI, "SMALL": SCALAR_TAYLOR_LIMIT,
-              "INF": math.inf, "NAN": math.nan, "INT": int, "FLOAT": float, "ARRAY": np.ndarray, "NUMPY_INTS": NUMPY_INTS,
-              "NUMBERS": NUMBERS, "INDEX": operator.index}
+_CONSTANTS = {"cos": cos, "sin": sin, "floor": floor, "PI": pi, "NEG_PI": -pi, "TWO_PI": TWO_PI,
+              "SMALL": SCALAR_TAYLOR_LIMIT, "INF": math.inf, "NAN": math.nan, "INT": int, "FLOAT": float,
+              "ARRAY": np.ndarray, "NUMPY_INTS": NUMPY_INTS, "NUMBERS": NUMBERS, "INDEX": operator.index}
 """Names the kernels use, bound as default arguments (fast local lookups; no globals)."""
 
 
@@ -116,10 +116,10 @@ class WheelBound:
 class Kernels:
     """The generated functions of one estimator configuration (all pure)."""
 
-    step_ticks: Optional[Callable]
-    step_angles: Optional[Callable]
-    fk_ticks: Optional[Callable]
-    fk_angles: Optional[Callable]
+    step_ticks: Callable | None
+    step_angles: Callable | None
+    fk_ticks: Callable | None
+    fk_angles: Callable | None
     move: Callable
     source: str
 
@@ -133,7 +133,7 @@ def _check_lines(d: list[str], bounds: list[WheelBound]) -> list[str]:
     distinct rule; a sample near or past a limit is left to the general path's exact rule."""
     names: dict[WheelBound, str] = {}
     lines, tests = [], []
-    for v, b in zip(d, bounds):
+    for v, b in zip(d, bounds, strict=True):
         if b not in names:
             names[b] = f"L{len(names)}"
             lim = names[b]
@@ -154,8 +154,8 @@ def _check_lines(d: list[str], bounds: list[WheelBound]) -> list[str]:
 def _fk_lines(fk_rows, d: list[str]) -> list[str]:
     """``(a, b, phi) = F d``; terms whose coefficient is exactly zero are left out (d is finite)."""
     lines = []
-    for name, row in zip(("a", "b", "phi"), fk_rows):
-        terms = [f"{float(c)!r} * {v}" for c, v in zip(row, d) if float(c) != 0.0]
+    for name, row in zip(("a", "b", "phi"), fk_rows, strict=True):
+        terms = [f"{float(c)!r} * {v}" for c, v in zip(row, d, strict=True) if float(c) != 0.0]
         lines.append(f"{name} = " + (" + ".join(terms) if terms else "0.0"))
     return lines
 

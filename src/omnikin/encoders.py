@@ -202,17 +202,11 @@ def counter_readings(ticks, names) -> np.ndarray:
     an object array of Python ints, never float64 (which would round them beyond 2**53).
     Floats are allowed; bools, complex numbers and anything else are refused.
     """
-    if isinstance(ticks, np.ndarray):
-        arr = ticks
-    else:
-        arr = np.asarray(ticks)
-        if arr.dtype.kind in "fO":
-            arr = _exact_from_python(ticks, arr, names)
+    arr = ticks if isinstance(ticks, np.ndarray) else np.asarray(ticks)
+    if arr.dtype.kind == "O" or (arr.dtype.kind == "f" and not isinstance(ticks, np.ndarray)):
+        arr = _exact_from_python(ticks, arr, names)    # float64 or object only when not all integers fit
     kind = arr.dtype.kind
-    if kind == "O":
-        arr = _exact_from_python(arr, arr, names)
-        kind = arr.dtype.kind
-    if kind not in "iuf":
+    if kind not in "iufO":
         raise OdometryInputError(f"ticks: expected real numbers for wheels {names}, got dtype {arr.dtype}")
     if kind == "f" and arr.dtype != np.float64:
         arr = arr.astype(np.float64)
@@ -230,7 +224,7 @@ def _exact_from_python(ticks, converted: np.ndarray, names) -> np.ndarray:
         for v in flat:
             if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
                 raise OdometryInputError(f"ticks: reading {show_number(v)} for wheels {names} is not a number")
-        if any(ok and abs(int(v)) > FLOAT_EXACT for ok, v in zip(integral, flat)):
+        if any(ok and abs(int(v)) > FLOAT_EXACT for ok, v in zip(integral, flat, strict=True)):
             raise OdometryInputError("ticks: integer readings beyond 2**53 mixed with floats would be rounded; "
                                      "give integers only")
         return obj.astype(np.float64)

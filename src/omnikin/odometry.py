@@ -13,15 +13,22 @@ The streaming estimator lives in :mod:`omnikin.streaming`.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property, partial
-from typing import Callable, Optional
 
 import numpy as np
 
 from ._arrays import as_components, require_finite
-from .encoders import (check_angle_jumps, check_times, checked_increments, counter_readings, counter_rules, first_bad,
-                       wheel_increments)
+from .encoders import (
+    check_angle_jumps,
+    check_times,
+    checked_increments,
+    counter_readings,
+    counter_rules,
+    first_bad,
+    wheel_increments,
+)
 from .errors import InputError, OdometryInputError
 from .geometry import wrap_angle
 from .integration import check_method, integrate_components
@@ -39,7 +46,7 @@ def encoded_wheels(robot: Robot):
     return wheels
 
 
-def mid_steer(steer: Optional[np.ndarray]) -> Optional[np.ndarray]:
+def mid_steer(steer: np.ndarray | None) -> np.ndarray | None:
     """Interval steering: circular mean of consecutive samples ``(..., N-1, n_steer)``."""
     if steer is None:
         return None

@@ -20,14 +20,23 @@ from __future__ import annotations
 import math
 import numbers
 import warnings
-from typing import Optional
 
 import numpy as np
 
 from . import _stream_kernel as kernel
 from ._arrays import as_components
-from ._stream_kernel import (KIND_ANGLES, KIND_NONE, KIND_TICKS, S_COUNT, S_DT, S_INC, S_POSE, S_READ, state_kind,
-                             state_time)
+from ._stream_kernel import (
+    KIND_ANGLES,
+    KIND_NONE,
+    KIND_TICKS,
+    S_COUNT,
+    S_DT,
+    S_INC,
+    S_POSE,
+    S_READ,
+    state_kind,
+    state_time,
+)
 from .encoders import counter_rules, in_counter_range, show_number, wrap_scalar
 from .errors import InputError, OdometryInputError, shorten
 from .geometry import wrap_angle
@@ -96,7 +105,7 @@ class Odometry:
         fk_angles = fk_ticks = None
         if not self._steerable:
             fk_angles = [[float(v) for v in row[: self._n]] for row in self._fk]
-            fk_ticks = [[v * s for v, s in zip(row, self._scale)] for row in fk_angles]
+            fk_ticks = [[v * s for v, s in zip(row, self._scale, strict=True)] for row in fk_angles]
         self._kernels = kernel.build(self._n, fk_ticks, fk_angles, kernel.tick_bounds(self.rules),
                                      kernel.angle_bounds(self.rules), [r.bits for r in self.rules], self.method)
         self._step_ticks = self._kernels.step_ticks or _decline
@@ -131,7 +140,7 @@ class Odometry:
         return self._state[S_POSE]
 
     @property
-    def t(self) -> Optional[float]:
+    def t(self) -> float | None:
         return None if state_kind(self._state) == KIND_NONE else state_time(self._state)
 
     @property
@@ -221,7 +230,7 @@ class Odometry:
             got = len(seq) if isinstance(seq, list) else shorten(seq)
             raise self._fail(f"expected {self._n} {what}s for wheels {self.wheel_names}, got {got}")
         out = []
-        for name, v in zip(self.wheel_names, seq):
+        for name, v in zip(self.wheel_names, seq, strict=True):
             if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
                 raise self._fail(f"{what} {shorten(v)} of wheel {name!r} is not a number")
             if isinstance(v, numbers.Integral) and kind == KIND_TICKS:
@@ -254,21 +263,21 @@ class Odometry:
         if not dt > 0.0:
             return self._not_later(t, dt, values, previous, s)
         if kind == KIND_TICKS:
-            exact = [wrap_scalar(v - p, r.bits) for v, p, r in zip(values, previous, self.rules)]
-            for d, r in zip(exact, self.rules):
+            exact = [wrap_scalar(v - p, r.bits) for v, p, r in zip(values, previous, self.rules, strict=True)]
+            for d, r in zip(exact, self.rules, strict=True):
                 if abs(d) > r.limit(dt) or (r.half is not None and d == -r.half):
                     raise self._fail(r.jump_message(d, dt))
             deltas = tuple(float(d) for d in exact)
         else:
-            deltas = tuple(v - p for v, p in zip(values, previous))
-            for d, r in zip(deltas, self.rules):
+            deltas = tuple(v - p for v, p in zip(values, previous, strict=True))
+            for d, r in zip(deltas, self.rules, strict=True):
                 if abs(d) > r.angle_limit(dt):
                     raise self._fail(r.jump_message(d, dt, "rad"))
         residual = None
         if self._steerable:
             scale = self._scale if kind == KIND_TICKS else [1.0] * self._n
             mid = mid_steer(np.stack([self._steer, s]))[0]
-            fk = self.robot.fk(np.array([d * k for d, k in zip(deltas, scale)]), mid, self.wheel_names)
+            fk = self.robot.fk(np.array([d * k for d, k in zip(deltas, scale, strict=True)]), mid, self.wheel_names)
             a, b, phi = (float(v) for v in fk.twist)
             residual = [float(v) / dt for v in fk.residual]
         else:
@@ -301,7 +310,7 @@ class Odometry:
 
     def _check_range(self, values) -> None:
         """Raise if a reading lies outside its wheel's counter (signed or unsigned)."""
-        for v, r in zip(values, self.rules):
+        for v, r in zip(values, self.rules, strict=True):
             if r.bits is not None and not (isinstance(v, int) and in_counter_range(v, r.bits)) \
                     and not (isinstance(v, float) and -r.half <= v < 2 * r.half):
                 raise self._fail(r.range_message(v))

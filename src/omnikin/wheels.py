@@ -52,7 +52,7 @@ class Encoder:
     ticks_per_rev: float
     gear_ratio: float = 1.0
     invert: bool = False
-    counter_bits: Optional[int] = None
+    counter_bits: int | None = None
 
     def __post_init__(self):
         bits = self.counter_bits

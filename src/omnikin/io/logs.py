@@ -96,8 +96,9 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
         if len(row) != len(header):
             raise OdometryInputError(f"{source}: line {line}: {len(row)} fields, header has {len(header)}")
         sample = (number(row[t_col], source, line, "t", OdometryInputError),
-                  tuple(tick_reading(row[j], source, line, name) for j, name in zip(tick_cols, wheels)),
-                  tuple(number(row[j], source, line, name, OdometryInputError) for j, name in zip(steer_idx, steer_cols)))
+                  tuple(tick_reading(row[j], source, line, name) for j, name in zip(tick_cols, wheels, strict=True)),
+                  tuple(number(row[j], source, line, name, OdometryInputError)
+                        for j, name in zip(steer_idx, steer_cols, strict=True)))
         if samples and sample == samples[-1]:
             duplicates.append(line)
             continue
@@ -143,7 +144,7 @@ def tick_log_lines(t, ticks, wheel_names, steer=None, steer_names=(), comment: s
     out = [f"# {line}" for line in (comment.splitlines() if comment else [])]
     out.append(",".join(columns))
     rows = tk.tolist()
-    for k, (tk_text, row) in enumerate(zip(times, rows)):
+    for k, (tk_text, row) in enumerate(zip(times, rows, strict=True)):
         cells = [tk_text] + [str(int(v)) for v in row]
         if deg is not None:
             cells += [repr(float(v) + 0.0) for v in deg[k]]
