@@ -15,6 +15,7 @@ References measured in the same run, interleaved with omnikin round by round:
 from __future__ import annotations
 
 import math
+import random
 from math import cos, floor, pi, sin
 
 import numpy as np
@@ -112,7 +113,7 @@ class NumpyPerUpdate:
         self.prev = ticks
 
 
-def main(n: int = 20000, rounds: int = 7) -> dict:
+def main(n: int = 2000, rounds: int = 40) -> dict:
     robot, t, ticks = tomasi_log(n)
     fk = robot.fk_matrix()
     scale = [w.encoder.rad_per_tick for w in robot.wheels]
@@ -147,12 +148,14 @@ def main(n: int = 20000, rounds: int = 7) -> dict:
     runs["omnikin, 16-bit counters, Python ints"] = run(Odometry(robot, counter_bits=16), ts,
                                                        [[v % 65536 for v in r] for r in ints])
     best = {name: math.inf for name in runs}
-    for _ in range(rounds):                       # interleaved: load from other processes hits all alike
-        for name, go in runs.items():
-            best[name] = min(best[name], best_time(go, repeat=1) / n * 1e6)
+    order = list(runs)
+    for r in range(rounds):   # short runs, interleaved in a changing order: load from other processes hits all alike
+        random.Random(r).shuffle(order)
+        for name in order:
+            best[name] = min(best[name], best_time(runs[name], repeat=1) / n * 1e6)
     ref = best["reference step"]
     fastest = best["omnikin, Python ints (list)"]
-    print(f"streaming odometry update, tomasi-omni3, {n} samples (best of {rounds} interleaved rounds)")
+    print(f"streaming odometry update, tomasi-omni3, {n} samples per run (best of {rounds} interleaved rounds)")
     for name, us in best.items():
         print(f"  {name:44s} {us:7.3f} us/update   {us / ref:5.2f}x reference step   {us / fastest:5.2f}x fastest")
     worst = max((us for name, us in best.items() if name.startswith("omnikin, ") and "16-bit" not in name))
