@@ -197,6 +197,13 @@ def test_numpy_inputs_take_the_generated_kernel(tom):
         assert a._step_angles(a._state, 0.1, row) is not None
 
 
+def test_readings_from_an_iterator_are_read_once(tom):
+    o = Odometry(tom)
+    o.update(0.0, iter([0, 0, 0]))
+    pose = o.update(0.1, (v for v in [11, -5, 3]))
+    assert_poses_close([pose], tomasi_poses([[11, -5, 3]])[1:])
+
+
 def test_bools_and_floats_in_numpy_rows_are_not_ticks(tom):
     o = Odometry(tom, counter_bits=16)
     o.update(0.0, [0, 0, 0])

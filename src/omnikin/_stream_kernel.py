@@ -13,8 +13,9 @@ estimator's general path then decides (integrates the sample the same way, or ra
 an update that raises cannot have changed the estimator, and estimators copy and pickle
 as plain data. Per sample, ``step_ticks`` does (conventions, Odometry):
 
-1. accept Python ints and NumPy integer scalars or rows (converted exactly; bools, floats
-   and anything else are left to the general path), the timestamp as a float;
+1. accept lists and tuples of Python ints or NumPy integer scalars, and NumPy rows (converted
+   exactly; bools, floats, iterators and anything else are left to the general path), the
+   timestamp as a float;
 2. counter increments ``d_j = ticks_j - prev_j`` in exact integer arithmetic (wrapped
    modulo ``2**bits`` for counters of a known width, after checking the reading lies in
    the counter's range), then as floats;
@@ -98,7 +99,8 @@ _MOVE = (
 
 _CONSTANTS = {"cos": cos, "sin": sin, "floor": floor, "PI": pi, "NEG_PI": -pi, "TWO_PI": TWO_PI,
               "SMALL": SCALAR_TAYLOR_LIMIT, "INF": math.inf, "NAN": math.nan, "INT": int, "FLOAT": float,
-              "ARRAY": np.ndarray, "NUMPY_INTS": NUMPY_INTS, "NUMBERS": NUMBERS, "INDEX": operator.index}
+              "LIST": list, "TUPLE": tuple, "ARRAY": np.ndarray, "NUMPY_INTS": NUMPY_INTS, "NUMBERS": NUMBERS,
+              "INDEX": operator.index}
 """Names the kernels use, bound as default arguments (fast local lookups; no globals)."""
 
 
@@ -178,7 +180,9 @@ def _step_source(name: str, n: int, fk_rows, bounds: list[WheelBound], bits: lis
         "        if t.__class__ not in NUMBERS:",
         "            return None",
         "        t = FLOAT(t)",
-        "    if values.__class__ is ARRAY:",
+        "    if values.__class__ is not LIST and values.__class__ is not TUPLE:",
+        "        if values.__class__ is not ARRAY:",
+        "            return None  # an iterator would be used up here: the general path reads it",
         "        values = values.tolist()  # exact Python ints (or floats, bools: refused below)",
         f"    {', '.join(v)}, = values",
     ]

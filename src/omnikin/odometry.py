@@ -65,7 +65,8 @@ class OdometryResult:
     ``increments`` ``(..., N-1, 3)`` are the body displacements of each interval;
     ``twists`` their mean twists; ``residual`` ``(..., N-1, n_rows)`` the forward
     kinematics residual [rad/s] (zero for a square, full-rank layout). They are
-    computed on first access (the wheel increments again from the readings).
+    computed on first access, the wheel increments again from the readings passed in:
+    arrays of int64, uint64 or float64 are not copied, so read these before changing them.
     """
 
     t: np.ndarray
