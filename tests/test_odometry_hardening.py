@@ -23,6 +23,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
 from omnikin.errors import InputError, RobotFileError
@@ -141,6 +143,24 @@ def test_every_integer_dtype_integrates_like_python_ints(tom, dtype):
         warnings.simplefilter("error")          # no overflow warning from NumPy scalar arithmetic
         assert_poses_close(stream(tom, t, list(tk))[1], expected)                    # NumPy rows
         assert_poses_close(stream(tom, t, [list(r) for r in tk])[1], expected)       # lists of NumPy scalars
+
+
+@given(st.lists(st.tuples(*[st.integers(-100, 100)] * 3), min_size=1, max_size=12),
+       st.sampled_from([None, 8, 16, 32, 64]), st.integers(0, 2 ** 64 - 1), st.sampled_from(["python", "numpy"]))
+def test_any_counter_representation_integrates_the_true_increments(increments, bits, offset, form):
+    """Readings = offset + running sum of the increments, stored as the counter stores them
+    (unsigned, modulo 2**bits; without a width: plain integers, possibly beyond 64 bits). Batch and
+    streaming both give the closed form of the true increments."""
+    tom = load_robot("tomasi-omni3")
+    true = np.cumsum([[0, 0, 0]] + increments, axis=0, dtype=object) + offset
+    readings = true % (1 << bits) if bits else true
+    rows = [[int(v) for v in r] for r in readings]
+    if form == "numpy" and 0 <= min(min(r) for r in rows) and max(max(r) for r in rows) < 2 ** 64:
+        rows = np.array(rows, dtype=np.uint64)
+    t = [0.01 * k for k in range(len(rows))]
+    expected = tomasi_poses(increments)
+    assert_poses_close(batch_odometry(tom, t, rows, counter_bits=bits).poses, expected, atol=1e-9)
+    assert_poses_close(stream(tom, t, list(rows), counter_bits=bits)[1], expected, atol=1e-9)
 
 
 def test_uint64_beyond_int64_does_not_wrap_through_int64(tom):

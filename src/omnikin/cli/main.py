@@ -387,9 +387,9 @@ def build_parser() -> argparse.ArgumentParser:
                         epilog="examples:\n  omnikin odometry tomasi-omni3 log.csv -o traj.tum --format tum\n"
                                "  evo_traj tum traj.tum --plot\n"
                                "  omnikin odometry my_robot.yaml log.csv -o - --counter-bits 16 | head\n\n"
-                               "tick readings: integers (ASCII digits, optional leading '-'), exact up to 64 bits. "
-                               "A jump no wheel could make in one sample is an error: if the counters wrap, give "
-                               "their width (--counter-bits or encoder.counter_bits in the robot file).",
+                               "tick readings: integers (ASCII digits, optional leading '-'), exact up to 64 bits.\n"
+                               "A jump no wheel could make in one sample is an error: if the counters wrap,\n"
+                               "give their width (--counter-bits or encoder.counter_bits in the robot file).",
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument("log", metavar="LOG.csv", help="tick log")
