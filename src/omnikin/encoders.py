@@ -136,8 +136,9 @@ class CounterRule:
                 f"if its counter wraps, give the counter width (counter_bits, --counter-bits or encoder.counter_bits)")
 
     def range_message(self, value) -> str:
+        half = 1 << ((self.bits or 1) - 1)
         return (f"tick reading {show_number(value)} outside the range of a {self.bits}-bit counter "
-                f"({-self.half} .. {2 * self.half - 1}), wheel {self.wheel!r}")
+                f"({-half} .. {2 * half - 1}), wheel {self.wheel!r}")
 
 
 def counter_rules(wheels, counter_bits=None, max_jump=None, max_wheel_speed=None) -> tuple[CounterRule, ...]:

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import numbers
 import warnings
+from typing import Any
 
 import numpy as np
 
@@ -94,8 +95,8 @@ class Odometry:
         self._steerable = bool(robot.steerable)
         rows = robot.fk_rows(np.zeros(len(robot.steerable)), self.wheel_names)
         self._n_rows = rows.shape[0]
-        self._rows = None if self._steerable else rows
-        self._fk = None if self._steerable else robot.fk_matrix(None, self.wheel_names)
+        self._rows: np.ndarray | None = None if self._steerable else rows
+        self._fk: np.ndarray | None = None if self._steerable else robot.fk_matrix(None, self.wheel_names)
         self._redundant = not self._steerable and rows.shape[0] > rank(rows @ robot.admissible_basis)
         self._build()
         self.reset(start)
@@ -103,7 +104,7 @@ class Odometry:
     def _build(self) -> None:
         """Compile (or fetch) the kernels of this configuration."""
         fk_angles = fk_ticks = None
-        if not self._steerable:
+        if self._fk is not None:
             fk_angles = [[float(v) for v in row[: self._n]] for row in self._fk]
             fk_ticks = [[v * s for v, s in zip(row, self._scale, strict=True)] for row in fk_angles]
         self._kernels = kernel.build(self._n, fk_ticks, fk_angles, kernel.tick_bounds(self.rules),
@@ -128,9 +129,10 @@ class Odometry:
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise InputError(f"pose: expected 3 finite numbers, got {shorten(pose)}")
         start = (float(p[0]), float(p[1]), float(wrap_angle(p[2])))
-        self._state = (start, math.nan, math.nan, 0, math.nan, 0.0, 0.0, 0.0) + (0,) * self._n + (0.0,) * self._n
-        self._steer = None
-        self._steer_residual = None
+        self._state: tuple[Any, ...] = (start, math.nan, math.nan, 0, math.nan, 0.0, 0.0, 0.0) + \
+            (0,) * self._n + (0.0,) * self._n
+        self._steer: np.ndarray | None = None
+        self._steer_residual: list[float] | None = None
         self.duplicates = 0
         self._warned = False
 
@@ -163,9 +165,9 @@ class Odometry:
         st = self._state
         if st[S_COUNT] < 2:
             return [0.0] * self._n_rows
-        if self._steerable:
+        if self._steer_residual is not None:
             return list(self._steer_residual)
-        if not self._redundant:
+        if not self._redundant or self._rows is None:
             return [0.0] * self._n_rows
         delta = np.array(st[S_READ + self._n:], dtype=float)
         angles = delta * self._scale if state_kind(st) == KIND_TICKS else delta
@@ -229,7 +231,7 @@ class Odometry:
         if not isinstance(seq, list) or len(seq) != self._n:
             got = len(seq) if isinstance(seq, list) else shorten(seq)
             raise self._fail(f"expected {self._n} {what}s for wheels {self.wheel_names}, got {got}")
-        out = []
+        out: list[int | float] = []
         for name, v in zip(self.wheel_names, seq, strict=True):
             if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
                 raise self._fail(f"{what} {shorten(v)} of wheel {name!r} is not a number")
@@ -274,15 +276,16 @@ class Odometry:
                 if abs(d) > r.angle_limit(dt):
                     raise self._fail(r.jump_message(d, dt, "rad"))
         residual = None
-        if self._steerable:
+        if self._steer is not None and s is not None:        # steerable wheels
             scale = self._scale if kind == KIND_TICKS else [1.0] * self._n
-            mid = mid_steer(np.stack([self._steer, s]))[0]
+            mid = np.asarray(mid_steer(np.stack([self._steer, s])))[0]
             fk = self.robot.fk(np.array([d * k for d, k in zip(deltas, scale, strict=True)]), mid, self.wheel_names)
             a, b, phi = (float(v) for v in fk.twist)
             residual = [float(v) / dt for v in fk.residual]
         else:
-            fk = self._kernels.fk_ticks if kind == KIND_TICKS else self._kernels.fk_angles
-            a, b, phi = fk(*deltas)
+            body_increment = self._kernels.fk_ticks if kind == KIND_TICKS else self._kernels.fk_angles
+            assert body_increment is not None      # built for every robot without steerable wheels
+            a, b, phi = body_increment(*deltas)
         pose = self._kernels.move(st[S_POSE], a, b, phi)
         self._state = (pose,) + _times(t, kind) + (st[S_COUNT] + 1, dt, a, b, phi) + values + deltas
         self._steer = s
@@ -311,8 +314,7 @@ class Odometry:
     def _check_range(self, values) -> None:
         """Raise if a reading lies outside its wheel's counter (signed or unsigned)."""
         for v, r in zip(values, self.rules, strict=True):
-            if r.bits is not None and not (isinstance(v, int) and in_counter_range(v, r.bits)) \
-                    and not (isinstance(v, float) and -r.half <= v < 2 * r.half):
+            if r.bits is not None and not in_counter_range(v, r.bits):
                 raise self._fail(r.range_message(v))
 
     def _check_steer(self, steer):

@@ -91,7 +91,9 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
         raise OdometryInputError(f"{source}: needs at least two samples, got {len(rows) - 1}")
     t_col, tick_cols = header.index("t"), [header.index(name) for name in wheels]
     steer_idx = [header.index(name) for name in steer_cols]
-    samples, kept_lines, duplicates = [], [], []
+    samples: list[tuple] = []
+    kept_lines: list[int] = []
+    duplicates: list[int] = []
     for line, row in rows[1:]:
         if len(row) != len(header):
             raise OdometryInputError(f"{source}: line {line}: {len(row)} fields, header has {len(header)}")
