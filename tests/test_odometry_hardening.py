@@ -470,8 +470,9 @@ def test_errors_carry_the_sample(tom):
 
 
 def test_batch_does_not_copy_int64_ticks(tom):
-    """Peak memory of batch odometry on int64 ticks stays below the poses it returns plus a
-    fraction of its input: no full-size copy or temporary of the readings."""
+    """Peak memory of batch odometry on int64 ticks stays below the arrays it returns (poses,
+    increments; the residual of a square layout takes none) plus a fraction of its input: no
+    full-size copy or temporary of the readings."""
     n = 400_000
     ticks = np.zeros((n, 3), dtype=np.int64)
     ticks[:, 0] = np.arange(n)
@@ -481,7 +482,9 @@ def test_batch_does_not_copy_int64_ticks(tom):
     res = batch_odometry(tom, t, ticks)
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    assert peak < res.poses.nbytes + ticks.nbytes // 2, (peak, res.poses.nbytes, ticks.nbytes)
+    returned = res.poses.nbytes + res.increments.nbytes
+    assert res.residual.base is not None and not res.residual.flags.writeable   # zeros, no memory
+    assert peak < returned + ticks.nbytes // 2, (peak, returned, ticks.nbytes)
 
 
 # =====================================================================================================
@@ -597,3 +600,23 @@ def test_cli_names_the_file_line_of_a_bad_sample(capsys, tmp_path):
     warning, line = err.strip().splitlines()
     assert "skipped 1 row" in warning and "line 5" in warning
     assert f"{log}: line 8: impossible jump of 8995 ticks" in line and "sample" not in line
+
+
+def test_batch_results_do_not_change_when_the_input_changes_afterwards(tom):
+    """The result is computed at the call: mutating the caller's ticks later changes nothing
+    (the readings are not copied, so nothing may be read from them lazily)."""
+    t = np.arange(50) * 0.01
+    ticks = np.cumsum(np.tile(np.array([4, -2, -2], dtype=np.int64), (50, 1)), axis=0)
+    res = batch_odometry(tom, t, ticks)
+    before = (res.increments.copy(), res.twists.copy(), np.array(res.residual))
+    ticks[:] = 0
+    np.testing.assert_array_equal(res.increments, before[0])
+    np.testing.assert_array_equal(res.twists, before[1])
+    np.testing.assert_array_equal(res.residual, before[2])
+    omni4 = load_robot("omni4")                                   # redundant: a real residual
+    ticks4 = np.cumsum(np.tile(np.array([4, -2, -2, 1], dtype=np.int64), (50, 1)), axis=0)
+    res4 = batch_odometry(omni4, t, ticks4)
+    kept = np.array(res4.residual)
+    assert np.abs(kept).max() > 0
+    ticks4[:] = 0
+    np.testing.assert_array_equal(res4.residual, kept)

@@ -13,9 +13,8 @@ The streaming estimator lives in :mod:`omnikin.streaming`.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
-from functools import cached_property, partial
+from functools import partial
 
 import numpy as np
 
@@ -62,36 +61,34 @@ allocations besides the poses (see docs/performance.md)."""
 class OdometryResult:
     """Batch odometry: ``poses`` ``(..., N, 3)`` at the times ``t`` ``(..., N)``.
 
-    ``increments`` ``(..., N-1, 3)`` are the body displacements of each interval;
-    ``twists`` their mean twists; ``residual`` ``(..., N-1, n_rows)`` the forward
-    kinematics residual [rad/s] (zero for a square, full-rank layout). They are
-    computed on first access, the wheel increments again from the readings passed in:
-    arrays of int64, uint64 or float64 are not copied, so read these before changing them.
+    ``increments`` ``(..., N-1, 3)`` are the body displacements of each interval [m, m, rad];
+    ``twists`` their mean twists [m/s, m/s, rad/s]; ``residual`` ``(..., N-1, n_rows)`` the
+    forward kinematics residual [rad/s] (zero for a square, full-rank layout: then a
+    read-only array of zeros that takes no memory). All are computed with the poses, from
+    the readings as they were at the call: changing the input array afterwards changes nothing.
     """
 
     t: np.ndarray
     poses: np.ndarray
-    _delta: Callable[[], np.ndarray]   # () -> (..., N-1, n) wheel increments [ticks or rad] ...
-    _scale: np.ndarray   # (n,) ... times this [rad per unit]
-    _fk: np.ndarray      # ((..., N-1,) 3, n_rows) forward-kinematics operator
-    _rows: np.ndarray    # ((..., N-1,) n_rows, 3) forward-kinematics rows A
+    increments: np.ndarray
+    residual: np.ndarray
 
-    @cached_property
-    def _angles(self) -> np.ndarray:
-        return _fk_input(self._delta(), self._scale, self._fk)
-
-    @cached_property
-    def increments(self) -> np.ndarray:
-        return np.einsum("...ij,...j->...i", self._fk, self._angles)
-
-    @cached_property
+    @property
     def twists(self) -> np.ndarray:
         return self.increments / np.diff(self.t, axis=-1)[..., None]
 
-    @cached_property
-    def residual(self) -> np.ndarray:
-        pred = np.einsum("...ij,...j->...i", self._rows, self.increments)
-        return (self._angles - pred) / np.diff(self.t, axis=-1)[..., None]
+
+def _residual(angles: np.ndarray, rows: np.ndarray, increments: np.ndarray, dt: np.ndarray) -> np.ndarray:
+    """Forward-kinematics residual ``(angles - A increments) / dt`` [rad/s] (``angles`` padded)."""
+    pred = np.einsum("...ij,...j->...i", rows, increments)
+    return (angles - pred) / dt[..., None]
+
+
+def _redundant(robot: Robot, rows: np.ndarray) -> bool:
+    """More fitted rows than the motions they observe: the residual can be non-zero."""
+    from .linalg import rank
+
+    return rows.shape[-2] > rank(rows @ robot.admissible_basis)
 
 
 def _fk_input(delta, scale, fk) -> np.ndarray:
@@ -127,10 +124,13 @@ def batch_odometry(robot: Robot, t, ticks, *, steer=None, method: str = "exact",
         return _integrate(robot, wheels, tt, delta, scale, steer, method, start)
     _no_steer(robot, steer)
     f = robot.fk_matrix(None, names)
+    rows = robot.fk_rows(None, names)
     out = _pose_array(tk.shape[:-2], tt.shape[:-1], tk.shape[-2], start)
+    lead, m = out.shape[:-2], tk.shape[-2] - 1
+    inc = np.empty(lead + (m, 3))
+    residual = np.empty(lead + (m, rows.shape[-2])) if _redundant(robot, rows) else None
     pose = out[..., 0, :]
     f_ticks = f * scale
-    m = tk.shape[-2] - 1
     for s0 in range(0, m, CHUNK):
         s1 = min(m, s0 + CHUNK)
         dt = check_times(tt[..., s0:s1 + 1], s0)
@@ -138,8 +138,13 @@ def batch_odometry(robot: Robot, t, ticks, *, steer=None, method: str = "exact",
         comps = np.matmul(f_ticks, np.swapaxes(d, -1, -2))                  # (..., 3, block)
         integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], pose, method,
                              out=out[..., s0:s1 + 1, :])
+        inc[..., s0:s1, :] = np.swapaxes(comps, -1, -2)
+        if residual is not None:
+            residual[..., s0:s1, :] = _residual(_fk_input(d, scale, f), rows, inc[..., s0:s1, :], dt)
         pose = out[..., s1, :]
-    return OdometryResult(tt, out, delta, scale, f, robot.fk_rows(None, names))
+    if residual is None:
+        residual = np.broadcast_to(np.zeros(()), lead + (m, rows.shape[-2]))
+    return OdometryResult(tt, out, inc, residual)
 
 
 def batch_odometry_from_angles(robot: Robot, t, angles, *, steer=None, method: str = "exact", start=None,
@@ -201,7 +206,9 @@ def _integrate(robot, wheels, t, delta, scale, steer, method, start) -> Odometry
         out = _pose_array(d.shape[:-2], t.shape[:-1], d.shape[-2] + 1, start)
         comps = np.matmul(f * scale, np.swapaxes(d, -1, -2))
         integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], out[..., 0, :], method, out=out)
-        return OdometryResult(t, out, delta, scale, f, robot.fk_rows(None, names))
+        inc = np.swapaxes(comps, -1, -2)
+        rows = robot.fk_rows(None, names)
+        return OdometryResult(t, out, inc, _residual(_fk_input(d, scale, f), rows, inc, np.diff(t, axis=-1)))
     if steer is None:
         raise InputError(f"robot {robot.name!r}: steerable wheels {robot.steer_names} need steering "
                          f"angles (steer, shape (..., N, {len(robot.steerable)}))")
@@ -215,11 +222,12 @@ def _integrate(robot, wheels, t, delta, scale, steer, method, start) -> Odometry
     mid = mid_steer(s)
     f = robot.fk_matrix(mid, names)
     rows = robot.fk_rows(mid, names)
-    inc = np.einsum("...ij,...j->...i", f, _fk_input(d, scale, f))
+    angles = _fk_input(d, scale, f)
+    inc = np.einsum("...ij,...j->...i", f, angles)
     comps = np.ascontiguousarray(np.swapaxes(inc, -1, -2))
     poses = integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :],
                                  None if start is None else _start(start), method)
-    return OdometryResult(t, poses, delta, scale, f, rows)
+    return OdometryResult(t, poses, inc, _residual(angles, rows, inc, np.diff(t, axis=-1)))
 
 
 def _start(start) -> np.ndarray:
