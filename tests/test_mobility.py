@@ -1,12 +1,14 @@
 """Mobility analysis against Campion, Bastin and d'Andrea-Novel (1996), Table 1 / Sec. 3."""
 
+import json
 import math
 
 import numpy as np
 import pytest
-from conftest import omni_robot
 
-from omnikin import Robot, SingularLayoutError, Steer, Wheel, load_robot
+from conftest import omni_robot
+from omnikin import PRESET_NAMES, Robot, SingularLayoutError, Steer, Wheel, load_robot
+from omnikin.mobility import CONDITION_WARNING
 
 CASTOR = dict(steer=Steer(offset=0.03))
 
@@ -117,3 +119,54 @@ def test_three_fixed_wheels_with_tangent_axles_are_immobile():
 def test_castors_alone_are_rejected():
     with pytest.raises(SingularLayoutError, match="no rolling wheel"):
         Robot("castors", (castor("a", 0.1, 0), castor("b", -0.1, 0)))
+
+
+# --- conditioning warning (threshold 10, docs/conventions.md "Conditioning") ------------------------------------
+SKEWED = ("omnikin: 1\nname: skewed-omni3\nwheels:\n"
+          "  - {name: a, type: omni, x: 0.2, y: 0.1, drive_deg: 0, radius: 0.05}\n"
+          "  - {name: b, type: omni, x: 0.2, y: -0.1, drive_deg: 0, radius: 0.05}\n"
+          "  - {name: c, type: omni, x: -0.2, y: 0.0, drive_deg: 10, radius: 0.05}\n")
+
+
+def skewed_condition_by_hand() -> float:
+    """Rows (cos d, sin d, x sin d - y cos d) / r typed in; not isotropic (J^T J has unequal translational
+    diagonal), so the rotation is scaled by the RMS wheel distance L (omnikin.mobility docstring)."""
+    r = 0.05
+    d = math.radians(10)
+    jac = np.array([[1, 0, -0.1], [1, 0, 0.1], [math.cos(d), math.sin(d), -0.2 * math.sin(d)]]) / r
+    length = math.sqrt((0.05 + 0.05 + 0.04) / 3)
+    s = np.linalg.svd(jac @ np.diag([1, 1, 1 / length]), compute_uv=False)
+    return s[0] / s[-1]
+
+
+def test_badly_conditioned_layout_is_flagged(tmp_path):
+    path = tmp_path / "skewed.yaml"
+    path.write_text(SKEWED)
+    m = load_robot(path).mobility
+    assert m.condition_number == pytest.approx(skewed_condition_by_hand(), rel=1e-9)
+    assert m.condition_number > CONDITION_WARNING == 10.0
+    assert not m.well_conditioned and f"{m.condition_number:.3g}" in m.conditioning_warning
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_presets_are_well_conditioned(name):
+    m = load_robot(name).mobility
+    assert m.well_conditioned and m.conditioning_warning is None and m.condition_number < 5
+
+
+def test_show_warns_once_on_stderr_and_in_json(tmp_path, capsys):
+    from omnikin.cli.main import main
+
+    path = tmp_path / "skewed.yaml"
+    path.write_text(SKEWED)
+    assert main(["show", str(path), "--json"]) == 0
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
+    assert doc["condition_warning"] and "badly conditioned" in doc["condition_warning"]
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("omnikin: warning: skewed-omni3: badly conditioned")
+    assert main(["show", str(path)]) == 0
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    assert main(["show", "tomasi-omni3", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["condition_warning"] is None and err == ""

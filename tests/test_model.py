@@ -1,14 +1,15 @@
 """Inverse/forward kinematics of the robot model against closed forms and reference tables."""
 
 import math
+import time
 
 import numpy as np
 import pytest
-from conftest import omni_robot
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from omnikin import InfeasibleTwistError, Robot, SingularLayoutError, Wheel, load_robot
+from conftest import omni_robot
+from omnikin import Encoder, InfeasibleTwistError, InputError, Robot, SingularLayoutError, Steer, Wheel, load_robot
 from omnikin.errors import OmnikinError
 
 # --- ros2_controllers parity --------------------------------------------------------------
@@ -58,9 +59,9 @@ def test_preset_mecanum4_matches_ros2_formula():
 # --- closed forms ------------------------------------------------------------------------------------
 def test_radial_omni_row_closed_form(tomasi):
     """conventions: omega_i = (-sin b vx + cos b vy + l omega) / r for a radial-axle omni wheel."""
-    l, r = 0.113, 0.04125
+    dist, r = 0.113, 0.04125
     for i, b in enumerate(np.radians([0, 120, 240])):
-        np.testing.assert_allclose(tomasi.ik_matrix[i], [-math.sin(b) / r, math.cos(b) / r, l / r], atol=1e-12)
+        np.testing.assert_allclose(tomasi.ik_matrix[i], [-math.sin(b) / r, math.cos(b) / r, dist / r], atol=1e-12)
 
 
 def test_world_frame_ik_uses_heading(tomasi):
@@ -76,7 +77,7 @@ def test_roller_speeds_solve_hub_velocity_balance():
     twist = np.array([0.4, -0.3, 0.9])
     speeds = robot.ik(twist).wheel_speeds
     rollers = robot.roller_speeds(twist)
-    for w, wi, si in zip(robot.wheels, speeds, rollers):
+    for w, wi, si in zip(robot.wheels, speeds, rollers, strict=True):
         v = np.array([twist[0] - twist[2] * w.y, twist[1] + twist[2] * w.x])
         u = np.array([math.cos(w.drive), math.sin(w.drive)])
         a = w.drive + w.roller
@@ -87,7 +88,7 @@ def test_roller_speeds_solve_hub_velocity_balance():
 
 def test_omni_roller_speed_is_side_velocity(tomasi):
     twist = np.array([0.2, 0.1, -0.5])
-    for w, s in zip(tomasi.wheels, tomasi.roller_speeds(twist)):
+    for w, s in zip(tomasi.wheels, tomasi.roller_speeds(twist), strict=True):
         v = np.array([twist[0] - twist[2] * w.y, twist[1] + twist[2] * w.x])
         assert s == pytest.approx(-math.sin(w.drive) * v[0] + math.cos(w.drive) * v[1], abs=1e-12)
 
@@ -172,8 +173,8 @@ def test_diff_drive_fk_closed_form():
     robot = load_robot("diff-drive")
     wl, wr = 7.0, 9.0
     fk = robot.fk([wl, wr])
-    r, l = 0.0825, 0.33
-    np.testing.assert_allclose(fk.twist, [(wr + wl) * r / 2, 0.0, (wr - wl) * r / l], atol=1e-12)
+    r, track = 0.0825, 0.33
+    np.testing.assert_allclose(fk.twist, [(wr + wl) * r / 2, 0.0, (wr - wl) * r / track], atol=1e-12)
 
 
 def test_ackermann_steering_closed_form():
@@ -207,7 +208,7 @@ def test_off_centred_steerable_needs_no_steering_rate():
     robot = load_robot("xr4000")
     twist = np.array([0.3, -0.2, 0.5])
     res = robot.ik(twist)
-    for w, phi, speed in zip(robot.wheels, res.steer_angles, res.wheel_speeds):
+    for w, phi, speed in zip(robot.wheels, res.steer_angles, res.wheel_speeds, strict=True):
         delta = w.drive + phi
         v = np.array([twist[0] - twist[2] * w.y, twist[1] + twist[2] * w.x])
         n = np.array([-math.sin(delta), math.cos(delta)])
@@ -270,3 +271,117 @@ def test_steered_jacobian_still_follows_the_steering():
     assert not np.allclose(zero, turned)
     w = robot.steerable[0]
     np.testing.assert_allclose(turned[0], w.rolling_row(0.5), atol=1e-15)
+
+
+# --- numeric sanity: finite input that overflows is refused, naming the argument --------------------------------
+@pytest.mark.parametrize("twist", [[1e308, 0.0, 0.0], [0.0, -1e308, 0.0], [0.0, 0.0, 1.7e308]])
+def test_ik_overflow_is_an_input_error_naming_the_twist(tomasi, twist):
+    """Each wheel speed is a sum of twist components over r = 0.04125 m: 1e308 / r overflows."""
+    with pytest.raises(InputError, match=r"^twist: \[.*\] is too large: the wheel speeds overflow"):
+        tomasi.ik(twist)
+    with pytest.raises(InputError, match="twist"):
+        tomasi.wheel_speeds(twist)
+    with pytest.raises(InputError, match="twist"):      # wheel 3's roller: (0.5 + 0.866) 1.5e308 m/s
+        tomasi.roller_speeds([1.5e308, 1.5e308, 0.0])
+
+
+def test_ik_overflow_in_a_stack_names_the_sample(tomasi):
+    twists = np.zeros((5, 3))
+    twists[3] = [0.0, 1e308, 0.0]
+    with pytest.raises(InputError, match=r"^twist at index \(3,\): \[0.0, 1e\+308, 0.0\] is too large"):
+        tomasi.ik(twists)
+
+
+def test_world_frame_overflow_names_the_velocity(tomasi):
+    """At heading 45 deg, vx = xdot cos + ydot sin: two 1.5e308 add up to more than the largest double."""
+    with pytest.raises(InputError, match="^velocity: .* is too large: the body twist overflow"):
+        tomasi.ik([1.5e308, 1.5e308, 0.0], heading=math.pi / 4)
+
+
+def test_fk_overflow_is_an_input_error_naming_the_wheel_speeds():
+    """Three omni wheels of radius 10 m on a 0.1 m circle: all turning at 1e308 rad/s means spinning at
+    omega = r w / l = 1e310 rad/s, not representable."""
+    robot = omni_robot([0, 120, 240], distance=0.1, radius=10.0)
+    with pytest.raises(InputError, match="^wheel_speeds: .* is too large: the twist overflow"):
+        robot.fk([1e308, 1e308, 1e308])
+    assert np.all(np.isfinite(robot.fk([1e300, 1e300, 1e300]).twist))     # large but representable: fine
+
+
+def test_cli_ik_of_a_huge_twist_is_one_line_error(capsys):
+    from omnikin.cli.main import main
+
+    assert main(["ik", "tomasi-omni3", "1e308", "0", "0"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.startswith("omnikin: error: twist: [1e+308, 0.0, 0.0] is too large")
+    assert len(err.strip().splitlines()) == 1 and "nan" not in err and "inf" not in err
+
+
+@pytest.mark.parametrize("ticks, gear", [(1e-310, 1.0), (1e-200, 1.0), (0.5, 1.0), (2.0 ** 32 + 1, 1.0),
+                                         (600, 1e-310), (600, 1e-200), (600, 1e300), (600, 0.0)])
+def test_encoder_outside_physical_ranges_is_refused(ticks, gear):
+    """1e-310 ticks per turn made 2 pi / (ticks gear) infinite (NaN poses); 1e-200 a ZeroDivisionError."""
+    with pytest.raises(InputError, match="must lie in"):
+        Encoder(ticks, gear)
+
+
+@pytest.mark.parametrize("ticks, gear", [(1, 1e-3), (2.0 ** 32, 1e4), (600, 1.0), (4096.5, 19.7)])
+def test_encoder_within_ranges_gives_a_finite_angle_per_tick(ticks, gear):
+    step = Encoder(ticks, gear).rad_per_tick
+    assert step == pytest.approx(2 * math.pi / (ticks * gear)) and math.isfinite(step) and step > 0
+
+
+@pytest.mark.parametrize("kw", [{"radius": 20.0}, {"radius": 5e-5}, {"x": 1e4}, {"y": -2e3},
+                                {"roller": math.radians(85)}, {"max_speed": 1e5}, {"max_speed": -1.0},
+                                {"encoder": 600}, {"steer": "big"}])
+def test_wheel_outside_physical_ranges_is_refused(kw):
+    args = {"name": "a", "type": "swedish", "x": 0.1, "y": 0.0, "drive": math.pi / 2, "radius": 0.05}
+    args.update(kw)
+    with pytest.raises(InputError):
+        Wheel(**args)
+
+
+@pytest.mark.parametrize("kw", [{"offset": 11.0}, {"offset": -0.1}, {"lower": -4.0}, {"upper": 4.0},
+                                {"lower": 0.5, "upper": 0.5}])
+def test_steer_outside_ranges_is_refused(kw):
+    with pytest.raises(InputError):
+        Steer(**kw)
+
+
+# --- validation is linear in the number of wheels ---------------------------------------------------------------
+def _best_time(fn, repeats=3) -> float:
+    best = math.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def _many_wheels(n):
+    step = 2 * math.pi / n
+    return tuple(Wheel(f"w{i}", "omni", 0.2 * math.cos(i * step), 0.2 * math.sin(i * step), i * step + math.pi / 2,
+                       0.05, encoder=Encoder(100)) for i in range(n))
+
+
+def test_robot_validation_and_wheel_lookups_are_linear():
+    """20 000 wheels: the duplicate-name check counted every name in the whole list (names.count) and
+    each wheel look-up scanned the list, so 20 000 wheels took ~100x as long as 2 000. Linear work
+    takes ~10x; the bound allows 30x (and half a second of noise)."""
+    def build_and_check(wheels):
+        def run():
+            robot = Robot("many", wheels)
+            robot.check_observable(robot.encoded_names)
+            assert robot.wheel(wheels[-1].name) is wheels[-1]
+        return run
+
+    small, large = _many_wheels(2_000), _many_wheels(20_000)
+    t_small = _best_time(build_and_check(small))
+    t_large = _best_time(build_and_check(large), repeats=1)
+    assert t_large < 30 * t_small + 0.5, (t_small, t_large)
+
+
+def test_duplicate_among_many_wheels_is_found_and_named():
+    wheels = list(_many_wheels(20_000))
+    wheels[-1] = Wheel("w7", "omni", 0.3, 0.0, math.pi / 2, 0.05)
+    with pytest.raises(InputError, match=r"duplicate wheel name 'w7' \(also wheel #8\)$"):
+        Robot("many", tuple(wheels))

@@ -26,17 +26,73 @@ conventions. The residual ``b - A twist`` measures slip / model error.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Optional, Sequence
 
 import numpy as np
 
 from ._arrays import as_components, require_finite
-from .errors import InfeasibleTwistError, InputError, SingularLayoutError
+from .errors import InfeasibleTwistError, InputError, SingularLayoutError, shorten
 from .linalg import RANK_TOL, null_space, rank
 from .mobility import Configuration, Mobility, analyse, generic_configuration
-from .wheels import Wheel
+from .wheels import DERIVED_SUFFIXES, Wheel
+
+MAX_ROBOT_NAME = 128
+"""Longest robot name [characters]: it is quoted in messages, reports and bag metadata."""
+
+
+def robot_name_problem(name) -> str | None:
+    """None if ``name`` is a usable robot name (1 to 128 printable characters, no blanks at either
+    end), else why not."""
+    if not isinstance(name, str) or not name.strip():
+        return f"must be a non-empty string, got {shorten(name)}"
+    if len(name) > MAX_ROBOT_NAME:
+        return f"at most {MAX_ROBOT_NAME} characters, got {len(name)}"
+    if not name.isprintable() or name != name.strip():
+        return f"printable characters without blanks at either end, got {shorten(name)}"
+    return None
+
+
+def name_collisions(names: Sequence[str]) -> list[tuple[int, str]]:
+    """``(index, problem)`` for each wheel name that clashes (empty if none): a repeated name, or
+    a name equal to one derived from another wheel's (``w`` and ``w_steer_deg``, see
+    :data:`omnikin.wheels.DERIVED_SUFFIXES`). ``index`` is 0-based. Linear in the number of wheels."""
+    first: dict[str, int] = {}
+    problems = []
+    for i, n in enumerate(names):
+        if n in first:
+            problems.append((i, f"duplicate wheel name {shorten(n)} (also wheel #{first[n] + 1})"))
+        else:
+            first[n] = i
+    for i, n in enumerate(names):
+        for suffix, meaning in DERIVED_SUFFIXES.items():
+            base = n[: -len(suffix)]
+            if n.endswith(suffix) and base in first:
+                problems.append((i, f"wheel name {shorten(n)} is taken by the {meaning} of wheel {shorten(base)} "
+                                    f"(#{first[base] + 1}): rename one of them"))
+    return sorted(problems)
+
+
+def _checked_after():
+    """NumPy error state for a computation whose result :func:`_refuse_overflow` checks afterwards:
+    no RuntimeWarning printed for the overflow it reports."""
+    return np.errstate(over="ignore", invalid="ignore")
+
+
+def _refuse_overflow(result: np.ndarray, what: str, name: str, given: np.ndarray) -> None:
+    """Finite input can still overflow (a twist of 1e308 m/s times 1/r): raise an InputError
+    naming the input ``name`` (and the offending sample of ``given``) rather than return inf/NaN."""
+    bad = ~np.isfinite(result)
+    if not bad.any():
+        return
+    index = tuple(int(i) for i in np.argwhere(bad)[0][:-1])
+    at = f" at index {index}" if index else ""
+    value = ""
+    if given.shape[:-1] == result.shape[:-1]:
+        value = " " + shorten(given[index].tolist())
+    raise InputError(f"{name}{at}:{value} is too large: the {what} overflow (not finite); give values of "
+                     f"physical size")
 
 
 @dataclass(frozen=True)
@@ -75,7 +131,10 @@ class FKResult:
 
     @property
     def residual_norm(self) -> np.ndarray:
-        return np.linalg.norm(self.residual, axis=-1)
+        """Euclidean norm of the residual, scaled so that it does not overflow for huge readings."""
+        scale = np.max(np.abs(self.residual), axis=-1, keepdims=True, initial=0.0)
+        safe = np.where(scale > 0, scale, 1.0)
+        return np.linalg.norm(self.residual / safe, axis=-1) * safe[..., 0]
 
 
 @dataclass(frozen=True)
@@ -94,12 +153,17 @@ class Robot:
     references: tuple[str, ...] = field(default_factory=tuple)
 
     def __post_init__(self):
+        problem = robot_name_problem(self.name)
+        if problem:
+            raise InputError(f"robot name: {problem}")
         object.__setattr__(self, "wheels", tuple(self.wheels))
         object.__setattr__(self, "references", tuple(self.references))
-        names = [w.name for w in self.wheels]
-        dup = {n for n in names if names.count(n) > 1}
-        if dup:
-            raise InputError(f"robot {self.name!r}: duplicate wheel names {sorted(dup)}")
+        for i, w in enumerate(self.wheels):
+            if not isinstance(w, Wheel):
+                raise InputError(f"robot {self.name!r}: wheel #{i + 1} is not a Wheel, got {shorten(w)}")
+        collisions = name_collisions([w.name for w in self.wheels])
+        if collisions:
+            raise InputError(f"robot {self.name!r}: {collisions[0][1]}")
         if not self.rolling:
             raise SingularLayoutError(
                 f"robot {self.name!r}: no rolling wheel (castors alone cannot move or measure it)"
@@ -144,11 +208,17 @@ class Robot:
     def steer_names(self) -> list[str]:
         return [w.name for w in self.steerable]
 
+    @cached_property
+    def _by_name(self) -> dict[str, Wheel]:
+        return {w.name: w for w in self.wheels}
+
     def wheel(self, name: str) -> Wheel:
-        for w in self.wheels:
-            if w.name == name:
-                return w
-        raise InputError(f"robot {self.name!r} has no wheel {name!r} (wheels: {[w.name for w in self.wheels]})")
+        """The wheel called ``name`` (a dictionary look-up)."""
+        try:
+            return self._by_name[name]
+        except (KeyError, TypeError):
+            raise InputError(f"robot {self.name!r} has no wheel {shorten(name)} "
+                             f"(wheels: {shorten(self.wheel_names)})") from None
 
     # --- matrices ---------------------------------------------------------------
     def _steer_array(self, steer) -> np.ndarray:
@@ -165,7 +235,7 @@ class Robot:
     def _steer_of(self, steer: np.ndarray) -> dict[str, np.ndarray]:
         return {w.name: steer[..., i] for i, w in enumerate(self.steerable)}
 
-    def jacobian(self, steer=None, wheels: Optional[Sequence[str]] = None) -> np.ndarray:
+    def jacobian(self, steer=None, wheels: Sequence[str] | None = None) -> np.ndarray:
         """Wheel Jacobian ``(..., n, 3)``: ``omega = J twist`` [rad/s per twist].
 
         Without steerable wheels the matrix is constant: it is built once and returned
@@ -205,7 +275,7 @@ class Robot:
         """Orthonormal basis ``N`` ``(3, k)`` of twists the fixed wheels allow."""
         return null_space(self.fixed_constraints, 3)
 
-    def fk_rows(self, steer=None, wheels: Optional[Sequence[str]] = None) -> np.ndarray:
+    def fk_rows(self, steer=None, wheels: Sequence[str] | None = None) -> np.ndarray:
         """Rows ``A = [J; S/r]`` ``(..., n_rows, 3)`` that forward kinematics fits (module docstring).
 
         ``J``: rolling rows of the chosen wheels; ``S/r``: sliding rows of the chosen centred
@@ -220,10 +290,10 @@ class Robot:
         if not extra:
             return jac
         shape = np.broadcast_shapes(jac.shape[:-2], *[e.shape[:-1] for e in extra])
-        extra = np.stack([np.broadcast_to(e, shape + (3,)) for e in extra], axis=-2)
-        return np.concatenate([np.broadcast_to(jac, shape + jac.shape[-2:]), extra], axis=-2)
+        sliding = np.stack([np.broadcast_to(e, shape + (3,)) for e in extra], axis=-2)
+        return np.concatenate([np.broadcast_to(jac, shape + jac.shape[-2:]), sliding], axis=-2)
 
-    def fk_matrix(self, steer=None, wheels: Optional[Sequence[str]] = None) -> np.ndarray:
+    def fk_matrix(self, steer=None, wheels: Sequence[str] | None = None) -> np.ndarray:
         """Forward-kinematics operator ``(..., 3, n_rows)``: ``twist = F [omega; 0]``.
 
         Without steerable wheels the operator is constant: it is computed once per wheel
@@ -243,7 +313,7 @@ class Robot:
     def _fk_cache(self) -> dict:
         return {}
 
-    _CACHES = ("_jacobian_constant", "_fk_cache")
+    _CACHES = ("_jacobian_constant", "_fk_cache", "_by_name")
 
     def __getstate__(self):
         """Pickle and deepcopy without the read-only matrix caches (NumPy does not keep the
@@ -255,7 +325,7 @@ class Robot:
         n = self.admissible_basis
         return n @ np.linalg.pinv(a @ n, rcond=RANK_TOL)
 
-    def fk_rank(self, steer=None, wheels: Optional[Sequence[str]] = None) -> int:
+    def fk_rank(self, steer=None, wheels: Sequence[str] | None = None) -> int:
         """How many independent motion components the wheels determine at ``steer``."""
         a = self.fk_rows(self._steer_array(steer), wheels)
         return rank(a @ self.admissible_basis)
@@ -276,13 +346,13 @@ class Robot:
             names = [w.name for w in self.fixed] + [w.name for w in self.steerable if w.is_centred_steerable]
             raise SingularLayoutError(
                 f"robot {self.name!r}: immobile layout: the no-side-slip constraints of wheels "
-                f"{names} admit no motion (degree of mobility 0)")
+                f"{shorten(names)} admit no motion (degree of mobility 0)")
         if not self.steerable:
             # with steerable wheels some motions are made by steering alone (e.g. spinning about a
             # centred steered wheel): observability is then checked where it matters, by odometry
             self._check_observable(None, config)
 
-    def _check_observable(self, wheels: Optional[Sequence[str]], config: Configuration) -> None:
+    def _check_observable(self, wheels: Sequence[str] | None, config: Configuration) -> None:
         """Every admissible motion must turn at least one of ``wheels``."""
         a = self.fk_rows(config.steer, wheels)
         basis = config.admissible
@@ -304,7 +374,7 @@ class Robot:
         if any(w.is_centred_steerable for w in self.steerable):
             hint = " (that motion is made by steering alone; wheel speeds cannot measure it)"
         raise SingularLayoutError(
-            f"robot {self.name!r}: singular layout: wheels {used} cannot realise or measure "
+            f"robot {self.name!r}: singular layout: wheels {shorten(used)} cannot realise or measure "
             f"every motion the robot can make; {why}{hint} (wheel Jacobian rank {rank(m)} < {basis.shape[1]})")
 
     def check_observable(self, wheels: Sequence[str]) -> None:
@@ -318,9 +388,11 @@ class Robot:
         th = np.asarray(heading, dtype=float)
         c, s = np.cos(th), np.sin(th)
         out = np.empty(np.broadcast_shapes(v.shape, th.shape + (3,)))
-        out[..., 0] = c * v[..., 0] + s * v[..., 1]
-        out[..., 1] = -s * v[..., 0] + c * v[..., 1]
+        with _checked_after():
+            out[..., 0] = c * v[..., 0] + s * v[..., 1]
+            out[..., 1] = -s * v[..., 0] + c * v[..., 1]
         out[..., 2] = v[..., 2]
+        _refuse_overflow(out, "body twist", "velocity", v)
         return out
 
     def ik(self, twist, *, heading=None, steer_hint=None, on_infeasible: str = "raise") -> IKResult:
@@ -335,7 +407,7 @@ class Robot:
         side-slip speed; ``"return"`` reports it in ``IKResult.violation``.
         """
         if on_infeasible not in ("raise", "return"):
-            raise InputError(f"on_infeasible must be 'raise' or 'return', got {on_infeasible!r}")
+            raise InputError(f"on_infeasible must be 'raise' or 'return', got {shorten(on_infeasible)}")
         t = as_components(twist, 3, "twist")
         require_finite(t, "twist")
         if heading is not None:
@@ -344,9 +416,13 @@ class Robot:
         hint = self._steer_array(steer_hint)
         if hint.ndim > 1 and np.broadcast_shapes(hint.shape[:-1], t.shape[:-1]) != t.shape[:-1]:
             raise InputError(f"steer_hint: shape {hint.shape} does not fit twists of shape {t.shape}")
-        steer, limited = self._steer_for(t, hint, strict=on_infeasible == "raise")
-        speeds = np.einsum("...ij,...j->...i", self.jacobian(steer), t)
-        violation = t @ self.fixed_constraints.T
+        with _checked_after():
+            steer, limited = self._steer_for(t, hint, strict=on_infeasible == "raise")
+            speeds = np.einsum("...ij,...j->...i", self.jacobian(steer), t)
+            violation = t @ self.fixed_constraints.T
+        given = np.asarray(twist, dtype=float)
+        for values, what in ((speeds, "wheel speeds"), (steer, "steering angles"), (violation, "side-slip speeds")):
+            _refuse_overflow(values, what, "twist", given)
         result = IKResult(speeds, steer, violation, limited)
         if on_infeasible == "raise" and not np.all(result.feasible):
             raise InfeasibleTwistError(self._infeasible_message(t, violation, limited))
@@ -380,9 +456,13 @@ class Robot:
         """Fast inverse kinematics ``(..., n)`` [rad/s] for layouts without steering."""
         if self.steerable:
             return self.ik(twist).wheel_speeds
-        return as_components(twist, 3, "twist") @ self.ik_matrix.T
+        t = as_components(twist, 3, "twist")
+        with _checked_after():
+            speeds = t @ self.ik_matrix.T
+        _refuse_overflow(speeds, "wheel speeds", "twist", t)
+        return speeds
 
-    def fk(self, wheel_speeds, steer=None, wheels: Optional[Sequence[str]] = None) -> FKResult:
+    def fk(self, wheel_speeds, steer=None, wheels: Sequence[str] | None = None) -> FKResult:
         """Forward kinematics: wheel speeds ``(..., n)`` [rad/s] -> body twist.
 
         ``steer`` ``(..., n_steer)`` [rad] is required when the robot has steerable
@@ -394,14 +474,18 @@ class Robot:
         require_finite(w, "wheel_speeds")
         if self.steerable and steer is None:
             raise InputError(
-                f"robot {self.name!r}: steerable wheels {self.steer_names} need their steering angles (steer=...)")
+                f"robot {self.name!r}: steerable wheels {shorten(self.steer_names)} need their steering angles "
+                f"(steer=...)")
         steer = self._steer_array(steer)
         a = self.fk_rows(steer, wheels)
         n_extra = a.shape[-2] - len(names)
         b = np.concatenate([w, np.zeros(w.shape[:-1] + (n_extra,))], axis=-1) if n_extra else w
         f = self._fk_operator(a) if self.steerable else self.fk_matrix(None, wheels)
-        twist = np.einsum("...ij,...j->...i", f, b)
-        residual = b - np.einsum("...ij,...j->...i", a, twist)
+        with _checked_after():
+            twist = np.einsum("...ij,...j->...i", f, b)
+            residual = b - np.einsum("...ij,...j->...i", a, twist)
+        _refuse_overflow(twist, "twist", "wheel_speeds", w)
+        _refuse_overflow(residual, "residuals", "wheel_speeds", w)
         return FKResult(twist, residual)
 
     def roller_speeds(self, twist) -> np.ndarray:
@@ -412,7 +496,10 @@ class Robot:
         """
         t = as_components(twist, 3, "twist")
         rows = np.array([w.roller_row() for w in self.wheels if w.is_swedish]).reshape(-1, 3)
-        return t @ rows.T
+        with _checked_after():
+            speeds = t @ rows.T
+        _refuse_overflow(speeds, "roller speeds", "twist", t)
+        return speeds
 
     @property
     def swedish_names(self) -> list[str]:

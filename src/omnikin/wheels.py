@@ -27,18 +27,76 @@ Rows implemented here (each a ``(..., 3)`` array acting on the twist):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Optional
-
 import math
+import re
+from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import InfeasibleTwistError, InputError, shorten
 from .geometry import wrap_angle
-from .errors import InfeasibleTwistError, InputError
 
 WHEEL_TYPES = ("omni", "mecanum", "swedish", "standard", "steerable", "castor")
 SWEDISH_TYPES = ("omni", "mecanum", "swedish")
+
+# --- what a wheel may be (docs/conventions.md, "Ranges" and "Names") ------------------------
+NAME_PATTERN = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
+"""Wheel names: a letter, then letters, digits or underscores, 64 characters at most, so that a
+name is a CSV column and a ROS name as it stands (no quoting, no blanks, no separators)."""
+RESERVED_NAMES = frozenset({"t"})
+"""Names a wheel may not take: ``t`` is the time column of tick logs."""
+DERIVED_SUFFIXES = {"_steer": "steering joint (joint_states)", "_steer_deg": "steering column (tick logs)"}
+"""Names derived from a wheel name ``w`` and what they name: ``w_steer`` and ``w_steer_deg``; no
+wheel may carry a name derived from another wheel's."""
+
+RADIUS_RANGE = (1e-4, 10.0)
+"""Rolling radius [m]: from a 0.1 mm micro-robot wheel to a 10 m mining-truck tyre."""
+POSITION_LIMIT = 1e3
+"""Largest ``|x|``, ``|y|`` of a wheel [m]: a wheel more than 1 km from the body origin is a typo."""
+OFFSET_RANGE = (0.0, 10.0)
+"""Castor trail / steering offset [m], bounded like the radius."""
+ROLLER_LIMIT_DEG = 80.0
+"""Largest ``|roller angle|`` [deg]: a Swedish wheel's speed is scaled by ``1/cos(gamma)``
+(5.8 at 80 deg, infinite at 90 deg where the wheel cannot drive); built wheels use 0 and 45."""
+TICKS_PER_REV_RANGE = (1.0, 2.0**32)
+"""Encoder ticks per revolution of the encoder shaft: from a single index pulse to a 32-bit
+absolute encoder."""
+GEAR_RATIO_RANGE = (1e-3, 1e4)
+"""Encoder revolutions per wheel revolution: multi-stage gearboxes stay below 1e4."""
+MAX_SPEED_RANGE = (1e-3, 1e4)
+"""Wheel speed limit [rad/s]: 1e4 rad/s is 95 000 rpm, beyond any wheel."""
+
+
+def range_problem(value, low: float, high: float, unit: str = "") -> str | None:
+    """None if ``value`` is a finite real number in ``[low, high]``, else what is wrong with it."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        return f"must be a number, got {shorten(value)}"
+    try:
+        x = float(value)
+    except OverflowError:
+        return f"number too large, got {shorten(value)}"
+    if not math.isfinite(x):
+        return f"must be finite, got {shorten(value)}"
+    if not low <= x <= high:
+        return f"must lie in [{low:g}, {high:g}]{' ' + unit if unit else ''}, got {x:g}"
+    return None
+
+
+def name_problem(name) -> str | None:
+    """None if ``name`` is a valid wheel name (:data:`NAME_PATTERN`, not reserved), else why not."""
+    if not isinstance(name, str):
+        return f"must be a string, got {shorten(name)} (quote it in YAML: name: '1')"
+    if not NAME_PATTERN.fullmatch(name):
+        return (f"{shorten(name)} is not a valid wheel name: a letter, then letters, digits or underscores, "
+                f"at most 64 characters (it names CSV columns and ROS joints)")
+    if name in RESERVED_NAMES:
+        return f"{name!r} is reserved (the time column of tick logs)"
+    return None
+
+
+def _require(problem: str | None, what: str) -> None:
+    if problem is not None:
+        raise InputError(f"{what} {problem}")
 
 
 @dataclass(frozen=True)
@@ -59,6 +117,10 @@ class Encoder:
         if bits is not None and (isinstance(bits, (bool, np.bool_)) or not isinstance(bits, (int, np.integer))
                                  or not 2 <= bits <= 64):
             raise InputError(f"encoder counter_bits must be a whole number from 2 to 64, got {bits!r}")
+        _require(range_problem(self.ticks_per_rev, *TICKS_PER_REV_RANGE), "encoder: ticks_per_rev")
+        _require(range_problem(self.gear_ratio, *GEAR_RATIO_RANGE), "encoder: gear_ratio")
+        if not isinstance(self.invert, (bool, np.bool_)):
+            raise InputError(f"encoder: invert must be True or False, got {shorten(self.invert)}")
 
     @property
     def rad_per_tick(self) -> float:
@@ -80,6 +142,13 @@ class Steer:
     lower: float = -np.pi
     upper: float = np.pi
 
+    def __post_init__(self):
+        _require(range_problem(self.offset, *OFFSET_RANGE, "m"), "steer: offset")
+        _require(range_problem(self.lower, -math.pi, math.pi, "rad"), "steer: lower")
+        _require(range_problem(self.upper, -math.pi, math.pi, "rad"), "steer: upper")
+        if not self.lower < self.upper:
+            raise InputError(f"steer: need lower < upper, got {self.lower:g} and {self.upper:g} rad")
+
 
 @dataclass(frozen=True)
 class Wheel:
@@ -96,25 +165,32 @@ class Wheel:
     drive: float
     radius: float
     roller: float = 0.0
-    encoder: Optional[Encoder] = None
-    max_speed: Optional[float] = None
-    steer: Optional[Steer] = None
+    encoder: Encoder | None = None
+    max_speed: float | None = None
+    steer: Steer | None = None
 
     def __post_init__(self):
+        """Check the name and every number against the ranges above (docs/conventions.md)."""
+        _require(name_problem(self.name), "wheel name:")
+        who = f"wheel {self.name!r}:"
         if self.type not in WHEEL_TYPES:
-            raise InputError(f"wheel {self.name!r}: unknown type {self.type!r}; one of {list(WHEEL_TYPES)}")
-        for field in ("x", "y", "drive", "radius", "roller"):
-            v = getattr(self, field)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.number)) or not math.isfinite(v):
-                raise InputError(f"wheel {self.name!r}: {field} must be a finite number, got {v!r}")
-        if not self.radius > 0:
-            raise InputError(f"wheel {self.name!r}: radius must be > 0, got {self.radius!r}")
-        if not abs(self.roller) < math.pi / 2:
-            raise InputError(f"wheel {self.name!r}: roller angle must lie strictly between -90 and 90 deg")
+            raise InputError(f"{who} unknown type {shorten(self.type)}; one of {list(WHEEL_TYPES)}")
+        roller = math.radians(ROLLER_LIMIT_DEG)
+        for field, low, high, unit in (("x", -POSITION_LIMIT, POSITION_LIMIT, "m"),
+                                       ("y", -POSITION_LIMIT, POSITION_LIMIT, "m"),
+                                       ("drive", -math.inf, math.inf, "rad"),
+                                       ("radius", *RADIUS_RANGE, "m"),
+                                       ("roller", -roller, roller, "rad")):
+            _require(range_problem(getattr(self, field), low, high, unit), f"{who} {field}")
         if self.roller and not self.is_swedish:
-            raise InputError(f"wheel {self.name!r}: only Swedish wheels have a roller angle")
-        if max(abs(self.x), abs(self.y), self.radius) > 1e6 or self.radius < 1e-9:
-            raise InputError(f"wheel {self.name!r}: dimensions outside 1 nm .. 1000 km are not a wheeled robot")
+            raise InputError(f"{who} only Swedish wheels have a roller angle")
+        if self.max_speed is not None:
+            # 0 (a locked wheel) is allowed here; a robot file describes a drivable robot and needs the range
+            _require(range_problem(self.max_speed, 0.0, MAX_SPEED_RANGE[1], "rad/s"), f"{who} max_speed")
+        for part, kind in (("encoder", Encoder), ("steer", Steer)):
+            value = getattr(self, part)
+            if value is not None and not isinstance(value, kind):
+                raise InputError(f"{who} {part} must be an {kind.__name__} or None, got {shorten(value)}")
 
     # --- classification ---------------------------------------------------
     @property

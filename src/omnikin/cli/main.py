@@ -140,6 +140,12 @@ def show_data(robot) -> dict:
 def cmd_show(args) -> int:
     robot = load_robot(args.robot)
     data = show_data(robot)
+    # --- conditioning warning (robot-file validation): one line on stderr, a field in --json ---
+    warning = robot.mobility.conditioning_warning
+    data["condition_warning"] = warning
+    if warning:
+        print(f"omnikin: warning: {robot.name}: {warning}", file=sys.stderr)
+    # --- end conditioning warning ---
     if args.plot:
         from ..viz.layout import save_layout
 
