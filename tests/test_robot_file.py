@@ -11,6 +11,7 @@ import copy
 import json
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +20,7 @@ import yaml
 from omnikin import PRESET_NAMES
 from omnikin.errors import RobotFileError
 from omnikin.io.robot_file import load_robot, parse_robot_text, robot_from_dict, robot_to_dict, save_robot
+from omnikin.presets import preset_path
 
 NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 
@@ -134,7 +136,7 @@ BAD_CASES = [
     ("missing-wheel-type", _w2(type=None), W2 + ["'type'"]),
     ("unknown-wheel-type", _w2(type="hover"), W2 + ["'type'", "hover"]),
     ("missing-radius", _w2(radius=None), W2 + ["'radius'"]),
-    ("zero-radius", _w2(radius=0), W2 + ["'radius'", "> 0"]),
+    ("zero-radius", _w2(radius=0), W2 + ["'radius'", "[0.0001, 10] m, got 0"]),
     ("negative-radius", _w2(radius=-0.04), W2 + ["'radius'", "-0.04"]),
     ("negative-distance", _w2(distance=-0.1), W2 + ["'distance'"]),
     ("radius-string", _w2(radius="0.04"), W2 + ["'radius'", "number"]),
@@ -167,10 +169,10 @@ BAD_CASES = [
     ("mecanum-roller-30", _w2(type="mecanum", roller_deg=30), W2 + ["roller_deg", "30"]),
     ("mecanum-roller-0", _w2(type="mecanum", roller_deg=0), W2 + ["roller_deg"]),
     ("mecanum-roller-missing", _w2(type="mecanum"), W2 + ["roller_deg"]),
-    ("swedish-roller-missing", _w2(type="swedish"), W2 + ["roller_deg"]),
-    ("swedish-roller-90", _w2(type="swedish", roller_deg=90), W2 + ["roller_deg", "90"]),
-    ("swedish-roller-minus-90", _w2(type="swedish", roller_deg=-90), W2 + ["roller_deg", "-90"]),
-    ("swedish-roller-120", _w2(type="swedish", roller_deg=120), W2 + ["roller_deg"]),
+    ("swedish-roller-missing", _w2(type="swedish", drive_deg=0), W2 + ["roller_deg"]),
+    ("swedish-roller-90", _w2(type="swedish", drive_deg=0, roller_deg=90), W2 + ["roller_deg", "90"]),
+    ("swedish-roller-minus-90", _w2(type="swedish", drive_deg=0, roller_deg=-90), W2 + ["roller_deg", "-90"]),
+    ("swedish-roller-120", _w2(type="swedish", drive_deg=0, roller_deg=120), W2 + ["roller_deg"]),
     ("omni-roller-45", _w2(roller_deg=45), W2 + ["roller_deg", "45"]),
     ("standard-roller", _w2(type="standard", drive_deg=90, roller_deg=0), W2 + ["roller_deg"]),
     ("steerable-roller", _w2(**STEER_W2, roller_deg=10), W2 + ["roller_deg"]),
@@ -236,11 +238,13 @@ def test_yaml_nan_and_inf_rejected(tmp_path, field, literal):
 @pytest.mark.parametrize("literal", [".nan", ".inf"])
 def test_yaml_nan_in_encoder_and_steer(tmp_path, literal):
     text = ("omnikin: 1\nname: nan-bot\nwheels:\n"
-            f"  - {{name: w1, type: omni, distance: 0.1, angle_deg: 0, radius: 0.05, encoder: {{ticks_per_rev: {literal}}}}}\n")
+            f"  - {{name: w1, type: omni, distance: 0.1, angle_deg: 0, radius: 0.05, "
+            f"encoder: {{ticks_per_rev: {literal}}}}}\n")
     msg = load_error(tmp_path, text)
     assert "'w1'" in msg and "ticks_per_rev" in msg
     text = ("omnikin: 1\nname: nan-bot\nwheels:\n"
-            f"  - {{name: s1, type: steerable, x: 0.1, y: 0, drive_deg: 0, radius: 0.05, steer: {{offset: {literal}}}}}\n")
+            f"  - {{name: s1, type: steerable, x: 0.1, y: 0, drive_deg: 0, radius: 0.05, "
+            f"steer: {{offset: {literal}}}}}\n")
     msg = load_error(tmp_path, text)
     assert "'s1'" in msg and "offset" in msg
 
@@ -415,8 +419,8 @@ def test_three_fixed_wheels_not_on_one_axle_are_immobile(tmp_path):
 def test_three_fixed_tangent_wheels_rotate_in_place(tmp_path):
     """Control for the immobile case: tangent drive directions leave rotation about the origin."""
     data = base_robot()
-    data["wheels"] = [{"name": n, "type": "standard", "distance": 0.2, "angle_deg": b, "radius": 0.05}
-                      for n, b in (("a", 0), ("b", 120), ("c", 240))]
+    data["wheels"] = [{"name": n, "type": "standard", "distance": 0.2, "angle_deg": b, "drive_deg": b + 90,
+                       "radius": 0.05} for n, b in (("a", 0), ("b", 120), ("c", 240))]
     robot = load_robot(write(tmp_path, data))
     assert robot.mobility.degree_of_mobility == 1
 
@@ -441,7 +445,7 @@ def test_mecanum_x_arrangement_is_fine_and_matches_hand_rows(tmp_path):
     data["wheels"] = [{"name": n, "type": "mecanum", "x": pos[n][0], "y": pos[n][1], "drive_deg": 0,
                        "roller_deg": rolls[n], "radius": 0.0475} for n in rolls]
     robot = load_robot(write(tmp_path, data))
-    for row, n in zip(robot.ik_matrix, rolls):
+    for row, n in zip(robot.ik_matrix, rolls, strict=True):
         g = rolls[n]
         # gamma = +-45, delta = 0: (1, tan g, x tan g - y) / r
         t = math.tan(math.radians(g))
@@ -452,12 +456,12 @@ def test_mecanum_x_arrangement_is_fine_and_matches_hand_rows(tmp_path):
 # --- kinematics read from the file -----------------------------------------------------------------------
 def test_default_drive_is_counter_clockwise_tangent(tmp_path):
     """Wheel at beta = 30 deg, no drive_deg: row = (-sin b, cos b, l) / r."""
-    l, r, b = 0.2, 0.05, math.radians(30.0)
+    dist, r, b = 0.2, 0.05, math.radians(30.0)
     data = base_robot()
-    data["wheels"] = [omni_wheel("w1", 30, distance=l, radius=r), omni_wheel("w2", 150, distance=l, radius=r),
-                      omni_wheel("w3", 270, distance=l, radius=r)]
+    data["wheels"] = [omni_wheel("w1", 30, distance=dist, radius=r), omni_wheel("w2", 150, distance=dist, radius=r),
+                      omni_wheel("w3", 270, distance=dist, radius=r)]
     robot = load_robot(write(tmp_path, data))
-    expected = np.array([-math.sin(b), math.cos(b), l]) / r
+    expected = np.array([-math.sin(b), math.cos(b), dist]) / r
     np.testing.assert_allclose(robot.ik_matrix[0], expected, atol=1e-12)
     # the explicit counter-clockwise tangent gives the same row, the clockwise one its negative
     data["wheels"][0]["drive_deg"] = 120
@@ -467,19 +471,19 @@ def test_default_drive_is_counter_clockwise_tangent(tmp_path):
 
 
 def test_tomasi_preset_rows_by_hand():
-    l, r = 0.113, 0.04125
+    dist, r = 0.113, 0.04125
     robot = load_robot("tomasi-omni3")
-    for row, deg in zip(robot.ik_matrix, (0, 120, 240)):
+    for row, deg in zip(robot.ik_matrix, (0, 120, 240), strict=True):
         b = math.radians(deg)
-        np.testing.assert_allclose(row, np.array([-math.sin(b), math.cos(b), l]) / r, atol=1e-12)
+        np.testing.assert_allclose(row, np.array([-math.sin(b), math.cos(b), dist]) / r, atol=1e-12)
 
 
 @pytest.mark.parametrize("deg", [30.0, 120.0, 225.0, -60.0, 0.0, 90.0, 180.0])
 @pytest.mark.parametrize("drive", [None, 17.0])
 def test_polar_and_cartesian_placement_identical(tmp_path, deg, drive):
-    l, b = 0.137, math.radians(deg)
-    polar = {"name": "p", "type": "omni", "distance": l, "angle_deg": deg, "radius": 0.03}
-    cart = {"name": "p", "type": "omni", "x": l * math.cos(b), "y": l * math.sin(b), "radius": 0.03}
+    dist, b = 0.137, math.radians(deg)
+    polar = {"name": "p", "type": "omni", "distance": dist, "angle_deg": deg, "radius": 0.03}
+    cart = {"name": "p", "type": "omni", "x": dist * math.cos(b), "y": dist * math.sin(b), "radius": 0.03}
     if drive is not None:
         polar["drive_deg"] = cart["drive_deg"] = drive
     rows = []
@@ -489,7 +493,7 @@ def test_polar_and_cartesian_placement_identical(tmp_path, deg, drive):
         rows.append(load_robot(write(tmp_path, data)).ik_matrix[0])
     np.testing.assert_allclose(rows[0], rows[1], atol=1e-12)
     delta = b + math.pi / 2 if drive is None else math.radians(drive)
-    np.testing.assert_allclose(rows[0], hand_row(l * math.cos(b), l * math.sin(b), delta, 0.03), atol=1e-12)
+    np.testing.assert_allclose(rows[0], hand_row(dist * math.cos(b), dist * math.sin(b), delta, 0.03), atol=1e-12)
 
 
 def test_swedish_roller_angle_row(tmp_path):
@@ -548,7 +552,7 @@ def assert_same_robot(a, b):
     if a.steerable:
         steer = np.linspace(-0.4, 0.5, len(a.steerable))
         np.testing.assert_allclose(a.jacobian(steer), b.jacobian(steer), atol=1e-10)
-    for wa, wb in zip(a.wheels, b.wheels):
+    for wa, wb in zip(a.wheels, b.wheels, strict=True):
         assert wa.encoder == wb.encoder and wa.max_speed == wb.max_speed
         if wa.steer is None:
             assert wb.steer is None
@@ -593,7 +597,8 @@ def test_round_trip_preserves_hand_edited_robot(tmp_path):
         "wheels": [
             {"name": "m", "type": "mecanum", "x": 0.2, "y": 0.1, "drive_deg": 10, "roller_deg": -45, "radius": 0.05,
              "encoder": {"ticks_per_rev": 2048, "gear_ratio": 3.5, "invert": True}, "max_speed": 20.0},
-            {"name": "s", "type": "swedish", "distance": 0.2, "angle_deg": 135, "roller_deg": 20, "radius": 0.04},
+            {"name": "s", "type": "swedish", "distance": 0.2, "angle_deg": 135, "drive_deg": 225, "roller_deg": 20,
+             "radius": 0.04},
             {"name": "o", "type": "omni", "distance": 0.25, "angle_deg": 250, "roller_deg": 0, "radius": 0.04},
             {"name": "c", "type": "castor", "x": -0.3, "y": 0.0, "drive_deg": 0, "radius": 0.02,
              "steer": {"offset": 0.03}},
@@ -604,3 +609,193 @@ def test_round_trip_preserves_hand_edited_robot(tmp_path):
         path = tmp_path / f"out{suffix}"
         save_robot(robot, path)
         assert_same_robot(robot, load_robot(path))
+
+
+# --- ranges of every numeric field (docs/conventions.md, "Ranges") ---------------------------------------
+STEER_W2_AT = {"type": "steerable", "drive_deg": 0}
+RANGE_CASES = [
+    # id, wheel-2 changes, field named in the message, documented (low, high), values accepted at the ends
+    ("x", lambda v: {"distance": None, "angle_deg": None, "x": v, "y": 0.1}, "'x'", (-1000, 1000), None),
+    ("y", lambda v: {"distance": None, "angle_deg": None, "x": 0.1, "y": v}, "'y'", (-1000, 1000), None),
+    ("distance", lambda v: {"distance": v, "drive_deg": 90}, "'distance'", (0, 1000), None),
+    ("angle_deg", lambda v: {"angle_deg": v, "drive_deg": 0}, "'angle_deg'", (-720, 720), None),
+    ("drive_deg", lambda v: {"drive_deg": v}, "'drive_deg'", (-720, 720), None),
+    ("roller_deg", lambda v: {"type": "swedish", "drive_deg": 90, "roller_deg": v}, "'roller_deg'", (-80, 80), None),
+    ("radius", lambda v: {"radius": v}, "'radius'", (1e-4, 10), None),
+    ("max_speed", lambda v: {"max_speed": v}, "'max_speed'", (1e-3, 1e4), None),
+    ("ticks_per_rev", lambda v: {"encoder": {"ticks_per_rev": v}}, "encoder.ticks_per_rev", (1, 2.0 ** 32), None),
+    ("gear_ratio", lambda v: {"encoder": {"ticks_per_rev": 100, "gear_ratio": v}}, "encoder.gear_ratio",
+     (1e-3, 1e4), None),
+    ("steer.offset", lambda v: {**STEER_W2_AT, "steer": {"offset": v}}, "steer.offset", (0, 10), None),
+    ("steer.min_deg", lambda v: {**STEER_W2_AT, "steer": {"min_deg": v, "max_deg": 180}}, "steer.min_deg",
+     (-180, 180), (-180, 179)),
+    ("steer.max_deg", lambda v: {**STEER_W2_AT, "steer": {"min_deg": -180, "max_deg": v}}, "steer.max_deg",
+     (-180, 180), (-179, 180)),
+]
+
+
+@pytest.mark.parametrize("changes, field, bounds, inside", [c[1:] for c in RANGE_CASES],
+                         ids=[c[0] for c in RANGE_CASES])
+def test_every_numeric_field_is_range_checked(tmp_path, changes, field, bounds, inside):
+    low, high = bounds
+    for value in inside or bounds:
+        load_robot(write(tmp_path, with_wheel2(**changes(value))))      # the ends of the range are fine
+    for outside in (low - max(abs(low), 1) * 1e-3, high + max(abs(high), 1) * 1e-3, 1e300, -1e300):
+        msg = load_error(tmp_path, with_wheel2(**changes(outside)))
+        assert "'w2'" in msg and field in msg and "must lie in [" in msg, msg
+
+
+@pytest.mark.parametrize("tpr, gear", [(1e-310, 1.0), (1e-200, 1.0), (100, 1e-310), (100, 1e-200), (100, 1e300)])
+def test_encoder_values_that_once_gave_nan_poses_are_refused(tmp_path, tpr, gear):
+    """ticks_per_rev 1e-310 made rad_per_tick inf (NaN poses), 1e-200 * gear overflowed a division."""
+    msg = load_error(tmp_path, with_wheel2(encoder={"ticks_per_rev": tpr, "gear_ratio": gear}))
+    assert "'w2'" in msg and ("ticks_per_rev" in msg or "gear_ratio" in msg) and "must lie in" in msg
+
+
+# --- names (docs/conventions.md, "Names") ----------------------------------------------------------------------
+@pytest.mark.parametrize("name", ["", " w2", "w2 ", "w 2", "w,2", 'w"2', "w'2", "w\n2", "w\t2", "2w", "_w",
+                                  "w-2", "w.2", "wä", "x" * 65, "t"],
+                         ids=["empty", "leading-blank", "trailing-blank", "blank", "comma", "double-quote",
+                              "quote", "newline", "tab", "digit-first", "underscore-first", "hyphen", "dot",
+                              "non-ascii", "65-chars", "time-column"])
+def test_wheel_names_unusable_as_csv_column_or_ros_name_are_refused(tmp_path, name):
+    msg = load_error(tmp_path, with_wheel2(name=name))
+    assert "#2" in msg and "'name'" in msg, msg
+
+
+def test_longest_and_plain_wheel_names_are_accepted(tmp_path):
+    data = base_robot()
+    names = ["a" * 64, "Front_Left_2", "T"]
+    for w, n in zip(data["wheels"], names, strict=True):
+        w["name"] = n
+    assert load_robot(write(tmp_path, data)).wheel_names == names
+
+
+@pytest.mark.parametrize("other, steer_type", [("a_steer_deg", "steerable"), ("a_steer", "steerable"),
+                                               ("a_steer_deg", "omni"), ("a_steer", "omni")])
+def test_wheel_named_like_a_derived_column_or_joint_is_refused(tmp_path, other, steer_type):
+    """Tick logs have a column <wheel>_steer_deg and joint_states a joint <wheel>_steer: a wheel of that
+    name would read another wheel's steering angle as its ticks (refused for any wheel types)."""
+    data = base_robot()
+    data["wheels"][0]["name"] = "a"
+    if steer_type == "steerable":
+        data["wheels"][0].update(type="steerable", drive_deg=90)
+    data["wheels"][2]["name"] = other
+    msg = load_error(tmp_path, data)
+    assert f"wheel {other!r} (#3)" in msg and "'name'" in msg and "wheel 'a' (#1)" in msg, msg
+
+
+def test_duplicate_wheel_name_names_both_wheels(tmp_path):
+    msg = load_error(tmp_path, with_wheel2(name="w1"))
+    assert "wheel 'w1' (#2)" in msg and "also wheel #1" in msg
+
+
+@pytest.mark.parametrize("name", ["two\nlines", "x" * 129, " padded", "bell\a"],
+                         ids=["newline", "129-chars", "leading-blank", "control-char"])
+def test_robot_names_that_break_one_line_messages_are_refused(tmp_path, name):
+    data = base_robot()
+    data["name"] = name
+    msg = load_error(tmp_path, data)
+    assert "field 'name'" in msg
+
+
+def test_core_refuses_the_same_names():
+    """Robot built in Python: the same rules hold (a tick log written for it could not be read)."""
+    from omnikin import InputError, Robot, Wheel
+
+    def wheel(name, angle):
+        b = math.radians(angle)
+        return Wheel(name, "omni", 0.1 * math.cos(b), 0.1 * math.sin(b), b + math.pi / 2, 0.05)
+
+    with pytest.raises(InputError, match="not a valid wheel name"):
+        wheel("w 1", 0)
+    with pytest.raises(InputError, match="reserved"):
+        wheel("t", 0)
+    with pytest.raises(InputError, match="'a_steer_deg' is taken by the steering column"):
+        Robot("r", (wheel("a", 0), wheel("b", 120), wheel("a_steer_deg", 240)))
+    with pytest.raises(InputError, match="duplicate wheel name 'a'"):
+        Robot("r", (wheel("a", 0), wheel("b", 120), wheel("a", 240)))
+    with pytest.raises(InputError, match="robot name"):
+        Robot("two\nlines", (wheel("a", 0), wheel("b", 120), wheel("c", 240)))
+
+
+# --- default drive direction (docs/conventions.md, "Default drive direction") ----------------------------------
+def mecanum_robot(lx, ly, r, drive_deg=None):
+    """Four mecanum wheels in the X arrangement, as the mecanum4 preset (rollers -45 front-left/rear-right)."""
+    wheels = []
+    for name, x, y, roller in (("fl", lx, ly, -45), ("fr", lx, -ly, 45), ("rl", -lx, ly, 45), ("rr", -lx, -ly, -45)):
+        w = {"name": name, "type": "mecanum", "x": x, "y": y, "roller_deg": roller, "radius": r}
+        if drive_deg is not None:
+            w["drive_deg"] = drive_deg
+        wheels.append(w)
+    return {"omnikin": 1, "name": "mecanum", "wheels": wheels}
+
+
+@pytest.mark.parametrize("lx, ly, r", [(0.2355, 0.15, 0.0475), (0.5, 0.05, 0.1), (0.3, 0.3, 0.076)])
+def test_mecanum_without_drive_deg_follows_the_standard_mecanum_equations(tmp_path, lx, ly, r):
+    """Muir & Neuman (1987), Taheri, Qiao & Ghaeminezhad (2015), wheels fl, fr, rl, rr:
+    omega = [vx - vy - (lx+ly) w, vx + vy + (lx+ly) w, vx + vy - (lx+ly) w, vx - vy + (lx+ly) w] / r."""
+    robot = load_robot(write(tmp_path, mecanum_robot(lx, ly, r)))
+    k = lx + ly
+    for vx, vy, w in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0), (0.3, -0.2, 0.7)):
+        expected = np.array([vx - vy - k * w, vx + vy + k * w, vx + vy - k * w, vx - vy + k * w]) / r
+        np.testing.assert_allclose(robot.ik([vx, vy, w]).wheel_speeds, expected, atol=1e-9)
+    # the closed form is isotropic with length lx + ly: J^T J = (4 / r^2) diag(1, 1, k^2)
+    assert robot.mobility.condition_number == pytest.approx(1.0, abs=1e-9)
+    explicit = load_robot(write(tmp_path, mecanum_robot(lx, ly, r, drive_deg=0)))
+    np.testing.assert_allclose(robot.ik_matrix, explicit.ik_matrix, atol=1e-15)
+
+
+def test_mecanum4_preset_matches_its_file_without_drive_deg(tmp_path):
+    text = (Path(preset_path("mecanum4"))).read_text().replace("drive_deg: 0, ", "")
+    assert "drive_deg" not in text.split("wheels:")[1]
+    robot = load_robot(write(tmp_path, text))
+    np.testing.assert_allclose(robot.ik_matrix, load_robot("mecanum4").ik_matrix, atol=1e-15)
+
+
+@pytest.mark.parametrize("kind, extra", [("swedish", {"roller_deg": 30}), ("standard", {}),
+                                         ("steerable", {}), ("castor", {"steer": {"offset": 0.02}})])
+def test_types_without_a_universal_mounting_must_give_drive_deg(tmp_path, kind, extra):
+    msg = load_error(tmp_path, with_wheel2(type=kind, **extra))
+    assert "'w2'" in msg and "'drive_deg'" in msg and f"required for a {kind} wheel" in msg
+    assert "0: along body +x" in msg
+
+
+def test_omni_default_is_still_the_counter_clockwise_tangent(tmp_path):
+    robot = load_robot(write(tmp_path, base_robot()))
+    b = math.radians(120)
+    np.testing.assert_allclose(robot.ik_matrix[1], hand_row(0.113 * math.cos(b), 0.113 * math.sin(b),
+                                                            b + math.pi / 2, 0.04125), atol=1e-12)
+
+
+# --- messages stay one bounded line whatever the value ----------------------------------------------------------
+HUGE_TEXT = "x" * 1_000_000
+HUGE_LIST = list(range(100_000))
+BOUNDED_CASES = [
+    ("name", _set_top("name", HUGE_TEXT)),
+    ("name-list", _set_top("name", HUGE_LIST)),
+    ("description", _set_top("description", HUGE_LIST)),
+    ("references", _set_top("references", [HUGE_TEXT, 1])),
+    ("wheels", _set_top("wheels", {"k": HUGE_LIST})),
+    ("schema", _set_top("omnikin", HUGE_TEXT)),
+    ("unknown-top-keys", _mut(lambda d: d.update({f"k{i}": i for i in range(20_000)}))),
+    ("unknown-wheel-keys", _w2(**{f"k{i}": i for i in range(20_000)})),
+    ("wheel-name", _w2(name=HUGE_TEXT)),
+    ("wheel-type", _w2(type=HUGE_TEXT)),
+    ("wheel-not-mapping", _mut(lambda d: d["wheels"].__setitem__(1, HUGE_LIST))),
+    ("radius", _w2(radius=HUGE_TEXT)),
+    ("radius-list", _w2(radius=HUGE_LIST)),
+    ("encoder", _w2(encoder=HUGE_LIST)),
+    ("invert", _w2(encoder={"ticks_per_rev": 100, "invert": HUGE_TEXT})),
+    ("steer", _w2(**STEER_W2, steer=HUGE_TEXT)),
+    ("roller", _w2(type="mecanum", roller_deg=HUGE_TEXT)),
+    ("omni-roller", _w2(roller_deg=HUGE_TEXT)),
+]
+
+
+@pytest.mark.parametrize("builder", [c[1] for c in BOUNDED_CASES], ids=[c[0] for c in BOUNDED_CASES])
+def test_messages_quote_huge_values_shortened(builder):
+    with pytest.raises(RobotFileError) as info:
+        robot_from_dict(builder(), "big.yaml")
+    msg = str(info.value)
+    assert msg.startswith("big.yaml: ") and "\n" not in msg and len(msg) < 600, msg[:1000]

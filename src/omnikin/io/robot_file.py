@@ -1,24 +1,50 @@
 """Robot files, schema version 1 (``docs/conventions.md``): YAML, JSON accepted.
 
 Every problem is reported as :class:`~omnikin.errors.RobotFileError` naming the
-file, the wheel and the field, e.g.
-``robot.yaml: wheel 'w2' (#2): field 'radius': must be > 0, got -0.04``.
+file, the wheel and the field, in one line, quoting user values through
+:func:`~omnikin.errors.shorten`, e.g.
+``robot.yaml: wheel 'w2' (#2): field 'radius': must lie in [0.0001, 10] m, got -0.04``.
 Degrees appear only in fields ending in ``_deg``; the loaded
 :class:`~omnikin.model.Robot` holds radians.
+
+Hostile files are refused before they cost time or memory (docs/conventions.md, "Robot
+file"): only regular files up to 256 KiB are read (:mod:`omnikin.io.textfile`); the YAML
+reader (:func:`strict_yaml_loader`, also used for ROS parameter files) refuses anchors,
+aliases and merge keys (a 1 KB alias bomb would otherwise expand to gigabytes), nesting
+deeper than :data:`MAX_DEPTH`, duplicate keys and over-long integer literals; JSON gets the
+same depth, key and integer checks.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 import re
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from ..errors import OmnikinError, RobotFileError, shorten
-from ..model import Robot
+from ..model import Robot, name_collisions, robot_name_problem
 from ..presets import PRESET_NAMES, preset_path
-from ..wheels import SWEDISH_TYPES, WHEEL_TYPES, Encoder, Steer, Wheel
+from ..wheels import (
+    GEAR_RATIO_RANGE,
+    MAX_SPEED_RANGE,
+    OFFSET_RANGE,
+    POSITION_LIMIT,
+    RADIUS_RANGE,
+    ROLLER_LIMIT_DEG,
+    SWEDISH_TYPES,
+    TICKS_PER_REV_RANGE,
+    WHEEL_TYPES,
+    Encoder,
+    Steer,
+    Wheel,
+    name_problem,
+    range_problem,
+)
+from .textfile import read_text
 
 SCHEMA_VERSION = 1
 TOP_KEYS = {"omnikin": True, "name": True, "description": False, "references": False, "wheels": True}
@@ -26,6 +52,34 @@ WHEEL_KEYS = {"name", "type", "distance", "angle_deg", "x", "y", "drive_deg", "r
               "radius", "encoder", "max_speed", "steer"}
 ENCODER_KEYS = {"ticks_per_rev", "gear_ratio", "invert", "counter_bits"}
 STEER_KEYS = {"offset", "min_deg", "max_deg"}
+
+FIELD_RANGES: dict[str, tuple[float, float, str]] = {
+    "x": (-POSITION_LIMIT, POSITION_LIMIT, "m"),
+    "y": (-POSITION_LIMIT, POSITION_LIMIT, "m"),
+    "distance": (0.0, POSITION_LIMIT, "m"),
+    "angle_deg": (-720.0, 720.0, "deg"),
+    "drive_deg": (-720.0, 720.0, "deg"),
+    "roller_deg": (-ROLLER_LIMIT_DEG, ROLLER_LIMIT_DEG, "deg"),
+    "radius": (*RADIUS_RANGE, "m"),
+    "max_speed": (*MAX_SPEED_RANGE, "rad/s"),
+    "encoder.ticks_per_rev": (*TICKS_PER_REV_RANGE, ""),
+    "encoder.gear_ratio": (*GEAR_RATIO_RANGE, ""),
+    "steer.offset": (*OFFSET_RANGE, "m"),
+    "steer.min_deg": (-180.0, 180.0, "deg"),
+    "steer.max_deg": (-180.0, 180.0, "deg"),
+}
+"""Allowed range of every numeric field (inclusive; docs/conventions.md gives the reasons)."""
+
+DEFAULT_DRIVE_DEG = {"mecanum": 0.0}
+"""Drive direction of a wheel type when ``drive_deg`` is omitted [deg]; omni wheels take the
+counter-clockwise tangent, every other type must give ``drive_deg`` (docs/conventions.md)."""
+
+MAX_DEPTH = 32
+"""Deepest nesting of mappings and lists in a robot or parameter file (a robot file needs 4)."""
+
+MAX_INT_CHARS = 100
+"""Longest integer literal read as an integer; longer decimal ones are read as floats (and
+then refused by the range of their field), other long forms are errors."""
 
 
 class _Where:
@@ -43,41 +97,33 @@ class _Where:
         return RobotFileError(": ".join(parts) + ": " + msg)
 
 
-def _number(where: _Where, value: Any, wheel: str | None, field: str, *, positive=False,
-            nonnegative=False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise where.error(f"must be a number, got {value!r}", wheel, field)
-    try:
-        x = float(value)
-    except OverflowError:
-        raise where.error(f"number too large, got {value!r}", wheel, field) from None
-    if not math.isfinite(x):
-        raise where.error(f"must be finite, got {value!r}", wheel, field)
-    if positive and x <= 0:
-        raise where.error(f"must be > 0, got {value!r}", wheel, field)
-    if nonnegative and x < 0:
-        raise where.error(f"must be >= 0, got {value!r}", wheel, field)
-    return x
+def _number(where: _Where, value: Any, wheel: str | None, field: str) -> float:
+    """``value`` as a float within ``FIELD_RANGES[field]``, else an error naming wheel and field."""
+    problem = range_problem(value, *FIELD_RANGES[field])
+    if problem:
+        raise where.error(problem, wheel, field)
+    return float(value)
 
 
 def _check_keys(where: _Where, data: Mapping, allowed, wheel: str | None, field: str | None):
     unknown = sorted(set(map(str, data)) - set(allowed))
     if unknown:
-        raise where.error(f"unknown key(s) {unknown}; allowed: {sorted(allowed)}", wheel,
+        raise where.error(f"unknown key(s) {shorten(unknown)}; allowed: {sorted(allowed)}", wheel,
                           field if field else None)
 
 
 def _encoder(where: _Where, data: Any, wheel: str) -> Encoder:
     if not isinstance(data, Mapping):
-        raise where.error(f"must be a mapping with keys {sorted(ENCODER_KEYS)}, got {data!r}", wheel, "encoder")
+        raise where.error(f"must be a mapping with keys {sorted(ENCODER_KEYS)}, got {shorten(data)}", wheel,
+                          "encoder")
     _check_keys(where, data, ENCODER_KEYS, wheel, "encoder")
     if "ticks_per_rev" not in data:
         raise where.error("missing required key 'ticks_per_rev'", wheel, "encoder")
-    tpr = _number(where, data["ticks_per_rev"], wheel, "encoder.ticks_per_rev", positive=True)
-    gear = _number(where, data.get("gear_ratio", 1.0), wheel, "encoder.gear_ratio", positive=True)
+    tpr = _number(where, data["ticks_per_rev"], wheel, "encoder.ticks_per_rev")
+    gear = _number(where, data.get("gear_ratio", 1.0), wheel, "encoder.gear_ratio")
     invert = data.get("invert", False)
     if not isinstance(invert, bool):
-        raise where.error(f"must be true or false, got {invert!r}", wheel, "encoder.invert")
+        raise where.error(f"must be true or false, got {shorten(invert)}", wheel, "encoder.invert")
     bits = data.get("counter_bits")
     if bits is not None and (isinstance(bits, bool) or not isinstance(bits, int) or not 2 <= bits <= 64):
         raise where.error(f"the width of the encoder's counter, a whole number from 2 to 64, got {shorten(bits)}",
@@ -87,32 +133,18 @@ def _encoder(where: _Where, data: Any, wheel: str) -> Encoder:
 
 def _steer(where: _Where, data: Any, wheel: str) -> Steer:
     if not isinstance(data, Mapping):
-        raise where.error(f"must be a mapping with keys {sorted(STEER_KEYS)}, got {data!r}", wheel, "steer")
+        raise where.error(f"must be a mapping with keys {sorted(STEER_KEYS)}, got {shorten(data)}", wheel, "steer")
     _check_keys(where, data, STEER_KEYS, wheel, "steer")
-    offset = _number(where, data.get("offset", 0.0), wheel, "steer.offset", nonnegative=True)
+    offset = _number(where, data.get("offset", 0.0), wheel, "steer.offset")
     lo = _number(where, data.get("min_deg", -180.0), wheel, "steer.min_deg")
     hi = _number(where, data.get("max_deg", 180.0), wheel, "steer.max_deg")
-    if not -180.0 <= lo < hi <= 180.0:
-        raise where.error(f"need -180 <= min_deg < max_deg <= 180, got {lo} and {hi}", wheel, "steer")
+    if not lo < hi:
+        raise where.error(f"need -180 <= min_deg < max_deg <= 180, got {lo:g} and {hi:g}", wheel, "steer")
     return Steer(offset, math.radians(lo), math.radians(hi))
 
 
-def _wheel(where: _Where, data: Any, index: int) -> Wheel:
-    label = f"wheel #{index}"
-    if not isinstance(data, Mapping):
-        raise where.error(f"must be a mapping, got {data!r}", label)
-    if isinstance(data.get("name"), str) and data["name"]:
-        label = f"wheel {data['name']!r} (#{index})"
-    _check_keys(where, data, WHEEL_KEYS, label, None)
-    for key in ("name", "type", "radius"):
-        if key not in data:
-            raise where.error("missing required key", label, key)
-    name, kind = data["name"], data["type"]
-    if not isinstance(name, str) or not name.strip():
-        raise where.error(f"must be a non-empty string, got {name!r}", label, "name")
-    if kind not in WHEEL_TYPES:
-        raise where.error(f"unknown wheel type {kind!r}; one of {list(WHEEL_TYPES)}", label, "type")
-
+def _placement(where: _Where, data: Mapping, label: str) -> tuple[float, float]:
+    """Hub position ``(x, y)`` [m] from ``x``/``y`` or ``distance``/``angle_deg``."""
     polar = [k for k in ("distance", "angle_deg") if k in data]
     cart = [k for k in ("x", "y") if k in data]
     if polar and cart:
@@ -120,47 +152,75 @@ def _wheel(where: _Where, data: Any, index: int) -> Wheel:
     if cart:
         if len(cart) != 2:
             raise where.error("Cartesian placement needs both 'x' and 'y'", label)
-        x = _number(where, data["x"], label, "x")
-        y = _number(where, data["y"], label, "y")
-    elif polar:
-        if len(polar) != 2:
-            raise where.error("polar placement needs both 'distance' and 'angle_deg'", label)
-        dist = _number(where, data["distance"], label, "distance", nonnegative=True)
-        beta = math.radians(_number(where, data["angle_deg"], label, "angle_deg"))
-        x, y = dist * math.cos(beta), dist * math.sin(beta)
-        x, y = (0.0 if abs(x) < 1e-15 * max(dist, 1) else x), (0.0 if abs(y) < 1e-15 * max(dist, 1) else y)
-    else:
+        return _number(where, data["x"], label, "x"), _number(where, data["y"], label, "y")
+    if not polar:
         raise where.error("missing placement: give distance and angle_deg, or x and y", label)
+    if len(polar) != 2:
+        raise where.error("polar placement needs both 'distance' and 'angle_deg'", label)
+    dist = _number(where, data["distance"], label, "distance")
+    beta = math.radians(_number(where, data["angle_deg"], label, "angle_deg"))
+    x, y = dist * math.cos(beta), dist * math.sin(beta)
+    return (0.0 if abs(x) < 1e-15 * max(dist, 1) else x), (0.0 if abs(y) < 1e-15 * max(dist, 1) else y)
 
+
+def _drive(where: _Where, data: Mapping, label: str, kind: str, x: float, y: float) -> float:
+    """Drive direction [rad]: ``drive_deg``, else the default of the wheel type (docs/conventions.md):
+    omni wheels the counter-clockwise tangent, mecanum wheels body +x; the other types must say."""
     if "drive_deg" in data:
-        drive = math.radians(_number(where, data["drive_deg"], label, "drive_deg"))
-    elif x == 0.0 and y == 0.0:
+        return math.radians(_number(where, data["drive_deg"], label, "drive_deg"))
+    if kind in DEFAULT_DRIVE_DEG:
+        return math.radians(DEFAULT_DRIVE_DEG[kind])
+    if kind != "omni":
+        raise where.error(f"required for a {kind} wheel: the direction its hub moves at positive wheel speed "
+                          f"and zero steering (0: along body +x, as on differential drives, cars and castors; "
+                          f"angle_deg + 90: the counter-clockwise tangent)", label, "drive_deg")
+    if x == 0.0 and y == 0.0:
         raise where.error("a wheel at the origin has no default drive direction: give drive_deg", label,
                           "drive_deg")
-    else:
-        drive = math.atan2(y, x) + math.pi / 2
+    return math.atan2(y, x) + math.pi / 2
 
-    radius = _number(where, data["radius"], label, "radius", positive=True)
-    roller = 0.0
-    if kind in SWEDISH_TYPES:
-        if kind == "omni":
-            if "roller_deg" in data and _number(where, data["roller_deg"], label, "roller_deg") != 0.0:
-                raise where.error(f"an omni wheel has roller_deg 0, got {data['roller_deg']!r} "
-                                  f"(use type 'swedish' for other roller angles)", label, "roller_deg")
-        else:
-            if "roller_deg" not in data:
-                raise where.error(f"required for a {kind} wheel", label, "roller_deg")
-            gamma = _number(where, data["roller_deg"], label, "roller_deg")
-            if kind == "mecanum" and abs(gamma) != 45.0:
-                raise where.error(f"a mecanum wheel has roller_deg +45 or -45, got {gamma!r} "
-                                  f"(use type 'swedish' for other angles)", label, "roller_deg")
-            if not -90.0 < gamma < 90.0:
-                raise where.error(f"must lie strictly between -90 and 90 (at +-90 the wheel cannot drive), "
-                                  f"got {gamma!r}", label, "roller_deg")
-            roller = math.radians(gamma)
-    elif "roller_deg" in data:
-        raise where.error(f"only Swedish wheels (omni, mecanum, swedish) have rollers, not {kind!r}", label,
-                          "roller_deg")
+
+def _roller(where: _Where, data: Mapping, label: str, kind: str) -> float:
+    """Roller angle gamma [rad] of a Swedish wheel (0 for every other wheel)."""
+    if kind not in SWEDISH_TYPES:
+        if "roller_deg" in data:
+            raise where.error(f"only Swedish wheels (omni, mecanum, swedish) have rollers, not {kind!r}", label,
+                              "roller_deg")
+        return 0.0
+    if kind == "omni":
+        if "roller_deg" in data and _number(where, data["roller_deg"], label, "roller_deg") != 0.0:
+            raise where.error(f"an omni wheel has roller_deg 0, got {shorten(data['roller_deg'])} "
+                              f"(use type 'swedish' for other roller angles)", label, "roller_deg")
+        return 0.0
+    if "roller_deg" not in data:
+        raise where.error(f"required for a {kind} wheel", label, "roller_deg")
+    gamma = data["roller_deg"]
+    if kind == "mecanum" and (isinstance(gamma, bool) or gamma not in (45, -45)):
+        raise where.error(f"a mecanum wheel has roller_deg +45 or -45, got {shorten(gamma)} "
+                          f"(use type 'swedish' for other angles)", label, "roller_deg")
+    return math.radians(_number(where, gamma, label, "roller_deg"))
+
+
+def _wheel(where: _Where, data: Any, index: int) -> Wheel:
+    label = f"wheel #{index}"
+    if not isinstance(data, Mapping):
+        raise where.error(f"must be a mapping, got {shorten(data)}", label)
+    if isinstance(data.get("name"), str) and data["name"]:
+        label = f"wheel {shorten(data['name'])} (#{index})"
+    _check_keys(where, data, WHEEL_KEYS, label, None)
+    for key in ("name", "type", "radius"):
+        if key not in data:
+            raise where.error("missing required key", label, key)
+    name, kind = data["name"], data["type"]
+    problem = name_problem(name)
+    if problem:
+        raise where.error(problem, label, "name")
+    if kind not in WHEEL_TYPES:
+        raise where.error(f"unknown wheel type {shorten(kind)}; one of {list(WHEEL_TYPES)}", label, "type")
+    x, y = _placement(where, data, label)
+    drive = _drive(where, data, label, kind, x, y)
+    radius = _number(where, data["radius"], label, "radius")
+    roller = _roller(where, data, label, kind)
 
     steer = None
     if "steer" in data:
@@ -172,10 +232,11 @@ def _wheel(where: _Where, data: Any, index: int) -> Wheel:
     if kind == "castor" and "encoder" in data:
         raise where.error("castors are passive and unmeasured in schema 1: remove 'encoder'", label, "encoder")
     encoder = _encoder(where, data["encoder"], label) if "encoder" in data else None
-    max_speed = None
-    if "max_speed" in data:
-        max_speed = _number(where, data["max_speed"], label, "max_speed", positive=True)
-    return Wheel(name, kind, x, y, drive, radius, roller, encoder, max_speed, steer)
+    max_speed = _number(where, data["max_speed"], label, "max_speed") if "max_speed" in data else None
+    try:
+        return Wheel(name, kind, x, y, drive, radius, roller, encoder, max_speed, steer)
+    except OmnikinError as exc:      # a combination the file checks above do not see
+        raise where.error(str(exc), label) from None
 
 
 def robot_from_dict(data: Any, source: str = "<robot>") -> Robot:
@@ -188,71 +249,150 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> Robot:
         if required and key not in data:
             raise where.error("missing required key", None, key)
     if data["omnikin"] != SCHEMA_VERSION or isinstance(data["omnikin"], bool):
-        raise where.error(f"unsupported schema version {data['omnikin']!r}; this omnikin reads version "
+        raise where.error(f"unsupported schema version {shorten(data['omnikin'])}; this omnikin reads version "
                           f"{SCHEMA_VERSION}", None, "omnikin")
     name = data["name"]
-    if not isinstance(name, str) or not name.strip():
-        raise where.error(f"must be a non-empty string, got {name!r}", None, "name")
+    problem = robot_name_problem(name)
+    if problem:
+        raise where.error(problem, None, "name")
     description = data.get("description", "")
     if not isinstance(description, str):
-        raise where.error(f"must be a string, got {description!r}", None, "description")
+        raise where.error(f"must be a string, got {shorten(description)}", None, "description")
     refs = data.get("references", [])
     if not isinstance(refs, list) or not all(isinstance(r, str) for r in refs):
-        raise where.error(f"must be a list of strings, got {refs!r}", None, "references")
+        raise where.error(f"must be a list of strings, got {shorten(refs)}", None, "references")
     wheels = data["wheels"]
     if not isinstance(wheels, list) or not wheels:
-        raise where.error(f"must be a non-empty list of wheels, got {wheels!r}", None, "wheels")
+        raise where.error(f"must be a non-empty list of wheels, got {shorten(wheels)}", None, "wheels")
     parsed = [_wheel(where, w, i + 1) for i, w in enumerate(wheels)]
-    seen = set()
-    for i, w in enumerate(parsed):
-        if w.name in seen:
-            raise where.error(f"duplicate wheel name {w.name!r}", f"wheel #{i + 1}", "name")
-        seen.add(w.name)
+    for i, problem in name_collisions([w.name for w in parsed]):
+        raise where.error(problem, f"wheel {shorten(parsed[i].name)} (#{i + 1})", "name")
     try:
         return Robot(name, tuple(parsed), description, tuple(refs))
     except OmnikinError as exc:
         raise RobotFileError(f"{source}: {exc}") from None
 
 
-_EXPONENT = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+$")
-"""Floats YAML 1.1 reads as strings (``5e-2``: no dot) but YAML 1.2 and JSON as numbers."""
+# --- reading YAML and JSON safely ---------------------------------------------------------------
+_EXPONENT = re.compile(r"[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)[eE][-+]?[0-9]+")
+"""Floats YAML 1.1 reads as strings (``5e-2``: no dot) but YAML 1.2 and JSON as numbers. Written
+without nested repetition so that a long hostile scalar is matched in linear time."""
+
+_NO_ALIASES = ("anchors (&name) and aliases (*name) are not allowed in omnikin files (a 1 KB alias bomb "
+               "expands to gigabytes): write the values out")
 
 
 def strict_yaml_loader():
-    """A PyYAML SafeLoader that refuses duplicate keys and reads ``5e-2`` as a float."""
+    """A PyYAML SafeLoader for robot and parameter files (module docstring).
+
+    Refuses, with the line and column: anchors and aliases, merge keys (``<<``), nesting deeper
+    than :data:`MAX_DEPTH`, keys that are not scalars, duplicate keys and integer literals of
+    more than :data:`MAX_INT_CHARS` characters that are not plain decimals. Reads ``5e-2`` as a
+    float (YAML 1.2). ROS 2's own parameter parser (rcl_yaml_param_parser) refuses aliases too.
+    """
     import yaml
+    from yaml.composer import ComposerError
+    from yaml.constructor import ConstructorError
 
     class StrictLoader(yaml.SafeLoader):
-        pass
+        depth = 0
+
+        def compose_node(self, parent, index):
+            event = self.peek_event()
+            if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None) is not None:
+                raise ComposerError(None, None, _NO_ALIASES, event.start_mark)
+            if self.depth >= MAX_DEPTH:
+                raise ComposerError(None, None, f"nested deeper than {MAX_DEPTH} levels", event.start_mark)
+            self.depth += 1
+            try:
+                return super().compose_node(parent, index)
+            finally:
+                self.depth -= 1
 
     def mapping(loader, node, deep=False):
         keys = set()
         for key_node, _ in node.value:
+            mark = key_node.start_mark
+            if key_node.tag == "tag:yaml.org,2002:merge":
+                raise ConstructorError(None, None, "merge keys (<<) are not allowed: write the keys out", mark)
+            if not isinstance(key_node, yaml.ScalarNode):
+                raise ConstructorError(None, None, "a key must be a plain value, not a list or mapping", mark)
             key = loader.construct_object(key_node, deep=deep)
             if key in keys:
-                mark = key_node.start_mark
-                raise yaml.constructor.ConstructorError(
-                    None, None, f"duplicate key {key!r} (line {mark.line + 1})", mark)
+                raise ConstructorError(None, None, f"duplicate key {shorten(key)}", mark)
             keys.add(key)
         return loader.construct_mapping(node, deep=deep)
 
     def scalar(loader, node):
         value = loader.construct_scalar(node)
-        if node.style is None and _EXPONENT.match(value):
+        if node.style is None and len(value) <= MAX_INT_CHARS and _EXPONENT.fullmatch(value):
             return float(value)
         return value
 
+    def integer(loader, node):
+        text = loader.construct_scalar(node).replace("_", "")
+        if len(text) <= MAX_INT_CHARS:
+            return yaml.SafeLoader.construct_yaml_int(loader, node)
+        if text.lstrip("+-").isdigit():
+            return float(text)        # inf or a huge float: refused by the range of its field
+        raise ConstructorError(None, None, f"integer literal of {len(text)} characters is too long",
+                               node.start_mark)
+
     StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
     StrictLoader.add_constructor("tag:yaml.org,2002:str", scalar)
+    StrictLoader.add_constructor("tag:yaml.org,2002:int", integer)
     return StrictLoader
+
+
+def parse_yaml(text: str, source: str, error: type[Exception] = RobotFileError) -> Any:
+    """The data of a YAML document read with :func:`strict_yaml_loader` (None if empty); every
+    problem raises ``error`` naming ``source``, the line and the column."""
+    import yaml
+
+    try:
+        return yaml.load(text, Loader=strict_yaml_loader())
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        at = f" at line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise error(f"{source}: invalid YAML{at}: {problem}") from None
+
+
+def load_yaml_file(path: str | Path, error: type[Exception], what: str = "a YAML file") -> Any:
+    """Read and parse a small YAML file (robot or ROS parameter file) with every check above."""
+    return parse_yaml(read_text(path, error, what=what), str(path), error)
+
+
+_JSON_TOKENS = re.compile(r'"(?:[^"\\]|\\.)*"|[\[\]{}]', re.DOTALL)
+
+
+def _json_depth_check(text: str, source: str) -> None:
+    """Refuse JSON nested deeper than :data:`MAX_DEPTH` before the (recursive) decoder sees it."""
+    depth = 0
+    for m in _JSON_TOKENS.finditer(text):
+        token = m.group()
+        if token in "[{":
+            depth += 1
+            if depth > MAX_DEPTH:
+                line = text.count("\n", 0, m.start()) + 1
+                raise RobotFileError(f"{source}: invalid JSON at line {line}: nested deeper than {MAX_DEPTH} levels")
+        elif token in "]}":
+            depth -= 1
+
+
+def _json_int(text: str) -> int | float:
+    """JSON integers: exact up to :data:`MAX_INT_CHARS` digits, longer ones as floats (then refused
+    by the range of their field) instead of Python's ``int`` digit-limit ValueError."""
+    return int(text) if len(text) <= MAX_INT_CHARS else float(text)
 
 
 def _unique_json_keys(source: str):
     def hook(pairs):
-        keys = [k for k, _ in pairs]
-        dup = sorted({k for k in keys if keys.count(k) > 1})
-        if dup:
-            raise RobotFileError(f"{source}: duplicate key(s) {dup}")
+        seen: set = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise RobotFileError(f"{source}: duplicate key {shorten(key)}")
+            seen.add(key)
         return dict(pairs)
     return hook
 
@@ -260,38 +400,32 @@ def _unique_json_keys(source: str):
 def parse_robot_text(text: str, source: str) -> Robot:
     """Parse YAML or JSON text (JSON is YAML 1.2 too; tried first when it looks like JSON)."""
     if text.lstrip().startswith("{"):
+        _json_depth_check(text, source)
         try:
-            data = json.loads(text, object_pairs_hook=_unique_json_keys(source))
+            data = json.loads(text, object_pairs_hook=_unique_json_keys(source), parse_int=_json_int)
         except json.JSONDecodeError as exc:
             raise RobotFileError(f"{source}: invalid JSON at line {exc.lineno} column {exc.colno}: {exc.msg}") from None
     else:
-        import yaml
-
-        try:
-            data = yaml.load(text, Loader=strict_yaml_loader())
-        except yaml.YAMLError as exc:
-            mark = getattr(exc, "problem_mark", None)
-            at = f" at line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""
-            problem = getattr(exc, "problem", None) or str(exc)
-            raise RobotFileError(f"{source}: invalid YAML{at}: {problem}") from None
+        data = parse_yaml(text, source)
     return robot_from_dict(data, source)
 
 
 def load_robot(spec: str | Path) -> Robot:
-    """Load a robot from a preset name (``omnikin show`` lists them) or a file path."""
+    """Load a robot from a preset name (``omnikin show`` lists them) or a file path.
+
+    Only a regular file of at most 256 KiB is read (:func:`omnikin.io.textfile.read_text`): a
+    directory, device, FIFO, binary or non-UTF-8 file is an error naming it.
+    """
     spec_str = str(spec)
     path = Path(spec_str)
-    if spec_str in PRESET_NAMES and not path.exists():
+    exists = os.path.lexists(spec_str)      # False, not an OSError, for a name too long or with NUL
+    if spec_str in PRESET_NAMES and not exists:
         path = preset_path(spec_str)
-    elif not path.exists():
-        raise RobotFileError(f"{spec_str}: no such robot file or preset; presets: {', '.join(PRESET_NAMES)}")
-    if path.is_dir():
-        raise RobotFileError(f"{spec_str}: is a directory, not a robot file")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise RobotFileError(f"{spec_str}: cannot read: {exc}") from None
-    return parse_robot_text(text, path.name if spec_str in PRESET_NAMES else spec_str)
+    elif not exists:
+        raise RobotFileError(f"{shorten(spec_str, 1000)}: no such robot file or preset; presets: "
+                             f"{', '.join(PRESET_NAMES)}")
+    source = path.name if spec_str in PRESET_NAMES else spec_str
+    return parse_robot_text(read_text(path, RobotFileError, what="a robot file"), source)
 
 
 def _clean(x: float) -> float:

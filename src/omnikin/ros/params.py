@@ -108,20 +108,10 @@ def load_params(path: str | Path | None) -> dict:
     values = dict(DEFAULTS)
     if path is None:
         return values
-    import yaml
+    from ..io.robot_file import load_yaml_file
 
-    from ..io.robot_file import strict_yaml_loader
-
-    try:
-        data = yaml.load(Path(path).read_text(encoding="utf-8-sig"), Loader=strict_yaml_loader()) or {}
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read: {exc.strerror}") from None
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{path}: not a UTF-8 text file (byte {exc.start}: {exc.reason})") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        at = f" at line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""
-        raise InputError(f"{path}: invalid YAML{at}: {getattr(exc, 'problem', None) or 'syntax error'}") from None
+    # a regular file of at most 256 KiB, no anchors/aliases, bounded nesting (the robot-file reader's checks)
+    data = load_yaml_file(path, InputError, what="a parameter file") or {}
     if not isinstance(data, dict):
         raise InputError(f"{path}: expected a mapping of parameters")
     if len(data) == 1:
