@@ -304,11 +304,17 @@ def test_analyze_theta_columns(capsys, tmp_path):
     rad = tmp_path / "rad.csv"
     rad.write_text("direction,x_abs,y_abs,x_calc,y_calc,theta_abs,theta_calc\n"
                    "cw,0.01,0.02,0,0,0.1,0.02\n"
-                   "ccw,0.03,0.04,0,0,,\n", encoding="utf-8")
+                   "ccw,0.03,0.04,0,0,-0.1,0.05\n", encoding="utf-8")
     d = run_json(capsys, "umbmark", "analyze", rad, "--json")
     assert d["cw"]["runs"][0]["epsilon"][2] == pytest.approx(0.08, rel=1e-12)
-    assert d["ccw"]["runs"][0]["epsilon"][2] is None
+    assert d["ccw"]["runs"][0]["epsilon"][2] == pytest.approx(-0.15, rel=1e-12)
     assert d["e_max_syst"] == pytest.approx(0.05, rel=1e-12)
+    # an empty theta field is an error naming line and column, not a run without heading
+    rad.write_text("direction,x_abs,y_abs,x_calc,y_calc,theta_abs,theta_calc\n"
+                   "cw,0.01,0.02,0,0,0.1,0.02\n"
+                   "ccw,0.03,0.04,0,0,,\n", encoding="utf-8")
+    rc, _, err = run(capsys, "umbmark", "analyze", rad, "--json")
+    assert rc == 2 and "line 3, column 'theta_abs'" in err and "empty field" in err
     # comments, blank lines and a BOM as spreadsheets write them
     bom = tmp_path / "bom.csv"
     bom.write_bytes("\ufeff# measured 2024-05-01\ndirection,x_abs,y_abs,x_calc,y_calc\n\ncw,0.03,0.04,0,0\n"

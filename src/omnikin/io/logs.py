@@ -36,7 +36,6 @@ other scripts' digits)."""
 TICK_DIGITS = 20
 """Digits of the largest 64-bit reading, 2**64 - 1: longer text is refused before int()."""
 
-
 @dataclass(frozen=True)
 class TickLog:
     """A parsed tick log: ``t`` (N,), ``ticks`` (N, n_enc), ``steer`` (N, n_steer) [rad] or None.
@@ -89,8 +88,9 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
                                  f"; robot {robot.name!r} expects {expected}")
     if len(rows) < 3:
         raise OdometryInputError(f"{source}: needs at least two samples, got {len(rows) - 1}")
-    t_col, tick_cols = header.index("t"), [header.index(name) for name in wheels]
-    steer_idx = [header.index(name) for name in steer_cols]
+    position = {name: k for k, name in enumerate(header)}      # a dict: linear in the number of columns
+    t_col, tick_cols = position["t"], [position[name] for name in wheels]
+    steer_idx = [position[name] for name in steer_cols]
     samples: list[tuple] = []
     kept_lines: list[int] = []
     duplicates: list[int] = []

@@ -14,8 +14,9 @@ one of::
     spin ANGLE_DEG                            turn in place (positive: counter-clockwise)
     arc RADIUS ANGLE_DEG                      forward on a circle
 
-Blank lines and lines starting with ``#`` are skipped. Errors name the file, the line
-and the column.
+Blank lines and lines starting with ``#`` are skipped; every field needs a value (an
+optional theta column, once present, must be filled on every row: an empty field is an
+error, not "not measured"). Errors name the file, the line and the column.
 """
 
 from __future__ import annotations
@@ -25,8 +26,8 @@ import math
 
 import numpy as np
 
+from ..errors import InputError, OmnikinError, shorten
 from ..geometry import wrap_angle
-from ..errors import InputError, OmnikinError
 from ..plans import CalibrationRun, Plan, parse_plan
 from .csvfile import column_problems, number, read_rows
 
@@ -45,7 +46,7 @@ def _rows(path) -> tuple[list[str], list[tuple[int, dict]]]:
     for line_no, r in raw[1:]:
         if len(r) != len(header):
             raise RunsFileError(f"{source}: line {line_no}: {len(r)} fields, the header has {len(header)}")
-        rows.append((line_no, dict(zip(header, r))))
+        rows.append((line_no, dict(zip(header, r, strict=True))))
     if not rows:
         raise RunsFileError(f"{source}: no data rows after the header")
     return header, rows
@@ -66,9 +67,9 @@ def _theta(source, header, line_no, row, which) -> float:
     rad, deg = f"theta_{which}", f"theta_{which}_deg"
     if rad in header and deg in header:
         raise RunsFileError(f"{source}: give {rad} [rad] or {deg} [deg], not both")
-    if rad in header and row[rad] != "":
+    if rad in header:
         return _number(source, line_no, rad, row[rad])
-    if deg in header and row[deg] != "":
+    if deg in header:
         return math.radians(_number(source, line_no, deg, row[deg]))
     return math.nan
 
@@ -83,7 +84,8 @@ def read_umbmark_measurements(path):
     for line_no, row in rows:
         d = row["direction"].lower()
         if d not in eps:
-            raise RunsFileError(f"{source}: line {line_no}, column 'direction': expected cw or ccw, got {row['direction']!r}")
+            raise RunsFileError(f"{source}: line {line_no}, column 'direction': expected cw or ccw, got "
+                                f"{shorten(row['direction'])}")
         x = _number(source, line_no, "x_abs", row["x_abs"]) - _number(source, line_no, "x_calc", row["x_calc"])
         y = _number(source, line_no, "y_abs", row["y_abs"]) - _number(source, line_no, "y_calc", row["y_calc"])
         th = _theta(source, header, line_no, row, "abs") - _theta(source, header, line_no, row, "calc")
@@ -94,7 +96,11 @@ def read_umbmark_measurements(path):
     return {d: np.array(v) for d, v in eps.items()}
 
 
-def read_calibration_runs(path, sigma=(0.001, math.radians(0.2))) -> list[CalibrationRun]:
+DEFAULT_SIGMA = (0.001, math.radians(0.2))
+"""Default measurement standard deviations of a calibration run: position [m], heading [rad]."""
+
+
+def read_calibration_runs(path, sigma=DEFAULT_SIGMA) -> list[CalibrationRun]:
     """Calibration runs of a runs file (module docstring)."""
     source = str(path)
     header, rows = _rows(path)

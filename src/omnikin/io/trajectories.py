@@ -10,22 +10,22 @@
 * ``csv``: header ``t,x,y,theta`` [s, m, m, rad], as ``omnikin odometry`` writes.
 
 Integer timestamps (``int64`` nanoseconds, as in ROS bags) are written exactly as
-``seconds.nanoseconds``. Blank lines and lines starting with ``#`` are skipped when reading;
-every problem names the file and the line.
+``seconds.nanoseconds``. Reading follows :mod:`omnikin.io.csvfile`: blank lines and lines
+starting with ``#`` are skipped, an empty field is an error (never dropped), every problem names
+the file and the line; TUM and KITTI fields are separated by blanks (or single commas).
 """
 
 from __future__ import annotations
 
 import math
-import re
 import sys
 from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError, shorten
 from ..geometry import wrap_angle
-from ..errors import InputError
-from .csvfile import number
+from .csvfile import iter_fields, number, read_rows
 
 FORMATS = ("tum", "kitti", "csv")
 
@@ -62,13 +62,14 @@ def trajectory_lines(t, poses, fmt: str) -> list[str]:
     if fmt in ("csv", "tum"):                      # fixed decimals: what rounds to zero is written as 0
         p = np.column_stack([np.round(p[:, :2], 9), np.round(p[:, 2], 12)]) + 0.0
     if fmt == "csv":
-        return ["t,x,y,theta"] + [f"{tk},{x:.9f},{y:.9f},{th:.12f}" for tk, (x, y, th) in zip(times, p.tolist())]
+        return ["t,x,y,theta"] + [f"{tk},{x:.9f},{y:.9f},{th:.12f}"
+                                  for tk, (x, y, th) in zip(times, p.tolist(), strict=True)]
     if fmt == "tum":
         qz, qw = np.round(np.sin(0.5 * p[:, 2]), 12) + 0.0, np.round(np.cos(0.5 * p[:, 2]), 12) + 0.0
         return [f"{tk} {x:.9f} {y:.9f} 0 0 0 {z:.12f} {w:.12f}"
-                for tk, (x, y, _), z, w in zip(times, p.tolist(), qz.tolist(), qw.tolist())]
+                for tk, (x, y, _), z, w in zip(times, p.tolist(), qz.tolist(), qw.tolist(), strict=True)]
     return [f"{ck:.12g} {-sk + 0.0:.12g} 0 {x:.12g} {sk:.12g} {ck:.12g} 0 {y:.12g} 0 0 1 0"
-            for (x, y, _), ck, sk in zip(p.tolist(), c.tolist(), s.tolist())]
+            for (x, y, _), ck, sk in zip(p.tolist(), c.tolist(), s.tolist(), strict=True)]
 
 
 def write_trajectory(path, t, poses, fmt: str) -> None:
@@ -83,70 +84,67 @@ def write_trajectory(path, t, poses, fmt: str) -> None:
         raise TrajectoryFileError(f"{path}: cannot write: {exc.strerror or exc}") from None
 
 
-_SPLIT = re.compile(r"[\s,]+")
-
-
 def _numbers(source, line_no, fields, count, fmt) -> list[float]:
     if len(fields) != count:
         raise TrajectoryFileError(f"{source}: line {line_no}: {len(fields)} fields, a {fmt} line has {count}")
     return [number(f, source, line_no, k + 1, TrajectoryFileError) for k, f in enumerate(fields)]
 
 
+CSV_HEADER = ["t", "x", "y", "theta"]
+
+
+def _first_row(path) -> tuple[int, list[str]]:
+    for row in iter_fields(path, TrajectoryFileError):
+        return row
+    raise TrajectoryFileError(f"{path}: empty trajectory file")
+
+
 def detect_format(path) -> str:
     """``csv`` (header starting ``t,``), ``tum`` (8 fields) or ``kitti`` (12 fields) from the first data line."""
-    lines = _lines(path)
-    if not lines:
-        raise TrajectoryFileError(f"{path}: empty trajectory file")
-    line_no, text = lines[0]
-    if text.replace(" ", "").lower().startswith("t,"):
+    line_no, fields = _first_row(path)
+    if fields[0].lower() == "t":
         return "csv"
-    n = len([f for f in _SPLIT.split(text.strip()) if f])
-    if n == 8:
+    if len(fields) == 8:
         return "tum"
-    if n == 12:
+    if len(fields) == 12:
         return "kitti"
-    raise TrajectoryFileError(f"{path}: line {line_no}: {n} fields; expected a TUM line (t x y z qx qy qz qw, 8 "
-                              f"fields), a KITTI line (12 fields) or a CSV header t,x,y,theta")
+    raise TrajectoryFileError(f"{path}: line {line_no}: {len(fields)} fields; expected a TUM line (t x y z qx qy qz "
+                              f"qw, 8 fields), a KITTI line (12 fields) or a CSV header t,x,y,theta")
 
 
-def _lines(path) -> list[tuple[int, str]]:
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise TrajectoryFileError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise TrajectoryFileError(f"{path}: is a directory, not a trajectory file") from None
-    except UnicodeDecodeError as exc:
-        raise TrajectoryFileError(f"{path}: not a UTF-8 text file (byte {exc.start}: {exc.reason})") from None
-    except OSError as exc:
-        raise TrajectoryFileError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    return [(k + 1, line) for k, line in enumerate(text.splitlines())
-            if line.strip() and not line.lstrip().startswith("#")]
+def _rows(path, fmt: str) -> list[tuple[int, list[str]]]:
+    """The data rows of a trajectory file (the CSV header checked and dropped); no empty field."""
+    source = str(path)
+    if fmt != "csv":
+        return list(iter_fields(path, TrajectoryFileError))
+    rows = read_rows(path, TrajectoryFileError)
+    if not rows:
+        raise TrajectoryFileError(f"{source}: empty trajectory file")
+    (line_no, header), *data = rows
+    if header != CSV_HEADER:
+        raise TrajectoryFileError(f"{source}: line {line_no}: expected the header t,x,y,theta, got "
+                                  f"{shorten(','.join(header))}")
+    return data
 
 
 def read_trajectory(path, fmt: str | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """``(t (N,), poses (N, 3))`` of a TUM, KITTI or CSV file (``fmt`` None: detected)."""
+    """``(t (N,), poses (N, 3))`` of a TUM, KITTI or CSV file (``fmt`` None: detected).
+
+    Every field must hold a number: an empty field (``1,,2``) is an error naming its line and
+    column, never skipped (:mod:`omnikin.io.csvfile`).
+    """
     source = str(path)
     fmt = fmt or detect_format(path)
     if fmt not in FORMATS:
         raise TrajectoryFileError(f"unknown trajectory format {fmt!r}; one of {list(FORMATS)}")
-    lines = _lines(path)
-    if fmt == "csv":
-        if not lines:
-            raise TrajectoryFileError(f"{source}: empty trajectory file")
-        header = [h.strip() for h in lines[0][1].split(",")]
-        if header != ["t", "x", "y", "theta"]:
-            raise TrajectoryFileError(f"{source}: line {lines[0][0]}: expected the header t,x,y,theta, got "
-                                      f"{lines[0][1].strip()!r}")
-        lines = lines[1:]
-    if not lines:
+    rows = _rows(path, fmt)
+    if not rows:
         raise TrajectoryFileError(f"{source}: no poses")
-    t = np.empty(len(lines))
-    poses = np.empty((len(lines), 3))
-    for k, (line_no, text) in enumerate(lines):
-        fields = [f for f in (text.split(",") if fmt == "csv" else _SPLIT.split(text.strip())) if f.strip()]
+    t = np.empty(len(rows))
+    poses = np.empty((len(rows), 3))
+    for k, (line_no, fields) in enumerate(rows):
         if fmt == "csv":
-            t[k], *poses[k] = _numbers(source, line_no, [f.strip() for f in fields], 4, "csv")
+            t[k], *poses[k] = _numbers(source, line_no, fields, 4, "csv")
         elif fmt == "tum":
             tk, x, y, _z, qx, qy, qz, qw = _numbers(source, line_no, fields, 8, "TUM")
             if qx == qy == qz == qw == 0.0:
