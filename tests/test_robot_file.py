@@ -790,6 +790,10 @@ BOUNDED_CASES = [
     ("steer", _w2(**STEER_W2, steer=HUGE_TEXT)),
     ("roller", _w2(type="mecanum", roller_deg=HUGE_TEXT)),
     ("omni-roller", _w2(roller_deg=HUGE_TEXT)),
+    ("radius-int-beyond-repr", _w2(radius=10 ** 5000)),           # repr() of it raises ValueError
+    ("name-int-beyond-repr", _w2(name=10 ** 5000)),
+    ("schema-int-beyond-repr", _set_top("omnikin", 10 ** 5000)),
+    ("counter-bits-beyond-repr", _w2(encoder={"ticks_per_rev": 100, "counter_bits": 10 ** 5000})),
 ]
 
 

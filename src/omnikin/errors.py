@@ -66,7 +66,10 @@ def shorten(value: object, limit: int = 60) -> str:
     Messages never print an unbounded value: a 10 MB field or a list of a million numbers
     would make the one-line error useless (and slow).
     """
-    text = repr(value)
+    try:
+        text = repr(value)
+    except ValueError:      # holds an int beyond Python's digit limit for str(int) (4300 digits)
+        return f"<{type(value).__name__} too large to print>"
     if len(text) <= limit:
         return text
     return text[: limit - 15] + f"... ({len(text)} chars)"

@@ -116,7 +116,7 @@ class Encoder:
         bits = self.counter_bits
         if bits is not None and (isinstance(bits, (bool, np.bool_)) or not isinstance(bits, (int, np.integer))
                                  or not 2 <= bits <= 64):
-            raise InputError(f"encoder counter_bits must be a whole number from 2 to 64, got {bits!r}")
+            raise InputError(f"encoder counter_bits must be a whole number from 2 to 64, got {shorten(bits)}")
         _require(range_problem(self.ticks_per_rev, *TICKS_PER_REV_RANGE), "encoder: ticks_per_rev")
         _require(range_problem(self.gear_ratio, *GEAR_RATIO_RANGE), "encoder: gear_ratio")
         if not isinstance(self.invert, (bool, np.bool_)):
