@@ -78,7 +78,7 @@ def range_problem(value, low: float, high: float, unit: str = "") -> str | None:
     if not math.isfinite(x):
         return f"must be finite, got {shorten(value)}"
     if not low <= x <= high:
-        return f"must lie in [{low:g}, {high:g}]{' ' + unit if unit else ''}, got {x:g}"
+        return f"must lie in [{low:.10g}, {high:.10g}]{' ' + unit if unit else ''}, got {x:g}"
     return None
 
 
