@@ -208,6 +208,21 @@ class Robot:
     def steer_names(self) -> list[str]:
         return [w.name for w in self.steerable]
 
+    def rolling_index(self, names) -> list[int]:
+        """Positions of the rolling wheels ``names`` in a wheel-speed array (one dictionary
+        look-up each); a castor or unknown name is an error."""
+        index = self._rolling_index
+        try:
+            return [index[n] for n in names]
+        except (KeyError, TypeError):
+            bad = next(n for n in names if not isinstance(n, str) or n not in index)
+            raise InputError(f"robot {self.name!r} has no rolling wheel {shorten(bad)} "
+                             f"(rolling wheels: {shorten(self.rolling_names)})") from None
+
+    @cached_property
+    def _rolling_index(self) -> dict[str, int]:
+        return {w.name: i for i, w in enumerate(self.rolling)}
+
     @cached_property
     def _by_name(self) -> dict[str, Wheel]:
         return {w.name: w for w in self.wheels}
@@ -313,7 +328,7 @@ class Robot:
     def _fk_cache(self) -> dict:
         return {}
 
-    _CACHES = ("_jacobian_constant", "_fk_cache", "_by_name")
+    _CACHES = ("_jacobian_constant", "_fk_cache", "_by_name", "_rolling_index")
 
     def __getstate__(self):
         """Pickle and deepcopy without the read-only matrix caches (NumPy does not keep the

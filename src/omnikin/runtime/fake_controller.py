@@ -120,7 +120,7 @@ class FakeController:
             w = robot.wheel(n)
             if w.encoder is None:
                 raise InputError(f"fake controller: wheel {n!r} has no encoder")
-            specs.append(FakeWheel(robot.rolling_names.index(n), 1.0 / w.encoder.rad_per_tick,
+            specs.append(FakeWheel(robot.rolling_index([n])[0], 1.0 / w.encoder.rad_per_tick,
                                    int(start_counts.get(n, 0)), w.max_speed))
         return cls(specs, **kwargs)
 

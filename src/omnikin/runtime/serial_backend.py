@@ -110,7 +110,7 @@ class SerialBackend:
         self.encoded = robot.encoded_names
         if not self.encoded:
             raise InputError(f"robot {robot.name!r}: the serial back-end needs driven wheels with an encoder")
-        self.index = {n: robot.rolling_names.index(n) for n in self.encoded}
+        self.index = dict(zip(self.encoded, robot.rolling_index(self.encoded)))
         too_high = [n for n, i in self.index.items() if i > p.wheel_index_max]
         if too_high:
             raise InputError(f"robot {robot.name!r}: wheels {too_high} have indices beyond {p.wheel_index_max}")

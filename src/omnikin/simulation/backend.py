@@ -33,7 +33,7 @@ class SimBackend:
         self.encoded = robot.encoded_names
         if not self.encoded:
             raise InputError(f"robot {robot.name!r}: the simulated back-end needs encoded (driven) wheels")
-        self._index = [robot.rolling_names.index(n) for n in self.encoded]
+        self._index = robot.rolling_index(self.encoded)
         self._radius = np.array([self.true_robot.wheel(n).radius for n in self.encoded])
         self._rpt = np.array([abs(robot.wheel(n).encoder.rad_per_tick) for n in self.encoded])
         self.truth = np.asarray(start, dtype=float).copy()
