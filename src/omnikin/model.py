@@ -208,6 +208,17 @@ class Robot:
     def steer_names(self) -> list[str]:
         return [w.name for w in self.steerable]
 
+    def rad_per_tick(self, names=None) -> np.ndarray:
+        """Encoder scale [rad per tick, signed by ``invert``] of the encoded wheels ``names``
+        (default: all of them, file order); a wheel without an encoder is an error."""
+        wheels = self.encoded if names is None else [self.wheel(n) for n in names]
+        out = []
+        for w in wheels:
+            if w.encoder is None:
+                raise InputError(f"robot {self.name!r}: wheel {w.name!r} has no encoder")
+            out.append(w.encoder.rad_per_tick)
+        return np.array(out, dtype=float)
+
     def rolling_index(self, names) -> list[int]:
         """Positions of the rolling wheels ``names`` in a wheel-speed array (one dictionary
         look-up each); a castor or unknown name is an error."""

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import partial
+from typing import overload
 
 import numpy as np
 
@@ -43,6 +44,14 @@ def encoded_wheels(robot: Robot):
             f"encoder.ticks_per_rev on the measured wheels")
     robot.check_observable([w.name for w in wheels])
     return wheels
+
+
+@overload
+def mid_steer(steer: None) -> None: ...
+
+
+@overload
+def mid_steer(steer: np.ndarray) -> np.ndarray: ...
 
 
 def mid_steer(steer: np.ndarray | None) -> np.ndarray | None:

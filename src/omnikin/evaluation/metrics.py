@@ -81,9 +81,9 @@ def check_trajectory(t, poses, name: str = "trajectory") -> tuple[np.ndarray, np
     bad = np.flatnonzero(~np.isfinite(tt))
     if bad.size:
         raise MetricsInputError(f"{name}: non-finite timestamp {float(tt[bad[0]])} at pose {bad[0]}")
-    bad = np.argwhere(~np.isfinite(p))
-    if bad.size:
-        i, j = bad[0]
+    where = np.argwhere(~np.isfinite(p))
+    if where.size:
+        i, j = where[0]
         raise MetricsInputError(f"{name}: non-finite {'xy'[j] if j < 2 else 'theta'} {float(p[i, j])} at pose {i}")
     back = np.flatnonzero(np.diff(tt) <= 0)
     if back.size:

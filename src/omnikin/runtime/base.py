@@ -103,8 +103,10 @@ class BaseRuntime:
         if self._last is not None and state.t > self._last.t:
             d = state.positions - self._last.positions
             var = (self.wheel_slip ** 2 * np.abs(d) * self._radius) / self._radius ** 2
-            steer = None if state.steer is None else mid_steer(np.stack([self._last.steer, state.steer]))[0]
-            f = self._fk if steer is None else self.robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
+            prev = self._last.steer
+            steer = None if state.steer is None or prev is None else mid_steer(np.stack([prev, state.steer]))[0]
+            f = self._fk if self._fk is not None else \
+                self.robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
             sigma_xi = f @ np.diag(var) @ f.T
             dt = state.t - self._last.t
             inc = np.array(self.odometry.twist) * dt          # the body increment the odometry just used

@@ -120,14 +120,14 @@ class SerialBackend:
         self.heartbeat_period = self._positive(heartbeat_period, p.timing.heartbeat_period, "heartbeat_period")
         self.baud = int(baud if baud is not None else p.serial["baud"])
         self.port_of = self._map_ports(ports)
-        self._rpt = {n: robot.wheel(n).encoder.rad_per_tick for n in self.encoded}
+        self._rpt = dict(zip(self.encoded, robot.rad_per_tick(self.encoded).tolist()))
         self._ticks = {n: 0 for n in self.encoded}
         self._last_count: dict[str, int | None] = {n: None for n in self.encoded}
         self._velocity = {n: 0.0 for n in self.encoded}
         self._last_rx: dict[str, float | None] = {n: None for n in self.encoded}
         self._status = {n: None for n in self.encoded}
         self._time_us = {n: None for n in self.encoded}
-        self._reported = set()
+        self._reported: set[str] = set()
         self._encoder = FrameEncoder(p)
         self._start_t: float | None = None
         self._t: float | None = None
@@ -255,8 +255,9 @@ class SerialBackend:
             out["link_lost_reason"] = self._lost[0]
         if self._t is not None:
             for n in self.encoded:
-                if self._last_rx[n] is not None:
-                    out[f"age_{n}"] = round(self._t - self._last_rx[n], 6)
+                last_rx = self._last_rx[n]
+                if last_rx is not None:
+                    out[f"age_{n}"] = round(self._t - last_rx, 6)
         return out
 
     def close(self) -> None:
@@ -333,7 +334,7 @@ class SerialBackend:
         self._t = float(t)
 
     def _send_speeds(self, speeds: np.ndarray) -> None:
-        out = {}
+        out: dict[str, list[bytes]] = {}
         for name in self.encoded:
             i = self.index[name]
             frame = self._encoder.encode("SPEED_CMD", wheel=i, speed=float(speeds[i]))
@@ -411,7 +412,8 @@ class SerialBackend:
         for name in self.encoded:
             last = self._last_rx[name]
             if last is None:
-                silent, limit, what = t - self._start_t, self.connect_timeout, "connect_timeout"
+                start = t if self._start_t is None else self._start_t
+                silent, limit, what = t - start, self.connect_timeout, "connect_timeout"
             else:
                 silent, limit, what = t - last, self.link_timeout, "link_timeout"
             if silent > limit:

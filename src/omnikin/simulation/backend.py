@@ -35,13 +35,13 @@ class SimBackend:
             raise InputError(f"robot {robot.name!r}: the simulated back-end needs encoded (driven) wheels")
         self._index = robot.rolling_index(self.encoded)
         self._radius = np.array([self.true_robot.wheel(n).radius for n in self.encoded])
-        self._rpt = np.array([abs(robot.wheel(n).encoder.rad_per_tick) for n in self.encoded])
+        self._rpt = np.abs(robot.rad_per_tick(self.encoded))
         self.truth = np.asarray(start, dtype=float).copy()
         self._angles = np.zeros(len(self.encoded))
         self._speeds = np.zeros(len(self.encoded))
         self._steer = np.zeros(len(robot.steerable)) if robot.steerable else None
         self._steer_start = None if self._steer is None else self._steer.copy()
-        self._t = None
+        self._t: float | None = None
         self.writes = 0
         self.reads = 0
 
@@ -65,7 +65,7 @@ class SimBackend:
         return WheelState(float(t), positions, self._speeds.copy(), steer)
 
     def _advance(self, t: float) -> None:
-        if self._t is None:
+        if self._t is None:  # the first call starts the clock
             self._t = float(t)
             return
         dt = float(t) - self._t
@@ -77,8 +77,8 @@ class SimBackend:
             sigma = self.noise.slip * np.sqrt(np.abs(d) * self._radius) / self._radius
             d = d + sigma * self.rng.standard_normal(len(d))
         steer = None
-        if self._steer is not None:   # steering moves linearly over the interval: use its middle
-            steer = mid_steer(np.stack([self._steer_start, self._steer]))[0]
+        if self._steer is not None and self._steer_start is not None:   # steering moves linearly over
+            steer = mid_steer(np.stack([self._steer_start, self._steer]))[0]   # the interval: use its middle
             self._steer_start = self._steer.copy()
         f = self.true_robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
         inc = f @ d

@@ -96,15 +96,14 @@ def sample_plan(plan: Plan, robot, rate: float = 100.0, limits: MotionLimits | N
     if not estimate <= MAX_SAMPLES:
         raise InputError(f"plan {plan.name!r} would take about {estimate:.3g} samples at {rate:g} Hz; the most "
                            f"omnikin samples in one run is {MAX_SAMPLES:.0e} (shorten the path or lower the rate)")
-    progress, segment = [], []
+    pieces, labels = [], []
     for k, seg in enumerate(plan.segments):
         amax = _accel_scale(seg.xi, limits)
-        s = _profile(seg.length, float(vmax[k]), amax, dt)
-        ds = np.diff(s)
-        progress.append(ds)
-        segment.append(np.full(len(ds), k))
-    progress = np.concatenate(progress)
-    segment = np.concatenate(segment)
+        ds = np.diff(_profile(seg.length, float(vmax[k]), amax, dt))
+        pieces.append(ds)
+        labels.append(np.full(len(ds), k))
+    progress = np.concatenate(pieces)
+    segment = np.concatenate(labels)
     t = np.arange(len(progress) + 1) * dt
     return SampledPlan(plan, rate, t, progress, segment, xi)
 

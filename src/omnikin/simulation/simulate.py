@@ -109,11 +109,11 @@ def simulate(plan: Plan | SampledPlan, true_robot: Robot, command_robot: Robot, 
     if missing:
         raise InputError(f"true robot {true_robot.name!r}: wheels {missing} have no encoder")
     angles, steer = commanded_angles(sampled, command_robot, cmd_wheels)
-    cmd_rpt = np.array([w.encoder.rad_per_tick for w in cmd_wheels])
+    cmd_rpt = command_robot.rad_per_tick(names)
     ticks = angles / cmd_rpt
     if noise.quantise:
         ticks = np.round(ticks).astype(np.int64)
-    true_rpt = np.array([w.encoder.rad_per_tick for w in true_wheels])
+    true_rpt = true_robot.rad_per_tick(names)
     dtrue = np.diff(ticks, axis=0).T * true_rpt[:, None]          # (n, N) true wheel increments [rad]
     odometry = batch_odometry(odometry_robot, sampled.t, ticks, steer=steer).poses
     truth = _truth(true_robot, names, dtrue, steer, noise, trials, rng, keep_truth)
