@@ -22,7 +22,7 @@ from rosbags.rosbag2 import Reader, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from omnikin import load_robot
-from omnikin.errors import OmnikinError
+from omnikin.errors import InputError, OmnikinError, OutputExistsError
 from omnikin.io import bags
 from omnikin.io.trajectories import read_trajectory
 
@@ -55,7 +55,7 @@ def write_joint_states(path, names, positions, stamps, topic="/joint_states", ex
         if extra:
             ce = w.add_connection(extra, "std_msgs/msg/String", typestore=TS)
             w.write(ce, int(stamps[0]), TS.serialize_cdr(T["std_msgs/msg/String"](data="hello"), "std_msgs/msg/String"))
-        for s, p in zip(stamps, positions):
+        for s, p in zip(stamps, positions, strict=True):
             st = T["builtin_interfaces/msg/Time"](sec=0, nanosec=0) if header_zero else \
                 T["builtin_interfaces/msg/Time"](sec=int(s) // 10**9, nanosec=int(s) % 10**9)
             msg = T["sensor_msgs/msg/JointState"](header=T["std_msgs/msg/Header"](stamp=st, frame_id=""),
@@ -173,8 +173,9 @@ def test_duplicates_dropped_and_foreign_messages_skipped(tmp_path):
     path = tmp_path / "dup"
     with Writer(path, version=8) as w:
         c = w.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=TS)
-        for k, (s, a) in enumerate(zip(stamps, ang)):
-            for names, pos in ([["w1", "w2", "w3"], a], [["arm"], [1.0]]) if k % 10 == 0 else ([["w1", "w2", "w3"], a],):
+        for k, (s, a) in enumerate(zip(stamps, ang, strict=True)):
+            extra = ([["arm"], [1.0]],) if k % 10 == 0 else ()
+            for names, pos in ([["w1", "w2", "w3"], a], *extra):
                 st = T["builtin_interfaces/msg/Time"](sec=int(s) // 10**9, nanosec=int(s) % 10**9)
                 msg = T["sensor_msgs/msg/JointState"](header=T["std_msgs/msg/Header"](stamp=st, frame_id=""),
                                                       name=names, position=np.asarray(pos, float),
@@ -362,9 +363,9 @@ def test_output_bag_is_never_overwritten(circle_bag, tmp_path):
     path = circle_bag[0]
     out = tmp_path / "exists"
     out.mkdir()
-    with pytest.raises(bags.BagError, match="exists already"):
+    with pytest.raises(OutputExistsError, match="exists already"):
         run_cli(["bag", "odometry", "tomasi-omni3", path, "-o", out])
-    with pytest.raises(bags.BagError, match="does not exist"):
+    with pytest.raises(InputError, match="does not exist"):
         run_cli(["simulate", "tomasi-omni3", "--path", "spin 10", "--bag", tmp_path / "no" / "dir" / "x.bag"])
 
 
@@ -416,7 +417,7 @@ def test_stamp_going_back_names_the_bags_message(tmp_path):
     path = tmp_path / "swapped"
     with Writer(path, version=8) as w:
         c = w.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=TS)
-        for s, h, a in zip(stamps, header, ang):
+        for s, h, a in zip(stamps, header, ang, strict=True):
             for names, pos in ([["arm"], [1.0]], [["w1", "w2", "w3"], a]):    # topic messages 2k and 2k+1
                 st = T["builtin_interfaces/msg/Time"](sec=int(h) // 10**9, nanosec=int(h) % 10**9)
                 msg = T["sensor_msgs/msg/JointState"](header=T["std_msgs/msg/Header"](stamp=st, frame_id=""),
@@ -438,7 +439,7 @@ def test_taken_output_fails_before_reading_or_simulating(tmp_path):
     impossible path is not reached."""
     out = tmp_path / "taken"
     out.mkdir()
-    with pytest.raises(bags.BagError, match="exists already"):
+    with pytest.raises(OutputExistsError, match="exists already"):
         bags.bag_odometry(load_robot("tomasi-omni3"), tmp_path / "no-such-bag", out)
-    with pytest.raises(bags.BagError, match="exists already"):
+    with pytest.raises(OutputExistsError, match="exists already"):
         run_cli(["simulate", "tomasi-omni3", "--path", "not a path", "--bag", out])

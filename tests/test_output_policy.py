@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import os
+import stat
+from pathlib import Path
 
 import pytest
 
-from omnikin.errors import InputError, OutputExistsError
-from omnikin.io.output import REPORT_MARKER, atomic_write, check_output, report_folder
+from omnikin.errors import InputError, OutputError, OutputExistsError
+from omnikin.io.output import DATA_MARKER, REPORT_MARKER, atomic_write, check_output, data_folder, report_folder
 
 
 def test_new_file_is_accepted_and_existing_one_needs_force(tmp_path):
@@ -92,3 +94,99 @@ def test_new_files_get_the_usual_permissions(tmp_path):
     umask = os.umask(0)
     os.umask(umask)
     assert out.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+# --- data folders (ROS 2 bags): replaced only with force, and only if omnikin wrote them ---------------
+def _write_data(out, name):
+    """A writer that creates its folder itself (as rosbags does) inside omnikin.io.output.data_folder."""
+    with data_folder(out) as target:
+        assert not target.exists() and target.name == out.name and target.parent != out.parent
+        target.mkdir()
+        (target / name).write_text(name)
+
+
+def test_data_folder_is_new_or_replaced_as_a_whole_with_force(tmp_path):
+    out = tmp_path / "run.bag"
+    assert check_output(out, folder="data") == out
+    _write_data(out, "first.db3")
+    assert sorted(p.name for p in out.iterdir()) == [DATA_MARKER, "first.db3"]
+    with pytest.raises(OutputExistsError, match="pass --force"):
+        check_output(out, folder="data")
+    check_output(out, folder="data", force=True)
+    _write_data(out, "second.db3")
+    assert sorted(p.name for p in out.iterdir()) == [DATA_MARKER, "second.db3"]       # no mix of two runs
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.bag"]                   # no staging left
+
+
+def test_foreign_folders_and_files_are_never_data_outputs(tmp_path):
+    foreign = tmp_path / "recorded.bag"
+    foreign.mkdir()
+    (foreign / "metadata.yaml").write_text("precious")
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    a_file = tmp_path / "notes.txt"
+    a_file.write_text("precious")
+    for path in (foreign, empty, a_file):
+        for force in (False, True):
+            with pytest.raises(OutputExistsError, match="did not write"):
+                check_output(path, folder="data", force=force)
+    assert (foreign / "metadata.yaml").read_text() == "precious" and a_file.read_text() == "precious"
+
+
+def test_interrupted_data_folder_leaves_the_previous_one(tmp_path):
+    out = tmp_path / "run.bag"
+    _write_data(out, "first.db3")
+    with pytest.raises(KeyboardInterrupt):
+        with data_folder(out) as target:
+            target.mkdir()
+            (target / "half.db3").write_text("half")
+            raise KeyboardInterrupt
+    assert sorted(p.name for p in out.iterdir()) == [DATA_MARKER, "first.db3"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.bag"]
+
+
+def test_a_data_folder_is_never_inside_an_input_folder(tmp_path):
+    bag = tmp_path / "in.bag"
+    bag.mkdir()
+    with pytest.raises(OutputExistsError, match="input"):
+        check_output(bag / "out.bag", inputs=[bag], folder="data", force=True)
+    with pytest.raises(OutputExistsError, match="input"):         # nor one that contains an input
+        check_output(tmp_path, inputs=[bag / "metadata.yaml"], folder="data", force=True)
+
+
+# --- devices, failures ----------------------------------------------------------------------------------
+def test_character_devices_are_written_in_place(tmp_path):
+    """-o /dev/null needs no --force, and /dev/null stays a device (no rename over it)."""
+    assert check_output("/dev/null") == Path("/dev/null")
+    with atomic_write("/dev/null") as handle:
+        handle.write("discarded")
+    assert stat.S_ISCHR(os.stat("/dev/null").st_mode)
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (Linux)")
+def test_a_full_disk_is_an_output_error_naming_the_path():
+    with pytest.raises(OutputError, match="^/dev/full: cannot write: No space left on device$"):
+        with atomic_write("/dev/full") as handle:
+            handle.write("x" * 100_000)
+
+
+def test_missing_folder_is_named(tmp_path):
+    with pytest.raises(InputError, match="cannot write: folder .*nope does not exist"):
+        check_output(tmp_path / "nope" / "out.csv")
+    with pytest.raises(InputError, match="does not exist"):
+        check_output(tmp_path / "nope" / "out.bag", folder="data")
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write in any folder")
+def test_read_only_folder_is_refused_before_writing(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        with pytest.raises(OutputError, match="not writable"):
+            check_output(ro / "out.csv")
+        with pytest.raises(OutputError, match="cannot write"):
+            with atomic_write(ro / "out.csv") as handle:
+                handle.write("x")
+    finally:
+        ro.chmod(0o755)

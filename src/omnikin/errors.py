@@ -35,7 +35,15 @@ class SingularLayoutError(InputError):
 
 
 class InfeasibleTwistError(InputError):
-    """A commanded twist violates a no-side-slip constraint or a steering limit."""
+    """A commanded twist violates a no-side-slip constraint or a steering limit.
+
+    ``detail``: the message without the library's way out (``on_infeasible='return'``), so
+    that an edge can name its own (the command line's ``--allow-infeasible``).
+    """
+
+    def __init__(self, message: str, *, detail: str | None = None):
+        super().__init__(message)
+        self.detail = detail if detail is not None else message
 
 
 class OdometryInputError(InputError):
@@ -56,8 +64,52 @@ class OutputExistsError(InputError):
     """An output path exists and the user did not ask to replace it, or it is an input."""
 
 
+class ResourceLimitError(InputError):
+    """A job would need more memory or time than allowed; the message names the limit and the
+    way to change it. ``needed`` and ``limit`` are in the unit of ``unit`` (``"bytes"``,
+    ``"seconds"``, ``"messages"``, ...)."""
+
+    def __init__(self, message: str, *, needed: float | None = None, limit: float | None = None,
+                 unit: str = ""):
+        super().__init__(message)
+        self.needed = needed
+        self.limit = limit
+        self.unit = unit
+
+
+class OutputError(OmnikinError, OSError):
+    """Writing an output failed (disk full, read-only folder, ...); the message names the path.
+    Not an input error: the same command may succeed elsewhere."""
+
+
 class LinkError(OmnikinError, RuntimeError):
     """A link to hardware failed while running (not an input error)."""
+
+
+def one_line(text: object, limit: int = 300) -> str:
+    """``text`` as one line of at most ``limit`` characters: runs of white space (newlines
+    included) become one space, and a longer text is cut with a note of its length.
+
+    For messages of other libraries that span several lines (a YAML parser's, a bag
+    reader's), quoted inside omnikin's one-line errors.
+    """
+    flat = " ".join(str(text).split())
+    if len(flat) <= limit:
+        return flat
+    return flat[: limit - 20].rstrip() + f"... ({len(flat)} chars)"
+
+
+def did_you_mean(word: str, choices) -> str:
+    """``"; did you mean 'x'?"`` naming the choices closest to ``word`` (difflib ratio >= 0.6,
+    at most three), or ``""`` when none is close. For messages about unknown names: presets,
+    sub-commands, options."""
+    import difflib
+
+    names = [str(c) for c in choices]
+    close = difflib.get_close_matches(str(word), names, n=3, cutoff=0.6)
+    if not close:
+        return ""
+    return "; did you mean " + " or ".join(repr(c) for c in close) + "?"
 
 
 def shorten(value: object, limit: int = 60) -> str:

@@ -451,18 +451,20 @@ class Robot:
             _refuse_overflow(values, what, "twist", given)
         result = IKResult(speeds, steer, violation, limited)
         if on_infeasible == "raise" and not np.all(result.feasible):
-            raise InfeasibleTwistError(self._infeasible_message(t, violation, limited))
+            detail = self._infeasible_detail(t, violation, limited)
+            raise InfeasibleTwistError(f"{detail} (on_infeasible='return' reports the violation instead)",
+                                       detail=detail)
         return result
 
-    def _infeasible_message(self, t, violation, limited) -> str:
+    def _infeasible_detail(self, t, violation, limited) -> str:
+        """What makes the twist infeasible (first wheel), without the way out."""
         scale = 1e-9
         bad = np.argwhere(np.abs(violation) > scale)
         if bad.size:
             idx = tuple(bad[0][:-1])
             w = self.fixed[int(bad[0][-1])]
             return (f"robot {self.name!r}: twist {np.round(t[idx], 9).tolist()} is infeasible: fixed wheel "
-                    f"{w.name!r} would slide sideways at {violation[tuple(bad[0])]:.6g} m/s "
-                    f"(on_infeasible='return' reports the violation instead)")
+                    f"{w.name!r} would slide sideways at {violation[tuple(bad[0])]:.6g} m/s")
         idx = np.argwhere(limited)[0]
         w = self.steerable[int(idx[-1])]
         lo, hi = (w.steer.lower, w.steer.upper) if w.steer is not None else (-np.pi, np.pi)

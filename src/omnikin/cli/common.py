@@ -1,8 +1,26 @@
-"""Helpers shared by the sub-commands."""
+"""Helpers shared by the sub-commands: the robot, the console, outputs and JSON.
+
+Outputs (the policy is :mod:`omnikin.io.output`): a command that writes files calls
+:func:`add_output_options` on its parser (``--force``), :func:`checked_output` for each output
+before any long work (an input is never an output; an existing file needs ``--force``), writes
+through the writers of :mod:`omnikin.io` (atomic), and prints its messages with
+:func:`messages_console`, which goes to standard error when an output is ``-`` (standard
+output then carries the data only). ``--json`` documents are printed with :func:`print_json`
+(strict JSON: a non-finite number is an error naming the field).
+"""
 
 from __future__ import annotations
 
+import os
+import stat
+from pathlib import Path
+
 import numpy as np
+
+from ..errors import InputError, RobotFileError, did_you_mean
+from ..io.output import check_output, is_stdout
+
+FORCE_HELP = "replace existing output files (never an input; a folder only if omnikin wrote it)"
 
 
 def robot_as_built(robot, true_robot: str | None, errors: str, seed):
@@ -26,8 +44,67 @@ def console(width: int = 140, stderr: bool = False):
     return con
 
 
-def load_robot(spec):
-    """A preset or robot file (:func:`omnikin.io.robot_file.load_robot`, imported on use)."""
-    from ..io.robot_file import load_robot as load
+def messages_console(*outputs, width: int = 120):
+    """The console for a command's messages and tables: standard error when one of ``outputs``
+    is ``-`` (standard output carries the data only), else standard output."""
+    return console(width, stderr=any(o is not None and is_stdout(o) for o in outputs))
 
+
+def load_robot(spec):
+    """A preset or robot file (:func:`omnikin.io.robot_file.load_robot`, imported on use); a name
+    that is neither names the closest presets."""
+    from ..io.robot_file import load_robot as load
+    from ..presets import PRESET_NAMES
+
+    text = str(spec)
+    if text not in PRESET_NAMES and not os.path.exists(text):      # False for unreadable or too long names
+        raise RobotFileError(f"{text}: no such robot file or preset{did_you_mean(text, PRESET_NAMES)} "
+                             f"(presets: {', '.join(PRESET_NAMES)})")
+    if text not in PRESET_NAMES:
+        require_regular_file(text, "robot")
     return load(spec)
+
+
+def require_regular_file(path, what: str = "input") -> None:
+    """Refuse a device or pipe given as an input file (``/dev/zero`` would be read forever):
+    its size cannot be checked against the budget. Folders and missing paths are left to the
+    reader, which names them."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return
+    if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        raise InputError(f"{path}: not a regular file (a device or a pipe could be read forever); save the {what} "
+                         f"to a file first")
+
+
+# --- outputs -----------------------------------------------------------------------------------------
+def add_output_options(parser) -> None:
+    """Add ``--force`` to a command that writes files (see the module docstring)."""
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP)
+
+
+def checked_output(args, path, inputs=(), *, folder: bool | str = False) -> Path | None:
+    """:func:`omnikin.io.output.check_output` of ``path`` with ``--force`` from ``args``: call it
+    before any long work. ``inputs``: every file or folder the command reads (robot files
+    included). Returns the path (None for ``-``)."""
+    return check_output(path, inputs=[i for i in inputs if i is not None], force=bool(getattr(args, "force", False)),
+                        folder=folder)
+
+
+def robot_inputs(*specs) -> list:
+    """The robot files among robot specs (preset names are not files)."""
+    from ..presets import PRESET_NAMES
+
+    return [s for s in specs if s is not None and (str(s) not in PRESET_NAMES or Path(str(s)).exists())]
+
+
+# --- JSON ------------------------------------------------------------------------------------------------
+def print_json(data, *, nullable=()) -> None:
+    """Print ``data`` as strict JSON on standard output (:func:`omnikin.io.jsonfile.to_json`;
+    ``nullable``: fields whose non-finite values print as null)."""
+    from ..io.jsonfile import to_json
+
+    text = to_json(data, nullable=nullable)
+    print(text)
+

@@ -1,24 +1,29 @@
 """``omnikin``: command-line entry point.
 
 Every sub-command takes ROBOT = a preset name (``omnikin presets``) or a robot file.
-Bad input ends with exit status 2 and one line ``omnikin: error: ...`` on stderr.
+Errors end with one line ``omnikin: error: ...`` on stderr, never a traceback: exit status 2
+for bad input or usage, 1 when something fails while running (an output cannot be written, a
+hardware link fails, an unexpected error), 130 on Ctrl-C, 141 when a reader closes the pipe.
 """
 
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
-import re
+import os
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from .. import __version__
-from ..errors import InfeasibleTwistError, OmnikinError
+from ..errors import InfeasibleTwistError, InputError, OmnikinError, one_line
 from ..presets import PRESET_NAMES
-from .common import console, load_robot
+from .common import add_output_options, checked_output, console, load_robot, messages_console, print_json, robot_inputs
+from .parser import CommandParser, UsageError
 
 EPILOG = """examples:
   omnikin presets                          list the robots shipped with omnikin
@@ -38,15 +43,27 @@ EPILOG = """examples:
   omnikin ros tomasi-omni3                         the ROS 2 base driver (extra ros)
 
 units: SI and radians; degrees only where an option or column ends in -deg/_deg.
-frames: body x forward, y left, angles counter-clockwise (REP-103)."""
+frames: body x forward, y left, angles counter-clockwise (REP-103).
+negative numbers are values: omnikin ik tomasi-omni3 -2.5e-3 0 -1e-1 (-inf, -1E3 too).
 
+output files: no command writes over one of its inputs, --force or not. An existing file is
+  replaced only with --force; an existing folder only if omnikin wrote it (a report folder is
+  replaced by the next run, a bag only with --force); omnikin never deletes anything else.
+  Files are written whole or not at all (a temporary file beside them, renamed when complete).
+  '-' is standard output, which then carries the data only: messages and tables go to stderr.
+limits: commands whose size you choose (simulate --rate/--path, bags, trajectory files) are
+  sized first and refused beyond --max-memory (default 2G) or --max-time (default 1h).
+errors: one line 'omnikin: error: ...' on stderr; exit status 2 for bad input or usage, 1 when
+  something fails while running (writing an output, a hardware link), 130 on Ctrl-C."""
 
-NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|nan)$", re.IGNORECASE)
-"""Arguments argparse must read as negative numbers, not options (``-2.5e-3`` included;
-argparse before Python 3.13 only knows ``-2`` and ``-2.5``)."""
+MESSAGE_LIMIT = 800
+"""Longest error or warning line printed [characters]."""
 
+WRITE_ERRORS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EROFS, errno.EACCES, errno.EPERM,
+                errno.EBADF, errno.EPIPE}
+"""Operating-system errors that mean an output could not be written."""
 
-class CliError(Exception):
+class CliError(InputError):
     """A usage problem found after argument parsing (exit status 2)."""
 
 
@@ -68,7 +85,7 @@ def _matrix_table(matrix, row_names, col_names):
     table.add_column("")
     for c in col_names:
         table.add_column(c, justify="right")
-    for name, row in zip(row_names, np.atleast_2d(_clean(matrix))):
+    for name, row in zip(row_names, np.atleast_2d(_clean(matrix)), strict=True):
         table.add_row(name, *[_fmt(v) for v in row])
     return table
 
@@ -90,7 +107,7 @@ def cmd_presets(args) -> int:
         table.add_row(name, str(len(r.wheels)), str(m.campion_type), "yes" if m.holonomic else "no",
                       ref[:70] + ("..." if len(ref) > 70 else ""))
     if args.json:
-        print(json.dumps(out, indent=2))
+        print_json(out)
     else:
         console().print(table)
     return 0
@@ -138,6 +155,7 @@ def show_data(robot) -> dict:
 
 
 def cmd_show(args) -> int:
+    plot_format = _plot_format(args) if args.plot is not None else None
     robot = load_robot(args.robot)
     data = show_data(robot)
     # --- conditioning warning (robot-file validation): one line on stderr, a field in --json ---
@@ -146,15 +164,11 @@ def cmd_show(args) -> int:
     if warning:
         print(f"omnikin: warning: {robot.name}: {warning}", file=sys.stderr)
     # --- end conditioning warning ---
-    if args.plot:
-        from ..viz.layout import save_layout
-
-        try:
-            save_layout(robot, args.plot)
-        except (OSError, ValueError) as exc:
-            raise CliError(f"{args.plot}: cannot write the drawing: {exc}") from None
+    text = _json_checked(data)
+    if args.plot is not None:
+        _save_plot(robot, args.plot, plot_format)
     if args.json:
-        print(json.dumps(data, indent=2))
+        print(text)
         return 0
     from rich.table import Table
 
@@ -198,9 +212,46 @@ def cmd_show(args) -> int:
                  ("isotropic", "yes" if data["isotropic"] else "no")):
         ana.add_row(k, str(v))
     con.print(ana)
-    if args.plot:
+    if args.plot is not None:
         con.print(f"layout drawing written to {args.plot}")
     return 0
+
+
+def _plot_format(args) -> str:
+    """The drawing format of ``--plot FILE`` (from its extension), checked with the output
+    before any work: never the robot file, an existing file only with ``--force``."""
+    from ..viz import require_matplotlib
+
+    if args.plot == "-":
+        raise CliError("--plot needs a file name (the format follows its extension: .png, .svg, .pdf)")
+    checked_output(args, args.plot, robot_inputs(args.robot))
+    require_matplotlib()
+    from matplotlib.figure import Figure
+
+    formats = Figure().canvas.get_supported_filetypes()
+    suffix = os.path.splitext(args.plot)[1].lower().lstrip(".")
+    if suffix not in formats:
+        raise CliError(f"--plot {args.plot}: unknown drawing format {suffix or '(no extension)'!r}; "
+                       f"one of {', '.join(sorted(formats))}")
+    return suffix
+
+
+def _save_plot(robot, path, fmt: str) -> None:
+    """Draw the layout to ``path`` atomically (a failure leaves no partial file)."""
+    from ..io.output import atomic_write
+    from ..viz.layout import layout_figure
+
+    figure = layout_figure(robot)
+    with atomic_write(path, "wb") as handle:
+        figure.savefig(handle, format=fmt)
+
+
+def _json_checked(data) -> str:
+    """The ``--json`` text of a result, made in text mode too: a non-finite number in a result
+    is an error naming its field either way (never a silent ``inf`` in a table)."""
+    from ..io.jsonfile import to_json
+
+    return to_json(data)
 
 
 # --- ik / fk -------------------------------------------------------------------------------
@@ -208,14 +259,16 @@ def cmd_ik(args) -> int:
     robot = load_robot(args.robot)
     twist = np.array([args.vx, args.vy, args.omega])
     hint = np.radians(args.steer_hint_deg) if args.steer_hint_deg is not None else None
+    if hint is not None and not robot.steerable:
+        raise CliError(f"robot {robot.name!r} has no steerable wheel: drop --steer-hint-deg")
     if hint is not None and len(hint) != len(robot.steerable):
         raise CliError(f"--steer-hint-deg needs {len(robot.steerable)} values for {robot.steer_names}")
     try:
         res = robot.ik(twist, heading=args.heading, steer_hint=hint,
                        on_infeasible="return" if args.allow_infeasible else "raise")
     except InfeasibleTwistError as exc:
-        msg = str(exc).split(" (on_infeasible=")[0]
-        raise CliError(f"{msg}; --allow-infeasible reports the violation instead") from None
+        raise InfeasibleTwistError(f"{exc.detail}; --allow-infeasible reports the violation instead",
+                                   detail=exc.detail) from None
     body = robot.body_twist(twist, args.heading) if args.heading is not None else twist
     data = {"robot": robot.name, "twist": body.tolist(), "wheel_names": robot.rolling_names,
             "wheel_speeds": res.wheel_speeds.tolist()}
@@ -230,8 +283,9 @@ def cmd_ik(args) -> int:
     if robot.steerable:
         data["steer_limited"] = res.steer_limited.tolist()
     data["feasible"] = bool(res.feasible)
+    text = _json_checked(data)
     if args.json:
-        print(json.dumps(data, indent=2))
+        print(text)
         return 0
     from rich.table import Table
 
@@ -240,17 +294,17 @@ def cmd_ik(args) -> int:
     table = Table(title_justify="left")
     for col in ("wheel", "speed [rad/s]", "steer [deg]", "roller [m/s]"):
         table.add_column(col, justify="right")
-    steer = dict(zip(robot.steer_names, res.steer_angles))
-    roller = dict(zip(robot.swedish_names, data.get("roller_speeds", [])))
-    for name, speed in zip(robot.rolling_names, res.wheel_speeds):
+    steer = dict(zip(robot.steer_names, res.steer_angles, strict=True))
+    roller = dict(zip(robot.swedish_names, data.get("roller_speeds", []), strict=True))
+    for name, speed in zip(robot.rolling_names, res.wheel_speeds, strict=True):
         table.add_row(name, _fmt(speed), _fmt(math.degrees(steer[name])) if name in steer else "",
                       _fmt(roller[name]) if name in roller else "")
     con.print(table)
     if not res.feasible:
         if robot.fixed and np.any(np.abs(res.violation) > 1e-9):
-            slips = ", ".join(f"{w.name} {v:.6g}" for w, v in zip(robot.fixed, res.violation))
+            slips = ", ".join(f"{w.name} {v:.6g}" for w, v in zip(robot.fixed, res.violation, strict=True))
             con.print(f"infeasible: fixed wheels would slide sideways [m/s]: {slips}")
-        limited = [n for n, flag in zip(robot.steer_names, np.atleast_1d(res.steer_limited)) if flag]
+        limited = [n for n, flag in zip(robot.steer_names, np.atleast_1d(res.steer_limited), strict=False) if flag]
         if limited:
             con.print(f"infeasible: no steering angle within limits (or no steady one) for {', '.join(limited)}")
     return 0
@@ -273,8 +327,9 @@ def cmd_fk(args) -> int:
     res = robot.fk(np.array(args.speeds), steer)
     data = {"robot": robot.name, "wheel_names": robot.rolling_names, "twist": res.twist.tolist(),
             "residual": res.residual.tolist(), "residual_norm": float(res.residual_norm)}
+    text = _json_checked(data)
     if args.json:
-        print(json.dumps(data, indent=2))
+        print(text)
         return 0
     con = console()
     t = res.twist
@@ -332,8 +387,8 @@ def cmd_odometry(args) -> int:
 
 
 # --- parser --------------------------------------------------------------------------------------------
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+def build_parser() -> CommandParser:
+    p = CommandParser(
         prog="omnikin", description="Kinematics and exact odometry for wheeled mobile robots of any wheel layout.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--version", action="version", version=f"omnikin {__version__}")
@@ -352,8 +407,11 @@ def build_parser() -> argparse.ArgumentParser:
                         epilog="example: omnikin show tomasi-omni3 --plot layout.png",
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
-    sp.add_argument("--json", action="store_true", help="print JSON (keys ik_matrix, rank, mobility, steerability, ...)")
-    sp.add_argument("--plot", metavar="FILE.png", help="draw the layout with drive and roller directions")
+    sp.add_argument("--json", action="store_true",
+                    help="print JSON (keys ik_matrix, rank, mobility, steerability, ...)")
+    sp.add_argument("--plot", metavar="FILE.png", help="draw the layout with drive and roller directions (format "
+                                                      "from the extension: png, svg, pdf, ...)")
+    add_output_options(sp)
     sp.set_defaults(func=cmd_show)
 
     sp = sub.add_parser("ik", help="inverse kinematics: twist -> wheel speeds (and steering)",
@@ -417,34 +475,116 @@ def build_parser() -> argparse.ArgumentParser:
     from . import bag, ros, umbmark
 
     umbmark.add_parsers(sub, robot_help)
+    _add_umbmark_analyze(sub.choices["umbmark"])
     bag.add_parsers(sub, robot_help)
     ros.add_parsers(sub, robot_help)
-    for parser in [p, *sub.choices.values()]:
-        parser._negative_number_matcher = NEGATIVE_NUMBER  # see NEGATIVE_NUMBER
     return p
 
 
-def main(argv=None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
-    if argv[:2] == ["umbmark", "analyze"]:
-        from .umbmark import analyze_parser
+def _add_umbmark_analyze(umbmark_parser: CommandParser) -> None:
+    """``omnikin umbmark analyze``: the options and behaviour of :func:`omnikin.cli.umbmark.analyze_parser`,
+    as a command of ``umbmark`` beside its optional ROBOT (:meth:`CommandParser.add_command`)."""
+    from .umbmark import analyze_parser
 
-        parser = analyze_parser()
-        parser._negative_number_matcher = NEGATIVE_NUMBER
-        argv = argv[2:]
-    else:
-        parser = build_parser()
-    args = parser.parse_args([str(a) for a in argv])
+    spec = analyze_parser()
+    analyze = CommandParser(prog="omnikin umbmark analyze", parents=[spec], add_help=False,
+                            description=spec.description, epilog=spec.epilog, formatter_class=spec.formatter_class)
+    umbmark_parser.add_command("analyze", analyze)
+
+
+# --- running a command ----------------------------------------------------------------------------------
+def main(argv=None) -> int:
+    """Run ``omnikin`` with ``argv`` (default ``sys.argv[1:]``); returns the exit status.
+
+    Every failure ends here as one line on stderr (:func:`_fail`), whatever raised it: usage
+    and input errors (2), failures while running (1), Ctrl-C (130), a closed pipe (141, quiet),
+    floating-point trouble in omnikin's own computations (2: an input out of range; NumPy's
+    warnings are errors inside a command), anything unexpected (1, ``internal error``; set
+    ``OMNIKIN_TRACEBACK=1`` to see where). Other libraries' warnings print as one line.
+    """
+    argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
+    try:
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            warnings.filterwarnings("error", category=RuntimeWarning, module=r"omnikin(\.|$)")
+            status = _run(argv)
+            sys.stdout.flush()              # a full disk or a closed pipe shows here, not at exit
+            return status
+    except UsageError as exc:
+        return _fail(f"{exc.command + ': ' if exc.command else ''}{exc} (see {exc.help_hint})", 2)
+    except InputError as exc:
+        return _fail(exc, 2)
+    except OmnikinError as exc:             # OutputError, LinkError: failures while running
+        _quiet_stdout()
+        return _fail(exc, 1)
+    except ImportError as exc:              # an optional extra is missing (the message names it)
+        return _fail(exc, 2)
+    except KeyboardInterrupt:
+        return _fail("interrupted", 130)
+    except BrokenPipeError:                 # the reader of standard output went away: stop quietly
+        _quiet_stdout()
+        return 141
+    except (RuntimeWarning, FloatingPointError) as exc:
+        return _fail(f"numerical failure ({exc}): an input is probably beyond the range omnikin computes with", 2)
+    except MemoryError:
+        return _fail("out of memory; lower the sizes of the job (see --max-memory of the command)", 1)
+    except OSError as exc:                  # not raised by omnikin's readers and writers: standard output
+        _quiet_stdout()
+        where = f"{exc.filename}" if exc.filename else "standard output"
+        return _fail(f"{where}: cannot write: {exc.strerror or exc}" if exc.errno in WRITE_ERRORS
+                     else f"{where}: {exc.strerror or exc}", 1)
+    except Exception as exc:  # noqa: BLE001 (the promise: no traceback reaches a user)
+        if os.environ.get("OMNIKIN_TRACEBACK"):
+            import traceback
+
+            traceback.print_exc()
+        return _fail(f"internal error: {type(exc).__name__}: {exc} (a bug in omnikin: please report it with the "
+                     f"command line; OMNIKIN_TRACEBACK=1 shows where)", 1)
+
+
+def _run(argv: list[str]) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:               # --help and --version print, then argparse exits
+        return exc.code if isinstance(exc.code, int) else 0
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    return args.func(args)
+
+
+def _fail(message, status: int) -> int:
+    """Print ``omnikin: error: MESSAGE`` as one bounded line on stderr; return ``status``."""
     try:
-        return args.func(args)
-    except (OmnikinError, CliError, ImportError) as exc:
-        print(f"omnikin: error: {exc}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:
-        return 0
+        print(f"omnikin: error: {one_line(message, MESSAGE_LIMIT)}", file=sys.stderr)
+        sys.stderr.flush()
+    except (OSError, ValueError):           # stderr itself is gone: nothing more to say
+        pass
+    return status
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings of other libraries as one line (``warnings.showwarning`` during a command)."""
+    try:
+        print(f"omnikin: warning: {one_line(message, MESSAGE_LIMIT)}", file=sys.stderr)
+    except (OSError, ValueError):
+        pass
+
+
+def _quiet_stdout() -> None:
+    """After standard output failed (closed pipe, full disk), point it at /dev/null so that the
+    interpreter's final flush does not print a second error."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):   # not a real file (a test's capture)
+        return
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, fd)
+        os.close(devnull)
+    except OSError:
+        pass
 
 
 if __name__ == "__main__":

@@ -27,26 +27,34 @@ interval that ends at the sample, zero at the first sample) and 36-element row-m
 covariances over ``(x, y, z, roll, pitch, yaw)`` (zero unless given; a 6-vector is taken as
 the diagonal). Bags are written with the message definitions of ROS 2 Humble (identical for
 these types in later distributions), rosbag2 format version 8, sqlite3 storage by default.
-A bag is a new directory: an existing path is refused, never overwritten.
+A bag is a new folder (:mod:`omnikin.io.output`, ``folder="data"``): an existing path is
+refused, unless ``force`` and it is a bag omnikin wrote (replaced as a whole); an input bag is
+never an output, nor holds one. The bag is written beside its name and moved there when
+complete, so an interrupted run leaves nothing behind; messages are serialized and written one
+at a time (memory does not grow with the bag).
 
 Every problem with an input (no such bag, unreadable bag, missing topic, wrong message type,
-wrong joint names, undecodable message) raises :class:`BagError` naming the bag and topic.
+wrong joint names, undecodable message) raises :class:`BagError` naming the bag and topic, in
+one line (messages of ``rosbags`` that span lines are flattened). Readers take a bound on the
+messages of the topic held in memory (``max_messages``, also checked against the count the
+bag declares before reading) and on the size of one message (``max_message_bytes``); beyond
+them they raise :class:`omnikin.errors.ResourceLimitError`.
 """
 
 from __future__ import annotations
 
 import math
 import re
-import shutil
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, OmnikinError
+from ..errors import InputError, OmnikinError, ResourceLimitError, one_line, shorten
 from ..geometry import between, log
 from ..model import Robot
+from .output import check_output, data_folder
 
 BAGS_EXTRA = 'pip install "omnikin[bags]"'
 
@@ -134,7 +142,7 @@ def _open_reader(rb: _Rosbags, bag):
     except BagError:
         raise
     except Exception as exc:  # noqa: BLE001 (rosbags raises ReaderError, FileNotFoundError, sqlite3 and MCAP errors)
-        raise BagError(f"{bag}: cannot read the bag: {exc}") from None
+        raise BagError(f"{bag}: cannot read the bag: {one_line(exc)}") from None
     return reader
 
 
@@ -148,8 +156,21 @@ def topic_types(bag) -> dict[str, str]:
         reader.close()
 
 
-def _messages(bag, topic: str, allowed: Iterable[str]) -> Iterable[tuple[int, int, object, str]]:
-    """Yield ``(index, bag time [ns], message, msgtype)`` of ``topic``, checking its type."""
+def message_count(bag, topic: str) -> int:
+    """Number of messages of ``topic`` the bag declares (its metadata; 0 for no such topic),
+    read without reading the messages: for sizing a job before starting it."""
+    rb = _Rosbags.get()
+    reader = _open_reader(rb, bag)
+    try:
+        return sum(int(getattr(c, "msgcount", 0) or 0) for c in reader.connections if c.topic == topic)
+    finally:
+        reader.close()
+
+
+def _messages(bag, topic: str, allowed: Iterable[str], max_messages: int | None = None,
+              max_message_bytes: int | None = None) -> Iterator[tuple[int, int, object, str]]:
+    """Yield ``(index, bag time [ns], message, msgtype)`` of ``topic``, checking its type and
+    the bounds (module docstring)."""
     rb = _Rosbags.get()
     allowed = tuple(allowed)
     reader = _open_reader(rb, bag)
@@ -157,26 +178,41 @@ def _messages(bag, topic: str, allowed: Iterable[str]) -> Iterable[tuple[int, in
         conns = [c for c in reader.connections if c.topic == topic]
         if not conns:
             have = ", ".join(f"{c.topic} ({c.msgtype})" for c in sorted(reader.connections, key=lambda c: c.topic))
-            raise BagError(f"{bag}: no topic {topic!r} in the bag; it has: {have or 'no topics'}")
+            raise BagError(f"{bag}: no topic {topic!r} in the bag; it has: {one_line(have or 'no topics', 500)}")
         bad = sorted({c.msgtype for c in conns if c.msgtype not in allowed})
         if bad:
             raise BagError(f"{bag}: topic {topic!r} carries {', '.join(bad)}; expected "
                            f"{' or '.join(allowed)}")
+        declared = sum(int(getattr(c, "msgcount", 0) or 0) for c in conns)
+        if max_messages is not None and declared > max_messages:
+            raise _too_many(bag, topic, declared, max_messages)
         try:
             stream = reader.messages(connections=conns)
             for k, (conn, t_ns, raw) in enumerate(stream):
+                if max_messages is not None and k >= max_messages:
+                    raise _too_many(bag, topic, k + 1, max_messages, declared=False)
+                if max_message_bytes is not None and len(raw) > max_message_bytes:
+                    raise ResourceLimitError(f"{bag}: topic {topic!r}, message {k}: {len(raw)} bytes, more than the "
+                                             f"{max_message_bytes} bytes allowed for one message",
+                                             needed=len(raw), limit=max_message_bytes, unit="bytes")
                 try:
                     msg = rb.store.deserialize_cdr(raw, conn.msgtype)
                 except Exception as exc:  # noqa: BLE001 (any decoding failure of rosbags' serde)
                     raise BagError(f"{bag}: topic {topic!r}, message {k}: cannot decode {conn.msgtype}: "
-                                   f"{exc}") from None
+                                   f"{one_line(exc)}") from None
                 yield k, int(t_ns), msg, conn.msgtype
-        except BagError:
+        except (BagError, ResourceLimitError):
             raise
         except Exception as exc:  # noqa: BLE001 (storage errors of sqlite3 / MCAP while reading)
-            raise BagError(f"{bag}: topic {topic!r}: cannot read the messages: {exc}") from None
+            raise BagError(f"{bag}: topic {topic!r}: cannot read the messages: {one_line(exc)}") from None
     finally:
         reader.close()
+
+
+def _too_many(bag, topic: str, count: int, limit: int, declared: bool = True) -> ResourceLimitError:
+    has = f"declares {count} messages" if declared else f"has more than {limit} messages"
+    return ResourceLimitError(f"{bag}: topic {topic!r} {has}, more than the {limit} that may be held in memory",
+                              needed=count, limit=limit, unit="messages")
 
 
 @dataclass(frozen=True)
@@ -213,7 +249,8 @@ def _encoded_names(robot: Robot) -> list[str]:
 
 
 def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp: str = "auto",
-                      steer_suffix: str = STEER_SUFFIX) -> JointStates:
+                      steer_suffix: str = STEER_SUFFIX, max_messages: int | None = None,
+                      max_message_bytes: int | None = None) -> JointStates:
     """Wheel angles (and steering angles) of ``robot`` from a JointState topic (module docstring)."""
     if stamp not in STAMPS:
         raise BagError(f"stamp must be one of {list(STAMPS)}, got {stamp!r}")
@@ -223,7 +260,7 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
     header_ns, bag_ns, rows, msg_index = [], [], [], []
     skipped = 0
     seen_names: set[str] = set()
-    for k, t_ns, msg, _ in _messages(bag, topic, (JOINT_STATE,)):
+    for k, t_ns, msg, _ in _messages(bag, topic, (JOINT_STATE,), max_messages, max_message_bytes):
         names = list(msg.name)
         pos = np.asarray(msg.position, dtype=float)
         seen_names.update(names)
@@ -233,7 +270,7 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
         index = {}
         for i, n in enumerate(names):
             if n in index:
-                raise BagError(f"{bag}: topic {topic!r}, message {k}: joint {n!r} appears twice")
+                raise BagError(f"{bag}: topic {topic!r}, message {k}: joint {shorten(n)} appears twice")
             index[n] = i
         present = [n for n in needed if n in index]
         if not present:
@@ -242,9 +279,9 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
         missing = [n for n in needed if n not in index]
         if missing:
             raise BagError(f"{bag}: topic {topic!r}, message {k}: no joint(s) {missing} (robot {robot.name!r} "
-                           f"needs {needed}); the message has {names}")
+                           f"needs {needed}); the message has {shorten(names, 200)}")
         row = pos[[index[n] for n in needed]]
-        bad = [n for n, v in zip(needed, row) if not math.isfinite(v)]
+        bad = [n for n, v in zip(needed, row, strict=True) if not math.isfinite(v)]
         if bad:
             raise BagError(f"{bag}: topic {topic!r}, message {k}: non-finite position of joint(s) {bad}")
         header_ns.append(_stamp_ns(msg.header.stamp))
@@ -254,7 +291,7 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
     if not rows:
         raise BagError(f"{bag}: topic {topic!r}: no JointState message names the wheel joints {needed} of robot "
                        f"{robot.name!r} (joint name = wheel name); the topic's joints are "
-                       f"{sorted(seen_names) or 'none (no messages)'}")
+                       f"{shorten(sorted(seen_names), 300) if seen_names else 'none (no messages)'}")
     header_ns = np.array(header_ns, dtype=np.int64)
     bag_ns = np.array(bag_ns, dtype=np.int64)
     source = stamp
@@ -310,12 +347,12 @@ def yaw_of(q) -> float:
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), q.w * q.w + q.x * q.x - q.y * q.y - q.z * q.z)
 
 
-def read_poses(bag, topic: str) -> PoseTrack:
+def read_poses(bag, topic: str, *, max_messages: int | None = None, max_message_bytes: int | None = None) -> PoseTrack:
     """Planar poses ``(x, y, yaw)`` of a ``nav_msgs/Odometry`` or ``geometry_msgs/PoseStamped`` topic."""
     stamps, bag_ns, poses, twists = [], [], [], []
     frame = child = ""
     msgtype = ""
-    for k, t_ns, msg, mtype in _messages(bag, topic, POSE_TYPES):
+    for k, t_ns, msg, mtype in _messages(bag, topic, POSE_TYPES, max_messages, max_message_bytes):
         msgtype = mtype
         pose = msg.pose.pose if mtype == ODOMETRY else msg.pose
         q = pose.orientation
@@ -338,8 +375,10 @@ def read_poses(bag, topic: str) -> PoseTrack:
                      np.array(poses), frame, child, np.array(twists) if twists else None)
 
 
-def export_poses(bag, topic: str, fmt: str, output=None) -> PoseTrack:
-    """Write the poses of ``topic`` as a ``tum``, ``kitti`` or ``csv`` file (``output`` None: stdout).
+def export_poses(bag, topic: str, fmt: str, output=None, *, force: bool = False, max_messages: int | None = None,
+                 max_message_bytes: int | None = None) -> PoseTrack:
+    """Write the poses of ``topic`` as a ``tum``, ``kitti`` or ``csv`` file (``output`` None or
+    ``-``: stdout) under the output policy (an existing file needs ``force``; never the bag).
 
     Timestamps are the header stamps, written exactly in seconds with nanoseconds.
     """
@@ -347,8 +386,10 @@ def export_poses(bag, topic: str, fmt: str, output=None) -> PoseTrack:
 
     if fmt not in FORMATS:
         raise BagError(f"unknown export format {fmt!r}; one of {list(FORMATS)}")
-    track = read_poses(bag, topic)
-    write_trajectory(output, track.stamps, track.poses, fmt)
+    output = "-" if output is None else output
+    check_output(output, inputs=[bag], force=force)
+    track = read_poses(bag, topic, max_messages=max_messages, max_message_bytes=max_message_bytes)
+    write_trajectory(output, track.stamps, track.poses, fmt, force=force, inputs=[bag])
     return track
 
 
@@ -392,35 +433,36 @@ def _joint_state_msg(rb: _Rosbags, ns: int, names, position, velocity):
                           velocity=np.asarray(velocity, dtype=np.float64), effort=np.zeros(0))
 
 
-@dataclass
+@dataclass(frozen=True)
 class _Topic:
     name: str
     msgtype: str
-    messages: list   # [(bag time ns, serialized bytes)]
 
 
 def _serialize(rb: _Rosbags, msg, msgtype: str) -> bytes:
     return bytes(rb.store.serialize_cdr(msg, msgtype))
 
 
-def require_new_bag(path) -> Path:
-    """``path`` as a :class:`Path` if a new bag can be written there, else :class:`BagError`.
+def require_new_bag(path, *, inputs: Iterable = (), force: bool = False) -> Path:
+    """``path`` as a :class:`Path` if a bag may be written there.
 
-    Called before any long work (reading, simulating) so that a taken name fails at once."""
-    out = Path(path)
-    if out.exists():
-        raise BagError(f"{path}: exists already; a bag is written to a new directory, never overwritten")
-    if not out.parent.exists():
-        raise BagError(f"{path}: the folder {str(out.parent)!r} does not exist")
-    return out
+    The output policy of :mod:`omnikin.io.output` for a data folder: a new path, or with
+    ``force`` a bag omnikin wrote (replaced as a whole); never an input bag, nor inside one.
+    Called before any long work (reading, simulating) so that a taken name fails at once.
+    Raises :class:`omnikin.errors.OutputExistsError` (or the other errors of
+    :func:`omnikin.io.output.check_output`)."""
+    return check_output(path, inputs=inputs, force=force, folder="data")
 
 
-def _write_bag(path, topics: list[_Topic], storage: str = "sqlite3", custom: dict | None = None) -> None:
-    """Write serialized messages to a new bag, interleaved by bag time."""
+def _write_bag(path, topics: list[_Topic], messages: Iterable[tuple[int, int, bytes]], storage: str = "sqlite3",
+               custom: dict | None = None, *, force: bool = False, inputs: Iterable = ()) -> int:
+    """Write a new bag with ``topics`` from ``messages`` ``(topic index, bag time [ns], serialized
+    bytes)`` in time order, one at a time; returns the number written. The bag is built beside
+    ``path`` and moved there when complete (:func:`omnikin.io.output.data_folder`)."""
     rb = _Rosbags.get()
     if storage not in STORAGES:
         raise BagError(f"{path}: unknown bag storage {storage!r}; one of {list(STORAGES)}")
-    out = require_new_bag(path)
+    require_new_bag(path, inputs=inputs, force=force)
     import inspect
 
     params = inspect.signature(rb.Writer).parameters
@@ -433,41 +475,52 @@ def _write_bag(path, topics: list[_Topic], storage: str = "sqlite3", custom: dic
         except ImportError:
             raise BagError(f"{path}: writing MCAP needs a newer rosbags (>= 0.11): pip install -U rosbags") from None
         kwargs["storage_plugin"] = StoragePlugin.MCAP
-    order = sorted(((t_ns, j, m) for j, topic in enumerate(topics) for m, (t_ns, _) in enumerate(topic.messages)))
-    try:
-        with rb.Writer(out, **kwargs) as writer:
-            conns = [writer.add_connection(t.name, t.msgtype, typestore=rb.store) for t in topics]
-            for key, value in (custom or {}).items():
-                if hasattr(writer, "set_custom_data"):
-                    writer.set_custom_data(str(key), str(value))
-            for t_ns, j, m in order:
-                writer.write(conns[j], int(t_ns), topics[j].messages[m][1])
-    except Exception as exc:  # noqa: BLE001 (rosbags WriterError, OSError, serde errors: clean up, then report)
-        if out.exists():
-            shutil.rmtree(out, ignore_errors=True)
-        raise BagError(f"{path}: cannot write the bag: {exc}") from None
+    count = 0
+    with data_folder(path) as stage:
+        try:
+            with rb.Writer(stage, **kwargs) as writer:
+                conns = [writer.add_connection(t.name, t.msgtype, typestore=rb.store) for t in topics]
+                for key, value in (custom or {}).items():
+                    if hasattr(writer, "set_custom_data"):
+                        writer.set_custom_data(str(key), str(value))
+                for j, t_ns, raw in messages:
+                    writer.write(conns[j], int(t_ns), raw)
+                    count += 1
+        except (OmnikinError, OSError, KeyboardInterrupt):
+            raise
+        except Exception as exc:  # noqa: BLE001 (rosbags WriterError, serde errors)
+            raise BagError(f"{path}: cannot write the bag: {one_line(exc)}") from None
+    return count
 
 
 def odometry_messages(stamps, poses, twists, *, bag_times=None, frame_id: str = "odom",
-                      child_frame_id: str = "base_link", pose_covariance=None, twist_covariance=None) -> list:
-    """Serialized ``nav_msgs/Odometry`` messages ``[(bag time ns, bytes), ...]``."""
+                      child_frame_id: str = "base_link", pose_covariance=None, twist_covariance=None,
+                      topic: int = 0) -> Iterator[tuple[int, int, bytes]]:
+    """Serialized ``nav_msgs/Odometry`` messages ``(topic, bag time ns, bytes)``, made one at a
+    time in the order given."""
     rb = _Rosbags.get()
     pc = _covariance(pose_covariance, "pose covariance")
     tc = _covariance(twist_covariance, "twist covariance")
     stamps = np.asarray(stamps, dtype=np.int64)
     bag_times = stamps if bag_times is None else np.asarray(bag_times, dtype=np.int64)
-    return [(int(b), _serialize(rb, _odometry_msg(rb, int(s), p, w, frame_id, child_frame_id, pc, tc), ODOMETRY))
-            for s, b, p, w in zip(stamps.tolist(), bag_times.tolist(), np.asarray(poses), np.asarray(twists))]
+    poses, twists = np.asarray(poses), np.asarray(twists)
+    for k in range(len(stamps)):
+        msg = _odometry_msg(rb, int(stamps[k]), poses[k], twists[k], frame_id, child_frame_id, pc, tc)
+        yield topic, int(bag_times[k]), _serialize(rb, msg, ODOMETRY)
 
 
 def write_odometry(path, stamps, poses, twists, *, topic: str = "/odom", bag_times=None, frame_id: str = "odom",
                    child_frame_id: str = "base_link", pose_covariance=None, twist_covariance=None,
-                   storage: str = "sqlite3") -> None:
-    """Write poses ``(N, 3)`` and body twists ``(N, 3)`` at ``stamps`` [int ns] as Odometry to a new bag."""
-    msgs = odometry_messages(stamps, poses, twists, bag_times=bag_times, frame_id=frame_id,
-                             child_frame_id=child_frame_id, pose_covariance=pose_covariance,
-                             twist_covariance=twist_covariance)
-    _write_bag(path, [_Topic(topic, ODOMETRY, msgs)], storage)
+                   storage: str = "sqlite3", force: bool = False, inputs: Iterable = ()) -> None:
+    """Write poses ``(N, 3)`` and body twists ``(N, 3)`` at ``stamps`` [int ns] as Odometry to a new bag
+    (messages in order of bag time)."""
+    stamps = np.asarray(stamps, dtype=np.int64)
+    bag_times = stamps if bag_times is None else np.asarray(bag_times, dtype=np.int64)
+    order = np.argsort(bag_times, kind="stable")
+    msgs = odometry_messages(stamps[order], np.asarray(poses)[order], np.asarray(twists)[order],
+                             bag_times=bag_times[order], frame_id=frame_id, child_frame_id=child_frame_id,
+                             pose_covariance=pose_covariance, twist_covariance=twist_covariance)
+    _write_bag(path, [_Topic(topic, ODOMETRY)], msgs, storage, force=force, inputs=inputs)
 
 
 def interval_twists(t, poses) -> np.ndarray:
@@ -504,7 +557,8 @@ class BagOdometry:
 def bag_odometry(robot: Robot, bag_in, bag_out, *, joint_states_topic: str = "/joint_states",
                  odom_topic: str = "/odom", method: str = "exact", stamp: str = "auto", frame_id: str = "odom",
                  child_frame_id: str = "base_link", pose_covariance=None, twist_covariance=None,
-                 storage: str = "sqlite3", steer_suffix: str = STEER_SUFFIX) -> BagOdometry:
+                 storage: str = "sqlite3", steer_suffix: str = STEER_SUFFIX, force: bool = False,
+                 max_messages: int | None = None, max_message_bytes: int | None = None) -> BagOdometry:
     """Wheel odometry of the JointState topic of ``bag_in`` written as Odometry to the new bag ``bag_out``.
 
     Each output message has the stamp and the bag record time of the input sample it comes
@@ -512,19 +566,24 @@ def bag_odometry(robot: Robot, bag_in, bag_out, *, joint_states_topic: str = "/j
     """
     from ..odometry import batch_odometry_from_angles
 
-    require_new_bag(bag_out)
-    js = read_joint_states(bag_in, robot, joint_states_topic, stamp=stamp, steer_suffix=steer_suffix)
+    require_new_bag(bag_out, inputs=[bag_in], force=force)
+    js = read_joint_states(bag_in, robot, joint_states_topic, stamp=stamp, steer_suffix=steer_suffix,
+                           max_messages=max_messages, max_message_bytes=max_message_bytes)
     try:
         res = batch_odometry_from_angles(robot, js.t, js.angles, steer=js.steer, method=method)
     except OmnikinError as exc:
         raise BagError(f"{bag_in}: topic {joint_states_topic!r}: {exc}") from None
     twists = np.zeros_like(res.poses)
     twists[1:] = res.twists
-    msgs = odometry_messages(js.stamps, res.poses, twists, bag_times=js.bag_times, frame_id=frame_id,
-                             child_frame_id=child_frame_id, pose_covariance=pose_covariance,
+    _covariance(pose_covariance, "pose covariance")            # refused before the bag is started
+    _covariance(twist_covariance, "twist covariance")
+    order = np.argsort(js.bag_times, kind="stable")
+    msgs = odometry_messages(js.stamps[order], res.poses[order], twists[order], bag_times=js.bag_times[order],
+                             frame_id=frame_id, child_frame_id=child_frame_id, pose_covariance=pose_covariance,
                              twist_covariance=twist_covariance)
-    _write_bag(bag_out, [_Topic(odom_topic, ODOMETRY, msgs)], storage,
-               {"omnikin.robot": robot.name, "omnikin.method": method, "omnikin.input": str(bag_in)})
+    _write_bag(bag_out, [_Topic(odom_topic, ODOMETRY)], msgs, storage,
+               {"omnikin.robot": robot.name, "omnikin.method": method, "omnikin.input": str(bag_in)},
+               force=force, inputs=[bag_in])
     return BagOdometry(js, res.poses, twists, str(bag_out), odom_topic)
 
 
@@ -535,7 +594,7 @@ RUN_TOPICS = {"ground_truth": "/ground_truth", "odom": "/odom", "joint_states": 
 
 def record_run(path, run, robot: Robot, *, start: float = 0.0, topics: dict | None = None, frame_id: str = "odom",
                child_frame_id: str = "base_link", storage: str = "sqlite3", custom: dict | None = None,
-               steer_suffix: str = STEER_SUFFIX) -> dict:
+               steer_suffix: str = STEER_SUFFIX, force: bool = False) -> dict:
     """Write a simulated run (:class:`omnikin.simulation.simulate.SimulatedRun`, first trial) to a new bag.
 
     Topics (``topics`` renames them): ``/ground_truth`` (Odometry, the true poses),
@@ -545,7 +604,8 @@ def record_run(path, run, robot: Robot, *, start: float = 0.0, topics: dict | No
     (Twist: the commanded body twist of the interval that starts at the sample, zero at the
     last). Sample k is stamped ``start + t_k`` [s]. ``robot`` is the commanding (nominal) robot
     whose odometry ``run.odometry`` is, so reading the bag's joint states back with it
-    reproduces ``/odom``. Returns ``{topic: message count}``.
+    reproduces ``/odom``. Messages are made and written one sample at a time. Returns
+    ``{topic: message count}``.
     """
     rb = _Rosbags.get()
     names = dict(RUN_TOPICS, **(topics or {}))
@@ -572,18 +632,22 @@ def record_run(path, run, robot: Robot, *, start: float = 0.0, topics: dict | No
     dt = np.diff(t)
     speeds = np.zeros_like(angles)
     speeds[1:] = np.diff(angles, axis=0) / dt[:, None]
-    sampled = run.sampled
     cmd = np.zeros((len(t), 3))
-    cmd[:-1] = sampled.increments / dt[:, None]
-    msgs = {
-        "ground_truth": odometry_messages(stamps, truth, interval_twists(t, truth), frame_id=frame_id,
-                                          child_frame_id=child_frame_id),
-        "odom": odometry_messages(stamps, run.odometry, interval_twists(t, run.odometry), frame_id=frame_id,
-                                  child_frame_id=child_frame_id),
-        "joint_states": [(int(s), _serialize(rb, _joint_state_msg(rb, int(s), joint_names, a, v), JOINT_STATE))
-                         for s, a, v in zip(stamps.tolist(), angles, speeds)],
-        "cmd_vel": [(int(s), _serialize(rb, _twist_msg(rb, c), TWIST)) for s, c in zip(stamps.tolist(), cmd)],
-    }
+    cmd[:-1] = run.sampled.increments / dt[:, None]
+    truth_twist = interval_twists(t, truth)
+    odom_twist = interval_twists(t, run.odometry)
+    zero = np.zeros(36)
+
+    def messages() -> Iterator[tuple[int, int, bytes]]:
+        for k, ns in enumerate(stamps.tolist()):
+            yield 0, ns, _serialize(rb, _odometry_msg(rb, ns, truth[k], truth_twist[k], frame_id, child_frame_id,
+                                                      zero, zero), ODOMETRY)
+            yield 1, ns, _serialize(rb, _odometry_msg(rb, ns, run.odometry[k], odom_twist[k], frame_id,
+                                                      child_frame_id, zero, zero), ODOMETRY)
+            yield 2, ns, _serialize(rb, _joint_state_msg(rb, ns, joint_names, angles[k], speeds[k]), JOINT_STATE)
+            yield 3, ns, _serialize(rb, _twist_msg(rb, cmd[k]), TWIST)
+
     types = {"ground_truth": ODOMETRY, "odom": ODOMETRY, "joint_states": JOINT_STATE, "cmd_vel": TWIST}
-    _write_bag(path, [_Topic(names[k], types[k], msgs[k]) for k in RUN_TOPICS], storage, custom)
-    return {names[k]: len(msgs[k]) for k in RUN_TOPICS}
+    keys = list(RUN_TOPICS)            # the topic indices used by messages()
+    _write_bag(path, [_Topic(names[k], types[k]) for k in keys], messages(), storage, custom, force=force)
+    return {names[k]: len(t) for k in keys}

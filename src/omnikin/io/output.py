@@ -4,17 +4,28 @@
   input folder (a bag), is refused, ``--force`` or not.
 * **Never a surprise.** An existing file the user did not ask to replace is refused unless
   ``force``; a report folder omnikin wrote itself (it carries :data:`REPORT_MARKER`) is
-  replaced as a whole, so the same command runs twice; any other non-empty folder is
-  refused, ``force`` or not (omnikin never deletes a folder it did not write).
+  replaced as a whole, so the same command runs twice; a data folder omnikin wrote (a ROS 2
+  bag; it carries :data:`DATA_MARKER`) is replaced as a whole only with ``force``; any other
+  existing folder is refused, ``force`` or not (omnikin never deletes a folder it did not
+  write). An existing character device or pipe (``/dev/null``, a named pipe) is written in
+  place: there is no file to lose.
 * **Never half written.** Files are written to a temporary file in the same folder and
   renamed over the target (:func:`atomic_write`); a report folder is built beside the
   target and swapped in when complete (:func:`report_folder`), so an interrupted run leaves
-  the previous output as it was and a folder never mixes files of two runs.
+  the previous output as it was and a folder never mixes files of two runs; a data folder is
+  written beside the target by its writer and swapped in the same way (:func:`data_folder`).
+* **Failures name the path.** An operating-system error while writing (disk full, read-only
+  folder, no permission) is an :class:`omnikin.errors.OutputError` naming the path, in one
+  line.
 * ``-`` (:data:`STDOUT`) names standard output: it then carries the data only; messages go
   to standard error (the caller's job: :func:`is_stdout`).
 
 Every refusal is an :class:`omnikin.errors.OutputExistsError` with a one-line message
 naming the path and the way out.
+
+The command line adds ``--force`` and calls :func:`check_output` before any long work
+(``omnikin.cli.common.add_output_options`` and ``checked_output``); the writers check again
+right before writing, so a library caller gets the same protection.
 """
 
 from __future__ import annotations
@@ -22,18 +33,25 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+import stat
 import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import IO, Any
 
-from ..errors import InputError, OutputExistsError
+from ..errors import InputError, OutputError, OutputExistsError
 
 STDOUT = "-"
 """The output name meaning standard output."""
 
 REPORT_MARKER = ".omnikin-report"
 """File in every report folder omnikin writes: such a folder may be replaced as a whole."""
+
+DATA_MARKER = ".omnikin-data"
+"""File in every data folder omnikin writes (a ROS 2 bag): with ``force`` such a folder is
+replaced as a whole."""
+
+FOLDER_KINDS = ("report", "data")
 
 
 def is_stdout(path) -> bool:
@@ -48,43 +66,78 @@ def _inside(child: Path, parent: Path) -> bool:
     return child == parent or parent in child.parents
 
 
-def check_output(path, *, inputs: Iterable = (), force: bool = False, folder: bool = False) -> Path | None:
+def check_output(path, *, inputs: Iterable = (), force: bool = False, folder: bool | str = False) -> Path | None:
     """Check that ``path`` may be written; return it as a :class:`Path` (None for stdout).
 
     ``inputs``: the paths the command reads (files or folders; None entries and ``-`` are
-    skipped). ``folder``: the output is a folder (see the module docstring), else a file.
-    Raises :class:`OutputExistsError` (or :class:`InputError` for a missing parent folder).
+    skipped). ``folder``: False for a file; ``"report"`` (or True) for a report folder,
+    ``"data"`` for a data folder such as a ROS 2 bag (see the module docstring).
+    Raises :class:`OutputExistsError`, :class:`InputError` for a missing parent folder, or
+    :class:`OutputError` for a folder omnikin may not write in.
     """
+    kind = "report" if folder is True else folder
+    if kind and kind not in FOLDER_KINDS:
+        raise ValueError(f"folder must be False, True or one of {FOLDER_KINDS}, got {folder!r}")
     if is_stdout(path):
-        if folder:
+        if kind:
             raise InputError("'-' (standard output) cannot receive a folder; name a folder")
         return None
+    if os.fspath(path) == "":
+        raise InputError("empty output path; name a file (or '-' for standard output)")
     out = Path(os.fspath(path))
-    if str(out) == "":
-        raise InputError("empty output path")
     target = _resolved(out)
     for item in inputs:
         if item is None or is_stdout(item):
             continue
         src = _resolved(item)
-        if _inside(target, src) or (folder and _inside(src, target)):
+        if _inside(target, src) or (kind and _inside(src, target)):
             raise OutputExistsError(f"{out}: is (or is inside, or contains) the input {item}; "
                                     "write the output somewhere else")
     parent = target.parent
     if not parent.is_dir():
-        raise InputError(f"{out}: folder {parent} does not exist")
-    if folder:
+        raise InputError(f"{out}: cannot write: folder {parent} does not exist")
+    if not kind and _in_place(out):
+        return out
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise OutputError(f"{out}: cannot write: folder {parent} is not writable")
+    if kind == "report":
         if out.exists() and not out.is_dir():
             raise OutputExistsError(f"{out}: exists and is not a folder")
         if out.is_dir() and any(out.iterdir()) and not (out / REPORT_MARKER).is_file():
             raise OutputExistsError(f"{out}: a non-empty folder omnikin did not write; choose a new folder "
                                     "(omnikin replaces only report folders it wrote itself)")
         return out
+    if kind == "data":
+        if out.exists() or out.is_symlink():
+            if not (out.is_dir() and not out.is_symlink() and (out / DATA_MARKER).is_file()):
+                raise OutputExistsError(f"{out}: exists already and omnikin did not write it; choose a new name "
+                                        "(omnikin never replaces a file or folder it did not write)")
+            if not force:
+                raise OutputExistsError(f"{out}: exists already; pass --force to replace it (a folder omnikin "
+                                        "wrote, replaced as a whole)")
+        return out
     if out.is_dir():
         raise OutputExistsError(f"{out}: is a folder; name a file")
     if out.exists() and not force:
         raise OutputExistsError(f"{out}: exists; pass --force to replace it")
+    if out.exists() and not stat.S_ISREG(out.stat().st_mode):
+        raise OutputExistsError(f"{out}: exists and is not a regular file; name a file")
     return out
+
+
+def _in_place(path: Path) -> bool:
+    """True for an existing character device or pipe (``/dev/null``): written in place."""
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        return False
+    return stat.S_ISCHR(mode) or stat.S_ISFIFO(mode)
+
+
+def _output_error(path, exc: OSError) -> OutputError:
+    if isinstance(exc, OutputError):
+        return exc
+    return OutputError(f"{path}: cannot write: {exc.strerror or exc}")
 
 
 @contextlib.contextmanager
@@ -93,22 +146,39 @@ def atomic_write(path, mode: str = "w", *, encoding: str | None = "utf-8",
     """Open a temporary file beside ``path``; on success it is renamed over ``path``.
 
     On an exception (or an interrupt) the temporary file is removed and ``path`` is left as
-    it was. ``mode`` is ``"w"`` (text) or ``"wb"`` (bytes).
+    it was. ``mode`` is ``"w"`` (text) or ``"wb"`` (bytes). A character device or pipe
+    (``/dev/null``) is written in place. An operating-system error while writing (disk
+    full, no permission) becomes an :class:`OutputError` naming ``path``.
     """
     target = Path(os.fspath(path))
     if mode not in ("w", "wb"):
         raise ValueError(f"atomic_write: mode must be 'w' or 'wb', got {mode!r}")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent or ".")
+
+    def opened(fd_or_path) -> IO[Any]:
+        return (open(fd_or_path, "wb") if mode == "wb"
+                else open(fd_or_path, "w", encoding=encoding, newline=newline))
+
+    if _in_place(target):
+        try:
+            with opened(target) as handle:
+                yield handle
+        except OSError as exc:
+            raise _output_error(path, exc) from None
+        return
     try:
-        handle: IO[Any] = (os.fdopen(fd, "wb") if mode == "wb"
-                           else os.fdopen(fd, "w", encoding=encoding, newline=newline))
-        with handle:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent or ".")
+    except OSError as exc:
+        raise _output_error(path, exc) from None
+    try:
+        with opened(fd) as handle:
             yield handle
         _keep_mode(target, tmp)
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
+        if isinstance(exc, OSError):
+            raise _output_error(path, exc) from None
         raise
 
 
@@ -140,23 +210,68 @@ def report_folder(path) -> Iterator[Path]:
     as it was. Call :func:`check_output` with ``folder=True`` first.
     """
     target = Path(os.fspath(path))
-    parent = target.parent if str(target.parent) else Path(".")
-    stage = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent))
+    stage = _stage(target)
     try:
         yield stage
-        (stage / REPORT_MARKER).write_text("written by omnikin; the folder is replaced as a whole on the next run\n",
-                                           encoding="utf-8")
-        os.chmod(stage, 0o777 & ~_umask())
-        old = None
-        if target.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".old", dir=parent))
-            os.replace(target, old / "report")
-        os.replace(stage, target)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
-    except BaseException:
+        _finish(stage, target, REPORT_MARKER,
+                "written by omnikin; the folder is replaced as a whole on the next run\n")
+    except BaseException as exc:
         shutil.rmtree(stage, ignore_errors=True)
+        if isinstance(exc, OSError):
+            raise _output_error(path, exc) from None
         raise
+
+
+@contextlib.contextmanager
+def data_folder(path) -> Iterator[Path]:
+    """Write a data folder (a ROS 2 bag) whose writer creates the folder itself: yields a path
+    that does not exist yet, in a staging folder beside ``path``, with the same name; on
+    success the folder written there is marked (:data:`DATA_MARKER`) and swapped in for
+    ``path`` (a data folder omnikin wrote there before is removed as a whole). On an
+    exception nothing is left behind and ``path`` stays as it was. Call :func:`check_output`
+    with ``folder="data"`` first.
+    """
+    target = Path(os.fspath(path))
+    holder = _stage(target)
+    try:
+        yield holder / target.name
+        _finish(holder / target.name, target, DATA_MARKER,
+                "written by omnikin; with --force the folder is replaced as a whole\n")
+    except BaseException as exc:
+        if isinstance(exc, OSError):
+            raise _output_error(path, exc) from None
+        raise
+    finally:
+        shutil.rmtree(holder, ignore_errors=True)
+
+
+def _stage(target: Path) -> Path:
+    """A new empty folder beside ``target`` (same file system, so that renames are atomic)."""
+    parent = target.parent if str(target.parent) else Path(".")
+    try:
+        return Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent))
+    except OSError as exc:
+        raise _output_error(target, exc) from None
+
+
+def _finish(built: Path, target: Path, marker: str, note: str) -> None:
+    """Mark the folder ``built`` and swap it in for ``target`` (an older one removed as a whole)."""
+    (built / marker).write_text(note, encoding="utf-8")
+    os.chmod(built, 0o777 & ~_umask())
+    parent = target.parent if str(target.parent) else Path(".")
+    old = None
+    if target.exists():
+        old = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".old", dir=parent))
+        os.replace(target, old / "previous")
+    try:
+        os.replace(built, target)
+    except BaseException:
+        if old is not None:                       # put the previous folder back
+            os.replace(old / "previous", target)
+            old.rmdir()
+        raise
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
 
 
 def _umask() -> int:

@@ -18,7 +18,6 @@ the file and the line; TUM and KITTI fields are separated by blanks (or single c
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +25,7 @@ import numpy as np
 from ..errors import InputError, shorten
 from ..geometry import wrap_angle
 from .csvfile import iter_fields, number, read_rows
+from .output import STDOUT, check_output, write_text
 
 FORMATS = ("tum", "kitti", "csv")
 
@@ -72,16 +72,17 @@ def trajectory_lines(t, poses, fmt: str) -> list[str]:
             for (x, y, _), ck, sk in zip(p.tolist(), c.tolist(), s.tolist(), strict=True)]
 
 
-def write_trajectory(path, t, poses, fmt: str) -> None:
-    """Write a trajectory file; ``path`` ``None`` or ``'-'`` writes to standard output."""
-    text = "\n".join(trajectory_lines(t, poses, fmt)) + "\n"
-    if path is None or str(path) == "-":
-        sys.stdout.write(text)
-        return
-    try:
-        Path(path).write_text(text, encoding="utf-8")
-    except OSError as exc:
-        raise TrajectoryFileError(f"{path}: cannot write: {exc.strerror or exc}") from None
+def write_trajectory(path, t, poses, fmt: str, *, force: bool = False, inputs=()) -> None:
+    """Write a trajectory file; ``path`` ``None`` or ``'-'`` writes to standard output.
+
+    The output policy of :mod:`omnikin.io.output`: an existing file is replaced only with
+    ``force``, never one of ``inputs`` (the files the caller read), and the file is written
+    atomically (a failure leaves the previous file; an :class:`omnikin.errors.OutputError`
+    names the path).
+    """
+    path = STDOUT if path is None else path
+    check_output(path, inputs=inputs, force=force)
+    write_text(path, "\n".join(trajectory_lines(t, poses, fmt)) + "\n")
 
 
 def _numbers(source, line_no, fields, count, fmt) -> list[float]:

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..errors import InputError, did_you_mean
+
 PRESET_DIR = Path(__file__).resolve().parent
 
 PRESET_NAMES = (
@@ -24,7 +26,9 @@ PRESET_NAMES = (
 
 
 def preset_path(name: str) -> Path:
-    """Path of the robot file of preset ``name``."""
+    """Path of the robot file of preset ``name``; an unknown name is an
+    :class:`~omnikin.errors.InputError` naming the closest presets."""
     if name not in PRESET_NAMES:
-        raise KeyError(f"unknown preset {name!r}; presets: {', '.join(PRESET_NAMES)}")
+        raise InputError(f"unknown preset {name!r}{did_you_mean(name, PRESET_NAMES)} "
+                         f"(presets: {', '.join(PRESET_NAMES)})")
     return PRESET_DIR / f"{name}.yaml"

@@ -19,7 +19,6 @@ from ..errors import InputError
 from ..limits import MotionLimits, speed_scale
 from ..plans import Plan
 
-
 # --- timing ----------------------------------------------------------------------------------------
 MAX_SAMPLES = 50_000_000
 """Largest number of samples one run may have (about 1.2 GB of increments)."""
@@ -81,18 +80,10 @@ def sample_plan(plan: Plan, robot, rate: float = 100.0, limits: MotionLimits | N
     acceleration the largest that keeps the acceleration limits.
     """
     limits = limits or MotionLimits()
-    if not (math.isfinite(rate) and rate > 0):
-        raise InputError(f"rate must be a positive number of samples per second, got {rate!r}")
-    dt = 1.0 / rate
+    dt = 1.0 / _check_rate(rate)
     xi = np.array([seg.xi for seg in plan.segments])
     vmax = speed_scale(robot, xi, limits)
-    estimate = 0.0
-    for k, seg in enumerate(plan.segments):
-        if not np.isfinite(vmax[k]):
-            raise InputError(f"plan {plan.name!r}, segment {seg.label!r}: no speed limit bounds its pace; "
-                               f"set MotionLimits.linear/angular or wheel max_speed")
-        amax = _accel_scale(seg.xi, limits)
-        estimate += (seg.length / vmax[k] + (vmax[k] / amax if amax else 0.0)) * rate + 1
+    estimate = _estimate(plan, vmax, limits, rate)
     if not estimate <= MAX_SAMPLES:
         raise InputError(f"plan {plan.name!r} would take about {estimate:.3g} samples at {rate:g} Hz; the most "
                            f"omnikin samples in one run is {MAX_SAMPLES:.0e} (shorten the path or lower the rate)")
@@ -106,6 +97,34 @@ def sample_plan(plan: Plan, robot, rate: float = 100.0, limits: MotionLimits | N
     segment = np.concatenate(labels)
     t = np.arange(len(progress) + 1) * dt
     return SampledPlan(plan, rate, t, progress, segment, xi)
+
+
+def estimated_samples(plan: Plan, robot, rate: float = 100.0, limits: MotionLimits | None = None) -> float:
+    """Number of samples :func:`sample_plan` would make (an upper bound, within one sample per
+    segment), computed without sampling: for sizing a job before starting it."""
+    limits = limits or MotionLimits()
+    _check_rate(rate)
+    xi = np.array([seg.xi for seg in plan.segments])
+    return _estimate(plan, speed_scale(robot, xi, limits), limits, rate)
+
+
+def _check_rate(rate: float) -> float:
+    if not (math.isfinite(rate) and rate > 0):
+        raise InputError(f"rate must be a positive number of samples per second, got {rate!r}")
+    return rate
+
+
+def _estimate(plan: Plan, vmax, limits: MotionLimits, rate: float) -> float:
+    """Samples of the timed plan: per segment its duration (cruise plus the time lost to the
+    acceleration ramps) times ``rate``, plus one."""
+    estimate = 0.0
+    for k, seg in enumerate(plan.segments):
+        if not np.isfinite(vmax[k]):
+            raise InputError(f"plan {plan.name!r}, segment {seg.label!r}: no speed limit bounds its pace; "
+                               f"set MotionLimits.linear/angular or wheel max_speed")
+        amax = _accel_scale(seg.xi, limits)
+        estimate += (seg.length / vmax[k] + (vmax[k] / amax if amax else 0.0)) * rate + 1
+    return estimate
 
 
 def _accel_scale(xi, limits: MotionLimits) -> float | None:

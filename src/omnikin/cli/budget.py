@@ -1,0 +1,166 @@
+"""Memory and time budgets: a job whose size the user controls is sized before it starts.
+
+A simulation's rate and path, the messages of a bag, the length of a trajectory file, the
+number of Monte Carlo trials: omnikin cannot bound these itself, and a hostile or mistyped
+value (``--rate 1e9``) would end in a ``MemoryError`` traceback, or a machine swapping for an
+hour. A command estimates what the job needs from the sizes it is given and calls
+:func:`require` before the work; a job over budget is refused with one line naming the
+estimate, the limit, and what to change::
+
+    omnikin: error: simulate: about 6.1 GB of memory for 2.2e+07 samples, more than
+    --max-memory 2G; lower --rate or shorten --path, or raise --max-memory
+
+The limits are the options ``--max-memory SIZE`` and ``--max-time DURATION``
+(:func:`add_budget_options`). Each command's estimates use measured costs (memory rounded
+up; time per item on the fast side, so a job is refused for time only when clearly too
+long). A job estimated to take longer than :data:`NOTE_AFTER` seconds says so on standard
+error before it starts.
+
+For ``--trials`` / ``--runs`` of ``omnikin umbmark``: ``add_budget_options(parser)`` and
+``require(args, "umbmark", memory=..., seconds=..., hint="lower --trials or --runs")``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+import re
+import sys
+from dataclasses import dataclass
+
+from ..errors import ResourceLimitError
+
+DEFAULT_MEMORY = 2 * 1024 ** 3
+"""Default ``--max-memory`` [bytes]: 2 GiB."""
+
+DEFAULT_TIME = 3600.0
+"""Default ``--max-time`` [s]: one hour."""
+
+NOTE_AFTER = 30.0
+"""Jobs estimated to take longer than this [s] say so before starting."""
+
+SIZE_UNITS = {"": 1, "b": 1, "k": 1024, "m": 1024 ** 2, "g": 1024 ** 3, "t": 1024 ** 4}
+TIME_UNITS = {"": 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
+_QUANTITY = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([A-Za-z]*)\s*")
+
+
+@dataclass(frozen=True)
+class Budget:
+    """What one command may use: ``memory`` [bytes] and ``seconds`` [s] of wall time."""
+
+    memory: float = DEFAULT_MEMORY
+    seconds: float = DEFAULT_TIME
+
+    @classmethod
+    def of(cls, args) -> Budget:
+        """The budget given on the command line (defaults for options the command lacks)."""
+        if isinstance(args, Budget):
+            return args
+        return cls(getattr(args, "max_memory", None) or DEFAULT_MEMORY,
+                   getattr(args, "max_time", None) or DEFAULT_TIME)
+
+    def messages(self, bytes_each: float) -> int:
+        """How many items of ``bytes_each`` bytes fit the memory budget."""
+        return max(1, int(self.memory // bytes_each))
+
+
+# --- options ---------------------------------------------------------------------------------------------
+def parse_size(text: str) -> int:
+    """A memory size: bytes, or a number with K, M, G or T (powers of 1024; ``512M``, ``1.5G``)."""
+    m = _QUANTITY.fullmatch(str(text))
+    unit = m.group(2).lower().removesuffix("ib").removesuffix("b") if m else ""
+    if not m or unit not in SIZE_UNITS:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a size (bytes, or a number with K, M, G or T: 512M, 2G)")
+    value = float(m.group(1)) * SIZE_UNITS[unit]
+    if not (math.isfinite(value) and value >= 1):
+        raise argparse.ArgumentTypeError(f"{text!r}: a size must be at least one byte")
+    return int(value)
+
+
+def parse_duration(text: str) -> float:
+    """A duration [s]: seconds, or a number with s, m (min), h or d (``90``, ``10m``, ``2h``)."""
+    m = _QUANTITY.fullmatch(str(text))
+    unit = m.group(2).lower() if m else ""
+    if not m or unit not in TIME_UNITS:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a duration (seconds, or a number with s, m, h or d: "
+                                         f"90, 10m, 2h)")
+    value = float(m.group(1)) * TIME_UNITS[unit]
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text!r}: a duration must be positive")
+    return value
+
+
+def add_budget_options(parser, *, time: bool = True) -> None:
+    """Add ``--max-memory SIZE`` (and, with ``time``, ``--max-time DURATION``) to ``parser``."""
+    parser.add_argument("--max-memory", type=parse_size, default=DEFAULT_MEMORY, metavar="SIZE",
+                        help=f"refuse to start a job estimated to need more memory (bytes, or K/M/G/T; default "
+                             f"{format_bytes(DEFAULT_MEMORY)})")
+    if time:
+        parser.add_argument("--max-time", type=parse_duration, default=DEFAULT_TIME, metavar="DURATION",
+                            help=f"refuse to start a job estimated to take longer (seconds, or m/h: 90, 10m, 2h; "
+                                 f"default {format_seconds(DEFAULT_TIME)})")
+
+
+# --- checks -----------------------------------------------------------------------------------------------
+def require(args, what: str, *, memory: float | None = None, seconds: float | None = None, hint: str,
+            size: str = "") -> None:
+    """Refuse (:class:`ResourceLimitError`) a job estimated to need more than the budget of
+    ``args`` (a parsed command line or a :class:`Budget`); else, if it will take long, say so on
+    standard error.
+
+    ``what``: the command (``"simulate"``); ``memory`` [bytes] and ``seconds`` [s]: the
+    estimates; ``hint``: what to change (``"lower --rate or shorten --path"``); ``size``: the
+    size in the job's own terms (``"2.2e+07 samples"``), for the message.
+    """
+    budget = Budget.of(args)
+    of = f" for {size}" if size else ""
+    if memory is not None and not memory <= budget.memory:
+        raise ResourceLimitError(f"{what}: about {format_bytes(memory)} of memory{of}, more than --max-memory "
+                                 f"{format_bytes(budget.memory)}; {hint}, or raise --max-memory",
+                                 needed=memory, limit=budget.memory, unit="bytes")
+    if seconds is not None and not seconds <= budget.seconds:
+        raise ResourceLimitError(f"{what}: about {format_seconds(seconds)}{of}, more than --max-time "
+                                 f"{format_seconds(budget.seconds)}; {hint}, or raise --max-time",
+                                 needed=seconds, limit=budget.seconds, unit="seconds")
+    if seconds is not None and seconds > NOTE_AFTER:
+        print(f"omnikin: note: {what}: this will take about {format_seconds(seconds)}{of}", file=sys.stderr)
+
+
+@contextlib.contextmanager
+def explained(args):
+    """Add the option that sets the limit to a :class:`ResourceLimitError` raised by a library
+    call given a bound derived from the budget (a bag reader's ``max_messages``)."""
+    try:
+        yield
+    except ResourceLimitError as exc:
+        option = "--max-time" if exc.unit == "seconds" else "--max-memory"
+        value = Budget.of(args).seconds if exc.unit == "seconds" else Budget.of(args).memory
+        shown = format_seconds(value) if exc.unit == "seconds" else format_bytes(value)
+        raise ResourceLimitError(f"{exc} (the limit follows from {option} {shown}; raise it to allow more)",
+                                 needed=exc.needed, limit=exc.limit, unit=exc.unit) from None
+
+
+# --- formatting --------------------------------------------------------------------------------------
+def format_bytes(n: float) -> str:
+    """``2G``, ``1.5G``, ``300M``, ``12K``, ``100 bytes``, ``inf``."""
+    if not math.isfinite(n):
+        return str(n)
+    for unit in ("T", "G", "M", "K"):
+        scale = SIZE_UNITS[unit.lower()]
+        if n >= scale:
+            return f"{n / scale:.3g}{unit}"
+    return f"{n:.0f} bytes"
+
+
+def format_seconds(s: float) -> str:
+    """``45 s``, ``12 min``, ``3.5 h``, ``40 days``, ``inf``."""
+    if not math.isfinite(s):
+        return str(s)
+    if s < 120:
+        return f"{s:.3g} s"
+    if s < 3600:
+        return f"{s / 60:.3g} min"
+    if s < 3 * 86400:
+        return f"{s / 3600:.3g} h"
+    return f"{s / 86400:.3g} days"

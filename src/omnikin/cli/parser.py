@@ -1,0 +1,161 @@
+"""The argument parser of every ``omnikin`` sub-command: :mod:`argparse` with three habits fixed.
+
+* **Errors are one line.** A usage error raises :class:`UsageError` (``omnikin.cli.main``
+  prints it as ``omnikin: error: ik: ...; see 'omnikin ik --help'`` and exits 2) instead of
+  argparse's usage block followed by the message.
+* **Did you mean.** An unknown sub-command (``omnikin shwo``) or option (``omnikin ik --jsn``)
+  names the closest known ones (:func:`omnikin.errors.did_you_mean`; argparse before Python
+  3.14 has no suggestions).
+* **Negative numbers are values.** ``omnikin ik tomasi-omni3 -2.5e-3 0 0``: argparse takes any
+  argument that starts with ``-`` for an option unless it looks like ``-2`` or ``-2.5`` (before
+  Python 3.13 it does not know ``-2.5e-3``, ``-1e3`` or ``-inf``). Arguments that are negative
+  numbers in Python's float syntax are handed to argparse with a leading space, which argparse
+  reads as a value and :class:`float` and :class:`int` ignore; string values get their exact
+  spelling back after parsing. (``--`` before the values, or ``--option=-1e3``, work too.)
+
+Sub-commands sit in argparse sub-parsers, which cannot share a parser with an optional
+positional argument (``omnikin umbmark [ROBOT]`` and ``omnikin umbmark analyze FILE``);
+:meth:`CommandParser.add_command` lets a first argument name such a command instead.
+
+Options registered through argument groups are not offered as suggestions (none are used).
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+
+from ..errors import InputError, did_you_mean
+
+NEGATIVE_NUMBER = re.compile(r"-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|-(inf|infinity|nan)", re.IGNORECASE)
+"""A negative number in Python's float syntax (matched in full): ``-2``, ``-2.5``, ``-.5``,
+``-2.5e-3``, ``-1E3``, ``-inf``, ``-nan``."""
+
+_VALUE_MARK = " "
+"""Prefix that makes argparse read an argument as a value (an argument with a space is never
+an option) and that :class:`float` and :class:`int` ignore."""
+
+_PARSER = "_omnikin_parser"
+"""Namespace attribute naming the innermost parser that ran (for suggestions), removed after parsing."""
+
+
+class UsageError(InputError):
+    """The command line itself is wrong (exit status 2). ``command``: the sub-command's name
+    (``"ik"``, ``"bag odometry"``; empty for ``omnikin`` itself), for the ``--help`` hint."""
+
+    def __init__(self, message: str, *, command: str = ""):
+        super().__init__(message)
+        self.command = command
+
+    @property
+    def help_hint(self) -> str:
+        return f"omnikin {self.command} --help" if self.command else "omnikin --help"
+
+
+class CommandParser(argparse.ArgumentParser):
+    """:class:`argparse.ArgumentParser` with one-line errors, suggestions and negative numbers
+    as values (module docstring). Sub-parsers made with :meth:`add_subparsers` are of this
+    class too."""
+
+    def __init__(self, *args, **kwargs):
+        self._option_names: list[str] = []          # before argparse adds -h/--help through add_argument
+        self._commands: dict[str, CommandParser] = {}
+        self._subcommands = None
+        super().__init__(*args, **kwargs)
+        for parent in kwargs.get("parents", ()):
+            self._option_names += getattr(parent, "option_names", [])
+
+    # --- what the parser knows -------------------------------------------------------------------
+    @property
+    def option_names(self) -> list[str]:
+        """Every option string (``--json``, ``-o``, ...) added with :meth:`add_argument`."""
+        return list(self._option_names)
+
+    @property
+    def command_name(self) -> str:
+        """The sub-command this parser reads (``"bag odometry"``), from its ``prog``."""
+        words = self.prog.split()
+        return " ".join(words[1:])
+
+    def add_argument(self, *args, **kwargs):
+        action = super().add_argument(*args, **kwargs)
+        self._option_names += list(action.option_strings)
+        return action
+
+    def add_subparsers(self, **kwargs):
+        self._subcommands = super().add_subparsers(**kwargs)
+        return self._subcommands
+
+    def add_command(self, name: str, parser: CommandParser) -> None:
+        """Let a first argument ``name`` select ``parser`` (beside this parser's own arguments,
+        which may include an optional positional that argparse's sub-parsers cannot follow)."""
+        self._commands[name] = parser
+
+    @property
+    def command_names(self) -> list[str]:
+        """The names of the sub-commands (argparse sub-parsers and :meth:`add_command`)."""
+        names = list(self._commands)
+        if self._subcommands is not None:
+            names += list(self._subcommands.choices)
+        return names
+
+    # --- parsing ---------------------------------------------------------------------------------------
+    def parse_known_args(self, args=None, namespace=None):
+        args = [str(a) for a in (sys.argv[1:] if args is None else args)]
+        marked = {_VALUE_MARK + a: a for a in args if NEGATIVE_NUMBER.fullmatch(a)}
+        args = [_VALUE_MARK + a if NEGATIVE_NUMBER.fullmatch(a) else a for a in args]
+        if args and args[0] in self._commands:
+            namespace, extras = self._commands[args[0]].parse_known_args(args[1:], namespace)
+        else:
+            self._check_command(args)
+            namespace, extras = super().parse_known_args(args, namespace)
+        if not hasattr(namespace, _PARSER):
+            setattr(namespace, _PARSER, self)
+        _unmark(namespace, marked)
+        return namespace, [marked.get(a, a) for a in extras]
+
+    def parse_args(self, args=None, namespace=None):
+        namespace, extras = self.parse_known_args(args, namespace)
+        innermost = getattr(namespace, _PARSER, self)
+        delattr(namespace, _PARSER)
+        if extras:
+            innermost.error(innermost._unrecognized(extras))
+        return namespace
+
+    def error(self, message: str):
+        """Raise :class:`UsageError` (argparse would print the usage block and exit)."""
+        raise UsageError(message, command=self.command_name)
+
+    # --- messages ---------------------------------------------------------------------------------------
+    def _check_command(self, args: list[str]) -> None:
+        """An unknown sub-command is named with the closest known ones (the first argument that
+        is not an option; no parser of omnikin has an option with a value before its sub-command)."""
+        if self._subcommands is None:
+            return
+        word = next((a for a in args if not a.startswith("-")), None)
+        names = self.command_names
+        if word is not None and word not in names:
+            self.error(f"unknown command {word!r}{did_you_mean(word, names)} (commands: {', '.join(names)})")
+
+    def _unrecognized(self, extras: list[str]) -> str:
+        first = extras[0]
+        if first.startswith("-") and not NEGATIVE_NUMBER.fullmatch(first):
+            name = first.split("=", 1)[0]
+            message = f"unknown option {name!r}{did_you_mean(name, self._option_names)}"
+        else:
+            message = f"unexpected argument {first!r}"
+        if len(extras) > 1:
+            message += f" (and {len(extras) - 1} more argument(s))"
+        return message
+
+
+def _unmark(namespace, marked: dict) -> None:
+    """Give string values read from marked arguments their exact spelling back."""
+    if not marked:
+        return
+    for key, value in vars(namespace).items():
+        if isinstance(value, str) and value in marked:
+            setattr(namespace, key, marked[value])
+        elif isinstance(value, list) and any(isinstance(v, str) and v in marked for v in value):
+            setattr(namespace, key, [marked.get(v, v) if isinstance(v, str) else v for v in value])

@@ -1,0 +1,178 @@
+"""The command line as a hostile user meets it: every error one line, never a traceback;
+negative numbers are values; unknown names get a suggestion.
+
+One-line means: stderr holds exactly ``omnikin: error: ...`` (bounded, no newline inside),
+stdout nothing, status 2 for bad input or usage.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import omnikin
+from omnikin.cli.main import MESSAGE_LIMIT, main
+
+TOMASI_J = np.array([[-math.sin(b), math.cos(b), 0.113] for b in np.radians([0.0, 120.0, 240.0])]) / 0.04125
+# omni4 (preset file): hubs at 45 + 90 k deg on a 0.2 m circle, drive = counter-clockwise tangent, r = 0.05
+OMNI4_J = np.array([[-math.sin(b), math.cos(b), 0.2] for b in np.radians([45.0, 135.0, 225.0, 315.0])]) / 0.05
+
+
+def cli(capsys, *argv):
+    rc = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def one_line(rc, out, err, *fragments, status=2):
+    assert rc == status, err
+    assert out == ""
+    assert err.endswith("\n") and err.count("\n") == 1, err
+    assert err.startswith("omnikin: error: ") and "Traceback" not in err
+    for f in fragments:
+        assert f in err, (f, err)
+    return err.strip()
+
+
+def entry_point(*argv, cwd=None):
+    env = dict(os.environ, PYTHONPATH=str(Path(omnikin.__file__).resolve().parents[1]))
+    return subprocess.run([sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]], env=env, cwd=cwd,
+                          capture_output=True, text=True, timeout=120)
+
+
+# --- negative numbers are values ------------------------------------------------------------------------
+def test_negative_exponent_twist_is_a_value(capsys):
+    rc, out, err = cli(capsys, "ik", "tomasi-omni3", "-2.5e-3", "0", "0", "--json")
+    assert rc == 0, err
+    data = json.loads(out)
+    assert data["twist"] == [-2.5e-3, 0.0, 0.0]
+    np.testing.assert_allclose(data["wheel_speeds"], TOMASI_J @ [-2.5e-3, 0, 0], atol=1e-15)
+
+
+def test_all_negative_wheel_speeds_are_values(capsys):
+    rc, out, err = cli(capsys, "fk", "omni4", "-1", "-2", "-3", "-4", "--json")
+    assert rc == 0, err
+    twist, *_ = np.linalg.lstsq(OMNI4_J, [-1.0, -2.0, -3.0, -4.0], rcond=None)
+    np.testing.assert_allclose(json.loads(out)["twist"], twist, atol=1e-12)
+
+
+def test_negative_option_values_in_exponent_notation(capsys):
+    """--steer-deg takes several values, all negative; synchro's wheels steered to -10 deg rolling at
+    4 rad/s (r = 0.05 m) translate at 0.2 m/s along -10 deg."""
+    rc, out, err = cli(capsys, "fk", "synchro", "4", "4", "4", "--steer-deg", "-1e1", "-1E1", "-10", "--json")
+    assert rc == 0, err
+    a = math.radians(-10)
+    np.testing.assert_allclose(json.loads(out)["twist"], [0.2 * math.cos(a), 0.2 * math.sin(a), 0], atol=1e-12)
+    rc, out, err = cli(capsys, "ik", "tomasi-omni3", "1", "0", "0", "--heading", "-1.5e0", "--json")
+    assert rc == 0, err
+    h = -1.5                                            # world (1, 0) seen from a body at heading h
+    np.testing.assert_allclose(json.loads(out)["twist"], [math.cos(h), -math.sin(h), 0], atol=1e-12)
+
+
+def test_negative_infinity_is_a_value_refused_by_the_model(capsys):
+    one_line(*cli(capsys, "ik", "tomasi-omni3", "-inf", "0", "0"), "twist")
+
+
+def test_string_values_keep_their_spelling(capsys):
+    """A robot named like a negative number is looked up as typed, not with argparse's workaround."""
+    line = one_line(*cli(capsys, "show", "-1e3"))
+    assert "-1e3: no such robot file" in line and " -1e3" not in line.split("error: ")[1]
+
+
+def test_double_dash_still_works(capsys):
+    rc, out, err = cli(capsys, "ik", "tomasi-omni3", "--json", "--", "-2e-3", "0", "0")
+    assert rc == 0 and json.loads(out)["twist"] == [-2e-3, 0.0, 0.0]
+
+
+# --- did you mean ----------------------------------------------------------------------------------------
+@pytest.mark.parametrize("argv, suggestion", [
+    (["shwo", "omni4"], "'show'"),
+    (["bag", "exprt", "x.bag"], "'export'"),
+    (["ik", "tomasi-omni3", "0", "0", "0", "--jsn"], "'--json'"),
+    (["fk", "omni4", "1", "2", "3", "4", "--steer-dg", "0"], "'--steer-deg'"),
+    (["show", "tomasi-omni"], "'tomasi-omni3'"),
+    (["ik", "mecanum", "0", "0", "0"], "'mecanum4'"),
+])
+def test_unknown_names_get_a_suggestion(capsys, argv, suggestion):
+    line = one_line(*cli(capsys, *argv), "did you mean", suggestion)
+    assert line.count("did you mean") == 1
+
+
+def test_no_suggestion_when_nothing_is_close(capsys):
+    line = one_line(*cli(capsys, "zzzzzz"), "unknown command 'zzzzzz'", "presets")
+    assert "did you mean" not in line
+
+
+def test_usage_errors_are_one_line_and_point_to_help(capsys):
+    one_line(*cli(capsys, "ik", "tomasi-omni3", "zero", "0", "0"), "invalid float value: 'zero'", "omnikin ik --help")
+    one_line(*cli(capsys, "ik"), "required", "ROBOT")
+    one_line(*cli(capsys, "ik", "tomasi-omni3", "0", "0", "0", "7"), "unexpected argument '7'")
+    one_line(*cli(capsys, "bag", "odometry", "tomasi-omni3"), "omnikin bag odometry --help")
+
+
+def test_umbmark_analyze_is_a_command_of_umbmark(capsys):
+    one_line(*cli(capsys, "umbmark", "analyze"), "umbmark analyze", "MEASUREMENTS.csv")
+    assert main(["umbmark", "analyze", "--help"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("usage: omnikin umbmark analyze") and "--side" in out
+
+
+def test_umbmark_analyze_help_subprocess():
+    proc = entry_point("umbmark", "analyze", "--help")
+    assert proc.returncode == 0 and proc.stdout.startswith("usage: omnikin umbmark analyze")
+
+
+# --- one line, whatever the library said ----------------------------------------------------------------------
+def test_invalid_bag_metadata_is_one_line(tmp_path):
+    """rosbags explains a YAML error over several lines; the user sees one, naming the bag."""
+    pytest.importorskip("rosbags")
+    bag = tmp_path / "bad.bag"
+    bag.mkdir()
+    (bag / "metadata.yaml").write_text("rosbag2_bagfile_information:\n  version: 8\n   storage: [\n")
+    for argv in (["bag", "export", bag, "--topic", "/odom", "--format", "tum"],
+                 ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag"]):
+        proc = entry_point(*argv)
+        one_line(proc.returncode, proc.stdout, proc.stderr, str(bag), "line 3")
+
+
+def test_messages_are_flattened_and_bounded(capsys, tmp_path):
+    """A robot path with a newline and one of 5000 characters: the error stays one bounded line."""
+    one_line(*cli(capsys, "show", "first\nsecond"), "first second")
+    line = one_line(*cli(capsys, "show", "x" * 5000))
+    assert len(line) <= len("omnikin: error: ") + MESSAGE_LIMIT and "chars)" in line
+
+
+def test_non_finite_results_are_errors_naming_the_field(capsys):
+    """1e308 m/s: the wheel speeds overflow to infinity; no 'Infinity' in JSON, no 'inf' in a table."""
+    for extra in ([], ["--json"]):
+        one_line(*cli(capsys, "ik", "tomasi-omni3", "1e308", "0", "0", *extra), "wheel_speeds[")
+
+
+def test_overflow_in_numpy_is_at_most_a_warning_line_and_an_error(capsys):
+    rc, out, err = cli(capsys, "fk", "tomasi-omni3", "1e308", "1e308", "1e308")
+    assert rc == 2 and out == "" and "Traceback" not in err
+    lines = err.strip().splitlines()
+    assert lines[-1].startswith("omnikin: error: ") and all(line.startswith("omnikin: ") for line in lines)
+
+
+def test_closed_pipe_ends_quietly(tmp_path):
+    """The reader of standard output stops early: no traceback, no 'Exception ignored' (some kernels
+    hold the whole output in the pipe, then the command simply succeeds)."""
+    pytest.importorskip("rosbags")
+    bag = tmp_path / "long.bag"
+    assert main(["simulate", "mecanum4", "--path", "line 10", "--rate", "1000", "--bag", str(bag)]) == 0
+    env = dict(os.environ, PYTHONPATH=str(Path(omnikin.__file__).resolve().parents[1]))
+    proc = subprocess.Popen([sys.executable, "-m", "omnikin.cli.main", "bag", "export", str(bag), "--topic", "/odom",
+                             "--format", "tum"], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc.stdout.read(100)
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert proc.wait(timeout=120) in (0, 141)
+    assert "Traceback" not in err and "Exception" not in err and err.count("\n") <= 1
