@@ -200,8 +200,8 @@ def test_odometry_to_stdout_carries_the_trajectory_only(capsys, log):
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (Linux)")
-def test_full_disk_is_one_line_and_status_1(capsys, log):
-    rc, _, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", "/dev/full")
+def test_full_disk_is_one_line_and_status_1(capsys, sim_bag):
+    rc, _, err = cli(capsys, "bag", "export", sim_bag, "--topic", "/odom", "--format", "tum", "-o", "/dev/full")
     assert rc == 1 and err.strip() == "omnikin: error: /dev/full: cannot write: No space left on device"
     with open("/dev/full", "w") as full:
         proc = entry_point("presets", "--json", stdout=full)

@@ -285,13 +285,13 @@ def cmd_simulate(args) -> int:
     from ..simulation.motion import estimated_samples
     from ..simulation.simulate import simulate
 
-    if not args.bag and not args.log:
+    if args.bag is None and args.log is None:
         raise InputError("simulate: give --bag OUT.bag and/or --log LOG.csv")
-    if args.bag:
+    if args.bag is not None:
         require_rosbags()
         checked_output(args, args.bag, robot_inputs(args.robot, args.true_robot), folder="data")
     robot = load_robot(args.robot)
-    if args.log:
+    if args.log is not None:
         _check_tick_log(args, robot)
     if args.seed < 0:
         raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
@@ -311,8 +311,8 @@ def cmd_simulate(args) -> int:
               "omnikin.errors": "file " + args.true_robot if args.true_robot else args.errors,
               "omnikin.noise": args.noise, "omnikin.rate": f"{args.rate:g}"}
     counts = (record_run(args.bag, run, robot, start=args.start, storage=args.storage, custom=custom,
-                         force=args.force) if args.bag else {})
-    if args.log:
+                         force=args.force) if args.bag is not None else {})
+    if args.log is not None:
         _write_tick_log(args, robot, run)
     truth_end = run.truth[0, -1]
     odom_end = run.odometry[-1]
@@ -335,8 +335,8 @@ def cmd_simulate(args) -> int:
         f"end pose: truth x={truth_end[0]:.6g} m, y={truth_end[1]:.6g} m, theta={truth_end[2]:.6g} rad; odometry "
         f"x={odom_end[0]:.6g} m, y={odom_end[1]:.6g} m, theta={odom_end[2]:.6g} rad "
         f"(off by {summary['end_error_distance'] * 1000:.3g} mm)\n"
-        + (f"bag {args.bag}: " + ", ".join(f"{t} ({n})" for t, n in counts.items()) if args.bag else "")
-        + (("\n" if args.bag else "") + f"tick log written to {args.log}" if args.log else ""))
+        + (f"bag {args.bag}: " + ", ".join(f"{t} ({n})" for t, n in counts.items()) if args.bag is not None else "")
+        + (("\n" if args.bag is not None else "") + f"tick log written to {args.log}" if args.log is not None else ""))
     return 0
 
 

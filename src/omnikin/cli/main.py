@@ -22,7 +22,7 @@ import numpy as np
 from .. import __version__
 from ..errors import InfeasibleTwistError, InputError, OmnikinError, one_line
 from ..presets import PRESET_NAMES
-from .common import add_output_options, checked_output, console, load_robot, messages_console, print_json, robot_inputs
+from .common import add_output_options, checked_output, console, load_robot, print_json, robot_inputs
 from .parser import CommandParser, UsageError
 
 EPILOG = """examples:
