@@ -176,3 +176,17 @@ def test_closed_pipe_ends_quietly(tmp_path):
     err = proc.stderr.read()
     assert proc.wait(timeout=120) in (0, 141)
     assert "Traceback" not in err and "Exception" not in err and err.count("\n") <= 1
+
+
+def test_floating_point_trouble_in_omnikin_is_an_error_not_a_wrong_number(capsys, tmp_path):
+    """Positions of +-1e308 m are finite, their differences are not: the metrics would be inf or
+    NaN. NumPy's warning inside omnikin's own computation ends the command with one line."""
+    a, b = tmp_path / "a.tum", tmp_path / "b.tum"
+    a.write_text("".join(f"{k} 1e308 0 0 0 0 0 1\n" for k in range(3)))
+    b.write_text("".join(f"{k} -1e308 0 0 0 0 0 1\n" for k in range(3)))
+    for extra in ([], ["--json"], ["--align"]):
+        rc, out, err = cli(capsys, "metrics", a, b, *extra)
+        assert rc == 2 and out == "" and "Traceback" not in err
+        lines = err.strip().splitlines()
+        assert all(line.startswith("omnikin: ") for line in lines)
+        assert lines[-1].startswith("omnikin: error: numerical failure")

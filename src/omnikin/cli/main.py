@@ -63,6 +63,7 @@ WRITE_ERRORS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EROFS,
                 errno.EBADF, errno.EPIPE}
 """Operating-system errors that mean an output could not be written."""
 
+
 class CliError(InputError):
     """A usage problem found after argument parsing (exit status 2)."""
 
@@ -515,7 +516,6 @@ def main(argv=None) -> int:
     except InputError as exc:
         return _fail(exc, 2)
     except OmnikinError as exc:             # OutputError, LinkError: failures while running
-        _quiet_stdout()
         return _fail(exc, 1)
     except ImportError as exc:              # an optional extra is missing (the message names it)
         return _fail(exc, 2)
