@@ -10,9 +10,11 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -84,9 +86,11 @@ def cli_json(capsys, *argv):
     return json.loads(out)
 
 
-def run(*argv, timeout=120):
-    """The real entry point in a subprocess."""
-    return subprocess.run([sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]],
+def run(*argv, timeout=120, cwd=None):
+    """The real entry point in a subprocess, running this checkout's omnikin from any folder (a
+    relative PYTHONPATH would fall back to whatever omnikin is installed)."""
+    env = dict(os.environ, PYTHONPATH=str(Path(omnikin.__file__).resolve().parents[1]))
+    return subprocess.run([sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]], env=env, cwd=cwd,
                           capture_output=True, text=True, timeout=timeout)
 
 
@@ -248,9 +252,9 @@ def test_ik_every_preset_forward_twist(capsys, name):
     if name in STEERABLE_PRESETS:
         steer_names = [w[0] for w in wheels if w[1] == "steerable"]
         assert data["steer_names"] == steer_names
-        steer = dict(zip(steer_names, data["steer_angles"]))
+        steer = dict(zip(steer_names, data["steer_angles"], strict=True))
         assert len(data["steer_angles"]) == len(steer_names)
-        for (wname, kind, x, y, drive, _, r, _), w_speed in zip(wheels, speeds):
+        for (wname, _kind, _x, _y, drive, _, r, _), w_speed in zip(wheels, speeds, strict=True):
             delta = drive + steer.get(wname, 0.0)
             # pure translation along x: every hub moves along +x, so each steered wheel lies along x
             # and rolls at cos(delta) * 0.1 / r
@@ -267,8 +271,8 @@ def test_ik_every_preset_turning_twist(capsys, name):
     data = cli_json(capsys, "ik", name, *twist)
     wheels = preset_wheels(name)
     speeds = np.array(data["wheel_speeds"])
-    steer = dict(zip(data.get("steer_names", []), data.get("steer_angles", [])))
-    for (wname, kind, x, y, drive, gamma, r, offset), w_speed in zip(wheels, speeds):
+    steer = dict(zip(data.get("steer_names", []), data.get("steer_angles", []), strict=True))
+    for (wname, kind, x, y, drive, gamma, r, offset), w_speed in zip(wheels, speeds, strict=True):
         delta = drive + steer.get(wname, 0.0)
         vp = np.array([twist[0] - twist[2] * y, twist[1] + twist[2] * x])  # hub (steering axis) velocity
         if kind == "steerable":
@@ -289,8 +293,8 @@ def test_ik_tomasi_pure_rotation(capsys):
 @pytest.mark.parametrize("twist", [(0.2, 0.0, 0.5), (0.0, 0.3, 0.0), (-0.1, 0.25, -1.5), (1.0, 0.0, 0.0)])
 def test_ik_tomasi_closed_form(capsys, twist):
     vx, vy, w = twist
-    l, r = 0.113, 0.04125
-    expected = [(-math.sin(b) * vx + math.cos(b) * vy + l * w) / r for b in np.radians([0, 120, 240])]
+    lever, r = 0.113, 0.04125
+    expected = [(-math.sin(b) * vx + math.cos(b) * vy + lever * w) / r for b in np.radians([0, 120, 240])]
     data = cli_json(capsys, "ik", "tomasi-omni3", vx, vy, w)
     np.testing.assert_allclose(data["wheel_speeds"], expected, rtol=1e-12, atol=1e-12)
     # rollers of omni wheels carry the hub velocity along the axle; omnikin counts it positive along
@@ -345,7 +349,7 @@ def test_ik_heading_world_frame(capsys):
 def test_ik_steer_hint_chooses_reversed_branch(capsys):
     """xr4000 can also reach a forward twist with every wheel turned round (steer 180, speed negative)."""
     data = cli_json(capsys, "ik", "xr4000", 0.1, 0, 0, "--steer-hint-deg", 170, 170, 170, 170)
-    for a, s in zip(data["steer_angles"], data["wheel_speeds"]):
+    for a, s in zip(data["steer_angles"], data["wheel_speeds"], strict=True):
         assert abs(math.cos(a) + 1) < 1e-9
         assert s == pytest.approx(-0.1 / 0.05)
 
@@ -540,8 +544,7 @@ SUBPROCESS_ERRORS = [
 
 @pytest.mark.parametrize("argv, fragment", SUBPROCESS_ERRORS, ids=[" ".join(a[:2]) for a, _ in SUBPROCESS_ERRORS])
 def test_subprocess_errors_are_one_line(tmp_path, argv, fragment):
-    proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", *argv], capture_output=True, text=True,
-                          timeout=120, cwd=tmp_path)
+    proc = run(*argv, cwd=tmp_path)
     assert proc.stdout == ""
     assert_clean_error(proc.returncode, proc.stderr, fragment)
 
