@@ -4,6 +4,7 @@ line naming the limit and the option, instead of a MemoryError traceback or an h
 from __future__ import annotations
 
 import math
+import os
 import time
 from pathlib import Path
 
@@ -139,7 +140,7 @@ def test_trajectory_file_too_large_for_the_budget_is_refused(capsys, tmp_path):
     assert rc == 0, err
 
 
-# --- inputs without a size -------------------------------------------------------------------------------------
+# --- inputs without a size or end ------------------------------------------------------------------------
 @pytest.mark.parametrize("argv", [["metrics", "/dev/zero", "/dev/zero"], ["show", "/dev/zero"],
                                   ["simulate", "diff-drive", "--true-robot", "/dev/zero", "--bag", "x.bag"],
                                   ["bag", "export", "/dev/zero", "--topic", "/odom", "--format", "tum"]])
@@ -148,4 +149,17 @@ def test_endless_devices_are_refused_not_read(capsys, tmp_path, monkeypatch, arg
     if argv[0] in ("simulate", "bag"):
         pytest.importorskip("rosbags")
     monkeypatch.chdir(tmp_path)
-    refused_quickly(capsys, argv, "/dev/zero", "not a regular file")
+    refused_quickly(capsys, argv, "/dev/zero")
+
+
+def test_bag_that_is_or_holds_a_pipe_is_refused_not_waited_for(capsys, joint_bag, tmp_path):
+    """A named pipe nobody writes to would block the bag reader's open() forever."""
+    import shutil
+
+    fifo = tmp_path / "run.mcap"
+    os.mkfifo(fifo)
+    refused_quickly(capsys, ["bag", "export", fifo, "--topic", "/odom", "--format", "tum"], "pipe")
+    bag = tmp_path / "copy.bag"
+    shutil.copytree(joint_bag, bag)
+    os.mkfifo(bag / "extra.mcap")
+    refused_quickly(capsys, ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag"], "extra.mcap", "pipe")

@@ -23,7 +23,6 @@ from .common import (
     load_robot,
     messages_console,
     print_json,
-    require_regular_file,
     robot_as_built,
     robot_inputs,
 )
@@ -199,7 +198,6 @@ def _size_bag_job(args, what: str, bag, topic: str, bytes_each: float, hint: str
     """Refuse a bag job over budget from the message count the bag declares."""
     from ..io.bags import message_count
 
-    require_regular_file(bag, "bag")
     count = message_count(bag, topic)
     require(args, what, memory=count * bytes_each, seconds=count * 2 * MESSAGE_SECONDS, size=f"{count} messages",
             hint=hint)
@@ -435,14 +433,17 @@ strings, the parsed numbers): measured 4 for TUM lines, 9 for KITTI, 16 for 12-b
 
 
 def _size_trajectory_file(args, path) -> None:
-    """Refuse a trajectory file too large to read within ``--max-memory`` (from its size), or
-    one without a size (a device, a pipe)."""
+    """Refuse a trajectory file too large to read within ``--max-memory`` (from its size; a pipe
+    has none and is read as it comes, a device is refused by the reader)."""
     import os
+    import stat
 
-    require_regular_file(path, "trajectory")
     try:
-        size = os.stat(path).st_size
+        info = os.stat(path)
     except OSError:
         return                              # the reader names a missing or unreadable file
+    if not stat.S_ISREG(info.st_mode):
+        return
+    size = info.st_size
     require(args, "metrics", memory=size * TRAJECTORY_BYTES_PER_FILE_BYTE, size=f"{path} ({size} bytes)",
             hint="compare shorter trajectories")

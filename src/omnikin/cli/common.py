@@ -11,13 +11,10 @@ output then carries the data only). ``--json`` documents are printed with :func:
 
 from __future__ import annotations
 
-import os
-import stat
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, RobotFileError, did_you_mean
 from ..io.output import check_output, is_stdout
 
 FORCE_HELP = "replace existing output files (never an input; a folder only if omnikin wrote it)"
@@ -51,31 +48,10 @@ def messages_console(*outputs, width: int = 120):
 
 
 def load_robot(spec):
-    """A preset or robot file (:func:`omnikin.io.robot_file.load_robot`, imported on use); a name
-    that is neither names the closest presets."""
+    """A preset or robot file (:func:`omnikin.io.robot_file.load_robot`, imported on use)."""
     from ..io.robot_file import load_robot as load
-    from ..presets import PRESET_NAMES
 
-    text = str(spec)
-    if text not in PRESET_NAMES and not os.path.exists(text):      # False for unreadable or too long names
-        raise RobotFileError(f"{text}: no such robot file or preset{did_you_mean(text, PRESET_NAMES)} "
-                             f"(presets: {', '.join(PRESET_NAMES)})")
-    if text not in PRESET_NAMES:
-        require_regular_file(text, "robot")
     return load(spec)
-
-
-def require_regular_file(path, what: str = "input") -> None:
-    """Refuse a device or pipe given as an input file (``/dev/zero`` would be read forever):
-    its size cannot be checked against the budget. Folders and missing paths are left to the
-    reader, which names them."""
-    try:
-        mode = os.stat(path).st_mode
-    except OSError:
-        return
-    if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
-        raise InputError(f"{path}: not a regular file (a device or a pipe could be read forever); save the {what} "
-                         f"to a file first")
 
 
 # --- outputs -----------------------------------------------------------------------------------------

@@ -44,7 +44,9 @@ them they raise :class:`omnikin.errors.ResourceLimitError`.
 from __future__ import annotations
 
 import math
+import os
 import re
+import stat
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -132,10 +134,31 @@ def seconds_to_ns(t) -> np.ndarray:
 
 
 # --- reading -------------------------------------------------------------------------------------------
-def _open_reader(rb: _Rosbags, bag):
+def _check_bag_path(bag) -> Path:
+    """``bag`` as a :class:`Path` if it is a folder or a regular file, holding no device, pipe or
+    socket (which could block the reader forever), else :class:`BagError`."""
     path = Path(bag)
-    if not path.exists():
-        raise BagError(f"{bag}: no such bag (expected a rosbag2 directory, or a .db3 or .mcap file)")
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):           # missing, or a name too long or with NUL
+        raise BagError(f"{shorten(str(bag), 300)}: no such bag (expected a rosbag2 directory, or a .db3 or .mcap "
+                       f"file)") from None
+    inside = []
+    if stat.S_ISDIR(mode):
+        try:
+            inside = [entry for entry in os.scandir(path) if not (entry.is_file() or entry.is_dir())]
+        except OSError as exc:
+            raise BagError(f"{bag}: cannot read the bag: {exc.strerror or exc}") from None
+    elif not stat.S_ISREG(mode):
+        raise BagError(f"{bag}: not a bag but a device, pipe or socket (a bag is a rosbag2 directory, or a .db3 or "
+                       f".mcap file)")
+    if inside:
+        raise BagError(f"{bag}: holds {inside[0].name!r}, a device, pipe or socket, not a bag file")
+    return path
+
+
+def _open_reader(rb: _Rosbags, bag):
+    path = _check_bag_path(bag)
     try:
         reader = rb.Reader(path)
         reader.open()

@@ -25,7 +25,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..errors import OmnikinError, RobotFileError, shorten
+from ..errors import OmnikinError, RobotFileError, did_you_mean, shorten
 from ..model import Robot, name_collisions, robot_name_problem
 from ..presets import PRESET_NAMES, preset_path
 from ..wheels import (
@@ -422,8 +422,8 @@ def load_robot(spec: str | Path) -> Robot:
     if spec_str in PRESET_NAMES and not exists:
         path = preset_path(spec_str)
     elif not exists:
-        raise RobotFileError(f"{shorten(spec_str, 1000)}: no such robot file or preset; presets: "
-                             f"{', '.join(PRESET_NAMES)}")
+        raise RobotFileError(f"{shorten(spec_str, 1000)}: no such robot file or preset"
+                             f"{did_you_mean(spec_str, PRESET_NAMES)}; presets: {', '.join(PRESET_NAMES)}")
     source = path.name if spec_str in PRESET_NAMES else spec_str
     return parse_robot_text(read_text(path, RobotFileError, what="a robot file"), source)
 

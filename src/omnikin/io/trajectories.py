@@ -18,7 +18,6 @@ the file and the line; TUM and KITTI fields are separated by blanks (or single c
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 
