@@ -141,7 +141,7 @@ def _check_bag_path(bag) -> Path:
     try:
         mode = os.stat(path).st_mode
     except (OSError, ValueError):           # missing, or a name too long or with NUL
-        raise BagError(f"{shorten(str(bag), 300)}: no such bag (expected a rosbag2 directory, or a .db3 or .mcap "
+        raise BagError(f"{one_line(bag, 300)}: no such bag (expected a rosbag2 directory, or a .db3 or .mcap "
                        f"file)") from None
     inside = []
     if stat.S_ISDIR(mode):
