@@ -24,4 +24,4 @@ def require_finite(arr: np.ndarray, name: str) -> None:
     bad = ~np.isfinite(arr)
     if bad.any():
         index = tuple(int(i) for i in np.argwhere(bad)[0])
-        raise InputError(f"{name}: non-finite value {arr[index]!r} at index {index}")
+        raise InputError(f"{name}: non-finite value {float(arr[index])} at index {index}")

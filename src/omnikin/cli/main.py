@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import argparse
 import errno
-import json
 import math
 import os
 import sys
@@ -378,7 +377,7 @@ def cmd_odometry(args) -> int:
                "output": str(args.output), "format": args.format,
                "duplicate_lines": list(log.duplicate_lines)}
     if args.json:
-        print(json.dumps(summary, indent=2))
+        print_json(summary)
     else:
         console(stderr=to_stdout).print(
             f"{robot.name}: {summary['samples']} samples over {summary['duration']:.6g} s, {args.method} integration\n"

@@ -457,12 +457,18 @@ def robot_to_dict(robot: Robot) -> dict:
 
 
 def save_robot(robot: Robot, path: str | Path) -> None:
-    """Write ``robot`` as YAML (``.yaml``/``.yml``) or JSON (``.json``)."""
-    path = Path(path)
+    """Write ``robot`` as YAML (``.yaml``/``.yml``) or strict JSON (``.json``), atomically.
+
+    Whether ``path`` may be written (it exists, it is an input) is the caller's check
+    (:func:`omnikin.io.output.check_output`); this only guarantees no half-written file.
+    """
+    from .jsonfile import to_json
+    from .output import write_text
+
     data = robot_to_dict(robot)
-    if path.suffix.lower() == ".json":
-        path.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+    if Path(path).suffix.lower() == ".json":
+        write_text(path, to_json(data) + "\n")
     else:
         import yaml
 
-        path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+        write_text(path, yaml.safe_dump(data, sort_keys=False))
