@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import stat
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -177,16 +179,28 @@ def test_missing_folder_is_named(tmp_path):
         check_output(tmp_path / "nope" / "out.bag", folder="data")
 
 
-@pytest.mark.skipif(os.geteuid() == 0, reason="root may write in any folder")
-def test_read_only_folder_is_refused_before_writing(tmp_path):
-    ro = tmp_path / "ro"
-    ro.mkdir()
-    ro.chmod(0o555)
+@contextlib.contextmanager
+def _unwritable_folder(path: Path):
+    """A folder nobody may write in, root included: mode 0555 for a normal user; for root
+    (CI runs as root) the immutable attribute (``chattr +i``, e2fsprogs)."""
+    path.mkdir()
+    path.chmod(0o555)
+    immutable = os.geteuid() == 0
+    if immutable:
+        subprocess.run(["chattr", "+i", str(path)], check=True, capture_output=True, timeout=30)
     try:
+        yield path
+    finally:
+        if immutable:
+            subprocess.run(["chattr", "-i", str(path)], check=True, capture_output=True, timeout=30)
+        path.chmod(0o755)
+
+
+def test_read_only_folder_is_refused_before_writing(tmp_path):
+    with _unwritable_folder(tmp_path / "ro") as ro:
         with pytest.raises(OutputError, match="not writable"):
             check_output(ro / "out.csv")
         with pytest.raises(OutputError, match="cannot write"):
             with atomic_write(ro / "out.csv") as handle:
                 handle.write("x")
-    finally:
-        ro.chmod(0o755)
+        assert list(ro.iterdir()) == []
