@@ -1,14 +1,33 @@
-"""Shared test helpers: random wheel layouts built from first principles."""
+"""Shared test helpers: the repository's paths, the environment for omnikin subprocesses, and
+wheel layouts built from first principles."""
 
 from __future__ import annotations
 
 import math
+import os
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, settings
 
+import omnikin
 from omnikin import Robot, Wheel
+
+ROOT = Path(__file__).resolve().parents[1]
+"""The repository (docs/, examples/, firmware/)."""
+
+SRC = str(Path(omnikin.__file__).resolve().parents[1])
+"""The folder holding the omnikin under test: subprocesses (the CLI, ROS nodes) must import
+this one, whatever their working folder."""
+
+
+def omnikin_env(**extra: str) -> dict:
+    """The environment for an omnikin subprocess: this process's, with :data:`SRC` first on
+    ``PYTHONPATH`` (``extra`` variables added)."""
+    env = dict(os.environ, **extra)
+    env["PYTHONPATH"] = SRC + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    return env
 
 # no wall-clock limits: a loaded CI machine must not fail a test for being slow
 settings.register_profile("ci", max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])

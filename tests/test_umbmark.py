@@ -14,12 +14,10 @@ import numpy as np
 import pytest
 
 from omnikin import OmnikinError, load_robot
-from omnikin.plans import CalibrationRun
-from omnikin.evaluation.calibration import (borenstein_calibrate, calibrate, predicted_end,
-                                           recommended_runs)
+from omnikin.evaluation.calibration import borenstein_calibrate, calibrate, predicted_end, recommended_runs
 from omnikin.evaluation.umbmark import analyze, borenstein, differential_pair, run_umbmark
+from omnikin.plans import CalibrationRun, line, spin, umbmark_square
 from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel, SystematicErrors, WheelErrors
-from omnikin.plans import line, spin, umbmark_square
 from omnikin.simulation.simulate import simulate
 
 EXACT = NoiseModel(quantise=False)

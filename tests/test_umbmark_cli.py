@@ -327,8 +327,8 @@ def test_analyze_theta_columns(capsys, tmp_path):
 # omnikin calibrate on a runs file written from simulate()
 # =====================================================================================================
 def test_calibrate_own_runs_file(capsys, tmp_path):
-    from omnikin.simulation.error_models import NoiseModel, SystematicErrors, WheelErrors
     from omnikin.plans import line, spin, umbmark_square
+    from omnikin.simulation.error_models import NoiseModel, SystematicErrors, WheelErrors
     from omnikin.simulation.simulate import simulate
 
     robot = load_robot("diff-drive")

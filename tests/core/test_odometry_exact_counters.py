@@ -19,21 +19,19 @@ import sys
 import traceback
 import tracemalloc
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from conftest import ROOT  # noqa: E402
 from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
 from omnikin.errors import InputError, RobotFileError
 from omnikin.io.logs import read_tick_log, write_tick_log
 from omnikin.io.robot_file import robot_to_dict
-from test_odometry_cli import TOMASI_RPT, cli, one_line_error, read_csv_traj, write_log
-from test_review_regressions import assert_poses_close, tomasi_poses
+from tomasi_helpers import TOMASI_RPT, assert_poses_close, cli, one_line_error, read_csv_traj, tomasi_poses, write_log
 
-ROOT = Path(__file__).resolve().parents[1]
 H = ["t", "w1", "w2", "w3"]
 TOMASI_R = 0.04125
 RIM_RATE = 100.0 / TOMASI_R / TOMASI_RPT       # ticks/s at the default 100 m/s rim-speed bound

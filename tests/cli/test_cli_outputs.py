@@ -13,12 +13,11 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-import omnikin
+from conftest import omnikin_env
 from omnikin.cli.main import main
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -58,7 +57,7 @@ def log(tmp_path):
 
 def entry_point(*argv, **kwargs):
     """The real entry point in a subprocess, with this checkout's omnikin whatever the folder."""
-    env = dict(os.environ, PYTHONPATH=str(Path(omnikin.__file__).resolve().parents[1]))
+    env = omnikin_env()
     kwargs = {"stdout": subprocess.PIPE, "stderr": subprocess.PIPE, **kwargs}
     return subprocess.Popen([sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]], env=env, text=True,
                             **kwargs)

@@ -18,8 +18,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from omnikin.evaluation import metrics as m
 from omnikin.errors import OmnikinError
+from omnikin.evaluation import metrics as m
 from omnikin.io.trajectories import (
     TrajectoryFileError,
     read_trajectory,

@@ -15,6 +15,7 @@ import yaml
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
+from conftest import ROOT  # noqa: E402
 from omnikin.errors import InputError
 from omnikin.runtime import protocol as P
 from omnikin.runtime.protocol import (
@@ -28,13 +29,12 @@ from omnikin.runtime.protocol import (
     load_protocol,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
 FIRMWARE = ROOT / "firmware" / "omnikin_wheel"
-HOST_TESTS = ROOT / "tests" / "firmware"
+HOST_TESTS = ROOT / "tests" / "runtime" / "firmware"
 YAML_PATH = ROOT / "src" / "omnikin" / "runtime" / "protocol.yaml"
 GXX = shutil.which("g++")
 GCC = shutil.which("gcc")
-needs_gxx = pytest.mark.skipif(GXX is None, reason="g++ not available")
+needs_gxx = pytest.mark.skipif(GXX is None, reason="g++ not available (.ci/run installs it)")
 
 PROTO = load_protocol()
 
@@ -697,7 +697,8 @@ def _run(exe, *args, stdin=""):
                           timeout=30).stdout
 
 
-@pytest.mark.skipif(GCC is None, reason="gcc not available")
+@pytest.mark.compiler
+@pytest.mark.skipif(GCC is None, reason="gcc not available (.ci/run installs it)")
 def test_header_is_valid_c99(tmp_path):
     src = tmp_path / "t.c"
     src.write_text('#include "omnikin_protocol.h"\nint main(void) { uint8_t f[OMNIKIN_MAX_FRAME]; '
@@ -707,6 +708,7 @@ def test_header_is_valid_c99(tmp_path):
     subprocess.run([str(tmp_path / "t")], check=True)
 
 
+@pytest.mark.compiler
 @needs_gxx
 def test_c_crc_and_encoding_match_python(host_test):
     assert _run(host_test, "crc").split() == ["29b1", "29b1"]
@@ -718,6 +720,7 @@ def test_c_crc_and_encoding_match_python(host_test):
     assert lines["ERROR_REPORT"] == encode("ERROR_REPORT", 42, wheel=0, code=1, text="boom").hex()
 
 
+@pytest.mark.compiler
 @needs_gxx
 def test_c_parser_accepts_what_python_accepts(host_test):
     rng = np.random.default_rng(7)
@@ -747,6 +750,7 @@ def test_c_parser_accepts_what_python_accepts(host_test):
     assert stats[0] == "STATS" and int(stats[3]) == py.stats.bad_version
 
 
+@pytest.mark.compiler
 @needs_gxx
 def test_c_sequence_rules_match_python(host_test):
     rng = np.random.default_rng(8)
@@ -787,6 +791,7 @@ def _simulate(exe, tmp_path, schedule, duration_s):
     return msgs, np.array(states), dec.stats
 
 
+@pytest.mark.compiler
 @needs_gxx
 @pytest.mark.parametrize("config", [
     dict(WHEEL_INDEX=0, TICKS_PER_REV="600.0f", ENCODER_X4=0, ENCODER_INVERT=0, MOTOR_INVERT=0),

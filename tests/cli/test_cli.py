@@ -10,17 +10,16 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import shutil
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
 
 import omnikin
+from conftest import omnikin_env
 from omnikin import PRESET_NAMES
 from omnikin.cli.main import main
 from omnikin.presets import preset_path
@@ -89,7 +88,7 @@ def cli_json(capsys, *argv):
 def run(*argv, timeout=120, cwd=None):
     """The real entry point in a subprocess, running this checkout's omnikin from any folder (a
     relative PYTHONPATH would fall back to whatever omnikin is installed)."""
-    env = dict(os.environ, PYTHONPATH=str(Path(omnikin.__file__).resolve().parents[1]))
+    env = omnikin_env()
     return subprocess.run([sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]], env=env, cwd=cwd,
                           capture_output=True, text=True, timeout=timeout)
 

@@ -22,6 +22,8 @@ from omnikin.runtime.fake_controller import FakeController, FakeWheel
 from omnikin.runtime.protocol import load_protocol
 from omnikin.runtime.serial_backend import LinkLostError, SerialBackend
 
+pytestmark = pytest.mark.serial
+
 LINK_TIMEOUT = 0.3
 REPORT = 0.01
 TWO_PI = 2 * math.pi

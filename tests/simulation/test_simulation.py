@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from omnikin import OmnikinError, load_robot
-from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel, SystematicErrors, WheelErrors
 from omnikin.limits import MotionLimits, saturate
 from omnikin.plans import arc, line, polyline, spin, umbmark_square
+from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel, SystematicErrors, WheelErrors
 from omnikin.simulation.motion import sample_plan
 from omnikin.simulation.simulate import simulate
 

@@ -9,15 +9,13 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-import omnikin
+from conftest import omnikin_env
 from omnikin.cli.main import MESSAGE_LIMIT, main
 
 TOMASI_J = np.array([[-math.sin(b), math.cos(b), 0.113] for b in np.radians([0.0, 120.0, 240.0])]) / 0.04125
@@ -42,7 +40,7 @@ def one_line(rc, out, err, *fragments, status=2):
 
 
 def entry_point(*argv, cwd=None):
-    env = dict(os.environ, PYTHONPATH=str(Path(omnikin.__file__).resolve().parents[1]))
+    env = omnikin_env()
     return subprocess.run([sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]], env=env, cwd=cwd,
                           capture_output=True, text=True, timeout=120)
 
@@ -176,7 +174,7 @@ def test_closed_pipe_ends_quietly(tmp_path):
     pytest.importorskip("rosbags")
     bag = tmp_path / "long.bag"
     assert main(["simulate", "mecanum4", "--path", "line 10", "--rate", "1000", "--bag", str(bag)]) == 0
-    env = dict(os.environ, PYTHONPATH=str(Path(omnikin.__file__).resolve().parents[1]))
+    env = omnikin_env()
     proc = subprocess.Popen([sys.executable, "-m", "omnikin.cli.main", "bag", "export", str(bag), "--topic", "/odom",
                              "--format", "tum"], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     proc.stdout.read(100)

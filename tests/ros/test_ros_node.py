@@ -30,7 +30,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import omnikin
 from omnikin import load_robot
 
 _REASON = (
@@ -60,7 +59,9 @@ RELIABLE_ALL = QoSProfile(
     durability=DurabilityPolicy.VOLATILE,
 )  # the test's side never drops a message
 V, A_LIN = 0.2, 0.5  # commanded speed [m/s], linear.x.max_acceleration [m/s^2]
-SRC = str(Path(omnikin.__file__).resolve().parents[1])  # the omnikin under test, for the node processes
+from conftest import SRC  # noqa: E402  (the omnikin under test, for the node processes)
+
+pytestmark = pytest.mark.ros
 
 _used_domains: set[int] = set()
 
@@ -735,6 +736,7 @@ def test_unknown_ros_args_parameter_suggests_the_closest_name(tmp_path, kind):
 SOAK_SECONDS = 60.0
 
 
+@pytest.mark.slow
 def test_soak_100hz_no_odometry_lost(tmp_path):
     proc, g = start(tmp_path, ["omni4", "--ros-args", "-p", "publish_rate:=100.0"], joint_states=True)
     try:

@@ -7,11 +7,9 @@ tables with its default value, and no table may list a parameter the node does n
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import omnikin.ros.params as params
-
-ROOT = Path(__file__).resolve().parents[1]
+from conftest import ROOT  # noqa: E402
 
 
 def _rows(text: str) -> dict:

@@ -17,32 +17,20 @@ import sys
 import numpy as np
 import pytest
 
-from omnikin.cli.main import main
-
-TOMASI_L, TOMASI_R = 0.113, 0.04125
-TOMASI_RPT = 2 * math.pi / 600  # rad per tick (600 ticks/rev, no gearbox)
-TOMASI_BETAS = np.radians([0.0, 120.0, 240.0])
-TOMASI_J = np.array([[-math.sin(b), math.cos(b), TOMASI_L] for b in TOMASI_BETAS]) / TOMASI_R
-TOMASI_F = np.linalg.inv(TOMASI_J)
+from tomasi_helpers import (
+    TOMASI_F,
+    TOMASI_J,
+    TOMASI_RPT,
+    cli,
+    closed_form_pose,
+    one_line_error,
+    read_csv_traj,
+    wrap,
+    write_log,
+)
 
 
 # --- closed forms --------------------------------------------------------------------------------------------
-def wrap(a):
-    return (np.asarray(a) + math.pi) % (2 * math.pi) - math.pi
-
-
-def closed_form_pose(twist, t):
-    """Pose (x, y, theta) after constant body twist for times t, from the origin (theta wrapped)."""
-    vx, vy, w = twist
-    t = np.asarray(t, dtype=float)
-    if w == 0:
-        return np.stack([vx * t, vy * t, np.zeros_like(t)], axis=-1)
-    th = w * t
-    x = (vx * np.sin(th) - vy * (1 - np.cos(th))) / w
-    y = (vx * (1 - np.cos(th)) + vy * np.sin(th)) / w
-    return np.stack([x, y, wrap(th)], axis=-1)
-
-
 def test_closed_form_pose_is_the_textbook_circle():
     """Self-check of the helper: (v, 0, w) gives x = v/w sin(wt), y = v/w (1 - cos(wt))."""
     v, w, t = 0.3, 0.7, 2.0
@@ -65,14 +53,6 @@ def quantisation_tolerance(F, rpt, twist, duration):
 
 
 # --- writing logs and running the CLI ----------------------------------------------------------------------
-def write_log(path, header, rows):
-    with open(path, "w", encoding="utf-8", newline="") as f:
-        f.write(",".join(header) + "\n")
-        for row in rows:
-            f.write(",".join(str(v) for v in row) + "\n")
-    return path
-
-
 def tomasi_log(path, twist, dt, n):
     t = np.arange(n + 1) * dt
     angles = np.outer(t, TOMASI_J @ np.asarray(twist, float))
@@ -81,27 +61,10 @@ def tomasi_log(path, twist, dt, n):
     return write_log(path, ["t", "w1", "w2", "w3"], rows), t
 
 
-def cli(capsys, *argv):
-    try:
-        rc = main([str(a) for a in argv])
-    except SystemExit as exc:
-        rc = exc.code
-    out, err = capsys.readouterr()
-    return rc, out, err
-
-
 def read_tum(path):
     lines = path.read_text(encoding="utf-8").strip().splitlines()
     rows = [line.split() for line in lines]
     assert all(len(r) == 8 for r in rows), "TUM lines need 8 columns"
-    return np.array(rows, dtype=float)
-
-
-def read_csv_traj(path):
-    lines = path.read_text(encoding="utf-8").strip().splitlines()
-    assert lines[0].replace(" ", "") == "t,x,y,theta"
-    rows = [line.split(",") for line in lines[1:]]
-    assert all(len(r) == 4 for r in rows)
     return np.array(rows, dtype=float)
 
 
@@ -375,14 +338,6 @@ def test_max_speed_jump_detected(capsys, tmp_path):
 
 
 # --- broken logs ---------------------------------------------------------------------------------------------------
-def one_line_error(rc, err):
-    assert rc == 2, err
-    assert "Traceback" not in err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("omnikin: error: "), err
-    return lines[0]
-
-
 GOOD = [[0.0, 0, 0, 0], [0.1, 5, -3, 2], [0.2, 10, -6, 4], [0.3, 15, -9, 6]]
 H = ["t", "w1", "w2", "w3"]
 

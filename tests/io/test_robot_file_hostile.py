@@ -12,15 +12,13 @@ import json
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
-import omnikin
+from conftest import SRC  # noqa: E402
 from omnikin.errors import InputError, RobotFileError
 from omnikin.io.robot_file import load_robot, parse_robot_text
 
-SRC = str(Path(omnikin.__file__).resolve().parents[1])
 TIMEOUT = 60        # seconds; every case below finishes in about one
 
 

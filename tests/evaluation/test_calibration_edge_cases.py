@@ -1,0 +1,40 @@
+"""Borenstein's correction on degenerate input; the lever parameter's sign.
+
+Regression tests of the review findings, grouped here by module. Expected values are derived
+independently of the code under test (closed forms typed in from the geometry, least squares
+computed with NumPy, or the batch odometry as reference for the streaming estimator).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from omnikin import (
+    OmnikinError,
+    load_robot,
+)
+
+
+def test_borenstein_degenerate_input_is_an_error():
+    from omnikin.evaluation.umbmark import borenstein
+
+    with pytest.raises(OmnikinError, match="undefined"):
+        borenstein(-1.0, 1.0, 1e-300, 0.33)
+
+
+def test_lever_is_the_displacement_component_along_its_direction():
+    """The lever is the hub displacement along (-sin a, cos a), a = drive + roller; the calibrate
+    table shows that component (it used to show a magnitude with the sign of dx)."""
+    import math as _m
+
+    from omnikin.evaluation.calibration import errors_from_vector, parameter_names
+
+    robot = load_robot("tomasi-omni3")
+    names = parameter_names(robot)
+    p = np.zeros(len(names))
+    p[names.index("w1.lever")] = -0.0004
+    e = errors_from_vector(robot, p).wheels["w1"]
+    w = robot.wheel("w1")
+    a = w.drive + w.roller
+    assert -_m.sin(a) * e.dx + _m.cos(a) * e.dy == pytest.approx(-0.0004, abs=1e-15)
