@@ -11,8 +11,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from _common import save
 
+from _common import save
 from omnikin import batch_odometry_from_angles, load_robot
 
 

@@ -11,11 +11,11 @@ streaming odometry update alone is measured in the same run for scale.
 from __future__ import annotations
 
 import numpy as np
-from _common import best_time, save
 
+from _common import best_time, save
 from omnikin import Odometry, load_robot
-from omnikin.simulation.backend import SimBackend
 from omnikin.runtime.base import BaseRuntime
+from omnikin.simulation.backend import SimBackend
 
 ROBOTS = ("tomasi-omni3", "omni4", "mecanum4", "diff-drive", "xr4000", "villasenor-omni3")
 CYCLES = 1000

@@ -9,7 +9,6 @@ changes.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
@@ -27,11 +26,11 @@ class MotionLimits:
     file applies too, whichever is smaller).
     """
 
-    linear: Optional[float] = 0.3
-    angular: Optional[float] = 1.0
-    linear_accel: Optional[float] = 0.5
-    angular_accel: Optional[float] = 2.0
-    wheel: Optional[float] = None
+    linear: float | None = 0.3
+    angular: float | None = 1.0
+    linear_accel: float | None = 0.5
+    angular_accel: float | None = 2.0
+    wheel: float | None = None
 
     def __post_init__(self):
         for name in ("linear", "angular", "linear_accel", "angular_accel", "wheel"):

@@ -28,8 +28,8 @@ calibration fits and what measurement files hold.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 
@@ -66,7 +66,7 @@ class Plan:
         if not self.segments:
             raise InputError(f"plan {self.name!r} has no segment")
 
-    def __add__(self, other: "Plan") -> "Plan":
+    def __add__(self, other: Plan) -> Plan:
         return Plan(self.segments + other.segments, f"{self.name}+{other.name}")
 
     def end_pose(self) -> np.ndarray:

@@ -57,9 +57,12 @@ MAXSPEED_YAML = """\
 omnikin: 1
 name: m
 wheels:
-  - {name: w1, type: omni, distance: 0.113, angle_deg: 0, radius: 0.04125, max_speed: 30.0, encoder: {ticks_per_rev: 600}}
-  - {name: w2, type: omni, distance: 0.113, angle_deg: 120, radius: 0.04125, max_speed: 30.0, encoder: {ticks_per_rev: 600}}
-  - {name: w3, type: omni, distance: 0.113, angle_deg: 240, radius: 0.04125, max_speed: 30.0, encoder: {ticks_per_rev: 600}}
+  - {name: w1, type: omni, distance: 0.113, angle_deg: 0, radius: 0.04125, max_speed: 30.0,
+     encoder: {ticks_per_rev: 600}}
+  - {name: w2, type: omni, distance: 0.113, angle_deg: 120, radius: 0.04125, max_speed: 30.0,
+     encoder: {ticks_per_rev: 600}}
+  - {name: w3, type: omni, distance: 0.113, angle_deg: 240, radius: 0.04125, max_speed: 30.0,
+     encoder: {ticks_per_rev: 600}}
 """
 
 

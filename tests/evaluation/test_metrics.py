@@ -180,7 +180,8 @@ def test_rpe_half_turn_is_pi():
     assert m.rpe(t, ref, t, est).rotation[0] == pytest.approx(math.pi, abs=1e-15)
 
 
-@pytest.mark.parametrize("kw, match", [({"delta": 0}, "delta"), ({"delta": 1.5}, "delta"), ({"delta": 10}, "more than 10"),
+@pytest.mark.parametrize("kw, match", [
+    ({"delta": 0}, "delta"), ({"delta": 1.5}, "delta"), ({"delta": 10}, "more than 10"),
                                        ({"angle_unit": "grad"}, "angle_unit")])
 def test_rpe_refuses(kw, match):
     t = np.arange(10.0)

@@ -99,7 +99,7 @@ _PRIMES = (3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 
 def generic_point(*exprs):
     syms = sorted(set().union(*[_mat(e).free_symbols for e in exprs]), key=str)
     assert len(syms) <= len(_PRIMES)
-    return {s: Q(p, 13) for s, p in zip(syms, _PRIMES)}
+    return {s: Q(p, 13) for s, p in zip(syms, _PRIMES[: len(syms)], strict=True)}
 
 
 def wrong_entries(printed, derived):

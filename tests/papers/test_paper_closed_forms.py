@@ -108,7 +108,7 @@ def garcia_derived():
     the 3-D no-slip. In omnikin's terms the drive is -y_i (delta = theta - 90 deg), the roller
     axis is -y_i too (gamma = 0), and the paper's roller spin about +y_i is -wr."""
     rows_w, rows_r = [], []
-    for lam, th in zip(G_LAMBDA, G_THETA):
+    for lam, th in zip(G_LAMBDA, G_THETA, strict=True):
         ww, wr = swedish_no_slip(body_point_velocity(lam), th - pi / 2, 0, RR_, rr_)
         rows_w.append(sp.simplify(ww))
         rows_r.append(sp.simplify(-wr))
@@ -335,7 +335,7 @@ def test_B10_mecanum4_preset_matches_burgard_with_mapping():
         assert sp.simplify(rim[name].subs(tw) - sol[v[k]]) == 0
     f = sp.lambdify((bx, by, bth), [sol[v[k]] for k in range(4)])
     for bxv, byv, bthv in twists():
-        speeds = dict(zip(order, f(bxv, byv, bthv)))
+        speeds = dict(zip(order, f(bxv, byv, bthv), strict=True))
         wheel = np.array([speeds[n] for n in robot.rolling_names]) / r
         res = robot.fk(wheel)
         assert_close(res.twist, [byv, -bxv, bthv / (a + b)])
@@ -350,7 +350,7 @@ def test_B10_mecanum4_fk_residual_is_burgard_v_error():
     J = (sp.Matrix([rim[n] for n in names]).jacobian(TWIST) / R).subs({a_: 0.2355, b_: 0.15, R: 0.0475})
     J = np.array(J, dtype=float)
     for omega in RNG.uniform(-10, 10, size=(6, 4)):
-        s = dict(zip(names, omega * 0.0475))
+        s = dict(zip(names, omega * 0.0475, strict=True))
         v_error = (s["rear_right"] + s["rear_left"] - s["front_left"] - s["front_right"]) / 4
         res = robot.fk(omega)
         # least-squares residual: the part of omega orthogonal to range(J)
@@ -379,7 +379,7 @@ def test_V03_villasenor_preset_contact_points_are_eq6():
     lam, dl = sp.Matrix(sp.symbols("l_x l_y", real=True)), sp.Matrix(sp.symbols("d_x d_y", real=True))
     p = lam + rot2(a + b) * dl  # eq 6
     f = sp.lambdify((a, b, *dl, *lam), p)
-    for wheel, (adeg, bdeg, d, l) in zip(robot.wheels, table):
-        expected = np.ravel(f(np.radians(adeg), np.radians(bdeg), *d, *l)) / 1000.0
+    for wheel, (adeg, bdeg, d, hip) in zip(robot.wheels, table, strict=True):
+        expected = np.ravel(f(np.radians(adeg), np.radians(bdeg), *d, *hip)) / 1000.0
         assert_close(wheel.contact_point(), expected, atol=2e-5)  # preset rounded to 0.01 mm / 1e-3 deg
         assert abs(wheel.offset - np.hypot(*d) / 1000.0) < 1e-5

@@ -287,10 +287,10 @@ def test_one_port_per_wheel_and_misrouted_frames(tomasi):
         with SerialBackend(tomasi, [f.path for f in fakes], link_timeout=LINK_TIMEOUT) as backend:
             backend.wait_ready(2.0)
             speeds = np.array([1.0, 2.0, 3.0])
-            poll(backend, lambda s: [f.speed(i) for f, i in zip(fakes, range(3))] == [1.0, 2.0, 3.0], speeds=speeds)
+            poll(backend, lambda s: [f.speed(i) for i, f in enumerate(fakes)] == [1.0, 2.0, 3.0], speeds=speeds)
             assert fakes[0].speed(1) == 0.0            # wheel 1's commands go to its own port only
             zero = np.zeros(3)
-            poll(backend, lambda s: all(f.speed(i) == 0.0 for f, i in zip(fakes, range(3))), speeds=zero)
+            poll(backend, lambda s: all(f.speed(i) == 0.0 for f, i in zip(fakes, range(3), strict=True)), speeds=zero)
             # wheel 1 stopped: wait until the back-end has its final count, not a fixed time
             rest = poll(backend, lambda s: math.isclose(s.positions[1], fakes[1].ticks(1) * TWO_PI / 600,
                                                         abs_tol=1e-12), speeds=zero)

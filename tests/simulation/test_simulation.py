@@ -94,7 +94,7 @@ def tomasi_limited(tmp_path_factory):
     path = tmp_path_factory.mktemp("robots") / "tomasi-limited.yaml"
     wheels = "\n".join(f"  - {{name: w{i + 1}, type: omni, distance: {TOMASI_L}, angle_deg: {a}, radius: {TOMASI_R}, "
                        f"encoder: {{ticks_per_rev: 600}}, max_speed: {ms}}}"
-                       for i, (a, ms) in enumerate(zip((0, 120, 240), (4.0, 4.5, 2.5))))
+                       for i, (a, ms) in enumerate(zip((0, 120, 240), (4.0, 4.5, 2.5), strict=True)))
     path.write_text(f"omnikin: 1\nname: tomasi-limited\nwheels:\n{wheels}\n", encoding="utf-8")
     return load_robot(path)
 
@@ -387,7 +387,7 @@ def test_error_profile_std_swedish(robots):
     draws = _draws(robot, 3000, 7)
     r, drive, radial, tangential = [], [], [], []
     for d in draws:
-        for name, b in zip(("w1", "w2", "w3"), TOMASI_BETAS):
+        for name, b in zip(("w1", "w2", "w3"), TOMASI_BETAS, strict=True):
             e = d.wheels[name]
             r.append(e.radius)
             drive.append(e.drive)

@@ -16,10 +16,9 @@ Back-ends: :class:`omnikin.simulation.backend.SimBackend` (the robot as built, s
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional, Protocol
+from typing import Protocol
 
 import numpy as np
-
 
 
 @dataclass(frozen=True)
@@ -29,13 +28,13 @@ class WheelState:
     t: float
     positions: np.ndarray
     velocities: np.ndarray
-    steer: Optional[np.ndarray] = None
+    steer: np.ndarray | None = None
 
 
 class WheelBackend(Protocol):
     """What the runtime needs from wheels (module docstring)."""
 
-    def write(self, t: float, speeds: np.ndarray, steer: Optional[np.ndarray] = None) -> None: ...
+    def write(self, t: float, speeds: np.ndarray, steer: np.ndarray | None = None) -> None: ...
 
     def read(self, t: float) -> WheelState: ...
 

@@ -13,26 +13,27 @@ variance ``slip^2 |r dtheta| / r^2`` [rad^2] (distance-proportional slip as in
 :mod:`omnikin.simulation.error_models`; it does not depend on the sample rate, and nothing grows
 while the robot stands still). Encoder quantisation is not process noise: the quantisation
 errors of successive increments telescope to that of the last reading, a bounded
-``q / sqrt(12)`` per wheel, negligible against slip after a few centimetres; the body increment's covariance is ``Sigma_xi = F diag(.) F^T`` (``F`` forward
-kinematics) and the pose covariance is propagated through the exact SE(2) update
-``x' = x + sinc(phi/2) R(theta + phi/2) (a, b)``, ``theta' = theta + phi`` with its
-Jacobians: ``P' = A P A^T + B Sigma_xi B^T``. The twist covariance is ``Sigma_xi / dt^2``.
-The forward-kinematics residual (redundant layouts) is reported as a slip indicator.
+``q / sqrt(12)`` per wheel, negligible against slip after a few centimetres; the body increment's
+covariance is ``Sigma_xi = F diag(.) F^T`` (``F`` forward kinematics) and the pose covariance is
+propagated through the exact SE(2) update ``x' = x + sinc(phi/2) R(theta + phi/2) (a, b)``,
+``theta' = theta + phi`` with its Jacobians (:func:`omnikin.geometry.compose_exp_jacobians`):
+``P' = J_out_pose P J_out_pose^T + J_out_tangent Sigma_xi J_out_tangent^T``. The twist
+covariance is ``Sigma_xi / dt^2``. The forward-kinematics residual (redundant layouts) is
+reported as a slip indicator.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
 from ..errors import InputError
 from ..geometry import compose_exp_jacobians
+from ..limits import MotionLimits
 from ..model import Robot
 from ..odometry import mid_steer
-from ..limits import MotionLimits
 from ..streaming import Odometry
 from .backends import WheelBackend, WheelState
 from .command import CommandFilter
@@ -51,7 +52,7 @@ class StepResult:
     state: WheelState
     command: np.ndarray
     wheel_speeds: np.ndarray
-    steer: Optional[np.ndarray]
+    steer: np.ndarray | None
 
 
 class BaseRuntime:
@@ -71,7 +72,7 @@ class BaseRuntime:
         self._fk = None if robot.steerable else robot.fk_matrix(None, self.encoded)[:, : len(self.encoded)]
         self.pose_covariance = np.zeros((3, 3))
         self.twist_covariance = np.zeros((3, 3))
-        self._last: Optional[WheelState] = None
+        self._last: WheelState | None = None
         self._steer_cmd = np.zeros(len(robot.steerable))
         self.steps = 0
 
@@ -110,8 +111,8 @@ class BaseRuntime:
             sigma_xi = f @ np.diag(var) @ f.T
             dt = state.t - self._last.t
             inc = np.array(self.odometry.twist) * dt          # the body increment the odometry just used
-            a_mat, b_mat = compose_exp_jacobians(before[2], inc)
-            self.pose_covariance = a_mat @ self.pose_covariance @ a_mat.T + b_mat @ sigma_xi @ b_mat.T
+            j_pose, j_tangent = compose_exp_jacobians(before[2], inc)
+            self.pose_covariance = j_pose @ self.pose_covariance @ j_pose.T + j_tangent @ sigma_xi @ j_tangent.T
             self.twist_covariance = sigma_xi / dt ** 2
         self._last = state
 

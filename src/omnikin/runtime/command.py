@@ -26,8 +26,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
-from ..model import Robot
 from ..limits import MotionLimits, saturate
+from ..model import Robot
 
 
 @dataclass
@@ -72,7 +72,7 @@ class CommandFilter:
         if not np.all(np.isfinite(v)):
             return self._reject(f"non-finite component in {v.tolist()}")
         bounds = [self.limits.linear, self.limits.linear, self.limits.angular]
-        for value, bound, name in zip(v, bounds, ("vx", "vy", "omega")):
+        for value, bound, name in zip(v, bounds, ("vx", "vy", "omega"), strict=True):
             if bound is not None and abs(value) > self.reject_above * bound:
                 return self._reject(f"{name} = {value:g} is beyond {self.reject_above:g} times its limit {bound:g}")
         if self.robot.fixed:

@@ -110,7 +110,7 @@ class SerialBackend:
         self.encoded = robot.encoded_names
         if not self.encoded:
             raise InputError(f"robot {robot.name!r}: the serial back-end needs driven wheels with an encoder")
-        self.index = dict(zip(self.encoded, robot.rolling_index(self.encoded)))
+        self.index = dict(zip(self.encoded, robot.rolling_index(self.encoded), strict=True))
         too_high = [n for n, i in self.index.items() if i > p.wheel_index_max]
         if too_high:
             raise InputError(f"robot {robot.name!r}: wheels {too_high} have indices beyond {p.wheel_index_max}")
@@ -120,7 +120,7 @@ class SerialBackend:
         self.heartbeat_period = self._positive(heartbeat_period, p.timing.heartbeat_period, "heartbeat_period")
         self.baud = int(baud if baud is not None else p.serial["baud"])
         self.port_of = self._map_ports(ports)
-        self._rpt = dict(zip(self.encoded, robot.rad_per_tick(self.encoded).tolist()))
+        self._rpt = dict(zip(self.encoded, robot.rad_per_tick(self.encoded).tolist(), strict=True))
         self._ticks = {n: 0 for n in self.encoded}
         self._last_count: dict[str, int | None] = {n: None for n in self.encoded}
         self._velocity = {n: 0.0 for n in self.encoded}
@@ -174,7 +174,7 @@ class SerialBackend:
             if len(ports) != len(enc):
                 raise InputError(f"serial back-end: {len(ports)} ports for {len(enc)} driven wheels {enc}; give one "
                                    "port for all or one per driven wheel in file order")
-            mapping = dict(zip(enc, ports))
+            mapping = dict(zip(enc, ports, strict=True))
         bad = [n for n, u in mapping.items() if not u]
         if bad:
             raise InputError(f"serial back-end: empty port name for wheel(s) {bad}")

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, shorten
 from ..geometry import compose, exp
 from ..model import Robot
 from ..odometry import mid_steer
@@ -48,7 +48,8 @@ class SimBackend:
     def write(self, t: float, speeds, steer=None) -> None:
         speeds = np.asarray(speeds, dtype=float)
         if speeds.shape != (len(self.robot.rolling_names),) or not np.all(np.isfinite(speeds)):
-            raise InputError(f"sim back-end: expected {len(self.robot.rolling_names)} finite wheel speeds, got {speeds}")
+            raise InputError(f"sim back-end: expected {len(self.robot.rolling_names)} finite wheel speeds, "
+                             f"got {shorten(speeds.tolist())}")
         self._advance(t)
         self._speeds = speeds[self._index]
         if self._steer is not None and steer is not None:

@@ -20,7 +20,8 @@ encoder counting ``(1 + ticks)`` times the nominal ticks per revolution.
 ``PROFILES`` and ``NOISE`` hold the named profiles used by ``omnikin umbmark``; the
 ``typical`` as-built profile is: radius sigma 0.5 %, hub distance sigma 1 mm, hub angle and
 drive direction sigma 0.5 deg (for fixed standard wheels only the hub displacement along
-the axle: a toed-in or fore-aft shifted rigid wheel pair could not move at all); run-to-run return scatter of about 10 mm on the 4 m square;
+the axle: a toed-in or fore-aft shifted rigid wheel pair could not move at all); run-to-run
+return scatter of about 10 mm on the 4 m square;
 end-pose measurement sigma 1 mm.
 """
 

@@ -20,22 +20,20 @@ steered wheels) follow the motion and do not drive it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Optional
-
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import InputError
 from ..geometry import TAYLOR_LIMIT, wrap_angle
 from ..integration import integrate_components, integrate_end
-from ..model import Robot
-from ..rng import make_rng
-from ..odometry import batch_odometry, encoded_wheels
-from .error_models import NoiseModel
 from ..limits import MotionLimits
+from ..model import Robot
+from ..odometry import batch_odometry, encoded_wheels
 from ..plans import Plan
+from ..rng import make_rng
+from .error_models import NoiseModel
 from .motion import SampledPlan, sample_plan
 
 
@@ -53,7 +51,7 @@ class SimulatedRun:
     sampled: SampledPlan
     t: np.ndarray
     ticks: np.ndarray
-    steer: Optional[np.ndarray]
+    steer: np.ndarray | None
     odometry: np.ndarray
     truth: np.ndarray
     measured: np.ndarray
@@ -66,7 +64,7 @@ class SimulatedRun:
         return eps
 
 
-def commanded_angles(sampled: SampledPlan, robot: Robot, wheels) -> tuple[np.ndarray, Optional[np.ndarray]]:
+def commanded_angles(sampled: SampledPlan, robot: Robot, wheels) -> tuple[np.ndarray, np.ndarray | None]:
     """Commanded wheel angles ``(N + 1, n)`` [rad] of ``wheels`` and steering ``(N + 1, n_steer)``."""
     names = [w.name for w in wheels]
     per_segment = np.zeros((len(sampled.xi), len(names)))
