@@ -377,7 +377,7 @@ def test_identifiability_full_runs_no_blind_direction(name):
 
 def test_recommended_runs_and_calibrate_errors(tomasi, diff):
     labels = [lbl for lbl, _ in recommended_runs(tomasi)]
-    assert "square cw translate" in labels and "square ccw rotate" in labels
+    assert "square cw translate 4" in labels and "square ccw rotate 4" in labels
     assert all("translate" not in lbl for lbl, _ in recommended_runs(diff))
     with pytest.raises(OmnikinError):
         calibrate(tomasi, [])
@@ -385,3 +385,105 @@ def test_recommended_runs_and_calibrate_errors(tomasi, diff):
         CalibrationRun(line(1.0), (float("nan"), 0.0, 0.0))
     # heading not measured is allowed
     CalibrationRun(spin(1.0), (0.0, 0.0, float("nan")))
+
+
+# =====================================================================================================
+# runs the robot cannot drive; the recommended runs
+# =====================================================================================================
+def simulate_refusal(plan, robot):
+    """The reason ``simulate`` gives for refusing ``plan`` on ``robot`` (what calibration must say too)."""
+    from omnikin.errors import InfeasibleTwistError
+
+    with pytest.raises(InfeasibleTwistError) as info:
+        simulate(plan, robot, robot, noise=EXACT, rate=20.0)
+    return str(info.value).split(" (on_infeasible=")[0].removeprefix(f"robot {robot.name!r}: ")
+
+
+@pytest.mark.parametrize("robot_name, path, wheel", [
+    ("diff-drive", "line 1 90", "left"),            # sideways: the fixed wheels would slide
+    ("ackermann", "spin 90", "front_left"),         # in place: beyond the steering limits
+    ("ackermann", "square cw rotate 4", "front_left"),
+])
+def test_calibrate_refuses_a_run_the_robot_cannot_drive_naming_it(robot_name, path, wheel):
+    from omnikin.evaluation.calibration import InfeasibleRunError
+    from omnikin.plans import parse_plan
+
+    robot = load_robot(robot_name)
+    good = CalibrationRun(line(4.0), (4.0, 0.0, 0.0), "line 4")
+    bad = CalibrationRun(parse_plan(path), (0.0, 1.0, 0.0), path)
+    with pytest.raises(InfeasibleRunError) as info:
+        calibrate(robot, [good, good, bad])
+    message = str(info.value)
+    assert info.value.run == 2
+    assert message.startswith(f"run 3 ('{path}'): robot '{robot_name}' cannot drive this path: "), message
+    assert wheel in message and "\n" not in message
+    # the same check as simulate: its reason, word for word
+    assert simulate_refusal(parse_plan(path), robot) in message
+
+
+def test_calibrate_names_the_file_line_of_an_infeasible_run(tmp_path):
+    from omnikin.evaluation.calibration import InfeasibleRunError
+    from omnikin.io.runs import read_calibration_runs
+
+    f = tmp_path / "runs.csv"
+    f.write_text("path,x_abs,y_abs\n# sideways below\nline 4,4.0,0\n\nline 1 90,0,1\n", encoding="utf-8")
+    with pytest.raises(InfeasibleRunError, match=r"runs\.csv: line 5 \('line 1 90'\): robot 'diff-drive' cannot drive"):
+        calibrate(load_robot("diff-drive"), read_calibration_runs(f))
+
+
+@pytest.mark.parametrize("name", ["tomasi-omni3", "diff-drive", "ackermann", "villasenor-omni3", "synchro",
+                                  "xr4000", "mecanum4", "omni4", "garcia-sillas-omni3"])
+def test_recommended_runs_are_drivable_and_read_back_from_their_text(name):
+    from omnikin.plans import parse_plan
+
+    robot = load_robot(name)
+    runs = recommended_runs(robot, 2.5)
+    assert runs
+    for text, plan in runs:
+        assert parse_plan(text) == plan
+        simulate(plan, robot, robot, noise=EXACT, rate=10.0)      # refuses what the robot cannot drive
+    texts = [t for t, _ in runs]
+    if robot.mobility.holonomic and name != "villasenor-omni3":
+        assert "square cw translate 2.5" in texts and "line 2.5 90" in texts
+    if name == "diff-drive":
+        assert not any("translate" in t or t == "line 2.5 90" for t in texts)
+    if name == "ackermann":                      # cannot turn in place: half circles instead
+        assert texts == ["line 2.5 0", "arc 1.25 180", "arc 1.25 -180"]
+
+
+def test_steering_offsets_of_steerable_wheels_are_calibrated():
+    """A steerable wheel's steering offset ('drive') is a fitted parameter: with it missing the fit
+    compensated with metre-sized hub shifts and made UMBmark ten times worse (synchro)."""
+    robot = load_robot("synchro")
+    injected = {"w1": WheelErrors(radius=0.003, drive=0.009), "w2": WheelErrors(radius=-0.002, drive=-0.006),
+                "w3": WheelErrors(dx=0.001, drive=0.004)}
+    true = SystematicErrors(injected).apply(robot)
+    cal = calibrate(robot, calibration_runs(true, robot, EXACT, 0))
+    assert {"w1.drive", "w2.drive", "w3.drive"} <= set(cal.values)
+    assert cal.fits and cal.residual_after < 0.1            # noise-free runs: the model explains them
+    assert e_max_syst(true, cal.robot) <= e_max_syst(true, robot) / 100
+
+
+def test_a_calibration_that_cannot_explain_its_runs_says_so(tomasi):
+    """Runs whose measurements no wheel errors can produce (a half turn measured as a 4 m line)."""
+    from omnikin.evaluation.calibration import FIT_LIMIT
+
+    runs = calibration_runs(tomasi, tomasi, EXACT, 0)
+    runs[3] = CalibrationRun(runs[3].plan, (4.0, 0.0, 0.0), runs[3].label, SIGMA)
+    cal = calibrate(tomasi, runs)
+    assert cal.residual_after > FIT_LIMIT and not cal.fits
+    assert cal.as_dict()["fits"] is False
+
+
+def test_fitted_parameters_carry_their_units(tomasi):
+    true = SystematicErrors(INJECTED["tomasi-omni3"]).apply(tomasi)
+    cal = calibrate(tomasi, calibration_runs(true, tomasi, EXACT, 0))
+    units = {p["name"]: p["unit"] for p in cal.parameters()}
+    assert units == {f"{w}.{k}": u for w in ("w1", "w2", "w3")
+                     for k, u in (("radius", "relative"), ("lever", "m"), ("drive", "rad"))}
+    values = {p["name"]: p["value"] for p in cal.parameters()}
+    # the lever of w2 is its hub shift normal to the roller axis: dy = 1 mm rotated into that direction
+    w2 = tomasi.wheel("w2")
+    a = w2.drive + w2.roller
+    assert values["w2.lever"] == pytest.approx(math.cos(a) * 0.001, abs=2e-5)
+    assert values["w1.radius"] == pytest.approx(0.008, rel=1e-3)

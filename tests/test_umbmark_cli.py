@@ -21,6 +21,7 @@ from omnikin import load_robot
 from omnikin.cli.main import main
 
 PNG = b"\x89PNG\r\n\x1a\n"
+SRC = __import__("pathlib").Path(__file__).resolve().parents[1] / "src"
 SIDE_DEFAULT = 4.0
 
 
@@ -67,6 +68,14 @@ def check_direction_dict(d, n_runs):
     return r
 
 
+def subprocess_env():
+    """The environment of a child ``omnikin``: this checkout's sources first (a relative
+    PYTHONPATH would not survive the child's own working directory)."""
+    import os
+
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
+
+
 # =====================================================================================================
 # the main job (subprocess)
 # =====================================================================================================
@@ -74,7 +83,7 @@ def check_direction_dict(d, n_runs):
 def main_job(tmp_path_factory):
     cwd = tmp_path_factory.mktemp("mainjob")
     proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", "umbmark"], cwd=cwd, capture_output=True,
-                          text=True, timeout=120)
+                          text=True, timeout=120, env=subprocess_env())
     return cwd, proc
 
 
@@ -106,7 +115,7 @@ def test_main_job_report_folder(main_job):
 def test_main_job_result_json(main_job):
     cwd, _ = main_job
     res = json.loads((cwd / "umbmark-report" / "result.json").read_text(encoding="utf-8"))
-    for key in ("before", "after", "calibrated_robot"):
+    for key in ("before", "after", "calibrated_robot", "units", "methods", "noise_floor"):
         assert key in res
     e = {}
     for stage in ("before", "after"):
@@ -115,12 +124,29 @@ def test_main_job_result_json(main_job):
         r_ccw = check_direction_dict(d["ccw"], 5)
         # E_max,syst = max(r_cg_cw, r_cg_ccw)
         assert d["e_max_syst"] == pytest.approx(max(r_cw, r_ccw), rel=1e-12)
+        low, high = d["e_max_syst_interval"]
+        assert low <= d["e_max_syst"] <= high
+        # at the noise floor exactly when at or below the floor's 95th percentile
+        assert d["at_noise_floor"] == (d["e_max_syst"] <= res["noise_floor"]["e_max_syst_p95"])
         e[stage] = d["e_max_syst"]
-    cal = res["calibration"]
-    assert cal["improvement"] >= 20
-    assert cal["improvement"] == pytest.approx(e["before"] / e["after"], rel=1e-12)
-    assert res["settings"]["robot"] == "tomasi-omni3"
+    assert res["reduction_factor"] >= 20
+    assert res["reduction_factor"] == pytest.approx(e["before"] / e["after"], rel=1e-12)
+    low, high = res["reduction_factor_interval"]
+    assert low <= res["reduction_factor"] and (high is None or res["reduction_factor"] <= high)
+    assert res["settings"]["robot"] == "tomasi-omni3" and res["settings"]["calibrate"] is True
     assert res["settings"]["errors"] == "typical" and res["settings"]["noise"] == "typical"
+    for key in ("e_max_syst", "r_cg", "cg", "side", "rate", "e_max_syst_p95", "reduction_factor"):
+        assert key in res["units"], key
+    assert res["units"]["e_max_syst"] == "m" and res["units"]["rate"] == "Hz"
+
+
+def test_main_job_report_says_when_after_is_at_the_noise_floor(main_job):
+    cwd, _ = main_job
+    report = cwd / "umbmark-report"
+    res = json.loads((report / "result.json").read_text(encoding="utf-8"))
+    md = (report / "report.md").read_text(encoding="utf-8")
+    assert ("After calibration, E_max,syst" in md) == res["after"]["at_noise_floor"]
+    assert "Hotelling" in md and "95th percentile" in md
 
 
 def test_main_job_robot_files(main_job):
@@ -160,50 +186,89 @@ def test_calibrate_from_report_runs(main_job, capsys, tmp_path):
     nominal = load_robot("tomasi-omni3")
     assert calibrated.wheel_names == nominal.wheel_names
     assert np.max(np.abs(calibrated.ik_matrix - nominal.ik_matrix)) > 1e-3 * np.max(np.abs(nominal.ik_matrix))
-    # the same runs (written to 1 um / 1e-5 deg) give the same estimates as the main job's calibration
-    for name, e in res["calibration"]["errors"].items():
-        assert d["errors"][name]["radius"] == pytest.approx(e["radius"], abs=1e-4)
-    # the table form prints every parameter
+    # the same runs (written to 1 um / 1e-5 deg), weighted the same way, give the main job's estimates
+    main = {p["name"]: p for p in res["calibration"]["parameters"]}
+    assert [p["name"] for p in d["parameters"]] == list(main)
+    for p in d["parameters"]:
+        assert p["unit"] == main[p["name"]]["unit"]
+        assert p["value"] == pytest.approx(main[p["name"]]["value"], abs=3 * main[p["name"]]["sigma"] * 1e-2)
+    # the table prints every parameter with the unit result.json gives it
     rc, text, err = run(capsys, "calibrate", "tomasi-omni3", report / "calibration_runs.csv")
     assert rc == 0, err
-    for p in ("w1.radius", "w2.lever", "w3.drive"):
-        assert p in text
+    rows = {line.split()[1]: line for line in text.splitlines() if line.startswith("│ w")}
+    assert set(rows) == set(main)
+    for name, p in main.items():
+        assert p["unit"] in rows[name]
 
 
 # =====================================================================================================
 # omnikin umbmark with options (in-process)
 # =====================================================================================================
-FAST = ("--runs", "2", "--rate", "20")
+FAST = ("--runs", "3", "--rate", "20")
 
 
-def test_umbmark_json_calibrate(capsys, tmp_path, monkeypatch):
+def read_result(folder):
+    return json.loads((folder / "result.json").read_text(encoding="utf-8"))
+
+
+def test_umbmark_json_prints_result_json(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    d = run_json(capsys, "umbmark", "tomasi-omni3", "--calibrate", "--json", *FAST)
-    for key in ("cw", "ccw", "e_max_syst", "calibration"):
-        assert key in d
-    assert "borenstein" not in d
-    assert d["e_max_syst"] == pytest.approx(max(check_direction_dict(d["cw"], 2), check_direction_dict(d["ccw"], 2)))
-    assert d["calibration"]["improvement"] > 1
-    assert (tmp_path / "umbmark-report" / "result.json").is_file()
+    rc, out, err = run(capsys, "umbmark", "tomasi-omni3", "--json", *FAST)
+    assert rc == 0, err
+    assert out == (tmp_path / "umbmark-report" / "result.json").read_text(encoding="utf-8")
+    d = json.loads(out)
+    assert d["after"]["e_max_syst"] == pytest.approx(max(check_direction_dict(d["after"]["cw"], 3),
+                                                         check_direction_dict(d["after"]["ccw"], 3)))
+    assert "borenstein" not in d["before"]
+    assert d["files"] and set(d["files"]) <= {p.name for p in (tmp_path / "umbmark-report").iterdir()}
 
 
 def test_umbmark_json_diff_drive_borenstein(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    d = run_json(capsys, "umbmark", "diff-drive", "--calibrate", "--json", "--out", "dd", *FAST)
-    for key in ("cw", "ccw", "e_max_syst", "calibration", "borenstein"):
-        assert key in d
-    b = d["borenstein"]
+    d = run_json(capsys, "umbmark", "diff-drive", "--json", "--out", "dd", *FAST)
+    b = d["before"]["borenstein"]
     assert set(b) >= {"alpha", "beta", "R", "E_d", "E_b", "c_L", "c_R", "b_new"}
     # Borenstein's figures from the printed centres of gravity (L = 4 m, b = 0.33 m)
-    x_cw, x_ccw = d["cw"]["cg"][0], d["ccw"]["cg"][0]
+    x_cw, x_ccw = d["before"]["cw"]["cg"][0], d["before"]["ccw"]["cg"][0]
     assert b["alpha"] == pytest.approx((x_cw + x_ccw) / -16.0, rel=1e-12)
     assert b["beta"] == pytest.approx((x_cw - x_ccw) / -16.0, rel=1e-12)
     assert b["c_R"] / b["c_L"] == pytest.approx(b["E_d"], rel=1e-12)
     assert b["b_new"] == pytest.approx(0.33 * b["E_b"], rel=1e-12)
+    assert len(d["borenstein_iterations"]) == 3
     assert (tmp_path / "dd" / "report.md").is_file()
-    # without --calibrate no calibration
-    d = run_json(capsys, "umbmark", "diff-drive", "--json", "--out", "dd2", *FAST)
-    assert "calibration" not in d and "borenstein" in d
+    d = run_json(capsys, "umbmark", "diff-drive", "--json", "-o", "dd2", "--no-calibrate", *FAST)
+    assert "calibration" not in d and "after" not in d and "borenstein" in d["before"]
+
+
+def test_umbmark_without_robot_is_the_same_study_as_naming_the_default_robot(capsys, tmp_path, monkeypatch):
+    """No hidden special case for the default run: 'omnikin umbmark' = 'omnikin umbmark tomasi-omni3'."""
+    monkeypatch.chdir(tmp_path)
+    a = run_json(capsys, "umbmark", "--json", "-o", "a", *FAST)
+    b = run_json(capsys, "umbmark", "tomasi-omni3", "--json", "-o", "b", *FAST)
+    assert a == b
+    assert "calibration" in a                                   # calibration is the default for every robot
+    c = run_json(capsys, "umbmark", "diff-drive", "--json", "-o", "c", *FAST)
+    assert "calibration" in c
+
+
+def test_same_seed_builds_the_same_robot_and_calibration_whatever_the_trials(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    one = run_json(capsys, "umbmark", "--json", "-o", "one", "--seed", "5", *FAST)
+    many = run_json(capsys, "umbmark", "--json", "-o", "many", "--seed", "5", "--trials", "3", *FAST)
+    other = run_json(capsys, "umbmark", "--json", "-o", "other", "--seed", "6", *FAST)
+    assert one["true_robot"] == many["true_robot"] and one["injected_errors"] == many["injected_errors"]
+    assert one["calibrated_robot"] == many["calibrated_robot"]
+    def data(folder):
+        text = (tmp_path / folder / "calibration_runs.csv").read_text(encoding="utf-8")
+        return [line for line in text.splitlines() if not line.startswith("#")]
+
+    assert data("one") == data("many")
+    assert one["true_robot"] != other["true_robot"]
+    # the robot drawn for a seed is the one 'omnikin simulate --seed' and omnikin.simulate draw
+    import omnikin
+
+    sim = omnikin.simulate("tomasi-omni3", "line 1", seed=5)
+    assert sim.injected.as_dict() == one["injected_errors"]
 
 
 def test_umbmark_calibration_runs_file_keeps_side(capsys, tmp_path, monkeypatch):
@@ -225,8 +290,108 @@ def test_umbmark_report_names_the_number_of_runs(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     run_json(capsys, "umbmark", "tomasi-omni3", "--json", *FAST)
     md = (tmp_path / "umbmark-report" / "report.md").read_text(encoding="utf-8")
-    assert "2 runs per direction" in md
+    assert "3 runs per direction" in md
     assert "of 5 runs" not in md
+
+
+def test_a_perfect_robot_without_noise_is_reported_at_the_noise_floor(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    from omnikin.io.robot_file import save_robot
+
+    save_robot(load_robot("diff-drive"), tmp_path / "perfect.yaml")
+    d = run_json(capsys, "umbmark", "diff-drive", "--true-robot", "perfect.yaml", "--noise", "none", "--json",
+                 "--no-calibrate", *FAST)
+    assert d["before"]["e_max_syst"] < 1e-9
+    assert d["before"]["at_noise_floor"] is True
+    assert "Before calibration, E_max,syst" in (tmp_path / "umbmark-report" / "report.md").read_text(encoding="utf-8")
+
+
+# --- the report folder: omnikin.io.output ------------------------------------------------------------------
+def folder_files(folder):
+    return sorted(p.name for p in folder.iterdir())
+
+
+def test_the_same_command_twice_replaces_the_report_as_a_whole(capsys, tmp_path, monkeypatch):
+    from omnikin.io.output import REPORT_MARKER
+
+    monkeypatch.chdir(tmp_path)
+    first = run_json(capsys, "umbmark", "--json", "--trials", "2", *FAST)
+    assert "monte_carlo.png" in first["files"] and "calibrated_robot.yaml" in first["files"]
+    second = run_json(capsys, "umbmark", "--json", "--no-calibrate", *FAST)
+    # nothing of the first run is left: exactly the second run's files
+    assert folder_files(tmp_path / "umbmark-report") == sorted(second["files"] + [REPORT_MARKER])
+    assert "monte_carlo.png" not in second["files"] and "calibrated_robot.yaml" not in second["files"]
+    third = run_json(capsys, "umbmark", "--json", "--no-calibrate", *FAST)
+    assert third == second
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["umbmark-report"]     # no staging left behind
+
+
+def test_a_foreign_folder_is_refused_and_left_alone(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    mine = tmp_path / "thesis"
+    mine.mkdir()
+    (mine / "chapter1.tex").write_text("precious", encoding="utf-8")
+    line = assert_usage_error(capsys, "umbmark", "-o", "thesis", *FAST, contains=["thesis"])
+    assert "did not write" in line
+    assert folder_files(mine) == ["chapter1.tex"]
+    assert (mine / "chapter1.tex").read_text(encoding="utf-8") == "precious"
+    # an empty folder is fine
+    (tmp_path / "empty").mkdir()
+    run_json(capsys, "umbmark", "-o", "empty", "--json", "--no-calibrate", *FAST)
+
+
+def test_the_report_folder_is_never_an_input(capsys, tmp_path, monkeypatch):
+    from omnikin.io.robot_file import save_robot
+
+    monkeypatch.chdir(tmp_path)
+    save_robot(load_robot("diff-drive"), tmp_path / "robot.yaml")
+    assert_usage_error(capsys, "umbmark", "robot.yaml", "-o", "robot.yaml", *FAST, contains=["robot.yaml"])
+    assert load_robot(tmp_path / "robot.yaml").name == "diff-drive"
+    assert_usage_error(capsys, "umbmark", "-o", "-", *FAST, contains=["folder"])
+
+
+def test_an_interrupted_run_leaves_the_previous_report_intact(tmp_path):
+    """Ctrl-C while the report is being written: the old report stays, nothing half written."""
+    import os
+    import signal
+    import time
+
+    env = subprocess_env()
+    base = [sys.executable, "-m", "omnikin.cli.main", "umbmark", "--runs", "3", "--rate", "20"]
+    done = subprocess.run(base, cwd=tmp_path, env=env, capture_output=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    report = tmp_path / "umbmark-report"
+    before = {p.name: p.read_bytes() for p in report.iterdir()}
+    # a slow write (large PNGs), interrupted as soon as its staging folder appears
+    proc = subprocess.Popen(base + ["--seed", "2", "--dpi", "900"], cwd=tmp_path, env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120
+    staged = False
+    while proc.poll() is None and time.monotonic() < deadline:
+        if any(p.name.startswith(".umbmark-report.") for p in tmp_path.iterdir()):
+            proc.send_signal(signal.SIGINT)
+            staged = True
+            break
+        time.sleep(0.005)
+    proc.wait(timeout=60)
+    assert staged, "the run finished before it could be interrupted"
+    assert proc.returncode != 0
+    assert {p.name: p.read_bytes() for p in report.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["umbmark-report"]
+
+
+@pytest.mark.parametrize("argv, contains", [
+    (["--trials", "100000000"], ["--trials", "1e+10"]),                 # time
+    (["--trials", "20000000", "--runs", "1", "--rate", "1"], ["GiB", "--trials"]),   # memory
+])
+def test_umbmark_refuses_studies_beyond_the_budget_at_once(capsys, tmp_path, monkeypatch, argv, contains):
+    import time
+
+    monkeypatch.chdir(tmp_path)
+    start = time.monotonic()
+    assert_usage_error(capsys, "umbmark", *argv, contains=contains)
+    assert time.monotonic() - start < 10
+    assert not (tmp_path / "umbmark-report").exists()
 
 
 # =====================================================================================================

@@ -1,19 +1,32 @@
 """omnikin: kinematics, exact odometry and UMBmark for wheeled mobile robots.
 
-Layers (each imports only those above it in this list): ``geometry`` -> ``wheels``
--> ``model`` (with ``mobility``) -> ``presets`` -> ``odometry`` (with ``encoders``
-and ``integration``). Edges: ``io``, ``viz``, ``cli``.
+Layers (each imports only those below it; ``pyproject.toml``, ``[tool.importlinter]``): the
+core ``geometry`` -> ``wheels`` -> ``model`` (with ``mobility``) -> ``presets``/``plans`` ->
+``odometry`` -> ``simulation`` -> ``evaluation``; the edges ``io``, ``viz``; the Python API
+``api``; the command line ``cli``.
+
+Entry points (the command-line tools as functions, with their defaults; imported on first
+use, so ``import omnikin`` loads neither SciPy nor matplotlib):
+
+- :func:`simulate` (``omnikin simulate``), :func:`run_umbmark` (``omnikin umbmark``),
+  :func:`analyze_umbmark` (``omnikin umbmark analyze``), :func:`calibrate` and
+  :func:`calibration_plan` (``omnikin calibrate``), :func:`plot_layout` (``omnikin show --plot``);
+- their results plot themselves: ``result.plot()`` returns a matplotlib ``Figure`` (extra ``viz``).
 """
 
 from .errors import (InfeasibleTwistError, InputError, LinkError, OdometryInputError, OmnikinError,
                      RobotFileError, SingularLayoutError)
 from .model import FKResult, IKResult, Robot
 from .odometry import OdometryResult, batch_odometry, batch_odometry_from_angles
-from .streaming import Odometry
 from .presets import PRESET_NAMES
+from .streaming import Odometry
 from .wheels import Encoder, Steer, Wheel
 
 __version__ = "0.1.0"
+
+_API = ("simulate", "run_umbmark", "analyze_umbmark", "calibrate", "calibration_plan", "plot_layout",
+        "Simulation", "UMBmarkReport", "UMBmarkAnalysis", "Calibration")
+"""Names served lazily from :mod:`omnikin.api`."""
 
 
 def load_robot(spec):
@@ -23,8 +36,25 @@ def load_robot(spec):
     return _load(spec)
 
 
+def __getattr__(name: str):
+    """The API's entry points (:data:`_API`), imported on first use (PEP 562)."""
+    if name in _API:
+        from . import api
+
+        value = getattr(api, name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'omnikin' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_API))
+
+
 __all__ = [
-    "Encoder", "FKResult", "IKResult", "InfeasibleTwistError", "InputError", "LinkError", "Odometry", "OdometryInputError",
-    "OdometryResult", "OmnikinError", "PRESET_NAMES", "Robot", "RobotFileError", "SingularLayoutError",
-    "Steer", "Wheel", "batch_odometry", "batch_odometry_from_angles", "load_robot", "__version__",
+    "Calibration", "Encoder", "FKResult", "IKResult", "InfeasibleTwistError", "InputError", "LinkError", "Odometry",
+    "OdometryInputError", "OdometryResult", "OmnikinError", "PRESET_NAMES", "Robot", "RobotFileError", "Simulation",
+    "SingularLayoutError", "Steer", "UMBmarkAnalysis", "UMBmarkReport", "Wheel", "analyze_umbmark", "batch_odometry",
+    "batch_odometry_from_angles", "calibrate", "calibration_plan", "load_robot", "plot_layout", "run_umbmark",
+    "simulate", "__version__",
 ]

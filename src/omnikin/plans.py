@@ -189,13 +189,15 @@ class CalibrationRun:
     """A plan driven by the nominal model and its measured end pose ``(x, y, theta)``.
 
     ``theta`` may be NaN when the heading was not measured. ``sigma`` is the measurement
-    standard deviation ``(m, rad)``.
+    standard deviation ``(m, rad)``. ``source`` says where the run was read from (e.g.
+    ``"runs.csv: line 5"``), so that an error about the run can name it.
     """
 
     plan: Plan
     measured: tuple
     label: str = ""
     sigma: tuple = (0.001, math.radians(0.2))
+    source: str = ""
 
     def __post_init__(self):
         m = tuple(float(v) for v in self.measured)

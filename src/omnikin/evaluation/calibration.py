@@ -12,7 +12,8 @@ Two methods:
   roller axis; along the axis it changes nothing) and drive direction error [rad];
   fixed standard wheels: radius and ``axle`` (displacement along the axle [m]; a toe or
   fore-aft error would make two rigid fixed wheels immobile, so it is not a kinematic
-  parameter); steerable wheels: radius and ``dx, dy`` [m]. For a candidate the
+  parameter); steerable wheels: radius, ``dx, dy`` [m] and the steering offset ``drive``
+  [rad] (the angle the steering reads when the wheel rolls along body x). For a candidate the
   true end pose of a plan is predicted in closed form: within a segment the commanded
   wheel angles grow in fixed proportion, so the true robot moves along
   ``exp(s * F_true J_cmd xi)`` (:mod:`omnikin.simulation.motion`). SciPy's
@@ -23,21 +24,26 @@ Two methods:
 
 Encoder tick-count errors act exactly like radius errors on a wheel and are not
 separable from them: the fitted radius absorbs both.
+
+A run the robot cannot drive (a sideways line for a differential drive, a turn in place
+for a car) is refused before fitting, by the check :func:`omnikin.simulation.simulate.simulate`
+uses (:func:`~omnikin.simulation.simulate.segment_rates`), naming the run.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Sequence
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InfeasibleTwistError, InputError, shorten
 from ..geometry import compose, exp, wrap_angle
 from ..model import Robot
+from ..plans import CalibrationRun, Plan, parse_plan
 from ..simulation.error_models import SystematicErrors, WheelErrors
-from ..plans import CalibrationRun, Plan, line, spin, umbmark_square
+from ..simulation.simulate import segment_rates
 from .umbmark import UMBmarkResult, differential_pair
 
 BLIND = 2.0
@@ -46,8 +52,31 @@ prior sigma) is below this is reported as not observable: the runs pin it down l
 half as well as the prior does."""
 
 PRIOR = {"radius": 0.05, "dx": 0.01, "dy": 0.01, "lever": 0.01, "axle": 0.01, "drive": math.radians(5.0)}
-"""Prior standard deviations of the fitted parameters (relative, m, m, rad): ten times the
-``typical`` as-built profile, weak enough never to pull an observable parameter."""
+"""Prior standard deviations of the fitted parameters (units :data:`PARAMETER_UNITS`): ten
+times the ``typical`` as-built profile, weak enough never to pull an observable parameter."""
+
+PARAMETER_UNITS = {"radius": "relative", "dx": "m", "dy": "m", "lever": "m", "axle": "m", "drive": "rad"}
+"""Unit of each fitted parameter: ``radius`` is relative (r_true = r (1 + radius)), hub
+displacements in metres, the drive direction in radians."""
+
+ERROR_UNITS = {"radius": "relative", "dx": "m", "dy": "m", "drive": "rad", "roller": "rad", "ticks": "relative"}
+"""Unit of each per-wheel systematic error (:class:`~omnikin.simulation.error_models.WheelErrors`)."""
+
+FIT_LIMIT = 3.0
+"""Residual RMS [measurement sigmas] above which a calibration is reported as not fitting
+its runs: the model cannot explain the measurements (a wrong robot file, a mislabelled run,
+or errors the parameters do not cover); the calibrated robot should not be used."""
+
+RECOMMENDED_REPEATS = 5
+"""How often to drive each recommended calibration run (:func:`recommended_runs`)."""
+
+
+class InfeasibleRunError(InputError):
+    """A calibration run the robot cannot drive; ``run`` is its index (0-based) in the runs given."""
+
+    def __init__(self, message: str, *, run: int):
+        super().__init__(message)
+        self.run = run
 
 
 class PlanSet:
@@ -64,19 +93,14 @@ class PlanSet:
         self.names = command_robot.encoded_names
         w, steer, length, owner, slot = [], [], [], [], []
         for p, plan in enumerate(plans):
-            hint = np.zeros(len(command_robot.steerable))
-            for k, seg in enumerate(plan.segments):
-                xi = np.array(seg.xi)
-                st = command_robot.ik(xi, steer_hint=hint).steer_angles if command_robot.steerable else None
-                if st is not None:
-                    hint = st
-                    steer.append(st)
-                w.append(command_robot.jacobian(st, self.names) @ xi)
-                length.append(seg.length)
-                owner.append(p)
-                slot.append(k)
+            rates, steering = segment_rates([seg.xi for seg in plan.segments], command_robot, self.names)
+            w.extend(rates)
+            steer.extend(steering)
+            length.extend(seg.length for seg in plan.segments)
+            owner.extend([p] * len(plan.segments))
+            slot.extend(range(len(plan.segments)))
         self.w = np.array(w)
-        self.steer = np.array(steer) if steer else None
+        self.steer = np.array(steer) if command_robot.steerable else None
         self.length = np.array(length)
         self.owner = np.array(owner)
         self.slot = np.array(slot)
@@ -87,7 +111,8 @@ class PlanSet:
         ratio = np.array([true_robot.wheel(n).encoder.rad_per_tick / self.command.wheel(n).encoder.rad_per_tick
                           for n in self.names])
         f = true_robot.fk_matrix(self.steer, self.names)[..., : len(self.names)]
-        twist = np.einsum("...ij,sj->si", f, self.w * ratio) if f.ndim == 2 else np.einsum("sij,sj->si", f, self.w * ratio)
+        rates = self.w * ratio
+        twist = np.einsum("ij,sj->si", f, rates) if f.ndim == 2 else np.einsum("sij,sj->si", f, rates)
         steps = exp(twist * self.length[:, None])
         pose = np.zeros((self.n_plans, 3))
         for k in range(int(self.slot.max()) + 1):
@@ -100,7 +125,8 @@ def predicted_end(plan: Plan, true_robot: Robot, command_robot: Robot) -> np.nda
     """End pose ``(3,)`` of ``true_robot`` driving ``plan`` as commanded by ``command_robot``.
 
     Noise-free and exact: per segment the true body twist per unit progress is
-    ``F_true (J_cmd xi * rpt_true / rpt_cmd)`` over the encoded (driven) wheels.
+    ``F_true (J_cmd xi * rpt_true / rpt_cmd)`` over the encoded (driven) wheels. A plan
+    ``command_robot`` cannot drive raises :class:`~omnikin.errors.InfeasibleTwistError`.
     """
     return PlanSet([plan], command_robot).ends(true_robot)[0]
 
@@ -118,7 +144,7 @@ def wheel_parameters(wheel) -> tuple[str, ...]:
         return ("radius", "axle")
     if wheel.is_swedish:
         return ("radius", "lever", "drive")
-    return ("radius", "dx", "dy")
+    return ("radius", "dx", "dy", "drive")
 
 
 def parameter_names(robot: Robot) -> list[str]:
@@ -130,7 +156,7 @@ def errors_from_vector(robot: Robot, p: np.ndarray) -> SystematicErrors:
     out, k = {}, 0
     for w in _driven(robot):
         names = wheel_parameters(w)
-        values = dict(zip(names, map(float, p[k:k + len(names)])))
+        values = dict(zip(names, map(float, p[k:k + len(names)]), strict=True))
         k += len(names)
         dx, dy = values.get("dx", 0.0), values.get("dy", 0.0)
         if "axle" in values:                   # along (-sin delta, cos delta)
@@ -163,7 +189,13 @@ class Identifiability:
 
 @dataclass(frozen=True)
 class CalibrationResult:
-    """Fitted errors, the calibrated robot, residuals and the identifiability report."""
+    """Fitted errors, the calibrated robot, residuals and the identifiability report.
+
+    ``values``: the fitted parameters by name (``"w1.radius"``, order of
+    :func:`parameter_names`), in the units of :data:`PARAMETER_UNITS`; ``errors``: the same
+    as per-wheel systematic errors (:data:`ERROR_UNITS`); residuals as RMS of the weighted
+    residuals [measurement sigmas].
+    """
 
     nominal: Robot
     errors: SystematicErrors
@@ -173,11 +205,23 @@ class CalibrationResult:
     identifiability: Identifiability
     method: str = "least-squares"
     details: dict = field(default_factory=dict)
+    values: dict = field(default_factory=dict)
+
+    @property
+    def fits(self) -> bool:
+        """Whether the calibrated model explains the runs (residual RMS at most :data:`FIT_LIMIT`)."""
+        return self.residual_after <= FIT_LIMIT
+
+    def parameters(self) -> list[dict]:
+        """The fitted parameters: ``[{"name", "value", "sigma", "unit"}, ...]``."""
+        sigma = self.identifiability.sigma
+        return [{"name": n, "value": float(v), "sigma": float(sigma[n]), "unit": PARAMETER_UNITS[n.rsplit(".", 1)[1]]}
+                for n, v in self.values.items()]
 
     def as_dict(self) -> dict:
-        return {"method": self.method, "errors": self.errors.as_dict(), "residual_rms_before": self.residual_before,
-                "residual_rms_after": self.residual_after, "identifiability": self.identifiability.as_dict(),
-                **self.details}
+        return {"method": self.method, "parameters": self.parameters(), "errors": self.errors.as_dict(),
+                "residual_rms_before": self.residual_before, "residual_rms_after": self.residual_after,
+                "fits": self.fits, "identifiability": self.identifiability.as_dict(), **self.details}
 
 
 def _weights(runs: Sequence[CalibrationRun], index: np.ndarray) -> np.ndarray:
@@ -214,7 +258,8 @@ def _residuals(nominal: Robot, runs: Sequence[CalibrationRun], plans: PlanSet, i
 def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Robot | None = None) -> CalibrationResult:
     """Least-squares calibration of ``nominal`` from ``runs`` (module docstring).
 
-    ``command_robot``: the model the runs were driven by (default ``nominal``).
+    ``command_robot``: the model the runs were driven by (default ``nominal``). A run it
+    cannot drive raises :class:`InfeasibleRunError` naming the run.
     Returns the calibrated robot (``result.robot``): ``nominal`` with the fitted errors.
     """
     try:
@@ -227,9 +272,11 @@ def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Rob
     names = parameter_names(nominal)
     scale = np.array([PRIOR[n.rsplit(".", 1)[1]] for n in names])
 
-    unique = list({id(r.plan): r.plan for r in runs}.values())
+    unique = list(dict.fromkeys(r.plan for r in runs))
+    check_drivable(runs, command)
     plans = PlanSet(unique, command)
-    index = np.array([next(i for i, u in enumerate(unique) if u is r.plan) for r in runs])
+    slot = {plan: k for k, plan in enumerate(unique)}
+    index = np.array([slot[r.plan] for r in runs])
 
     sigma = _weights(runs, index)
 
@@ -247,7 +294,40 @@ def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Rob
     robot = Robot(nominal.name, robot.wheels, nominal.description + " (calibrated by omnikin)",
                   nominal.references)
     return CalibrationResult(nominal, errors, robot, float(np.sqrt(np.mean(r0 ** 2))), float(np.sqrt(np.mean(r1 ** 2))),
-                             ident, details={"runs": len(runs), "cost": float(sol.cost), "nfev": int(sol.nfev)})
+                             ident, details={"runs": len(runs), "cost": float(sol.cost), "nfev": int(sol.nfev)},
+                             values=dict(zip(names, map(float, p), strict=True)))
+
+
+def run_name(run: CalibrationRun, index: int) -> str:
+    """How messages name a run: where it was read from, or its number, with its path."""
+    where = run.source or f"run {index + 1}"
+    return f"{where} ({shorten(run.label, 40)})" if run.label else where
+
+
+def check_drivable(runs: Sequence[CalibrationRun], robot: Robot) -> None:
+    """Refuse (:class:`InfeasibleRunError`, naming the first such run) a run ``robot`` cannot
+    drive: the check :func:`~omnikin.simulation.simulate.simulate` makes
+    (:func:`~omnikin.simulation.simulate.segment_rates`)."""
+    seen = set()
+    for k, run in enumerate(runs):
+        if run.plan in seen:
+            continue
+        seen.add(run.plan)
+        try:
+            segment_rates([seg.xi for seg in run.plan.segments], robot, robot.encoded_names)
+        except InfeasibleTwistError as exc:
+            reason = str(exc).split(" (on_infeasible=")[0].removeprefix(f"robot {robot.name!r}: ")
+            raise InfeasibleRunError(f"{run_name(run, k)}: robot {robot.name!r} cannot drive this path: {reason}",
+                                     run=k) from None
+
+
+def can_drive(plan: Plan, robot: Robot) -> bool:
+    """Whether ``robot`` can drive ``plan`` (the check of :func:`check_drivable`)."""
+    try:
+        segment_rates([seg.xi for seg in plan.segments], robot, robot.encoded_names)
+    except InfeasibleTwistError:
+        return False
+    return True
 
 
 def _identifiability(names, jac_data, jac_full, scale) -> Identifiability:
@@ -258,7 +338,8 @@ def _identifiability(names, jac_data, jac_full, scale) -> Identifiability:
     blind = []
     for k in np.flatnonzero(s_all < BLIND):
         v = vt[k]
-        blind.append([{"parameter": names[j], "weight": float(v[j])} for j in np.argsort(-np.abs(v)) if abs(v[j]) > 0.2])
+        blind.append([{"parameter": names[j], "weight": float(v[j])}
+                      for j in np.argsort(-np.abs(v)) if abs(v[j]) > 0.2])
     cov = np.linalg.pinv(jac_full.T @ jac_full)
     sigma = {n: float(np.sqrt(max(cov[j, j], 0.0)) * scale[j]) for j, n in enumerate(names)}
     return Identifiability(names, [float(v) for v in s], blind, sigma)
@@ -267,26 +348,38 @@ def _identifiability(names, jac_data, jac_full, scale) -> Identifiability:
 def recommended_runs(robot: Robot, side: float = 4.0) -> list[tuple[str, Plan]]:
     """A calibration protocol that sees every parameter it can for this layout.
 
-    Both UMBmark squares in ``rotate`` mode (and ``translate`` mode for holonomic robots),
-    a straight line along body x (and y for holonomic robots), half turns in place both ways
-    and five full turns in place both ways. Measure x, y and the heading at the end of each.
+    ``[(path, plan), ...]``, ``path`` in the runs-file grammar (:func:`omnikin.plans.parse_plan`)
+    and ``plan`` parsed from it; drive each :data:`RECOMMENDED_REPEATS` times and measure x,
+    y and the heading at the end. The candidates, one rule for every robot: both UMBmark
+    squares in ``rotate`` mode and in ``translate`` mode, straight lines of ``side`` along body
+    x and y, half turns in place both ways, five full turns in place both ways, and half
+    circles of radius ``side / 2`` left and right; the runs the robot cannot drive (the
+    check of :func:`check_drivable`) are left out.
     The half turns see where the robot really turns about: a closed square hides an offset
     of that centre (its four corner shifts cancel), a half turn moves the origin by twice
     the offset. The five turns see the rotation scale (track over radius) ten times more
-    sharply than a half turn against the same heading measurement error.
+    sharply than a half turn against the same heading measurement error. The half circles
+    stand in for the turns in place on robots that cannot turn in place (cars).
     """
-    out = [("square cw rotate", umbmark_square("cw", side, "rotate")),
-           ("square ccw rotate", umbmark_square("ccw", side, "rotate")),
-           (f"line {side:g} m along x", line(side)),
-           ("spin +180 deg", spin(math.pi)),
-           ("spin -180 deg", spin(-math.pi)),
-           ("spin +1800 deg", spin(10 * math.pi)),
-           ("spin -1800 deg", spin(-10 * math.pi))]
-    if robot.mobility.holonomic:
-        out += [("square cw translate", umbmark_square("cw", side, "translate")),
-                ("square ccw translate", umbmark_square("ccw", side, "translate")),
-                (f"line {side:g} m along y", line(side, math.pi / 2))]
+    if not (math.isfinite(side) and side > 0):
+        raise InputError(f"side must be a positive length [m], got {side!r}")
+    L, half = _number_text(side), _number_text(side / 2)
+    candidates = [f"square cw rotate {L}", f"square ccw rotate {L}", f"line {L} 0", "spin 180", "spin -180",
+                  "spin 1800", "spin -1800", f"square cw translate {L}", f"square ccw translate {L}", f"line {L} 90"]
+    out = [(text, parse_plan(text)) for text in candidates]
+    out = [(text, plan) for text, plan in out if can_drive(plan, robot)]
+    if not any(text.startswith("spin") for text, _ in out):
+        arcs = [(text, parse_plan(text)) for text in (f"arc {half} 180", f"arc {half} -180")]
+        out += [(text, plan) for text, plan in arcs if can_drive(plan, robot)]
+    if not out:
+        raise InputError(f"robot {robot.name!r} can drive none of the calibration runs (squares, lines, turns, arcs)")
     return out
+
+
+def _number_text(x: float) -> str:
+    """``x`` as short as it reads back exactly (``4`` rather than ``4.0``; ``repr`` otherwise)."""
+    short = f"{x:g}"
+    return short if float(short) == x else repr(float(x))
 
 
 def borenstein_calibrate(robot: Robot, result: UMBmarkResult) -> Robot:

@@ -1,9 +1,22 @@
-"""UMBmark (Borenstein and Feng 1995) as fixed in ``docs/conventions.md``.
+"""UMBmark (Borenstein and Feng, "Measurement and correction of systematic odometry errors
+in mobile robots", 1996) as fixed in ``docs/conventions.md``.
 
 Per run the return error is ``eps = abs - calc``: the true end pose minus the odometry
-end pose [m, m, rad] (seed 000, eq. 1-2). Per direction the centre of gravity of the
-n runs (eq. 3-4) and its distance from the origin ``r_cg`` (eq. 5-6);
-``E_max,syst = max(r_cg_cw, r_cg_ccw)``.
+end pose [m, m, rad] (Tomasi and Todt, "Three wheeled omnidirectional mobile robot",
+eq. 1-2). Per direction the centre of gravity of the n runs (eq. 3-4) and its distance
+from the origin ``r_cg`` (eq. 5-6); ``E_max,syst = max(r_cg_cw, r_cg_ccw)``.
+
+Confidence interval of ``E_max,syst`` (:meth:`UMBmarkResult.e_max_interval`): the quantity
+estimated is ``max_d |mu_d|``, ``mu_d`` the expected return position of direction ``d``
+(the systematic error; the centre of gravity estimates it). With run-to-run errors
+independent and Gaussian, ``n (cg - mu)^T S^-1 (cg - mu)`` follows Hotelling's ``T^2(2, n - 1)``
+distribution (``S`` the sample covariance of the n runs), so ``{mu : n (cg - mu)^T S^-1
+(cg - mu) <= 2 (n - 1) / (n - 2) F_{2, n-2}(g)}`` is an exact confidence region of level ``g``
+for ``mu_d``. Each direction's region at level ``g = sqrt(level)`` (the directions are
+independent) bounds ``|mu_d|`` between its nearest and farthest point from the origin, and
+``E_max,syst`` between the larger of the two nearest and the larger of the two farthest
+distances: a conservative interval (coverage at least ``level``; projections of a region
+are wider than an interval for one number). It needs at least 3 runs per direction.
 
 For a differential drive (two coaxial fixed wheels; :func:`differential_pair`) Borenstein's
 correction: ``alpha = (x_cw + x_ccw) / (-4L)``, ``beta = (x_cw - x_ccw) / (-4L)`` [rad],
@@ -20,17 +33,28 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
-from ..errors import InputError
-from ..model import Robot
-from ..simulation.error_models import NoiseModel
+from ..errors import InfeasibleTwistError, InputError
 from ..limits import MotionLimits
+from ..model import Robot
 from ..plans import check_mode, umbmark_square
 from ..rng import make_rng
-from ..simulation.simulate import simulate
+from ..simulation.error_models import NoiseModel
+from ..simulation.simulate import segment_rates, simulate
+
+UNITS = {"side": "m", "epsilon": "[m, m, rad]", "cg": "m", "r_cg": "m", "e_max_syst": "m",
+         "e_max_syst_interval": "m", "alpha": "rad", "beta": "rad", "R": "m", "E_d": "1", "E_b": "1", "c_L": "1",
+         "c_R": "1", "b_new": "m"}
+"""Unit of each key of :meth:`UMBmarkResult.as_dict` (``[m, m, rad]``: per component)."""
+
+LEVEL = 0.95
+"""Default confidence level of the intervals."""
+
+BOUNDARY_POINTS = 4096
+"""Points on the boundary of a confidence ellipse when finding its nearest and farthest
+point from the origin (relative accuracy of the distances about 1e-6)."""
 
 
 @dataclass(frozen=True)
@@ -87,6 +111,26 @@ class DirectionResult:
         """Distance of the centre of gravity from the origin [m] (eq. 5-6)."""
         return float(np.hypot(*self.cg))
 
+    def distance_range(self, level: float) -> tuple[float, float] | None:
+        """Nearest and farthest distance [m] from the origin of the Hotelling ``T^2``
+        confidence region of level ``level`` for the expected return position (module
+        docstring); None with fewer than 3 runs."""
+        n = len(self.epsilon)
+        if n < 3:
+            return None
+        from scipy.stats import f as f_dist
+
+        c = 2.0 * (n - 1) / (n - 2) * float(f_dist.ppf(level, 2, n - 2))
+        lam, vec = np.linalg.eigh(np.cov(self.epsilon[:, :2], rowvar=False))
+        a = vec * np.sqrt(np.clip(lam, 0.0, None) * c / n)           # region: cg + a u, |u| <= 1
+        phi = np.linspace(0.0, 2.0 * np.pi, BOUNDARY_POINTS, endpoint=False)
+        edge = self.cg[:, None] + a @ np.vstack([np.cos(phi), np.sin(phi)])
+        dist = np.hypot(edge[0], edge[1])
+        near = float(dist.min())
+        if np.linalg.matrix_rank(a) == 2 and np.linalg.norm(np.linalg.solve(a, -self.cg)) <= 1.0:
+            near = 0.0                                                     # the origin lies inside
+        return near, float(dist.max())
+
     def as_dict(self) -> dict:
         return {"runs": [{"epsilon": [float(v) if np.isfinite(v) else None for v in e]} for e in self.epsilon],
                 "cg": [float(v) for v in self.cg], "r_cg": self.r_cg}
@@ -100,18 +144,87 @@ class UMBmarkResult:
     ccw: DirectionResult
     side: float
     mode: str = "rotate"
-    borenstein: Optional[Borenstein] = None
+    borenstein: Borenstein | None = None
 
     @property
     def e_max_syst(self) -> float:
+        """``max(r_cg_cw, r_cg_ccw)`` [m]."""
         return max(self.cw.r_cg, self.ccw.r_cg)
 
-    def as_dict(self) -> dict:
+    def e_max_interval(self, level: float = LEVEL) -> tuple[float, float] | None:
+        """Confidence interval ``(low, high)`` [m] of ``E_max,syst`` at ``level`` (module
+        docstring: Hotelling's ``T^2`` per direction, conservative); None with fewer than 3
+        runs in a direction."""
+        _check_level(level)
+        ranges = [d.distance_range(math.sqrt(level)) for d in (self.cw, self.ccw)]
+        if None in ranges:
+            return None
+        return max(r[0] for r in ranges), max(r[1] for r in ranges)
+
+    def as_dict(self, level: float = LEVEL) -> dict:
+        interval = self.e_max_interval(level)
         out = {"side": self.side, "mode": self.mode, "cw": self.cw.as_dict(), "ccw": self.ccw.as_dict(),
-               "e_max_syst": self.e_max_syst}
+               "e_max_syst": self.e_max_syst, "e_max_syst_interval": list(interval) if interval else None}
         if self.borenstein is not None:
             out["borenstein"] = self.borenstein.as_dict()
         return out
+
+
+def _check_level(level: float) -> None:
+    if not (isinstance(level, (int, float)) and 0.0 < level < 1.0):
+        raise InputError(f"confidence level must lie between 0 and 1, got {level!r}")
+
+
+def reduction_interval(before: UMBmarkResult, after: UMBmarkResult,
+                       level: float = LEVEL) -> tuple[float, float] | None:
+    """Confidence interval of the reduction factor ``E_max,syst(before) / E_max,syst(after)``.
+
+    With ``before`` and ``after`` independent procedures, each ``E_max,syst`` interval at
+    level ``sqrt(level)`` (:meth:`UMBmarkResult.e_max_interval`) bounds the ratio between
+    ``low_before / high_after`` and ``high_before / low_after`` with probability at least
+    ``level``; the upper bound is ``inf`` when ``after`` is consistent with zero (the
+    calibration left nothing UMBmark can see). None with fewer than 3 runs per direction.
+    """
+    _check_level(level)
+    b, a = before.e_max_interval(math.sqrt(level)), after.e_max_interval(math.sqrt(level))
+    if b is None or a is None:
+        return None
+    low = b[0] / a[1] if a[1] > 0 else (math.inf if b[0] > 0 else math.nan)
+    high = b[1] / a[0] if a[0] > 0 else math.inf
+    return low, high
+
+
+@dataclass(frozen=True)
+class NoiseFloor:
+    """What UMBmark shows of a perfectly calibrated robot: ``E_max,syst`` [m] of ``values``
+    procedures in which the robot as built is commanded by its own exact model, under the
+    same random errors, runs, square and rate. A measured ``E_max,syst`` at or below the
+    floor's 95th percentile (:attr:`limit`) cannot be told from a perfect calibration."""
+
+    values: np.ndarray
+
+    @property
+    def limit(self) -> float:
+        """95th percentile of ``E_max,syst`` of the perfectly calibrated robot [m]."""
+        return float(np.percentile(self.values, 95))
+
+    @property
+    def median(self) -> float:
+        return float(np.median(self.values))
+
+    def reaches(self, e_max_syst: float) -> bool:
+        """Whether ``e_max_syst`` [m] is at the noise floor (at most :attr:`limit`)."""
+        return e_max_syst <= self.limit
+
+    def as_dict(self) -> dict:
+        return {"procedures": int(len(self.values)), "e_max_syst_median": self.median, "e_max_syst_p95": self.limit}
+
+
+def noise_floor(robot: Robot, *, procedures: int, rng=None, **options) -> NoiseFloor:
+    """The :class:`NoiseFloor` of ``robot`` (the robot as built): ``procedures`` UMBmark
+    procedures of ``robot`` commanded by itself; ``options`` as :func:`run_umbmark`."""
+    results = run_umbmark(robot, robot, trials=procedures, rng=rng, **options)
+    return NoiseFloor(np.array([r.e_max_syst for r in results]))
 
 
 def differential_pair(robot: Robot):
@@ -176,10 +289,15 @@ def run_umbmark(true_robot: Robot, command_robot: Robot, *, side: float = 4.0, m
     if not isinstance(runs, (int, np.integer)) or runs < 1:
         raise InputError(f"runs must be a whole number >= 1, got {runs!r}")
     check_mode(mode)
-    if mode == "translate" and not command_robot.mobility.holonomic:
-        raise InputError(f"robot {command_robot.name!r} is not holonomic (Campion type "
-                           f"{command_robot.mobility.campion_type}): it cannot drive the 'translate' square; "
-                           f"use --mode rotate")
+    other = {"rotate": "translate", "translate": "rotate"}[mode]
+    for direction in ("cw", "ccw"):
+        square = umbmark_square(direction, side, mode)
+        try:
+            segment_rates([seg.xi for seg in square.segments], command_robot, command_robot.encoded_names)
+        except InfeasibleTwistError as exc:
+            reason = str(exc).split(" (on_infeasible=")[0]
+            raise InputError(f"robot {command_robot.name!r} cannot drive the UMBmark square in {mode!r} mode "
+                             f"({reason}); the other mode is {other!r}") from None
     rng = make_rng(rng)
     sims = {}
     for direction in ("cw", "ccw"):

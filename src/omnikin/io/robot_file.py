@@ -456,19 +456,24 @@ def robot_to_dict(robot: Robot) -> dict:
             "references": list(robot.references), "wheels": wheels}
 
 
+def robot_text(robot: Robot, path: str | Path) -> str:
+    """``robot`` as the text of a robot file named ``path``: strict JSON for ``.json``, else YAML."""
+    data = robot_to_dict(robot)
+    if Path(path).suffix.lower() == ".json":
+        from .jsonfile import to_json
+
+        return to_json(data) + "\n"
+    import yaml
+
+    return yaml.safe_dump(data, sort_keys=False)
+
+
 def save_robot(robot: Robot, path: str | Path) -> None:
     """Write ``robot`` as YAML (``.yaml``/``.yml``) or strict JSON (``.json``), atomically.
 
     Whether ``path`` may be written (it exists, it is an input) is the caller's check
     (:func:`omnikin.io.output.check_output`); this only guarantees no half-written file.
     """
-    from .jsonfile import to_json
     from .output import write_text
 
-    data = robot_to_dict(robot)
-    if Path(path).suffix.lower() == ".json":
-        write_text(path, to_json(data) + "\n")
-    else:
-        import yaml
-
-        write_text(path, yaml.safe_dump(data, sort_keys=False))
+    write_text(path, robot_text(robot, path))

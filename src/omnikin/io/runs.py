@@ -22,6 +22,7 @@ error, not "not measured"). Errors name the file, the line and the column.
 from __future__ import annotations
 
 import csv
+import io
 import math
 
 import numpy as np
@@ -116,25 +117,49 @@ def read_calibration_runs(path, sigma=DEFAULT_SIGMA) -> list[CalibrationRun]:
                 raise RunsFileError(f"{source}: line {line_no}, column 'path': {exc}") from None
         m = (_number(source, line_no, "x_abs", row["x_abs"]), _number(source, line_no, "y_abs", row["y_abs"]),
              _theta(source, header, line_no, row, "abs"))
-        out.append(CalibrationRun(plans[key], m, row["path"], sigma))
+        out.append(CalibrationRun(plans[key], m, row["path"], sigma, source=f"{source}: line {line_no}"))
     return out
 
 
-def write_calibration_runs(path, runs: list[tuple[str, np.ndarray]]) -> None:
-    """Write ``[(path_text, measured (x, y, theta)), ...]`` as a runs file (theta in degrees)."""
-    with open(path, "w", newline="", encoding="utf-8") as handle:
-        w = csv.writer(handle)
-        w.writerow(["path", "x_abs", "y_abs", "theta_abs_deg"])
-        for text, m in runs:
-            w.writerow([text, f"{m[0]:.6f}", f"{m[1]:.6f}", f"{math.degrees(m[2]):.5f}"])
+def _comment(text: str | None) -> str:
+    """``text`` as ``#`` comment lines (read back as nothing)."""
+    if not text:
+        return ""
+    return "".join(f"# {line}".rstrip() + "\n" for line in text.splitlines())
 
 
-def write_umbmark_measurements(path, result) -> None:
-    """Write a :class:`~omnikin.evaluation.umbmark.UMBmarkResult` as a measurements file
-    (odometry at the origin, so ``abs`` = ``epsilon``)."""
-    with open(path, "w", newline="", encoding="utf-8") as handle:
-        w = csv.writer(handle)
-        w.writerow(["direction", "x_abs", "y_abs", "x_calc", "y_calc", "theta_abs_deg", "theta_calc_deg"])
-        for d in (result.cw, result.ccw):
-            for e in d.epsilon:
-                w.writerow([d.direction, f"{e[0]:.6f}", f"{e[1]:.6f}", "0", "0", f"{math.degrees(e[2]):.5f}", "0"])
+def _csv(rows) -> str:
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="\n").writerows(rows)
+    return buffer.getvalue()
+
+
+def calibration_runs_text(runs, comment: str | None = None) -> str:
+    """A runs file (``omnikin calibrate``): one row per :class:`~omnikin.plans.CalibrationRun`
+    (its ``label`` is the path in the runs-file grammar), x and y in metres to 1 um, the
+    heading in degrees to 1e-5 deg, an unmeasured heading (NaN) left empty; ``comment``
+    becomes ``#`` lines at the top."""
+    rows = [["path", "x_abs", "y_abs", "theta_abs_deg"]]
+    for run in runs:
+        x, y, th = run.measured
+        rows.append([run.label, f"{x:.6f}", f"{y:.6f}", f"{math.degrees(th):.5f}" if math.isfinite(th) else ""])
+    return _comment(comment) + _csv(rows)
+
+
+def calibration_template(paths, repeats: int, comment: str | None = None) -> str:
+    """A runs file to fill in on a real robot: every path ``repeats`` times, measurements empty."""
+    rows = [["path", "x_abs", "y_abs", "theta_abs_deg"]]
+    rows += [[path, "", "", ""] for path in paths for _ in range(repeats)]
+    return _comment(comment) + _csv(rows)
+
+
+def umbmark_measurements_text(result, comment: str | None = None) -> str:
+    """A measurements file (``omnikin umbmark analyze``) of a
+    :class:`~omnikin.evaluation.umbmark.UMBmarkResult`: odometry at the origin, so ``abs`` =
+    ``epsilon`` [m, deg]; an unmeasured heading left empty."""
+    rows = [["direction", "x_abs", "y_abs", "x_calc", "y_calc", "theta_abs_deg", "theta_calc_deg"]]
+    for d in (result.cw, result.ccw):
+        for e in d.epsilon:
+            th = f"{math.degrees(e[2]):.5f}" if math.isfinite(e[2]) else ""
+            rows.append([d.direction, f"{e[0]:.6f}", f"{e[1]:.6f}", "0", "0", th, "0" if th else ""])
+    return _comment(comment) + _csv(rows)

@@ -64,20 +64,35 @@ class SimulatedRun:
         return eps
 
 
-def commanded_angles(sampled: SampledPlan, robot: Robot, wheels) -> tuple[np.ndarray, np.ndarray | None]:
-    """Commanded wheel angles ``(N + 1, n)`` [rad] of ``wheels`` and steering ``(N + 1, n_steer)``."""
-    names = [w.name for w in wheels]
-    per_segment = np.zeros((len(sampled.xi), len(names)))
-    steer_seg = np.zeros((len(sampled.xi), len(robot.steerable)))
+def segment_rates(xi, robot: Robot, names) -> tuple[np.ndarray, np.ndarray]:
+    """Per segment of a plan, what ``robot`` commands to drive it.
+
+    ``xi`` ``(n_seg, 3)``: each segment's body twist per unit progress. Returns the wheel
+    angle per unit progress ``(n_seg, n)`` [rad] of the wheels ``names`` (``J(steer) xi``)
+    and the steering ``(n_seg, n_steer)`` [rad] of ``robot.steerable`` (each segment's
+    alignment nearest the previous one). This is the one check of whether a robot can
+    drive a plan: a twist its fixed wheels cannot roll along, or its steerable wheels
+    cannot follow within their limits, raises :class:`~omnikin.errors.InfeasibleTwistError`
+    naming the wheel (:meth:`omnikin.model.Robot.ik`).
+    """
+    xi = np.asarray(xi, dtype=float).reshape(-1, 3)
+    per_segment = np.zeros((len(xi), len(names)))
+    steer_seg = np.zeros((len(xi), len(robot.steerable)))
     hint = np.zeros(len(robot.steerable))
-    for k, xi in enumerate(sampled.xi):
+    for k, twist in enumerate(xi):
         if robot.steerable:
-            res = robot.ik(xi, steer_hint=hint)
+            res = robot.ik(twist, steer_hint=hint)
             hint = steer_seg[k] = res.steer_angles
         else:
-            robot.ik(xi)      # refuses a plan the command model cannot drive, naming the wheel
-        per_segment[k] = robot.jacobian(steer_seg[k], names) @ xi
-    angles = np.zeros((len(sampled.progress) + 1, len(names)))
+            robot.ik(twist)      # refuses a plan the command model cannot drive, naming the wheel
+        per_segment[k] = robot.jacobian(steer_seg[k], names) @ twist
+    return per_segment, steer_seg
+
+
+def commanded_angles(sampled: SampledPlan, robot: Robot, wheels) -> tuple[np.ndarray, np.ndarray | None]:
+    """Commanded wheel angles ``(N + 1, n)`` [rad] of ``wheels`` and steering ``(N + 1, n_steer)``."""
+    per_segment, steer_seg = segment_rates(sampled.xi, robot, [w.name for w in wheels])
+    angles = np.zeros((len(sampled.progress) + 1, len(wheels)))
     np.cumsum(per_segment[sampled.segment] * sampled.progress[:, None], axis=0, out=angles[1:])
     steer = None
     if robot.steerable:

@@ -1,119 +1,139 @@
-"""UMBmark figures in the style of the seed paper (Tomasi and Todt, Figures 8 and 9).
+r"""UMBmark figures in the style of Tomasi and Todt ("Three wheeled omnidirectional mobile
+robot", Figures 8 and 9) and Borenstein and Feng.
 
-* :func:`return_errors_figure`: return positions ``(eps_x, eps_y)`` of every run per
-  direction with their centres of gravity, before and after calibration (Fig. 9);
-* :func:`euclidean_errors_figure`: the Euclidean return error of each run (Fig. 8);
-* :func:`trajectories_figure`: true vs odometry paths of the first run of each direction;
-* :func:`monte_carlo_figure`: distribution of ``E_max,syst`` over repeated procedures.
+* :func:`return_errors_figure`: return positions ``(eps_x, eps_y)`` [mm] of every run per
+  direction, drawn over their centre of gravity (an open ring, so every run stays visible),
+  with the noise floor as a circle, before and after calibration (Fig. 9);
+* :func:`euclidean_errors_figure`: the Euclidean return error of each run [mm], one marker
+  per run, grouped by stage and direction (Fig. 8; runs are independent, so no line joins
+  them);
+* :func:`trajectories_figure`: true vs odometry paths of the first run of each direction [m];
+* :func:`monte_carlo_figure`: distribution of ``E_max,syst`` [mm] over repeated procedures.
 
-Figures are ``matplotlib.figure.Figure`` objects (no pyplot, no backend switching).
+Figures are ``matplotlib.figure.Figure`` objects (no pyplot, no backend switching); write them
+with :func:`omnikin.viz.save_figure` (PNG, SVG or PDF). Run markers carry the ``gid``
+``"runs:<stage>:<direction>"``, centres of gravity ``"cg:<stage>:<direction>"``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from . import require_matplotlib
+from . import new_figure
 
 COLORS = {"cw": "#d62728", "ccw": "#1f77b4"}
+MARKERS = {"cw": "o", "ccw": "s"}
+E_MAX = r"$E_{\max,\mathrm{syst}}$"
+"""``E_max,syst`` in math text."""
 
 
-def _figure(*args, **kwargs):
-    require_matplotlib()
-    from matplotlib.figure import Figure
+def return_errors_figure(results: dict, title: str = "", floor: float | None = None):
+    """Return positions [mm]; ``results``: ``{stage: UMBmarkResult}``; ``floor``: the noise
+    floor [m] (:class:`~omnikin.evaluation.umbmark.NoiseFloor` ``.limit``), drawn as a circle."""
+    from matplotlib.patches import Circle
 
-    return Figure(*args, **kwargs)
-
-
-def _finish(fig, title: str):
+    fig = new_figure(figsize=(4.4 * len(results) + 0.4, 5.4))
+    axes = fig.subplots(1, len(results), squeeze=False)[0]
+    for ax, (stage, res) in zip(axes, results.items(), strict=True):
+        for d in (res.cw, res.ccw):
+            e = d.epsilon[:, :2] * 1000
+            cg = d.cg * 1000
+            ax.scatter([cg[0]], [cg[1]], s=240, marker="o", facecolor="none", edgecolor=COLORS[d.direction], lw=1.6,
+                       zorder=2, gid=f"cg:{stage}:{d.direction}", label=f"{d.direction} centre of gravity")
+            ax.scatter(e[:, 0], e[:, 1], s=22, marker=MARKERS[d.direction], color=COLORS[d.direction], alpha=0.85,
+                       edgecolor="white", linewidth=0.4, zorder=3, gid=f"runs:{stage}:{d.direction}",
+                       label=f"{d.direction} runs")
+        if floor is not None and floor > 0:
+            ax.add_patch(Circle((0, 0), floor * 1000, fill=False, ls="--", lw=0.9, color="0.45", zorder=1,
+                                gid="noise-floor", label="noise floor (95th percentile)"))
+        ax.scatter([0], [0], s=50, marker="+", color="k", lw=1.0, zorder=4, gid="origin", label="start = goal")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel(r"return error $\epsilon_x$ [mm]")
+        ax.set_ylabel(r"return error $\epsilon_y$ [mm]")
+        ax.set_title(f"{stage}: {E_MAX} = {res.e_max_syst * 1000:.1f} mm\n"
+                     rf"$r_{{cg}}$: cw {res.cw.r_cg * 1000:.1f} mm, ccw {res.ccw.r_cg * 1000:.1f} mm", fontsize=10)
+        ax.grid(True, alpha=0.3)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=8, frameon=False, markerscale=0.6)
     if title:
         fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
     return fig
 
 
-def _style_axes(ax, xlabel: str, ylabel: str, title: str, equal: bool = False) -> None:
-    """Labels, title, grid and legend shared by the figures."""
-    if equal:
-        ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=10)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, loc="best")
-
-
-def return_errors_figure(results: dict, title: str = ""):
-    """Scatter of return errors [mm]; ``results``: ``{"before": UMBmarkResult, "after": ...}``."""
-    fig = _figure(figsize=(5.2 * len(results), 5.0), dpi=100)
-    for k, (label, res) in enumerate(results.items()):
-        ax = fig.add_subplot(1, len(results), k + 1)
-        for d in (res.cw, res.ccw):
-            e = d.epsilon[:, :2] * 1000
-            ax.scatter(e[:, 0], e[:, 1], s=28, color=COLORS[d.direction], alpha=0.75, label=f"{d.direction} runs")
-            cg = d.cg * 1000
-            ax.scatter([cg[0]], [cg[1]], s=160, marker="X", color=COLORS[d.direction], edgecolor="k",
-                       label=f"{d.direction} c.g., r = {d.r_cg * 1000:.1f} mm")
-        ax.axhline(0, color="0.6", lw=0.8)
-        ax.axvline(0, color="0.6", lw=0.8)
-        _style_axes(ax, "return error x [mm]", "return error y [mm]",
-                    f"{label}: E_max,syst = {res.e_max_syst * 1000:.1f} mm", equal=True)
-    return _finish(fig, title)
-
-
 def euclidean_errors_figure(results: dict, title: str = ""):
-    """Euclidean return error of each run [mm], per direction, before and after."""
-    fig = _figure(figsize=(7.5, 4.2), dpi=100)
+    """Euclidean return error of each run [mm]: one marker per run, grouped by stage and
+    direction (log scale when the values span more than a factor 30)."""
+    fig = new_figure(figsize=(6.4, 4.4))
     ax = fig.add_subplot(1, 1, 1)
-    styles = {0: "-o", 1: "--s", 2: ":^"}
-    for k, (label, res) in enumerate(results.items()):
-        for d in (res.cw, res.ccw):
+    ticks, names, values = [], [], []
+    for k, (stage, res) in enumerate(results.items()):
+        for j, d in enumerate((res.cw, res.ccw)):
             err = np.hypot(d.epsilon[:, 0], d.epsilon[:, 1]) * 1000
-            ax.plot(np.arange(1, len(err) + 1), err, styles.get(k, "-o"), color=COLORS[d.direction],
-                    label=f"{label} {d.direction}")
-    ax.set_yscale("log")
-    n = max(len(r.cw.epsilon) for r in results.values())
-    ax.set_xticks(np.arange(1, n + 1))
-    ax.set_xlabel("run")
-    ax.set_ylabel("Euclidean return error [mm] (log scale)")
-    ax.set_title(title or "Euclidean return error per run", fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8, ncol=2)
-    fig.tight_layout()
+            x0 = 3 * k + j
+            offsets = np.linspace(-0.25, 0.25, len(err)) if len(err) > 1 else np.zeros(1)
+            ax.scatter(x0 + offsets, err, s=26, marker=MARKERS[d.direction], color=COLORS[d.direction], alpha=0.85,
+                       edgecolor="white", linewidth=0.4, zorder=3, gid=f"runs:{stage}:{d.direction}",
+                       label=f"{d.direction} runs" if k == 0 else None)
+            ticks.append(x0)
+            names.append(d.direction + "\n" + stage.replace(" ", "\n"))
+            values.append(err)
+    v = np.concatenate(values)
+    positive = v[v > 0]
+    if positive.size and positive.max() / positive.min() > 30:
+        ax.set_yscale("log")
+    else:
+        ax.set_ylim(bottom=0)
+    ax.set_xticks(ticks, names)
+    ax.set_xlim(min(ticks) - 0.7, max(ticks) + 0.7)
+    ax.set_ylabel(r"Euclidean return error $\|(\epsilon_x, \epsilon_y)\|$ [mm]")
+    ax.set_title(title or "Euclidean return error of each run", fontsize=10)
+    ax.grid(True, axis="y", which="both", alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
     return fig
 
 
 def trajectories_figure(runs: dict, side: float, title: str = ""):
-    """True (solid) vs odometry (dashed) paths; ``runs``: ``{label: {"cw": SimulatedRun, "ccw": ...}}``."""
-    fig = _figure(figsize=(5.2 * len(runs), 5.2), dpi=100)
-    for k, (label, sims) in enumerate(runs.items()):
-        ax = fig.add_subplot(1, len(runs), k + 1)
+    """True (solid) vs odometry (dashed) path [m] of one run per direction;
+    ``runs``: ``{stage: {"cw": SimulatedRun, "ccw": ...}}`` (ground truth kept)."""
+    fig = new_figure(figsize=(4.4 * len(runs) + 0.4, 5.4))
+    axes = fig.subplots(1, len(runs), squeeze=False)[0]
+    for ax, (stage, sims) in zip(axes, runs.items(), strict=True):
         for d, sim in sims.items():
             truth = sim.truth[0]
-            ax.plot(truth[:, 0], truth[:, 1], "-", color=COLORS[d], lw=1.4, label=f"{d} true")
-            ax.plot(sim.odometry[:, 0], sim.odometry[:, 1], "--", color=COLORS[d], lw=1.0, alpha=0.7,
+            ax.plot(truth[:, 0], truth[:, 1], "-", color=COLORS[d], lw=1.4, label=f"{d} true path")
+            ax.plot(sim.odometry[:, 0], sim.odometry[:, 1], "--", color=COLORS[d], lw=1.0, alpha=0.8,
                     label=f"{d} odometry")
-            ax.plot([truth[-1, 0]], [truth[-1, 1]], "o", color=COLORS[d])
-        ax.plot([0], [0], "k*", ms=10, label="start")
-        _style_axes(ax, "x [m]", "y [m]", f"{label}: first run of each direction ({side:g} m square)", equal=True)
-    return _finish(fig, title)
+            ax.plot([truth[-1, 0]], [truth[-1, 1]], MARKERS[d], color=COLORS[d], ms=5, label=f"{d} true end")
+        ax.plot([0], [0], "k+", ms=9, mew=1.2, label="start")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.set_title(f"{stage}: first run of each direction", fontsize=10)
+        ax.grid(True, alpha=0.3)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=8, frameon=False)
+    if title:
+        fig.suptitle(title, fontsize=11)
+    return fig
 
 
 def monte_carlo_figure(values: dict, title: str = ""):
-    """Histograms of ``E_max,syst`` [mm] over procedures; ``values``: ``{label: array [m]}``."""
-    fig = _figure(figsize=(7.5, 4.2), dpi=100)
+    """Histograms of ``E_max,syst`` [mm] over procedures; ``values``: ``{label: array [m]}``
+    (e.g. before, after calibration, and the noise floor's perfectly calibrated robot)."""
+    fig = new_figure(figsize=(6.4, 4.2))
     ax = fig.add_subplot(1, 1, 1)
-    data = {k: np.asarray(v) * 1000 for k, v in values.items()}
-    lo = max(min(float(v.min()) for v in data.values()), 1e-3)
-    hi = max(float(v.max()) for v in data.values())
+    data = {k: np.asarray(v, dtype=float) * 1000 for k, v in values.items()}
+    every = np.concatenate(list(data.values()))
+    lo = max(float(every.min()), 1e-3)
+    hi = max(float(every.max()), lo * 1.01)
     bins = np.logspace(np.log10(lo), np.log10(hi * 1.01), 40)
     for label, v in data.items():
-        ax.hist(v, bins=bins, alpha=0.6, label=f"{label} (median {np.median(v):.1f} mm)")
+        ax.hist(np.clip(v, lo, None), bins=bins, weights=np.full(len(v), 1.0 / len(v)), histtype="step", lw=1.6,
+                label=f"{label}: {len(v)} procedures, median {np.median(v):.3g} mm")
     ax.set_xscale("log")
-    ax.set_xlabel("E_max,syst [mm]")
-    ax.set_ylabel("procedures")
-    ax.set_title(title or "E_max,syst over repeated UMBmark procedures", fontsize=10)
+    ax.set_xlabel(f"{E_MAX} [mm]")
+    ax.set_ylabel("fraction of procedures")
+    ax.set_title(title or f"{E_MAX} over repeated UMBmark procedures", fontsize=10)
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
-    fig.tight_layout()
     return fig

@@ -1,0 +1,39 @@
+"""The Python API: the command-line tools as functions, with the command line's defaults.
+
+Each function takes what its command takes (a robot as a preset name, a robot file or a
+:class:`~omnikin.model.Robot`; error and noise profiles by name or as objects) and returns a
+result object that plots itself (``result.plot()`` returns a matplotlib ``Figure``; matplotlib
+is imported only then, with an error naming the ``viz`` extra when it is missing)::
+
+    import omnikin
+
+    run = omnikin.simulate("diff-drive", "square cw rotate 4")         # omnikin simulate
+    report = omnikin.run_umbmark("tomasi-omni3", trials=20)            # omnikin umbmark
+    report.write("umbmark-report")                                     #   its report folder
+    fit = omnikin.calibrate("tomasi-omni3", "runs.csv")                # omnikin calibrate
+    res = omnikin.analyze_umbmark("measured.csv", robot="diff-drive")  # omnikin umbmark analyze
+    omnikin.plot_layout("mecanum4").savefig("layout.pdf")              # omnikin show --plot
+
+Lengths in metres, angles in radians, unless a name says otherwise (``_deg``, ``_mm``).
+"""
+
+from __future__ import annotations
+
+from .calibration import Calibration, calibrate, calibration_plan
+from .common import dumps, robot_of
+from .simulation import DEFAULT_PATH, Simulation, simulate
+from .umbmark import DEFAULT_ROBOT, UMBmarkAnalysis, UMBmarkReport, analyze_umbmark, run_umbmark
+
+
+def plot_layout(robot):
+    """The wheel layout of ``robot`` (a matplotlib ``Figure``; ``omnikin show --plot``)."""
+    from ..viz.layout import layout_figure
+    from .common import require_viz
+
+    require_viz()
+    return layout_figure(robot_of(robot))
+
+
+__all__ = ["Calibration", "DEFAULT_PATH", "DEFAULT_ROBOT", "Simulation", "UMBmarkAnalysis", "UMBmarkReport",
+           "analyze_umbmark", "calibrate", "calibration_plan", "dumps", "plot_layout", "robot_of", "run_umbmark",
+           "simulate"]

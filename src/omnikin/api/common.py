@@ -1,0 +1,67 @@
+"""What the API's entry points share: resolving robots and profiles given by name, JSON output."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+
+from ..model import Robot
+from ..simulation.error_models import ErrorProfile, NoiseModel
+from ..simulation.error_models import noise as noise_profile
+from ..simulation.error_models import profile as error_profile
+
+
+def robot_of(spec) -> Robot:
+    """A :class:`~omnikin.model.Robot`, or one loaded from a preset name or robot file."""
+    if isinstance(spec, Robot):
+        return spec
+    from ..io.robot_file import load_robot
+
+    return load_robot(spec)
+
+
+def noise_of(spec) -> NoiseModel:
+    return spec if isinstance(spec, NoiseModel) else noise_profile(spec)
+
+
+def errors_of(spec) -> ErrorProfile:
+    return spec if isinstance(spec, ErrorProfile) else error_profile(spec)
+
+
+def setting_name(spec) -> str | None:
+    """How a setting given as a name, a path or an object is recorded."""
+    if spec is None or isinstance(spec, str):
+        return spec
+    if isinstance(spec, os.PathLike):
+        return os.fspath(spec)
+    if isinstance(spec, Robot):
+        return spec.name
+    return repr(spec)
+
+
+def as_built(robot: Robot, true_robot, errors, seed_sequence):
+    """The robot as built and the errors drawn (None for a given ``true_robot``)."""
+    from ..evaluation.procedure import draw_as_built
+
+    if true_robot is not None:
+        return robot_of(true_robot), None
+    return draw_as_built(robot, errors_of(errors), seed_sequence)
+
+
+def finite_or_none(x):
+    """``x`` for JSON: non-finite numbers become None (JSON has no infinity)."""
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
+
+
+def dumps(document: dict) -> str:
+    """The JSON text of a result document (strict JSON: no NaN or infinity)."""
+    return json.dumps(document, indent=2, allow_nan=False) + "\n"
+
+
+def require_viz():
+    from ..viz import require_matplotlib
+
+    require_matplotlib()

@@ -1,0 +1,67 @@
+"""``omnikin.simulate``: one simulated run, as ``omnikin simulate`` makes it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model import Robot
+from ..simulation.simulate import SimulatedRun
+from .common import as_built, noise_of, require_viz, robot_of
+
+DEFAULT_PATH = "square cw rotate 4"
+"""The path of ``omnikin simulate`` without ``--path``."""
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """A simulated run (:func:`simulate`): ``run`` holds the times [s], encoder ticks, odometry,
+    ground truth and measured end pose (:class:`~omnikin.simulation.simulate.SimulatedRun`);
+    ``injected`` the systematic errors drawn (None for a given true robot)."""
+
+    robot: Robot
+    true_robot: Robot
+    injected: object
+    path: str
+    run: SimulatedRun
+
+    @property
+    def end_error(self) -> np.ndarray:
+        """True end pose minus odometry end pose ``(x [m], y [m], theta [rad])``."""
+        from ..geometry import wrap_angle
+
+        d = self.run.truth[0, -1] - self.run.odometry[-1]
+        d[2] = wrap_angle(d[2])
+        return d
+
+    def plot(self):
+        """True path and odometry [m] (a matplotlib ``Figure``)."""
+        require_viz()
+        from ..viz.runs import run_figure
+
+        return run_figure(self.run, f"{self.robot.name}: {self.path}")
+
+
+def simulate(robot, path=DEFAULT_PATH, *, true_robot=None, errors="typical", noise="typical", seed: int = 1,
+             rate: float = 100.0) -> Simulation:
+    """Simulate ``robot`` as built driving ``path`` commanded by its nominal model
+    (``omnikin simulate``, without the bag).
+
+    ``path``: a :class:`~omnikin.plans.Plan` (plans add: ``line(4) + spin(math.pi)``) or a path
+    in the runs-file grammar (:func:`omnikin.plans.parse_plan`); ``true_robot`` (robot file or Robot) replaces the seeded draw of the
+    ``errors`` profile; ``noise``: random errors (profile name or
+    :class:`~omnikin.simulation.error_models.NoiseModel`); ``rate`` [Hz]. The seed's first
+    stream draws the robot as built (the same robot as ``omnikin umbmark --seed``), its second
+    the run, as ``omnikin simulate`` does.
+    """
+    from ..evaluation.procedure import streams
+    from ..plans import Plan, parse_plan
+    from ..simulation.simulate import simulate as simulate_run
+
+    nominal = robot_of(robot)
+    plan = path if isinstance(path, Plan) else parse_plan(str(path))
+    seeds = list(streams(seed).values())
+    true, injected = as_built(nominal, true_robot, errors, seeds[0])
+    run = simulate_run(plan, true, nominal, rate=rate, noise=noise_of(noise), trials=1, rng=seeds[1])
+    return Simulation(nominal, true, injected, path.name if isinstance(path, Plan) else str(path), run)

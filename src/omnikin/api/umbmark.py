@@ -1,0 +1,282 @@
+"""``omnikin.run_umbmark`` and ``omnikin.analyze_umbmark``: UMBmark as ``omnikin umbmark`` runs it.
+
+:func:`run_umbmark` runs the study of :mod:`omnikin.evaluation.procedure` and returns a
+:class:`UMBmarkReport`: its :meth:`~UMBmarkReport.as_dict` is the ``result.json`` document
+(and what ``--json`` prints: one function builds both), :meth:`~UMBmarkReport.plot` draws
+it and :meth:`~UMBmarkReport.write` writes the report folder.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from ..errors import InputError
+from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT, RECOMMENDED_REPEATS
+from ..evaluation.procedure import FLOOR_PROCEDURES, UMBmarkStudy, check_cost, estimate_cost, streams, umbmark_study
+from ..evaluation.umbmark import LEVEL, UNITS, UMBmarkResult, analyze
+from ..viz import DPI
+from .common import as_built, dumps, finite_or_none, noise_of, require_viz, robot_of, setting_name
+
+RESULT_FORMAT = "omnikin-umbmark-result/1"
+"""Name and version of the ``result.json`` document (:meth:`UMBmarkReport.as_dict`)."""
+
+STAGES = {"before": "before", "after": "after calibration"}
+"""How the figures and tables name the stages."""
+
+DEFAULT_ROBOT = "tomasi-omni3"
+"""The robot of ``omnikin umbmark`` without ROBOT (Tomasi and Todt's three-wheeled omni robot)."""
+
+
+@dataclass(frozen=True)
+class UMBmarkReport(UMBmarkStudy):
+    """The result of :func:`run_umbmark` (the study of :mod:`omnikin.evaluation.procedure`)
+    with the settings it ran with; :meth:`as_dict` is ``result.json``, :meth:`plot` draws it,
+    :meth:`write` writes the report folder."""
+
+    settings: dict = field(default_factory=dict)
+
+    # -- numbers ------------------------------------------------------------------------------
+    def at_noise_floor(self, result: UMBmarkResult) -> bool:
+        """Whether ``result``'s E_max,syst cannot be told from a perfectly calibrated robot's."""
+        return self.floor.reaches(result.e_max_syst)
+
+    def _stage(self, result: UMBmarkResult) -> dict:
+        return {**result.as_dict(self.level), "at_noise_floor": self.at_noise_floor(result)}
+
+    def as_dict(self, files: list | None = None) -> dict:
+        """The ``result.json`` document (also what ``omnikin umbmark --json`` prints); lengths
+        in metres (``units`` gives every key's unit); ``null`` for an unbounded interval end."""
+        from ..io.robot_file import robot_to_dict
+
+        doc = {"format": RESULT_FORMAT, "units": RESULT_UNITS, "methods": METHODS,
+               "settings": {**self.settings, "confidence_level": self.level},
+               "robot": robot_to_dict(self.robot), "true_robot": robot_to_dict(self.true_robot)}
+        if self.injected is not None:
+            doc["injected_errors"] = self.injected.as_dict()
+        doc["before"] = self._stage(self.before[0])
+        doc["noise_floor"] = self.floor.as_dict()
+        doc["systematic"] = {f"e_max_syst_{k}": v for k, v in self.systematic.items()}
+        if self.after is not None:
+            doc["after"] = self._stage(self.after[0])
+            doc["reduction_factor"] = finite_or_none(self.reduction_factor)
+            interval = self.reduction_interval
+            doc["reduction_factor_interval"] = [finite_or_none(v) for v in interval] if interval else None
+            s = self.systematic
+            doc["systematic"]["reduction_factor"] = finite_or_none(s["before"] / s["after"] if s["after"] > 0
+                                                                   else math.inf)
+            doc["calibration"] = {**self.calibration.as_dict(), "repeats": RECOMMENDED_REPEATS,
+                                  "paths": list(dict.fromkeys(r.label for r in self.calibration_runs))}
+            doc["calibrated_robot"] = robot_to_dict(self.calibration.robot)
+            if self.borenstein is not None:
+                doc["borenstein_iterations"] = list(self.borenstein)
+        if self.trials > 1:
+            doc["monte_carlo"] = {"before": _stats(self.before)}
+            if self.after is not None:
+                doc["monte_carlo"]["after calibration"] = _stats(self.after)
+        doc["files"] = list(files or [])
+        return doc
+
+    # -- figures -------------------------------------------------------------------------------
+    def figures(self) -> dict:
+        """The report's figures by file stem: ``return_errors``, ``euclidean_errors``,
+        ``trajectories`` and, with trials, ``monte_carlo`` (matplotlib ``Figure`` objects)."""
+        require_viz()
+        from ..viz import umbmark as fig
+
+        title = f"UMBmark of {self.robot.name} as built ({self.mode} mode, {self.side:g} m square)"
+        out = {"return_errors": fig.return_errors_figure(self.first(), title, floor=self.floor.limit),
+               "euclidean_errors": fig.euclidean_errors_figure(self.first(), title),
+               "trajectories": fig.trajectories_figure(
+                   {STAGES[k]: v for k, v in self.trajectories.items()}, self.side, title)}
+        if self.trials > 1:
+            values = {"before": [r.e_max_syst for r in self.before]}
+            if self.after is not None:
+                values["after calibration"] = [r.e_max_syst for r in self.after]
+            values["perfectly calibrated (noise floor)"] = self.floor.values
+            out["monte_carlo"] = fig.monte_carlo_figure(values, f"{fig.E_MAX} over {self.trials} procedures")
+        return out
+
+    def plot(self, kind: str = "return_errors"):
+        """One figure of :meth:`figures` (default: the return positions, before and after)."""
+        figures = self.figures()
+        if kind not in figures:
+            raise InputError(f"unknown figure {kind!r}; one of {sorted(figures)}")
+        return figures[kind]
+
+    # -- report folder ---------------------------------------------------------------------------
+    def write(self, folder, *, figure_format: str = "png", dpi: float = DPI, inputs=()) -> dict:
+        """Write the report folder (replaced as a whole if omnikin wrote it; a foreign non-empty
+        folder is refused; nothing changes if writing fails: :mod:`omnikin.io.output`).
+        Returns the ``result.json`` document written."""
+        from ..io.output import check_output, report_folder
+        from .report import umbmark_markdown
+        from ..io.robot_file import robot_text
+        from ..io.runs import calibration_runs_text, umbmark_measurements_text
+        from ..viz import check_dpi, figure_format as check_format, save_figure
+
+        check_format("", figure_format)
+        check_dpi(dpi)
+        target = check_output(folder, inputs=inputs, folder=True)
+        try:
+            figures = self.figures()
+        except ImportError:
+            figures = {}
+        texts = {"true_robot.yaml": robot_text(self.true_robot, "true_robot.yaml"),
+                 "measurements_before.csv": umbmark_measurements_text(self.before[0], self._measurement_note("before"))}
+        if self.after is not None:
+            texts["measurements_after.csv"] = umbmark_measurements_text(self.after[0],
+                                                                        self._measurement_note("after"))
+            texts["calibrated_robot.yaml"] = robot_text(self.calibration.robot, "calibrated_robot.yaml")
+            texts["calibration_runs.csv"] = calibration_runs_text(self.calibration_runs, self._runs_note())
+        names = [f"{stem}.{figure_format}" for stem in figures]
+        files = ["report.md", "result.json", *texts, *names]
+        doc = self.as_dict(files)
+        texts["result.json"] = dumps(doc)
+        texts["report.md"] = umbmark_markdown(self, doc, names)
+        try:
+            with report_folder(target) as stage:
+                for name, text in texts.items():
+                    (stage / name).write_text(text, encoding="utf-8")
+                for name, (stem, figure) in zip(names, figures.items(), strict=True):
+                    save_figure(figure, stage / f"{stem}.{figure_format}", dpi=dpi)
+        except OSError as exc:
+            raise InputError(f"{folder}: cannot write the report: {exc.strerror or exc}") from None
+        return doc
+
+    def command_line(self) -> str:
+        """The command line that reproduces this study."""
+        s = self.settings
+        robot = s.get("robot") or self.robot.name
+        return (f"omnikin umbmark {robot} --mode {self.mode} --runs {self.runs} --side {self.side:g} "
+                f"--rate {self.rate:g} --seed {s.get('seed')} --noise {s.get('noise')}"
+                + (f" --true-robot {s['true_robot']}" if s.get("true_robot") else f" --errors {s.get('errors')}")
+                + (f" --trials {self.trials}" if self.trials > 1 else "")
+                + ("" if s.get("calibrate", True) else " --no-calibrate"))
+
+    def _measurement_note(self, stage: str) -> str:
+        robot = self.settings.get("robot") or self.robot.name
+        return (f"UMBmark {stage} calibration, simulated by: {self.command_line()}\n"
+                f"first procedure, {self.runs} runs per direction; read it with: omnikin umbmark analyze FILE "
+                f"--robot {robot} --side {self.side:g}")
+
+    def _runs_note(self) -> str:
+        robot = self.settings.get("robot") or self.robot.name
+        return (f"calibration runs simulated by: {self.command_line()}\n"
+                f"each recommended run driven {RECOMMENDED_REPEATS} times; read it with: omnikin calibrate {robot} "
+                f"FILE -o calibrated.yaml")
+
+
+def _stats(results) -> dict:
+    v = np.array([r.e_max_syst for r in results])
+    return {"procedures": len(v), "e_max_syst_mean": float(v.mean()), "e_max_syst_median": float(np.median(v)),
+            "e_max_syst_p95": float(np.percentile(v, 95)), "e_max_syst_max": float(v.max())}
+
+
+RESULT_UNITS = {**UNITS, "rate": "Hz", "confidence_level": "1", "reduction_factor": "1",
+                "reduction_factor_interval": "1", "e_max_syst_before": "m", "e_max_syst_after": "m",
+                "e_max_syst_mean": "m", "e_max_syst_median": "m", "e_max_syst_p95": "m", "e_max_syst_max": "m",
+                "borenstein_iterations": "m (E_max,syst after each iteration)",
+                "residual_rms_before": "measurement sigmas", "residual_rms_after": "measurement sigmas",
+                "value": "the entry's 'unit'", "sigma": "the entry's 'unit'", "errors": ERROR_UNITS,
+                "injected_errors": ERROR_UNITS, "robot": "m, rad (robot file schema 1, docs/conventions.md)",
+                "true_robot": "m, rad", "calibrated_robot": "m, rad"}
+"""Unit of each key of ``result.json``, by the key's own name (the same name has the same unit
+wherever it appears; ``errors``: per error name)."""
+
+
+METHODS = {
+    "e_max_syst": "max(r_cg_cw, r_cg_ccw), r_cg the distance of the centre of gravity of the runs of one direction "
+                  "from the origin (Borenstein and Feng 1996)",
+    "e_max_syst_interval": "conservative confidence interval: per direction the Hotelling T^2 confidence region of "
+                           "the expected return position at level sqrt(confidence_level), projected onto the "
+                           "distance from the origin; needs 3 runs per direction (null otherwise)",
+    "reduction_factor_interval": "low_before / high_after to high_before / low_after of the E_max,syst intervals at "
+                                 "level sqrt(confidence_level); null upper end: after is consistent with zero",
+    "noise_floor": f"E_max,syst of the robot as built commanded by its own exact model (a perfect calibration) under "
+                   f"the same random errors, {FLOOR_PROCEDURES} procedures; at_noise_floor: E_max,syst at or below "
+                   f"their 95th percentile",
+    "systematic": "E_max,syst without random errors (one run per direction)",
+    "calibration": "least squares over the recommended calibration runs, each driven "
+                   f"{RECOMMENDED_REPEATS} times (omnikin calibrate ROBOT --plan); fits: residual RMS at most "
+                   f"{FIT_LIMIT:g} measurement sigmas",
+}
+"""How each reported quantity is defined (copied into ``result.json``)."""
+
+
+def run_umbmark(robot=DEFAULT_ROBOT, *, true_robot=None, errors="typical", mode: str = "rotate", runs: int = 5,
+                side: float = 4.0, noise="typical", rate: float = 100.0, seed: int = 1, trials: int = 1,
+                calibrate: bool = True, progress=None) -> UMBmarkReport:
+    """UMBmark of ``robot`` as built, calibration, UMBmark again (``omnikin umbmark``).
+
+    ``robot``: preset name, robot file or Robot; ``true_robot`` (file or Robot) replaces the
+    seeded draw of the ``errors`` profile; ``mode``: ``rotate`` or ``translate``; ``runs`` per
+    direction; ``side`` [m]; ``noise``: random errors; ``rate`` [Hz]; ``trials``: repeated
+    UMBmark procedures (Monte Carlo over the noise; the robot as built and its calibration
+    stay the same); ``calibrate``: run the calibration step (:mod:`omnikin.evaluation.procedure`).
+    ``progress`` is called with the name of each step. Studies that would simulate or hold
+    too much are refused up front (:func:`~omnikin.evaluation.procedure.check_cost`).
+    """
+    nominal = robot_of(robot)
+    for name, value in (("runs", runs), ("trials", trials)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise InputError(f"{name} (--{name}) must be a whole number >= 1, got {value!r}")
+    if not (isinstance(side, (int, float)) and math.isfinite(side) and side > 0):
+        raise InputError(f"side (--side) must be a positive length [m], got {side!r}")
+    if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
+        raise InputError(f"rate (--rate) must be a positive number of samples per second, got {rate!r}")
+    seeds = streams(seed)
+    noise_model = noise_of(noise)
+    check_cost(estimate_cost(nominal, side=side, mode=mode, runs=runs, rate=rate, trials=trials,
+                             calibrate=calibrate), trials, runs)
+    true, injected = as_built(nominal, true_robot, errors, seeds["robot"])
+    study = umbmark_study(nominal, true, injected=injected, side=float(side), mode=mode, runs=int(runs),
+                          rate=float(rate), trials=int(trials), noise=noise_model, seed=seed, calibrate=calibrate,
+                          progress=progress)
+    settings = {"robot": setting_name(robot), "true_robot": setting_name(true_robot),
+                "errors": None if true_robot is not None else setting_name(errors), "noise": setting_name(noise), "mode": mode,
+                "runs": int(runs), "side": float(side), "rate": float(rate), "seed": seed, "trials": int(trials),
+                "calibrate": bool(calibrate)}
+    return UMBmarkReport(**{f.name: getattr(study, f.name) for f in fields(study)}, settings=settings)
+
+
+# --- analyze ---------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class UMBmarkAnalysis(UMBmarkResult):
+    """UMBmark of measured runs (:func:`analyze_umbmark`) that plots itself."""
+
+    def plot(self, kind: str = "return_errors"):
+        """``return_errors`` (return positions and centres of gravity) or ``euclidean_errors``."""
+        require_viz()
+        from ..viz import umbmark as fig
+
+        makers = {"return_errors": fig.return_errors_figure, "euclidean_errors": fig.euclidean_errors_figure}
+        if kind not in makers:
+            raise InputError(f"unknown figure {kind!r}; one of {sorted(makers)}")
+        return makers[kind]({"measured": self}, "UMBmark of measured runs")
+
+    def as_dict(self, level: float = LEVEL) -> dict:
+        """The ``omnikin umbmark analyze --json`` document (lengths in metres; ``units``)."""
+        return {**UMBmarkResult.as_dict(self, level), "confidence_level": level, "units": UNITS}
+
+
+def analyze_umbmark(measurements, *, robot=None, side: float = 4.0) -> UMBmarkAnalysis:
+    """UMBmark of a real robot's runs (``omnikin umbmark analyze``).
+
+    ``measurements``: a measurements file (columns ``direction, x_abs, y_abs, x_calc, y_calc``
+    [m], optional headings; :mod:`omnikin.io.runs`) or ``{"cw": eps, "ccw": eps}`` return
+    errors ``(n, 2)`` or ``(n, 3)`` [m, m, rad]; ``robot``: a differential drive also gets
+    Borenstein's correction; ``side`` [m] of the square.
+    """
+    if isinstance(measurements, dict):
+        eps = measurements
+    else:
+        from ..io.runs import read_umbmark_measurements
+
+        eps = read_umbmark_measurements(measurements)
+    res = analyze(eps["cw"], eps["ccw"], side, robot_of(robot) if robot is not None else None)
+    return UMBmarkAnalysis(**{f.name: getattr(res, f.name) for f in fields(res)})
+
+

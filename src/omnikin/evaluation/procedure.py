@@ -1,0 +1,246 @@
+"""The UMBmark study of ``omnikin umbmark``: UMBmark, calibration, UMBmark again.
+
+One procedure for every robot (:func:`umbmark_study`):
+
+1. the robot as built: a seeded draw of an error profile applied to the nominal robot
+   (or a given true robot);
+2. UMBmark before calibration: ``trials`` procedures of ``runs`` runs per direction, the
+   robot commanded by its nominal model (Borenstein and Feng, "Measurement and correction
+   of systematic odometry errors in mobile robots", 1996);
+3. calibration (unless switched off): every run of
+   :func:`~omnikin.evaluation.calibration.recommended_runs` driven
+   :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times by the nominal model, its
+   end pose "measured" with the noise model's measurement error, and the least-squares
+   calibration (:func:`~omnikin.evaluation.calibration.calibrate`) weighted exactly as
+   ``omnikin calibrate`` weights the same runs read from a file; for a differential drive
+   in ``rotate`` mode Borenstein's iterated correction too, for comparison;
+4. UMBmark after calibration, the robot commanded by its calibrated model;
+5. the noise floor (:class:`~omnikin.evaluation.umbmark.NoiseFloor`): the same UMBmark of
+   the robot as built commanded by its own exact model, :data:`FLOOR_PROCEDURES` times;
+6. the systematic part alone: UMBmark without random errors, before and after.
+
+Every step draws its random numbers from its own stream of ``numpy.random.SeedSequence(seed)``
+(:data:`STREAMS`), so the robot as built, the calibration runs and the first procedure do
+not depend on ``trials``; the robot stream is the first child, as for ``omnikin simulate``,
+so the same seed builds the same robot there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..model import Robot
+from ..plans import CalibrationRun, umbmark_square
+from ..simulation.error_models import NOISE, NoiseModel, SystematicErrors
+from ..simulation.motion import sample_plan
+from ..simulation.simulate import simulate
+from .calibration import RECOMMENDED_REPEATS, CalibrationResult, borenstein_calibrate, recommended_runs
+from .calibration import calibrate as least_squares_calibration
+from .umbmark import LEVEL, NoiseFloor, UMBmarkResult, differential_pair, noise_floor, reduction_interval, run_umbmark
+
+STREAMS = ("robot", "before", "trajectories", "calibration", "borenstein", "after", "floor")
+"""Random streams, in the order of the children of ``SeedSequence(seed)``."""
+
+FLOOR_PROCEDURES = 400
+"""UMBmark procedures of the perfectly calibrated robot that make the noise floor."""
+
+BORENSTEIN_ITERATIONS = 3
+"""Iterations of Borenstein's correction in the comparison (differential drives)."""
+
+MAX_SAMPLES = 1e10
+"""Most robot-samples one study may simulate (about 20 minutes at 10 million per second,
+docs/performance.md); more is refused before anything runs."""
+
+MAX_BYTES = 2 * 1024 ** 3
+"""Most memory [bytes] one study may plan to hold; more is refused before anything runs."""
+
+SAMPLES_PER_SECOND = 1e7
+"""Simulation speed used to express a sample count as a time (docs/performance.md)."""
+
+BYTES_PER_PROCEDURE = 4096
+"""Memory of one kept UMBmark procedure (its result objects and return errors), generous."""
+
+
+def streams(seed: int) -> dict:
+    """The random stream of each step (:data:`STREAMS`) for ``seed``."""
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise InputError(f"seed (--seed) must be a whole number >= 0, got {seed!r}")
+    return dict(zip(STREAMS, np.random.SeedSequence(int(seed)).spawn(len(STREAMS)), strict=True))
+
+
+def draw_as_built(robot: Robot, profile, seed) -> tuple[Robot, SystematicErrors]:
+    """The robot as built: a draw of the error ``profile``
+    (:class:`~omnikin.simulation.error_models.ErrorProfile`) from ``seed`` (a SeedSequence or
+    int) applied to ``robot``. Returns the true robot and the errors drawn."""
+    drawn = profile.sample(robot, np.random.default_rng(seed))
+    return drawn.apply(robot), drawn
+
+
+@dataclass(frozen=True)
+class Cost:
+    """What a study will take: ``samples`` robot-samples simulated and ``bytes`` of memory."""
+
+    samples: float
+    bytes: float
+
+    @property
+    def seconds(self) -> float:
+        return self.samples / SAMPLES_PER_SECOND
+
+
+def estimate_cost(robot: Robot, *, side: float, mode: str, runs: int, rate: float, trials: int,
+                  calibrate: bool) -> Cost:
+    """Samples and memory of :func:`umbmark_study` with these settings, from the length of the
+    sampled square (:func:`~omnikin.simulation.motion.sample_plan`, which itself refuses a
+    square of too many samples) and of the calibration runs."""
+    square = len(sample_plan(umbmark_square("cw", side, mode), robot, rate).t)
+    procedures = trials * (2 if calibrate else 1) + FLOOR_PROCEDURES
+    samples = 2.0 * runs * square * procedures + 2 * 2 * 2 * square          # + systematic part, trajectories
+    if calibrate:
+        samples += sum(len(sample_plan(plan, robot, rate).t) for _, plan in recommended_runs(robot, side)) \
+            * RECOMMENDED_REPEATS
+        if differential_pair(robot) is not None and mode == "rotate":
+            samples += 2.0 * runs * square * BORENSTEIN_ITERATIONS
+    kept = trials * (2 if calibrate else 1) + FLOOR_PROCEDURES
+    memory = kept * (BYTES_PER_PROCEDURE + 2 * runs * 3 * 8 * 4) + 4 * square * 3 * 8 * 8 + 64 * 1024 ** 2
+    return Cost(samples, memory)
+
+
+def check_cost(cost: Cost, trials: int, runs: int) -> None:
+    """Refuse a study above :data:`MAX_SAMPLES` or :data:`MAX_BYTES` with one line naming the limit."""
+    if cost.samples > MAX_SAMPLES:
+        raise InputError(f"{trials} trial(s) of {runs} run(s) per direction would simulate about "
+                         f"{cost.samples:.2g} robot-samples (about {cost.seconds / 60:.0f} min); the limit is "
+                         f"{MAX_SAMPLES:.0e}: lower --trials, --runs or --rate")
+    if cost.bytes > MAX_BYTES:
+        raise InputError(f"{trials} trial(s) of {runs} run(s) per direction would hold about "
+                         f"{cost.bytes / 1024 ** 3:.2g} GiB; the limit is {MAX_BYTES / 1024 ** 3:.0f} GiB: "
+                         f"lower --trials or --runs")
+
+
+@dataclass(frozen=True)
+class UMBmarkStudy:
+    """Everything :func:`umbmark_study` found (module docstring); lengths in metres.
+
+    ``before``/``after``: one :class:`~omnikin.evaluation.umbmark.UMBmarkResult` per trial
+    (``after`` None without calibration); ``calibration_runs``: the simulated runs with
+    their measured end poses (``label`` = the path in the runs-file grammar);
+    ``borenstein``: E_max,syst [m] after each iteration of Borenstein's correction (or
+    None); ``systematic``: E_max,syst [m] without random errors, ``{"before", "after"}``;
+    ``trajectories``: ``{"before"|"after": {"cw"|"ccw": SimulatedRun}}``, the first run of
+    each direction with its ground truth.
+    """
+
+    robot: Robot
+    true_robot: Robot
+    injected: SystematicErrors | None
+    side: float
+    mode: str
+    runs: int
+    rate: float
+    trials: int
+    noise: NoiseModel
+    before: list
+    after: list | None
+    calibration: CalibrationResult | None
+    calibration_runs: list
+    borenstein: list | None
+    systematic: dict
+    floor: NoiseFloor
+    trajectories: dict
+    level: float = LEVEL
+
+    @property
+    def reduction_factor(self) -> float | None:
+        """E_max,syst before over after (first procedure), or None without calibration."""
+        if self.after is None:
+            return None
+        b, a = self.before[0].e_max_syst, self.after[0].e_max_syst
+        return b / a if a > 0 else math.inf
+
+    @property
+    def reduction_interval(self) -> tuple[float, float] | None:
+        """Confidence interval of :attr:`reduction_factor`
+        (:func:`~omnikin.evaluation.umbmark.reduction_interval`)."""
+        if self.after is None:
+            return None
+        return reduction_interval(self.before[0], self.after[0], self.level)
+
+    def first(self) -> dict:
+        """The first procedure of each stage: ``{"before": UMBmarkResult, "after calibration": ...}``."""
+        out = {"before": self.before[0]}
+        if self.after is not None:
+            out["after calibration"] = self.after[0]
+        return out
+
+
+def umbmark_study(robot: Robot, true_robot: Robot, *, injected: SystematicErrors | None = None, side: float,
+                  mode: str, runs: int, rate: float, trials: int, noise: NoiseModel, seed: int, calibrate: bool,
+                  progress=None) -> UMBmarkStudy:
+    """Run the study of the module docstring. ``true_robot``: the robot as built
+    (:func:`draw_as_built`); ``progress``: called with the name of each step as it starts."""
+    rng = streams(seed)
+    step = progress or (lambda name: None)
+    opts = dict(side=side, mode=mode, runs=runs, noise=noise, rate=rate)
+    step("UMBmark before calibration")
+    before = run_umbmark(true_robot, robot, trials=trials, rng=rng["before"], **opts)
+    step("trajectories for the figures")
+    traj_rng = np.random.default_rng(rng["trajectories"])
+    trajectories = {"before": _trajectories(true_robot, robot, traj_rng, **opts)}
+    after = cal = bor = None
+    cal_runs = []
+    quiet = dict(opts, runs=1, noise=NOISE["none"])
+    systematic = {"before": run_umbmark(true_robot, robot, **quiet)[0].e_max_syst}
+    if calibrate:
+        step("calibration runs")
+        cal_runs = simulate_calibration_runs(true_robot, robot, side=side, noise=noise, rate=rate,
+                                             rng=rng["calibration"])
+        step("least-squares calibration")
+        cal = least_squares_calibration(robot, cal_runs)
+        if differential_pair(robot) is not None and mode == "rotate":
+            step("Borenstein's correction (comparison)")
+            bor = _borenstein(true_robot, robot, before[0], np.random.default_rng(rng["borenstein"]), opts)
+        step("UMBmark after calibration")
+        after = run_umbmark(true_robot, cal.robot, trials=trials, rng=rng["after"], **opts)
+        trajectories["after"] = _trajectories(true_robot, cal.robot, traj_rng, **opts)
+        systematic["after"] = run_umbmark(true_robot, cal.robot, **quiet)[0].e_max_syst
+    step("noise floor")
+    floor = noise_floor(true_robot, procedures=FLOOR_PROCEDURES, rng=rng["floor"], **opts)
+    return UMBmarkStudy(robot, true_robot, injected, side, mode, runs, rate, trials, noise, before, after, cal,
+                        cal_runs, bor, systematic, floor, trajectories)
+
+
+def simulate_calibration_runs(true_robot: Robot, robot: Robot, *, side: float, noise: NoiseModel, rate: float,
+                              rng) -> list[CalibrationRun]:
+    """The recommended calibration runs of ``robot``, each driven
+    :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times by ``true_robot``
+    commanded by ``robot``, with their measured end poses and the default measurement sigma
+    of :class:`~omnikin.plans.CalibrationRun` (as a runs file is read)."""
+    rng = np.random.default_rng(rng)
+    out = []
+    for text, plan in recommended_runs(robot, side):
+        sim = simulate(plan, true_robot, robot, rate=rate, noise=noise, trials=RECOMMENDED_REPEATS, rng=rng,
+                       keep_truth=False)
+        out += [CalibrationRun(plan, tuple(m), text) for m in sim.measured]
+    return out
+
+
+def _trajectories(true_robot: Robot, command: Robot, rng, *, side, mode, runs, noise, rate) -> dict:
+    """The first run of each direction with its ground truth, for the figures."""
+    return {d: simulate(umbmark_square(d, side, mode), true_robot, command, rate=rate, noise=noise, trials=1,
+                        rng=rng) for d in ("cw", "ccw")}
+
+
+def _borenstein(true_robot: Robot, robot: Robot, first: UMBmarkResult, rng, opts) -> list:
+    """Borenstein's iterated correction: E_max,syst [m] after each iteration."""
+    out, model, res = [], robot, first
+    for _ in range(BORENSTEIN_ITERATIONS):
+        model = borenstein_calibrate(model, res)
+        res = run_umbmark(true_robot, model, rng=rng, **opts)[0]
+        out.append(res.e_max_syst)
+    return out
+
