@@ -190,9 +190,9 @@ def test_borenstein_calibrate_iterated(diff):
         res = run_umbmark(true, model, noise=NOISE["none"], runs=1)[0]
     assert res.e_max_syst <= before / 10
     # the corrected model keeps the axle midpoint and the wheel names
-    l, r, track = differential_pair(model)
-    assert (l.name, r.name) == ("left", "right")
-    assert 0.5 * (l.y + r.y) == pytest.approx(0.0, abs=1e-15)
+    left, right, track = differential_pair(model)
+    assert (left.name, right.name) == ("left", "right")
+    assert 0.5 * (left.y + right.y) == pytest.approx(0.0, abs=1e-15)
 
 
 def test_borenstein_calibrate_refuses_other_robots(tomasi):
@@ -339,7 +339,7 @@ def test_identifiability_matches_independent_jacobian(tomasi):
     cal = calibrate(tomasi, calibration_runs(true, tomasi, EXACT, 0, plans=protocol))
     prior = {"radius": 0.05, "lever": 0.01, "drive": math.radians(5.0)}
     cols, h = [], 1e-5
-    for w, b in zip(("w1", "w2", "w3"), np.radians([0.0, 120.0, 240.0])):
+    for w, b in zip(("w1", "w2", "w3"), np.radians([0.0, 120.0, 240.0]), strict=True):
         for par in ("radius", "lever", "drive"):
             ends = []
             for sgn in (1, -1):
@@ -487,3 +487,19 @@ def test_fitted_parameters_carry_their_units(tomasi):
     a = w2.drive + w2.roller
     assert values["w2.lever"] == pytest.approx(math.cos(a) * 0.001, abs=2e-5)
     assert values["w1.radius"] == pytest.approx(0.008, rel=1e-3)
+
+
+def test_budget_estimate_bounds_the_samples_of_a_run_from_above():
+    """run_samples is an upper bound (it refuses in time), yet close (within a sample per second
+    of each segment plus one per segment)."""
+    from omnikin.evaluation.procedure import run_samples
+    from omnikin.plans import parse_plan
+    from omnikin.simulation.motion import sample_plan
+
+    robot = load_robot("tomasi-omni3")
+    for text in ("square cw rotate 4", "square ccw translate 2", "spin 1800", "line 0.01", "arc 2 -180"):
+        plan = parse_plan(text)
+        for rate in (0.5, 20.0, 100.0, 1000.0):
+            actual = len(sample_plan(plan, robot, rate).t)
+            bound = run_samples(plan, robot, rate)
+            assert actual <= bound <= actual + len(plan.segments) * (rate + 1) + 1, (text, rate)

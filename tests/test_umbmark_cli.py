@@ -352,7 +352,6 @@ def test_the_report_folder_is_never_an_input(capsys, tmp_path, monkeypatch):
 
 def test_an_interrupted_run_leaves_the_previous_report_intact(tmp_path):
     """Ctrl-C while the report is being written: the old report stays, nothing half written."""
-    import os
     import signal
     import time
 
@@ -432,7 +431,7 @@ def test_analyze_hand_file(capsys, tmp_path, side):
     for direction in ("cw", "ccw"):
         runs = d[direction]["runs"]
         assert len(runs) == len(eps[direction])
-        for r, (x, y) in zip(runs, eps[direction]):
+        for r, (x, y) in zip(runs, eps[direction], strict=True):
             assert r["epsilon"][:2] == pytest.approx([x, y], abs=1e-15)
             assert r["epsilon"][2] is None               # heading not measured
         assert d[direction]["cg"] == pytest.approx(HAND_CG[direction], abs=1e-15)
@@ -583,3 +582,128 @@ def test_calibrate_bad_runs_files(capsys, tmp_path, content, contains):
     f.write_text(content, encoding="utf-8")
     assert_usage_error(capsys, "calibrate", "tomasi-omni3", f, "-o", tmp_path / "o.yaml", contains=contains)
     assert not (tmp_path / "o.yaml").exists()
+
+
+# =====================================================================================================
+# omnikin calibrate: runs it cannot drive, outputs, --plan
+# =====================================================================================================
+def test_calibrate_refuses_a_runs_file_with_a_path_the_robot_cannot_drive(capsys, tmp_path):
+    f = tmp_path / "runs.csv"
+    f.write_text("path,x_abs,y_abs\nline 4,4.0,0\n# sideways next\nline 1 90,0,1\n", encoding="utf-8")
+    assert_usage_error(capsys, "calibrate", "diff-drive", f, "-o", tmp_path / "o.yaml",
+                       contains=[f"{f}: line 4", "'line 1 90'", "diff-drive", "left"])
+    assert not (tmp_path / "o.yaml").exists()
+
+
+def write_runs(path, robot, true, plans):
+    from omnikin.simulation.error_models import NoiseModel
+    from omnikin.simulation.simulate import simulate
+
+    with open(path, "w", newline="", encoding="utf-8") as handle:
+        w = csv.writer(handle)
+        w.writerow(["path", "x_abs", "y_abs", "theta_abs_deg"])
+        for text in plans:
+            from omnikin.plans import parse_plan
+
+            m = simulate(parse_plan(text), true, robot, noise=NoiseModel(quantise=False), rate=50.0).measured[0]
+            w.writerow([text, f"{m[0]:.7f}", f"{m[1]:.7f}", f"{math.degrees(m[2]):.6f}"])
+
+
+def test_calibrate_output_is_never_an_input_and_needs_force_to_replace(capsys, tmp_path):
+    runs = tmp_path / "runs.csv"
+    robot = load_robot("diff-drive")
+    write_runs(runs, robot, robot, ["line 4 0", "spin 180", "square cw rotate 4"])
+    original = runs.read_bytes()
+    assert_usage_error(capsys, "calibrate", "diff-drive", runs, "-o", runs, contains=["runs.csv", "input"])
+    assert_usage_error(capsys, "calibrate", "diff-drive", runs, "-o", runs, "--force", contains=["input"])
+    assert runs.read_bytes() == original
+    out = tmp_path / "cal.yaml"
+    out.write_text("mine", encoding="utf-8")
+    assert_usage_error(capsys, "calibrate", "diff-drive", runs, "-o", out, contains=["cal.yaml", "--force"])
+    assert out.read_text(encoding="utf-8") == "mine"
+    rc, text, err = run(capsys, "calibrate", "diff-drive", runs, "-o", out, "--force")
+    assert rc == 0, err
+    assert load_robot(out).wheel("left").radius == pytest.approx(0.0825, rel=1e-6)
+    # the robot file given as ROBOT is an input too
+    from omnikin.io.robot_file import save_robot
+
+    save_robot(robot, tmp_path / "dd.yaml")
+    assert_usage_error(capsys, "calibrate", tmp_path / "dd.yaml", runs, "-o", tmp_path / "dd.yaml", "--force",
+                       contains=["input"])
+
+
+def test_calibrate_plan_prints_the_runs_to_drive_as_a_runs_file(capsys, tmp_path):
+    from omnikin.io.runs import read_calibration_runs
+
+    rc, text, err = run(capsys, "calibrate", "diff-drive", "--plan")
+    assert rc == 0, err
+    lines = text.splitlines()
+    header = [line for line in lines if not line.startswith("#")][0]
+    assert header == "path,x_abs,y_abs,theta_abs_deg"
+    rows = [line.split(",")[0] for line in lines if not line.startswith("#")][1:]
+    # every recommended path five times, and nothing a differential drive cannot drive
+    assert sorted(set(rows)) == sorted(["square cw rotate 4", "square ccw rotate 4", "line 4 0", "spin 180",
+                                        "spin -180", "spin 1800", "spin -1800"])
+    assert all(rows.count(p) == 5 for p in set(rows))
+    # filled in with measurements, the template is a runs file omnikin calibrate reads
+    robot = load_robot("diff-drive")
+    from omnikin.simulation.error_models import SystematicErrors, WheelErrors
+
+    true = SystematicErrors({"left": WheelErrors(radius=0.004), "right": WheelErrors(radius=-0.002)}).apply(robot)
+    filled = tmp_path / "filled.csv"
+    write_runs(filled, robot, true, rows)
+    assert len(read_calibration_runs(filled)) == len(rows)
+    d = run_json(capsys, "calibrate", "diff-drive", filled, "--json")
+    values = {p["name"]: p["value"] for p in d["parameters"]}
+    assert values["left.radius"] == pytest.approx(0.004, rel=1e-3)
+    assert values["right.radius"] == pytest.approx(-0.002, rel=1e-3)
+    # --plan -o writes the template by the output policy; --plan takes no RUNS
+    out = tmp_path / "plan.csv"
+    rc, _, err = run(capsys, "calibrate", "ackermann", "--plan", "-o", out)
+    assert rc == 0, err
+    paths = {r[0] for r in data_rows(out)[1:]}
+    assert paths == {"line 4 0", "arc 2 180", "arc 2 -180"}           # a car cannot turn in place
+    assert_usage_error(capsys, "calibrate", "ackermann", "--plan", "-o", out, contains=["--force"])
+    assert_usage_error(capsys, "calibrate", "ackermann", filled, "--plan", contains=["--plan"])
+    assert_usage_error(capsys, "calibrate", "ackermann", contains=["RUNS"])
+
+
+# =====================================================================================================
+# the sample data in examples/
+# =====================================================================================================
+EXAMPLES = SRC.parent / "examples"
+
+
+def data_rows(path):
+    with open(path, newline="", encoding="utf-8") as handle:
+        return [r for r in csv.reader(handle) if r and not r[0].startswith("#")]
+
+
+def test_examples_run_as_written_on_a_fresh_clone(tmp_path):
+    import shutil
+
+    shutil.copytree(EXAMPLES, tmp_path / "examples")
+    for argv in (["umbmark", "analyze", "examples/umbmark_measurements.csv", "--robot", "tomasi-omni3"],
+                 ["calibrate", "tomasi-omni3", "examples/calibration_runs.csv", "-o", "calibrated.yaml"]):
+        proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", *argv], cwd=tmp_path, capture_output=True,
+                              text=True, timeout=120, env=subprocess_env())
+        assert proc.returncode == 0, proc.stderr
+        assert proc.stderr == ""
+    assert load_robot(tmp_path / "calibrated.yaml").wheel_names == load_robot("tomasi-omni3").wheel_names
+    for name in ("umbmark_measurements.csv", "calibration_runs.csv"):
+        first = (EXAMPLES / name).read_text(encoding="utf-8").splitlines()[0]
+        assert first.startswith("# ") and "generated by omnikin" in first
+
+
+def test_examples_are_what_omnikin_umbmark_writes(main_job):
+    """The sample data is the main job's output (as its '#' lines say): same rows, to the printed digits."""
+    cwd, _ = main_job
+    report = cwd / "umbmark-report"
+    for example, written in (("umbmark_measurements.csv", "measurements_before.csv"),
+                             ("calibration_runs.csv", "calibration_runs.csv")):
+        ours, theirs = data_rows(EXAMPLES / example), data_rows(report / written)
+        assert ours[0] == theirs[0] and len(ours) == len(theirs)
+        for a, b in zip(ours[1:], theirs[1:], strict=True):
+            assert a[0] == b[0]
+            assert [float(v or "nan") for v in a[1:]] == pytest.approx([float(v or "nan") for v in b[1:]],
+                                                                      abs=2e-5, nan_ok=True)

@@ -14,8 +14,15 @@ use, so ``import omnikin`` loads neither SciPy nor matplotlib):
 - their results plot themselves: ``result.plot()`` returns a matplotlib ``Figure`` (extra ``viz``).
 """
 
-from .errors import (InfeasibleTwistError, InputError, LinkError, OdometryInputError, OmnikinError,
-                     RobotFileError, SingularLayoutError)
+from .errors import (
+    InfeasibleTwistError,
+    InputError,
+    LinkError,
+    OdometryInputError,
+    OmnikinError,
+    RobotFileError,
+    SingularLayoutError,
+)
 from .model import FKResult, IKResult, Robot
 from .odometry import OdometryResult, batch_odometry, batch_odometry_from_angles
 from .presets import PRESET_NAMES

@@ -24,7 +24,8 @@ class Calibration(CalibrationResult):
         the nominal model (``"nominal"``) and by the calibrated one (``"calibrated"``)."""
         out = {}
         for label, model in (("nominal", self.nominal), ("calibrated", self.robot)):
-            ends = {plan: predicted_end(plan, model, self.nominal)[:2] for plan in dict.fromkeys(r.plan for r in self.runs)}
+            plans = dict.fromkeys(r.plan for r in self.runs)
+            ends = {plan: predicted_end(plan, model, self.nominal)[:2] for plan in plans}
             out[label] = np.array([np.asarray(r.measured[:2]) - ends[r.plan] for r in self.runs])
         return out
 

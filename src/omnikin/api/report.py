@@ -61,7 +61,8 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
                          f"{_interval_mm(d['e_max_syst_interval'])} | {'yes' if d['at_noise_floor'] else 'no'} |")
     floor = doc["noise_floor"]
     lines += ["", f"Noise floor: a perfectly calibrated robot shows E_max,syst of {_mm(floor['e_max_syst_median'])} "
-                  f"mm (median) and up to {_mm(floor['e_max_syst_p95'])} mm (95th percentile) over {floor['procedures']} procedures "
+                  f"mm (median) and up to {_mm(floor['e_max_syst_p95'])} mm (95th percentile) over "
+                  f"{floor['procedures']} procedures "
                   "with these random errors; a value at or below the 95th percentile cannot be told from a perfect "
                   "calibration."]
     for key, label in (("before", "Before calibration"), ("after", "After calibration")):
@@ -114,7 +115,8 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
 def _calibration_lines(report, doc) -> list:
     cal = doc["calibration"]
     lines = ["", "## Calibration", "",
-             f"Residual RMS {cal['residual_rms_before']:.3g} -> {cal['residual_rms_after']:.3g} measurement sigmas over "
+             f"Residual RMS {cal['residual_rms_before']:.3g} -> {cal['residual_rms_after']:.3g} measurement sigmas "
+             "over "
              f"{cal['runs']} runs."]
     if not cal["fits"]:
         lines += ["", f"**The calibration does not fit its runs** (residual RMS {cal['residual_rms_after']:.3g} "

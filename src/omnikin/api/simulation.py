@@ -49,7 +49,8 @@ def simulate(robot, path=DEFAULT_PATH, *, true_robot=None, errors="typical", noi
     (``omnikin simulate``, without the bag).
 
     ``path``: a :class:`~omnikin.plans.Plan` (plans add: ``line(4) + spin(math.pi)``) or a path
-    in the runs-file grammar (:func:`omnikin.plans.parse_plan`); ``true_robot`` (robot file or Robot) replaces the seeded draw of the
+    in the runs-file grammar (:func:`omnikin.plans.parse_plan`); ``true_robot`` (robot file or
+    Robot) replaces the seeded draw of the
     ``errors`` profile; ``noise``: random errors (profile name or
     :class:`~omnikin.simulation.error_models.NoiseModel`); ``rate`` [Hz]. The seed's first
     stream draws the robot as built (the same robot as ``omnikin umbmark --seed``), its second

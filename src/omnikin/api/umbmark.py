@@ -112,10 +112,11 @@ class UMBmarkReport(UMBmarkStudy):
         folder is refused; nothing changes if writing fails: :mod:`omnikin.io.output`).
         Returns the ``result.json`` document written."""
         from ..io.output import check_output, report_folder
-        from .report import umbmark_markdown
         from ..io.robot_file import robot_text
         from ..io.runs import calibration_runs_text, umbmark_measurements_text
-        from ..viz import check_dpi, figure_format as check_format, save_figure
+        from ..viz import check_dpi, save_figure
+        from ..viz import figure_format as check_format
+        from .report import umbmark_markdown
 
         check_format("", figure_format)
         check_dpi(dpi)
@@ -140,8 +141,8 @@ class UMBmarkReport(UMBmarkStudy):
             with report_folder(target) as stage:
                 for name, text in texts.items():
                     (stage / name).write_text(text, encoding="utf-8")
-                for name, (stem, figure) in zip(names, figures.items(), strict=True):
-                    save_figure(figure, stage / f"{stem}.{figure_format}", dpi=dpi)
+                for name, figure in zip(names, figures.values(), strict=True):
+                    save_figure(figure, stage / name, dpi=dpi)
         except OSError as exc:
             raise InputError(f"{folder}: cannot write the report: {exc.strerror or exc}") from None
         return doc
@@ -236,7 +237,8 @@ def run_umbmark(robot=DEFAULT_ROBOT, *, true_robot=None, errors="typical", mode:
                           rate=float(rate), trials=int(trials), noise=noise_model, seed=seed, calibrate=calibrate,
                           progress=progress)
     settings = {"robot": setting_name(robot), "true_robot": setting_name(true_robot),
-                "errors": None if true_robot is not None else setting_name(errors), "noise": setting_name(noise), "mode": mode,
+                "errors": None if true_robot is not None else setting_name(errors), "noise": setting_name(noise),
+                "mode": mode,
                 "runs": int(runs), "side": float(side), "rate": float(rate), "seed": seed, "trials": int(trials),
                 "calibrate": bool(calibrate)}
     return UMBmarkReport(**{f.name: getattr(study, f.name) for f in fields(study)}, settings=settings)

@@ -20,8 +20,9 @@ from ..api.calibration import calibration_plan
 from ..api.common import dumps
 from ..api.umbmark import DEFAULT_ROBOT, UMBmarkReport, analyze_umbmark, run_umbmark
 from ..errors import InputError
+from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
 from ..simulation.error_models import NOISE, PROFILES
-from ..viz import FIGURE_FORMATS, MAX_DPI
+from ..viz import FIGURE_FORMATS, MAX_DPI, check_dpi
 from .common import console
 
 DEFAULT_OUT = "umbmark-report"
@@ -72,7 +73,8 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("--mode", choices=("rotate", "translate"), default=d["mode"],
                     help="square driven by turning in place at corners (rotate) or by translating with the "
                          f"heading held (translate, holonomic robots); default {d['mode']}")
-    sp.add_argument("--runs", type=int, default=d["runs"], metavar="N", help=f"runs per direction (default {d['runs']})")
+    sp.add_argument("--runs", type=int, default=d["runs"], metavar="N",
+                    help=f"runs per direction (default {d['runs']})")
     sp.add_argument("--side", type=float, default=d["side"], metavar="M",
                     help=f"side of the square [m] (default {d['side']:g})")
     sp.add_argument("--noise", default=d["noise"], metavar="PROFILE",
@@ -154,6 +156,10 @@ def _mm(x) -> str:
     return f"{x * 1000:.2f}" if math.isfinite(x) else "-"
 
 
+def _factor(x) -> str:
+    return "unbounded" if x is None else f"{x:.3g}"
+
+
 def _input_files(*specs) -> list:
     """The given robot/runs specifications that are files (preset names are not inputs to protect)."""
     return [s for s in specs if s and Path(s).is_file()]
@@ -188,7 +194,8 @@ def cmd_umbmark(args) -> int:
     from ..io.output import check_output
 
     inputs = _input_files(args.robot, args.true_robot)
-    check_output(args.out, inputs=inputs, folder=True)        # refuse before hours of simulation
+    check_dpi(args.dpi)                                        # refuse before the simulation, not after
+    check_output(args.out, inputs=inputs, folder=True)
     with _Status(args.json) as status:
         report = run_umbmark(args.robot, true_robot=args.true_robot, errors=args.errors, mode=args.mode,
                              runs=args.runs, side=args.side, noise=args.noise, rate=args.rate, seed=args.seed,
@@ -233,10 +240,9 @@ def _print_summary(report: UMBmarkReport, doc: dict, out) -> None:
                   f"E_b {bor.E_b:.5f}, c_L {bor.c_L:.5f}, c_R {bor.c_R:.5f}, b_new {bor.b_new:.5f} m")
     if "after" in doc:
         r, ri = doc["reduction_factor"], doc["reduction_factor_interval"]
-        fmt = (lambda v: "unbounded" if v is None else f"{v:.3g}")
         sysm = doc["systematic"]
-        con.print(f"calibration: E_max,syst reduced {fmt(r)}-fold"
-                  + (f" (95 % interval {fmt(ri[0])} to {fmt(ri[1])})" if ri else "")
+        con.print(f"calibration: E_max,syst reduced {_factor(r)}-fold"
+                  + (f" (95 % interval {_factor(ri[0])} to {_factor(ri[1])})" if ri else "")
                   + f"; systematic part alone (no random errors) {_mm(sysm['e_max_syst_before'])} mm -> "
                     f"{_mm(sysm['e_max_syst_after'])} mm")
         cal = doc["calibration"]
@@ -309,8 +315,6 @@ def cmd_calibrate(args) -> int:
     if args.output:
         cal.write_robot(args.output, force=args.force, inputs=inputs)
     if args.json:
-        from ..evaluation.calibration import ERROR_UNITS
-
         print(dumps({**cal.as_dict(), "units": {"errors": ERROR_UNITS, "residual_rms": "measurement sigmas",
                                                 "parameters": "each entry's 'unit'"},
                      "output": args.output}), end="")
@@ -326,8 +330,9 @@ def cmd_calibrate(args) -> int:
     con.print(t)
     con.print(f"residual RMS {cal.residual_before:.3g} -> {cal.residual_after:.3g} measurement sigmas")
     if not cal.fits:
-        con.print("warning: the calibrated model does not fit the runs (residual RMS above "
-                  f"{cal.residual_after:.3g} measurement sigmas): check the robot file and the runs")
+        con.print(f"warning: the calibrated model does not fit the runs (residual RMS {cal.residual_after:.3g} "
+                  f"measurement sigmas, above {FIT_LIMIT:g}): check the robot file and the runs; do not use the "
+                  "calibrated robot")
     for combo in cal.identifiability.blind:
         con.print("not observable by these runs: " + " + ".join(f"{c['weight']:+.2f} {c['parameter']}" for c in combo))
     if args.output and not to_stdout:

@@ -94,20 +94,32 @@ class Cost:
 
 def estimate_cost(robot: Robot, *, side: float, mode: str, runs: int, rate: float, trials: int,
                   calibrate: bool) -> Cost:
-    """Samples and memory of :func:`umbmark_study` with these settings, from the length of the
-    sampled square (:func:`~omnikin.simulation.motion.sample_plan`, which itself refuses a
-    square of too many samples) and of the calibration runs."""
-    square = len(sample_plan(umbmark_square("cw", side, mode), robot, rate).t)
+    """Samples and memory of :func:`umbmark_study` with these settings, from the lengths of
+    the sampled square and calibration runs (:func:`run_samples`)."""
+    square = run_samples(umbmark_square("cw", side, mode), robot, rate)
     procedures = trials * (2 if calibrate else 1) + FLOOR_PROCEDURES
     samples = 2.0 * runs * square * procedures + 2 * 2 * 2 * square          # + systematic part, trajectories
     if calibrate:
-        samples += sum(len(sample_plan(plan, robot, rate).t) for _, plan in recommended_runs(robot, side)) \
+        samples += sum(run_samples(plan, robot, rate) for _, plan in recommended_runs(robot, side)) \
             * RECOMMENDED_REPEATS
         if differential_pair(robot) is not None and mode == "rotate":
             samples += 2.0 * runs * square * BORENSTEIN_ITERATIONS
-    kept = trials * (2 if calibrate else 1) + FLOOR_PROCEDURES
-    memory = kept * (BYTES_PER_PROCEDURE + 2 * runs * 3 * 8 * 4) + 4 * square * 3 * 8 * 8 + 64 * 1024 ** 2
+    memory = procedures * (BYTES_PER_PROCEDURE + 2 * runs * 3 * 8 * 4) + 4 * square * 3 * 8 * 8 + 64 * 1024 ** 2
     return Cost(samples, memory)
+
+
+ESTIMATE_RATE = 1.0
+"""Sample rate [Hz] at which :func:`run_samples` times a plan (cheap even for a long plan)."""
+
+
+def run_samples(plan, robot: Robot, rate: float) -> float:
+    """An upper bound of the samples one run of ``plan`` takes at ``rate`` [Hz], found without
+    allocating what the run itself would: timed by :func:`~omnikin.simulation.motion.sample_plan`
+    at :data:`ESTIMATE_RATE`, segment ``k`` takes ``m_k >= T_k`` whole seconds, so at ``rate`` it
+    takes ``ceil(T_k rate) <= m_k rate + 1`` samples."""
+    low = min(rate, ESTIMATE_RATE)
+    sampled = sample_plan(plan, robot, low)
+    return len(sampled.progress) * rate / low + len(plan.segments) + 1
 
 
 def check_cost(cost: Cost, trials: int, runs: int) -> None:

@@ -1,0 +1,163 @@
+"""The Python API: omnikin.simulate, run_umbmark, analyze_umbmark, calibrate, calibration_plan,
+plot_layout. Entry points exported from ``omnikin`` without making ``import omnikin`` heavy,
+defaults equal to the command line's, results that plot themselves."""
+
+from __future__ import annotations
+
+import inspect
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import omnikin
+from omnikin.cli.main import build_parser
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+ENTRY_POINTS = ("simulate", "run_umbmark", "analyze_umbmark", "calibrate", "calibration_plan", "plot_layout")
+
+
+def python(code: str) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env)
+
+
+def test_import_omnikin_loads_neither_scipy_nor_matplotlib():
+    proc = python("import sys, omnikin\n"
+                  "heavy = sorted({m.split('.')[0] for m in sys.modules} & {'scipy', 'matplotlib', 'omnikin.api'})\n"
+                  "api = [m for m in sys.modules if m.startswith(('omnikin.api', 'omnikin.evaluation'))]\n"
+                  "print(heavy, api)")
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "[] []"
+
+
+def test_entry_points_are_exported_and_documented():
+    for name in ENTRY_POINTS:
+        function = getattr(omnikin, name)
+        assert callable(function) and name in omnikin.__all__ and name in dir(omnikin)
+        assert function.__doc__ and function.__doc__.strip(), name
+        assert f":func:`{name}`" in omnikin.__doc__, name
+    with pytest.raises(AttributeError):
+        omnikin.no_such_thing  # noqa: B018
+
+
+def subparser(name: str):
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    return sub.choices[name]
+
+
+def argparse_defaults(parser) -> dict:
+    return {a.dest: a.default for a in parser._actions if a.dest != "help"}
+
+
+def signature_defaults(function) -> dict:
+    return {n: p.default for n, p in inspect.signature(function).parameters.items()
+            if p.default is not inspect.Parameter.empty}
+
+
+@pytest.mark.parametrize("command, function, names", [
+    ("umbmark", omnikin.run_umbmark, {"robot": "robot", "true_robot": "true_robot", "errors": "errors",
+                                      "mode": "mode", "runs": "runs", "side": "side", "noise": "noise",
+                                      "rate": "rate", "seed": "seed", "trials": "trials", "calibrate": "calibrate"}),
+    ("umbmark", omnikin.UMBmarkReport.write, {"figures": "figure_format", "dpi": "dpi"}),
+    ("simulate", omnikin.simulate, {"path": "path", "true_robot": "true_robot", "errors": "errors",
+                                    "noise": "noise", "seed": "seed", "rate": "rate"}),
+    ("calibrate", omnikin.calibration_plan, {"side": "side"}),
+])
+def test_defaults_equal_the_command_line(command, function, names):
+    cli = argparse_defaults(subparser(command))
+    api = signature_defaults(function)
+    for dest, param in names.items():
+        assert cli[dest] == api[param], (dest, cli[dest], api[param])
+        assert type(cli[dest]) is type(api[param]), dest
+
+
+def test_analyze_defaults_equal_the_command_line():
+    from omnikin.cli.umbmark import analyze_parser
+
+    cli = argparse_defaults(analyze_parser())
+    api = signature_defaults(omnikin.analyze_umbmark)
+    assert (cli["robot"], cli["side"]) == (api["robot"], api["side"])
+
+
+def test_simulate_is_omnikin_simulate_without_the_bag(tmp_path):
+    pytest.importorskip("rosbags.rosbag2")
+
+    proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", "simulate", "tomasi-omni3", "--path", "line 1",
+                           "--seed", "5", "--bag", str(tmp_path / "s.bag"), "--json"], capture_output=True, text=True,
+                          timeout=120, env={**os.environ, "PYTHONPATH": str(SRC)})
+    assert proc.returncode == 0, proc.stderr
+    cli = json.loads(proc.stdout)
+    sim = omnikin.simulate("tomasi-omni3", "line 1", seed=5)
+    assert sim.run.truth[0, -1].tolist() == cli["truth_end"]
+    assert sim.run.odometry[-1].tolist() == cli["odometry_end"]
+    assert sim.end_error.tolist() == pytest.approx(cli["end_error"], abs=1e-15)
+
+
+def test_results_plot_themselves(tmp_path):
+    pytest.importorskip("matplotlib")
+    from matplotlib.figure import Figure
+
+    from omnikin.plans import CalibrationRun, line, spin
+
+    robot = omnikin.load_robot("diff-drive")
+    report = omnikin.run_umbmark(robot, runs=3, rate=20.0)
+    for kind in ("return_errors", "euclidean_errors", "trajectories"):
+        assert isinstance(report.plot(kind), Figure)
+    assert isinstance(omnikin.simulate(robot, "spin 90").plot(), Figure)
+    res = omnikin.analyze_umbmark({"cw": [(0.01, 0.02), (0.02, 0.01), (0.0, 0.0)], "ccw": [(0.0, -0.01)] * 3})
+    assert isinstance(res.plot(), Figure)
+    assert res.e_max_syst == pytest.approx(math.hypot(0.01, 0.01), rel=1e-12)
+    runs = [CalibrationRun(line(4.0), (4.01, 0.02, 0.0), "line 4"),
+            CalibrationRun(spin(math.pi), (0, 0, 3.1), "spin 180")]
+    fit = omnikin.calibrate(robot, runs)
+    fig = fit.plot()
+    assert isinstance(fig, Figure)
+    # the residual of the nominal model is measured minus the exact path's end
+    np.testing.assert_allclose(fit.residuals()["nominal"], [[0.01, 0.02], [0.0, 0.0]], atol=1e-9)
+    assert isinstance(omnikin.plot_layout("mecanum4"), Figure)
+
+
+def test_plotting_without_matplotlib_names_the_viz_extra():
+    proc = python("import sys; sys.modules['matplotlib'] = None\n"
+                  "import omnikin\n"
+                  "res = omnikin.analyze_umbmark({'cw': [(0.01, 0.0)], 'ccw': [(0.0, 0.01)]})\n"
+                  "print(res.e_max_syst)\n"
+                  "try:\n    res.plot()\nexcept ImportError as e:\n    print('ImportError:', e)")
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert float(lines[0]) == pytest.approx(0.01)
+    assert lines[1].startswith("ImportError:") and "omnikin[viz]" in lines[1]
+
+
+def test_run_umbmark_result_is_what_the_command_writes(tmp_path):
+    report = omnikin.run_umbmark("tomasi-omni3", runs=3, rate=20.0, seed=4)
+    doc = report.write(tmp_path / "r")
+    assert json.loads((tmp_path / "r" / "result.json").read_text(encoding="utf-8")) == doc
+    assert doc == json.loads(json.dumps(report.as_dict(doc["files"])))
+    from omnikin.cli.main import main
+
+    assert main(["umbmark", "--runs", "3", "--rate", "20", "--seed", "4", "-o", str(tmp_path / "c")]) == 0
+    cli = json.loads((tmp_path / "c" / "result.json").read_text(encoding="utf-8"))
+    assert cli == doc
+
+
+@pytest.mark.parametrize("kwargs, contains", [
+    ({"trials": 0}, "trials"), ({"runs": 2.5}, "runs"), ({"side": -1.0}, "side"), ({"rate": math.nan}, "rate"),
+    ({"seed": -3}, "seed"), ({"noise": "loud"}, "loud"), ({"trials": 10 ** 9}, "limit"),
+])
+def test_run_umbmark_refuses_bad_arguments_with_one_line(kwargs, contains):
+    with pytest.raises(omnikin.InputError) as info:
+        omnikin.run_umbmark("diff-drive", **kwargs)
+    assert contains in str(info.value) and "\n" not in str(info.value)
+
+
+def test_calibration_plan_lists_what_the_robot_can_drive():
+    assert omnikin.calibration_plan("diff-drive", 3.0) == ["square cw rotate 3", "square ccw rotate 3", "line 3 0",
+                                                           "spin 180", "spin -180", "spin 1800", "spin -1800"]
