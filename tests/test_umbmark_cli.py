@@ -553,7 +553,10 @@ def test_analyze_missing_file_and_bad_side(capsys, tmp_path):
     (["--side", "nan"], ["--side"]),
     (["--errors", "bogus"], ["bogus"]),
     (["--noise", "bogus"], ["bogus"]),
-    (["diff-drive", "--mode", "translate"], ["translate"]),
+    (["diff-drive", "--mode", "translate"], ["'translate' mode", "'left'", "the other mode is 'rotate'"]),
+    (["ackermann"], ["'rotate' mode", "front_left", "nor in the other mode"]),
+    (["--dpi", "0"], ["dpi"]),
+    (["--dpi", "nan"], ["dpi"]),
     (["no-such-robot"], ["no-such-robot"]),
     (["--rate", "0"], ["rate"]),
 ])

@@ -275,6 +275,18 @@ def analyze(eps_cw, eps_ccw, side: float = 4.0, robot: Robot | None = None, mode
     return UMBmarkResult(cw, ccw, side, mode, bor)
 
 
+def square_refusal(robot: Robot, side: float, mode: str) -> str | None:
+    """Why ``robot`` cannot drive the UMBmark squares of ``mode`` (the check ``simulate``
+    makes: :func:`~omnikin.simulation.simulate.segment_rates`), or None if it can."""
+    for direction in ("cw", "ccw"):
+        square = umbmark_square(direction, side, mode)
+        try:
+            segment_rates([seg.xi for seg in square.segments], robot, robot.encoded_names)
+        except InfeasibleTwistError as exc:
+            return str(exc).split(" (on_infeasible=")[0].removeprefix(f"robot {robot.name!r}: ")
+    return None
+
+
 def run_umbmark(true_robot: Robot, command_robot: Robot, *, side: float = 4.0, mode: str = "rotate", runs: int = 5,
                 noise: NoiseModel | None = None, rate: float = 100.0, limits: MotionLimits | None = None,
                 trials: int = 1, rng=None, keep_runs: bool = False):
@@ -289,15 +301,13 @@ def run_umbmark(true_robot: Robot, command_robot: Robot, *, side: float = 4.0, m
     if not isinstance(runs, (int, np.integer)) or runs < 1:
         raise InputError(f"runs must be a whole number >= 1, got {runs!r}")
     check_mode(mode)
-    other = {"rotate": "translate", "translate": "rotate"}[mode]
-    for direction in ("cw", "ccw"):
-        square = umbmark_square(direction, side, mode)
-        try:
-            segment_rates([seg.xi for seg in square.segments], command_robot, command_robot.encoded_names)
-        except InfeasibleTwistError as exc:
-            reason = str(exc).split(" (on_infeasible=")[0]
-            raise InputError(f"robot {command_robot.name!r} cannot drive the UMBmark square in {mode!r} mode "
-                             f"({reason}); the other mode is {other!r}") from None
+    refusal = square_refusal(command_robot, side, mode)
+    if refusal is not None:
+        other = {"rotate": "translate", "translate": "rotate"}[mode]
+        hint = (f"the other mode is {other!r}" if square_refusal(command_robot, side, other) is None
+                else "nor in the other mode: UMBmark does not apply to it")
+        raise InputError(f"robot {command_robot.name!r} cannot drive the UMBmark square in {mode!r} mode "
+                         f"({refusal}); {hint}")
     rng = make_rng(rng)
     sims = {}
     for direction in ("cw", "ccw"):
