@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
+from typing import Any
 
 import numpy as np
 
@@ -51,7 +52,7 @@ class UMBmarkReport(UMBmarkStudy):
         in metres (``units`` gives every key's unit); ``null`` for an unbounded interval end."""
         from ..io.robot_file import robot_to_dict
 
-        doc = {"format": RESULT_FORMAT, "units": RESULT_UNITS, "methods": METHODS,
+        doc: dict[str, Any] = {"format": RESULT_FORMAT, "units": RESULT_UNITS, "methods": METHODS,
                "settings": {**self.settings, "confidence_level": self.level},
                "robot": robot_to_dict(self.robot), "true_robot": robot_to_dict(self.true_robot)}
         if self.injected is not None:
@@ -59,7 +60,7 @@ class UMBmarkReport(UMBmarkStudy):
         doc["before"] = self._stage(self.before[0])
         doc["noise_floor"] = self.floor.as_dict()
         doc["systematic"] = {f"e_max_syst_{k}": v for k, v in self.systematic.items()}
-        if self.after is not None:
+        if self.after is not None and self.calibration is not None:
             doc["after"] = self._stage(self.after[0])
             doc["reduction_factor"] = finite_or_none(self.reduction_factor)
             interval = self.reduction_interval
@@ -92,7 +93,7 @@ class UMBmarkReport(UMBmarkStudy):
                "trajectories": fig.trajectories_figure(
                    {STAGES[k]: v for k, v in self.trajectories.items()}, self.side, title)}
         if self.trials > 1:
-            values = {"before": [r.e_max_syst for r in self.before]}
+            values: dict[str, Any] = {"before": [r.e_max_syst for r in self.before]}
             if self.after is not None:
                 values["after calibration"] = [r.e_max_syst for r in self.after]
             values["perfectly calibrated (noise floor)"] = self.floor.values
@@ -127,7 +128,7 @@ class UMBmarkReport(UMBmarkStudy):
             figures = {}
         texts = {"true_robot.yaml": robot_text(self.true_robot, "true_robot.yaml"),
                  "measurements_before.csv": umbmark_measurements_text(self.before[0], self._measurement_note("before"))}
-        if self.after is not None:
+        if self.after is not None and self.calibration is not None:
             texts["measurements_after.csv"] = umbmark_measurements_text(self.after[0],
                                                                         self._measurement_note("after"))
             texts["calibrated_robot.yaml"] = robot_text(self.calibration.robot, "calibrated_robot.yaml")

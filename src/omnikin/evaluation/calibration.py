@@ -91,7 +91,11 @@ class PlanSet:
     def __init__(self, plans: Sequence[Plan], command_robot: Robot):
         self.command = command_robot
         self.names = command_robot.encoded_names
-        w, steer, length, owner, slot = [], [], [], [], []
+        w: list[np.ndarray] = []
+        steer: list[np.ndarray] = []
+        length: list[float] = []
+        owner: list[int] = []
+        slot: list[int] = []
         for p, plan in enumerate(plans):
             rates, steering = segment_rates([seg.xi for seg in plan.segments], command_robot, self.names)
             w.extend(rates)
@@ -108,8 +112,7 @@ class PlanSet:
 
     def ends(self, true_robot: Robot) -> np.ndarray:
         """End poses ``(n_plans, 3)`` of ``true_robot`` driving the plans (noise-free, exact)."""
-        ratio = np.array([true_robot.wheel(n).encoder.rad_per_tick / self.command.wheel(n).encoder.rad_per_tick
-                          for n in self.names])
+        ratio = np.array([_rad_per_tick(true_robot, n) / _rad_per_tick(self.command, n) for n in self.names])
         f = true_robot.fk_matrix(self.steer, self.names)[..., : len(self.names)]
         rates = self.w * ratio
         twist = np.einsum("ij,sj->si", f, rates) if f.ndim == 2 else np.einsum("sij,sj->si", f, rates)
@@ -119,6 +122,15 @@ class PlanSet:
             sel = self.slot == k
             pose[self.owner[sel]] = compose(pose[self.owner[sel]], steps[sel])
         return pose
+
+
+def _rad_per_tick(robot: Robot, name: str) -> float:
+    """Wheel angle per encoder tick [rad] of the encoded wheel ``name``."""
+    encoder = robot.wheel(name).encoder
+    if encoder is None:
+        raise InputError(f"robot {robot.name!r}: wheel {name!r} has no encoder; calibration needs the driven "
+                         "wheels' encoders")
+    return encoder.rad_per_tick
 
 
 def predicted_end(plan: Plan, true_robot: Robot, command_robot: Robot) -> np.ndarray:

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -197,15 +198,17 @@ def umbmark_study(robot: Robot, true_robot: Robot, *, injected: SystematicErrors
     (:func:`draw_as_built`); ``progress``: called with the name of each step as it starts."""
     rng = streams(seed)
     step = progress or (lambda name: None)
-    opts = dict(side=side, mode=mode, runs=runs, noise=noise, rate=rate)
+    opts: dict[str, Any] = dict(side=side, mode=mode, runs=runs, noise=noise, rate=rate)
     step("UMBmark before calibration")
     before = run_umbmark(true_robot, robot, trials=trials, rng=rng["before"], **opts)
     step("trajectories for the figures")
     traj_rng = np.random.default_rng(rng["trajectories"])
     trajectories = {"before": _trajectories(true_robot, robot, traj_rng, **opts)}
-    after = cal = bor = None
-    cal_runs = []
-    quiet = dict(opts, runs=1, noise=NOISE["none"])
+    after: list | None = None
+    cal: CalibrationResult | None = None
+    bor: list | None = None
+    cal_runs: list[CalibrationRun] = []
+    quiet: dict[str, Any] = dict(opts, runs=1, noise=NOISE["none"])
     systematic = {"before": run_umbmark(true_robot, robot, **quiet)[0].e_max_syst}
     if calibrate:
         step("calibration runs")

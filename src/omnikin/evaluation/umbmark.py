@@ -156,10 +156,10 @@ class UMBmarkResult:
         docstring: Hotelling's ``T^2`` per direction, conservative); None with fewer than 3
         runs in a direction."""
         _check_level(level)
-        ranges = [d.distance_range(math.sqrt(level)) for d in (self.cw, self.ccw)]
-        if None in ranges:
+        cw, ccw = (d.distance_range(math.sqrt(level)) for d in (self.cw, self.ccw))
+        if cw is None or ccw is None:
             return None
-        return max(r[0] for r in ranges), max(r[1] for r in ranges)
+        return max(cw[0], ccw[0]), max(cw[1], ccw[1])
 
     def as_dict(self, level: float = LEVEL) -> dict:
         interval = self.e_max_interval(level)

@@ -38,6 +38,7 @@ def _wheel_outline(w) -> np.ndarray:
 def layout_figure(robot: Robot):
     """A matplotlib ``Figure`` of ``robot``'s layout at zero steering (module docstring)."""
     require_matplotlib()
+    from matplotlib.artist import Artist
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
     from matplotlib.patches import FancyArrowPatch, Patch, Polygon
@@ -78,8 +79,8 @@ def layout_figure(robot: Robot):
     m = robot.mobility
     ax.set_title(f"{robot.name}: Campion type {m.campion_type}, {'holonomic' if m.holonomic else 'non-holonomic'}",
                  fontsize=10)
-    handles = [Patch(facecolor=COLORS[t], alpha=0.45, edgecolor=COLORS[t], label=f"{t} wheel")
-               for t in dict.fromkeys(w.type for w in robot.wheels)]
+    handles: list[Artist] = [Patch(facecolor=COLORS[t], alpha=0.45, edgecolor=COLORS[t], label=f"{t} wheel")
+                             for t in dict.fromkeys(w.type for w in robot.wheels)]
     handles.append(Line2D([], [], color="0.3", marker=">", markevery=[1], label="drive direction (positive speed)"))
     if any(w.is_swedish for w in robot.wheels):
         handles.append(Line2D([], [], color="k", ls="--", lw=1, label="roller axis"))
@@ -114,13 +115,14 @@ def _label_wheels(fig, ax, robot: Robot, reach: float) -> None:
     measured with the Agg canvas); a wheel without a free spot is named beyond the drawing at
     its bearing from the origin, the axes widened to hold it."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.transforms import Bbox
 
     canvas = FigureCanvasAgg(fig)
     canvas.draw()
     renderer = canvas.get_renderer()
     drawing = _drawing_paths(ax)
     frame = ax.get_window_extent(renderer)
-    taken = []
+    taken: list[Bbox] = []
     for w in robot.wheels:
         cx, cy = w.contact_point()
         outward = math.atan2(cy, cx) if math.hypot(cx, cy) > 1e-9 else -math.pi / 2
