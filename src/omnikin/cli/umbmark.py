@@ -72,7 +72,7 @@ def add_parsers(sub, robot_help: str) -> None:
                     help=f"systematic error profile: {', '.join(sorted(PROFILES))} (default {d['errors']})")
     sp.add_argument("--mode", choices=("rotate", "translate"), default=d["mode"],
                     help="square driven by turning in place at corners (rotate) or by translating with the "
-                         f"heading held (translate, holonomic robots); default {d['mode']}")
+                         f"heading held (translate: robots that can move sideways); default {d['mode']}")
     sp.add_argument("--runs", type=int, default=d["runs"], metavar="N",
                     help=f"runs per direction (default {d['runs']})")
     sp.add_argument("--side", type=float, default=d["side"], metavar="M",
