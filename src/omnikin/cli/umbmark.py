@@ -350,8 +350,8 @@ def _print_plan(args) -> int:
             "robot's own (nominal) model,\n"
             "starting at rest at the origin (x forward, y left). Measure the end pose: x_abs, y_abs [m] to about "
             "1 mm,\n"
-            "theta_abs_deg [deg] to about 0.2 deg (leave it empty if not measured). Paths: square cw|ccw "
-            "rotate|translate SIDE,\n"
+            "theta_abs_deg [deg] to about 0.2 deg (delete that column if you do not measure the heading).\n"
+            "Fill in every field. Paths: square cw|ccw rotate|translate SIDE,\n"
             "line LENGTH HEADING_DEG, spin ANGLE_DEG (positive counter-clockwise), arc RADIUS ANGLE_DEG.\n"
             f"then: omnikin calibrate {args.robot} THIS_FILE -o calibrated.yaml")
     text = calibration_template(paths, RECOMMENDED_REPEATS, note)

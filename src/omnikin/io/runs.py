@@ -134,20 +134,34 @@ def _csv(rows) -> str:
     return buffer.getvalue()
 
 
+def _with_heading(headings, what: str) -> bool:
+    """Whether a file gets a heading column: every heading measured (yes) or none (no); a file
+    holds no empty field, so a mix cannot be written."""
+    measured = [math.isfinite(h) for h in headings]
+    if any(measured) and not all(measured):
+        raise InputError(f"{what}: the heading is measured in some runs and not in others; a runs file has a "
+                         "heading column for every run or none")
+    return all(measured) and bool(measured)
+
+
 def calibration_runs_text(runs, comment: str | None = None) -> str:
     """A runs file (``omnikin calibrate``): one row per :class:`~omnikin.plans.CalibrationRun`
     (its ``label`` is the path in the runs-file grammar), x and y in metres to 1 um, the
-    heading in degrees to 1e-5 deg, an unmeasured heading (NaN) left empty; ``comment``
-    becomes ``#`` lines at the top."""
-    rows = [["path", "x_abs", "y_abs", "theta_abs_deg"]]
+    heading in degrees to 1e-5 deg (no heading column when no heading was measured);
+    ``comment`` becomes ``#`` lines at the top."""
+    runs = list(runs)
+    heading = _with_heading([r.measured[2] for r in runs], "calibration runs")
+    rows = [["path", "x_abs", "y_abs"] + (["theta_abs_deg"] if heading else [])]
     for run in runs:
         x, y, th = run.measured
-        rows.append([run.label, f"{x:.6f}", f"{y:.6f}", f"{math.degrees(th):.5f}" if math.isfinite(th) else ""])
+        rows.append([run.label, f"{x:.6f}", f"{y:.6f}"] + ([f"{math.degrees(th):.5f}"] if heading else []))
     return _comment(comment) + _csv(rows)
 
 
 def calibration_template(paths, repeats: int, comment: str | None = None) -> str:
-    """A runs file to fill in on a real robot: every path ``repeats`` times, measurements empty."""
+    """A runs file to fill in on a real robot: every path ``repeats`` times, measurements empty
+    (every field must be filled before it is read; without heading measurements delete the
+    ``theta_abs_deg`` column)."""
     rows = [["path", "x_abs", "y_abs", "theta_abs_deg"]]
     rows += [[path, "", "", ""] for path in paths for _ in range(repeats)]
     return _comment(comment) + _csv(rows)
@@ -156,10 +170,13 @@ def calibration_template(paths, repeats: int, comment: str | None = None) -> str
 def umbmark_measurements_text(result, comment: str | None = None) -> str:
     """A measurements file (``omnikin umbmark analyze``) of a
     :class:`~omnikin.evaluation.umbmark.UMBmarkResult`: odometry at the origin, so ``abs`` =
-    ``epsilon`` [m, deg]; an unmeasured heading left empty."""
-    rows = [["direction", "x_abs", "y_abs", "x_calc", "y_calc", "theta_abs_deg", "theta_calc_deg"]]
+    ``epsilon`` [m, deg]; no heading columns when no heading was measured."""
+    eps = [e for d in (result.cw, result.ccw) for e in d.epsilon]
+    heading = _with_heading([e[2] for e in eps], "UMBmark measurements")
+    rows = [["direction", "x_abs", "y_abs", "x_calc", "y_calc"] + (["theta_abs_deg", "theta_calc_deg"] if heading
+                                                                   else [])]
     for d in (result.cw, result.ccw):
         for e in d.epsilon:
-            th = f"{math.degrees(e[2]):.5f}" if math.isfinite(e[2]) else ""
-            rows.append([d.direction, f"{e[0]:.6f}", f"{e[1]:.6f}", "0", "0", th, "0" if th else ""])
+            rows.append([d.direction, f"{e[0]:.6f}", f"{e[1]:.6f}", "0", "0"]
+                        + ([f"{math.degrees(e[2]):.5f}", "0"] if heading else []))
     return _comment(comment) + _csv(rows)
