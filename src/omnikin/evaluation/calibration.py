@@ -112,7 +112,7 @@ class PlanSet:
 
     def ends(self, true_robot: Robot) -> np.ndarray:
         """End poses ``(n_plans, 3)`` of ``true_robot`` driving the plans (noise-free, exact)."""
-        ratio = np.array([_rad_per_tick(true_robot, n) / _rad_per_tick(self.command, n) for n in self.names])
+        ratio = true_robot.rad_per_tick(self.names) / self.command.rad_per_tick(self.names)
         f = true_robot.fk_matrix(self.steer, self.names)[..., : len(self.names)]
         rates = self.w * ratio
         twist = np.einsum("ij,sj->si", f, rates) if f.ndim == 2 else np.einsum("sij,sj->si", f, rates)
@@ -122,15 +122,6 @@ class PlanSet:
             sel = self.slot == k
             pose[self.owner[sel]] = compose(pose[self.owner[sel]], steps[sel])
         return pose
-
-
-def _rad_per_tick(robot: Robot, name: str) -> float:
-    """Wheel angle per encoder tick [rad] of the encoded wheel ``name``."""
-    encoder = robot.wheel(name).encoder
-    if encoder is None:
-        raise InputError(f"robot {robot.name!r}: wheel {name!r} has no encoder; calibration needs the driven "
-                         "wheels' encoders")
-    return encoder.rad_per_tick
 
 
 def predicted_end(plan: Plan, true_robot: Robot, command_robot: Robot) -> np.ndarray:
