@@ -64,7 +64,8 @@ def signature_defaults(function) -> dict:
 @pytest.mark.parametrize("command, function, names", [
     ("umbmark", omnikin.run_umbmark, {"robot": "robot", "true_robot": "true_robot", "errors": "errors",
                                       "mode": "mode", "runs": "runs", "side": "side", "noise": "noise",
-                                      "rate": "rate", "seed": "seed", "trials": "trials", "calibrate": "calibrate"}),
+                                      "rate": "rate", "seed": "seed", "trials": "trials", "calibrate": "calibrate",
+                                      "max_memory": "max_memory", "max_time": "max_time"}),
     ("umbmark", omnikin.UMBmarkReport.write, {"figures": "figure_format", "dpi": "dpi"}),
     ("simulate", omnikin.simulate, {"path": "path", "true_robot": "true_robot", "errors": "errors",
                                     "noise": "noise", "seed": "seed", "rate": "rate"}),
@@ -150,7 +151,8 @@ def test_run_umbmark_result_is_what_the_command_writes(tmp_path):
 
 @pytest.mark.parametrize("kwargs, contains", [
     ({"trials": 0}, "trials"), ({"runs": 2.5}, "runs"), ({"side": -1.0}, "side"), ({"rate": math.nan}, "rate"),
-    ({"seed": -3}, "seed"), ({"noise": "loud"}, "loud"), ({"trials": 10 ** 9}, "limit"),
+    ({"seed": -3}, "seed"), ({"noise": "loud"}, "loud"), ({"trials": 10 ** 9}, "max_memory"),
+    ({"trials": 3000, "max_time": 10.0}, "max_time"),
 ])
 def test_run_umbmark_refuses_bad_arguments_with_one_line(kwargs, contains):
     with pytest.raises(omnikin.InputError) as info:

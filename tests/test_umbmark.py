@@ -489,17 +489,19 @@ def test_fitted_parameters_carry_their_units(tomasi):
     assert values["w1.radius"] == pytest.approx(0.008, rel=1e-3)
 
 
-def test_budget_estimate_bounds_the_samples_of_a_run_from_above():
-    """run_samples is an upper bound (it refuses in time), yet close (within a sample per second
-    of each segment plus one per segment)."""
-    from omnikin.evaluation.procedure import run_samples
-    from omnikin.plans import parse_plan
+def test_budget_estimate_counts_what_a_trial_really_simulates():
+    """Each extra trial drives 'runs' squares per direction before and after calibration: the
+    estimate grows by at least that many sampled steps (from the sampler itself) and by little
+    more (the estimator bounds each segment from above by at most one sample)."""
+    from omnikin.evaluation.procedure import estimate_cost
     from omnikin.simulation.motion import sample_plan
 
     robot = load_robot("tomasi-omni3")
-    for text in ("square cw rotate 4", "square ccw translate 2", "spin 1800", "line 0.01", "arc 2 -180"):
-        plan = parse_plan(text)
-        for rate in (0.5, 20.0, 100.0, 1000.0):
-            actual = len(sample_plan(plan, robot, rate).t)
-            bound = run_samples(plan, robot, rate)
-            assert actual <= bound <= actual + len(plan.segments) * (rate + 1) + 1, (text, rate)
+    for rate, runs in ((20.0, 3), (100.0, 5)):
+        opts = dict(side=4.0, mode="rotate", runs=runs, rate=rate, calibrate=True)
+        one, two = estimate_cost(robot, trials=1, **opts), estimate_cost(robot, trials=2, **opts)
+        square = len(sample_plan(umbmark_square("cw"), robot, rate).t)
+        actual = 2 * 2 * runs * square                      # two directions, before and after
+        slack = 2 * 2 * runs * (len(umbmark_square("cw").segments) + 1)
+        assert actual <= two.samples - one.samples <= actual + slack
+        assert two.bytes > one.bytes and two.seconds > one.seconds

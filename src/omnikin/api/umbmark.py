@@ -16,7 +16,17 @@ import numpy as np
 
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT, RECOMMENDED_REPEATS
-from ..evaluation.procedure import FLOOR_PROCEDURES, UMBmarkStudy, check_cost, estimate_cost, streams, umbmark_study
+from ..evaluation.procedure import (
+    FLOOR_PROCEDURES,
+    MAX_MEMORY,
+    MAX_TIME,
+    Cost,
+    UMBmarkStudy,
+    check_cost,
+    estimate_cost,
+    streams,
+    umbmark_study,
+)
 from ..evaluation.umbmark import LEVEL, UNITS, UMBmarkResult, analyze
 from ..viz import DPI
 from .common import as_built, dumps, finite_or_none, noise_of, require_viz, robot_of, setting_name
@@ -210,7 +220,8 @@ METHODS = {
 
 def run_umbmark(robot=DEFAULT_ROBOT, *, true_robot=None, errors="typical", mode: str = "rotate", runs: int = 5,
                 side: float = 4.0, noise="typical", rate: float = 100.0, seed: int = 1, trials: int = 1,
-                calibrate: bool = True, progress=None) -> UMBmarkReport:
+                calibrate: bool = True, max_memory: float = MAX_MEMORY, max_time: float = MAX_TIME,
+                progress=None) -> UMBmarkReport:
     """UMBmark of ``robot`` as built, calibration, UMBmark again (``omnikin umbmark``).
 
     ``robot``: preset name, robot file or Robot; ``true_robot`` (file or Robot) replaces the
@@ -218,21 +229,16 @@ def run_umbmark(robot=DEFAULT_ROBOT, *, true_robot=None, errors="typical", mode:
     direction; ``side`` [m]; ``noise``: random errors; ``rate`` [Hz]; ``trials``: repeated
     UMBmark procedures (Monte Carlo over the noise; the robot as built and its calibration
     stay the same); ``calibrate``: run the calibration step (:mod:`omnikin.evaluation.procedure`).
-    ``progress`` is called with the name of each step. Studies that would simulate or hold
-    too much are refused up front (:func:`~omnikin.evaluation.procedure.check_cost`).
+    ``progress`` is called with the name of each step. A study estimated to need more than
+    ``max_memory`` [bytes] or ``max_time`` [s] is refused up front
+    (:func:`~omnikin.evaluation.procedure.check_cost`).
     """
     nominal = robot_of(robot)
-    for name, value in (("runs", runs), ("trials", trials)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise InputError(f"{name} (--{name}) must be a whole number >= 1, got {value!r}")
-    if not (isinstance(side, (int, float)) and math.isfinite(side) and side > 0):
-        raise InputError(f"side (--side) must be a positive length [m], got {side!r}")
-    if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
-        raise InputError(f"rate (--rate) must be a positive number of samples per second, got {rate!r}")
+    _check_settings(runs=runs, trials=trials, side=side, rate=rate)
     seeds = streams(seed)
     noise_model = noise_of(noise)
-    check_cost(estimate_cost(nominal, side=side, mode=mode, runs=runs, rate=rate, trials=trials,
-                             calibrate=calibrate), trials, runs)
+    check_cost(umbmark_cost(nominal, mode=mode, runs=runs, side=side, rate=rate, trials=trials, calibrate=calibrate),
+               max_memory=max_memory, max_time=max_time)
     true, injected = as_built(nominal, true_robot, errors, seeds["robot"])
     study = umbmark_study(nominal, true, injected=injected, side=float(side), mode=mode, runs=int(runs),
                           rate=float(rate), trials=int(trials), noise=noise_model, seed=seed, calibrate=calibrate,
@@ -243,6 +249,26 @@ def run_umbmark(robot=DEFAULT_ROBOT, *, true_robot=None, errors="typical", mode:
                 "runs": int(runs), "side": float(side), "rate": float(rate), "seed": seed, "trials": int(trials),
                 "calibrate": bool(calibrate)}
     return UMBmarkReport(**{f.name: getattr(study, f.name) for f in fields(study)}, settings=settings)
+
+
+def _check_settings(*, runs, trials, side, rate) -> None:
+    """One line naming the first bad setting (and its command-line option)."""
+    for name, value in (("runs", runs), ("trials", trials)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise InputError(f"{name} (--{name}) must be a whole number >= 1, got {value!r}")
+    if not (isinstance(side, (int, float)) and math.isfinite(side) and side > 0):
+        raise InputError(f"side (--side) must be a positive length [m], got {side!r}")
+    if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
+        raise InputError(f"rate (--rate) must be a positive number of samples per second, got {rate!r}")
+
+
+def umbmark_cost(robot=DEFAULT_ROBOT, *, mode: str = "rotate", runs: int = 5, side: float = 4.0,
+                 rate: float = 100.0, trials: int = 1, calibrate: bool = True) -> Cost:
+    """What :func:`run_umbmark` with these settings will take (robot-samples, memory, time):
+    :func:`~omnikin.evaluation.procedure.estimate_cost`."""
+    _check_settings(runs=runs, trials=trials, side=side, rate=rate)
+    return estimate_cost(robot_of(robot), side=side, mode=mode, runs=runs, rate=rate, trials=trials,
+                         calibrate=calibrate)
 
 
 # --- analyze ---------------------------------------------------------------------------------------

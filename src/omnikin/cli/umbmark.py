@@ -18,11 +18,12 @@ from pathlib import Path
 from ..api.calibration import calibrate as api_calibrate
 from ..api.calibration import calibration_plan
 from ..api.common import dumps
-from ..api.umbmark import DEFAULT_ROBOT, UMBmarkReport, analyze_umbmark, run_umbmark
+from ..api.umbmark import DEFAULT_ROBOT, UMBmarkReport, analyze_umbmark, run_umbmark, umbmark_cost
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
 from ..simulation.error_models import NOISE, PROFILES
 from ..viz import FIGURE_FORMATS, MAX_DPI, check_dpi
+from .budget import add_budget_options, require
 from .common import console
 
 DEFAULT_OUT = "umbmark-report"
@@ -96,6 +97,7 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("--dpi", type=float, default=WRITE["dpi"], metavar="N",
                     help=f"resolution of PNG figures (default {WRITE['dpi']:g}, at most {MAX_DPI})")
     sp.add_argument("--json", action="store_true", help="print result.json instead of tables")
+    add_budget_options(sp)
     sp.set_defaults(func=cmd_umbmark)
 
     sp = sub.add_parser("calibrate", help="calibrate a robot file from measured runs",
@@ -196,10 +198,15 @@ def cmd_umbmark(args) -> int:
     inputs = _input_files(args.robot, args.true_robot)
     check_dpi(args.dpi)                                        # refuse before the simulation, not after
     check_output(args.out, inputs=inputs, folder=True)
+    cost = umbmark_cost(args.robot, mode=args.mode, runs=args.runs, side=args.side, rate=args.rate,
+                        trials=args.trials, calibrate=args.calibrate)
+    require(args, "umbmark", memory=cost.bytes, seconds=cost.seconds, size=f"{cost.samples:.3g} robot-samples",
+            hint="lower --trials, --runs or --rate")
     with _Status(args.json) as status:
         report = run_umbmark(args.robot, true_robot=args.true_robot, errors=args.errors, mode=args.mode,
                              runs=args.runs, side=args.side, noise=args.noise, rate=args.rate, seed=args.seed,
-                             trials=args.trials, calibrate=args.calibrate, progress=status.step)
+                             trials=args.trials, calibrate=args.calibrate, max_memory=args.max_memory,
+                             max_time=args.max_time, progress=status.step)
         status.step("report")
         doc = report.write(args.out, figure_format=args.figures, dpi=args.dpi, inputs=inputs)
     if args.json:

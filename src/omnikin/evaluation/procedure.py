@@ -33,11 +33,11 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, ResourceLimitError
 from ..model import Robot
 from ..plans import CalibrationRun, umbmark_square
 from ..simulation.error_models import NOISE, NoiseModel, SystematicErrors
-from ..simulation.motion import sample_plan
+from ..simulation.motion import estimated_samples
 from ..simulation.simulate import simulate
 from .calibration import RECOMMENDED_REPEATS, CalibrationResult, borenstein_calibrate, recommended_runs
 from .calibration import calibrate as least_squares_calibration
@@ -52,12 +52,11 @@ FLOOR_PROCEDURES = 400
 BORENSTEIN_ITERATIONS = 3
 """Iterations of Borenstein's correction in the comparison (differential drives)."""
 
-MAX_SAMPLES = 1e10
-"""Most robot-samples one study may simulate (about 20 minutes at 10 million per second,
-docs/performance.md); more is refused before anything runs."""
+MAX_MEMORY = 2 * 1024 ** 3
+"""Default memory budget of a study [bytes] (the command line's ``--max-memory``)."""
 
-MAX_BYTES = 2 * 1024 ** 3
-"""Most memory [bytes] one study may plan to hold; more is refused before anything runs."""
+MAX_TIME = 3600.0
+"""Default time budget of a study [s] (the command line's ``--max-time``)."""
 
 SAMPLES_PER_SECOND = 1e7
 """Simulation speed used to express a sample count as a time (docs/performance.md)."""
@@ -95,13 +94,14 @@ class Cost:
 
 def estimate_cost(robot: Robot, *, side: float, mode: str, runs: int, rate: float, trials: int,
                   calibrate: bool) -> Cost:
-    """Samples and memory of :func:`umbmark_study` with these settings, from the lengths of
-    the sampled square and calibration runs (:func:`run_samples`)."""
-    square = run_samples(umbmark_square("cw", side, mode), robot, rate)
+    """Samples and memory of :func:`umbmark_study` with these settings, from the lengths of the
+    square and of the calibration runs (:func:`~omnikin.simulation.motion.estimated_samples`, an
+    upper bound computed without sampling)."""
+    square = estimated_samples(umbmark_square("cw", side, mode), robot, rate)
     procedures = trials * (2 if calibrate else 1) + FLOOR_PROCEDURES
     samples = 2.0 * runs * square * procedures + 2 * 2 * 2 * square          # + systematic part, trajectories
     if calibrate:
-        samples += sum(run_samples(plan, robot, rate) for _, plan in recommended_runs(robot, side)) \
+        samples += sum(estimated_samples(plan, robot, rate) for _, plan in recommended_runs(robot, side)) \
             * RECOMMENDED_REPEATS
         if differential_pair(robot) is not None and mode == "rotate":
             samples += 2.0 * runs * square * BORENSTEIN_ITERATIONS
@@ -109,30 +109,17 @@ def estimate_cost(robot: Robot, *, side: float, mode: str, runs: int, rate: floa
     return Cost(samples, memory)
 
 
-ESTIMATE_RATE = 1.0
-"""Sample rate [Hz] at which :func:`run_samples` times a plan (cheap even for a long plan)."""
-
-
-def run_samples(plan, robot: Robot, rate: float) -> float:
-    """An upper bound of the samples one run of ``plan`` takes at ``rate`` [Hz], found without
-    allocating what the run itself would: timed by :func:`~omnikin.simulation.motion.sample_plan`
-    at :data:`ESTIMATE_RATE`, segment ``k`` takes ``m_k >= T_k`` whole seconds, so at ``rate`` it
-    takes ``ceil(T_k rate) <= m_k rate + 1`` samples."""
-    low = min(rate, ESTIMATE_RATE)
-    sampled = sample_plan(plan, robot, low)
-    return len(sampled.progress) * rate / low + len(plan.segments) + 1
-
-
-def check_cost(cost: Cost, trials: int, runs: int) -> None:
-    """Refuse a study above :data:`MAX_SAMPLES` or :data:`MAX_BYTES` with one line naming the limit."""
-    if cost.samples > MAX_SAMPLES:
-        raise InputError(f"{trials} trial(s) of {runs} run(s) per direction would simulate about "
-                         f"{cost.samples:.2g} robot-samples (about {cost.seconds / 60:.0f} min); the limit is "
-                         f"{MAX_SAMPLES:.0e}: lower --trials, --runs or --rate")
-    if cost.bytes > MAX_BYTES:
-        raise InputError(f"{trials} trial(s) of {runs} run(s) per direction would hold about "
-                         f"{cost.bytes / 1024 ** 3:.2g} GiB; the limit is {MAX_BYTES / 1024 ** 3:.0f} GiB: "
-                         f"lower --trials or --runs")
+def check_cost(cost: Cost, *, max_memory: float = MAX_MEMORY, max_time: float = MAX_TIME) -> None:
+    """Refuse (:class:`~omnikin.errors.ResourceLimitError`, one line naming the limit) a study
+    estimated to need more than ``max_memory`` [bytes] or ``max_time`` [s]."""
+    if not cost.bytes <= max_memory:
+        raise ResourceLimitError(f"UMBmark study: about {cost.bytes / 1024 ** 3:.3g} GiB of memory, more than "
+                                 f"max_memory {max_memory / 1024 ** 3:.3g} GiB; lower trials or runs",
+                                 needed=cost.bytes, limit=max_memory, unit="bytes")
+    if not cost.seconds <= max_time:
+        raise ResourceLimitError(f"UMBmark study: about {cost.seconds:.3g} s for {cost.samples:.3g} robot-samples, "
+                                 f"more than max_time {max_time:.3g} s; lower trials, runs or rate",
+                                 needed=cost.seconds, limit=max_time, unit="seconds")
 
 
 @dataclass(frozen=True)
