@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import os
 
@@ -57,8 +56,11 @@ def finite_or_none(x):
 
 
 def dumps(document: dict) -> str:
-    """The JSON text of a result document (strict JSON: no NaN or infinity)."""
-    return json.dumps(document, indent=2, allow_nan=False) + "\n"
+    """The JSON text of a result document: strict JSON (:func:`omnikin.io.jsonfile.to_json`; a
+    NaN or infinity left in it is an error naming its field), with a final newline."""
+    from ..io.jsonfile import to_json
+
+    return to_json(document) + "\n"
 
 
 def require_viz():
