@@ -7,24 +7,22 @@ from __future__ import annotations
 import inspect
 import json
 import math
-import os
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import omnikin
+from conftest import omnikin_env
 from omnikin.cli.main import build_parser
 
-SRC = Path(__file__).resolve().parents[1] / "src"
 ENTRY_POINTS = ("simulate", "run_umbmark", "analyze_umbmark", "calibrate", "calibration_plan", "plot_layout")
 
 
 def python(code: str) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env)
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                          env=omnikin_env())
 
 
 def test_import_omnikin_loads_neither_scipy_nor_matplotlib():
@@ -92,7 +90,7 @@ def test_simulate_is_omnikin_simulate_without_the_bag(tmp_path):
 
     proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", "simulate", "tomasi-omni3", "--path", "line 1",
                            "--seed", "5", "--bag", str(tmp_path / "s.bag"), "--json"], capture_output=True, text=True,
-                          timeout=120, env={**os.environ, "PYTHONPATH": str(SRC)})
+                          timeout=120, env=omnikin_env())
     assert proc.returncode == 0, proc.stderr
     cli = json.loads(proc.stdout)
     sim = omnikin.simulate("tomasi-omni3", "line 1", seed=5)

@@ -17,11 +17,11 @@ import sys
 import numpy as np
 import pytest
 
+from conftest import ROOT, omnikin_env
 from omnikin import load_robot
 from omnikin.cli.main import main
 
 PNG = b"\x89PNG\r\n\x1a\n"
-SRC = __import__("pathlib").Path(__file__).resolve().parents[1] / "src"
 SIDE_DEFAULT = 4.0
 
 
@@ -68,14 +68,6 @@ def check_direction_dict(d, n_runs):
     return r
 
 
-def subprocess_env():
-    """The environment of a child ``omnikin``: this checkout's sources first (a relative
-    PYTHONPATH would not survive the child's own working directory)."""
-    import os
-
-    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
-
-
 # =====================================================================================================
 # the main job (subprocess)
 # =====================================================================================================
@@ -83,7 +75,7 @@ def subprocess_env():
 def main_job(tmp_path_factory):
     cwd = tmp_path_factory.mktemp("mainjob")
     proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", "umbmark"], cwd=cwd, capture_output=True,
-                          text=True, timeout=120, env=subprocess_env())
+                          text=True, timeout=120, env=omnikin_env())
     return cwd, proc
 
 
@@ -355,7 +347,7 @@ def test_an_interrupted_run_leaves_the_previous_report_intact(tmp_path):
     import signal
     import time
 
-    env = subprocess_env()
+    env = omnikin_env()
     base = [sys.executable, "-m", "omnikin.cli.main", "umbmark", "--runs", "3", "--rate", "20"]
     done = subprocess.run(base, cwd=tmp_path, env=env, capture_output=True, timeout=120)
     assert done.returncode == 0, done.stderr
@@ -674,7 +666,7 @@ def test_calibrate_plan_prints_the_runs_to_drive_as_a_runs_file(capsys, tmp_path
 # =====================================================================================================
 # the sample data in examples/
 # =====================================================================================================
-EXAMPLES = SRC.parent / "examples"
+EXAMPLES = ROOT / "examples"
 
 
 def data_rows(path):
@@ -689,7 +681,7 @@ def test_examples_run_as_written_on_a_fresh_clone(tmp_path):
     for argv in (["umbmark", "analyze", "examples/umbmark_measurements.csv", "--robot", "tomasi-omni3"],
                  ["calibrate", "tomasi-omni3", "examples/calibration_runs.csv", "-o", "calibrated.yaml"]):
         proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", *argv], cwd=tmp_path, capture_output=True,
-                              text=True, timeout=120, env=subprocess_env())
+                              text=True, timeout=120, env=omnikin_env())
         assert proc.returncode == 0, proc.stderr
         assert proc.stderr == ""
     assert load_robot(tmp_path / "calibrated.yaml").wheel_names == load_robot("tomasi-omni3").wheel_names
