@@ -37,6 +37,11 @@ from .errors import InputError
 from .geometry import wrap_angle
 
 
+MAX_SEGMENT = 1e5
+"""Longest segment [m or rad]: 100 km of travel, or about 16,000 turns in place. Beyond it a
+plan is a typo (``line 1e308``), not a robot's path: refused before anything is sampled."""
+
+
 @dataclass(frozen=True)
 class Segment:
     """Move by ``exp(length * xi)``: ``xi`` body twist per unit progress, ``length`` >= 0."""
@@ -49,8 +54,9 @@ class Segment:
         xi = tuple(float(v) for v in self.xi)
         if len(xi) != 3 or not all(math.isfinite(v) for v in xi) or xi == (0.0, 0.0, 0.0):
             raise InputError(f"segment {self.label!r}: xi must be a finite non-zero twist, got {self.xi!r}")
-        if not (math.isfinite(self.length) and self.length >= 0):
-            raise InputError(f"segment {self.label!r}: length must be finite and >= 0, got {self.length!r}")
+        if not (math.isfinite(self.length) and 0 <= self.length <= MAX_SEGMENT):
+            raise InputError(f"segment {self.label!r}: length must be from 0 to {MAX_SEGMENT:g} [m or rad], "
+                             f"got {self.length!r}")
         object.__setattr__(self, "xi", xi)
 
 

@@ -79,3 +79,4 @@ def test_zero_wheel_limit_with_zero_twist_is_not_nan():
         warnings.simplefilter("error")
         assert speed_scale(robot, [0.0, 0.0, 0.0], MotionLimits()) == np.inf
         np.testing.assert_array_equal(saturate(robot, [0.0, 0.0, 0.0], MotionLimits()), [0.0, 0.0, 0.0])
+

@@ -13,8 +13,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
 from ..io.output import check_output, is_stdout
 
 FORCE_HELP = "replace existing output files (never an input; a folder only if omnikin wrote it)"
@@ -22,13 +20,11 @@ FORCE_HELP = "replace existing output files (never an input; a folder only if om
 
 def robot_as_built(robot, true_robot: str | None, errors: str, seed):
     """The robot as built and the errors drawn: a ``--true-robot`` file, or ``robot`` with a
-    seeded draw of the ``--errors`` profile. ``seed``: a SeedSequence or an int."""
-    from ..simulation.error_models import profile as error_profile
+    seeded draw of the ``--errors`` profile (:func:`omnikin.api.common.as_built`, the draw the
+    Python API and ``omnikin umbmark`` make). ``seed``: a SeedSequence or an int."""
+    from ..api.common import as_built
 
-    if true_robot:
-        return load_robot(true_robot), None
-    drawn = error_profile(errors).sample(robot, np.random.default_rng(seed))
-    return drawn.apply(robot), drawn
+    return as_built(robot, true_robot or None, errors, seed)
 
 
 def console(width: int = 140, stderr: bool = False):

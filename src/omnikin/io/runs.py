@@ -97,8 +97,9 @@ def read_umbmark_measurements(path):
     return {d: np.array(v) for d, v in eps.items()}
 
 
-DEFAULT_SIGMA = (0.001, math.radians(0.2))
-"""Default measurement standard deviations of a calibration run: position [m], heading [rad]."""
+DEFAULT_SIGMA = CalibrationRun.sigma
+"""Default measurement standard deviations of a calibration run: position [m], heading [rad]
+(:class:`omnikin.plans.CalibrationRun`'s)."""
 
 
 def read_calibration_runs(path, sigma=DEFAULT_SIGMA) -> list[CalibrationRun]:
