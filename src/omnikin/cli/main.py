@@ -51,8 +51,8 @@ output files: no command writes over one of its inputs, --force or not. An exist
   Files are written whole or not at all (a temporary file beside them, renamed when complete).
   '-' is standard output, which then carries the data only: messages and tables go to stderr.
 limits: commands whose size you choose (umbmark --trials/--runs, simulate --rate/--path, bags,
-  trajectory files) are
-  sized first and refused beyond --max-memory (default 2G) or --max-time (default 1h).
+  trajectory files) are sized first and refused beyond --max-memory (default 2G) or --max-time
+  (default 1h).
 errors: one line 'omnikin: error: ...' on stderr; exit status 2 for bad input or usage, 1 when
   something fails while running (writing an output, a hardware link), 130 on Ctrl-C."""
 
