@@ -204,3 +204,21 @@ def test_read_only_folder_is_refused_before_writing(tmp_path):
             with atomic_write(ro / "out.csv") as handle:
                 handle.write("x")
         assert list(ro.iterdir()) == []
+
+
+def test_a_signal_during_a_critical_step_is_delivered_after_it(tmp_path):
+    """Ctrl-C that arrives while a temporary file is created and recorded (or folders are
+    swapped) waits for the step to end, then interrupts: nothing is left behind."""
+    import signal
+
+    from omnikin.io.output import _uninterrupted
+
+    out = tmp_path / "a.txt"
+    with pytest.raises(KeyboardInterrupt):
+        with atomic_write(out) as handle:
+            with _uninterrupted():
+                signal.raise_signal(signal.SIGINT)      # arrives inside the critical step ...
+                handle.write("still running")           # ... which goes on to its end
+            raise AssertionError("the deferred Ctrl-C should have been delivered here")
+    assert list(tmp_path.iterdir()) == []
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

@@ -33,8 +33,10 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+import signal
 import stat
 import tempfile
+import threading
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import IO, Any
@@ -165,18 +167,20 @@ def atomic_write(path, mode: str = "w", *, encoding: str | None = "utf-8",
         except OSError as exc:
             raise _output_error(path, exc) from None
         return
+    tmp = None
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent or ".")
-    except OSError as exc:
-        raise _output_error(path, exc) from None
-    try:
+        with _uninterrupted():            # a Ctrl-C here must not leave the temporary file behind
+            fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent or ".")
         with opened(fd) as handle:
             yield handle
-        _keep_mode(target, tmp)
-        os.replace(tmp, target)
+        with _uninterrupted():
+            _keep_mode(target, tmp)
+            os.replace(tmp, target)
+            tmp = None
     except BaseException as exc:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
         if isinstance(exc, OSError):
             raise _output_error(path, exc) from None
         raise
@@ -210,13 +214,16 @@ def report_folder(path) -> Iterator[Path]:
     as it was. Call :func:`check_output` with ``folder=True`` first.
     """
     target = Path(os.fspath(path))
-    stage = _stage(target)
+    stage = None
     try:
+        with _uninterrupted():
+            stage = _stage(target)
         yield stage
         _finish(stage, target, REPORT_MARKER,
                 "written by omnikin; the folder is replaced as a whole on the next run\n")
     except BaseException as exc:
-        shutil.rmtree(stage, ignore_errors=True)
+        if stage is not None:
+            shutil.rmtree(stage, ignore_errors=True)
         if isinstance(exc, OSError):
             raise _output_error(path, exc) from None
         raise
@@ -232,8 +239,10 @@ def data_folder(path) -> Iterator[Path]:
     with ``folder="data"`` first.
     """
     target = Path(os.fspath(path))
-    holder = _stage(target)
+    holder = None
     try:
+        with _uninterrupted():
+            holder = _stage(target)
         yield holder / target.name
         _finish(holder / target.name, target, DATA_MARKER,
                 "written by omnikin; with --force the folder is replaced as a whole\n")
@@ -242,7 +251,8 @@ def data_folder(path) -> Iterator[Path]:
             raise _output_error(path, exc) from None
         raise
     finally:
-        shutil.rmtree(holder, ignore_errors=True)
+        if holder is not None:
+            shutil.rmtree(holder, ignore_errors=True)
 
 
 def _stage(target: Path) -> Path:
@@ -255,7 +265,13 @@ def _stage(target: Path) -> Path:
 
 
 def _finish(built: Path, target: Path, marker: str, note: str) -> None:
-    """Mark the folder ``built`` and swap it in for ``target`` (an older one removed as a whole)."""
+    """Mark the folder ``built`` and swap it in for ``target`` (an older one removed as a whole);
+    Ctrl-C waits until the swap is complete."""
+    with _uninterrupted():
+        _swap(built, target, marker, note)
+
+
+def _swap(built: Path, target: Path, marker: str, note: str) -> None:
     (built / marker).write_text(note, encoding="utf-8")
     os.chmod(built, 0o777 & ~_umask())
     parent = target.parent if str(target.parent) else Path(".")
@@ -272,6 +288,27 @@ def _finish(built: Path, target: Path, marker: str, note: str) -> None:
         raise
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _uninterrupted() -> Iterator[None]:
+    """Defer Ctrl-C (SIGINT) and SIGTERM over a few file-system steps that must not be cut in
+    the middle (creating a temporary and recording its name, swapping folders); the signal is
+    delivered right after, to the handler that was there before. Outside the main thread
+    (where handlers cannot be set) it does nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    received: list[int] = []
+    previous = {sig: signal.signal(sig, lambda num, frame: received.append(num))
+                for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+        if received:
+            signal.raise_signal(received[0])
 
 
 def _umask() -> int:
