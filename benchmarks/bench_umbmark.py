@@ -20,18 +20,18 @@ import tempfile
 import time
 
 import numpy as np
+
 from _common import save
+from omnikin import load_robot
+from omnikin.evaluation.calibration import borenstein_calibrate, calibrate, recommended_runs
+from omnikin.evaluation.umbmark import run_umbmark
+from omnikin.plans import CalibrationRun, umbmark_square
+from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel
+from omnikin.simulation.simulate import simulate
 
 REPEATS = 5
 """Repeats of each recommended calibration run (as UMBmark repeats each square 5 times)."""
 
-from omnikin import load_robot
-from omnikin.plans import CalibrationRun
-from omnikin.evaluation.calibration import borenstein_calibrate, calibrate, recommended_runs
-from omnikin.evaluation.umbmark import run_umbmark
-from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel
-from omnikin.plans import umbmark_square
-from omnikin.simulation.simulate import simulate
 
 
 def calibration_bar(name: str, seeds=range(1, 21)) -> dict:
@@ -114,7 +114,7 @@ def main() -> dict:
               f"median {r['systematic_factor_median']:.1f}x; >= 20x for {r['systematic_at_least_20x']} of "
               f"{r['robots']} robots")
         short = [b for b, f in zip(r["systematic_before_mm"], np.array(r["systematic_before_mm"]) /
-                                   np.array(r["systematic_after_mm"])) if f < 20]
+                                   np.array(r["systematic_after_mm"]), strict=True) if f < 20]
         if short:
             print(f"  the robots below 20x started from E_max,syst {', '.join(f'{b:.1f}' for b in short)} mm")
         print(f"  after calibration [mm]: median {np.median(r['systematic_after_mm']):.2f}, max "

@@ -36,7 +36,6 @@ import numpy as np
 from .errors import InputError
 from .geometry import wrap_angle
 
-
 MAX_SEGMENT = 1e5
 """Longest segment [m or rad]: 100 km of travel, or about 16,000 turns in place. Beyond it a
 plan is a typo (``line 1e308``), not a robot's path: refused before anything is sampled."""

@@ -166,7 +166,7 @@ def cmd_show(args) -> int:
         print(f"omnikin: warning: {robot.name}: {warning}", file=sys.stderr)
     # --- end conditioning warning ---
     text = _json_checked(data)
-    if args.plot is not None:
+    if args.plot is not None and plot_format is not None:
         _save_plot(robot, args.plot, plot_format)
     if args.json:
         print(text)

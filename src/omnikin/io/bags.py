@@ -50,6 +50,7 @@ import stat
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -191,7 +192,7 @@ def message_count(bag, topic: str) -> int:
 
 
 def _messages(bag, topic: str, allowed: Iterable[str], max_messages: int | None = None,
-              max_message_bytes: int | None = None) -> Iterator[tuple[int, int, object, str]]:
+              max_message_bytes: int | None = None) -> Iterator[tuple[int, int, Any, str]]:
     """Yield ``(index, bag time [ns], message, msgtype)`` of ``topic``, checking its type and
     the bounds (module docstring)."""
     rb = _Rosbags.get()
@@ -280,7 +281,10 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
     wheels = _encoded_names(robot)
     steer_joints = [f"{n}{steer_suffix}" for n in robot.steer_names]
     needed = wheels + steer_joints
-    header_ns, bag_ns, rows, msg_index = [], [], [], []
+    header_list: list[int] = []
+    bag_list: list[int] = []
+    rows: list[np.ndarray] = []
+    index_list: list[int] = []
     skipped = 0
     seen_names: set[str] = set()
     for k, t_ns, msg, _ in _messages(bag, topic, (JOINT_STATE,), max_messages, max_message_bytes):
@@ -307,16 +311,16 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
         bad = [n for n, v in zip(needed, row, strict=True) if not math.isfinite(v)]
         if bad:
             raise BagError(f"{bag}: topic {topic!r}, message {k}: non-finite position of joint(s) {bad}")
-        header_ns.append(_stamp_ns(msg.header.stamp))
-        bag_ns.append(t_ns)
+        header_list.append(_stamp_ns(msg.header.stamp))
+        bag_list.append(t_ns)
         rows.append(row)
-        msg_index.append(k)
+        index_list.append(k)
     if not rows:
         raise BagError(f"{bag}: topic {topic!r}: no JointState message names the wheel joints {needed} of robot "
                        f"{robot.name!r} (joint name = wheel name); the topic's joints are "
                        f"{shorten(sorted(seen_names), 300) if seen_names else 'none (no messages)'}")
-    header_ns = np.array(header_ns, dtype=np.int64)
-    bag_ns = np.array(bag_ns, dtype=np.int64)
+    header_ns = np.array(header_list, dtype=np.int64)
+    bag_ns = np.array(bag_list, dtype=np.int64)
     source = stamp
     if stamp == "auto":
         source = "bag" if not np.any(header_ns) else "header"
@@ -325,7 +329,7 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
     repeat = np.zeros(len(data), dtype=bool)
     repeat[1:] = (stamps[1:] == stamps[:-1]) & np.all(data[1:] == data[:-1], axis=1)
     keep = ~repeat
-    data, stamps, bag_ns, msg_index = data[keep], stamps[keep], bag_ns[keep], np.array(msg_index)[keep]
+    data, stamps, bag_ns, msg_index = data[keep], stamps[keep], bag_ns[keep], np.array(index_list)[keep]
     back = np.flatnonzero(np.diff(stamps) <= 0)
     if back.size:
         i = int(back[0]) + 1
@@ -474,7 +478,10 @@ def require_new_bag(path, *, inputs: Iterable = (), force: bool = False) -> Path
     Called before any long work (reading, simulating) so that a taken name fails at once.
     Raises :class:`omnikin.errors.OutputExistsError` (or the other errors of
     :func:`omnikin.io.output.check_output`)."""
-    return check_output(path, inputs=inputs, force=force, folder="data")
+    out = check_output(path, inputs=inputs, force=force, folder="data")
+    if out is None:                              # '-' is refused for folders by check_output
+        raise BagError("a bag is a folder: name it (standard output cannot take a bag)")
+    return out
 
 
 def _write_bag(path, topics: list[_Topic], messages: Iterable[tuple[int, int, bytes]], storage: str = "sqlite3",
@@ -646,7 +653,7 @@ def record_run(path, run, robot: Robot, *, start: float = 0.0, topics: dict | No
     if truth.shape[0] != len(t):
         raise BagError("record_run needs the full ground truth (simulate with keep_truth=True)")
     wheels = _encoded_names(robot)
-    rpt = np.array([robot.wheel(n).encoder.rad_per_tick for n in wheels])
+    rpt = robot.rad_per_tick(wheels)
     angles = np.asarray(run.ticks, dtype=float) * rpt
     joint_names = list(wheels)
     if run.steer is not None:
