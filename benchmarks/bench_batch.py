@@ -59,10 +59,12 @@ def cold_call(which: str, n: int) -> float:
     robot, t, ticks = tomasi_log(n)
     fk = robot.fk_matrix()
     scale = np.array([w.encoder.rad_per_tick for w in robot.wheels])
-    batch_odometry(robot, t[:10], ticks[:10])            # imports, not the measurement
+    batch_odometry(robot, t[:10], ticks[:10])  # imports, not the measurement
     straightforward_numpy(fk, scale, t[:10], ticks[:10])
-    fn = {"omnikin": lambda: batch_odometry(robot, t, ticks),
-          "straightforward numpy": lambda: straightforward_numpy(fk, scale, t, ticks)}[which]
+    fn = {
+        "omnikin": lambda: batch_odometry(robot, t, ticks),
+        "straightforward numpy": lambda: straightforward_numpy(fk, scale, t, ticks),
+    }[which]
     t0 = time.perf_counter()
     fn()
     return time.perf_counter() - t0
@@ -73,8 +75,9 @@ def cold(n: int, runs: int) -> dict:
     times = {"omnikin": [], "straightforward numpy": []}
     for _ in range(runs):
         for which in times:
-            out = subprocess.run([sys.executable, __file__, "--cold", which, str(n)], capture_output=True, text=True,
-                                 check=True)
+            out = subprocess.run(
+                [sys.executable, __file__, "--cold", which, str(n)], capture_output=True, text=True, check=True
+            )
             times[which].append(float(out.stdout))
     return {k: {"median_s": statistics.median(v), "best_s": min(v)} for k, v in times.items()}
 
@@ -92,8 +95,9 @@ def main(n: int = 2_000_000, trials: int = 20, cold_runs: int = 5) -> dict:
     }
     m = n // trials
     stacked = np.stack([ticks[:m]] * trials)
-    rates[f"omnikin, {trials} trials x {m}"] = trials * m / best_time(
-        lambda: batch_odometry(robot, t[:m], stacked), repeat=5)
+    rates[f"omnikin, {trials} trials x {m}"] = (
+        trials * m / best_time(lambda: batch_odometry(robot, t[:m], stacked), repeat=5)
+    )
     short = [list(map(int, row)) for row in ticks[:100_000]]
     rates["plain loop"] = len(short) / best_time(lambda: plain_loop(fk.tolist(), scale.tolist(), t, short), repeat=2)
     base = rates["straightforward numpy"]
@@ -107,11 +111,18 @@ def main(n: int = 2_000_000, trials: int = 20, cold_runs: int = 5) -> dict:
     for name, c in first.items():
         print(f"  {name:32s} {n / c['median_s'] / 1e6:8.2f} ({n / c['best_s'] / 1e6:.2f}) M samples/s")
     print(f"  omnikin cold is {ratio:.2f}x the reference's speed")
-    print(f"  target >= 10 M samples/s: {'met' if rates['omnikin'] >= 10e6 else 'NOT met'}; never slower than "
-          f"the reference: warm {'met' if rates['omnikin'] >= base else 'NOT met'}, "
-          f"cold {'met' if ratio >= 1.0 else 'NOT met'}")
-    return {"samples_per_s": rates, "target": 10e6, "max_position_difference_m": err, "cold": first,
-            "cold_speed_ratio": ratio}
+    print(
+        f"  target >= 10 M samples/s: {'met' if rates['omnikin'] >= 10e6 else 'NOT met'}; never slower than "
+        f"the reference: warm {'met' if rates['omnikin'] >= base else 'NOT met'}, "
+        f"cold {'met' if ratio >= 1.0 else 'NOT met'}"
+    )
+    return {
+        "samples_per_s": rates,
+        "target": 10e6,
+        "max_position_difference_m": err,
+        "cold": first,
+        "cold_speed_ratio": ratio,
+    }
 
 
 if __name__ == "__main__":

@@ -36,7 +36,7 @@ def cycle_seconds(name: str) -> float:
             runtime.step(t)
         clock[0] = t
 
-    run()                                    # warm-up: caches, first measurement
+    run()  # warm-up: caches, first measurement
     return best_time(run, repeat=5) / CYCLES
 
 
@@ -60,8 +60,10 @@ def main() -> dict:
     for name in ROBOTS:
         s = cycle_seconds(name)
         out["robots"][name] = {"cycle_us": s * 1e6, "share_of_100hz_period": s / PERIOD, "vs_odometry": s / ref}
-        print(f"{name:18s} control cycle {s * 1e6:7.0f} us = {100 * s / PERIOD:4.1f} % of a 100 Hz period "
-              f"({s / ref:.0f}x the odometry update)")
+        print(
+            f"{name:18s} control cycle {s * 1e6:7.0f} us = {100 * s / PERIOD:4.1f} % of a 100 Hz period "
+            f"({s / ref:.0f}x the odometry update)"
+        )
     return out
 
 

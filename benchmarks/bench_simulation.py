@@ -60,16 +60,28 @@ def main(procedures: int = 1000) -> dict:
     ref_rate = n_ref * samples_per_run / (time.perf_counter() - t0)
     rate = total / elapsed
     e = np.array([r.e_max_syst for r in results])
-    print(f"Monte Carlo UMBmark, tomasi-omni3, {procedures} procedures x 10 runs x {samples_per_run} samples "
-          f"(100 Hz) = {total / 1e6:.1f} M robot-samples")
-    print(f"  omnikin run_umbmark          {elapsed:6.2f} s   {rate / 1e6:6.2f} M samples/s   "
-          f"{rate / ref_rate:5.2f}x the reference")
+    print(
+        f"Monte Carlo UMBmark, tomasi-omni3, {procedures} procedures x 10 runs x {samples_per_run} samples "
+        f"(100 Hz) = {total / 1e6:.1f} M robot-samples"
+    )
+    print(
+        f"  omnikin run_umbmark          {elapsed:6.2f} s   {rate / 1e6:6.2f} M samples/s   "
+        f"{rate / ref_rate:5.2f}x the reference"
+    )
     print(f"  straightforward numpy (ref)             {ref_rate / 1e6:6.2f} M samples/s")
-    print(f"  E_max,syst over procedures: median {np.median(e) * 1000:.1f} mm, 5-95 % "
-          f"{np.percentile(e, 5) * 1000:.1f}-{np.percentile(e, 95) * 1000:.1f} mm")
+    print(
+        f"  E_max,syst over procedures: median {np.median(e) * 1000:.1f} mm, 5-95 % "
+        f"{np.percentile(e, 5) * 1000:.1f}-{np.percentile(e, 95) * 1000:.1f} mm"
+    )
     print(f"  target >= 10 M samples/s: {'met' if rate >= 10e6 else 'NOT met'}")
-    return {"procedures": procedures, "samples": total, "seconds": elapsed, "samples_per_s": rate,
-            "reference_samples_per_s": ref_rate, "target": 10e6}
+    return {
+        "procedures": procedures,
+        "samples": total,
+        "seconds": elapsed,
+        "samples_per_s": rate,
+        "reference_samples_per_s": ref_rate,
+        "target": 10e6,
+    }
 
 
 if __name__ == "__main__":

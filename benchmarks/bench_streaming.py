@@ -120,15 +120,18 @@ def main(n: int = 2000, rounds: int = 40) -> dict:
     fk_ticks = [[float(v) * s for v, s in zip(row, scale, strict=True)] for row in fk]
     ts = [float(v) for v in t]
     ints = [[int(v) for v in row] for row in ticks]
-    inputs = {   # name: (timestamps, readings, method of Odometry)
+    inputs = {  # name: (timestamps, readings, method of Odometry)
         "Python ints (list)": (ts, ints, "update"),
         "Python ints (tuple)": (ts, [tuple(r) for r in ints], "update"),
         "NumPy int64 row": (ts, list(ticks), "update"),
         "NumPy uint32 row": (ts, list((ticks + 1_000_000).astype(np.uint32)), "update"),
         "list of np.int64": (ts, [list(r) for r in ticks], "update"),
         "np.float64 time, int64 row": (list(t), list(ticks), "update"),
-        "wheel angles (update_angles)": (ts, [[v * s for v, s in zip(r, scale, strict=True)] for r in ints],
-                                         "update_angles"),
+        "wheel angles (update_angles)": (
+            ts,
+            [[v * s for v, s in zip(r, scale, strict=True)] for r in ints],
+            "update_angles",
+        ),
         "wheel angles as NumPy rows": (ts, list(ticks * np.array(scale)), "update_angles"),
     }
 
@@ -138,18 +141,22 @@ def main(n: int = 2000, rounds: int = 40) -> dict:
             upd = getattr(est, method)
             for k in range(n):
                 upd(times[k], rows[k])
+
         return go
 
-    runs = {"reference step": run(ReferenceStep(fk_ticks), ts, ints),
-            "plain loop": run(PlainLoop(fk, scale), ts, ints),
-            "numpy per update": run(NumpyPerUpdate(fk, scale), ts, ints)}
+    runs = {
+        "reference step": run(ReferenceStep(fk_ticks), ts, ints),
+        "plain loop": run(PlainLoop(fk, scale), ts, ints),
+        "numpy per update": run(NumpyPerUpdate(fk, scale), ts, ints),
+    }
     for name, (times, rows, method) in inputs.items():
         runs[f"omnikin, {name}"] = run(Odometry(robot), times, rows, method)
-    runs["omnikin, 16-bit counters, Python ints"] = run(Odometry(robot, counter_bits=16), ts,
-                                                       [[v % 65536 for v in r] for r in ints])
+    runs["omnikin, 16-bit counters, Python ints"] = run(
+        Odometry(robot, counter_bits=16), ts, [[v % 65536 for v in r] for r in ints]
+    )
     best = {name: math.inf for name in runs}
     order = list(runs)
-    for r in range(rounds):   # short runs, interleaved in a changing order: load from other processes hits all alike
+    for r in range(rounds):  # short runs, interleaved in a changing order: load from other processes hits all alike
         random.Random(r).shuffle(order)
         for name in order:
             best[name] = min(best[name], best_time(runs[name], repeat=1) / n * 1e6)
@@ -159,12 +166,18 @@ def main(n: int = 2000, rounds: int = 40) -> dict:
     for name, us in best.items():
         print(f"  {name:44s} {us:7.3f} us/update   {us / ref:5.2f}x reference step   {us / fastest:5.2f}x fastest")
     worst = max((us for name, us in best.items() if name.startswith("omnikin, ") and "16-bit" not in name))
-    print(f"  target fastest <= 1.2x reference step: {fastest / ref:.2f}x "
-          f"{'met' if fastest <= 1.2 * ref else 'NOT met'}")
-    print(f"  target every input type <= 1.3x fastest: worst {worst / fastest:.2f}x "
-          f"{'met' if worst <= 1.3 * fastest else 'NOT met'}")
-    return {"us_per_update": best, "ratio_to_reference": {k: v / ref for k, v in best.items()},
-            "ratio_to_fastest": {k: v / fastest for k, v in best.items()}}
+    print(
+        f"  target fastest <= 1.2x reference step: {fastest / ref:.2f}x {'met' if fastest <= 1.2 * ref else 'NOT met'}"
+    )
+    print(
+        f"  target every input type <= 1.3x fastest: worst {worst / fastest:.2f}x "
+        f"{'met' if worst <= 1.3 * fastest else 'NOT met'}"
+    )
+    return {
+        "us_per_update": best,
+        "ratio_to_reference": {k: v / ref for k, v in best.items()},
+        "ratio_to_fastest": {k: v / fastest for k, v in best.items()},
+    }
 
 
 if __name__ == "__main__":

@@ -33,7 +33,6 @@ REPEATS = 5
 """Repeats of each recommended calibration run (as UMBmark repeats each square 5 times)."""
 
 
-
 def calibration_bar(name: str, seeds=range(1, 21)) -> dict:
     nominal = load_robot(name)
     noisy, quiet = NOISE["typical"], NoiseModel(quantise=False)
@@ -60,13 +59,17 @@ def calibration_bar(name: str, seeds=range(1, 21)) -> dict:
                 model = borenstein_calibrate(model, res)
                 res = run_umbmark(true, model, noise=noisy, rng=rng)[0]
             borenstein.append(nb.e_max_syst / res.e_max_syst)
-    out = {"robots": len(factors), "systematic_at_least_20x": int(np.sum(np.array(factors) >= 20)),
-           "noisy_at_least_20x": int(np.sum(np.array(factors_noisy) >= 20)),
-           "systematic_before_mm": [round(b * 1000, 2) for b in befores],
-           "systematic_after_mm": [round(a * 1000, 2) for a in afters],
-           "systematic_factor_min": float(np.min(factors)),
-           "systematic_factor_median": float(np.median(factors)),
-           "noisy_factor_min": float(np.min(factors_noisy)), "noisy_factor_median": float(np.median(factors_noisy))}
+    out = {
+        "robots": len(factors),
+        "systematic_at_least_20x": int(np.sum(np.array(factors) >= 20)),
+        "noisy_at_least_20x": int(np.sum(np.array(factors_noisy) >= 20)),
+        "systematic_before_mm": [round(b * 1000, 2) for b in befores],
+        "systematic_after_mm": [round(a * 1000, 2) for a in afters],
+        "systematic_factor_min": float(np.min(factors)),
+        "systematic_factor_median": float(np.median(factors)),
+        "noisy_factor_min": float(np.min(factors_noisy)),
+        "noisy_factor_median": float(np.median(factors_noisy)),
+    }
     if borenstein:
         out["borenstein_noisy_factor_min"] = float(np.min(borenstein))
         out["borenstein_noisy_factor_median"] = float(np.median(borenstein))
@@ -85,8 +88,9 @@ def perfect_knowledge() -> dict:
                     key = f"{name} quantise={quantise}"
                     worst[key] = max(worst.get(key, 0.0), err)
                     if not quantise:
-                        worst[f"{name} odometry end"] = max(worst.get(f"{name} odometry end", 0.0),
-                                                            float(np.hypot(*run.odometry[-1, :2])))
+                        worst[f"{name} odometry end"] = max(
+                            worst.get(f"{name} odometry end", 0.0), float(np.hypot(*run.odometry[-1, :2]))
+                        )
     return worst
 
 
@@ -97,8 +101,9 @@ def main_job_seconds(repeat: int = 3) -> float:
     for _ in range(repeat):
         with tempfile.TemporaryDirectory() as cwd:
             t0 = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "omnikin.cli.main", "umbmark"], cwd=cwd, check=True,
-                           capture_output=True)
+            subprocess.run(
+                [sys.executable, "-m", "omnikin.cli.main", "umbmark"], cwd=cwd, check=True, capture_output=True
+            )
             best = min(best, time.perf_counter() - t0)
     return best
 
@@ -108,27 +113,46 @@ def main() -> dict:
     print(f"main job (omnikin umbmark, report and plots included): {out['main_job_seconds']:.1f} s")
     for name in ("tomasi-omni3", "diff-drive"):
         r = out[name] = calibration_bar(name)
-        print(f"{name}: calibration over {r['robots']} robots as built ('typical' errors, 'typical' noise in the "
-              f"calibration runs)")
-        print(f"  E_max,syst reduction, systematic part (noise-free UMBmark): min {r['systematic_factor_min']:.1f}x, "
-              f"median {r['systematic_factor_median']:.1f}x; >= 20x for {r['systematic_at_least_20x']} of "
-              f"{r['robots']} robots")
-        short = [b for b, f in zip(r["systematic_before_mm"], np.array(r["systematic_before_mm"]) /
-                                   np.array(r["systematic_after_mm"]), strict=True) if f < 20]
+        print(
+            f"{name}: calibration over {r['robots']} robots as built ('typical' errors, 'typical' noise in the "
+            f"calibration runs)"
+        )
+        print(
+            f"  E_max,syst reduction, systematic part (noise-free UMBmark): min {r['systematic_factor_min']:.1f}x, "
+            f"median {r['systematic_factor_median']:.1f}x; >= 20x for {r['systematic_at_least_20x']} of "
+            f"{r['robots']} robots"
+        )
+        short = [
+            b
+            for b, f in zip(
+                r["systematic_before_mm"],
+                np.array(r["systematic_before_mm"]) / np.array(r["systematic_after_mm"]),
+                strict=True,
+            )
+            if f < 20
+        ]
         if short:
             print(f"  the robots below 20x started from E_max,syst {', '.join(f'{b:.1f}' for b in short)} mm")
-        print(f"  after calibration [mm]: median {np.median(r['systematic_after_mm']):.2f}, max "
-              f"{np.max(r['systematic_after_mm']):.2f} (before: median {np.median(r['systematic_before_mm']):.1f}, "
-              f"min {np.min(r['systematic_before_mm']):.1f})")
-        print(f"  one noisy procedure (5 runs per direction): min {r['noisy_factor_min']:.1f}x, median "
-              f"{r['noisy_factor_median']:.1f}x; >= 20x for {r['noisy_at_least_20x']} of {r['robots']}")
+        print(
+            f"  after calibration [mm]: median {np.median(r['systematic_after_mm']):.2f}, max "
+            f"{np.max(r['systematic_after_mm']):.2f} (before: median {np.median(r['systematic_before_mm']):.1f}, "
+            f"min {np.min(r['systematic_before_mm']):.1f})"
+        )
+        print(
+            f"  one noisy procedure (5 runs per direction): min {r['noisy_factor_min']:.1f}x, median "
+            f"{r['noisy_factor_median']:.1f}x; >= 20x for {r['noisy_at_least_20x']} of {r['robots']}"
+        )
         if "borenstein_noisy_factor_min" in r:
-            print(f"  Borenstein's iterated E_d/E_b correction, one noisy procedure: min "
-                  f"{r['borenstein_noisy_factor_min']:.1f}x, median {r['borenstein_noisy_factor_median']:.1f}x")
+            print(
+                f"  Borenstein's iterated E_d/E_b correction, one noisy procedure: min "
+                f"{r['borenstein_noisy_factor_min']:.1f}x, median {r['borenstein_noisy_factor_median']:.1f}x"
+            )
     pk = out["perfect_knowledge"] = perfect_knowledge()
     worst = max(pk.values())
-    print(f"perfect-knowledge odometry, 4 robots x 5 rates x (quantised or not) x cw/ccw: largest return error "
-          f"{worst:.2e} m (target < 1e-9: {'met' if worst < 1e-9 else 'NOT met'})")
+    print(
+        f"perfect-knowledge odometry, 4 robots x 5 rates x (quantised or not) x cw/ccw: largest return error "
+        f"{worst:.2e} m (target < 1e-9: {'met' if worst < 1e-9 else 'NOT met'})"
+    )
     return out
 
 

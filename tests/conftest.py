@@ -29,6 +29,7 @@ def omnikin_env(**extra: str) -> dict:
     env["PYTHONPATH"] = SRC + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     return env
 
+
 # no wall-clock limits: a loaded CI machine must not fail a test for being slow
 settings.register_profile("ci", max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile("ci")
@@ -40,8 +41,9 @@ def omni_robot(angles_deg, distance=0.113, radius=0.04125, drive_offsets_deg=Non
     for i, a in enumerate(angles_deg):
         b = math.radians(a)
         off = math.radians(drive_offsets_deg[i]) if drive_offsets_deg else 0.0
-        wheels.append(Wheel(f"w{i + 1}", "omni", distance * math.cos(b), distance * math.sin(b),
-                            b + math.pi / 2 + off, radius))
+        wheels.append(
+            Wheel(f"w{i + 1}", "omni", distance * math.cos(b), distance * math.sin(b), b + math.pi / 2 + off, radius)
+        )
     return Robot(name, tuple(wheels))
 
 

@@ -31,8 +31,18 @@ from .wheels import Encoder, Steer, Wheel
 
 __version__ = "0.1.0"
 
-_API = ("simulate", "run_umbmark", "analyze_umbmark", "calibrate", "calibration_plan", "plot_layout",
-        "Simulation", "UMBmarkReport", "UMBmarkAnalysis", "Calibration")
+_API = (
+    "simulate",
+    "run_umbmark",
+    "analyze_umbmark",
+    "calibrate",
+    "calibration_plan",
+    "plot_layout",
+    "Simulation",
+    "UMBmarkReport",
+    "UMBmarkAnalysis",
+    "Calibration",
+)
 """Names served lazily from :mod:`omnikin.api`."""
 
 
@@ -59,9 +69,34 @@ def __dir__():
 
 
 __all__ = [
-    "Calibration", "Encoder", "FKResult", "IKResult", "InfeasibleTwistError", "InputError", "LinkError", "Odometry",
-    "OdometryInputError", "OdometryResult", "OmnikinError", "PRESET_NAMES", "Robot", "RobotFileError", "Simulation",
-    "SingularLayoutError", "Steer", "UMBmarkAnalysis", "UMBmarkReport", "Wheel", "analyze_umbmark", "batch_odometry",
-    "batch_odometry_from_angles", "calibrate", "calibration_plan", "load_robot", "plot_layout", "run_umbmark",
-    "simulate", "__version__",
+    "Calibration",
+    "Encoder",
+    "FKResult",
+    "IKResult",
+    "InfeasibleTwistError",
+    "InputError",
+    "LinkError",
+    "Odometry",
+    "OdometryInputError",
+    "OdometryResult",
+    "OmnikinError",
+    "PRESET_NAMES",
+    "Robot",
+    "RobotFileError",
+    "Simulation",
+    "SingularLayoutError",
+    "Steer",
+    "UMBmarkAnalysis",
+    "UMBmarkReport",
+    "Wheel",
+    "analyze_umbmark",
+    "batch_odometry",
+    "batch_odometry_from_angles",
+    "calibrate",
+    "calibration_plan",
+    "load_robot",
+    "plot_layout",
+    "run_umbmark",
+    "simulate",
+    "__version__",
 ]

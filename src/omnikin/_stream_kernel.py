@@ -72,8 +72,24 @@ SAFETY = 1.0 - 1e-12
 """Shrinks the limits of the fast jump test by far more than float rounding (and the rounding of
 increments beyond 2**53 to floats): it never accepts what the exact rule refuses."""
 
-NUMPY_INTS = frozenset({np.int8, np.int16, np.int32, np.int64, np.uint8, np.uint16, np.uint32, np.uint64,
-                        np.intc, np.uintc, np.longlong, np.ulonglong, np.intp, np.uintp})
+NUMPY_INTS = frozenset(
+    {
+        np.int8,
+        np.int16,
+        np.int32,
+        np.int64,
+        np.uint8,
+        np.uint16,
+        np.uint32,
+        np.uint64,
+        np.intc,
+        np.uintc,
+        np.longlong,
+        np.ulonglong,
+        np.intp,
+        np.uintp,
+    }
+)
 """NumPy integer scalar types (bool excluded): converted exactly with ``operator.index``."""
 NUMBERS = frozenset({int, np.float64, np.float32, np.float16}) | NUMPY_INTS
 """Other types converted to float for timestamps and wheel angles."""
@@ -82,7 +98,8 @@ ADVANCE = {
     "exact": (
         "x = 0.5 * phi\n"
         "h = th + x\n"
-        "k = 1.0 - x * x / 6.0 if -SMALL < x < SMALL else sin(x) / x  # as geometry.sinc_scalar\n"),
+        "k = 1.0 - x * x / 6.0 if -SMALL < x < SMALL else sin(x) / x  # as geometry.sinc_scalar\n"
+    ),
     "midpoint": "h = th + 0.5 * phi\nk = 1.0\n",
     "euler": "h = th\nk = 1.0\n",
 }
@@ -95,12 +112,28 @@ _MOVE = (
     "y = py + k * (s * a + c * b)\n"
     "th += phi\n"
     "if th >= PI or th < NEG_PI:\n"
-    "    th -= TWO_PI * floor((th + PI) / TWO_PI)  # as geometry.wrap_angle\n")
+    "    th -= TWO_PI * floor((th + PI) / TWO_PI)  # as geometry.wrap_angle\n"
+)
 
-_CONSTANTS = {"cos": cos, "sin": sin, "floor": floor, "PI": pi, "NEG_PI": -pi, "TWO_PI": TWO_PI,
-              "SMALL": SCALAR_TAYLOR_LIMIT, "INF": math.inf, "NAN": math.nan, "INT": int, "FLOAT": float,
-              "LIST": list, "TUPLE": tuple, "ARRAY": np.ndarray, "NUMPY_INTS": NUMPY_INTS, "NUMBERS": NUMBERS,
-              "INDEX": operator.index}
+_CONSTANTS = {
+    "cos": cos,
+    "sin": sin,
+    "floor": floor,
+    "PI": pi,
+    "NEG_PI": -pi,
+    "TWO_PI": TWO_PI,
+    "SMALL": SCALAR_TAYLOR_LIMIT,
+    "INF": math.inf,
+    "NAN": math.nan,
+    "INT": int,
+    "FLOAT": float,
+    "LIST": list,
+    "TUPLE": tuple,
+    "ARRAY": np.ndarray,
+    "NUMPY_INTS": NUMPY_INTS,
+    "NUMBERS": NUMBERS,
+    "INDEX": operator.index,
+}
 """Names the kernels use, bound as default arguments (fast local lookups; no globals)."""
 
 
@@ -164,8 +197,12 @@ def _fk_lines(fk_rows, d: list[str]) -> list[str]:
 
 def _unpack(n: int, angles: bool) -> str:
     times = "_, t_prev" if angles else "t_prev, _"
-    return f"(px, py, th), {times}, count, _, _, _, _, " + ", ".join(f"p{j}" for j in range(n)) + ", " + \
-        ", ".join("_" for _ in range(n))
+    return (
+        f"(px, py, th), {times}, count, _, _, _, _, "
+        + ", ".join(f"p{j}" for j in range(n))
+        + ", "
+        + ", ".join("_" for _ in range(n))
+    )
 
 
 def _step_source(name: str, n: int, fk_rows, bounds: list[WheelBound], bits: list, method: str, angles: bool) -> str:
@@ -188,23 +225,29 @@ def _step_source(name: str, n: int, fk_rows, bounds: list[WheelBound], bits: lis
     ]
     for j in range(n):
         if angles:
-            body += [f"    if {v[j]}.__class__ is not FLOAT:",
-                     f"        if {v[j]}.__class__ not in NUMBERS:",
-                     "            return None",
-                     f"        {v[j]} = FLOAT({v[j]})",
-                     f"    {d[j]} = {v[j]} - p{j}"]
+            body += [
+                f"    if {v[j]}.__class__ is not FLOAT:",
+                f"        if {v[j]}.__class__ not in NUMBERS:",
+                "            return None",
+                f"        {v[j]} = FLOAT({v[j]})",
+                f"    {d[j]} = {v[j]} - p{j}",
+            ]
             continue
-        body += [f"    if {v[j]}.__class__ is not INT:",
-                 f"        if {v[j]}.__class__ not in NUMPY_INTS:",
-                 "            return None  # floats, bools, anything else",
-                 f"        {v[j]} = INDEX({v[j]})"]
+        body += [
+            f"    if {v[j]}.__class__ is not INT:",
+            f"        if {v[j]}.__class__ not in NUMPY_INTS:",
+            "            return None  # floats, bools, anything else",
+            f"        {v[j]} = INDEX({v[j]})",
+        ]
         if bits[j] is None:
             body.append(f"    {d[j]} = {v[j]} - p{j} + 0.0")
         else:
             half = 1 << (bits[j] - 1)
-            body += [f"    if not {-half} <= {v[j]} < {2 * half}:",
-                     f"        return None  # outside the {bits[j]}-bit counter: the general path raises",
-                     f"    {d[j]} = (({v[j]} - p{j} + {half}) & {2 * half - 1}) - {half} + 0.0"]
+            body += [
+                f"    if not {-half} <= {v[j]} < {2 * half}:",
+                f"        return None  # outside the {bits[j]}-bit counter: the general path raises",
+                f"    {d[j]} = (({v[j]} - p{j} + {half}) & {2 * half - 1}) - {half} + 0.0",
+            ]
     body += [
         "except (TypeError, ValueError, OverflowError):",
         "    return None  # the general path names what is wrong",
@@ -217,23 +260,31 @@ def _step_source(name: str, n: int, fk_rows, bounds: list[WheelBound], bits: lis
     body += ADVANCE[method].splitlines() + _MOVE.splitlines()
     times = "NAN, t" if angles else "t, NAN"
     body.append(f"return ((x, y, th), {times}, count + 1, dt, a, b, phi, {', '.join(v)}, {', '.join(d)})")
-    doc = (f'"""One sample of {"wheel angles [rad]" if angles else "tick readings"} for {n} wheels, '
-           f'{method} integration: the new state, or None."""')
+    doc = (
+        f'"""One sample of {"wheel angles [rad]" if angles else "tick readings"} for {n} wheels, '
+        f'{method} integration: the new state, or None."""'
+    )
     return f"def {name}(state, t, values, {args}):\n    {doc}\n" + "\n".join(_indent("\n".join(body))) + "\n"
 
 
 def _fk_source(name: str, fk_rows, n: int) -> str:
     d = [f"d{j}" for j in range(n)]
     body = _fk_lines(fk_rows, d) + ["return a, b, phi"]
-    return f"def {name}({', '.join(d)}):\n    \"\"\"Body increment (a, b, phi) of wheel increments.\"\"\"\n" + \
-        "\n".join(_indent("\n".join(body))) + "\n"
+    return (
+        f'def {name}({", ".join(d)}):\n    """Body increment (a, b, phi) of wheel increments."""\n'
+        + "\n".join(_indent("\n".join(body)))
+        + "\n"
+    )
 
 
 def _move_source(method: str) -> str:
     args = ", ".join(f"{k}={k}" for k in _CONSTANTS)
     body = "px, py, th = pose\n" + ADVANCE[method] + _MOVE + "return (x, y, th)\n"
-    return f"def move(pose, a, b, phi, {args}):\n    \"\"\"Pose after the body increment (a, b, phi).\"\"\"\n" + \
-        "\n".join(_indent(body)) + "\n"
+    return (
+        f'def move(pose, a, b, phi, {args}):\n    """Pose after the body increment (a, b, phi)."""\n'
+        + "\n".join(_indent(body))
+        + "\n"
+    )
 
 
 _COMPILED: dict[str, dict] = {}
@@ -253,20 +304,23 @@ def _compile(source: str) -> dict:
     return functions
 
 
-def build(n: int, fk_ticks, fk_angles, tick_bounds: list[WheelBound], angle_bounds: list[WheelBound], bits: list,
-          method: str) -> Kernels:
+def build(
+    n: int, fk_ticks, fk_angles, tick_bounds: list[WheelBound], angle_bounds: list[WheelBound], bits: list, method: str
+) -> Kernels:
     """Kernels for ``n`` encoded wheels. ``fk_ticks``/``fk_angles``: 3 rows of ``n``
     coefficients [m or rad per tick, per rad], or None for robots whose forward kinematics
     changes with steering (only ``move`` then); ``bits``: counter width per wheel or None."""
     parts = [_move_source(method)]
     if fk_ticks is not None:
-        parts += [_step_source("step_ticks", n, fk_ticks, tick_bounds, bits, method, angles=False),
-                  _step_source("step_angles", n, fk_angles, angle_bounds, bits, method, angles=True),
-                  _fk_source("fk_ticks", fk_ticks, n), _fk_source("fk_angles", fk_angles, n)]
+        parts += [
+            _step_source("step_ticks", n, fk_ticks, tick_bounds, bits, method, angles=False),
+            _step_source("step_angles", n, fk_angles, angle_bounds, bits, method, angles=True),
+            _fk_source("fk_ticks", fk_ticks, n),
+            _fk_source("fk_angles", fk_angles, n),
+        ]
     source = "\n\n".join(parts)
     f = _compile(source)
-    return Kernels(f.get("step_ticks"), f.get("step_angles"), f.get("fk_ticks"), f.get("fk_angles"), f["move"],
-                   source)
+    return Kernels(f.get("step_ticks"), f.get("step_angles"), f.get("fk_ticks"), f.get("fk_angles"), f["move"], source)
 
 
 def tick_bounds(rules) -> list[WheelBound]:

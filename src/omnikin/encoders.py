@@ -44,9 +44,9 @@ DEFAULT_RIM_SPEED = 100.0
 5-10 m/s): the speed bound of a wheel without ``max_speed``. At 100 Hz it lets a 4 cm wheel
 with 600 ticks/rev move 2300 ticks per sample, while a wrapped 16-bit counter jumps by
 about 65 000."""
-INT64_MIN, INT64_MAX = -(2 ** 63), 2 ** 63 - 1
-UINT64_END = 2 ** 64
-FLOAT_EXACT = 2 ** 53
+INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
+UINT64_END = 2**64
+FLOAT_EXACT = 2**53
 """Integers beyond this are not all floats: readings there must stay integers."""
 
 
@@ -70,8 +70,12 @@ def check_max_wheel_speed(speed) -> float | None:
 def _positive(value, name: str, what: str) -> float | None:
     if value is None:
         return None
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) \
-            or not math.isfinite(value) or value <= 0:
+    if (
+        isinstance(value, (bool, np.bool_))
+        or not isinstance(value, numbers.Real)
+        or not math.isfinite(value)
+        or value <= 0
+    ):
         raise OdometryInputError(f"{name} must be {what}, got {value!r}")
     return float(value)
 
@@ -130,15 +134,21 @@ class CounterRule:
         if unit != "ticks":
             return f"impossible jump of {show_number(delta)} {unit} in {dt:.6g} s, wheel {self.wheel!r}: {why}"
         if self.bits is not None:
-            return (f"impossible jump of {show_number(delta)} {unit} in {dt:.6g} s, wheel {self.wheel!r}: {why}, "
-                    f"or half the range of its {self.bits}-bit counter")
-        return (f"impossible jump of {show_number(delta)} {unit} in {dt:.6g} s, wheel {self.wheel!r}: {why}; "
-                f"if its counter wraps, give the counter width (counter_bits, --counter-bits or encoder.counter_bits)")
+            return (
+                f"impossible jump of {show_number(delta)} {unit} in {dt:.6g} s, wheel {self.wheel!r}: {why}, "
+                f"or half the range of its {self.bits}-bit counter"
+            )
+        return (
+            f"impossible jump of {show_number(delta)} {unit} in {dt:.6g} s, wheel {self.wheel!r}: {why}; "
+            f"if its counter wraps, give the counter width (counter_bits, --counter-bits or encoder.counter_bits)"
+        )
 
     def range_message(self, value) -> str:
         half = 1 << ((self.bits or 1) - 1)
-        return (f"tick reading {show_number(value)} outside the range of a {self.bits}-bit counter "
-                f"({-half} .. {2 * half - 1}), wheel {self.wheel!r}")
+        return (
+            f"tick reading {show_number(value)} outside the range of a {self.bits}-bit counter "
+            f"({-half} .. {2 * half - 1}), wheel {self.wheel!r}"
+        )
 
 
 def counter_rules(wheels, counter_bits=None, max_jump=None, max_wheel_speed=None) -> tuple[CounterRule, ...]:
@@ -155,16 +165,19 @@ def counter_rules(wheels, counter_bits=None, max_jump=None, max_wheel_speed=None
     for w in wheels:
         own = w.encoder.counter_bits
         if bits is not None and own is not None and own != bits:
-            raise InputError(f"counter_bits={bits} contradicts encoder.counter_bits: {own} of wheel {w.name!r} "
-                             f"in the robot file; give one of them")
+            raise InputError(
+                f"counter_bits={bits} contradicts encoder.counter_bits: {own} of wheel {w.name!r} "
+                f"in the robot file; give one of them"
+            )
         if speed is not None:
             bound, source = JUMP_MARGIN * speed, f"{JUMP_MARGIN:g} x max_wheel_speed {speed:g} rad/s"
         elif w.max_speed is not None:
             bound, source = JUMP_MARGIN * w.max_speed, f"{JUMP_MARGIN:g} x its max_speed {w.max_speed:g} rad/s"
         else:
             bound, source = DEFAULT_RIM_SPEED / w.radius, f"{DEFAULT_RIM_SPEED:g} m/s at the rim"
-        rules.append(CounterRule(w.name, bits if bits is not None else own, w.encoder.rad_per_tick, bound, source,
-                                 max_jump))
+        rules.append(
+            CounterRule(w.name, bits if bits is not None else own, w.encoder.rad_per_tick, bound, source, max_jump)
+        )
     return tuple(rules)
 
 
@@ -205,7 +218,7 @@ def counter_readings(ticks, names) -> np.ndarray:
     """
     arr = ticks if isinstance(ticks, np.ndarray) else np.asarray(ticks)
     if arr.dtype.kind == "O" or (arr.dtype.kind == "f" and not isinstance(ticks, np.ndarray)):
-        arr = _exact_from_python(ticks, arr, names)    # float64 or object only when not all integers fit
+        arr = _exact_from_python(ticks, arr, names)  # float64 or object only when not all integers fit
     kind = arr.dtype.kind
     if kind not in "iufO":
         raise OdometryInputError(f"ticks: expected real numbers for wheels {names}, got dtype {arr.dtype}")
@@ -226,8 +239,9 @@ def _exact_from_python(ticks, converted: np.ndarray, names) -> np.ndarray:
             if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
                 raise OdometryInputError(f"ticks: reading {show_number(v)} for wheels {names} is not a number")
         if any(ok and abs(int(v)) > FLOAT_EXACT for ok, v in zip(integral, flat, strict=True)):
-            raise OdometryInputError("ticks: integer readings beyond 2**53 mixed with floats would be rounded; "
-                                     "give integers only")
+            raise OdometryInputError(
+                "ticks: integer readings beyond 2**53 mixed with floats would be rounded; give integers only"
+            )
         return obj.astype(np.float64)
     values = [int(v) for v in flat]
     if not values or (min(values) >= INT64_MIN and max(values) <= INT64_MAX):
@@ -291,7 +305,7 @@ def checked_increments(rules, readings: np.ndarray, dt: np.ndarray, offset: int)
         bad = np.abs(d) > limit
     if delta.dtype.kind != "f":
         for j, r in enumerate(rules):
-            if r.bits == 64:      # -2**63, half a 64-bit range: no float between it and the limit
+            if r.bits == 64:  # -2**63, half a 64-bit range: no float between it and the limit
                 bad[..., j] |= delta[..., j] == INT64_MIN
     delta = d
     if np.any(bad):
@@ -300,8 +314,9 @@ def checked_increments(rules, readings: np.ndarray, dt: np.ndarray, offset: int)
         k = idx.pop()
         rule = rules[j]
         gap = float(np.broadcast_to(dt, bad.shape[:-1])[tuple(idx) + (k,)])
-        raise_at(rule.jump_message(_exact_difference_at(rule, readings, tuple(idx), k, j), gap),
-                 k + 1 + offset, tuple(idx))
+        raise_at(
+            rule.jump_message(_exact_difference_at(rule, readings, tuple(idx), k, j), gap), k + 1 + offset, tuple(idx)
+        )
     return delta
 
 
@@ -333,7 +348,7 @@ def _exact_differences(rules, readings: np.ndarray) -> np.ndarray:
     if kind == "f":
         delta = np.diff(readings, axis=-2)
         for bits, cols in _by_bits(rules):
-            full = float(2 ** bits)
+            full = float(2**bits)
             delta[..., cols] = (delta[..., cols] + full / 2) % full - full / 2
         return delta
     if kind == "O":
@@ -346,7 +361,7 @@ def _exact_differences(rules, readings: np.ndarray) -> np.ndarray:
     if not wide:
         readings = readings.astype(np.int64)
     unsigned = readings.view(np.uint64)
-    du = np.subtract(unsigned[..., 1:, :], unsigned[..., :-1, :])   # modulo 2**64: exact for wrapping
+    du = np.subtract(unsigned[..., 1:, :], unsigned[..., :-1, :])  # modulo 2**64: exact for wrapping
     delta = du.view(np.int64)
     for bits, cols in _by_bits(rules):
         if bits < 64:
@@ -390,8 +405,8 @@ def wheel_increments(rules, t, readings, block: int) -> np.ndarray:
     out = np.empty(lead + (m, len(rules)))
     for s0 in range(0, m, block):
         s1 = min(m, s0 + block)
-        dt = check_times(t[..., s0:s1 + 1], s0)
-        out[..., s0:s1, :] = checked_increments(rules, readings[..., s0:s1 + 1, :], dt, s0)
+        dt = check_times(t[..., s0 : s1 + 1], s0)
+        out[..., s0:s1, :] = checked_increments(rules, readings[..., s0 : s1 + 1, :], dt, s0)
     return out
 
 

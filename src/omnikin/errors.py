@@ -69,8 +69,7 @@ class ResourceLimitError(InputError):
     way to change it. ``needed`` and ``limit`` are in the unit of ``unit`` (``"bytes"``,
     ``"seconds"``, ``"messages"``, ...)."""
 
-    def __init__(self, message: str, *, needed: float | None = None, limit: float | None = None,
-                 unit: str = ""):
+    def __init__(self, message: str, *, needed: float | None = None, limit: float | None = None, unit: str = ""):
         super().__init__(message)
         self.needed = needed
         self.limit = limit
@@ -120,7 +119,7 @@ def shorten(value: object, limit: int = 60) -> str:
     """
     try:
         text = repr(value)
-    except ValueError:      # holds an int beyond Python's digit limit for str(int) (4300 digits)
+    except ValueError:  # holds an int beyond Python's digit limit for str(int) (4300 digits)
         return f"<{type(value).__name__} too large to print>"
     if len(text) <= limit:
         return text

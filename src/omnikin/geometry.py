@@ -188,10 +188,10 @@ def compose_exp_jacobians(theta: float, tangent) -> tuple[np.ndarray, np.ndarray
     k = sinc_scalar(h)
     dk = dsinc_scalar(h)
     c, s = math.cos(theta + h), math.sin(theta + h)
-    ra, rb = c * a - s * b, s * a + c * b            # R(theta + phi/2) (a, b)
+    ra, rb = c * a - s * b, s * a + c * b  # R(theta + phi/2) (a, b)
     j_pose = np.array([[1.0, 0.0, -k * rb], [0.0, 1.0, k * ra], [0.0, 0.0, 1.0]])
     # d/dphi of k(phi/2) R(theta + phi/2) (a, b): 0.5 dk R t + 0.5 k R' t
-    j_tangent = np.array([[k * c, -k * s, 0.5 * dk * ra - 0.5 * k * rb],
-                          [k * s, k * c, 0.5 * dk * rb + 0.5 * k * ra],
-                          [0.0, 0.0, 1.0]])
+    j_tangent = np.array(
+        [[k * c, -k * s, 0.5 * dk * ra - 0.5 * k * rb], [k * s, k * c, 0.5 * dk * rb + 0.5 * k * ra], [0.0, 0.0, 1.0]]
+    )
     return j_pose, j_tangent

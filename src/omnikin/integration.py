@@ -67,8 +67,9 @@ def _world_steps(a, b, phi, heading0, method: str):
     return dx, dy, heading
 
 
-def integrate_components(a: np.ndarray, b: np.ndarray, phi: np.ndarray, start=None,
-                         method: str = "exact", out: np.ndarray | None = None) -> np.ndarray:
+def integrate_components(
+    a: np.ndarray, b: np.ndarray, phi: np.ndarray, start=None, method: str = "exact", out: np.ndarray | None = None
+) -> np.ndarray:
     """:func:`integrate` on the components ``(..., N)`` of the increments (the fast path).
 
     About two dozen passes over memory and three transcendental functions per sample

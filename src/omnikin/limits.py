@@ -58,10 +58,11 @@ def speed_scale(robot, twist, limits: MotionLimits) -> np.ndarray:
     t = as_components(twist, 3, "twist")
     require_finite(t, "twist")
     speeds = np.abs(robot.ik(t, on_infeasible="return").wheel_speeds)
-    with np.errstate(divide="ignore"):            # a bound over a zero speed is no bound: inf
+    with np.errstate(divide="ignore"):  # a bound over a zero speed is no bound: inf
         bound = np.broadcast_to(wheel_limits(robot, limits), speeds.shape)
-        k = np.min(np.divide(bound, speeds, out=np.full(speeds.shape, np.inf), where=speeds > 0),
-                   axis=-1, initial=np.inf)
+        k = np.min(
+            np.divide(bound, speeds, out=np.full(speeds.shape, np.inf), where=speeds > 0), axis=-1, initial=np.inf
+        )
         if limits.linear is not None:
             k = np.minimum(k, limits.linear / np.hypot(t[..., 0], t[..., 1]))
         if limits.angular is not None:

@@ -86,9 +86,11 @@ class Mobility:
         if self.well_conditioned:
             return None
         c = self.condition_number
-        return (f"badly conditioned wheel layout: condition number {c:.3g} > {CONDITION_WARNING:g}, so a 1 % "
-                f"error in the wheel speeds can become a {c:.3g} % error of the twist in its worst direction "
-                f"(check drive_deg and roller_deg of the wheels)")
+        return (
+            f"badly conditioned wheel layout: condition number {c:.3g} > {CONDITION_WARNING:g}, so a 1 % "
+            f"error in the wheel speeds can become a {c:.3g} % error of the twist in its worst direction "
+            f"(check drive_deg and roller_deg of the wheels)"
+        )
 
     @property
     def campion_type(self) -> tuple[int, int]:

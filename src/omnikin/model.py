@@ -69,8 +69,13 @@ def name_collisions(names: Sequence[str]) -> list[tuple[int, str]]:
         for suffix, meaning in DERIVED_SUFFIXES.items():
             base = n[: -len(suffix)]
             if n.endswith(suffix) and base in first:
-                problems.append((i, f"wheel name {shorten(n)} is taken by the {meaning} of wheel {shorten(base)} "
-                                    f"(#{first[base] + 1}): rename one of them"))
+                problems.append(
+                    (
+                        i,
+                        f"wheel name {shorten(n)} is taken by the {meaning} of wheel {shorten(base)} "
+                        f"(#{first[base] + 1}): rename one of them",
+                    )
+                )
     return sorted(problems)
 
 
@@ -91,8 +96,7 @@ def _refuse_overflow(result: np.ndarray, what: str, name: str, given: np.ndarray
     value = ""
     if given.shape[:-1] == result.shape[:-1]:
         value = " " + shorten(given[index].tolist())
-    raise InputError(f"{name}{at}:{value} is too large: the {what} overflow (not finite); give values of "
-                     f"physical size")
+    raise InputError(f"{name}{at}:{value} is too large: the {what} overflow (not finite); give values of physical size")
 
 
 @dataclass(frozen=True)
@@ -227,8 +231,10 @@ class Robot:
             return [index[n] for n in names]
         except (KeyError, TypeError):
             bad = next(n for n in names if not isinstance(n, str) or n not in index)
-            raise InputError(f"robot {self.name!r} has no rolling wheel {shorten(bad)} "
-                             f"(rolling wheels: {shorten(self.rolling_names)})") from None
+            raise InputError(
+                f"robot {self.name!r} has no rolling wheel {shorten(bad)} "
+                f"(rolling wheels: {shorten(self.rolling_names)})"
+            ) from None
 
     @cached_property
     def _rolling_index(self) -> dict[str, int]:
@@ -243,8 +249,9 @@ class Robot:
         try:
             return self._by_name[name]
         except (KeyError, TypeError):
-            raise InputError(f"robot {self.name!r} has no wheel {shorten(name)} "
-                             f"(wheels: {shorten(self.wheel_names)})") from None
+            raise InputError(
+                f"robot {self.name!r} has no wheel {shorten(name)} (wheels: {shorten(self.wheel_names)})"
+            ) from None
 
     # --- matrices ---------------------------------------------------------------
     def _steer_array(self, steer) -> np.ndarray:
@@ -311,8 +318,9 @@ class Robot:
         jac = self.jacobian(steer, wheels)
         chosen = {w.name for w in (self.rolling if wheels is None else [self.wheel(n) for n in wheels])}
         by = self._steer_of(steer)
-        extra = [w.sliding_row(by[w.name]) / w.radius for w in self.steerable
-                 if w.is_centred_steerable and w.name in chosen]
+        extra = [
+            w.sliding_row(by[w.name]) / w.radius for w in self.steerable if w.is_centred_steerable and w.name in chosen
+        ]
         if not extra:
             return jac
         shape = np.broadcast_shapes(jac.shape[:-2], *[e.shape[:-1] for e in extra])
@@ -372,7 +380,8 @@ class Robot:
             names = [w.name for w in self.fixed] + [w.name for w in self.steerable if w.is_centred_steerable]
             raise SingularLayoutError(
                 f"robot {self.name!r}: immobile layout: the no-side-slip constraints of wheels "
-                f"{shorten(names)} admit no motion (degree of mobility 0)")
+                f"{shorten(names)} admit no motion (degree of mobility 0)"
+            )
         if not self.steerable:
             # with steerable wheels some motions are made by steering alone (e.g. spinning about a
             # centred steered wheel): observability is then checked where it matters, by odometry
@@ -390,18 +399,23 @@ class Robot:
         used = self.rolling_names if wheels is None else list(wheels)
         if abs(eta[2]) > 1e-9:
             cx, cy = (0.0 if abs(c) < 1e-12 else c for c in (-eta[1] / eta[2], eta[0] / eta[2]))
-            why = (f"a rotation about the point ({cx:.6g}, {cy:.6g}) m turns none of them: "
-                   f"every drive line passes through it")
+            why = (
+                f"a rotation about the point ({cx:.6g}, {cy:.6g}) m turns none of them: "
+                f"every drive line passes through it"
+            )
         else:
             d = [0.0 if abs(c) < 1e-12 else c for c in eta[:2] / np.hypot(eta[0], eta[1])]
-            why = (f"a translation along ({d[0]:.6g}, {d[1]:.6g}) turns none of them: "
-                   f"every rolling direction is perpendicular to it")
+            why = (
+                f"a translation along ({d[0]:.6g}, {d[1]:.6g}) turns none of them: "
+                f"every rolling direction is perpendicular to it"
+            )
         hint = ""
         if any(w.is_centred_steerable for w in self.steerable):
             hint = " (that motion is made by steering alone; wheel speeds cannot measure it)"
         raise SingularLayoutError(
             f"robot {self.name!r}: singular layout: wheels {shorten(used)} cannot realise or measure "
-            f"every motion the robot can make; {why}{hint} (wheel Jacobian rank {rank(m)} < {basis.shape[1]})")
+            f"every motion the robot can make; {why}{hint} (wheel Jacobian rank {rank(m)} < {basis.shape[1]})"
+        )
 
     def check_observable(self, wheels: Sequence[str]) -> None:
         """Raise unless the wheels ``wheels`` (e.g. the encoded ones) observe every motion."""
@@ -452,8 +466,9 @@ class Robot:
         result = IKResult(speeds, steer, violation, limited)
         if on_infeasible == "raise" and not np.all(result.feasible):
             detail = self._infeasible_detail(t, violation, limited)
-            raise InfeasibleTwistError(f"{detail} (on_infeasible='return' reports the violation instead)",
-                                       detail=detail)
+            raise InfeasibleTwistError(
+                f"{detail} (on_infeasible='return' reports the violation instead)", detail=detail
+            )
         return result
 
     def _infeasible_detail(self, t, violation, limited) -> str:
@@ -463,13 +478,17 @@ class Robot:
         if bad.size:
             idx = tuple(bad[0][:-1])
             w = self.fixed[int(bad[0][-1])]
-            return (f"robot {self.name!r}: twist {np.round(t[idx], 9).tolist()} is infeasible: fixed wheel "
-                    f"{w.name!r} would slide sideways at {violation[tuple(bad[0])]:.6g} m/s")
+            return (
+                f"robot {self.name!r}: twist {np.round(t[idx], 9).tolist()} is infeasible: fixed wheel "
+                f"{w.name!r} would slide sideways at {violation[tuple(bad[0])]:.6g} m/s"
+            )
         idx = np.argwhere(limited)[0]
         w = self.steerable[int(idx[-1])]
         lo, hi = (w.steer.lower, w.steer.upper) if w.steer is not None else (-np.pi, np.pi)
-        return (f"robot {self.name!r}: twist {np.round(t[tuple(idx[:-1])], 9).tolist()} needs wheel {w.name!r} "
-                f"steered outside its limits [{np.degrees(lo):.6g}, {np.degrees(hi):.6g}] deg")
+        return (
+            f"robot {self.name!r}: twist {np.round(t[tuple(idx[:-1])], 9).tolist()} needs wheel {w.name!r} "
+            f"steered outside its limits [{np.degrees(lo):.6g}, {np.degrees(hi):.6g}] deg"
+        )
 
     def _steer_for(self, t: np.ndarray, hint: np.ndarray, strict: bool = True):
         """Steering angles ``(..., n_steer)`` aligning each steerable wheel with the motion."""
@@ -503,7 +522,8 @@ class Robot:
         if self.steerable and steer is None:
             raise InputError(
                 f"robot {self.name!r}: steerable wheels {shorten(self.steer_names)} need their steering angles "
-                f"(steer=...)")
+                f"(steer=...)"
+            )
         steer = self._steer_array(steer)
         a = self.fk_rows(steer, wheels)
         n_extra = a.shape[-2] - len(names)
@@ -532,4 +552,3 @@ class Robot:
     @property
     def swedish_names(self) -> list[str]:
         return [w.name for w in self.wheels if w.is_swedish]
-

@@ -41,7 +41,8 @@ def encoded_wheels(robot: Robot):
     if not wheels:
         raise InputError(
             f"robot {robot.name!r}: no wheel has an 'encoder' entry; odometry from ticks needs "
-            f"encoder.ticks_per_rev on the measured wheels")
+            f"encoder.ticks_per_rev on the measured wheels"
+        )
     robot.check_observable([w.name for w in wheels])
     return wheels
 
@@ -109,8 +110,18 @@ def _fk_input(delta, scale, fk) -> np.ndarray:
     return angles
 
 
-def batch_odometry(robot: Robot, t, ticks, *, steer=None, method: str = "exact", counter_bits: int | None = None,
-                   start=None, max_jump=None, max_wheel_speed=None) -> OdometryResult:
+def batch_odometry(
+    robot: Robot,
+    t,
+    ticks,
+    *,
+    steer=None,
+    method: str = "exact",
+    counter_bits: int | None = None,
+    start=None,
+    max_jump=None,
+    max_wheel_speed=None,
+) -> OdometryResult:
     """Odometry of whole logs: ``ticks`` ``(..., N, n_enc)`` at times ``t`` ``(..., N)``.
 
     Leading axes (trials) broadcast. ``steer`` ``(..., N, n_steer)`` [rad] is needed
@@ -142,11 +153,12 @@ def batch_odometry(robot: Robot, t, ticks, *, steer=None, method: str = "exact",
     f_ticks = f * scale
     for s0 in range(0, m, CHUNK):
         s1 = min(m, s0 + CHUNK)
-        dt = check_times(tt[..., s0:s1 + 1], s0)
-        d = checked_increments(rules, tk[..., s0:s1 + 1, :], dt, s0)
-        comps = np.matmul(f_ticks, np.swapaxes(d, -1, -2))                  # (..., 3, block)
-        integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], pose, method,
-                             out=out[..., s0:s1 + 1, :])
+        dt = check_times(tt[..., s0 : s1 + 1], s0)
+        d = checked_increments(rules, tk[..., s0 : s1 + 1, :], dt, s0)
+        comps = np.matmul(f_ticks, np.swapaxes(d, -1, -2))  # (..., 3, block)
+        integrate_components(
+            comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], pose, method, out=out[..., s0 : s1 + 1, :]
+        )
         inc[..., s0:s1, :] = np.swapaxes(comps, -1, -2)
         if residual is not None:
             residual[..., s0:s1, :] = _residual(_fk_input(d, scale, f), rows, inc[..., s0:s1, :], dt)
@@ -156,8 +168,9 @@ def batch_odometry(robot: Robot, t, ticks, *, steer=None, method: str = "exact",
     return OdometryResult(tt, out, inc, residual)
 
 
-def batch_odometry_from_angles(robot: Robot, t, angles, *, steer=None, method: str = "exact", start=None,
-                               max_jump=None, max_wheel_speed=None) -> OdometryResult:
+def batch_odometry_from_angles(
+    robot: Robot, t, angles, *, steer=None, method: str = "exact", start=None, max_jump=None, max_wheel_speed=None
+) -> OdometryResult:
     """Like :func:`batch_odometry` but from wheel angles ``(..., N, n_enc)`` [rad] (no counters;
     the same physical jump rule)."""
     wheels = encoded_wheels(robot)
@@ -179,13 +192,15 @@ def _timestamps(t, readings: np.ndarray, what: str, names) -> np.ndarray:
         raise OdometryInputError(f"{what}: expected shape (..., N, {n}) for wheels {names}, got {readings.shape}")
     tt = np.asarray(t, dtype=float)
     if tt.shape[-1:] != readings.shape[-2:-1]:
-        raise OdometryInputError(f"t: expected {readings.shape[-2]} timestamps to match {what} {readings.shape}, "
-                                 f"got shape {tt.shape}")
+        raise OdometryInputError(
+            f"t: expected {readings.shape[-2]} timestamps to match {what} {readings.shape}, got shape {tt.shape}"
+        )
     try:
         np.broadcast_shapes(tt.shape[:-1], readings.shape[:-2])
     except ValueError:
-        raise OdometryInputError(f"t: leading shape {tt.shape[:-1]} does not broadcast with {what} "
-                                 f"{readings.shape[:-2]}") from None
+        raise OdometryInputError(
+            f"t: leading shape {tt.shape[:-1]} does not broadcast with {what} {readings.shape[:-2]}"
+        ) from None
     return tt
 
 
@@ -219,14 +234,17 @@ def _integrate(robot, wheels, t, delta, scale, steer, method, start) -> Odometry
         rows = robot.fk_rows(None, names)
         return OdometryResult(t, out, inc, _residual(_fk_input(d, scale, f), rows, inc, np.diff(t, axis=-1)))
     if steer is None:
-        raise InputError(f"robot {robot.name!r}: steerable wheels {robot.steer_names} need steering "
-                         f"angles (steer, shape (..., N, {len(robot.steerable)}))")
+        raise InputError(
+            f"robot {robot.name!r}: steerable wheels {robot.steer_names} need steering "
+            f"angles (steer, shape (..., N, {len(robot.steerable)}))"
+        )
     d = delta()
     s = as_components(steer, len(robot.steerable), "steer")
     want = d.shape[:-2] + (d.shape[-2] + 1, len(robot.steerable))
     if s.ndim < 2 or s.shape[-2] != want[-2] or np.broadcast_shapes(s.shape, want) != want:
-        raise OdometryInputError(f"steer: expected shape {want} (one angle per steerable wheel and sample), "
-                                 f"got {s.shape}")
+        raise OdometryInputError(
+            f"steer: expected shape {want} (one angle per steerable wheel and sample), got {s.shape}"
+        )
     first_bad(~np.isfinite(s), "steer: non-finite steering angle", robot.steer_names)
     mid = mid_steer(s)
     f = robot.fk_matrix(mid, names)
@@ -234,8 +252,9 @@ def _integrate(robot, wheels, t, delta, scale, steer, method, start) -> Odometry
     angles = _fk_input(d, scale, f)
     inc = np.einsum("...ij,...j->...i", f, angles)
     comps = np.ascontiguousarray(np.swapaxes(inc, -1, -2))
-    poses = integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :],
-                                 None if start is None else _start(start), method)
+    poses = integrate_components(
+        comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], None if start is None else _start(start), method
+    )
     return OdometryResult(t, poses, inc, _residual(angles, rows, inc, np.diff(t, axis=-1)))
 
 

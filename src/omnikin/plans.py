@@ -54,8 +54,9 @@ class Segment:
         if len(xi) != 3 or not all(math.isfinite(v) for v in xi) or xi == (0.0, 0.0, 0.0):
             raise InputError(f"segment {self.label!r}: xi must be a finite non-zero twist, got {self.xi!r}")
         if not (math.isfinite(self.length) and 0 <= self.length <= MAX_SEGMENT):
-            raise InputError(f"segment {self.label!r}: length must be from 0 to {MAX_SEGMENT:g} [m or rad], "
-                             f"got {self.length!r}")
+            raise InputError(
+                f"segment {self.label!r}: length must be from 0 to {MAX_SEGMENT:g} [m or rad], got {self.length!r}"
+            )
         object.__setattr__(self, "xi", xi)
 
 
@@ -185,8 +186,10 @@ def parse_plan(text: str) -> Plan:
         return spin(math.radians(nums[0]))
     if kind == "arc" and len(nums) == 2:
         return arc(nums[0], math.radians(nums[1]))
-    raise InputError(f"path {text!r}: expected 'square cw|ccw rotate|translate [SIDE]', 'line LENGTH "
-                       f"[HEADING_DEG]', 'spin ANGLE_DEG' or 'arc RADIUS ANGLE_DEG'")
+    raise InputError(
+        f"path {text!r}: expected 'square cw|ccw rotate|translate [SIDE]', 'line LENGTH "
+        f"[HEADING_DEG]', 'spin ANGLE_DEG' or 'arc RADIUS ANGLE_DEG'"
+    )
 
 
 @dataclass(frozen=True)
@@ -207,8 +210,10 @@ class CalibrationRun:
     def __post_init__(self):
         m = tuple(float(v) for v in self.measured)
         if len(m) != 3 or not (math.isfinite(m[0]) and math.isfinite(m[1])) or math.isinf(m[2]):
-            raise InputError(f"calibration run {self.label!r}: measured end pose needs finite x and y "
-                               f"(theta may be NaN when not measured), got {self.measured!r}")
+            raise InputError(
+                f"calibration run {self.label!r}: measured end pose needs finite x and y "
+                f"(theta may be NaN when not measured), got {self.measured!r}"
+            )
         if not all(s > 0 for s in self.sigma):
             raise InputError(f"calibration run {self.label!r}: sigma must be positive, got {self.sigma!r}")
         object.__setattr__(self, "measured", m)

@@ -81,8 +81,16 @@ class Odometry:
     ``samples``.
     """
 
-    def __init__(self, robot: Robot, *, method: str = "exact", counter_bits: int | None = None,
-                 start=(0.0, 0.0, 0.0), max_jump=None, max_wheel_speed=None):
+    def __init__(
+        self,
+        robot: Robot,
+        *,
+        method: str = "exact",
+        counter_bits: int | None = None,
+        start=(0.0, 0.0, 0.0),
+        max_jump=None,
+        max_wheel_speed=None,
+    ):
         self.robot = robot
         self.method = check_method(method)
         wheels = encoded_wheels(robot)
@@ -107,8 +115,15 @@ class Odometry:
         if self._fk is not None:
             fk_angles = [[float(v) for v in row[: self._n]] for row in self._fk]
             fk_ticks = [[v * s for v, s in zip(row, self._scale, strict=True)] for row in fk_angles]
-        self._kernels = kernel.build(self._n, fk_ticks, fk_angles, kernel.tick_bounds(self.rules),
-                                     kernel.angle_bounds(self.rules), [r.bits for r in self.rules], self.method)
+        self._kernels = kernel.build(
+            self._n,
+            fk_ticks,
+            fk_angles,
+            kernel.tick_bounds(self.rules),
+            kernel.angle_bounds(self.rules),
+            [r.bits for r in self.rules],
+            self.method,
+        )
         self._step_ticks = self._kernels.step_ticks or _decline
         self._step_angles = self._kernels.step_angles or _decline
 
@@ -129,8 +144,9 @@ class Odometry:
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise InputError(f"pose: expected 3 finite numbers, got {shorten(pose)}")
         start = (float(p[0]), float(p[1]), float(wrap_angle(p[2])))
-        self._state: tuple[Any, ...] = (start, math.nan, math.nan, 0, math.nan, 0.0, 0.0, 0.0) + \
-            (0,) * self._n + (0.0,) * self._n
+        self._state: tuple[Any, ...] = (
+            (start, math.nan, math.nan, 0, math.nan, 0.0, 0.0, 0.0) + (0,) * self._n + (0.0,) * self._n
+        )
         self._steer: np.ndarray | None = None
         self._steer_residual: list[float] | None = None
         self.duplicates = 0
@@ -169,10 +185,10 @@ class Odometry:
             return list(self._steer_residual)
         if not self._redundant or self._rows is None:
             return [0.0] * self._n_rows
-        delta = np.array(st[S_READ + self._n:], dtype=float)
+        delta = np.array(st[S_READ + self._n :], dtype=float)
         angles = delta * self._scale if state_kind(st) == KIND_TICKS else delta
         b = np.concatenate([angles, np.zeros(self._n_rows - self._n)])
-        inc = np.array(st[S_INC:S_INC + 3])
+        inc = np.array(st[S_INC : S_INC + 3])
         return [float(v) / st[S_DT] for v in b - self._rows @ inc]
 
     @property
@@ -226,8 +242,9 @@ class Odometry:
             try:
                 seq = list(values)
             except TypeError:
-                raise self._fail(f"expected {self._n} {what}s for wheels {self.wheel_names}, "
-                                 f"got {shorten(values)}") from None
+                raise self._fail(
+                    f"expected {self._n} {what}s for wheels {self.wheel_names}, got {shorten(values)}"
+                ) from None
         if not isinstance(seq, list) or len(seq) != self._n:
             got = len(seq) if isinstance(seq, list) else shorten(seq)
             raise self._fail(f"expected {self._n} {what}s for wheels {self.wheel_names}, got {got}")
@@ -258,9 +275,10 @@ class Odometry:
         if fed == KIND_NONE:
             return self._first(t, values, s, kind)
         if fed != kind:
-            raise InputError(f"this estimator was fed {_WHAT[fed]}s since its last reset: reset() before feeding "
-                             f"{_WHAT[kind]}s")
-        previous = st[S_READ:S_READ + self._n]
+            raise InputError(
+                f"this estimator was fed {_WHAT[fed]}s since its last reset: reset() before feeding {_WHAT[kind]}s"
+            )
+        previous = st[S_READ : S_READ + self._n]
         dt = t - state_time(st)
         if not dt > 0.0:
             return self._not_later(t, dt, values, previous, s)
@@ -276,7 +294,7 @@ class Odometry:
                 if abs(d) > r.angle_limit(dt):
                     raise self._fail(r.jump_message(d, dt, "rad"))
         residual = None
-        if self._steer is not None and s is not None:        # steerable wheels
+        if self._steer is not None and s is not None:  # steerable wheels
             scale = self._scale if kind == KIND_TICKS else [1.0] * self._n
             mid = np.asarray(mid_steer(np.stack([self._steer, s])))[0]
             fk = self.robot.fk(np.array([d * k for d, k in zip(deltas, scale, strict=True)]), mid, self.wheel_names)
@@ -284,7 +302,7 @@ class Odometry:
             residual = [float(v) / dt for v in fk.residual]
         else:
             body_increment = self._kernels.fk_ticks if kind == KIND_TICKS else self._kernels.fk_angles
-            assert body_increment is not None      # built for every robot without steerable wheels
+            assert body_increment is not None  # built for every robot without steerable wheels
             a, b, phi = body_increment(*deltas)
         pose = self._kernels.move(st[S_POSE], a, b, phi)
         self._state = (pose,) + _times(t, kind) + (st[S_COUNT] + 1, dt, a, b, phi) + values + deltas
@@ -303,8 +321,11 @@ class Odometry:
         if dt == 0.0 and values == previous and same_steer:
             self.duplicates += 1
             if not self._warned:
-                warnings.warn(f"odometry: duplicate sample at t={t!r} skipped (counted in .duplicates)",
-                              RuntimeWarning, stacklevel=4)
+                warnings.warn(
+                    f"odometry: duplicate sample at t={t!r} skipped (counted in .duplicates)",
+                    RuntimeWarning,
+                    stacklevel=4,
+                )
                 self._warned = True
             return self.pose
         what = "repeats" if dt == 0.0 else "goes back from"
@@ -323,12 +344,15 @@ class Odometry:
                 raise InputError(f"robot {self.robot.name!r} has no steerable wheel: do not pass steer")
             return None
         if steer is None:
-            raise InputError(f"robot {self.robot.name!r}: steerable wheels {self.robot.steer_names} need "
-                             f"their steering angles (steer=...)")
+            raise InputError(
+                f"robot {self.robot.name!r}: steerable wheels {self.robot.steer_names} need "
+                f"their steering angles (steer=...)"
+            )
         s = as_components(steer, len(self.robot.steerable), "steer")
         if s.shape != (len(self.robot.steerable),):
-            raise self._fail(f"steer: expected {len(self.robot.steerable)} angles for {self.robot.steer_names}, "
-                             f"got shape {s.shape}")
+            raise self._fail(
+                f"steer: expected {len(self.robot.steerable)} angles for {self.robot.steer_names}, got shape {s.shape}"
+            )
         if not np.all(np.isfinite(s)):
             raise self._fail(f"non-finite steering angle {shorten(list(s))}")
         return s

@@ -87,8 +87,10 @@ def name_problem(name) -> str | None:
     if not isinstance(name, str):
         return f"must be a string, got {shorten(name)} (quote it in YAML: name: '1')"
     if not NAME_PATTERN.fullmatch(name):
-        return (f"{shorten(name)} is not a valid wheel name: a letter, then letters, digits or underscores, "
-                f"at most 64 characters (it names CSV columns and ROS joints)")
+        return (
+            f"{shorten(name)} is not a valid wheel name: a letter, then letters, digits or underscores, "
+            f"at most 64 characters (it names CSV columns and ROS joints)"
+        )
     if name in RESERVED_NAMES:
         return f"{name!r} is reserved (the time column of tick logs)"
     return None
@@ -114,8 +116,9 @@ class Encoder:
 
     def __post_init__(self):
         bits = self.counter_bits
-        if bits is not None and (isinstance(bits, (bool, np.bool_)) or not isinstance(bits, (int, np.integer))
-                                 or not 2 <= bits <= 64):
+        if bits is not None and (
+            isinstance(bits, (bool, np.bool_)) or not isinstance(bits, (int, np.integer)) or not 2 <= bits <= 64
+        ):
             raise InputError(f"encoder counter_bits must be a whole number from 2 to 64, got {shorten(bits)}")
         _require(range_problem(self.ticks_per_rev, *TICKS_PER_REV_RANGE), "encoder: ticks_per_rev")
         _require(range_problem(self.gear_ratio, *GEAR_RATIO_RANGE), "encoder: gear_ratio")
@@ -176,11 +179,13 @@ class Wheel:
         if self.type not in WHEEL_TYPES:
             raise InputError(f"{who} unknown type {shorten(self.type)}; one of {list(WHEEL_TYPES)}")
         roller = math.radians(ROLLER_LIMIT_DEG)
-        for field, low, high, unit in (("x", -POSITION_LIMIT, POSITION_LIMIT, "m"),
-                                       ("y", -POSITION_LIMIT, POSITION_LIMIT, "m"),
-                                       ("drive", -math.inf, math.inf, "rad"),
-                                       ("radius", *RADIUS_RANGE, "m"),
-                                       ("roller", -roller, roller, "rad")):
+        for field, low, high, unit in (
+            ("x", -POSITION_LIMIT, POSITION_LIMIT, "m"),
+            ("y", -POSITION_LIMIT, POSITION_LIMIT, "m"),
+            ("drive", -math.inf, math.inf, "rad"),
+            ("radius", *RADIUS_RANGE, "m"),
+            ("roller", -roller, roller, "rad"),
+        ):
             _require(range_problem(getattr(self, field), low, high, unit), f"{who} {field}")
         if self.roller and not self.is_swedish:
             raise InputError(f"{who} only Swedish wheels have a roller angle")
@@ -300,7 +305,8 @@ class Wheel:
             bad = np.argwhere(unsteady)[0]
             raise InfeasibleTwistError(
                 f"wheel {self.name!r}: no steady steering angle for twist {t[tuple(bad)].tolist()}: its "
-                f"steering axis moves slower than offset*|omega|, so the wheel would keep swivelling")
+                f"steering axis moves slower than offset*|omega|, so the wheel would keep swivelling"
+            )
         a = np.arcsin(np.clip(k, -1.0, 1.0))
         cands = np.stack([psi - a, psi + np.pi + a], axis=-1) - self.drive
         cands = wrap_angle(cands)

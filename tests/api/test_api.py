@@ -21,15 +21,16 @@ ENTRY_POINTS = ("simulate", "run_umbmark", "analyze_umbmark", "calibrate", "cali
 
 
 def python(code: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
-                          env=omnikin_env())
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=omnikin_env())
 
 
 def test_import_omnikin_loads_neither_scipy_nor_matplotlib():
-    proc = python("import sys, omnikin\n"
-                  "heavy = sorted({m.split('.')[0] for m in sys.modules} & {'scipy', 'matplotlib', 'omnikin.api'})\n"
-                  "api = [m for m in sys.modules if m.startswith(('omnikin.api', 'omnikin.evaluation'))]\n"
-                  "print(heavy, api)")
+    proc = python(
+        "import sys, omnikin\n"
+        "heavy = sorted({m.split('.')[0] for m in sys.modules} & {'scipy', 'matplotlib', 'omnikin.api'})\n"
+        "api = [m for m in sys.modules if m.startswith(('omnikin.api', 'omnikin.evaluation'))]\n"
+        "print(heavy, api)"
+    )
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "[] []"
 
@@ -55,20 +56,51 @@ def argparse_defaults(parser) -> dict:
 
 
 def signature_defaults(function) -> dict:
-    return {n: p.default for n, p in inspect.signature(function).parameters.items()
-            if p.default is not inspect.Parameter.empty}
+    return {
+        n: p.default
+        for n, p in inspect.signature(function).parameters.items()
+        if p.default is not inspect.Parameter.empty
+    }
 
 
-@pytest.mark.parametrize("command, function, names", [
-    ("umbmark", omnikin.run_umbmark, {"robot": "robot", "true_robot": "true_robot", "errors": "errors",
-                                      "mode": "mode", "runs": "runs", "side": "side", "noise": "noise",
-                                      "rate": "rate", "seed": "seed", "trials": "trials", "calibrate": "calibrate",
-                                      "max_memory": "max_memory", "max_time": "max_time"}),
-    ("umbmark", omnikin.UMBmarkReport.write, {"figures": "figure_format", "dpi": "dpi"}),
-    ("simulate", omnikin.simulate, {"path": "path", "true_robot": "true_robot", "errors": "errors",
-                                    "noise": "noise", "seed": "seed", "rate": "rate"}),
-    ("calibrate", omnikin.calibration_plan, {"side": "side"}),
-])
+@pytest.mark.parametrize(
+    "command, function, names",
+    [
+        (
+            "umbmark",
+            omnikin.run_umbmark,
+            {
+                "robot": "robot",
+                "true_robot": "true_robot",
+                "errors": "errors",
+                "mode": "mode",
+                "runs": "runs",
+                "side": "side",
+                "noise": "noise",
+                "rate": "rate",
+                "seed": "seed",
+                "trials": "trials",
+                "calibrate": "calibrate",
+                "max_memory": "max_memory",
+                "max_time": "max_time",
+            },
+        ),
+        ("umbmark", omnikin.UMBmarkReport.write, {"figures": "figure_format", "dpi": "dpi"}),
+        (
+            "simulate",
+            omnikin.simulate,
+            {
+                "path": "path",
+                "true_robot": "true_robot",
+                "errors": "errors",
+                "noise": "noise",
+                "seed": "seed",
+                "rate": "rate",
+            },
+        ),
+        ("calibrate", omnikin.calibration_plan, {"side": "side"}),
+    ],
+)
 def test_defaults_equal_the_command_line(command, function, names):
     cli = argparse_defaults(subparser(command))
     api = signature_defaults(function)
@@ -88,9 +120,26 @@ def test_analyze_defaults_equal_the_command_line():
 def test_simulate_is_omnikin_simulate_without_the_bag(tmp_path):
     pytest.importorskip("rosbags.rosbag2")
 
-    proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", "simulate", "tomasi-omni3", "--path", "line 1",
-                           "--seed", "5", "--bag", str(tmp_path / "s.bag"), "--json"], capture_output=True, text=True,
-                          timeout=120, env=omnikin_env())
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "omnikin.cli.main",
+            "simulate",
+            "tomasi-omni3",
+            "--path",
+            "line 1",
+            "--seed",
+            "5",
+            "--bag",
+            str(tmp_path / "s.bag"),
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=omnikin_env(),
+    )
     assert proc.returncode == 0, proc.stderr
     cli = json.loads(proc.stdout)
     sim = omnikin.simulate("tomasi-omni3", "line 1", seed=5)
@@ -113,8 +162,10 @@ def test_results_plot_themselves(tmp_path):
     res = omnikin.analyze_umbmark({"cw": [(0.01, 0.02), (0.02, 0.01), (0.0, 0.0)], "ccw": [(0.0, -0.01)] * 3})
     assert isinstance(res.plot(), Figure)
     assert res.e_max_syst == pytest.approx(math.hypot(0.01, 0.01), rel=1e-12)
-    runs = [CalibrationRun(line(4.0), (4.01, 0.02, 0.0), "line 4"),
-            CalibrationRun(spin(math.pi), (0, 0, 3.1), "spin 180")]
+    runs = [
+        CalibrationRun(line(4.0), (4.01, 0.02, 0.0), "line 4"),
+        CalibrationRun(spin(math.pi), (0, 0, 3.1), "spin 180"),
+    ]
     fit = omnikin.calibrate(robot, runs)
     fig = fit.plot()
     assert isinstance(fig, Figure)
@@ -124,11 +175,13 @@ def test_results_plot_themselves(tmp_path):
 
 
 def test_plotting_without_matplotlib_names_the_viz_extra():
-    proc = python("import sys; sys.modules['matplotlib'] = None\n"
-                  "import omnikin\n"
-                  "res = omnikin.analyze_umbmark({'cw': [(0.01, 0.0)], 'ccw': [(0.0, 0.01)]})\n"
-                  "print(res.e_max_syst)\n"
-                  "try:\n    res.plot()\nexcept ImportError as e:\n    print('ImportError:', e)")
+    proc = python(
+        "import sys; sys.modules['matplotlib'] = None\n"
+        "import omnikin\n"
+        "res = omnikin.analyze_umbmark({'cw': [(0.01, 0.0)], 'ccw': [(0.0, 0.01)]})\n"
+        "print(res.e_max_syst)\n"
+        "try:\n    res.plot()\nexcept ImportError as e:\n    print('ImportError:', e)"
+    )
     assert proc.returncode == 0, proc.stderr
     lines = proc.stdout.splitlines()
     assert float(lines[0]) == pytest.approx(0.01)
@@ -147,11 +200,19 @@ def test_run_umbmark_result_is_what_the_command_writes(tmp_path):
     assert cli == doc
 
 
-@pytest.mark.parametrize("kwargs, contains", [
-    ({"trials": 0}, "trials"), ({"runs": 2.5}, "runs"), ({"side": -1.0}, "side"), ({"rate": math.nan}, "rate"),
-    ({"seed": -3}, "seed"), ({"noise": "loud"}, "loud"), ({"trials": 10 ** 9}, "max_memory"),
-    ({"trials": 3000, "max_time": 10.0}, "max_time"),
-])
+@pytest.mark.parametrize(
+    "kwargs, contains",
+    [
+        ({"trials": 0}, "trials"),
+        ({"runs": 2.5}, "runs"),
+        ({"side": -1.0}, "side"),
+        ({"rate": math.nan}, "rate"),
+        ({"seed": -3}, "seed"),
+        ({"noise": "loud"}, "loud"),
+        ({"trials": 10**9}, "max_memory"),
+        ({"trials": 3000, "max_time": 10.0}, "max_time"),
+    ],
+)
 def test_run_umbmark_refuses_bad_arguments_with_one_line(kwargs, contains):
     with pytest.raises(omnikin.InputError) as info:
         omnikin.run_umbmark("diff-drive", **kwargs)
@@ -159,5 +220,12 @@ def test_run_umbmark_refuses_bad_arguments_with_one_line(kwargs, contains):
 
 
 def test_calibration_plan_lists_what_the_robot_can_drive():
-    assert omnikin.calibration_plan("diff-drive", 3.0) == ["square cw rotate 3", "square ccw rotate 3", "line 3 0",
-                                                           "spin 180", "spin -180", "spin 1800", "spin -1800"]
+    assert omnikin.calibration_plan("diff-drive", 3.0) == [
+        "square cw rotate 3",
+        "square ccw rotate 3",
+        "line 3 0",
+        "spin 180",
+        "spin -180",
+        "spin 1800",
+        "spin -1800",
+    ]

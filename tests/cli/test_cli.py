@@ -29,9 +29,17 @@ COMMANDS = ("presets", "show", "ik", "fk", "odometry")
 STEERABLE_PRESETS = ("villasenor-omni3", "ackermann", "synchro", "xr4000")
 SWEDISH_PRESETS = ("tomasi-omni3", "garcia-sillas-omni3", "mecanum4", "omni4")
 # Campion types known from the layouts (Campion, Bastin, d'Andrea-Novel 1996)
-CAMPION = {"tomasi-omni3": (3, 0), "garcia-sillas-omni3": (3, 0), "villasenor-omni3": (3, 0),
-           "diff-drive": (2, 0), "ackermann": (1, 1), "synchro": (1, 2), "xr4000": (3, 0),
-           "mecanum4": (3, 0), "omni4": (3, 0)}
+CAMPION = {
+    "tomasi-omni3": (3, 0),
+    "garcia-sillas-omni3": (3, 0),
+    "villasenor-omni3": (3, 0),
+    "diff-drive": (2, 0),
+    "ackermann": (1, 1),
+    "synchro": (1, 2),
+    "xr4000": (3, 0),
+    "mecanum4": (3, 0),
+    "omni4": (3, 0),
+}
 # a feasible twist with some rotation for each preset
 FEASIBLE = {name: (0.1, 0.05, 0.2) for name in PRESET_NAMES}
 FEASIBLE.update({"diff-drive": (0.1, 0.0, 0.2), "ackermann": (1.0, 0.0, 0.3)})
@@ -89,8 +97,14 @@ def run(*argv, timeout=120, cwd=None):
     """The real entry point in a subprocess, running this checkout's omnikin from any folder (a
     relative PYTHONPATH would fall back to whatever omnikin is installed)."""
     env = omnikin_env()
-    return subprocess.run([sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]], env=env, cwd=cwd,
-                          capture_output=True, text=True, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]],
+        env=env,
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
 
 
 def assert_clean_error(rc, err, *fragments):
@@ -132,8 +146,9 @@ def test_installed_script_runs():
     exe = shutil.which("omnikin")
     if exe is None:
         pytest.skip("omnikin console script not on PATH")
-    proc = subprocess.run([exe, "ik", "tomasi-omni3", "0", "0", "1", "--json"], capture_output=True, text=True,
-                          timeout=120)
+    proc = subprocess.run(
+        [exe, "ik", "tomasi-omni3", "0", "0", "1", "--json"], capture_output=True, text=True, timeout=120
+    )
     assert proc.returncode == 0, proc.stderr
     np.testing.assert_allclose(json.loads(proc.stdout)["wheel_speeds"], [0.113 / 0.04125] * 3, rtol=1e-12)
 
@@ -199,13 +214,17 @@ def test_show_json(capsys, name):
 def test_show_json_file_robot(capsys, tmp_path):
     """ROBOT may be a file path; the IK matrix follows the file."""
     path = tmp_path / "tri.yaml"
-    path.write_text("omnikin: 1\nname: tri\nwheels:\n"
-                    "  - {name: a, type: omni, distance: 0.2, angle_deg: 90, radius: 0.05}\n"
-                    "  - {name: b, type: omni, distance: 0.2, angle_deg: 210, radius: 0.05}\n"
-                    "  - {name: c, type: omni, distance: 0.2, angle_deg: 330, radius: 0.05}\n", encoding="utf-8")
+    path.write_text(
+        "omnikin: 1\nname: tri\nwheels:\n"
+        "  - {name: a, type: omni, distance: 0.2, angle_deg: 90, radius: 0.05}\n"
+        "  - {name: b, type: omni, distance: 0.2, angle_deg: 210, radius: 0.05}\n"
+        "  - {name: c, type: omni, distance: 0.2, angle_deg: 330, radius: 0.05}\n",
+        encoding="utf-8",
+    )
     data = cli_json(capsys, "show", path)
-    expected = [[-math.sin(math.radians(b)) / 0.05, math.cos(math.radians(b)) / 0.05, 0.2 / 0.05]
-                for b in (90, 210, 330)]
+    expected = [
+        [-math.sin(math.radians(b)) / 0.05, math.cos(math.radians(b)) / 0.05, 0.2 / 0.05] for b in (90, 210, 330)
+    ]
     np.testing.assert_allclose(data["ik_matrix"], expected, atol=1e-12)
 
 
@@ -322,11 +341,19 @@ def test_ik_ackermann_closed_form(capsys):
     v, w, d, half, r = 1.0, 0.3, 0.6, 0.25, 0.1
     data = cli_json(capsys, "ik", "ackermann", v, 0, w)
     assert data["steer_names"] == ["front_left", "front_right"]
-    np.testing.assert_allclose(data["steer_angles"], [math.atan2(d * w, v - half * w), math.atan2(d * w, v + half * w)],
-                               atol=1e-12)
-    np.testing.assert_allclose(data["wheel_speeds"],
-                               [(v - half * w) / r, (v + half * w) / r,
-                                math.hypot(v - half * w, d * w) / r, math.hypot(v + half * w, d * w) / r], atol=1e-12)
+    np.testing.assert_allclose(
+        data["steer_angles"], [math.atan2(d * w, v - half * w), math.atan2(d * w, v + half * w)], atol=1e-12
+    )
+    np.testing.assert_allclose(
+        data["wheel_speeds"],
+        [
+            (v - half * w) / r,
+            (v + half * w) / r,
+            math.hypot(v - half * w, d * w) / r,
+            math.hypot(v + half * w, d * w) / r,
+        ],
+        atol=1e-12,
+    )
     assert data["feasible"] is True
 
 
@@ -390,8 +417,12 @@ def test_fk_synchro_steered_30_deg(capsys):
 
 def test_fk_ackermann_closed_form(capsys):
     v, w, d, half, r = 1.0, 0.3, 0.6, 0.25, 0.1
-    speeds = [(v - half * w) / r, (v + half * w) / r, math.hypot(v - half * w, d * w) / r,
-              math.hypot(v + half * w, d * w) / r]
+    speeds = [
+        (v - half * w) / r,
+        (v + half * w) / r,
+        math.hypot(v - half * w, d * w) / r,
+        math.hypot(v + half * w, d * w) / r,
+    ]
     steer = [math.degrees(math.atan2(d * w, v - half * w)), math.degrees(math.atan2(d * w, v + half * w))]
     data = cli_json(capsys, "fk", "ackermann", *speeds, "--steer-deg", *steer)
     np.testing.assert_allclose(data["twist"], [v, 0, w], atol=1e-9)
@@ -416,8 +447,12 @@ def test_fk_text_output(capsys):
 
 # --- bad input (in-process; main must return 2, never raise) ----------------------------------------------------
 def test_unknown_robot(capsys):
-    for argv in (("show", "no-such-bot"), ("ik", "no-such-bot", 0, 0, 0), ("fk", "no-such-bot", 1),
-                 ("odometry", "no-such-bot", "log.csv", "-o", "out.csv")):
+    for argv in (
+        ("show", "no-such-bot"),
+        ("ik", "no-such-bot", 0, 0, 0),
+        ("fk", "no-such-bot", 1),
+        ("odometry", "no-such-bot", "log.csv", "-o", "out.csv"),
+    ):
         rc, _, err = cli(capsys, *argv)
         line = assert_clean_error(rc, err, "no-such-bot")
         for name in PRESET_NAMES:
@@ -426,23 +461,33 @@ def test_unknown_robot(capsys):
 
 def test_bad_robot_file_names_file(capsys, tmp_path):
     path = tmp_path / "bad.yaml"
-    path.write_text("omnikin: 1\nname: bad\nwheels:\n  - {name: w1, type: omni, distance: 0.1, angle_deg: 0, "
-                    "radius: -0.04}\n", encoding="utf-8")
+    path.write_text(
+        "omnikin: 1\nname: bad\nwheels:\n  - {name: w1, type: omni, distance: 0.1, angle_deg: 0, radius: -0.04}\n",
+        encoding="utf-8",
+    )
     rc, _, err = cli(capsys, "show", path)
     assert_clean_error(rc, err, str(path), "'w1'", "'radius'")
 
 
-@pytest.mark.parametrize("name, count", [("tomasi-omni3", 2), ("tomasi-omni3", 4), ("omni4", 3),
-                                         ("diff-drive", 3), ("synchro", 1)])
+@pytest.mark.parametrize(
+    "name, count", [("tomasi-omni3", 2), ("tomasi-omni3", 4), ("omni4", 3), ("diff-drive", 3), ("synchro", 1)]
+)
 def test_fk_wrong_number_of_speeds(capsys, name, count):
     n = len(preset_wheels(name))
     rc, _, err = cli(capsys, "fk", name, *([1.0] * count))
     assert_clean_error(rc, err, f"{n} wheel speeds", f"got {count}")
 
 
-@pytest.mark.parametrize("argv", [("ik", "tomasi-omni3", "fast", 0, 0), ("ik", "tomasi-omni3", 0, 0, "1rad"),
-                                  ("fk", "tomasi-omni3", 1, "two", 3), ("ik", "tomasi-omni3", 0, 0),
-                                  ("odometry", "tomasi-omni3", "log.csv", "-o", "x", "--counter-bits", "16.5")])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ("ik", "tomasi-omni3", "fast", 0, 0),
+        ("ik", "tomasi-omni3", 0, 0, "1rad"),
+        ("fk", "tomasi-omni3", 1, "two", 3),
+        ("ik", "tomasi-omni3", 0, 0),
+        ("odometry", "tomasi-omni3", "log.csv", "-o", "x", "--counter-bits", "16.5"),
+    ],
+)
 def test_non_numeric_or_missing_arguments(capsys, argv):
     rc, out, err = cli(capsys, *argv)
     assert rc == 2 and out == ""

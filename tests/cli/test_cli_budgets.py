@@ -35,14 +35,23 @@ def refused_quickly(capsys, argv, *fragments, seconds=10.0):
 
 
 # --- the helpers -----------------------------------------------------------------------------------------
-@pytest.mark.parametrize("text, value", [("2G", 2 * 1024 ** 3), ("1.5K", 1536), ("512M", 512 * 1024 ** 2),
-                                         ("100", 100), ("3GiB", 3 * 1024 ** 3), ("1e3", 1000), ("4kb", 4096)])
+@pytest.mark.parametrize(
+    "text, value",
+    [
+        ("2G", 2 * 1024**3),
+        ("1.5K", 1536),
+        ("512M", 512 * 1024**2),
+        ("100", 100),
+        ("3GiB", 3 * 1024**3),
+        ("1e3", 1000),
+        ("4kb", 4096),
+    ],
+)
 def test_sizes(text, value):
     assert parse_size(text) == value
 
 
-@pytest.mark.parametrize("text, value", [("90", 90.0), ("10m", 600.0), ("2h", 7200.0), ("1.5 s", 1.5),
-                                         ("1d", 86400.0)])
+@pytest.mark.parametrize("text, value", [("90", 90.0), ("10m", 600.0), ("2h", 7200.0), ("1.5 s", 1.5), ("1d", 86400.0)])
 def test_durations(text, value):
     assert parse_duration(text) == value
 
@@ -54,24 +63,27 @@ def test_bad_sizes_are_refused(text):
 
 
 def test_require_names_the_limit_and_the_way_out():
-    with pytest.raises(ResourceLimitError, match=r"^job: about 3G of memory for 7 things, more than --max-memory "
-                                                 r"2G; do less, or raise --max-memory$") as info:
-        require(Budget(), "job", memory=3 * 1024 ** 3, size="7 things", hint="do less")
-    assert info.value.needed == 3 * 1024 ** 3 and info.value.limit == 2 * 1024 ** 3 and info.value.unit == "bytes"
+    with pytest.raises(
+        ResourceLimitError,
+        match=r"^job: about 3G of memory for 7 things, more than --max-memory "
+        r"2G; do less, or raise --max-memory$",
+    ) as info:
+        require(Budget(), "job", memory=3 * 1024**3, size="7 things", hint="do less")
+    assert info.value.needed == 3 * 1024**3 and info.value.limit == 2 * 1024**3 and info.value.unit == "bytes"
     with pytest.raises(ResourceLimitError, match="more than --max-time 90 s"):
         require(Budget(seconds=90), "job", seconds=91, hint="do less")
-    require(Budget(seconds=90), "job", memory=1024, seconds=89, hint="do less")          # within: no error
+    require(Budget(seconds=90), "job", memory=1024, seconds=89, hint="do less")  # within: no error
     assert format_bytes(math.inf) == "inf"
 
 
 # --- simulate ---------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("extra", [["--rate", "1e9"], ["--rate", "1e300"], ["--path", "line 1e5"],
-                                   ["--path", "spin 5e6"]])
+@pytest.mark.parametrize(
+    "extra", [["--rate", "1e9"], ["--rate", "1e300"], ["--path", "line 1e5"], ["--path", "spin 5e6"]]
+)
 def test_hostile_simulation_sizes_are_refused_at_once(capsys, tmp_path, extra):
     pytest.importorskip("rosbags")
     bag = tmp_path / "x.bag"
-    refused_quickly(capsys, ["simulate", "tomasi-omni3", *extra, "--bag", bag], "simulate", "--max-memory",
-                    "samples")
+    refused_quickly(capsys, ["simulate", "tomasi-omni3", *extra, "--bag", bag], "simulate", "--max-memory", "samples")
     assert not bag.exists() and list(tmp_path.iterdir()) == []
 
 
@@ -79,21 +91,30 @@ def test_hostile_simulation_sizes_are_refused_at_once(capsys, tmp_path, extra):
 def test_absurd_path_lengths_are_refused_by_the_plan(capsys, tmp_path, path):
     pytest.importorskip("rosbags")
     bag = tmp_path / "x.bag"
-    refused_quickly(capsys, ["simulate", "tomasi-omni3", "--path", path, "--bag", bag], "--path",
-                    "length must be from 0 to 100000")
+    refused_quickly(
+        capsys, ["simulate", "tomasi-omni3", "--path", path, "--bag", bag], "--path", "length must be from 0 to 100000"
+    )
     assert list(tmp_path.iterdir()) == []
 
 
 def test_simulation_beyond_the_time_limit_is_refused(capsys, tmp_path):
     """640,000 samples of four messages each: far more than 1 s of writing on any machine."""
     pytest.importorskip("rosbags")
-    refused_quickly(capsys, ["simulate", "tomasi-omni3", "--rate", "1e4", "--max-time", "1s", "--bag",
-                             tmp_path / "x.bag"], "--max-time 1 s", "lower --rate")
+    refused_quickly(
+        capsys,
+        ["simulate", "tomasi-omni3", "--rate", "1e4", "--max-time", "1s", "--bag", tmp_path / "x.bag"],
+        "--max-time 1 s",
+        "lower --rate",
+    )
 
 
 def test_bad_limit_is_a_usage_error(capsys, tmp_path):
-    refused_quickly(capsys, ["simulate", "tomasi-omni3", "--max-memory", "lots", "--bag", tmp_path / "x.bag"],
-                    "--max-memory", "'lots'")
+    refused_quickly(
+        capsys,
+        ["simulate", "tomasi-omni3", "--max-memory", "lots", "--bag", tmp_path / "x.bag"],
+        "--max-memory",
+        "'lots'",
+    )
 
 
 # --- bags --------------------------------------------------------------------------------------------------
@@ -121,21 +142,36 @@ def copy_with_declared_count(bag: Path, dest: Path, topic: str, count: int) -> P
 
 
 def test_bag_declaring_a_trillion_messages_is_refused_before_reading(capsys, joint_bag, tmp_path):
-    bag = copy_with_declared_count(joint_bag, tmp_path / "huge.bag", "/joint_states", 10 ** 12)
-    refused_quickly(capsys, ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag"], "1000000000000",
-                    "--max-memory")
+    bag = copy_with_declared_count(joint_bag, tmp_path / "huge.bag", "/joint_states", 10**12)
+    refused_quickly(
+        capsys, ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag"], "1000000000000", "--max-memory"
+    )
     assert not (tmp_path / "o.bag").exists()
-    refused_quickly(capsys, ["bag", "export", copy_with_declared_count(joint_bag, tmp_path / "h2.bag", "/odom",
-                                                                      10 ** 12),
-                             "--topic", "/odom", "--format", "tum"], "--max-memory")
+    refused_quickly(
+        capsys,
+        [
+            "bag",
+            "export",
+            copy_with_declared_count(joint_bag, tmp_path / "h2.bag", "/odom", 10**12),
+            "--topic",
+            "/odom",
+            "--format",
+            "tum",
+        ],
+        "--max-memory",
+    )
 
 
 def test_bag_understating_its_messages_is_stopped_while_reading(capsys, joint_bag, tmp_path):
     """The metadata says one message; the limit (8K / 400 bytes = 20 messages) is enforced on the
     messages actually read."""
     bag = copy_with_declared_count(joint_bag, tmp_path / "liar.bag", "/joint_states", 1)
-    line = refused_quickly(capsys, ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag", "--max-memory",
-                                    "8K"], "more than 20 messages", "--max-memory 8K")
+    line = refused_quickly(
+        capsys,
+        ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag", "--max-memory", "8K"],
+        "more than 20 messages",
+        "--max-memory 8K",
+    )
     assert "Traceback" not in line
     assert not (tmp_path / "o.bag").exists() and sorted(p.name for p in tmp_path.iterdir()) == ["liar.bag"]
 
@@ -150,9 +186,15 @@ def test_trajectory_file_too_large_for_the_budget_is_refused(capsys, tmp_path):
 
 
 # --- inputs without a size or end ------------------------------------------------------------------------
-@pytest.mark.parametrize("argv", [["metrics", "/dev/zero", "/dev/zero"], ["show", "/dev/zero"],
-                                  ["simulate", "diff-drive", "--true-robot", "/dev/zero", "--bag", "x.bag"],
-                                  ["bag", "export", "/dev/zero", "--topic", "/odom", "--format", "tum"]])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["metrics", "/dev/zero", "/dev/zero"],
+        ["show", "/dev/zero"],
+        ["simulate", "diff-drive", "--true-robot", "/dev/zero", "--bag", "x.bag"],
+        ["bag", "export", "/dev/zero", "--topic", "/odom", "--format", "tum"],
+    ],
+)
 def test_endless_devices_are_refused_not_read(capsys, tmp_path, monkeypatch, argv):
     """/dev/zero has no size to check and no end: read, it would fill the memory."""
     if argv[0] in ("simulate", "bag"):

@@ -58,15 +58,15 @@ def test_cli_ackermann_spin_text_names_steering(capsys):
 def test_cli_names_file_line_after_duplicates(tmp_path, capsys):
     log = tmp_path / "log.csv"
     lines = [
-        "t,w1,w2,w3",          # 1
-        "# logger v1",         # 2
-        "0.0,0,0,0",           # 3
-        "0.1,10,10,10",        # 4
-        "0.1,10,10,10",        # 5 duplicate
-        "",                    # 6
-        "0.1,10,10,10",        # 7 duplicate
-        "0.2,20,20,20",        # 8
-        "0.15,30,30,30",       # 9 time goes back
+        "t,w1,w2,w3",  # 1
+        "# logger v1",  # 2
+        "0.0,0,0,0",  # 3
+        "0.1,10,10,10",  # 4
+        "0.1,10,10,10",  # 5 duplicate
+        "",  # 6
+        "0.1,10,10,10",  # 7 duplicate
+        "0.2,20,20,20",  # 8
+        "0.15,30,30,30",  # 9 time goes back
     ]
     log.write_text("\n".join(lines) + "\n")
     rc = main(["odometry", "tomasi-omni3", str(log), "-o", str(tmp_path / "out.csv")])
@@ -82,10 +82,12 @@ def test_cli_names_file_line_after_duplicates(tmp_path, capsys):
 @pytest.mark.parametrize("first", ["x: 0.1, y: 0, radius: 1.0e-320", "x: 1.0e+308, y: 1.0e+308, radius: 0.05"])
 def test_show_extreme_robot_file_one_line_error(tmp_path, capsys, first):
     p = tmp_path / "r.yaml"
-    p.write_text("omnikin: 1\nname: r\nwheels:\n"
-                 f"  - {{name: a, type: omni, {first}, encoder: {{ticks_per_rev: 100}}}}\n"
-                 "  - {name: b, type: omni, distance: 0.1, angle_deg: 120, radius: 0.05}\n"
-                 "  - {name: c, type: omni, distance: 0.1, angle_deg: 240, radius: 0.05}\n")
+    p.write_text(
+        "omnikin: 1\nname: r\nwheels:\n"
+        f"  - {{name: a, type: omni, {first}, encoder: {{ticks_per_rev: 100}}}}\n"
+        "  - {name: b, type: omni, distance: 0.1, angle_deg: 120, radius: 0.05}\n"
+        "  - {name: c, type: omni, distance: 0.1, angle_deg: 240, radius: 0.05}\n"
+    )
     assert main(["show", str(p)]) == 2
     cap = capsys.readouterr()
     err = cap.err.strip().splitlines()
@@ -103,6 +105,15 @@ def test_simulate_refuses_absurd_plans_and_stamps(capsys, tmp_path):
 
 def test_bag_topic_names_are_checked(capsys, tmp_path):
     pytest.importorskip("rosbags")
-    rc, _, err = run_cli(capsys, "bag", "odometry", "tomasi-omni3", tmp_path / "in.bag", "-o", tmp_path / "o.bag",
-                         "--odom-topic", "bad topic!!")
+    rc, _, err = run_cli(
+        capsys,
+        "bag",
+        "odometry",
+        "tomasi-omni3",
+        tmp_path / "in.bag",
+        "-o",
+        tmp_path / "o.bag",
+        "--odom-topic",
+        "bad topic!!",
+    )
     assert rc == 2 and "not a valid ROS 2 topic name" in err

@@ -41,8 +41,14 @@ def one_line(rc, out, err, *fragments, status=2):
 
 def entry_point(*argv, cwd=None):
     env = omnikin_env()
-    return subprocess.run([sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]], env=env, cwd=cwd,
-                          capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]],
+        env=env,
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 # --- negative numbers are values ------------------------------------------------------------------------
@@ -70,7 +76,7 @@ def test_negative_option_values_in_exponent_notation(capsys):
     np.testing.assert_allclose(json.loads(out)["twist"], [0.2 * math.cos(a), 0.2 * math.sin(a), 0], atol=1e-12)
     rc, out, err = cli(capsys, "ik", "tomasi-omni3", "1", "0", "0", "--heading", "-1.5e0", "--json")
     assert rc == 0, err
-    h = -1.5                                            # world (1, 0) seen from a body at heading h
+    h = -1.5  # world (1, 0) seen from a body at heading h
     np.testing.assert_allclose(json.loads(out)["twist"], [math.cos(h), -math.sin(h), 0], atol=1e-12)
 
 
@@ -90,14 +96,17 @@ def test_double_dash_still_works(capsys):
 
 
 # --- did you mean ----------------------------------------------------------------------------------------
-@pytest.mark.parametrize("argv, suggestion", [
-    (["shwo", "omni4"], "'show'"),
-    (["bag", "exprt", "x.bag"], "'export'"),
-    (["ik", "tomasi-omni3", "0", "0", "0", "--jsn"], "'--json'"),
-    (["fk", "omni4", "1", "2", "3", "4", "--steer-dg", "0"], "'--steer-deg'"),
-    (["show", "tomasi-omni"], "'tomasi-omni3'"),
-    (["ik", "mecanum", "0", "0", "0"], "'mecanum4'"),
-])
+@pytest.mark.parametrize(
+    "argv, suggestion",
+    [
+        (["shwo", "omni4"], "'show'"),
+        (["bag", "exprt", "x.bag"], "'export'"),
+        (["ik", "tomasi-omni3", "0", "0", "0", "--jsn"], "'--json'"),
+        (["fk", "omni4", "1", "2", "3", "4", "--steer-dg", "0"], "'--steer-deg'"),
+        (["show", "tomasi-omni"], "'tomasi-omni3'"),
+        (["ik", "mecanum", "0", "0", "0"], "'mecanum4'"),
+    ],
+)
 def test_unknown_names_get_a_suggestion(capsys, argv, suggestion):
     line = one_line(*cli(capsys, *argv), "did you mean", suggestion)
     assert line.count("did you mean") == 1
@@ -134,8 +143,10 @@ def test_invalid_bag_metadata_is_one_line(tmp_path):
     bag = tmp_path / "bad.bag"
     bag.mkdir()
     (bag / "metadata.yaml").write_text("rosbag2_bagfile_information:\n  version: 8\n   storage: [\n")
-    for argv in (["bag", "export", bag, "--topic", "/odom", "--format", "tum"],
-                 ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag"]):
+    for argv in (
+        ["bag", "export", bag, "--topic", "/odom", "--format", "tum"],
+        ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag"],
+    ):
         proc = entry_point(*argv)
         one_line(proc.returncode, proc.stdout, proc.stderr, str(bag), "line 3")
 
@@ -147,9 +158,15 @@ def test_messages_are_flattened_and_bounded(capsys, tmp_path):
     assert len(line) <= len("omnikin: error: ") + MESSAGE_LIMIT and "chars)" in line
 
 
-@pytest.mark.parametrize("argv", [["ik", "tomasi-omni3", "1e308", "0", "0"], ["ik", "omni4", "1e308", "1e308", "1e308"],
-                                  ["fk", "tomasi-omni3", "1e308", "1e308", "1e308"],
-                                  ["fk", "omni4", "1e308", "-1e308", "1e308", "-1e308"]])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["ik", "tomasi-omni3", "1e308", "0", "0"],
+        ["ik", "omni4", "1e308", "1e308", "1e308"],
+        ["fk", "tomasi-omni3", "1e308", "1e308", "1e308"],
+        ["fk", "omni4", "1e308", "-1e308", "1e308", "-1e308"],
+    ],
+)
 def test_huge_inputs_give_finite_numbers_or_one_line(capsys, argv):
     """1e308 is a finite input whose results may overflow: the output is finite strict JSON, or
     the command ends with lines all starting 'omnikin: ' and an error last (a NumPy warning may
@@ -175,8 +192,13 @@ def test_closed_pipe_ends_quietly(tmp_path):
     bag = tmp_path / "long.bag"
     assert main(["simulate", "mecanum4", "--path", "line 10", "--rate", "1000", "--bag", str(bag)]) == 0
     env = omnikin_env()
-    proc = subprocess.Popen([sys.executable, "-m", "omnikin.cli.main", "bag", "export", str(bag), "--topic", "/odom",
-                             "--format", "tum"], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "omnikin.cli.main", "bag", "export", str(bag), "--topic", "/odom", "--format", "tum"],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     proc.stdout.read(100)
     proc.stdout.close()
     err = proc.stderr.read()

@@ -41,10 +41,13 @@ def test_non_finite_values_name_their_field():
 
 
 def test_documented_fields_become_null_and_numpy_is_plain():
-    doc = {"calibration": {"improvement": math.inf}, "count": np.int64(3), "ok": np.bool_(True),
-           "xs": np.arange(3.0)}
-    assert strict(to_json(doc, nullable=["improvement"])) == {"calibration": {"improvement": None}, "count": 3,
-                                                             "ok": True, "xs": [0.0, 1.0, 2.0]}
+    doc = {"calibration": {"improvement": math.inf}, "count": np.int64(3), "ok": np.bool_(True), "xs": np.arange(3.0)}
+    assert strict(to_json(doc, nullable=["improvement"])) == {
+        "calibration": {"improvement": None},
+        "count": 3,
+        "ok": True,
+        "xs": [0.0, 1.0, 2.0],
+    }
     assert strict(to_json(doc, nullable=["calibration.improvement"]))["calibration"]["improvement"] is None
     with pytest.raises(NonFiniteValueError):
         to_json(doc, nullable=["other"])
@@ -58,7 +61,7 @@ def test_json_files_follow_the_output_policy(tmp_path):
         write_json(out, {"a": 2})
     with pytest.raises(NonFiniteValueError):
         write_json(out, {"a": math.nan}, force=True)
-    assert strict(out.read_text()) == {"a": 1.5}                # nothing written on error
+    assert strict(out.read_text()) == {"a": 1.5}  # nothing written on error
 
 
 # --- every --json command -------------------------------------------------------------------------------------
@@ -83,10 +86,25 @@ def test_bags_and_metrics(capsys, tmp_path):
     bag = tmp_path / "sim.bag"
     json_of(capsys, "simulate", "diff-drive", "--path", "square ccw rotate 1", "--rate", "20", "--bag", bag)
     json_of(capsys, "bag", "odometry", "diff-drive", bag, "-o", tmp_path / "odom.bag")
-    assert main(["bag", "export", str(bag), "--topic", "/ground_truth", "--format", "tum", "-o",
-                 str(tmp_path / "truth.tum")]) == 0
-    assert main(["bag", "export", str(bag), "--topic", "/odom", "--format", "tum", "-o",
-                 str(tmp_path / "odom.tum")]) == 0
+    assert (
+        main(
+            [
+                "bag",
+                "export",
+                str(bag),
+                "--topic",
+                "/ground_truth",
+                "--format",
+                "tum",
+                "-o",
+                str(tmp_path / "truth.tum"),
+            ]
+        )
+        == 0
+    )
+    assert (
+        main(["bag", "export", str(bag), "--topic", "/odom", "--format", "tum", "-o", str(tmp_path / "odom.tum")]) == 0
+    )
     capsys.readouterr()
     doc = json_of(capsys, "metrics", tmp_path / "truth.tum", tmp_path / "odom.tum", "--align")
     assert doc["ate"]["translation"]["rmse"] >= 0

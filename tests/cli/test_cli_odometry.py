@@ -34,8 +34,9 @@ from tomasi_helpers import (
 def test_closed_form_pose_is_the_textbook_circle():
     """Self-check of the helper: (v, 0, w) gives x = v/w sin(wt), y = v/w (1 - cos(wt))."""
     v, w, t = 0.3, 0.7, 2.0
-    np.testing.assert_allclose(closed_form_pose((v, 0, w), [t])[0],
-                               [v / w * math.sin(w * t), v / w * (1 - math.cos(w * t)), w * t], atol=1e-15)
+    np.testing.assert_allclose(
+        closed_form_pose((v, 0, w), [t])[0], [v / w * math.sin(w * t), v / w * (1 - math.cos(w * t)), w * t], atol=1e-15
+    )
 
 
 def quantisation_tolerance(F, rpt, twist, duration):
@@ -72,7 +73,7 @@ def check_tum(arr, t, expected, pos_tol, th_tol):
     np.testing.assert_allclose(arr[:, 0], t, atol=1e-9)
     np.testing.assert_array_equal(arr[:, 3:6], 0.0)  # z, qx, qy
     qz, qw = arr[:, 6], arr[:, 7]
-    np.testing.assert_allclose(qz ** 2 + qw ** 2, 1.0, atol=1e-8)
+    np.testing.assert_allclose(qz**2 + qw**2, 1.0, atol=1e-8)
     theta = 2 * np.arctan2(qz, qw)
     assert np.all(np.abs(wrap(theta - expected[:, 2])) <= th_tol)
     # qz = sin(theta/2), qw = cos(theta/2) with theta in [-pi, pi): where the expected heading is
@@ -229,8 +230,10 @@ def test_counter_wrap_16_bit(capsys, tmp_path, representation):
     line = one_line_error(rc, err)
     assert "--counter-bits" in line and "encoder.counter_bits" in line and "impossible jump" in line
     first_wrap = 1 + int(np.argmax(np.any(np.abs(np.diff(raw[:, 1:], axis=0)) > 30000, axis=1)))
-    assert f"line {first_wrap + 2}:" in line            # header is line 1, sample k is line k + 2
+    assert f"line {first_wrap + 2}:" in line  # header is line 1, sample k is line k + 2
     assert not (tmp_path / "other.tum").exists()
+
+
 def test_user_log_conventions(capsys, tmp_path):
     """t first, wheel columns in any order, spaces after commas, comment and blank lines, CRLF ends."""
     per_sample, dt, n = (40, -10, 25), 0.5, 6
@@ -257,8 +260,11 @@ def test_diff_drive_circle_with_gearbox(capsys, tmp_path):
     t = np.arange(n + 1) * dt
     left = np.rint((v - half * w) / r * t / rpt).astype(int)
     right = np.rint((v + half * w) / r * t / rpt).astype(int)
-    log = write_log(tmp_path / "dd.csv", ["t", "left", "right"],
-                    [[f"{a:.3f}", b, c] for a, b, c in zip(t, left.tolist(), right.tolist(), strict=True)])
+    log = write_log(
+        tmp_path / "dd.csv",
+        ["t", "left", "right"],
+        [[f"{a:.3f}", b, c] for a, b, c in zip(t, left.tolist(), right.tolist(), strict=True)],
+    )
     out = tmp_path / "dd.tum"
     rc, _, err = cli(capsys, "odometry", "diff-drive", log, "-o", out, "--format", "tum")
     assert rc == 0, err
@@ -325,13 +331,21 @@ def test_synchro_nan_steering_cell(capsys, tmp_path):
 def test_max_speed_jump_detected(capsys, tmp_path):
     """With max_speed in the robot file a reading that would need a far faster wheel is refused."""
     robot = tmp_path / "fast.yaml"
-    robot.write_text("omnikin: 1\nname: capped\nwheels:\n" + "".join(
-        f"  - {{name: w{i + 1}, type: omni, distance: 0.113, angle_deg: {b}, radius: 0.04125, "
-        f"max_speed: 30.0, encoder: {{ticks_per_rev: 600}}}}\n" for i, b in enumerate((0, 120, 240))),
-        encoding="utf-8")
+    robot.write_text(
+        "omnikin: 1\nname: capped\nwheels:\n"
+        + "".join(
+            f"  - {{name: w{i + 1}, type: omni, distance: 0.113, angle_deg: {b}, radius: 0.04125, "
+            f"max_speed: 30.0, encoder: {{ticks_per_rev: 600}}}}\n"
+            for i, b in enumerate((0, 120, 240))
+        ),
+        encoding="utf-8",
+    )
     # 30 rad/s for 0.01 s is ~29 ticks; 5000 ticks is impossible
-    log = write_log(tmp_path / "log.csv", ["t", "w1", "w2", "w3"],
-                    [[0.0, 0, 0, 0], [0.01, 10, 10, 10], [0.02, 20, 5000, 20], [0.03, 30, 5010, 30]])
+    log = write_log(
+        tmp_path / "log.csv",
+        ["t", "w1", "w2", "w3"],
+        [[0.0, 0, 0, 0], [0.01, 10, 10, 10], [0.02, 20, 5000, 20], [0.03, 30, 5010, 30]],
+    )
     rc, _, err = cli(capsys, "odometry", robot, log, "-o", tmp_path / "o.tum")
     line = one_line_error(rc, err)
     assert "jump" in line and "'w2'" in line and ("sample 2" in line or "line 4" in line)
@@ -373,8 +387,7 @@ BROKEN = [
 def test_broken_log(capsys, tmp_path, header, rows, fragments, alternatives):
     log = write_log(tmp_path / "broken.csv", header, rows)
     out = tmp_path / "out.tum"
-    rc, stdout, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", out, "--format", "tum",
-                          "--counter-bits", 16)
+    rc, stdout, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", out, "--format", "tum", "--counter-bits", 16)
     line = one_line_error(rc, err)
     assert stdout == ""
     for frag in fragments:
@@ -384,13 +397,17 @@ def test_broken_log(capsys, tmp_path, header, rows, fragments, alternatives):
     assert not out.exists()
 
 
-@pytest.mark.parametrize("content, fragment", [
-    ("", "empty"),
-    ("\n\n", "empty"),
-    ("# only a comment\n", "empty"),
-    ("t,w1,w2,w3\n", "sample"),
-    ("t,w1,w2,w3\n0.0,0,0,0\n", "sample"),
-], ids=["empty", "blank-lines", "comment-only", "header-only", "one-sample"])
+@pytest.mark.parametrize(
+    "content, fragment",
+    [
+        ("", "empty"),
+        ("\n\n", "empty"),
+        ("# only a comment\n", "empty"),
+        ("t,w1,w2,w3\n", "sample"),
+        ("t,w1,w2,w3\n0.0,0,0,0\n", "sample"),
+    ],
+    ids=["empty", "blank-lines", "comment-only", "header-only", "one-sample"],
+)
 def test_too_short_logs(capsys, tmp_path, content, fragment):
     log = tmp_path / "short.csv"
     log.write_text(content, encoding="utf-8")
@@ -412,7 +429,7 @@ def test_exact_duplicate_rows_are_skipped_with_a_warning(capsys, tmp_path):
     twist = TOMASI_F @ (np.array(per_sample) * TOMASI_RPT) / dt
     log, t = exact_tick_log(tmp_path / "log.csv", per_sample, dt, n)
     lines = log.read_text(encoding="utf-8").splitlines()
-    lines.insert(3, lines[2])                     # line 4 repeats line 3
+    lines.insert(3, lines[2])  # line 4 repeats line 3
     log.write_text("\n".join(lines) + "\n", encoding="utf-8")
     out = tmp_path / "out.tum"
     rc, _, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", out, "--format", "tum")
@@ -463,9 +480,24 @@ def test_log_with_utf8_bom(capsys, tmp_path):
 def test_subprocess_odometry_tum(tmp_path):
     twist, dt, n = (0.2, 0.0, 0.5), 0.1, 40
     log, t = tomasi_log(tmp_path / "log.csv", twist, dt, n)
-    proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", "odometry", "tomasi-omni3", "log.csv",
-                           "-o", "out.tum", "--format", "tum"], capture_output=True, text=True, timeout=120,
-                          cwd=tmp_path)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "omnikin.cli.main",
+            "odometry",
+            "tomasi-omni3",
+            "log.csv",
+            "-o",
+            "out.tum",
+            "--format",
+            "tum",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp_path,
+    )
     assert proc.returncode == 0, proc.stderr
     pos_tol, th_tol = quantisation_tolerance(TOMASI_F, TOMASI_RPT, twist, t[-1])
     check_tum(read_tum(tmp_path / "out.tum"), t, closed_form_pose(twist, t), pos_tol, th_tol)
@@ -473,7 +505,12 @@ def test_subprocess_odometry_tum(tmp_path):
 
 def test_subprocess_broken_log_no_traceback(tmp_path):
     write_log(tmp_path / "bad.csv", H, rows_with(4, [0.2, 10, "x", 4]))
-    proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", "odometry", "tomasi-omni3", "bad.csv",
-                           "-o", "out.tum"], capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    proc = subprocess.run(
+        [sys.executable, "-m", "omnikin.cli.main", "odometry", "tomasi-omni3", "bad.csv", "-o", "out.tum"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp_path,
+    )
     line = one_line_error(proc.returncode, proc.stderr)
     assert "line 4" in line and "'w2'" in line

@@ -22,10 +22,12 @@ from omnikin.cli.main import main
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 LOG = "t,w1,w2,w3\n0,0,0,0\n0.1,5,-3,2\n0.2,10,-6,4\n"
-ROBOT = ("omnikin: 1\nname: tri\nwheels:\n"
-         "  - {name: a, type: omni, distance: 0.2, angle_deg: 90, radius: 0.05}\n"
-         "  - {name: b, type: omni, distance: 0.2, angle_deg: 210, radius: 0.05}\n"
-         "  - {name: c, type: omni, distance: 0.2, angle_deg: 330, radius: 0.05}\n")
+ROBOT = (
+    "omnikin: 1\nname: tri\nwheels:\n"
+    "  - {name: a, type: omni, distance: 0.2, angle_deg: 90, radius: 0.05}\n"
+    "  - {name: b, type: omni, distance: 0.2, angle_deg: 210, radius: 0.05}\n"
+    "  - {name: c, type: omni, distance: 0.2, angle_deg: 330, radius: 0.05}\n"
+)
 
 
 def cli(capsys, *argv):
@@ -59,8 +61,9 @@ def entry_point(*argv, **kwargs):
     """The real entry point in a subprocess, with this checkout's omnikin whatever the folder."""
     env = omnikin_env()
     kwargs = {"stdout": subprocess.PIPE, "stderr": subprocess.PIPE, **kwargs}
-    return subprocess.Popen([sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]], env=env, text=True,
-                            **kwargs)
+    return subprocess.Popen(
+        [sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]], env=env, text=True, **kwargs
+    )
 
 
 @pytest.fixture(scope="module")
@@ -68,8 +71,25 @@ def sim_bag(tmp_path_factory):
     """A small simulated bag (a quarter turn in place at 50 Hz) written by omnikin itself."""
     pytest.importorskip("rosbags")
     path = tmp_path_factory.mktemp("sim") / "sim.bag"
-    assert main(["simulate", "tomasi-omni3", "--path", "spin 90", "--rate", "50", "--errors", "none",
-                 "--noise", "none", "--bag", str(path)]) == 0
+    assert (
+        main(
+            [
+                "simulate",
+                "tomasi-omni3",
+                "--path",
+                "spin 90",
+                "--rate",
+                "50",
+                "--errors",
+                "none",
+                "--noise",
+                "none",
+                "--bag",
+                str(path),
+            ]
+        )
+        == 0
+    )
     return path
 
 
@@ -90,7 +110,7 @@ def test_odometry_never_writes_over_its_log(capsys, log):
 
 
 def test_show_plot_never_writes_over_the_robot_file(capsys, tmp_path):
-    robot = tmp_path / "tri.png"                 # a robot file with a drawing's name
+    robot = tmp_path / "tri.png"  # a robot file with a drawing's name
     robot.write_text(ROBOT)
     for extra in ([], ["--force"]):
         rc, _, err = cli(capsys, "show", robot, "--plot", robot, *extra)
@@ -101,8 +121,9 @@ def test_show_plot_never_writes_over_the_robot_file(capsys, tmp_path):
 def test_bag_export_never_writes_into_the_bag(capsys, sim_bag):
     before = snapshot(sim_bag)
     for target in (sim_bag / "metadata.yaml", sim_bag / "new.tum", sim_bag):
-        rc, _, err = cli(capsys, "bag", "export", sim_bag, "--topic", "/odom", "--format", "tum", "-o", target,
-                         "--force")
+        rc, _, err = cli(
+            capsys, "bag", "export", sim_bag, "--topic", "/odom", "--format", "tum", "-o", target, "--force"
+        )
         assert rc == 2 and "omnikin: error:" in err
     assert snapshot(sim_bag) == before
 
@@ -125,7 +146,7 @@ def test_existing_drawing_is_replaced_only_with_force(capsys, tmp_path):
     rc, out, err = cli(capsys, "show", "omni4", "--plot", png, "--force")
     assert rc == 0, err
     assert png.read_bytes()[:8] == PNG_MAGIC
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["layout.png"]        # no temporary left
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["layout.png"]  # no temporary left
 
 
 def test_unknown_drawing_format_is_refused_before_anything_is_written(capsys, tmp_path):
@@ -162,10 +183,11 @@ def test_bag_output_replaces_only_a_bag_omnikin_wrote(capsys, sim_bag, tmp_path)
     (out / "stray.txt").write_text("from the first run")
     rc, _, err = cli(capsys, "bag", "odometry", "tomasi-omni3", sim_bag, "-o", out, "--odom-topic", "/second")
     refused(rc, err, "--force")
-    rc, _, err = cli(capsys, "bag", "odometry", "tomasi-omni3", sim_bag, "-o", out, "--odom-topic", "/second",
-                     "--force")
+    rc, _, err = cli(
+        capsys, "bag", "odometry", "tomasi-omni3", sim_bag, "-o", out, "--odom-topic", "/second", "--force"
+    )
     assert rc == 0, err
-    assert not (out / "stray.txt").exists()                   # replaced as a whole, never mixed
+    assert not (out / "stray.txt").exists()  # replaced as a whole, never mixed
     with Reader(out) as reader:
         assert [c.topic for c in reader.connections] == ["/second"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["odom.bag", "recorded.bag"]
@@ -186,7 +208,7 @@ def test_bag_export_to_stdout_carries_the_poses_only(capsys, sim_bag):
     assert rc == 0
     rows = np.array([[float(v) for v in line.split()] for line in out.splitlines()])
     assert rows.shape == (odom_count(sim_bag, "/ground_truth"), 8)
-    assert f"{len(rows)} poses" in err                   # the message went to stderr
+    assert f"{len(rows)} poses" in err  # the message went to stderr
 
 
 def test_odometry_to_stdout_carries_the_trajectory_only(capsys, log):
@@ -219,10 +241,20 @@ def test_interrupted_simulation_leaves_no_bag_and_exits_130(tmp_path):
     """Ctrl-C while the bag is being written: one line, status 130, and no bag or staging folder."""
     pytest.importorskip("rosbags")
     bag = tmp_path / "long.bag"
-    proc = entry_point("simulate", "mecanum4", "--path", "line 40", "--rate", "2000", "--bag", bag, cwd=tmp_path,
-                       preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    proc = entry_point(
+        "simulate",
+        "mecanum4",
+        "--path",
+        "line 40",
+        "--rate",
+        "2000",
+        "--bag",
+        bag,
+        cwd=tmp_path,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     deadline = time.monotonic() + 120
-    while not any(p.name.startswith(".long.bag.") for p in tmp_path.iterdir()):   # the bag is being written
+    while not any(p.name.startswith(".long.bag.") for p in tmp_path.iterdir()):  # the bag is being written
         assert proc.poll() is None, proc.communicate()
         assert time.monotonic() < deadline
         time.sleep(0.05)
@@ -241,8 +273,14 @@ def test_help_documents_the_output_policy():
         assert phrase in text, phrase
 
 
-@pytest.mark.parametrize("argv", [["show", "omni4", "--plot", ""], ["odometry", "tomasi-omni3", "LOG", "-o", ""],
-                                  ["simulate", "diff-drive", "--bag", ""]])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["show", "omni4", "--plot", ""],
+        ["odometry", "tomasi-omni3", "LOG", "-o", ""],
+        ["simulate", "diff-drive", "--bag", ""],
+    ],
+)
 def test_empty_output_name_is_refused(capsys, log, argv):
     """An empty name is not 'no output' and not the current folder."""
     if argv[0] == "simulate":

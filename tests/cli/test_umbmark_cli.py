@@ -74,8 +74,14 @@ def check_direction_dict(d, n_runs):
 @pytest.fixture(scope="module")
 def main_job(tmp_path_factory):
     cwd = tmp_path_factory.mktemp("mainjob")
-    proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", "umbmark"], cwd=cwd, capture_output=True,
-                          text=True, timeout=120, env=omnikin_env())
+    proc = subprocess.run(
+        [sys.executable, "-m", "omnikin.cli.main", "umbmark"],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=omnikin_env(),
+    )
     return cwd, proc
 
 
@@ -92,8 +98,15 @@ def test_main_job_runs_and_prints_a_table(main_job):
 def test_main_job_report_folder(main_job):
     cwd, proc = main_job
     report = cwd / "umbmark-report"
-    for name in ("report.md", "result.json", "return_errors.png", "euclidean_errors.png", "trajectories.png",
-                 "true_robot.yaml", "calibrated_robot.yaml"):
+    for name in (
+        "report.md",
+        "result.json",
+        "return_errors.png",
+        "euclidean_errors.png",
+        "trajectories.png",
+        "true_robot.yaml",
+        "calibrated_robot.yaml",
+    ):
         assert (report / name).is_file(), name
     for name in ("return_errors.png", "euclidean_errors.png", "trajectories.png"):
         assert (report / name).read_bytes()[:8] == PNG
@@ -209,8 +222,9 @@ def test_umbmark_json_prints_result_json(capsys, tmp_path, monkeypatch):
     assert rc == 0, err
     assert out == (tmp_path / "umbmark-report" / "result.json").read_text(encoding="utf-8")
     d = json.loads(out)
-    assert d["after"]["e_max_syst"] == pytest.approx(max(check_direction_dict(d["after"]["cw"], 3),
-                                                         check_direction_dict(d["after"]["ccw"], 3)))
+    assert d["after"]["e_max_syst"] == pytest.approx(
+        max(check_direction_dict(d["after"]["cw"], 3), check_direction_dict(d["after"]["ccw"], 3))
+    )
     assert "borenstein" not in d["before"]
     assert d["files"] and set(d["files"]) <= {p.name for p in (tmp_path / "umbmark-report").iterdir()}
 
@@ -238,7 +252,7 @@ def test_umbmark_without_robot_is_the_same_study_as_naming_the_default_robot(cap
     a = run_json(capsys, "umbmark", "--json", "-o", "a", *FAST)
     b = run_json(capsys, "umbmark", "tomasi-omni3", "--json", "-o", "b", *FAST)
     assert a == b
-    assert "calibration" in a                                   # calibration is the default for every robot
+    assert "calibration" in a  # calibration is the default for every robot
     c = run_json(capsys, "umbmark", "diff-drive", "--json", "-o", "c", *FAST)
     assert "calibration" in c
 
@@ -250,6 +264,7 @@ def test_same_seed_builds_the_same_robot_and_calibration_whatever_the_trials(cap
     other = run_json(capsys, "umbmark", "--json", "-o", "other", "--seed", "6", *FAST)
     assert one["true_robot"] == many["true_robot"] and one["injected_errors"] == many["injected_errors"]
     assert one["calibrated_robot"] == many["calibrated_robot"]
+
     def data(folder):
         text = (tmp_path / folder / "calibration_runs.csv").read_text(encoding="utf-8")
         return [line for line in text.splitlines() if not line.startswith("#")]
@@ -291,8 +306,18 @@ def test_a_perfect_robot_without_noise_is_reported_at_the_noise_floor(capsys, tm
     from omnikin.io.robot_file import save_robot
 
     save_robot(load_robot("diff-drive"), tmp_path / "perfect.yaml")
-    d = run_json(capsys, "umbmark", "diff-drive", "--true-robot", "perfect.yaml", "--noise", "none", "--json",
-                 "--no-calibrate", *FAST)
+    d = run_json(
+        capsys,
+        "umbmark",
+        "diff-drive",
+        "--true-robot",
+        "perfect.yaml",
+        "--noise",
+        "none",
+        "--json",
+        "--no-calibrate",
+        *FAST,
+    )
     assert d["before"]["e_max_syst"] < 1e-9
     assert d["before"]["at_noise_floor"] is True
     assert "Before calibration, E_max,syst" in (tmp_path / "umbmark-report" / "report.md").read_text(encoding="utf-8")
@@ -315,7 +340,7 @@ def test_the_same_command_twice_replaces_the_report_as_a_whole(capsys, tmp_path,
     assert "monte_carlo.png" not in second["files"] and "calibrated_robot.yaml" not in second["files"]
     third = run_json(capsys, "umbmark", "--json", "--no-calibrate", *FAST)
     assert third == second
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["umbmark-report"]     # no staging left behind
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["umbmark-report"]  # no staging left behind
 
 
 def test_a_foreign_folder_is_refused_and_left_alone(capsys, tmp_path, monkeypatch):
@@ -354,8 +379,13 @@ def test_an_interrupted_run_leaves_the_previous_report_intact(tmp_path):
     report = tmp_path / "umbmark-report"
     before = {p.name: p.read_bytes() for p in report.iterdir()}
     # a slow write (large PNGs), interrupted as soon as its staging folder appears
-    proc = subprocess.Popen(base + ["--seed", "2", "--dpi", "900"], cwd=tmp_path, env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen(
+        base + ["--seed", "2", "--dpi", "900"],
+        cwd=tmp_path,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     deadline = time.monotonic() + 120
     staged = False
     while proc.poll() is None and time.monotonic() < deadline:
@@ -371,10 +401,13 @@ def test_an_interrupted_run_leaves_the_previous_report_intact(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["umbmark-report"]
 
 
-@pytest.mark.parametrize("argv, contains", [
-    (["--trials", "3000", "--max-time", "10"], ["umbmark", "--max-time 10 s", "--trials"]),
-    (["--trials", "20000000", "--runs", "1", "--rate", "1"], ["umbmark", "--max-memory 2G", "--trials"]),
-])
+@pytest.mark.parametrize(
+    "argv, contains",
+    [
+        (["--trials", "3000", "--max-time", "10"], ["umbmark", "--max-time 10 s", "--trials"]),
+        (["--trials", "20000000", "--runs", "1", "--rate", "1"], ["umbmark", "--max-memory 2G", "--trials"]),
+    ],
+)
 def test_umbmark_refuses_studies_beyond_the_budget_at_once(capsys, tmp_path, monkeypatch, argv, contains):
     import time
 
@@ -403,12 +436,26 @@ ccw,0.04,0.05,0.01,-0.02
 HAND_CG = {"cw": (0.28 / 3, -0.16 / 3), "ccw": (0.025, 0.085)}
 HAND_R = {"cw": 0.107496769977313995364888176404, "ccw": 0.0886002257333467520099556254877}
 HAND_BORENSTEIN = {
-    4.0: dict(alpha=-0.00739583333333333333333, beta=-0.00427083333333333333333, R=-936.586077659592773238987,
-              E_d=0.99964771857981259868773, E_b=0.995313730786286244601320, c_L=1.00017617174110927808797,
-              c_R=0.999823828258890721912028, b_new=0.32845353115947446071843577),
-    2.0: dict(alpha=-0.0147916666666666666666667, beta=-0.00854166666666666666666, R=-234.147053270484916279079,
-              E_d=0.998591621748032505496304, E_b=0.990671178939508514956046, c_L=1.00070468535774991470854,
-              c_R=0.999295314642250085291460, b_new=0.326921489050037809935495),
+    4.0: dict(
+        alpha=-0.00739583333333333333333,
+        beta=-0.00427083333333333333333,
+        R=-936.586077659592773238987,
+        E_d=0.99964771857981259868773,
+        E_b=0.995313730786286244601320,
+        c_L=1.00017617174110927808797,
+        c_R=0.999823828258890721912028,
+        b_new=0.32845353115947446071843577,
+    ),
+    2.0: dict(
+        alpha=-0.0147916666666666666666667,
+        beta=-0.00854166666666666666666,
+        R=-234.147053270484916279079,
+        E_d=0.998591621748032505496304,
+        E_b=0.990671178939508514956046,
+        c_L=1.00070468535774991470854,
+        c_R=0.999295314642250085291460,
+        b_new=0.326921489050037809935495,
+    ),
 }
 
 
@@ -418,14 +465,16 @@ def test_analyze_hand_file(capsys, tmp_path, side):
     f.write_text(HAND, encoding="utf-8")
     argv = ["umbmark", "analyze", f, "--robot", "diff-drive", "--json"] + ([] if side == 4.0 else ["--side", "2"])
     d = run_json(capsys, *argv)
-    eps = {"cw": [(0.08, -0.06), (0.10, -0.04), (0.10, -0.06)],
-           "ccw": [(0.02, 0.09), (0.04, 0.08), (0.01, 0.10), (0.03, 0.07)]}
+    eps = {
+        "cw": [(0.08, -0.06), (0.10, -0.04), (0.10, -0.06)],
+        "ccw": [(0.02, 0.09), (0.04, 0.08), (0.01, 0.10), (0.03, 0.07)],
+    }
     for direction in ("cw", "ccw"):
         runs = d[direction]["runs"]
         assert len(runs) == len(eps[direction])
         for r, (x, y) in zip(runs, eps[direction], strict=True):
             assert r["epsilon"][:2] == pytest.approx([x, y], abs=1e-15)
-            assert r["epsilon"][2] is None               # heading not measured
+            assert r["epsilon"][2] is None  # heading not measured
         assert d[direction]["cg"] == pytest.approx(HAND_CG[direction], abs=1e-15)
         assert d[direction]["r_cg"] == pytest.approx(HAND_R[direction], rel=1e-13)
     assert d["e_max_syst"] == pytest.approx(HAND_R["cw"], rel=1e-13)
@@ -439,7 +488,7 @@ def test_analyze_table_output_and_non_diff_robot(capsys, tmp_path):
     f.write_text(HAND, encoding="utf-8")
     rc, out, err = run(capsys, "umbmark", "analyze", f, "--robot", "diff-drive")
     assert rc == 0, err
-    assert "107.50" in out and "88.60" in out          # r_cg in mm
+    assert "107.50" in out and "88.60" in out  # r_cg in mm
     assert "Borenstein" in out
     d = run_json(capsys, "umbmark", "analyze", f, "--robot", "tomasi-omni3", "--json")
     assert "borenstein" not in d and d["e_max_syst"] == pytest.approx(HAND_R["cw"], rel=1e-13)
@@ -449,32 +498,42 @@ def test_analyze_table_output_and_non_diff_robot(capsys, tmp_path):
 
 def test_analyze_theta_columns(capsys, tmp_path):
     deg = tmp_path / "deg.csv"
-    deg.write_text("direction,x_abs,y_abs,x_calc,y_calc,theta_abs_deg,theta_calc_deg\n"
-                   "cw,0.01,0.02,0,0,10,4\n"
-                   "ccw,0.01,0.02,0,0,179,-179\n"
-                   "ccw,0.01,0.02,0,0,-3,2\n", encoding="utf-8")
+    deg.write_text(
+        "direction,x_abs,y_abs,x_calc,y_calc,theta_abs_deg,theta_calc_deg\n"
+        "cw,0.01,0.02,0,0,10,4\n"
+        "ccw,0.01,0.02,0,0,179,-179\n"
+        "ccw,0.01,0.02,0,0,-3,2\n",
+        encoding="utf-8",
+    )
     d = run_json(capsys, "umbmark", "analyze", deg, "--json")
     assert d["cw"]["runs"][0]["epsilon"][2] == pytest.approx(math.radians(6.0), rel=1e-12)
-    assert d["ccw"]["runs"][0]["epsilon"][2] == pytest.approx(math.radians(-2.0), rel=1e-9)   # wrapped
+    assert d["ccw"]["runs"][0]["epsilon"][2] == pytest.approx(math.radians(-2.0), rel=1e-9)  # wrapped
     assert d["ccw"]["runs"][1]["epsilon"][2] == pytest.approx(math.radians(-5.0), rel=1e-12)
     rad = tmp_path / "rad.csv"
-    rad.write_text("direction,x_abs,y_abs,x_calc,y_calc,theta_abs,theta_calc\n"
-                   "cw,0.01,0.02,0,0,0.1,0.02\n"
-                   "ccw,0.03,0.04,0,0,-0.1,0.05\n", encoding="utf-8")
+    rad.write_text(
+        "direction,x_abs,y_abs,x_calc,y_calc,theta_abs,theta_calc\n"
+        "cw,0.01,0.02,0,0,0.1,0.02\n"
+        "ccw,0.03,0.04,0,0,-0.1,0.05\n",
+        encoding="utf-8",
+    )
     d = run_json(capsys, "umbmark", "analyze", rad, "--json")
     assert d["cw"]["runs"][0]["epsilon"][2] == pytest.approx(0.08, rel=1e-12)
     assert d["ccw"]["runs"][0]["epsilon"][2] == pytest.approx(-0.15, rel=1e-12)
     assert d["e_max_syst"] == pytest.approx(0.05, rel=1e-12)
     # an empty theta field is an error naming line and column, not a run without heading
-    rad.write_text("direction,x_abs,y_abs,x_calc,y_calc,theta_abs,theta_calc\n"
-                   "cw,0.01,0.02,0,0,0.1,0.02\n"
-                   "ccw,0.03,0.04,0,0,,\n", encoding="utf-8")
+    rad.write_text(
+        "direction,x_abs,y_abs,x_calc,y_calc,theta_abs,theta_calc\ncw,0.01,0.02,0,0,0.1,0.02\nccw,0.03,0.04,0,0,,\n",
+        encoding="utf-8",
+    )
     rc, _, err = run(capsys, "umbmark", "analyze", rad, "--json")
     assert rc == 2 and "line 3, column 'theta_abs'" in err and "empty field" in err
     # comments, blank lines and a BOM as spreadsheets write them
     bom = tmp_path / "bom.csv"
-    bom.write_bytes("\ufeff# measured 2024-05-01\ndirection,x_abs,y_abs,x_calc,y_calc\n\ncw,0.03,0.04,0,0\n"
-                    "CCW,0,0.01,0,0\n".encode("utf-8"))
+    bom.write_bytes(
+        "\ufeff# measured 2024-05-01\ndirection,x_abs,y_abs,x_calc,y_calc\n\ncw,0.03,0.04,0,0\nCCW,0,0.01,0,0\n".encode(
+            "utf-8"
+        )
+    )
     d = run_json(capsys, "umbmark", "analyze", bom, "--json")
     assert d["e_max_syst"] == pytest.approx(0.05, rel=1e-12)
 
@@ -488,10 +547,16 @@ def test_calibrate_own_runs_file(capsys, tmp_path):
     from omnikin.simulation.simulate import simulate
 
     robot = load_robot("diff-drive")
-    true = SystematicErrors({"left": WheelErrors(radius=-0.004, dy=0.002),
-                             "right": WheelErrors(radius=0.006, dy=-0.001)}).apply(robot)
-    plans = {"square cw rotate": umbmark_square("cw"), "square ccw rotate": umbmark_square("ccw"),
-             "line 4": line(4.0), "spin 180": spin(math.pi), "spin -180": spin(-math.pi)}
+    true = SystematicErrors(
+        {"left": WheelErrors(radius=-0.004, dy=0.002), "right": WheelErrors(radius=0.006, dy=-0.001)}
+    ).apply(robot)
+    plans = {
+        "square cw rotate": umbmark_square("cw"),
+        "square ccw rotate": umbmark_square("ccw"),
+        "line 4": line(4.0),
+        "spin 180": spin(math.pi),
+        "spin -180": spin(-math.pi),
+    }
     path = tmp_path / "runs.csv"
     with open(path, "w", newline="", encoding="utf-8") as handle:
         w = csv.writer(handle)
@@ -513,16 +578,19 @@ def test_calibrate_own_runs_file(capsys, tmp_path):
 # =====================================================================================================
 # bad input: exit 2, one line, no traceback
 # =====================================================================================================
-@pytest.mark.parametrize("content, contains", [
-    ("direction,x_abs,y_abs,x_calc\ncw,1,2,3\n", ["y_calc"]),                                   # missing column
-    ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,nan,0,0\nccw,1,2,0,0\n", ["line 2", "y_abs"]),  # NaN
-    ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,2,0,0\ncw,1,2,0,0\n", ["ccw"]),                  # one direction
-    ("direction,x_abs,y_abs,x_calc,y_calc\n", []),                                              # no runs
-    ("", ["empty"]),                                                                            # empty file
-    ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,2,0,0\nccw,,2,0,0\n", ["line 3", "x_abs"]),
-    ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,2,0,0\nup,1,2,0,0\n", ["line 3", "direction"]),
-    ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,2,0,0\nccw,1,2,0\n", ["line 3"]),
-])
+@pytest.mark.parametrize(
+    "content, contains",
+    [
+        ("direction,x_abs,y_abs,x_calc\ncw,1,2,3\n", ["y_calc"]),  # missing column
+        ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,nan,0,0\nccw,1,2,0,0\n", ["line 2", "y_abs"]),  # NaN
+        ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,2,0,0\ncw,1,2,0,0\n", ["ccw"]),  # one direction
+        ("direction,x_abs,y_abs,x_calc,y_calc\n", []),  # no runs
+        ("", ["empty"]),  # empty file
+        ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,2,0,0\nccw,,2,0,0\n", ["line 3", "x_abs"]),
+        ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,2,0,0\nup,1,2,0,0\n", ["line 3", "direction"]),
+        ("direction,x_abs,y_abs,x_calc,y_calc\ncw,1,2,0,0\nccw,1,2,0\n", ["line 3"]),
+    ],
+)
 def test_analyze_bad_files(capsys, tmp_path, content, contains):
     f = tmp_path / "bad.csv"
     f.write_text(content, encoding="utf-8")
@@ -536,22 +604,25 @@ def test_analyze_missing_file_and_bad_side(capsys, tmp_path):
     assert_usage_error(capsys, "umbmark", "analyze", f, "--side", "-2", contains=["side"])
 
 
-@pytest.mark.parametrize("argv, contains", [
-    (["--runs", "0"], ["--runs"]),
-    (["--runs", "-3"], ["--runs"]),
-    (["--trials", "0"], ["--trials"]),
-    (["--side", "-1"], ["--side"]),
-    (["--side", "0"], ["--side"]),
-    (["--side", "nan"], ["--side"]),
-    (["--errors", "bogus"], ["bogus"]),
-    (["--noise", "bogus"], ["bogus"]),
-    (["diff-drive", "--mode", "translate"], ["'translate' mode", "'left'", "the other mode is 'rotate'"]),
-    (["ackermann"], ["'rotate' mode", "front_left", "nor in the other mode"]),
-    (["--dpi", "0"], ["dpi"]),
-    (["--dpi", "nan"], ["dpi"]),
-    (["no-such-robot"], ["no-such-robot"]),
-    (["--rate", "0"], ["rate"]),
-])
+@pytest.mark.parametrize(
+    "argv, contains",
+    [
+        (["--runs", "0"], ["--runs"]),
+        (["--runs", "-3"], ["--runs"]),
+        (["--trials", "0"], ["--trials"]),
+        (["--side", "-1"], ["--side"]),
+        (["--side", "0"], ["--side"]),
+        (["--side", "nan"], ["--side"]),
+        (["--errors", "bogus"], ["bogus"]),
+        (["--noise", "bogus"], ["bogus"]),
+        (["diff-drive", "--mode", "translate"], ["'translate' mode", "'left'", "the other mode is 'rotate'"]),
+        (["ackermann"], ["'rotate' mode", "front_left", "nor in the other mode"]),
+        (["--dpi", "0"], ["dpi"]),
+        (["--dpi", "nan"], ["dpi"]),
+        (["no-such-robot"], ["no-such-robot"]),
+        (["--rate", "0"], ["rate"]),
+    ],
+)
 def test_umbmark_bad_options(capsys, tmp_path, monkeypatch, argv, contains):
     monkeypatch.chdir(tmp_path)
     assert_usage_error(capsys, "umbmark", *argv, contains=contains)
@@ -563,15 +634,18 @@ def test_umbmark_negative_seed(capsys, tmp_path, monkeypatch):
     assert_usage_error(capsys, "umbmark", "--seed", "-1", "--runs", "1", "--rate", "20", contains=["seed"])
 
 
-@pytest.mark.parametrize("content, contains", [
-    ("path,x_abs,y_abs\nline 4,4.01,0\nhop 3,1,1\n", ["line 3", "'path'", "hop 3"]),    # unknown path
-    ("path,x_abs,y_abs\nline 4,4.01,0\nsquare cw,1,1\n", ["line 3", "'path'"]),
-    ("path,x_abs,y_abs\nline 4,4.01,0\nline four,1,1\n", ["line 3", "'path'"]),
-    ("path,x_abs,y_abs\nline 4,4.01,0\narc -1 90,1,1\n", ["line 3", "'path'"]),
-    ("path,x_abs,y_abs\n\n# comment\nline 4,4.01,0\nspin 90,nan,0\n", ["line 5", "x_abs"]),
-    ("", ["empty"]),
-    ("path,x_abs\nline 4,4.01\n", ["y_abs"]),
-])
+@pytest.mark.parametrize(
+    "content, contains",
+    [
+        ("path,x_abs,y_abs\nline 4,4.01,0\nhop 3,1,1\n", ["line 3", "'path'", "hop 3"]),  # unknown path
+        ("path,x_abs,y_abs\nline 4,4.01,0\nsquare cw,1,1\n", ["line 3", "'path'"]),
+        ("path,x_abs,y_abs\nline 4,4.01,0\nline four,1,1\n", ["line 3", "'path'"]),
+        ("path,x_abs,y_abs\nline 4,4.01,0\narc -1 90,1,1\n", ["line 3", "'path'"]),
+        ("path,x_abs,y_abs\n\n# comment\nline 4,4.01,0\nspin 90,nan,0\n", ["line 5", "x_abs"]),
+        ("", ["empty"]),
+        ("path,x_abs\nline 4,4.01\n", ["y_abs"]),
+    ],
+)
 def test_calibrate_bad_runs_files(capsys, tmp_path, content, contains):
     f = tmp_path / "runs.csv"
     f.write_text(content, encoding="utf-8")
@@ -585,8 +659,15 @@ def test_calibrate_bad_runs_files(capsys, tmp_path, content, contains):
 def test_calibrate_refuses_a_runs_file_with_a_path_the_robot_cannot_drive(capsys, tmp_path):
     f = tmp_path / "runs.csv"
     f.write_text("path,x_abs,y_abs\nline 4,4.0,0\n# sideways next\nline 1 90,0,1\n", encoding="utf-8")
-    assert_usage_error(capsys, "calibrate", "diff-drive", f, "-o", tmp_path / "o.yaml",
-                       contains=[f"{f}: line 4", "'line 1 90'", "diff-drive", "left"])
+    assert_usage_error(
+        capsys,
+        "calibrate",
+        "diff-drive",
+        f,
+        "-o",
+        tmp_path / "o.yaml",
+        contains=[f"{f}: line 4", "'line 1 90'", "diff-drive", "left"],
+    )
     assert not (tmp_path / "o.yaml").exists()
 
 
@@ -623,8 +704,9 @@ def test_calibrate_output_is_never_an_input_and_needs_force_to_replace(capsys, t
     from omnikin.io.robot_file import save_robot
 
     save_robot(robot, tmp_path / "dd.yaml")
-    assert_usage_error(capsys, "calibrate", tmp_path / "dd.yaml", runs, "-o", tmp_path / "dd.yaml", "--force",
-                       contains=["input"])
+    assert_usage_error(
+        capsys, "calibrate", tmp_path / "dd.yaml", runs, "-o", tmp_path / "dd.yaml", "--force", contains=["input"]
+    )
 
 
 def test_calibrate_plan_prints_the_runs_to_drive_as_a_runs_file(capsys, tmp_path):
@@ -637,8 +719,9 @@ def test_calibrate_plan_prints_the_runs_to_drive_as_a_runs_file(capsys, tmp_path
     assert header == "path,x_abs,y_abs,theta_abs_deg"
     rows = [line.split(",")[0] for line in lines if not line.startswith("#")][1:]
     # every recommended path five times, and nothing a differential drive cannot drive
-    assert sorted(set(rows)) == sorted(["square cw rotate 4", "square ccw rotate 4", "line 4 0", "spin 180",
-                                        "spin -180", "spin 1800", "spin -1800"])
+    assert sorted(set(rows)) == sorted(
+        ["square cw rotate 4", "square ccw rotate 4", "line 4 0", "spin 180", "spin -180", "spin 1800", "spin -1800"]
+    )
     assert all(rows.count(p) == 5 for p in set(rows))
     # filled in with measurements, the template is a runs file omnikin calibrate reads
     robot = load_robot("diff-drive")
@@ -657,7 +740,7 @@ def test_calibrate_plan_prints_the_runs_to_drive_as_a_runs_file(capsys, tmp_path
     rc, _, err = run(capsys, "calibrate", "ackermann", "--plan", "-o", out)
     assert rc == 0, err
     paths = {r[0] for r in data_rows(out)[1:]}
-    assert paths == {"line 4 0", "arc 2 180", "arc 2 -180"}           # a car cannot turn in place
+    assert paths == {"line 4 0", "arc 2 180", "arc 2 -180"}  # a car cannot turn in place
     assert_usage_error(capsys, "calibrate", "ackermann", "--plan", "-o", out, contains=["--force"])
     assert_usage_error(capsys, "calibrate", "ackermann", filled, "--plan", contains=["--plan"])
     assert_usage_error(capsys, "calibrate", "ackermann", contains=["RUNS"])
@@ -678,10 +761,18 @@ def test_examples_run_as_written_on_a_fresh_clone(tmp_path):
     import shutil
 
     shutil.copytree(EXAMPLES, tmp_path / "examples")
-    for argv in (["umbmark", "analyze", "examples/umbmark_measurements.csv", "--robot", "tomasi-omni3"],
-                 ["calibrate", "tomasi-omni3", "examples/calibration_runs.csv", "-o", "calibrated.yaml"]):
-        proc = subprocess.run([sys.executable, "-m", "omnikin.cli.main", *argv], cwd=tmp_path, capture_output=True,
-                              text=True, timeout=120, env=omnikin_env())
+    for argv in (
+        ["umbmark", "analyze", "examples/umbmark_measurements.csv", "--robot", "tomasi-omni3"],
+        ["calibrate", "tomasi-omni3", "examples/calibration_runs.csv", "-o", "calibrated.yaml"],
+    ):
+        proc = subprocess.run(
+            [sys.executable, "-m", "omnikin.cli.main", *argv],
+            cwd=tmp_path,
+            capture_output=True,
+            text=True,
+            timeout=120,
+            env=omnikin_env(),
+        )
         assert proc.returncode == 0, proc.stderr
         assert proc.stderr == ""
     assert load_robot(tmp_path / "calibrated.yaml").wheel_names == load_robot("tomasi-omni3").wheel_names
@@ -694,11 +785,14 @@ def test_examples_are_what_omnikin_umbmark_writes(main_job):
     """The sample data is the main job's output (as its '#' lines say): same rows, to the printed digits."""
     cwd, _ = main_job
     report = cwd / "umbmark-report"
-    for example, written in (("umbmark_measurements.csv", "measurements_before.csv"),
-                             ("calibration_runs.csv", "calibration_runs.csv")):
+    for example, written in (
+        ("umbmark_measurements.csv", "measurements_before.csv"),
+        ("calibration_runs.csv", "calibration_runs.csv"),
+    ):
         ours, theirs = data_rows(EXAMPLES / example), data_rows(report / written)
         assert ours[0] == theirs[0] and len(ours) == len(theirs)
         for a, b in zip(ours[1:], theirs[1:], strict=True):
             assert a[0] == b[0]
-            assert [float(v or "nan") for v in a[1:]] == pytest.approx([float(v or "nan") for v in b[1:]],
-                                                                      abs=2e-5, nan_ok=True)
+            assert [float(v or "nan") for v in a[1:]] == pytest.approx(
+                [float(v or "nan") for v in b[1:]], abs=2e-5, nan_ok=True
+            )

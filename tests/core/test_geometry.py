@@ -78,11 +78,25 @@ def test_exp_is_the_constant_twist_arc():
     assert_pose_close(g.exp([1.0, 0.0, math.pi / 2]), np.array([r, r, math.pi / 2]), 1e-12)
 
 
-_EDGE = 2 * g.TAYLOR_LIMIT   # phi at which sinc(phi/2) switches from its polynomial to sin(x)/x
+_EDGE = 2 * g.TAYLOR_LIMIT  # phi at which sinc(phi/2) switches from its polynomial to sin(x)/x
 
 
-@pytest.mark.parametrize("phi", [_EDGE * (1 - 1e-12), _EDGE, _EDGE * (1 + 1e-12), -_EDGE, -_EDGE * (1 - 1e-12),
-                                 0.5 * _EDGE, 1e-4, 1e-9, 0.0, 1.0, 3.0])
+@pytest.mark.parametrize(
+    "phi",
+    [
+        _EDGE * (1 - 1e-12),
+        _EDGE,
+        _EDGE * (1 + 1e-12),
+        -_EDGE,
+        -_EDGE * (1 - 1e-12),
+        0.5 * _EDGE,
+        1e-4,
+        1e-9,
+        0.0,
+        1.0,
+        3.0,
+    ],
+)
 def test_small_angle_branch_is_continuous(phi):
     """Both sides of the Taylor switch agree with an exact-rational series reference to one ulp."""
     from fractions import Fraction

@@ -17,17 +17,20 @@ def castor(name, x, y):
     return Wheel(name, "castor", x, y, 0.0, 0.03, **CASTOR)
 
 
-@pytest.mark.parametrize("name, campion, holonomic", [
-    ("tomasi-omni3", (3, 0), True),
-    ("garcia-sillas-omni3", (3, 0), True),
-    ("omni4", (3, 0), True),
-    ("mecanum4", (3, 0), True),
-    ("xr4000", (3, 0), True),              # powered castors do not constrain the body
-    ("villasenor-omni3", (3, 0), True),
-    ("diff-drive", (2, 0), False),
-    ("ackermann", (1, 1), False),
-    ("synchro", (1, 2), False),            # steering coupling not expressible in schema 1
-])
+@pytest.mark.parametrize(
+    "name, campion, holonomic",
+    [
+        ("tomasi-omni3", (3, 0), True),
+        ("garcia-sillas-omni3", (3, 0), True),
+        ("omni4", (3, 0), True),
+        ("mecanum4", (3, 0), True),
+        ("xr4000", (3, 0), True),  # powered castors do not constrain the body
+        ("villasenor-omni3", (3, 0), True),
+        ("diff-drive", (2, 0), False),
+        ("ackermann", (1, 1), False),
+        ("synchro", (1, 2), False),  # steering coupling not expressible in schema 1
+    ],
+)
 def test_presets_campion_types(name, campion, holonomic):
     m = load_robot(name).mobility
     assert m.campion_type == campion
@@ -35,8 +38,9 @@ def test_presets_campion_types(name, campion, holonomic):
 
 
 def test_type_2_1_one_centred_steerable_wheel_and_castors():
-    robot = Robot("2-1", (Wheel("s", "steerable", 0.3, 0.0, 0.0, 0.1), castor("c1", -0.2, 0.2),
-                          castor("c2", -0.2, -0.2)))
+    robot = Robot(
+        "2-1", (Wheel("s", "steerable", 0.3, 0.0, 0.0, 0.1), castor("c1", -0.2, 0.2), castor("c2", -0.2, -0.2))
+    )
     assert robot.mobility.campion_type == (2, 1)
     # spinning about the steered wheel's contact is done by steering alone: odometry from wheel
     # speeds cannot see it, and says so
@@ -45,23 +49,37 @@ def test_type_2_1_one_centred_steerable_wheel_and_castors():
 
 
 def test_type_1_2_two_centred_steerable_wheels():
-    robot = Robot("1-2", (Wheel("s1", "steerable", 0.3, 0.0, 0.0, 0.1), Wheel("s2", "steerable", -0.3, 0.0, 0.0, 0.1),
-                          castor("c", 0.0, 0.3)))
+    robot = Robot(
+        "1-2",
+        (
+            Wheel("s1", "steerable", 0.3, 0.0, 0.0, 0.1),
+            Wheel("s2", "steerable", -0.3, 0.0, 0.0, 0.1),
+            castor("c", 0.0, 0.3),
+        ),
+    )
     assert robot.mobility.campion_type == (1, 2)
 
 
 def test_fixed_wheels_with_radial_axles_can_only_spin():
     """Axles all through the origin (tangent drive): the only motion is rotation about it, (1, 0)."""
-    wheels = tuple(Wheel(f"w{i}", "standard", 0.2 * math.cos(b), 0.2 * math.sin(b), b + math.pi / 2, 0.05)
-                   for i, b in enumerate(np.radians([0, 120, 240])))
+    wheels = tuple(
+        Wheel(f"w{i}", "standard", 0.2 * math.cos(b), 0.2 * math.sin(b), b + math.pi / 2, 0.05)
+        for i, b in enumerate(np.radians([0, 120, 240]))
+    )
     m = Robot("spinner", wheels).mobility
     assert m.campion_type == (1, 0)
     assert "degenerate" in m.campion_name
 
 
 def test_tricycle_is_car_like():
-    robot = Robot("tricycle", (Wheel("l", "standard", 0, 0.2, 0.0, 0.1), Wheel("r", "standard", 0, -0.2, 0.0, 0.1),
-                               Wheel("f", "steerable", 0.5, 0.0, 0.0, 0.1)))
+    robot = Robot(
+        "tricycle",
+        (
+            Wheel("l", "standard", 0, 0.2, 0.0, 0.1),
+            Wheel("r", "standard", 0, -0.2, 0.0, 0.1),
+            Wheel("f", "steerable", 0.5, 0.0, 0.0, 0.1),
+        ),
+    )
     assert robot.mobility.campion_type == (1, 1)
 
 
@@ -102,16 +120,20 @@ def test_two_omni_wheels_cannot_measure_every_motion():
 def test_parallel_rollers_cannot_see_a_translation():
     """Four mecanum wheels with the same roller sign: lateral translation along the rollers' free
     direction is invisible."""
-    wheels = tuple(Wheel(n, "mecanum", x, y, 0.0, 0.05, math.radians(45))
-                   for n, x, y in [("a", .2, .2), ("b", .2, -.2), ("c", -.2, .2), ("d", -.2, -.2)])
+    wheels = tuple(
+        Wheel(n, "mecanum", x, y, 0.0, 0.05, math.radians(45))
+        for n, x, y in [("a", 0.2, 0.2), ("b", 0.2, -0.2), ("c", -0.2, 0.2), ("d", -0.2, -0.2)]
+    )
     with pytest.raises(SingularLayoutError, match="translation along"):
         Robot("bad-mecanum", wheels)
 
 
 def test_three_fixed_wheels_with_tangent_axles_are_immobile():
     """Axles along the tangents (drive directions radial) share no instantaneous centre."""
-    wheels = tuple(Wheel(f"w{i}", "standard", 0.2 * math.cos(b), 0.2 * math.sin(b), b, 0.05)
-                   for i, b in enumerate(np.radians([0, 120, 240])))
+    wheels = tuple(
+        Wheel(f"w{i}", "standard", 0.2 * math.cos(b), 0.2 * math.sin(b), b, 0.05)
+        for i, b in enumerate(np.radians([0, 120, 240]))
+    )
     with pytest.raises(SingularLayoutError, match="immobile"):
         Robot("locked", wheels)
 
@@ -122,10 +144,12 @@ def test_castors_alone_are_rejected():
 
 
 # --- conditioning warning (threshold 10, docs/conventions.md "Conditioning") ------------------------------------
-SKEWED = ("omnikin: 1\nname: skewed-omni3\nwheels:\n"
-          "  - {name: a, type: omni, x: 0.2, y: 0.1, drive_deg: 0, radius: 0.05}\n"
-          "  - {name: b, type: omni, x: 0.2, y: -0.1, drive_deg: 0, radius: 0.05}\n"
-          "  - {name: c, type: omni, x: -0.2, y: 0.0, drive_deg: 10, radius: 0.05}\n")
+SKEWED = (
+    "omnikin: 1\nname: skewed-omni3\nwheels:\n"
+    "  - {name: a, type: omni, x: 0.2, y: 0.1, drive_deg: 0, radius: 0.05}\n"
+    "  - {name: b, type: omni, x: 0.2, y: -0.1, drive_deg: 0, radius: 0.05}\n"
+    "  - {name: c, type: omni, x: -0.2, y: 0.0, drive_deg: 10, radius: 0.05}\n"
+)
 
 
 def skewed_condition_by_hand() -> float:

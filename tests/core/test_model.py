@@ -19,10 +19,13 @@ from omnikin.errors import OmnikinError
 # counter-clockwise tangent, so the mapping is: same wheel angles, omnikin speed = -(their speed).
 
 
-@pytest.mark.parametrize("n, offset, theirs", [
-    (3, 0.0, [-15.0, 8.66025, -8.66025]),
-    (4, math.pi / 4, [-5.0, 9.14214, -5.0, -19.1421]),
-])
+@pytest.mark.parametrize(
+    "n, offset, theirs",
+    [
+        (3, 0.0, [-15.0, 8.66025, -8.66025]),
+        (4, math.pi / 4, [-5.0, 9.14214, -5.0, -19.1421]),
+    ],
+)
 def test_ros2_omni_wheel_drive_controller_parity(n, offset, theirs):
     robot = omni_robot([math.degrees(offset + 2 * math.pi * k / n) for k in range(n)], distance=0.5, radius=0.1)
     ours = robot.ik([1.0, 1.0, 1.0]).wheel_speeds
@@ -95,17 +98,20 @@ def test_omni_roller_speed_is_side_velocity(tomasi):
 
 # --- property tests: random full-rank Swedish layouts ----------------------------------------------
 wheel_st = st.tuples(
-    st.floats(-0.5, 0.5), st.floats(-0.5, 0.5),       # position
-    st.floats(-math.pi, math.pi),                     # drive direction
-    st.floats(-60, 60),                               # roller angle [deg]
-    st.floats(0.02, 0.2),                             # radius
+    st.floats(-0.5, 0.5),
+    st.floats(-0.5, 0.5),  # position
+    st.floats(-math.pi, math.pi),  # drive direction
+    st.floats(-60, 60),  # roller angle [deg]
+    st.floats(0.02, 0.2),  # radius
 )
 
 
 def swedish_robot(specs, rotate=0.0):
     c, s = math.cos(rotate), math.sin(rotate)
-    wheels = tuple(Wheel(f"w{i}", "swedish", c * x - s * y, s * x + c * y, d + rotate, r, math.radians(g))
-                   for i, (x, y, d, g, r) in enumerate(specs))
+    wheels = tuple(
+        Wheel(f"w{i}", "swedish", c * x - s * y, s * x + c * y, d + rotate, r, math.radians(g))
+        for i, (x, y, d, g, r) in enumerate(specs)
+    )
     return Robot("random", wheels)
 
 
@@ -122,8 +128,7 @@ def test_ik_fk_round_trip(specs, twist):
     assert fk.residual_norm < 1e-6
 
 
-@given(st.lists(wheel_st, min_size=3, max_size=5), st.floats(-math.pi, math.pi),
-       st.tuples(*[st.floats(-2, 2)] * 3))
+@given(st.lists(wheel_st, min_size=3, max_size=5), st.floats(-math.pi, math.pi), st.tuples(*[st.floats(-2, 2)] * 3))
 def test_rotating_the_layout_rotates_the_twist(specs, alpha, twist):
     """Rotating every wheel (position and direction) by alpha about the origin is the same robot
     seen in a rotated body frame: wheel speeds for the rotated twist are unchanged."""
@@ -186,7 +191,7 @@ def test_ackermann_steering_closed_form():
     np.testing.assert_allclose(res.steer_angles, [math.atan(d / (R - b)), math.atan(d / (R + b))], atol=1e-12)
     np.testing.assert_allclose(res.wheel_speeds[2], w * math.hypot(d, R - b) / 0.1, atol=1e-12)
     with pytest.raises(InfeasibleTwistError, match="steered outside its limits"):
-        robot.ik([0.1, 0.0, 2.0])        # needs more than 35 deg
+        robot.ik([0.1, 0.0, 2.0])  # needs more than 35 deg
 
 
 def test_synchro_translation_steers_all_wheels_alike():
@@ -199,7 +204,7 @@ def test_synchro_translation_steers_all_wheels_alike():
 def test_steer_hint_picks_reversed_branch():
     robot = load_robot("synchro")
     res = robot.ik([-0.3, 0.0, 0.0], steer_hint=[0.0, 0.0, 0.0])
-    np.testing.assert_allclose(res.steer_angles, [0.0] * 3, atol=1e-12)    # drive backwards
+    np.testing.assert_allclose(res.steer_angles, [0.0] * 3, atol=1e-12)  # drive backwards
     np.testing.assert_allclose(res.wheel_speeds, [-6.0] * 3, atol=1e-12)
 
 
@@ -281,7 +286,7 @@ def test_ik_overflow_is_an_input_error_naming_the_twist(tomasi, twist):
         tomasi.ik(twist)
     with pytest.raises(InputError, match="twist"):
         tomasi.wheel_speeds(twist)
-    with pytest.raises(InputError, match="twist"):      # wheel 3's roller: (0.5 + 0.866) 1.5e308 m/s
+    with pytest.raises(InputError, match="twist"):  # wheel 3's roller: (0.5 + 0.866) 1.5e308 m/s
         tomasi.roller_speeds([1.5e308, 1.5e308, 0.0])
 
 
@@ -304,7 +309,7 @@ def test_fk_overflow_is_an_input_error_naming_the_wheel_speeds():
     robot = omni_robot([0, 120, 240], distance=0.1, radius=10.0)
     with pytest.raises(InputError, match="^wheel_speeds: .* is too large: the twist overflow"):
         robot.fk([1e308, 1e308, 1e308])
-    assert np.all(np.isfinite(robot.fk([1e300, 1e300, 1e300]).twist))     # large but representable: fine
+    assert np.all(np.isfinite(robot.fk([1e300, 1e300, 1e300]).twist))  # large but representable: fine
 
 
 def test_cli_ik_of_a_huge_twist_is_one_line_error(capsys):
@@ -316,23 +321,45 @@ def test_cli_ik_of_a_huge_twist_is_one_line_error(capsys):
     assert len(err.strip().splitlines()) == 1 and "nan" not in err and "inf" not in err
 
 
-@pytest.mark.parametrize("ticks, gear", [(1e-310, 1.0), (1e-200, 1.0), (0.5, 1.0), (2.0 ** 32 + 1, 1.0),
-                                         (600, 1e-310), (600, 1e-200), (600, 1e300), (600, 0.0)])
+@pytest.mark.parametrize(
+    "ticks, gear",
+    [
+        (1e-310, 1.0),
+        (1e-200, 1.0),
+        (0.5, 1.0),
+        (2.0**32 + 1, 1.0),
+        (600, 1e-310),
+        (600, 1e-200),
+        (600, 1e300),
+        (600, 0.0),
+    ],
+)
 def test_encoder_outside_physical_ranges_is_refused(ticks, gear):
     """1e-310 ticks per turn made 2 pi / (ticks gear) infinite (NaN poses); 1e-200 a ZeroDivisionError."""
     with pytest.raises(InputError, match="must lie in"):
         Encoder(ticks, gear)
 
 
-@pytest.mark.parametrize("ticks, gear", [(1, 1e-3), (2.0 ** 32, 1e4), (600, 1.0), (4096.5, 19.7)])
+@pytest.mark.parametrize("ticks, gear", [(1, 1e-3), (2.0**32, 1e4), (600, 1.0), (4096.5, 19.7)])
 def test_encoder_within_ranges_gives_a_finite_angle_per_tick(ticks, gear):
     step = Encoder(ticks, gear).rad_per_tick
     assert step == pytest.approx(2 * math.pi / (ticks * gear)) and math.isfinite(step) and step > 0
 
 
-@pytest.mark.parametrize("kw", [{"radius": 20.0}, {"radius": 5e-5}, {"x": 1e4}, {"y": -2e3},
-                                {"roller": math.radians(85)}, {"max_speed": 1e5}, {"max_speed": -1.0},
-                                {"encoder": 600}, {"steer": "big"}])
+@pytest.mark.parametrize(
+    "kw",
+    [
+        {"radius": 20.0},
+        {"radius": 5e-5},
+        {"x": 1e4},
+        {"y": -2e3},
+        {"roller": math.radians(85)},
+        {"max_speed": 1e5},
+        {"max_speed": -1.0},
+        {"encoder": 600},
+        {"steer": "big"},
+    ],
+)
 def test_wheel_outside_physical_ranges_is_refused(kw):
     args = {"name": "a", "type": "swedish", "x": 0.1, "y": 0.0, "drive": math.pi / 2, "radius": 0.05}
     args.update(kw)
@@ -340,8 +367,9 @@ def test_wheel_outside_physical_ranges_is_refused(kw):
         Wheel(**args)
 
 
-@pytest.mark.parametrize("kw", [{"offset": 11.0}, {"offset": -0.1}, {"lower": -4.0}, {"upper": 4.0},
-                                {"lower": 0.5, "upper": 0.5}])
+@pytest.mark.parametrize(
+    "kw", [{"offset": 11.0}, {"offset": -0.1}, {"lower": -4.0}, {"upper": 4.0}, {"lower": 0.5, "upper": 0.5}]
+)
 def test_steer_outside_ranges_is_refused(kw):
     with pytest.raises(InputError):
         Steer(**kw)
@@ -359,19 +387,31 @@ def _best_time(fn, repeats=3) -> float:
 
 def _many_wheels(n):
     step = 2 * math.pi / n
-    return tuple(Wheel(f"w{i}", "omni", 0.2 * math.cos(i * step), 0.2 * math.sin(i * step), i * step + math.pi / 2,
-                       0.05, encoder=Encoder(100)) for i in range(n))
+    return tuple(
+        Wheel(
+            f"w{i}",
+            "omni",
+            0.2 * math.cos(i * step),
+            0.2 * math.sin(i * step),
+            i * step + math.pi / 2,
+            0.05,
+            encoder=Encoder(100),
+        )
+        for i in range(n)
+    )
 
 
 def test_robot_validation_and_wheel_lookups_are_linear():
     """20 000 wheels: the duplicate-name check counted every name in the whole list (names.count) and
     each wheel look-up scanned the list, so 20 000 wheels took ~100x as long as 2 000. Linear work
     takes ~10x; the bound allows 30x (and half a second of noise)."""
+
     def build_and_check(wheels):
         def run():
             robot = Robot("many", wheels)
             robot.check_observable(robot.encoded_names)
             assert robot.wheel(wheels[-1].name) is wheels[-1]
+
         return run
 
     small, large = _many_wheels(2_000), _many_wheels(20_000)

@@ -37,8 +37,9 @@ def test_villasenor_pure_rotation_returned_as_infeasible():
         v.ik([0, 0, 1.0])
 
 
-@pytest.mark.parametrize("kw", [{"radius": 0.0}, {"x": math.nan}, {"type": "omny"}, {"radius": 1e-320},
-                                {"radius": -0.05}, {"y": math.inf}])
+@pytest.mark.parametrize(
+    "kw", [{"radius": 0.0}, {"x": math.nan}, {"type": "omny"}, {"radius": 1e-320}, {"radius": -0.05}, {"y": math.inf}]
+)
 def test_wheel_validation(kw):
     args = {"name": "a", "type": "omni", "x": 0.1, "y": 0.0, "drive": math.pi / 2, "radius": 0.05}
     args.update(kw)
@@ -72,11 +73,20 @@ def test_fk_matrix_accepts_any_iterable_of_wheel_names():
 def test_zero_wheel_limit_with_zero_twist_is_not_nan():
     from omnikin.limits import MotionLimits, saturate, speed_scale
 
-    wheels = tuple(Wheel(f"w{i}", "omni", 0.1 * math.cos(a), 0.1 * math.sin(a), a + math.pi / 2, 0.03,
-                         max_speed=0.0 if i == 0 else None) for i, a in enumerate(TOM_BETAS))
+    wheels = tuple(
+        Wheel(
+            f"w{i}",
+            "omni",
+            0.1 * math.cos(a),
+            0.1 * math.sin(a),
+            a + math.pi / 2,
+            0.03,
+            max_speed=0.0 if i == 0 else None,
+        )
+        for i, a in enumerate(TOM_BETAS)
+    )
     robot = Robot("zero-limit", wheels)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert speed_scale(robot, [0.0, 0.0, 0.0], MotionLimits()) == np.inf
         np.testing.assert_array_equal(saturate(robot, [0.0, 0.0, 0.0], MotionLimits()), [0.0, 0.0, 0.0])
-

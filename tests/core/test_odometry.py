@@ -13,7 +13,7 @@ from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry
 from omnikin.errors import OmnikinError
 from omnikin.integration import integrate
 
-RAD_PER_TICK = 2 * math.pi / 600      # tomasi-omni3 encoders
+RAD_PER_TICK = 2 * math.pi / 600  # tomasi-omni3 encoders
 
 
 def tomasi_angles(twist, t):
@@ -54,8 +54,10 @@ def test_euler_and_midpoint_are_approximations(tomasi):
     t = np.arange(0, math.pi / 2 / 0.2 + 1e-9, dt)
     ang = tomasi_angles(twist, t)
     end = constant_twist_pose(twist, t[-1])
-    err = {m: np.hypot(*(batch_odometry_from_angles(tomasi, t, ang, method=m).poses[-1, :2] - end[:2]))
-           for m in ("exact", "midpoint", "euler")}
+    err = {
+        m: np.hypot(*(batch_odometry_from_angles(tomasi, t, ang, method=m).poses[-1, :2] - end[:2]))
+        for m in ("exact", "midpoint", "euler")
+    }
     p, x = math.hypot(end[0], end[1]), 0.2 * dt
     assert err["exact"] < 1e-13
     assert err["euler"] == pytest.approx(p * x / 2, rel=0.01)
@@ -65,7 +67,7 @@ def test_euler_and_midpoint_are_approximations(tomasi):
 def test_batch_broadcasts_over_trials(tomasi):
     t = np.linspace(0, 2, 41)
     twists = np.array([[0.2, 0, 0.1], [0, 0.3, -0.2], [0.1, 0.1, 0.0]])
-    angles = np.stack([tomasi_angles(tw, t) for tw in twists])          # (3, 41, 3)
+    angles = np.stack([tomasi_angles(tw, t) for tw in twists])  # (3, 41, 3)
     res = batch_odometry_from_angles(tomasi, t, angles)
     assert res.poses.shape == (3, 41, 3)
     for k, tw in enumerate(twists):
@@ -103,8 +105,8 @@ def test_ticks_within_quantisation_of_truth(tomasi):
 @pytest.mark.parametrize("bits", [8, 16, 32])
 def test_counter_wrap_around(tomasi, bits):
     t = np.arange(0, 3, 0.01)
-    ticks = quantised_log(np.array([0.5, 0.2, 1.0]), t) + 2 ** bits - 300     # starts near the top
-    wrapped = ticks % (2 ** bits)
+    ticks = quantised_log(np.array([0.5, 0.2, 1.0]), t) + 2**bits - 300  # starts near the top
+    wrapped = ticks % (2**bits)
     ref = batch_odometry(tomasi, t, ticks)
     res = batch_odometry(tomasi, t, wrapped, counter_bits=bits)
     np.testing.assert_allclose(res.poses, ref.poses, atol=1e-12)
@@ -136,9 +138,9 @@ def test_redundant_layout_reports_residual():
     robot = load_robot("omni4")
     odo = Odometry(robot)
     odo.update(0.0, [0, 0, 0, 0])
-    odo.update(0.1, [100, 0, 0, 0])               # one wheel slips
+    odo.update(0.1, [100, 0, 0, 0])  # one wheel slips
     rad = 2 * math.pi / 2048 * 100
-    n = np.array([1, -1, 1, -1]) / 2.0             # left null space of J (see test_model)
+    n = np.array([1, -1, 1, -1]) / 2.0  # left null space of J (see test_model)
     np.testing.assert_allclose(odo.residual, n * n[0] * rad / 0.1, atol=1e-9)
 
 
@@ -199,11 +201,12 @@ def test_batch_trial_index_in_errors(tomasi):
 
 
 def test_counter_range_and_ambiguous_half_jump(tomasi):
-    with pytest.raises(OdometryInputError,
-                       match=r"sample 1: tick reading 70000 outside the range of a 16-bit counter .*, wheel 'w1'"):
+    with pytest.raises(
+        OdometryInputError, match=r"sample 1: tick reading 70000 outside the range of a 16-bit counter .*, wheel 'w1'"
+    ):
         batch_odometry(tomasi, [0, 1], [[0, 0, 0], [70000, 0, 0]], counter_bits=16)
     with pytest.raises(OdometryInputError, match="impossible jump"):
-        batch_odometry(tomasi, [0, 1], [[0, 0, 0], [0, 128, 0]], counter_bits=8)   # exactly half: undecidable
+        batch_odometry(tomasi, [0, 1], [[0, 0, 0], [0, 128, 0]], counter_bits=8)  # exactly half: undecidable
     with pytest.raises(OdometryInputError, match="counter_bits"):
         batch_odometry(tomasi, [0, 1], np.zeros((2, 3)), counter_bits=0)
 
@@ -212,9 +215,14 @@ def fast_wheel_robot(tmp_path):
     from omnikin.io.robot_file import load_robot as load
 
     p = tmp_path / "r.yaml"
-    p.write_text("omnikin: 1\nname: limited\nwheels:\n" + "".join(
-        f"  - {{name: w{i}, type: omni, distance: 0.1, angle_deg: {a}, radius: 0.05, max_speed: 10,"
-        f" encoder: {{ticks_per_rev: 1000}}}}\n" for i, a in enumerate([0, 120, 240])))
+    p.write_text(
+        "omnikin: 1\nname: limited\nwheels:\n"
+        + "".join(
+            f"  - {{name: w{i}, type: omni, distance: 0.1, angle_deg: {a}, radius: 0.05, max_speed: 10,"
+            f" encoder: {{ticks_per_rev: 1000}}}}\n"
+            for i, a in enumerate([0, 120, 240])
+        )
+    )
     return load(p)
 
 
@@ -229,8 +237,8 @@ def test_impossible_jump_from_max_speed(tmp_path):
     odo.update(0.0, [0, 0, 0])
     with pytest.raises(OdometryInputError, match="impossible jump of 5000 ticks in 0.1 s, wheel 'w0'"):
         odo.update(0.1, [5000, 0, 0])
-    assert odo.pose == (0.0, 0.0, 0.0)             # state unchanged after the error
-    odo.update(0.1, [100, 0, 0])                   # and the estimator goes on
+    assert odo.pose == (0.0, 0.0, 0.0)  # state unchanged after the error
+    odo.update(0.1, [100, 0, 0])  # and the estimator goes on
 
 
 def test_streaming_errors_name_the_sample(tomasi):
@@ -263,15 +271,20 @@ def test_duplicate_sample_is_skipped_with_one_warning(tomasi):
         odo.update(0.1, [5, 5, 5])
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        odo.update(0.1, [5, 5, 5])                # warned only once
+        odo.update(0.1, [5, 5, 5])  # warned only once
     assert odo.duplicates == 2 and odo.pose == pose
 
 
 def test_odometry_needs_encoders():
     from omnikin import Robot, Wheel
 
-    robot = Robot("no-enc", tuple(Wheel(f"w{i}", "omni", 0.1 * math.cos(b), 0.1 * math.sin(b), b + math.pi / 2, 0.05)
-                                  for i, b in enumerate(np.radians([0, 120, 240]))))
+    robot = Robot(
+        "no-enc",
+        tuple(
+            Wheel(f"w{i}", "omni", 0.1 * math.cos(b), 0.1 * math.sin(b), b + math.pi / 2, 0.05)
+            for i, b in enumerate(np.radians([0, 120, 240]))
+        ),
+    )
     with pytest.raises(OmnikinError, match="no wheel has an 'encoder'"):
         Odometry(robot)
 

@@ -34,7 +34,7 @@ from tomasi_helpers import TOMASI_RPT, assert_poses_close, cli, one_line_error, 
 
 H = ["t", "w1", "w2", "w3"]
 TOMASI_R = 0.04125
-RIM_RATE = 100.0 / TOMASI_R / TOMASI_RPT       # ticks/s at the default 100 m/s rim-speed bound
+RIM_RATE = 100.0 / TOMASI_R / TOMASI_RPT  # ticks/s at the default 100 m/s rim-speed bound
 
 
 @pytest.fixture(scope="module")
@@ -50,10 +50,15 @@ def stream(robot, t, rows, **kw):
 def tomasi_file(tmp_path, encoder_extra="", wheel_extra="", name="r.yaml"):
     """tomasi-omni3 written out as a robot file, with extra encoder / wheel fields."""
     p = tmp_path / name
-    p.write_text("omnikin: 1\nname: tomasi-file\nwheels:\n" + "".join(
-        f"  - {{name: w{i + 1}, type: omni, distance: 0.113, angle_deg: {b}, radius: 0.04125{wheel_extra}, "
-        f"encoder: {{ticks_per_rev: 600{encoder_extra}}}}}\n" for i, b in enumerate((0, 120, 240))),
-        encoding="utf-8")
+    p.write_text(
+        "omnikin: 1\nname: tomasi-file\nwheels:\n"
+        + "".join(
+            f"  - {{name: w{i + 1}, type: omni, distance: 0.113, angle_deg: {b}, radius: 0.04125{wheel_extra}, "
+            f"encoder: {{ticks_per_rev: 600{encoder_extra}}}}}\n"
+            for i, b in enumerate((0, 120, 240))
+        ),
+        encoding="utf-8",
+    )
     return p
 
 
@@ -72,7 +77,7 @@ def test_64_bit_unsigned_counter_log_gives_plus_11_ticks(capsys, tmp_path):
 
 def test_readings_beyond_2_53_are_not_rounded(capsys, tmp_path):
     """2**53 + 1 and 2**53 + 12 differ by 11; as floats they are 2**53 and 2**53 + 12 (12 apart)."""
-    base = 2 ** 53 + 1
+    base = 2**53 + 1
     log = write_log(tmp_path / "log.csv", H, [[0.0, base, base, base], [0.1, base + 11, base - 5, base + 3]])
     out = tmp_path / "out.csv"
     rc, _, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", out)
@@ -83,15 +88,28 @@ def test_readings_beyond_2_53_are_not_rounded(capsys, tmp_path):
 
 
 def test_uint64_log_is_kept_unsigned_and_exact(tom, tmp_path):
-    top = 2 ** 64 - 1
+    top = 2**64 - 1
     log = write_log(tmp_path / "log.csv", H, [[0.0, top - 3, 0, 0], [0.1, top, 0, 0]])
     parsed = read_tick_log(log, tom)
     assert parsed.ticks.dtype == np.uint64 and int(parsed.ticks[1, 0]) == top
 
 
-@pytest.mark.parametrize("text", ["1_0", "\u0661\u0662", "0x10", "1e3", "5.0", "1 0", "+5", "", "--5", "５"],
-                         ids=["underscore", "arabic-indic", "hex", "exponent", "decimal-point", "inner-space",
-                              "plus", "empty", "double-minus", "fullwidth"])
+@pytest.mark.parametrize(
+    "text",
+    ["1_0", "\u0661\u0662", "0x10", "1e3", "5.0", "1 0", "+5", "", "--5", "５"],
+    ids=[
+        "underscore",
+        "arabic-indic",
+        "hex",
+        "exponent",
+        "decimal-point",
+        "inner-space",
+        "plus",
+        "empty",
+        "double-minus",
+        "fullwidth",
+    ],
+)
 def test_log_refuses_anything_but_plain_decimal_integers(capsys, tmp_path, text):
     log = tmp_path / "log.csv"
     log.write_text("t,w1,w2,w3\n0.0,0,0,0\n0.1,5," + text + ",2\n", encoding="utf-8")
@@ -138,13 +156,17 @@ def test_every_integer_dtype_integrates_like_python_ints(tom, dtype):
     t = [0.0, 0.1, 0.2]
     assert_poses_close(batch_odometry(tom, t, tk).poses, expected)
     with warnings.catch_warnings():
-        warnings.simplefilter("error")          # no overflow warning from NumPy scalar arithmetic
-        assert_poses_close(stream(tom, t, list(tk))[1], expected)                    # NumPy rows
-        assert_poses_close(stream(tom, t, [list(r) for r in tk])[1], expected)       # lists of NumPy scalars
+        warnings.simplefilter("error")  # no overflow warning from NumPy scalar arithmetic
+        assert_poses_close(stream(tom, t, list(tk))[1], expected)  # NumPy rows
+        assert_poses_close(stream(tom, t, [list(r) for r in tk])[1], expected)  # lists of NumPy scalars
 
 
-@given(st.lists(st.tuples(*[st.integers(-100, 100)] * 3), min_size=1, max_size=12),
-       st.sampled_from([None, 8, 16, 32, 64]), st.integers(0, 2 ** 64 - 1), st.sampled_from(["python", "numpy"]))
+@given(
+    st.lists(st.tuples(*[st.integers(-100, 100)] * 3), min_size=1, max_size=12),
+    st.sampled_from([None, 8, 16, 32, 64]),
+    st.integers(0, 2**64 - 1),
+    st.sampled_from(["python", "numpy"]),
+)
 def test_any_counter_representation_integrates_the_true_increments(increments, bits, offset, form):
     """Readings = offset + running sum of the increments, stored as the counter stores them
     (unsigned, modulo 2**bits; without a width: plain integers, possibly beyond 64 bits). Batch and
@@ -153,7 +175,7 @@ def test_any_counter_representation_integrates_the_true_increments(increments, b
     true = np.cumsum([[0, 0, 0]] + increments, axis=0, dtype=object) + offset
     readings = true % (1 << bits) if bits else true
     rows = [[int(v) for v in r] for r in readings]
-    if form == "numpy" and 0 <= min(min(r) for r in rows) and max(max(r) for r in rows) < 2 ** 64:
+    if form == "numpy" and 0 <= min(min(r) for r in rows) and max(max(r) for r in rows) < 2**64:
         rows = np.array(rows, dtype=np.uint64)
     t = [0.01 * k for k in range(len(rows))]
     expected = tomasi_poses(increments)
@@ -163,7 +185,7 @@ def test_any_counter_representation_integrates_the_true_increments(increments, b
 
 def test_uint64_beyond_int64_does_not_wrap_through_int64(tom):
     """Without a counter width, 0 -> 2**64 - 1 is a jump of 2**64 - 1 ticks (refused), not -1."""
-    tk = np.array([[0, 0, 0], [2 ** 64 - 1, 0, 0]], dtype=np.uint64)
+    tk = np.array([[0, 0, 0], [2**64 - 1, 0, 0]], dtype=np.uint64)
     with pytest.raises(OdometryInputError, match="impossible jump of 18446744073709551615 ticks"):
         batch_odometry(tom, [0.0, 0.1], tk)
     o = Odometry(tom)
@@ -177,27 +199,30 @@ def test_uint64_beyond_int64_does_not_wrap_through_int64(tom):
 
 
 def test_int64_extremes_without_width_are_a_jump_not_a_wrap(tom):
-    tk = np.array([[-(2 ** 63), 0, 0], [2 ** 63 - 1, 0, 0]], dtype=np.int64)
+    tk = np.array([[-(2**63), 0, 0], [2**63 - 1, 0, 0]], dtype=np.int64)
     with pytest.raises(OdometryInputError, match="impossible jump of 18446744073709551615 ticks"):
         batch_odometry(tom, [0.0, 0.1], tk)
 
 
 def test_python_lists_of_huge_ints_stay_exact(tom):
     """np.asarray would make these float64 (rounded); the increments must stay +11 and -4."""
-    rows = [[18446744073709551610, 2 ** 63 + 3, 1], [18446744073709551610 + 5, 2 ** 63 - 1, 1]]
+    rows = [[18446744073709551610, 2**63 + 3, 1], [18446744073709551610 + 5, 2**63 - 1, 1]]
     expected = tomasi_poses([[5, -4, 0]])
     assert_poses_close(batch_odometry(tom, [0.0, 0.1], rows).poses, expected)
-    big = [[10 ** 30, -(10 ** 30), 0], [10 ** 30 + 5, -(10 ** 30) - 4, 0]]     # beyond 64 bits
+    big = [[10**30, -(10**30), 0], [10**30 + 5, -(10**30) - 4, 0]]  # beyond 64 bits
     assert_poses_close(batch_odometry(tom, [0.0, 0.1], big).poses, expected)
     assert_poses_close(stream(tom, [0.0, 0.1], big)[1], expected)
     with pytest.raises(OdometryInputError, match="2\\*\\*53"):
-        batch_odometry(tom, [0.0, 0.1], [[2 ** 60, 0.5, 0], [2 ** 60, 0.5, 0]])
+        batch_odometry(tom, [0.0, 0.1], [[2**60, 0.5, 0], [2**60, 0.5, 0]])
 
 
 def test_streaming_python_and_numpy_scalars_of_64_bit_counter(tom):
     expected = tomasi_poses([[11, 0, 0]])
-    for first, second in ((18446744073709551610, 5), (np.uint64(18446744073709551610), np.uint64(5)),
-                          (-6, np.int64(5))):
+    for first, second in (
+        (18446744073709551610, 5),
+        (np.uint64(18446744073709551610), np.uint64(5)),
+        (-6, np.int64(5)),
+    ):
         assert_poses_close(stream(tom, [0.0, 0.1], [[first, 0, 0], [second, 0, 0]], counter_bits=64)[1], expected)
 
 
@@ -206,8 +231,12 @@ def test_numpy_inputs_take_the_generated_kernel(tom):
     not the (slow) general path: calling it directly gives a new state."""
     o = Odometry(tom)
     o.update(0.0, [0, 0, 0])
-    for t, row in ((np.float64(0.1), np.array([3, 4, 5])), (0.1, [np.int32(3), np.uint64(4), 5]),
-                   (0.1, (3, 4, 5)), (1, np.array([3, 4, 5], dtype=np.uint16))):
+    for t, row in (
+        (np.float64(0.1), np.array([3, 4, 5])),
+        (0.1, [np.int32(3), np.uint64(4), 5]),
+        (0.1, (3, 4, 5)),
+        (1, np.array([3, 4, 5], dtype=np.uint16)),
+    ):
         assert o._step_ticks(o._state, t, row) is not None, (t, row)
     a = Odometry(tom)
     a.update_angles(0.0, [0.0, 0.0, 0.0])
@@ -279,15 +308,18 @@ def test_counter_bits_from_the_robot_file(tmp_path, capsys):
 def test_counter_bits_per_wheel(tmp_path):
     """One 8-bit wheel among plain counters: only that wheel wraps."""
     p = tmp_path / "mixed.yaml"
-    p.write_text("omnikin: 1\nname: mixed\nwheels:\n"
-                 "  - {name: w1, type: omni, distance: 0.113, angle_deg: 0, radius: 0.04125,"
-                 " encoder: {ticks_per_rev: 600, counter_bits: 8}}\n"
-                 "  - {name: w2, type: omni, distance: 0.113, angle_deg: 120, radius: 0.04125,"
-                 " encoder: {ticks_per_rev: 600}}\n"
-                 "  - {name: w3, type: omni, distance: 0.113, angle_deg: 240, radius: 0.04125,"
-                 " encoder: {ticks_per_rev: 600}}\n", encoding="utf-8")
+    p.write_text(
+        "omnikin: 1\nname: mixed\nwheels:\n"
+        "  - {name: w1, type: omni, distance: 0.113, angle_deg: 0, radius: 0.04125,"
+        " encoder: {ticks_per_rev: 600, counter_bits: 8}}\n"
+        "  - {name: w2, type: omni, distance: 0.113, angle_deg: 120, radius: 0.04125,"
+        " encoder: {ticks_per_rev: 600}}\n"
+        "  - {name: w3, type: omni, distance: 0.113, angle_deg: 240, radius: 0.04125,"
+        " encoder: {ticks_per_rev: 600}}\n",
+        encoding="utf-8",
+    )
     robot = load_robot(p)
-    rows = [[250, 250, -3], [4, 260, -3]]          # w1: 250 -> 4 is +10 on 8 bits; w2 +10 plainly
+    rows = [[250, 250, -3], [4, 260, -3]]  # w1: 250 -> 4 is +10 on 8 bits; w2 +10 plainly
     expected = tomasi_poses([[10, 10, 0]])
     assert_poses_close(batch_odometry(robot, [0.0, 0.1], rows).poses, expected)
     assert_poses_close(stream(robot, [0.0, 0.1], rows)[1], expected)
@@ -325,12 +357,15 @@ def test_max_wheel_speed_sets_the_bound(tom, tmp_path, capsys):
     limit = 1.5 * 10.0 / TOMASI_RPT * 0.1 + 2.0
     assert 145 < limit < 146
     rows, t = [[0, 0, 0], [146, 0, 0]], [0.0, 0.1]
-    for run in (lambda: batch_odometry(tom, t, rows, max_wheel_speed=10.0),
-                lambda: stream(tom, t, rows, max_wheel_speed=10.0)):
+    for run in (
+        lambda: batch_odometry(tom, t, rows, max_wheel_speed=10.0),
+        lambda: stream(tom, t, rows, max_wheel_speed=10.0),
+    ):
         with pytest.raises(OdometryInputError, match="max_wheel_speed"):
             run()
-    assert_poses_close(batch_odometry(tom, t, [[0, 0, 0], [145, 0, 0]], max_wheel_speed=10.0).poses,
-                       tomasi_poses([[145, 0, 0]]))
+    assert_poses_close(
+        batch_odometry(tom, t, [[0, 0, 0], [145, 0, 0]], max_wheel_speed=10.0).poses, tomasi_poses([[145, 0, 0]])
+    )
     log = write_log(tmp_path / "log.csv", H, [[0.0, 0, 0, 0], [0.1, 146, 0, 0]])
     rc, _, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", tmp_path / "o.csv", "--max-wheel-speed", 10)
     assert "line 3" in one_line_error(rc, err)
@@ -340,7 +375,7 @@ def test_max_wheel_speed_sets_the_bound(tom, tmp_path, capsys):
 
 
 def test_wheel_angles_have_the_same_physical_bound(tom):
-    bound_rad = 100.0 / TOMASI_R * 0.1 + 2.0 * TOMASI_RPT      # 0.1 s
+    bound_rad = 100.0 / TOMASI_R * 0.1 + 2.0 * TOMASI_RPT  # 0.1 s
     rows = [[0.0, 0.0, 0.0], [bound_rad * 1.01, 0.0, 0.0]]
     with pytest.raises(OdometryInputError, match="impossible jump .* rad"):
         batch_odometry_from_angles(tom, [0.0, 0.1], rows)
@@ -372,9 +407,9 @@ def test_deepcopy_gives_an_independent_estimator(tom, kw):
     pose = o.pose
     c = copy.deepcopy(o)
     drive(c, range(20, 40), bits)
-    assert o.pose == pose and o.samples == 20                  # the copy moved, the original did not
+    assert o.pose == pose and o.samples == 20  # the copy moved, the original did not
     drive(o, range(20, 40), bits)
-    assert o.pose == c.pose and o.samples == c.samples == 40   # and both continue identically
+    assert o.pose == c.pose and o.samples == c.samples == 40  # and both continue identically
     ref = Odometry(tom, **kw)
     assert drive(ref, range(40), bits) == o.pose
 
@@ -409,18 +444,29 @@ def test_generated_kernel_lines_appear_in_tracebacks(tom):
     filename = step.__code__.co_filename
     assert linecache.getline(filename, step.__code__.co_firstlineno).startswith("def step_ticks(")
     try:
-        step(None, 0.0, [1, 2, 3])                  # not a state: fails at its first line
+        step(None, 0.0, [1, 2, 3])  # not a state: fails at its first line
     except TypeError:
         text = traceback.format_exc()
     else:
         pytest.fail("a None state must not unpack")
-    assert filename in text and "= state" in text   # the source line itself is shown
+    assert filename in text and "= state" in text  # the source line itself is shown
 
 
 def bad_samples():
-    return [(0.35, [1, 2]), (0.35, [1, 2, "3"]), (0.35, [1, 2, float("nan")]), (float("inf"), [1, 2, 3]),
-            (0.1, [1, 2, 3]), (0.3, [1, 2, 3]), (0.35, [10 ** 9, 0, 0]), (0.35, [True, 0, 0]),
-            (0.35, np.array([True, False, True])), (0.35, [1, 2, 3, 4]), ("0.4", [1, 2, 3]), (0.35, None)]
+    return [
+        (0.35, [1, 2]),
+        (0.35, [1, 2, "3"]),
+        (0.35, [1, 2, float("nan")]),
+        (float("inf"), [1, 2, 3]),
+        (0.1, [1, 2, 3]),
+        (0.3, [1, 2, 3]),
+        (0.35, [10**9, 0, 0]),
+        (0.35, [True, 0, 0]),
+        (0.35, np.array([True, False, True])),
+        (0.35, [1, 2, 3, 4]),
+        ("0.4", [1, 2, 3]),
+        (0.35, None),
+    ]
 
 
 @pytest.mark.parametrize("bits", [None, 16])
@@ -429,7 +475,7 @@ def test_a_failed_update_changes_nothing(tom, bits):
     drive(o, range(31), bits)
     before = pickle.dumps(o.__getstate__())
     for t, row in bad_samples():
-        if bits and isinstance(row, list) and row[:1] == [10 ** 9]:
+        if bits and isinstance(row, list) and row[:1] == [10**9]:
             row = [40000, 0, 0]
         with pytest.raises(InputError):
             o.update(t, row)
@@ -463,7 +509,7 @@ def test_errors_carry_the_sample(tom):
     o = Odometry(tom)
     o.update(0.0, [0, 0, 0])
     with pytest.raises(OdometryInputError) as exc:
-        o.update(0.1, [10 ** 6, 0, 0])
+        o.update(0.1, [10**6, 0, 0])
     assert exc.value.sample == 1 and exc.value.detail.startswith("impossible jump")
 
 
@@ -475,13 +521,13 @@ def test_batch_does_not_copy_int64_ticks(tom):
     ticks = np.zeros((n, 3), dtype=np.int64)
     ticks[:, 0] = np.arange(n)
     t = np.arange(n) * 0.01
-    batch_odometry(tom, t[:10], ticks[:10])          # imports and caches outside the measurement
+    batch_odometry(tom, t[:10], ticks[:10])  # imports and caches outside the measurement
     tracemalloc.start()
     res = batch_odometry(tom, t, ticks)
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     returned = res.poses.nbytes + res.increments.nbytes
-    assert res.residual.base is not None and not res.residual.flags.writeable   # zeros, no memory
+    assert res.residual.base is not None and not res.residual.flags.writeable  # zeros, no memory
     assert peak < returned + ticks.nbytes // 2, (peak, returned, ticks.nbytes)
 
 
@@ -490,7 +536,7 @@ def test_batch_does_not_copy_int64_ticks(tom):
 # =====================================================================================================
 def test_write_tick_log_round_trip_is_exact(tom, tmp_path):
     t = np.array([0.0, 0.01, 0.02])
-    ticks = np.array([[2 ** 64 - 2, 5, 0], [1, 6, 0], [4, 7, 1]], dtype=np.uint64)
+    ticks = np.array([[2**64 - 2, 5, 0], [1, 6, 0], [4, 7, 1]], dtype=np.uint64)
     path = tmp_path / "log.csv"
     write_tick_log(path, t, ticks, tom.encoded_names, comment="made by a test")
     text = path.read_text(encoding="utf-8").splitlines()
@@ -517,15 +563,31 @@ def test_write_tick_log_refuses_fractional_ticks(tom, tmp_path):
 def run_omnikin(*args, cwd):
     """The command line in a fresh process, importing this checkout's omnikin."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
-    return subprocess.run([sys.executable, "-m", "omnikin.cli.main", *map(str, args)], capture_output=True,
-                          text=True, timeout=300, cwd=cwd, env=env)
+    return subprocess.run(
+        [sys.executable, "-m", "omnikin.cli.main", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=cwd,
+        env=env,
+    )
 
 
 def test_simulate_log_then_odometry_as_written(tmp_path):
     """`omnikin simulate tomasi-omni3 --log log.csv && omnikin odometry tomasi-omni3 log.csv -o traj.csv`:
     the odometry of the log ends where the simulator's own odometry of the same ticks ended."""
-    sim = run_omnikin("simulate", "tomasi-omni3", "--path", "square cw rotate 1", "--rate", "20", "--log",
-                      "log.csv", "--json", cwd=tmp_path)
+    sim = run_omnikin(
+        "simulate",
+        "tomasi-omni3",
+        "--path",
+        "square cw rotate 1",
+        "--rate",
+        "20",
+        "--log",
+        "log.csv",
+        "--json",
+        cwd=tmp_path,
+    )
     assert sim.returncode == 0, sim.stderr
     odo = run_omnikin("odometry", "tomasi-omni3", "log.csv", "-o", "traj.csv", cwd=tmp_path)
     assert odo.returncode == 0, odo.stderr
@@ -581,8 +643,9 @@ def test_output_dash_writes_the_trajectory_to_stdout(capsys, tmp_path):
     assert rc == 0
     lines = out.strip().splitlines()
     assert lines[0] == "t,x,y,theta" and len(lines) == 4
-    assert_poses_close(np.array([r.split(",") for r in lines[1:]], float)[:, 1:],
-                       tomasi_poses([[5, -3, 2], [5, -3, 2]]), atol=1e-9)
+    assert_poses_close(
+        np.array([r.split(",") for r in lines[1:]], float)[:, 1:], tomasi_poses([[5, -3, 2], [5, -3, 2]]), atol=1e-9
+    )
     assert "final pose" in err
     rc, out, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", "-", "--json")
     assert "standard output" in one_line_error(rc, err) and out == ""
@@ -591,8 +654,9 @@ def test_output_dash_writes_the_trajectory_to_stdout(capsys, tmp_path):
 def test_cli_names_the_file_line_of_a_bad_sample(capsys, tmp_path):
     """Comments, blank lines and skipped duplicates before the bad sample: the line is the file's."""
     log = tmp_path / "log.csv"
-    log.write_text("# bench run\nt,w1,w2,w3\n\n0.0,0,0,0\n0.0,0,0,0\n# note\n0.01,5,5,5\n0.02,9000,5,5\n",
-                   encoding="utf-8")
+    log.write_text(
+        "# bench run\nt,w1,w2,w3\n\n0.0,0,0,0\n0.0,0,0,0\n# note\n0.01,5,5,5\n0.02,9000,5,5\n", encoding="utf-8"
+    )
     rc, _, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", tmp_path / "o.csv")
     assert rc == 2 and "Traceback" not in err
     warning, line = err.strip().splitlines()
@@ -611,7 +675,7 @@ def test_batch_results_do_not_change_when_the_input_changes_afterwards(tom):
     np.testing.assert_array_equal(res.increments, before[0])
     np.testing.assert_array_equal(res.twists, before[1])
     np.testing.assert_array_equal(res.residual, before[2])
-    omni4 = load_robot("omni4")                                   # redundant: a real residual
+    omni4 = load_robot("omni4")  # redundant: a real residual
     ticks4 = np.cumsum(np.tile(np.array([4, -2, -2, 1], dtype=np.int64), (50, 1)), axis=0)
     res4 = batch_odometry(omni4, t, ticks4)
     kept = np.array(res4.residual)

@@ -85,10 +85,14 @@ def lstsq_residual(a, b):
 
 def dd_side_robot():
     enc = Encoder(1000)
-    return Robot("dd+omni", (
-        Wheel("left", "standard", 0.0, 0.165, 0.0, 0.08, encoder=enc),
-        Wheel("right", "standard", 0.0, -0.165, 0.0, 0.08, encoder=enc),
-        Wheel("side", "omni", 0.3, 0.0, math.pi / 2, 0.03, encoder=enc)))
+    return Robot(
+        "dd+omni",
+        (
+            Wheel("left", "standard", 0.0, 0.165, 0.0, 0.08, encoder=enc),
+            Wheel("right", "standard", 0.0, -0.165, 0.0, 0.08, encoder=enc),
+            Wheel("side", "omni", 0.3, 0.0, math.pi / 2, 0.03, encoder=enc),
+        ),
+    )
 
 
 @pytest.mark.parametrize("dtype, bits", [(np.int32, 32), (np.int16, 16), (np.int64, 32), (np.int64, None)])
@@ -96,7 +100,7 @@ def test_narrow_int_readings_batch_and_stream(tom, dtype, bits):
     expected = tomasi_poses(INC)
     tk = np.array([[0, 0, 0], [10, -5, 3], [20, -10, 6]], dtype=dtype)
     assert_poses_close(batch_odometry(tom, T3, tk, counter_bits=bits).poses, expected)
-    _, ps = stream(tom, T3, list(tk), counter_bits=bits)   # rows of numpy integer scalars
+    _, ps = stream(tom, T3, list(tk), counter_bits=bits)  # rows of numpy integer scalars
     assert_poses_close(ps, expected)
 
 
@@ -104,7 +108,7 @@ def test_narrow_int_readings_batch_and_stream(tom, dtype, bits):
 def test_narrow_int_readings_wrap_at_type_limit(tom, dtype, bits):
     """Counters stored in their own width wrap from the largest to the smallest value."""
     top = 2 ** (bits - 1) - 1
-    tk = np.array([[top - 4, 0, 0], [-top + 4, -5, 3]], dtype=dtype)   # +10 ticks through the wrap
+    tk = np.array([[top - 4, 0, 0], [-top + 4, -5, 3]], dtype=dtype)  # +10 ticks through the wrap
     expected = tomasi_poses([[10, -5, 3]])
     assert_poses_close(batch_odometry(tom, T3[:2], tk, counter_bits=bits).poses, expected)
     _, ps = stream(tom, T3[:2], list(tk), counter_bits=bits)
@@ -124,7 +128,7 @@ def test_uint32_readings_same_as_signed_stream(tom, bits):
     _, ps = stream(tom, T3, list(SIGNED), counter_bits=bits)
     assert_poses_close(ps, expected)
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)   # numpy overflow warnings of the open bug
+        warnings.simplefilter("ignore", RuntimeWarning)  # numpy overflow warnings of the open bug
         _, ps = stream(tom, T3, list(SIGNED.astype(np.uint32)), counter_bits=bits)
     assert_poses_close(ps, expected)
 
@@ -136,7 +140,7 @@ def test_stream_int16_scalars_without_bits_large_span(tom):
     expected = tomasi_poses([[60000, 0, 0]])
     assert_poses_close(batch_odometry(tom, [0.0, 10.0], tk).poses, expected, atol=1e-9)
     with warnings.catch_warnings():
-        warnings.simplefilter("error", RuntimeWarning)   # no overflow in int16 arithmetic
+        warnings.simplefilter("error", RuntimeWarning)  # no overflow in int16 arithmetic
         _, ps = stream(tom, [0.0, 10.0], list(tk))
     assert_poses_close(ps, expected, atol=1e-9)
 
@@ -211,7 +215,7 @@ def test_stream_same_t_ticks_different_steer_is_error(syn):
     with pytest.raises(OdometryInputError):
         o.update(0.1, [10, 10, 10], [0.5, 0.5, 0.5])
     assert o.duplicates == 0 and o.pose == pose
-    with pytest.warns(RuntimeWarning):   # the same steering too: a true duplicate
+    with pytest.warns(RuntimeWarning):  # the same steering too: a true duplicate
         o.update(0.1, [10, 10, 10], [0, 0, 0])
     assert o.duplicates == 1
 
@@ -259,7 +263,7 @@ def test_bad_max_jump_refused_at_construction(tom, bad):
 @pytest.mark.parametrize("bad", [math.inf, math.nan, -1, 0])
 def test_batch_bad_max_jump_refused(tom, bad):
     with pytest.raises(OmnikinError):
-        batch_odometry(tom, [0, 0.1], [[0, 0, 0], [10 ** 9, 1, 1]], max_jump=bad)
+        batch_odometry(tom, [0, 0.1], [[0, 0, 0], [10**9, 1, 1]], max_jump=bad)
 
 
 def test_omni4_float_ticks_counter_bits_residual_parity():
@@ -267,7 +271,7 @@ def test_omni4_float_ticks_counter_bits_residual_parity():
     t, tk = [0.0, 0.1], [[0.0, 0, 0, 0], [100.0, 0, 0, 0]]
     rpt = 2 * math.pi / 2048
     expected = lstsq_residual(omni4_rows(), np.array([100.0, 0, 0, 0]) * rpt / 0.1)
-    assert np.max(np.abs(expected)) > 0.1   # one wheel turning alone is inconsistent
+    assert np.max(np.abs(expected)) > 0.1  # one wheel turning alone is inconsistent
     b = batch_odometry(o4, t, tk, counter_bits=16)
     np.testing.assert_allclose(b.residual[-1], expected, rtol=1e-9, atol=1e-9)
     o, ps = stream(o4, t, tk, counter_bits=16)
@@ -325,27 +329,27 @@ def test_update_angles_wrong_count(tom):
     assert o.samples == 1
 
 
-@pytest.mark.parametrize("before, after", [(2 ** 60, 2 ** 60 + 1), (2 ** 63 - 1, -(2 ** 63))])
+@pytest.mark.parametrize("before, after", [(2**60, 2**60 + 1), (2**63 - 1, -(2**63))])
 def test_counter_bits_64_single_tick(tom, before, after):
     expected = tomasi_poses([[1, 0, 0]])
     tk = np.array([[before, 7, -7], [after, 7, -7]], dtype=np.int64)
     assert_poses_close(batch_odometry(tom, T3[:2], tk, counter_bits=64).poses, expected)
-    _, ps = stream(tom, T3[:2], [[before, 7, -7], [after, 7, -7]], counter_bits=64)   # Python ints
+    _, ps = stream(tom, T3[:2], [[before, 7, -7], [after, 7, -7]], counter_bits=64)  # Python ints
     assert_poses_close(ps, expected)
-    _, ps = stream(tom, T3[:2], list(tk), counter_bits=64)                             # numpy int64 scalars
+    _, ps = stream(tom, T3[:2], list(tk), counter_bits=64)  # numpy int64 scalars
     assert_poses_close(ps, expected)
 
 
 @pytest.mark.parametrize("bits", [None, 16], ids=["fast-path", "general-path"])
 def test_stream_heading_one_ulp_below_minus_pi_wraps_into_range(tom, bits):
-    target = np.nextafter(-math.pi, -math.inf)     # -pi - 1 ulp
-    tk = [[0.0, 0.0, 0.0], [-0.3, -0.3, -0.3]]     # pure rotation, phi ~ -1e-3 rad (float ticks)
-    probe = Odometry(tom, counter_bits=bits)       # the exact float phi this estimator computes
+    target = np.nextafter(-math.pi, -math.inf)  # -pi - 1 ulp
+    tk = [[0.0, 0.0, 0.0], [-0.3, -0.3, -0.3]]  # pure rotation, phi ~ -1e-3 rad (float ticks)
+    probe = Odometry(tom, counter_bits=bits)  # the exact float phi this estimator computes
     probe.update(0.0, tk[0])
     phi = probe.update(0.1, tk[1])[2]
     assert -0.01 < phi < 0.0
     th0 = target - phi
-    for _ in range(8):                             # start heading whose sum with phi lands on target
+    for _ in range(8):  # start heading whose sum with phi lands on target
         if th0 + phi == target:
             break
         th0 = np.nextafter(th0, -math.inf) if th0 + phi > target else np.nextafter(th0, math.inf)
@@ -356,4 +360,4 @@ def test_stream_heading_one_ulp_below_minus_pi_wraps_into_range(tom, bits):
     o.update(0.0, tk[0])
     th = o.update(0.1, tk[1])[2]
     assert -math.pi <= th < math.pi
-    assert abs(th - math.pi) < 1e-15            # -pi - 1 ulp is the same direction as pi - 1 ulp
+    assert abs(th - math.pi) < 1e-15  # -pi - 1 ulp is the same direction as pi - 1 ulp

@@ -57,8 +57,10 @@ def _argv(cmd: str) -> list[str]:
 
 def test_readme_has_exactly_two_setup_commands():
     setup = [c for b in _blocks("bash") for c in b.splitlines() if "pip install" in c]
-    assert setup == ['python3 -m pip install -e ".[viz]" && omnikin umbmark',
-                     'python3 -m pip install -e ".[test]" && python3 -m pytest']
+    assert setup == [
+        'python3 -m pip install -e ".[viz]" && omnikin umbmark',
+        'python3 -m pip install -e ".[test]" && python3 -m pytest',
+    ]
 
 
 @pytest.mark.slow
@@ -67,8 +69,9 @@ def test_every_readme_command_runs_as_written(workdir):
     for cmd in _commands():
         if cmd.startswith("omnikin ros"):
             pytest.importorskip("rclpy", reason="the ROS 2 wheels (extra ros) are not installed")
-            proc = subprocess.Popen(_argv(cmd), cwd=workdir, env=env, stdout=subprocess.PIPE,
-                                    stderr=subprocess.PIPE, text=True)
+            proc = subprocess.Popen(
+                _argv(cmd), cwd=workdir, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+            )
             time.sleep(8.0)
             assert proc.poll() is None, f"{cmd}: exited early: {proc.communicate()[1][-500:]}"
             proc.send_signal(signal.SIGINT)
@@ -82,8 +85,9 @@ def test_every_readme_command_runs_as_written(workdir):
 
 def test_readme_python_block_runs(workdir):
     (code,) = _blocks("python")
-    res = subprocess.run([sys.executable, "-c", code], cwd=workdir, env=_env(), capture_output=True, text=True,
-                         timeout=120)
+    res = subprocess.run(
+        [sys.executable, "-c", code], cwd=workdir, env=_env(), capture_output=True, text=True, timeout=120
+    )
     assert res.returncode == 0, res.stderr[-800:]
 
 

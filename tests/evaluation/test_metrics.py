@@ -180,9 +180,15 @@ def test_rpe_half_turn_is_pi():
     assert m.rpe(t, ref, t, est).rotation[0] == pytest.approx(math.pi, abs=1e-15)
 
 
-@pytest.mark.parametrize("kw, match", [
-    ({"delta": 0}, "delta"), ({"delta": 1.5}, "delta"), ({"delta": 10}, "more than 10"),
-                                       ({"angle_unit": "grad"}, "angle_unit")])
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"delta": 0}, "delta"),
+        ({"delta": 1.5}, "delta"),
+        ({"delta": 10}, "more than 10"),
+        ({"angle_unit": "grad"}, "angle_unit"),
+    ],
+)
 def test_rpe_refuses(kw, match):
     t = np.arange(10.0)
     p = np.zeros((10, 3))
@@ -204,10 +210,10 @@ def test_association_nearest_within_max_diff():
 def test_association_walks_the_shorter_and_may_reuse():
     ref = np.array([0.0, 1.0])
     est = np.array([0.0, 0.001, 0.002, 0.999])
-    i_ref, i_est = m.associate(ref, est, max_diff=0.01)      # est longer: each ref pose once
+    i_ref, i_est = m.associate(ref, est, max_diff=0.01)  # est longer: each ref pose once
     np.testing.assert_array_equal(i_ref, [0, 1])
     np.testing.assert_array_equal(i_est, [0, 3])
-    i_ref, i_est = m.associate(est, ref, max_diff=0.01)      # now ref (est above) is longer: est walks
+    i_ref, i_est = m.associate(est, ref, max_diff=0.01)  # now ref (est above) is longer: est walks
     np.testing.assert_array_equal(i_ref, [0, 3])
 
 
@@ -216,7 +222,7 @@ def test_association_ties_go_to_the_earlier_and_offset_applies():
     est = np.array([0.25, 1.25])
     i_ref, _ = m.associate(ref, est, max_diff=0.3)
     np.testing.assert_array_equal(i_ref, [0, 2])
-    i_ref, _ = m.associate(ref, est, max_diff=0.01, offset=0.25)   # est + 0.25 = 0.5, 1.5
+    i_ref, _ = m.associate(ref, est, max_diff=0.01, offset=0.25)  # est + 0.25 = 0.5, 1.5
     np.testing.assert_array_equal(i_ref, [1, 3])
 
 
@@ -225,14 +231,17 @@ def test_association_without_match_says_so():
         m.associate([0.0, 1.0], [5.0, 6.0])
 
 
-@pytest.mark.parametrize("t, poses, match", [
-    ([], np.zeros((0, 3)), "empty"),
-    ([0.0, 1.0], np.zeros((3, 3)), "2 timestamps but 3 poses"),
-    ([0.0, 1.0], np.zeros((2, 2)), r"shape \(N, 3\)"),
-    ([0.0, math.nan], np.zeros((2, 3)), "non-finite timestamp"),
-    ([0.0, 1.0], [[0, 0, 0], [0, math.nan, 0]], "non-finite y .* at pose 1"),
-    ([0.0, 1.0, 1.0], np.zeros((3, 3)), "increase strictly; pose 2"),
-])
+@pytest.mark.parametrize(
+    "t, poses, match",
+    [
+        ([], np.zeros((0, 3)), "empty"),
+        ([0.0, 1.0], np.zeros((3, 3)), "2 timestamps but 3 poses"),
+        ([0.0, 1.0], np.zeros((2, 2)), r"shape \(N, 3\)"),
+        ([0.0, math.nan], np.zeros((2, 3)), "non-finite timestamp"),
+        ([0.0, 1.0], [[0, 0, 0], [0, math.nan, 0]], "non-finite y .* at pose 1"),
+        ([0.0, 1.0, 1.0], np.zeros((3, 3)), "increase strictly; pose 2"),
+    ],
+)
 def test_bad_trajectories_are_named(t, poses, match):
     good_t, good = np.arange(3.0), np.zeros((3, 3))
     with pytest.raises(m.MetricsInputError, match="estimate: .*" + match):
@@ -264,8 +273,9 @@ def test_kitti_line_is_the_embedded_matrix(tmp_path):
 
 def test_integer_nanoseconds_are_written_exactly(tmp_path):
     path = tmp_path / "t.tum"
-    write_trajectory(path, np.array([1_700_000_000_123_456_789, -1_500_000_000], dtype=np.int64),
-                     np.zeros((2, 3)), "tum")
+    write_trajectory(
+        path, np.array([1_700_000_000_123_456_789, -1_500_000_000], dtype=np.int64), np.zeros((2, 3)), "tum"
+    )
     lines = path.read_text().splitlines()
     assert lines[0].split()[0] == "1700000000.123456789" and lines[1].split()[0] == "-1.500000000"
 
@@ -279,15 +289,18 @@ def test_tum_reader_takes_the_yaw_of_any_quaternion(tmp_path):
     np.testing.assert_allclose(p, [[1, 2, yaw]], atol=1e-12)
 
 
-@pytest.mark.parametrize("text, match", [
-    ("", "empty"),
-    ("0 1 2 3\n", "4 fields"),
-    ("0 0 0 0 0 0 0 1\n1 0 0 0 0 0 0\n", "line 2: 7 fields"),
-    ("0 0 0 0 0 0 0 1\n1 0 x 0 0 0 0 1\n", "line 2, field 3: not a number"),
-    ("0 0 0 0 0 0 0 1\n1 0 nan 0 0 0 0 1\n", "non-finite"),
-    ("0 0 0 0 0 0 0 0\n", "zero quaternion"),
-    ("t,x,y\n0,0,0\n", "header t,x,y,theta"),
-])
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("", "empty"),
+        ("0 1 2 3\n", "4 fields"),
+        ("0 0 0 0 0 0 0 1\n1 0 0 0 0 0 0\n", "line 2: 7 fields"),
+        ("0 0 0 0 0 0 0 1\n1 0 x 0 0 0 0 1\n", "line 2, field 3: not a number"),
+        ("0 0 0 0 0 0 0 1\n1 0 nan 0 0 0 0 1\n", "non-finite"),
+        ("0 0 0 0 0 0 0 0\n", "zero quaternion"),
+        ("t,x,y\n0,0,0\n", "header t,x,y,theta"),
+    ],
+)
 def test_bad_trajectory_files_name_file_and_line(tmp_path, text, match):
     path = tmp_path / "bad.tum"
     path.write_text(text)
@@ -329,8 +342,14 @@ def test_metrics_cli_json_matches_the_library(tmp_path, capsys):
     assert "ATE translation [m]" in out and "RPE rotation [deg]" in out and "120 associated poses" in out
 
 
-@pytest.mark.parametrize("extra, match", [(["--delta", "0"], "--delta"), (["--t-max-diff", "-1"], "--t-max-diff"),
-                                          (["--t-offset", "100"], "no matching timestamps")])
+@pytest.mark.parametrize(
+    "extra, match",
+    [
+        (["--delta", "0"], "--delta"),
+        (["--t-max-diff", "-1"], "--t-max-diff"),
+        (["--t-offset", "100"], "no matching timestamps"),
+    ],
+)
 def test_metrics_cli_refuses(tmp_path, extra, match):
     t, ref = wiggly(20)
     write_trajectory(tmp_path / "a.tum", t, ref, "tum")
@@ -381,13 +400,16 @@ def test_same_numbers_as_evo(tmp_path, seed):
             for k, v in ape.get_all_statistics().items():
                 assert ours[k] == pytest.approx(float(v), abs=1e-9, rel=1e-9), (max_diff, align, k)
         for delta, all_pairs in ((1, False), (7, False), (7, True)):
-            for relation, unit, key in ((em.PoseRelation.translation_part, "rad", "translation_stats"),
-                                        (em.PoseRelation.rotation_angle_rad, "rad", "rotation_stats"),
-                                        (em.PoseRelation.rotation_angle_deg, "deg", "rotation_stats")):
+            for relation, unit, key in (
+                (em.PoseRelation.translation_part, "rad", "translation_stats"),
+                (em.PoseRelation.rotation_angle_rad, "rad", "rotation_stats"),
+                (em.PoseRelation.rotation_angle_deg, "deg", "rotation_stats"),
+            ):
                 rpe = em.RPE(relation, delta=delta, delta_unit=em.Unit.frames, all_pairs=all_pairs)
                 rpe.process_data((r, e))
-                ours = getattr(m.rpe(tr, qr, te, pe, delta=delta, all_pairs=all_pairs, angle_unit=unit,
-                                     max_diff=max_diff), key).as_dict()
+                ours = getattr(
+                    m.rpe(tr, qr, te, pe, delta=delta, all_pairs=all_pairs, angle_unit=unit, max_diff=max_diff), key
+                ).as_dict()
                 for k, v in rpe.get_all_statistics().items():
                     assert ours[k] == pytest.approx(float(v), abs=1e-9, rel=1e-9), (delta, all_pairs, relation, k)
 
@@ -401,8 +423,11 @@ def test_cli_matches_evo_main_ape(tmp_path, capsys):
     from evo.tools import file_interface
 
     ref_path, est_path = _evo_case(tmp_path, 2)
-    r, e = sync.associate_trajectories(file_interface.read_tum_trajectory_file(str(ref_path)),
-                                       file_interface.read_tum_trajectory_file(str(est_path)), max_diff=0.01)
+    r, e = sync.associate_trajectories(
+        file_interface.read_tum_trajectory_file(str(ref_path)),
+        file_interface.read_tum_trajectory_file(str(est_path)),
+        max_diff=0.01,
+    )
     result = ape(r, e, pose_relation=em.PoseRelation.translation_part, align=True, correct_scale=False)
     assert run_cli(["metrics", ref_path, est_path, "--align", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
@@ -424,7 +449,7 @@ def test_kitti_against_a_timed_file_is_refused(tmp_path, capsys):
         assert main(["metrics", str(tmp_path / ref), str(tmp_path / est)]) == 2
         err = capsys.readouterr().err
         assert "a.kitti is KITTI (no timestamps" in err and "b.tum has timestamps" in err
-    assert main(["metrics", str(tmp_path / "a.kitti"), str(tmp_path / "c.kitti"), "--json"]) == 0   # by index
+    assert main(["metrics", str(tmp_path / "a.kitti"), str(tmp_path / "c.kitti"), "--json"]) == 0  # by index
 
 
 def test_written_files_have_no_negative_zero(tmp_path):

@@ -78,18 +78,21 @@ def test_analyze_single_run_and_side():
     assert res.side == 2.0
 
 
-@pytest.mark.parametrize("cw, ccw, match", [
-    (CW, [], "ccw"),                                          # a single direction
-    (CW, np.zeros((0, 3)), "ccw"),                            # zero runs
-    (np.zeros((0, 2)), CCW, "cw"),
-    (CW, None, "ccw"),
-    ([(0.01, float("nan"), 0.0)], CCW, "cw"),                 # NaN position
-    (CW, [(float("inf"), 0.0)], "ccw"),
-    ([0.01, 0.02, 0.03], CCW, "cw"),                          # wrong shapes
-    (CW, np.zeros((2, 4)), "ccw"),
-    (np.zeros((2, 1)), CCW, "cw"),
-    (np.zeros((2, 2, 3)), CCW, "cw"),
-])
+@pytest.mark.parametrize(
+    "cw, ccw, match",
+    [
+        (CW, [], "ccw"),  # a single direction
+        (CW, np.zeros((0, 3)), "ccw"),  # zero runs
+        (np.zeros((0, 2)), CCW, "cw"),
+        (CW, None, "ccw"),
+        ([(0.01, float("nan"), 0.0)], CCW, "cw"),  # NaN position
+        (CW, [(float("inf"), 0.0)], "ccw"),
+        ([0.01, 0.02, 0.03], CCW, "cw"),  # wrong shapes
+        (CW, np.zeros((2, 4)), "ccw"),
+        (np.zeros((2, 1)), CCW, "cw"),
+        (np.zeros((2, 2, 3)), CCW, "cw"),
+    ],
+)
 def test_analyze_errors(cw, ccw, match):
     with pytest.raises(OmnikinError, match=match):
         analyze(cw, ccw)
@@ -179,8 +182,9 @@ def test_borenstein_by_simulation_wheel_diameter_error(diff):
 
 
 def test_borenstein_calibrate_iterated(diff):
-    true = SystematicErrors({"left": WheelErrors(radius=-0.002, dy=0.002),
-                             "right": WheelErrors(radius=0.003, dy=-0.001)}).apply(diff)
+    true = SystematicErrors(
+        {"left": WheelErrors(radius=-0.002, dy=0.002), "right": WheelErrors(radius=0.003, dy=-0.001)}
+    ).apply(diff)
     model = diff
     res = run_umbmark(true, model, noise=NOISE["none"], runs=1)[0]
     before = res.e_max_syst
@@ -235,11 +239,12 @@ def calibration_runs(true, robot, noise, rng, repeats=1, plans=None):
 
 
 INJECTED = {
-    "tomasi-omni3": {"w1": WheelErrors(radius=0.008, drive=0.01, dx=0.002),
-                     "w2": WheelErrors(radius=-0.005, dy=0.001),
-                     "w3": WheelErrors(radius=0.003, drive=-0.005)},
-    "diff-drive": {"left": WheelErrors(radius=-0.004, dy=0.002),
-                   "right": WheelErrors(radius=0.006, dy=-0.001)},
+    "tomasi-omni3": {
+        "w1": WheelErrors(radius=0.008, drive=0.01, dx=0.002),
+        "w2": WheelErrors(radius=-0.005, dy=0.001),
+        "w3": WheelErrors(radius=0.003, drive=-0.005),
+    },
+    "diff-drive": {"left": WheelErrors(radius=-0.004, dy=0.002), "right": WheelErrors(radius=0.006, dy=-0.001)},
 }
 
 
@@ -275,7 +280,7 @@ def test_calibration_round_trip_with_measurement_noise(name):
         sigma = cal.identifiability.sigma[f"{wheel}.radius"]
         assert 5e-5 < sigma < 1e-3
         assert abs(cal.errors.wheels[wheel].radius - e.radius) < 5 * sigma
-    assert cal.residual_after < 2.0           # in measurement sigmas: the model fits to the noise
+    assert cal.residual_after < 2.0  # in measurement sigmas: the model fits to the noise
 
 
 @pytest.mark.parametrize("name", sorted(INJECTED))
@@ -355,12 +360,13 @@ def test_identifiability_matches_independent_jacobian(tomasi):
             d = (ends[0] - ends[1]) / (2 * h) / [SIGMA[0], SIGMA[0], SIGMA[1]]
             cols.append(d.ravel() * prior[par])
     jac = np.column_stack(cols)
-    assert cal.identifiability.parameters == [f"{w}.{p}" for w in ("w1", "w2", "w3")
-                                              for p in ("radius", "lever", "drive")]
+    assert cal.identifiability.parameters == [
+        f"{w}.{p}" for w in ("w1", "w2", "w3") for p in ("radius", "lever", "drive")
+    ]
     own = np.linalg.svd(jac, compute_uv=False)
     np.testing.assert_allclose(cal.identifiability.singular_values, own, rtol=1e-3)
     scale = np.tile([prior[p] for p in ("radius", "lever", "drive")], 3)
-    post = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac + np.eye(9)))) * scale      # prior rows: q ~ N(0, 1)
+    post = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac + np.eye(9)))) * scale  # prior rows: q ~ N(0, 1)
     np.testing.assert_allclose([cal.identifiability.sigma[n] for n in cal.identifiability.parameters], post, rtol=1e-2)
 
 
@@ -399,11 +405,14 @@ def simulate_refusal(plan, robot):
     return str(info.value).split(" (on_infeasible=")[0].removeprefix(f"robot {robot.name!r}: ")
 
 
-@pytest.mark.parametrize("robot_name, path, wheel", [
-    ("diff-drive", "line 1 90", "left"),            # sideways: the fixed wheels would slide
-    ("ackermann", "spin 90", "front_left"),         # in place: beyond the steering limits
-    ("ackermann", "square cw rotate 4", "front_left"),
-])
+@pytest.mark.parametrize(
+    "robot_name, path, wheel",
+    [
+        ("diff-drive", "line 1 90", "left"),  # sideways: the fixed wheels would slide
+        ("ackermann", "spin 90", "front_left"),  # in place: beyond the steering limits
+        ("ackermann", "square cw rotate 4", "front_left"),
+    ],
+)
 def test_calibrate_refuses_a_run_the_robot_cannot_drive_naming_it(robot_name, path, wheel):
     from omnikin.evaluation.calibration import InfeasibleRunError
     from omnikin.plans import parse_plan
@@ -431,8 +440,20 @@ def test_calibrate_names_the_file_line_of_an_infeasible_run(tmp_path):
         calibrate(load_robot("diff-drive"), read_calibration_runs(f))
 
 
-@pytest.mark.parametrize("name", ["tomasi-omni3", "diff-drive", "ackermann", "villasenor-omni3", "synchro",
-                                  "xr4000", "mecanum4", "omni4", "garcia-sillas-omni3"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "tomasi-omni3",
+        "diff-drive",
+        "ackermann",
+        "villasenor-omni3",
+        "synchro",
+        "xr4000",
+        "mecanum4",
+        "omni4",
+        "garcia-sillas-omni3",
+    ],
+)
 def test_recommended_runs_are_drivable_and_read_back_from_their_text(name):
     from omnikin.plans import parse_plan
 
@@ -441,13 +462,13 @@ def test_recommended_runs_are_drivable_and_read_back_from_their_text(name):
     assert runs
     for text, plan in runs:
         assert parse_plan(text) == plan
-        simulate(plan, robot, robot, noise=EXACT, rate=10.0)      # refuses what the robot cannot drive
+        simulate(plan, robot, robot, noise=EXACT, rate=10.0)  # refuses what the robot cannot drive
     texts = [t for t, _ in runs]
     if robot.mobility.holonomic and name != "villasenor-omni3":
         assert "square cw translate 2.5" in texts and "line 2.5 90" in texts
     if name == "diff-drive":
         assert not any("translate" in t or t == "line 2.5 90" for t in texts)
-    if name == "ackermann":                      # cannot turn in place: half circles instead
+    if name == "ackermann":  # cannot turn in place: half circles instead
         assert texts == ["line 2.5 0", "arc 1.25 180", "arc 1.25 -180"]
 
 
@@ -455,12 +476,15 @@ def test_steering_offsets_of_steerable_wheels_are_calibrated():
     """A steerable wheel's steering offset ('drive') is a fitted parameter: with it missing the fit
     compensated with metre-sized hub shifts and made UMBmark ten times worse (synchro)."""
     robot = load_robot("synchro")
-    injected = {"w1": WheelErrors(radius=0.003, drive=0.009), "w2": WheelErrors(radius=-0.002, drive=-0.006),
-                "w3": WheelErrors(dx=0.001, drive=0.004)}
+    injected = {
+        "w1": WheelErrors(radius=0.003, drive=0.009),
+        "w2": WheelErrors(radius=-0.002, drive=-0.006),
+        "w3": WheelErrors(dx=0.001, drive=0.004),
+    }
     true = SystematicErrors(injected).apply(robot)
     cal = calibrate(robot, calibration_runs(true, robot, EXACT, 0))
     assert {"w1.drive", "w2.drive", "w3.drive"} <= set(cal.values)
-    assert cal.fits and cal.residual_after < 0.1            # noise-free runs: the model explains them
+    assert cal.fits and cal.residual_after < 0.1  # noise-free runs: the model explains them
     assert e_max_syst(true, cal.robot) <= e_max_syst(true, robot) / 100
 
 
@@ -479,8 +503,9 @@ def test_fitted_parameters_carry_their_units(tomasi):
     true = SystematicErrors(INJECTED["tomasi-omni3"]).apply(tomasi)
     cal = calibrate(tomasi, calibration_runs(true, tomasi, EXACT, 0))
     units = {p["name"]: p["unit"] for p in cal.parameters()}
-    assert units == {f"{w}.{k}": u for w in ("w1", "w2", "w3")
-                     for k, u in (("radius", "relative"), ("lever", "m"), ("drive", "rad"))}
+    assert units == {
+        f"{w}.{k}": u for w in ("w1", "w2", "w3") for k, u in (("radius", "relative"), ("lever", "m"), ("drive", "rad"))
+    }
     values = {p["name"]: p["value"] for p in cal.parameters()}
     # the lever of w2 is its hub shift normal to the roller axis: dy = 1 mm rotated into that direction
     w2 = tomasi.wheel("w2")
@@ -501,7 +526,7 @@ def test_budget_estimate_counts_what_a_trial_really_simulates():
         opts = dict(side=4.0, mode="rotate", runs=runs, rate=rate, calibrate=True)
         one, two = estimate_cost(robot, trials=1, **opts), estimate_cost(robot, trials=2, **opts)
         square = len(sample_plan(umbmark_square("cw"), robot, rate).t)
-        actual = 2 * 2 * runs * square                      # two directions, before and after
+        actual = 2 * 2 * runs * square  # two directions, before and after
         slack = 2 * 2 * runs * (len(umbmark_square("cw").segments) + 1)
         assert actual <= two.samples - one.samples <= actual + slack
         assert two.bytes > one.bytes and two.seconds > one.seconds

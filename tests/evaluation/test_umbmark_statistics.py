@@ -45,7 +45,7 @@ def test_e_max_interval_of_isotropic_runs_is_the_closed_form_disc():
 
 def test_e_max_interval_reaches_zero_when_the_origin_is_inside():
     g = math.sqrt(LEVEL)
-    small = plus_runs((0.03, 0.0), 0.02)                     # disc radius 0.088 > 0.03
+    small = plus_runs((0.03, 0.0), 0.02)  # disc radius 0.088 > 0.03
     res = analyze(small, small)
     low, high = res.e_max_interval(LEVEL)
     assert low == 0.0
@@ -53,14 +53,14 @@ def test_e_max_interval_reaches_zero_when_the_origin_is_inside():
 
 
 def test_reduction_interval_closed_form_and_unbounded_above():
-    g = LEVEL ** 0.25                                        # each E at sqrt(level), each direction at its sqrt
+    g = LEVEL**0.25  # each E at sqrt(level), each direction at its sqrt
     before = analyze(plus_runs((0.3, -0.4), 0.01), plus_runs((0.1, 0.0), 0.02))
     after = analyze(plus_runs((0.004, 0.0), 0.01), plus_runs((0.0, 0.002), 0.01))
     low, high = reduction_interval(before, after, LEVEL)
     b_low = max(0.5 - disc_radius(0.01, g), 0.1 - disc_radius(0.02, g))
     a_high = max(0.004, 0.002) + disc_radius(0.01, g)
     assert low == pytest.approx(b_low / a_high, rel=1e-6)
-    assert high == math.inf                                   # 'after' is consistent with zero
+    assert high == math.inf  # 'after' is consistent with zero
 
 
 def test_intervals_need_three_runs_per_direction():
@@ -80,14 +80,17 @@ def gaussian_runs(rng, mean, cov, n):
     return rng.multivariate_normal(mean, cov, size=n)
 
 
-COV_CW = np.array([[1.2e-4, 0.5e-4], [0.5e-4, 0.8e-4]])      # about 10 mm scatter, correlated
+COV_CW = np.array([[1.2e-4, 0.5e-4], [0.5e-4, 0.8e-4]])  # about 10 mm scatter, correlated
 COV_CCW = np.array([[0.6e-4, -0.2e-4], [-0.2e-4, 1.5e-4]])
 
 
-@pytest.mark.parametrize("mu_cw, mu_ccw", [
-    ((0.40, -0.50), (0.35, -0.28)),                          # far from zero (before calibration)
-    ((0.003, 0.001), (-0.002, 0.002)),                       # inside the scatter (after calibration)
-])
+@pytest.mark.parametrize(
+    "mu_cw, mu_ccw",
+    [
+        ((0.40, -0.50), (0.35, -0.28)),  # far from zero (before calibration)
+        ((0.003, 0.001), (-0.002, 0.002)),  # inside the scatter (after calibration)
+    ],
+)
 def test_e_max_interval_covers_the_true_value_at_least_at_its_level(mu_cw, mu_ccw):
     rng = np.random.default_rng(20240501)
     truth = max(math.hypot(*mu_cw), math.hypot(*mu_ccw))
@@ -99,7 +102,7 @@ def test_e_max_interval_covers_the_true_value_at_least_at_its_level(mu_cw, mu_cc
         widths.append(high - low)
     # conservative by construction: at least the level, less three binomial standard deviations
     assert hits / trials >= LEVEL - 3 * math.sqrt(LEVEL * (1 - LEVEL) / trials), hits
-    assert np.median(widths) < 0.08                          # and not vacuous: a few centimetres
+    assert np.median(widths) < 0.08  # and not vacuous: a few centimetres
 
 
 def test_reduction_interval_covers_the_true_factor():
@@ -126,7 +129,7 @@ def test_a_perfect_robot_is_at_the_noise_floor_in_about_95_percent_of_procedures
     report = omnikin.run_umbmark(robot, true_robot=robot, calibrate=False, trials=300, rate=20.0, seed=3)
     at_floor = np.mean([report.at_noise_floor(r) for r in report.before])
     assert 0.95 - 3 * math.sqrt(0.95 * 0.05 / 300) <= at_floor <= 1.0
-    assert report.floor.limit > 0.001                       # typical noise: millimetres, not zero
+    assert report.floor.limit > 0.001  # typical noise: millimetres, not zero
 
 
 def test_a_badly_built_robot_is_not_at_the_noise_floor():

@@ -28,8 +28,8 @@ from omnikin.io.trajectories import read_trajectory
 
 TS = get_typestore(Stores.ROS2_HUMBLE)
 T = TS.types
-T0 = 1_700_000_000 * 10**9 + 123_456_789          # first stamp [ns]
-DT = 10_000_000                                    # 100 Hz [ns]
+T0 = 1_700_000_000 * 10**9 + 123_456_789  # first stamp [ns]
+DT = 10_000_000  # 100 Hz [ns]
 
 TOMASI_L, TOMASI_R = 0.113, 0.04125
 TOMASI_J = np.array([[-math.sin(b), math.cos(b), TOMASI_L] for b in np.radians([0.0, 120.0, 240.0])]) / TOMASI_R
@@ -56,11 +56,18 @@ def write_joint_states(path, names, positions, stamps, topic="/joint_states", ex
             ce = w.add_connection(extra, "std_msgs/msg/String", typestore=TS)
             w.write(ce, int(stamps[0]), TS.serialize_cdr(T["std_msgs/msg/String"](data="hello"), "std_msgs/msg/String"))
         for s, p in zip(stamps, positions, strict=True):
-            st = T["builtin_interfaces/msg/Time"](sec=0, nanosec=0) if header_zero else \
-                T["builtin_interfaces/msg/Time"](sec=int(s) // 10**9, nanosec=int(s) % 10**9)
-            msg = T["sensor_msgs/msg/JointState"](header=T["std_msgs/msg/Header"](stamp=st, frame_id=""),
-                                                  name=list(names), position=np.asarray(p, dtype=float),
-                                                  velocity=np.zeros(0), effort=np.zeros(0))
+            st = (
+                T["builtin_interfaces/msg/Time"](sec=0, nanosec=0)
+                if header_zero
+                else T["builtin_interfaces/msg/Time"](sec=int(s) // 10**9, nanosec=int(s) % 10**9)
+            )
+            msg = T["sensor_msgs/msg/JointState"](
+                header=T["std_msgs/msg/Header"](stamp=st, frame_id=""),
+                name=list(names),
+                position=np.asarray(p, dtype=float),
+                velocity=np.zeros(0),
+                effort=np.zeros(0),
+            )
             w.write(c, int(s), TS.serialize_cdr(msg, "sensor_msgs/msg/JointState"))
 
 
@@ -77,10 +84,17 @@ def read_topic(path, topic):
 def odom_arrays(path, topic="/odom"):
     msgs = read_topic(path, topic)
     stamps = np.array([m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for _, _, m in msgs])
-    poses = np.array([(m.pose.pose.position.x, m.pose.pose.position.y,
-                       2 * math.atan2(m.pose.pose.orientation.z, m.pose.pose.orientation.w)) for _, _, m in msgs])
-    twists = np.array([(m.twist.twist.linear.x, m.twist.twist.linear.y, m.twist.twist.angular.z)
-                       for _, _, m in msgs])
+    poses = np.array(
+        [
+            (
+                m.pose.pose.position.x,
+                m.pose.pose.position.y,
+                2 * math.atan2(m.pose.pose.orientation.z, m.pose.pose.orientation.w),
+            )
+            for _, _, m in msgs
+        ]
+    )
+    twists = np.array([(m.twist.twist.linear.x, m.twist.twist.linear.y, m.twist.twist.angular.z) for _, _, m in msgs])
     return stamps, wrap(poses), twists, msgs
 
 
@@ -101,7 +115,7 @@ def circle_bag(tmp_path):
     n = 401
     stamps = T0 + DT * np.arange(n)
     t = (stamps - T0) * 1e-9
-    angles = np.outer(t, TOMASI_J @ twist)                 # (n, 3): w1, w2, w3
+    angles = np.outer(t, TOMASI_J @ twist)  # (n, 3): w1, w2, w3
     names = ["w3", "lift", "w1", "w2"]
     pos = np.column_stack([angles[:, 2], np.full(n, 7.0), angles[:, 0], angles[:, 1]])
     path = tmp_path / "in.bag"
@@ -118,7 +132,7 @@ def test_bag_odometry_is_the_closed_form_circle(circle_bag, tmp_path, capsys):
     assert summary["samples"] == 401 and summary["stamp_source"] == "header" and summary["skipped_messages"] == 0
     got_stamps, poses, twists, msgs = odom_arrays(out)
     np.testing.assert_array_equal(got_stamps, stamps)
-    np.testing.assert_array_equal([b for b, _, _ in msgs], stamps)          # bag time = input record time
+    np.testing.assert_array_equal([b for b, _, _ in msgs], stamps)  # bag time = input record time
     np.testing.assert_allclose(poses, circle(twist, t), atol=1e-9)
     np.testing.assert_allclose(twists[1:], np.tile(twist, (400, 1)), atol=1e-9)
     np.testing.assert_array_equal(twists[0], 0.0)
@@ -127,19 +141,53 @@ def test_bag_odometry_is_the_closed_form_circle(circle_bag, tmp_path, capsys):
     assert m.pose.covariance.shape == (36,) and m.twist.covariance.shape == (36,)
     assert not m.pose.covariance.any() and not m.twist.covariance.any()
     q = m.pose.pose.orientation
-    assert q.x == q.y == 0 and q.z ** 2 + q.w ** 2 == pytest.approx(1, abs=1e-15)
+    assert q.x == q.y == 0 and q.z**2 + q.w**2 == pytest.approx(1, abs=1e-15)
     assert m.pose.pose.position.z == 0 and m.twist.twist.linear.z == 0
 
 
 def test_bag_odometry_options_and_mcap(circle_bag, tmp_path):
     path, twist, _, t = circle_bag
     out = tmp_path / "odom_mcap"
-    assert run_cli(["bag", "odometry", "tomasi-omni3", path, "-o", out, "--odom-topic", "/wheel_odom",
-                    "--frame-id", "world", "--child-frame-id", "base", "--storage", "mcap", "--method", "euler",
-                    "--pose-cov-diag", 1, 2, 3, 4, 5, 6, "--twist-cov-diag", 0.1, 0, 0, 0, 0, 0.2]) == 0
+    assert (
+        run_cli(
+            [
+                "bag",
+                "odometry",
+                "tomasi-omni3",
+                path,
+                "-o",
+                out,
+                "--odom-topic",
+                "/wheel_odom",
+                "--frame-id",
+                "world",
+                "--child-frame-id",
+                "base",
+                "--storage",
+                "mcap",
+                "--method",
+                "euler",
+                "--pose-cov-diag",
+                1,
+                2,
+                3,
+                4,
+                5,
+                6,
+                "--twist-cov-diag",
+                0.1,
+                0,
+                0,
+                0,
+                0,
+                0.2,
+            ]
+        )
+        == 0
+    )
     mcap_files = list(out.glob("*.mcap"))
     assert len(mcap_files) == 1
-    track = bags.read_poses(mcap_files[0], "/wheel_odom")                  # a bare .mcap file reads too
+    track = bags.read_poses(mcap_files[0], "/wheel_odom")  # a bare .mcap file reads too
     assert track.frame_id == "world" and track.child_frame_id == "base" and len(track.poses) == 401
     _, poses, _, msgs = odom_arrays(out, "/wheel_odom")
     m = msgs[0][2]
@@ -177,10 +225,14 @@ def test_duplicates_dropped_and_foreign_messages_skipped(tmp_path):
             extra = ([["arm"], [1.0]],) if k % 10 == 0 else ()
             for names, pos in ([["w1", "w2", "w3"], a], *extra):
                 st = T["builtin_interfaces/msg/Time"](sec=int(s) // 10**9, nanosec=int(s) % 10**9)
-                msg = T["sensor_msgs/msg/JointState"](header=T["std_msgs/msg/Header"](stamp=st, frame_id=""),
-                                                      name=names, position=np.asarray(pos, float),
-                                                      velocity=np.zeros(0), effort=np.zeros(0))
-                for _ in range(2 if k == 21 else 1):          # sample 21 written twice
+                msg = T["sensor_msgs/msg/JointState"](
+                    header=T["std_msgs/msg/Header"](stamp=st, frame_id=""),
+                    name=names,
+                    position=np.asarray(pos, float),
+                    velocity=np.zeros(0),
+                    effort=np.zeros(0),
+                )
+                for _ in range(2 if k == 21 else 1):  # sample 21 written twice
                     w.write(c, int(s), TS.serialize_cdr(msg, "sensor_msgs/msg/JointState"))
     js = bags.read_joint_states(path, load_robot("tomasi-omni3"))
     assert js.skipped == 6 and js.duplicates == 1 and len(js.stamps) == 51
@@ -189,8 +241,25 @@ def test_duplicates_dropped_and_foreign_messages_skipped(tmp_path):
 def test_steerable_robot_reads_steer_joints(tmp_path):
     """Synchro drive: simulate --bag records W_steer joints; bag odometry of that bag reproduces /odom."""
     sim = tmp_path / "synchro.bag"
-    assert run_cli(["simulate", "synchro", "--path", "line 1 30", "--rate", "50", "--errors", "none",
-                    "--noise", "none", "--bag", sim]) == 0
+    assert (
+        run_cli(
+            [
+                "simulate",
+                "synchro",
+                "--path",
+                "line 1 30",
+                "--rate",
+                "50",
+                "--errors",
+                "none",
+                "--noise",
+                "none",
+                "--bag",
+                sim,
+            ]
+        )
+        == 0
+    )
     msgs = read_topic(sim, "/joint_states")
     assert list(msgs[0][2].name) == ["w1", "w2", "w3", "w1_steer", "w2_steer", "w3_steer"]
     np.testing.assert_allclose(msgs[len(msgs) // 2][2].position[3:], math.radians(30), atol=1e-12)
@@ -211,16 +280,40 @@ def test_simulate_records_four_topics(tmp_path, capsys):
     from omnikin.simulation.motion import sample_plan
 
     out = tmp_path / "sim.bag"
-    assert run_cli(["simulate", "tomasi-omni3", "--path", "arc 1 90", "--rate", "50", "--errors", "none",
-                    "--noise", "none", "--start", 100, "--bag", out, "--json"]) == 0
+    assert (
+        run_cli(
+            [
+                "simulate",
+                "tomasi-omni3",
+                "--path",
+                "arc 1 90",
+                "--rate",
+                "50",
+                "--errors",
+                "none",
+                "--noise",
+                "none",
+                "--start",
+                100,
+                "--bag",
+                out,
+                "--json",
+            ]
+        )
+        == 0
+    )
     summary = json.loads(capsys.readouterr().out)
     with Reader(out) as r:
         types = {c.topic: c.msgtype for c in r.connections}
-    assert types == {"/ground_truth": "nav_msgs/msg/Odometry", "/odom": "nav_msgs/msg/Odometry",
-                     "/joint_states": "sensor_msgs/msg/JointState", "/cmd_vel": "geometry_msgs/msg/Twist"}
+    assert types == {
+        "/ground_truth": "nav_msgs/msg/Odometry",
+        "/odom": "nav_msgs/msg/Odometry",
+        "/joint_states": "sensor_msgs/msg/JointState",
+        "/cmd_vel": "geometry_msgs/msg/Twist",
+    }
     robot = load_robot("tomasi-omni3")
     sp = sample_plan(arc(1.0, math.pi / 2), robot, 50.0)
-    s = np.concatenate([[0.0], np.cumsum(sp.progress)])          # arc length driven [m]
+    s = np.concatenate([[0.0], np.cumsum(sp.progress)])  # arc length driven [m]
     closed = np.column_stack([np.sin(s), 1 - np.cos(s), wrap(s)])  # unit circle, centre left
     n = len(s)
     assert summary["samples"] == n and all(v == n for v in summary["topics"].values())
@@ -250,8 +343,23 @@ def test_simulated_bag_through_odometry_and_export(tmp_path, capsys):
     """simulate --bag with errors and noise; bag odometry on its joint states reproduces its /odom;
     the exports read back as the poses; metrics of odometry against truth is non-zero."""
     sim = tmp_path / "sim.bag"
-    assert run_cli(["simulate", "tomasi-omni3", "--path", "line 1; spin 90; line 0.5", "--rate", "50",
-                    "--seed", "3", "--bag", sim]) == 0
+    assert (
+        run_cli(
+            [
+                "simulate",
+                "tomasi-omni3",
+                "--path",
+                "line 1; spin 90; line 0.5",
+                "--rate",
+                "50",
+                "--seed",
+                "3",
+                "--bag",
+                sim,
+            ]
+        )
+        == 0
+    )
     capsys.readouterr()
     out = tmp_path / "odom.bag"
     assert run_cli(["bag", "odometry", "tomasi-omni3", sim, "-o", out]) == 0
@@ -284,11 +392,14 @@ def test_export_pose_stamped(tmp_path):
         for k in range(3):
             yaw = 1.0 + k
             msg = T["geometry_msgs/msg/PoseStamped"](
-                header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=5 + k, nanosec=7),
-                                                frame_id="map"),
+                header=T["std_msgs/msg/Header"](
+                    stamp=T["builtin_interfaces/msg/Time"](sec=5 + k, nanosec=7), frame_id="map"
+                ),
                 pose=T["geometry_msgs/msg/Pose"](
                     position=T["geometry_msgs/msg/Point"](x=k, y=-k, z=3.0),
-                    orientation=T["geometry_msgs/msg/Quaternion"](x=0, y=0, z=math.sin(yaw / 2), w=math.cos(yaw / 2))))
+                    orientation=T["geometry_msgs/msg/Quaternion"](x=0, y=0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)),
+                ),
+            )
             w.write(c, k, TS.serialize_cdr(msg, "geometry_msgs/msg/PoseStamped"))
     track = bags.export_poses(path, "/pose", "csv", tmp_path / "p.csv")
     assert track.frame_id == "map" and track.msgtype == "geometry_msgs/msg/PoseStamped"
@@ -319,27 +430,37 @@ def test_missing_bag_and_broken_bags(tmp_path):
 
 def test_missing_topic_lists_the_topics(circle_bag, tmp_path):
     path = circle_bag[0]
-    with pytest.raises(OmnikinError, match=r"in.bag: no topic '/js' in the bag; it has: /chatter \(std_msgs/msg/String"
-                                           r"\), /joint_states \(sensor_msgs/msg/JointState\)"):
+    with pytest.raises(
+        OmnikinError,
+        match=r"in.bag: no topic '/js' in the bag; it has: /chatter \(std_msgs/msg/String"
+        r"\), /joint_states \(sensor_msgs/msg/JointState\)",
+    ):
         run_cli(["bag", "odometry", "tomasi-omni3", path, "-o", tmp_path / "o", "--joint-states-topic", "/js"])
     assert not (tmp_path / "o").exists()
 
 
 def test_wrong_message_type(circle_bag, tmp_path):
     path = circle_bag[0]
-    with pytest.raises(bags.BagError, match=r"in.bag: topic '/joint_states' carries sensor_msgs/msg/JointState; "
-                                            r"expected nav_msgs/msg/Odometry or geometry_msgs/msg/PoseStamped"):
+    with pytest.raises(
+        bags.BagError,
+        match=r"in.bag: topic '/joint_states' carries sensor_msgs/msg/JointState; "
+        r"expected nav_msgs/msg/Odometry or geometry_msgs/msg/PoseStamped",
+    ):
         run_cli(["bag", "export", path, "--topic", "/joint_states", "--format", "tum"])
-    with pytest.raises(bags.BagError, match="topic '/chatter' carries std_msgs/msg/String; expected "
-                                            "sensor_msgs/msg/JointState"):
+    with pytest.raises(
+        bags.BagError, match="topic '/chatter' carries std_msgs/msg/String; expected sensor_msgs/msg/JointState"
+    ):
         run_cli(["bag", "odometry", "tomasi-omni3", path, "-o", tmp_path / "o", "--joint-states-topic", "/chatter"])
 
 
 def test_wrong_joint_names(circle_bag, tmp_path):
     path = circle_bag[0]
-    with pytest.raises(bags.BagError, match=r"in.bag: topic '/joint_states': no JointState message names the wheel "
-                                            r"joints \['left', 'right'\] of robot 'diff-drive'.*\['lift', 'w1', 'w2', "
-                                            r"'w3'\]"):
+    with pytest.raises(
+        bags.BagError,
+        match=r"in.bag: topic '/joint_states': no JointState message names the wheel "
+        r"joints \['left', 'right'\] of robot 'diff-drive'.*\['lift', 'w1', 'w2', "
+        r"'w3'\]",
+    ):
         run_cli(["bag", "odometry", "diff-drive", path, "-o", tmp_path / "o"])
     partial = tmp_path / "partial"
     write_joint_states(partial, ["w1", "w2"], [[0, 0], [1, 1]], [T0, T0 + DT])
@@ -369,16 +490,19 @@ def test_output_bag_is_never_overwritten(circle_bag, tmp_path):
         run_cli(["simulate", "tomasi-omni3", "--path", "spin 10", "--bag", tmp_path / "no" / "dir" / "x.bag"])
 
 
-@pytest.mark.parametrize("argv, match", [
-    (["simulate", "tomasi-omni3", "--path", "hop 3"], "--path: path 'hop 3'"),
-    (["simulate", "tomasi-omni3", "--path", "line 1;;spin 9"], "empty part"),
-    (["simulate", "tomasi-omni3", "--errors", "awful"], "unknown error profile 'awful'"),
-    (["simulate", "tomasi-omni3", "--noise", "loud"], "unknown noise profile 'loud'"),
-    (["simulate", "tomasi-omni3", "--rate", "0"], "--rate"),
-    (["simulate", "tomasi-omni3", "--seed", "-1"], "--seed"),
-    (["simulate", "diff-drive", "--path", "line 1 90"], "diff-drive"),
-    (["bag"], "give a sub-command"),
-])
+@pytest.mark.parametrize(
+    "argv, match",
+    [
+        (["simulate", "tomasi-omni3", "--path", "hop 3"], "--path: path 'hop 3'"),
+        (["simulate", "tomasi-omni3", "--path", "line 1;;spin 9"], "empty part"),
+        (["simulate", "tomasi-omni3", "--errors", "awful"], "unknown error profile 'awful'"),
+        (["simulate", "tomasi-omni3", "--noise", "loud"], "unknown noise profile 'loud'"),
+        (["simulate", "tomasi-omni3", "--rate", "0"], "--rate"),
+        (["simulate", "tomasi-omni3", "--seed", "-1"], "--seed"),
+        (["simulate", "diff-drive", "--path", "line 1 90"], "diff-drive"),
+        (["bag"], "give a sub-command"),
+    ],
+)
 def test_cli_bad_input_raises_omnikin_error(tmp_path, argv, match):
     if argv[0] == "simulate":
         argv = argv + ["--bag", tmp_path / "x.bag"]
@@ -418,19 +542,26 @@ def test_stamp_going_back_names_the_bags_message(tmp_path):
     with Writer(path, version=8) as w:
         c = w.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=TS)
         for s, h, a in zip(stamps, header, ang, strict=True):
-            for names, pos in ([["arm"], [1.0]], [["w1", "w2", "w3"], a]):    # topic messages 2k and 2k+1
+            for names, pos in ([["arm"], [1.0]], [["w1", "w2", "w3"], a]):  # topic messages 2k and 2k+1
                 st = T["builtin_interfaces/msg/Time"](sec=int(h) // 10**9, nanosec=int(h) % 10**9)
-                msg = T["sensor_msgs/msg/JointState"](header=T["std_msgs/msg/Header"](stamp=st, frame_id=""),
-                                                      name=names, position=np.asarray(pos, float),
-                                                      velocity=np.zeros(0), effort=np.zeros(0))
+                msg = T["sensor_msgs/msg/JointState"](
+                    header=T["std_msgs/msg/Header"](stamp=st, frame_id=""),
+                    name=names,
+                    position=np.asarray(pos, float),
+                    velocity=np.zeros(0),
+                    effort=np.zeros(0),
+                )
                 w.write(c, int(s), TS.serialize_cdr(msg, "sensor_msgs/msg/JointState"))
     robot = load_robot("tomasi-omni3")
     # wheel sample 9 is topic message 2 * 9 + 1 = 19; it follows message 17
-    with pytest.raises(bags.BagError, match=r"message 19: header stamps must increase strictly.*of message 17; "
-                                            r"--stamp bag") as info:
+    with pytest.raises(
+        bags.BagError,
+        match=r"message 19: header stamps must increase strictly.*of message 17; "
+        r"--stamp bag",
+    ) as info:
         bags.read_joint_states(path, robot)
     assert str(int(header[9])) in str(info.value)
-    js = bags.read_joint_states(path, robot, stamp="bag")               # the record times are in order
+    js = bags.read_joint_states(path, robot, stamp="bag")  # the record times are in order
     assert len(js.stamps) == 20
 
 

@@ -32,7 +32,7 @@ def test_an_input_is_never_an_output_even_with_force(tmp_path):
     link.symlink_to(log)
     with pytest.raises(OutputExistsError, match="input"):
         check_output(link, inputs=[log], force=True)
-    with pytest.raises(OutputExistsError, match="input"):       # same file by another spelling
+    with pytest.raises(OutputExistsError, match="input"):  # same file by another spelling
         check_output(tmp_path / "sub" / ".." / "log.csv", inputs=[log], force=True)
 
 
@@ -58,7 +58,7 @@ def test_atomic_write_leaves_the_old_file_on_failure(tmp_path):
             handle.write("new")
             raise RuntimeError("interrupted")
     assert out.read_text() == "old"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt"]      # no temporary left
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt"]  # no temporary left
     with atomic_write(out) as handle:
         handle.write("new")
     assert out.read_text() == "new"
@@ -70,10 +70,10 @@ def test_report_folder_is_replaced_as_a_whole_and_foreign_folders_refused(tmp_pa
     with report_folder(out) as stage:
         (stage / "first.txt").write_text("1")
     assert (out / REPORT_MARKER).is_file() and (out / "first.txt").is_file()
-    check_output(out, folder=True)                                         # ours: may be replaced
+    check_output(out, folder=True)  # ours: may be replaced
     with report_folder(out) as stage:
         (stage / "second.txt").write_text("2")
-    assert sorted(p.name for p in out.iterdir()) == sorted([REPORT_MARKER, "second.txt"])   # no mix
+    assert sorted(p.name for p in out.iterdir()) == sorted([REPORT_MARKER, "second.txt"])  # no mix
     with pytest.raises(RuntimeError):
         with report_folder(out) as stage:
             (stage / "third.txt").write_text("3")
@@ -116,8 +116,8 @@ def test_data_folder_is_new_or_replaced_as_a_whole_with_force(tmp_path):
         check_output(out, folder="data")
     check_output(out, folder="data", force=True)
     _write_data(out, "second.db3")
-    assert sorted(p.name for p in out.iterdir()) == [DATA_MARKER, "second.db3"]       # no mix of two runs
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.bag"]                   # no staging left
+    assert sorted(p.name for p in out.iterdir()) == [DATA_MARKER, "second.db3"]  # no mix of two runs
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.bag"]  # no staging left
 
 
 def test_foreign_folders_and_files_are_never_data_outputs(tmp_path):
@@ -152,7 +152,7 @@ def test_a_data_folder_is_never_inside_an_input_folder(tmp_path):
     bag.mkdir()
     with pytest.raises(OutputExistsError, match="input"):
         check_output(bag / "out.bag", inputs=[bag], folder="data", force=True)
-    with pytest.raises(OutputExistsError, match="input"):         # nor one that contains an input
+    with pytest.raises(OutputExistsError, match="input"):  # nor one that contains an input
         check_output(tmp_path, inputs=[bag / "metadata.yaml"], folder="data", force=True)
 
 
@@ -217,8 +217,8 @@ def test_a_signal_during_a_critical_step_is_delivered_after_it(tmp_path):
     with pytest.raises(KeyboardInterrupt):
         with atomic_write(out) as handle:
             with _uninterrupted():
-                signal.raise_signal(signal.SIGINT)      # arrives inside the critical step ...
-                handle.write("still running")           # ... which goes on to its end
+                signal.raise_signal(signal.SIGINT)  # arrives inside the critical step ...
+                handle.write("still running")  # ... which goes on to its end
             raise AssertionError("the deferred Ctrl-C should have been delivered here")
     assert list(tmp_path.iterdir()) == []
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

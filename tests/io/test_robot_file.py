@@ -95,6 +95,7 @@ def _mut(fn):
         data = base_robot()
         fn(data)
         return data
+
     return make
 
 
@@ -180,8 +181,11 @@ BAD_CASES = [
     ("steer-on-standard", _w2(type="standard", drive_deg=90, steer={"offset": 0.0}), W2 + ["steer"]),
     ("castor-without-steer", _w2(type="castor", drive_deg=0), W2 + ["steer", "offset"]),
     ("castor-zero-offset", _w2(type="castor", drive_deg=0, steer={"offset": 0.0}), W2 + ["steer", "offset"]),
-    ("castor-with-encoder", _w2(type="castor", drive_deg=0, steer={"offset": 0.02},
-                                encoder={"ticks_per_rev": 100}), W2 + ["encoder"]),
+    (
+        "castor-with-encoder",
+        _w2(type="castor", drive_deg=0, steer={"offset": 0.02}, encoder={"ticks_per_rev": 100}),
+        W2 + ["encoder"],
+    ),
     ("steer-min-above-max", _w2(**STEER_W2, steer={"min_deg": 30, "max_deg": -30}), W2 + ["steer", "min_deg"]),
     ("steer-min-equals-max", _w2(**STEER_W2, steer={"min_deg": 10, "max_deg": 10}), W2 + ["steer"]),
     ("steer-min-below-180", _w2(**STEER_W2, steer={"min_deg": -200, "max_deg": 0}), W2 + ["steer"]),
@@ -217,8 +221,13 @@ def test_first_wheel_unnamed_is_named_by_index(tmp_path):
 
 # --- NaN / inf written the YAML way ----------------------------------------------------------------
 NONFINITE = [
-    ("radius", ".nan"), ("radius", ".inf"), ("distance", ".inf"), ("angle_deg", "-.inf"),
-    ("angle_deg", ".NaN"), ("drive_deg", ".nan"), ("max_speed", ".inf"),
+    ("radius", ".nan"),
+    ("radius", ".inf"),
+    ("distance", ".inf"),
+    ("angle_deg", "-.inf"),
+    ("angle_deg", ".NaN"),
+    ("drive_deg", ".nan"),
+    ("max_speed", ".inf"),
 ]
 
 
@@ -227,24 +236,30 @@ def test_yaml_nan_and_inf_rejected(tmp_path, field, literal):
     values = {"distance": "0.113", "angle_deg": "120", "radius": "0.04125"}
     values[field] = literal
     extra = "".join(f", {k}: {v}" for k, v in values.items())
-    text = ("omnikin: 1\nname: nan-bot\nwheels:\n"
-            "  - {name: w1, type: omni, distance: 0.113, angle_deg: 0, radius: 0.04125}\n"
-            f"  - {{name: w2, type: omni{extra}}}\n"
-            "  - {name: w3, type: omni, distance: 0.113, angle_deg: 240, radius: 0.04125}\n")
+    text = (
+        "omnikin: 1\nname: nan-bot\nwheels:\n"
+        "  - {name: w1, type: omni, distance: 0.113, angle_deg: 0, radius: 0.04125}\n"
+        f"  - {{name: w2, type: omni{extra}}}\n"
+        "  - {name: w3, type: omni, distance: 0.113, angle_deg: 240, radius: 0.04125}\n"
+    )
     msg = load_error(tmp_path, text)
     assert "'w2'" in msg and f"'{field}'" in msg and "finite" in msg
 
 
 @pytest.mark.parametrize("literal", [".nan", ".inf"])
 def test_yaml_nan_in_encoder_and_steer(tmp_path, literal):
-    text = ("omnikin: 1\nname: nan-bot\nwheels:\n"
-            f"  - {{name: w1, type: omni, distance: 0.1, angle_deg: 0, radius: 0.05, "
-            f"encoder: {{ticks_per_rev: {literal}}}}}\n")
+    text = (
+        "omnikin: 1\nname: nan-bot\nwheels:\n"
+        f"  - {{name: w1, type: omni, distance: 0.1, angle_deg: 0, radius: 0.05, "
+        f"encoder: {{ticks_per_rev: {literal}}}}}\n"
+    )
     msg = load_error(tmp_path, text)
     assert "'w1'" in msg and "ticks_per_rev" in msg
-    text = ("omnikin: 1\nname: nan-bot\nwheels:\n"
-            f"  - {{name: s1, type: steerable, x: 0.1, y: 0, drive_deg: 0, radius: 0.05, "
-            f"steer: {{offset: {literal}}}}}\n")
+    text = (
+        "omnikin: 1\nname: nan-bot\nwheels:\n"
+        f"  - {{name: s1, type: steerable, x: 0.1, y: 0, drive_deg: 0, radius: 0.05, "
+        f"steer: {{offset: {literal}}}}}\n"
+    )
     msg = load_error(tmp_path, text)
     assert "'s1'" in msg and "offset" in msg
 
@@ -259,20 +274,19 @@ def test_json_nan_rejected(tmp_path):
 
 def test_integer_too_large_for_a_float_is_rejected(tmp_path):
     """float() of a 401-digit integer overflows: that must be a RobotFileError, not OverflowError."""
-    text = ("omnikin: 1\nname: big\nwheels:\n"
-            "  - {name: w1, type: omni, distance: 0.113, angle_deg: 0, radius: 1" + "0" * 400 + "}\n")
+    text = (
+        "omnikin: 1\nname: big\nwheels:\n"
+        "  - {name: w1, type: omni, distance: 0.113, angle_deg: 0, radius: 1" + "0" * 400 + "}\n"
+    )
     msg = load_error(tmp_path, text)
     assert "'w1'" in msg and "'radius'" in msg
 
 
 # --- file-level problems ------------------------------------------------------------------------------
 def test_invalid_yaml_reports_line(tmp_path):
-    text = ("omnikin: 1\n"
-            "name: broken\n"
-            "wheels:\n"
-            "  - name: w1\n"
-            "    type: omni\n"
-            "   radius: 0.05\n")  # line 6: bad indentation
+    text = (
+        "omnikin: 1\nname: broken\nwheels:\n  - name: w1\n    type: omni\n   radius: 0.05\n"  # line 6: bad indentation
+    )
     msg = load_error(tmp_path, text)
     assert "YAML" in msg and re.search(r"\bline 6\b", msg), msg
 
@@ -295,8 +309,10 @@ def test_empty_file(tmp_path, text):
     assert "mapping" in msg
 
 
-@pytest.mark.parametrize("text, kind", [("- omnikin: 1\n- name: x\n", "list"), ("[1, 2, 3]\n", "list"),
-                                        ("just words\n", "str"), ("42\n", "int")])
+@pytest.mark.parametrize(
+    "text, kind",
+    [("- omnikin: 1\n- name: x\n", "list"), ("[1, 2, 3]\n", "list"), ("just words\n", "str"), ("42\n", "int")],
+)
 def test_top_level_not_a_mapping(tmp_path, text, kind):
     msg = load_error(tmp_path, text)
     assert "mapping" in msg and kind in msg
@@ -369,8 +385,16 @@ def test_drive_lines_through_common_point_are_singular(tmp_path):
     data["wheels"] = []
     for i, b in enumerate((10.0, 130.0, 250.0)):
         x, y = 0.2 * math.cos(math.radians(b)), 0.2 * math.sin(math.radians(b))
-        data["wheels"].append({"name": f"w{i + 1}", "type": "omni", "x": x, "y": y,
-                               "drive_deg": math.degrees(math.atan2(y - py, x - px)), "radius": 0.05})
+        data["wheels"].append(
+            {
+                "name": f"w{i + 1}",
+                "type": "omni",
+                "x": x,
+                "y": y,
+                "drive_deg": math.degrees(math.atan2(y - py, x - px)),
+                "radius": 0.05,
+            }
+        )
     msg = load_error(tmp_path, data)
     cx, cy = numbers_after(msg, "rotation")
     assert cx == pytest.approx(px, abs=1e-5) and cy == pytest.approx(py, abs=1e-5), msg
@@ -408,8 +432,10 @@ def test_single_omni_wheel_is_singular(tmp_path):
 def test_three_fixed_wheels_not_on_one_axle_are_immobile(tmp_path):
     """Three standard wheels with tangent axles (radial drive): no motion is admissible."""
     data = base_robot()
-    data["wheels"] = [{"name": n, "type": "standard", "distance": 0.2, "angle_deg": b, "drive_deg": b,
-                       "radius": 0.05} for n, b in (("a", 0), ("b", 120), ("c", 240))]
+    data["wheels"] = [
+        {"name": n, "type": "standard", "distance": 0.2, "angle_deg": b, "drive_deg": b, "radius": 0.05}
+        for n, b in (("a", 0), ("b", 120), ("c", 240))
+    ]
     msg = load_error(tmp_path, data)
     assert "immobile" in msg and "mobility 0" in msg
     for n in ("'a'", "'b'", "'c'"):
@@ -419,8 +445,10 @@ def test_three_fixed_wheels_not_on_one_axle_are_immobile(tmp_path):
 def test_three_fixed_tangent_wheels_rotate_in_place(tmp_path):
     """Control for the immobile case: tangent drive directions leave rotation about the origin."""
     data = base_robot()
-    data["wheels"] = [{"name": n, "type": "standard", "distance": 0.2, "angle_deg": b, "drive_deg": b + 90,
-                       "radius": 0.05} for n, b in (("a", 0), ("b", 120), ("c", 240))]
+    data["wheels"] = [
+        {"name": n, "type": "standard", "distance": 0.2, "angle_deg": b, "drive_deg": b + 90, "radius": 0.05}
+        for n, b in (("a", 0), ("b", 120), ("c", 240))
+    ]
     robot = load_robot(write(tmp_path, data))
     assert robot.mobility.degree_of_mobility == 1
 
@@ -428,9 +456,10 @@ def test_three_fixed_tangent_wheels_rotate_in_place(tmp_path):
 def test_mecanum_all_plus_45_rank_deficient(tmp_path):
     """Four mecanum wheels, all roller +45: rows (1, 1, x - y)/r; translation (1, -1) unseen."""
     data = base_robot()
-    data["wheels"] = [{"name": n, "type": "mecanum", "x": x, "y": y, "drive_deg": 0, "roller_deg": 45,
-                       "radius": 0.0475} for n, x, y in (("fl", 0.2355, 0.15), ("fr", 0.2355, -0.15),
-                                                         ("rl", -0.2355, 0.15), ("rr", -0.2355, -0.15))]
+    data["wheels"] = [
+        {"name": n, "type": "mecanum", "x": x, "y": y, "drive_deg": 0, "roller_deg": 45, "radius": 0.0475}
+        for n, x, y in (("fl", 0.2355, 0.15), ("fr", 0.2355, -0.15), ("rl", -0.2355, 0.15), ("rr", -0.2355, -0.15))
+    ]
     msg = load_error(tmp_path, data)
     assert "singular" in msg and "rank 2" in msg and "translation" in msg
     dx, dy = numbers_after(msg, "translation")
@@ -442,8 +471,18 @@ def test_mecanum_x_arrangement_is_fine_and_matches_hand_rows(tmp_path):
     rolls = {"fl": -45, "fr": 45, "rl": 45, "rr": -45}
     pos = {"fl": (0.2355, 0.15), "fr": (0.2355, -0.15), "rl": (-0.2355, 0.15), "rr": (-0.2355, -0.15)}
     data = base_robot()
-    data["wheels"] = [{"name": n, "type": "mecanum", "x": pos[n][0], "y": pos[n][1], "drive_deg": 0,
-                       "roller_deg": rolls[n], "radius": 0.0475} for n in rolls]
+    data["wheels"] = [
+        {
+            "name": n,
+            "type": "mecanum",
+            "x": pos[n][0],
+            "y": pos[n][1],
+            "drive_deg": 0,
+            "roller_deg": rolls[n],
+            "radius": 0.0475,
+        }
+        for n in rolls
+    ]
     robot = load_robot(write(tmp_path, data))
     for row, n in zip(robot.ik_matrix, rolls, strict=True):
         g = rolls[n]
@@ -458,8 +497,11 @@ def test_default_drive_is_counter_clockwise_tangent(tmp_path):
     """Wheel at beta = 30 deg, no drive_deg: row = (-sin b, cos b, l) / r."""
     dist, r, b = 0.2, 0.05, math.radians(30.0)
     data = base_robot()
-    data["wheels"] = [omni_wheel("w1", 30, distance=dist, radius=r), omni_wheel("w2", 150, distance=dist, radius=r),
-                      omni_wheel("w3", 270, distance=dist, radius=r)]
+    data["wheels"] = [
+        omni_wheel("w1", 30, distance=dist, radius=r),
+        omni_wheel("w2", 150, distance=dist, radius=r),
+        omni_wheel("w3", 270, distance=dist, radius=r),
+    ]
     robot = load_robot(write(tmp_path, data))
     expected = np.array([-math.sin(b), math.cos(b), dist]) / r
     np.testing.assert_allclose(robot.ik_matrix[0], expected, atol=1e-12)
@@ -499,11 +541,19 @@ def test_polar_and_cartesian_placement_identical(tmp_path, deg, drive):
 def test_swedish_roller_angle_row(tmp_path):
     """A swedish wheel of roller 30 deg follows the conventions' row exactly."""
     data = base_robot()
-    data["wheels"][0] = {"name": "w1", "type": "swedish", "x": 0.1, "y": 0.05, "drive_deg": 80,
-                         "roller_deg": 30, "radius": 0.04}
+    data["wheels"][0] = {
+        "name": "w1",
+        "type": "swedish",
+        "x": 0.1,
+        "y": 0.05,
+        "drive_deg": 80,
+        "roller_deg": 30,
+        "radius": 0.04,
+    }
     robot = load_robot(write(tmp_path, data))
-    np.testing.assert_allclose(robot.ik_matrix[0], hand_row(0.1, 0.05, math.radians(80), 0.04,
-                                                            math.radians(30)), atol=1e-12)
+    np.testing.assert_allclose(
+        robot.ik_matrix[0], hand_row(0.1, 0.05, math.radians(80), 0.04, math.radians(30)), atol=1e-12
+    )
 
 
 def test_encoder_and_limits_read(tmp_path):
@@ -518,8 +568,15 @@ def test_encoder_and_limits_read(tmp_path):
 
 def test_steer_limits_in_degrees(tmp_path):
     data = base_robot()
-    data["wheels"][1] = {"name": "w2", "type": "steerable", "distance": 0.113, "angle_deg": 120, "drive_deg": 0,
-                         "radius": 0.04, "steer": {"offset": 0.01, "min_deg": -45, "max_deg": 90}}
+    data["wheels"][1] = {
+        "name": "w2",
+        "type": "steerable",
+        "distance": 0.113,
+        "angle_deg": 120,
+        "drive_deg": 0,
+        "radius": 0.04,
+        "steer": {"offset": 0.01, "min_deg": -45, "max_deg": 90},
+    }
     robot = load_robot(write(tmp_path, data))
     s = robot.wheels[1].steer
     assert (s.offset, s.lower, s.upper) == pytest.approx((0.01, -math.pi / 4, math.pi / 2))
@@ -558,7 +615,8 @@ def assert_same_robot(a, b):
             assert wb.steer is None
         else:
             assert (wa.steer.offset, wa.steer.lower, wa.steer.upper) == pytest.approx(
-                (wb.steer.offset, wb.steer.lower, wb.steer.upper), abs=1e-12)
+                (wb.steer.offset, wb.steer.lower, wb.steer.upper), abs=1e-12
+            )
         assert wa.roller == pytest.approx(wb.roller, abs=1e-12)
     assert a.mobility.campion_type == b.mobility.campion_type
 
@@ -593,15 +651,41 @@ def test_round_trip_file(tmp_path, name, suffix):
 def test_round_trip_preserves_hand_edited_robot(tmp_path):
     """A robot using every optional field survives save/load."""
     data = {
-        "omnikin": 1, "name": "kitchen-sink", "description": "all the fields", "references": ["a", "b"],
+        "omnikin": 1,
+        "name": "kitchen-sink",
+        "description": "all the fields",
+        "references": ["a", "b"],
         "wheels": [
-            {"name": "m", "type": "mecanum", "x": 0.2, "y": 0.1, "drive_deg": 10, "roller_deg": -45, "radius": 0.05,
-             "encoder": {"ticks_per_rev": 2048, "gear_ratio": 3.5, "invert": True}, "max_speed": 20.0},
-            {"name": "s", "type": "swedish", "distance": 0.2, "angle_deg": 135, "drive_deg": 225, "roller_deg": 20,
-             "radius": 0.04},
+            {
+                "name": "m",
+                "type": "mecanum",
+                "x": 0.2,
+                "y": 0.1,
+                "drive_deg": 10,
+                "roller_deg": -45,
+                "radius": 0.05,
+                "encoder": {"ticks_per_rev": 2048, "gear_ratio": 3.5, "invert": True},
+                "max_speed": 20.0,
+            },
+            {
+                "name": "s",
+                "type": "swedish",
+                "distance": 0.2,
+                "angle_deg": 135,
+                "drive_deg": 225,
+                "roller_deg": 20,
+                "radius": 0.04,
+            },
             {"name": "o", "type": "omni", "distance": 0.25, "angle_deg": 250, "roller_deg": 0, "radius": 0.04},
-            {"name": "c", "type": "castor", "x": -0.3, "y": 0.0, "drive_deg": 0, "radius": 0.02,
-             "steer": {"offset": 0.03}},
+            {
+                "name": "c",
+                "type": "castor",
+                "x": -0.3,
+                "y": 0.0,
+                "drive_deg": 0,
+                "radius": 0.02,
+                "steer": {"offset": 0.03},
+            },
         ],
     }
     robot = load_robot(write(tmp_path, data))
@@ -623,23 +707,39 @@ RANGE_CASES = [
     ("roller_deg", lambda v: {"type": "swedish", "drive_deg": 90, "roller_deg": v}, "'roller_deg'", (-80, 80), None),
     ("radius", lambda v: {"radius": v}, "'radius'", (1e-4, 10), None),
     ("max_speed", lambda v: {"max_speed": v}, "'max_speed'", (1e-3, 1e4), None),
-    ("ticks_per_rev", lambda v: {"encoder": {"ticks_per_rev": v}}, "encoder.ticks_per_rev", (1, 2.0 ** 32), None),
-    ("gear_ratio", lambda v: {"encoder": {"ticks_per_rev": 100, "gear_ratio": v}}, "encoder.gear_ratio",
-     (1e-3, 1e4), None),
+    ("ticks_per_rev", lambda v: {"encoder": {"ticks_per_rev": v}}, "encoder.ticks_per_rev", (1, 2.0**32), None),
+    (
+        "gear_ratio",
+        lambda v: {"encoder": {"ticks_per_rev": 100, "gear_ratio": v}},
+        "encoder.gear_ratio",
+        (1e-3, 1e4),
+        None,
+    ),
     ("steer.offset", lambda v: {**STEER_W2_AT, "steer": {"offset": v}}, "steer.offset", (0, 10), None),
-    ("steer.min_deg", lambda v: {**STEER_W2_AT, "steer": {"min_deg": v, "max_deg": 180}}, "steer.min_deg",
-     (-180, 180), (-180, 179)),
-    ("steer.max_deg", lambda v: {**STEER_W2_AT, "steer": {"min_deg": -180, "max_deg": v}}, "steer.max_deg",
-     (-180, 180), (-179, 180)),
+    (
+        "steer.min_deg",
+        lambda v: {**STEER_W2_AT, "steer": {"min_deg": v, "max_deg": 180}},
+        "steer.min_deg",
+        (-180, 180),
+        (-180, 179),
+    ),
+    (
+        "steer.max_deg",
+        lambda v: {**STEER_W2_AT, "steer": {"min_deg": -180, "max_deg": v}},
+        "steer.max_deg",
+        (-180, 180),
+        (-179, 180),
+    ),
 ]
 
 
-@pytest.mark.parametrize("changes, field, bounds, inside", [c[1:] for c in RANGE_CASES],
-                         ids=[c[0] for c in RANGE_CASES])
+@pytest.mark.parametrize(
+    "changes, field, bounds, inside", [c[1:] for c in RANGE_CASES], ids=[c[0] for c in RANGE_CASES]
+)
 def test_every_numeric_field_is_range_checked(tmp_path, changes, field, bounds, inside):
     low, high = bounds
     for value in inside or bounds:
-        load_robot(write(tmp_path, with_wheel2(**changes(value))))      # the ends of the range are fine
+        load_robot(write(tmp_path, with_wheel2(**changes(value))))  # the ends of the range are fine
     for outside in (low - max(abs(low), 1) * 1e-3, high + max(abs(high), 1) * 1e-3, 1e300, -1e300):
         msg = load_error(tmp_path, with_wheel2(**changes(outside)))
         assert "'w2'" in msg and field in msg and "must lie in [" in msg, msg
@@ -653,11 +753,28 @@ def test_encoder_values_that_once_gave_nan_poses_are_refused(tmp_path, tpr, gear
 
 
 # --- names (docs/conventions.md, "Names") ----------------------------------------------------------------------
-@pytest.mark.parametrize("name", ["", " w2", "w2 ", "w 2", "w,2", 'w"2', "w'2", "w\n2", "w\t2", "2w", "_w",
-                                  "w-2", "w.2", "wä", "x" * 65, "t"],
-                         ids=["empty", "leading-blank", "trailing-blank", "blank", "comma", "double-quote",
-                              "quote", "newline", "tab", "digit-first", "underscore-first", "hyphen", "dot",
-                              "non-ascii", "65-chars", "time-column"])
+@pytest.mark.parametrize(
+    "name",
+    ["", " w2", "w2 ", "w 2", "w,2", 'w"2', "w'2", "w\n2", "w\t2", "2w", "_w", "w-2", "w.2", "wä", "x" * 65, "t"],
+    ids=[
+        "empty",
+        "leading-blank",
+        "trailing-blank",
+        "blank",
+        "comma",
+        "double-quote",
+        "quote",
+        "newline",
+        "tab",
+        "digit-first",
+        "underscore-first",
+        "hyphen",
+        "dot",
+        "non-ascii",
+        "65-chars",
+        "time-column",
+    ],
+)
 def test_wheel_names_unusable_as_csv_column_or_ros_name_are_refused(tmp_path, name):
     msg = load_error(tmp_path, with_wheel2(name=name))
     assert "#2" in msg and "'name'" in msg, msg
@@ -671,8 +788,10 @@ def test_longest_and_plain_wheel_names_are_accepted(tmp_path):
     assert load_robot(write(tmp_path, data)).wheel_names == names
 
 
-@pytest.mark.parametrize("other, steer_type", [("a_steer_deg", "steerable"), ("a_steer", "steerable"),
-                                               ("a_steer_deg", "omni"), ("a_steer", "omni")])
+@pytest.mark.parametrize(
+    "other, steer_type",
+    [("a_steer_deg", "steerable"), ("a_steer", "steerable"), ("a_steer_deg", "omni"), ("a_steer", "omni")],
+)
 def test_wheel_named_like_a_derived_column_or_joint_is_refused(tmp_path, other, steer_type):
     """Tick logs have a column <wheel>_steer_deg and joint_states a joint <wheel>_steer: a wheel of that
     name would read another wheel's steering angle as its ticks (refused for any wheel types)."""
@@ -690,8 +809,11 @@ def test_duplicate_wheel_name_names_both_wheels(tmp_path):
     assert "wheel 'w1' (#2)" in msg and "also wheel #1" in msg
 
 
-@pytest.mark.parametrize("name", ["two\nlines", "x" * 129, " padded", "bell\a"],
-                         ids=["newline", "129-chars", "leading-blank", "control-char"])
+@pytest.mark.parametrize(
+    "name",
+    ["two\nlines", "x" * 129, " padded", "bell\a"],
+    ids=["newline", "129-chars", "leading-blank", "control-char"],
+)
 def test_robot_names_that_break_one_line_messages_are_refused(tmp_path, name):
     data = base_robot()
     data["name"] = name
@@ -753,8 +875,10 @@ def test_mecanum4_preset_matches_its_file_without_drive_deg(tmp_path):
     np.testing.assert_allclose(robot.ik_matrix, load_robot("mecanum4").ik_matrix, atol=1e-15)
 
 
-@pytest.mark.parametrize("kind, extra", [("swedish", {"roller_deg": 30}), ("standard", {}),
-                                         ("steerable", {}), ("castor", {"steer": {"offset": 0.02}})])
+@pytest.mark.parametrize(
+    "kind, extra",
+    [("swedish", {"roller_deg": 30}), ("standard", {}), ("steerable", {}), ("castor", {"steer": {"offset": 0.02}})],
+)
 def test_types_without_a_universal_mounting_must_give_drive_deg(tmp_path, kind, extra):
     msg = load_error(tmp_path, with_wheel2(type=kind, **extra))
     assert "'w2'" in msg and "'drive_deg'" in msg and f"required for a {kind} wheel" in msg
@@ -764,8 +888,9 @@ def test_types_without_a_universal_mounting_must_give_drive_deg(tmp_path, kind, 
 def test_omni_default_is_still_the_counter_clockwise_tangent(tmp_path):
     robot = load_robot(write(tmp_path, base_robot()))
     b = math.radians(120)
-    np.testing.assert_allclose(robot.ik_matrix[1], hand_row(0.113 * math.cos(b), 0.113 * math.sin(b),
-                                                            b + math.pi / 2, 0.04125), atol=1e-12)
+    np.testing.assert_allclose(
+        robot.ik_matrix[1], hand_row(0.113 * math.cos(b), 0.113 * math.sin(b), b + math.pi / 2, 0.04125), atol=1e-12
+    )
 
 
 # --- messages stay one bounded line whatever the value ----------------------------------------------------------
@@ -790,10 +915,10 @@ BOUNDED_CASES = [
     ("steer", _w2(**STEER_W2, steer=HUGE_TEXT)),
     ("roller", _w2(type="mecanum", roller_deg=HUGE_TEXT)),
     ("omni-roller", _w2(roller_deg=HUGE_TEXT)),
-    ("radius-int-beyond-repr", _w2(radius=10 ** 5000)),           # repr() of it raises ValueError
-    ("name-int-beyond-repr", _w2(name=10 ** 5000)),
-    ("schema-int-beyond-repr", _set_top("omnikin", 10 ** 5000)),
-    ("counter-bits-beyond-repr", _w2(encoder={"ticks_per_rev": 100, "counter_bits": 10 ** 5000})),
+    ("radius-int-beyond-repr", _w2(radius=10**5000)),  # repr() of it raises ValueError
+    ("name-int-beyond-repr", _w2(name=10**5000)),
+    ("schema-int-beyond-repr", _set_top("omnikin", 10**5000)),
+    ("counter-bits-beyond-repr", _w2(encoder={"ticks_per_rev": 100, "counter_bits": 10**5000})),
 ]
 
 

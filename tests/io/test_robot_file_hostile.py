@@ -19,7 +19,7 @@ from conftest import SRC  # noqa: E402
 from omnikin.errors import InputError, RobotFileError
 from omnikin.io.robot_file import load_robot, parse_robot_text
 
-TIMEOUT = 60        # seconds; every case below finishes in about one
+TIMEOUT = 60  # seconds; every case below finishes in about one
 
 
 def _limit_memory():  # pragma: no cover - runs in the child
@@ -31,9 +31,14 @@ def _limit_memory():  # pragma: no cover - runs in the child
 def run_python(code: str, *args) -> subprocess.CompletedProcess:
     """Run ``code`` in a fresh interpreter using this omnikin, bounded in time and memory."""
     env = dict(os.environ, PYTHONPATH=SRC, OPENBLAS_NUM_THREADS="1")
-    return subprocess.run([sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True,
-                          env=env, timeout=TIMEOUT,
-                          preexec_fn=_limit_memory if sys.platform.startswith("linux") else None)
+    return subprocess.run(
+        [sys.executable, "-c", code, *map(str, args)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=TIMEOUT,
+        preexec_fn=_limit_memory if sys.platform.startswith("linux") else None,
+    )
 
 
 def show(path) -> str:
@@ -49,8 +54,10 @@ def show(path) -> str:
 
 def load_params_error(path) -> str:
     """``load_params(path)`` in a subprocess: must raise InputError; returns its message."""
-    code = ("import sys\nfrom omnikin.errors import InputError\nfrom omnikin.ros.params import load_params\n"
-            "try:\n    load_params(sys.argv[1])\nexcept InputError as exc:\n    print(exc)\n    sys.exit(3)\n")
+    code = (
+        "import sys\nfrom omnikin.errors import InputError\nfrom omnikin.ros.params import load_params\n"
+        "try:\n    load_params(sys.argv[1])\nexcept InputError as exc:\n    print(exc)\n    sys.exit(3)\n"
+    )
     proc = run_python(code, path)
     assert proc.returncode == 3, (proc.returncode, proc.stderr[-2000:])
     return proc.stdout.strip()
@@ -70,8 +77,10 @@ def test_billion_laughs_robot_file_is_refused_at_once(tmp_path):
     bomb = billion_laughs()
     refs = "references: [" + ", ".join(line.split(": ", 1)[1] for line in bomb.splitlines()) + "]\n"
     path = tmp_path / "laughs.yaml"
-    path.write_text("omnikin: 1\nname: lol\n" + refs + "wheels:\n"
-                    "  - {name: w1, type: omni, distance: 0.1, angle_deg: 0, radius: 0.05}\n")
+    path.write_text(
+        "omnikin: 1\nname: lol\n" + refs + "wheels:\n"
+        "  - {name: w1, type: omni, distance: 0.1, angle_deg: 0, radius: 0.05}\n"
+    )
     assert path.stat().st_size < 1024
     msg = show(path)
     assert str(path) in msg and "line 3" in msg and "alias" in msg
@@ -84,11 +93,14 @@ def test_billion_laughs_parameter_file_is_refused_at_once(tmp_path):
     assert str(path) in msg and "alias" in msg and "line 1" in msg
 
 
-@pytest.mark.parametrize("text, line", [
-    ("omnikin: 1\nname: &n bot\nwheels: []\n", 2),                 # an anchor alone
-    ("omnikin: 1\nname: x\nwheels:\n  - &w {name: a}\n  - *w\n", 4),
-    ("base: &b {radius: 0.05}\nomnikin: 1\n", 1),
-])
+@pytest.mark.parametrize(
+    "text, line",
+    [
+        ("omnikin: 1\nname: &n bot\nwheels: []\n", 2),  # an anchor alone
+        ("omnikin: 1\nname: x\nwheels:\n  - &w {name: a}\n  - *w\n", 4),
+        ("base: &b {radius: 0.05}\nomnikin: 1\n", 1),
+    ],
+)
 def test_anchors_and_aliases_are_refused_with_the_line(tmp_path, text, line):
     path = tmp_path / "robot.yaml"
     path.write_text(text)
@@ -104,7 +116,7 @@ def test_merge_keys_are_refused(tmp_path):
 
 
 # --- deep nesting ------------------------------------------------------------------------------------
-DEEP = {   # built in the test: a parameter this large would make the test id (and its environment) huge
+DEEP = {  # built in the test: a parameter this large would make the test id (and its environment) huge
     "deep.yaml": lambda: "[" * 100_000 + "]" * 100_000 + "\n",
     "deep-block.yaml": lambda: "wheels:\n" + "".join("  " * k + "- \n" for k in range(1, 200)),
     "deep.json": lambda: '{"omnikin": ' + "[" * 100_000 + "]" * 100_000 + "}\n",
@@ -166,18 +178,21 @@ def test_file_just_over_the_limit_is_refused_and_at_the_limit_read(tmp_path):
     body = "omnikin: 1\nname: x\nwheels: []\n"
     path = tmp_path / "padded.yaml"
     path.write_text(body + "#" * (MAX_CONFIG_BYTES - len(body) - 1) + "\n")
-    with pytest.raises(RobotFileError, match="non-empty list of wheels"):   # read: the limit is inclusive
+    with pytest.raises(RobotFileError, match="non-empty list of wheels"):  # read: the limit is inclusive
         load_robot(path)
     path.write_text(body + "#" * (MAX_CONFIG_BYTES - len(body)) + "\n")
     with pytest.raises(RobotFileError, match="too large"):
         load_robot(path)
 
 
-@pytest.mark.parametrize("data, fragment", [
-    (b"\x7fELF\x02\x01\x01\x00\x00\x00\x00\x00", "binary data (NUL byte at offset 7)"),
-    (b"omnikin: 1\nname: caf\xe9\n", "not a UTF-8 text file"),
-    (b"\xff\xfeomnikin: 1\n", "not a UTF-8 text file"),
-])
+@pytest.mark.parametrize(
+    "data, fragment",
+    [
+        (b"\x7fELF\x02\x01\x01\x00\x00\x00\x00\x00", "binary data (NUL byte at offset 7)"),
+        (b"omnikin: 1\nname: caf\xe9\n", "not a UTF-8 text file"),
+        (b"\xff\xfeomnikin: 1\n", "not a UTF-8 text file"),
+    ],
+)
 def test_binary_and_non_utf8_robot_files(tmp_path, data, fragment):
     path = tmp_path / "robot.yaml"
     path.write_bytes(data)
@@ -204,26 +219,31 @@ def test_name_too_long_for_the_file_system():
 
 # --- hostile values ------------------------------------------------------------------------------------
 def robot_text(radius: str) -> str:
-    return ("omnikin: 1\nname: r\nwheels:\n"
-            f"  - {{name: w1, type: omni, distance: 0.1, angle_deg: 0, radius: {radius}}}\n"
-            "  - {name: w2, type: omni, distance: 0.1, angle_deg: 120, radius: 0.05}\n"
-            "  - {name: w3, type: omni, distance: 0.1, angle_deg: 240, radius: 0.05}\n")
+    return (
+        "omnikin: 1\nname: r\nwheels:\n"
+        f"  - {{name: w1, type: omni, distance: 0.1, angle_deg: 0, radius: {radius}}}\n"
+        "  - {name: w2, type: omni, distance: 0.1, angle_deg: 120, radius: 0.05}\n"
+        "  - {name: w3, type: omni, distance: 0.1, angle_deg: 240, radius: 0.05}\n"
+    )
 
 
-@pytest.mark.parametrize("literal, fragment", [
-    ("1e999", "must be finite"),
-    ("-1e999", "must be finite"),
-    pytest.param("1" * 100_000, "must be finite", id="int-100k-digits"),   # past Python's int-parsing limit
-    pytest.param("1" * 350, "must be finite", id="int-350-digits"),
-    pytest.param("1" + "0" * 150, "must lie in [0.0001, 10] m, got 1e+150", id="int-1e150"),
-    pytest.param("0x" + "f" * 300, "integer literal of 302 characters is too long", id="hex-300-digits"),
-    pytest.param("1" + ":1" * 200, "integer literal of 401 characters is too long", id="sexagesimal-201-parts"),
-    (".nan", "must be finite"),
-    ("-.inf", "must be finite"),
-    ("true", "must be a number, got True"),
-    ("'0.05'", "must be a number, got '0.05'"),
-    ("1e-310", "must lie in [0.0001, 10] m"),
-])
+@pytest.mark.parametrize(
+    "literal, fragment",
+    [
+        ("1e999", "must be finite"),
+        ("-1e999", "must be finite"),
+        pytest.param("1" * 100_000, "must be finite", id="int-100k-digits"),  # past Python's int-parsing limit
+        pytest.param("1" * 350, "must be finite", id="int-350-digits"),
+        pytest.param("1" + "0" * 150, "must lie in [0.0001, 10] m, got 1e+150", id="int-1e150"),
+        pytest.param("0x" + "f" * 300, "integer literal of 302 characters is too long", id="hex-300-digits"),
+        pytest.param("1" + ":1" * 200, "integer literal of 401 characters is too long", id="sexagesimal-201-parts"),
+        (".nan", "must be finite"),
+        ("-.inf", "must be finite"),
+        ("true", "must be a number, got True"),
+        ("'0.05'", "must be a number, got '0.05'"),
+        ("1e-310", "must lie in [0.0001, 10] m"),
+    ],
+)
 def test_hostile_numbers_in_yaml(tmp_path, literal, fragment):
     path = tmp_path / "robot.yaml"
     path.write_text(robot_text(literal))
@@ -233,17 +253,25 @@ def test_hostile_numbers_in_yaml(tmp_path, literal, fragment):
     assert fragment in msg and "\n" not in msg and len(msg) < 400, msg
 
 
-@pytest.mark.parametrize("literal, fragment", [
-    ("1e999", "must be finite"),
-    pytest.param("1" * 100_000, "must be finite", id="int-100k-digits"),
-    ("NaN", "must be finite"),
-    ("-Infinity", "must be finite"),
-    ("true", "must be a number, got True"),
-    pytest.param("1" + "0" * 150, "got 1e+150", id="int-1e150"),
-])
+@pytest.mark.parametrize(
+    "literal, fragment",
+    [
+        ("1e999", "must be finite"),
+        pytest.param("1" * 100_000, "must be finite", id="int-100k-digits"),
+        ("NaN", "must be finite"),
+        ("-Infinity", "must be finite"),
+        ("true", "must be a number, got True"),
+        pytest.param("1" + "0" * 150, "got 1e+150", id="int-1e150"),
+    ],
+)
 def test_hostile_numbers_in_json(tmp_path, literal, fragment):
-    data = {"omnikin": 1, "name": "r", "wheels": [
-        {"name": f"w{k}", "type": "omni", "distance": 0.1, "angle_deg": 120 * k, "radius": 0.05} for k in range(3)]}
+    data = {
+        "omnikin": 1,
+        "name": "r",
+        "wheels": [
+            {"name": f"w{k}", "type": "omni", "distance": 0.1, "angle_deg": 120 * k, "radius": 0.05} for k in range(3)
+        ],
+    }
     text = json.dumps(data).replace('"radius": 0.05', f'"radius": {literal}', 1)
     path = tmp_path / "robot.json"
     path.write_text(text)
@@ -258,18 +286,24 @@ def test_long_hostile_string_scalar_is_read_in_linear_time(tmp_path):
     quadratic backtracking (minutes); now it is just a (wrong) wheel name."""
     path = tmp_path / "robot.yaml"
     path.write_text("omnikin: 1\nname: x\nwheels:\n  - {name: " + "1" * 200_000 + "x, type: omni, radius: 0.05}\n")
-    proc = run_python("import sys\nfrom omnikin.io.robot_file import load_robot\nfrom omnikin.errors import "
-                      "RobotFileError\ntry:\n    load_robot(sys.argv[1])\nexcept RobotFileError as e:\n"
-                      "    print(e)\n", path)
+    proc = run_python(
+        "import sys\nfrom omnikin.io.robot_file import load_robot\nfrom omnikin.errors import "
+        "RobotFileError\ntry:\n    load_robot(sys.argv[1])\nexcept RobotFileError as e:\n"
+        "    print(e)\n",
+        path,
+    )
     assert "is not a valid wheel name" in proc.stdout and len(proc.stdout) < 400, proc.stderr[-1000:]
 
 
-@pytest.mark.parametrize("text, fragment", [
-    ("omnikin: 1\nname: a\nname: b\nwheels: []\n", "line 3 column 1: duplicate key 'name'"),
-    ("omnikin: 1\nname: x\nwheels:\n  - {name: a, name: b}\n", "line 4 column 15: duplicate key 'name'"),
-    ("omnikin: 1\n1: a\n1.0: b\n", "line 3 column 1: duplicate key 1.0"),
-    ("omnikin: 1\n? [a, b]\n: 1\n", "line 2 column 3: a key must be a plain value"),
-])
+@pytest.mark.parametrize(
+    "text, fragment",
+    [
+        ("omnikin: 1\nname: a\nname: b\nwheels: []\n", "line 3 column 1: duplicate key 'name'"),
+        ("omnikin: 1\nname: x\nwheels:\n  - {name: a, name: b}\n", "line 4 column 15: duplicate key 'name'"),
+        ("omnikin: 1\n1: a\n1.0: b\n", "line 3 column 1: duplicate key 1.0"),
+        ("omnikin: 1\n? [a, b]\n: 1\n", "line 2 column 3: a key must be a plain value"),
+    ],
+)
 def test_duplicate_and_structured_keys_in_yaml(tmp_path, text, fragment):
     path = tmp_path / "robot.yaml"
     path.write_text(text)
@@ -292,14 +326,15 @@ def test_duplicate_keys_in_json_are_refused_in_linear_time():
 
     small = min(timed(2_000) for _ in range(3))
     large = timed(20_000)
-    assert large < 30 * small + 0.5, (small, large)      # linear: ~10x; the quadratic check was ~100x
+    assert large < 30 * small + 0.5, (small, large)  # linear: ~10x; the quadratic check was ~100x
 
 
 @pytest.mark.parametrize("value", ["yes", "no", "on", "off", "1", "2.5", "null", "2024-05-01"])
 def test_yaml_scalars_that_are_not_strings_as_wheel_names(tmp_path, value):
     path = tmp_path / "robot.yaml"
-    path.write_text(f"omnikin: 1\nname: x\nwheels:\n  - {{name: {value}, type: omni, distance: 0.1, "
-                    f"angle_deg: 0, radius: 0.05}}\n")
+    path.write_text(
+        f"omnikin: 1\nname: x\nwheels:\n  - {{name: {value}, type: omni, distance: 0.1, angle_deg: 0, radius: 0.05}}\n"
+    )
     with pytest.raises(RobotFileError) as info:
         load_robot(path)
     msg = str(info.value)

@@ -20,8 +20,9 @@ from omnikin.plans import CalibrationRun, parse_plan
 
 
 def runs_with(headings):
-    return [CalibrationRun(parse_plan("line 4 0"), (4.0 + k * 1e-3, -2e-3, h), "line 4 0")
-            for k, h in enumerate(headings)]
+    return [
+        CalibrationRun(parse_plan("line 4 0"), (4.0 + k * 1e-3, -2e-3, h), "line 4 0") for k, h in enumerate(headings)
+    ]
 
 
 @pytest.mark.parametrize("headings", [[0.01, -0.02], [math.nan, math.nan]])
@@ -35,7 +36,7 @@ def test_runs_files_read_back_as_written(tmp_path, headings):
         if math.isnan(h):
             assert math.isnan(run.measured[2])
         else:
-            assert run.measured[2] == pytest.approx(h, abs=1e-7)        # written to 1e-5 deg
+            assert run.measured[2] == pytest.approx(h, abs=1e-7)  # written to 1e-5 deg
     assert f.read_text(encoding="utf-8").startswith("# made by a test\n# second line\n")
 
 
@@ -51,7 +52,7 @@ def test_measurement_files_read_back_as_written(tmp_path, theta):
     if not theta:
         cw, ccw = [e[:2] for e in cw], [e[:2] for e in ccw]
     res = analyze(cw, ccw)
-    if not theta:                                    # analyze fills an unmeasured heading with zero
+    if not theta:  # analyze fills an unmeasured heading with zero
         for d in (res.cw, res.ccw):
             d.epsilon[:, 2] = math.nan
     f = tmp_path / "m.csv"

@@ -39,17 +39,21 @@ def test_metrics_with_an_empty_csv_field_names_line_and_column(tmp_path, capsys)
     est.write_text("t,x,y,theta\n0,0,0,0\n1,0.5,,0.25,0.1\n2,1.0,0.5,0.2\n")
     rc, out, err = cli(capsys, "metrics", ref, est)
     assert rc == 2 and out == ""
-    assert err.strip() == (f"omnikin: error: {est}: line 3, column 'y' (field 3): empty field "
-                           f"(every field needs a value)")
+    assert err.strip() == (
+        f"omnikin: error: {est}: line 3, column 'y' (field 3): empty field (every field needs a value)"
+    )
 
 
-@pytest.mark.parametrize("fmt, line, field", [
-    ("tum", "1,0.5,,0,0,0,0,0,1", 3),               # comma separated TUM with a hole: 8 values remain
-    ("tum", "1 0.5 0.25 0 0 0 0 1,", 9),            # a trailing comma
-    ("kitti", "1,0,0,0.5,,0,1,0,0.25,0,0,1,0", 5),
-    ("csv", "1,0.5,0.25,0.1,", 5),
-    ("csv", ",,,", 1),                              # a line of separators is no blank line
-])
+@pytest.mark.parametrize(
+    "fmt, line, field",
+    [
+        ("tum", "1,0.5,,0,0,0,0,0,1", 3),  # comma separated TUM with a hole: 8 values remain
+        ("tum", "1 0.5 0.25 0 0 0 0 1,", 9),  # a trailing comma
+        ("kitti", "1,0,0,0.5,,0,1,0,0.25,0,0,1,0", 5),
+        ("csv", "1,0.5,0.25,0.1,", 5),
+        ("csv", ",,,", 1),  # a line of separators is no blank line
+    ],
+)
 def test_empty_field_in_any_trajectory_format(tmp_path, fmt, line, field):
     first = {"tum": "0 0 0 0 0 0 0 1", "kitti": "1 0 0 0 0 1 0 0 0 0 1 0", "csv": "t,x,y,theta\n0,0,0,0"}[fmt]
     path = tmp_path / f"traj.{fmt}"
@@ -58,8 +62,11 @@ def test_empty_field_in_any_trajectory_format(tmp_path, fmt, line, field):
         read_trajectory(path, fmt)
     msg = str(info.value)
     line_no = len(first.splitlines()) + 1
-    assert re.fullmatch(rf"{re.escape(str(path))}: line {line_no}, (column '\w+' \(field {field}\)|field {field}): "
-                        r"empty field \(every field needs a value\)", msg), msg
+    assert re.fullmatch(
+        rf"{re.escape(str(path))}: line {line_no}, (column '\w+' \(field {field}\)|field {field}): "
+        r"empty field \(every field needs a value\)",
+        msg,
+    ), msg
 
 
 def test_blank_separated_formats_still_read(tmp_path):
@@ -79,13 +86,18 @@ def test_detection_reads_only_the_first_line(tmp_path):
 
 
 # --- measurement and runs files -------------------------------------------------------------------------------
-@pytest.mark.parametrize("text, where", [
-    ("direction,x_abs,y_abs,x_calc,y_calc\ncw,0.1,,0,0\nccw,0,0,0,0\n", "line 2, column 'y_abs' (field 3)"),
-    ("direction,x_abs,y_abs,x_calc,y_calc\ncw,0.1,0.2,0,0,\nccw,0,0,0,0\n", "line 2, field 6"),
-    ("direction,x_abs,,x_calc,y_calc\ncw,0.1,0.2,0,0\n", "line 1, field 3: empty column name"),
-    ("direction,x_abs,y_abs,x_calc,y_calc,theta_abs_deg,theta_calc_deg\ncw,1,2,0,0,,3\nccw,0,0,0,0,1,1\n",
-     "line 2, column 'theta_abs_deg' (field 6)"),
-])
+@pytest.mark.parametrize(
+    "text, where",
+    [
+        ("direction,x_abs,y_abs,x_calc,y_calc\ncw,0.1,,0,0\nccw,0,0,0,0\n", "line 2, column 'y_abs' (field 3)"),
+        ("direction,x_abs,y_abs,x_calc,y_calc\ncw,0.1,0.2,0,0,\nccw,0,0,0,0\n", "line 2, field 6"),
+        ("direction,x_abs,,x_calc,y_calc\ncw,0.1,0.2,0,0\n", "line 1, field 3: empty column name"),
+        (
+            "direction,x_abs,y_abs,x_calc,y_calc,theta_abs_deg,theta_calc_deg\ncw,1,2,0,0,,3\nccw,0,0,0,0,1,1\n",
+            "line 2, column 'theta_abs_deg' (field 6)",
+        ),
+    ],
+)
 def test_empty_field_in_umbmark_measurements(tmp_path, text, where):
     path = tmp_path / "m.csv"
     path.write_text(text)
@@ -112,10 +124,24 @@ def test_empty_field_in_a_tick_log(tmp_path, capsys):
 
 def test_tick_log_of_many_wheels_is_read_in_linear_time(tmp_path):
     """The column look-up once searched the header for every wheel: quadratic in the wheel count."""
+
     def robot(n):
         step = 2 * math.pi / n
-        return Robot("many", tuple(Wheel(f"w{i}", "omni", 0.2 * math.cos(i * step), 0.2 * math.sin(i * step),
-                                         i * step + math.pi / 2, 0.05, encoder=Encoder(100)) for i in range(n)))
+        return Robot(
+            "many",
+            tuple(
+                Wheel(
+                    f"w{i}",
+                    "omni",
+                    0.2 * math.cos(i * step),
+                    0.2 * math.sin(i * step),
+                    i * step + math.pi / 2,
+                    0.05,
+                    encoder=Encoder(100),
+                )
+                for i in range(n)
+            ),
+        )
 
     def timed(n):
         r = robot(n)
@@ -134,6 +160,7 @@ def test_tick_log_of_many_wheels_is_read_in_linear_time(tmp_path):
 
 def test_column_problems_is_linear_and_bounded():
     """header.count per column was quadratic: 20 000 columns took seconds."""
+
     def timed(n):
         header = ["t"] + [f"w{i}" for i in range(n)] + ["w0"]
         start = time.perf_counter()
@@ -151,8 +178,11 @@ def test_column_problems_is_linear_and_bounded():
 
 # --- what a table file may be ---------------------------------------------------------------------------------
 @pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="needs /dev/zero")
-@pytest.mark.parametrize("reader", [lambda p: read_rows(p, RunsFileError),
-                                    lambda p: list(iter_fields(p, TrajectoryFileError))], ids=["csv", "blank"])
+@pytest.mark.parametrize(
+    "reader",
+    [lambda p: read_rows(p, RunsFileError), lambda p: list(iter_fields(p, TrajectoryFileError))],
+    ids=["csv", "blank"],
+)
 def test_devices_and_directories_are_refused(tmp_path, reader):
     with pytest.raises((RunsFileError, TrajectoryFileError), match="character device"):
         reader("/dev/zero")
@@ -179,7 +209,7 @@ def test_a_pipe_is_read_as_a_stream(tmp_path):
 def test_a_pipe_nobody_writes_to_is_an_error_instead_of_a_hang(tmp_path, monkeypatch):
     from omnikin.io import textfile
 
-    monkeypatch.setattr(textfile, "PIPE_WAIT_S", 0.5)      # the default is 30 s
+    monkeypatch.setattr(textfile, "PIPE_WAIT_S", 0.5)  # the default is 30 s
     fifo = tmp_path / "log.csv"
     os.mkfifo(fifo)
     start = time.perf_counter()

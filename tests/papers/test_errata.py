@@ -393,9 +393,7 @@ def mn_printed_jhat():
     """Eq 5 of 002 (= eq 8 of 004) with eq 2-3 substituted."""
     thi = alp + bet + gam
     p = sp.Matrix([lamx, lamy]) + rot2(alp + bet) * sp.Matrix([delx, dely])
-    return sp.Matrix([[cos(thi), -sin(thi), p[1], -lamy],
-                      [sin(thi), cos(thi), -p[0], lamx],
-                      [0, 0, 1, -1]]), p, thi
+    return sp.Matrix([[cos(thi), -sin(thi), p[1], -lamy], [sin(thi), cos(thi), -p[0], lamx], [0, 0, 1, -1]]), p, thi
 
 
 def conventional_qhat(r_):
@@ -596,10 +594,13 @@ def test_G15_eq18_vehicle_jacobian():
     A, B = _garcia_AB()
     a = 2 * S3
     R, r_, L = RR_, rr_, LL
-    printed = sp.Matrix([
-        [0, -r_ / 3, 0, R / a, r_ / 6, L / a, -R / a, r_ / 6, -L / a],
-        [R / 3, 0, L / 3, -R / 6, r_ / a, -L / 6, -R / 6, -r_ / a, -L / 6],
-        [0, 0, Q(1, 3), 0, 0, Q(1, 3), 0, 0, Q(1, 3)]])
+    printed = sp.Matrix(
+        [
+            [0, -r_ / 3, 0, R / a, r_ / 6, L / a, -R / a, r_ / 6, -L / a],
+            [R / 3, 0, L / 3, -R / 6, r_ / a, -L / 6, -R / 6, -r_ / a, -L / 6],
+            [0, 0, Q(1, 3), 0, 0, Q(1, 3), 0, 0, Q(1, 3)],
+        ]
+    )
     assert same(printed, (A.T * A).inv() * A.T * B)
 
 
@@ -609,16 +610,19 @@ def test_G16_eq19_no_slip_matrix_three_entries():
     a, s3 = 2 * S3, S3
     R, r_, L = RR_, rr_, LL
     t3 = Q(1, 3)
-    printed = sp.Matrix([
-        [0, 2 * r_ / 3, 0, R / a, r_ / 6, L / a, -R / a, r_ / 6, -L / a],
-        [-2 * r_ / 3, 0, -2 * L / 3, -R / 6, r_ / a, -L / 6, -R / 6, -r_ / a, -L / 6],
-        [0, 0, -2 * t3, 0, 0, t3, 0, 0, t3],
-        [0, -r_ / 3, 0, -R / s3, -r_ / 3, -L / s3, -R / a, -r_ / 6, -L / a],
-        [R / 3, 0, L / 3, R / 3, -r_ / s3, L / 3, -R / 6, -r_ / a, -L / 6],
-        [0, 0, t3, 0, 0, -2 * t3, 0, 0, t3],
-        [0, -r_ / 3, 0, R / a, r_ / 6, L / a, R / s3, -r_ / 3, -L / s3],
-        [R / 3, 0, L / 3, -R / 6, r_ / a, -L / 6, R / 3, r_ / s3, L / 3],
-        [0, 0, t3, 0, 0, t3, 0, 0, -2 * t3]])
+    printed = sp.Matrix(
+        [
+            [0, 2 * r_ / 3, 0, R / a, r_ / 6, L / a, -R / a, r_ / 6, -L / a],
+            [-2 * r_ / 3, 0, -2 * L / 3, -R / 6, r_ / a, -L / 6, -R / 6, -r_ / a, -L / 6],
+            [0, 0, -2 * t3, 0, 0, t3, 0, 0, t3],
+            [0, -r_ / 3, 0, -R / s3, -r_ / 3, -L / s3, -R / a, -r_ / 6, -L / a],
+            [R / 3, 0, L / 3, R / 3, -r_ / s3, L / 3, -R / 6, -r_ / a, -L / 6],
+            [0, 0, t3, 0, 0, -2 * t3, 0, 0, t3],
+            [0, -r_ / 3, 0, R / a, r_ / 6, L / a, R / s3, -r_ / 3, -L / s3],
+            [R / 3, 0, L / 3, -R / 6, r_ / a, -L / 6, R / 3, r_ / s3, L / 3],
+            [0, 0, t3, 0, 0, t3, 0, 0, -2 * t3],
+        ]
+    )
     assert wrong_entries(printed, derived) == [(2, 1), (4, 8), (7, 9)]
     printed[1, 0], printed[3, 7], printed[6, 8] = -2 * R / 3, r_ / 6, L / s3
     assert same(printed, derived)
@@ -689,16 +693,18 @@ def test_G22_eq28_omega_signs():
 
 def garcia_eq29(corrected: bool):
     R, L = RR_, LL
-    return sp.Matrix([[0, R / S3, (-1 if corrected else 1) * R / S3],
-                      [2 * R / 3, -R / 3, -R / 3],
-                      [-R / (3 * L), -R / (3 * L), -R / (3 * L)]])
+    return sp.Matrix(
+        [
+            [0, R / S3, (-1 if corrected else 1) * R / S3],
+            [2 * R / 3, -R / 3, -R / 3],
+            [-R / (3 * L), -R / (3 * L), -R / (3 * L)],
+        ]
+    )
 
 
 def garcia_eq30():
     R, L = RR_, LL
-    return sp.Matrix([[0, 1 / R, -L / R],
-                      [S3 / (2 * R), -1 / (2 * R), -L / R],
-                      [-S3 / (2 * R), -1 / (2 * R), -L / R]])
+    return sp.Matrix([[0, 1 / R, -L / R], [S3 / (2 * R), -1 / (2 * R), -L / R], [-S3 / (2 * R), -1 / (2 * R), -L / R]])
 
 
 def test_G23_eq29_entry_1_3():
@@ -723,6 +729,7 @@ def test_G24_eq30_inverse_jacobian():
 # Villasenor et al. (seed 004)
 # ====================================================================================
 
+
 def test_V01_eq3_homogeneous_matrix_last_row():
     a, px, py, pz = sp.symbols("a p_x p_y p_z", real=True)
     rot = sp.Matrix([[cos(a), -sin(a), 0], [sin(a), cos(a), 0], [0, 0, 1]])
@@ -736,8 +743,9 @@ def test_V02_eq4_5_inverse_transform():
     a, dx_, dy_, dz_ = sp.symbols("a d_x d_y d_z", real=True)
     P = sp.Matrix([[cos(a), -sin(a), 0, dx_], [sin(a), cos(a), 0, dy_], [0, 0, 1, dz_], [0, 0, 0, 1]])  # eq 5
     n, o, aa, p = P[:3, 0], P[:3, 1], P[:3, 2], P[:3, 3]
-    inv4 = sp.Matrix([[n[0], n[1], n[2], -p.dot(n)], [o[0], o[1], o[2], -p.dot(o)],
-                      [aa[0], aa[1], aa[2], -p.dot(aa)], [0, 0, 0, 1]])  # eq 4
+    inv4 = sp.Matrix(
+        [[n[0], n[1], n[2], -p.dot(n)], [o[0], o[1], o[2], -p.dot(o)], [aa[0], aa[1], aa[2], -p.dot(aa)], [0, 0, 0, 1]]
+    )  # eq 4
     assert same(inv4 * P, sp.eye(4))
 
 
@@ -936,8 +944,12 @@ def mecanum_rim_speeds():
 
 
 def _burgard(v):
-    return {"v_y": (v[0] + v[1] + v[2] + v[3]) / 4, "v_x": (v[0] - v[1] + v[2] - v[3]) / 4,
-            "v_theta": (v[0] - v[1] - v[2] + v[3]) / 4, "v_error": (v[0] + v[1] - v[2] - v[3]) / 4}
+    return {
+        "v_y": (v[0] + v[1] + v[2] + v[3]) / 4,
+        "v_x": (v[0] - v[1] + v[2] - v[3]) / 4,
+        "v_theta": (v[0] - v[1] - v[2] + v[3]) / 4,
+        "v_error": (v[0] + v[1] - v[2] - v[3]) / 4,
+    }
 
 
 def test_B10_mecanum_relations_numbering_and_frame():
@@ -961,10 +973,13 @@ def test_B10_mecanum_relations_numbering_and_frame():
 
     def holds(order):
         bb = _burgard([rim[n] for n in order])
-        return any(sp.expand(bb["v_x"] - (M * sp.Matrix([vx, vy]))[0]) == 0
-                   and sp.expand(bb["v_y"] - (M * sp.Matrix([vx, vy]))[1]) == 0
-                   and sp.expand(bb["v_error"]) == 0
-                   and sp.expand(bb["v_theta"] ** 2 - ((a_ + b_) * w) ** 2) == 0 for M in frames)
+        return any(
+            sp.expand(bb["v_x"] - (M * sp.Matrix([vx, vy]))[0]) == 0
+            and sp.expand(bb["v_y"] - (M * sp.Matrix([vx, vy]))[1]) == 0
+            and sp.expand(bb["v_error"]) == 0
+            and sp.expand(bb["v_theta"] ** 2 - ((a_ + b_) * w) ** 2) == 0
+            for M in frames
+        )
 
     assert not holds(("FL", "FR", "RL", "RR"))
     assert holds(("RR", "RL", "FL", "FR"))

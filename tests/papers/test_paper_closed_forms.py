@@ -71,6 +71,7 @@ def twists(n=6):
 
 # ----------------------------------------------------------------------------- reference row
 
+
 def test_reference_swedish_rolling_and_roller_rows():
     """omnikin's Wheel.rolling_row / roller_row (conventions.md) against the 3-D no-slip."""
     d, g, x, y = sp.symbols("delta gamma x y", real=True)
@@ -117,9 +118,13 @@ def garcia_derived():
 
 def test_G24_garcia_preset_ik_matrix_is_eq30():
     J, _ = garcia_derived()
-    eq30 = sp.Matrix([[0, 1 / RR_, -LL / RR_],
-                      [S3 / (2 * RR_), -1 / (2 * RR_), -LL / RR_],
-                      [-S3 / (2 * RR_), -1 / (2 * RR_), -LL / RR_]])
+    eq30 = sp.Matrix(
+        [
+            [0, 1 / RR_, -LL / RR_],
+            [S3 / (2 * RR_), -1 / (2 * RR_), -LL / RR_],
+            [-S3 / (2 * RR_), -1 / (2 * RR_), -LL / RR_],
+        ]
+    )
     assert sp.simplify(J - eq30) == sp.zeros(3, 3)
     robot = load_robot("garcia-sillas-omni3")
     assert_close(robot.ik_matrix, np.array(J.subs(G_NUM), dtype=float))
@@ -130,8 +135,7 @@ def test_G24_garcia_preset_ik_matrix_is_eq30():
 def test_G23_garcia_preset_fk_matrix_is_corrected_eq29():
     J, _ = garcia_derived()
     F = J.inv().applyfunc(sp.simplify)
-    eq29_corrected = sp.Matrix([[0, RR_ / S3, -RR_ / S3], [2 * RR_ / 3, -RR_ / 3, -RR_ / 3],
-                                [-RR_ / (3 * LL)] * 3])
+    eq29_corrected = sp.Matrix([[0, RR_ / S3, -RR_ / S3], [2 * RR_ / 3, -RR_ / 3, -RR_ / 3], [-RR_ / (3 * LL)] * 3])
     assert sp.simplify(F - eq29_corrected) == sp.zeros(3, 3)
     robot = load_robot("garcia-sillas-omni3")
     assert_close(robot.fk_matrix(), np.array(F.subs(G_NUM), dtype=float))
@@ -145,8 +149,9 @@ def test_G17_garcia_roller_speeds_eq20_22():
     i.e. roller surface speed positive along x_i = omnikin's n = (-sin delta, cos delta))."""
     J, wr_rows = garcia_derived()
     wx = J * TWIST  # wheel speeds of the twist
-    printed = sp.Matrix([RR_ * (wx[2] - wx[1]) / (rr_ * S3), RR_ * (wx[0] - wx[2]) / (rr_ * S3),
-                         RR_ * (wx[1] - wx[0]) / (rr_ * S3)])
+    printed = sp.Matrix(
+        [RR_ * (wx[2] - wx[1]) / (rr_ * S3), RR_ * (wx[0] - wx[2]) / (rr_ * S3), RR_ * (wx[1] - wx[0]) / (rr_ * S3)]
+    )
     assert sp.simplify(printed - wr_rows) == sp.zeros(3, 1)
     robot = load_robot("garcia-sillas-omni3")
     f = sp.lambdify((vx, vy, w), wr_rows.subs(G_NUM), "numpy")
@@ -227,6 +232,7 @@ def test_T16_tomasi_preset_world_rate_ik_is_eq24():
 
 # ----------------------------------------------------------------------------- Burgard
 
+
 def _dd_derivation():
     V, om, ll, vl, vr = sp.symbols("V omega l v_l v_r", real=True)
     sub = {vx: V, vy: 0, w: om}
@@ -274,7 +280,7 @@ def test_B07_ackermann_preset_steering_matches_R_d_over_tan_phi():
     R_, om, dd, hh = sp.symbols("R omega d h", real=True)
     sub = {vx: om * R_, vy: 0, w: om}
     phis, speeds = [], []
-    for (px, py) in ((dd, hh), (dd, -hh)):
+    for px, py in ((dd, hh), (dd, -hh)):
         v = body_point_velocity((px, py)).subs(sub)
         phis.append(sp.atan(sp.cancel(v[1] / v[0])))
         speeds.append(sqrt(v[0] ** 2 + v[1] ** 2))
@@ -309,8 +315,12 @@ def test_B08_synchro_preset_parallel_steering():
 @lru_cache(None)
 def _mecanum_rim():
     a_, b_, R, rho = sp.symbols("a b R rho", positive=True)
-    layout = {"front_left": (a_, b_, -pi / 4), "front_right": (a_, -b_, pi / 4),
-              "rear_left": (-a_, b_, pi / 4), "rear_right": (-a_, -b_, -pi / 4)}
+    layout = {
+        "front_left": (a_, b_, -pi / 4),
+        "front_right": (a_, -b_, pi / 4),
+        "rear_left": (-a_, b_, pi / 4),
+        "rear_right": (-a_, -b_, -pi / 4),
+    }
     rim = {}
     for name, (x, y, g) in layout.items():
         ww, _ = swedish_no_slip(body_point_velocity((x, y)), 0, g, R, rho)
@@ -326,8 +336,12 @@ def test_B10_mecanum4_preset_matches_burgard_with_mapping():
     # Burgard's relations inverted (with v_error = 0) -> v0..v3
     bx, by, bth = sp.symbols("vB_x vB_y vB_theta", real=True)
     v = sp.symbols("v0:4", real=True)
-    rel = [(v[0] + v[1] + v[2] + v[3]) / 4 - by, (v[0] - v[1] + v[2] - v[3]) / 4 - bx,
-           (v[0] - v[1] - v[2] + v[3]) / 4 - bth, (v[0] + v[1] - v[2] - v[3]) / 4]
+    rel = [
+        (v[0] + v[1] + v[2] + v[3]) / 4 - by,
+        (v[0] - v[1] + v[2] - v[3]) / 4 - bx,
+        (v[0] - v[1] - v[2] + v[3]) / 4 - bth,
+        (v[0] + v[1] - v[2] - v[3]) / 4,
+    ]
     sol = sp.solve(rel, v, dict=True)[0]
     # these are the rim speeds of the twist (vx, vy, omega) = (vB_y, -vB_x, vB_theta / (a + b))
     tw = {vx: by, vy: -bx, w: bth / (a_ + b_)}
@@ -367,6 +381,7 @@ def test_B11_holonomy_matches_the_slides():
 
 
 # ----------------------------------------------------------------------------- Villasenor
+
 
 def test_V03_villasenor_preset_contact_points_are_eq6():
     robot = load_robot("villasenor-omni3")

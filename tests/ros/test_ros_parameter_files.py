@@ -22,13 +22,16 @@ def run_cli(capsys, *argv):
     return rc, out, err
 
 
-@pytest.mark.parametrize("content, fragment", [
-    (b"\xff\xfe", "not a UTF-8 text file"),
-    (b"omnikin_base: {ros__parameters: 5}\n", "ros__parameters must be a mapping"),
-    (b"publish_rate: 0.0\n", "publish_rate"),
-    (b"reject_above: -1.0\n", "reject_above"),
-    (b"bogus: 1\n", "unknown parameter 'bogus'"),
-])
+@pytest.mark.parametrize(
+    "content, fragment",
+    [
+        (b"\xff\xfe", "not a UTF-8 text file"),
+        (b"omnikin_base: {ros__parameters: 5}\n", "ros__parameters must be a mapping"),
+        (b"publish_rate: 0.0\n", "publish_rate"),
+        (b"reject_above: -1.0\n", "reject_above"),
+        (b"bogus: 1\n", "unknown parameter 'bogus'"),
+    ],
+)
 def test_ros_parameter_files_bad(tmp_path, content, fragment):
     from omnikin.ros.params import load_params
 

@@ -23,13 +23,13 @@ def test_halt_then_command_keeps_the_acceleration_limit():
     f = CommandFilter(load_robot("tomasi-omni3"), MotionLimits(linear=1.0, linear_accel=0.5), timeout=0.0)
     f.command((0.2, 0.0, 0.0), 0.0)
     for k in range(1, 100):
-        f.update(0.01 * k)                       # up to speed
-    f.halt()                                     # the link was lost at t = 0.99 and re-armed at 2.0
+        f.update(0.01 * k)  # up to speed
+    f.halt()  # the link was lost at t = 0.99 and re-armed at 2.0
     f.command((0.2, 0.0, 0.0), 2.0)
     first = f.update(2.0)
     second = f.update(2.01)
     assert first[0] == 0.0
-    assert second[0] == pytest.approx(0.5 * 0.01, abs=1e-12)     # a_max * dt, from rest
+    assert second[0] == pytest.approx(0.5 * 0.01, abs=1e-12)  # a_max * dt, from rest
 
 
 def test_replaced_limits_apply_to_the_current_command():

@@ -27,7 +27,7 @@ from omnikin.simulation.backend import SimBackend
 from omnikin.simulation.error_models import PROFILES, NoiseModel
 from omnikin.wheels import Encoder
 
-DT = 1.0 / 128.0          # a power of two: the time grid is exact in binary floating point
+DT = 1.0 / 128.0  # a power of two: the time grid is exact in binary floating point
 
 
 @pytest.fixture(scope="module")
@@ -65,7 +65,7 @@ def parallel(a, b, tol=1e-9):
 # --- CommandFilter: timeout ----------------------------------------------------------------------
 class TestTimeout:
     def test_timeout_brakes_to_zero_within_the_deceleration_limit(self, omni3):
-        v, a, timeout = 0.25, 0.5, 1.0          # v / a = 64 DT: the grid resolves the ramp exactly
+        v, a, timeout = 0.25, 0.5, 1.0  # v / a = 64 DT: the grid resolves the ramp exactly
         f = CommandFilter(omni3, MotionLimits(linear=0.3, linear_accel=a), timeout=timeout)
         f.update(0.0)
         assert f.command((v, 0.0, 0.0), 0.0)
@@ -104,7 +104,7 @@ class TestTimeout:
     def test_each_valid_command_restarts_the_timeout(self, omni3):
         f = CommandFilter(omni3, timeout=0.5)
         f.update(0.0)
-        for k in range(20):                      # 2 s of commands every 0.1 s
+        for k in range(20):  # 2 s of commands every 0.1 s
             t = 0.1 * k
             f.command((0.1, 0.0, 0.0), t)
             f.update(t)
@@ -153,12 +153,15 @@ class TestTimeout:
 
 # --- CommandFilter: acceleration limit ---------------------------------------------------------
 class TestAcceleration:
-    @pytest.mark.parametrize("start, target", [
-        ((0, 0, 0), (0.25, 0.1, 0.8)),
-        ((0.2, 0.0, 0.0), (-0.2, 0.1, 0.5)),
-        ((0.0, 0.0, 0.9), (0.05, 0.0, -0.9)),
-        ((0.1, -0.1, 0.0), (0.0, 0.0, 0.0)),
-    ])
+    @pytest.mark.parametrize(
+        "start, target",
+        [
+            ((0, 0, 0), (0.25, 0.1, 0.8)),
+            ((0.2, 0.0, 0.0), (-0.2, 0.1, 0.5)),
+            ((0.0, 0.0, 0.9), (0.05, 0.0, -0.9)),
+            ((0.1, -0.1, 0.0), (0.0, 0.0, 0.0)),
+        ],
+    )
     def test_the_change_keeps_its_direction_and_respects_both_limits(self, omni3, start, target):
         lim = MotionLimits(linear=0.3, angular=1.0, linear_accel=0.5, angular_accel=2.0)
         f = CommandFilter(omni3, lim, timeout=0.0)
@@ -208,8 +211,11 @@ class TestSaturation:
         f = CommandFilter(omni3, lim, timeout=0.0)
         out = self.settle(f, cmd)
         cmd = np.array(cmd)
-        k = min(1.0, 0.3 / math.hypot(cmd[0], cmd[1]) if cmd[:2].any() else math.inf,
-                1.0 / abs(cmd[2]) if cmd[2] else math.inf)
+        k = min(
+            1.0,
+            0.3 / math.hypot(cmd[0], cmd[1]) if cmd[:2].any() else math.inf,
+            1.0 / abs(cmd[2]) if cmd[2] else math.inf,
+        )
         assert out == pytest.approx(k * cmd, abs=1e-12)
         assert parallel(cmd, out)
         if cmd[:2].any():
@@ -229,13 +235,13 @@ class TestSaturation:
         f = CommandFilter(omni3, lim, timeout=0.0)
         out = self.settle(f, cmd)
         speeds = np.abs(omni3.ik(out).wheel_speeds)
-        assert speeds.max() == pytest.approx(3.0, rel=1e-9)        # the binding limit is reached ...
-        assert np.all(speeds <= 3.0 * (1 + 1e-12))                  # ... and never exceeded
+        assert speeds.max() == pytest.approx(3.0, rel=1e-9)  # the binding limit is reached ...
+        assert np.all(speeds <= 3.0 * (1 + 1e-12))  # ... and never exceeded
         assert parallel(cmd, out)
 
     def test_respects_each_wheels_max_speed_from_the_robot_file(self, omni3):
         wheels = list(omni3.wheels)
-        wheels[1] = replace(wheels[1], max_speed=2.0)               # one slow wheel
+        wheels[1] = replace(wheels[1], max_speed=2.0)  # one slow wheel
         robot = replace(omni3, wheels=tuple(wheels))
         lim = MotionLimits(linear=10.0, angular=10.0, wheel=4.0)
         f = CommandFilter(robot, lim, timeout=0.0)
@@ -258,10 +264,21 @@ class TestSaturation:
 
 # --- CommandFilter: malformed commands ----------------------------------------------------------
 class TestValidation:
-    @pytest.mark.parametrize("bad", [
-        (math.nan, 0.0, 0.0), (0.0, math.inf, 0.0), (0.0, 0.0, -math.inf), (1e9, 0.0, 0.0),
-        (0.0, -1e9, 0.0), (0.0, 0.0, 1e9), (31.0, 0.0, 0.0), "fast", (0.1, 0.2), None,
-    ])
+    @pytest.mark.parametrize(
+        "bad",
+        [
+            (math.nan, 0.0, 0.0),
+            (0.0, math.inf, 0.0),
+            (0.0, 0.0, -math.inf),
+            (1e9, 0.0, 0.0),
+            (0.0, -1e9, 0.0),
+            (0.0, 0.0, 1e9),
+            (31.0, 0.0, 0.0),
+            "fast",
+            (0.1, 0.2),
+            None,
+        ],
+    )
     def test_rejected_counted_and_the_previous_target_kept(self, omni3, bad):
         f = CommandFilter(omni3, MotionLimits(linear=0.3, angular=1.0), timeout=0.0)
         f.update(0.0)
@@ -301,7 +318,7 @@ class TestValidation:
     @pytest.mark.parametrize("cmd", [(0.1, 0.0, 1.0), (0.0, 0.0, 0.5), (-0.1, 0.0, 0.8)])
     def test_ackermann_steering_beyond_limits_is_rejected(self, ackermann, cmd):
         f = CommandFilter(ackermann, MotionLimits(), timeout=0.0)
-        assert f.command((0.2, 0.0, 0.1), 0.0)                # R = 2 m: about 17 deg, feasible
+        assert f.command((0.2, 0.0, 0.1), 0.0)  # R = 2 m: about 17 deg, feasible
         assert f.command(cmd, 0.1) is False
         assert f.stats.rejected == 1
         assert "steering" in f.stats.last_reject_reason
@@ -317,13 +334,24 @@ class TestValidation:
 
 # --- BaseRuntime with SimBackend -------------------------------------------------------------------
 SQUARE_AND_ARCS = [
-    ((0.2, 0.0, 0.0), 3.0), ((0.0, 0.0, 0.0), 0.6), ((0.0, 0.0, 0.8), 2.0), ((0.0, 0.0, 0.0), 0.8),
-    ((0.2, 0.0, 0.0), 3.0), ((0.0, 0.0, -0.8), 2.0), ((0.15, 0.0, 0.4), 3.0), ((0.2, 0.0, -0.6), 2.5),
+    ((0.2, 0.0, 0.0), 3.0),
+    ((0.0, 0.0, 0.0), 0.6),
+    ((0.0, 0.0, 0.8), 2.0),
+    ((0.0, 0.0, 0.0), 0.8),
+    ((0.2, 0.0, 0.0), 3.0),
+    ((0.0, 0.0, -0.8), 2.0),
+    ((0.15, 0.0, 0.4), 3.0),
+    ((0.2, 0.0, -0.6), 2.5),
     ((0.0, 0.0, 0.0), 1.0),
 ]
 HOLONOMIC = [((0.0, 0.2, 0.0), 2.0), ((0.15, -0.15, 0.3), 2.0), ((0.0, 0.0, 0.0), 1.0)]
-ACKERMANN = [((0.2, 0.0, 0.0), 2.0), ((0.25, 0.0, 0.15), 3.0), ((0.2, 0.0, -0.1), 3.0), ((0.1, 0.0, 0.0), 1.0),
-             ((0.0, 0.0, 0.0), 1.0)]
+ACKERMANN = [
+    ((0.2, 0.0, 0.0), 2.0),
+    ((0.25, 0.0, 0.15), 3.0),
+    ((0.2, 0.0, -0.1), 3.0),
+    ((0.1, 0.0, 0.0), 1.0),
+    ((0.0, 0.0, 0.0), 1.0),
+]
 
 
 def drive(runtime: BaseRuntime, script, dt: float = 0.04, t0: float = 0.0, every=None):
@@ -349,7 +377,7 @@ VILLASENOR = [((0.2, 0.0, 0.0), 2.0), ((0.0, 0.15, 0.0), 2.0), ((0.15, 0.1, 0.1)
 
 
 def script_for(robot):
-    if robot.name == "villasenor-omni3":          # legs trail more than their distance: no turn in place
+    if robot.name == "villasenor-omni3":  # legs trail more than their distance: no turn in place
         return VILLASENOR
     if robot.steerable and robot.fixed:
         return ACKERMANN
@@ -358,8 +386,17 @@ def script_for(robot):
     return SQUARE_AND_ARCS
 
 
-ENCODED_PRESETS = ["tomasi-omni3", "garcia-sillas-omni3", "villasenor-omni3", "diff-drive", "omni4", "mecanum4",
-                   "ackermann", "synchro", "xr4000"]
+ENCODED_PRESETS = [
+    "tomasi-omni3",
+    "garcia-sillas-omni3",
+    "villasenor-omni3",
+    "diff-drive",
+    "omni4",
+    "mecanum4",
+    "ackermann",
+    "synchro",
+    "xr4000",
+]
 
 
 class TestPerfectKnowledge:
@@ -376,7 +413,7 @@ class TestPerfectKnowledge:
 
         drive(rt, script_for(robot), every=check)
         travelled = np.abs(backend.truth[:2]).max() + abs(backend.truth[2])
-        assert travelled > 0.3                           # the script did move the robot
+        assert travelled > 0.3  # the script did move the robot
         assert worst[0] < 1e-9, f"{name}: odometry left the truth by {worst[0]:.3g}"
 
     def test_wheel_commands_are_the_inverse_kinematics_of_the_filtered_twist(self, omni3):
@@ -418,7 +455,7 @@ class TestSystematicErrors:
         errors = np.array(errors)
         assert errors[-1, :2].max() > 1e-4 or errors[-1, 2] > 1e-4
         # the drift grows along the run
-        assert errors[len(errors) // 4:].max() > 3 * errors[: len(errors) // 10].max()
+        assert errors[len(errors) // 4 :].max() > 3 * errors[: len(errors) // 10].max()
 
 
 # --- covariance ---------------------------------------------------------------------------------------
@@ -464,21 +501,22 @@ class TestCovariance:
         t = drive(rt, [((0.2, 0.0, 0.3), 3.0), ((0.0, 0.0, 0.0), 1.0)], dt=0.02)
         moving = rt.pose_covariance.copy()
         assert np.trace(moving) > 0
-        t = drive(rt, [((0.0, 0.0, 0.0), 20.0)], t0=t, dt=0.02)      # 20 s standing still at 50 Hz
+        t = drive(rt, [((0.0, 0.0, 0.0), 20.0)], t0=t, dt=0.02)  # 20 s standing still at 50 Hz
         still = rt.pose_covariance
         growth = np.sqrt(np.diag(still)) - np.sqrt(np.diag(moving))
         assert np.all(growth <= 1e-3 * np.sqrt(np.diag(moving))), (
-            f"standing still for 20 s grew the pose sigma from {np.sqrt(np.diag(moving))} "
-            f"to {np.sqrt(np.diag(still))}")
+            f"standing still for 20 s grew the pose sigma from {np.sqrt(np.diag(moving))} to {np.sqrt(np.diag(still))}"
+        )
 
     def test_does_not_depend_on_the_sample_rate(self, omni3):
         """Slip is distance-proportional: the same drive sampled at 20 Hz and 100 Hz, same covariance."""
         covs = []
         for dt in (0.05, 0.01):
             backend = SimBackend(omni3, noise=NoiseModel(quantise=False))
-            rt = BaseRuntime(omni3, backend, cmd_vel_timeout=0.0,
-                             limits=MotionLimits(linear_accel=None, angular_accel=None))
-            rt.step(drive(rt, [((0.2, 0.0, 0.0), 5.0), ((0.0, 0.2, 0.5), 5.0)], dt=dt))   # up to t = 10 s
+            rt = BaseRuntime(
+                omni3, backend, cmd_vel_timeout=0.0, limits=MotionLimits(linear_accel=None, angular_accel=None)
+            )
+            rt.step(drive(rt, [((0.2, 0.0, 0.0), 5.0), ((0.0, 0.2, 0.5), 5.0)], dt=dt))  # up to t = 10 s
             covs.append(rt.pose_covariance)
         sig = [np.sqrt(np.diag(c)) for c in covs]
         assert sig[1] == pytest.approx(sig[0], rel=0.1), f"sigma at 20 Hz {sig[0]}, at 100 Hz {sig[1]}"
@@ -487,9 +525,13 @@ class TestCovariance:
         robot = fine_encoders(omni3)
         covs = []
         for dt in (0.05, 0.01):
-            rt = BaseRuntime(robot, SimBackend(robot), cmd_vel_timeout=0.0,
-                             limits=MotionLimits(linear_accel=None, angular_accel=None))
-            rt.step(drive(rt, [((0.2, 0.0, 0.0), 5.0), ((0.0, 0.2, 0.5), 5.0)], dt=dt))   # up to t = 10 s
+            rt = BaseRuntime(
+                robot,
+                SimBackend(robot),
+                cmd_vel_timeout=0.0,
+                limits=MotionLimits(linear_accel=None, angular_accel=None),
+            )
+            rt.step(drive(rt, [((0.2, 0.0, 0.0), 5.0), ((0.0, 0.2, 0.5), 5.0)], dt=dt))  # up to t = 10 s
             covs.append(rt.pose_covariance)
         assert covs[1] == pytest.approx(covs[0], rel=0.02, abs=1e-3 * np.abs(covs[0]).max())
 
@@ -508,12 +550,21 @@ class TestCovariance:
         rt2 = BaseRuntime(robot, SimBackend(robot), cmd_vel_timeout=0.0)
         drive(rt2, [((0.2, 0.0, 0.0), 1.0)], dt=0.04, every=r2.append)
         # constant speed: Sigma_xi ~ distance ~ dt, so Sigma_twist ~ 1/dt
-        assert np.trace(r2[-1].twist_covariance) == pytest.approx(0.5 * np.trace(res[-1].twist_covariance),
-                                                                  rel=1e-6)
+        assert np.trace(r2[-1].twist_covariance) == pytest.approx(0.5 * np.trace(res[-1].twist_covariance), rel=1e-6)
 
     @pytest.mark.parametrize("theta", [0.0, 0.7, -2.9, math.pi / 2])
-    @pytest.mark.parametrize("inc", [(0.01, 0.0, 0.0), (0.02, -0.01, 0.3), (-0.05, 0.03, -1.2),
-                                     (0.0, 0.0, 0.0), (0.01, 0.004, 1e-7), (0.3, 0.1, 2.5), (0.0, 0.0, 2e-4)])
+    @pytest.mark.parametrize(
+        "inc",
+        [
+            (0.01, 0.0, 0.0),
+            (0.02, -0.01, 0.3),
+            (-0.05, 0.03, -1.2),
+            (0.0, 0.0, 0.0),
+            (0.01, 0.004, 1e-7),
+            (0.3, 0.1, 2.5),
+            (0.0, 0.0, 2e-4),
+        ],
+    )
     def test_jacobians_match_finite_differences_of_the_exact_update(self, theta, inc):
         inc = np.array(inc, dtype=float)
         x0 = np.array([0.3, -1.2, theta])
@@ -521,7 +572,7 @@ class TestCovariance:
 
         def update(x, xi):
             out = compose(x, exp(xi))
-            out[2] = x[2] + xi[2]                 # unwrapped heading: a smooth function
+            out[2] = x[2] + xi[2]  # unwrapped heading: a smooth function
             return out
 
         h = 1e-6
@@ -536,7 +587,7 @@ class TestCovariance:
 
     def test_jacobians_are_continuous_across_the_small_angle_branch(self):
         inc = np.array([0.02, -0.01, 0.0])
-        for phi in (1.999e-4, 2.001e-4):            # the branch at |phi / 2| = 1e-4
+        for phi in (1.999e-4, 2.001e-4):  # the branch at |phi / 2| = 1e-4
             inc[2] = phi
             a1, b1 = _jacobians(0.4, inc)
             inc2 = inc.copy()
@@ -546,15 +597,18 @@ class TestCovariance:
 
 
 class TestMonteCarlo:
-    SLIP = 5e-3          # sqrt(m): large, so that 400 trials resolve it; linear regime still
+    SLIP = 5e-3  # sqrt(m): large, so that 400 trials resolve it; linear regime still
     SCRIPT = (((0.2, 0.0, 0.0), 2.0), ((0.1, 0.1, 0.6), 2.0), ((0.0, 0.2, -0.4), 2.0), ((0.0, 0.0, 0.0), 0.4))
-    DT = 0.2             # the propagation is exact in the step count: coarse steps, fast trials
+    DT = 0.2  # the propagation is exact in the step count: coarse steps, fast trials
 
     @pytest.mark.parametrize("name, trials", [("tomasi-omni3", 400), ("diff-drive", 300)])
     def test_propagated_covariance_matches_the_sample_covariance(self, name, trials):
         robot = fine_encoders(load_robot(name))
-        script = self.SCRIPT if robot.mobility.holonomic else [
-            ((0.2, 0.0, 0.0), 2.0), ((0.15, 0.0, 0.6), 2.0), ((0.2, 0.0, -0.4), 2.0), ((0.0, 0.0, 0.0), 0.4)]
+        script = (
+            self.SCRIPT
+            if robot.mobility.holonomic
+            else [((0.2, 0.0, 0.0), 2.0), ((0.15, 0.0, 0.6), 2.0), ((0.2, 0.0, -0.4), 2.0), ((0.0, 0.0, 0.0), 0.4)]
+        )
         # one run of the runtime: the commands and the propagated covariance (slip does not
         # reach the encoder readings of SimBackend, so the odometry is the same in every trial)
         backend = SimBackend(robot, noise=NoiseModel(slip=self.SLIP, quantise=False), rng=0)
@@ -602,7 +656,7 @@ class TestResidual:
         rt = BaseRuntime(robot, backend, cmd_vel_timeout=0.0)
         out = []
         drive(rt, SQUARE_AND_ARCS, every=out.append)
-        assert np.abs(pose_error(rt.pose, backend.truth)).max() > 1e-3      # slip did happen
+        assert np.abs(pose_error(rt.pose, backend.truth)).max() > 1e-3  # slip did happen
         assert max(np.linalg.norm(r.residual) for r in out) < 1e-9
 
     def test_a_wheel_that_spins_out_shows_in_the_residual(self):
@@ -660,7 +714,7 @@ def test_covariance_uses_the_circular_mean_of_the_steering_across_pi():
     angle is pi; the arithmetic mean, 0, points the wheel the other way). The same motion
     reported without the wrap (pi - 0.01 to pi + 0.01) must give the same pose and covariance."""
     robot = load_robot("synchro")
-    d = np.array([0.4, 0.1, -0.2])                           # wheel angle increments [rad]
+    d = np.array([0.4, 0.1, -0.2])  # wheel angle increments [rad]
     s0 = np.array([math.pi - 0.01, 0.3, -0.2])
     results = []
     for w1_end in (-math.pi + 0.01, math.pi + 0.01):
@@ -672,7 +726,7 @@ def test_covariance_uses_the_circular_mean_of_the_steering_across_pi():
     (pose_a, p_a, t_a), (pose_b, p_b, t_b) = results
     mid = np.array([math.pi, 0.3, -0.2])
     inc = robot.fk_matrix(mid, rt.encoded)[:, :3] @ d
-    assert pose_a == pytest.approx(exp(inc), abs=1e-12)      # the odometry uses the circular mean
+    assert pose_a == pytest.approx(exp(inc), abs=1e-12)  # the odometry uses the circular mean
     assert pose_b == pytest.approx(exp(inc), abs=1e-12)
     assert np.abs(p_a).max() > 0
     assert p_a == pytest.approx(p_b, rel=1e-9, abs=1e-18), "pose covariance depends on how the steering wraps"

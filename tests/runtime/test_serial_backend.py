@@ -31,16 +31,38 @@ TWO_PI = 2 * math.pi
 
 def robot_mixed():
     """Three omni wheels with different encoders (one inverted, one geared) and a passive castor."""
-    return robot_from_dict({
-        "omnikin": 1, "name": "serial-test",
-        "wheels": [
-            {"name": "a", "type": "omni", "distance": 0.1, "angle_deg": 0, "radius": 0.03,
-             "encoder": {"ticks_per_rev": 600}},
-            {"name": "b", "type": "omni", "distance": 0.1, "angle_deg": 120, "radius": 0.03,
-             "encoder": {"ticks_per_rev": 1000, "gear_ratio": 2.5}},
-            {"name": "c", "type": "omni", "distance": 0.1, "angle_deg": 240, "radius": 0.03,
-             "encoder": {"ticks_per_rev": 600, "invert": True}},
-        ]})
+    return robot_from_dict(
+        {
+            "omnikin": 1,
+            "name": "serial-test",
+            "wheels": [
+                {
+                    "name": "a",
+                    "type": "omni",
+                    "distance": 0.1,
+                    "angle_deg": 0,
+                    "radius": 0.03,
+                    "encoder": {"ticks_per_rev": 600},
+                },
+                {
+                    "name": "b",
+                    "type": "omni",
+                    "distance": 0.1,
+                    "angle_deg": 120,
+                    "radius": 0.03,
+                    "encoder": {"ticks_per_rev": 1000, "gear_ratio": 2.5},
+                },
+                {
+                    "name": "c",
+                    "type": "omni",
+                    "distance": 0.1,
+                    "angle_deg": 240,
+                    "radius": 0.03,
+                    "encoder": {"ticks_per_rev": 600, "invert": True},
+                },
+            ],
+        }
+    )
 
 
 def poll(backend, until, timeout=2.0, speeds=None):
@@ -84,8 +106,7 @@ def rig(tomasi):
 def test_speeds_commanded_arrive_and_heartbeats_flow(rig):
     fake, backend = rig
     speeds = np.array([1.0, -2.5, 0.1234])
-    poll(backend, lambda s: all(math.isclose(fake.speed(i), speeds[i], abs_tol=1e-12) for i in range(3)),
-         speeds=speeds)
+    poll(backend, lambda s: all(math.isclose(fake.speed(i), speeds[i], abs_tol=1e-12) for i in range(3)), speeds=speeds)
     state = poll(backend, lambda s: np.allclose(s.velocities, speeds), speeds=speeds)
     assert state.steer is None and state.positions.shape == (3,)
     t0 = time.monotonic()
@@ -104,21 +125,21 @@ def test_counts_become_angles_with_each_encoder():
     with FakeController.for_robot(robot, report_period=REPORT) as fake:
         with SerialBackend(robot, fake.path, link_timeout=LINK_TIMEOUT) as backend:
             backend.wait_ready(2.0)
-            fake.advance(0, 600)          # one turn of a
-            fake.advance(1, 1000 * 2.5)   # one turn of b (geared)
-            fake.advance(2, 300)          # half a turn of c, counting backwards (invert)
+            fake.advance(0, 600)  # one turn of a
+            fake.advance(1, 1000 * 2.5)  # one turn of b (geared)
+            fake.advance(2, 300)  # half a turn of c, counting backwards (invert)
             state = poll(backend, lambda s: np.allclose(s.positions, [TWO_PI, TWO_PI, -math.pi], atol=1e-12))
             assert np.allclose(state.positions, [TWO_PI, TWO_PI, -math.pi], rtol=0, atol=1e-12)
 
 
 def test_counter_wrap_around(tomasi):
-    top = 2 ** 31 - 1
-    starts = {"w1": top - 100, "w2": -2 ** 31 + 50, "w3": 0}
+    top = 2**31 - 1
+    starts = {"w1": top - 100, "w2": -(2**31) + 50, "w3": 0}
     with FakeController.for_robot(tomasi, start_counts=starts, report_period=REPORT) as fake:
         with SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT) as backend:
             backend.wait_ready(2.0)
-            fake.advance(0, 600)           # crosses +2**31 -> -2**31
-            fake.advance(1, -600)          # crosses -2**31 -> +2**31 - 1 going back
+            fake.advance(0, 600)  # crosses +2**31 -> -2**31
+            fake.advance(1, -600)  # crosses -2**31 -> +2**31 - 1 going back
             poll(backend, lambda s: np.allclose(s.positions, [TWO_PI, -TWO_PI, 0.0], atol=1e-12))
             # and while turning: 15 rad/s for a while, then stop; the angle is exactly the count moved
             speeds = np.array([15.0, -15.0, 0.0])
@@ -128,7 +149,7 @@ def test_counter_wrap_around(tomasi):
             poll(backend, lambda s: fake.speed(0) == 0.0 and fake.speed(1) == 0.0, speeds=zero)
             time.sleep(3 * REPORT)
             expected = [(fake.ticks(i) - (starts[n])) * TWO_PI / 600 for i, n in enumerate(("w1", "w2", "w3"))]
-            assert fake.ticks(0) > top and fake.ticks(1) < -2 ** 31      # the 32-bit counters did wrap
+            assert fake.ticks(0) > top and fake.ticks(1) < -(2**31)  # the 32-bit counters did wrap
             state = poll(backend, lambda s: np.allclose(s.positions, expected, atol=1e-12), speeds=zero)
             assert state.positions[0] > TWO_PI + 1.0 and state.positions[1] < -TWO_PI - 1.0
 
@@ -137,8 +158,8 @@ def test_controller_reset_keeps_the_angle(rig):
     fake, backend = rig
     fake.advance(0, 150)
     poll(backend, lambda s: math.isclose(s.positions[0], math.pi / 2, abs_tol=1e-12))
-    resets = backend.stats()["resets"]   # the start-up RESETs arrive or not, depending on when the port opened
-    fake.simulate_reset(0)          # counter back to 0, sequence numbers from 0, RESET report first
+    resets = backend.stats()["resets"]  # the start-up RESETs arrive or not, depending on when the port opened
+    fake.simulate_reset(0)  # counter back to 0, sequence numbers from 0, RESET report first
     wait_for(lambda: fake.faults_pending == 0)
     # the RESET, then two rounds of reports (count 0 for this wheel) reach the back-end before the
     # wheel moves again: waited for, not slept for
@@ -152,15 +173,18 @@ def test_controller_reset_keeps_the_angle(rig):
     assert s["out_of_order"] == 0 and state.positions[0] == pytest.approx(math.pi)
 
 
-@pytest.mark.parametrize("fault, n, counters, counted", [
-    # the fake damages the next n frames it sends, back to back: one garbled stretch of bytes
-    ("corrupt", 3, ("corrupt",), 1),
-    ("short", 2, ("short", "corrupt"), 1),   # short or corrupt: depends on the lengths of the two cut frames
-    ("out_of_order", 2, ("out_of_order",), 2),
-    ("duplicate", 2, ("duplicates",), 2),
-    ("bad_version", 1, ("bad_version",), 1),
-    ("unknown_type", 1, ("unknown_type",), 1),
-])
+@pytest.mark.parametrize(
+    "fault, n, counters, counted",
+    [
+        # the fake damages the next n frames it sends, back to back: one garbled stretch of bytes
+        ("corrupt", 3, ("corrupt",), 1),
+        ("short", 2, ("short", "corrupt"), 1),  # short or corrupt: depends on the lengths of the two cut frames
+        ("out_of_order", 2, ("out_of_order",), 2),
+        ("duplicate", 2, ("duplicates",), 2),
+        ("bad_version", 1, ("bad_version",), 1),
+        ("unknown_type", 1, ("unknown_type",), 1),
+    ],
+)
 def test_bad_frames_are_counted_and_the_link_survives(rig, fault, n, counters, counted):
     fake, backend = rig
     before = backend.stats()
@@ -210,7 +234,7 @@ def test_silent_controller_loses_the_link_and_stops_the_wheels(rig):
     # the back-end's own account: silent for just over link_timeout (one poll late at most);
     # against the test's clock only loosely, as the last frame may have left early under load
     silent = float(re.search(r"sent no valid frame for ([0-9.]+) s", str(info.value)).group(1))
-    assert LINK_TIMEOUT - 0.0005 <= silent <= LINK_TIMEOUT + 0.2, str(info.value)    # printed to 1 ms
+    assert LINK_TIMEOUT - 0.0005 <= silent <= LINK_TIMEOUT + 0.2, str(info.value)  # printed to 1 ms
     assert LINK_TIMEOUT - 0.1 <= detected <= LINK_TIMEOUT + 0.5
     err = info.value
     assert isinstance(err, OmnikinError)
@@ -278,9 +302,11 @@ def test_controller_that_never_answers(tomasi):
 
 
 def test_one_port_per_wheel_and_misrouted_frames(tomasi):
-    fakes = [FakeController([FakeWheel(0, 600 / TWO_PI), FakeWheel(1, 600 / TWO_PI)], report_period=REPORT),
-             FakeController([FakeWheel(1, 600 / TWO_PI)], report_period=REPORT),
-             FakeController([FakeWheel(2, 600 / TWO_PI)], report_period=REPORT)]
+    fakes = [
+        FakeController([FakeWheel(0, 600 / TWO_PI), FakeWheel(1, 600 / TWO_PI)], report_period=REPORT),
+        FakeController([FakeWheel(1, 600 / TWO_PI)], report_period=REPORT),
+        FakeController([FakeWheel(2, 600 / TWO_PI)], report_period=REPORT),
+    ]
     for f in fakes:
         f.start()
     try:
@@ -288,14 +314,17 @@ def test_one_port_per_wheel_and_misrouted_frames(tomasi):
             backend.wait_ready(2.0)
             speeds = np.array([1.0, 2.0, 3.0])
             poll(backend, lambda s: [f.speed(i) for i, f in enumerate(fakes)] == [1.0, 2.0, 3.0], speeds=speeds)
-            assert fakes[0].speed(1) == 0.0            # wheel 1's commands go to its own port only
+            assert fakes[0].speed(1) == 0.0  # wheel 1's commands go to its own port only
             zero = np.zeros(3)
             poll(backend, lambda s: all(f.speed(i) == 0.0 for f, i in zip(fakes, range(3), strict=True)), speeds=zero)
             # wheel 1 stopped: wait until the back-end has its final count, not a fixed time
-            rest = poll(backend, lambda s: math.isclose(s.positions[1], fakes[1].ticks(1) * TWO_PI / 600,
-                                                        abs_tol=1e-12), speeds=zero)
+            rest = poll(
+                backend,
+                lambda s: math.isclose(s.positions[1], fakes[1].ticks(1) * TWO_PI / 600, abs_tol=1e-12),
+                speeds=zero,
+            )
             start = rest.positions[1]
-            fakes[0].advance(1, 600)                   # a wheel-1 controller on wheel 0's port: ignored
+            fakes[0].advance(1, 600)  # a wheel-1 controller on wheel 0's port: ignored
             fakes[1].advance(1, 300)
             poll(backend, lambda s: math.isclose(s.positions[1] - start, math.pi, abs_tol=1e-9), speeds=zero)
             time.sleep(3 * REPORT)
@@ -348,8 +377,9 @@ def test_fake_controller_stops_when_the_host_goes_quiet(tomasi):
             # the host stops calling: no commands, no heartbeats
             wait_for(lambda: not fake.link_ok(0), timeout=1.0)
             assert fake.speed(0) == 0.0 and fake.link_lost_events(0) == 1
-            poll(backend, lambda s: "LINK_LOST" in backend.stats()["last_error"] and s.velocities[0] == 0.0,
-                 timeout=1.0)       # reported by the controller, and its reports show the wheel stopped
+            poll(
+                backend, lambda s: "LINK_LOST" in backend.stats()["last_error"] and s.velocities[0] == 0.0, timeout=1.0
+            )  # reported by the controller, and its reports show the wheel stopped
 
 
 def test_runtime_drives_the_fake_robot(tomasi):
@@ -390,6 +420,9 @@ def test_protocol_timing_is_the_default(tomasi):
     with FakeController.for_robot(tomasi) as fake:
         with SerialBackend(tomasi, fake.path) as backend:
             t = load_protocol().timing
-            assert (backend.link_timeout, backend.connect_timeout, backend.heartbeat_period) == \
-                (t.link_timeout, t.connect_timeout, t.heartbeat_period)
+            assert (backend.link_timeout, backend.connect_timeout, backend.heartbeat_period) == (
+                t.link_timeout,
+                t.connect_timeout,
+                t.heartbeat_period,
+            )
             assert backend.baud == 115200

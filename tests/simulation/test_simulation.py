@@ -24,7 +24,7 @@ from omnikin.simulation.simulate import simulate
 TOMASI_L, TOMASI_R = 0.113, 0.04125
 TOMASI_BETAS = np.radians([0.0, 120.0, 240.0])
 DIFF_TRACK, DIFF_R = 0.33, 0.0825
-EXACT = NoiseModel(quantise=False)          # no random error at all, ticks not rounded
+EXACT = NoiseModel(quantise=False)  # no random error at all, ticks not rounded
 ROBOTS = ("tomasi-omni3", "diff-drive", "mecanum4")
 
 
@@ -38,8 +38,9 @@ def twist_motion(xi, s):
     vx, vy, w = (float(v) * s for v in xi)
     if w == 0.0:
         return np.array([vx, vy, 0.0])
-    return np.array([(vx * math.sin(w) - vy * (1 - math.cos(w))) / w,
-                     (vx * (1 - math.cos(w)) + vy * math.sin(w)) / w, w])
+    return np.array(
+        [(vx * math.sin(w) - vy * (1 - math.cos(w))) / w, (vx * (1 - math.cos(w)) + vy * math.sin(w)) / w, w]
+    )
 
 
 def comp(a, b):
@@ -62,8 +63,8 @@ def integrate_increments(inc):
     a, b, phi = inc[:, 0], inc[:, 1], inc[:, 2]
     small = np.abs(phi) < 1e-6
     ps = np.where(small, 1.0, phi)
-    s_over = np.where(small, 1 - phi ** 2 / 6, np.sin(ps) / ps)
-    c_over = np.where(small, phi / 2 - phi ** 3 / 24, (1 - np.cos(ps)) / ps)
+    s_over = np.where(small, 1 - phi**2 / 6, np.sin(ps) / ps)
+    c_over = np.where(small, phi / 2 - phi**3 / 24, (1 - np.cos(ps)) / ps)
     lx, ly = s_over * a - c_over * b, c_over * a + s_over * b
     heading = np.concatenate([[0.0], np.cumsum(phi)])
     h0 = heading[:-1]
@@ -73,8 +74,10 @@ def integrate_increments(inc):
 
 def tomasi_wheel_speeds(t):
     t = np.asarray(t, dtype=float)
-    return np.stack([(-math.sin(b) * t[..., 0] + math.cos(b) * t[..., 1] + TOMASI_L * t[..., 2]) / TOMASI_R
-                     for b in TOMASI_BETAS], axis=-1)
+    return np.stack(
+        [(-math.sin(b) * t[..., 0] + math.cos(b) * t[..., 1] + TOMASI_L * t[..., 2]) / TOMASI_R for b in TOMASI_BETAS],
+        axis=-1,
+    )
 
 
 def assert_pose(got, expected, tol):
@@ -92,9 +95,11 @@ def robots():
 def tomasi_limited(tmp_path_factory):
     """tomasi-omni3 with a wheel max_speed that binds for 0.3 m/s translations and 1 rad/s spins."""
     path = tmp_path_factory.mktemp("robots") / "tomasi-limited.yaml"
-    wheels = "\n".join(f"  - {{name: w{i + 1}, type: omni, distance: {TOMASI_L}, angle_deg: {a}, radius: {TOMASI_R}, "
-                       f"encoder: {{ticks_per_rev: 600}}, max_speed: {ms}}}"
-                       for i, (a, ms) in enumerate(zip((0, 120, 240), (4.0, 4.5, 2.5), strict=True)))
+    wheels = "\n".join(
+        f"  - {{name: w{i + 1}, type: omni, distance: {TOMASI_L}, angle_deg: {a}, radius: {TOMASI_R}, "
+        f"encoder: {{ticks_per_rev: 600}}, max_speed: {ms}}}"
+        for i, (a, ms) in enumerate(zip((0, 120, 240), (4.0, 4.5, 2.5), strict=True))
+    )
     path.write_text(f"omnikin: 1\nname: tomasi-limited\nwheels:\n{wheels}\n", encoding="utf-8")
     return load_robot(path)
 
@@ -136,8 +141,9 @@ def test_umbmark_square_side_scales():
         np.testing.assert_allclose(poses, np.array(CORNERS[direction]) * 2.5 / 4, atol=1e-12)
 
 
-@pytest.mark.parametrize("bad", [dict(direction="left"), dict(mode="slide"), dict(side=0.0), dict(side=-4.0),
-                                 dict(side=float("nan"))])
+@pytest.mark.parametrize(
+    "bad", [dict(direction="left"), dict(mode="slide"), dict(side=0.0), dict(side=-4.0), dict(side=float("nan"))]
+)
 def test_umbmark_square_bad_arguments(bad):
     with pytest.raises(OmnikinError):
         umbmark_square(**{"direction": "cw", "side": 4.0, "mode": "rotate", **bad})
@@ -173,8 +179,16 @@ def test_end_pose_matches_segment_composition():
 
 
 # --- sampling under limits -----------------------------------------------------------------------------
-MIXED = (umbmark_square("ccw", 4.0, "translate") + umbmark_square("cw", 2.0, "rotate") + arc(1.0, 1.0)
-         + spin(-2.0) + line(0.5, 0.7) + arc(0.7, -2.0) + line(0.003) + spin(0.001))
+MIXED = (
+    umbmark_square("ccw", 4.0, "translate")
+    + umbmark_square("cw", 2.0, "rotate")
+    + arc(1.0, 1.0)
+    + spin(-2.0)
+    + line(0.5, 0.7)
+    + arc(0.7, -2.0)
+    + line(0.003)
+    + spin(0.001)
+)
 
 
 def _sample_twists(sp):
@@ -288,9 +302,9 @@ def test_saturate_closed_form_tomasi(robots):
     limits = MotionLimits(linear=0.5, angular=1.5, wheel=8.0)
     rng = np.random.default_rng(3)
     t = rng.normal(size=(600, 3)) * [0.6, 0.6, 2.0]
-    t[:50] *= 0.1                                       # some inside every limit
-    t[50:60, 2] = 0.0                                   # pure translations
-    t[60:70, :2] = 0.0                                  # pure spins
+    t[:50] *= 0.1  # some inside every limit
+    t[50:60, 2] = 0.0  # pure translations
+    t[60:70, :2] = 0.0  # pure spins
     out = saturate(robot, t, limits)
     assert out.shape == t.shape
 
@@ -312,8 +326,9 @@ def test_saturate_closed_form_tomasi(robots):
     cross = out[:, 0] * t[:, 1] - out[:, 1] * t[:, 0]
     assert np.max(np.abs(cross)) <= 1e-14
     moving = v > 0
-    np.testing.assert_allclose(out[moving, 2] / np.hypot(out[moving, 0], out[moving, 1]),
-                               t[moving, 2] / v[moving], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(
+        out[moving, 2] / np.hypot(out[moving, 0], out[moving, 1]), t[moving, 2] / v[moving], rtol=1e-12, atol=1e-15
+    )
     # never scales up: twists inside every limit come back unchanged
     inside = k == 1.0
     assert inside.sum() >= 30
@@ -395,8 +410,12 @@ def test_error_profile_std_swedish(robots):
             tangential.append(-math.sin(b) * e.dx + math.cos(b) * e.dy)
             assert e.roller == 0.0 and e.ticks == 0.0
     n = len(r)
-    for values, sigma in ((r, 0.005), (drive, math.radians(0.5)), (radial, 0.001),
-                          (tangential, TOMASI_L * math.radians(0.5))):
+    for values, sigma in (
+        (r, 0.005),
+        (drive, math.radians(0.5)),
+        (radial, 0.001),
+        (tangential, TOMASI_L * math.radians(0.5)),
+    ):
         values = np.array(values)
         assert np.std(values) == pytest.approx(sigma, rel=0.05)
         assert abs(np.mean(values)) < 4 * sigma / math.sqrt(n)
@@ -499,8 +518,11 @@ def test_all_radii_one_percent_large_line_and_spin(robots):
     # mecanum4: the same argument holds for any layout
     mec = robots["mecanum4"]
     true = SystematicErrors({w.name: WheelErrors(radius=0.01) for w in mec.rolling}).apply(mec)
-    assert_pose(simulate(line(4.0, 0.5), true, mec, noise=EXACT).measured[0],
-                [4.04 * math.cos(0.5), 4.04 * math.sin(0.5), 0], 1e-9)
+    assert_pose(
+        simulate(line(4.0, 0.5), true, mec, noise=EXACT).measured[0],
+        [4.04 * math.cos(0.5), 4.04 * math.sin(0.5), 0],
+        1e-9,
+    )
 
 
 def test_encoder_ticks_error(robots):
@@ -547,8 +569,9 @@ def test_typical_noise_scatter_about_10_mm(robots):
     """'typical' noise: run-to-run scatter of the return positions on the 4 m square ~ 10 mm."""
     robot = robots["tomasi-omni3"]
     for direction in ("cw", "ccw"):
-        sim = simulate(umbmark_square(direction), robot, robot, noise=NOISE["typical"], trials=200, rng=2024,
-                       keep_truth=False)
+        sim = simulate(
+            umbmark_square(direction), robot, robot, noise=NOISE["typical"], trials=200, rng=2024, keep_truth=False
+        )
         e = sim.epsilon[:, :2]
         rms = math.sqrt(np.mean(np.sum((e - e.mean(axis=0)) ** 2, axis=1)))
         assert 0.005 <= rms <= 0.020, rms

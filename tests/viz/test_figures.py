@@ -59,13 +59,13 @@ def test_figure_files_are_valid_in_every_format(tmp_path, fmt):
         assert data[:8] == PNG
     elif fmt == "pdf":
         assert data[:5] == b"%PDF-" and b"%%EOF" in data[-64:]
-        assert b"/Type3" not in data                                 # TrueType fonts, as journals ask
+        assert b"/Type3" not in data  # TrueType fonts, as journals ask
     else:
         root = ET.fromstring(data)
         assert root.tag == f"{SVG}svg"
-        assert len(root.findall(f".//{SVG}path")) + len(root.findall(f".//{SVG}use")) > 10   # vector marks
+        assert len(root.findall(f".//{SVG}path")) + len(root.findall(f".//{SVG}use")) > 10  # vector marks
         texts = " ".join("".join(t.itertext()) for t in root.iter(f"{SVG}text"))
-        assert "UMBmark" in texts and "cw runs" in texts              # text kept as text
+        assert "UMBmark" in texts and "cw runs" in texts  # text kept as text
 
 
 def test_png_resolution_follows_dpi(tmp_path):
@@ -73,13 +73,15 @@ def test_png_resolution_follows_dpi(tmp_path):
     for dpi in (72, 150):
         path = tmp_path / f"e{dpi}.png"
         save_figure(fig, path, dpi=dpi)
-        width, height = struct.unpack(">II", path.read_bytes()[16:24])        # IHDR
+        width, height = struct.unpack(">II", path.read_bytes()[16:24])  # IHDR
         w_in, h_in = fig.get_size_inches()
         assert width == pytest.approx(w_in * dpi, abs=1) and height == pytest.approx(h_in * dpi, abs=1)
 
 
-@pytest.mark.parametrize("name, dpi, contains", [("f.jpg", 100, "png, svg, pdf"), ("f", 100, "extension"),
-                                                 ("f.png", 0, "dpi"), ("f.png", 1e6, "dpi")])
+@pytest.mark.parametrize(
+    "name, dpi, contains",
+    [("f.jpg", 100, "png, svg, pdf"), ("f", 100, "extension"), ("f.png", 0, "dpi"), ("f.png", 1e6, "dpi")],
+)
 def test_unsupported_format_or_dpi_is_refused(tmp_path, name, dpi, contains):
     from omnikin.errors import InputError
 
@@ -94,8 +96,9 @@ def test_every_run_is_one_marker_drawn_above_a_hollow_centre_of_gravity():
     fig = return_errors_figure(results, floor=0.009)
     rendered(fig)
     runs = run_collections(fig)
-    assert sum(len(c.get_offsets()) for c in runs) == sum(len(r.cw.epsilon) + len(r.ccw.epsilon)
-                                                          for r in results.values())
+    assert sum(len(c.get_offsets()) for c in runs) == sum(
+        len(r.cw.epsilon) + len(r.ccw.epsilon) for r in results.values()
+    )
     # each direction's markers sit at its return errors [mm]
     for c in runs:
         _, stage, direction = c.get_gid().split(":")
@@ -104,7 +107,7 @@ def test_every_run_is_one_marker_drawn_above_a_hollow_centre_of_gravity():
     cgs = [c for ax in fig.axes for c in ax.collections if str(c.get_gid()).startswith("cg:")]
     assert len(cgs) == 4
     for cg in cgs:
-        assert np.all(cg.get_facecolors()[:, 3] == 0)              # hollow: the runs show through
+        assert np.all(cg.get_facecolors()[:, 3] == 0)  # hollow: the runs show through
         assert cg.get_zorder() < min(c.get_zorder() for c in runs)
 
 
@@ -115,7 +118,7 @@ def assert_no_line_joins_runs(fig):
             xy = np.column_stack([line.get_xdata(), line.get_ydata()]).astype(float)
             on_runs = sum(tuple(np.round(p, 9)) in points for p in xy)
             assert on_runs <= 1, f"a line joins {on_runs} independent runs"
-        for c in ax.collections:                                     # and no line collection either
+        for c in ax.collections:  # and no line collection either
             assert isinstance(c, PathCollection), type(c)
 
 
@@ -127,15 +130,18 @@ def test_no_line_joins_independent_runs():
     fig = euclidean_errors_figure(results)
     assert sum(len(c.get_offsets()) for c in run_collections(fig)) == 20
     heights = np.sort(np.concatenate([np.asarray(c.get_offsets())[:, 1] for c in run_collections(fig)]))
-    expected = np.sort(np.concatenate([np.hypot(*getattr(r, d).epsilon[:, :2].T) * 1000
-                                       for r in results.values() for d in ("cw", "ccw")]))
+    expected = np.sort(
+        np.concatenate(
+            [np.hypot(*getattr(r, d).epsilon[:, :2].T) * 1000 for r in results.values() for d in ("cw", "ccw")]
+        )
+    )
     np.testing.assert_allclose(heights, expected)
 
 
 def test_axes_carry_units_and_math_text():
     results = seeded_results()
     for fig in (return_errors_figure(results, "t"), euclidean_errors_figure(results)):
-        rendered(fig)                                                # mathtext must parse
+        rendered(fig)  # mathtext must parse
         for ax in fig.axes:
             assert "[mm]" in ax.get_ylabel()
             assert ax.get_xlabel() == "" or "[mm]" in ax.get_xlabel()
@@ -149,15 +155,48 @@ def test_the_report_figures_of_omnikin_umbmark(tmp_path):
 
     from omnikin.cli.main import main
 
-    assert main(["umbmark", "diff-drive", "--runs", "3", "--rate", "20", "-o", str(tmp_path / "r"), "--figures",
-                 "svg", "--json"]) == 0
+    assert (
+        main(
+            [
+                "umbmark",
+                "diff-drive",
+                "--runs",
+                "3",
+                "--rate",
+                "20",
+                "-o",
+                str(tmp_path / "r"),
+                "--figures",
+                "svg",
+                "--json",
+            ]
+        )
+        == 0
+    )
     doc = json.loads((tmp_path / "r" / "result.json").read_text(encoding="utf-8"))
     svgs = [f for f in doc["files"] if f.endswith(".svg")]
     assert sorted(svgs) == ["euclidean_errors.svg", "return_errors.svg", "trajectories.svg"]
     for f in svgs:
         assert ET.parse(tmp_path / "r" / f).getroot().tag == f"{SVG}svg"
-    assert main(["umbmark", "diff-drive", "--runs", "3", "--rate", "20", "-o", str(tmp_path / "p"), "--figures",
-                 "pdf", "--dpi", "300"]) == 0
+    assert (
+        main(
+            [
+                "umbmark",
+                "diff-drive",
+                "--runs",
+                "3",
+                "--rate",
+                "20",
+                "-o",
+                str(tmp_path / "p"),
+                "--figures",
+                "pdf",
+                "--dpi",
+                "300",
+            ]
+        )
+        == 0
+    )
     assert (tmp_path / "p" / "return_errors.pdf").read_bytes()[:5] == b"%PDF-"
     assert main(["umbmark", "--dpi", "0", "-o", str(tmp_path / "q")]) == 2
     assert not (tmp_path / "q").exists()
@@ -188,7 +227,7 @@ def test_layout_labels_cover_no_part_of_the_drawing(name):
             assert not path.intersects_bbox(box, filled=filled), (text.get_text(), gid)
         assert frame.x0 <= box.x0 and box.x1 <= frame.x1 and frame.y0 <= box.y0 and box.y1 <= frame.y1
     for i, a in enumerate(boxes):
-        for b in boxes[i + 1:]:
+        for b in boxes[i + 1 :]:
             assert not a.overlaps(b)
     # every wheel and its drive arrow are drawn; the axes say metres
     gids = {str(p.get_gid()) for p in ax.patches}

@@ -34,6 +34,19 @@ def plot_layout(robot):
     return layout_figure(robot_of(robot))
 
 
-__all__ = ["Calibration", "DEFAULT_PATH", "DEFAULT_ROBOT", "Simulation", "UMBmarkAnalysis", "UMBmarkReport",
-           "analyze_umbmark", "calibrate", "calibration_plan", "dumps", "plot_layout", "robot_of", "run_umbmark",
-           "simulate"]
+__all__ = [
+    "Calibration",
+    "DEFAULT_PATH",
+    "DEFAULT_ROBOT",
+    "Simulation",
+    "UMBmarkAnalysis",
+    "UMBmarkReport",
+    "analyze_umbmark",
+    "calibrate",
+    "calibration_plan",
+    "dumps",
+    "plot_layout",
+    "robot_of",
+    "run_umbmark",
+    "simulate",
+]

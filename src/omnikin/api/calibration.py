@@ -34,8 +34,11 @@ class Calibration(CalibrationResult):
         require_viz()
         from ..viz.calibration import residuals_figure
 
-        return residuals_figure(self.residuals(), [r.label for r in self.runs],
-                                f"calibration of {self.nominal.name} from {len(self.runs)} runs")
+        return residuals_figure(
+            self.residuals(),
+            [r.label for r in self.runs],
+            f"calibration of {self.nominal.name} from {len(self.runs)} runs",
+        )
 
     def write_robot(self, path, *, force: bool = False, inputs=()) -> None:
         """Write the calibrated robot file (JSON for ``.json``, else YAML) by the output policy

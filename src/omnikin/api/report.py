@@ -29,99 +29,164 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
     """The report of a :class:`~omnikin.api.umbmark.UMBmarkReport` whose ``result.json`` is ``doc``."""
     s = doc["settings"]
     level = f"{s['confidence_level'] * 100:g} %"
-    built = (f"the robot file {s['true_robot']}" if s["true_robot"]
-             else f"the nominal model with a draw of the {s['errors']!r} systematic error profile (seed {s['seed']})")
-    lines = [f"# UMBmark report: {report.robot.name}", "",
-             f"Robot as built: {built}. Random errors: {s['noise']!r} profile. {s['runs']} runs per direction on a "
-             f"{s['side']:g} m square, {s['mode']} mode, encoders sampled at {s['rate']:g} Hz"
-             + (f", {s['trials']} procedures (Monte Carlo)." if s["trials"] > 1 else "."), "",
-             f"Reproduce: `{report.command_line()}`.", "",
-             "## Procedure", "",
-             "1. UMBmark (Borenstein and Feng, \"Measurement and correction of systematic odometry errors in mobile "
-             "robots\", 1996): the robot drives each square by its own (nominal) model, so its odometry says it "
-             "returned home; the return error of a run is the true end pose minus the odometry end pose, "
-             "E_max,syst the larger distance of the two directions' centres of gravity from the origin."]
+    built = (
+        f"the robot file {s['true_robot']}"
+        if s["true_robot"]
+        else f"the nominal model with a draw of the {s['errors']!r} systematic error profile (seed {s['seed']})"
+    )
+    lines = [
+        f"# UMBmark report: {report.robot.name}",
+        "",
+        f"Robot as built: {built}. Random errors: {s['noise']!r} profile. {s['runs']} runs per direction on a "
+        f"{s['side']:g} m square, {s['mode']} mode, encoders sampled at {s['rate']:g} Hz"
+        + (f", {s['trials']} procedures (Monte Carlo)." if s["trials"] > 1 else "."),
+        "",
+        f"Reproduce: `{report.command_line()}`.",
+        "",
+        "## Procedure",
+        "",
+        '1. UMBmark (Borenstein and Feng, "Measurement and correction of systematic odometry errors in mobile '
+        'robots", 1996): the robot drives each square by its own (nominal) model, so its odometry says it '
+        "returned home; the return error of a run is the true end pose minus the odometry end pose, "
+        "E_max,syst the larger distance of the two directions' centres of gravity from the origin.",
+    ]
     if s["calibrate"]:
         cal = doc["calibration"]
-        lines += [f"2. Calibration: the {len(cal['paths'])} recommended runs ({', '.join(cal['paths'])}), each "
-                  f"driven {cal['repeats']} times by the nominal model with its end pose measured, and a "
-                  f"least-squares fit of {len(cal['parameters'])} wheel parameters "
-                  "(`omnikin calibrate`; the runs are in `calibration_runs.csv`).",
-                  "3. UMBmark again, the robot driven by its calibrated model."]
+        lines += [
+            f"2. Calibration: the {len(cal['paths'])} recommended runs ({', '.join(cal['paths'])}), each "
+            f"driven {cal['repeats']} times by the nominal model with its end pose measured, and a "
+            f"least-squares fit of {len(cal['parameters'])} wheel parameters "
+            "(`omnikin calibrate`; the runs are in `calibration_runs.csv`).",
+            "3. UMBmark again, the robot driven by its calibrated model.",
+        ]
     else:
         lines += ["2. No calibration (`--no-calibrate`)."]
-    lines += [f"{'4' if s['calibrate'] else '3'}. The noise floor: {doc['methods']['noise_floor']}.", "",
-              "## Results", "",
-              f"| | r_cg cw [mm] | r_cg ccw [mm] | E_max,syst [mm] | {level} interval [mm] | at the noise floor |",
-              "|---|---:|---:|---:|---:|:---:|"]
+    lines += [
+        f"{'4' if s['calibrate'] else '3'}. The noise floor: {doc['methods']['noise_floor']}.",
+        "",
+        "## Results",
+        "",
+        f"| | r_cg cw [mm] | r_cg ccw [mm] | E_max,syst [mm] | {level} interval [mm] | at the noise floor |",
+        "|---|---:|---:|---:|---:|:---:|",
+    ]
     for key, label in (("before", "before"), ("after", "after calibration")):
         if key in doc:
             d = doc[key]
-            lines.append(f"| {label} | {_mm(d['cw']['r_cg'])} | {_mm(d['ccw']['r_cg'])} | {_mm(d['e_max_syst'])} | "
-                         f"{_interval_mm(d['e_max_syst_interval'])} | {'yes' if d['at_noise_floor'] else 'no'} |")
+            lines.append(
+                f"| {label} | {_mm(d['cw']['r_cg'])} | {_mm(d['ccw']['r_cg'])} | {_mm(d['e_max_syst'])} | "
+                f"{_interval_mm(d['e_max_syst_interval'])} | {'yes' if d['at_noise_floor'] else 'no'} |"
+            )
     floor = doc["noise_floor"]
-    lines += ["", f"Noise floor: a perfectly calibrated robot shows E_max,syst of {_mm(floor['e_max_syst_median'])} "
-                  f"mm (median) and up to {_mm(floor['e_max_syst_p95'])} mm (95th percentile) over "
-                  f"{floor['procedures']} procedures "
-                  "with these random errors; a value at or below the 95th percentile cannot be told from a perfect "
-                  "calibration."]
+    lines += [
+        "",
+        f"Noise floor: a perfectly calibrated robot shows E_max,syst of {_mm(floor['e_max_syst_median'])} "
+        f"mm (median) and up to {_mm(floor['e_max_syst_p95'])} mm (95th percentile) over "
+        f"{floor['procedures']} procedures "
+        "with these random errors; a value at or below the 95th percentile cannot be told from a perfect "
+        "calibration.",
+    ]
     for key, label in (("before", "Before calibration"), ("after", "After calibration")):
         if key in doc and doc[key]["at_noise_floor"]:
-            lines += ["", f"**{label}, E_max,syst ({_mm(doc[key]['e_max_syst'])} mm) is at the noise floor**: the "
-                          "systematic error left is below what UMBmark with this many runs can detect."]
+            lines += [
+                "",
+                f"**{label}, E_max,syst ({_mm(doc[key]['e_max_syst'])} mm) is at the noise floor**: the "
+                "systematic error left is below what UMBmark with this many runs can detect.",
+            ]
     if "after" in doc:
         r, ri = doc["reduction_factor"], doc["reduction_factor_interval"]
         ri_text = f"{_factor(ri[0])} to {_factor(ri[1])}" if ri else "n/a (needs 3 runs per direction)"
-        lines += ["", f"Reduction factor of E_max,syst: {_factor(r)} ({level} interval {ri_text})."
-                  + (" The upper end is unbounded because the value after calibration is consistent with zero."
-                     if ri and ri[1] is None else "")]
+        lines += [
+            "",
+            f"Reduction factor of E_max,syst: {_factor(r)} ({level} interval {ri_text})."
+            + (
+                " The upper end is unbounded because the value after calibration is consistent with zero."
+                if ri and ri[1] is None
+                else ""
+            ),
+        ]
     sysm = doc["systematic"]
-    lines += ["", "Without random errors (the systematic part alone): E_max,syst "
-              f"{_mm(sysm['e_max_syst_before'])} mm before"
-              + (f", {_mm(sysm['e_max_syst_after'])} mm after calibration (reduction "
-                 f"{_factor(sysm['reduction_factor'])})." if "e_max_syst_after" in sysm else ".")]
-    lines += ["", "Intervals: " + doc["methods"]["e_max_syst_interval"] + "; reduction factor: "
-              + doc["methods"]["reduction_factor_interval"] + "."]
+    lines += [
+        "",
+        "Without random errors (the systematic part alone): E_max,syst "
+        f"{_mm(sysm['e_max_syst_before'])} mm before"
+        + (
+            f", {_mm(sysm['e_max_syst_after'])} mm after calibration (reduction {_factor(sysm['reduction_factor'])})."
+            if "e_max_syst_after" in sysm
+            else "."
+        ),
+    ]
+    lines += [
+        "",
+        "Intervals: "
+        + doc["methods"]["e_max_syst_interval"]
+        + "; reduction factor: "
+        + doc["methods"]["reduction_factor_interval"]
+        + ".",
+    ]
     if "calibration" in doc:
         lines += _calibration_lines(report, doc)
     bor = report.before[0].borenstein
     if bor is not None:
-        lines += ["", "Borenstein's differential-drive figures (before): "
-                  f"alpha = {bor.alpha:.5g} rad, beta = {bor.beta:.5g} rad, R = {bor.R:.4g} m, E_d = {bor.E_d:.6f}, "
-                  f"E_b = {bor.E_b:.6f}, c_L = {bor.c_L:.6f}, c_R = {bor.c_R:.6f}, b_new = {bor.b_new:.6f} m."]
+        lines += [
+            "",
+            "Borenstein's differential-drive figures (before): "
+            f"alpha = {bor.alpha:.5g} rad, beta = {bor.beta:.5g} rad, R = {bor.R:.4g} m, E_d = {bor.E_d:.6f}, "
+            f"E_b = {bor.E_b:.6f}, c_L = {bor.c_L:.6f}, c_R = {bor.c_R:.6f}, b_new = {bor.b_new:.6f} m.",
+        ]
     if "monte_carlo" in doc:
-        lines += ["", "## Monte Carlo", "", "| | procedures | median [mm] | mean [mm] | 95th percentile [mm] |",
-                  "|---|---:|---:|---:|---:|"]
+        lines += [
+            "",
+            "## Monte Carlo",
+            "",
+            "| | procedures | median [mm] | mean [mm] | 95th percentile [mm] |",
+            "|---|---:|---:|---:|---:|",
+        ]
         for label, st in doc["monte_carlo"].items():
-            lines.append(f"| {label} | {st['procedures']} | {_mm(st['e_max_syst_median'])} | "
-                         f"{_mm(st['e_max_syst_mean'])} | {_mm(st['e_max_syst_p95'])} |")
+            lines.append(
+                f"| {label} | {st['procedures']} | {_mm(st['e_max_syst_median'])} | "
+                f"{_mm(st['e_max_syst_mean'])} | {_mm(st['e_max_syst_p95'])} |"
+            )
     if figures:
         lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]
     else:
         lines += ["", "No figures: they need matplotlib (pip install 'omnikin[viz]')."]
-    lines += ["", "## Files", "", "- `result.json`: every number above (lengths in metres; `units` names the unit "
-              "of every key, `methods` how each quantity is defined).",
-              "- `true_robot.yaml`: the robot as built.",
-              f"- `measurements_before.csv`: the runs of the first procedure before calibration "
-              f"(`omnikin umbmark analyze measurements_before.csv --robot {report.robot.name} --side {s['side']:g}`)."]
+    lines += [
+        "",
+        "## Files",
+        "",
+        "- `result.json`: every number above (lengths in metres; `units` names the unit "
+        "of every key, `methods` how each quantity is defined).",
+        "- `true_robot.yaml`: the robot as built.",
+        f"- `measurements_before.csv`: the runs of the first procedure before calibration "
+        f"(`omnikin umbmark analyze measurements_before.csv --robot {report.robot.name} --side {s['side']:g}`).",
+    ]
     if "calibration" in doc:
-        lines += ["- `measurements_after.csv`: the same after calibration.",
-                  "- `calibrated_robot.yaml`: the calibrated robot.",
-                  f"- `calibration_runs.csv`: the calibration runs (`omnikin calibrate {report.robot.name} "
-                  "calibration_runs.csv -o calibrated.yaml`)."]
+        lines += [
+            "- `measurements_after.csv`: the same after calibration.",
+            "- `calibrated_robot.yaml`: the calibrated robot.",
+            f"- `calibration_runs.csv`: the calibration runs (`omnikin calibrate {report.robot.name} "
+            "calibration_runs.csv -o calibrated.yaml`).",
+        ]
     return "\n".join(lines) + "\n"
 
 
 def _calibration_lines(report, doc) -> list:
     cal = doc["calibration"]
-    lines = ["", "## Calibration", "",
-             f"Residual RMS {cal['residual_rms_before']:.3g} -> {cal['residual_rms_after']:.3g} measurement sigmas "
-             "over "
-             f"{cal['runs']} runs."]
+    lines = [
+        "",
+        "## Calibration",
+        "",
+        f"Residual RMS {cal['residual_rms_before']:.3g} -> {cal['residual_rms_after']:.3g} measurement sigmas "
+        "over "
+        f"{cal['runs']} runs.",
+    ]
     if not cal["fits"]:
-        lines += ["", f"**The calibration does not fit its runs** (residual RMS {cal['residual_rms_after']:.3g} "
-                      "measurement sigmas): the model cannot explain the measurements; do not use the calibrated "
-                      "robot."]
+        lines += [
+            "",
+            f"**The calibration does not fit its runs** (residual RMS {cal['residual_rms_after']:.3g} "
+            "measurement sigmas): the model cannot explain the measurements; do not use the calibrated "
+            "robot.",
+        ]
     lines += ["", "| parameter | estimate | sigma | unit |", "|---|---:|---:|---|"]
     for p in cal["parameters"]:
         lines.append(f"| {p['name']} | {p['value']:.6g} | {p['sigma']:.3g} | {p['unit']} |")
@@ -131,11 +196,19 @@ def _calibration_lines(report, doc) -> list:
         for combo in blind:
             lines.append("- " + " + ".join(f"{c['weight']:+.2f} {c['parameter']}" for c in combo))
     if "borenstein_iterations" in doc:
-        lines += ["", "Borenstein's E_d/E_b correction, for comparison, E_max,syst after each iteration [mm]: "
-                  + ", ".join(_mm(v) for v in doc["borenstein_iterations"])]
+        lines += [
+            "",
+            "Borenstein's E_d/E_b correction, for comparison, E_max,syst after each iteration [mm]: "
+            + ", ".join(_mm(v) for v in doc["borenstein_iterations"]),
+        ]
     if "injected_errors" in doc:
-        lines += ["", "Injected and estimated radius errors:", "",
-                  "| wheel | injected [%] | estimated [%] |", "|---|---:|---:|"]
+        lines += [
+            "",
+            "Injected and estimated radius errors:",
+            "",
+            "| wheel | injected [%] | estimated [%] |",
+            "|---|---:|---:|",
+        ]
         for name, e in doc["injected_errors"].items():
             est = cal["errors"].get(name)
             if est is not None:

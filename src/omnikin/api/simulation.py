@@ -43,8 +43,9 @@ class Simulation:
         return run_figure(self.run, f"{self.robot.name}: {self.path}")
 
 
-def simulate(robot, path=DEFAULT_PATH, *, true_robot=None, errors="typical", noise="typical", seed: int = 1,
-             rate: float = 100.0) -> Simulation:
+def simulate(
+    robot, path=DEFAULT_PATH, *, true_robot=None, errors="typical", noise="typical", seed: int = 1, rate: float = 100.0
+) -> Simulation:
     """Simulate ``robot`` as built driving ``path`` commanded by its nominal model
     (``omnikin simulate``, without the bag).
 

@@ -62,9 +62,14 @@ class UMBmarkReport(UMBmarkStudy):
         in metres (``units`` gives every key's unit); ``null`` for an unbounded interval end."""
         from ..io.robot_file import robot_to_dict
 
-        doc: dict[str, Any] = {"format": RESULT_FORMAT, "units": RESULT_UNITS, "methods": METHODS,
-               "settings": {**self.settings, "confidence_level": self.level},
-               "robot": robot_to_dict(self.robot), "true_robot": robot_to_dict(self.true_robot)}
+        doc: dict[str, Any] = {
+            "format": RESULT_FORMAT,
+            "units": RESULT_UNITS,
+            "methods": METHODS,
+            "settings": {**self.settings, "confidence_level": self.level},
+            "robot": robot_to_dict(self.robot),
+            "true_robot": robot_to_dict(self.true_robot),
+        }
         if self.injected is not None:
             doc["injected_errors"] = self.injected.as_dict()
         doc["before"] = self._stage(self.before[0])
@@ -76,10 +81,14 @@ class UMBmarkReport(UMBmarkStudy):
             interval = self.reduction_interval
             doc["reduction_factor_interval"] = [finite_or_none(v) for v in interval] if interval else None
             s = self.systematic
-            doc["systematic"]["reduction_factor"] = finite_or_none(s["before"] / s["after"] if s["after"] > 0
-                                                                   else math.inf)
-            doc["calibration"] = {**self.calibration.as_dict(), "repeats": RECOMMENDED_REPEATS,
-                                  "paths": list(dict.fromkeys(r.label for r in self.calibration_runs))}
+            doc["systematic"]["reduction_factor"] = finite_or_none(
+                s["before"] / s["after"] if s["after"] > 0 else math.inf
+            )
+            doc["calibration"] = {
+                **self.calibration.as_dict(),
+                "repeats": RECOMMENDED_REPEATS,
+                "paths": list(dict.fromkeys(r.label for r in self.calibration_runs)),
+            }
             doc["calibrated_robot"] = robot_to_dict(self.calibration.robot)
             if self.borenstein is not None:
                 doc["borenstein_iterations"] = list(self.borenstein)
@@ -98,10 +107,13 @@ class UMBmarkReport(UMBmarkStudy):
         from ..viz import umbmark as fig
 
         title = f"UMBmark of {self.robot.name} as built ({self.mode} mode, {self.side:g} m square)"
-        out = {"return_errors": fig.return_errors_figure(self.first(), title, floor=self.floor.limit),
-               "euclidean_errors": fig.euclidean_errors_figure(self.first(), title),
-               "trajectories": fig.trajectories_figure(
-                   {STAGES[k]: v for k, v in self.trajectories.items()}, self.side, title)}
+        out = {
+            "return_errors": fig.return_errors_figure(self.first(), title, floor=self.floor.limit),
+            "euclidean_errors": fig.euclidean_errors_figure(self.first(), title),
+            "trajectories": fig.trajectories_figure(
+                {STAGES[k]: v for k, v in self.trajectories.items()}, self.side, title
+            ),
+        }
         if self.trials > 1:
             values: dict[str, Any] = {"before": [r.e_max_syst for r in self.before]}
             if self.after is not None:
@@ -136,11 +148,12 @@ class UMBmarkReport(UMBmarkStudy):
             figures = self.figures()
         except ImportError:
             figures = {}
-        texts = {"true_robot.yaml": robot_text(self.true_robot, "true_robot.yaml"),
-                 "measurements_before.csv": umbmark_measurements_text(self.before[0], self._measurement_note("before"))}
+        texts = {
+            "true_robot.yaml": robot_text(self.true_robot, "true_robot.yaml"),
+            "measurements_before.csv": umbmark_measurements_text(self.before[0], self._measurement_note("before")),
+        }
         if self.after is not None and self.calibration is not None:
-            texts["measurements_after.csv"] = umbmark_measurements_text(self.after[0],
-                                                                        self._measurement_note("after"))
+            texts["measurements_after.csv"] = umbmark_measurements_text(self.after[0], self._measurement_note("after"))
             texts["calibrated_robot.yaml"] = robot_text(self.calibration.robot, "calibrated_robot.yaml")
             texts["calibration_runs.csv"] = calibration_runs_text(self.calibration_runs, self._runs_note())
         names = [f"{stem}.{figure_format}" for stem in figures]
@@ -162,66 +175,105 @@ class UMBmarkReport(UMBmarkStudy):
         """The command line that reproduces this study."""
         s = self.settings
         robot = s.get("robot") or self.robot.name
-        return (f"omnikin umbmark {robot} --mode {self.mode} --runs {self.runs} --side {self.side:g} "
-                f"--rate {self.rate:g} --seed {s.get('seed')} --noise {s.get('noise')}"
-                + (f" --true-robot {s['true_robot']}" if s.get("true_robot") else f" --errors {s.get('errors')}")
-                + (f" --trials {self.trials}" if self.trials > 1 else "")
-                + ("" if s.get("calibrate", True) else " --no-calibrate"))
+        return (
+            f"omnikin umbmark {robot} --mode {self.mode} --runs {self.runs} --side {self.side:g} "
+            f"--rate {self.rate:g} --seed {s.get('seed')} --noise {s.get('noise')}"
+            + (f" --true-robot {s['true_robot']}" if s.get("true_robot") else f" --errors {s.get('errors')}")
+            + (f" --trials {self.trials}" if self.trials > 1 else "")
+            + ("" if s.get("calibrate", True) else " --no-calibrate")
+        )
 
     def _measurement_note(self, stage: str) -> str:
         robot = self.settings.get("robot") or self.robot.name
-        return (f"UMBmark {stage} calibration, simulated by: {self.command_line()}\n"
-                f"first procedure, {self.runs} runs per direction; read it with: omnikin umbmark analyze FILE "
-                f"--robot {robot} --side {self.side:g}")
+        return (
+            f"UMBmark {stage} calibration, simulated by: {self.command_line()}\n"
+            f"first procedure, {self.runs} runs per direction; read it with: omnikin umbmark analyze FILE "
+            f"--robot {robot} --side {self.side:g}"
+        )
 
     def _runs_note(self) -> str:
         robot = self.settings.get("robot") or self.robot.name
-        return (f"calibration runs simulated by: {self.command_line()}\n"
-                f"each recommended run driven {RECOMMENDED_REPEATS} times; read it with: omnikin calibrate {robot} "
-                f"FILE -o calibrated.yaml")
+        return (
+            f"calibration runs simulated by: {self.command_line()}\n"
+            f"each recommended run driven {RECOMMENDED_REPEATS} times; read it with: omnikin calibrate {robot} "
+            f"FILE -o calibrated.yaml"
+        )
 
 
 def _stats(results) -> dict:
     v = np.array([r.e_max_syst for r in results])
-    return {"procedures": len(v), "e_max_syst_mean": float(v.mean()), "e_max_syst_median": float(np.median(v)),
-            "e_max_syst_p95": float(np.percentile(v, 95)), "e_max_syst_max": float(v.max())}
+    return {
+        "procedures": len(v),
+        "e_max_syst_mean": float(v.mean()),
+        "e_max_syst_median": float(np.median(v)),
+        "e_max_syst_p95": float(np.percentile(v, 95)),
+        "e_max_syst_max": float(v.max()),
+    }
 
 
-RESULT_UNITS = {**UNITS, "rate": "Hz", "confidence_level": "1", "reduction_factor": "1",
-                "reduction_factor_interval": "1", "e_max_syst_before": "m", "e_max_syst_after": "m",
-                "e_max_syst_mean": "m", "e_max_syst_median": "m", "e_max_syst_p95": "m", "e_max_syst_max": "m",
-                "borenstein_iterations": "m (E_max,syst after each iteration)",
-                "residual_rms_before": "measurement sigmas", "residual_rms_after": "measurement sigmas",
-                "value": "the entry's 'unit'", "sigma": "the entry's 'unit'", "errors": ERROR_UNITS,
-                "injected_errors": ERROR_UNITS, "robot": "m, rad (robot file schema 1, docs/conventions.md)",
-                "true_robot": "m, rad", "calibrated_robot": "m, rad"}
+RESULT_UNITS = {
+    **UNITS,
+    "rate": "Hz",
+    "confidence_level": "1",
+    "reduction_factor": "1",
+    "reduction_factor_interval": "1",
+    "e_max_syst_before": "m",
+    "e_max_syst_after": "m",
+    "e_max_syst_mean": "m",
+    "e_max_syst_median": "m",
+    "e_max_syst_p95": "m",
+    "e_max_syst_max": "m",
+    "borenstein_iterations": "m (E_max,syst after each iteration)",
+    "residual_rms_before": "measurement sigmas",
+    "residual_rms_after": "measurement sigmas",
+    "value": "the entry's 'unit'",
+    "sigma": "the entry's 'unit'",
+    "errors": ERROR_UNITS,
+    "injected_errors": ERROR_UNITS,
+    "robot": "m, rad (robot file schema 1, docs/conventions.md)",
+    "true_robot": "m, rad",
+    "calibrated_robot": "m, rad",
+}
 """Unit of each key of ``result.json``, by the key's own name (the same name has the same unit
 wherever it appears; ``errors``: per error name)."""
 
 
 METHODS = {
     "e_max_syst": "max(r_cg_cw, r_cg_ccw), r_cg the distance of the centre of gravity of the runs of one direction "
-                  "from the origin (Borenstein and Feng 1996)",
+    "from the origin (Borenstein and Feng 1996)",
     "e_max_syst_interval": "conservative confidence interval: per direction the Hotelling T^2 confidence region of "
-                           "the expected return position at level sqrt(confidence_level), projected onto the "
-                           "distance from the origin; needs 3 runs per direction (null otherwise)",
+    "the expected return position at level sqrt(confidence_level), projected onto the "
+    "distance from the origin; needs 3 runs per direction (null otherwise)",
     "reduction_factor_interval": "low_before / high_after to high_before / low_after of the E_max,syst intervals at "
-                                 "level sqrt(confidence_level); null upper end: after is consistent with zero",
+    "level sqrt(confidence_level); null upper end: after is consistent with zero",
     "noise_floor": f"E_max,syst of the robot as built commanded by its own exact model (a perfect calibration) under "
-                   f"the same random errors, {FLOOR_PROCEDURES} procedures; at_noise_floor: E_max,syst at or below "
-                   f"their 95th percentile",
+    f"the same random errors, {FLOOR_PROCEDURES} procedures; at_noise_floor: E_max,syst at or below "
+    f"their 95th percentile",
     "systematic": "E_max,syst without random errors (one run per direction)",
     "calibration": "least squares over the recommended calibration runs, each driven "
-                   f"{RECOMMENDED_REPEATS} times (omnikin calibrate ROBOT --plan); fits: residual RMS at most "
-                   f"{FIT_LIMIT:g} measurement sigmas",
+    f"{RECOMMENDED_REPEATS} times (omnikin calibrate ROBOT --plan); fits: residual RMS at most "
+    f"{FIT_LIMIT:g} measurement sigmas",
 }
 """How each reported quantity is defined (copied into ``result.json``)."""
 
 
-def run_umbmark(robot=DEFAULT_ROBOT, *, true_robot=None, errors="typical", mode: str = "rotate", runs: int = 5,
-                side: float = 4.0, noise="typical", rate: float = 100.0, seed: int = 1, trials: int = 1,
-                calibrate: bool = True, max_memory: float = MAX_MEMORY, max_time: float = MAX_TIME,
-                progress=None) -> UMBmarkReport:
+def run_umbmark(
+    robot=DEFAULT_ROBOT,
+    *,
+    true_robot=None,
+    errors="typical",
+    mode: str = "rotate",
+    runs: int = 5,
+    side: float = 4.0,
+    noise="typical",
+    rate: float = 100.0,
+    seed: int = 1,
+    trials: int = 1,
+    calibrate: bool = True,
+    max_memory: float = MAX_MEMORY,
+    max_time: float = MAX_TIME,
+    progress=None,
+) -> UMBmarkReport:
     """UMBmark of ``robot`` as built, calibration, UMBmark again (``omnikin umbmark``).
 
     ``robot``: preset name, robot file or Robot; ``true_robot`` (file or Robot) replaces the
@@ -237,17 +289,39 @@ def run_umbmark(robot=DEFAULT_ROBOT, *, true_robot=None, errors="typical", mode:
     _check_settings(runs=runs, trials=trials, side=side, rate=rate)
     seeds = streams(seed)
     noise_model = noise_of(noise)
-    check_cost(umbmark_cost(nominal, mode=mode, runs=runs, side=side, rate=rate, trials=trials, calibrate=calibrate),
-               max_memory=max_memory, max_time=max_time)
+    check_cost(
+        umbmark_cost(nominal, mode=mode, runs=runs, side=side, rate=rate, trials=trials, calibrate=calibrate),
+        max_memory=max_memory,
+        max_time=max_time,
+    )
     true, injected = as_built(nominal, true_robot, errors, seeds["robot"])
-    study = umbmark_study(nominal, true, injected=injected, side=float(side), mode=mode, runs=int(runs),
-                          rate=float(rate), trials=int(trials), noise=noise_model, seed=seed, calibrate=calibrate,
-                          progress=progress)
-    settings = {"robot": setting_name(robot), "true_robot": setting_name(true_robot),
-                "errors": None if true_robot is not None else setting_name(errors), "noise": setting_name(noise),
-                "mode": mode,
-                "runs": int(runs), "side": float(side), "rate": float(rate), "seed": seed, "trials": int(trials),
-                "calibrate": bool(calibrate)}
+    study = umbmark_study(
+        nominal,
+        true,
+        injected=injected,
+        side=float(side),
+        mode=mode,
+        runs=int(runs),
+        rate=float(rate),
+        trials=int(trials),
+        noise=noise_model,
+        seed=seed,
+        calibrate=calibrate,
+        progress=progress,
+    )
+    settings = {
+        "robot": setting_name(robot),
+        "true_robot": setting_name(true_robot),
+        "errors": None if true_robot is not None else setting_name(errors),
+        "noise": setting_name(noise),
+        "mode": mode,
+        "runs": int(runs),
+        "side": float(side),
+        "rate": float(rate),
+        "seed": seed,
+        "trials": int(trials),
+        "calibrate": bool(calibrate),
+    }
     return UMBmarkReport(**{f.name: getattr(study, f.name) for f in fields(study)}, settings=settings)
 
 
@@ -262,13 +336,22 @@ def _check_settings(*, runs, trials, side, rate) -> None:
         raise InputError(f"rate (--rate) must be a positive number of samples per second, got {rate!r}")
 
 
-def umbmark_cost(robot=DEFAULT_ROBOT, *, mode: str = "rotate", runs: int = 5, side: float = 4.0,
-                 rate: float = 100.0, trials: int = 1, calibrate: bool = True) -> Cost:
+def umbmark_cost(
+    robot=DEFAULT_ROBOT,
+    *,
+    mode: str = "rotate",
+    runs: int = 5,
+    side: float = 4.0,
+    rate: float = 100.0,
+    trials: int = 1,
+    calibrate: bool = True,
+) -> Cost:
     """What :func:`run_umbmark` with these settings will take (robot-samples, memory, time):
     :func:`~omnikin.evaluation.procedure.estimate_cost`."""
     _check_settings(runs=runs, trials=trials, side=side, rate=rate)
-    return estimate_cost(robot_of(robot), side=side, mode=mode, runs=runs, rate=rate, trials=trials,
-                         calibrate=calibrate)
+    return estimate_cost(
+        robot_of(robot), side=side, mode=mode, runs=runs, rate=rate, trials=trials, calibrate=calibrate
+    )
 
 
 # --- analyze ---------------------------------------------------------------------------------------
@@ -307,5 +390,3 @@ def analyze_umbmark(measurements, *, robot=None, side: float = 4.0) -> UMBmarkAn
         eps = read_umbmark_measurements(measurements)
     res = analyze(eps["cw"], eps["ccw"], side, robot_of(robot) if robot is not None else None)
     return UMBmarkAnalysis(**{f.name: getattr(res, f.name) for f in fields(res)})
-
-

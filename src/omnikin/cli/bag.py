@@ -79,99 +79,169 @@ trans_part, --delta N --delta_unit f)."""
 
 def add_parsers(sub, robot_help: str) -> None:
     """Add ``bag`` (with ``odometry`` and ``export``), ``simulate`` and ``metrics`` to ``sub``."""
-    bag = sub.add_parser("bag", help="ROS 2 bags: wheel odometry from joint states, export of pose topics",
-                         description="Work with ROS 2 bags (rosbag2: sqlite3 or MCAP); needs the rosbags package "
-                                     "(pip install \"omnikin[bags]\").",
-                         epilog=BAG_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    bag = sub.add_parser(
+        "bag",
+        help="ROS 2 bags: wheel odometry from joint states, export of pose topics",
+        description="Work with ROS 2 bags (rosbag2: sqlite3 or MCAP); needs the rosbags package "
+        '(pip install "omnikin[bags]").',
+        epilog=BAG_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     bag.set_defaults(func=cmd_bag_help, bag_parser=bag)
     bsub = bag.add_subparsers(dest="bag_command", metavar="SUBCOMMAND")
 
-    sp = bsub.add_parser("odometry", help="sensor_msgs/JointState wheel angles -> nav_msgs/Odometry in a new bag",
-                         description="Read the wheel angles of ROBOT from a JointState topic (joint name = wheel "
-                                     "name, rad), integrate them exactly on SE(2) and write nav_msgs/Odometry to a "
-                                     "new bag (one message per input sample, same stamps).",
-                         epilog=BAG_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp = bsub.add_parser(
+        "odometry",
+        help="sensor_msgs/JointState wheel angles -> nav_msgs/Odometry in a new bag",
+        description="Read the wheel angles of ROBOT from a JointState topic (joint name = wheel "
+        "name, rad), integrate them exactly on SE(2) and write nav_msgs/Odometry to a "
+        "new bag (one message per input sample, same stamps).",
+        epilog=BAG_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument("bag", metavar="IN.bag", help="input bag (directory, .db3 or .mcap)")
-    sp.add_argument("-o", "--output", required=True, metavar="OUT.bag",
-                    help="new bag to write (a new name; --force replaces a bag omnikin wrote)")
-    sp.add_argument("--joint-states-topic", default="/joint_states", metavar="TOPIC",
-                    help="sensor_msgs/JointState topic (default /joint_states)")
+    sp.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="OUT.bag",
+        help="new bag to write (a new name; --force replaces a bag omnikin wrote)",
+    )
+    sp.add_argument(
+        "--joint-states-topic",
+        default="/joint_states",
+        metavar="TOPIC",
+        help="sensor_msgs/JointState topic (default /joint_states)",
+    )
     sp.add_argument("--odom-topic", default="/odom", metavar="TOPIC", help="output topic (default /odom)")
-    sp.add_argument("--method", choices=("exact", "midpoint", "euler"), default="exact",
-                    help="pose integration (default exact; the others exist for comparison)")
-    sp.add_argument("--stamp", choices=("auto", "header", "bag"), default="auto",
-                    help="sample times: header stamps, bag record times, or auto (header unless all zero)")
+    sp.add_argument(
+        "--method",
+        choices=("exact", "midpoint", "euler"),
+        default="exact",
+        help="pose integration (default exact; the others exist for comparison)",
+    )
+    sp.add_argument(
+        "--stamp",
+        choices=("auto", "header", "bag"),
+        default="auto",
+        help="sample times: header stamps, bag record times, or auto (header unless all zero)",
+    )
     sp.add_argument("--frame-id", default="odom", metavar="FRAME", help="header.frame_id (default odom)")
-    sp.add_argument("--child-frame-id", default="base_link", metavar="FRAME",
-                    help="child_frame_id (default base_link)")
-    sp.add_argument("--pose-cov-diag", type=float, nargs=6, metavar="V",
-                    help="pose covariance diagonal (x y z roll pitch yaw) [m^2, rad^2]; default zeros")
-    sp.add_argument("--twist-cov-diag", type=float, nargs=6, metavar="V",
-                    help="twist covariance diagonal (vx vy vz wx wy wz); default zeros")
-    sp.add_argument("--storage", choices=("sqlite3", "mcap"), default="sqlite3",
-                    help="output storage (default sqlite3)")
+    sp.add_argument("--child-frame-id", default="base_link", metavar="FRAME", help="child_frame_id (default base_link)")
+    sp.add_argument(
+        "--pose-cov-diag",
+        type=float,
+        nargs=6,
+        metavar="V",
+        help="pose covariance diagonal (x y z roll pitch yaw) [m^2, rad^2]; default zeros",
+    )
+    sp.add_argument(
+        "--twist-cov-diag",
+        type=float,
+        nargs=6,
+        metavar="V",
+        help="twist covariance diagonal (vx vy vz wx wy wz); default zeros",
+    )
+    sp.add_argument(
+        "--storage", choices=("sqlite3", "mcap"), default="sqlite3", help="output storage (default sqlite3)"
+    )
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     add_output_options(sp)
     add_budget_options(sp)
     sp.set_defaults(func=cmd_bag_odometry)
 
-    sp = bsub.add_parser("export", help="export a nav_msgs/Odometry or geometry_msgs/PoseStamped topic",
-                         description="Write the planar poses (x, y, yaw) of an Odometry or PoseStamped topic as TUM "
-                                     "(t x y z qx qy qz qw), KITTI (3x4 row-major [R|t], no times) or CSV "
-                                     "(t,x,y,theta); times are the header stamps.",
-                         epilog=BAG_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp = bsub.add_parser(
+        "export",
+        help="export a nav_msgs/Odometry or geometry_msgs/PoseStamped topic",
+        description="Write the planar poses (x, y, yaw) of an Odometry or PoseStamped topic as TUM "
+        "(t x y z qx qy qz qw), KITTI (3x4 row-major [R|t], no times) or CSV "
+        "(t,x,y,theta); times are the header stamps.",
+        epilog=BAG_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sp.add_argument("bag", metavar="IN.bag", help="input bag (directory, .db3 or .mcap)")
     sp.add_argument("--topic", required=True, metavar="TOPIC", help="nav_msgs/Odometry or geometry_msgs/PoseStamped")
     sp.add_argument("--format", required=True, choices=("tum", "kitti", "csv"), help="output format")
-    sp.add_argument("-o", "--output", metavar="FILE", default="-",
-                    help="file to write (default '-': standard output)")
+    sp.add_argument("-o", "--output", metavar="FILE", default="-", help="file to write (default '-': standard output)")
     add_output_options(sp)
     add_budget_options(sp)
     sp.set_defaults(func=cmd_bag_export)
 
     from ..simulation.error_models import NOISE, PROFILES
 
-    sp = sub.add_parser("simulate", help="simulate a run and record it to a ROS 2 bag",
-                        description="Simulate ROBOT as built (systematic --errors, random --noise) driving a path "
-                                    "commanded by its nominal model, and record ground truth, odometry, wheel "
-                                    "joint states and cmd_vel to a new bag.",
-                        epilog=SIMULATE_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp = sub.add_parser(
+        "simulate",
+        help="simulate a run and record it to a ROS 2 bag",
+        description="Simulate ROBOT as built (systematic --errors, random --noise) driving a path "
+        "commanded by its nominal model, and record ground truth, odometry, wheel "
+        "joint states and cmd_vel to a new bag.",
+        epilog=SIMULATE_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
-    sp.add_argument("--path", default="square cw rotate 4", metavar="PATH",
-                    help="the path (see below; default 'square cw rotate 4')")
-    sp.add_argument("--errors", default="typical", metavar="PROFILE",
-                    help=f"systematic error profile: {', '.join(sorted(PROFILES))} (default typical)")
+    sp.add_argument(
+        "--path",
+        default="square cw rotate 4",
+        metavar="PATH",
+        help="the path (see below; default 'square cw rotate 4')",
+    )
+    sp.add_argument(
+        "--errors",
+        default="typical",
+        metavar="PROFILE",
+        help=f"systematic error profile: {', '.join(sorted(PROFILES))} (default typical)",
+    )
     sp.add_argument("--true-robot", metavar="FILE", help="the robot as built (replaces --errors)")
-    sp.add_argument("--noise", default="typical", metavar="PROFILE",
-                    help=f"random errors: {', '.join(sorted(NOISE))} (default typical)")
+    sp.add_argument(
+        "--noise",
+        default="typical",
+        metavar="PROFILE",
+        help=f"random errors: {', '.join(sorted(NOISE))} (default typical)",
+    )
     sp.add_argument("--seed", type=int, default=1, metavar="N", help="random seed (default 1)")
     sp.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="sample rate of all topics (default 100)")
     sp.add_argument("--start", type=float, default=0.0, metavar="SEC", help="stamp of the first sample [s] (default 0)")
-    sp.add_argument("--bag", metavar="OUT.bag",
-                    help="new bag to write (a new name; --force replaces a bag omnikin wrote)")
-    sp.add_argument("--log", metavar="LOG.csv",
-                    help="also (or only) write the encoder tick log, the input of 'omnikin odometry'")
+    sp.add_argument(
+        "--bag", metavar="OUT.bag", help="new bag to write (a new name; --force replaces a bag omnikin wrote)"
+    )
+    sp.add_argument(
+        "--log", metavar="LOG.csv", help="also (or only) write the encoder tick log, the input of 'omnikin odometry'"
+    )
     sp.add_argument("--storage", choices=("sqlite3", "mcap"), default="sqlite3", help="bag storage (default sqlite3)")
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     add_output_options(sp)
     add_budget_options(sp)
     sp.set_defaults(func=cmd_simulate)
 
-    sp = sub.add_parser("metrics", help="ATE and RPE of an estimated trajectory against a reference",
-                        description="Absolute trajectory error (translation, optionally after SE(2) alignment) "
-                                    "and relative pose error (translation and rotation over DELTA frames) of EST "
-                                    "against REF, after associating their timestamps.",
-                        epilog=METRICS_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp = sub.add_parser(
+        "metrics",
+        help="ATE and RPE of an estimated trajectory against a reference",
+        description="Absolute trajectory error (translation, optionally after SE(2) alignment) "
+        "and relative pose error (translation and rotation over DELTA frames) of EST "
+        "against REF, after associating their timestamps.",
+        epilog=METRICS_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sp.add_argument("ref", metavar="REF", help="reference trajectory (TUM, KITTI or CSV)")
     sp.add_argument("est", metavar="EST", help="estimated trajectory (TUM, KITTI or CSV)")
     sp.add_argument("--align", action="store_true", help="align EST to REF by SE(2) least squares before the ATE")
     sp.add_argument("--delta", type=int, default=1, metavar="N", help="RPE pose distance in frames (default 1)")
     sp.add_argument("--all-pairs", action="store_true", help="RPE over all pairs (i, i+N), not only consecutive")
-    sp.add_argument("--t-max-diff", type=float, default=0.01, metavar="SEC",
-                    help="largest time difference of associated poses [s] (default 0.01)")
-    sp.add_argument("--t-offset", type=float, default=0.0, metavar="SEC",
-                    help="time offset added to EST's timestamps [s] (default 0)")
+    sp.add_argument(
+        "--t-max-diff",
+        type=float,
+        default=0.01,
+        metavar="SEC",
+        help="largest time difference of associated poses [s] (default 0.01)",
+    )
+    sp.add_argument(
+        "--t-offset",
+        type=float,
+        default=0.0,
+        metavar="SEC",
+        help="time offset added to EST's timestamps [s] (default 0)",
+    )
     sp.add_argument("--json", action="store_true", help="print JSON (rotation in rad and in deg)")
     add_budget_options(sp, time=False)
     sp.set_defaults(func=cmd_metrics)
@@ -190,8 +260,10 @@ def cmd_bag_help(args) -> int:
 def _read_bounds(args, bytes_each: float) -> dict:
     """The reader bounds that follow from ``--max-memory``: messages held, bytes of one message."""
     budget = Budget.of(args)
-    return {"max_messages": budget.messages(bytes_each),
-            "max_message_bytes": int(budget.memory // LARGEST_MESSAGE_SHARE)}
+    return {
+        "max_messages": budget.messages(bytes_each),
+        "max_message_bytes": int(budget.memory // LARGEST_MESSAGE_SHARE),
+    }
 
 
 def _size_bag_job(args, what: str, bag, topic: str, bytes_each: float, hint: str) -> None:
@@ -199,8 +271,9 @@ def _size_bag_job(args, what: str, bag, topic: str, bytes_each: float, hint: str
     from ..io.bags import message_count
 
     count = message_count(bag, topic)
-    require(args, what, memory=count * bytes_each, seconds=count * 2 * MESSAGE_SECONDS, size=f"{count} messages",
-            hint=hint)
+    require(
+        args, what, memory=count * bytes_each, seconds=count * 2 * MESSAGE_SECONDS, size=f"{count} messages", hint=hint
+    )
 
 
 def cmd_bag_odometry(args) -> int:
@@ -214,14 +287,31 @@ def cmd_bag_odometry(args) -> int:
     check_topic(args.joint_states_topic, "--joint-states-topic")
     check_topic(args.odom_topic, "--odom-topic")
     checked_output(args, args.output, [args.bag, *robot_inputs(args.robot)], folder="data")
-    _size_bag_job(args, "bag odometry", args.bag, args.joint_states_topic, JOINT_STATE_BYTES,
-                  hint="split the bag (ros2 bag convert)")
+    _size_bag_job(
+        args,
+        "bag odometry",
+        args.bag,
+        args.joint_states_topic,
+        JOINT_STATE_BYTES,
+        hint="split the bag (ros2 bag convert)",
+    )
     with explained(args):
-        res = bag_odometry(robot, args.bag, args.output, joint_states_topic=args.joint_states_topic,
-                           odom_topic=args.odom_topic, method=args.method, stamp=args.stamp, frame_id=args.frame_id,
-                           child_frame_id=args.child_frame_id, pose_covariance=_covariance(args.pose_cov_diag),
-                           twist_covariance=_covariance(args.twist_cov_diag), storage=args.storage,
-                           force=args.force, **_read_bounds(args, JOINT_STATE_BYTES))
+        res = bag_odometry(
+            robot,
+            args.bag,
+            args.output,
+            joint_states_topic=args.joint_states_topic,
+            odom_topic=args.odom_topic,
+            method=args.method,
+            stamp=args.stamp,
+            frame_id=args.frame_id,
+            child_frame_id=args.child_frame_id,
+            pose_covariance=_covariance(args.pose_cov_diag),
+            twist_covariance=_covariance(args.twist_cov_diag),
+            storage=args.storage,
+            force=args.force,
+            **_read_bounds(args, JOINT_STATE_BYTES),
+        )
     s = res.summary()
     s.update(robot=robot.name, method=args.method)
     if args.json:
@@ -238,7 +328,8 @@ def cmd_bag_odometry(args) -> int:
         f"({s['stamp_source']} stamps), {args.method} integration\n"
         f"final pose x={end[0]:.6g} m, y={end[1]:.6g} m, theta={end[2]:.6g} rad; path {s['path_length']:.6g} m\n"
         f"nav_msgs/Odometry on {args.odom_topic} written to {args.output}"
-        + (f"\nnote: {'; '.join(notes)}" if notes else ""))
+        + (f"\nnote: {'; '.join(notes)}" if notes else "")
+    )
     return 0
 
 
@@ -250,10 +341,13 @@ def cmd_bag_export(args) -> int:
     checked_output(args, args.output, [args.bag])
     _size_bag_job(args, "bag export", args.bag, args.topic, POSE_BYTES, hint="split the bag (ros2 bag convert)")
     with explained(args):
-        track = export_poses(args.bag, args.topic, args.format, args.output, force=args.force,
-                             **_read_bounds(args, POSE_BYTES))
-    messages_console(args.output).print(f"{len(track.poses)} poses of {args.topic} ({track.msgtype}, frame "
-                                        f"{track.frame_id!r}) written to {args.output} ({args.format})")
+        track = export_poses(
+            args.bag, args.topic, args.format, args.output, force=args.force, **_read_bounds(args, POSE_BYTES)
+        )
+    messages_console(args.output).print(
+        f"{len(track.poses)} poses of {args.topic} ({track.msgtype}, frame "
+        f"{track.frame_id!r}) written to {args.output} ({args.format})"
+    )
     return 0
 
 
@@ -300,27 +394,54 @@ def cmd_simulate(args) -> int:
     plan = parse_paths(args.path)
     noise = noise_profile(args.noise)
     samples = estimated_samples(plan, robot, args.rate)
-    require(args, "simulate", memory=samples * SIM_SAMPLE_BYTES, seconds=samples * SIM_SAMPLE_SECONDS,
-            size=f"{samples:.3g} samples", hint="lower --rate or shorten --path")
+    require(
+        args,
+        "simulate",
+        memory=samples * SIM_SAMPLE_BYTES,
+        seconds=samples * SIM_SAMPLE_SECONDS,
+        size=f"{samples:.3g} samples",
+        hint="lower --rate or shorten --path",
+    )
     seeds = np.random.SeedSequence(args.seed).spawn(2)
     true, errors = robot_as_built(robot, args.true_robot, args.errors, seeds[0])
     run = simulate(plan, true, robot, rate=args.rate, noise=noise, trials=1, rng=seeds[1])
-    custom = {"omnikin.robot": robot.name, "omnikin.path": args.path, "omnikin.seed": str(args.seed),
-              "omnikin.errors": "file " + args.true_robot if args.true_robot else args.errors,
-              "omnikin.noise": args.noise, "omnikin.rate": f"{args.rate:g}"}
-    counts = (record_run(args.bag, run, robot, start=args.start, storage=args.storage, custom=custom,
-                         force=args.force) if args.bag is not None else {})
+    custom = {
+        "omnikin.robot": robot.name,
+        "omnikin.path": args.path,
+        "omnikin.seed": str(args.seed),
+        "omnikin.errors": "file " + args.true_robot if args.true_robot else args.errors,
+        "omnikin.noise": args.noise,
+        "omnikin.rate": f"{args.rate:g}",
+    }
+    counts = (
+        record_run(args.bag, run, robot, start=args.start, storage=args.storage, custom=custom, force=args.force)
+        if args.bag is not None
+        else {}
+    )
     if args.log is not None:
         _write_tick_log(args, robot, run)
     truth_end = run.truth[0, -1]
     odom_end = run.odometry[-1]
     diff = truth_end - odom_end
     diff[2] = wrap_angle(diff[2])
-    summary = {"robot": robot.name, "path": args.path, "errors": None if args.true_robot else args.errors,
-               "true_robot": args.true_robot, "noise": args.noise, "seed": args.seed, "rate": args.rate,
-               "samples": len(run.t), "duration": float(run.t[-1]), "bag": args.bag, "topics": counts, "log": args.log,
-               "truth_end": truth_end.tolist(), "odometry_end": odom_end.tolist(),
-               "end_error": diff.tolist(), "end_error_distance": float(math.hypot(diff[0], diff[1]))}
+    summary = {
+        "robot": robot.name,
+        "path": args.path,
+        "errors": None if args.true_robot else args.errors,
+        "true_robot": args.true_robot,
+        "noise": args.noise,
+        "seed": args.seed,
+        "rate": args.rate,
+        "samples": len(run.t),
+        "duration": float(run.t[-1]),
+        "bag": args.bag,
+        "topics": counts,
+        "log": args.log,
+        "truth_end": truth_end.tolist(),
+        "odometry_end": odom_end.tolist(),
+        "end_error": diff.tolist(),
+        "end_error_distance": float(math.hypot(diff[0], diff[1])),
+    }
     if errors is not None:
         summary["injected_errors"] = errors.as_dict()
     if args.json:
@@ -334,7 +455,8 @@ def cmd_simulate(args) -> int:
         f"x={odom_end[0]:.6g} m, y={odom_end[1]:.6g} m, theta={odom_end[2]:.6g} rad "
         f"(off by {summary['end_error_distance'] * 1000:.3g} mm)\n"
         + (f"bag {args.bag}: " + ", ".join(f"{t} ({n})" for t, n in counts.items()) if args.bag is not None else "")
-        + (("\n" if args.bag is not None else "") + f"tick log written to {args.log}" if args.log is not None else ""))
+        + (("\n" if args.bag is not None else "") + f"tick log written to {args.log}" if args.log is not None else "")
+    )
     return 0
 
 
@@ -346,8 +468,10 @@ def _check_tick_log(args, robot) -> None:
     from ..simulation.error_models import noise as noise_profile
 
     if not noise_profile(args.noise).quantise:
-        raise InputError(f"--log writes whole-number encoder counts, but --noise {args.noise} leaves the ticks "
-                         f"unquantised; choose another --noise profile")
+        raise InputError(
+            f"--log writes whole-number encoder counts, but --noise {args.noise} leaves the ticks "
+            f"unquantised; choose another --noise profile"
+        )
     inputs = [p for p in (args.robot, args.true_robot) if p and Path(p).is_file()]
     check_output(args.log, inputs=inputs, force=args.force)
 
@@ -357,14 +481,20 @@ def _write_tick_log(args, robot, run) -> None:
 
     from ..io.logs import write_tick_log
 
-    command = " ".join(["omnikin simulate", shlex.quote(args.robot), "--path", shlex.quote(args.path)]
-                       + (["--true-robot", shlex.quote(args.true_robot)] if args.true_robot else
-                          ["--errors", args.errors])
-                       + ["--noise", args.noise, "--seed", str(args.seed), "--rate", f"{args.rate:g}",
-                          "--log", shlex.quote(args.log)])
-    write_tick_log(args.log, run.t + args.start, run.ticks, robot.encoded_names, run.steer,
-                   steer_names=robot.steer_names,
-                   comment=f"encoder tick log of {robot.name} written by: {command}")
+    command = " ".join(
+        ["omnikin simulate", shlex.quote(args.robot), "--path", shlex.quote(args.path)]
+        + (["--true-robot", shlex.quote(args.true_robot)] if args.true_robot else ["--errors", args.errors])
+        + ["--noise", args.noise, "--seed", str(args.seed), "--rate", f"{args.rate:g}", "--log", shlex.quote(args.log)]
+    )
+    write_tick_log(
+        args.log,
+        run.t + args.start,
+        run.ticks,
+        robot.encoded_names,
+        run.steer,
+        steer_names=robot.steer_names,
+        comment=f"encoder tick log of {robot.name} written by: {command}",
+    )
 
 
 # --- metrics -----------------------------------------------------------------------------------------
@@ -384,19 +514,35 @@ def cmd_metrics(args) -> int:
     formats = [detect_format(p) for p in paths]
     if formats.count("kitti") == 1:
         kitti, timed = paths if formats[0] == "kitti" else paths[::-1]
-        raise InputError(f"{kitti} is KITTI (no timestamps: pose k stands at t = k) but {timed} has timestamps "
-                           f"[s]: they cannot be associated; export both as TUM or CSV, or both as KITTI to "
-                           f"compare by index")
+        raise InputError(
+            f"{kitti} is KITTI (no timestamps: pose k stands at t = k) but {timed} has timestamps "
+            f"[s]: they cannot be associated; export both as TUM or CSV, or both as KITTI to "
+            f"compare by index"
+        )
     t_ref, ref = read_trajectory(args.ref, formats[0])
     t_est, est = read_trajectory(args.est, formats[1])
     try:
-        ev = evaluate(t_ref, ref, t_est, est, align=args.align, delta=args.delta, all_pairs=args.all_pairs,
-                      max_diff=args.t_max_diff, offset=args.t_offset)
+        ev = evaluate(
+            t_ref,
+            ref,
+            t_est,
+            est,
+            align=args.align,
+            delta=args.delta,
+            all_pairs=args.all_pairs,
+            max_diff=args.t_max_diff,
+            offset=args.t_offset,
+        )
     except OmnikinError as exc:
         raise InputError(f"{args.ref} vs {args.est}: {exc}") from None
     rot_deg = statistics(np.degrees(ev.rpe.rotation))
-    doc = {"reference": args.ref, "estimate": args.est, "reference_poses": len(t_ref),
-           "estimate_poses": len(t_est), **ev.as_dict()}
+    doc = {
+        "reference": args.ref,
+        "estimate": args.est,
+        "reference_poses": len(t_ref),
+        "estimate_poses": len(t_est),
+        **ev.as_dict(),
+    }
     doc["rpe"]["rotation_deg"] = rot_deg.as_dict()
     if args.json:
         print_json(doc)
@@ -405,9 +551,10 @@ def cmd_metrics(args) -> int:
 
     con = console(120)
     a = ev.ate
-    con.print(f"{args.est} against {args.ref}: {a.errors.size} associated poses (of {len(t_est)} and {len(t_ref)}; "
-              f"max time difference {args.t_max_diff:g} s" + (f", offset {args.t_offset:g} s" if args.t_offset else "")
-              + ")")
+    con.print(
+        f"{args.est} against {args.ref}: {a.errors.size} associated poses (of {len(t_est)} and {len(t_ref)}; "
+        f"max time difference {args.t_max_diff:g} s" + (f", offset {args.t_offset:g} s" if args.t_offset else "") + ")"
+    )
     if a.alignment is not None:
         al = a.alignment
         con.print(f"SE(2) alignment: x={al.x:.6g} m, y={al.y:.6g} m, theta={math.degrees(al.theta):.6g} deg")
@@ -418,9 +565,11 @@ def cmd_metrics(args) -> int:
         table.add_column(c, justify="right")
     pairs = "all pairs (i, i+N)" if args.all_pairs else "consecutive pairs"
     con.print(f"RPE over delta N = {args.delta} frames: {ev.rpe.translation.size} {pairs}")
-    rows = (("ATE translation [m]" + (" (aligned)" if args.align else ""), a.stats),
-            ("RPE translation [m]", ev.rpe.translation_stats),
-            ("RPE rotation [deg]", rot_deg))
+    rows = (
+        ("ATE translation [m]" + (" (aligned)" if args.align else ""), a.stats),
+        ("RPE translation [m]", ev.rpe.translation_stats),
+        ("RPE rotation [deg]", rot_deg),
+    )
     for label, s in rows:
         table.add_row(label, *[f"{getattr(s, c):.6g}" for c in cols])
     con.print(table)
@@ -441,9 +590,14 @@ def _size_trajectory_file(args, path) -> None:
     try:
         info = os.stat(path)
     except OSError:
-        return                              # the reader names a missing or unreadable file
+        return  # the reader names a missing or unreadable file
     if not stat.S_ISREG(info.st_mode):
         return
     size = info.st_size
-    require(args, "metrics", memory=size * TRAJECTORY_BYTES_PER_FILE_BYTE, size=f"{path} ({size} bytes)",
-            hint="compare shorter trajectories")
+    require(
+        args,
+        "metrics",
+        memory=size * TRAJECTORY_BYTES_PER_FILE_BYTE,
+        size=f"{path} ({size} bytes)",
+        hint="compare shorter trajectories",
+    )

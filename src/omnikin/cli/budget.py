@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 from ..errors import ResourceLimitError
 
-DEFAULT_MEMORY = 2 * 1024 ** 3
+DEFAULT_MEMORY = 2 * 1024**3
 """Default ``--max-memory`` [bytes]: 2 GiB."""
 
 DEFAULT_TIME = 3600.0
@@ -40,7 +40,7 @@ DEFAULT_TIME = 3600.0
 NOTE_AFTER = 30.0
 """Jobs estimated to take longer than this [s] say so before starting."""
 
-SIZE_UNITS = {"": 1, "b": 1, "k": 1024, "m": 1024 ** 2, "g": 1024 ** 3, "t": 1024 ** 4}
+SIZE_UNITS = {"": 1, "b": 1, "k": 1024, "m": 1024**2, "g": 1024**3, "t": 1024**4}
 TIME_UNITS = {"": 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
 _QUANTITY = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([A-Za-z]*)\s*")
 
@@ -57,8 +57,7 @@ class Budget:
         """The budget given on the command line (defaults for options the command lacks)."""
         if isinstance(args, Budget):
             return args
-        return cls(getattr(args, "max_memory", None) or DEFAULT_MEMORY,
-                   getattr(args, "max_time", None) or DEFAULT_TIME)
+        return cls(getattr(args, "max_memory", None) or DEFAULT_MEMORY, getattr(args, "max_time", None) or DEFAULT_TIME)
 
     def messages(self, bytes_each: float) -> int:
         """How many items of ``bytes_each`` bytes fit the memory budget."""
@@ -83,8 +82,9 @@ def parse_duration(text: str) -> float:
     m = _QUANTITY.fullmatch(str(text))
     unit = m.group(2).lower() if m else ""
     if not m or unit not in TIME_UNITS:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a duration (seconds, or a number with s, m, h or d: "
-                                         f"90, 10m, 2h)")
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a duration (seconds, or a number with s, m, h or d: 90, 10m, 2h)"
+        )
     value = float(m.group(1)) * TIME_UNITS[unit]
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"{text!r}: a duration must be positive")
@@ -93,18 +93,29 @@ def parse_duration(text: str) -> float:
 
 def add_budget_options(parser, *, time: bool = True) -> None:
     """Add ``--max-memory SIZE`` (and, with ``time``, ``--max-time DURATION``) to ``parser``."""
-    parser.add_argument("--max-memory", type=parse_size, default=DEFAULT_MEMORY, metavar="SIZE",
-                        help=f"refuse to start a job estimated to need more memory (bytes, or K/M/G/T; default "
-                             f"{format_bytes(DEFAULT_MEMORY)})")
+    parser.add_argument(
+        "--max-memory",
+        type=parse_size,
+        default=DEFAULT_MEMORY,
+        metavar="SIZE",
+        help=f"refuse to start a job estimated to need more memory (bytes, or K/M/G/T; default "
+        f"{format_bytes(DEFAULT_MEMORY)})",
+    )
     if time:
-        parser.add_argument("--max-time", type=parse_duration, default=DEFAULT_TIME, metavar="DURATION",
-                            help=f"refuse to start a job estimated to take longer (seconds, or m/h: 90, 10m, 2h; "
-                                 f"default {format_seconds(DEFAULT_TIME)})")
+        parser.add_argument(
+            "--max-time",
+            type=parse_duration,
+            default=DEFAULT_TIME,
+            metavar="DURATION",
+            help=f"refuse to start a job estimated to take longer (seconds, or m/h: 90, 10m, 2h; "
+            f"default {format_seconds(DEFAULT_TIME)})",
+        )
 
 
 # --- checks -----------------------------------------------------------------------------------------------
-def require(args, what: str, *, memory: float | None = None, seconds: float | None = None, hint: str,
-            size: str = "") -> None:
+def require(
+    args, what: str, *, memory: float | None = None, seconds: float | None = None, hint: str, size: str = ""
+) -> None:
     """Refuse (:class:`ResourceLimitError`) a job estimated to need more than the budget of
     ``args`` (a parsed command line or a :class:`Budget`); else, if it will take long, say so on
     standard error.
@@ -116,13 +127,21 @@ def require(args, what: str, *, memory: float | None = None, seconds: float | No
     budget = Budget.of(args)
     of = f" for {size}" if size else ""
     if memory is not None and not memory <= budget.memory:
-        raise ResourceLimitError(f"{what}: about {format_bytes(memory)} of memory{of}, more than --max-memory "
-                                 f"{format_bytes(budget.memory)}; {hint}, or raise --max-memory",
-                                 needed=memory, limit=budget.memory, unit="bytes")
+        raise ResourceLimitError(
+            f"{what}: about {format_bytes(memory)} of memory{of}, more than --max-memory "
+            f"{format_bytes(budget.memory)}; {hint}, or raise --max-memory",
+            needed=memory,
+            limit=budget.memory,
+            unit="bytes",
+        )
     if seconds is not None and not seconds <= budget.seconds:
-        raise ResourceLimitError(f"{what}: about {format_seconds(seconds)}{of}, more than --max-time "
-                                 f"{format_seconds(budget.seconds)}; {hint}, or raise --max-time",
-                                 needed=seconds, limit=budget.seconds, unit="seconds")
+        raise ResourceLimitError(
+            f"{what}: about {format_seconds(seconds)}{of}, more than --max-time "
+            f"{format_seconds(budget.seconds)}; {hint}, or raise --max-time",
+            needed=seconds,
+            limit=budget.seconds,
+            unit="seconds",
+        )
     if seconds is not None and seconds > NOTE_AFTER:
         print(f"omnikin: note: {what}: this will take about {format_seconds(seconds)}{of}", file=sys.stderr)
 
@@ -137,8 +156,12 @@ def explained(args):
         option = "--max-time" if exc.unit == "seconds" else "--max-memory"
         value = Budget.of(args).seconds if exc.unit == "seconds" else Budget.of(args).memory
         shown = format_seconds(value) if exc.unit == "seconds" else format_bytes(value)
-        raise ResourceLimitError(f"{exc} (the limit follows from {option} {shown}; raise it to allow more)",
-                                 needed=exc.needed, limit=exc.limit, unit=exc.unit) from None
+        raise ResourceLimitError(
+            f"{exc} (the limit follows from {option} {shown}; raise it to allow more)",
+            needed=exc.needed,
+            limit=exc.limit,
+            unit=exc.unit,
+        ) from None
 
 
 # --- formatting --------------------------------------------------------------------------------------

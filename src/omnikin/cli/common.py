@@ -60,8 +60,9 @@ def checked_output(args, path, inputs=(), *, folder: bool | str = False) -> Path
     """:func:`omnikin.io.output.check_output` of ``path`` with ``--force`` from ``args``: call it
     before any long work. ``inputs``: every file or folder the command reads (robot files
     included). Returns the path (None for ``-``)."""
-    return check_output(path, inputs=[i for i in inputs if i is not None], force=bool(getattr(args, "force", False)),
-                        folder=folder)
+    return check_output(
+        path, inputs=[i for i in inputs if i is not None], force=bool(getattr(args, "force", False)), folder=folder
+    )
 
 
 def robot_inputs(*specs) -> list:
@@ -79,4 +80,3 @@ def print_json(data, *, nullable=()) -> None:
 
     text = to_json(data, nullable=nullable)
     print(text)
-

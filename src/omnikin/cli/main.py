@@ -59,8 +59,17 @@ errors: one line 'omnikin: error: ...' on stderr; exit status 2 for bad input or
 MESSAGE_LIMIT = 800
 """Longest error or warning line printed [characters]."""
 
-WRITE_ERRORS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EROFS, errno.EACCES, errno.EPERM,
-                errno.EBADF, errno.EPIPE}
+WRITE_ERRORS = {
+    errno.ENOSPC,
+    errno.EDQUOT,
+    errno.EFBIG,
+    errno.EIO,
+    errno.EROFS,
+    errno.EACCES,
+    errno.EPERM,
+    errno.EBADF,
+    errno.EPIPE,
+}
 """Operating-system errors that mean an output could not be written."""
 
 
@@ -103,10 +112,22 @@ def cmd_presets(args) -> int:
         r = load_robot(name)
         m = r.mobility
         ref = r.references[0] if r.references else ""
-        out.append({"name": name, "wheels": len(r.wheels), "campion_type": list(m.campion_type),
-                    "holonomic": m.holonomic, "reference": ref})
-        table.add_row(name, str(len(r.wheels)), str(m.campion_type), "yes" if m.holonomic else "no",
-                      ref[:70] + ("..." if len(ref) > 70 else ""))
+        out.append(
+            {
+                "name": name,
+                "wheels": len(r.wheels),
+                "campion_type": list(m.campion_type),
+                "holonomic": m.holonomic,
+                "reference": ref,
+            }
+        )
+        table.add_row(
+            name,
+            str(len(r.wheels)),
+            str(m.campion_type),
+            "yes" if m.holonomic else "no",
+            ref[:70] + ("..." if len(ref) > 70 else ""),
+        )
     if args.json:
         print_json(out)
     else:
@@ -120,15 +141,29 @@ def show_data(robot) -> dict:
     m = robot.mobility
     wheels = []
     for w in robot.wheels:
-        d = {"name": w.name, "type": w.type, "x": w.x, "y": w.y, "distance": math.hypot(w.x, w.y),
-             "angle_deg": math.degrees(math.atan2(w.y, w.x)), "drive_deg": math.degrees(w.drive),
-             "roller_deg": math.degrees(w.roller), "radius": w.radius}
+        d = {
+            "name": w.name,
+            "type": w.type,
+            "x": w.x,
+            "y": w.y,
+            "distance": math.hypot(w.x, w.y),
+            "angle_deg": math.degrees(math.atan2(w.y, w.x)),
+            "drive_deg": math.degrees(w.drive),
+            "roller_deg": math.degrees(w.roller),
+            "radius": w.radius,
+        }
         if w.encoder is not None:
-            d["encoder"] = {"ticks_per_rev": w.encoder.ticks_per_rev, "gear_ratio": w.encoder.gear_ratio,
-                            "invert": w.encoder.invert}
+            d["encoder"] = {
+                "ticks_per_rev": w.encoder.ticks_per_rev,
+                "gear_ratio": w.encoder.gear_ratio,
+                "invert": w.encoder.invert,
+            }
         if w.steer is not None:
-            d["steer"] = {"offset": w.steer.offset, "min_deg": math.degrees(w.steer.lower),
-                          "max_deg": math.degrees(w.steer.upper)}
+            d["steer"] = {
+                "offset": w.steer.offset,
+                "min_deg": math.degrees(w.steer.lower),
+                "max_deg": math.degrees(w.steer.upper),
+            }
         if w.max_speed is not None:
             d["max_speed"] = w.max_speed
         wheels.append(d)
@@ -179,16 +214,45 @@ def cmd_show(args) -> int:
         con.print(f"  ref: {ref}")
     con.print("wheels (body frame: x forward, y left)")
     geo = Table()
-    for col in ("name", "type", "x [m]", "y [m]", "angle [deg]", "drive [deg]", "roller [deg]", "radius [m]",
-                "steer", "encoder"):
+    for col in (
+        "name",
+        "type",
+        "x [m]",
+        "y [m]",
+        "angle [deg]",
+        "drive [deg]",
+        "roller [deg]",
+        "radius [m]",
+        "steer",
+        "encoder",
+    ):
         geo.add_column(col, justify="right" if "[" in col else "left")
     for w in data["wheels"]:
-        steer = (f"offset {w['steer']['offset']:g} m, {w['steer']['min_deg']:g}..{w['steer']['max_deg']:g} deg"
-                 if "steer" in w else "")
-        enc = (f"{w['encoder']['ticks_per_rev']:g}/rev x{w['encoder']['gear_ratio']:g}"
-               + (" inv" if w["encoder"]["invert"] else "")) if "encoder" in w else ""
-        geo.add_row(w["name"], w["type"], _fmt(w["x"]), _fmt(w["y"]), _fmt(w["angle_deg"]), _fmt(w["drive_deg"]),
-                    _fmt(w["roller_deg"]), _fmt(w["radius"]), steer, enc)
+        steer = (
+            f"offset {w['steer']['offset']:g} m, {w['steer']['min_deg']:g}..{w['steer']['max_deg']:g} deg"
+            if "steer" in w
+            else ""
+        )
+        enc = (
+            (
+                f"{w['encoder']['ticks_per_rev']:g}/rev x{w['encoder']['gear_ratio']:g}"
+                + (" inv" if w["encoder"]["invert"] else "")
+            )
+            if "encoder" in w
+            else ""
+        )
+        geo.add_row(
+            w["name"],
+            w["type"],
+            _fmt(w["x"]),
+            _fmt(w["y"]),
+            _fmt(w["angle_deg"]),
+            _fmt(w["drive_deg"]),
+            _fmt(w["roller_deg"]),
+            _fmt(w["radius"]),
+            steer,
+            enc,
+        )
     con.print(geo)
     twist = ["vx", "vy", "omega"]
     note = " at zero steering" if robot.steerable else ""
@@ -197,20 +261,25 @@ def cmd_show(args) -> int:
     con.print(f"forward kinematics{note}: (vx, vy, omega) = F wheel speeds (least squares)")
     con.print(_matrix_table(data["fk_matrix"], twist, robot.rolling_names))
     if data["fk_rank"] < data["mobility"]:
-        con.print(f"note: at zero steering the wheel speeds determine only {data['fk_rank']} of the "
-                  f"{data['mobility']} motion components; F is the minimum-norm solution there")
+        con.print(
+            f"note: at zero steering the wheel speeds determine only {data['fk_rank']} of the "
+            f"{data['mobility']} motion components; F is the minimum-norm solution there"
+        )
     con.print("mobility analysis (Campion, Bastin, d'Andrea-Novel 1996)")
     ana = Table()
     ana.add_column("quantity")
     ana.add_column("value", justify="right")
     rank_label = "rank of J (generic steering)" if robot.steerable else "rank of J"
-    for k, v in ((rank_label, data["rank"]), ("degree of mobility", data["mobility"]),
-                 ("degree of steerability", data["steerability"]),
-                 ("Campion type", f"{tuple(data['campion_type'])} {data['campion_name']}"),
-                 ("holonomic", "yes" if data["holonomic"] else "no"),
-                 ("condition number", _fmt(data["condition_number"])),
-                 ("characteristic length [m]", _fmt(data["characteristic_length"])),
-                 ("isotropic", "yes" if data["isotropic"] else "no")):
+    for k, v in (
+        (rank_label, data["rank"]),
+        ("degree of mobility", data["mobility"]),
+        ("degree of steerability", data["steerability"]),
+        ("Campion type", f"{tuple(data['campion_type'])} {data['campion_name']}"),
+        ("holonomic", "yes" if data["holonomic"] else "no"),
+        ("condition number", _fmt(data["condition_number"])),
+        ("characteristic length [m]", _fmt(data["characteristic_length"])),
+        ("isotropic", "yes" if data["isotropic"] else "no"),
+    ):
         ana.add_row(k, str(v))
     con.print(ana)
     if args.plot is not None:
@@ -232,8 +301,10 @@ def _plot_format(args) -> str:
     formats = Figure().canvas.get_supported_filetypes()
     suffix = os.path.splitext(args.plot)[1].lower().lstrip(".")
     if suffix not in formats:
-        raise CliError(f"--plot {args.plot}: unknown drawing format {suffix or '(no extension)'!r}; "
-                       f"one of {', '.join(sorted(formats))}")
+        raise CliError(
+            f"--plot {args.plot}: unknown drawing format {suffix or '(no extension)'!r}; "
+            f"one of {', '.join(sorted(formats))}"
+        )
     return suffix
 
 
@@ -265,14 +336,20 @@ def cmd_ik(args) -> int:
     if hint is not None and len(hint) != len(robot.steerable):
         raise CliError(f"--steer-hint-deg needs {len(robot.steerable)} values for {robot.steer_names}")
     try:
-        res = robot.ik(twist, heading=args.heading, steer_hint=hint,
-                       on_infeasible="return" if args.allow_infeasible else "raise")
+        res = robot.ik(
+            twist, heading=args.heading, steer_hint=hint, on_infeasible="return" if args.allow_infeasible else "raise"
+        )
     except InfeasibleTwistError as exc:
-        raise InfeasibleTwistError(f"{exc.detail}; --allow-infeasible reports the violation instead",
-                                   detail=exc.detail) from None
+        raise InfeasibleTwistError(
+            f"{exc.detail}; --allow-infeasible reports the violation instead", detail=exc.detail
+        ) from None
     body = robot.body_twist(twist, args.heading) if args.heading is not None else twist
-    data = {"robot": robot.name, "twist": body.tolist(), "wheel_names": robot.rolling_names,
-            "wheel_speeds": res.wheel_speeds.tolist()}
+    data = {
+        "robot": robot.name,
+        "twist": body.tolist(),
+        "wheel_names": robot.rolling_names,
+        "wheel_speeds": res.wheel_speeds.tolist(),
+    }
     if robot.steerable:
         data["steer_names"] = robot.steer_names
         data["steer_angles"] = res.steer_angles.tolist()
@@ -298,8 +375,12 @@ def cmd_ik(args) -> int:
     steer = dict(zip(robot.steer_names, res.steer_angles, strict=True))
     roller = dict(zip(robot.swedish_names, data.get("roller_speeds", []), strict=True))
     for name, speed in zip(robot.rolling_names, res.wheel_speeds, strict=True):
-        table.add_row(name, _fmt(speed), _fmt(math.degrees(steer[name])) if name in steer else "",
-                      _fmt(roller[name]) if name in roller else "")
+        table.add_row(
+            name,
+            _fmt(speed),
+            _fmt(math.degrees(steer[name])) if name in steer else "",
+            _fmt(roller[name]) if name in roller else "",
+        )
     con.print(table)
     if not res.feasible:
         if robot.fixed and np.any(np.abs(res.violation) > 1e-9):
@@ -315,19 +396,28 @@ def cmd_fk(args) -> int:
     robot = load_robot(args.robot)
     n = len(robot.rolling_names)
     if len(args.speeds) != n:
-        raise CliError(f"robot {robot.name!r} has {n} rolling wheels {robot.rolling_names}: "
-                       f"give {n} wheel speeds, got {len(args.speeds)}")
+        raise CliError(
+            f"robot {robot.name!r} has {n} rolling wheels {robot.rolling_names}: "
+            f"give {n} wheel speeds, got {len(args.speeds)}"
+        )
     steer = None
     if robot.steerable:
         if args.steer_deg is None or len(args.steer_deg) != len(robot.steerable):
-            raise CliError(f"robot {robot.name!r} has steerable wheels {robot.steer_names}: give their steering "
-                           f"angles with --steer-deg ({len(robot.steerable)} values)")
+            raise CliError(
+                f"robot {robot.name!r} has steerable wheels {robot.steer_names}: give their steering "
+                f"angles with --steer-deg ({len(robot.steerable)} values)"
+            )
         steer = np.radians(args.steer_deg)
     elif args.steer_deg is not None:
         raise CliError(f"robot {robot.name!r} has no steerable wheel: drop --steer-deg")
     res = robot.fk(np.array(args.speeds), steer)
-    data = {"robot": robot.name, "wheel_names": robot.rolling_names, "twist": res.twist.tolist(),
-            "residual": res.residual.tolist(), "residual_norm": float(res.residual_norm)}
+    data = {
+        "robot": robot.name,
+        "wheel_names": robot.rolling_names,
+        "twist": res.twist.tolist(),
+        "residual": res.residual.tolist(),
+        "residual_norm": float(res.residual_norm),
+    }
     text = _json_checked(data)
     if args.json:
         print(text)
@@ -356,11 +446,21 @@ def cmd_odometry(args) -> int:
     log = read_tick_log(args.log, robot)
     if log.duplicate_lines:
         lines = ", ".join(map(str, log.duplicate_lines[:10])) + (" ..." if len(log.duplicate_lines) > 10 else "")
-        print(f"omnikin: warning: {args.log}: skipped {len(log.duplicate_lines)} row(s) repeating the previous "
-              f"sample exactly (line {lines})", file=sys.stderr)
+        print(
+            f"omnikin: warning: {args.log}: skipped {len(log.duplicate_lines)} row(s) repeating the previous "
+            f"sample exactly (line {lines})",
+            file=sys.stderr,
+        )
     try:
-        res = batch_odometry(robot, log.t, log.ticks, steer=log.steer, method=args.method,
-                             counter_bits=args.counter_bits, max_wheel_speed=args.max_wheel_speed)
+        res = batch_odometry(
+            robot,
+            log.t,
+            log.ticks,
+            steer=log.steer,
+            method=args.method,
+            counter_bits=args.counter_bits,
+            max_wheel_speed=args.max_wheel_speed,
+        )
     except OdometryInputError as exc:
         if exc.sample is None:
             raise CliError(f"{args.log}: {exc}") from None
@@ -372,105 +472,170 @@ def cmd_odometry(args) -> int:
         raise CliError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
     end = res.poses[-1]
     path = float(np.sum(np.hypot(*np.diff(res.poses[:, :2], axis=0).T)))
-    summary = {"robot": robot.name, "samples": int(len(log.t)), "duration": float(log.t[-1] - log.t[0]),
-               "method": args.method, "final_pose": end.tolist(), "path_length": path,
-               "max_residual": float(np.max(np.abs(res.residual))) if res.residual.size else 0.0,
-               "output": str(args.output), "format": args.format,
-               "duplicate_lines": list(log.duplicate_lines)}
+    summary = {
+        "robot": robot.name,
+        "samples": int(len(log.t)),
+        "duration": float(log.t[-1] - log.t[0]),
+        "method": args.method,
+        "final_pose": end.tolist(),
+        "path_length": path,
+        "max_residual": float(np.max(np.abs(res.residual))) if res.residual.size else 0.0,
+        "output": str(args.output),
+        "format": args.format,
+        "duplicate_lines": list(log.duplicate_lines),
+    }
     if args.json:
         print_json(summary)
     else:
         console(stderr=to_stdout).print(
             f"{robot.name}: {summary['samples']} samples over {summary['duration']:.6g} s, {args.method} integration\n"
             f"final pose x={end[0]:.6g} m, y={end[1]:.6g} m, theta={end[2]:.6g} rad; path {path:.6g} m\n"
-            f"written to {'standard output' if to_stdout else args.output} ({args.format})")
+            f"written to {'standard output' if to_stdout else args.output} ({args.format})"
+        )
     return 0
 
 
 # --- parser --------------------------------------------------------------------------------------------
 def build_parser() -> CommandParser:
     p = CommandParser(
-        prog="omnikin", description="Kinematics and exact odometry for wheeled mobile robots of any wheel layout.",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+        prog="omnikin",
+        description="Kinematics and exact odometry for wheeled mobile robots of any wheel layout.",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("--version", action="version", version=f"omnikin {__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
     robot_help = f"preset name ({', '.join(PRESET_NAMES)}) or robot file (YAML/JSON, schema 1)"
 
-    sp = sub.add_parser("presets", help="list the shipped robots", description="List the robots shipped with omnikin.",
-                        epilog="examples:\n  omnikin presets\n  omnikin presets --json",
-                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp = sub.add_parser(
+        "presets",
+        help="list the shipped robots",
+        description="List the robots shipped with omnikin.",
+        epilog="examples:\n  omnikin presets\n  omnikin presets --json",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sp.add_argument("--json", action="store_true", help="machine-readable output")
     sp.set_defaults(func=cmd_presets)
 
-    sp = sub.add_parser("show", help="geometry, IK/FK matrices and mobility analysis of a robot",
-                        description="Show a robot: wheel table, inverse and forward kinematics matrices, "
-                                    "rank, Campion type, holonomy and conditioning; optionally draw it.",
-                        epilog="example: omnikin show tomasi-omni3 --plot layout.png",
-                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp = sub.add_parser(
+        "show",
+        help="geometry, IK/FK matrices and mobility analysis of a robot",
+        description="Show a robot: wheel table, inverse and forward kinematics matrices, "
+        "rank, Campion type, holonomy and conditioning; optionally draw it.",
+        epilog="example: omnikin show tomasi-omni3 --plot layout.png",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
-    sp.add_argument("--json", action="store_true",
-                    help="print JSON (keys ik_matrix, rank, mobility, steerability, ...)")
-    sp.add_argument("--plot", metavar="FILE.png", help="draw the layout with drive and roller directions (format "
-                                                      "from the extension: png, svg, pdf, ...)")
+    sp.add_argument(
+        "--json", action="store_true", help="print JSON (keys ik_matrix, rank, mobility, steerability, ...)"
+    )
+    sp.add_argument(
+        "--plot",
+        metavar="FILE.png",
+        help="draw the layout with drive and roller directions (format from the extension: png, svg, pdf, ...)",
+    )
     add_output_options(sp)
     sp.set_defaults(func=cmd_show)
 
-    sp = sub.add_parser("ik", help="inverse kinematics: twist -> wheel speeds (and steering)",
-                        description="Wheel speeds [rad/s, robot-file order] for a body twist VX VY [m/s] OMEGA "
-                                    "[rad/s]; with --heading the velocity is given in the world frame.",
-                        epilog="examples:\n  omnikin ik tomasi-omni3 0.2 0 0.5\n"
-                               "  omnikin ik diff-drive 0.5 0.1 0 --allow-infeasible --json",
-                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp = sub.add_parser(
+        "ik",
+        help="inverse kinematics: twist -> wheel speeds (and steering)",
+        description="Wheel speeds [rad/s, robot-file order] for a body twist VX VY [m/s] OMEGA "
+        "[rad/s]; with --heading the velocity is given in the world frame.",
+        epilog="examples:\n  omnikin ik tomasi-omni3 0.2 0 0.5\n"
+        "  omnikin ik diff-drive 0.5 0.1 0 --allow-infeasible --json",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument("vx", type=float, metavar="VX", help="velocity along body x [m/s] (world x with --heading)")
     sp.add_argument("vy", type=float, metavar="VY", help="velocity along body y [m/s] (world y with --heading)")
     sp.add_argument("omega", type=float, metavar="OMEGA", help="turn rate [rad/s], counter-clockwise positive")
     sp.add_argument("--heading", type=float, metavar="RAD", help="robot heading [rad]: VX VY are world-frame rates")
-    sp.add_argument("--steer-hint-deg", type=float, nargs="+", metavar="DEG",
-                    help="current steering angles [deg]: the nearest valid alignment is chosen")
-    sp.add_argument("--allow-infeasible", action="store_true",
-                    help="report the side-slip violation of fixed wheels instead of refusing the twist")
+    sp.add_argument(
+        "--steer-hint-deg",
+        type=float,
+        nargs="+",
+        metavar="DEG",
+        help="current steering angles [deg]: the nearest valid alignment is chosen",
+    )
+    sp.add_argument(
+        "--allow-infeasible",
+        action="store_true",
+        help="report the side-slip violation of fixed wheels instead of refusing the twist",
+    )
     sp.add_argument("--json", action="store_true", help="print JSON (keys wheel_speeds, steer_angles [rad], ...)")
     sp.set_defaults(func=cmd_ik)
 
-    sp = sub.add_parser("fk", help="forward kinematics: wheel speeds -> twist and residual",
-                        description="Body twist from wheel speeds [rad/s] of all rolling wheels in robot-file "
-                                    "order, by least squares; the residual measures slip or model error.",
-                        epilog="example: omnikin fk omni4 10 -5 -10 5 --json",
-                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp = sub.add_parser(
+        "fk",
+        help="forward kinematics: wheel speeds -> twist and residual",
+        description="Body twist from wheel speeds [rad/s] of all rolling wheels in robot-file "
+        "order, by least squares; the residual measures slip or model error.",
+        epilog="example: omnikin fk omni4 10 -5 -10 5 --json",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument("speeds", type=float, nargs="+", metavar="W", help="wheel speeds [rad/s]")
-    sp.add_argument("--steer-deg", type=float, nargs="+", metavar="DEG",
-                    help="steering angles [deg] of the steerable wheels (required for them)")
+    sp.add_argument(
+        "--steer-deg",
+        type=float,
+        nargs="+",
+        metavar="DEG",
+        help="steering angles [deg] of the steerable wheels (required for them)",
+    )
     sp.add_argument("--json", action="store_true", help="print JSON (keys twist, residual)")
     sp.set_defaults(func=cmd_fk)
 
-    sp = sub.add_parser("odometry", help="integrate an encoder tick log into a trajectory",
-                        description="Read a CSV tick log (header: t, then one column per encoded wheel named by "
-                                    "the wheel, plus <wheel>_steer_deg for steerable wheels), integrate it exactly "
-                                    "on SE(2) and write the trajectory.",
-                        epilog="examples:\n  omnikin odometry tomasi-omni3 log.csv -o traj.tum --format tum\n"
-                               "  evo_traj tum traj.tum --plot\n"
-                               "  omnikin odometry my_robot.yaml log.csv -o - --counter-bits 16 | head\n\n"
-                               "tick readings: integers (ASCII digits, optional leading '-'), exact up to 64 bits.\n"
-                               "A jump no wheel could make in one sample is an error: if the counters wrap,\n"
-                               "give their width (--counter-bits or encoder.counter_bits in the robot file).",
-                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp = sub.add_parser(
+        "odometry",
+        help="integrate an encoder tick log into a trajectory",
+        description="Read a CSV tick log (header: t, then one column per encoded wheel named by "
+        "the wheel, plus <wheel>_steer_deg for steerable wheels), integrate it exactly "
+        "on SE(2) and write the trajectory.",
+        epilog="examples:\n  omnikin odometry tomasi-omni3 log.csv -o traj.tum --format tum\n"
+        "  evo_traj tum traj.tum --plot\n"
+        "  omnikin odometry my_robot.yaml log.csv -o - --counter-bits 16 | head\n\n"
+        "tick readings: integers (ASCII digits, optional leading '-'), exact up to 64 bits.\n"
+        "A jump no wheel could make in one sample is an error: if the counters wrap,\n"
+        "give their width (--counter-bits or encoder.counter_bits in the robot file).",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument("log", metavar="LOG.csv", help="tick log")
-    sp.add_argument("-o", "--output", required=True, metavar="OUT",
-                    help="trajectory file to write ('-': standard output, messages then go to standard error)")
+    sp.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="OUT",
+        help="trajectory file to write ('-': standard output, messages then go to standard error)",
+    )
     sp.add_argument("--force", action="store_true", help="replace OUT if it exists")
-    sp.add_argument("--format", choices=("csv", "tum", "kitti"), default="csv",
-                    help="csv: t,x,y,theta; tum: t x y z qx qy qz qw; kitti: 3x4 matrices (default csv)")
-    sp.add_argument("--method", choices=("exact", "midpoint", "euler"), default="exact",
-                    help="pose integration (default exact; the others exist for comparison)")
-    sp.add_argument("--counter-bits", type=int, metavar="N",
-                    help="encoder counters wrap at 2**N (e.g. 16, 32); default: each wheel's encoder.counter_bits "
-                         "in the robot file (a different value there is an error), else no wrap-around")
-    sp.add_argument("--max-wheel-speed", type=float, metavar="RAD_S",
-                    help="fastest a wheel turns [rad/s]: a tick jump needing more than 1.5x this is refused "
-                         "(default: each wheel's max_speed, else 100 m/s at the rim)")
+    sp.add_argument(
+        "--format",
+        choices=("csv", "tum", "kitti"),
+        default="csv",
+        help="csv: t,x,y,theta; tum: t x y z qx qy qz qw; kitti: 3x4 matrices (default csv)",
+    )
+    sp.add_argument(
+        "--method",
+        choices=("exact", "midpoint", "euler"),
+        default="exact",
+        help="pose integration (default exact; the others exist for comparison)",
+    )
+    sp.add_argument(
+        "--counter-bits",
+        type=int,
+        metavar="N",
+        help="encoder counters wrap at 2**N (e.g. 16, 32); default: each wheel's encoder.counter_bits "
+        "in the robot file (a different value there is an error), else no wrap-around",
+    )
+    sp.add_argument(
+        "--max-wheel-speed",
+        type=float,
+        metavar="RAD_S",
+        help="fastest a wheel turns [rad/s]: a tick jump needing more than 1.5x this is refused "
+        "(default: each wheel's max_speed, else 100 m/s at the rim)",
+    )
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     sp.set_defaults(func=cmd_odometry)
     from . import bag, ros, umbmark
@@ -488,8 +653,14 @@ def _add_umbmark_analyze(umbmark_parser: CommandParser) -> None:
     from .umbmark import analyze_parser
 
     spec = analyze_parser()
-    analyze = CommandParser(prog="omnikin umbmark analyze", parents=[spec], add_help=False,
-                            description=spec.description, epilog=spec.epilog, formatter_class=spec.formatter_class)
+    analyze = CommandParser(
+        prog="omnikin umbmark analyze",
+        parents=[spec],
+        add_help=False,
+        description=spec.description,
+        epilog=spec.epilog,
+        formatter_class=spec.formatter_class,
+    )
     umbmark_parser.add_command("analyze", analyze)
 
 
@@ -509,44 +680,51 @@ def main(argv=None) -> int:
             warnings.showwarning = _show_warning
             warnings.filterwarnings("error", category=RuntimeWarning, module=r"omnikin(\.|$)")
             status = _run(argv)
-            sys.stdout.flush()              # a full disk or a closed pipe shows here, not at exit
+            sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
             return status
     except UsageError as exc:
         return _fail(f"{exc.command + ': ' if exc.command else ''}{exc} (see {exc.help_hint})", 2)
     except InputError as exc:
         return _fail(exc, 2)
-    except OmnikinError as exc:             # OutputError, LinkError: failures while running
+    except OmnikinError as exc:  # OutputError, LinkError: failures while running
         return _fail(exc, 1)
-    except ImportError as exc:              # an optional extra is missing (the message names it)
+    except ImportError as exc:  # an optional extra is missing (the message names it)
         return _fail(exc, 2)
     except KeyboardInterrupt:
         return _fail("interrupted", 130)
-    except BrokenPipeError:                 # the reader of standard output went away: stop quietly
+    except BrokenPipeError:  # the reader of standard output went away: stop quietly
         _quiet_stdout()
         return 141
     except (RuntimeWarning, FloatingPointError) as exc:
         return _fail(f"numerical failure ({exc}): an input is probably beyond the range omnikin computes with", 2)
     except MemoryError:
         return _fail("out of memory; lower the sizes of the job (see --max-memory of the command)", 1)
-    except OSError as exc:                  # not raised by omnikin's readers and writers: standard output
+    except OSError as exc:  # not raised by omnikin's readers and writers: standard output
         _quiet_stdout()
         where = f"{exc.filename}" if exc.filename else "standard output"
-        return _fail(f"{where}: cannot write: {exc.strerror or exc}" if exc.errno in WRITE_ERRORS
-                     else f"{where}: {exc.strerror or exc}", 1)
+        return _fail(
+            f"{where}: cannot write: {exc.strerror or exc}"
+            if exc.errno in WRITE_ERRORS
+            else f"{where}: {exc.strerror or exc}",
+            1,
+        )
     except Exception as exc:  # noqa: BLE001 (the promise: no traceback reaches a user)
         if os.environ.get("OMNIKIN_TRACEBACK"):
             import traceback
 
             traceback.print_exc()
-        return _fail(f"internal error: {type(exc).__name__}: {exc} (a bug in omnikin: please report it with the "
-                     f"command line; OMNIKIN_TRACEBACK=1 shows where)", 1)
+        return _fail(
+            f"internal error: {type(exc).__name__}: {exc} (a bug in omnikin: please report it with the "
+            f"command line; OMNIKIN_TRACEBACK=1 shows where)",
+            1,
+        )
 
 
 def _run(argv: list[str]) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
-    except SystemExit as exc:               # --help and --version print, then argparse exits
+    except SystemExit as exc:  # --help and --version print, then argparse exits
         return exc.code if isinstance(exc.code, int) else 0
     if not getattr(args, "func", None):
         parser.print_help()
@@ -559,7 +737,7 @@ def _fail(message, status: int) -> int:
     try:
         print(f"omnikin: error: {one_line(message, MESSAGE_LIMIT)}", file=sys.stderr)
         sys.stderr.flush()
-    except (OSError, ValueError):           # stderr itself is gone: nothing more to say
+    except (OSError, ValueError):  # stderr itself is gone: nothing more to say
         pass
     return status
 
@@ -577,7 +755,7 @@ def _quiet_stdout() -> None:
     interpreter's final flush does not print a second error."""
     try:
         fd = sys.stdout.fileno()
-    except (AttributeError, OSError, ValueError):   # not a real file (a test's capture)
+    except (AttributeError, OSError, ValueError):  # not a real file (a test's capture)
         return
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)

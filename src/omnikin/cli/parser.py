@@ -59,7 +59,7 @@ class CommandParser(argparse.ArgumentParser):
     class too."""
 
     def __init__(self, *args, **kwargs):
-        self._option_names: list[str] = []          # before argparse adds -h/--help through add_argument
+        self._option_names: list[str] = []  # before argparse adds -h/--help through add_argument
         self._commands: dict[str, CommandParser] = {}
         self._subcommands = None
         super().__init__(*args, **kwargs)

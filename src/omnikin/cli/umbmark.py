@@ -32,8 +32,11 @@ DEFAULT_OUT = "umbmark-report"
 
 def _defaults(function) -> dict:
     """Keyword defaults of ``function`` (the API entry point a command calls)."""
-    return {name: p.default for name, p in inspect.signature(function).parameters.items()
-            if p.default is not inspect.Parameter.empty}
+    return {
+        name: p.default
+        for name, p in inspect.signature(function).parameters.items()
+        if p.default is not inspect.Parameter.empty
+    }
 
 
 UMBMARK = _defaults(run_umbmark)
@@ -50,8 +53,8 @@ UMBMARK_EPILOG = f"""examples:
 
 Every robot goes through the same steps; the calibration drives the runs of
 'omnikin calibrate ROBOT --plan' (--no-calibrate skips it). --errors draws per-wheel systematic
-errors ({', '.join(sorted(PROFILES))}); --noise adds run-to-run slip, floor and measurement errors
-({', '.join(sorted(NOISE))}). The return error is the true end pose minus the odometry end pose
+errors ({", ".join(sorted(PROFILES))}); --noise adds run-to-run slip, floor and measurement errors
+({", ".join(sorted(NOISE))}). The return error is the true end pose minus the odometry end pose
 (Borenstein and Feng, "Measurement and correction of systematic odometry errors in mobile robots").
 The report gives confidence intervals of E_max,syst and of the reduction factor (Hotelling's T^2,
 3 runs per direction at least) and the noise floor: E_max,syst of the same robot perfectly
@@ -60,67 +63,128 @@ calibrated, under the same random errors."""
 
 def add_parsers(sub, robot_help: str) -> None:
     d = UMBMARK
-    sp = sub.add_parser("umbmark", help="UMBmark, calibration and report",
-                        description="Simulate the UMBmark odometry benchmark on a robot as built, calibrate it and "
-                                    "run UMBmark again; write a report folder. 'omnikin umbmark analyze FILE' "
-                                    "analyses a real robot's measurements.",
-                        epilog=UMBMARK_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    sp.add_argument("robot", nargs="?", default=d["robot"], metavar="ROBOT",
-                    help=f"{robot_help} (default {d['robot']})")
-    sp.add_argument("--true-robot", metavar="FILE", default=d["true_robot"],
-                    help="the robot as built (replaces --errors)")
-    sp.add_argument("--errors", default=d["errors"], metavar="PROFILE",
-                    help=f"systematic error profile: {', '.join(sorted(PROFILES))} (default {d['errors']})")
-    sp.add_argument("--mode", choices=("rotate", "translate"), default=d["mode"],
-                    help="square driven by turning in place at corners (rotate) or by translating with the "
-                         f"heading held (translate: robots that can move sideways); default {d['mode']}")
-    sp.add_argument("--runs", type=int, default=d["runs"], metavar="N",
-                    help=f"runs per direction (default {d['runs']})")
-    sp.add_argument("--side", type=float, default=d["side"], metavar="M",
-                    help=f"side of the square [m] (default {d['side']:g})")
-    sp.add_argument("--noise", default=d["noise"], metavar="PROFILE",
-                    help=f"random errors: {', '.join(sorted(NOISE))} (default {d['noise']})")
-    sp.add_argument("--rate", type=float, default=d["rate"], metavar="HZ",
-                    help=f"encoder sample rate [Hz] (default {d['rate']:g})")
-    sp.add_argument("--seed", type=int, default=d["seed"], metavar="N",
-                    help=f"random seed (default {d['seed']}); the same seed builds the same robot whatever --trials")
-    sp.add_argument("--trials", type=int, default=d["trials"], metavar="N",
-                    help="repeat each UMBmark procedure N times with fresh random errors (Monte Carlo; the robot "
-                         f"as built and its calibration stay the same; default {d['trials']})")
-    sp.add_argument("--calibrate", action=argparse.BooleanOptionalAction, default=d["calibrate"],
-                    help="calibrate and run UMBmark again (default on; --no-calibrate: UMBmark only)")
-    sp.add_argument("-o", "--out", default=DEFAULT_OUT, metavar="DIR",
-                    help=f"report folder (default ./{DEFAULT_OUT}); a folder omnikin wrote is replaced as a whole, "
-                         "any other non-empty folder is refused")
-    sp.add_argument("--figures", choices=FIGURE_FORMATS, default=WRITE["figure_format"],
-                    help=f"figure format: png, or svg/pdf (vector) for papers (default {WRITE['figure_format']})")
-    sp.add_argument("--dpi", type=float, default=WRITE["dpi"], metavar="N",
-                    help=f"resolution of PNG figures (default {WRITE['dpi']:g}, at most {MAX_DPI})")
+    sp = sub.add_parser(
+        "umbmark",
+        help="UMBmark, calibration and report",
+        description="Simulate the UMBmark odometry benchmark on a robot as built, calibrate it and "
+        "run UMBmark again; write a report folder. 'omnikin umbmark analyze FILE' "
+        "analyses a real robot's measurements.",
+        epilog=UMBMARK_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sp.add_argument(
+        "robot", nargs="?", default=d["robot"], metavar="ROBOT", help=f"{robot_help} (default {d['robot']})"
+    )
+    sp.add_argument(
+        "--true-robot", metavar="FILE", default=d["true_robot"], help="the robot as built (replaces --errors)"
+    )
+    sp.add_argument(
+        "--errors",
+        default=d["errors"],
+        metavar="PROFILE",
+        help=f"systematic error profile: {', '.join(sorted(PROFILES))} (default {d['errors']})",
+    )
+    sp.add_argument(
+        "--mode",
+        choices=("rotate", "translate"),
+        default=d["mode"],
+        help="square driven by turning in place at corners (rotate) or by translating with the "
+        f"heading held (translate: robots that can move sideways); default {d['mode']}",
+    )
+    sp.add_argument(
+        "--runs", type=int, default=d["runs"], metavar="N", help=f"runs per direction (default {d['runs']})"
+    )
+    sp.add_argument(
+        "--side", type=float, default=d["side"], metavar="M", help=f"side of the square [m] (default {d['side']:g})"
+    )
+    sp.add_argument(
+        "--noise",
+        default=d["noise"],
+        metavar="PROFILE",
+        help=f"random errors: {', '.join(sorted(NOISE))} (default {d['noise']})",
+    )
+    sp.add_argument(
+        "--rate", type=float, default=d["rate"], metavar="HZ", help=f"encoder sample rate [Hz] (default {d['rate']:g})"
+    )
+    sp.add_argument(
+        "--seed",
+        type=int,
+        default=d["seed"],
+        metavar="N",
+        help=f"random seed (default {d['seed']}); the same seed builds the same robot whatever --trials",
+    )
+    sp.add_argument(
+        "--trials",
+        type=int,
+        default=d["trials"],
+        metavar="N",
+        help="repeat each UMBmark procedure N times with fresh random errors (Monte Carlo; the robot "
+        f"as built and its calibration stay the same; default {d['trials']})",
+    )
+    sp.add_argument(
+        "--calibrate",
+        action=argparse.BooleanOptionalAction,
+        default=d["calibrate"],
+        help="calibrate and run UMBmark again (default on; --no-calibrate: UMBmark only)",
+    )
+    sp.add_argument(
+        "-o",
+        "--out",
+        default=DEFAULT_OUT,
+        metavar="DIR",
+        help=f"report folder (default ./{DEFAULT_OUT}); a folder omnikin wrote is replaced as a whole, "
+        "any other non-empty folder is refused",
+    )
+    sp.add_argument(
+        "--figures",
+        choices=FIGURE_FORMATS,
+        default=WRITE["figure_format"],
+        help=f"figure format: png, or svg/pdf (vector) for papers (default {WRITE['figure_format']})",
+    )
+    sp.add_argument(
+        "--dpi",
+        type=float,
+        default=WRITE["dpi"],
+        metavar="N",
+        help=f"resolution of PNG figures (default {WRITE['dpi']:g}, at most {MAX_DPI})",
+    )
     sp.add_argument("--json", action="store_true", help="print result.json instead of tables")
     add_budget_options(sp)
     sp.set_defaults(func=cmd_umbmark)
 
-    sp = sub.add_parser("calibrate", help="calibrate a robot file from measured runs",
-                        description="Least-squares calibration of the wheel radii, hub positions and drive "
-                                    "directions from runs with measured end poses (docs/umbmark.md). --plan "
-                                    "prints the runs to drive and a runs file to fill in.",
-                        epilog="examples:\n"
-                               "  omnikin calibrate tomasi-omni3 --plan > runs.csv     the runs to drive, to fill in\n"
-                               "  omnikin calibrate tomasi-omni3 runs.csv -o calibrated.yaml\n"
-                               "  omnikin calibrate tomasi-omni3 examples/calibration_runs.csv --json\n"
-                               "RUNS columns: path, x_abs, y_abs [m], optional theta_abs_deg [deg] (or theta_abs "
-                               "[rad]).\n'omnikin umbmark' writes one: umbmark-report/calibration_runs.csv.",
-                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp = sub.add_parser(
+        "calibrate",
+        help="calibrate a robot file from measured runs",
+        description="Least-squares calibration of the wheel radii, hub positions and drive "
+        "directions from runs with measured end poses (docs/umbmark.md). --plan "
+        "prints the runs to drive and a runs file to fill in.",
+        epilog="examples:\n"
+        "  omnikin calibrate tomasi-omni3 --plan > runs.csv     the runs to drive, to fill in\n"
+        "  omnikin calibrate tomasi-omni3 runs.csv -o calibrated.yaml\n"
+        "  omnikin calibrate tomasi-omni3 examples/calibration_runs.csv --json\n"
+        "RUNS columns: path, x_abs, y_abs [m], optional theta_abs_deg [deg] (or theta_abs "
+        "[rad]).\n'omnikin umbmark' writes one: umbmark-report/calibration_runs.csv.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument("runs", metavar="RUNS", nargs="?", help="CSV of runs: path, x_abs, y_abs[, theta_abs_deg]")
-    sp.add_argument("-o", "--output", metavar="FILE",
-                    help="write the calibrated robot file (YAML, or JSON for .json); with --plan, the runs file "
-                         "to fill in")
+    sp.add_argument(
+        "-o",
+        "--output",
+        metavar="FILE",
+        help="write the calibrated robot file (YAML, or JSON for .json); with --plan, the runs file to fill in",
+    )
     sp.add_argument("--force", action="store_true", help="replace an existing output file")
-    sp.add_argument("--plan", action="store_true",
-                    help="print the recommended calibration runs as a runs file to fill in (no RUNS)")
-    sp.add_argument("--side", type=float, default=4.0, metavar="M",
-                    help="with --plan: side of the squares and length of the lines [m] (default 4)")
+    sp.add_argument(
+        "--plan", action="store_true", help="print the recommended calibration runs as a runs file to fill in (no RUNS)"
+    )
+    sp.add_argument(
+        "--side",
+        type=float,
+        default=4.0,
+        metavar="M",
+        help="with --plan: side of the squares and length of the lines [m] (default 4)",
+    )
     sp.add_argument("--json", action="store_true", help="print the result as JSON")
     sp.set_defaults(func=cmd_calibrate)
 
@@ -128,26 +192,43 @@ def add_parsers(sub, robot_help: str) -> None:
 def add_analyze_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """The options of ``omnikin umbmark analyze`` (for a parser or a sub-command parser)."""
     p.add_argument("measurements", metavar="MEASUREMENTS.csv")
-    p.add_argument("--robot", metavar="ROBOT", default=ANALYZE["robot"],
-                   help="the robot (a differential drive gets Borenstein's correction)")
-    p.add_argument("--side", type=float, default=ANALYZE["side"], metavar="L",
-                   help=f"side of the square [m] (default {ANALYZE['side']:g})")
+    p.add_argument(
+        "--robot",
+        metavar="ROBOT",
+        default=ANALYZE["robot"],
+        help="the robot (a differential drive gets Borenstein's correction)",
+    )
+    p.add_argument(
+        "--side",
+        type=float,
+        default=ANALYZE["side"],
+        metavar="L",
+        help=f"side of the square [m] (default {ANALYZE['side']:g})",
+    )
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=cmd_umbmark_analyze)
     return p
 
 
-ANALYZE_DESCRIPTION = ("UMBmark of a real robot from measured end poses (Borenstein and Feng) and, for a "
-                       "differential drive, Borenstein's correction.")
-ANALYZE_EPILOG = ("MEASUREMENTS.csv columns: direction (cw/ccw), x_abs, y_abs, x_calc, y_calc [m], optional "
-                  "theta_abs, theta_calc [rad] or theta_abs_deg, theta_calc_deg [deg].\n"
-                  "example:\n  omnikin umbmark analyze examples/umbmark_measurements.csv --robot tomasi-omni3")
+ANALYZE_DESCRIPTION = (
+    "UMBmark of a real robot from measured end poses (Borenstein and Feng) and, for a "
+    "differential drive, Borenstein's correction."
+)
+ANALYZE_EPILOG = (
+    "MEASUREMENTS.csv columns: direction (cw/ccw), x_abs, y_abs, x_calc, y_calc [m], optional "
+    "theta_abs, theta_calc [rad] or theta_abs_deg, theta_calc_deg [deg].\n"
+    "example:\n  omnikin umbmark analyze examples/umbmark_measurements.csv --robot tomasi-omni3"
+)
 
 
 def analyze_parser() -> argparse.ArgumentParser:
     """The parser of ``omnikin umbmark analyze``."""
-    p = argparse.ArgumentParser(prog="omnikin umbmark analyze", description=ANALYZE_DESCRIPTION, epilog=ANALYZE_EPILOG,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        prog="omnikin umbmark analyze",
+        description=ANALYZE_DESCRIPTION,
+        epilog=ANALYZE_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     return add_analyze_arguments(p)
 
 
@@ -196,17 +277,42 @@ def cmd_umbmark(args) -> int:
     from ..io.output import check_output
 
     inputs = _input_files(args.robot, args.true_robot)
-    check_dpi(args.dpi)                                        # refuse before the simulation, not after
+    check_dpi(args.dpi)  # refuse before the simulation, not after
     check_output(args.out, inputs=inputs, folder=True)
-    cost = umbmark_cost(args.robot, mode=args.mode, runs=args.runs, side=args.side, rate=args.rate,
-                        trials=args.trials, calibrate=args.calibrate)
-    require(args, "umbmark", memory=cost.bytes, seconds=cost.seconds, size=f"{cost.samples:.3g} robot-samples",
-            hint="lower --trials, --runs or --rate")
+    cost = umbmark_cost(
+        args.robot,
+        mode=args.mode,
+        runs=args.runs,
+        side=args.side,
+        rate=args.rate,
+        trials=args.trials,
+        calibrate=args.calibrate,
+    )
+    require(
+        args,
+        "umbmark",
+        memory=cost.bytes,
+        seconds=cost.seconds,
+        size=f"{cost.samples:.3g} robot-samples",
+        hint="lower --trials, --runs or --rate",
+    )
     with _Status(args.json) as status:
-        report = run_umbmark(args.robot, true_robot=args.true_robot, errors=args.errors, mode=args.mode,
-                             runs=args.runs, side=args.side, noise=args.noise, rate=args.rate, seed=args.seed,
-                             trials=args.trials, calibrate=args.calibrate, max_memory=args.max_memory,
-                             max_time=args.max_time, progress=status.step)
+        report = run_umbmark(
+            args.robot,
+            true_robot=args.true_robot,
+            errors=args.errors,
+            mode=args.mode,
+            runs=args.runs,
+            side=args.side,
+            noise=args.noise,
+            rate=args.rate,
+            seed=args.seed,
+            trials=args.trials,
+            calibrate=args.calibrate,
+            max_memory=args.max_memory,
+            max_time=args.max_time,
+            progress=status.step,
+        )
         status.step("report")
         doc = report.write(args.out, figure_format=args.figures, dpi=args.dpi, inputs=inputs)
     if args.json:
@@ -227,46 +333,67 @@ def _umbmark_table(doc: dict):
         if key in doc:
             d = doc[key]
             iv = d["e_max_syst_interval"]
-            t.add_row(label, _mm(d["cw"]["r_cg"]), _mm(d["ccw"]["r_cg"]), _mm(d["e_max_syst"]),
-                      f"{_mm(iv[0])} to {_mm(iv[1])}" if iv else "n/a", "at floor" if d["at_noise_floor"] else "")
+            t.add_row(
+                label,
+                _mm(d["cw"]["r_cg"]),
+                _mm(d["ccw"]["r_cg"]),
+                _mm(d["e_max_syst"]),
+                f"{_mm(iv[0])} to {_mm(iv[1])}" if iv else "n/a",
+                "at floor" if d["at_noise_floor"] else "",
+            )
     return t
 
 
 def _print_summary(report: UMBmarkReport, doc: dict, out) -> None:
     s = doc["settings"]
     con = console(120)
-    con.print(f"UMBmark: {report.robot.name} as built, {s['runs']} runs per direction, {s['side']:g} m square, "
-              f"{s['mode']} mode")
+    con.print(
+        f"UMBmark: {report.robot.name} as built, {s['runs']} runs per direction, {s['side']:g} m square, "
+        f"{s['mode']} mode"
+    )
     con.print(_umbmark_table(doc))
     floor = doc["noise_floor"]
-    con.print(f"noise floor (perfectly calibrated robot, same random errors): median "
-              f"{_mm(floor['e_max_syst_median'])} mm, 95th percentile {_mm(floor['e_max_syst_p95'])} mm")
+    con.print(
+        f"noise floor (perfectly calibrated robot, same random errors): median "
+        f"{_mm(floor['e_max_syst_median'])} mm, 95th percentile {_mm(floor['e_max_syst_p95'])} mm"
+    )
     bor = report.before[0].borenstein
     if bor is not None:
-        con.print(f"Borenstein (before): alpha {bor.alpha:.4g} rad, beta {bor.beta:.4g} rad, E_d {bor.E_d:.5f}, "
-                  f"E_b {bor.E_b:.5f}, c_L {bor.c_L:.5f}, c_R {bor.c_R:.5f}, b_new {bor.b_new:.5f} m")
+        con.print(
+            f"Borenstein (before): alpha {bor.alpha:.4g} rad, beta {bor.beta:.4g} rad, E_d {bor.E_d:.5f}, "
+            f"E_b {bor.E_b:.5f}, c_L {bor.c_L:.5f}, c_R {bor.c_R:.5f}, b_new {bor.b_new:.5f} m"
+        )
     if "after" in doc:
         r, ri = doc["reduction_factor"], doc["reduction_factor_interval"]
         sysm = doc["systematic"]
-        con.print(f"calibration: E_max,syst reduced {_factor(r)}-fold"
-                  + (f" (95 % interval {_factor(ri[0])} to {_factor(ri[1])})" if ri else "")
-                  + f"; systematic part alone (no random errors) {_mm(sysm['e_max_syst_before'])} mm -> "
-                    f"{_mm(sysm['e_max_syst_after'])} mm")
+        con.print(
+            f"calibration: E_max,syst reduced {_factor(r)}-fold"
+            + (f" (95 % interval {_factor(ri[0])} to {_factor(ri[1])})" if ri else "")
+            + f"; systematic part alone (no random errors) {_mm(sysm['e_max_syst_before'])} mm -> "
+            f"{_mm(sysm['e_max_syst_after'])} mm"
+        )
         cal = doc["calibration"]
         if not cal["fits"]:
-            con.print(f"warning: the calibration does not fit its runs (residual RMS {cal['residual_rms_after']:.3g} "
-                      "measurement sigmas); do not use the calibrated robot")
+            con.print(
+                f"warning: the calibration does not fit its runs (residual RMS {cal['residual_rms_after']:.3g} "
+                "measurement sigmas); do not use the calibrated robot"
+            )
         if "borenstein_iterations" in doc:
-            con.print("Borenstein's correction for comparison [mm per iteration]: "
-                      + ", ".join(_mm(v) for v in doc["borenstein_iterations"]))
+            con.print(
+                "Borenstein's correction for comparison [mm per iteration]: "
+                + ", ".join(_mm(v) for v in doc["borenstein_iterations"])
+            )
         blind = cal["identifiability"]["blind"]
         if blind:
-            con.print(f"note: {len(blind)} parameter combination(s) not observable by the calibration runs "
-                      f"(see report.md)")
+            con.print(
+                f"note: {len(blind)} parameter combination(s) not observable by the calibration runs (see report.md)"
+            )
     if "monte_carlo" in doc:
         for label, st in doc["monte_carlo"].items():
-            con.print(f"Monte Carlo {label}: {st['procedures']} procedures, E_max,syst median "
-                      f"{_mm(st['e_max_syst_median'])} mm, 95th percentile {_mm(st['e_max_syst_p95'])} mm")
+            con.print(
+                f"Monte Carlo {label}: {st['procedures']} procedures, E_max,syst median "
+                f"{_mm(st['e_max_syst_median'])} mm, 95th percentile {_mm(st['e_max_syst_p95'])} mm"
+            )
     con.print(f"report: {Path(out) / 'report.md'}")
 
 
@@ -277,26 +404,36 @@ def cmd_umbmark_analyze(args) -> int:
         print(dumps(res.as_dict()), end="")
         return 0
     con = console(120)
-    con.print(f"UMBmark of {args.measurements} ({len(res.cw.epsilon)} cw, {len(res.ccw.epsilon)} ccw runs, "
-              f"{args.side:g} m square)")
+    con.print(
+        f"UMBmark of {args.measurements} ({len(res.cw.epsilon)} cw, {len(res.ccw.epsilon)} ccw runs, "
+        f"{args.side:g} m square)"
+    )
     from rich.table import Table
 
     t = Table()
     for col in ("", "r_cg cw [mm]", "r_cg ccw [mm]", "E_max,syst [mm]", "95 % interval [mm]"):
         t.add_column(col, justify="right" if col else "left")
     iv = res.e_max_interval()
-    t.add_row("measured", _mm(res.cw.r_cg), _mm(res.ccw.r_cg), _mm(res.e_max_syst),
-              f"{_mm(iv[0])} to {_mm(iv[1])}" if iv else "n/a (3 runs per direction needed)")
+    t.add_row(
+        "measured",
+        _mm(res.cw.r_cg),
+        _mm(res.ccw.r_cg),
+        _mm(res.e_max_syst),
+        f"{_mm(iv[0])} to {_mm(iv[1])}" if iv else "n/a (3 runs per direction needed)",
+    )
     con.print(t)
     for d in (res.cw, res.ccw):
         con.print(f"centre of gravity {d.direction}: x = {_mm(d.cg[0])} mm, y = {_mm(d.cg[1])} mm")
     if res.borenstein is not None:
         bd = res.borenstein
-        con.print(f"Borenstein: alpha {bd.alpha:.5g} rad, beta {bd.beta:.5g} rad, R {bd.R:.5g} m, E_d {bd.E_d:.6f}, "
-                  f"E_b {bd.E_b:.6f}, c_L {bd.c_L:.6f}, c_R {bd.c_R:.6f}, b_new {bd.b_new:.6f} m")
+        con.print(
+            f"Borenstein: alpha {bd.alpha:.5g} rad, beta {bd.beta:.5g} rad, R {bd.R:.5g} m, E_d {bd.E_d:.6f}, "
+            f"E_b {bd.E_b:.6f}, c_L {bd.c_L:.6f}, c_R {bd.c_R:.6f}, b_new {bd.b_new:.6f} m"
+        )
     elif args.robot is not None:
-        con.print(f"{args.robot} is not a differential drive: Borenstein's correction does not apply "
-                  f"(use omnikin calibrate)")
+        con.print(
+            f"{args.robot} is not a differential drive: Borenstein's correction does not apply (use omnikin calibrate)"
+        )
     return 0
 
 
@@ -317,14 +454,25 @@ def cmd_calibrate(args) -> int:
     if to_stdout and args.json:
         raise InputError("-o - and --json would both write to standard output; choose one")
     if args.output:
-        check_output(args.output, inputs=inputs, force=args.force)    # before the fit
+        check_output(args.output, inputs=inputs, force=args.force)  # before the fit
     cal = api_calibrate(args.robot, args.runs)
     if args.output:
         cal.write_robot(args.output, force=args.force, inputs=inputs)
     if args.json:
-        print(dumps({**cal.as_dict(), "units": {"errors": ERROR_UNITS, "residual_rms": "measurement sigmas",
-                                                "parameters": "each entry's 'unit'"},
-                     "output": args.output}), end="")
+        print(
+            dumps(
+                {
+                    **cal.as_dict(),
+                    "units": {
+                        "errors": ERROR_UNITS,
+                        "residual_rms": "measurement sigmas",
+                        "parameters": "each entry's 'unit'",
+                    },
+                    "output": args.output,
+                }
+            ),
+            end="",
+        )
         return 0
     from rich.table import Table
 
@@ -337,9 +485,11 @@ def cmd_calibrate(args) -> int:
     con.print(t)
     con.print(f"residual RMS {cal.residual_before:.3g} -> {cal.residual_after:.3g} measurement sigmas")
     if not cal.fits:
-        con.print(f"warning: the calibrated model does not fit the runs (residual RMS {cal.residual_after:.3g} "
-                  f"measurement sigmas, above {FIT_LIMIT:g}): check the robot file and the runs; do not use the "
-                  "calibrated robot")
+        con.print(
+            f"warning: the calibrated model does not fit the runs (residual RMS {cal.residual_after:.3g} "
+            f"measurement sigmas, above {FIT_LIMIT:g}): check the robot file and the runs; do not use the "
+            "calibrated robot"
+        )
     for combo in cal.identifiability.blind:
         con.print("not observable by these runs: " + " + ".join(f"{c['weight']:+.2f} {c['parameter']}" for c in combo))
     if args.output and not to_stdout:
@@ -353,14 +503,16 @@ def _print_plan(args) -> int:
     from ..io.runs import calibration_template
 
     paths = calibration_plan(args.robot, args.side)
-    note = (f"calibration runs for {args.robot}: drive each path {RECOMMENDED_REPEATS} times, commanded by the "
-            "robot's own (nominal) model,\n"
-            "starting at rest at the origin (x forward, y left). Measure the end pose: x_abs, y_abs [m] to about "
-            "1 mm,\n"
-            "theta_abs_deg [deg] to about 0.2 deg (delete that column if you do not measure the heading).\n"
-            "Fill in every field. Paths: square cw|ccw rotate|translate SIDE,\n"
-            "line LENGTH HEADING_DEG, spin ANGLE_DEG (positive counter-clockwise), arc RADIUS ANGLE_DEG.\n"
-            f"then: omnikin calibrate {args.robot} THIS_FILE -o calibrated.yaml")
+    note = (
+        f"calibration runs for {args.robot}: drive each path {RECOMMENDED_REPEATS} times, commanded by the "
+        "robot's own (nominal) model,\n"
+        "starting at rest at the origin (x forward, y left). Measure the end pose: x_abs, y_abs [m] to about "
+        "1 mm,\n"
+        "theta_abs_deg [deg] to about 0.2 deg (delete that column if you do not measure the heading).\n"
+        "Fill in every field. Paths: square cw|ccw rotate|translate SIDE,\n"
+        "line LENGTH HEADING_DEG, spin ANGLE_DEG (positive counter-clockwise), arc RADIUS ANGLE_DEG.\n"
+        f"then: omnikin calibrate {args.robot} THIS_FILE -o calibrated.yaml"
+    )
     text = calibration_template(paths, RECOMMENDED_REPEATS, note)
     if args.output and args.json and is_stdout(args.output):
         raise InputError("-o - and --json would both write to standard output; choose one")
@@ -370,8 +522,18 @@ def _print_plan(args) -> int:
         if not args.json and not is_stdout(args.output):
             console(120, stderr=True).print(f"runs file to fill in written to {args.output}")
     if args.json:
-        print(dumps({"robot": args.robot, "paths": paths, "repeats": RECOMMENDED_REPEATS,
-                     "columns": ["path", "x_abs", "y_abs", "theta_abs_deg"], "output": args.output}), end="")
+        print(
+            dumps(
+                {
+                    "robot": args.robot,
+                    "paths": paths,
+                    "repeats": RECOMMENDED_REPEATS,
+                    "columns": ["path", "x_abs", "y_abs", "theta_abs_deg"],
+                    "output": args.output,
+                }
+            ),
+            end="",
+        )
     elif not args.output:
         print(text, end="")
     return 0

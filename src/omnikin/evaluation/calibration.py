@@ -159,12 +159,12 @@ def errors_from_vector(robot: Robot, p: np.ndarray) -> SystematicErrors:
     out, k = {}, 0
     for w in _driven(robot):
         names = wheel_parameters(w)
-        values = dict(zip(names, map(float, p[k:k + len(names)]), strict=True))
+        values = dict(zip(names, map(float, p[k : k + len(names)]), strict=True))
         k += len(names)
         dx, dy = values.get("dx", 0.0), values.get("dy", 0.0)
-        if "axle" in values:                   # along (-sin delta, cos delta)
+        if "axle" in values:  # along (-sin delta, cos delta)
             dx, dy = -math.sin(w.drive) * values["axle"], math.cos(w.drive) * values["axle"]
-        if "lever" in values:                  # normal to the roller axis delta + gamma
+        if "lever" in values:  # normal to the roller axis delta + gamma
             a = w.drive + w.roller
             dx, dy = -math.sin(a) * values["lever"], math.cos(a) * values["lever"]
         out[w.name] = WheelErrors(radius=values["radius"], dx=dx, dy=dy, drive=values.get("drive", 0.0))
@@ -186,8 +186,12 @@ class Identifiability:
     sigma: dict
 
     def as_dict(self) -> dict:
-        return {"parameters": self.parameters, "singular_values": self.singular_values, "blind": self.blind,
-                "sigma": self.sigma}
+        return {
+            "parameters": self.parameters,
+            "singular_values": self.singular_values,
+            "blind": self.blind,
+            "sigma": self.sigma,
+        }
 
 
 @dataclass(frozen=True)
@@ -218,13 +222,22 @@ class CalibrationResult:
     def parameters(self) -> list[dict]:
         """The fitted parameters: ``[{"name", "value", "sigma", "unit"}, ...]``."""
         sigma = self.identifiability.sigma
-        return [{"name": n, "value": float(v), "sigma": float(sigma[n]), "unit": PARAMETER_UNITS[n.rsplit(".", 1)[1]]}
-                for n, v in self.values.items()]
+        return [
+            {"name": n, "value": float(v), "sigma": float(sigma[n]), "unit": PARAMETER_UNITS[n.rsplit(".", 1)[1]]}
+            for n, v in self.values.items()
+        ]
 
     def as_dict(self) -> dict:
-        return {"method": self.method, "parameters": self.parameters(), "errors": self.errors.as_dict(),
-                "residual_rms_before": self.residual_before, "residual_rms_after": self.residual_after,
-                "fits": self.fits, "identifiability": self.identifiability.as_dict(), **self.details}
+        return {
+            "method": self.method,
+            "parameters": self.parameters(),
+            "errors": self.errors.as_dict(),
+            "residual_rms_before": self.residual_before,
+            "residual_rms_after": self.residual_after,
+            "fits": self.fits,
+            "identifiability": self.identifiability.as_dict(),
+            **self.details,
+        }
 
 
 def _weights(runs: Sequence[CalibrationRun], index: np.ndarray) -> np.ndarray:
@@ -244,12 +257,13 @@ def _weights(runs: Sequence[CalibrationRun], index: np.ndarray) -> np.ndarray:
             m[:, 2] = np.unwrap(m[:, 2])
             spread = np.nanstd(m, axis=0, ddof=1)
             spread = np.where(np.isfinite(spread), spread, 0.0)
-            sig[sel] = np.sqrt(sig[sel] ** 2 + spread ** 2)
+            sig[sel] = np.sqrt(sig[sel] ** 2 + spread**2)
     return sig
 
 
-def _residuals(nominal: Robot, runs: Sequence[CalibrationRun], plans: PlanSet, index: np.ndarray,
-               sigma: np.ndarray, p: np.ndarray) -> np.ndarray:
+def _residuals(
+    nominal: Robot, runs: Sequence[CalibrationRun], plans: PlanSet, index: np.ndarray, sigma: np.ndarray, p: np.ndarray
+) -> np.ndarray:
     """Weighted residuals of all runs for the parameter vector ``p``."""
     ends = plans.ends(errors_from_vector(nominal, p).apply(nominal))[index]
     meas = np.array([r.measured for r in runs])
@@ -284,7 +298,7 @@ def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Rob
     sigma = _weights(runs, index)
 
     def fun(q):
-        return np.concatenate([_residuals(nominal, runs, plans, index, sigma, q * scale), q])   # prior: q ~ N(0, 1)
+        return np.concatenate([_residuals(nominal, runs, plans, index, sigma, q * scale), q])  # prior: q ~ N(0, 1)
 
     q0 = np.zeros(len(names))
     r0 = fun(q0)[: -len(names)]
@@ -294,11 +308,17 @@ def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Rob
     ident = _identifiability(names, sol.jac[: -len(names)], sol.jac, scale)
     errors = errors_from_vector(nominal, p)
     robot = errors.apply(nominal)
-    robot = Robot(nominal.name, robot.wheels, nominal.description + " (calibrated by omnikin)",
-                  nominal.references)
-    return CalibrationResult(nominal, errors, robot, float(np.sqrt(np.mean(r0 ** 2))), float(np.sqrt(np.mean(r1 ** 2))),
-                             ident, details={"runs": len(runs), "cost": float(sol.cost), "nfev": int(sol.nfev)},
-                             values=dict(zip(names, map(float, p), strict=True)))
+    robot = Robot(nominal.name, robot.wheels, nominal.description + " (calibrated by omnikin)", nominal.references)
+    return CalibrationResult(
+        nominal,
+        errors,
+        robot,
+        float(np.sqrt(np.mean(r0**2))),
+        float(np.sqrt(np.mean(r1**2))),
+        ident,
+        details={"runs": len(runs), "cost": float(sol.cost), "nfev": int(sol.nfev)},
+        values=dict(zip(names, map(float, p), strict=True)),
+    )
 
 
 def run_name(run: CalibrationRun, index: int) -> str:
@@ -320,8 +340,9 @@ def check_drivable(runs: Sequence[CalibrationRun], robot: Robot) -> None:
             segment_rates([seg.xi for seg in run.plan.segments], robot, robot.encoded_names)
         except InfeasibleTwistError as exc:
             reason = str(exc).split(" (on_infeasible=")[0].removeprefix(f"robot {robot.name!r}: ")
-            raise InfeasibleRunError(f"{run_name(run, k)}: robot {robot.name!r} cannot drive this path: {reason}",
-                                     run=k) from None
+            raise InfeasibleRunError(
+                f"{run_name(run, k)}: robot {robot.name!r} cannot drive this path: {reason}", run=k
+            ) from None
 
 
 def can_drive(plan: Plan, robot: Robot) -> bool:
@@ -341,8 +362,9 @@ def _identifiability(names, jac_data, jac_full, scale) -> Identifiability:
     blind = []
     for k in np.flatnonzero(s_all < BLIND):
         v = vt[k]
-        blind.append([{"parameter": names[j], "weight": float(v[j])}
-                      for j in np.argsort(-np.abs(v)) if abs(v[j]) > 0.2])
+        blind.append(
+            [{"parameter": names[j], "weight": float(v[j])} for j in np.argsort(-np.abs(v)) if abs(v[j]) > 0.2]
+        )
     cov = np.linalg.pinv(jac_full.T @ jac_full)
     sigma = {n: float(np.sqrt(max(cov[j, j], 0.0)) * scale[j]) for j, n in enumerate(names)}
     return Identifiability(names, [float(v) for v in s], blind, sigma)
@@ -367,8 +389,18 @@ def recommended_runs(robot: Robot, side: float = 4.0) -> list[tuple[str, Plan]]:
     if not (math.isfinite(side) and side > 0):
         raise InputError(f"side must be a positive length [m], got {side!r}")
     L, half = _number_text(side), _number_text(side / 2)
-    candidates = [f"square cw rotate {L}", f"square ccw rotate {L}", f"line {L} 0", "spin 180", "spin -180",
-                  "spin 1800", "spin -1800", f"square cw translate {L}", f"square ccw translate {L}", f"line {L} 90"]
+    candidates = [
+        f"square cw rotate {L}",
+        f"square ccw rotate {L}",
+        f"line {L} 0",
+        "spin 180",
+        "spin -180",
+        "spin 1800",
+        "spin -1800",
+        f"square cw translate {L}",
+        f"square ccw translate {L}",
+        f"line {L} 90",
+    ]
     out = [(text, parse_plan(text)) for text in candidates]
     out = [(text, plan) for text, plan in out if can_drive(plan, robot)]
     if not any(text.startswith("spin") for text, _ in out):
@@ -389,8 +421,10 @@ def borenstein_calibrate(robot: Robot, result: UMBmarkResult) -> Robot:
     """Apply Borenstein's corrections of a differential-drive UMBmark ``result`` to ``robot``."""
     pair = differential_pair(robot)
     if pair is None or result.borenstein is None:
-        raise InputError(f"robot {robot.name!r} is not a differential drive (two coaxial fixed encoded wheels): "
-                           f"Borenstein's correction does not apply; use the least-squares calibration")
+        raise InputError(
+            f"robot {robot.name!r} is not a differential drive (two coaxial fixed encoded wheels): "
+            f"Borenstein's correction does not apply; use the least-squares calibration"
+        )
     left, right, track = pair
     b = result.borenstein
     mid = 0.5 * (left.y + right.y)

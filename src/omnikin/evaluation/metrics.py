@@ -88,8 +88,10 @@ def check_trajectory(t, poses, name: str = "trajectory") -> tuple[np.ndarray, np
     back = np.flatnonzero(np.diff(tt) <= 0)
     if back.size:
         k = back[0] + 1
-        raise MetricsInputError(f"{name}: timestamps must increase strictly; pose {k} at t={float(tt[k]):.9g} follows "
-                                f"t={float(tt[k - 1]):.9g}")
+        raise MetricsInputError(
+            f"{name}: timestamps must increase strictly; pose {k} at t={float(tt[k]):.9g} follows "
+            f"t={float(tt[k - 1]):.9g}"
+        )
     return tt, p
 
 
@@ -119,9 +121,16 @@ def statistics(errors) -> Statistics:
     if not np.all(np.isfinite(e)):
         raise MetricsInputError("statistics: non-finite error value")
     sq = e * e
-    return Statistics(rmse=float(math.sqrt(np.mean(sq))), mean=float(np.mean(e)), median=float(np.median(e)),
-                      std=float(np.std(e)), min=float(np.min(e)), max=float(np.max(e)), sse=float(np.sum(sq)),
-                      count=int(e.size))
+    return Statistics(
+        rmse=float(math.sqrt(np.mean(sq))),
+        mean=float(np.mean(e)),
+        median=float(np.median(e)),
+        std=float(np.std(e)),
+        min=float(np.min(e)),
+        max=float(np.max(e)),
+        sse=float(np.sum(sq)),
+        count=int(e.size),
+    )
 
 
 # --- association -----------------------------------------------------------------------------------------
@@ -155,11 +164,11 @@ def associate(t_ref, t_est, max_diff: float = 0.01, offset: float = 0.0) -> tupl
             raise MetricsInputError(f"{name}: timestamps must be a non-empty 1-D array, got shape {t.shape}")
         if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
             raise MetricsInputError(f"{name}: timestamps must be finite and increase strictly")
-    if len(te) > len(tr):          # walk the reference (the shorter), match into the estimate
+    if len(te) > len(tr):  # walk the reference (the shorter), match into the estimate
         j, d = _nearest(tr, te + offset)
         keep = d <= max_diff
         i_ref, i_est = np.flatnonzero(keep), j[keep]
-    else:                          # walk the estimate, match into the reference
+    else:  # walk the estimate, match into the reference
         j, d = _nearest(te, tr - offset)
         keep = d <= max_diff
         i_ref, i_est = j[keep], np.flatnonzero(keep)
@@ -167,7 +176,8 @@ def associate(t_ref, t_est, max_diff: float = 0.01, offset: float = 0.0) -> tupl
         raise MetricsInputError(
             f"no matching timestamps between reference ({len(tr)} poses, t {tr[0]:.9g}..{tr[-1]:.9g} s) and "
             f"estimate ({len(te)} poses, t {te[0]:.9g}..{te[-1]:.9g} s) within max_diff {max_diff:g} s"
-            + (f" and offset {offset:g} s" if offset else ""))
+            + (f" and offset {offset:g} s" if offset else "")
+        )
     return i_ref.astype(np.intp), i_est.astype(np.intp)
 
 
@@ -197,8 +207,9 @@ def align_se2(ref_xy, est_xy) -> Alignment:
     q = np.asarray(ref_xy, dtype=float)
     p = np.asarray(est_xy, dtype=float)
     if q.shape != p.shape or q.ndim != 2 or q.shape[1] != 2 or q.shape[0] == 0:
-        raise MetricsInputError(f"alignment needs two (M, 2) position arrays of the same shape, got {q.shape} "
-                                f"and {p.shape}")
+        raise MetricsInputError(
+            f"alignment needs two (M, 2) position arrays of the same shape, got {q.shape} and {p.shape}"
+        )
     if not (np.all(np.isfinite(q)) and np.all(np.isfinite(p))):
         raise MetricsInputError("alignment: non-finite position")
     qb, pb = q.mean(axis=0), p.mean(axis=0)
@@ -210,7 +221,8 @@ def align_se2(ref_xy, est_xy) -> Alignment:
         raise MetricsInputError(
             f"SE(2) alignment is undefined for these {len(q)} associated poses: all positions of the "
             f"{'estimate' if np.sum(a * a) <= np.sum(b * b) else 'reference'} coincide (or the two are "
-            f"uncorrelated); drop --align or use a longer trajectory")
+            f"uncorrelated); drop --align or use a longer trajectory"
+        )
     theta = math.atan2(s, c)
     ct, st = math.cos(theta), math.sin(theta)
     tx = qb[0] - (ct * pb[0] - st * pb[1])
@@ -236,9 +248,13 @@ class ATEResult:
     stats: Statistics
 
     def as_dict(self) -> dict:
-        return {"pairs": int(self.errors.size), "aligned": self.alignment is not None,
-                "alignment": None if self.alignment is None else self.alignment.as_dict(),
-                "translation": self.stats.as_dict(), "unit": "m"}
+        return {
+            "pairs": int(self.errors.size),
+            "aligned": self.alignment is not None,
+            "alignment": None if self.alignment is None else self.alignment.as_dict(),
+            "translation": self.stats.as_dict(),
+            "unit": "m",
+        }
 
 
 def _associated(t_ref, ref, t_est, est, max_diff, offset):
@@ -288,9 +304,16 @@ class RPEResult:
     rotation_stats: Statistics
 
     def as_dict(self) -> dict:
-        return {"delta": self.delta, "delta_unit": "frames", "all_pairs": self.all_pairs,
-                "pairs": int(self.translation.size), "translation": self.translation_stats.as_dict(),
-                "translation_unit": "m", "rotation": self.rotation_stats.as_dict(), "rotation_unit": self.angle_unit}
+        return {
+            "delta": self.delta,
+            "delta_unit": "frames",
+            "all_pairs": self.all_pairs,
+            "pairs": int(self.translation.size),
+            "translation": self.translation_stats.as_dict(),
+            "translation_unit": "m",
+            "rotation": self.rotation_stats.as_dict(),
+            "rotation_unit": self.angle_unit,
+        }
 
 
 def index_pairs(n: int, delta: int, all_pairs: bool = False) -> np.ndarray:
@@ -310,8 +333,18 @@ def relative_errors(ref, est, pairs) -> np.ndarray:
     return between(between(q[i], q[j]), between(p[i], p[j]))
 
 
-def rpe(t_ref, ref, t_est, est, *, delta: int = 1, all_pairs: bool = False, angle_unit: str = "rad",
-        max_diff: float = 0.01, offset: float = 0.0) -> RPEResult:
+def rpe(
+    t_ref,
+    ref,
+    t_est,
+    est,
+    *,
+    delta: int = 1,
+    all_pairs: bool = False,
+    angle_unit: str = "rad",
+    max_diff: float = 0.01,
+    offset: float = 0.0,
+) -> RPEResult:
     """Relative pose error over ``delta`` frames of the associated poses (module docstring).
 
     ``angle_unit``: ``rad`` or ``deg`` for the rotation part.
@@ -322,8 +355,7 @@ def rpe(t_ref, ref, t_est, est, *, delta: int = 1, all_pairs: bool = False, angl
         raise MetricsInputError(f"angle_unit must be one of {list(ANGLE_UNITS)}, got {angle_unit!r}")
     _, q, p, i_ref, i_est = _associated(t_ref, ref, t_est, est, max_diff, offset)
     if len(q) <= delta:
-        raise MetricsInputError(f"RPE with delta {delta} frames needs more than {delta} associated poses, "
-                                f"got {len(q)}")
+        raise MetricsInputError(f"RPE with delta {delta} frames needs more than {delta} associated poses, got {len(q)}")
     pairs = index_pairs(len(q), int(delta), all_pairs)
     err = relative_errors(q, p, pairs)
     trans = np.hypot(err[:, 0], err[:, 1])
@@ -331,8 +363,9 @@ def rpe(t_ref, ref, t_est, est, *, delta: int = 1, all_pairs: bool = False, angl
     # wrap_angle maps to [-pi, pi): a half turn is +-pi, its size pi either way
     if angle_unit == "deg":
         rot = np.degrees(rot)
-    return RPEResult(int(delta), bool(all_pairs), pairs, trans, rot, angle_unit, i_ref, i_est,
-                     statistics(trans), statistics(rot))
+    return RPEResult(
+        int(delta), bool(all_pairs), pairs, trans, rot, angle_unit, i_ref, i_est, statistics(trans), statistics(rot)
+    )
 
 
 @dataclass(frozen=True)
@@ -347,12 +380,39 @@ class Evaluation:
         return {"settings": dict(self.settings), "ate": self.ate.as_dict(), "rpe": self.rpe.as_dict()}
 
 
-def evaluate(t_ref, ref, t_est, est, *, align: bool = False, delta: int = 1, all_pairs: bool = False,
-             angle_unit: str = "rad", max_diff: float = 0.01, offset: float = 0.0) -> Evaluation:
+def evaluate(
+    t_ref,
+    ref,
+    t_est,
+    est,
+    *,
+    align: bool = False,
+    delta: int = 1,
+    all_pairs: bool = False,
+    angle_unit: str = "rad",
+    max_diff: float = 0.01,
+    offset: float = 0.0,
+) -> Evaluation:
     """:func:`ate` and :func:`rpe` with the same association."""
     a = ate(t_ref, ref, t_est, est, align=align, max_diff=max_diff, offset=offset)
-    r = rpe(t_ref, ref, t_est, est, delta=delta, all_pairs=all_pairs, angle_unit=angle_unit, max_diff=max_diff,
-            offset=offset)
-    settings = {"align": align, "delta": int(delta), "delta_unit": "frames", "all_pairs": all_pairs,
-                "max_diff": max_diff, "offset": offset, "angle_unit": angle_unit}
+    r = rpe(
+        t_ref,
+        ref,
+        t_est,
+        est,
+        delta=delta,
+        all_pairs=all_pairs,
+        angle_unit=angle_unit,
+        max_diff=max_diff,
+        offset=offset,
+    )
+    settings = {
+        "align": align,
+        "delta": int(delta),
+        "delta_unit": "frames",
+        "all_pairs": all_pairs,
+        "max_diff": max_diff,
+        "offset": offset,
+        "angle_unit": angle_unit,
+    }
     return Evaluation(a, r, settings)

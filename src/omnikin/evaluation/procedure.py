@@ -52,7 +52,7 @@ FLOOR_PROCEDURES = 400
 BORENSTEIN_ITERATIONS = 3
 """Iterations of Borenstein's correction in the comparison (differential drives)."""
 
-MAX_MEMORY = 2 * 1024 ** 3
+MAX_MEMORY = 2 * 1024**3
 """Default memory budget of a study [bytes] (the command line's ``--max-memory``)."""
 
 MAX_TIME = 3600.0
@@ -92,20 +92,22 @@ class Cost:
         return self.samples / SAMPLES_PER_SECOND
 
 
-def estimate_cost(robot: Robot, *, side: float, mode: str, runs: int, rate: float, trials: int,
-                  calibrate: bool) -> Cost:
+def estimate_cost(
+    robot: Robot, *, side: float, mode: str, runs: int, rate: float, trials: int, calibrate: bool
+) -> Cost:
     """Samples and memory of :func:`umbmark_study` with these settings, from the lengths of the
     square and of the calibration runs (:func:`~omnikin.simulation.motion.estimated_samples`, an
     upper bound computed without sampling)."""
     square = estimated_samples(umbmark_square("cw", side, mode), robot, rate)
     procedures = trials * (2 if calibrate else 1) + FLOOR_PROCEDURES
-    samples = 2.0 * runs * square * procedures + 2 * 2 * 2 * square          # + systematic part, trajectories
+    samples = 2.0 * runs * square * procedures + 2 * 2 * 2 * square  # + systematic part, trajectories
     if calibrate:
-        samples += sum(estimated_samples(plan, robot, rate) for _, plan in recommended_runs(robot, side)) \
-            * RECOMMENDED_REPEATS
+        samples += (
+            sum(estimated_samples(plan, robot, rate) for _, plan in recommended_runs(robot, side)) * RECOMMENDED_REPEATS
+        )
         if differential_pair(robot) is not None and mode == "rotate":
             samples += 2.0 * runs * square * BORENSTEIN_ITERATIONS
-    memory = procedures * (BYTES_PER_PROCEDURE + 2 * runs * 3 * 8 * 4) + 4 * square * 3 * 8 * 8 + 64 * 1024 ** 2
+    memory = procedures * (BYTES_PER_PROCEDURE + 2 * runs * 3 * 8 * 4) + 4 * square * 3 * 8 * 8 + 64 * 1024**2
     return Cost(samples, memory)
 
 
@@ -113,13 +115,21 @@ def check_cost(cost: Cost, *, max_memory: float = MAX_MEMORY, max_time: float = 
     """Refuse (:class:`~omnikin.errors.ResourceLimitError`, one line naming the limit) a study
     estimated to need more than ``max_memory`` [bytes] or ``max_time`` [s]."""
     if not cost.bytes <= max_memory:
-        raise ResourceLimitError(f"UMBmark study: about {cost.bytes / 1024 ** 3:.3g} GiB of memory, more than "
-                                 f"max_memory {max_memory / 1024 ** 3:.3g} GiB; lower trials or runs",
-                                 needed=cost.bytes, limit=max_memory, unit="bytes")
+        raise ResourceLimitError(
+            f"UMBmark study: about {cost.bytes / 1024**3:.3g} GiB of memory, more than "
+            f"max_memory {max_memory / 1024**3:.3g} GiB; lower trials or runs",
+            needed=cost.bytes,
+            limit=max_memory,
+            unit="bytes",
+        )
     if not cost.seconds <= max_time:
-        raise ResourceLimitError(f"UMBmark study: about {cost.seconds:.3g} s for {cost.samples:.3g} robot-samples, "
-                                 f"more than max_time {max_time:.3g} s; lower trials, runs or rate",
-                                 needed=cost.seconds, limit=max_time, unit="seconds")
+        raise ResourceLimitError(
+            f"UMBmark study: about {cost.seconds:.3g} s for {cost.samples:.3g} robot-samples, "
+            f"more than max_time {max_time:.3g} s; lower trials, runs or rate",
+            needed=cost.seconds,
+            limit=max_time,
+            unit="seconds",
+        )
 
 
 @dataclass(frozen=True)
@@ -178,9 +188,21 @@ class UMBmarkStudy:
         return out
 
 
-def umbmark_study(robot: Robot, true_robot: Robot, *, injected: SystematicErrors | None = None, side: float,
-                  mode: str, runs: int, rate: float, trials: int, noise: NoiseModel, seed: int, calibrate: bool,
-                  progress=None) -> UMBmarkStudy:
+def umbmark_study(
+    robot: Robot,
+    true_robot: Robot,
+    *,
+    injected: SystematicErrors | None = None,
+    side: float,
+    mode: str,
+    runs: int,
+    rate: float,
+    trials: int,
+    noise: NoiseModel,
+    seed: int,
+    calibrate: bool,
+    progress=None,
+) -> UMBmarkStudy:
     """Run the study of the module docstring. ``true_robot``: the robot as built
     (:func:`draw_as_built`); ``progress``: called with the name of each step as it starts."""
     rng = streams(seed)
@@ -199,8 +221,9 @@ def umbmark_study(robot: Robot, true_robot: Robot, *, injected: SystematicErrors
     systematic = {"before": run_umbmark(true_robot, robot, **quiet)[0].e_max_syst}
     if calibrate:
         step("calibration runs")
-        cal_runs = simulate_calibration_runs(true_robot, robot, side=side, noise=noise, rate=rate,
-                                             rng=rng["calibration"])
+        cal_runs = simulate_calibration_runs(
+            true_robot, robot, side=side, noise=noise, rate=rate, rng=rng["calibration"]
+        )
         step("least-squares calibration")
         cal = least_squares_calibration(robot, cal_runs)
         if differential_pair(robot) is not None and mode == "rotate":
@@ -212,12 +235,30 @@ def umbmark_study(robot: Robot, true_robot: Robot, *, injected: SystematicErrors
         systematic["after"] = run_umbmark(true_robot, cal.robot, **quiet)[0].e_max_syst
     step("noise floor")
     floor = noise_floor(true_robot, procedures=FLOOR_PROCEDURES, rng=rng["floor"], **opts)
-    return UMBmarkStudy(robot, true_robot, injected, side, mode, runs, rate, trials, noise, before, after, cal,
-                        cal_runs, bor, systematic, floor, trajectories)
+    return UMBmarkStudy(
+        robot,
+        true_robot,
+        injected,
+        side,
+        mode,
+        runs,
+        rate,
+        trials,
+        noise,
+        before,
+        after,
+        cal,
+        cal_runs,
+        bor,
+        systematic,
+        floor,
+        trajectories,
+    )
 
 
-def simulate_calibration_runs(true_robot: Robot, robot: Robot, *, side: float, noise: NoiseModel, rate: float,
-                              rng) -> list[CalibrationRun]:
+def simulate_calibration_runs(
+    true_robot: Robot, robot: Robot, *, side: float, noise: NoiseModel, rate: float, rng
+) -> list[CalibrationRun]:
     """The recommended calibration runs of ``robot``, each driven
     :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times by ``true_robot``
     commanded by ``robot``, with their measured end poses and the default measurement sigma
@@ -225,16 +266,19 @@ def simulate_calibration_runs(true_robot: Robot, robot: Robot, *, side: float, n
     rng = np.random.default_rng(rng)
     out = []
     for text, plan in recommended_runs(robot, side):
-        sim = simulate(plan, true_robot, robot, rate=rate, noise=noise, trials=RECOMMENDED_REPEATS, rng=rng,
-                       keep_truth=False)
+        sim = simulate(
+            plan, true_robot, robot, rate=rate, noise=noise, trials=RECOMMENDED_REPEATS, rng=rng, keep_truth=False
+        )
         out += [CalibrationRun(plan, tuple(m), text) for m in sim.measured]
     return out
 
 
 def _trajectories(true_robot: Robot, command: Robot, rng, *, side, mode, runs, noise, rate) -> dict:
     """The first run of each direction with its ground truth, for the figures."""
-    return {d: simulate(umbmark_square(d, side, mode), true_robot, command, rate=rate, noise=noise, trials=1,
-                        rng=rng) for d in ("cw", "ccw")}
+    return {
+        d: simulate(umbmark_square(d, side, mode), true_robot, command, rate=rate, noise=noise, trials=1, rng=rng)
+        for d in ("cw", "ccw")
+    }
 
 
 def _borenstein(true_robot: Robot, robot: Robot, first: UMBmarkResult, rng, opts) -> list:
@@ -245,4 +289,3 @@ def _borenstein(true_robot: Robot, robot: Robot, first: UMBmarkResult, rng, opts
         res = run_umbmark(true_robot, model, rng=rng, **opts)[0]
         out.append(res.e_max_syst)
     return out
-

@@ -44,9 +44,22 @@ from ..rng import make_rng
 from ..simulation.error_models import NoiseModel
 from ..simulation.simulate import segment_rates, simulate
 
-UNITS = {"side": "m", "epsilon": "[m, m, rad]", "cg": "m", "r_cg": "m", "e_max_syst": "m",
-         "e_max_syst_interval": "m", "alpha": "rad", "beta": "rad", "R": "m", "E_d": "1", "E_b": "1", "c_L": "1",
-         "c_R": "1", "b_new": "m"}
+UNITS = {
+    "side": "m",
+    "epsilon": "[m, m, rad]",
+    "cg": "m",
+    "r_cg": "m",
+    "e_max_syst": "m",
+    "e_max_syst_interval": "m",
+    "alpha": "rad",
+    "beta": "rad",
+    "R": "m",
+    "E_d": "1",
+    "E_b": "1",
+    "c_L": "1",
+    "c_R": "1",
+    "b_new": "m",
+}
 """Unit of each key of :meth:`UMBmarkResult.as_dict` (``[m, m, rad]``: per component)."""
 
 LEVEL = 0.95
@@ -79,16 +92,20 @@ def borenstein(x_cw: float, x_ccw: float, side: float, track: float) -> Borenste
     alpha = (x_cw + x_ccw) / (-4.0 * side)
     beta = (x_cw - x_ccw) / (-4.0 * side)
     if abs(alpha) >= math.pi / 2 or abs(beta) >= math.pi:
-        raise InputError(f"Borenstein's correction is undefined here: alpha = {alpha:.6g} rad, beta = {beta:.6g} "
-                           f"rad from x_cw = {x_cw:.6g} m, x_ccw = {x_ccw:.6g} m and side {side:.6g} m (the "
-                           f"errors are not small against the square)")
+        raise InputError(
+            f"Borenstein's correction is undefined here: alpha = {alpha:.6g} rad, beta = {beta:.6g} "
+            f"rad from x_cw = {x_cw:.6g} m, x_ccw = {x_ccw:.6g} m and side {side:.6g} m (the "
+            f"errors are not small against the square)"
+        )
     if beta == 0.0:
         R, e_d = math.inf, 1.0
     else:
         R = (side / 2.0) / math.sin(beta / 2.0)
         if abs(R) <= track / 2.0:
-            raise InputError(f"Borenstein's correction is undefined here: the legs curve with radius {R:.6g} m, "
-                               f"within half the track ({track / 2:.6g} m)")
+            raise InputError(
+                f"Borenstein's correction is undefined here: the legs curve with radius {R:.6g} m, "
+                f"within half the track ({track / 2:.6g} m)"
+            )
         e_d = (R + track / 2.0) / (R - track / 2.0)
     e_b = (math.pi / 2) / (math.pi / 2 - alpha)
     return Borenstein(alpha, beta, R, e_d, e_b, 2.0 / (e_d + 1.0), 2.0 / (1.0 / e_d + 1.0), e_b * track)
@@ -122,18 +139,21 @@ class DirectionResult:
 
         c = 2.0 * (n - 1) / (n - 2) * float(f_dist.ppf(level, 2, n - 2))
         lam, vec = np.linalg.eigh(np.cov(self.epsilon[:, :2], rowvar=False))
-        a = vec * np.sqrt(np.clip(lam, 0.0, None) * c / n)           # region: cg + a u, |u| <= 1
+        a = vec * np.sqrt(np.clip(lam, 0.0, None) * c / n)  # region: cg + a u, |u| <= 1
         phi = np.linspace(0.0, 2.0 * np.pi, BOUNDARY_POINTS, endpoint=False)
         edge = self.cg[:, None] + a @ np.vstack([np.cos(phi), np.sin(phi)])
         dist = np.hypot(edge[0], edge[1])
         near = float(dist.min())
         if np.linalg.matrix_rank(a) == 2 and np.linalg.norm(np.linalg.solve(a, -self.cg)) <= 1.0:
-            near = 0.0                                                     # the origin lies inside
+            near = 0.0  # the origin lies inside
         return near, float(dist.max())
 
     def as_dict(self) -> dict:
-        return {"runs": [{"epsilon": [float(v) if np.isfinite(v) else None for v in e]} for e in self.epsilon],
-                "cg": [float(v) for v in self.cg], "r_cg": self.r_cg}
+        return {
+            "runs": [{"epsilon": [float(v) if np.isfinite(v) else None for v in e]} for e in self.epsilon],
+            "cg": [float(v) for v in self.cg],
+            "r_cg": self.r_cg,
+        }
 
 
 @dataclass(frozen=True)
@@ -163,8 +183,14 @@ class UMBmarkResult:
 
     def as_dict(self, level: float = LEVEL) -> dict:
         interval = self.e_max_interval(level)
-        out = {"side": self.side, "mode": self.mode, "cw": self.cw.as_dict(), "ccw": self.ccw.as_dict(),
-               "e_max_syst": self.e_max_syst, "e_max_syst_interval": list(interval) if interval else None}
+        out = {
+            "side": self.side,
+            "mode": self.mode,
+            "cw": self.cw.as_dict(),
+            "ccw": self.ccw.as_dict(),
+            "e_max_syst": self.e_max_syst,
+            "e_max_syst_interval": list(interval) if interval else None,
+        }
         if self.borenstein is not None:
             out["borenstein"] = self.borenstein.as_dict()
         return out
@@ -175,8 +201,7 @@ def _check_level(level: float) -> None:
         raise InputError(f"confidence level must lie between 0 and 1, got {level!r}")
 
 
-def reduction_interval(before: UMBmarkResult, after: UMBmarkResult,
-                       level: float = LEVEL) -> tuple[float, float] | None:
+def reduction_interval(before: UMBmarkResult, after: UMBmarkResult, level: float = LEVEL) -> tuple[float, float] | None:
     """Confidence interval of the reduction factor ``E_max,syst(before) / E_max,syst(after)``.
 
     With ``before`` and ``after`` independent procedures, each ``E_max,syst`` interval at
@@ -261,8 +286,9 @@ def analyze(eps_cw, eps_ccw, side: float = 4.0, robot: Robot | None = None, mode
         if len(e) == 0:
             raise InputError(f"{name}: no runs; UMBmark needs at least one run in each direction")
         if not np.all(np.isfinite(e[:, :2])):
-            raise InputError(f"{name}: non-finite return error in run "
-                               f"{int(np.argwhere(~np.isfinite(e[:, :2]))[0, 0]) + 1}")
+            raise InputError(
+                f"{name}: non-finite return error in run {int(np.argwhere(~np.isfinite(e[:, :2]))[0, 0]) + 1}"
+            )
         if e.shape[1] == 2:
             e = np.column_stack([e, np.zeros(len(e))])
         dirs.append(DirectionResult(name, e))
@@ -287,9 +313,20 @@ def square_refusal(robot: Robot, side: float, mode: str) -> str | None:
     return None
 
 
-def run_umbmark(true_robot: Robot, command_robot: Robot, *, side: float = 4.0, mode: str = "rotate", runs: int = 5,
-                noise: NoiseModel | None = None, rate: float = 100.0, limits: MotionLimits | None = None,
-                trials: int = 1, rng=None, keep_runs: bool = False):
+def run_umbmark(
+    true_robot: Robot,
+    command_robot: Robot,
+    *,
+    side: float = 4.0,
+    mode: str = "rotate",
+    runs: int = 5,
+    noise: NoiseModel | None = None,
+    rate: float = 100.0,
+    limits: MotionLimits | None = None,
+    trials: int = 1,
+    rng=None,
+    keep_runs: bool = False,
+):
     """Simulate ``trials`` UMBmark procedures of ``runs`` runs per direction.
 
     ``command_robot`` is the model the robot executes the path by and computes its
@@ -304,18 +341,30 @@ def run_umbmark(true_robot: Robot, command_robot: Robot, *, side: float = 4.0, m
     refusal = square_refusal(command_robot, side, mode)
     if refusal is not None:
         other = {"rotate": "translate", "translate": "rotate"}[mode]
-        hint = (f"the other mode is {other!r}" if square_refusal(command_robot, side, other) is None
-                else "nor in the other mode: UMBmark does not apply to it")
-        raise InputError(f"robot {command_robot.name!r} cannot drive the UMBmark square in {mode!r} mode "
-                         f"({refusal}); {hint}")
+        hint = (
+            f"the other mode is {other!r}"
+            if square_refusal(command_robot, side, other) is None
+            else "nor in the other mode: UMBmark does not apply to it"
+        )
+        raise InputError(
+            f"robot {command_robot.name!r} cannot drive the UMBmark square in {mode!r} mode ({refusal}); {hint}"
+        )
     rng = make_rng(rng)
     sims = {}
     for direction in ("cw", "ccw"):
-        sims[direction] = simulate(umbmark_square(direction, side, mode), true_robot, command_robot, rate=rate,
-                                   limits=limits, noise=noise, trials=trials * runs, rng=rng,
-                                   keep_truth=keep_runs)
+        sims[direction] = simulate(
+            umbmark_square(direction, side, mode),
+            true_robot,
+            command_robot,
+            rate=rate,
+            limits=limits,
+            noise=noise,
+            trials=trials * runs,
+            rng=rng,
+            keep_truth=keep_runs,
+        )
     results = []
     for k in range(trials):
-        eps = {d: sims[d].epsilon[k * runs:(k + 1) * runs] for d in sims}
+        eps = {d: sims[d].epsilon[k * runs : (k + 1) * runs] for d in sims}
         results.append(analyze(eps["cw"], eps["ccw"], side, command_robot, mode))
     return (results, sims) if keep_runs else results

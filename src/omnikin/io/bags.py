@@ -81,8 +81,10 @@ with a digit; '~' only at the start."""
 def check_topic(name: str, what: str = "topic") -> str:
     """``name`` if it is a valid ROS 2 topic name, else :class:`BagError` naming it."""
     if not isinstance(name, str) or not TOPIC.match(name):
-        raise BagError(f"{what}: {name!r} is not a valid ROS 2 topic name (letters, digits and underscores "
-                       f"separated by '/', e.g. /odom)")
+        raise BagError(
+            f"{what}: {name!r} is not a valid ROS 2 topic name (letters, digits and underscores "
+            f"separated by '/', e.g. /odom)"
+        )
     return name
 
 
@@ -141,9 +143,10 @@ def _check_bag_path(bag) -> Path:
     path = Path(bag)
     try:
         mode = os.stat(path).st_mode
-    except (OSError, ValueError):           # missing, or a name too long or with NUL
-        raise BagError(f"{one_line(bag, 300)}: no such bag (expected a rosbag2 directory, or a .db3 or .mcap "
-                       f"file)") from None
+    except (OSError, ValueError):  # missing, or a name too long or with NUL
+        raise BagError(
+            f"{one_line(bag, 300)}: no such bag (expected a rosbag2 directory, or a .db3 or .mcap file)"
+        ) from None
     inside = []
     if stat.S_ISDIR(mode):
         try:
@@ -151,8 +154,9 @@ def _check_bag_path(bag) -> Path:
         except OSError as exc:
             raise BagError(f"{bag}: cannot read the bag: {exc.strerror or exc}") from None
     elif not stat.S_ISREG(mode):
-        raise BagError(f"{bag}: not a bag but a device, pipe or socket (a bag is a rosbag2 directory, or a .db3 or "
-                       f".mcap file)")
+        raise BagError(
+            f"{bag}: not a bag but a device, pipe or socket (a bag is a rosbag2 directory, or a .db3 or .mcap file)"
+        )
     if inside:
         raise BagError(f"{bag}: holds {inside[0].name!r}, a device, pipe or socket, not a bag file")
     return path
@@ -191,8 +195,9 @@ def message_count(bag, topic: str) -> int:
         reader.close()
 
 
-def _messages(bag, topic: str, allowed: Iterable[str], max_messages: int | None = None,
-              max_message_bytes: int | None = None) -> Iterator[tuple[int, int, Any, str]]:
+def _messages(
+    bag, topic: str, allowed: Iterable[str], max_messages: int | None = None, max_message_bytes: int | None = None
+) -> Iterator[tuple[int, int, Any, str]]:
     """Yield ``(index, bag time [ns], message, msgtype)`` of ``topic``, checking its type and
     the bounds (module docstring)."""
     rb = _Rosbags.get()
@@ -205,8 +210,7 @@ def _messages(bag, topic: str, allowed: Iterable[str], max_messages: int | None 
             raise BagError(f"{bag}: no topic {topic!r} in the bag; it has: {one_line(have or 'no topics', 500)}")
         bad = sorted({c.msgtype for c in conns if c.msgtype not in allowed})
         if bad:
-            raise BagError(f"{bag}: topic {topic!r} carries {', '.join(bad)}; expected "
-                           f"{' or '.join(allowed)}")
+            raise BagError(f"{bag}: topic {topic!r} carries {', '.join(bad)}; expected {' or '.join(allowed)}")
         declared = sum(int(getattr(c, "msgcount", 0) or 0) for c in conns)
         if max_messages is not None and declared > max_messages:
             raise _too_many(bag, topic, declared, max_messages)
@@ -216,14 +220,19 @@ def _messages(bag, topic: str, allowed: Iterable[str], max_messages: int | None 
                 if max_messages is not None and k >= max_messages:
                     raise _too_many(bag, topic, k + 1, max_messages, declared=False)
                 if max_message_bytes is not None and len(raw) > max_message_bytes:
-                    raise ResourceLimitError(f"{bag}: topic {topic!r}, message {k}: {len(raw)} bytes, more than the "
-                                             f"{max_message_bytes} bytes allowed for one message",
-                                             needed=len(raw), limit=max_message_bytes, unit="bytes")
+                    raise ResourceLimitError(
+                        f"{bag}: topic {topic!r}, message {k}: {len(raw)} bytes, more than the "
+                        f"{max_message_bytes} bytes allowed for one message",
+                        needed=len(raw),
+                        limit=max_message_bytes,
+                        unit="bytes",
+                    )
                 try:
                     msg = rb.store.deserialize_cdr(raw, conn.msgtype)
                 except Exception as exc:  # noqa: BLE001 (any decoding failure of rosbags' serde)
-                    raise BagError(f"{bag}: topic {topic!r}, message {k}: cannot decode {conn.msgtype}: "
-                                   f"{one_line(exc)}") from None
+                    raise BagError(
+                        f"{bag}: topic {topic!r}, message {k}: cannot decode {conn.msgtype}: {one_line(exc)}"
+                    ) from None
                 yield k, int(t_ns), msg, conn.msgtype
         except (BagError, ResourceLimitError):
             raise
@@ -235,8 +244,12 @@ def _messages(bag, topic: str, allowed: Iterable[str], max_messages: int | None 
 
 def _too_many(bag, topic: str, count: int, limit: int, declared: bool = True) -> ResourceLimitError:
     has = f"declares {count} messages" if declared else f"has more than {limit} messages"
-    return ResourceLimitError(f"{bag}: topic {topic!r} {has}, more than the {limit} that may be held in memory",
-                              needed=count, limit=limit, unit="messages")
+    return ResourceLimitError(
+        f"{bag}: topic {topic!r} {has}, more than the {limit} that may be held in memory",
+        needed=count,
+        limit=limit,
+        unit="messages",
+    )
 
 
 @dataclass(frozen=True)
@@ -272,9 +285,16 @@ def _encoded_names(robot: Robot) -> list[str]:
     return [w.name for w in encoded_wheels(robot)]
 
 
-def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp: str = "auto",
-                      steer_suffix: str = STEER_SUFFIX, max_messages: int | None = None,
-                      max_message_bytes: int | None = None) -> JointStates:
+def read_joint_states(
+    bag,
+    robot: Robot,
+    topic: str = "/joint_states",
+    *,
+    stamp: str = "auto",
+    steer_suffix: str = STEER_SUFFIX,
+    max_messages: int | None = None,
+    max_message_bytes: int | None = None,
+) -> JointStates:
     """Wheel angles (and steering angles) of ``robot`` from a JointState topic (module docstring)."""
     if stamp not in STAMPS:
         raise BagError(f"stamp must be one of {list(STAMPS)}, got {stamp!r}")
@@ -292,8 +312,7 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
         pos = np.asarray(msg.position, dtype=float)
         seen_names.update(names)
         if len(pos) != len(names):
-            raise BagError(f"{bag}: topic {topic!r}, message {k}: {len(names)} joint names but {len(pos)} "
-                           f"positions")
+            raise BagError(f"{bag}: topic {topic!r}, message {k}: {len(names)} joint names but {len(pos)} positions")
         index = {}
         for i, n in enumerate(names):
             if n in index:
@@ -305,8 +324,10 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
             continue
         missing = [n for n in needed if n not in index]
         if missing:
-            raise BagError(f"{bag}: topic {topic!r}, message {k}: no joint(s) {missing} (robot {robot.name!r} "
-                           f"needs {needed}); the message has {shorten(names, 200)}")
+            raise BagError(
+                f"{bag}: topic {topic!r}, message {k}: no joint(s) {missing} (robot {robot.name!r} "
+                f"needs {needed}); the message has {shorten(names, 200)}"
+            )
         row = pos[[index[n] for n in needed]]
         bad = [n for n, v in zip(needed, row, strict=True) if not math.isfinite(v)]
         if bad:
@@ -316,9 +337,11 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
         rows.append(row)
         index_list.append(k)
     if not rows:
-        raise BagError(f"{bag}: topic {topic!r}: no JointState message names the wheel joints {needed} of robot "
-                       f"{robot.name!r} (joint name = wheel name); the topic's joints are "
-                       f"{shorten(sorted(seen_names), 300) if seen_names else 'none (no messages)'}")
+        raise BagError(
+            f"{bag}: topic {topic!r}: no JointState message names the wheel joints {needed} of robot "
+            f"{robot.name!r} (joint name = wheel name); the topic's joints are "
+            f"{shorten(sorted(seen_names), 300) if seen_names else 'none (no messages)'}"
+        )
     header_ns = np.array(header_list, dtype=np.int64)
     bag_ns = np.array(bag_list, dtype=np.int64)
     source = stamp
@@ -334,19 +357,25 @@ def read_joint_states(bag, robot: Robot, topic: str = "/joint_states", *, stamp:
     if back.size:
         i = int(back[0]) + 1
         what = "header stamps" if source == "header" else "bag record times"
-        hint = ("; all header stamps are zero: use --stamp bag (record times)" if source == "header"
-                and not np.any(header_ns) else
-                "; --stamp bag uses the record times instead" if source == "header" else "")
-        raise BagError(f"{bag}: topic {topic!r}, message {int(msg_index[i])}: {what} must increase strictly: "
-                       f"{int(stamps[i])} ns follows {int(stamps[i - 1])} ns of message {int(msg_index[i - 1])}"
-                       f"{hint}")
+        hint = (
+            "; all header stamps are zero: use --stamp bag (record times)"
+            if source == "header" and not np.any(header_ns)
+            else "; --stamp bag uses the record times instead"
+            if source == "header"
+            else ""
+        )
+        raise BagError(
+            f"{bag}: topic {topic!r}, message {int(msg_index[i])}: {what} must increase strictly: "
+            f"{int(stamps[i])} ns follows {int(stamps[i - 1])} ns of message {int(msg_index[i - 1])}"
+            f"{hint}"
+        )
     if len(data) < 2:
-        raise BagError(f"{bag}: topic {topic!r}: odometry needs at least two distinct wheel samples, got "
-                       f"{len(data)}")
+        raise BagError(f"{bag}: topic {topic!r}: odometry needs at least two distinct wheel samples, got {len(data)}")
     n = len(wheels)
     steer = data[:, n:] if steer_joints else None
-    return JointStates(str(bag), topic, stamps, bag_ns, data[:, :n], steer, wheels, steer_joints, source,
-                       skipped, int(repeat.sum()))
+    return JointStates(
+        str(bag), topic, stamps, bag_ns, data[:, :n], steer, wheels, steer_joints, source, skipped, int(repeat.sum())
+    )
 
 
 @dataclass(frozen=True)
@@ -398,12 +427,29 @@ def read_poses(bag, topic: str, *, max_messages: int | None = None, max_message_
             twists.append((tw.linear.x, tw.linear.y, tw.angular.z))
     if not poses:
         raise BagError(f"{bag}: topic {topic!r}: no messages")
-    return PoseTrack(str(bag), topic, msgtype, np.array(stamps, dtype=np.int64), np.array(bag_ns, dtype=np.int64),
-                     np.array(poses), frame, child, np.array(twists) if twists else None)
+    return PoseTrack(
+        str(bag),
+        topic,
+        msgtype,
+        np.array(stamps, dtype=np.int64),
+        np.array(bag_ns, dtype=np.int64),
+        np.array(poses),
+        frame,
+        child,
+        np.array(twists) if twists else None,
+    )
 
 
-def export_poses(bag, topic: str, fmt: str, output=None, *, force: bool = False, max_messages: int | None = None,
-                 max_message_bytes: int | None = None) -> PoseTrack:
+def export_poses(
+    bag,
+    topic: str,
+    fmt: str,
+    output=None,
+    *,
+    force: bool = False,
+    max_messages: int | None = None,
+    max_message_bytes: int | None = None,
+) -> PoseTrack:
     """Write the poses of ``topic`` as a ``tum``, ``kitti`` or ``csv`` file (``output`` None or
     ``-``: stdout) under the output policy (an existing file needs ``force``; never the bag).
 
@@ -438,26 +484,38 @@ def _odometry_msg(rb: _Rosbags, ns: int, pose, twist, frame_id, child_frame_id, 
     header = T["std_msgs/msg/Header"](stamp=_time_msg(rb, ns), frame_id=frame_id)
     p = T["geometry_msgs/msg/Pose"](
         position=T["geometry_msgs/msg/Point"](x=float(pose[0]), y=float(pose[1]), z=0.0),
-        orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(half), w=math.cos(half)))
+        orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(half), w=math.cos(half)),
+    )
     tw = T["geometry_msgs/msg/Twist"](
         linear=T["geometry_msgs/msg/Vector3"](x=float(twist[0]), y=float(twist[1]), z=0.0),
-        angular=T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=float(twist[2])))
-    return T[ODOMETRY](header=header, child_frame_id=child_frame_id,
-                       pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=p, covariance=pose_cov),
-                       twist=T["geometry_msgs/msg/TwistWithCovariance"](twist=tw, covariance=twist_cov))
+        angular=T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=float(twist[2])),
+    )
+    return T[ODOMETRY](
+        header=header,
+        child_frame_id=child_frame_id,
+        pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=p, covariance=pose_cov),
+        twist=T["geometry_msgs/msg/TwistWithCovariance"](twist=tw, covariance=twist_cov),
+    )
 
 
 def _twist_msg(rb: _Rosbags, twist):
     T = rb.types
-    return T[TWIST](linear=T["geometry_msgs/msg/Vector3"](x=float(twist[0]), y=float(twist[1]), z=0.0),
-                    angular=T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=float(twist[2])))
+    return T[TWIST](
+        linear=T["geometry_msgs/msg/Vector3"](x=float(twist[0]), y=float(twist[1]), z=0.0),
+        angular=T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=float(twist[2])),
+    )
 
 
 def _joint_state_msg(rb: _Rosbags, ns: int, names, position, velocity):
     T = rb.types
     header = T["std_msgs/msg/Header"](stamp=_time_msg(rb, ns), frame_id="")
-    return T[JOINT_STATE](header=header, name=list(names), position=np.asarray(position, dtype=np.float64),
-                          velocity=np.asarray(velocity, dtype=np.float64), effort=np.zeros(0))
+    return T[JOINT_STATE](
+        header=header,
+        name=list(names),
+        position=np.asarray(position, dtype=np.float64),
+        velocity=np.asarray(velocity, dtype=np.float64),
+        effort=np.zeros(0),
+    )
 
 
 @dataclass(frozen=True)
@@ -479,13 +537,21 @@ def require_new_bag(path, *, inputs: Iterable = (), force: bool = False) -> Path
     Raises :class:`omnikin.errors.OutputExistsError` (or the other errors of
     :func:`omnikin.io.output.check_output`)."""
     out = check_output(path, inputs=inputs, force=force, folder="data")
-    if out is None:                              # '-' is refused for folders by check_output
+    if out is None:  # '-' is refused for folders by check_output
         raise BagError("a bag is a folder: name it (standard output cannot take a bag)")
     return out
 
 
-def _write_bag(path, topics: list[_Topic], messages: Iterable[tuple[int, int, bytes]], storage: str = "sqlite3",
-               custom: dict | None = None, *, force: bool = False, inputs: Iterable = ()) -> int:
+def _write_bag(
+    path,
+    topics: list[_Topic],
+    messages: Iterable[tuple[int, int, bytes]],
+    storage: str = "sqlite3",
+    custom: dict | None = None,
+    *,
+    force: bool = False,
+    inputs: Iterable = (),
+) -> int:
     """Write a new bag with ``topics`` from ``messages`` ``(topic index, bag time [ns], serialized
     bytes)`` in time order, one at a time; returns the number written. The bag is built beside
     ``path`` and moved there when complete (:func:`omnikin.io.output.data_folder`)."""
@@ -523,9 +589,18 @@ def _write_bag(path, topics: list[_Topic], messages: Iterable[tuple[int, int, by
     return count
 
 
-def odometry_messages(stamps, poses, twists, *, bag_times=None, frame_id: str = "odom",
-                      child_frame_id: str = "base_link", pose_covariance=None, twist_covariance=None,
-                      topic: int = 0) -> Iterator[tuple[int, int, bytes]]:
+def odometry_messages(
+    stamps,
+    poses,
+    twists,
+    *,
+    bag_times=None,
+    frame_id: str = "odom",
+    child_frame_id: str = "base_link",
+    pose_covariance=None,
+    twist_covariance=None,
+    topic: int = 0,
+) -> Iterator[tuple[int, int, bytes]]:
     """Serialized ``nav_msgs/Odometry`` messages ``(topic, bag time ns, bytes)``, made one at a
     time in the order given."""
     rb = _Rosbags.get()
@@ -539,17 +614,37 @@ def odometry_messages(stamps, poses, twists, *, bag_times=None, frame_id: str = 
         yield topic, int(bag_times[k]), _serialize(rb, msg, ODOMETRY)
 
 
-def write_odometry(path, stamps, poses, twists, *, topic: str = "/odom", bag_times=None, frame_id: str = "odom",
-                   child_frame_id: str = "base_link", pose_covariance=None, twist_covariance=None,
-                   storage: str = "sqlite3", force: bool = False, inputs: Iterable = ()) -> None:
+def write_odometry(
+    path,
+    stamps,
+    poses,
+    twists,
+    *,
+    topic: str = "/odom",
+    bag_times=None,
+    frame_id: str = "odom",
+    child_frame_id: str = "base_link",
+    pose_covariance=None,
+    twist_covariance=None,
+    storage: str = "sqlite3",
+    force: bool = False,
+    inputs: Iterable = (),
+) -> None:
     """Write poses ``(N, 3)`` and body twists ``(N, 3)`` at ``stamps`` [int ns] as Odometry to a new bag
     (messages in order of bag time)."""
     stamps = np.asarray(stamps, dtype=np.int64)
     bag_times = stamps if bag_times is None else np.asarray(bag_times, dtype=np.int64)
     order = np.argsort(bag_times, kind="stable")
-    msgs = odometry_messages(stamps[order], np.asarray(poses)[order], np.asarray(twists)[order],
-                             bag_times=bag_times[order], frame_id=frame_id, child_frame_id=child_frame_id,
-                             pose_covariance=pose_covariance, twist_covariance=twist_covariance)
+    msgs = odometry_messages(
+        stamps[order],
+        np.asarray(poses)[order],
+        np.asarray(twists)[order],
+        bag_times=bag_times[order],
+        frame_id=frame_id,
+        child_frame_id=child_frame_id,
+        pose_covariance=pose_covariance,
+        twist_covariance=twist_covariance,
+    )
     _write_bag(path, [_Topic(topic, ODOMETRY)], msgs, storage, force=force, inputs=inputs)
 
 
@@ -578,17 +673,42 @@ class BagOdometry:
         js = self.joint_states
         end = self.poses[-1]
         path = float(np.sum(np.hypot(*np.diff(self.poses[:, :2], axis=0).T)))
-        return {"input": js.bag, "joint_states_topic": js.topic, "samples": len(js.stamps),
-                "duration": float(js.t[-1]), "stamp_source": js.stamp_source, "wheels": js.wheel_names,
-                "steer_joints": js.steer_names, "skipped_messages": js.skipped, "duplicates_dropped": js.duplicates,
-                "output": self.output, "odom_topic": self.topic, "final_pose": end.tolist(), "path_length": path}
+        return {
+            "input": js.bag,
+            "joint_states_topic": js.topic,
+            "samples": len(js.stamps),
+            "duration": float(js.t[-1]),
+            "stamp_source": js.stamp_source,
+            "wheels": js.wheel_names,
+            "steer_joints": js.steer_names,
+            "skipped_messages": js.skipped,
+            "duplicates_dropped": js.duplicates,
+            "output": self.output,
+            "odom_topic": self.topic,
+            "final_pose": end.tolist(),
+            "path_length": path,
+        }
 
 
-def bag_odometry(robot: Robot, bag_in, bag_out, *, joint_states_topic: str = "/joint_states",
-                 odom_topic: str = "/odom", method: str = "exact", stamp: str = "auto", frame_id: str = "odom",
-                 child_frame_id: str = "base_link", pose_covariance=None, twist_covariance=None,
-                 storage: str = "sqlite3", steer_suffix: str = STEER_SUFFIX, force: bool = False,
-                 max_messages: int | None = None, max_message_bytes: int | None = None) -> BagOdometry:
+def bag_odometry(
+    robot: Robot,
+    bag_in,
+    bag_out,
+    *,
+    joint_states_topic: str = "/joint_states",
+    odom_topic: str = "/odom",
+    method: str = "exact",
+    stamp: str = "auto",
+    frame_id: str = "odom",
+    child_frame_id: str = "base_link",
+    pose_covariance=None,
+    twist_covariance=None,
+    storage: str = "sqlite3",
+    steer_suffix: str = STEER_SUFFIX,
+    force: bool = False,
+    max_messages: int | None = None,
+    max_message_bytes: int | None = None,
+) -> BagOdometry:
     """Wheel odometry of the JointState topic of ``bag_in`` written as Odometry to the new bag ``bag_out``.
 
     Each output message has the stamp and the bag record time of the input sample it comes
@@ -597,34 +717,64 @@ def bag_odometry(robot: Robot, bag_in, bag_out, *, joint_states_topic: str = "/j
     from ..odometry import batch_odometry_from_angles
 
     require_new_bag(bag_out, inputs=[bag_in], force=force)
-    js = read_joint_states(bag_in, robot, joint_states_topic, stamp=stamp, steer_suffix=steer_suffix,
-                           max_messages=max_messages, max_message_bytes=max_message_bytes)
+    js = read_joint_states(
+        bag_in,
+        robot,
+        joint_states_topic,
+        stamp=stamp,
+        steer_suffix=steer_suffix,
+        max_messages=max_messages,
+        max_message_bytes=max_message_bytes,
+    )
     try:
         res = batch_odometry_from_angles(robot, js.t, js.angles, steer=js.steer, method=method)
     except OmnikinError as exc:
         raise BagError(f"{bag_in}: topic {joint_states_topic!r}: {exc}") from None
     twists = np.zeros_like(res.poses)
     twists[1:] = res.twists
-    _covariance(pose_covariance, "pose covariance")            # refused before the bag is started
+    _covariance(pose_covariance, "pose covariance")  # refused before the bag is started
     _covariance(twist_covariance, "twist covariance")
     order = np.argsort(js.bag_times, kind="stable")
-    msgs = odometry_messages(js.stamps[order], res.poses[order], twists[order], bag_times=js.bag_times[order],
-                             frame_id=frame_id, child_frame_id=child_frame_id, pose_covariance=pose_covariance,
-                             twist_covariance=twist_covariance)
-    _write_bag(bag_out, [_Topic(odom_topic, ODOMETRY)], msgs, storage,
-               {"omnikin.robot": robot.name, "omnikin.method": method, "omnikin.input": str(bag_in)},
-               force=force, inputs=[bag_in])
+    msgs = odometry_messages(
+        js.stamps[order],
+        res.poses[order],
+        twists[order],
+        bag_times=js.bag_times[order],
+        frame_id=frame_id,
+        child_frame_id=child_frame_id,
+        pose_covariance=pose_covariance,
+        twist_covariance=twist_covariance,
+    )
+    _write_bag(
+        bag_out,
+        [_Topic(odom_topic, ODOMETRY)],
+        msgs,
+        storage,
+        {"omnikin.robot": robot.name, "omnikin.method": method, "omnikin.input": str(bag_in)},
+        force=force,
+        inputs=[bag_in],
+    )
     return BagOdometry(js, res.poses, twists, str(bag_out), odom_topic)
 
 
 # --- simulated runs ------------------------------------------------------------------------------------
-RUN_TOPICS = {"ground_truth": "/ground_truth", "odom": "/odom", "joint_states": "/joint_states",
-              "cmd_vel": "/cmd_vel"}
+RUN_TOPICS = {"ground_truth": "/ground_truth", "odom": "/odom", "joint_states": "/joint_states", "cmd_vel": "/cmd_vel"}
 
 
-def record_run(path, run, robot: Robot, *, start: float = 0.0, topics: dict | None = None, frame_id: str = "odom",
-               child_frame_id: str = "base_link", storage: str = "sqlite3", custom: dict | None = None,
-               steer_suffix: str = STEER_SUFFIX, force: bool = False) -> dict:
+def record_run(
+    path,
+    run,
+    robot: Robot,
+    *,
+    start: float = 0.0,
+    topics: dict | None = None,
+    frame_id: str = "odom",
+    child_frame_id: str = "base_link",
+    storage: str = "sqlite3",
+    custom: dict | None = None,
+    steer_suffix: str = STEER_SUFFIX,
+    force: bool = False,
+) -> dict:
     """Write a simulated run (:class:`omnikin.simulation.simulate.SimulatedRun`, first trial) to a new bag.
 
     Topics (``topics`` renames them): ``/ground_truth`` (Odometry, the true poses),
@@ -645,7 +795,7 @@ def record_run(path, run, robot: Robot, *, start: float = 0.0, topics: dict | No
     if not math.isfinite(start):
         raise BagError(f"start time must be finite, got {start!r}")
     end = start + float(run.t[-1])
-    if not (-2 ** 31 <= start and end < 2 ** 31):
+    if not (-(2**31) <= start and end < 2**31):
         raise BagError(f"stamps from {start:.6g} s to {end:.6g} s do not fit a ROS time (int32 seconds)")
     t = np.asarray(run.t, dtype=float)
     stamps = seconds_to_ns(t) + round(start * 1e9)
@@ -670,14 +820,26 @@ def record_run(path, run, robot: Robot, *, start: float = 0.0, topics: dict | No
 
     def messages() -> Iterator[tuple[int, int, bytes]]:
         for k, ns in enumerate(stamps.tolist()):
-            yield 0, ns, _serialize(rb, _odometry_msg(rb, ns, truth[k], truth_twist[k], frame_id, child_frame_id,
-                                                      zero, zero), ODOMETRY)
-            yield 1, ns, _serialize(rb, _odometry_msg(rb, ns, run.odometry[k], odom_twist[k], frame_id,
-                                                      child_frame_id, zero, zero), ODOMETRY)
+            yield (
+                0,
+                ns,
+                _serialize(
+                    rb, _odometry_msg(rb, ns, truth[k], truth_twist[k], frame_id, child_frame_id, zero, zero), ODOMETRY
+                ),
+            )
+            yield (
+                1,
+                ns,
+                _serialize(
+                    rb,
+                    _odometry_msg(rb, ns, run.odometry[k], odom_twist[k], frame_id, child_frame_id, zero, zero),
+                    ODOMETRY,
+                ),
+            )
             yield 2, ns, _serialize(rb, _joint_state_msg(rb, ns, joint_names, angles[k], speeds[k]), JOINT_STATE)
             yield 3, ns, _serialize(rb, _twist_msg(rb, cmd[k]), TWIST)
 
     types = {"ground_truth": ODOMETRY, "odom": ODOMETRY, "joint_states": JOINT_STATE, "cmd_vel": TWIST}
-    keys = list(RUN_TOPICS)            # the topic indices used by messages()
+    keys = list(RUN_TOPICS)  # the topic indices used by messages()
     _write_bag(path, [_Topic(names[k], types[k]) for k in keys], messages(), storage, custom, force=force)
     return {names[k]: len(t) for k in keys}

@@ -34,8 +34,7 @@ def _skipped(text: str) -> bool:
     return not stripped or stripped.startswith("#")
 
 
-def _refuse_empty(fields: list[str], names: list[str] | None, source: str, line: int,
-                  error: type[Exception]) -> None:
+def _refuse_empty(fields: list[str], names: list[str] | None, source: str, line: int, error: type[Exception]) -> None:
     """Raise ``error`` at the first empty field; ``names`` the header (None: this is the header)."""
     for k, value in enumerate(fields):
         if not value:
@@ -63,8 +62,7 @@ def read_rows(path, error: type[Exception]) -> list[tuple[int, list[str]]]:
     return rows
 
 
-def iter_fields(path, error: type[Exception], names: list[str] | None = None
-                ) -> Iterator[tuple[int, list[str]]]:
+def iter_fields(path, error: type[Exception], names: list[str] | None = None) -> Iterator[tuple[int, list[str]]]:
     """``(line_number, fields)`` of each line of a whitespace table that is not blank or a
     comment (module docstring); ``names`` name the columns in messages."""
     source = str(path)
@@ -85,9 +83,11 @@ def column_problems(header: list[str], required, optional=()) -> list[str]:
     dup = sorted(h for h, n in counts.items() if n > 1)
     missing = [c for c in required if c not in counts]
     unknown = [c for c in header if c not in allowed]
-    return ([f"missing column(s) {_names(missing)}"] if missing else []) + \
-        ([f"unknown column(s) {_names(unknown)}"] if unknown else []) + \
-        ([f"duplicate column(s) {_names(dup)}"] if dup else [])
+    return (
+        ([f"missing column(s) {_names(missing)}"] if missing else [])
+        + ([f"unknown column(s) {_names(unknown)}"] if unknown else [])
+        + ([f"duplicate column(s) {_names(dup)}"] if dup else [])
+    )
 
 
 def _names(names: list[str], limit: int = 8) -> str:

@@ -63,8 +63,11 @@ def _plain(value, field: str, nullable: frozenset):
     if isinstance(value, float) and not math.isfinite(value):
         if _nullable(field, nullable):
             return None
-        raise NonFiniteValueError(f"result field {field or '(top level)'} is {value} and JSON has no NaN or "
-                                  f"Infinity; an input may be out of range", field=field)
+        raise NonFiniteValueError(
+            f"result field {field or '(top level)'} is {value} and JSON has no NaN or "
+            f"Infinity; an input may be out of range",
+            field=field,
+        )
     return value
 
 

@@ -36,6 +36,7 @@ other scripts' digits)."""
 TICK_DIGITS = 20
 """Digits of the largest 64-bit reading, 2**64 - 1: longer text is refused before int()."""
 
+
 @dataclass(frozen=True)
 class TickLog:
     """A parsed tick log: ``t`` (N,), ``ticks`` (N, n_enc), ``steer`` (N, n_steer) [rad] or None.
@@ -61,11 +62,15 @@ def tick_reading(text: str, source: str, line: int, column: str) -> int:
     """One tick reading as an exact int, or :class:`OdometryInputError` naming file, line and column."""
     where = f"{source}: line {line}, column {column!r}"
     if not TICK.fullmatch(text):
-        raise OdometryInputError(f"{where}: not a tick reading: {shorten(text)} (expected an integer: ASCII digits "
-                                 f"with an optional leading '-')")
+        raise OdometryInputError(
+            f"{where}: not a tick reading: {shorten(text)} (expected an integer: ASCII digits "
+            f"with an optional leading '-')"
+        )
     if len(text.lstrip("-")) > TICK_DIGITS or not INT64_MIN <= int(text) < UINT64_END:
-        raise OdometryInputError(f"{where}: tick reading {shorten(text)} outside the range of a 64-bit counter "
-                                 f"({INT64_MIN} .. {UINT64_END - 1})")
+        raise OdometryInputError(
+            f"{where}: tick reading {shorten(text)} outside the range of a 64-bit counter "
+            f"({INT64_MIN} .. {UINT64_END - 1})"
+        )
     return int(text)
 
 
@@ -80,15 +85,18 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
         raise OdometryInputError(f"{source}: empty log; expected a header {','.join(expected)}")
     header_line, header = rows[0]
     if not header or header[0] != "t":
-        raise OdometryInputError(f"{source}: line {header_line}: the first column must be 't', got "
-                                 f"{shorten(header[:1])}; expected columns {expected}")
+        raise OdometryInputError(
+            f"{source}: line {header_line}: the first column must be 't', got "
+            f"{shorten(header[:1])}; expected columns {expected}"
+        )
     problems = column_problems(header, expected)
     if problems:
-        raise OdometryInputError(f"{source}: line {header_line}: " + "; ".join(problems) +
-                                 f"; robot {robot.name!r} expects {expected}")
+        raise OdometryInputError(
+            f"{source}: line {header_line}: " + "; ".join(problems) + f"; robot {robot.name!r} expects {expected}"
+        )
     if len(rows) < 3:
         raise OdometryInputError(f"{source}: needs at least two samples, got {len(rows) - 1}")
-    position = {name: k for k, name in enumerate(header)}      # a dict: linear in the number of columns
+    position = {name: k for k, name in enumerate(header)}  # a dict: linear in the number of columns
     t_col, tick_cols = position["t"], [position[name] for name in wheels]
     steer_idx = [position[name] for name in steer_cols]
     samples: list[tuple] = []
@@ -97,10 +105,14 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
     for line, row in rows[1:]:
         if len(row) != len(header):
             raise OdometryInputError(f"{source}: line {line}: {len(row)} fields, header has {len(header)}")
-        sample = (number(row[t_col], source, line, "t", OdometryInputError),
-                  tuple(tick_reading(row[j], source, line, name) for j, name in zip(tick_cols, wheels, strict=True)),
-                  tuple(number(row[j], source, line, name, OdometryInputError)
-                        for j, name in zip(steer_idx, steer_cols, strict=True)))
+        sample = (
+            number(row[t_col], source, line, "t", OdometryInputError),
+            tuple(tick_reading(row[j], source, line, name) for j, name in zip(tick_cols, wheels, strict=True)),
+            tuple(
+                number(row[j], source, line, name, OdometryInputError)
+                for j, name in zip(steer_idx, steer_cols, strict=True)
+            ),
+        )
         if samples and sample == samples[-1]:
             duplicates.append(line)
             continue
@@ -110,8 +122,9 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
         raise OdometryInputError(f"{source}: needs at least two distinct samples, got {len(samples)}")
     ticks = counter_readings([s[1] for s in samples], wheels)
     steer = np.radians(np.array([s[2] for s in samples], dtype=float)) if steer_cols else None
-    return TickLog(np.array([s[0] for s in samples], dtype=float), ticks, steer, wheels, tuple(duplicates),
-                   tuple(kept_lines))
+    return TickLog(
+        np.array([s[0] for s in samples], dtype=float), ticks, steer, wheels, tuple(duplicates), tuple(kept_lines)
+    )
 
 
 def tick_log_lines(t, ticks, wheel_names, steer=None, steer_names=(), comment: str | None = None) -> list[str]:
@@ -126,9 +139,11 @@ def tick_log_lines(t, ticks, wheel_names, steer=None, steer_names=(), comment: s
     if tk.ndim != 2 or tk.shape[1] != len(names):
         raise InputError(f"ticks: expected shape (N, {len(names)}) for wheels {names}, got {tk.shape}")
     if tk.dtype.kind == "f":
-        if not np.all(np.isfinite(tk)) or np.any(tk != np.round(tk)) or np.any(np.abs(tk) > 2.0 ** 53):
-            raise InputError("ticks: a tick log holds whole-number counter readings; got fractions or values "
-                             "beyond 2**53 (quantise the ticks first)")
+        if not np.all(np.isfinite(tk)) or np.any(tk != np.round(tk)) or np.any(np.abs(tk) > 2.0**53):
+            raise InputError(
+                "ticks: a tick log holds whole-number counter readings; got fractions or values "
+                "beyond 2**53 (quantise the ticks first)"
+            )
         tk = tk.astype(np.int64)
     elif tk.dtype.kind not in "iuO":
         raise InputError(f"ticks: expected integer readings, got dtype {tk.dtype}")
@@ -141,8 +156,9 @@ def tick_log_lines(t, ticks, wheel_names, steer=None, steer_names=(), comment: s
     if steer is not None or steer_names:
         deg = np.degrees(np.asarray(steer, dtype=float))
         if deg.shape != (len(tk), len(steer_names)):
-            raise InputError(f"steer: expected shape ({len(tk)}, {len(steer_names)}) for {steer_names}, "
-                             f"got {deg.shape}")
+            raise InputError(
+                f"steer: expected shape ({len(tk)}, {len(steer_names)}) for {steer_names}, got {deg.shape}"
+            )
     out = [f"# {line}" for line in (comment.splitlines() if comment else [])]
     out.append(",".join(columns))
     rows = tk.tolist()

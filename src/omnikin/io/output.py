@@ -93,8 +93,9 @@ def check_output(path, *, inputs: Iterable = (), force: bool = False, folder: bo
             continue
         src = _resolved(item)
         if _inside(target, src) or (kind and _inside(src, target)):
-            raise OutputExistsError(f"{out}: is (or is inside, or contains) the input {item}; "
-                                    "write the output somewhere else")
+            raise OutputExistsError(
+                f"{out}: is (or is inside, or contains) the input {item}; write the output somewhere else"
+            )
     parent = target.parent
     if not parent.is_dir():
         raise InputError(f"{out}: cannot write: folder {parent} does not exist")
@@ -106,17 +107,22 @@ def check_output(path, *, inputs: Iterable = (), force: bool = False, folder: bo
         if out.exists() and not out.is_dir():
             raise OutputExistsError(f"{out}: exists and is not a folder")
         if out.is_dir() and any(out.iterdir()) and not (out / REPORT_MARKER).is_file():
-            raise OutputExistsError(f"{out}: a non-empty folder omnikin did not write; choose a new folder "
-                                    "(omnikin replaces only report folders it wrote itself)")
+            raise OutputExistsError(
+                f"{out}: a non-empty folder omnikin did not write; choose a new folder "
+                "(omnikin replaces only report folders it wrote itself)"
+            )
         return out
     if kind == "data":
         if out.exists() or out.is_symlink():
             if not (out.is_dir() and not out.is_symlink() and (out / DATA_MARKER).is_file()):
-                raise OutputExistsError(f"{out}: exists already and omnikin did not write it; choose a new name "
-                                        "(omnikin never replaces a file or folder it did not write)")
+                raise OutputExistsError(
+                    f"{out}: exists already and omnikin did not write it; choose a new name "
+                    "(omnikin never replaces a file or folder it did not write)"
+                )
             if not force:
-                raise OutputExistsError(f"{out}: exists already; pass --force to replace it (a folder omnikin "
-                                        "wrote, replaced as a whole)")
+                raise OutputExistsError(
+                    f"{out}: exists already; pass --force to replace it (a folder omnikin wrote, replaced as a whole)"
+                )
         return out
     if out.is_dir():
         raise OutputExistsError(f"{out}: is a folder; name a file")
@@ -143,8 +149,9 @@ def _output_error(path, exc: OSError) -> OutputError:
 
 
 @contextlib.contextmanager
-def atomic_write(path, mode: str = "w", *, encoding: str | None = "utf-8",
-                 newline: str | None = None) -> Iterator[IO[Any]]:
+def atomic_write(
+    path, mode: str = "w", *, encoding: str | None = "utf-8", newline: str | None = None
+) -> Iterator[IO[Any]]:
     """Open a temporary file beside ``path``; on success it is renamed over ``path``.
 
     On an exception (or an interrupt) the temporary file is removed and ``path`` is left as
@@ -157,8 +164,7 @@ def atomic_write(path, mode: str = "w", *, encoding: str | None = "utf-8",
         raise ValueError(f"atomic_write: mode must be 'w' or 'wb', got {mode!r}")
 
     def opened(fd_or_path) -> IO[Any]:
-        return (open(fd_or_path, "wb") if mode == "wb"
-                else open(fd_or_path, "w", encoding=encoding, newline=newline))
+        return open(fd_or_path, "wb") if mode == "wb" else open(fd_or_path, "w", encoding=encoding, newline=newline)
 
     if _in_place(target):
         try:
@@ -169,7 +175,7 @@ def atomic_write(path, mode: str = "w", *, encoding: str | None = "utf-8",
         return
     tmp = None
     try:
-        with _uninterrupted():            # a Ctrl-C here must not leave the temporary file behind
+        with _uninterrupted():  # a Ctrl-C here must not leave the temporary file behind
             fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent or ".")
         with opened(fd) as handle:
             yield handle
@@ -219,8 +225,7 @@ def report_folder(path) -> Iterator[Path]:
         with _uninterrupted():
             stage = _stage(target)
         yield stage
-        _finish(stage, target, REPORT_MARKER,
-                "written by omnikin; the folder is replaced as a whole on the next run\n")
+        _finish(stage, target, REPORT_MARKER, "written by omnikin; the folder is replaced as a whole on the next run\n")
     except BaseException as exc:
         if stage is not None:
             shutil.rmtree(stage, ignore_errors=True)
@@ -244,8 +249,12 @@ def data_folder(path) -> Iterator[Path]:
         with _uninterrupted():
             holder = _stage(target)
         yield holder / target.name
-        _finish(holder / target.name, target, DATA_MARKER,
-                "written by omnikin; with --force the folder is replaced as a whole\n")
+        _finish(
+            holder / target.name,
+            target,
+            DATA_MARKER,
+            "written by omnikin; with --force the folder is replaced as a whole\n",
+        )
     except BaseException as exc:
         if isinstance(exc, OSError):
             raise _output_error(path, exc) from None
@@ -282,7 +291,7 @@ def _swap(built: Path, target: Path, marker: str, note: str) -> None:
     try:
         os.replace(built, target)
     except BaseException:
-        if old is not None:                       # put the previous folder back
+        if old is not None:  # put the previous folder back
             os.replace(old / "previous", target)
             old.rmdir()
         raise
@@ -300,8 +309,9 @@ def _uninterrupted() -> Iterator[None]:
         yield
         return
     received: list[int] = []
-    previous = {sig: signal.signal(sig, lambda num, frame: received.append(num))
-                for sig in (signal.SIGINT, signal.SIGTERM)}
+    previous = {
+        sig: signal.signal(sig, lambda num, frame: received.append(num)) for sig in (signal.SIGINT, signal.SIGTERM)
+    }
     try:
         yield
     finally:

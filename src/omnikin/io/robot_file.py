@@ -48,8 +48,20 @@ from .textfile import read_text
 
 SCHEMA_VERSION = 1
 TOP_KEYS = {"omnikin": True, "name": True, "description": False, "references": False, "wheels": True}
-WHEEL_KEYS = {"name", "type", "distance", "angle_deg", "x", "y", "drive_deg", "roller_deg",
-              "radius", "encoder", "max_speed", "steer"}
+WHEEL_KEYS = {
+    "name",
+    "type",
+    "distance",
+    "angle_deg",
+    "x",
+    "y",
+    "drive_deg",
+    "roller_deg",
+    "radius",
+    "encoder",
+    "max_speed",
+    "steer",
+}
 ENCODER_KEYS = {"ticks_per_rev", "gear_ratio", "invert", "counter_bits"}
 STEER_KEYS = {"offset", "min_deg", "max_deg"}
 
@@ -108,14 +120,14 @@ def _number(where: _Where, value: Any, wheel: str | None, field: str) -> float:
 def _check_keys(where: _Where, data: Mapping, allowed, wheel: str | None, field: str | None):
     unknown = sorted(set(map(str, data)) - set(allowed))
     if unknown:
-        raise where.error(f"unknown key(s) {shorten(unknown)}; allowed: {sorted(allowed)}", wheel,
-                          field if field else None)
+        raise where.error(
+            f"unknown key(s) {shorten(unknown)}; allowed: {sorted(allowed)}", wheel, field if field else None
+        )
 
 
 def _encoder(where: _Where, data: Any, wheel: str) -> Encoder:
     if not isinstance(data, Mapping):
-        raise where.error(f"must be a mapping with keys {sorted(ENCODER_KEYS)}, got {shorten(data)}", wheel,
-                          "encoder")
+        raise where.error(f"must be a mapping with keys {sorted(ENCODER_KEYS)}, got {shorten(data)}", wheel, "encoder")
     _check_keys(where, data, ENCODER_KEYS, wheel, "encoder")
     if "ticks_per_rev" not in data:
         raise where.error("missing required key 'ticks_per_rev'", wheel, "encoder")
@@ -126,8 +138,11 @@ def _encoder(where: _Where, data: Any, wheel: str) -> Encoder:
         raise where.error(f"must be true or false, got {shorten(invert)}", wheel, "encoder.invert")
     bits = data.get("counter_bits")
     if bits is not None and (isinstance(bits, bool) or not isinstance(bits, int) or not 2 <= bits <= 64):
-        raise where.error(f"the width of the encoder's counter, a whole number from 2 to 64, got {shorten(bits)}",
-                          wheel, "encoder.counter_bits")
+        raise where.error(
+            f"the width of the encoder's counter, a whole number from 2 to 64, got {shorten(bits)}",
+            wheel,
+            "encoder.counter_bits",
+        )
     return Encoder(tpr, gear, invert, bits)
 
 
@@ -171,12 +186,15 @@ def _drive(where: _Where, data: Mapping, label: str, kind: str, x: float, y: flo
     if kind in DEFAULT_DRIVE_DEG:
         return math.radians(DEFAULT_DRIVE_DEG[kind])
     if kind != "omni":
-        raise where.error(f"required for a {kind} wheel: the direction its hub moves at positive wheel speed "
-                          f"and zero steering (0: along body +x, as on differential drives, cars and castors; "
-                          f"angle_deg + 90: the counter-clockwise tangent)", label, "drive_deg")
+        raise where.error(
+            f"required for a {kind} wheel: the direction its hub moves at positive wheel speed "
+            f"and zero steering (0: along body +x, as on differential drives, cars and castors; "
+            f"angle_deg + 90: the counter-clockwise tangent)",
+            label,
+            "drive_deg",
+        )
     if x == 0.0 and y == 0.0:
-        raise where.error("a wheel at the origin has no default drive direction: give drive_deg", label,
-                          "drive_deg")
+        raise where.error("a wheel at the origin has no default drive direction: give drive_deg", label, "drive_deg")
     return math.atan2(y, x) + math.pi / 2
 
 
@@ -184,20 +202,28 @@ def _roller(where: _Where, data: Mapping, label: str, kind: str) -> float:
     """Roller angle gamma [rad] of a Swedish wheel (0 for every other wheel)."""
     if kind not in SWEDISH_TYPES:
         if "roller_deg" in data:
-            raise where.error(f"only Swedish wheels (omni, mecanum, swedish) have rollers, not {kind!r}", label,
-                              "roller_deg")
+            raise where.error(
+                f"only Swedish wheels (omni, mecanum, swedish) have rollers, not {kind!r}", label, "roller_deg"
+            )
         return 0.0
     if kind == "omni":
         if "roller_deg" in data and _number(where, data["roller_deg"], label, "roller_deg") != 0.0:
-            raise where.error(f"an omni wheel has roller_deg 0, got {shorten(data['roller_deg'])} "
-                              f"(use type 'swedish' for other roller angles)", label, "roller_deg")
+            raise where.error(
+                f"an omni wheel has roller_deg 0, got {shorten(data['roller_deg'])} "
+                f"(use type 'swedish' for other roller angles)",
+                label,
+                "roller_deg",
+            )
         return 0.0
     if "roller_deg" not in data:
         raise where.error(f"required for a {kind} wheel", label, "roller_deg")
     gamma = data["roller_deg"]
     if kind == "mecanum" and (isinstance(gamma, bool) or gamma not in (45, -45)):
-        raise where.error(f"a mecanum wheel has roller_deg +45 or -45, got {shorten(gamma)} "
-                          f"(use type 'swedish' for other angles)", label, "roller_deg")
+        raise where.error(
+            f"a mecanum wheel has roller_deg +45 or -45, got {shorten(gamma)} (use type 'swedish' for other angles)",
+            label,
+            "roller_deg",
+        )
     return math.radians(_number(where, gamma, label, "roller_deg"))
 
 
@@ -235,7 +261,7 @@ def _wheel(where: _Where, data: Any, index: int) -> Wheel:
     max_speed = _number(where, data["max_speed"], label, "max_speed") if "max_speed" in data else None
     try:
         return Wheel(name, kind, x, y, drive, radius, roller, encoder, max_speed, steer)
-    except OmnikinError as exc:      # a combination the file checks above do not see
+    except OmnikinError as exc:  # a combination the file checks above do not see
         raise where.error(str(exc), label) from None
 
 
@@ -249,8 +275,11 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> Robot:
         if required and key not in data:
             raise where.error("missing required key", None, key)
     if data["omnikin"] != SCHEMA_VERSION or isinstance(data["omnikin"], bool):
-        raise where.error(f"unsupported schema version {shorten(data['omnikin'])}; this omnikin reads version "
-                          f"{SCHEMA_VERSION}", None, "omnikin")
+        raise where.error(
+            f"unsupported schema version {shorten(data['omnikin'])}; this omnikin reads version {SCHEMA_VERSION}",
+            None,
+            "omnikin",
+        )
     name = data["name"]
     problem = robot_name_problem(name)
     if problem:
@@ -278,8 +307,10 @@ _EXPONENT = re.compile(r"[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)[eE][-+]?[0-9]+")
 """Floats YAML 1.1 reads as strings (``5e-2``: no dot) but YAML 1.2 and JSON as numbers. Written
 without nested repetition so that a long hostile scalar is matched in linear time."""
 
-_NO_ALIASES = ("anchors (&name) and aliases (*name) are not allowed in omnikin files (a 1 KB alias bomb "
-               "expands to gigabytes): write the values out")
+_NO_ALIASES = (
+    "anchors (&name) and aliases (*name) are not allowed in omnikin files (a 1 KB alias bomb "
+    "expands to gigabytes): write the values out"
+)
 
 
 def strict_yaml_loader():
@@ -334,9 +365,8 @@ def strict_yaml_loader():
         if len(text) <= MAX_INT_CHARS:
             return yaml.SafeLoader.construct_yaml_int(loader, node)
         if text.lstrip("+-").isdigit():
-            return float(text)        # inf or a huge float: refused by the range of its field
-        raise ConstructorError(None, None, f"integer literal of {len(text)} characters is too long",
-                               node.start_mark)
+            return float(text)  # inf or a huge float: refused by the range of its field
+        raise ConstructorError(None, None, f"integer literal of {len(text)} characters is too long", node.start_mark)
 
     StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
     StrictLoader.add_constructor("tag:yaml.org,2002:str", scalar)
@@ -394,6 +424,7 @@ def _unique_json_keys(source: str):
                 raise RobotFileError(f"{source}: duplicate key {shorten(key)}")
             seen.add(key)
         return dict(pairs)
+
     return hook
 
 
@@ -418,12 +449,14 @@ def load_robot(spec: str | Path) -> Robot:
     """
     spec_str = str(spec)
     path = Path(spec_str)
-    exists = os.path.lexists(spec_str)      # False, not an OSError, for a name too long or with NUL
+    exists = os.path.lexists(spec_str)  # False, not an OSError, for a name too long or with NUL
     if spec_str in PRESET_NAMES and not exists:
         path = preset_path(spec_str)
     elif not exists:
-        raise RobotFileError(f"{shorten(spec_str, 1000)}: no such robot file or preset"
-                             f"{did_you_mean(spec_str, PRESET_NAMES)}; presets: {', '.join(PRESET_NAMES)}")
+        raise RobotFileError(
+            f"{shorten(spec_str, 1000)}: no such robot file or preset"
+            f"{did_you_mean(spec_str, PRESET_NAMES)}; presets: {', '.join(PRESET_NAMES)}"
+        )
     source = path.name if spec_str in PRESET_NAMES else spec_str
     return parse_robot_text(read_text(path, RobotFileError, what="a robot file"), source)
 
@@ -436,24 +469,40 @@ def robot_to_dict(robot: Robot) -> dict:
     """Schema-1 mapping of ``robot`` (Cartesian placement, explicit drive_deg)."""
     wheels = []
     for w in robot.wheels:
-        d: dict[str, Any] = {"name": w.name, "type": w.type, "x": _clean(w.x), "y": _clean(w.y),
-                             "drive_deg": _clean(math.degrees(w.drive))}
+        d: dict[str, Any] = {
+            "name": w.name,
+            "type": w.type,
+            "x": _clean(w.x),
+            "y": _clean(w.y),
+            "drive_deg": _clean(math.degrees(w.drive)),
+        }
         if w.type in ("mecanum", "swedish"):
             d["roller_deg"] = _clean(math.degrees(w.roller))
         d["radius"] = float(w.radius)
         if w.encoder is not None:
-            d["encoder"] = {"ticks_per_rev": float(w.encoder.ticks_per_rev), "gear_ratio": float(w.encoder.gear_ratio),
-                            "invert": bool(w.encoder.invert)}
+            d["encoder"] = {
+                "ticks_per_rev": float(w.encoder.ticks_per_rev),
+                "gear_ratio": float(w.encoder.gear_ratio),
+                "invert": bool(w.encoder.invert),
+            }
             if w.encoder.counter_bits is not None:
                 d["encoder"]["counter_bits"] = int(w.encoder.counter_bits)
         if w.max_speed is not None:
             d["max_speed"] = float(w.max_speed)
         if w.steer is not None:
-            d["steer"] = {"offset": float(w.steer.offset), "min_deg": _clean(math.degrees(w.steer.lower)),
-                          "max_deg": _clean(math.degrees(w.steer.upper))}
+            d["steer"] = {
+                "offset": float(w.steer.offset),
+                "min_deg": _clean(math.degrees(w.steer.lower)),
+                "max_deg": _clean(math.degrees(w.steer.upper)),
+            }
         wheels.append(d)
-    return {"omnikin": SCHEMA_VERSION, "name": robot.name, "description": robot.description,
-            "references": list(robot.references), "wheels": wheels}
+    return {
+        "omnikin": SCHEMA_VERSION,
+        "name": robot.name,
+        "description": robot.description,
+        "references": list(robot.references),
+        "wheels": wheels,
+    }
 
 
 def robot_text(robot: Robot, path: str | Path) -> str:

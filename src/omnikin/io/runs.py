@@ -56,8 +56,9 @@ def _rows(path) -> tuple[list[str], list[tuple[int, dict]]]:
 def _check_columns(source, header, required, optional):
     problems = column_problems(header, required, optional)
     if problems:
-        raise RunsFileError(f"{source}: " + "; ".join(problems) + f"; expected {list(required)} and optionally "
-                            f"{list(optional)}")
+        raise RunsFileError(
+            f"{source}: " + "; ".join(problems) + f"; expected {list(required)} and optionally {list(optional)}"
+        )
 
 
 def _number(source, line_no, column, text) -> float:
@@ -79,14 +80,19 @@ def read_umbmark_measurements(path):
     """Return errors per direction: ``{'cw': (n, 3), 'ccw': (n, 3)}`` (theta NaN if not measured)."""
     source = str(path)
     header, rows = _rows(path)
-    _check_columns(source, header, ("direction", "x_abs", "y_abs", "x_calc", "y_calc"),
-                   ("theta_abs", "theta_calc", "theta_abs_deg", "theta_calc_deg"))
+    _check_columns(
+        source,
+        header,
+        ("direction", "x_abs", "y_abs", "x_calc", "y_calc"),
+        ("theta_abs", "theta_calc", "theta_abs_deg", "theta_calc_deg"),
+    )
     eps = {"cw": [], "ccw": []}
     for line_no, row in rows:
         d = row["direction"].lower()
         if d not in eps:
-            raise RunsFileError(f"{source}: line {line_no}, column 'direction': expected cw or ccw, got "
-                                f"{shorten(row['direction'])}")
+            raise RunsFileError(
+                f"{source}: line {line_no}, column 'direction': expected cw or ccw, got {shorten(row['direction'])}"
+            )
         x = _number(source, line_no, "x_abs", row["x_abs"]) - _number(source, line_no, "x_calc", row["x_calc"])
         y = _number(source, line_no, "y_abs", row["y_abs"]) - _number(source, line_no, "y_calc", row["y_calc"])
         th = _theta(source, header, line_no, row, "abs") - _theta(source, header, line_no, row, "calc")
@@ -116,8 +122,11 @@ def read_calibration_runs(path, sigma=DEFAULT_SIGMA) -> list[CalibrationRun]:
                 plans[key] = parse_plan(key)
             except OmnikinError as exc:
                 raise RunsFileError(f"{source}: line {line_no}, column 'path': {exc}") from None
-        m = (_number(source, line_no, "x_abs", row["x_abs"]), _number(source, line_no, "y_abs", row["y_abs"]),
-             _theta(source, header, line_no, row, "abs"))
+        m = (
+            _number(source, line_no, "x_abs", row["x_abs"]),
+            _number(source, line_no, "y_abs", row["y_abs"]),
+            _theta(source, header, line_no, row, "abs"),
+        )
         out.append(CalibrationRun(plans[key], m, row["path"], sigma, source=f"{source}: line {line_no}"))
     return out
 
@@ -140,8 +149,10 @@ def _with_heading(headings, what: str) -> bool:
     holds no empty field, so a mix cannot be written."""
     measured = [math.isfinite(h) for h in headings]
     if any(measured) and not all(measured):
-        raise InputError(f"{what}: the heading is measured in some runs and not in others; a runs file has a "
-                         "heading column for every run or none")
+        raise InputError(
+            f"{what}: the heading is measured in some runs and not in others; a runs file has a "
+            "heading column for every run or none"
+        )
     return all(measured) and bool(measured)
 
 
@@ -174,10 +185,13 @@ def umbmark_measurements_text(result, comment: str | None = None) -> str:
     ``epsilon`` [m, deg]; no heading columns when no heading was measured."""
     eps = [e for d in (result.cw, result.ccw) for e in d.epsilon]
     heading = _with_heading([e[2] for e in eps], "UMBmark measurements")
-    rows = [["direction", "x_abs", "y_abs", "x_calc", "y_calc"] + (["theta_abs_deg", "theta_calc_deg"] if heading
-                                                                   else [])]
+    rows = [
+        ["direction", "x_abs", "y_abs", "x_calc", "y_calc"] + (["theta_abs_deg", "theta_calc_deg"] if heading else [])
+    ]
     for d in (result.cw, result.ccw):
         for e in d.epsilon:
-            rows.append([d.direction, f"{e[0]:.6f}", f"{e[1]:.6f}", "0", "0"]
-                        + ([f"{math.degrees(e[2]):.5f}", "0"] if heading else []))
+            rows.append(
+                [d.direction, f"{e[0]:.6f}", f"{e[1]:.6f}", "0", "0"]
+                + ([f"{math.degrees(e[2]):.5f}", "0"] if heading else [])
+            )
     return _comment(comment) + _csv(rows)

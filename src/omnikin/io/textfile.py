@@ -32,9 +32,13 @@ file without line breaks cannot make the reader hold more than this."""
 
 
 def _kind(mode: int) -> str:
-    for test, name in ((stat.S_ISDIR, "a directory"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a pipe (FIFO)"),
-                       (stat.S_ISSOCK, "a socket")):
+    for test, name in (
+        (stat.S_ISDIR, "a directory"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISFIFO, "a pipe (FIFO)"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
         if test(mode):
             return name
     return "not a regular file"
@@ -77,15 +81,16 @@ def _open_fd(path, error: type[Exception], what: str, *, allow_pipe: bool) -> tu
         if not regular:
             _wait_for_writer(fd, source, error)
         if hasattr(os, "set_blocking"):
-            os.set_blocking(fd, True)      # opened non-blocking only so that a FIFO cannot hang the open
+            os.set_blocking(fd, True)  # opened non-blocking only so that a FIFO cannot hang the open
     except BaseException:
         os.close(fd)
         raise
     return fd, info
 
 
-def read_text(path: str | Path, error: type[Exception], *, what: str = "a text file",
-              max_bytes: int = MAX_CONFIG_BYTES) -> str:
+def read_text(
+    path: str | Path, error: type[Exception], *, what: str = "a text file", max_bytes: int = MAX_CONFIG_BYTES
+) -> str:
     """The whole text of a small regular UTF-8 file (module docstring); ``what`` names the
     expected kind in messages (``"a robot file"``)."""
     source = str(path)
@@ -109,8 +114,9 @@ def read_text(path: str | Path, error: type[Exception], *, what: str = "a text f
         raise error(f"{source}: not a UTF-8 text file (byte {exc.start}: {exc.reason})") from None
 
 
-def read_lines(path: str | Path, error: type[Exception], *, what: str = "a text file",
-               max_line_bytes: int = MAX_LINE_BYTES) -> Iterator[tuple[int, str]]:
+def read_lines(
+    path: str | Path, error: type[Exception], *, what: str = "a text file", max_line_bytes: int = MAX_LINE_BYTES
+) -> Iterator[tuple[int, str]]:
     """``(line_number, text)`` of each line of a UTF-8 regular file or pipe (module docstring),
     line endings kept; a line longer than ``max_line_bytes`` or not UTF-8 is an error naming it."""
     source = str(path)
@@ -130,6 +136,7 @@ def read_lines(path: str | Path, error: type[Exception], *, what: str = "a text 
             try:
                 text = raw.decode("utf-8-sig" if number == 1 else "utf-8")
             except UnicodeDecodeError as exc:
-                raise error(f"{source}: line {number}: not UTF-8 text (byte {exc.start + 1} of the line: "
-                            f"{exc.reason})") from None
+                raise error(
+                    f"{source}: line {number}: not UTF-8 text (byte {exc.start + 1} of the line: {exc.reason})"
+                ) from None
             yield number, text

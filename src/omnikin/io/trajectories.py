@@ -56,19 +56,24 @@ def trajectory_lines(t, poses, fmt: str) -> list[str]:
     times = format_times(t)
     if len(times) != len(p):
         raise TrajectoryFileError(f"{len(times)} timestamps for {len(p)} poses")
-    c, s = np.cos(p[:, 2]) + 0.0, np.sin(p[:, 2]) + 0.0     # + 0.0 turns -0.0 into 0.0: no "-0" in the files
+    c, s = np.cos(p[:, 2]) + 0.0, np.sin(p[:, 2]) + 0.0  # + 0.0 turns -0.0 into 0.0: no "-0" in the files
     p = p + 0.0
-    if fmt in ("csv", "tum"):                      # fixed decimals: what rounds to zero is written as 0
+    if fmt in ("csv", "tum"):  # fixed decimals: what rounds to zero is written as 0
         p = np.column_stack([np.round(p[:, :2], 9), np.round(p[:, 2], 12)]) + 0.0
     if fmt == "csv":
-        return ["t,x,y,theta"] + [f"{tk},{x:.9f},{y:.9f},{th:.12f}"
-                                  for tk, (x, y, th) in zip(times, p.tolist(), strict=True)]
+        return ["t,x,y,theta"] + [
+            f"{tk},{x:.9f},{y:.9f},{th:.12f}" for tk, (x, y, th) in zip(times, p.tolist(), strict=True)
+        ]
     if fmt == "tum":
         qz, qw = np.round(np.sin(0.5 * p[:, 2]), 12) + 0.0, np.round(np.cos(0.5 * p[:, 2]), 12) + 0.0
-        return [f"{tk} {x:.9f} {y:.9f} 0 0 0 {z:.12f} {w:.12f}"
-                for tk, (x, y, _), z, w in zip(times, p.tolist(), qz.tolist(), qw.tolist(), strict=True)]
-    return [f"{ck:.12g} {-sk + 0.0:.12g} 0 {x:.12g} {sk:.12g} {ck:.12g} 0 {y:.12g} 0 0 1 0"
-            for (x, y, _), ck, sk in zip(p.tolist(), c.tolist(), s.tolist(), strict=True)]
+        return [
+            f"{tk} {x:.9f} {y:.9f} 0 0 0 {z:.12f} {w:.12f}"
+            for tk, (x, y, _), z, w in zip(times, p.tolist(), qz.tolist(), qw.tolist(), strict=True)
+        ]
+    return [
+        f"{ck:.12g} {-sk + 0.0:.12g} 0 {x:.12g} {sk:.12g} {ck:.12g} 0 {y:.12g} 0 0 1 0"
+        for (x, y, _), ck, sk in zip(p.tolist(), c.tolist(), s.tolist(), strict=True)
+    ]
 
 
 def write_trajectory(path, t, poses, fmt: str, *, force: bool = False, inputs=()) -> None:
@@ -108,8 +113,10 @@ def detect_format(path) -> str:
         return "tum"
     if len(fields) == 12:
         return "kitti"
-    raise TrajectoryFileError(f"{path}: line {line_no}: {len(fields)} fields; expected a TUM line (t x y z qx qy qz "
-                              f"qw, 8 fields), a KITTI line (12 fields) or a CSV header t,x,y,theta")
+    raise TrajectoryFileError(
+        f"{path}: line {line_no}: {len(fields)} fields; expected a TUM line (t x y z qx qy qz "
+        f"qw, 8 fields), a KITTI line (12 fields) or a CSV header t,x,y,theta"
+    )
 
 
 def _rows(path, fmt: str) -> list[tuple[int, list[str]]]:
@@ -122,8 +129,9 @@ def _rows(path, fmt: str) -> list[tuple[int, list[str]]]:
         raise TrajectoryFileError(f"{source}: empty trajectory file")
     (line_no, header), *data = rows
     if header != CSV_HEADER:
-        raise TrajectoryFileError(f"{source}: line {line_no}: expected the header t,x,y,theta, got "
-                                  f"{shorten(','.join(header))}")
+        raise TrajectoryFileError(
+            f"{source}: line {line_no}: expected the header t,x,y,theta, got {shorten(','.join(header))}"
+        )
     return data
 
 

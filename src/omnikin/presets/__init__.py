@@ -29,6 +29,7 @@ def preset_path(name: str) -> Path:
     """Path of the robot file of preset ``name``; an unknown name is an
     :class:`~omnikin.errors.InputError` naming the closest presets."""
     if name not in PRESET_NAMES:
-        raise InputError(f"unknown preset {name!r}{did_you_mean(name, PRESET_NAMES)} "
-                         f"(presets: {', '.join(PRESET_NAMES)})")
+        raise InputError(
+            f"unknown preset {name!r}{did_you_mean(name, PRESET_NAMES)} (presets: {', '.join(PRESET_NAMES)})"
+        )
     return PRESET_DIR / f"{name}.yaml"

@@ -58,8 +58,16 @@ class StepResult:
 class BaseRuntime:
     """Command filtering, inverse kinematics, odometry with covariance (module docstring)."""
 
-    def __init__(self, robot: Robot, backend: WheelBackend, *, limits: MotionLimits | None = None,
-                 cmd_vel_timeout: float = 0.5, wheel_slip: float = 2e-4, method: str = "exact"):
+    def __init__(
+        self,
+        robot: Robot,
+        backend: WheelBackend,
+        *,
+        limits: MotionLimits | None = None,
+        cmd_vel_timeout: float = 0.5,
+        wheel_slip: float = 2e-4,
+        method: str = "exact",
+    ):
         if not (math.isfinite(wheel_slip) and wheel_slip >= 0):
             raise InputError(f"wheel_slip must be a finite number >= 0 [sqrt(m)], got {wheel_slip!r}")
         self.robot = robot
@@ -95,28 +103,36 @@ class BaseRuntime:
         self.backend.write(t, speeds, steer)
         self.steps += 1
         o = self.odometry
-        return StepResult(t, o.pose, o.twist, self.pose_covariance.copy(), self.twist_covariance.copy(),
-                          list(o.residual), state, twist, speeds, steer)
+        return StepResult(
+            t,
+            o.pose,
+            o.twist,
+            self.pose_covariance.copy(),
+            self.twist_covariance.copy(),
+            list(o.residual),
+            state,
+            twist,
+            speeds,
+            steer,
+        )
 
     def _measure(self, state: WheelState) -> None:
         before = self.odometry.pose
         self.odometry.update_angles(state.t, list(state.positions), state.steer)
         if self._last is not None and state.t > self._last.t:
             d = state.positions - self._last.positions
-            var = (self.wheel_slip ** 2 * np.abs(d) * self._radius) / self._radius ** 2
+            var = (self.wheel_slip**2 * np.abs(d) * self._radius) / self._radius**2
             prev = self._last.steer
             steer = None if state.steer is None or prev is None else mid_steer(np.stack([prev, state.steer]))[0]
-            f = self._fk if self._fk is not None else \
-                self.robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
+            f = self._fk if self._fk is not None else self.robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
             sigma_xi = f @ np.diag(var) @ f.T
             dt = state.t - self._last.t
-            inc = np.array(self.odometry.twist) * dt          # the body increment the odometry just used
+            inc = np.array(self.odometry.twist) * dt  # the body increment the odometry just used
             j_pose, j_tangent = compose_exp_jacobians(before[2], inc)
             self.pose_covariance = j_pose @ self.pose_covariance @ j_pose.T + j_tangent @ sigma_xi @ j_tangent.T
-            self.twist_covariance = sigma_xi / dt ** 2
+            self.twist_covariance = sigma_xi / dt**2
         self._last = state
 
     @property
     def pose(self):
         return self.odometry.pose
-

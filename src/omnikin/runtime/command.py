@@ -37,8 +37,8 @@ class CommandStats:
     accepted: int = 0
     rejected: int = 0
     timeouts: int = 0
-    saturated: int = 0          # accepted commands scaled down to the limits
-    projected: int = 0          # accepted commands with an infeasible part dropped
+    saturated: int = 0  # accepted commands scaled down to the limits
+    projected: int = 0  # accepted commands with an infeasible part dropped
     last_reject_reason: str = ""
 
 
@@ -56,8 +56,8 @@ class CommandFilter:
         if not (math.isfinite(self.timeout) and self.timeout >= 0):
             raise InputError(f"cmd_vel_timeout must be a finite number >= 0 [s] (0 disables), got {self.timeout!r}")
         self.target = np.zeros(3)
-        self._limited_target = np.zeros(3)     # target saturated to the speed limits ...
-        self._limited_for = (self.robot, self.limits)   # ... of this robot and these limits
+        self._limited_target = np.zeros(3)  # target saturated to the speed limits ...
+        self._limited_for = (self.robot, self.limits)  # ... of this robot and these limits
         self.current = np.zeros(3)
         self._last_command_t = None
         self._timed_out = True
@@ -105,11 +105,15 @@ class CommandFilter:
         """The twist to drive at time ``t`` [s] (timeout, acceleration limit, saturation)."""
         dt = 0.0 if self._last_t is None else max(0.0, t - self._last_t)
         self._last_t = t
-        if self.timeout > 0 and self._last_command_t is not None and not self._timed_out \
-                and t - self._last_command_t > self.timeout:
+        if (
+            self.timeout > 0
+            and self._last_command_t is not None
+            and not self._timed_out
+            and t - self._last_command_t > self.timeout
+        ):
             self._timed_out = True
             self.stats.timeouts += 1
-        if self._limited_for != (self.robot, self.limits):     # limits replaced since the command
+        if self._limited_for != (self.robot, self.limits):  # limits replaced since the command
             self._limited_target = saturate(self.robot, self.target, self.limits)
             self._limited_for = (self.robot, self.limits)
         limited = np.zeros(3) if (self._timed_out or self._last_command_t is None) else self._limited_target
@@ -133,7 +137,7 @@ class CommandFilter:
         self._limited_target = np.zeros(3)
         self.current = np.zeros(3)
         self._timed_out = True
-        self._last_t = None            # the next update starts from rest: no step over the gap
+        self._last_t = None  # the next update starts from rest: no step over the gap
 
     @property
     def timed_out(self) -> bool:

@@ -58,10 +58,10 @@ class FakeWheel:
 class _WheelState:
     def __init__(self, w: FakeWheel):
         self.spec = w
-        self.speed = 0.0          # commanded, rad/s (what the motor does: ideal control)
-        self.angle = 0.0          # true wheel angle since start [rad]
-        self.ticks_frac = 0.0     # accumulated ticks (float) since start
-        self.offset = 0           # ticks added by advance()
+        self.speed = 0.0  # commanded, rad/s (what the motor does: ideal control)
+        self.angle = 0.0  # true wheel angle since start [rad]
+        self.ticks_frac = 0.0  # accumulated ticks (float) since start
+        self.offset = 0  # ticks added by advance()
         self.last_rx: float | None = None
         self.link_ok = False
         self.link_lost_events = 0
@@ -77,9 +77,18 @@ class FakeController:
     """Simulated controller(s) on a pty (module docstring). Use as a context manager or
     :meth:`start` / :meth:`close`."""
 
-    def __init__(self, wheels, *, protocol: Protocol | None = None, report_period: float | None = None,
-                 heartbeat_period: float | None = None, link_timeout: float | None = None,
-                 announce_reset: bool = True, seed: int = 0, tick: float = 0.001):
+    def __init__(
+        self,
+        wheels,
+        *,
+        protocol: Protocol | None = None,
+        report_period: float | None = None,
+        heartbeat_period: float | None = None,
+        link_timeout: float | None = None,
+        announce_reset: bool = True,
+        seed: int = 0,
+        tick: float = 0.001,
+    ):
         self.protocol = p = protocol or load_protocol()
         wheels = list(wheels)
         if not wheels or len({w.index for w in wheels}) != len(wheels):
@@ -120,8 +129,11 @@ class FakeController:
             w = robot.wheel(n)
             if w.encoder is None:
                 raise InputError(f"fake controller: wheel {n!r} has no encoder")
-            specs.append(FakeWheel(robot.rolling_index([n])[0], 1.0 / w.encoder.rad_per_tick,
-                                   int(start_counts.get(n, 0)), w.max_speed))
+            specs.append(
+                FakeWheel(
+                    robot.rolling_index([n])[0], 1.0 / w.encoder.rad_per_tick, int(start_counts.get(n, 0)), w.max_speed
+                )
+            )
         return cls(specs, **kwargs)
 
     # --- life cycle ------------------------------------------------------------------------------
@@ -247,8 +259,9 @@ class FakeController:
         if self.announce_reset:
             with self._lock:
                 for i in self.wheels:
-                    self._emit("ERROR_REPORT", wheel=i, code=self.protocol.error_code("RESET"),
-                               text="fake controller start")
+                    self._emit(
+                        "ERROR_REPORT", wheel=i, code=self.protocol.error_code("RESET"), text="fake controller start"
+                    )
         while not self._stop.is_set():
             try:
                 ready, _, _ = select.select([self._master], [], [], self.tick)
@@ -274,21 +287,31 @@ class FakeController:
                         w.link_ok = False
                         w.speed = 0.0
                         w.link_lost_events += 1
-                        self._emit("ERROR_REPORT", wheel=w.spec.index, code=self.protocol.error_code("LINK_LOST"),
-                                   text="host silent; motor stopped")
+                        self._emit(
+                            "ERROR_REPORT",
+                            wheel=w.spec.index,
+                            code=self.protocol.error_code("LINK_LOST"),
+                            text="host silent; motor stopped",
+                        )
                 last = now
                 while self._faults and isinstance(self._faults[0], tuple):
                     _, i, code, text = self._faults.popleft()
                     self._emit("ERROR_REPORT", wheel=i, code=self.protocol.error_code(code), text=text)
                 if now >= next_report:
                     for w in self.wheels.values():
-                        self._emit("ENCODER_REPORT", wheel=w.spec.index, time_us=self._now_us(now),
-                                   count=w.ticks, speed=w.speed)
+                        self._emit(
+                            "ENCODER_REPORT",
+                            wheel=w.spec.index,
+                            time_us=self._now_us(now),
+                            count=w.ticks,
+                            speed=w.speed,
+                        )
                     next_report = max(next_report + self.report_period, now)
                 if now >= next_hb:
                     for w in self.wheels.values():
-                        status = (self.protocol.status_bit("LINK_OK") if w.link_ok else 0) | \
-                                 (self.protocol.status_bit("MOTOR_ENABLED") if w.link_ok else 0)
+                        status = (self.protocol.status_bit("LINK_OK") if w.link_ok else 0) | (
+                            self.protocol.status_bit("MOTOR_ENABLED") if w.link_ok else 0
+                        )
                         self._emit("HEARTBEAT", wheel=w.spec.index, status=status, time_us=self._now_us(now))
                     next_hb = max(next_hb + self.heartbeat_period, now)
 
@@ -306,8 +329,12 @@ class FakeController:
                 limit = w.spec.max_speed
                 if limit is not None and abs(speed) > limit:
                     speed = float(np.clip(speed, -limit, limit))
-                    self._emit("ERROR_REPORT", wheel=msg.wheel, code=self.protocol.error_code("SPEED_CLAMPED"),
-                               text=f"{msg.fields['speed']:.3f} rad/s")
+                    self._emit(
+                        "ERROR_REPORT",
+                        wheel=msg.wheel,
+                        code=self.protocol.error_code("SPEED_CLAMPED"),
+                        text=f"{msg.fields['speed']:.3f} rad/s",
+                    )
                 w.speed = speed
 
     def _emit(self, name: str, **values) -> None:
@@ -330,10 +357,15 @@ class FakeController:
         elif fault == "duplicate":
             frame = frame + frame
         elif fault in ("bad_version", "unknown_type"):
-            body = frame[p.header_size:-2]
+            body = frame[p.header_size : -2]
             unused = next(i for i in range(255, 0, -1) if i not in p.by_id)
-            frame = frame_bytes(p, unused if fault == "unknown_type" else frame[3], frame[4], body,
-                                version=p.version + 1 if fault == "bad_version" else None)
+            frame = frame_bytes(
+                p,
+                unused if fault == "unknown_type" else frame[3],
+                frame[4],
+                body,
+                version=p.version + 1 if fault == "bad_version" else None,
+            )
         if self._garbage:
             frame = self._rng.integers(0, 256, self._garbage, dtype=np.uint8).tobytes() + frame
             self._garbage = 0

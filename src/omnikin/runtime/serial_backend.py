@@ -99,14 +99,25 @@ class SerialBackend:
 
     MAX_READS_PER_PORT = 64  # reads of up to 4096 bytes per port and call: a flooding device cannot hang read()
 
-    def __init__(self, robot: Robot, ports, baud: int | None = None, *, link_timeout: float | None = None,
-                 connect_timeout: float | None = None, heartbeat_period: float | None = None,
-                 write_timeout: float = 0.05, protocol: Protocol | None = None):
+    def __init__(
+        self,
+        robot: Robot,
+        ports,
+        baud: int | None = None,
+        *,
+        link_timeout: float | None = None,
+        connect_timeout: float | None = None,
+        heartbeat_period: float | None = None,
+        write_timeout: float = 0.05,
+        protocol: Protocol | None = None,
+    ):
         self.robot = robot
         self.protocol = p = protocol or load_protocol()
         if robot.steerable:
-            raise InputError(f"robot {robot.name!r}: the serial back-end (protocol version {p.version}) carries "
-                               f"wheel speeds only; steerable wheels {robot.steer_names} are not supported")
+            raise InputError(
+                f"robot {robot.name!r}: the serial back-end (protocol version {p.version}) carries "
+                f"wheel speeds only; steerable wheels {robot.steer_names} are not supported"
+            )
         self.encoded = robot.encoded_names
         if not self.encoded:
             raise InputError(f"robot {robot.name!r}: the serial back-end needs driven wheels with an encoder")
@@ -134,9 +145,21 @@ class SerialBackend:
         self._hb_due: float | None = None
         self._lost: tuple | None = None  # (message, wheel, port)
         self._closed = False
-        self.counters = {"writes": 0, "reads": 0, "tx_frames": 0, "tx_errors": 0, "heartbeats_tx": 0,
-                         "reports": 0, "heartbeats_rx": 0, "errors_rx": 0, "resets": 0, "misrouted": 0,
-                         "timeouts": 0, "port_errors": 0, "reconnects": 0}
+        self.counters = {
+            "writes": 0,
+            "reads": 0,
+            "tx_frames": 0,
+            "tx_errors": 0,
+            "heartbeats_tx": 0,
+            "reports": 0,
+            "heartbeats_rx": 0,
+            "errors_rx": 0,
+            "resets": 0,
+            "misrouted": 0,
+            "timeouts": 0,
+            "port_errors": 0,
+            "reconnects": 0,
+        }
         self.last_error = ""
         self.last_tx_error = ""
         self._ports: dict[str, _Port] = {}
@@ -159,21 +182,26 @@ class SerialBackend:
             unknown = [k for k in ports if k not in enc]
             missing = [n for n in enc if n not in ports]
             if unknown or missing:
-                raise InputError(f"serial back-end: ports must map every driven wheel {enc} to a port"
-                                   + (f"; unknown wheel(s) {unknown}" if unknown else "")
-                                   + (f"; missing {missing}" if missing else ""))
+                raise InputError(
+                    f"serial back-end: ports must map every driven wheel {enc} to a port"
+                    + (f"; unknown wheel(s) {unknown}" if unknown else "")
+                    + (f"; missing {missing}" if missing else "")
+                )
             mapping = {n: os.fspath(ports[n]) for n in enc}
         else:
             try:
                 ports = [os.fspath(x) for x in ports]
             except TypeError:
-                raise InputError(f"serial back-end: ports must be a port, a list of ports or a dict "
-                                   f"{{wheel: port}}, got {ports!r}") from None
+                raise InputError(
+                    f"serial back-end: ports must be a port, a list of ports or a dict {{wheel: port}}, got {ports!r}"
+                ) from None
             if len(ports) == 1:
                 ports = ports * len(enc)
             if len(ports) != len(enc):
-                raise InputError(f"serial back-end: {len(ports)} ports for {len(enc)} driven wheels {enc}; give one "
-                                   "port for all or one per driven wheel in file order")
+                raise InputError(
+                    f"serial back-end: {len(ports)} ports for {len(enc)} driven wheels {enc}; give one "
+                    "port for all or one per driven wheel in file order"
+                )
             mapping = dict(zip(enc, ports, strict=True))
         bad = [n for n, u in mapping.items() if not u]
         if bad:
@@ -196,9 +224,15 @@ class SerialBackend:
         parity = {"none": serial.PARITY_NONE, "even": serial.PARITY_EVEN, "odd": serial.PARITY_ODD}
         ser = self.protocol.serial
         try:
-            return serial.serial_for_url(url, baudrate=self.baud, bytesize=int(ser["bytesize"]),
-                                         parity=parity[ser["parity"]], stopbits=ser["stopbits"], timeout=0,
-                                         write_timeout=self._write_timeout)
+            return serial.serial_for_url(
+                url,
+                baudrate=self.baud,
+                bytesize=int(ser["bytesize"]),
+                parity=parity[ser["parity"]],
+                stopbits=ser["stopbits"],
+                timeout=0,
+                write_timeout=self._write_timeout,
+            )
         except (serial.SerialException, OSError, ValueError) as exc:
             raise LinkError(f"serial back-end: cannot open {url!r} for wheel(s) {wheels}: {exc}") from None
 
@@ -208,8 +242,9 @@ class SerialBackend:
         n = len(self.robot.rolling_names)
         speeds = np.asarray(speeds, dtype=float)
         if speeds.shape != (n,) or not np.all(np.isfinite(speeds)):
-            raise InputError(f"serial back-end: expected {n} finite wheel speeds for {self.robot.rolling_names}, "
-                               f"got {speeds}")
+            raise InputError(
+                f"serial back-end: expected {n} finite wheel speeds for {self.robot.rolling_names}, got {speeds}"
+            )
         self._clock(t)
         if self._lost is not None:
             speeds = np.zeros(n)
@@ -238,8 +273,11 @@ class SerialBackend:
         return WheelState(t, positions, velocities, None)
 
     def stats(self) -> dict:
-        out = {"backend": "serial", "ports": ",".join(self._ports) or ",".join(dict.fromkeys(self.port_of.values())),
-               "link_lost": self._lost is not None}
+        out = {
+            "backend": "serial",
+            "ports": ",".join(self._ports) or ",".join(dict.fromkeys(self.port_of.values())),
+            "link_lost": self._lost is not None,
+        }
         out.update(self.counters)
         total = None
         for port in self._ports.values():
@@ -250,7 +288,7 @@ class SerialBackend:
             out.update(total.as_dict())
         out["last_error"] = self.last_error
         out["last_tx_error"] = self.last_tx_error
-        out["waiting_for"] = ",".join(n for n in self.encoded if n not in self._reported)   # not heard since (re)arming
+        out["waiting_for"] = ",".join(n for n in self.encoded if n not in self._reported)  # not heard since (re)arming
         if self._lost is not None:
             out["link_lost_reason"] = self._lost[0]
         if self._t is not None:
@@ -322,9 +360,12 @@ class SerialBackend:
                 return state
             if clock() - t0 > timeout:
                 missing = [n for n in self.encoded if n not in self._reported]
-                raise LinkLostError(f"serial back-end: no encoder report from wheel(s) "
-                                    f"{[(n, self.port_of[n]) for n in missing]} within {timeout:g} s",
-                                    missing[0], self.port_of[missing[0]])
+                raise LinkLostError(
+                    f"serial back-end: no encoder report from wheel(s) "
+                    f"{[(n, self.port_of[n]) for n in missing]} within {timeout:g} s",
+                    missing[0],
+                    self.port_of[missing[0]],
+                )
             time.sleep(poll)
 
     # --- internals -----------------------------------------------------------------------------
@@ -359,8 +400,9 @@ class SerialBackend:
         self._hb_due = t + self.heartbeat_period
         time_us = round(t * 1e6) & 0xFFFFFFFF
         for url, port in self._ports.items():
-            frames = [self._encoder.encode("HEARTBEAT", wheel=self.index[n], status=0, time_us=time_us)
-                      for n in port.wheels]
+            frames = [
+                self._encoder.encode("HEARTBEAT", wheel=self.index[n], status=0, time_us=time_us) for n in port.wheels
+            ]
             self._send(url, b"".join(frames), len(frames))
             self.counters["heartbeats_tx"] += len(frames)
 
@@ -375,8 +417,13 @@ class SerialBackend:
                         self._handle(port, msg, t)
             except Exception as exc:  # SerialException / OSError: unplugged, closed
                 self.counters["port_errors"] += 1
-                self._lose(t, f"serial back-end: link lost: port {url} failed ({exc}) for wheel(s) {port.wheels}; "
-                              "all wheels commanded to zero", port.wheels[0], url)
+                self._lose(
+                    t,
+                    f"serial back-end: link lost: port {url} failed ({exc}) for wheel(s) {port.wheels}; "
+                    "all wheels commanded to zero",
+                    port.wheels[0],
+                    url,
+                )
                 return
 
     def _handle(self, port: _Port, msg, t: float) -> None:
@@ -402,8 +449,7 @@ class SerialBackend:
             code = msg.raw["code"]
             text = msg.fields["text"]
             self.counters["errors_rx"] += 1
-            self.last_error = (f"{name} on {port.url}: {self.protocol.error_name(code)}"
-                               + (f" ({text})" if text else ""))
+            self.last_error = f"{name} on {port.url}: {self.protocol.error_name(code)}" + (f" ({text})" if text else "")
             if code == self.protocol.error_code("RESET"):
                 self._last_count[name] = None
                 self.counters["resets"] += 1
@@ -419,9 +465,14 @@ class SerialBackend:
             if silent > limit:
                 url = self.port_of[name]
                 never = " (never heard from it)" if last is None else ""
-                self._lose(t, f"serial back-end: link lost: wheel {name!r} (index {self.index[name]}) on {url} "
-                              f"sent no valid frame for {silent:.3f} s{never}, beyond {what} {limit:g} s; "
-                              "all wheels commanded to zero", name, url)
+                self._lose(
+                    t,
+                    f"serial back-end: link lost: wheel {name!r} (index {self.index[name]}) on {url} "
+                    f"sent no valid frame for {silent:.3f} s{never}, beyond {what} {limit:g} s; "
+                    "all wheels commanded to zero",
+                    name,
+                    url,
+                )
                 self.counters["timeouts"] += 1
                 return
 

@@ -24,8 +24,14 @@ from .error_models import NoiseModel
 class SimBackend:
     """The robot as built, simulated (module docstring). ``truth`` is its true pose."""
 
-    def __init__(self, robot: Robot, true_robot: Robot | None = None, noise: NoiseModel | None = None, rng=None,
-                 start=(0.0, 0.0, 0.0)):
+    def __init__(
+        self,
+        robot: Robot,
+        true_robot: Robot | None = None,
+        noise: NoiseModel | None = None,
+        rng=None,
+        start=(0.0, 0.0, 0.0),
+    ):
         self.robot = robot
         self.true_robot = true_robot or robot
         self.noise = noise or NoiseModel(quantise=False)
@@ -48,8 +54,10 @@ class SimBackend:
     def write(self, t: float, speeds, steer=None) -> None:
         speeds = np.asarray(speeds, dtype=float)
         if speeds.shape != (len(self.robot.rolling_names),) or not np.all(np.isfinite(speeds)):
-            raise InputError(f"sim back-end: expected {len(self.robot.rolling_names)} finite wheel speeds, "
-                             f"got {shorten(speeds.tolist())}")
+            raise InputError(
+                f"sim back-end: expected {len(self.robot.rolling_names)} finite wheel speeds, "
+                f"got {shorten(speeds.tolist())}"
+            )
         self._advance(t)
         self._speeds = speeds[self._index]
         if self._steer is not None and steer is not None:
@@ -78,8 +86,8 @@ class SimBackend:
             sigma = self.noise.slip * np.sqrt(np.abs(d) * self._radius) / self._radius
             d = d + sigma * self.rng.standard_normal(len(d))
         steer = None
-        if self._steer is not None and self._steer_start is not None:   # steering moves linearly over
-            steer = mid_steer(np.stack([self._steer_start, self._steer]))[0]   # the interval: use its middle
+        if self._steer is not None and self._steer_start is not None:  # steering moves linearly over
+            steer = mid_steer(np.stack([self._steer_start, self._steer]))[0]  # the interval: use its middle
             self._steer_start = self._steer.copy()
         f = self.true_robot.fk_matrix(steer, self.encoded)[:, : len(self.encoded)]
         inc = f @ d

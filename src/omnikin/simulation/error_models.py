@@ -41,12 +41,12 @@ from ..wheels import Encoder
 class WheelErrors:
     """Systematic errors of one wheel (true = nominal + error)."""
 
-    radius: float = 0.0      # relative: r_true = r (1 + radius)
-    dx: float = 0.0          # hub displacement [m], body frame
+    radius: float = 0.0  # relative: r_true = r (1 + radius)
+    dx: float = 0.0  # hub displacement [m], body frame
     dy: float = 0.0
-    drive: float = 0.0       # drive direction error [rad]
-    roller: float = 0.0      # roller angle error [rad] (Swedish wheels)
-    ticks: float = 0.0       # relative: ticks_per_rev_true = ticks_per_rev (1 + ticks)
+    drive: float = 0.0  # drive direction error [rad]
+    roller: float = 0.0  # roller angle error [rad] (Swedish wheels)
+    ticks: float = 0.0  # relative: ticks_per_rev_true = ticks_per_rev (1 + ticks)
 
     def __post_init__(self):
         for name in ("radius", "dx", "dy", "drive", "roller", "ticks"):
@@ -82,25 +82,36 @@ class SystematicErrors:
                 # an omni wheel with a roller error is a Swedish wheel of that small angle
                 w = replace(w, type="swedish")
                 roller = e.roller
-            wheels.append(replace(w, x=w.x + e.dx, y=w.y + e.dy, drive=w.drive + e.drive, roller=roller,
-                                  radius=w.radius * (1 + e.radius), encoder=enc))
+            wheels.append(
+                replace(
+                    w,
+                    x=w.x + e.dx,
+                    y=w.y + e.dy,
+                    drive=w.drive + e.drive,
+                    roller=roller,
+                    radius=w.radius * (1 + e.radius),
+                    encoder=enc,
+                )
+            )
         return Robot(f"{robot.name} (as built)", tuple(wheels), robot.description, robot.references)
 
     def as_dict(self) -> dict:
-        return {name: {k: float(getattr(e, k)) for k in ("radius", "dx", "dy", "drive", "roller", "ticks")}
-                for name, e in self.wheels.items()}
+        return {
+            name: {k: float(getattr(e, k)) for k in ("radius", "dx", "dy", "drive", "roller", "ticks")}
+            for name, e in self.wheels.items()
+        }
 
 
 @dataclass(frozen=True)
 class ErrorProfile:
     """Standard deviations of the systematic errors drawn by :meth:`sample`."""
 
-    radius: float = 0.0          # relative
-    distance: float = 0.0        # m, radial hub displacement
-    angle: float = 0.0           # rad, hub displacement along the circle through it
-    drive: float = 0.0           # rad
-    roller: float = 0.0          # rad
-    ticks: float = 0.0           # relative
+    radius: float = 0.0  # relative
+    distance: float = 0.0  # m, radial hub displacement
+    angle: float = 0.0  # rad, hub displacement along the circle through it
+    drive: float = 0.0  # rad
+    roller: float = 0.0  # rad
+    ticks: float = 0.0  # relative
 
     def sample(self, robot: Robot, rng) -> SystematicErrors:
         """Draw one robot's worth of errors (``rng``: a numpy Generator or a seed)."""
@@ -119,9 +130,14 @@ class ErrorProfile:
                 # the displacement along the axle (the track error) and the radius error
                 along = -math.sin(w.drive) * dx + math.cos(w.drive) * dy
                 dx, dy, drive = -math.sin(w.drive) * along, math.cos(w.drive) * along, 0.0
-            out[w.name] = WheelErrors(radius=self.radius * z[0], dx=dx, dy=dy, drive=drive,
-                                      roller=self.roller * z[4] if w.is_swedish else 0.0,
-                                      ticks=self.ticks * z[5] if w.encoder is not None else 0.0)
+            out[w.name] = WheelErrors(
+                radius=self.radius * z[0],
+                dx=dx,
+                dy=dy,
+                drive=drive,
+                roller=self.roller * z[4] if w.is_swedish else 0.0,
+                ticks=self.ticks * z[5] if w.encoder is not None else 0.0,
+            )
         return SystematicErrors(out)
 
 
@@ -129,11 +145,11 @@ class ErrorProfile:
 class NoiseModel:
     """Random errors of a run (module docstring)."""
 
-    slip: float = 0.0                 # sqrt(m)
-    floor: float = 0.0                # rad / sqrt(m)
+    slip: float = 0.0  # sqrt(m)
+    floor: float = 0.0  # rad / sqrt(m)
     quantise: bool = True
-    measurement: float = 0.0          # m
-    measurement_theta: float = 0.0    # rad
+    measurement: float = 0.0  # m
+    measurement_theta: float = 0.0  # rad
 
     def __post_init__(self):
         for name in ("slip", "floor", "measurement", "measurement_theta"):

@@ -23,6 +23,7 @@ from ..plans import Plan
 MAX_SAMPLES = 50_000_000
 """Largest number of samples one run may have (about 1.2 GB of increments)."""
 
+
 @dataclass(frozen=True)
 class SampledPlan:
     """A plan sampled at ``rate`` [Hz] under limits.
@@ -55,7 +56,7 @@ def _profile(length: float, vmax: float, amax: float | None, dt: float) -> np.nd
         tk = np.arange(n + 1) * dt
         return np.minimum(tk * vmax, length)
     t_acc = vmax / amax
-    if amax * t_acc * t_acc >= length:           # triangular: never reaches vmax
+    if amax * t_acc * t_acc >= length:  # triangular: never reaches vmax
         t_acc = math.sqrt(length / amax)
         vmax = amax * t_acc
         t_flat = 0.0
@@ -65,9 +66,11 @@ def _profile(length: float, vmax: float, amax: float | None, dt: float) -> np.nd
     n = max(1, math.ceil(duration / dt - 1e-9))
     tk = np.minimum(np.arange(n + 1) * dt, duration)
     t1, t2 = t_acc, t_acc + t_flat
-    s = np.where(tk <= t1, 0.5 * amax * tk ** 2,
-                 np.where(tk <= t2, 0.5 * amax * t1 ** 2 + vmax * (tk - t1),
-                          length - 0.5 * amax * (duration - tk) ** 2))
+    s = np.where(
+        tk <= t1,
+        0.5 * amax * tk**2,
+        np.where(tk <= t2, 0.5 * amax * t1**2 + vmax * (tk - t1), length - 0.5 * amax * (duration - tk) ** 2),
+    )
     s[-1] = length
     return s
 
@@ -85,8 +88,10 @@ def sample_plan(plan: Plan, robot, rate: float = 100.0, limits: MotionLimits | N
     vmax = speed_scale(robot, xi, limits)
     estimate = _estimate(plan, vmax, limits, rate)
     if not estimate <= MAX_SAMPLES:
-        raise InputError(f"plan {plan.name!r} would take about {estimate:.3g} samples at {rate:g} Hz; the most "
-                           f"omnikin samples in one run is {MAX_SAMPLES:.0e} (shorten the path or lower the rate)")
+        raise InputError(
+            f"plan {plan.name!r} would take about {estimate:.3g} samples at {rate:g} Hz; the most "
+            f"omnikin samples in one run is {MAX_SAMPLES:.0e} (shorten the path or lower the rate)"
+        )
     pieces, labels = [], []
     for k, seg in enumerate(plan.segments):
         amax = _accel_scale(seg.xi, limits)
@@ -120,8 +125,10 @@ def _estimate(plan: Plan, vmax, limits: MotionLimits, rate: float) -> float:
     estimate = 0.0
     for k, seg in enumerate(plan.segments):
         if not np.isfinite(vmax[k]):
-            raise InputError(f"plan {plan.name!r}, segment {seg.label!r}: no speed limit bounds its pace; "
-                               f"set MotionLimits.linear/angular or wheel max_speed")
+            raise InputError(
+                f"plan {plan.name!r}, segment {seg.label!r}: no speed limit bounds its pace; "
+                f"set MotionLimits.linear/angular or wheel max_speed"
+            )
         amax = _accel_scale(seg.xi, limits)
         estimate += (seg.length / vmax[k] + (vmax[k] / amax if amax else 0.0)) * rate + 1
     return estimate

@@ -84,7 +84,7 @@ def segment_rates(xi, robot: Robot, names) -> tuple[np.ndarray, np.ndarray]:
             res = robot.ik(twist, steer_hint=hint)
             hint = steer_seg[k] = res.steer_angles
         else:
-            robot.ik(twist)      # refuses a plan the command model cannot drive, naming the wheel
+            robot.ik(twist)  # refuses a plan the command model cannot drive, naming the wheel
         per_segment[k] = robot.jacobian(steer_seg[k], names) @ twist
     return per_segment, steer_seg
 
@@ -101,9 +101,19 @@ def commanded_angles(sampled: SampledPlan, robot: Robot, wheels) -> tuple[np.nda
     return angles, steer
 
 
-def simulate(plan: Plan | SampledPlan, true_robot: Robot, command_robot: Robot, *, rate: float = 100.0,
-             limits: MotionLimits | None = None, noise: NoiseModel | None = None, trials: int = 1, rng=None,
-             odometry_robot: Robot | None = None, keep_truth: bool = True) -> SimulatedRun:
+def simulate(
+    plan: Plan | SampledPlan,
+    true_robot: Robot,
+    command_robot: Robot,
+    *,
+    rate: float = 100.0,
+    limits: MotionLimits | None = None,
+    noise: NoiseModel | None = None,
+    trials: int = 1,
+    rng=None,
+    odometry_robot: Robot | None = None,
+    keep_truth: bool = True,
+) -> SimulatedRun:
     """Simulate ``trials`` runs of ``plan`` by ``true_robot`` commanded by ``command_robot``.
 
     ``rng``: a numpy Generator or a seed (None: fresh entropy). ``odometry_robot``
@@ -127,7 +137,7 @@ def simulate(plan: Plan | SampledPlan, true_robot: Robot, command_robot: Robot, 
     if noise.quantise:
         ticks = np.round(ticks).astype(np.int64)
     true_rpt = true_robot.rad_per_tick(names)
-    dtrue = np.diff(ticks, axis=0).T * true_rpt[:, None]          # (n, N) true wheel increments [rad]
+    dtrue = np.diff(ticks, axis=0).T * true_rpt[:, None]  # (n, N) true wheel increments [rad]
     odometry = batch_odometry(odometry_robot, sampled.t, ticks, steer=steer).poses
     truth = _truth(true_robot, names, dtrue, steer, noise, trials, rng, keep_truth)
     measured = truth[:, -1, :].copy()
@@ -161,15 +171,15 @@ def _truth(robot: Robot, names, dtrue, steer, noise: NoiseModel, trials: int, rn
     n, m = dtrue.shape
     radius = np.array([robot.wheel(nm).radius for nm in names])
     mid = steer[:-1] + 0.5 * np.diff(steer, axis=0) if robot.steerable else None
-    f = robot.fk_matrix(mid, names)[..., : len(names)]            # (N, 3, n), or (3, n) when no
-    if f.ndim == 3:                                                 # driven wheel steers
+    f = robot.fk_matrix(mid, names)[..., : len(names)]  # (N, 3, n), or (3, n) when no
+    if f.ndim == 3:  # driven wheel steers
         base = np.einsum("kij,jk->ik", f, dtrue)
     else:
-        base = f @ dtrue                                            # (3, N) noise-free increments
+        base = f @ dtrue  # (3, N) noise-free increments
     reps = trials if not noise.is_zero else 1
     out = np.empty((trials, m + 1 if keep else 1, 3))
     root = _noise_root(f, dtrue, radius, base, noise) if reps > 1 or not noise.is_zero else None
-    base_mid = np.cumsum(base[2]) - 0.5 * base[2]                  # noise-free heading mid-sample
+    base_mid = np.cumsum(base[2]) - 0.5 * base[2]  # noise-free heading mid-sample
     cb, sb = np.cos(base_mid), np.sin(base_mid)
     block = max(1, TRIAL_BLOCK_SAMPLES // max(m, 1))
     work = _Work(min(block, reps), m)
@@ -201,13 +211,13 @@ def _noise_root(f, dtrue, radius, base, noise: NoiseModel) -> np.ndarray:
     """``S`` ``(3, 3, N)`` with ``S_k S_k^T = C_k`` (see :func:`_truth`), by eigendecomposition
     (``C_k`` may be singular: a differential drive cannot slip sideways)."""
     m = dtrue.shape[1]
-    var = (noise.slip ** 2) * np.abs(dtrue) * radius[:, None] / radius[:, None] ** 2      # (n, N) [rad^2]
-    fk = f if f.ndim == 3 else np.broadcast_to(f, (m,) + f.shape)                          # (N, 3, n)
+    var = (noise.slip**2) * np.abs(dtrue) * radius[:, None] / radius[:, None] ** 2  # (n, N) [rad^2]
+    fk = f if f.ndim == 3 else np.broadcast_to(f, (m,) + f.shape)  # (N, 3, n)
     cov = np.einsum("kin,nk,kjn->kij", fk, var, fk)
-    cov[:, 2, 2] += (noise.floor ** 2) * np.hypot(base[0], base[1])
+    cov[:, 2, 2] += (noise.floor**2) * np.hypot(base[0], base[1])
     lam, vec = np.linalg.eigh(cov)
     root = vec * np.sqrt(np.clip(lam, 0.0, None))[:, None, :]
-    return np.ascontiguousarray(np.moveaxis(root, 0, -1))                                  # (3, 3, N)
+    return np.ascontiguousarray(np.moveaxis(root, 0, -1))  # (3, 3, N)
 
 
 class _Work:
@@ -251,7 +261,7 @@ def _ends_near(comps: np.ndarray, base_mid, cb, sb, w: dict) -> np.ndarray:
     np.multiply(cb, sin_d, out=cos_d)
     s += cos_d
     np.multiply(half, half, out=d2)
-    k = _series(d2, _SINC, w["k"])               # sinc(phi/2), |phi/2| < 0.1
+    k = _series(d2, _SINC, w["k"])  # sinc(phi/2), |phi/2| < 0.1
     ka = np.multiply(k, a, out=w["ka"])
     kb = np.multiply(k, b, out=w["kb"])
     out = np.empty((len(comps), 3))
@@ -261,9 +271,9 @@ def _ends_near(comps: np.ndarray, base_mid, cb, sb, w: dict) -> np.ndarray:
     return out
 
 
-_COS = [(-1) ** k / math.factorial(2 * k) for k in range(5)]        # cos d = sum c_k d^2k, to d^8
-_SIN = [(-1) ** k / math.factorial(2 * k + 1) for k in range(5)]    # sin d / d = sum s_k d^2k
-_SINC = _SIN[:5]                                                     # sinc x to x^8 (geometry.sinc)
+_COS = [(-1) ** k / math.factorial(2 * k) for k in range(5)]  # cos d = sum c_k d^2k, to d^8
+_SIN = [(-1) ** k / math.factorial(2 * k + 1) for k in range(5)]  # sin d / d = sum s_k d^2k
+_SINC = _SIN[:5]  # sinc x to x^8 (geometry.sinc)
 
 
 def _series(x2: np.ndarray, coef, out: np.ndarray) -> np.ndarray:

@@ -50,8 +50,10 @@ def figure_format(path, format: str | None = None) -> str:
 
     fmt = (format or os.path.splitext(os.fspath(path))[1].lstrip(".")).lower()
     if fmt not in FIGURE_FORMATS:
-        raise InputError(f"{os.fspath(path)}: figures are written as {', '.join(FIGURE_FORMATS)} "
-                         f"(chosen by the extension), not {fmt or 'a file without extension'!r}")
+        raise InputError(
+            f"{os.fspath(path)}: figures are written as {', '.join(FIGURE_FORMATS)} "
+            f"(chosen by the extension), not {fmt or 'a file without extension'!r}"
+        )
     return fmt
 
 

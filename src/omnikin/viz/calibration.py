@@ -21,13 +21,23 @@ def residuals_figure(residuals: dict, labels: list, title: str = ""):
         r = np.asarray(res, dtype=float) * 1000
         for k, path in enumerate(paths):
             sel = [i for i, lbl in enumerate(labels) if lbl == path]
-            ax.scatter(r[sel, 0], r[sel, 1], s=24, color=cmap(k % 10), alpha=0.85, edgecolor="white", linewidth=0.4,
-                       zorder=3, gid=f"runs:{model}:{path}", label=path)
+            ax.scatter(
+                r[sel, 0],
+                r[sel, 1],
+                s=24,
+                color=cmap(k % 10),
+                alpha=0.85,
+                edgecolor="white",
+                linewidth=0.4,
+                zorder=3,
+                gid=f"runs:{model}:{path}",
+                label=path,
+            )
         ax.scatter([0], [0], s=50, marker="+", color="k", lw=1.0, zorder=4, label="prediction")
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel("measured - predicted x [mm]")
         ax.set_ylabel("measured - predicted y [mm]")
-        rms = float(np.sqrt(np.mean(np.sum(r ** 2, axis=1)))) if len(r) else 0.0
+        rms = float(np.sqrt(np.mean(np.sum(r**2, axis=1)))) if len(r) else 0.0
         ax.set_title(f"{model} model: RMS {rms:.3g} mm", fontsize=10)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)

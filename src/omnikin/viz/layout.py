@@ -17,8 +17,14 @@ import numpy as np
 from ..model import Robot
 from . import DPI, require_matplotlib, save_figure
 
-COLORS = {"omni": "#1f77b4", "mecanum": "#9467bd", "swedish": "#17becf", "standard": "#2ca02c",
-          "steerable": "#ff7f0e", "castor": "#7f7f7f"}
+COLORS = {
+    "omni": "#1f77b4",
+    "mecanum": "#9467bd",
+    "swedish": "#17becf",
+    "standard": "#2ca02c",
+    "steerable": "#ff7f0e",
+    "castor": "#7f7f7f",
+}
 
 LABEL_GAP = 0.08
 """Gap between the drawing and a wheel name placed beyond it, as a fraction of the drawing's radius."""
@@ -31,8 +37,9 @@ def _wheel_outline(w) -> np.ndarray:
     c, s = math.cos(w.drive), math.sin(w.drive)
     along, across = np.array([c, s]), np.array([-s, c])
     centre = np.array([cx, cy])
-    return np.array([centre + a * half_len * along + b * half_wid * across
-                     for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
+    return np.array(
+        [centre + a * half_len * along + b * half_wid * across for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    )
 
 
 def layout_figure(robot: Robot):
@@ -54,15 +61,19 @@ def layout_figure(robot: Robot):
         color = COLORS[w.type]
         cx, cy = w.contact_point()
         c, s = math.cos(w.drive), math.sin(w.drive)
-        ax.add_patch(Polygon(outlines[w.name], closed=True, facecolor=color, alpha=0.45, edgecolor=color,
-                             gid=f"wheel:{w.name}"))
+        ax.add_patch(
+            Polygon(outlines[w.name], closed=True, facecolor=color, alpha=0.45, edgecolor=color, gid=f"wheel:{w.name}")
+        )
         if w.offset > 0:
             ax.plot([w.x, cx], [w.y, cy], color=color, lw=1, gid=f"offset:{w.name}")
             ax.plot([w.x], [w.y], "o", color=color, ms=4, gid=f"axis:{w.name}")
         if not w.is_castor:
             tip = (cx + (w.radius + arrow) * c, cy + (w.radius + arrow) * s)
-            ax.add_patch(FancyArrowPatch((cx, cy), tip, arrowstyle="-|>", mutation_scale=12, color=color, lw=1.5,
-                                         gid=f"drive:{w.name}"))
+            ax.add_patch(
+                FancyArrowPatch(
+                    (cx, cy), tip, arrowstyle="-|>", mutation_scale=12, color=color, lw=1.5, gid=f"drive:{w.name}"
+                )
+            )
             points.append(np.array([tip]))
         if w.is_swedish:
             a = w.drive + w.roller
@@ -71,16 +82,30 @@ def layout_figure(robot: Robot):
     # body frame at the origin, short enough to stay clear of every wheel
     clearance = float(np.min(np.hypot(corners[:, 0], corners[:, 1]), initial=radius))
     frame = max(0.5 * clearance, 0.12 * radius)
-    ax.add_patch(FancyArrowPatch((0, 0), (frame, 0), arrowstyle="-|>", mutation_scale=12, color="#d62728", lw=1.5,
-                                 gid="frame:x"))
-    ax.add_patch(FancyArrowPatch((0, 0), (0, frame), arrowstyle="-|>", mutation_scale=12, color="#2ca02c", lw=1.5,
-                                 gid="frame:y", linestyle="-"))
+    ax.add_patch(
+        FancyArrowPatch((0, 0), (frame, 0), arrowstyle="-|>", mutation_scale=12, color="#d62728", lw=1.5, gid="frame:x")
+    )
+    ax.add_patch(
+        FancyArrowPatch(
+            (0, 0),
+            (0, frame),
+            arrowstyle="-|>",
+            mutation_scale=12,
+            color="#2ca02c",
+            lw=1.5,
+            gid="frame:y",
+            linestyle="-",
+        )
+    )
     reach = float(np.max(np.hypot(*np.vstack(points).T)))
     m = robot.mobility
-    ax.set_title(f"{robot.name}: Campion type {m.campion_type}, {'holonomic' if m.holonomic else 'non-holonomic'}",
-                 fontsize=10)
-    handles: list[Artist] = [Patch(facecolor=COLORS[t], alpha=0.45, edgecolor=COLORS[t], label=f"{t} wheel")
-                             for t in dict.fromkeys(w.type for w in robot.wheels)]
+    ax.set_title(
+        f"{robot.name}: Campion type {m.campion_type}, {'holonomic' if m.holonomic else 'non-holonomic'}", fontsize=10
+    )
+    handles: list[Artist] = [
+        Patch(facecolor=COLORS[t], alpha=0.45, edgecolor=COLORS[t], label=f"{t} wheel")
+        for t in dict.fromkeys(w.type for w in robot.wheels)
+    ]
     handles.append(Line2D([], [], color="0.3", marker=">", markevery=[1], label="drive direction (positive speed)"))
     if any(w.is_swedish for w in robot.wheels):
         handles.append(Line2D([], [], color="k", ls="--", lw=1, label="roller axis"))
@@ -133,16 +158,19 @@ def _label_wheels(fig, ax, robot: Robot, reach: float) -> None:
                 d = (w.radius * 1.2 + 0.04 * reach) * step
                 text = _name(ax, w, cx + d * math.cos(b), cy + d * math.sin(b), b)
                 box = text.get_window_extent(renderer).expanded(1.15, 1.3)
-                free = (frame.contains(box.x0, box.y0) and frame.contains(box.x1, box.y1)
-                        and not any(box.overlaps(t) for t in taken)
-                        and not any(path.intersects_bbox(box, filled=filled) for path, filled in drawing))
+                free = (
+                    frame.contains(box.x0, box.y0)
+                    and frame.contains(box.x1, box.y1)
+                    and not any(box.overlaps(t) for t in taken)
+                    and not any(path.intersects_bbox(box, filled=filled) for path, filled in drawing)
+                )
                 if free:
                     spot = box
                     break
                 text.remove()
             if spot is not None:
                 break
-        if spot is None:                      # beyond the drawing, at the wheel's bearing
+        if spot is None:  # beyond the drawing, at the wheel's bearing
             at = reach * (1 + LABEL_GAP)
             text = _name(ax, w, at * math.cos(outward), at * math.sin(outward), outward)
             lim = max(ax.get_xlim()[1], 1.6 * reach)

@@ -38,20 +38,54 @@ def return_errors_figure(results: dict, title: str = "", floor: float | None = N
         for d in (res.cw, res.ccw):
             e = d.epsilon[:, :2] * 1000
             cg = d.cg * 1000
-            ax.scatter([cg[0]], [cg[1]], s=240, marker="o", facecolor="none", edgecolor=COLORS[d.direction], lw=1.6,
-                       zorder=2, gid=f"cg:{stage}:{d.direction}", label=f"{d.direction} centre of gravity")
-            ax.scatter(e[:, 0], e[:, 1], s=22, marker=MARKERS[d.direction], color=COLORS[d.direction], alpha=0.85,
-                       edgecolor="white", linewidth=0.4, zorder=3, gid=f"runs:{stage}:{d.direction}",
-                       label=f"{d.direction} runs")
+            ax.scatter(
+                [cg[0]],
+                [cg[1]],
+                s=240,
+                marker="o",
+                facecolor="none",
+                edgecolor=COLORS[d.direction],
+                lw=1.6,
+                zorder=2,
+                gid=f"cg:{stage}:{d.direction}",
+                label=f"{d.direction} centre of gravity",
+            )
+            ax.scatter(
+                e[:, 0],
+                e[:, 1],
+                s=22,
+                marker=MARKERS[d.direction],
+                color=COLORS[d.direction],
+                alpha=0.85,
+                edgecolor="white",
+                linewidth=0.4,
+                zorder=3,
+                gid=f"runs:{stage}:{d.direction}",
+                label=f"{d.direction} runs",
+            )
         if floor is not None and floor > 0:
-            ax.add_patch(Circle((0, 0), floor * 1000, fill=False, ls="--", lw=0.9, color="0.45", zorder=1,
-                                gid="noise-floor", label="noise floor (95th percentile)"))
+            ax.add_patch(
+                Circle(
+                    (0, 0),
+                    floor * 1000,
+                    fill=False,
+                    ls="--",
+                    lw=0.9,
+                    color="0.45",
+                    zorder=1,
+                    gid="noise-floor",
+                    label="noise floor (95th percentile)",
+                )
+            )
         ax.scatter([0], [0], s=50, marker="+", color="k", lw=1.0, zorder=4, gid="origin", label="start = goal")
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel(r"return error $\epsilon_x$ [mm]")
         ax.set_ylabel(r"return error $\epsilon_y$ [mm]")
-        ax.set_title(f"{stage}: {E_MAX} = {res.e_max_syst * 1000:.1f} mm\n"
-                     rf"$r_{{cg}}$: cw {res.cw.r_cg * 1000:.1f} mm, ccw {res.ccw.r_cg * 1000:.1f} mm", fontsize=10)
+        ax.set_title(
+            f"{stage}: {E_MAX} = {res.e_max_syst * 1000:.1f} mm\n"
+            rf"$r_{{cg}}$: cw {res.cw.r_cg * 1000:.1f} mm, ccw {res.ccw.r_cg * 1000:.1f} mm",
+            fontsize=10,
+        )
         ax.grid(True, alpha=0.3)
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=8, frameon=False, markerscale=0.6)
@@ -71,9 +105,19 @@ def euclidean_errors_figure(results: dict, title: str = ""):
             err = np.hypot(d.epsilon[:, 0], d.epsilon[:, 1]) * 1000
             x0 = 3 * k + j
             offsets = np.linspace(-0.25, 0.25, len(err)) if len(err) > 1 else np.zeros(1)
-            ax.scatter(x0 + offsets, err, s=26, marker=MARKERS[d.direction], color=COLORS[d.direction], alpha=0.85,
-                       edgecolor="white", linewidth=0.4, zorder=3, gid=f"runs:{stage}:{d.direction}",
-                       label=f"{d.direction} runs" if k == 0 else None)
+            ax.scatter(
+                x0 + offsets,
+                err,
+                s=26,
+                marker=MARKERS[d.direction],
+                color=COLORS[d.direction],
+                alpha=0.85,
+                edgecolor="white",
+                linewidth=0.4,
+                zorder=3,
+                gid=f"runs:{stage}:{d.direction}",
+                label=f"{d.direction} runs" if k == 0 else None,
+            )
             ticks.append(x0)
             names.append(d.direction + "\n" + stage.replace(" ", "\n"))
             values.append(err)
@@ -101,8 +145,9 @@ def trajectories_figure(runs: dict, side: float, title: str = ""):
         for d, sim in sims.items():
             truth = sim.truth[0]
             ax.plot(truth[:, 0], truth[:, 1], "-", color=COLORS[d], lw=1.4, label=f"{d} true path")
-            ax.plot(sim.odometry[:, 0], sim.odometry[:, 1], "--", color=COLORS[d], lw=1.0, alpha=0.8,
-                    label=f"{d} odometry")
+            ax.plot(
+                sim.odometry[:, 0], sim.odometry[:, 1], "--", color=COLORS[d], lw=1.0, alpha=0.8, label=f"{d} odometry"
+            )
             ax.plot([truth[-1, 0]], [truth[-1, 1]], MARKERS[d], color=COLORS[d], ms=5, label=f"{d} true end")
         ax.plot([0], [0], "k+", ms=9, mew=1.2, label="start")
         ax.set_aspect("equal", adjustable="datalim")
@@ -128,8 +173,14 @@ def monte_carlo_figure(values: dict, title: str = ""):
     hi = max(float(every.max()), lo * 1.01)
     bins = np.logspace(np.log10(lo), np.log10(hi * 1.01), 40)
     for label, v in data.items():
-        ax.hist(np.clip(v, lo, None), bins=bins, weights=np.full(len(v), 1.0 / len(v)), histtype="step", lw=1.6,
-                label=f"{label}: {len(v)} procedures, median {np.median(v):.3g} mm")
+        ax.hist(
+            np.clip(v, lo, None),
+            bins=bins,
+            weights=np.full(len(v), 1.0 / len(v)),
+            histtype="step",
+            lw=1.6,
+            label=f"{label}: {len(v)} procedures, median {np.median(v):.3g} mm",
+        )
     ax.set_xscale("log")
     ax.set_xlabel(f"{E_MAX} [mm]")
     ax.set_ylabel("fraction of procedures")
