@@ -17,6 +17,7 @@ from ..errors import InputError, OmnikinError
 from ..geometry import wrap_angle
 from .budget import Budget, add_budget_options, explained, require
 from .common import (
+    add_method_option,
     add_output_options,
     checked_output,
     console,
@@ -115,12 +116,7 @@ def add_parsers(sub, robot_help: str) -> None:
         help="sensor_msgs/JointState topic (default /joint_states)",
     )
     sp.add_argument("--odom-topic", default="/odom", metavar="TOPIC", help="output topic (default /odom)")
-    sp.add_argument(
-        "--method",
-        choices=("exact", "midpoint", "euler"),
-        default="exact",
-        help="pose integration (default exact; the others exist for comparison)",
-    )
+    add_method_option(sp)
     sp.add_argument(
         "--stamp",
         choices=("auto", "header", "bag"),

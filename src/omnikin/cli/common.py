@@ -80,3 +80,13 @@ def print_json(data, *, nullable=()) -> None:
 
     text = to_json(data, nullable=nullable)
     print(text)
+
+
+def add_method_option(parser) -> None:
+    """``--method exact|midpoint|euler``: the pose integration of the odometry commands."""
+    parser.add_argument(
+        "--method",
+        choices=("exact", "midpoint", "euler"),
+        default="exact",
+        help="pose integration (default exact; the others exist for comparison)",
+    )

@@ -21,7 +21,7 @@ import numpy as np
 from .. import __version__
 from ..errors import InfeasibleTwistError, InputError, OmnikinError, one_line
 from ..presets import PRESET_NAMES
-from .common import add_output_options, checked_output, console, load_robot, print_json, robot_inputs
+from .common import add_method_option, add_output_options, checked_output, console, load_robot, print_json, robot_inputs
 from .parser import CommandParser, UsageError
 
 EPILOG = """examples:
@@ -616,12 +616,7 @@ def build_parser() -> CommandParser:
         default="csv",
         help="csv: t,x,y,theta; tum: t x y z qx qy qz qw; kitti: 3x4 matrices (default csv)",
     )
-    sp.add_argument(
-        "--method",
-        choices=("exact", "midpoint", "euler"),
-        default="exact",
-        help="pose integration (default exact; the others exist for comparison)",
-    )
+    add_method_option(sp)
     sp.add_argument(
         "--counter-bits",
         type=int,

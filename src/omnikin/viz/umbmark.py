@@ -27,6 +27,20 @@ E_MAX = r"$E_{\max,\mathrm{syst}}$"
 """``E_max,syst`` in math text."""
 
 
+def _run_style(stage: str, direction: str) -> dict:
+    """Marker style of the individual runs of one direction (both figures): drawn above the
+    centre-of-gravity rings, tagged ``runs:<stage>:<direction>`` for tests and SVG readers."""
+    return {
+        "marker": MARKERS[direction],
+        "color": COLORS[direction],
+        "alpha": 0.85,
+        "edgecolor": "white",
+        "linewidth": 0.4,
+        "zorder": 3,
+        "gid": f"runs:{stage}:{direction}",
+    }
+
+
 def return_errors_figure(results: dict, title: str = "", floor: float | None = None):
     """Return positions [mm]; ``results``: ``{stage: UMBmarkResult}``; ``floor``: the noise
     floor [m] (:class:`~omnikin.evaluation.umbmark.NoiseFloor` ``.limit``), drawn as a circle."""
@@ -54,13 +68,7 @@ def return_errors_figure(results: dict, title: str = "", floor: float | None = N
                 e[:, 0],
                 e[:, 1],
                 s=22,
-                marker=MARKERS[d.direction],
-                color=COLORS[d.direction],
-                alpha=0.85,
-                edgecolor="white",
-                linewidth=0.4,
-                zorder=3,
-                gid=f"runs:{stage}:{d.direction}",
+                **_run_style(stage, d.direction),
                 label=f"{d.direction} runs",
             )
         if floor is not None and floor > 0:
@@ -109,13 +117,7 @@ def euclidean_errors_figure(results: dict, title: str = ""):
                 x0 + offsets,
                 err,
                 s=26,
-                marker=MARKERS[d.direction],
-                color=COLORS[d.direction],
-                alpha=0.85,
-                edgecolor="white",
-                linewidth=0.4,
-                zorder=3,
-                gid=f"runs:{stage}:{d.direction}",
+                **_run_style(stage, d.direction),
                 label=f"{d.direction} runs" if k == 0 else None,
             )
             ticks.append(x0)
