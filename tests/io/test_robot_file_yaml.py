@@ -48,3 +48,76 @@ def test_yaml_exponent_without_dot_is_a_number(tmp_path):
     r = load_robot(p)
     assert [w.radius for w in r.wheels] == [0.05, 0.05, 0.05]
     assert r.wheels[0].x == 0.1
+
+
+# --- YAML 1.1 number forms: refused, not reinterpreted -----------------------------------------------
+def omni3_text(angle: str = "120", ticks: str = "512") -> str:
+    """Three omni wheels 0.1 m from the centre; wheel b's angle and encoder given as written."""
+    return (
+        "omnikin: 1\nname: r\nwheels:\n"
+        "  - {name: a, type: omni, distance: 0.1, angle_deg: 0, radius: 0.05}\n"
+        f"  - name: b\n    type: omni\n    distance: 0.1\n    angle_deg: {angle}\n    radius: 0.05\n"
+        f"    encoder: {{ticks_per_rev: {ticks}}}\n"
+        "  - {name: c, type: omni, distance: 0.1, angle_deg: 240, radius: 0.05}\n"
+    )
+
+
+@pytest.mark.parametrize(
+    "angle, ticks, line, message",
+    [
+        # YAML 1.1 (PyYAML) reads 0120 as the octal 80, YAML 1.2 as 120
+        ("0120", "512", 8, "0120 is octal in YAML 1.1 (80) but decimal in YAML 1.2: write 120, not 0120"),
+        ("-0120", "512", 8, "write -120, not -0120"),
+        ("120", "0600", 10, "0600 is octal in YAML 1.1 (384) but decimal in YAML 1.2: write 600, not 0600"),
+        ("120", "0_600", 10, "write 600, not 0_600"),
+        # base 60: 2:00 = 2 * 60 + 0, 1:30.5 = 60 + 30.5
+        ("2:00", "512", 8, "2:00 is a base-60 (sexagesimal) number in YAML 1.1 (120) but text in YAML 1.2"),
+        ("1:30.5", "512", 8, "write 90.5, not 1:30.5"),
+        ("120", "0x200", 10, "0x200 is a hexadecimal number in YAML 1.1 (512), not a plain decimal: write 512"),
+        ("120", "0b1000000000", 10, "binary number in YAML 1.1 (512)"),
+        ("1_20", "512", 8, "1_20 has digit separators (_), one number in YAML 1.1 only (120): write 120"),
+        ("1_20.0", "512", 8, "write 120.0, not 1_20.0"),
+    ],
+)
+def test_yaml_number_forms_read_differently_by_yaml_versions_are_refused(tmp_path, angle, ticks, line, message):
+    path = tmp_path / "robot.yaml"
+    path.write_text(omni3_text(angle, ticks))
+    with pytest.raises(RobotFileError) as info:
+        load_robot(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: line {line} column ") and message in text and "\n" not in text, text
+
+
+@pytest.mark.parametrize("angle", ["120", "+120", "120.0", "0120.0", "1.2e2", "1.2E+2"])
+def test_plain_decimal_numbers_read_as_written(tmp_path, angle):
+    path = tmp_path / "robot.yaml"
+    path.write_text(omni3_text(angle, "600"))
+    b = load_robot(path).wheel("b")
+    # 0.1 m at 120 deg: (-0.05, 0.1 sin 60 deg)
+    assert b.x == pytest.approx(-0.05, abs=1e-15) and b.y == pytest.approx(0.1 * 3**0.5 / 2, abs=1e-15)
+    assert b.encoder.ticks_per_rev == 600
+
+
+def test_quoted_number_forms_stay_text_and_are_refused_as_such(tmp_path):
+    path = tmp_path / "robot.yaml"
+    path.write_text(omni3_text("'0120'"))
+    with pytest.raises(RobotFileError, match=r"field 'angle_deg': must be a number, got '0120'"):
+        load_robot(path)
+
+
+@pytest.mark.parametrize(
+    "literal, message",
+    [("0100", "write 100, not 0100"), ("1:40", "(100)"), ("0x64", "(100)"), ("1_00", "write 100, not 1_00")],
+)
+def test_ros_parameter_files_refuse_the_same_number_forms(tmp_path, literal, message):
+    from omnikin.errors import InputError
+    from omnikin.ros.params import load_params
+
+    path = tmp_path / "params.yaml"
+    path.write_text(f"omnikin:\n  ros__parameters:\n    publish_rate: {literal}\n")
+    with pytest.raises(InputError) as info:
+        load_params(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: line 3 column 19: ") and message in text, text
+    path.write_text("omnikin:\n  ros__parameters:\n    publish_rate: 100\n")
+    assert load_params(path)["publish_rate"] == 100

@@ -11,8 +11,11 @@ Hostile files are refused before they cost time or memory (docs/conventions.md, 
 file"): only regular files up to 256 KiB are read (:mod:`omnikin.io.textfile`); the YAML
 reader (:func:`strict_yaml_loader`, also used for ROS parameter files) refuses anchors,
 aliases and merge keys (a 1 KB alias bomb would otherwise expand to gigabytes), nesting
-deeper than :data:`MAX_DEPTH`, duplicate keys and over-long integer literals; JSON gets the
-same depth, key and integer checks.
+deeper than :data:`MAX_DEPTH`, duplicate keys, over-long integer literals, and numbers that
+YAML readers read differently (YAML 1.1, which PyYAML follows, reads ``0120`` as the octal 80,
+``2:00`` as 120 and ``0x1``, ``0b1``, ``1_000`` as numbers; YAML 1.2 reads ``0120`` as 120 and
+``2:00`` as text): a number in an omnikin file is a plain decimal, ``120`` not ``0120``. JSON
+gets the same depth, key and integer checks (it has no other number forms).
 """
 
 from __future__ import annotations
@@ -317,9 +320,12 @@ def strict_yaml_loader():
     """A PyYAML SafeLoader for robot and parameter files (module docstring).
 
     Refuses, with the line and column: anchors and aliases, merge keys (``<<``), nesting deeper
-    than :data:`MAX_DEPTH`, keys that are not scalars, duplicate keys and integer literals of
-    more than :data:`MAX_INT_CHARS` characters that are not plain decimals. Reads ``5e-2`` as a
-    float (YAML 1.2). ROS 2's own parameter parser (rcl_yaml_param_parser) refuses aliases too.
+    than :data:`MAX_DEPTH`, keys that are not scalars, duplicate keys, and the YAML 1.1 number
+    forms other readers read differently (octal ``0120``, base-60 ``2:00`` and ``1:30.5``,
+    hexadecimal ``0x1``, binary ``0b1``, digit separators ``1_000``; the message gives the plain
+    decimal to write). Reads ``5e-2`` as a float (YAML 1.2); a plain decimal integer of more
+    than :data:`MAX_INT_CHARS` digits as a float (refused by the range of its field). ROS 2's
+    own parameter parser (rcl_yaml_param_parser) refuses aliases too.
     """
     import yaml
     from yaml.composer import ComposerError
@@ -361,17 +367,62 @@ def strict_yaml_loader():
         return value
 
     def integer(loader, node):
-        text = loader.construct_scalar(node).replace("_", "")
+        text = loader.construct_scalar(node)
+        if not _DECIMAL_INT.fullmatch(text):
+            value = yaml.SafeLoader.construct_yaml_int(loader, node) if len(text) <= MAX_INT_CHARS else None
+            raise _NumberFormError(_number_form_problem(text, value), node)
         if len(text) <= MAX_INT_CHARS:
-            return yaml.SafeLoader.construct_yaml_int(loader, node)
-        if text.lstrip("+-").isdigit():
-            return float(text)  # inf or a huge float: refused by the range of its field
-        raise ConstructorError(None, None, f"integer literal of {len(text)} characters is too long", node.start_mark)
+            return int(text)
+        return float(text)  # inf or a huge float: refused by the range of its field
+
+    def real(loader, node):
+        text = loader.construct_scalar(node)
+        if ":" in text or "_" in text:
+            value = yaml.SafeLoader.construct_yaml_float(loader, node) if len(text) <= MAX_INT_CHARS else None
+            raise _NumberFormError(_number_form_problem(text, value), node)
+        return yaml.SafeLoader.construct_yaml_float(loader, node)
 
     StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
     StrictLoader.add_constructor("tag:yaml.org,2002:str", scalar)
     StrictLoader.add_constructor("tag:yaml.org,2002:int", integer)
+    StrictLoader.add_constructor("tag:yaml.org,2002:float", real)
     return StrictLoader
+
+
+_DECIMAL_INT = re.compile(r"[-+]?(?:0|[1-9][0-9]*)")
+"""The integers every reader reads alike (YAML 1.1 and 1.2, JSON): plain decimal, no leading zero."""
+
+
+def _number_form_problem(text: str, value) -> str:
+    """Why the YAML 1.1 number ``text`` is refused (:func:`strict_yaml_loader`), with the plain
+    decimal to write instead; ``value`` is what YAML 1.1 (PyYAML) reads, None if not computed."""
+    body = text.lstrip("+-").lower()
+    digits = body.replace("_", "")
+    sign = text[0] if text[0] in "+-" else ""
+    if len(text) > 40:  # a hostile literal: named by its start, no value quoted
+        text, value = f"{text[:24]}... ({len(text)} characters)", None
+    read = "" if value is None else f" ({value!r})"
+    instead = f"write {value!r}, not {text}" if value is not None else "write a plain decimal number"
+    if digits.startswith(("0x", "0b")):
+        base = "hexadecimal" if digits.startswith("0x") else "binary"
+        return f"{text} is a {base} number in YAML 1.1{read}, not a plain decimal: {instead}"
+    if ":" in body:
+        return f"{text} is a base-60 (sexagesimal) number in YAML 1.1{read} but text in YAML 1.2: {instead}"
+    if len(digits) > 1 and digits[0] == "0" and digits[1].isdigit():
+        plain = sign + (digits.lstrip("0") or "0")
+        instead = f"write {plain}, not {text}" if value is not None else "write it without leading zeros"
+        return f"{text} is octal in YAML 1.1{read} but decimal in YAML 1.2: {instead}"
+    return f"{text} has digit separators (_), one number in YAML 1.1 only{read}: {instead}"
+
+
+class _NumberFormError(Exception):
+    """A number written in a YAML 1.1 form that other readers read differently (raised out of the
+    loader; :func:`parse_yaml` names the file, line and column)."""
+
+    def __init__(self, problem: str, node):
+        super().__init__(problem)
+        self.problem = problem
+        self.mark = node.start_mark
 
 
 def parse_yaml(text: str, source: str, error: type[Exception] = RobotFileError) -> Any:
@@ -381,6 +432,8 @@ def parse_yaml(text: str, source: str, error: type[Exception] = RobotFileError) 
 
     try:
         return yaml.load(text, Loader=strict_yaml_loader())
+    except _NumberFormError as exc:
+        raise error(f"{source}: line {exc.mark.line + 1} column {exc.mark.column + 1}: {exc.problem}") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         at = f" at line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""
