@@ -1,19 +1,83 @@
-"""Small input checks shared by the core: shapes and finiteness with clear messages."""
+"""Small input checks shared by the core: real numbers, shapes and finiteness with clear messages.
+
+Every public function that takes numbers (twists, wheel speeds, poses, steering angles,
+headings, times) reads them with :func:`as_real_array` or :func:`as_components`: only real
+numbers are accepted (NumPy integer and floating types, Python ``int`` and ``float``).
+Booleans, complex numbers, strings, ``None`` and other objects are refused with one line
+saying what arrived, instead of being converted silently (``np.asarray(x, dtype=float)``
+drops an imaginary part with only a ``ComplexWarning``, reads ``True`` as 1 and ``"0.5"`` as
+0.5).
+"""
 
 from __future__ import annotations
 
+import numbers
+
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, one_line, shorten
+
+REAL_KINDS = frozenset("iuf")
+"""NumPy dtype kinds read as real numbers: signed and unsigned integers, floating point."""
+
+
+def _is_real_scalar(x) -> bool:
+    return isinstance(x, numbers.Real) and not isinstance(x, (bool, np.bool_))
+
+
+def as_real_array(value, name: str, error: type[InputError] = InputError) -> np.ndarray:
+    """``value`` as a float64 array, refusing anything but real numbers (module docstring).
+
+    ``name`` names the argument in the one-line message (``twist: expected real numbers,
+    got complex128 values``); ``error`` is the class raised (a subclass of InputError, e.g.
+    :class:`~omnikin.errors.OdometryInputError` for timestamps). Shapes are not checked here.
+    """
+    if isinstance(value, np.ndarray):
+        arr = value
+    else:
+        try:
+            arr = np.asarray(value)
+        except (ValueError, TypeError) as exc:  # ragged nesting, unconvertible objects
+            raise error(f"{name}: not a rectangular array of numbers ({one_line(exc, 120)})") from None
+    kind = arr.dtype.kind
+    if kind in REAL_KINDS:
+        return arr.astype(float, copy=False)
+    if kind == "O":  # a list mixing Python ints beyond int64 with floats, Decimals, None, ...
+        for bad in arr.reshape(-1):
+            if not _is_real_scalar(bad):
+                raise error(f"{name}: expected real numbers, got {type(bad).__name__} {shorten(bad, 40)}")
+        try:
+            return arr.astype(float)
+        except OverflowError:
+            raise error(f"{name}: a number too large for a float") from None
+    what = {
+        "b": "booleans",
+        "c": "complex numbers",
+        "U": "strings",
+        "S": "bytes",
+        "M": "datetimes",
+        "m": "time deltas",
+        "V": "structured values",
+    }.get(kind, "values")
+    raise error(f"{name}: expected real numbers (int or float), got {what} ({arr.dtype})")
+
+
+def as_real_scalar(value, name: str, error: type[InputError] = InputError) -> float:
+    """One real number (module docstring) as a Python float."""
+    arr = as_real_array(value, name, error)
+    if arr.ndim != 0:
+        raise error(f"{name}: expected one number, got an array of shape {arr.shape}")
+    return float(arr)
 
 
 def as_components(value, size: int, name: str) -> np.ndarray:
-    """Return ``value`` as a float array of shape ``(..., size)``.
+    """Return ``value`` as a float array of shape ``(..., size)`` of real numbers.
 
-    Raises :class:`OmnikinError` saying what was expected and what arrived, e.g.
-    ``twist: expected shape (..., 3), got (4,)``.
+    Raises :class:`~omnikin.errors.InputError` saying what was expected and what arrived, e.g.
+    ``twist: expected shape (..., 3), got (4,)`` or ``twist: expected real numbers (int or
+    float), got complex numbers (complex128)``.
     """
-    arr = np.asarray(value, dtype=float)
+    arr = as_real_array(value, name)
     if arr.ndim == 0 or arr.shape[-1] != size:
         raise InputError(f"{name}: expected shape (..., {size}), got {arr.shape}")
     return arr

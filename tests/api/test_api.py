@@ -229,3 +229,47 @@ def test_calibration_plan_lists_what_the_robot_can_drive():
         "spin 1800",
         "spin -1800",
     ]
+
+
+@pytest.mark.parametrize(
+    "kwargs, contains",
+    [
+        ({"rate": 1e-9}, "rate (--rate): the encoder sample rate must lie in [5, 10000] Hz, got 1e-09"),
+        ({"rate": 4.99}, "must lie in [5, 10000] Hz"),
+        ({"rate": 1e6}, "must lie in [5, 10000] Hz"),
+        ({"rate": 100 + 0j}, "rate (--rate): the encoder sample rate must be a number"),
+        ({"side": 1e-300}, "side (--side): the side of the UMBmark square must lie in [0.05, 100] m, got 1e-300"),
+        ({"side": 0.049}, "must lie in [0.05, 100] m"),
+        ({"side": 101.0}, "must lie in [0.05, 100] m"),
+        ({"side": math.inf}, "side (--side): the side of the UMBmark square must be finite"),
+        ({"side": "4"}, "must be a number, got '4'"),
+    ],
+)
+def test_umbmark_rate_and_side_have_meaningful_bounds(kwargs, contains):
+    """The bounds live in the core (evaluation.procedure): the API, its cost estimate and the
+    procedure itself refuse the same settings with the same line."""
+    from omnikin.api.umbmark import umbmark_cost
+    from omnikin.evaluation.procedure import check_settings
+
+    settings = {"runs": 1, "trials": 1, "side": 4.0, "rate": 100.0, **kwargs}
+    for call in (
+        lambda: omnikin.run_umbmark("diff-drive", calibrate=False, runs=1, **kwargs),
+        lambda: umbmark_cost("diff-drive", **kwargs),
+        lambda: check_settings(**settings),
+    ):
+        with pytest.raises(omnikin.InputError) as info:
+            call()
+        assert contains in str(info.value) and "\n" not in str(info.value)
+
+
+def test_umbmark_runs_at_the_ends_of_its_bounds():
+    small = omnikin.run_umbmark("diff-drive", side=0.05, rate=5.0, runs=1, calibrate=False, noise="none")
+    assert small.side == 0.05 and small.rate == 5.0
+    assert len(small.trajectories["before"]["cw"].t) > 8  # each leg and turn spans samples
+
+
+def test_analyze_umbmark_side_has_the_same_bounds():
+    eps = {"cw": [[0.01, 0.0]], "ccw": [[0.01, 0.0]]}
+    with pytest.raises(omnikin.InputError, match=r"side \(--side\): the side of the UMBmark square must lie in"):
+        omnikin.analyze_umbmark(eps, side=1e-300)
+    assert omnikin.analyze_umbmark(eps, side=0.05).side == 0.05

@@ -405,7 +405,7 @@ def test_an_interrupted_run_leaves_the_previous_report_intact(tmp_path):
     "argv, contains",
     [
         (["--trials", "3000", "--max-time", "10"], ["umbmark", "--max-time 10 s", "--trials"]),
-        (["--trials", "20000000", "--runs", "1", "--rate", "1"], ["umbmark", "--max-memory 2G", "--trials"]),
+        (["--trials", "20000000", "--runs", "1", "--rate", "5"], ["umbmark", "--max-memory 2G", "--trials"]),
     ],
 )
 def test_umbmark_refuses_studies_beyond_the_budget_at_once(capsys, tmp_path, monkeypatch, argv, contains):

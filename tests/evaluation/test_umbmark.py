@@ -530,3 +530,39 @@ def test_budget_estimate_counts_what_a_trial_really_simulates():
         slack = 2 * 2 * runs * (len(umbmark_square("cw").segments) + 1)
         assert actual <= two.samples - one.samples <= actual + slack
         assert two.bytes > one.bytes and two.seconds > one.seconds
+
+
+# --- straight legs: beta = 0 ---------------------------------------------------------------------------
+def test_borenstein_straight_legs_give_ed_exactly_one():
+    """x_cw = x_ccw = +10 mm: beta = (x_cw - x_ccw) / (-4L) = 0, the legs do not curve (R infinite),
+    E_d = 1 and c_L = c_R = 1 exactly; alpha = 0.02 / (-16) = -0.00125 rad, E_b = (pi/2) / (pi/2 + 0.00125)."""
+    b = borenstein(0.01, 0.01, 4.0, DIFF_TRACK)
+    assert b.beta == 0.0 and math.copysign(1.0, b.beta) == 1.0  # not -0
+    assert b.straight and b.R == math.inf
+    assert (b.E_d, b.c_L, b.c_R) == (1.0, 1.0, 1.0)
+    assert b.alpha == pytest.approx(-0.00125, rel=1e-15)
+    assert b.E_b == pytest.approx((math.pi / 2) / (math.pi / 2 + 0.00125), rel=1e-15)
+    assert b.b_new == pytest.approx(DIFF_TRACK * (math.pi / 2) / (math.pi / 2 + 0.00125), rel=1e-15)
+    assert b.as_dict()["R"] is None
+    assert "R straight legs" in b.describe() and "-0 " not in b.describe()
+    # a curvature below the smallest float's reach: still straight, never inf/inf
+    tiny = borenstein(1e-320, -1e-320, 4.0, DIFF_TRACK)
+    assert tiny.E_d == 1.0 and tiny.c_L == 1.0
+
+
+def test_umbmark_analyze_of_straight_legs_prints_valid_json_and_text(tmp_path, capsys):
+    import json
+
+    from omnikin.cli.main import main
+
+    f = tmp_path / "m.csv"
+    rows = [f"{d},{0.01 + e},{dy},{e},0" for d in ("cw", "ccw") for e, dy in ((0.0, 0.001), (0.5, -0.001), (1.0, 0.0))]
+    f.write_text("direction,x_abs,y_abs,x_calc,y_calc\n" + "\n".join(rows) + "\n")
+    assert main(["umbmark", "analyze", str(f), "--robot", "diff-drive", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    bor = doc["borenstein"]
+    assert bor["R"] is None and bor["E_d"] == 1.0 and bor["beta"] == 0.0 and bor["c_L"] == bor["c_R"] == 1.0
+    assert bor["alpha"] == pytest.approx(-0.00125, rel=1e-12)
+    assert main(["umbmark", "analyze", str(f), "--robot", "diff-drive"]) == 0
+    out = capsys.readouterr().out
+    assert "R straight legs (beta = 0)" in out and "beta 0 rad" in out and "inf" not in out and "-0 " not in out

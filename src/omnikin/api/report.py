@@ -129,9 +129,7 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
     if bor is not None:
         lines += [
             "",
-            "Borenstein's differential-drive figures (before): "
-            f"alpha = {bor.alpha:.5g} rad, beta = {bor.beta:.5g} rad, R = {bor.R:.4g} m, E_d = {bor.E_d:.6f}, "
-            f"E_b = {bor.E_b:.6f}, c_L = {bor.c_L:.6f}, c_R = {bor.c_R:.6f}, b_new = {bor.b_new:.6f} m.",
+            f"Borenstein's differential-drive figures (before): {bor.describe()}.",
         ]
     if "monte_carlo" in doc:
         lines += [

@@ -23,6 +23,7 @@ from ..evaluation.procedure import (
     Cost,
     UMBmarkStudy,
     check_cost,
+    check_settings,
     estimate_cost,
     streams,
     umbmark_study,
@@ -286,7 +287,7 @@ def run_umbmark(
     (:func:`~omnikin.evaluation.procedure.check_cost`).
     """
     nominal = robot_of(robot)
-    _check_settings(runs=runs, trials=trials, side=side, rate=rate)
+    check_settings(runs=runs, trials=trials, side=side, rate=rate)
     seeds = streams(seed)
     noise_model = noise_of(noise)
     check_cost(
@@ -325,17 +326,6 @@ def run_umbmark(
     return UMBmarkReport(**{f.name: getattr(study, f.name) for f in fields(study)}, settings=settings)
 
 
-def _check_settings(*, runs, trials, side, rate) -> None:
-    """One line naming the first bad setting (and its command-line option)."""
-    for name, value in (("runs", runs), ("trials", trials)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise InputError(f"{name} (--{name}) must be a whole number >= 1, got {value!r}")
-    if not (isinstance(side, (int, float)) and math.isfinite(side) and side > 0):
-        raise InputError(f"side (--side) must be a positive length [m], got {side!r}")
-    if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
-        raise InputError(f"rate (--rate) must be a positive number of samples per second, got {rate!r}")
-
-
 def umbmark_cost(
     robot=DEFAULT_ROBOT,
     *,
@@ -348,7 +338,7 @@ def umbmark_cost(
 ) -> Cost:
     """What :func:`run_umbmark` with these settings will take (robot-samples, memory, time):
     :func:`~omnikin.evaluation.procedure.estimate_cost`."""
-    _check_settings(runs=runs, trials=trials, side=side, rate=rate)
+    check_settings(runs=runs, trials=trials, side=side, rate=rate)
     return estimate_cost(
         robot_of(robot), side=side, mode=mode, runs=runs, rate=rate, trials=trials, calibrate=calibrate
     )

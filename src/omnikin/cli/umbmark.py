@@ -359,10 +359,7 @@ def _print_summary(report: UMBmarkReport, doc: dict, out) -> None:
     )
     bor = report.before[0].borenstein
     if bor is not None:
-        con.print(
-            f"Borenstein (before): alpha {bor.alpha:.4g} rad, beta {bor.beta:.4g} rad, E_d {bor.E_d:.5f}, "
-            f"E_b {bor.E_b:.5f}, c_L {bor.c_L:.5f}, c_R {bor.c_R:.5f}, b_new {bor.b_new:.5f} m"
-        )
+        con.print(f"Borenstein (before): {bor.describe()}")
     if "after" in doc:
         r, ri = doc["reduction_factor"], doc["reduction_factor_interval"]
         sysm = doc["systematic"]
@@ -425,11 +422,7 @@ def cmd_umbmark_analyze(args) -> int:
     for d in (res.cw, res.ccw):
         con.print(f"centre of gravity {d.direction}: x = {_mm(d.cg[0])} mm, y = {_mm(d.cg[1])} mm")
     if res.borenstein is not None:
-        bd = res.borenstein
-        con.print(
-            f"Borenstein: alpha {bd.alpha:.5g} rad, beta {bd.beta:.5g} rad, R {bd.R:.5g} m, E_d {bd.E_d:.6f}, "
-            f"E_b {bd.E_b:.6f}, c_L {bd.c_L:.6f}, c_R {bd.c_R:.6f}, b_new {bd.b_new:.6f} m"
-        )
+        con.print(f"Borenstein: {res.borenstein.describe()}")
     elif args.robot is not None:
         con.print(
             f"{args.robot} is not a differential drive: Borenstein's correction does not apply (use omnikin calibrate)"

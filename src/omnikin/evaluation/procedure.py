@@ -33,15 +33,25 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, ResourceLimitError
+from ..errors import InputError, ResourceLimitError, shorten
 from ..model import Robot
 from ..plans import CalibrationRun, umbmark_square
 from ..simulation.error_models import NOISE, NoiseModel, SystematicErrors
 from ..simulation.motion import estimated_samples
 from ..simulation.simulate import simulate
+from ..wheels import range_problem
 from .calibration import RECOMMENDED_REPEATS, CalibrationResult, borenstein_calibrate, recommended_runs
 from .calibration import calibrate as least_squares_calibration
-from .umbmark import LEVEL, NoiseFloor, UMBmarkResult, differential_pair, noise_floor, reduction_interval, run_umbmark
+from .umbmark import (
+    LEVEL,
+    NoiseFloor,
+    UMBmarkResult,
+    check_side,
+    differential_pair,
+    noise_floor,
+    reduction_interval,
+    run_umbmark,
+)
 
 STREAMS = ("robot", "before", "trajectories", "calibration", "borenstein", "after", "floor")
 """Random streams, in the order of the children of ``SeedSequence(seed)``."""
@@ -61,6 +71,11 @@ MAX_TIME = 3600.0
 SAMPLES_PER_SECOND = 1e7
 """Simulation speed used to express a sample count as a time (docs/performance.md)."""
 
+RATE_RANGE = (5.0, 10_000.0)
+"""Encoder sample rate of a simulated study [Hz]: at least 5 samples per second (a UMBmark leg
+then still spans several samples; at 1e-9 Hz a run is one sample and the result is noise of the
+sampling, not odometry), at most 10 kHz (beyond any odometry loop; the cost grows with it)."""
+
 BYTES_PER_PROCEDURE = 4096
 """Memory of one kept UMBmark procedure (its result objects and return errors), generous."""
 
@@ -70,6 +85,19 @@ def streams(seed: int) -> dict:
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise InputError(f"seed (--seed) must be a whole number >= 0, got {seed!r}")
     return dict(zip(STREAMS, np.random.SeedSequence(int(seed)).spawn(len(STREAMS)), strict=True))
+
+
+def check_settings(*, runs, trials, side, rate) -> None:
+    """Refuse the first bad setting of a study with one line naming it and its command-line
+    option: ``runs`` and ``trials`` whole numbers >= 1, ``side`` within
+    :data:`~omnikin.evaluation.umbmark.SIDE_RANGE`, ``rate`` within :data:`RATE_RANGE`."""
+    for name, value in (("runs", runs), ("trials", trials)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise InputError(f"{name} (--{name}) must be a whole number >= 1, got {shorten(value)}")
+    check_side(side)
+    problem = range_problem(rate, *RATE_RANGE, "Hz")
+    if problem:
+        raise InputError(f"rate (--rate): the encoder sample rate {problem}")
 
 
 def draw_as_built(robot: Robot, profile, seed) -> tuple[Robot, SystematicErrors]:
@@ -204,7 +232,9 @@ def umbmark_study(
     progress=None,
 ) -> UMBmarkStudy:
     """Run the study of the module docstring. ``true_robot``: the robot as built
-    (:func:`draw_as_built`); ``progress``: called with the name of each step as it starts."""
+    (:func:`draw_as_built`); ``progress``: called with the name of each step as it starts.
+    The settings are checked first (:func:`check_settings`)."""
+    check_settings(runs=runs, trials=trials, side=side, rate=rate)
     rng = streams(seed)
     step = progress or (lambda name: None)
     opts: dict[str, Any] = dict(side=side, mode=mode, runs=runs, noise=noise, rate=rate)

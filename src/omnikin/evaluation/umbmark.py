@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._arrays import as_real_array
 from ..errors import InfeasibleTwistError, InputError
 from ..limits import MotionLimits
 from ..model import Robot
@@ -43,6 +44,7 @@ from ..plans import check_mode, umbmark_square
 from ..rng import make_rng
 from ..simulation.error_models import NoiseModel
 from ..simulation.simulate import segment_rates, simulate
+from ..wheels import range_problem
 
 UNITS = {
     "side": "m",
@@ -53,7 +55,7 @@ UNITS = {
     "e_max_syst_interval": "m",
     "alpha": "rad",
     "beta": "rad",
-    "R": "m",
+    "R": "m (null: straight legs, beta = 0)",
     "E_d": "1",
     "E_b": "1",
     "c_L": "1",
@@ -61,6 +63,10 @@ UNITS = {
     "b_new": "m",
 }
 """Unit of each key of :meth:`UMBmarkResult.as_dict` (``[m, m, rad]``: per component)."""
+
+SIDE_RANGE = (0.05, 100.0)
+"""Side of a UMBmark square [m], simulated or measured: from 5 cm (a robot of a few centimetres)
+to 100 m (Borenstein and Feng used 4 m; beyond 100 m the floor, not the odometry, is measured)."""
 
 LEVEL = 0.95
 """Default confidence level of the intervals."""
@@ -72,7 +78,11 @@ point from the origin (relative accuracy of the distances about 1e-6)."""
 
 @dataclass(frozen=True)
 class Borenstein:
-    """Borenstein's differential-drive correction (module docstring)."""
+    """Borenstein's differential-drive correction (module docstring).
+
+    ``R`` [m] is ``inf`` when the legs are straight (``beta = 0``: then ``E_d = 1`` exactly);
+    :meth:`as_dict` gives it as None (JSON null) and :meth:`describe` as ``straight``.
+    """
 
     alpha: float
     beta: float
@@ -83,32 +93,52 @@ class Borenstein:
     c_R: float
     b_new: float
 
+    FIELDS = ("alpha", "beta", "R", "E_d", "E_b", "c_L", "c_R", "b_new")
+
+    @property
+    def straight(self) -> bool:
+        """True when the legs do not curve (``beta = 0``, ``R`` infinite)."""
+        return math.isinf(self.R)
+
     def as_dict(self) -> dict:
-        return {k: float(getattr(self, k)) for k in ("alpha", "beta", "R", "E_d", "E_b", "c_L", "c_R", "b_new")}
+        """The figures by name; ``R`` None for straight legs (JSON has no infinity)."""
+        return {k: None if k == "R" and self.straight else float(getattr(self, k)) for k in self.FIELDS}
+
+    def describe(self) -> str:
+        """One line of the figures, as the command line and report print them."""
+        radius = "straight legs (beta = 0)" if self.straight else f"{self.R:.5g} m"
+        return (
+            f"alpha {self.alpha:.5g} rad, beta {self.beta:.5g} rad, R {radius}, E_d {self.E_d:.6f}, "
+            f"E_b {self.E_b:.6f}, c_L {self.c_L:.6f}, c_R {self.c_R:.6f}, b_new {self.b_new:.6f} m"
+        )
 
 
 def borenstein(x_cw: float, x_ccw: float, side: float, track: float) -> Borenstein:
-    """Borenstein's E_d, E_b and corrections from the x of the two centres of gravity [m]."""
-    alpha = (x_cw + x_ccw) / (-4.0 * side)
-    beta = (x_cw - x_ccw) / (-4.0 * side)
+    """Borenstein's E_d, E_b and corrections from the x of the two centres of gravity [m].
+
+    Computed through the curvature of the legs ``k = 1 / R = 2 sin(beta / 2) / L``, so that
+    ``E_d = (1 + k b/2) / (1 - k b/2)`` is exactly 1 for straight legs (``beta = 0``, ``R``
+    infinite) and never inf/inf. Signed zeros are returned as 0.
+    """
+    alpha = (x_cw + x_ccw) / (-4.0 * side) + 0.0  # + 0.0: -0.0 becomes 0.0
+    beta = (x_cw - x_ccw) / (-4.0 * side) + 0.0
     if abs(alpha) >= math.pi / 2 or abs(beta) >= math.pi:
         raise InputError(
             f"Borenstein's correction is undefined here: alpha = {alpha:.6g} rad, beta = {beta:.6g} "
             f"rad from x_cw = {x_cw:.6g} m, x_ccw = {x_ccw:.6g} m and side {side:.6g} m (the "
             f"errors are not small against the square)"
         )
-    if beta == 0.0:
-        R, e_d = math.inf, 1.0
-    else:
-        R = (side / 2.0) / math.sin(beta / 2.0)
-        if abs(R) <= track / 2.0:
-            raise InputError(
-                f"Borenstein's correction is undefined here: the legs curve with radius {R:.6g} m, "
-                f"within half the track ({track / 2:.6g} m)"
-            )
-        e_d = (R + track / 2.0) / (R - track / 2.0)
+    curvature = 2.0 * math.sin(beta / 2.0) / side  # 1 / R [1/m]
+    half = curvature * track / 2.0
+    if abs(half) >= 1.0:
+        raise InputError(
+            f"Borenstein's correction is undefined here: the legs curve with radius {1.0 / curvature:.6g} m, "
+            f"within half the track ({track / 2:.6g} m)"
+        )
+    radius = 1.0 / curvature if curvature != 0.0 else math.inf
+    e_d = (1.0 + half) / (1.0 - half)
     e_b = (math.pi / 2) / (math.pi / 2 - alpha)
-    return Borenstein(alpha, beta, R, e_d, e_b, 2.0 / (e_d + 1.0), 2.0 / (1.0 / e_d + 1.0), e_b * track)
+    return Borenstein(alpha, beta, radius, e_d, e_b, 2.0 / (e_d + 1.0), 2.0 / (1.0 / e_d + 1.0), e_b * track)
 
 
 @dataclass(frozen=True)
@@ -276,11 +306,10 @@ def analyze(eps_cw, eps_ccw, side: float = 4.0, robot: Robot | None = None, mode
     With a differential-drive ``robot`` Borenstein's correction is added.
     """
     check_mode(mode)
-    if not (math.isfinite(side) and side > 0):
-        raise InputError(f"side must be > 0, got {side!r}")
+    side = check_side(side)
     dirs = []
     for name, eps in (("cw", eps_cw), ("ccw", eps_ccw)):
-        e = np.asarray(eps, dtype=float)
+        e = as_real_array(eps, name)
         if e.ndim != 2 or e.shape[1] not in (2, 3):
             raise InputError(f"{name}: expected return errors of shape (n, 2) or (n, 3), got {e.shape}")
         if len(e) == 0:
@@ -299,6 +328,14 @@ def analyze(eps_cw, eps_ccw, side: float = 4.0, robot: Robot | None = None, mode
         if pair is not None:
             bor = borenstein(float(cw.cg[0]), float(ccw.cg[0]), side, pair[2])
     return UMBmarkResult(cw, ccw, side, mode, bor)
+
+
+def check_side(side, option: str = "side (--side)") -> float:
+    """``side`` [m] as a float within :data:`SIDE_RANGE`, else an InputError naming ``option``."""
+    problem = range_problem(side, *SIDE_RANGE, "m")
+    if problem:
+        raise InputError(f"{option}: the side of the UMBmark square {problem}")
+    return float(side)
 
 
 def square_refusal(robot: Robot, side: float, mode: str) -> str | None:
