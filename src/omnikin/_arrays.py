@@ -25,6 +25,15 @@ def _is_real_scalar(x) -> bool:
     return isinstance(x, numbers.Real) and not isinstance(x, (bool, np.bool_))
 
 
+def _holds_bool(value) -> bool:
+    """Whether nested lists and tuples hold a boolean (which NumPy would turn into 0 or 1)."""
+    if isinstance(value, (bool, np.bool_)):
+        return True
+    if isinstance(value, (list, tuple)):
+        return any(_holds_bool(v) for v in value)
+    return isinstance(value, np.ndarray) and value.dtype.kind == "b"
+
+
 def as_real_array(value, name: str, error: type[InputError] = InputError) -> np.ndarray:
     """``value`` as a float64 array, refusing anything but real numbers (module docstring).
 
@@ -41,6 +50,8 @@ def as_real_array(value, name: str, error: type[InputError] = InputError) -> np.
             raise error(f"{name}: not a rectangular array of numbers ({one_line(exc, 120)})") from None
     kind = arr.dtype.kind
     if kind in REAL_KINDS:
+        if isinstance(value, (list, tuple)) and _holds_bool(value):  # NumPy reads [0.2, True] as floats
+            raise error(f"{name}: expected real numbers (int or float), got a boolean among them")
         return arr.astype(float, copy=False)
     if kind == "O":  # a list mixing Python ints beyond int64 with floats, Decimals, None, ...
         for bad in arr.reshape(-1):

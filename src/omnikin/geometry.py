@@ -24,9 +24,14 @@ import math
 
 import numpy as np
 
-from ._arrays import as_components
+from ._arrays import as_components, as_real_array
 
 TWO_PI = 2.0 * math.pi
+
+MAX_ANGLE = 1e6
+"""Largest ``|angle|`` [rad] the core accepts as a heading or a steering angle given to it (about
+160 000 turns: an unwrapped heading of days of spinning). A double still resolves such an angle
+to 1e-10 rad; beyond it a value like 1e308 is a typo whose sine and cosine mean nothing."""
 
 SCALAR_TAYLOR_LIMIT = 1e-4
 """Below this |x| the scalar :func:`sinc_scalar` uses ``1 - x^2/6`` (truncation < 1e-18)."""
@@ -163,6 +168,7 @@ def apply(pose, points) -> np.ndarray:
 def rotate(angle, vectors) -> np.ndarray:
     """Rotate 2-vectors ``(..., 2)`` counter-clockwise by ``angle`` [rad]."""
     v = as_components(vectors, 2, "vectors")
+    angle = as_real_array(angle, "angle")
     c, s = np.cos(angle), np.sin(angle)
     shape = np.broadcast_shapes(np.shape(angle) + (2,), v.shape)
     out = np.empty(shape, dtype=float)

@@ -26,17 +26,23 @@ conventions. The residual ``b - A twist`` measures slip / model error.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
-from ._arrays import as_components, require_finite
+from ._arrays import as_components, as_real_array, require_finite
 from .errors import InfeasibleTwistError, InputError, SingularLayoutError, shorten
+from .geometry import MAX_ANGLE
 from .linalg import RANK_TOL, null_space, rank
 from .mobility import Configuration, Mobility, analyse, generic_configuration
 from .wheels import DERIVED_SUFFIXES, Wheel
+
+STEER_LIMIT_SLACK = 1e-9
+"""How far [rad] a given steering angle may lie outside its wheel's limits (round-off of a
+conversion from degrees); :meth:`Robot.fk` and the matrices refuse angles beyond it."""
 
 MAX_ROBOT_NAME = 128
 """Longest robot name [characters]: it is quoted in messages, reports and bag metadata."""
@@ -77,6 +83,22 @@ def name_collisions(names: Sequence[str]) -> list[tuple[int, str]]:
                     )
                 )
     return sorted(problems)
+
+
+def heading_array(heading, name: str = "heading") -> np.ndarray:
+    """``heading`` [rad] as a float array: real, finite and ``|heading| <=``
+    :data:`~omnikin.geometry.MAX_ANGLE`, else an InputError naming ``name``."""
+    th = as_real_array(heading, name)
+    require_finite(th, name)
+    big = np.abs(th) > MAX_ANGLE
+    if big.any():
+        index = tuple(int(i) for i in np.argwhere(big)[0])
+        at = f" at index {index}" if index else ""
+        raise InputError(
+            f"{name}{at}: {float(th[index]):.6g} rad is beyond +-{MAX_ANGLE:g} rad; give the heading in radians "
+            f"(wrapped, or unwrapped over fewer than {MAX_ANGLE / (2 * np.pi):.0f} turns)"
+        )
+    return th
 
 
 def _checked_after():
@@ -254,16 +276,47 @@ class Robot:
             ) from None
 
     # --- matrices ---------------------------------------------------------------
-    def _steer_array(self, steer) -> np.ndarray:
+    def _steer_array(self, steer, name: str = "steer") -> np.ndarray:
+        """Steering angles ``(..., n_steer)`` [rad], checked (docs/conventions.md, "Angles"): real
+        and finite; a wheel with steering limits within them (:data:`STEER_LIMIT_SLACK`), a wheel
+        that turns all the way round (limits -180 .. 180 deg) any angle up to
+        :data:`~omnikin.geometry.MAX_ANGLE` in size (an orientation; the interval steering of
+        odometry may cross +-180 deg). Else an InputError naming ``name``, the wheel and the angle."""
         if steer is None:
             return np.zeros(len(self.steerable))
         if not self.steerable:
             if np.size(steer):
                 raise InputError(f"robot {self.name!r} has no steerable wheel: do not pass steering angles")
             return np.zeros(0)
-        arr = as_components(steer, len(self.steerable), "steer")
-        require_finite(arr, "steer")
+        arr = as_components(steer, len(self.steerable), name)
+        require_finite(arr, name)
+        lower, upper = self._steer_limits
+        outside = (arr < lower - STEER_LIMIT_SLACK) | (arr > upper + STEER_LIMIT_SLACK) | (np.abs(arr) > MAX_ANGLE)
+        if outside.any():
+            index = tuple(int(i) for i in np.argwhere(outside)[0])
+            k = index[-1]
+            at = f" at index {index[:-1]}" if len(index) > 1 else ""
+            if math.isinf(lower[k]):
+                limits = f"beyond +-{MAX_ANGLE:g} rad"
+            else:
+                limits = f"outside its limits [{math.degrees(lower[k]):.6g}, {math.degrees(upper[k]):.6g}] deg"
+            raise InputError(
+                f"{name}{at}: wheel {self.steerable[k].name!r} steered to {float(arr[index]):.6g} rad "
+                f"({math.degrees(float(arr[index])):.6g} deg), {limits} "
+                f"(steering angles are in radians, relative to the wheel's drive_deg)"
+            )
         return arr
+
+    @cached_property
+    def _steer_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds ``(n_steer,)`` [rad] of the steering angles :meth:`_steer_array`
+        accepts: the wheel's limits, or +-inf (then :data:`~omnikin.geometry.MAX_ANGLE`) for a
+        wheel that turns all the way round (no ``steer``, or limits -180 .. 180 deg)."""
+        lims = [(w.steer.lower, w.steer.upper) if w.steer is not None else (-np.pi, np.pi) for w in self.steerable]
+        full = [hi - lo >= 2 * np.pi - 1e-9 for lo, hi in lims]
+        lower = np.array([-np.inf if f else lo for (lo, _), f in zip(lims, full, strict=True)])
+        upper = np.array([np.inf if f else hi for (_, hi), f in zip(lims, full, strict=True)])
+        return lower, upper
 
     def _steer_of(self, steer: np.ndarray) -> dict[str, np.ndarray]:
         return {w.name: steer[..., i] for i, w in enumerate(self.steerable)}
@@ -276,7 +329,10 @@ class Robot:
         """
         if wheels is None and self._constant_at(steer):
             return self._jacobian_constant
-        steer = self._steer_array(steer)
+        return self._jacobian(self._steer_array(steer), wheels)
+
+    def _jacobian(self, steer: np.ndarray, wheels: Sequence[str] | None) -> np.ndarray:
+        """:meth:`jacobian` at checked steering angles ``steer`` (:meth:`_steer_array`)."""
         by = self._steer_of(steer)
         chosen = self.rolling if wheels is None else [self.wheel(n) for n in wheels]
         rows = [w.rolling_row(by.get(w.name, 0.0)) for w in chosen]
@@ -314,8 +370,11 @@ class Robot:
         ``J``: rolling rows of the chosen wheels; ``S/r``: sliding rows of the chosen centred
         steerable wheels over their radii. ``steer`` ``(..., n_steer)`` [rad].
         """
-        steer = self._steer_array(steer)
-        jac = self.jacobian(steer, wheels)
+        return self._fk_rows(self._steer_array(steer), wheels)
+
+    def _fk_rows(self, steer: np.ndarray, wheels: Sequence[str] | None) -> np.ndarray:
+        """:meth:`fk_rows` at checked steering angles ``steer`` (:meth:`_steer_array`)."""
+        jac = self._jacobian(steer, wheels)
         chosen = {w.name for w in (self.rolling if wheels is None else [self.wheel(n) for n in wheels])}
         by = self._steer_of(steer)
         extra = [
@@ -337,7 +396,7 @@ class Robot:
         key = wheels = None if wheels is None else tuple(wheels)
         if constant and key in self._fk_cache:
             return self._fk_cache[key]
-        f = self._fk_operator(self.fk_rows(self._steer_array(steer), wheels))
+        f = self._fk_operator(self._fk_rows(self._steer_array(steer), wheels))
         if constant:
             f.setflags(write=False)
             self._fk_cache[key] = f
@@ -347,7 +406,7 @@ class Robot:
     def _fk_cache(self) -> dict:
         return {}
 
-    _CACHES = ("_jacobian_constant", "_fk_cache", "_by_name", "_rolling_index")
+    _CACHES = ("_jacobian_constant", "_fk_cache", "_by_name", "_rolling_index", "_steer_limits")
 
     def __getstate__(self):
         """Pickle and deepcopy without the read-only matrix caches (NumPy does not keep the
@@ -361,7 +420,7 @@ class Robot:
 
     def fk_rank(self, steer=None, wheels: Sequence[str] | None = None) -> int:
         """How many independent motion components the wheels determine at ``steer``."""
-        a = self.fk_rows(self._steer_array(steer), wheels)
+        a = self._fk_rows(self._steer_array(steer), wheels)
         return rank(a @ self.admissible_basis)
 
     # --- analysis ------------------------------------------------------------------
@@ -389,7 +448,7 @@ class Robot:
 
     def _check_observable(self, wheels: Sequence[str] | None, config: Configuration) -> None:
         """Every admissible motion must turn at least one of ``wheels``."""
-        a = self.fk_rows(config.steer, wheels)
+        a = self._fk_rows(np.asarray(config.steer, dtype=float), wheels)
         basis = config.admissible
         m = a @ basis
         if rank(m) == basis.shape[1]:
@@ -423,9 +482,11 @@ class Robot:
 
     # --- kinematics ------------------------------------------------------------------
     def body_twist(self, velocity, heading) -> np.ndarray:
-        """World-frame rates ``(xdot, ydot, thetadot)`` at ``heading`` -> body twist."""
+        """World-frame rates ``(xdot, ydot, thetadot)`` at ``heading`` [rad] -> body twist.
+
+        ``heading``: real, finite, at most :data:`~omnikin.geometry.MAX_ANGLE` in size."""
         v = as_components(velocity, 3, "velocity")
-        th = np.asarray(heading, dtype=float)
+        th = heading_array(heading)
         c, s = np.cos(th), np.sin(th)
         out = np.empty(np.broadcast_shapes(v.shape, th.shape + (3,)))
         with _checked_after():
@@ -451,14 +512,13 @@ class Robot:
         t = as_components(twist, 3, "twist")
         require_finite(t, "twist")
         if heading is not None:
-            require_finite(np.asarray(heading, dtype=float), "heading")
             t = self.body_twist(t, heading)
-        hint = self._steer_array(steer_hint)
+        hint = self._steer_array(steer_hint, "steer_hint")
         if hint.ndim > 1 and np.broadcast_shapes(hint.shape[:-1], t.shape[:-1]) != t.shape[:-1]:
             raise InputError(f"steer_hint: shape {hint.shape} does not fit twists of shape {t.shape}")
         with _checked_after():
             steer, limited = self._steer_for(t, hint, strict=on_infeasible == "raise")
-            speeds = np.einsum("...ij,...j->...i", self.jacobian(steer), t)
+            speeds = np.einsum("...ij,...j->...i", self._jacobian(steer, None), t)
             violation = t @ self.fixed_constraints.T
         given = np.asarray(twist, dtype=float)
         for values, what in ((speeds, "wheel speeds"), (steer, "steering angles"), (violation, "side-slip speeds")):
@@ -525,7 +585,7 @@ class Robot:
                 f"(steer=...)"
             )
         steer = self._steer_array(steer)
-        a = self.fk_rows(steer, wheels)
+        a = self._fk_rows(steer, wheels)
         n_extra = a.shape[-2] - len(names)
         b = np.concatenate([w, np.zeros(w.shape[:-1] + (n_extra,))], axis=-1) if n_extra else w
         f = self._fk_operator(a) if self.steerable else self.fk_matrix(None, wheels)

@@ -54,6 +54,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._arrays import as_real_array, as_real_scalar
 from ..errors import InputError
 from ..geometry import between, compose, wrap_angle
 
@@ -68,8 +69,8 @@ def check_trajectory(t, poses, name: str = "trajectory") -> tuple[np.ndarray, np
 
     Requires at least one pose, matching lengths, finite values and strictly increasing times.
     """
-    tt = np.asarray(t, dtype=float)
-    p = np.asarray(poses, dtype=float)
+    tt = as_real_array(t, f"{name}: timestamps", MetricsInputError)
+    p = as_real_array(poses, f"{name}: poses", MetricsInputError)
     if tt.ndim != 1:
         raise MetricsInputError(f"{name}: timestamps must be a 1-D array, got shape {tt.shape}")
     if p.ndim != 2 or p.shape[1] != 3:
@@ -115,7 +116,7 @@ class Statistics:
 
 def statistics(errors) -> Statistics:
     """:class:`Statistics` of a non-empty 1-D error array."""
-    e = np.asarray(errors, dtype=float)
+    e = as_real_array(errors, "statistics: errors", MetricsInputError)
     if e.ndim != 1 or e.size == 0:
         raise MetricsInputError(f"statistics need a non-empty 1-D error array, got shape {e.shape}")
     if not np.all(np.isfinite(e)):
@@ -153,9 +154,11 @@ def associate(t_ref, t_est, max_diff: float = 0.01, offset: float = 0.0) -> tupl
     estimate's timestamps before matching. Both inputs must be strictly increasing
     (see :func:`check_trajectory`). Raises :class:`MetricsInputError` if nothing matches.
     """
-    tr = np.asarray(t_ref, dtype=float)
-    te = np.asarray(t_est, dtype=float)
-    if not (isinstance(max_diff, (int, float, np.floating)) and math.isfinite(max_diff) and max_diff >= 0):
+    tr = as_real_array(t_ref, "reference: timestamps", MetricsInputError)
+    te = as_real_array(t_est, "estimate: timestamps", MetricsInputError)
+    max_diff = as_real_scalar(max_diff, "max_diff", MetricsInputError)
+    offset = as_real_scalar(offset, "offset", MetricsInputError)
+    if not (math.isfinite(max_diff) and max_diff >= 0):
         raise MetricsInputError(f"max_diff must be a finite number of seconds >= 0, got {max_diff!r}")
     if not math.isfinite(offset):
         raise MetricsInputError(f"offset must be a finite number of seconds, got {offset!r}")
@@ -196,7 +199,7 @@ class Alignment:
 
     def apply(self, poses) -> np.ndarray:
         """Aligned poses ``(..., 3)``: positions moved and headings turned by ``theta``."""
-        return compose(self.pose, np.asarray(poses, dtype=float))
+        return compose(self.pose, as_real_array(poses, "poses", MetricsInputError))
 
     def as_dict(self) -> dict:
         return {"x": self.x, "y": self.y, "theta": self.theta, "theta_deg": math.degrees(self.theta)}
@@ -204,8 +207,8 @@ class Alignment:
 
 def align_se2(ref_xy, est_xy) -> Alignment:
     """Closed-form least-squares SE(2) alignment of ``est_xy`` ``(M, 2)`` onto ``ref_xy`` (module docstring)."""
-    q = np.asarray(ref_xy, dtype=float)
-    p = np.asarray(est_xy, dtype=float)
+    q = as_real_array(ref_xy, "alignment: reference positions", MetricsInputError)
+    p = as_real_array(est_xy, "alignment: estimated positions", MetricsInputError)
     if q.shape != p.shape or q.ndim != 2 or q.shape[1] != 2 or q.shape[0] == 0:
         raise MetricsInputError(
             f"alignment needs two (M, 2) position arrays of the same shape, got {q.shape} and {p.shape}"
@@ -327,8 +330,8 @@ def index_pairs(n: int, delta: int, all_pairs: bool = False) -> np.ndarray:
 
 def relative_errors(ref, est, pairs) -> np.ndarray:
     """Error poses ``E_ij = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)`` ``(K, 3)`` for index ``pairs`` ``(K, 2)``."""
-    q = np.asarray(ref, dtype=float)
-    p = np.asarray(est, dtype=float)
+    q = as_real_array(ref, "reference poses", MetricsInputError)
+    p = as_real_array(est, "estimated poses", MetricsInputError)
     i, j = pairs[:, 0], pairs[:, 1]
     return between(between(q[i], q[j]), between(p[i], p[j]))
 

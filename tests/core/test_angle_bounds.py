@@ -1,0 +1,130 @@
+"""Headings and steering angles given to the robot model are bounded like robot-file angles:
+real, finite, a heading at most MAX_ANGLE = 1e6 rad in size, a steering angle within its
+wheel's limits (a wheel that turns all the way round: any angle up to 1e6 rad). Refused with one
+line naming the argument, the wheel and the limits (docs/conventions.md, "Angles")."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import omnikin_env
+from omnikin import InputError, load_robot
+from omnikin.geometry import MAX_ANGLE
+
+LIMIT = math.radians(35.0)  # ackermann: both front wheels steer within -35 .. 35 deg
+
+
+@pytest.fixture(scope="module")
+def ackermann():
+    return load_robot("ackermann")
+
+
+@pytest.fixture(scope="module")
+def tomasi():
+    return load_robot("tomasi-omni3")
+
+
+@pytest.mark.parametrize("heading", [1e308, -1e308, MAX_ANGLE * (1 + 1e-12), 1e20])
+def test_absurd_headings_are_refused(tomasi, heading):
+    for call in (
+        lambda: tomasi.ik([1.0, 0.0, 0.0], heading=heading),
+        lambda: tomasi.body_twist([1.0, 0.0, 0.0], heading),
+        lambda: tomasi.ik([[1.0, 0.0, 0.0]] * 2, heading=[0.0, heading]),
+    ):
+        with pytest.raises(InputError, match=r"^heading.*: .* rad is beyond \+-1e\+06 rad") as info:
+            call()
+        assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("heading", [math.nan, math.inf])
+def test_non_finite_headings_are_refused(tomasi, heading):
+    with pytest.raises(InputError, match=r"^heading: non-finite value"):
+        tomasi.ik([1.0, 0.0, 0.0], heading=heading)
+
+
+def test_large_unwrapped_headings_within_the_bound_work(tomasi):
+    """An unwrapped heading of many turns is the same heading: world (1, 0) at heading
+    theta is body (cos theta, -sin theta) (rotation by -theta)."""
+    theta = 1000 * 2 * math.pi + 0.3
+    body = tomasi.body_twist([1.0, 0.0, 0.5], theta)
+    np.testing.assert_allclose(body, [math.cos(0.3), -math.sin(0.3), 0.5], atol=1e-12)
+    np.testing.assert_allclose(
+        tomasi.ik([1.0, 0.0, 0.5], heading=MAX_ANGLE).wheel_speeds,
+        tomasi.ik([math.cos(MAX_ANGLE), -math.sin(MAX_ANGLE), 0.5]).wheel_speeds,
+        rtol=1e-12,
+    )
+
+
+@pytest.mark.parametrize(
+    "steer, wheel",
+    [
+        ([1e20, 0.0], "front_left"),
+        ([math.radians(90), math.radians(90)], "front_left"),
+        ([0.0, -math.radians(36)], "front_right"),
+        ([LIMIT + 1e-6, 0.0], "front_left"),
+    ],
+)
+def test_steering_outside_the_wheel_limits_is_refused(ackermann, steer, wheel):
+    speeds = [1.0, 1.0, 1.0, 1.0]
+    for name, call in (
+        ("steer", lambda: ackermann.fk(speeds, steer=steer)),
+        ("steer", lambda: ackermann.jacobian(steer)),
+        ("steer", lambda: ackermann.fk_matrix(steer)),
+        ("steer", lambda: ackermann.fk_rows(steer)),
+        ("steer", lambda: ackermann.fk_rank(steer)),
+        ("steer_hint", lambda: ackermann.ik([0.2, 0.0, 0.0], steer_hint=steer)),
+    ):
+        with pytest.raises(InputError) as info:
+            call()
+        message = str(info.value)
+        assert (
+            message.startswith(f"{name}: wheel {wheel!r} steered to ") and "outside its limits [-35, 35] deg" in message
+        )
+        assert "\n" not in message
+
+
+def test_steering_at_the_limits_is_accepted(ackermann):
+    """At +35 deg on both front wheels with the rear wheels still: forward kinematics of the
+    least-squares fit; at the limit exactly, nothing is refused (the bound is inclusive)."""
+    res = ackermann.fk([1.0, 1.0, 1.0, 1.0], steer=[LIMIT, -LIMIT])
+    assert np.all(np.isfinite(res.twist))
+    ackermann.fk([1.0, 1.0, 1.0, 1.0], steer=np.radians([35.0, -35.0]))
+
+
+def test_steering_of_a_stack_names_the_sample(ackermann):
+    steer = np.zeros((5, 2))
+    steer[3, 1] = 2.0
+    with pytest.raises(InputError, match=r"^steer at index \(3,\): wheel 'front_right' steered to 2 rad"):
+        ackermann.fk(np.ones((5, 4)), steer=steer)
+
+
+def test_wheels_that_turn_all_the_way_round_accept_any_orientation_up_to_the_bound():
+    """villasenor-omni3's legs steer without limits: 193 deg is the orientation -167 deg (the
+    interval steering of odometry crosses +-180 deg) and gives the same matrix."""
+    v = load_robot("villasenor-omni3")
+    a = np.radians([193.0, 0.0, -400.0])
+    b = np.radians([193.0 - 360.0, 0.0, -400.0 + 360.0])
+    np.testing.assert_allclose(v.jacobian(a), v.jacobian(b), atol=1e-12)
+    with pytest.raises(InputError, match=r"^steer: wheel 'leg2' steered to 1e\+07 rad .* beyond \+-1e\+06 rad"):
+        v.jacobian([0.0, 1e7, 0.0])
+
+
+@pytest.mark.parametrize(
+    "argv, contains",
+    [
+        (["ik", "tomasi-omni3", "1", "0", "0", "--heading", "1e308"], "heading: 1e+308 rad is beyond"),
+        (["fk", "ackermann", "1", "1", "1", "1", "--steer-deg", "1e20", "0"], "outside its limits [-35, 35] deg"),
+        (["fk", "ackermann", "1", "1", "1", "1", "--steer-deg", "90", "90"], "(90 deg), outside its limits"),
+    ],
+)
+def test_command_line_refuses_absurd_angles(argv, contains):
+    proc = subprocess.run(
+        [sys.executable, "-m", "omnikin.cli.main", *argv], capture_output=True, text=True, env=omnikin_env(), timeout=60
+    )
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert contains in proc.stderr and proc.stderr.count("\n") == 1, proc.stderr
