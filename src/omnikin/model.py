@@ -85,6 +85,38 @@ def name_collisions(names: Sequence[str]) -> list[tuple[int, str]]:
     return sorted(problems)
 
 
+def wheel_set_problem(robot: Robot, other: Robot) -> str | None:
+    """None if ``other`` (a robot as built) has the wheels of ``robot``, else the first
+    difference in one phrase: the same wheel names (in any order), each of the same type,
+    with an encoder exactly where ``robot`` has one. Positions, radii, angles, encoder scales
+    and steering limits may differ: those are what a robot as built gets wrong."""
+    mine, theirs = robot.wheel_names, set(other.wheel_names)
+    extra = [n for n in other.wheel_names if n not in set(mine)]
+    if extra:
+        return f"it has wheel {shorten(extra[0])}, which {robot.name!r} has not (wheels: {shorten(mine)})"
+    missing = [n for n in mine if n not in theirs]
+    if missing:
+        return f"it has no wheel {shorten(missing[0])} (wheels of {robot.name!r}: {shorten(mine)})"
+    for w in robot.wheels:
+        o = other.wheel(w.name)
+        if o.type != w.type:
+            return f"wheel {w.name!r} is of type {o.type!r}, not {w.type!r} as on {robot.name!r}"
+        if (o.encoder is None) != (w.encoder is None):
+            has, lacks = ("has no", "has one") if o.encoder is None else ("has an", "has none")
+            return f"wheel {w.name!r} {has} encoder, but on {robot.name!r} it {lacks}"
+    return None
+
+
+def require_same_wheels(robot: Robot, true_robot: Robot) -> None:
+    """Refuse a robot as built whose wheels are not those of ``robot`` (one line naming the
+    first difference: :func:`wheel_set_problem`)."""
+    if true_robot is robot:
+        return
+    problem = wheel_set_problem(robot, true_robot)
+    if problem:
+        raise InputError(f"true robot {true_robot.name!r} does not fit robot {robot.name!r}: {problem}")
+
+
 def heading_array(heading, name: str = "heading") -> np.ndarray:
     """``heading`` [rad] as a float array: real, finite and ``|heading| <=``
     :data:`~omnikin.geometry.MAX_ANGLE`, else an InputError naming ``name``."""

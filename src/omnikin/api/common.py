@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import os
 
-from ..model import Robot
+from ..model import Robot, require_same_wheels
 from ..simulation.error_models import ErrorProfile, NoiseModel
 from ..simulation.error_models import noise as noise_profile
 from ..simulation.error_models import profile as error_profile
@@ -40,11 +40,15 @@ def setting_name(spec) -> str | None:
 
 
 def as_built(robot: Robot, true_robot, errors, seed_sequence):
-    """The robot as built and the errors drawn (None for a given ``true_robot``)."""
+    """The robot as built and the errors drawn (None for a given ``true_robot``). A given
+    ``true_robot`` must have the wheels of ``robot`` (names, types, encoders:
+    :func:`~omnikin.model.wheel_set_problem`), else an InputError names the difference."""
     from ..evaluation.procedure import draw_as_built
 
     if true_robot is not None:
-        return robot_of(true_robot), None
+        true = robot_of(true_robot)
+        require_same_wheels(robot, true)
+        return true, None
     return draw_as_built(robot, errors_of(errors), seed_sequence)
 
 

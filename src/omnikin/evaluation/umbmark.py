@@ -338,6 +338,31 @@ def check_side(side, option: str = "side (--side)") -> float:
     return float(side)
 
 
+def procedure_generators(rng, count: int) -> list[np.random.Generator]:
+    """One Generator for each of ``count`` procedures: the ``k``-th child of the seed sequence
+    of ``rng`` (a SeedSequence, an integer seed, None for fresh entropy, or a Generator, which
+    gives one seed for the children). Child ``k`` depends only on ``rng`` and ``k``, not on
+    ``count``, and deriving them leaves a SeedSequence unchanged (unlike ``spawn``)."""
+    if isinstance(rng, np.random.SeedSequence):
+        seq = rng
+    elif isinstance(rng, np.random.Generator):
+        seq = np.random.SeedSequence(int(rng.integers(2**63)))
+    elif rng is None:
+        seq = np.random.SeedSequence()
+    else:
+        seq = np.random.SeedSequence(_seed(rng))
+    return [
+        make_rng(np.random.SeedSequence(seq.entropy, spawn_key=(*seq.spawn_key, k), pool_size=seq.pool_size))
+        for k in range(count)
+    ]
+
+
+def _seed(rng) -> int:
+    if isinstance(rng, bool) or not isinstance(rng, (int, np.integer)) or rng < 0:
+        raise InputError(f"rng must be a numpy Generator, a SeedSequence, an integer seed >= 0 or None, got {rng!r}")
+    return int(rng)
+
+
 def square_refusal(robot: Robot, side: float, mode: str) -> str | None:
     """Why ``robot`` cannot drive the UMBmark squares of ``mode`` (the check ``simulate``
     makes: :func:`~omnikin.simulation.simulate.segment_rates`), or None if it can."""
@@ -367,7 +392,9 @@ def run_umbmark(
     """Simulate ``trials`` UMBmark procedures of ``runs`` runs per direction.
 
     ``command_robot`` is the model the robot executes the path by and computes its
-    odometry with; ``true_robot`` the robot as built. Returns a list of
+    odometry with; ``true_robot`` the robot as built. Procedure ``k`` draws every random
+    number from its own stream, the ``k``-th child of ``rng``
+    (:func:`procedure_generators`): it is the same whatever ``trials``. Returns a list of
     :class:`UMBmarkResult` (one per trial) and, with ``keep_runs``, also the
     :class:`~omnikin.simulation.simulate.SimulatedRun` of each direction (its ``truth``
     holds the first trial's runs).
@@ -386,7 +413,8 @@ def run_umbmark(
         raise InputError(
             f"robot {command_robot.name!r} cannot drive the UMBmark square in {mode!r} mode ({refusal}); {hint}"
         )
-    rng = make_rng(rng)
+    gens = procedure_generators(rng, trials)
+    per_run = [g for g in gens for _ in range(runs)]  # procedure k's runs share its generator
     sims = {}
     for direction in ("cw", "ccw"):
         sims[direction] = simulate(
@@ -397,7 +425,7 @@ def run_umbmark(
             limits=limits,
             noise=noise,
             trials=trials * runs,
-            rng=rng,
+            rng=per_run,
             keep_truth=keep_runs,
         )
     results = []

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import InputError, shorten
 from ..geometry import compose, exp
-from ..model import Robot
+from ..model import Robot, require_same_wheels
 from ..odometry import mid_steer
 from ..rng import make_rng
 from ..runtime.backends import WheelState
@@ -34,6 +34,7 @@ class SimBackend:
     ):
         self.robot = robot
         self.true_robot = true_robot or robot
+        require_same_wheels(robot, self.true_robot)  # the robot as built has the robot's wheels
         self.noise = noise or NoiseModel(quantise=False)
         self.rng = make_rng(rng)
         self.encoded = robot.encoded_names

@@ -29,7 +29,7 @@ from ..errors import InputError
 from ..geometry import TAYLOR_LIMIT, wrap_angle
 from ..integration import integrate_components, integrate_end
 from ..limits import MotionLimits
-from ..model import Robot
+from ..model import Robot, require_same_wheels
 from ..odometry import batch_odometry, encoded_wheels
 from ..plans import Plan
 from ..rng import make_rng
@@ -116,13 +116,19 @@ def simulate(
 ) -> SimulatedRun:
     """Simulate ``trials`` runs of ``plan`` by ``true_robot`` commanded by ``command_robot``.
 
-    ``rng``: a numpy Generator or a seed (None: fresh entropy). ``odometry_robot``
-    defaults to ``command_robot`` (the robot executes the path by its own model).
+    ``rng``: a numpy Generator or a seed (None: fresh entropy), or a sequence of ``trials``
+    of them, one per trial. Each trial draws its random numbers (slip and floor, then the
+    measurement of its end pose) from its own entry, in trial order, so that trial ``k``
+    does not depend on how many trials follow it; trials that share a generator draw from
+    it one after the other. ``true_robot`` must have the wheels of ``command_robot``
+    (:func:`~omnikin.model.require_same_wheels`). ``odometry_robot`` defaults to
+    ``command_robot`` (the robot executes the path by its own model).
     """
     noise = noise or NoiseModel()
-    if not isinstance(trials, (int, np.integer)) or trials < 1:
+    if isinstance(trials, bool) or not isinstance(trials, (int, np.integer)) or trials < 1:
         raise InputError(f"trials must be a whole number >= 1, got {trials!r}")
-    rng = make_rng(rng)
+    gens = trial_generators(rng, int(trials))
+    require_same_wheels(command_robot, true_robot)
     odometry_robot = odometry_robot or command_robot
     sampled = plan if isinstance(plan, SampledPlan) else sample_plan(plan, command_robot, rate, limits)
     cmd_wheels = encoded_wheels(command_robot)
@@ -139,12 +145,22 @@ def simulate(
     true_rpt = true_robot.rad_per_tick(names)
     dtrue = np.diff(ticks, axis=0).T * true_rpt[:, None]  # (n, N) true wheel increments [rad]
     odometry = batch_odometry(odometry_robot, sampled.t, ticks, steer=steer).poses
-    truth = _truth(true_robot, names, dtrue, steer, noise, trials, rng, keep_truth)
+    truth, z = _truth(true_robot, names, dtrue, steer, noise, gens, keep_truth)
     measured = truth[:, -1, :].copy()
-    if noise.measurement or noise.measurement_theta:
-        z = rng.standard_normal((trials, 3))
+    if z is not None:
         measured += z * np.array([noise.measurement, noise.measurement, noise.measurement_theta])
     return SimulatedRun(sampled, sampled.t, ticks, steer, odometry, truth, measured)
+
+
+def trial_generators(rng, trials: int) -> list[np.random.Generator]:
+    """One Generator per trial (:func:`simulate`'s ``rng``): a sequence of ``trials`` entries,
+    each made a Generator (:func:`omnikin.rng.make_rng`; a Generator given twice stays one
+    generator), or one generator shared by every trial."""
+    if isinstance(rng, (list, tuple)):
+        if len(rng) != trials:
+            raise InputError(f"rng: one generator per trial, {trials} expected, got {len(rng)}")
+        return [make_rng(g) for g in rng]
+    return [make_rng(rng)] * trials
 
 
 TRIAL_BLOCK_SAMPLES = 1 << 15
@@ -155,8 +171,13 @@ _NEAR = 0.1
 uses its series (truncation error below 3e-17); beyond it the exact trigonometry is used."""
 
 
-def _truth(robot: Robot, names, dtrue, steer, noise: NoiseModel, trials: int, rng, keep: bool) -> np.ndarray:
-    """Ground-truth poses ``(trials, N + 1, 3)`` (or ``(trials, 1, 3)``, the ends, if not ``keep``).
+def _truth(
+    robot: Robot, names, dtrue, steer, noise: NoiseModel, gens: list, keep: bool
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Ground-truth poses ``(trials, N + 1, 3)`` (or ``(trials, 1, 3)``, the ends, if not ``keep``)
+    and the standard normal variates ``(trials, 3)`` of the end-pose measurement (None without
+    measurement noise). Trial ``k`` draws from ``gens[k]``: first its slip and floor variates,
+    then its measurement's (:func:`simulate`).
 
     The noise-free body increments ``base`` are computed once. Each trial's body
     increments are ``base + S_k z_k`` with ``z_k`` three standard normal variates per
@@ -168,6 +189,7 @@ def _truth(robot: Robot, names, dtrue, steer, noise: NoiseModel, trials: int, rn
     noise-free path length of the sample. Trials go in blocks through preallocated buffers
     (:class:`_Work`): fresh arrays of this size cost more in page faults than the arithmetic.
     """
+    trials = len(gens)
     n, m = dtrue.shape
     radius = np.array([robot.wheel(nm).radius for nm in names])
     mid = steer[:-1] + 0.5 * np.diff(steer, axis=0) if robot.steerable else None
@@ -178,6 +200,7 @@ def _truth(robot: Robot, names, dtrue, steer, noise: NoiseModel, trials: int, rn
         base = f @ dtrue  # (3, N) noise-free increments
     reps = trials if not noise.is_zero else 1
     out = np.empty((trials, m + 1 if keep else 1, 3))
+    measure = np.empty((trials, 3)) if noise.measurement or noise.measurement_theta else None
     root = _noise_root(f, dtrue, radius, base, noise) if reps > 1 or not noise.is_zero else None
     base_mid = np.cumsum(base[2]) - 0.5 * base[2]  # noise-free heading mid-sample
     cb, sb = np.cos(base_mid), np.sin(base_mid)
@@ -190,7 +213,11 @@ def _truth(robot: Robot, names, dtrue, steer, noise: NoiseModel, trials: int, rn
         if root is None:
             comps[...] = base
         else:
-            z = rng.standard_normal(out=w["z"])
+            z = w["z"]
+            for r in range(r0, r1):  # trial by trial, each from its own generator
+                gens[r].standard_normal(out=z[r - r0])
+                if measure is not None:
+                    measure[r] = gens[r].standard_normal(3)
             tmp = w["tmp"]
             for i in range(3):
                 np.multiply(root[i, 0], z[:, 0], out=comps[:, i])
@@ -204,7 +231,10 @@ def _truth(robot: Robot, names, dtrue, steer, noise: NoiseModel, trials: int, rn
             out[r0:r1, 0] = _ends_near(comps, base_mid, cb, sb, w)
     if reps != trials:
         out[1:] = out[0]
-    return out
+    if measure is not None and root is None:  # no slip or floor noise: the measurement only
+        for r in range(trials):
+            measure[r] = gens[r].standard_normal(3)
+    return out, measure
 
 
 def _noise_root(f, dtrue, radius, base, noise: NoiseModel) -> np.ndarray:
