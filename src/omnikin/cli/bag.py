@@ -458,7 +458,6 @@ def cmd_simulate(args) -> int:
 
 def _check_tick_log(args, robot) -> None:
     """Refuse a --log that cannot be written, before simulating (output policy of io.output)."""
-    from pathlib import Path
 
     from ..io.output import check_output
     from ..simulation.error_models import noise as noise_profile
@@ -468,8 +467,7 @@ def _check_tick_log(args, robot) -> None:
             f"--log writes whole-number encoder counts, but --noise {args.noise} leaves the ticks "
             f"unquantised; choose another --noise profile"
         )
-    inputs = [p for p in (args.robot, args.true_robot) if p and Path(p).is_file()]
-    check_output(args.log, inputs=inputs, force=args.force)
+    check_output(args.log, inputs=robot_inputs(args.robot, args.true_robot), force=args.force)
 
 
 def _write_tick_log(args, robot, run) -> None:

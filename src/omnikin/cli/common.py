@@ -66,10 +66,11 @@ def checked_output(args, path, inputs=(), *, folder: bool | str = False) -> Path
 
 
 def robot_inputs(*specs) -> list:
-    """The robot files among robot specs (preset names are not files)."""
-    from ..presets import PRESET_NAMES
+    """The robot files among robot specs (a preset name is never a file:
+    :func:`omnikin.io.robot_file.robot_file_of`)."""
+    from ..io.robot_file import robot_file_of
 
-    return [s for s in specs if s is not None and (str(s) not in PRESET_NAMES or Path(str(s)).exists())]
+    return [f for f in map(robot_file_of, specs) if f is not None]
 
 
 # --- JSON ------------------------------------------------------------------------------------------------

@@ -108,8 +108,10 @@ def cmd_presets(args) -> int:
     for col in ("name", "wheels", "Campion type", "holonomic", "reference"):
         table.add_column(col)
     out = []
+    from ..io.robot_file import load_preset
+
     for name in PRESET_NAMES:
-        r = load_robot(name)
+        r = load_preset(name)  # the shipped files, whatever the current folder holds
         m = r.mobility
         ref = r.references[0] if r.references else ""
         out.append(
@@ -505,7 +507,10 @@ def build_parser() -> CommandParser:
     )
     p.add_argument("--version", action="version", version=f"omnikin {__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
-    robot_help = f"preset name ({', '.join(PRESET_NAMES)}) or robot file (YAML/JSON, schema 1)"
+    robot_help = (
+        f"preset name ({', '.join(PRESET_NAMES)}) or robot file path (YAML/JSON, schema 1); a preset "
+        "name always means the preset: write ./NAME for a file of the current folder named like one"
+    )
 
     sp = sub.add_parser(
         "presets",

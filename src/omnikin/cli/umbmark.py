@@ -243,9 +243,14 @@ def _factor(x) -> str:
     return "unbounded" if x is None else f"{x:.3g}"
 
 
-def _input_files(*specs) -> list:
-    """The given robot/runs specifications that are files (preset names are not inputs to protect)."""
-    return [s for s in specs if s and Path(s).is_file()]
+def _input_files(*robots, files=()) -> list:
+    """The inputs to protect from being overwritten: the robot files among the robot
+    specifications ``robots`` (a preset name is none: :func:`omnikin.io.robot_file.robot_file_of`)
+    and the ``files`` read (a runs file)."""
+    from ..io.robot_file import robot_file_of
+
+    paths = [robot_file_of(r) for r in robots] + [f for f in files if f]
+    return [p for p in paths if p and Path(p).is_file()]
 
 
 class _Status:
@@ -442,7 +447,7 @@ def cmd_calibrate(args) -> int:
         raise InputError("calibrate: give RUNS (a runs file with measured end poses), or --plan for the runs to drive")
     from ..io.output import is_stdout
 
-    inputs = _input_files(args.robot, args.runs)
+    inputs = _input_files(args.robot, files=[args.runs])
     to_stdout = bool(args.output) and is_stdout(args.output)
     if to_stdout and args.json:
         raise InputError("-o - and --json would both write to standard output; choose one")

@@ -494,24 +494,68 @@ def parse_robot_text(text: str, source: str) -> Robot:
     return robot_from_dict(data, source)
 
 
-def load_robot(spec: str | Path) -> Robot:
-    """Load a robot from a preset name (``omnikin show`` lists them) or a file path.
+ROBOT_FILE_SUFFIXES = (".yaml", ".yml", ".json")
+"""Endings of robot file names (any other name is read as a robot file too when it is not a preset)."""
 
+
+class PresetShadowWarning(UserWarning):
+    """A preset name given as ROBOT is also the name of a file or folder in the current folder:
+    the preset is used (:func:`load_robot`), and the warning says how to name the file."""
+
+
+def is_preset_spec(spec) -> bool:
+    """Whether the robot specification ``spec`` names a preset: a string equal to a preset name
+    (``omnikin presets``), whatever exists in the current folder. Anything else is the path of
+    a robot file: a string that is no preset name (``./omni4``, ``robots/omni4``,
+    ``omni4.yaml``) or a :class:`os.PathLike` (``Path("omni4")``). docs/conventions.md, "Naming
+    a robot"."""
+    return isinstance(spec, str) and spec in PRESET_NAMES
+
+
+def robot_file_of(spec) -> str | None:
+    """The path of the robot file ``spec`` names, or None when it names a preset
+    (:func:`is_preset_spec`); for the inputs a command must not overwrite."""
+    if spec is None or is_preset_spec(spec):
+        return None
+    return os.fspath(spec) if isinstance(spec, os.PathLike) else str(spec)
+
+
+def load_preset(name: str) -> Robot:
+    """The preset ``name`` from the files shipped with omnikin (never a file of the current folder)."""
+    path = preset_path(name)
+    return parse_robot_text(read_text(path, RobotFileError, what="a robot file"), path.name)
+
+
+def load_robot(spec: str | Path) -> Robot:
+    """Load a robot from a preset name (``omnikin presets`` lists them) or a robot file path.
+
+    The rule (:func:`is_preset_spec`): a preset name given as a string always means the shipped
+    preset; to load a file or folder of the current folder that has a preset's name, write it as
+    a path (``./omni4``). When a preset name is also a file or folder in the current folder, a
+    :class:`PresetShadowWarning` says so (the command line prints it as one line on stderr).
     Only a regular file of at most 256 KiB is read (:func:`omnikin.io.textfile.read_text`): a
     directory, device, FIFO, binary or non-UTF-8 file is an error naming it.
     """
-    spec_str = str(spec)
-    path = Path(spec_str)
-    exists = os.path.lexists(spec_str)  # False, not an OSError, for a name too long or with NUL
-    if spec_str in PRESET_NAMES and not exists:
-        path = preset_path(spec_str)
-    elif not exists:
+    if is_preset_spec(spec):
+        name = str(spec)
+        if os.path.lexists(name):
+            import warnings
+
+            kind = "folder" if os.path.isdir(name) else "file"
+            warnings.warn(
+                f"{name!r} is the preset {name}, not the {kind} {name!r} in the current folder "
+                f"(write ./{name} to load that {kind})",
+                PresetShadowWarning,
+                stacklevel=1,  # one location: the default filter shows it once per process
+            )
+        return load_preset(name)
+    spec_str = robot_file_of(spec) or ""
+    if not os.path.lexists(spec_str):  # False, not an OSError, for a name too long or with NUL
         raise RobotFileError(
             f"{shorten(spec_str, 1000)}: no such robot file or preset"
             f"{did_you_mean(spec_str, PRESET_NAMES)}; presets: {', '.join(PRESET_NAMES)}"
         )
-    source = path.name if spec_str in PRESET_NAMES else spec_str
-    return parse_robot_text(read_text(path, RobotFileError, what="a robot file"), source)
+    return parse_robot_text(read_text(spec_str, RobotFileError, what="a robot file"), spec_str)
 
 
 def _clean(x: float) -> float:
