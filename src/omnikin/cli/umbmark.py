@@ -111,7 +111,8 @@ def add_parsers(sub, robot_help: str) -> None:
         type=int,
         default=d["seed"],
         metavar="N",
-        help=f"random seed (default {d['seed']}); the same seed builds the same robot whatever --trials",
+        help=f"random seed (default {d['seed']}); the same seed builds the same robot, calibration and "
+        "first procedures whatever --trials",
     )
     sp.add_argument(
         "--trials",
