@@ -556,7 +556,8 @@ def test_umbmark_analyze_of_straight_legs_prints_valid_json_and_text(tmp_path, c
     from omnikin.cli.main import main
 
     f = tmp_path / "m.csv"
-    rows = [f"{d},{0.01 + e},{dy},{e},0" for d in ("cw", "ccw") for e, dy in ((0.0, 0.001), (0.5, -0.001), (1.0, 0.0))]
+    pairs = ((0.0, 0.001), (0.5, -0.001), (1.0, -3e-9))  # mean y: -1e-9 m, printed as 0.00 mm
+    rows = [f"{d},{0.01 + e},{dy},{e},0" for d in ("cw", "ccw") for e, dy in pairs]
     f.write_text("direction,x_abs,y_abs,x_calc,y_calc\n" + "\n".join(rows) + "\n")
     assert main(["umbmark", "analyze", str(f), "--robot", "diff-drive", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
@@ -566,3 +567,13 @@ def test_umbmark_analyze_of_straight_legs_prints_valid_json_and_text(tmp_path, c
     assert main(["umbmark", "analyze", str(f), "--robot", "diff-drive"]) == 0
     out = capsys.readouterr().out
     assert "R straight legs (beta = 0)" in out and "beta 0 rad" in out and "inf" not in out and "-0 " not in out
+    assert "y = 0.00 mm" in out and "= -0.00" not in out
+
+
+def test_calibration_plan_side_has_the_umbmark_bounds():
+    from omnikin import calibration_plan
+
+    for side in (1e-300, 0.049, 101.0, float("nan")):
+        with pytest.raises(OmnikinError, match=r"^side \(--side\): the side of the UMBmark square must"):
+            calibration_plan("diff-drive", side)
+    assert calibration_plan("diff-drive", 0.05)[0] == "square cw rotate 0.05"

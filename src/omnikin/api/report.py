@@ -5,17 +5,18 @@ from __future__ import annotations
 import math
 
 
-def _mm(x) -> str:
-    """Metres as millimetres for a table (``-`` for none, ``unbounded`` for infinity)."""
+def mm_text(x) -> str:
+    """Metres as millimetres to 0.01 mm for tables and summaries: ``0.00``, never ``-0.00``;
+    ``unbounded`` for None (an open interval end), ``-`` for a non-finite number."""
     if x is None:
         return "unbounded"
-    return f"{x * 1000:.2f}" if math.isfinite(x) else "-"
+    return f"{x * 1000 + 0.0:.2f}".replace("-0.00", "0.00") if math.isfinite(x) else "-"
 
 
 def _interval_mm(interval) -> str:
     if not interval:
         return "n/a (needs 3 runs per direction)"
-    return f"{_mm(interval[0])} to {_mm(interval[1])}"
+    return f"{mm_text(interval[0])} to {mm_text(interval[1])}"
 
 
 def _factor(x) -> str:
@@ -73,14 +74,14 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         if key in doc:
             d = doc[key]
             lines.append(
-                f"| {label} | {_mm(d['cw']['r_cg'])} | {_mm(d['ccw']['r_cg'])} | {_mm(d['e_max_syst'])} | "
+                f"| {label} | {mm_text(d['cw']['r_cg'])} | {mm_text(d['ccw']['r_cg'])} | {mm_text(d['e_max_syst'])} | "
                 f"{_interval_mm(d['e_max_syst_interval'])} | {'yes' if d['at_noise_floor'] else 'no'} |"
             )
     floor = doc["noise_floor"]
     lines += [
         "",
-        f"Noise floor: a perfectly calibrated robot shows E_max,syst of {_mm(floor['e_max_syst_median'])} "
-        f"mm (median) and up to {_mm(floor['e_max_syst_p95'])} mm (95th percentile) over "
+        f"Noise floor: a perfectly calibrated robot shows E_max,syst of {mm_text(floor['e_max_syst_median'])} "
+        f"mm (median) and up to {mm_text(floor['e_max_syst_p95'])} mm (95th percentile) over "
         f"{floor['procedures']} procedures "
         "with these random errors; a value at or below the 95th percentile cannot be told from a perfect "
         "calibration.",
@@ -89,7 +90,7 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         if key in doc and doc[key]["at_noise_floor"]:
             lines += [
                 "",
-                f"**{label}, E_max,syst ({_mm(doc[key]['e_max_syst'])} mm) is at the noise floor**: the "
+                f"**{label}, E_max,syst ({mm_text(doc[key]['e_max_syst'])} mm) is at the noise floor**: the "
                 "systematic error left is below what UMBmark with this many runs can detect.",
             ]
     if "after" in doc:
@@ -108,9 +109,10 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
     lines += [
         "",
         "Without random errors (the systematic part alone): E_max,syst "
-        f"{_mm(sysm['e_max_syst_before'])} mm before"
+        f"{mm_text(sysm['e_max_syst_before'])} mm before"
         + (
-            f", {_mm(sysm['e_max_syst_after'])} mm after calibration (reduction {_factor(sysm['reduction_factor'])})."
+            f", {mm_text(sysm['e_max_syst_after'])} mm after calibration "
+            f"(reduction {_factor(sysm['reduction_factor'])})."
             if "e_max_syst_after" in sysm
             else "."
         ),
@@ -141,8 +143,8 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         ]
         for label, st in doc["monte_carlo"].items():
             lines.append(
-                f"| {label} | {st['procedures']} | {_mm(st['e_max_syst_median'])} | "
-                f"{_mm(st['e_max_syst_mean'])} | {_mm(st['e_max_syst_p95'])} |"
+                f"| {label} | {st['procedures']} | {mm_text(st['e_max_syst_median'])} | "
+                f"{mm_text(st['e_max_syst_mean'])} | {mm_text(st['e_max_syst_p95'])} |"
             )
     if figures:
         lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]
@@ -197,7 +199,7 @@ def _calibration_lines(report, doc) -> list:
         lines += [
             "",
             "Borenstein's E_d/E_b correction, for comparison, E_max,syst after each iteration [mm]: "
-            + ", ".join(_mm(v) for v in doc["borenstein_iterations"]),
+            + ", ".join(mm_text(v) for v in doc["borenstein_iterations"]),
         ]
     if "injected_errors" in doc:
         lines += [

@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import argparse
 import inspect
-import math
 from pathlib import Path
 
 from ..api.calibration import calibrate as api_calibrate
 from ..api.calibration import calibration_plan
 from ..api.common import dumps
+from ..api.report import mm_text
 from ..api.umbmark import DEFAULT_ROBOT, UMBmarkReport, analyze_umbmark, run_umbmark, umbmark_cost
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
@@ -234,12 +234,6 @@ def analyze_parser() -> argparse.ArgumentParser:
 
 
 # --- helpers -----------------------------------------------------------------------------------------
-def _mm(x) -> str:
-    if x is None:
-        return "unbounded"
-    return f"{x * 1000:.2f}" if math.isfinite(x) else "-"
-
-
 def _factor(x) -> str:
     return "unbounded" if x is None else f"{x:.3g}"
 
@@ -341,10 +335,10 @@ def _umbmark_table(doc: dict):
             iv = d["e_max_syst_interval"]
             t.add_row(
                 label,
-                _mm(d["cw"]["r_cg"]),
-                _mm(d["ccw"]["r_cg"]),
-                _mm(d["e_max_syst"]),
-                f"{_mm(iv[0])} to {_mm(iv[1])}" if iv else "n/a",
+                mm_text(d["cw"]["r_cg"]),
+                mm_text(d["ccw"]["r_cg"]),
+                mm_text(d["e_max_syst"]),
+                f"{mm_text(iv[0])} to {mm_text(iv[1])}" if iv else "n/a",
                 "at floor" if d["at_noise_floor"] else "",
             )
     return t
@@ -361,7 +355,7 @@ def _print_summary(report: UMBmarkReport, doc: dict, out) -> None:
     floor = doc["noise_floor"]
     con.print(
         f"noise floor (perfectly calibrated robot, same random errors): median "
-        f"{_mm(floor['e_max_syst_median'])} mm, 95th percentile {_mm(floor['e_max_syst_p95'])} mm"
+        f"{mm_text(floor['e_max_syst_median'])} mm, 95th percentile {mm_text(floor['e_max_syst_p95'])} mm"
     )
     bor = report.before[0].borenstein
     if bor is not None:
@@ -372,8 +366,8 @@ def _print_summary(report: UMBmarkReport, doc: dict, out) -> None:
         con.print(
             f"calibration: E_max,syst reduced {_factor(r)}-fold"
             + (f" (95 % interval {_factor(ri[0])} to {_factor(ri[1])})" if ri else "")
-            + f"; systematic part alone (no random errors) {_mm(sysm['e_max_syst_before'])} mm -> "
-            f"{_mm(sysm['e_max_syst_after'])} mm"
+            + f"; systematic part alone (no random errors) {mm_text(sysm['e_max_syst_before'])} mm -> "
+            f"{mm_text(sysm['e_max_syst_after'])} mm"
         )
         cal = doc["calibration"]
         if not cal["fits"]:
@@ -384,7 +378,7 @@ def _print_summary(report: UMBmarkReport, doc: dict, out) -> None:
         if "borenstein_iterations" in doc:
             con.print(
                 "Borenstein's correction for comparison [mm per iteration]: "
-                + ", ".join(_mm(v) for v in doc["borenstein_iterations"])
+                + ", ".join(mm_text(v) for v in doc["borenstein_iterations"])
             )
         blind = cal["identifiability"]["blind"]
         if blind:
@@ -395,7 +389,7 @@ def _print_summary(report: UMBmarkReport, doc: dict, out) -> None:
         for label, st in doc["monte_carlo"].items():
             con.print(
                 f"Monte Carlo {label}: {st['procedures']} procedures, E_max,syst median "
-                f"{_mm(st['e_max_syst_median'])} mm, 95th percentile {_mm(st['e_max_syst_p95'])} mm"
+                f"{mm_text(st['e_max_syst_median'])} mm, 95th percentile {mm_text(st['e_max_syst_p95'])} mm"
             )
     con.print(f"report: {Path(out) / 'report.md'}")
 
@@ -419,14 +413,14 @@ def cmd_umbmark_analyze(args) -> int:
     iv = res.e_max_interval()
     t.add_row(
         "measured",
-        _mm(res.cw.r_cg),
-        _mm(res.ccw.r_cg),
-        _mm(res.e_max_syst),
-        f"{_mm(iv[0])} to {_mm(iv[1])}" if iv else "n/a (3 runs per direction needed)",
+        mm_text(res.cw.r_cg),
+        mm_text(res.ccw.r_cg),
+        mm_text(res.e_max_syst),
+        f"{mm_text(iv[0])} to {mm_text(iv[1])}" if iv else "n/a (3 runs per direction needed)",
     )
     con.print(t)
     for d in (res.cw, res.ccw):
-        con.print(f"centre of gravity {d.direction}: x = {_mm(d.cg[0])} mm, y = {_mm(d.cg[1])} mm")
+        con.print(f"centre of gravity {d.direction}: x = {mm_text(d.cg[0])} mm, y = {mm_text(d.cg[1])} mm")
     if res.borenstein is not None:
         con.print(f"Borenstein: {res.borenstein.describe()}")
     elif args.robot is not None:

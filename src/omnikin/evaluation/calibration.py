@@ -44,7 +44,7 @@ from ..model import Robot
 from ..plans import CalibrationRun, Plan, parse_plan
 from ..simulation.error_models import SystematicErrors, WheelErrors
 from ..simulation.simulate import segment_rates
-from .umbmark import UMBmarkResult, differential_pair
+from .umbmark import UMBmarkResult, check_side, differential_pair
 
 BLIND = 2.0
 """A parameter direction whose data singular value (residuals in measurement sigmas per
@@ -386,8 +386,7 @@ def recommended_runs(robot: Robot, side: float = 4.0) -> list[tuple[str, Plan]]:
     sharply than a half turn against the same heading measurement error. The half circles
     stand in for the turns in place on robots that cannot turn in place (cars).
     """
-    if not (math.isfinite(side) and side > 0):
-        raise InputError(f"side must be a positive length [m], got {side!r}")
+    side = check_side(side)  # the UMBmark square's bounds (squares and lines of this length)
     L, half = _number_text(side), _number_text(side / 2)
     candidates = [
         f"square cw rotate {L}",
