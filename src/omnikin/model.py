@@ -88,8 +88,9 @@ def name_collisions(names: Sequence[str]) -> list[tuple[int, str]]:
 def wheel_set_problem(robot: Robot, other: Robot) -> str | None:
     """None if ``other`` (a robot as built) has the wheels of ``robot``, else the first
     difference in one phrase: the same wheel names (in any order), each of the same type,
-    with an encoder exactly where ``robot`` has one. Positions, radii, angles, encoder scales
-    and steering limits may differ: those are what a robot as built gets wrong."""
+    with an encoder exactly where ``robot`` has one, a steerable wheel centred (zero
+    ``steer.offset``) exactly where it is on ``robot``. Positions, radii, angles, encoder
+    scales, offsets and steering limits may differ: those are what a robot as built gets wrong."""
     mine, theirs = robot.wheel_names, set(other.wheel_names)
     extra = [n for n in other.wheel_names if n not in set(mine)]
     if extra:
@@ -104,6 +105,12 @@ def wheel_set_problem(robot: Robot, other: Robot) -> str | None:
         if (o.encoder is None) != (w.encoder is None):
             has, lacks = ("has no", "has one") if o.encoder is None else ("has an", "has none")
             return f"wheel {w.name!r} {has} encoder, but on {robot.name!r} it {lacks}"
+        if w.is_steerable and o.is_centred_steerable != w.is_centred_steerable:
+            centred = {True: "centred (steer.offset 0)", False: "off-centred (steer.offset > 0)"}
+            return (
+                f"wheel {w.name!r} is {centred[o.is_centred_steerable]}, but on {robot.name!r} it is "
+                f"{centred[w.is_centred_steerable]}"
+            )
     return None
 
 

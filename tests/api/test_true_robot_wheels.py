@@ -17,6 +17,7 @@ import omnikin
 from conftest import omnikin_env
 from omnikin import InputError, load_robot
 from omnikin.plans import line
+from omnikin.presets import preset_path
 from omnikin.simulation.backend import SimBackend
 from omnikin.simulation.simulate import simulate
 
@@ -110,3 +111,17 @@ def test_command_line_refuses_a_true_robot_with_other_wheels(tmp_path, command):
         "'tomasi-omni3' has not (wheels: ['w1', 'w2', 'w3'])\n"
     )
     assert not (tmp_path / "x").exists() and not (tmp_path / "x.csv").exists()
+
+
+def test_a_true_robot_with_an_off_centred_steering_wheel_where_it_is_centred_is_refused(tmp_path):
+    path = tmp_path / "car.yaml"
+    text = preset_path("ackermann").read_text(encoding="utf-8")
+    old = "steer: {min_deg: -35, max_deg: 35}}"
+    assert text.count(old) == 2
+    path.write_text(text.replace(old, "steer: {offset: 0.02, min_deg: -35, max_deg: 35}}", 1))
+    with pytest.raises(InputError) as info:
+        omnikin.simulate("ackermann", "line 1 0", true_robot=path)
+    assert str(info.value) == (
+        "true robot 'ackermann' does not fit robot 'ackermann': wheel 'front_left' is off-centred "
+        "(steer.offset > 0), but on 'ackermann' it is centred (steer.offset 0)"
+    )
