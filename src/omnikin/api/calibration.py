@@ -7,7 +7,6 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..errors import InputError
 from ..evaluation.calibration import CalibrationResult, predicted_end, recommended_runs
 from .common import require_viz, robot_of
 
@@ -48,10 +47,7 @@ class Calibration(CalibrationResult):
         from ..io.robot_file import robot_text
 
         target = check_output(path, inputs=inputs, force=force)
-        try:
-            write_text(path, robot_text(self.robot, target if target is not None else "robot.yaml"))
-        except OSError as exc:
-            raise InputError(f"{path}: cannot write: {exc.strerror or exc}") from None
+        write_text(path, robot_text(self.robot, target if target is not None else "robot.yaml"))
 
 
 def calibrate(robot, runs) -> Calibration:

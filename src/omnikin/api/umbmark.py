@@ -162,14 +162,11 @@ class UMBmarkReport(UMBmarkStudy):
         doc = self.as_dict(files)
         texts["result.json"] = dumps(doc)
         texts["report.md"] = umbmark_markdown(self, doc, names)
-        try:
-            with report_folder(target) as stage:
-                for name, text in texts.items():
-                    (stage / name).write_text(text, encoding="utf-8")
-                for name, figure in zip(names, figures.values(), strict=True):
-                    save_figure(figure, stage / name, dpi=dpi)
-        except OSError as exc:
-            raise InputError(f"{folder}: cannot write the report: {exc.strerror or exc}") from None
+        with report_folder(target) as stage:  # a write failure: OutputError naming the folder
+            for name, text in texts.items():
+                (stage / name).write_text(text, encoding="utf-8")
+            for name, figure in zip(names, figures.values(), strict=True):
+                save_figure(figure, stage / name, dpi=dpi)
         return doc
 
     def command_line(self) -> str:

@@ -13,19 +13,19 @@ import math
 
 import numpy as np
 
-from ..errors import InputError, OmnikinError
+from ..errors import InfeasibleTwistError, InputError, OmnikinError, shorten
 from ..geometry import wrap_angle
 from .budget import Budget, add_budget_options, explained, require
 from .common import (
     add_method_option,
+    add_output,
     add_output_options,
-    checked_output,
     console,
+    declare_inputs,
     load_robot,
     messages_console,
     print_json,
     robot_as_built,
-    robot_inputs,
 )
 
 # Measured costs of the bag commands (rosbags 0.11, CPython 3.11, tracemalloc peaks of 67,000-sample
@@ -102,9 +102,11 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument("bag", metavar="IN.bag", help="input bag (directory, .db3 or .mcap)")
-    sp.add_argument(
+    add_output(
+        sp,
         "-o",
         "--output",
+        folder="data",
         required=True,
         metavar="OUT.bag",
         help="new bag to write (a new name; --force replaces a bag omnikin wrote)",
@@ -145,6 +147,7 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     add_output_options(sp)
     add_budget_options(sp)
+    declare_inputs(sp, "bag", robots=("robot",))
     sp.set_defaults(func=cmd_bag_odometry)
 
     sp = bsub.add_parser(
@@ -159,9 +162,10 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("bag", metavar="IN.bag", help="input bag (directory, .db3 or .mcap)")
     sp.add_argument("--topic", required=True, metavar="TOPIC", help="nav_msgs/Odometry or geometry_msgs/PoseStamped")
     sp.add_argument("--format", required=True, choices=("tum", "kitti", "csv"), help="output format")
-    sp.add_argument("-o", "--output", metavar="FILE", default="-", help="file to write (default '-': standard output)")
+    add_output(sp, "-o", "--output", metavar="FILE", default="-", help="file to write (default '-': standard output)")
     add_output_options(sp)
     add_budget_options(sp)
+    declare_inputs(sp, "bag")
     sp.set_defaults(func=cmd_bag_export)
 
     from ..simulation.error_models import NOISE, PROFILES
@@ -198,16 +202,24 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("--seed", type=int, default=1, metavar="N", help="random seed (default 1)")
     sp.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="sample rate of all topics (default 100)")
     sp.add_argument("--start", type=float, default=0.0, metavar="SEC", help="stamp of the first sample [s] (default 0)")
-    sp.add_argument(
-        "--bag", metavar="OUT.bag", help="new bag to write (a new name; --force replaces a bag omnikin wrote)"
+    add_output(
+        sp,
+        "--bag",
+        folder="data",
+        metavar="OUT.bag",
+        help="new bag to write (a new name; --force replaces a bag omnikin wrote)",
     )
-    sp.add_argument(
-        "--log", metavar="LOG.csv", help="also (or only) write the encoder tick log, the input of 'omnikin odometry'"
+    add_output(
+        sp,
+        "--log",
+        metavar="LOG.csv",
+        help="also (or only) write the encoder tick log, the input of 'omnikin odometry'",
     )
     sp.add_argument("--storage", choices=("sqlite3", "mcap"), default="sqlite3", help="bag storage (default sqlite3)")
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     add_output_options(sp)
     add_budget_options(sp)
+    declare_inputs(sp, robots=("robot", "true_robot"))
     sp.set_defaults(func=cmd_simulate)
 
     sp = sub.add_parser(
@@ -273,7 +285,7 @@ def _size_bag_job(args, what: str, bag, topic: str, bytes_each: float, hint: str
 
 
 def cmd_bag_odometry(args) -> int:
-    from ..io.bags import bag_odometry, check_topic, require_rosbags
+    from ..io.bags import bag_odometry, check_frame_ids, check_topic, require_rosbags
 
     require_rosbags()
     robot = load_robot(args.robot)
@@ -282,7 +294,7 @@ def cmd_bag_odometry(args) -> int:
             raise InputError(f"{name}: variances must be finite and >= 0, got {diag}")
     check_topic(args.joint_states_topic, "--joint-states-topic")
     check_topic(args.odom_topic, "--odom-topic")
-    checked_output(args, args.output, [args.bag, *robot_inputs(args.robot)], folder="data")
+    check_frame_ids(args.frame_id, args.child_frame_id, ("--frame-id", "--child-frame-id"))
     _size_bag_job(
         args,
         "bag odometry",
@@ -334,7 +346,6 @@ def cmd_bag_export(args) -> int:
 
     require_rosbags()
     check_topic(args.topic, "--topic")
-    checked_output(args, args.output, [args.bag])
     _size_bag_job(args, "bag export", args.bag, args.topic, POSE_BYTES, hint="split the bag (ros2 bag convert)")
     with explained(args):
         track = export_poses(
@@ -349,8 +360,9 @@ def cmd_bag_export(args) -> int:
 
 # --- simulate ----------------------------------------------------------------------------------------
 def parse_paths(text: str):
-    """A plan from one or more ``;``-separated paths of the runs-file grammar (:func:`omnikin.plans.parse_plan`)."""
-    from ..plans import parse_plan
+    """A plan from one or more ``;``-separated paths of the runs-file grammar
+    (:func:`omnikin.io.runs.path_plan`: plain numbers)."""
+    from ..io.runs import path_plan
 
     parts = [p.strip() for p in text.split(";")]
     if not any(parts):
@@ -360,7 +372,7 @@ def parse_paths(text: str):
         if not part:
             raise InputError(f"--path {text!r}: empty part between ';'")
         try:
-            p = parse_plan(part)
+            p = path_plan(part)
         except OmnikinError as exc:
             raise InputError(f"--path: {exc}") from None
         plan = p if plan is None else plan + p
@@ -377,7 +389,6 @@ def cmd_simulate(args) -> int:
         raise InputError("simulate: give --bag OUT.bag and/or --log LOG.csv")
     if args.bag is not None:
         require_rosbags()
-        checked_output(args, args.bag, robot_inputs(args.robot, args.true_robot), folder="data")
     robot = load_robot(args.robot)
     if args.log is not None:
         _check_tick_log(args, robot)
@@ -400,7 +411,10 @@ def cmd_simulate(args) -> int:
     )
     seeds = np.random.SeedSequence(args.seed).spawn(2)
     true, errors = robot_as_built(robot, args.true_robot, args.errors, seeds[0])
-    run = simulate(plan, true, robot, rate=args.rate, noise=noise, trials=1, rng=seeds[1])
+    try:
+        run = simulate(plan, true, robot, rate=args.rate, noise=noise, trials=1, rng=seeds[1])
+    except InfeasibleTwistError as exc:
+        raise InputError(f"--path {shorten(args.path)}: {exc.detail}; choose a path this robot can drive") from None
     custom = {
         "omnikin.robot": robot.name,
         "omnikin.path": args.path,
@@ -457,9 +471,7 @@ def cmd_simulate(args) -> int:
 
 
 def _check_tick_log(args, robot) -> None:
-    """Refuse a --log that cannot be written, before simulating (output policy of io.output)."""
-
-    from ..io.output import check_output
+    """Refuse a --log the --noise profile cannot give (unquantised ticks), before simulating."""
     from ..simulation.error_models import noise as noise_profile
 
     if not noise_profile(args.noise).quantise:
@@ -467,7 +479,6 @@ def _check_tick_log(args, robot) -> None:
             f"--log writes whole-number encoder counts, but --noise {args.noise} leaves the ticks "
             f"unquantised; choose another --noise profile"
         )
-    check_output(args.log, inputs=robot_inputs(args.robot, args.true_robot), force=args.force)
 
 
 def _write_tick_log(args, robot, run) -> None:

@@ -42,7 +42,7 @@ NOTE_AFTER = 30.0
 
 SIZE_UNITS = {"": 1, "b": 1, "k": 1024, "m": 1024**2, "g": 1024**3, "t": 1024**4}
 TIME_UNITS = {"": 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
-_QUANTITY = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([A-Za-z]*)\s*")
+_QUANTITY = re.compile(r"\s*([-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([A-Za-z]*)\s*")
 
 
 @dataclass(frozen=True)
@@ -72,7 +72,9 @@ def parse_size(text: str) -> int:
     if not m or unit not in SIZE_UNITS:
         raise argparse.ArgumentTypeError(f"{text!r} is not a size (bytes, or a number with K, M, G or T: 512M, 2G)")
     value = float(m.group(1)) * SIZE_UNITS[unit]
-    if not (math.isfinite(value) and value >= 1):
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is too large (not a finite number of bytes)")
+    if value < 1:
         raise argparse.ArgumentTypeError(f"{text!r}: a size must be at least one byte")
     return int(value)
 
@@ -86,7 +88,9 @@ def parse_duration(text: str) -> float:
             f"{text!r} is not a duration (seconds, or a number with s, m, h or d: 90, 10m, 2h)"
         )
     value = float(m.group(1)) * TIME_UNITS[unit]
-    if not (math.isfinite(value) and value > 0):
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is too large (not a finite number of seconds)")
+    if value <= 0:
         raise argparse.ArgumentTypeError(f"{text!r}: a duration must be positive")
     return value
 

@@ -1,9 +1,13 @@
 """Helpers shared by the sub-commands: the robot, the console, outputs and JSON.
 
-Outputs (the policy is :mod:`omnikin.io.output`): a command that writes files calls
-:func:`add_output_options` on its parser (``--force``), :func:`checked_output` for each output
-before any long work (an input is never an output; an existing file needs ``--force``), writes
-through the writers of :mod:`omnikin.io` (atomic), and prints its messages with
+Outputs (the policy is :mod:`omnikin.io.output`): a command declares each option naming an
+output with :func:`add_output` (a file, a report folder or a data folder) and the arguments
+naming its inputs with :func:`declare_inputs`; :func:`add_output_options` adds ``--force``.
+``omnikin.cli.main`` checks every declared output of the command together
+(:func:`check_command_outputs`) before the command runs: never an input, never two outputs on
+the same path or one inside another, at most one thing on standard output (``--json``
+counts), an existing file only with ``--force``. The command then writes through the writers
+of :mod:`omnikin.io` (atomic, checked again) and prints its messages with
 :func:`messages_console`, which goes to standard error when an output is ``-`` (standard
 output then carries the data only). ``--json`` documents are printed with :func:`print_json`
 (strict JSON: a non-finite number is an error naming the field).
@@ -11,9 +15,8 @@ output then carries the data only). ``--json`` documents are printed with :func:
 
 from __future__ import annotations
 
-from pathlib import Path
-
-from ..io.output import check_output, is_stdout
+from ..errors import InputError
+from ..io.output import Output, check_outputs, is_stdout
 
 FORCE_HELP = "replace existing output files (never an input; a folder only if omnikin wrote it)"
 
@@ -56,12 +59,54 @@ def add_output_options(parser) -> None:
     parser.add_argument("--force", action="store_true", help=FORCE_HELP)
 
 
-def checked_output(args, path, inputs=(), *, folder: bool | str = False) -> Path | None:
-    """:func:`omnikin.io.output.check_output` of ``path`` with ``--force`` from ``args``: call it
-    before any long work. ``inputs``: every file or folder the command reads (robot files
-    included). Returns the path (None for ``-``)."""
-    return check_output(
-        path, inputs=[i for i in inputs if i is not None], force=bool(getattr(args, "force", False)), folder=folder
+OUTPUTS = "_omnikin_outputs"
+"""Namespace attribute (a parser default) listing the declared outputs: ``(dest, label, folder, stdout)``."""
+
+INPUTS = "_omnikin_inputs"
+"""Namespace attribute (a parser default) naming the arguments that are inputs."""
+
+
+def add_output(parser, *flags: str, folder: bool | str = False, stdout: bool = True, **kwargs):
+    """``parser.add_argument(*flags, **kwargs)`` for an option naming an output of the command,
+    recorded so that :func:`check_command_outputs` checks it with the others before the command
+    runs. ``folder``: as for :func:`omnikin.io.output.check_output`; ``stdout``: whether ``-``
+    (standard output) may take it (never for a folder)."""
+    action = parser.add_argument(*flags, **kwargs)
+    declared = parser.get_default(OUTPUTS) or ()
+    parser.set_defaults(**{OUTPUTS: (*declared, (action.dest, flags[0], folder, stdout and not folder))})
+    return action
+
+
+def declare_inputs(parser, *files: str, robots: tuple[str, ...] = ()) -> None:
+    """Record the arguments (by ``dest``) that name the command's inputs: ``files`` (logs, bags,
+    runs files: always paths) and ``robots`` (robot specs: a preset name is not a file,
+    :func:`robot_inputs`)."""
+    parser.set_defaults(**{INPUTS: (files, robots)})
+
+
+def command_inputs(args) -> list:
+    """The input files and folders of the parsed command (:func:`declare_inputs`)."""
+    files, robots = getattr(args, INPUTS, ((), ()))
+    given = [getattr(args, dest, None) for dest in files]
+    return [f for f in given if f is not None] + robot_inputs(*(getattr(args, dest, None) for dest in robots))
+
+
+def check_command_outputs(args) -> None:
+    """Check every output the parsed command declared (:func:`add_output`), together and against
+    its inputs (:func:`omnikin.io.output.check_outputs`); ``--json`` counts as a use of standard
+    output. Called by ``omnikin.cli.main`` before the command runs, so no command can skip it."""
+    declared = getattr(args, OUTPUTS, ())
+    outputs = []
+    for dest, label, folder, stdout in declared:
+        path = getattr(args, dest, None)
+        if path is not None and is_stdout(path) and not stdout:
+            raise InputError(f"{label}: '-' (standard output) cannot take it; name a {'folder' if folder else 'file'}")
+        outputs.append(Output(label, path, folder))
+    check_outputs(
+        outputs,
+        inputs=command_inputs(args),
+        force=bool(getattr(args, "force", False)),
+        stdout="--json" if getattr(args, "json", False) is True else None,
     )
 
 

@@ -9,19 +9,33 @@ hardware link fails, an unexpected error), 130 on Ctrl-C, 141 when a reader clos
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
+import io
 import math
 import os
+import signal
 import sys
+import threading
 import warnings
-from pathlib import Path
+from collections.abc import Iterator
 
 import numpy as np
 
 from .. import __version__
-from ..errors import InfeasibleTwistError, InputError, OmnikinError, one_line
+from ..errors import InfeasibleTwistError, InputError, OmnikinError, OutputError, one_line
 from ..presets import PRESET_NAMES
-from .common import add_method_option, add_output_options, checked_output, console, load_robot, print_json, robot_inputs
+from .common import (
+    add_method_option,
+    add_output,
+    add_output_options,
+    check_command_outputs,
+    command_inputs,
+    console,
+    declare_inputs,
+    load_robot,
+    print_json,
+)
 from .parser import CommandParser, UsageError
 
 EPILOG = """examples:
@@ -81,10 +95,13 @@ def _fmt(x: float) -> str:
     return f"{x:.6g}" if np.isfinite(x) else str(x)
 
 
-def _clean(matrix) -> np.ndarray:
-    """Matrix for display: entries below 1e-12 of its largest set to 0 (rounding noise of cos(pi/2))."""
+def _clean(matrix, scale: float | None = None) -> np.ndarray:
+    """A matrix or vector for display (text output only; ``--json`` keeps the numbers): entries
+    below 1e-12 of ``scale`` (default: its largest entry) set to 0 (rounding noise such as
+    cos(pi/2) = 6e-17)."""
     m = np.array(matrix, dtype=float)
-    m[np.abs(m) < 1e-12 * max(np.max(np.abs(m), initial=0.0), 1e-300)] = 0.0
+    largest = np.max(np.abs(m), initial=0.0) if scale is None else abs(scale)
+    m[np.abs(m) < 1e-12 * max(largest, 1e-300)] = 0.0
     return m
 
 
@@ -294,9 +311,6 @@ def _plot_format(args) -> str:
     before any work: never the robot file, an existing file only with ``--force``."""
     from ..viz import require_matplotlib
 
-    if args.plot == "-":
-        raise CliError("--plot needs a file name (the format follows its extension: .png, .svg, .pdf)")
-    checked_output(args, args.plot, robot_inputs(args.robot))
     require_matplotlib()
     from matplotlib.figure import Figure
 
@@ -342,9 +356,7 @@ def cmd_ik(args) -> int:
             twist, heading=args.heading, steer_hint=hint, on_infeasible="return" if args.allow_infeasible else "raise"
         )
     except InfeasibleTwistError as exc:
-        raise InfeasibleTwistError(
-            f"{exc.detail}; --allow-infeasible reports the violation instead", detail=exc.detail
-        ) from None
+        raise CliError(f"{exc.detail}; --allow-infeasible reports the violation instead") from None
     body = robot.body_twist(twist, args.heading) if args.heading is not None else twist
     data = {
         "robot": robot.name,
@@ -370,13 +382,16 @@ def cmd_ik(args) -> int:
     from rich.table import Table
 
     con = console()
-    con.print(f"{robot.name}: body twist vx={_fmt(body[0])} m/s, vy={_fmt(body[1])} m/s, omega={_fmt(body[2])} rad/s")
+    shown = _clean(body)
+    con.print(
+        f"{robot.name}: body twist vx={_fmt(shown[0])} m/s, vy={_fmt(shown[1])} m/s, omega={_fmt(shown[2])} rad/s"
+    )
     table = Table(title_justify="left")
     for col in ("wheel", "speed [rad/s]", "steer [deg]", "roller [m/s]"):
         table.add_column(col, justify="right")
-    steer = dict(zip(robot.steer_names, res.steer_angles, strict=True))
-    roller = dict(zip(robot.swedish_names, data.get("roller_speeds", []), strict=True))
-    for name, speed in zip(robot.rolling_names, res.wheel_speeds, strict=True):
+    steer = dict(zip(robot.steer_names, _clean(res.steer_angles), strict=True))
+    roller = dict(zip(robot.swedish_names, _clean(data.get("roller_speeds", [])), strict=True))
+    for name, speed in zip(robot.rolling_names, _clean(res.wheel_speeds), strict=True):
         table.add_row(
             name,
             _fmt(speed),
@@ -425,9 +440,11 @@ def cmd_fk(args) -> int:
         print(text)
         return 0
     con = console()
-    t = res.twist
+    t = _clean(res.twist)
     con.print(f"{robot.name}: vx={_fmt(t[0])} m/s, vy={_fmt(t[1])} m/s, omega={_fmt(t[2])} rad/s")
-    con.print(f"residual [rad/s]: {[float(_fmt(v)) for v in res.residual]} (norm {_fmt(float(res.residual_norm))})")
+    speeds = float(np.max(np.abs(args.speeds)))  # the residual's rounding noise is relative to the speeds
+    residual, norm = _clean(res.residual, speeds), _clean([res.residual_norm], speeds)[0]
+    con.print(f"residual [rad/s]: {[float(_fmt(v)) for v in residual]} (norm {_fmt(norm)})")
     return 0
 
 
@@ -435,15 +452,11 @@ def cmd_fk(args) -> int:
 def cmd_odometry(args) -> int:
     from ..errors import OdometryInputError
     from ..io.logs import read_tick_log
-    from ..io.output import check_output, is_stdout, write_text
-    from ..io.trajectories import trajectory_lines
+    from ..io.output import is_stdout
+    from ..io.trajectories import write_trajectory
     from ..odometry import batch_odometry
 
     to_stdout = is_stdout(args.output)
-    if to_stdout and args.json:
-        raise CliError("--json and '-o -' would both write to standard output; name a file with -o")
-    robot_file = [args.robot] if Path(args.robot).is_file() else []
-    check_output(args.output, inputs=[args.log, *robot_file], force=args.force)
     robot = load_robot(args.robot)
     log = read_tick_log(args.log, robot)
     if log.duplicate_lines:
@@ -467,11 +480,7 @@ def cmd_odometry(args) -> int:
         if exc.sample is None:
             raise CliError(f"{args.log}: {exc}") from None
         raise CliError(f"{args.log}: line {log.lines[exc.sample]}: {exc.detail}") from None
-    text = "\n".join(trajectory_lines(log.t, res.poses, args.format)) + "\n"
-    try:
-        write_text(args.output, text)
-    except OSError as exc:
-        raise CliError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
+    write_trajectory(args.output, log.t, res.poses, args.format, force=args.force, inputs=command_inputs(args))
     end = res.poses[-1]
     path = float(np.sum(np.hypot(*np.diff(res.poses[:, :2], axis=0).T)))
     summary = {
@@ -534,12 +543,15 @@ def build_parser() -> CommandParser:
     sp.add_argument(
         "--json", action="store_true", help="print JSON (keys ik_matrix, rank, mobility, steerability, ...)"
     )
-    sp.add_argument(
+    add_output(
+        sp,
         "--plot",
+        stdout=False,
         metavar="FILE.png",
         help="draw the layout with drive and roller directions (format from the extension: png, svg, pdf, ...)",
     )
     add_output_options(sp)
+    declare_inputs(sp, robots=("robot",))
     sp.set_defaults(func=cmd_show)
 
     sp = sub.add_parser(
@@ -607,14 +619,16 @@ def build_parser() -> CommandParser:
     )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument("log", metavar="LOG.csv", help="tick log")
-    sp.add_argument(
+    add_output(
+        sp,
         "-o",
         "--output",
         required=True,
         metavar="OUT",
         help="trajectory file to write ('-': standard output, messages then go to standard error)",
     )
-    sp.add_argument("--force", action="store_true", help="replace OUT if it exists")
+    add_output_options(sp)
+    declare_inputs(sp, "log", robots=("robot",))
     sp.add_argument(
         "--format",
         choices=("csv", "tum", "kitti"),
@@ -675,6 +689,11 @@ def main(argv=None) -> int:
     ``OMNIKIN_TRACEBACK=1`` to see where). Other libraries' warnings print as one line.
     """
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
+    with _standard_streams(), _termination_unwinds():
+        return _main(argv)
+
+
+def _main(argv: list[str]) -> int:
     try:
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning
@@ -684,14 +703,20 @@ def main(argv=None) -> int:
             return status
     except UsageError as exc:
         return _fail(f"{exc.command + ': ' if exc.command else ''}{exc} (see {exc.help_hint})", 2)
+    except OutputError as exc:  # the one place for write failures: the message names the path
+        return _fail(exc, 1)
+    except InfeasibleTwistError as exc:  # without the library's way out (a Python argument)
+        return _fail(exc.detail, 2)
     except InputError as exc:
         return _fail(exc, 2)
-    except OmnikinError as exc:  # OutputError, LinkError: failures while running
+    except OmnikinError as exc:  # LinkError: failures while running
         return _fail(exc, 1)
     except ImportError as exc:  # an optional extra is missing (the message names it)
         return _fail(exc, 2)
     except KeyboardInterrupt:
         return _fail("interrupted", 130)
+    except Terminated as exc:
+        return _fail(f"terminated ({signal.Signals(exc.signum).name})", 128 + exc.signum)
     except BrokenPipeError:  # the reader of standard output went away: stop quietly
         _quiet_stdout()
         return 141
@@ -729,6 +754,7 @@ def _run(argv: list[str]) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    check_command_outputs(args)  # every output of the command, together, before any work
     return args.func(args)
 
 
@@ -740,6 +766,95 @@ def _fail(message, status: int) -> int:
     except (OSError, ValueError):  # stderr itself is gone: nothing more to say
         pass
     return status
+
+
+TERMINATION_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+"""Signals that end a command like Ctrl-C does (:class:`Terminated`): ``timeout``, ``kill``,
+systemd, a closed terminal."""
+
+
+class Terminated(BaseException):
+    """A termination signal arrived (:data:`TERMINATION_SIGNALS`). Raised by the signal handler
+    :func:`main` installs, it unwinds the command like ``KeyboardInterrupt`` does, so every
+    cleanup runs (a temporary file, a staging folder: :mod:`omnikin.io.output`); the exit
+    status is 128 + the signal number (143 for SIGTERM). Not an :class:`Exception`: no
+    ``except Exception`` swallows it."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+@contextlib.contextmanager
+def _termination_unwinds() -> Iterator[None]:
+    """Turn the first termination signal into :class:`Terminated` while a command runs (later
+    ones wait: the cleanup it started must finish); the previous handlers come back after. A
+    signal the caller ignores (``nohup``) stays ignored. Only in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    fired: list[int] = []
+
+    def unwind(signum, frame):
+        if not fired:
+            fired.append(signum)
+            raise Terminated(signum)
+
+    previous = {}
+    for sig in TERMINATION_SIGNALS:
+        handler = signal.getsignal(sig)
+        if handler is not signal.SIG_IGN:
+            previous[sig] = signal.signal(sig, unwind)
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+
+
+class _ClosedStream(io.TextIOBase):
+    """Stands for standard output when the process has none (started with ``>&-``): writing to it
+    is an ``OSError`` (EBADF), which :func:`main` reports as one line with status 1."""
+
+    def writable(self) -> bool:
+        return True
+
+    def write(self, text: str) -> int:
+        raise OSError(errno.EBADF, "it is closed")
+
+    def isatty(self) -> bool:
+        return False
+
+
+@contextlib.contextmanager
+def _standard_streams() -> Iterator[None]:
+    """Standard output and error, usable whatever the process was given: a missing one (closed
+    by the caller) is replaced (standard output by :class:`_ClosedStream`, standard error by
+    the null device: nothing more can be said), and characters the stream's encoding lacks
+    (``PYTHONIOENCODING=ascii``, a C locale) are written as backslash escapes instead of
+    failing. Data written to ``-`` is UTF-8 whatever the encoding
+    (:func:`omnikin.io.output.write_text`). Restored after the command."""
+    saved = sys.stdout, sys.stderr
+    errors = {}
+    devnull = None
+    if sys.stdout is None:
+        sys.stdout = _ClosedStream()
+    if sys.stderr is None:
+        devnull = sys.stderr = open(os.devnull, "w", encoding="utf-8")  # noqa: SIM115 (closed below)
+    for stream in (sys.stdout, sys.stderr):
+        if isinstance(stream, io.TextIOWrapper) and stream.errors != "backslashreplace":
+            errors[stream] = stream.errors
+            with contextlib.suppress(OSError, ValueError):
+                stream.reconfigure(errors="backslashreplace")
+    try:
+        yield
+    finally:
+        for stream, old in errors.items():
+            with contextlib.suppress(OSError, ValueError):
+                stream.reconfigure(errors=old)
+        if devnull is not None:
+            devnull.close()
+        sys.stdout, sys.stderr = saved
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:

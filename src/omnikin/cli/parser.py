@@ -10,8 +10,13 @@
   argument that starts with ``-`` for an option unless it looks like ``-2`` or ``-2.5`` (before
   Python 3.13 it does not know ``-2.5e-3``, ``-1e3`` or ``-inf``). Arguments that are negative
   numbers in Python's float syntax are handed to argparse with a leading space, which argparse
-  reads as a value and :class:`float` and :class:`int` ignore; string values get their exact
-  spelling back after parsing. (``--`` before the values, or ``--option=-1e3``, work too.)
+  reads as a value; the space is taken off before the value is converted (``type``) or stored,
+  so messages and values show the exact spelling. (``--`` before the values, or
+  ``--option=-1e3``, work too.)
+* **Options and positionals mix freely.** ``omnikin calibrate ROBOT --side 3 RUNS -o out.yaml``:
+  a command without sub-commands is parsed like :meth:`argparse.ArgumentParser.parse_intermixed_args`
+  (options first, then the positionals left, in order), so an optional positional after an
+  option is not lost.
 
 Sub-commands sit in argparse sub-parsers, which cannot share a parser with an optional
 positional argument (``omnikin umbmark [ROBOT]`` and ``omnikin umbmark analyze FILE``);
@@ -28,9 +33,10 @@ import sys
 
 from ..errors import InputError, did_you_mean
 
-NEGATIVE_NUMBER = re.compile(r"-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|-(inf|infinity|nan)", re.IGNORECASE)
-"""A negative number in Python's float syntax (matched in full): ``-2``, ``-2.5``, ``-.5``,
-``-2.5e-3``, ``-1E3``, ``-inf``, ``-nan``."""
+NEGATIVE_NUMBER = re.compile(r"-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?[a-z]*|-(inf|infinity|nan)", re.IGNORECASE)
+"""A negative number in Python's float syntax, or with a unit (matched in full): ``-2``,
+``-2.5``, ``-.5``, ``-2.5e-3``, ``-1E3``, ``-inf``, ``-nan``, ``-5M``, ``-2h`` (no option of
+omnikin starts with ``-`` and a digit)."""
 
 _VALUE_MARK = " "
 """Prefix that makes argparse read an argument as a value (an argument with a space is never
@@ -62,6 +68,7 @@ class CommandParser(argparse.ArgumentParser):
         self._option_names: list[str] = []  # before argparse adds -h/--help through add_argument
         self._commands: dict[str, CommandParser] = {}
         self._subcommands = None
+        self._passes = False  # inside the two passes of argparse's intermixed parsing
         super().__init__(*args, **kwargs)
         for parent in kwargs.get("parents", ()):
             self._option_names += getattr(parent, "option_names", [])
@@ -102,6 +109,8 @@ class CommandParser(argparse.ArgumentParser):
 
     # --- parsing ---------------------------------------------------------------------------------------
     def parse_known_args(self, args=None, namespace=None):
+        if self._passes:  # a pass of parse_known_intermixed_args: arguments marked already
+            return super().parse_known_args(args, namespace)
         args = [str(a) for a in (sys.argv[1:] if args is None else args)]
         marked = {_VALUE_MARK + a: a for a in args if NEGATIVE_NUMBER.fullmatch(a)}
         args = [_VALUE_MARK + a if NEGATIVE_NUMBER.fullmatch(a) else a for a in args]
@@ -109,7 +118,7 @@ class CommandParser(argparse.ArgumentParser):
             namespace, extras = self._commands[args[0]].parse_known_args(args[1:], namespace)
         else:
             self._check_command(args)
-            namespace, extras = super().parse_known_args(args, namespace)
+            namespace, extras = self._parse_mixed(args, namespace)
         if not hasattr(namespace, _PARSER):
             setattr(namespace, _PARSER, self)
         _unmark(namespace, marked)
@@ -122,6 +131,25 @@ class CommandParser(argparse.ArgumentParser):
         if extras:
             innermost.error(innermost._unrecognized(extras))
         return namespace
+
+    def _parse_mixed(self, args: list[str], namespace):
+        """argparse's intermixed parsing where the parser allows it (no sub-commands, no
+        positional taking the remainder), else its plain parsing."""
+        if self._subcommands is not None or any(
+            a.nargs in (argparse.PARSER, argparse.REMAINDER) for a in self._get_positional_actions()
+        ):
+            return super().parse_known_args(args, namespace)
+        self._passes = True
+        try:
+            return super().parse_known_intermixed_args(args, namespace)
+        finally:
+            self._passes = False
+
+    def _get_value(self, action, arg_string):
+        """Take off the mark of a negative number before argparse converts or stores the value."""
+        if arg_string.startswith(_VALUE_MARK) and NEGATIVE_NUMBER.fullmatch(arg_string[len(_VALUE_MARK) :]):
+            arg_string = arg_string[len(_VALUE_MARK) :]
+        return super()._get_value(action, arg_string)
 
     def error(self, message: str):
         """Raise :class:`UsageError` (argparse would print the usage block and exit)."""

@@ -24,7 +24,7 @@ from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
 from ..simulation.error_models import NOISE, PROFILES
 from ..viz import FIGURE_FORMATS, MAX_DPI, check_dpi
 from .budget import add_budget_options, require
-from .common import console
+from .common import add_output, add_output_options, command_inputs, console, declare_inputs
 
 DEFAULT_OUT = "umbmark-report"
 """The report folder of ``omnikin umbmark`` without ``-o``."""
@@ -128,9 +128,11 @@ def add_parsers(sub, robot_help: str) -> None:
         default=d["calibrate"],
         help="calibrate and run UMBmark again (default on; --no-calibrate: UMBmark only)",
     )
-    sp.add_argument(
+    add_output(
+        sp,
         "-o",
         "--out",
+        folder="report",
         default=DEFAULT_OUT,
         metavar="DIR",
         help=f"report folder (default ./{DEFAULT_OUT}); a folder omnikin wrote is replaced as a whole, "
@@ -151,6 +153,7 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument("--json", action="store_true", help="print result.json instead of tables")
     add_budget_options(sp)
+    declare_inputs(sp, robots=("robot", "true_robot"))
     sp.set_defaults(func=cmd_umbmark)
 
     sp = sub.add_parser(
@@ -169,13 +172,15 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument("runs", metavar="RUNS", nargs="?", help="CSV of runs: path, x_abs, y_abs[, theta_abs_deg]")
-    sp.add_argument(
+    add_output(
+        sp,
         "-o",
         "--output",
         metavar="FILE",
         help="write the calibrated robot file (YAML, or JSON for .json); with --plan, the runs file to fill in",
     )
-    sp.add_argument("--force", action="store_true", help="replace an existing output file")
+    add_output_options(sp)
+    declare_inputs(sp, "runs", robots=("robot",))
     sp.add_argument(
         "--plan", action="store_true", help="print the recommended calibration runs as a runs file to fill in (no RUNS)"
     )
@@ -238,16 +243,6 @@ def _factor(x) -> str:
     return "unbounded" if x is None else f"{x:.3g}"
 
 
-def _input_files(*robots, files=()) -> list:
-    """The inputs to protect from being overwritten: the robot files among the robot
-    specifications ``robots`` (a preset name is none: :func:`omnikin.io.robot_file.robot_file_of`)
-    and the ``files`` read (a runs file)."""
-    from ..io.robot_file import robot_file_of
-
-    paths = [robot_file_of(r) for r in robots] + [f for f in files if f]
-    return [p for p in paths if p and Path(p).is_file()]
-
-
 class _Status:
     """The current step on standard error (nothing for --json or when not a terminal)."""
 
@@ -274,11 +269,8 @@ class _Status:
 
 # --- umbmark -----------------------------------------------------------------------------------------
 def cmd_umbmark(args) -> int:
-    from ..io.output import check_output
-
-    inputs = _input_files(args.robot, args.true_robot)
+    inputs = command_inputs(args)
     check_dpi(args.dpi)  # refuse before the simulation, not after
-    check_output(args.out, inputs=inputs, folder=True)
     cost = umbmark_cost(
         args.robot,
         mode=args.mode,
@@ -432,8 +424,6 @@ def cmd_umbmark_analyze(args) -> int:
 
 # --- calibrate -----------------------------------------------------------------------------------------
 def cmd_calibrate(args) -> int:
-    from ..io.output import check_output
-
     if args.plan:
         if args.runs is not None:
             raise InputError("calibrate --plan prints the runs to drive; it takes no RUNS file")
@@ -442,12 +432,8 @@ def cmd_calibrate(args) -> int:
         raise InputError("calibrate: give RUNS (a runs file with measured end poses), or --plan for the runs to drive")
     from ..io.output import is_stdout
 
-    inputs = _input_files(args.robot, files=[args.runs])
+    inputs = command_inputs(args)
     to_stdout = bool(args.output) and is_stdout(args.output)
-    if to_stdout and args.json:
-        raise InputError("-o - and --json would both write to standard output; choose one")
-    if args.output:
-        check_output(args.output, inputs=inputs, force=args.force)  # before the fit
     cal = api_calibrate(args.robot, args.runs)
     if args.output:
         cal.write_robot(args.output, force=args.force, inputs=inputs)
@@ -507,10 +493,8 @@ def _print_plan(args) -> int:
         f"then: omnikin calibrate {args.robot} THIS_FILE -o calibrated.yaml"
     )
     text = calibration_template(paths, RECOMMENDED_REPEATS, note)
-    if args.output and args.json and is_stdout(args.output):
-        raise InputError("-o - and --json would both write to standard output; choose one")
     if args.output:
-        check_output(args.output, inputs=_input_files(args.robot), force=args.force)
+        check_output(args.output, inputs=command_inputs(args), force=args.force)
         write_text(args.output, text)
         if not args.json and not is_stdout(args.output):
             console(120, stderr=True).print(f"runs file to fill in written to {args.output}")

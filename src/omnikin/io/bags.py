@@ -88,6 +88,26 @@ def check_topic(name: str, what: str = "topic") -> str:
     return name
 
 
+FRAME_ID = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*")
+"""tf2 frame ids as omnikin writes them: the tokens of a ROS 2 name (letters, digits and
+underscores, not starting with a digit) separated by '/', without a leading '/' (tf2 drops
+it, REP-105 names such as ``odom``, ``base_link``, ``robot1/odom``)."""
+
+
+def check_frame_ids(frame_id: str, child_frame_id: str, what: tuple[str, str] = ("frame_id", "child_frame_id")) -> None:
+    """Refuse (:class:`BagError`, one line) a frame id that is not a valid tf2 frame name
+    (:data:`FRAME_ID`) or a child frame equal to its parent (an Odometry message relates two
+    frames). ``what``: the names of the two in messages (the command line's options)."""
+    for name, label in zip((frame_id, child_frame_id), what, strict=True):
+        if not isinstance(name, str) or not FRAME_ID.fullmatch(name):
+            raise BagError(
+                f"{label}: {shorten(name)} is not a valid frame id (letters, digits and underscores "
+                f"separated by '/', no leading '/', e.g. odom, base_link)"
+            )
+    if frame_id == child_frame_id:
+        raise BagError(f"{what[1]} {child_frame_id!r} is the same frame as {what[0]}; the child frame is the robot's")
+
+
 class BagError(InputError):
     """A bag that cannot be read or written as asked; the message names the bag and topic."""
 
@@ -632,6 +652,7 @@ def write_odometry(
 ) -> None:
     """Write poses ``(N, 3)`` and body twists ``(N, 3)`` at ``stamps`` [int ns] as Odometry to a new bag
     (messages in order of bag time)."""
+    check_frame_ids(frame_id, child_frame_id)
     stamps = np.asarray(stamps, dtype=np.int64)
     bag_times = stamps if bag_times is None else np.asarray(bag_times, dtype=np.int64)
     order = np.argsort(bag_times, kind="stable")
@@ -716,6 +737,7 @@ def bag_odometry(
     """
     from ..odometry import batch_odometry_from_angles
 
+    check_frame_ids(frame_id, child_frame_id)
     require_new_bag(bag_out, inputs=[bag_in], force=force)
     js = read_joint_states(
         bag_in,
@@ -792,6 +814,7 @@ def record_run(
     unknown = sorted(set(names) - set(RUN_TOPICS))
     if unknown:
         raise BagError(f"unknown run topic key(s) {unknown}; keys are {sorted(RUN_TOPICS)}")
+    check_frame_ids(frame_id, child_frame_id)
     if not math.isfinite(start):
         raise BagError(f"start time must be finite, got {start!r}")
     end = start + float(run.t[-1])

@@ -175,7 +175,4 @@ def write_tick_log(path, t, ticks, wheel_names, steer=None, *, steer_names=(), c
     standard output for ``-``. Check the path first with
     :func:`omnikin.io.output.check_output`."""
     text = "\n".join(tick_log_lines(t, ticks, wheel_names, steer, steer_names, comment)) + "\n"
-    try:
-        write_text(path, text)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot write: {exc.strerror or exc}") from None
+    write_text(path, text)  # a write failure: OutputError naming the path

@@ -23,9 +23,15 @@
 Every refusal is an :class:`omnikin.errors.OutputExistsError` with a one-line message
 naming the path and the way out.
 
-The command line adds ``--force`` and calls :func:`check_output` before any long work
-(``omnikin.cli.common.add_output_options`` and ``checked_output``); the writers check again
-right before writing, so a library caller gets the same protection.
+* **One output, one path.** The outputs of one command are checked together
+  (:func:`check_outputs`): no two on the same path or one inside another, at most one on
+  standard output.
+* **Never the current folder.** A folder output is never the current folder or one holding
+  it (it is replaced as a whole); a file output never names a folder (``out/``, ``.``).
+
+The command line declares each command's outputs and calls :func:`check_outputs` on them
+before the command runs (``omnikin.cli.common.add_output`` and ``check_command_outputs``); the
+writers check again right before writing, so a library caller gets the same protection.
 """
 
 from __future__ import annotations
@@ -39,7 +45,7 @@ import tempfile
 import threading
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, NamedTuple
 
 from ..errors import InputError, OutputError, OutputExistsError
 
@@ -84,10 +90,18 @@ def check_output(path, *, inputs: Iterable = (), force: bool = False, folder: bo
         if kind:
             raise InputError("'-' (standard output) cannot receive a folder; name a folder")
         return None
-    if os.fspath(path) == "":
+    text = os.fspath(path)
+    if text == "":
         raise InputError("empty output path; name a file (or '-' for standard output)")
-    out = Path(os.fspath(path))
+    if not kind and _names_folder(text):
+        raise InputError(f"{text}: names a folder (it ends with {os.sep!r} or is '.' or '..'); name a file")
+    out = Path(text)
     target = _resolved(out)
+    if kind and _inside(_cwd(), target):
+        raise OutputExistsError(
+            f"{out}: is the current folder or contains it; omnikin replaces a {kind} folder as a whole: "
+            "name another folder, or run omnikin from outside it"
+        )
     for item in inputs:
         if item is None or is_stdout(item):
             continue
@@ -131,6 +145,67 @@ def check_output(path, *, inputs: Iterable = (), force: bool = False, folder: bo
     if out.exists() and not stat.S_ISREG(out.stat().st_mode):
         raise OutputExistsError(f"{out}: exists and is not a regular file; name a file")
     return out
+
+
+def _names_folder(text: str) -> bool:
+    """True for a path that can only name a folder: it ends with a separator (``out/``) or its
+    last part is ``.`` or ``..``."""
+    seps = (os.sep, os.altsep) if os.altsep else (os.sep,)
+    return text.endswith(seps) or os.path.basename(text) in (".", "..")
+
+
+def _cwd() -> Path | None:
+    """The current folder, resolved (None if it was removed)."""
+    try:
+        return _resolved(os.getcwd())
+    except OSError:
+        return None
+
+
+class Output(NamedTuple):
+    """One output of a command for :func:`check_outputs`: ``label`` names it in messages (the
+    option, ``--log``), ``path`` (None: not written; ``-``: standard output), ``folder`` as for
+    :func:`check_output`."""
+
+    label: str
+    path: Any
+    folder: bool | str = False
+
+
+def check_outputs(
+    outputs: Iterable[Output], *, inputs: Iterable = (), force: bool = False, stdout: str | None = None
+) -> list[Path | None]:
+    """Check every output of one command together, before any work; return their paths as
+    :func:`check_output` does (None for ``-``), in order.
+
+    Beyond :func:`check_output` of each (never an input, an existing one only with ``force``,
+    ...): at most one thing goes to standard output (``stdout`` labels another use of it, such
+    as ``--json``), and no two outputs are the same path or lie inside one another (a tick log
+    written into the bag folder it sits beside, a file named as the bag). Raises
+    :class:`InputError` (or the errors of :func:`check_output`) naming the outputs by label.
+    """
+    given = [o if isinstance(o, Output) else Output(*o) for o in outputs]
+    given = [o for o in given if o.path is not None]
+    inputs = list(inputs)
+    to_stdout = [f"{o.label} -" for o in given if is_stdout(o.path) and not o.folder] + ([stdout] if stdout else [])
+    if len(to_stdout) > 1:
+        raise InputError(
+            f"{' and '.join(to_stdout)} would both write to standard output; name a file for "
+            f"{'one of them' if len(to_stdout) == 2 else 'all but one'}"
+        )
+    files = [(o, _resolved(o.path)) for o in given if not is_stdout(o.path) and os.fspath(o.path) != ""]
+    for k, (a, pa) in enumerate(files):
+        for b, pb in files[k + 1 :]:
+            if pa == pb:
+                raise InputError(
+                    f"{a.label} {a.path} and {b.label} {b.path} are the same path; give each output its own name"
+                )
+            inner, outer = (a, b) if _inside(pa, pb) else (b, a) if _inside(pb, pa) else (None, None)
+            if inner is not None:
+                raise InputError(
+                    f"{inner.label} {inner.path} lies inside {outer.label} {outer.path}; write it elsewhere"
+                )
+    return [check_output(o.path, inputs=inputs, force=force, folder=o.folder) for o in given]
 
 
 def _in_place(path: Path) -> bool:
@@ -193,12 +268,20 @@ def atomic_write(
 
 
 def write_text(path, text: str) -> None:
-    """Write ``text`` to ``path`` atomically (UTF-8), or to standard output for ``-``."""
+    """Write ``text`` to ``path`` atomically (UTF-8), or to standard output for ``-`` (UTF-8 too,
+    whatever the encoding of standard output: the same bytes as the file would hold)."""
     if is_stdout(path):
         import sys
 
-        sys.stdout.write(text)
-        sys.stdout.flush()
+        stream = sys.stdout
+        binary = getattr(stream, "buffer", None)
+        stream.flush()
+        if binary is None:  # a text-only stream (a test's capture): it takes text
+            stream.write(text)
+            stream.flush()
+            return
+        binary.write(text.encode("utf-8"))
+        binary.flush()
         return
     with atomic_write(path) as handle:
         handle.write(text)
@@ -287,7 +370,11 @@ def _swap(built: Path, target: Path, marker: str, note: str) -> None:
     old = None
     if target.exists():
         old = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".old", dir=parent))
-        os.replace(target, old / "previous")
+        try:
+            os.replace(target, old / "previous")
+        except BaseException:  # the folder cannot move (busy, no permission): leave nothing behind
+            old.rmdir()
+            raise
     try:
         os.replace(built, target)
     except BaseException:
@@ -299,9 +386,13 @@ def _swap(built: Path, target: Path, marker: str, note: str) -> None:
         shutil.rmtree(old, ignore_errors=True)
 
 
+_DEFERRED = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+"""Signals :func:`_uninterrupted` defers."""
+
+
 @contextlib.contextmanager
 def _uninterrupted() -> Iterator[None]:
-    """Defer Ctrl-C (SIGINT) and SIGTERM over a few file-system steps that must not be cut in
+    """Defer Ctrl-C (SIGINT), SIGTERM and SIGHUP over a few file-system steps that must not be cut in
     the middle (creating a temporary and recording its name, swapping folders); the signal is
     delivered right after, to the handler that was there before. Outside the main thread
     (where handlers cannot be set) it does nothing."""
@@ -309,9 +400,7 @@ def _uninterrupted() -> Iterator[None]:
         yield
         return
     received: list[int] = []
-    previous = {
-        sig: signal.signal(sig, lambda num, frame: received.append(num)) for sig in (signal.SIGINT, signal.SIGTERM)
-    }
+    previous = {sig: signal.signal(sig, lambda num, frame: received.append(num)) for sig in _DEFERRED}
     try:
         yield
     finally:

@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import InputError, OmnikinError, shorten
 from ..geometry import wrap_angle
 from ..plans import CalibrationRun, Plan, parse_plan
-from .csvfile import column_problems, number, read_rows
+from .csvfile import PLAIN_NUMBER, column_problems, number, read_rows
 
 
 class RunsFileError(InputError):
@@ -76,6 +76,31 @@ def _theta(source, header, line_no, row, which) -> float:
     return math.nan
 
 
+PATH_WORDS = frozenset({"square", "cw", "ccw", "rotate", "translate", "line", "spin", "arc"})
+"""The words of the path grammar (module docstring); every other word of a path is a number."""
+
+
+def path_plan(text: str) -> Plan:
+    """The plan of one path of the grammar in the module docstring (:func:`omnikin.plans.parse_plan`).
+
+    Its numbers are plain decimals as in every table (:data:`omnikin.io.csvfile.PLAIN_NUMBER`:
+    not ``0_1``, non-ASCII digits, ``nan`` or ``inf``). One run drives one path: ``;`` (which
+    chains paths in ``omnikin simulate --path``) is refused here. Raises :class:`InputError`.
+    """
+    if ";" in text:
+        raise InputError(
+            f"path {shorten(text)}: one run is one path; ';' (chaining paths) is not allowed here, "
+            "give each path its own run"
+        )
+    for word in text.split():
+        if word.lower() not in PATH_WORDS and not PLAIN_NUMBER.fullmatch(word):
+            raise InputError(
+                f"path {shorten(text)}: {shorten(word)} is neither a word of the path grammar nor a plain "
+                "number (sign, ASCII digits, '.', exponent)"
+            )
+    return parse_plan(text)
+
+
 def read_umbmark_measurements(path):
     """Return errors per direction: ``{'cw': (n, 3), 'ccw': (n, 3)}`` (theta NaN if not measured)."""
     source = str(path)
@@ -119,7 +144,7 @@ def read_calibration_runs(path, sigma=DEFAULT_SIGMA) -> list[CalibrationRun]:
         key = " ".join(row["path"].lower().split())
         if key not in plans:
             try:
-                plans[key] = parse_plan(key)
+                plans[key] = path_plan(key)
             except OmnikinError as exc:
                 raise RunsFileError(f"{source}: line {line_no}, column 'path': {exc}") from None
         m = (
