@@ -99,11 +99,14 @@ def odom_arrays(path, topic="/odom"):
 
 
 def run_cli(argv):
+    """A bag command as ``omnikin.cli.main`` runs it (outputs checked first), errors raised."""
     from omnikin.cli import bag
+    from omnikin.cli.common import check_command_outputs
 
     p = argparse.ArgumentParser(prog="omnikin")
     bag.add_parsers(p.add_subparsers(), "preset or robot file")
     args = p.parse_args([str(a) for a in argv])
+    check_command_outputs(args)
     return args.func(args)
 
 
@@ -574,3 +577,33 @@ def test_taken_output_fails_before_reading_or_simulating(tmp_path):
         bags.bag_odometry(load_robot("tomasi-omni3"), tmp_path / "no-such-bag", out)
     with pytest.raises(OutputExistsError, match="exists already"):
         run_cli(["simulate", "tomasi-omni3", "--path", "not a path", "--bag", out])
+
+
+@pytest.mark.parametrize(
+    "frames, match",
+    [
+        (["--frame-id", ""], r"--frame-id: '' is not a valid frame id"),
+        (["--child-frame-id", ""], r"--child-frame-id: '' is not a valid frame id"),
+        (["--frame-id", "a b"], r"--frame-id: 'a b' is not a valid frame id"),
+        (["--frame-id", "/odom"], r"--frame-id: '/odom' is not a valid frame id"),
+        (["--child-frame-id", "base\nlink"], r"--child-frame-id: 'base\\nlink' is not a valid frame id"),
+        (["--child-frame-id", "1base"], r"--child-frame-id: '1base' is not a valid frame id"),
+        (["--child-frame-id", "odom"], r"--child-frame-id 'odom' is the same frame as --frame-id"),
+        (["--frame-id", "base_link"], r"--child-frame-id 'base_link' is the same frame as --frame-id"),
+    ],
+)
+def test_frame_ids_follow_ros_naming_rules(circle_bag, tmp_path, frames, match):
+    """'' and 'a b' were written into the bag's Odometry headers, and a child frame equal to its parent."""
+    out = tmp_path / "odom.bag"
+    with pytest.raises(bags.BagError, match=match):
+        run_cli(["bag", "odometry", "tomasi-omni3", circle_bag[0], "-o", out, *frames])
+    assert not out.exists()
+
+
+def test_library_writers_check_frame_ids_too(tmp_path):
+    stamps, poses = np.array([0, 10**8]), np.zeros((2, 3))
+    for frame, child in (("odom", "odom"), ("", "base_link"), ("odom", "base link")):
+        with pytest.raises(bags.BagError, match="frame"):
+            bags.write_odometry(tmp_path / "o.bag", stamps, poses, poses, frame_id=frame, child_frame_id=child)
+    bags.write_odometry(tmp_path / "o.bag", stamps, poses, poses, frame_id="robot1/odom", child_frame_id="robot1/base")
+    assert bags.read_poses(tmp_path / "o.bag", "/odom").child_frame_id == "robot1/base"

@@ -6,12 +6,23 @@ import contextlib
 import os
 import stat
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
+from conftest import omnikin_env
 from omnikin.errors import InputError, OutputError, OutputExistsError
-from omnikin.io.output import DATA_MARKER, REPORT_MARKER, atomic_write, check_output, data_folder, report_folder
+from omnikin.io.output import (
+    DATA_MARKER,
+    REPORT_MARKER,
+    Output,
+    atomic_write,
+    check_output,
+    check_outputs,
+    data_folder,
+    report_folder,
+)
 
 
 def test_new_file_is_accepted_and_existing_one_needs_force(tmp_path):
@@ -222,3 +233,103 @@ def test_a_signal_during_a_critical_step_is_delivered_after_it(tmp_path):
             raise AssertionError("the deferred Ctrl-C should have been delivered here")
     assert list(tmp_path.iterdir()) == []
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+# --- the outputs of one command, together -------------------------------------------------------------------
+def test_two_outputs_on_one_path_are_refused_before_anything_is_written(tmp_path):
+    """simulate --log x.csv --bag x.csv wrote a 13 MB bag and then failed: the outputs of a command
+    are checked against each other, whatever their kinds and spellings."""
+    log = tmp_path / "x.csv"
+    cases = [
+        [Output("--log", log), Output("--bag", log, "data")],
+        [Output("--log", log), Output("--bag", tmp_path / "sub" / ".." / "x.csv", "data")],
+        [Output("-o", log), Output("--plot", str(log))],
+    ]
+    for outputs in cases:
+        with pytest.raises(InputError, match="are the same path"):
+            check_outputs(outputs)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_output_inside_another_output_folder_is_refused(tmp_path):
+    bag = tmp_path / "run.bag"
+    for outputs in (
+        [Output("--bag", bag, "data"), Output("--log", bag / "log.csv")],
+        [Output("--log", bag / "deep" / "log.csv"), Output("--bag", bag, "data")],
+        [Output("-o", tmp_path / "rep", "report"), Output("--bag", tmp_path / "rep" / "b.bag", "data")],
+    ):
+        with pytest.raises(InputError, match="lies inside"):
+            check_outputs(outputs)
+
+
+def test_at_most_one_thing_goes_to_standard_output():
+    """--log - --json once wrote the CSV and the JSON document into one stream."""
+    with pytest.raises(InputError, match="--log - and --json would both write to standard output"):
+        check_outputs([Output("--log", "-")], stdout="--json")
+    with pytest.raises(InputError, match="-o - and --log - would both"):
+        check_outputs([Output("-o", "-"), Output("--log", "-")])
+    assert check_outputs([Output("-o", "-"), Output("--plot", None)]) == [None]
+    assert check_outputs([], stdout="--json") == []
+
+
+def test_outputs_are_still_checked_one_by_one_against_the_inputs(tmp_path):
+    log = tmp_path / "log.csv"
+    log.write_text("t\n")
+    with pytest.raises(OutputExistsError, match="input"):
+        check_outputs([Output("-o", tmp_path / "new.csv"), Output("--log", log)], inputs=[log], force=True)
+    with pytest.raises(OutputExistsError, match="exists; pass --force"):
+        check_outputs([Output("--log", log)])
+
+
+@pytest.mark.parametrize("name", ["newdir/", "newdir//", ".", "..", "sub/.", "sub/.."])
+def test_a_file_output_never_names_a_folder(tmp_path, name, monkeypatch):
+    """-o newdir/ wrote a regular file 'newdir'."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    with pytest.raises(InputError, match="names a folder"):
+        check_output(name)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sub"]
+
+
+def test_a_folder_output_may_end_with_a_separator(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert check_output("report/", folder="report") == Path("report")
+    assert check_output("run.bag/", folder="data") == Path("run.bag")
+
+
+@pytest.mark.parametrize("kind", ["report", "data"])
+def test_the_current_folder_or_one_holding_it_is_never_a_folder_output(tmp_path, monkeypatch, kind):
+    """'cd report && omnikin umbmark -o .' failed with 'Device or resource busy' and left an
+    empty '..xxxx.old' folder in the report."""
+    rep = tmp_path / "rep"
+    rep.mkdir()
+    (rep / (REPORT_MARKER if kind == "report" else DATA_MARKER)).write_text("")
+    (rep / "inner").mkdir()
+    monkeypatch.chdir(rep / "inner")
+    before = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*"))
+    for name in ("..", "../", str(rep), "../../rep", "."):
+        with pytest.raises(OutputExistsError, match="current folder"):
+            check_output(name, folder=kind, force=True)
+    assert sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*")) == before
+
+
+def test_a_folder_that_cannot_be_moved_aside_leaves_nothing_behind(tmp_path, monkeypatch):
+    """The swap of a report into '.' (the current folder cannot be renamed) fails as an
+    OutputError and leaves neither its staging folder nor an empty '.old' folder."""
+    rep = tmp_path / "rep"
+    rep.mkdir()
+    (rep / REPORT_MARKER).write_text("")
+    monkeypatch.chdir(rep)
+    with pytest.raises(OutputError, match="cannot write"):
+        with report_folder(".") as stage:  # the library call, without check_output
+            (stage / "a.txt").write_text("a")
+    assert sorted(p.name for p in rep.iterdir()) == [REPORT_MARKER]
+
+
+def test_data_to_standard_output_is_utf8_whatever_its_encoding(tmp_path):
+    """'-' carries the bytes a file would hold (UTF-8), even when standard output is ASCII."""
+    script = "from omnikin.io.output import write_text; write_text('-', 'caf\\u00e9\\n')"
+    env = dict(omnikin_env(), PYTHONIOENCODING="ascii")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == "café\n".encode()

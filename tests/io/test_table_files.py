@@ -15,7 +15,7 @@ import pytest
 
 from omnikin import Encoder, OdometryInputError, Robot, Wheel, load_robot
 from omnikin.cli.main import main
-from omnikin.io.csvfile import column_problems, iter_fields, read_rows
+from omnikin.io.csvfile import column_problems, iter_fields, number, read_rows
 from omnikin.io.logs import read_tick_log
 from omnikin.io.runs import RunsFileError, read_calibration_runs, read_umbmark_measurements
 from omnikin.io.trajectories import TrajectoryFileError, read_trajectory
@@ -243,3 +243,70 @@ def test_non_utf8_names_the_line(tmp_path, data, line):
     path.write_bytes(data)
     with pytest.raises(RunsFileError, match=f"line {line}: not UTF-8 text"):
         read_rows(path, RunsFileError)
+
+
+# --- numbers: plain ASCII decimals only ---------------------------------------------------------------------
+HOSTILE_NUMBERS = ["0_1", "1_000", "\u0661", "\u0660.\u0665", "\uff11", "\u00b2", "0x10", "1e", "--1", "+-1", "1.2.3"]
+"""Spellings float() reads (or half reads) that no table may accept: Python's digit groups,
+Arabic-Indic and full-width digits, a superscript, hexadecimal, and broken forms."""
+
+
+@pytest.mark.parametrize("text", HOSTILE_NUMBERS + ["nan", "inf", "-Infinity", "1e999"])
+def test_number_fields_accept_only_plain_ascii_decimals(text):
+    with pytest.raises(ValueError) as info:
+        number(text, "t.csv", 3, "x", RunsFileError)
+    assert str(info.value).startswith("t.csv: line 3, column 'x': ")
+
+
+@pytest.mark.parametrize(
+    "text, value", [("1", 1.0), ("-2.5", -2.5), ("+.5", 0.5), ("3.", 3.0), ("1e-3", 1e-3), ("-2.5E+2", -250.0)]
+)
+def test_plain_decimals_are_read(text, value):
+    assert number(text, "t.csv", 1, "x", RunsFileError) == value
+
+
+@pytest.mark.parametrize("text", HOSTILE_NUMBERS)
+def test_every_table_refuses_a_hostile_number(tmp_path, text):
+    """0_1 was read as 1.0 and Arabic-Indic digits as numbers in runs, measurements and trajectories."""
+    files = {
+        "measurements": (
+            f"direction,x_abs,y_abs,x_calc,y_calc\ncw,{text},0,0,0\nccw,0,0,0,0\n",
+            read_umbmark_measurements,
+            "line 2, column 'x_abs'",
+        ),
+        "runs": (f"path,x_abs,y_abs\nline 2,2.0,{text}\n", read_calibration_runs, "line 2, column 'y_abs'"),
+        "csv": (f"t,x,y,theta\n0,0,0,0\n1,{text},0,0\n", read_trajectory, "line 3, column 'x'"),
+        "tum": (f"0 0 0 0 0 0 0 1\n1 0 {text} 0 0 0 0 1\n", read_trajectory, "line 2, field 3"),
+        "kitti": (f"1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 {text} 0 1 0 0 0 0 1 0\n", read_trajectory, "line 2, field 4"),
+    }
+    for name, (content, reader, where) in files.items():
+        path = tmp_path / f"{name}.txt"
+        path.write_text(content, encoding="utf-8")
+        with pytest.raises(ValueError) as info:
+            reader(path)
+        assert str(info.value).startswith(f"{path}: {where}"), (name, str(info.value))
+
+
+@pytest.mark.parametrize("text", HOSTILE_NUMBERS)
+def test_a_tick_log_time_is_a_plain_number(tmp_path, capsys, text):
+    log = tmp_path / "log.csv"
+    log.write_text(f"t,w1,w2,w3\n0,0,0,0\n{text},10,10,10\n", encoding="utf-8")
+    rc, _, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", tmp_path / "out.csv")
+    assert rc == 2 and f"{log}: line 3, column 't'" in err, err
+    assert not (tmp_path / "out.csv").exists()
+
+
+@pytest.mark.parametrize("path", ["line 0_1", "spin \u0669\u0660", "arc 1 nan", "line inf", "square cw rotate 0x4"])
+def test_numbers_in_a_path_are_plain_too(tmp_path, path):
+    runs = tmp_path / "runs.csv"
+    runs.write_text(f"path,x_abs,y_abs\n{path},2.0,0.0\n", encoding="utf-8")
+    with pytest.raises(RunsFileError, match=r"line 2, column 'path': .*not a plain number|is neither"):
+        read_calibration_runs(runs)
+
+
+def test_a_run_is_one_path(tmp_path):
+    """'line 1; spin 90' in a runs file got 'numbers expected after line'."""
+    runs = tmp_path / "runs.csv"
+    runs.write_text("path,x_abs,y_abs\nline 1; spin 90,1.0,0.0\n")
+    with pytest.raises(RunsFileError, match=r"line 2, column 'path': .*one run is one path; ';'"):
+        read_calibration_runs(runs)

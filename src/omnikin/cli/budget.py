@@ -73,7 +73,7 @@ def parse_size(text: str) -> int:
         raise argparse.ArgumentTypeError(f"{text!r} is not a size (bytes, or a number with K, M, G or T: 512M, 2G)")
     value = float(m.group(1)) * SIZE_UNITS[unit]
     if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"{text!r} is too large (not a finite number of bytes)")
+        raise argparse.ArgumentTypeError(f"{text!r} is too large for a size (not a finite number of bytes)")
     if value < 1:
         raise argparse.ArgumentTypeError(f"{text!r}: a size must be at least one byte")
     return int(value)
@@ -89,7 +89,7 @@ def parse_duration(text: str) -> float:
         )
     value = float(m.group(1)) * TIME_UNITS[unit]
     if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"{text!r} is too large (not a finite number of seconds)")
+        raise argparse.ArgumentTypeError(f"{text!r} is too large for a duration (not a finite number of seconds)")
     if value <= 0:
         raise argparse.ArgumentTypeError(f"{text!r}: a duration must be positive")
     return value

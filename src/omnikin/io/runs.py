@@ -76,8 +76,11 @@ def _theta(source, header, line_no, row, which) -> float:
     return math.nan
 
 
-PATH_WORDS = frozenset({"square", "cw", "ccw", "rotate", "translate", "line", "spin", "arc"})
-"""The words of the path grammar (module docstring); every other word of a path is a number."""
+PATH_KINDS = frozenset({"square", "line", "spin", "arc"})
+"""The first words of the paths of the grammar (module docstring)."""
+
+PATH_WORDS = frozenset({"cw", "ccw", "rotate", "translate"})
+"""The other words of the path grammar; every other word of a path is a number."""
 
 
 def path_plan(text: str) -> Plan:
@@ -92,7 +95,15 @@ def path_plan(text: str) -> Plan:
             f"path {shorten(text)}: one run is one path; ';' (chaining paths) is not allowed here, "
             "give each path its own run"
         )
-    for word in text.split():
+    words = text.split()
+    if not words:
+        raise InputError("empty path")
+    if words[0].lower() not in PATH_KINDS:
+        raise InputError(
+            f"path {shorten(text)}: unknown kind of path {shorten(words[0])}; one of {sorted(PATH_KINDS)} "
+            "(square cw|ccw rotate|translate [SIDE], line LENGTH [HEADING_DEG], spin ANGLE_DEG, arc RADIUS ANGLE_DEG)"
+        )
+    for word in words[1:]:
         if word.lower() not in PATH_WORDS and not PLAIN_NUMBER.fullmatch(word):
             raise InputError(
                 f"path {shorten(text)}: {shorten(word)} is neither a word of the path grammar nor a plain "

@@ -89,10 +89,12 @@ def write_trajectory(path, t, poses, fmt: str, *, force: bool = False, inputs=()
     write_text(path, "\n".join(trajectory_lines(t, poses, fmt)) + "\n")
 
 
-def _numbers(source, line_no, fields, count, fmt) -> list[float]:
+def _numbers(source, line_no, fields, count, fmt, names=None) -> list[float]:
+    """The numbers of one line; ``names``: the columns (CSV), else fields are named by number."""
     if len(fields) != count:
         raise TrajectoryFileError(f"{source}: line {line_no}: {len(fields)} fields, a {fmt} line has {count}")
-    return [number(f, source, line_no, k + 1, TrajectoryFileError) for k, f in enumerate(fields)]
+    columns = names or range(1, count + 1)
+    return [number(f, source, line_no, c, TrajectoryFileError) for c, f in zip(columns, fields, strict=True)]
 
 
 CSV_HEADER = ["t", "x", "y", "theta"]
@@ -152,7 +154,7 @@ def read_trajectory(path, fmt: str | None = None) -> tuple[np.ndarray, np.ndarra
     poses = np.empty((len(rows), 3))
     for k, (line_no, fields) in enumerate(rows):
         if fmt == "csv":
-            t[k], *poses[k] = _numbers(source, line_no, fields, 4, "csv")
+            t[k], *poses[k] = _numbers(source, line_no, fields, 4, "csv", CSV_HEADER)
         elif fmt == "tum":
             tk, x, y, _z, qx, qy, qz, qw = _numbers(source, line_no, fields, 8, "TUM")
             if qx == qy == qz == qw == 0.0:
