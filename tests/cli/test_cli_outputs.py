@@ -287,3 +287,120 @@ def test_empty_output_name_is_refused(capsys, log, argv):
         pytest.importorskip("rosbags")
     rc, _, err = cli(capsys, *[log if a == "LOG" else a for a in argv])
     refused(rc, err, "empty output path")
+
+
+# --- every command that writes a file: one way to fail ---------------------------------------------------------
+RUNS = "ROOT/examples/calibration_runs.csv"
+
+
+def _argv(argv, log, sim_bag=None):
+    from conftest import ROOT
+
+    swap = {"LOG": log, "BAG": sim_bag, RUNS: ROOT / "examples" / "calibration_runs.csv"}
+    return [swap.get(a, a) for a in argv]
+
+
+FILE_WRITERS = [
+    ["odometry", "tomasi-omni3", "LOG", "-o", "OUT"],
+    ["calibrate", "tomasi-omni3", RUNS, "-o", "OUT"],
+    ["calibrate", "tomasi-omni3", "--plan", "-o", "OUT"],
+    ["simulate", "tomasi-omni3", "--path", "spin 10", "--log", "OUT"],
+    ["bag", "export", "BAG", "--topic", "/odom", "--format", "tum", "-o", "OUT"],
+    ["show", "tomasi-omni3", "--plot", "OUT"],
+]
+"""One command line per way omnikin writes a single file (OUT: the file)."""
+
+
+def _needs(argv):
+    if "BAG" in argv:
+        pytest.importorskip("rosbags")
+    if "--plot" in argv:
+        pytest.importorskip("matplotlib")
+
+
+@pytest.fixture
+def bag_if_needed(request, tmp_path_factory):
+    return request.getfixturevalue("sim_bag") if "BAG" in request.node.callspec.params.get("argv", []) else None
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (Linux)")
+@pytest.mark.parametrize("argv", FILE_WRITERS, ids=lambda a: " ".join(a[:2]))
+def test_every_file_writer_reports_a_full_disk_once_with_status_1(capsys, log, bag_if_needed, tmp_path, argv):
+    """odometry, calibrate and simulate --log said '/dev/full: cannot write: /dev/full: cannot
+    write: No space left on device' with status 2; bag export said it right."""
+    _needs(argv)
+    full = "/dev/full"
+    if "--plot" in argv:  # the drawing format follows the extension
+        full = tmp_path / "full.png"
+        full.symlink_to("/dev/full")
+    argv = [(full if a == "OUT" else a) for a in _argv(argv, log, bag_if_needed)]
+    rc, _, err = cli(capsys, *argv)
+    assert (rc, err) == (1, f"omnikin: error: {full}: cannot write: No space left on device\n")
+
+
+@pytest.mark.parametrize("argv", FILE_WRITERS, ids=lambda a: " ".join(a[:2]))
+def test_a_file_output_ending_in_a_separator_is_refused(capsys, log, bag_if_needed, tmp_path, argv):
+    """odometry -o newdir/ wrote a regular file 'newdir'."""
+    _needs(argv)
+    out = tmp_path / "fresh"
+    argv = [(f"{out}/" if a == "OUT" else a) for a in _argv(argv, log, bag_if_needed)]
+    rc, _, err = cli(capsys, *argv)
+    refused(rc, err, f"{out}/: names a folder")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "argv, both",
+    [
+        (["simulate", "tomasi-omni3", "--log", "-", "--json"], "--log - and --json"),
+        (["odometry", "tomasi-omni3", "LOG", "-o", "-", "--json"], "-o - and --json"),
+        (["calibrate", "tomasi-omni3", RUNS, "-o", "-", "--json"], "-o - and --json"),
+        (["calibrate", "tomasi-omni3", "--plan", "-o", "-", "--json"], "-o - and --json"),
+    ],
+)
+def test_data_and_json_never_share_standard_output(capsys, log, argv, both):
+    """simulate --log - --json wrote the CSV log and the JSON document both to stdout, status 0."""
+    rc, out, err = cli(capsys, *_argv(argv, log))
+    refused(rc, err, f"{both} would both write to standard output")
+    assert out == ""
+
+
+def test_a_command_never_names_one_path_for_two_outputs(capsys, tmp_path):
+    """simulate --log x1.csv --bag x1.csv wrote a 13 MB bag, then failed with a doubled message."""
+    pytest.importorskip("rosbags")
+    bag, log = tmp_path / "x1.csv", tmp_path / "x1.csv"
+    inner, folder = tmp_path / "run.bag" / "log.csv", tmp_path / "run.bag"
+    for bag_path, log_path, message in (
+        (bag, log, f"--bag {bag} and --log {log} are the same path"),
+        (folder, inner, f"--log {inner} lies inside --bag {folder}"),
+        (tmp_path / "sub" / ".." / "x2.csv", tmp_path / "x2.csv", "are the same path"),
+    ):
+        rc, _, err = cli(capsys, "simulate", "tomasi-omni3", "--bag", bag_path, "--log", log_path)
+        refused(rc, err, message)
+        assert list(tmp_path.iterdir()) == []
+
+
+def test_a_report_is_never_written_over_the_current_folder(tmp_path):
+    """'cd report && omnikin umbmark -o .' failed with 'Device or resource busy' and left an empty
+    '..xxxx.old' folder inside the report."""
+    first = entry_point("umbmark", "diff-drive", "--runs", "1", "--no-calibrate", "-o", "rep", cwd=tmp_path)
+    assert first.communicate(timeout=300) and first.returncode == 0
+    rep = tmp_path / "rep"
+    before = snapshot(tmp_path)
+    for out in (".", "..", "./", str(rep)):
+        proc = entry_point("umbmark", "diff-drive", "--runs", "1", "-o", out, cwd=rep)
+        _, err = proc.communicate(timeout=300)
+        assert proc.returncode == 2 and err.startswith("omnikin: error: ") and "current folder" in err, err
+        assert err.count("\n") == 1
+    assert snapshot(tmp_path) == before
+    assert [p.name for p in tmp_path.rglob(".*")] == [".omnikin-report"]  # no staging or '.old' folder
+
+
+def test_simulate_log_to_stdout_carries_the_log_only(capsys):
+    """simulate --log - printed its summary into the tick log on standard output."""
+    rc, out, err = cli(capsys, "simulate", "tomasi-omni3", "--path", "spin 20", "--rate", "20", "--log", "-")
+    assert rc == 0, err
+    lines = out.splitlines()
+    assert lines[0].startswith("# encoder tick log of tomasi-omni3") and lines[1] == "t,w1,w2,w3"
+    assert all(len(line.split(",")) == 4 for line in lines[1:])
+    assert "tick log written to standard output" in err

@@ -23,7 +23,6 @@ from .common import (
     console,
     declare_inputs,
     load_robot,
-    messages_console,
     print_json,
     robot_as_built,
 )
@@ -351,7 +350,7 @@ def cmd_bag_export(args) -> int:
         track = export_poses(
             args.bag, args.topic, args.format, args.output, force=args.force, **_read_bounds(args, POSE_BYTES)
         )
-    messages_console(args.output).print(
+    console(120).print(
         f"{len(track.poses)} poses of {args.topic} ({track.msgtype}, frame "
         f"{track.frame_id!r}) written to {args.output} ({args.format})"
     )
@@ -465,7 +464,12 @@ def cmd_simulate(args) -> int:
         f"x={odom_end[0]:.6g} m, y={odom_end[1]:.6g} m, theta={odom_end[2]:.6g} rad "
         f"(off by {summary['end_error_distance'] * 1000:.3g} mm)\n"
         + (f"bag {args.bag}: " + ", ".join(f"{t} ({n})" for t, n in counts.items()) if args.bag is not None else "")
-        + (("\n" if args.bag is not None else "") + f"tick log written to {args.log}" if args.log is not None else "")
+        + (
+            ("\n" if args.bag is not None else "")
+            + f"tick log written to {'standard output' if args.log == '-' else args.log}"
+            if args.log is not None
+            else ""
+        )
     )
     return 0
 

@@ -8,8 +8,8 @@ naming its inputs with :func:`declare_inputs`; :func:`add_output_options` adds `
 the same path or one inside another, at most one thing on standard output (``--json``
 counts), an existing file only with ``--force``. The command then writes through the writers
 of :mod:`omnikin.io` (atomic, checked again) and prints its messages with
-:func:`messages_console`, which goes to standard error when an output is ``-`` (standard
-output then carries the data only). ``--json`` documents are printed with :func:`print_json`
+:func:`console`, which goes to standard error when an output is ``-`` (standard output then
+carries the data only). ``--json`` documents are printed with :func:`print_json`
 (strict JSON: a non-finite number is an error naming the field).
 """
 
@@ -30,20 +30,24 @@ def robot_as_built(robot, true_robot: str | None, errors: str, seed):
     return as_built(robot, true_robot or None, errors, seed)
 
 
+class _Stdout:
+    """Whether the running command writes data to standard output (an output ``-``), set by
+    :func:`check_command_outputs` before the command runs: its messages then go to standard
+    error (:func:`console`), whichever command prints them."""
+
+    carries_data = False
+
+
 def console(width: int = 140, stderr: bool = False):
-    """A rich console without markup or highlighting; ``width`` columns when not a terminal."""
+    """A rich console without markup or highlighting; ``width`` columns when not a terminal. On
+    standard error when ``stderr`` or when standard output carries the command's data."""
     from rich.console import Console
 
+    stderr = stderr or _Stdout.carries_data
     con = Console(highlight=False, markup=False, stderr=stderr)
     if not con.is_terminal:
         con = Console(highlight=False, markup=False, width=width, stderr=stderr)
     return con
-
-
-def messages_console(*outputs, width: int = 120):
-    """The console for a command's messages and tables: standard error when one of ``outputs``
-    is ``-`` (standard output carries the data only), else standard output."""
-    return console(width, stderr=any(o is not None and is_stdout(o) for o in outputs))
 
 
 def load_robot(spec):
@@ -93,8 +97,9 @@ def command_inputs(args) -> list:
 
 def check_command_outputs(args) -> None:
     """Check every output the parsed command declared (:func:`add_output`), together and against
-    its inputs (:func:`omnikin.io.output.check_outputs`); ``--json`` counts as a use of standard
-    output. Called by ``omnikin.cli.main`` before the command runs, so no command can skip it."""
+        its inputs (:func:`omnikin.io.output.check_outputs`); ``--json`` counts as a use of standard
+        output. Called by ``omnikin.cli.main`` before the command runs, so no command can skip it; with
+    an output ``-``, the command's messages go to standard error (:func:`console`)."""
     declared = getattr(args, OUTPUTS, ())
     outputs = []
     for dest, label, folder, stdout in declared:
@@ -102,6 +107,7 @@ def check_command_outputs(args) -> None:
         if path is not None and is_stdout(path) and not stdout:
             raise InputError(f"{label}: '-' (standard output) cannot take it; name a {'folder' if folder else 'file'}")
         outputs.append(Output(label, path, folder))
+    _Stdout.carries_data = any(o.path is not None and is_stdout(o.path) for o in outputs)
     check_outputs(
         outputs,
         inputs=command_inputs(args),

@@ -498,7 +498,7 @@ def cmd_odometry(args) -> int:
     if args.json:
         print_json(summary)
     else:
-        console(stderr=to_stdout).print(
+        console().print(
             f"{robot.name}: {summary['samples']} samples over {summary['duration']:.6g} s, {args.method} integration\n"
             f"final pose x={end[0]:.6g} m, y={end[1]:.6g} m, theta={end[2]:.6g} rad; path {path:.6g} m\n"
             f"written to {'standard output' if to_stdout else args.output} ({args.format})"
@@ -787,8 +787,9 @@ class Terminated(BaseException):
 
 @contextlib.contextmanager
 def _termination_unwinds() -> Iterator[None]:
-    """Turn the first termination signal into :class:`Terminated` while a command runs (later
-    ones wait: the cleanup it started must finish); the previous handlers come back after. A
+    """Turn the first termination signal into :class:`Terminated` while a command runs; later
+    ones are ignored, to the end of the process (the cleanup the first one started must finish,
+    and the process is ending). Without a signal the previous handlers come back after. A
     signal the caller ignores (``nohup``) stays ignored. Only in the main thread."""
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -809,7 +810,7 @@ def _termination_unwinds() -> Iterator[None]:
         yield
     finally:
         for sig, handler in previous.items():
-            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+            signal.signal(sig, signal.SIG_IGN if fired else signal.SIG_DFL if handler is None else handler)
 
 
 class _ClosedStream(io.TextIOBase):

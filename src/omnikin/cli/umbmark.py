@@ -455,7 +455,7 @@ def cmd_calibrate(args) -> int:
         return 0
     from rich.table import Table
 
-    con = console(120, stderr=to_stdout)
+    con = console(120)
     t = Table(title=f"calibration of {cal.nominal.name} from {len(cal.runs)} runs", title_justify="left")
     for col in ("parameter", "estimate", "sigma", "unit"):
         t.add_column(col, justify="left" if col in ("parameter", "unit") else "right")

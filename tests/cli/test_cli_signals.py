@@ -1,0 +1,100 @@
+"""A termination signal (``timeout``, ``kill``, systemd: SIGTERM) ends a command the way Ctrl-C
+does: every cleanup runs, nothing half written is left, exit status 143.
+
+``timeout 2.6 omnikin umbmark -o k`` once left ``.k.xxxx.tmp/`` with a 0-byte PNG and
+``timeout 3 omnikin simulate --rate 2000 --bag big.bag`` 137 MB in ``.big.bag.xxxx.tmp/``.
+Each test runs the real entry point in a subprocess, waits until the output is being written
+(its temporary file or staging folder exists), sends a real SIGTERM and checks the folder.
+"""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from conftest import omnikin_env
+
+
+def start(tmp_path, *argv):
+    return subprocess.Popen(
+        [sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]],
+        cwd=tmp_path,
+        env=omnikin_env(),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def terminate_while_writing(proc, folder, prefix: str, timeout: float = 300.0) -> None:
+    """Send SIGTERM as soon as an entry of ``folder`` starting with ``prefix`` (a temporary file
+    or a staging folder) appears; fail if the command ends first."""
+    deadline = time.monotonic() + timeout
+    while not any(p.name.startswith(prefix) for p in folder.iterdir()):
+        if proc.poll() is not None:
+            out, err = proc.communicate()
+            pytest.fail(f"the command ended before writing: {proc.returncode} {err}")
+        assert time.monotonic() < deadline, "no temporary output appeared"
+    proc.send_signal(signal.SIGTERM)
+
+
+def ended_by_sigterm(proc) -> None:
+    out, err = proc.communicate(timeout=300)
+    assert proc.returncode == 128 + signal.SIGTERM == 143, err
+    assert err.splitlines()[-1] == "omnikin: error: terminated (SIGTERM)", err
+    assert "Traceback" not in err
+
+
+def test_sigterm_while_writing_a_report_folder_leaves_nothing(tmp_path):
+    proc = start(tmp_path, "umbmark", "diff-drive", "--runs", "1", "-o", "k")
+    terminate_while_writing(proc, tmp_path, ".k.")
+    ended_by_sigterm(proc)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sigterm_keeps_the_previous_report_as_it_was(tmp_path):
+    """A report omnikin wrote before stays whole: the new one was still being staged."""
+    first = start(tmp_path, "umbmark", "diff-drive", "--runs", "1", "--no-calibrate", "-o", "k")
+    assert first.wait(timeout=300) == 0, first.communicate()
+    before = {p.name: p.read_bytes() for p in (tmp_path / "k").iterdir()}
+    proc = start(tmp_path, "umbmark", "diff-drive", "--runs", "1", "-o", "k")
+    terminate_while_writing(proc, tmp_path, ".k.")
+    ended_by_sigterm(proc)
+    assert [p.name for p in tmp_path.iterdir()] == ["k"]
+    assert {p.name: p.read_bytes() for p in (tmp_path / "k").iterdir()} == before
+
+
+def test_sigterm_while_writing_a_bag_leaves_nothing(tmp_path):
+    pytest.importorskip("rosbags")
+    proc = start(tmp_path, "simulate", "tomasi-omni3", "--rate", "2000", "--bag", "big.bag")
+    terminate_while_writing(proc, tmp_path, ".big.bag.")
+    time.sleep(0.3)  # well into the writing
+    ended_by_sigterm(proc)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sigterm_while_writing_a_file_leaves_nothing(tmp_path):
+    """The drawing is rendered into its temporary file (the 0-byte PNG of the report)."""
+    pytest.importorskip("matplotlib")
+    proc = start(tmp_path, "show", "tomasi-omni3", "--plot", "layout.png")
+    terminate_while_writing(proc, tmp_path, ".layout.png.")
+    ended_by_sigterm(proc)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_second_sigterm_does_not_cut_the_cleanup(tmp_path):
+    """systemd and impatient users send SIGTERM twice: the cleanup the first one started finishes."""
+    pytest.importorskip("rosbags")
+    proc = start(tmp_path, "simulate", "tomasi-omni3", "--rate", "2000", "--bag", "big.bag")
+    terminate_while_writing(proc, tmp_path, ".big.bag.")
+    for _ in range(20):
+        if proc.poll() is not None:
+            break
+        proc.send_signal(signal.SIGTERM)
+        time.sleep(0.005)
+    ended_by_sigterm(proc)
+    assert list(tmp_path.iterdir()) == []
