@@ -95,6 +95,97 @@ def test_double_dash_still_works(capsys):
     assert rc == 0 and json.loads(out)["twist"] == [-2e-3, 0.0, 0.0]
 
 
+def _value_options():
+    """``(command words, option and values)`` for every option of every command that takes a
+    converted value, with the value ``-1q`` (as many as the option takes)."""
+    import argparse
+
+    from omnikin.cli.main import build_parser
+
+    found = []
+
+    def walk(parser, words):
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, sub in action.choices.items():
+                    walk(sub, [*words, name])
+            elif action.option_strings and action.type is not None and action.nargs != 0:
+                count = action.nargs if isinstance(action.nargs, int) else 1
+                found.append((words, [action.option_strings[-1]] + ["-1q"] * count))
+        for name, sub in getattr(parser, "_commands", {}).items():
+            walk(sub, [*words, name])
+
+    walk(build_parser(), [])
+    return found
+
+
+@pytest.mark.parametrize("words, option", _value_options(), ids=lambda v: " ".join(v))
+def test_a_negative_value_is_quoted_as_typed_for_every_option(capsys, words, option):
+    """'--max-time -1' said "' -1' is not a duration": the mark that makes argparse take -1 as a
+    value showed in the message, for every option type."""
+    rc, out, err = cli(capsys, *words, *option)
+    assert rc == 2 and err.count("\n") == 1, err
+    assert "'-1q'" in err and "' -1q'" not in err, err
+
+
+@pytest.mark.parametrize(
+    "value, message",
+    [
+        ("-1", "'-1': a duration must be positive"),
+        ("-2h", "'-2h': a duration must be positive"),
+        ("1e400", "'1e400' is too large for a duration"),
+        ("1e999h", "'1e999h' is too large for a duration"),
+    ],
+)
+def test_durations_say_what_is_wrong(capsys, value, message):
+    one_line(*cli(capsys, "umbmark", "--max-time", value), f"argument --max-time: {message}")
+
+
+@pytest.mark.parametrize(
+    "value, message",
+    [
+        ("-5M", "'-5M': a size must be at least one byte"),
+        ("0.5", "'0.5': a size must be at least one byte"),
+        ("1e999", "'1e999' is too large for a size"),
+    ],
+)
+def test_sizes_say_what_is_wrong(capsys, value, message):
+    one_line(*cli(capsys, "simulate", "tomasi-omni3", "--max-memory", value), f"argument --max-memory: {message}")
+
+
+def test_messages_speak_command_line_not_python(capsys):
+    """simulate --path 'square cw translate 4' on a differential drive suggested the Python
+    argument on_infeasible='return' to a command-line user."""
+    line = one_line(
+        *cli(capsys, "simulate", "diff-drive", "--path", "square cw translate 4", "--log", "-"),
+        "--path 'square cw translate 4'",
+        "fixed wheel 'left' would slide sideways",
+    )
+    assert "on_infeasible" not in line and "=" not in line
+    line = one_line(*cli(capsys, "ik", "diff-drive", "0", "1", "0"), "--allow-infeasible")
+    assert "on_infeasible" not in line
+
+
+def test_rounding_noise_prints_as_zero_and_json_keeps_the_numbers(capsys):
+    """'ik tomasi-omni3 -1 0 0' printed w1 -1.48442e-15: w1 (hub at 0 deg) drives along +y, so a
+    pure -x motion leaves it still; the others turn at -/+ sin(120 deg) / r."""
+    rc, out, err = cli(capsys, "ik", "tomasi-omni3", "-1", "0", "0")
+    assert rc == 0, err
+    rows = {
+        line.split()[1]: line.split()[3] for line in out.splitlines() if line.split()[1:2] in (["w1"], ["w2"], ["w3"])
+    }
+    speed = math.sin(math.radians(120)) / 0.04125
+    assert rows["w1"] == "0" and float(rows["w2"]) == pytest.approx(speed, rel=1e-5)
+    assert float(rows["w3"]) == pytest.approx(-speed, rel=1e-5)
+    rc, out, err = cli(capsys, "ik", "tomasi-omni3", "-1", "0", "0", "--json")
+    np.testing.assert_allclose(json.loads(out)["wheel_speeds"], TOMASI_J @ [-1, 0, 0], atol=1e-12)
+    rc, out, err = cli(capsys, "fk", "tomasi-omni3", "0", str(speed), str(-speed))
+    assert rc == 0 and out.splitlines() == [
+        "tomasi-omni3: vx=-1 m/s, vy=0 m/s, omega=0 rad/s",
+        "residual [rad/s]: [0.0, 0.0, 0.0] (norm 0)",
+    ], out
+
+
 # --- did you mean ----------------------------------------------------------------------------------------
 @pytest.mark.parametrize(
     "argv, suggestion",
