@@ -3,7 +3,9 @@
 Every sub-command takes ROBOT = a preset name (``omnikin presets``) or a robot file.
 Errors end with one line ``omnikin: error: ...`` on stderr, never a traceback: exit status 2
 for bad input or usage, 1 when something fails while running (an output cannot be written, a
-hardware link fails, an unexpected error), 130 on Ctrl-C, 141 when a reader closes the pipe.
+hardware link fails, an unexpected error), 130 on Ctrl-C, 143 on SIGTERM (129 on SIGHUP), 141
+when a reader closes the pipe. Ctrl-C and a termination signal end a command the same way:
+every temporary file and staging folder is removed, a previous output stays as it was.
 """
 
 from __future__ import annotations
@@ -58,17 +60,21 @@ EPILOG = """examples:
 units: SI and radians; degrees only where an option or column ends in -deg/_deg.
 frames: body x forward, y left, angles counter-clockwise (REP-103).
 negative numbers are values: omnikin ik tomasi-omni3 -2.5e-3 0 -1e-1 (-inf, -1E3 too).
+options may come before, between or after the positional arguments.
 
 output files: no command writes over one of its inputs, --force or not. An existing file is
   replaced only with --force; an existing folder only if omnikin wrote it (a report folder is
   replaced by the next run, a bag only with --force); omnikin never deletes anything else.
   Files are written whole or not at all (a temporary file beside them, renamed when complete).
   '-' is standard output, which then carries the data only: messages and tables go to stderr.
+  The outputs of a command are checked together before it starts: no two on one path, none
+  inside another, none the current folder, at most one on standard output (--json counts).
 limits: commands whose size you choose (umbmark --trials/--runs, simulate --rate/--path, bags,
   trajectory files) are sized first and refused beyond --max-memory (default 2G) or --max-time
   (default 1h).
 errors: one line 'omnikin: error: ...' on stderr; exit status 2 for bad input or usage, 1 when
-  something fails while running (writing an output, a hardware link), 130 on Ctrl-C."""
+  something fails while running (writing an output, a hardware link), 130 on Ctrl-C, 143 on
+  SIGTERM (timeout, kill); interrupted or terminated, a command leaves no partial output."""
 
 MESSAGE_LIMIT = 800
 """Longest error or warning line printed [characters]."""
@@ -683,10 +689,14 @@ def main(argv=None) -> int:
     """Run ``omnikin`` with ``argv`` (default ``sys.argv[1:]``); returns the exit status.
 
     Every failure ends here as one line on stderr (:func:`_fail`), whatever raised it: usage
-    and input errors (2), failures while running (1), Ctrl-C (130), a closed pipe (141, quiet),
+    and input errors (2), failures while running (1; writing an output: the one place an
+    :class:`OutputError` becomes a status), Ctrl-C (130), SIGTERM or SIGHUP (:class:`Terminated`,
+    128 + the signal), a closed pipe (141, quiet),
     floating-point trouble in omnikin's own computations (2: an input out of range; NumPy's
     warnings are errors inside a command), anything unexpected (1, ``internal error``; set
     ``OMNIKIN_TRACEBACK=1`` to see where). Other libraries' warnings print as one line.
+    Standard output and error may be closed or in an encoding without every character
+    (:func:`_standard_streams`).
     """
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
     with _standard_streams(), _termination_unwinds():

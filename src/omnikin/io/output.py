@@ -97,7 +97,8 @@ def check_output(path, *, inputs: Iterable = (), force: bool = False, folder: bo
         raise InputError(f"{text}: names a folder (it ends with {os.sep!r} or is '.' or '..'); name a file")
     out = Path(text)
     target = _resolved(out)
-    if kind and _inside(_cwd(), target):
+    cwd = _cwd()
+    if kind and cwd is not None and _inside(cwd, target):
         raise OutputExistsError(
             f"{out}: is the current folder or contains it; omnikin replaces a {kind} folder as a whole: "
             "name another folder, or run omnikin from outside it"
@@ -200,8 +201,8 @@ def check_outputs(
                 raise InputError(
                     f"{a.label} {a.path} and {b.label} {b.path} are the same path; give each output its own name"
                 )
-            inner, outer = (a, b) if _inside(pa, pb) else (b, a) if _inside(pb, pa) else (None, None)
-            if inner is not None:
+            if _inside(pa, pb) or _inside(pb, pa):
+                inner, outer = (a, b) if _inside(pa, pb) else (b, a)
                 raise InputError(
                     f"{inner.label} {inner.path} lies inside {outer.label} {outer.path}; write it elsewhere"
                 )
