@@ -39,6 +39,7 @@ def terminate_while_writing(proc, folder, prefix: str, timeout: float = 300.0) -
             out, err = proc.communicate()
             pytest.fail(f"the command ended before writing: {proc.returncode} {err}")
         assert time.monotonic() < deadline, "no temporary output appeared"
+        time.sleep(0.002)
     proc.send_signal(signal.SIGTERM)
 
 
@@ -78,12 +79,18 @@ def test_sigterm_while_writing_a_bag_leaves_nothing(tmp_path):
 
 
 def test_sigterm_while_writing_a_file_leaves_nothing(tmp_path):
-    """The drawing is rendered into its temporary file (the 0-byte PNG of the report)."""
+    """The drawing is rendered into its temporary file (the 0-byte PNG of the report); 120
+    wheels make the rendering last long enough to be caught in the middle."""
     pytest.importorskip("matplotlib")
-    proc = start(tmp_path, "show", "tomasi-omni3", "--plot", "layout.png")
+    wheels = "".join(
+        f"  - {{name: w{i}, type: omni, distance: 0.3, angle_deg: {3 * i}, radius: 0.05}}\n" for i in range(120)
+    )
+    robot = tmp_path / "many.yaml"
+    robot.write_text(f"omnikin: 1\nname: many\nwheels:\n{wheels}")
+    proc = start(tmp_path, "show", robot, "--plot", "layout.png")
     terminate_while_writing(proc, tmp_path, ".layout.png.")
     ended_by_sigterm(proc)
-    assert list(tmp_path.iterdir()) == []
+    assert list(tmp_path.iterdir()) == [robot]
 
 
 def test_a_second_sigterm_does_not_cut_the_cleanup(tmp_path):
