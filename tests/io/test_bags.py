@@ -101,13 +101,13 @@ def odom_arrays(path, topic="/odom"):
 def run_cli(argv):
     """A bag command as ``omnikin.cli.main`` runs it (outputs checked first), errors raised."""
     from omnikin.cli import bag
-    from omnikin.cli.common import check_command_outputs
+    from omnikin.cli.common import running
 
     p = argparse.ArgumentParser(prog="omnikin")
     bag.add_parsers(p.add_subparsers(), "preset or robot file")
     args = p.parse_args([str(a) for a in argv])
-    check_command_outputs(args)
-    return args.func(args)
+    with running(args):
+        return args.func(args)
 
 
 @pytest.fixture

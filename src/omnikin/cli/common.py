@@ -3,7 +3,7 @@
 Outputs (the policy is :mod:`omnikin.io.output`): a command declares each option naming an
 output with :func:`add_output` (a file, a report folder or a data folder) and the arguments
 naming its inputs with :func:`declare_inputs`; :func:`add_output_options` adds ``--force``.
-``omnikin.cli.main`` checks every declared output of the command together
+``omnikin.cli.main`` runs the command in :func:`running`, which checks its declared outputs together
 (:func:`check_command_outputs`) before the command runs: never an input, never two outputs on
 the same path or one inside another, at most one thing on standard output (``--json``
 counts), an existing file only with ``--force``. The command then writes through the writers
@@ -14,6 +14,9 @@ carries the data only). ``--json`` documents are printed with :func:`print_json`
 """
 
 from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
 
 from ..errors import InputError
 from ..io.output import Output, check_outputs, is_stdout
@@ -32,8 +35,8 @@ def robot_as_built(robot, true_robot: str | None, errors: str, seed):
 
 class _Stdout:
     """Whether the running command writes data to standard output (an output ``-``), set by
-    :func:`check_command_outputs` before the command runs: its messages then go to standard
-    error (:func:`console`), whichever command prints them."""
+    :func:`running` while the command runs: its messages then go to standard error
+    (:func:`console`), whichever command prints them."""
 
     carries_data = False
 
@@ -107,13 +110,28 @@ def check_command_outputs(args) -> None:
         if path is not None and is_stdout(path) and not stdout:
             raise InputError(f"{label}: '-' (standard output) cannot take it; name a {'folder' if folder else 'file'}")
         outputs.append(Output(label, path, folder))
-    _Stdout.carries_data = any(o.path is not None and is_stdout(o.path) for o in outputs)
     check_outputs(
         outputs,
         inputs=command_inputs(args),
         force=bool(getattr(args, "force", False)),
         stdout="--json" if getattr(args, "json", False) is True else None,
     )
+
+
+@contextlib.contextmanager
+def running(args) -> Iterator[None]:
+    """The frame ``omnikin.cli.main`` runs every parsed command in: its outputs are checked
+    first (:func:`check_command_outputs`), and while it runs, its messages go to standard error
+    if one of its outputs is ``-`` (:func:`console`)."""
+    check_command_outputs(args)
+    previous = _Stdout.carries_data
+    _Stdout.carries_data = any(
+        is_stdout(getattr(args, dest)) for dest, *_ in getattr(args, OUTPUTS, ()) if getattr(args, dest, None)
+    )
+    try:
+        yield
+    finally:
+        _Stdout.carries_data = previous
 
 
 def robot_inputs(*specs) -> list:

@@ -31,12 +31,12 @@ from .common import (
     add_method_option,
     add_output,
     add_output_options,
-    check_command_outputs,
     command_inputs,
     console,
     declare_inputs,
     load_robot,
     print_json,
+    running,
 )
 from .parser import CommandParser, UsageError
 
@@ -764,8 +764,8 @@ def _run(argv: list[str]) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
-    check_command_outputs(args)  # every output of the command, together, before any work
-    return args.func(args)
+    with running(args):  # every output of the command checked together before any work
+        return args.func(args)
 
 
 def _fail(message, status: int) -> int:
