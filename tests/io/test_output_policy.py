@@ -333,3 +333,15 @@ def test_data_to_standard_output_is_utf8_whatever_its_encoding(tmp_path):
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, env=env, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout == "café\n".encode()
+
+
+def test_data_to_a_closed_standard_output_is_an_output_error():
+    script = (
+        "from omnikin.io.output import write_text\n"
+        "from omnikin.errors import OutputError\n"
+        "try:\n    write_text('-', 'x')\nexcept OutputError as exc:\n    raise SystemExit(str(exc))\n"
+    )
+    proc = subprocess.run(
+        ["sh", "-c", f"'{sys.executable}' -c \"$0\" >&-", script], capture_output=True, env=omnikin_env(), timeout=120
+    )
+    assert (proc.returncode, proc.stderr) == (1, b"standard output: cannot write: it is closed\n")

@@ -275,6 +275,8 @@ def write_text(path, text: str) -> None:
         import sys
 
         stream = sys.stdout
+        if stream is None:  # the process was started without one (>&-)
+            raise OutputError("standard output: cannot write: it is closed")
         binary = getattr(stream, "buffer", None)
         stream.flush()
         if binary is None:  # a text-only stream (a test's capture): it takes text
