@@ -375,6 +375,8 @@ class Robot:
         by = self._steer_of(steer)
         chosen = self.rolling if wheels is None else [self.wheel(n) for n in wheels]
         rows = [w.rolling_row(by.get(w.name, 0.0)) for w in chosen]
+        if not rows:  # no wheel asked for: an empty (..., 0, 3) matrix, not a stacking error
+            return np.zeros(steer.shape[:-1] + (0, 3))
         shape = np.broadcast_shapes(*[r.shape for r in rows])
         return np.stack([np.broadcast_to(r, shape) for r in rows], axis=-2)
 

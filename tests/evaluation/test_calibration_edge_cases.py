@@ -38,3 +38,25 @@ def test_lever_is_the_displacement_component_along_its_direction():
     w = robot.wheel("w1")
     a = w.drive + w.roller
     assert -_m.sin(a) * e.dx + _m.cos(a) * e.dy == pytest.approx(-0.0004, abs=1e-15)
+
+
+def test_a_robot_without_encoders_is_refused_by_every_measuring_command(tmp_path, capsys, monkeypatch):
+    """UMBmark, the calibration plan and the calibration measure through the encoders: a robot
+    file without any says so in one line (it crashed with an internal error in the plan)."""
+    from omnikin.cli.main import main
+
+    robot = tmp_path / "uni.yaml"
+    robot.write_text(
+        "omnikin: 1\nname: uni\nwheels:\n"
+        + "".join(
+            f"  - {{name: w{i}, type: omni, distance: 0.113, angle_deg: {a}, radius: 0.04125}}\n"
+            for i, a in enumerate((0, 120, 240), start=1)
+        ),
+        encoding="utf-8",
+    )
+    monkeypatch.chdir(tmp_path)
+    for argv in (["calibrate", str(robot), "--plan"], ["umbmark", str(robot), "-o", "r", "--runs", "3"]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "no wheel has an 'encoder' entry" in err[0], err
+    assert not (tmp_path / "r").exists()

@@ -41,6 +41,7 @@ import numpy as np
 from ..errors import InfeasibleTwistError, InputError, shorten
 from ..geometry import compose, exp, wrap_angle
 from ..model import Robot
+from ..odometry import encoded_wheels
 from ..plans import CalibrationRun, Plan, parse_plan
 from ..simulation.error_models import SystematicErrors, WheelErrors
 from ..simulation.simulate import segment_rates
@@ -386,6 +387,7 @@ def recommended_runs(robot: Robot, side: float = 4.0) -> list[tuple[str, Plan]]:
     sharply than a half turn against the same heading measurement error. The half circles
     stand in for the turns in place on robots that cannot turn in place (cars).
     """
+    encoded_wheels(robot)  # the runs are measured through the encoders: refuse a robot without them
     side = check_side(side)  # the UMBmark square's bounds (squares and lines of this length)
     L, half = _number_text(side), _number_text(side / 2)
     candidates = [

@@ -35,6 +35,7 @@ import numpy as np
 
 from ..errors import InputError, ResourceLimitError, shorten
 from ..model import Robot
+from ..odometry import encoded_wheels
 from ..plans import CalibrationRun, umbmark_square
 from ..simulation.error_models import NOISE, NoiseModel, SystematicErrors
 from ..simulation.motion import estimated_samples
@@ -235,6 +236,7 @@ def umbmark_study(
     (:func:`draw_as_built`); ``progress``: called with the name of each step as it starts.
     The settings are checked first (:func:`check_settings`)."""
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
+    encoded_wheels(robot)  # UMBmark measures with the encoders: refuse a robot without them now
     rng = streams(seed)
     step = progress or (lambda name: None)
     opts: dict[str, Any] = dict(side=side, mode=mode, runs=runs, noise=noise, rate=rate)
