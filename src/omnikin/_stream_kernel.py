@@ -19,9 +19,11 @@ as plain data. Per sample, ``step_ticks`` does (conventions, Odometry):
 2. counter increments ``d_j = ticks_j - prev_j`` in exact integer arithmetic (wrapped
    modulo ``2**bits`` for counters of a known width, after checking the reading lies in
    the counter's range), then as floats;
-3. every wheel's jump rule (:mod:`omnikin.encoders`) ``|d_j| <= limit_j(dt)``, with the
-   limits shrunk by :data:`SAFETY` so that float rounding never accepts what the exact rule
-   refuses; a sample that close to a limit goes to the general path, which decides exactly;
+3. every wheel's jump rule (:mod:`omnikin.encoders`) ``|d_j| <= limit_j(dt)`` and, from the
+   third sample on, its change-of-speed rule ``|d_j - q_j| <= change_limit_j(dt, dt_prev)``
+   (``q_j`` the previous increment), with the limits shrunk by :data:`SAFETY` so that float
+   rounding never accepts what the exact rule refuses; a sample that close to a limit goes to
+   the general path, which decides exactly;
 4. body increment ``(a, b, phi) = F d`` (``F`` = forward kinematics per tick);
 5. the pose update of :mod:`omnikin.integration` (:data:`ADVANCE`).
 
@@ -148,6 +150,16 @@ class WheelBound:
 
 
 @dataclass(frozen=True)
+class ChangeBound:
+    """The change-of-speed rule of one wheel (:func:`omnikin.encoders.change_limit`) as the
+    kernel evaluates it: ``half_accel`` is half the acceleration bound (inf: no rule) and
+    ``slack`` the quantisation slack of one increment [ticks or rad]."""
+
+    half_accel: float
+    slack: float
+
+
+@dataclass(frozen=True)
 class Kernels:
     """The generated functions of one estimator configuration (all pure)."""
 
@@ -186,6 +198,35 @@ def _check_lines(d: list[str], bounds: list[WheelBound]) -> list[str]:
     return lines
 
 
+def _change_lines(d: list[str], bounds: list[ChangeBound]) -> list[str]:
+    """The change-of-speed test of every wheel with a bound, from the third sample on (``count``
+    samples accepted before this one): :func:`omnikin.encoders.change_limit` in the same order
+    of operations, times :data:`SAFETY`; near or past a limit the general path decides."""
+    active = [(j, b) for j, b in enumerate(bounds) if math.isfinite(b.half_accel)]
+    if not active:
+        return []
+    lines = [
+        "if count > 1:",
+        "    g = dt - dtp",
+        "    if g < 0.0:",
+        "        g = -g",
+        "    s = dtp + dt",
+        "    w1 = dt * s",
+        "    w0 = dtp * s",
+    ]
+    for j, b in active:
+        half, slack = repr(b.half_accel), repr(b.slack)
+        lines += [
+            f"    x = g * ((q{j} if q{j} >= 0.0 else -q{j}) + {slack}) / dtp + {half} * w1",
+            f"    y = g * ((d{j} if d{j} >= 0.0 else -d{j}) + {slack}) / dt + {half} * w0",
+            f"    x = ((x if x < y else y) + {2.0 * b.slack!r}) * {SAFETY!r}",
+            f"    y = d{j} - q{j}",
+            "    if not -x <= y <= x:",
+            "        return None  # near or past the limit: the general path decides",
+        ]
+    return lines
+
+
 def _fk_lines(fk_rows, d: list[str]) -> list[str]:
     """``(a, b, phi) = F d``; terms whose coefficient is exactly zero are left out (d is finite)."""
     lines = []
@@ -198,14 +239,23 @@ def _fk_lines(fk_rows, d: list[str]) -> list[str]:
 def _unpack(n: int, angles: bool) -> str:
     times = "_, t_prev" if angles else "t_prev, _"
     return (
-        f"(px, py, th), {times}, count, _, _, _, _, "
+        f"(px, py, th), {times}, count, dtp, _, _, _, "
         + ", ".join(f"p{j}" for j in range(n))
         + ", "
-        + ", ".join("_" for _ in range(n))
+        + ", ".join(f"q{j}" for j in range(n))
     )
 
 
-def _step_source(name: str, n: int, fk_rows, bounds: list[WheelBound], bits: list, method: str, angles: bool) -> str:
+def _step_source(
+    name: str,
+    n: int,
+    fk_rows,
+    bounds: list[WheelBound],
+    changes: list[ChangeBound],
+    bits: list,
+    method: str,
+    angles: bool,
+) -> str:
     """Source of ``name(state, t, values)``: one sample of ticks (or wheel angles) -> state or None."""
     v = [f"v{j}" for j in range(n)]
     d = [f"d{j}" for j in range(n)]
@@ -256,6 +306,7 @@ def _step_source(name: str, n: int, fk_rows, bounds: list[WheelBound], bits: lis
         "    return None",
     ]
     body += _check_lines(d, bounds)
+    body += _change_lines(d, changes)
     body += _fk_lines(fk_rows, d)
     body += ADVANCE[method].splitlines() + _MOVE.splitlines()
     times = "NAN, t" if angles else "t, NAN"
@@ -305,16 +356,25 @@ def _compile(source: str) -> dict:
 
 
 def build(
-    n: int, fk_ticks, fk_angles, tick_bounds: list[WheelBound], angle_bounds: list[WheelBound], bits: list, method: str
+    n: int,
+    fk_ticks,
+    fk_angles,
+    tick_bounds: list[WheelBound],
+    angle_bounds: list[WheelBound],
+    tick_changes: list[ChangeBound],
+    angle_changes: list[ChangeBound],
+    bits: list,
+    method: str,
 ) -> Kernels:
     """Kernels for ``n`` encoded wheels. ``fk_ticks``/``fk_angles``: 3 rows of ``n``
     coefficients [m or rad per tick, per rad], or None for robots whose forward kinematics
-    changes with steering (only ``move`` then); ``bits``: counter width per wheel or None."""
+    changes with steering (only ``move`` then); the jump and change-of-speed bounds in ticks
+    and radians; ``bits``: counter width per wheel or None."""
     parts = [_move_source(method)]
     if fk_ticks is not None:
         parts += [
-            _step_source("step_ticks", n, fk_ticks, tick_bounds, bits, method, angles=False),
-            _step_source("step_angles", n, fk_angles, angle_bounds, bits, method, angles=True),
+            _step_source("step_ticks", n, fk_ticks, tick_bounds, tick_changes, bits, method, angles=False),
+            _step_source("step_angles", n, fk_angles, angle_bounds, angle_changes, bits, method, angles=True),
             _fk_source("fk_ticks", fk_ticks, n),
             _fk_source("fk_angles", fk_angles, n),
         ]
@@ -335,3 +395,13 @@ def angle_bounds(rules) -> list[WheelBound]:
     if rules and rules[0].max_jump is not None:
         return [WheelBound(0.0, r.max_jump * abs(r.rad_per_tick)) for r in rules]
     return [WheelBound(r.speed, QUANTISATION_SLACK * abs(r.rad_per_tick)) for r in rules]
+
+
+def change_bounds(rules, unit: str) -> list[ChangeBound]:
+    """The change-of-speed rule of each wheel in ``unit`` (ticks or rad;
+    :meth:`omnikin.encoders.CounterRule.change_bounds`)."""
+    out = []
+    for r in rules:
+        a, slack = r.change_bounds(unit)
+        out.append(ChangeBound(a * 0.5, slack))
+    return out

@@ -1,53 +1,92 @@
-"""Encoder ticks -> wheel angle increments: every rule on counters, wrap-around and jumps
-(``docs/conventions.md``, Odometry).
+"""Encoder ticks -> wheel angle increments: every rule on counters, wrap-around, jumps and
+changes of speed (``docs/conventions.md``, Odometry).
 
 ``angle = 2 pi ticks / (ticks_per_rev gear_ratio)``, negated when ``invert``.
 
 Readings are exact integers (or, from the library, floats). A counter of ``bits`` bits
 (``counter_bits``) wraps: the increment between two samples is the difference taken
 modulo ``2**bits`` into ``[-2**(bits-1), 2**(bits-1))``; its readings may be stored
-signed or unsigned, so they must lie in ``[-2**(bits-1), 2**bits)``. Integer arithmetic
-is exact for readings of any integer type and size (int64, uint64 beyond 2**63, Python
-ints of any length).
+signed or unsigned, so they must lie in ``[-2**(bits-1), 2**bits)``. The increment is
+computed exactly and rounded once to a float: integer arithmetic for readings of any integer
+type and size (int64, uint64 beyond 2**63, Python ints of any length), and for float readings
+the exact difference of the two floats (Knuth's TwoSum), wrapped without rounding (the
+subtraction of a multiple of ``2**bits`` is exact by Sterbenz's lemma), so a float reading of a
+64-bit counter loses nothing a float can hold.
 
-A jump no wheel could make in one sample is refused. Each wheel has a speed bound
-[rad/s]: ``JUMP_MARGIN`` times an explicit ``max_wheel_speed``, else ``JUMP_MARGIN`` times the
-wheel's ``max_speed``, else a rim speed of :data:`DEFAULT_RIM_SPEED` over the wheel radius.
-An increment is impossible when ``|d| > bound * dt / |rad_per_tick| + QUANTISATION_SLACK``
-ticks (or ``|d| > max_jump`` when an explicit ``max_jump`` [ticks] is given); with a counter
-width also when ``|d| > 2**(bits-1) - 0.5`` (exactly half the range: direction undecidable).
-Without a counter width this is what turns a wrapped counter into an error instead of a
-wrong pose: a 16-bit wrap is a jump of about 65 000 ticks.
+Two physical rules turn a counter that wraps without a declared width into an error instead of
+a wrong pose, and refuse corrupted samples:
 
-This module is the single source of those rules: batch odometry uses the array functions
-(:func:`checked_increments`), the streaming estimator :class:`CounterRule`,
-:func:`wrap_scalar` and :func:`in_counter_range`, and the generated streaming kernel the same
-expressions (:mod:`omnikin._stream_kernel`).
+* **speed**: each wheel has a speed bound ``V`` [rad/s]: ``JUMP_MARGIN`` times an explicit
+  ``max_wheel_speed``, else ``JUMP_MARGIN`` times the wheel's ``max_speed``, else a rim speed of
+  :data:`DEFAULT_RIM_SPEED` over the wheel radius. An increment ``d`` over ``dt`` is impossible
+  when ``|d| > V dt / |rad_per_tick| + QUANTISATION_SLACK`` ticks (or ``|d| > max_jump`` when an
+  explicit ``max_jump`` [ticks] is given); with a counter width also when
+  ``|d| > 2**(bits-1) - 0.5`` (exactly half the range: direction undecidable);
+* **change of speed**: each wheel has an acceleration bound ``A`` [rad/s^2]: ``JUMP_MARGIN`` times
+  an explicit ``max_wheel_accel``, else a rim acceleration of :data:`DEFAULT_RIM_ACCEL` over the
+  radius (``inf`` switches the rule off). Two consecutive increments ``d0`` over ``dt0`` and
+  ``d1`` over ``dt1`` are impossible when
+  ``|d1 - d0| > V |dt1 - dt0| + A min(dt0, dt1) (dt0 + dt1) / 2 + 2 QUANTISATION_SLACK`` (all in
+  ticks: ``V`` and ``A`` over ``|rad_per_tick|``). Derivation: the mean speeds over two
+  adjacent intervals differ by at most ``A (dt0 + dt1) / 2``, and
+  ``d1 - d0 = (dt1 - dt0) v1 + dt0 (v1 - v0) = (dt1 - dt0) v0 + dt1 (v1 - v0)``; the first term
+  absorbs timestamp jitter and missed samples. A wrapped ``b``-bit counter changes an
+  increment by ``2**b``: this rule catches it whenever ``2**b`` exceeds twice the bound.
+
+The rule is applied to the float increments (the exact increments rounded once), by batch and
+streaming odometry alike, in the order of the samples. Within one sample the checks run in the
+order of :data:`RANKS`, so both report the same first problem.
+
+This module is the single source of those rules: batch odometry uses :func:`block_increments`,
+the streaming estimator :class:`CounterRule`, :func:`exact_increment` and
+:func:`in_counter_range`, and the generated streaming kernel the same expressions
+(:mod:`omnikin._stream_kernel`).
 """
 
 from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator, Mapping, MappingView, Sequence
+from collections.abc import Set as AbstractSet
+from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 
-from .errors import InputError, OdometryInputError
+from .errors import InputError, OdometryInputError, shorten
 
 JUMP_MARGIN = 1.5
-"""A wheel may turn this much faster than its speed limit before a jump is impossible."""
+"""A wheel may turn (or change its speed) this much faster than its stated limit before a
+sample is impossible."""
 QUANTISATION_SLACK = 2.0
 """Ticks allowed on top of the speed bound (quantisation at both ends of an interval)."""
-DEFAULT_RIM_SPEED = 100.0
-"""Rim speed [m/s] no wheel of a mobile robot reaches (360 km/h; fast mobile robots drive
-5-10 m/s): the speed bound of a wheel without ``max_speed``. At 100 Hz it lets a 4 cm wheel
-with 600 ticks/rev move 2300 ticks per sample, while a wrapped 16-bit counter jumps by
-about 65 000."""
+DEFAULT_RIM_SPEED = 50.0
+"""Rim speed [m/s] (180 km/h) bounding a wheel without ``max_speed``. Indoor and service robots
+drive below 3 m/s and scaled autonomous race cars (F1TENTH) stay near 20 m/s; only full-size
+autonomous race cars (the Indy Autonomous Challenge cars pass 70 m/s) are faster, and they give
+their wheels' ``max_speed`` (or ``max_wheel_speed``)."""
+DEFAULT_RIM_ACCEL = 30.0
+"""Rim acceleration [m/s^2] (about 10 g) bounding how fast a wheel's speed changes. Traction
+limits a robot to about 1 g (rubber on dry concrete); a wheel spinning free or braked by an
+impact changes faster, and 10 g leaves a margin of ten for that. Set ``max_wheel_accel`` for
+data with instantaneous speed steps (idealised simulations: ``math.inf`` switches the rule off)."""
 INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
 UINT64_END = 2**64
 FLOAT_EXACT = 2**53
 """Integers beyond this are not all floats: readings there must stay integers."""
+
+RANKS = {
+    "time": 0,  # non-finite timestamp
+    "reading": 1,  # non-finite reading or wheel angle
+    "steer": 2,  # bad steering angle
+    "range": 3,  # reading outside its counter's range
+    "order": 4,  # timestamp not later than the previous one, or an infinite interval
+    "jump": 5,  # the speed rule
+    "change": 6,  # the change-of-speed rule
+}
+"""Order of the checks of one sample (streaming runs them in this order; batch reports the
+earliest sample and, within it, the lowest rank)."""
 
 
 # --- options ----------------------------------------------------------------------------------
@@ -55,7 +94,7 @@ def check_bits(bits, what: str = "counter_bits") -> int | None:
     if bits is None:
         return None
     if isinstance(bits, (bool, np.bool_)) or not isinstance(bits, (int, np.integer)) or not 2 <= bits <= 64:
-        raise OdometryInputError(f"{what} must be a whole number from 2 to 64, got {bits!r}")
+        raise OdometryInputError(f"{what} must be a whole number from 2 to 64, got {shorten(bits)}")
     return int(bits)
 
 
@@ -67,6 +106,13 @@ def check_max_wheel_speed(speed) -> float | None:
     return _positive(speed, "max_wheel_speed", "a finite wheel speed > 0 [rad/s]")
 
 
+def check_max_wheel_accel(accel) -> float | None:
+    """``max_wheel_accel`` [rad/s^2] > 0; ``inf`` switches the change-of-speed rule off."""
+    if accel is not None and not isinstance(accel, (bool, np.bool_)) and accel == math.inf:
+        return math.inf
+    return _positive(accel, "max_wheel_accel", "a wheel acceleration > 0 [rad/s^2] (or inf: no bound)")
+
+
 def _positive(value, name: str, what: str) -> float | None:
     if value is None:
         return None
@@ -76,7 +122,7 @@ def _positive(value, name: str, what: str) -> float | None:
         or not math.isfinite(value)
         or value <= 0
     ):
-        raise OdometryInputError(f"{name} must be {what}, got {value!r}")
+        raise OdometryInputError(f"{name} must be {what}, got {shorten(value)}")
     return float(value)
 
 
@@ -87,7 +133,9 @@ class CounterRule:
 
     ``bits``: counter width (None: no wrap-around); ``rad_per_tick`` [rad] (negative when
     inverted); ``speed``: the wheel speed bound [rad/s] (margin included) and ``source``
-    where it comes from; ``max_jump`` [ticks]: an explicit bound replacing the speed bound.
+    where it comes from; ``accel``: the bound on its rate of change [rad/s^2] (margin included,
+    ``inf``: none) and ``accel_source``; ``max_jump`` [ticks]: an explicit bound replacing the
+    speed bound on one increment.
     """
 
     wheel: str
@@ -95,12 +143,20 @@ class CounterRule:
     rad_per_tick: float
     speed: float
     source: str
+    accel: float = math.inf
+    accel_source: str = "no bound"
     max_jump: float | None = None
+    accel_explicit: bool = False
 
     @property
     def rate(self) -> float:
         """Speed bound in ticks per second."""
         return self.speed / abs(self.rad_per_tick)
+
+    @property
+    def accel_rate(self) -> float:
+        """Acceleration bound in ticks per second squared."""
+        return self.accel / abs(self.rad_per_tick)
 
     @property
     def half(self) -> int | None:
@@ -124,24 +180,47 @@ class CounterRule:
             return self.max_jump * abs(self.rad_per_tick)
         return self.speed * dt + QUANTISATION_SLACK * abs(self.rad_per_tick)
 
-    def jump_message(self, delta, dt, unit: str = "ticks") -> str:
+    def change_bounds(self, unit: str = "ticks") -> tuple[float, float]:
+        """``(A, slack)`` of the change-of-speed rule in ``unit`` (ticks, or rad). Wheel angles
+        have it only with an explicit ``max_wheel_accel`` (``A`` inf otherwise: no rule)."""
+        if unit == "ticks":
+            return self.accel_rate, QUANTISATION_SLACK
+        return (self.accel if self.accel_explicit else math.inf), QUANTISATION_SLACK * abs(self.rad_per_tick)
+
+    def change_limit(self, before, delta, dt_before, dt, unit: str = "ticks"):
+        """Largest plausible ``|delta - before|`` [``unit``] of the increments ``before`` over
+        ``dt_before`` then ``delta`` over ``dt`` [s] (:func:`change_limit`)."""
+        a, slack = self.change_bounds(unit)
+        return change_limit(a, slack, before, delta, dt_before, dt)
+
+    def jump_message(self, delta, dt, unit: str = "ticks", hint: str = "") -> str:
         """Why ``delta`` [``unit``: ticks, or rad for wheel angles] over ``dt`` [s] is
         impossible, with the way out (one line)."""
         if self.max_jump is not None:
             why = f"more than max_jump={self.max_jump:g} ticks"
         else:
             why = f"faster than {self.speed:.6g} rad/s ({self.source})"
+        head = f"impossible jump of {show_number(delta)} {unit} in {dt:.6g} s, wheel {self.wheel!r}: {why}"
         if unit != "ticks":
-            return f"impossible jump of {show_number(delta)} {unit} in {dt:.6g} s, wheel {self.wheel!r}: {why}"
+            return head
         if self.bits is not None:
-            return (
-                f"impossible jump of {show_number(delta)} {unit} in {dt:.6g} s, wheel {self.wheel!r}: {why}, "
-                f"or half the range of its {self.bits}-bit counter"
-            )
-        return (
-            f"impossible jump of {show_number(delta)} {unit} in {dt:.6g} s, wheel {self.wheel!r}: {why}; "
-            f"if its counter wraps, give the counter width (counter_bits, --counter-bits or encoder.counter_bits)"
+            return f"{head}, or half the range of its {self.bits}-bit counter"
+        return f"{head}{hint}; {WRAP_ADVICE}"
+
+    def change_message(self, before, delta, dt_before, dt, unit: str = "ticks", hint: str = "") -> str:
+        """Why increments ``before`` then ``delta`` [``unit``] are impossible (one line)."""
+        if unit == "ticks":
+            before = exact_value(float(before))
+        head = (
+            f"impossible change of speed, wheel {self.wheel!r}: {show_number(before)} then {show_number(delta)} "
+            f"{unit} in consecutive intervals of {dt_before:.6g} s and {dt:.6g} s, faster than "
+            f"{self.accel:.6g} rad/s^2 ({self.accel_source})"
         )
+        if unit != "ticks":
+            return f"{head}; if this is real, raise max_wheel_accel"
+        if self.bits is not None:
+            return f"{head}; is its counter {self.bits} bits wide? If this is real, raise max_wheel_accel"
+        return f"{head}{hint}; {WRAP_ADVICE}; if this is real, raise max_wheel_accel"
 
     def range_message(self, value) -> str:
         half = 1 << ((self.bits or 1) - 1)
@@ -150,8 +229,58 @@ class CounterRule:
             f"({-half} .. {2 * half - 1}), wheel {self.wheel!r}"
         )
 
+    def wrap_hint(self, delta, dt, before=None, dt_before=None) -> str:
+        """For a wheel without counter width: ``"; read as a 12-bit counter it is 11 ticks"`` for
+        the widest counter that makes the exact increment ``delta`` over ``dt`` plausible, and
+        with the previous increment ``before`` over ``dt_before`` (the pair may hold the wrap in
+        either interval) ``"; read as a 12-bit counter they are -1 then -4 ticks"``; else ``""``."""
+        if self.bits is not None:
+            return ""
+        first = None if before is None else exact_value(before)
+        for bits in range(64, 1, -1):
+            top = 2.0 ** (bits - 1) - 0.5
+            wrapped = wrap_exact(delta, bits)
+            if abs(wrapped) > min(self.limit(dt), top):
+                continue
+            if first is None:
+                if wrapped != delta:
+                    return f"; read as a {bits}-bit counter it is {show_number(wrapped)} ticks"
+                continue
+            previous = wrap_exact(first, bits)
+            if (previous, wrapped) == (first, delta) or abs(previous) > min(self.limit(dt_before), top):
+                continue
+            if abs(float(wrapped) - float(previous)) <= self.change_limit(
+                float(previous), float(wrapped), dt_before, dt
+            ):
+                return (
+                    f"; read as a {bits}-bit counter they are {show_number(previous)} then {show_number(wrapped)} ticks"
+                )
+        return ""
 
-def counter_rules(wheels, counter_bits=None, max_jump=None, max_wheel_speed=None) -> tuple[CounterRule, ...]:
+
+WRAP_ADVICE = "if its counter wraps, give the counter width (counter_bits, --counter-bits or encoder.counter_bits)"
+
+
+def change_limit(a, slack, d0, d1, dt0, dt1):
+    """Largest plausible ``|d1 - d0|`` for the increments ``d0`` over ``dt0`` then ``d1`` over
+    ``dt1`` [s] of a wheel whose speed changes at most at ``a`` [per s^2] and whose increments
+    are off by up to ``slack`` (module docstring):
+
+    ``min(|dt1 - dt0| (|d0| + slack) / dt0 + a dt1 (dt0 + dt1) / 2,
+    |dt1 - dt0| (|d1| + slack) / dt1 + a dt0 (dt0 + dt1) / 2) + 2 slack``.
+
+    The same expression, in the same order, for Python floats (streaming) and arrays (batch),
+    so both round alike."""
+    gap = np.abs(dt1 - dt0)
+    span = dt0 + dt1
+    via0 = gap * (np.abs(d0) + slack) / dt0 + a * 0.5 * (dt1 * span)
+    via1 = gap * (np.abs(d1) + slack) / dt1 + a * 0.5 * (dt0 * span)
+    return np.minimum(via0, via1) + 2.0 * slack
+
+
+def counter_rules(
+    wheels, counter_bits=None, max_jump=None, max_wheel_speed=None, max_wheel_accel=None
+) -> tuple[CounterRule, ...]:
     """One :class:`CounterRule` per encoded wheel.
 
     ``counter_bits`` applies to every wheel; a wheel whose robot file gives another
@@ -161,6 +290,7 @@ def counter_rules(wheels, counter_bits=None, max_jump=None, max_wheel_speed=None
     bits = check_bits(counter_bits)
     max_jump = check_max_jump(max_jump)
     speed = check_max_wheel_speed(max_wheel_speed)
+    accel = check_max_wheel_accel(max_wheel_accel)
     rules = []
     for w in wheels:
         own = w.encoder.counter_bits
@@ -175,8 +305,22 @@ def counter_rules(wheels, counter_bits=None, max_jump=None, max_wheel_speed=None
             bound, source = JUMP_MARGIN * w.max_speed, f"{JUMP_MARGIN:g} x its max_speed {w.max_speed:g} rad/s"
         else:
             bound, source = DEFAULT_RIM_SPEED / w.radius, f"{DEFAULT_RIM_SPEED:g} m/s at the rim"
+        if accel is not None:
+            change, change_source = JUMP_MARGIN * accel, f"{JUMP_MARGIN:g} x max_wheel_accel {accel:g} rad/s^2"
+        else:
+            change, change_source = DEFAULT_RIM_ACCEL / w.radius, f"{DEFAULT_RIM_ACCEL:g} m/s^2 at the rim"
         rules.append(
-            CounterRule(w.name, bits if bits is not None else own, w.encoder.rad_per_tick, bound, source, max_jump)
+            CounterRule(
+                w.name,
+                bits if bits is not None else own,
+                w.encoder.rad_per_tick,
+                bound,
+                source,
+                change,
+                change_source,
+                max_jump,
+                accel is not None,
+            )
         )
     return tuple(rules)
 
@@ -186,20 +330,122 @@ def show_number(value) -> str:
     if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)):
         v = int(value)
         return str(v) if v.bit_length() <= 128 else f"<an integer of {v.bit_length()} bits>"
+    if isinstance(value, Fraction):
+        return repr(float(value)) if value.denominator != 1 else show_number(value.numerator)
     if isinstance(value, (float, np.floating)):
         return repr(float(value))
-    return str(value)
+    return shorten(value)
 
 
-# --- scalars (the streaming estimator) ---------------------------------------------------------
-def wrap_scalar(delta, bits: int | None):
-    """One increment (Python int or float) wrapped into the counter's range."""
+# --- containers of readings -------------------------------------------------------------------
+_TEXT = (str, bytes, bytearray, memoryview)
+
+
+def container_problem(value) -> str | None:
+    """Why ``value`` cannot hold readings in wheel order, or None if it can.
+
+    Lists, tuples and other sequences, NumPy arrays, array-likes (``__array__``) and iterators
+    (a generator, ``map``) give their items in a defined order. A set or a dict (or its views)
+    does not: its order is not the wheels' order. Text and bytes are not numbers
+    (``b'\\x05\\x07\\x09'`` would be taken as 5, 7, 9). Anything else is not a sequence.
+    """
+    if isinstance(value, np.ndarray):
+        return None
+    if isinstance(value, _TEXT):
+        return f"{type(value).__name__} {shorten(value, 40)} is text, not numbers"
+    if isinstance(value, (AbstractSet, Mapping, MappingView)):
+        return f"a {type(value).__name__} has no defined order (the wheels' order would be lost)"
+    if isinstance(value, (Sequence, Iterator)) or hasattr(value, "__array__") or hasattr(value, "__array_interface__"):
+        return None
+    return f"a {type(value).__name__} is not a sequence"
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+
+
+def nested_problem(value, names, what: str) -> OdometryInputError | None:
+    """The first element of nested Python containers ``value`` ``(..., N, n)`` that cannot be a
+    reading, as an error naming its sample (and trial and wheel), or None.
+
+    Rows are the innermost sequences (depth found along the first items); a container where a
+    number belongs, a non-number, or a row of the wrong length is reported.
+    """
+    depth, probe = 0, value
+    while container_problem(probe) is None and not isinstance(probe, np.ndarray) and len_or_none(probe):
+        depth, probe = depth + 1, next(iter(probe))
+    depth = max(depth, 2)
+
+    def walk(v, path):
+        why = container_problem(v)
+        if len(path) == depth:  # a reading
+            if why is None or not _is_number(v):
+                return path, f"reading {shorten(v, 40)} is not a number"
+            return None
+        if why is not None:
+            return path, why
+        if isinstance(v, np.ndarray) or hasattr(v, "__array__") or hasattr(v, "__array_interface__"):
+            return None  # converted by NumPy, checked there
+        if not isinstance(v, Sequence):
+            return path, f"a {type(v).__name__} is not a sequence (give rows as lists, tuples or arrays)"
+        if len(path) == depth - 1 and len(v) != len(names):
+            return path, f"{len(v)} readings for {len(names)} wheels {names}"
+        for i, item in enumerate(v):
+            found = walk(item, path + (i,))
+            if found is not None:
+                return found
+        return None
+
+    found = walk(value, ())
+    if found is None:
+        return None
+    path, why = found
+    if len(path) == depth:
+        sample, trial, wheel = path[-2], path[:-2], names[path[-1]] if path[-1] < len(names) else None
+        detail = f"{what}: {why}" + (f", wheel {wheel!r}" if wheel is not None else "")
+    elif len(path) == depth - 1:
+        sample, trial = path[-1], path[:-1]
+        detail = f"{what}: {why}"
+    else:
+        return OdometryInputError(f"{what}{list(path)}: {why}")
+    return at_sample(detail, sample, trial)
+
+
+def len_or_none(value) -> int:
+    """Length of a sequence (0 for anything else, iterators included: they are not walked)."""
+    return len(value) if isinstance(value, Sequence) and not isinstance(value, _TEXT) else 0
+
+
+# --- exact increments (scalars: the streaming estimator) -----------------------------------------
+def wrap_exact(delta, bits: int | None):
+    """An exact increment (int or Fraction) wrapped into ``[-2**(bits-1), 2**(bits-1))``."""
     if bits is None:
         return delta
     half = 1 << (bits - 1)
     if isinstance(delta, int):
         return ((delta + half) & (2 * half - 1)) - half
     return (delta + half) % (2 * half) - half
+
+
+def wrap_scalar(delta, bits: int | None):
+    """One increment (Python int or float) wrapped into the counter's range, exactly (a float
+    result is the wrapped value of the float ``delta``, rounded once)."""
+    if bits is None or isinstance(delta, int):
+        return wrap_exact(delta, bits)
+    return float(wrap_exact(Fraction(delta), bits))
+
+
+def exact_value(value):
+    """A reading as an exact number: ints as they are, whole floats as ints, other floats as
+    the Fraction they hold exactly."""
+    if isinstance(value, int):
+        return value
+    return int(value) if value.is_integer() else Fraction(value)
+
+
+def exact_increment(new, old, bits: int | None):
+    """``new - old`` wrapped to a ``bits``-bit counter, exactly (int or Fraction)."""
+    return wrap_exact(exact_value(new) - exact_value(old), bits)
 
 
 def in_counter_range(value, bits: int | None) -> bool:
@@ -214,9 +460,10 @@ def counter_readings(ticks, names) -> np.ndarray:
     NumPy integer arrays are kept as they are (no copy); lists of Python integers become
     int64, uint64 (beyond 2**63, e.g. a 64-bit unsigned counter) or, when they fit neither,
     an object array of Python ints, never float64 (which would round them beyond 2**53).
-    Floats are allowed; bools, complex numbers and anything else are refused.
+    Floats are allowed; bools, complex numbers, text, unordered containers (sets, dicts) and
+    anything else are refused, naming the sample.
     """
-    arr = ticks if isinstance(ticks, np.ndarray) else np.asarray(ticks)
+    arr = as_reading_array(ticks, names, "ticks")
     if arr.dtype.kind == "O" or (arr.dtype.kind == "f" and not isinstance(ticks, np.ndarray)):
         arr = _exact_from_python(ticks, arr, names)  # float64 or object only when not all integers fit
     kind = arr.dtype.kind
@@ -224,6 +471,28 @@ def counter_readings(ticks, names) -> np.ndarray:
         raise OdometryInputError(f"ticks: expected real numbers for wheels {names}, got dtype {arr.dtype}")
     if kind == "f" and arr.dtype != np.float64:
         arr = arr.astype(np.float64)
+    return arr
+
+
+def as_reading_array(values, names, what: str) -> np.ndarray:
+    """``values`` as a NumPy array; Python containers are checked first (:func:`nested_problem`)."""
+    if isinstance(values, np.ndarray):
+        return values
+    why = container_problem(values) or (
+        f"a {type(values).__name__} is not a sequence" if isinstance(values, Iterator) else None
+    )
+    if why is not None:
+        raise OdometryInputError(f"{what}: {why}; give readings as a list, tuple or array (..., N, {len(names)})")
+    try:
+        arr = np.asarray(values)
+    except (ValueError, TypeError):
+        arr = None
+    if arr is None or arr.dtype.kind in "OSUV":
+        problem = nested_problem(values, names, what)
+        if problem is not None:
+            raise problem
+        if arr is None:
+            raise OdometryInputError(f"{what}: expected an array (..., N, {len(names)}) of numbers for wheels {names}")
     return arr
 
 
@@ -236,7 +505,7 @@ def _exact_from_python(ticks, converted: np.ndarray, names) -> np.ndarray:
     integral = [isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_)) for v in flat]
     if not all(integral):
         for v in flat:
-            if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
+            if not _is_number(v):
                 raise OdometryInputError(f"ticks: reading {show_number(v)} for wheels {names} is not a number")
         if any(ok and abs(int(v)) > FLOAT_EXACT for ok, v in zip(integral, flat, strict=True)):
             raise OdometryInputError(
@@ -253,76 +522,210 @@ def _exact_from_python(ticks, converted: np.ndarray, names) -> np.ndarray:
     return out.reshape(obj.shape)
 
 
-def first_bad(mask, what: str, names=None, offset: int = 0) -> None:
-    """Raise naming the first sample (and trial and wheel) where ``mask`` ``(..., m[, n])`` is
-    True; row k of the mask is sample ``k + offset``."""
-    if not np.any(mask):
-        return
-    idx = [int(i) for i in np.argwhere(mask)[0]]
-    wheel = names[idx.pop()] if names is not None else None
-    raise_at(what + (f", wheel {wheel!r}" if wheel is not None else ""), idx.pop() + offset, tuple(idx))
+# --- the first problem of a block -------------------------------------------------------------------
+@dataclass(frozen=True, order=True)
+class Problem:
+    """A refused sample: ordered by sample, then rank (:data:`RANKS`), trial and wheel.
+    ``describe()`` gives the message, only for the problem reported (a later one may involve
+    values that cannot be described, such as the difference of a NaN)."""
+
+    sample: int
+    rank: int
+    trial: tuple = ()
+    wheel: int = -1
+    describe: Callable[[], str] = field(default=str, compare=False)
+
+    def error(self) -> OdometryInputError:
+        return at_sample(self.describe(), self.sample, self.trial)
+
+
+def at_sample(detail: str, sample: int, trial: tuple = ()) -> OdometryInputError:
+    """:class:`OdometryInputError` for ``sample`` (of ``trial``), with ``detail`` kept apart."""
+    if trial:
+        detail += f" (trial {trial})"
+    return OdometryInputError(f"sample {sample}: {detail}", sample=sample, detail=detail)
 
 
 def raise_at(detail: str, sample: int, trial: tuple = ()) -> None:
-    """Raise :class:`OdometryInputError` for ``sample`` (of ``trial``), with ``detail`` kept apart."""
-    if trial:
-        detail += f" (trial {trial})"
-    raise OdometryInputError(f"sample {sample}: {detail}", sample=sample, detail=detail)
+    raise at_sample(detail, sample, trial)
+
+
+def earliest(mask: np.ndarray, wheels: bool):
+    """``(row, trial, wheel)`` of the first True of ``mask`` ``(..., rows[, n])`` in row order
+    (then trial, then wheel; wheel -1 without a wheel axis), or None."""
+    if not np.any(mask):
+        return None
+    rows_first = np.moveaxis(mask, -2 if wheels else -1, 0)
+    idx = [int(i) for i in np.unravel_index(int(np.argmax(np.ascontiguousarray(rows_first))), rows_first.shape)]
+    row = idx.pop(0)
+    wheel = idx.pop() if wheels else -1
+    return row, tuple(idx), wheel
+
+
+def problem_at(mask, wheels: bool, offset: int, rank: str, describe) -> Problem | None:
+    """The first True of ``mask`` as a :class:`Problem` (row r is sample ``r + offset``);
+    ``describe(row, trial, wheel)`` gives its detail."""
+    found = earliest(mask, wheels)
+    if found is None:
+        return None
+    row, trial, wheel = found
+    return Problem(row + offset, RANKS[rank], trial, wheel, lambda: describe(row, trial, wheel))
+
+
+def first_bad(mask, what: str, names=None, offset: int = 0) -> None:
+    """Raise naming the first sample (and trial and wheel) where ``mask`` ``(..., m[, n])`` is True."""
+    wheels = names is not None
+    found = earliest(mask, wheels)
+    if found is not None:
+        row, trial, wheel = found
+        raise_at(what + (f", wheel {names[wheel]!r}" if wheels else ""), row + offset, trial)
+
+
+def time_problems(t: np.ndarray, offset: int) -> tuple[np.ndarray, list[Problem]]:
+    """Intervals ``(..., m)`` [s] of the timestamps ``t`` ``(..., m + 1)`` (row 0 is sample
+    ``offset``), and the first non-finite timestamp and first interval that is not a positive
+    finite number."""
+    dt = np.diff(t, axis=-1)
+    if np.all(dt > 0) and np.all(dt < np.inf):
+        return dt, []
+    found = [
+        problem_at(~np.isfinite(t), False, offset, "time", lambda *_: "t: non-finite timestamp"),
+        problem_at(
+            ~(dt > 0),
+            False,
+            offset + 1,
+            "order",
+            lambda *_: "t: timestamps must increase strictly (repeated or going back)",
+        ),
+        problem_at(~(dt < np.inf), False, offset + 1, "order", lambda *_: "t: interval between timestamps too long"),
+    ]
+    return dt, [p for p in found if p is not None]
 
 
 def check_times(t: np.ndarray, offset: int) -> np.ndarray:
-    """Intervals ``(..., m)`` [s] of the timestamps ``t`` ``(..., m + 1)``; raises naming the
-    sample if one is not finite or time does not increase strictly."""
-    dt = np.diff(t, axis=-1)
-    if np.all(dt > 0) and np.all(dt < np.inf):
-        return dt
-    first_bad(~np.isfinite(t), "t: non-finite timestamp", offset=offset)
-    first_bad(dt <= 0, "t: timestamps must increase strictly (repeated or going back)", offset=offset + 1)
-    first_bad(~np.isfinite(dt), "t: interval between timestamps too long", offset=offset + 1)
+    """Intervals ``(..., m)`` [s] of ``t`` ``(..., m + 1)``; raises for the first bad timestamp."""
+    dt, problems = time_problems(t, offset)
+    if problems:
+        raise min(problems).error()
     return dt
 
 
-def checked_increments(rules, readings: np.ndarray, dt: np.ndarray, offset: int) -> np.ndarray:
-    """Checked counter increments ``(..., m, n)`` [ticks, float] between consecutive rows of
-    ``readings`` ``(..., m + 1, n)`` (from :func:`counter_readings`), ``dt`` ``(..., m)`` [s].
+@dataclass
+class Carry:
+    """What the next block needs of the previous one: its last increment ``(..., 1, n)`` and
+    interval ``(..., 1)``, for the change-of-speed rule across the block boundary."""
 
-    ``offset`` is the sample index of the first row (for messages). Raises
-    :class:`OdometryInputError` naming sample, trial and wheel for a non-finite reading,
-    a reading outside its counter's range and an impossible jump.
+    delta: np.ndarray | None = None
+    dt: np.ndarray | None = None
+
+
+def block_increments(
+    rules, t: np.ndarray, values: np.ndarray, offset: int, carry: Carry, unit: str = "ticks", pending=None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Checked increments of one block: ``(dt (..., m), delta (..., m, n))`` [s, ``unit`` as
+    float] of ``values`` ``(..., m + 1, n)`` (readings from :func:`counter_readings`, or wheel
+    angles [rad] for ``unit="rad"``) at times ``t`` ``(..., m + 1)``; row 0 is sample ``offset``.
+
+    Raises :class:`OdometryInputError` for the earliest refused sample (module docstring), or
+    ``pending`` (a :class:`Problem` found elsewhere, e.g. a steering angle) if it comes first
+    and lies in this block. ``carry`` links the blocks and is updated.
     """
     names = [r.wheel for r in rules]
-    kind = readings.dtype.kind
-    if kind == "f":
-        first_bad(~np.isfinite(readings), "ticks: non-finite reading", names, offset)
-    _check_ranges(rules, readings, offset)
-    delta = _exact_differences(rules, readings)
-    limit = _limits(rules, dt)
-    if delta.dtype == object:
-        bad = np.abs(delta) > limit
-        d = delta.astype(np.float64)
-    else:
-        d = delta.astype(np.float64, copy=False)
-        bad = np.abs(d) > limit
-    if delta.dtype.kind != "f":
-        for j, r in enumerate(rules):
-            if r.bits == 64:  # -2**63, half a 64-bit range: no float between it and the limit
-                bad[..., j] |= delta[..., j] == INT64_MIN
-    delta = d
-    if np.any(bad):
-        idx = [int(i) for i in np.argwhere(bad)[0]]
-        j = idx.pop()
-        k = idx.pop()
-        rule = rules[j]
-        gap = float(np.broadcast_to(dt, bad.shape[:-1])[tuple(idx) + (k,)])
-        raise_at(
-            rule.jump_message(_exact_difference_at(rule, readings, tuple(idx), k, j), gap), k + 1 + offset, tuple(idx)
+    dt, problems = time_problems(t, offset)
+    if values.dtype.kind == "f":
+        what = "ticks: non-finite reading" if unit == "ticks" else "angles: non-finite wheel angle"
+        problems.append(
+            problem_at(~np.isfinite(values), True, offset, "reading", lambda r, tr, j: f"{what}, wheel {names[j]!r}")
         )
-    return delta
+    if unit == "ticks":
+        problems += _range_problems(rules, values, offset)
+        exact = _exact_differences(rules, values)
+        delta = exact.astype(np.float64)
+        bad = ~(np.abs(exact if exact.dtype == object else delta) <= _limits(rules, dt))
+        for j, r in enumerate(rules):
+            if r.bits == 64 and exact.dtype.kind == "i":  # -2**63: half the range, no float between it and the limit
+                bad[..., j] |= exact[..., j] == INT64_MIN
+    else:
+        exact = delta = np.diff(values, axis=-2)
+        limit = np.stack([np.broadcast_to(r.angle_limit(dt), dt.shape) for r in rules], axis=-1)
+        bad = ~(np.abs(delta) <= limit)
+
+    def jump(row, trial, j):
+        gap = _at(dt, trial, row)
+        if unit != "ticks":
+            return rules[j].jump_message(float(delta[trial + (row, j)]), gap, unit)
+        d = _exact_difference_at(rules[j], values, trial, row, j)
+        hint = rules[j].wrap_hint(d, gap, *_previous(delta, dt, carry, trial, row, j))
+        return rules[j].jump_message(d, gap, hint=hint)
+
+    problems.append(problem_at(bad, True, offset + 1, "jump", jump))
+    problems.append(_change_problem(rules, dt, delta, values, offset, carry, unit))
+    if pending is not None and pending.sample <= offset + dt.shape[-1]:
+        problems.append(pending)
+    problems = [p for p in problems if p is not None]
+    if problems:
+        raise min(problems).error()
+    carry.delta, carry.dt = delta[..., -1:, :], dt[..., -1:]
+    return dt, delta
 
 
-def _check_ranges(rules, readings, offset: int) -> None:
-    for bits in sorted({r.bits for r in rules if r.bits is not None}):
-        cols = [j for j, r in enumerate(rules) if r.bits == bits]
+def _at(array: np.ndarray, trial: tuple, row: int) -> float:
+    """``array[trial + (row,)]`` of an array ``(..., m)`` that broadcasts against the trials."""
+    lead = array.shape[:-1]
+    index = tuple(i if n > 1 else 0 for i, n in zip(trial[len(trial) - len(lead) :], lead, strict=True))
+    return float(array[index + (row,)])
+
+
+def _previous(delta, dt, carry: Carry, trial: tuple, row: int, j: int) -> tuple[float | None, float | None]:
+    """(increment [float], interval [s]) before the interval ``row`` of this block (None, None
+    before the first interval)."""
+    if row > 0:
+        return float(delta[_trial_index(delta, trial) + (row - 1, j)]), _at(dt, trial, row - 1)
+    if carry.delta is None or carry.dt is None:
+        return None, None
+    return float(carry.delta[_trial_index(carry.delta, trial) + (0, j)]), _at(carry.dt, trial, 0)
+
+
+def _trial_index(array: np.ndarray, trial: tuple) -> tuple:
+    lead = array.shape[:-2]
+    return tuple(i if n > 1 else 0 for i, n in zip(trial[len(trial) - len(lead) :], lead, strict=True))
+
+
+def _change_problem(rules, dt, delta, values, offset: int, carry: Carry, unit: str) -> Problem | None:
+    """The first pair of consecutive increments that breaks the change-of-speed rule."""
+    bounds = [r.change_bounds(unit) for r in rules]
+    if all(a == math.inf for a, _ in bounds):
+        return None
+    linked = carry.delta is not None and carry.dt is not None
+    if linked:
+        d = np.concatenate([carry.delta, delta], axis=-2)  # pair p: interval p - 1 and p of this block
+        gaps = np.concatenate([carry.dt, dt], axis=-1)
+    else:
+        d, gaps = delta, dt  # pair p: intervals p and p + 1
+    shift = 0 if linked else 1  # the later interval of pair p is interval p + shift of this block
+    if d.shape[-2] < 2:
+        return None
+    a, slack = (np.array([b[i] for b in bounds]) for i in range(2))
+    d0, d1 = d[..., :-1, :], d[..., 1:, :]
+    with np.errstate(divide="ignore", invalid="ignore"):  # bad intervals are refused by their own check
+        limit = change_limit(a, slack, d0, d1, gaps[..., :-1, None], gaps[..., 1:, None])
+        bad = ~(np.abs(d1 - d0) <= limit)
+
+    def describe(p, trial, j):
+        ti = _trial_index(d, trial)
+        before, after = float(d[ti + (p, j)]), float(d[ti + (p + 1, j)])
+        g0, g1 = _at(gaps, trial, p), _at(gaps, trial, p + 1)
+        if unit != "ticks":
+            return rules[j].change_message(before, after, g0, g1, unit)
+        exact = _exact_difference_at(rules[j], values, trial, p + shift, j)
+        return rules[j].change_message(before, exact, g0, g1, unit, rules[j].wrap_hint(exact, g1, before, g0))
+
+    return problem_at(bad, True, offset + 1 + shift, "change", describe)
+
+
+def _range_problems(rules, readings, offset: int) -> list[Problem]:
+    out = []
+    for bits, cols in _by_bits(rules):
         low, high = -(1 << (bits - 1)), 1 << bits
         block = readings[..., cols]
         if block.size == 0:
@@ -331,26 +734,27 @@ def _check_ranges(rules, readings, offset: int) -> None:
             ok = block.min() >= low and block.max() < high
         else:
             ok = int(block.min()) >= low and int(block.max()) < high
-        if not ok:
-            if readings.dtype.kind == "u":
-                mask = block >= np.uint64(high) if high < UINT64_END else np.zeros(block.shape, bool)
-            else:
-                mask = (block < low) | (block >= high)
-            idx = [int(i) for i in np.argwhere(mask)[0]]
-            j = cols[idx.pop()]
-            k = idx.pop()
-            raise_at(rules[j].range_message(readings[tuple(idx) + (k, j)]), k + offset, tuple(idx))
+        if ok:
+            continue
+        if readings.dtype.kind == "u":
+            mask = block >= np.uint64(high) if high < UINT64_END else np.zeros(block.shape, bool)
+        else:
+            mask = ~((block >= low) & (block < high))
+        found = earliest(mask, True)
+        assert found is not None
+        row, trial, c = found
+        j = cols[c]
+        message = rules[j].range_message(readings[trial + (row, j)])
+        out.append(Problem(row + offset, RANKS["range"], trial, j, lambda message=message: message))
+    return out
 
 
 def _exact_differences(rules, readings: np.ndarray) -> np.ndarray:
-    """Row-to-row differences, wrapped per wheel, exact: int64 or object (ints), or float64."""
+    """Row-to-row differences, wrapped per wheel, exact: int64 or object (ints), or float64
+    (the exact difference rounded once)."""
     kind = readings.dtype.kind
     if kind == "f":
-        delta = np.diff(readings, axis=-2)
-        for bits, cols in _by_bits(rules):
-            full = float(2**bits)
-            delta[..., cols] = (delta[..., cols] + full / 2) % full - full / 2
-        return delta
+        return _float_differences(rules, readings)
     if kind == "O":
         delta = np.diff(readings, axis=-2)
         for bits, cols in _by_bits(rules):
@@ -378,12 +782,34 @@ def _exact_differences(rules, readings: np.ndarray) -> np.ndarray:
     return delta
 
 
+def _float_differences(rules, readings: np.ndarray) -> np.ndarray:
+    """Wrapped differences of float readings, each the exact wrapped difference rounded once.
+
+    Without a width ``b - a`` is that already (IEEE subtraction is correctly rounded). With a
+    width ``2**bits``: TwoSum gives ``b - a = s + e`` exactly (Knuth, TAOCP vol. 2, 4.2.2);
+    ``s - n 2**bits`` with ``n = rint(s / 2**bits)`` in -2..2 is exact (Sterbenz: ``s`` lies within
+    a factor 2 of ``n 2**bits``), and adding ``e`` rounds once. ``(s + half) % full - half``,
+    the old way, lost every increment of a 64-bit counter: ``s + 2**63`` has no bits left for it.
+    """
+    a, b = readings[..., :-1, :], readings[..., 1:, :]
+    delta = b - a
+    for bits, cols in _by_bits(rules):
+        full = 2.0**bits
+        ra, rb, s = a[..., cols], b[..., cols], delta[..., cols]
+        b_virtual = s + ra
+        a_virtual = s - b_virtual
+        e = (rb - b_virtual) + (-ra - a_virtual)
+        delta[..., cols] = (s - np.rint(s / full) * full) + e
+    return delta
+
+
 def _exact_difference_at(rule, readings, trial: tuple, k: int, j: int):
     """The wrapped increment between rows k and k+1 of wheel j, as an exact Python number."""
-    a, b = readings[trial + (k, j)], readings[trial + (k + 1, j)]
+    index = _trial_index(readings, trial)
+    a, b = readings[index + (k, j)], readings[index + (k + 1, j)]
     if readings.dtype.kind == "f":
-        return wrap_scalar(float(b) - float(a), rule.bits)
-    return wrap_scalar(int(b) - int(a), rule.bits)
+        return exact_increment(float(b), float(a), rule.bits)
+    return wrap_exact(int(b) - int(a), rule.bits)
 
 
 def _by_bits(rules):
@@ -398,24 +824,17 @@ def _limits(rules, dt: np.ndarray) -> np.ndarray:
     return np.stack([np.broadcast_to(r.limit(dt), dt.shape) for r in rules], axis=-1)
 
 
-def wheel_increments(rules, t, readings, block: int) -> np.ndarray:
-    """All checked increments ``(..., N - 1, n)`` [ticks], computed ``block`` samples at a time."""
-    m = readings.shape[-2] - 1
-    lead = np.broadcast_shapes(readings.shape[:-2], t.shape[:-1])
+def wheel_increments(rules, t, values, block: int, unit: str = "ticks", pending=None) -> np.ndarray:
+    """All checked increments ``(..., N - 1, n)`` [``unit``], computed ``block`` samples at a time."""
+    m = values.shape[-2] - 1
+    lead = np.broadcast_shapes(values.shape[:-2], t.shape[:-1])
     out = np.empty(lead + (m, len(rules)))
+    carry = Carry()
     for s0 in range(0, m, block):
         s1 = min(m, s0 + block)
-        dt = check_times(t[..., s0 : s1 + 1], s0)
-        out[..., s0:s1, :] = checked_increments(rules, readings[..., s0 : s1 + 1, :], dt, s0)
+        _, out[..., s0:s1, :] = block_increments(
+            rules, t[..., s0 : s1 + 1], values[..., s0 : s1 + 1, :], s0, carry, unit, pending
+        )
+    if pending is not None:  # in the last block at the latest, unless there is no interval
+        raise pending.error()
     return out
-
-
-def check_angle_jumps(rules, delta: np.ndarray, dt: np.ndarray, offset: int = 0) -> None:
-    """Raise for a wheel-angle increment [rad] no wheel could make (the speed bounds above)."""
-    limit = np.stack([np.broadcast_to(r.angle_limit(dt), dt.shape) for r in rules], axis=-1)
-    bad = ~(np.abs(delta) <= limit)
-    if np.any(bad):
-        idx = [int(i) for i in np.argwhere(bad)[0]]
-        j, k = idx.pop(), idx.pop()
-        gap = float(np.broadcast_to(dt, bad.shape[:-1])[tuple(idx) + (k,)])
-        raise_at(rules[j].jump_message(float(delta[tuple(idx) + (k, j)]), gap, "rad"), k + 1 + offset, tuple(idx))

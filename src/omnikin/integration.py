@@ -15,12 +15,26 @@ used, so they share one vectorised kernel.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from .errors import InputError
+from .encoders import container_problem
+from .errors import InputError, shorten
 from .geometry import sinc, wrap_angle
 
 METHODS = ("exact", "midpoint", "euler")
+
+POSITION_LIMIT = 1.0e8
+"""Largest ``|x|``, ``|y|`` [m] of a start pose: 100 000 km, beyond any terrestrial coordinate
+(UTM northings stay below 1e7 m); there a float still resolves 15 nm, so no increment of a
+wheel is lost, while ``1e300`` would swallow every one."""
+ANGLE_LIMIT = 4 * math.pi
+"""Largest ``|theta|`` of a start pose and ``|steering angle|`` [rad]: two turns, as robot files
+bound their angles (``angle_deg``, ``drive_deg``: -720 .. 720 deg). Angles count modulo 2 pi,
+but ``1e308`` has no digit left modulo 2 pi: it would silently become some other heading."""
+ANGLE_LIMIT_DEG = 720.0
+""":data:`ANGLE_LIMIT` in degrees (tick-log steering columns)."""
 
 
 def check_method(method: str) -> str:
@@ -29,17 +43,45 @@ def check_method(method: str) -> str:
     return method
 
 
+FIELDS = (("x", "m", POSITION_LIMIT), ("y", "m", POSITION_LIMIT), ("theta", "rad", ANGLE_LIMIT))
+"""Name, unit and bound of each component of a start pose."""
+
+
+def check_start(start, what: str = "start") -> np.ndarray:
+    """A start pose ``(..., 3)`` (x, y, theta) [m, m, rad] as a float array, or
+    :class:`InputError`: a list, tuple or array of finite numbers with ``|x|, |y| <=``
+    :data:`POSITION_LIMIT` and ``|theta| <=`` :data:`ANGLE_LIMIT`."""
+    why = container_problem(start)
+    if why is not None:
+        raise InputError(f"{what}: expected (x, y, theta) as a list, tuple or array; {why}")
+    try:
+        p = np.asarray(start, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{what}: expected (x, y, theta) as numbers, got {shorten(start)}") from None
+    if p.ndim == 0 or p.shape[-1] != 3:
+        raise InputError(f"{what}: expected shape (..., 3) (x, y, theta), got {p.shape}")
+    bad = ~(np.abs(p) <= np.array([limit for _, _, limit in FIELDS]))
+    if np.any(bad):
+        index = tuple(int(i) for i in np.argwhere(bad)[0])
+        name, unit, limit = FIELDS[index[-1]]
+        where = f" at index {index[:-1]}" if p.ndim > 1 else ""
+        raise InputError(
+            f"{what}: {name} = {float(p[index]):.6g} {unit}{where} is not a finite number within +-{limit:.6g} {unit}"
+        )
+    return p
+
+
 def integrate(increments: np.ndarray, start=None, method: str = "exact") -> np.ndarray:
     """Poses ``(..., N + 1, 3)`` reached from ``start`` by the increments ``(..., N, 3)``.
 
-    ``start`` ``(..., 3)`` defaults to the origin; the first output pose is ``start``.
-    Headings are wrapped to ``[-pi, pi)``.
+    ``start`` ``(..., 3)`` (:func:`check_start`) defaults to the origin; the first output pose
+    is ``start``. Headings are wrapped to ``[-pi, pi)``.
     """
     inc = np.asarray(increments, dtype=float)
     if inc.ndim < 2 or inc.shape[-1] != 3:
         raise InputError(f"increments: expected shape (..., N, 3), got {inc.shape}")
     comps = np.ascontiguousarray(np.moveaxis(inc, -1, 0))
-    return integrate_components(comps[0], comps[1], comps[2], start, method)
+    return integrate_components(comps[0], comps[1], comps[2], None if start is None else check_start(start), method)
 
 
 def _world_steps(a, b, phi, heading0, method: str):

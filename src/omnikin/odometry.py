@@ -13,25 +13,26 @@ The streaming estimator lives in :mod:`omnikin.streaming`.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from functools import partial
 from typing import overload
 
 import numpy as np
 
-from ._arrays import as_components, require_finite
 from .encoders import (
-    check_angle_jumps,
-    check_times,
-    checked_increments,
+    Carry,
+    Problem,
+    as_reading_array,
+    block_increments,
+    container_problem,
     counter_readings,
     counter_rules,
-    first_bad,
+    problem_at,
     wheel_increments,
 )
-from .errors import InputError, OdometryInputError
+from .errors import InputError, OdometryInputError, shorten
 from .geometry import wrap_angle
-from .integration import check_method, integrate_components
+from .integration import ANGLE_LIMIT, check_method, check_start, integrate_components
 from .model import Robot
 
 
@@ -121,40 +122,45 @@ def batch_odometry(
     start=None,
     max_jump=None,
     max_wheel_speed=None,
+    max_wheel_accel=None,
 ) -> OdometryResult:
     """Odometry of whole logs: ``ticks`` ``(..., N, n_enc)`` at times ``t`` ``(..., N)``.
 
     Leading axes (trials) broadcast. ``steer`` ``(..., N, n_steer)`` [rad] is needed
     for robots with steerable wheels. The first sample is the zero of the ticks and
-    sits at ``start`` (default origin). Readings of any integer type are exact (see
-    :func:`omnikin.encoders.counter_readings`); ``counter_bits`` (else each wheel's
-    ``encoder.counter_bits``), ``max_jump`` [ticks] and ``max_wheel_speed`` [rad/s] are the
-    counter and jump rules of :mod:`omnikin.encoders`. Every bad sample raises
-    :class:`OdometryInputError` with its index in ``.sample``.
+    sits at ``start`` (default origin; :func:`omnikin.integration.check_start`). Readings of
+    any integer type are exact (see :func:`omnikin.encoders.counter_readings`);
+    ``counter_bits`` (else each wheel's ``encoder.counter_bits``), ``max_jump`` [ticks],
+    ``max_wheel_speed`` [rad/s] and ``max_wheel_accel`` [rad/s^2] are the counter, jump and
+    change-of-speed rules of :mod:`omnikin.encoders`. The earliest bad sample raises
+    :class:`OdometryInputError` with its index in ``.sample`` (the same sample the streaming
+    estimator refuses).
     """
     wheels = encoded_wheels(robot)
-    rules = counter_rules(wheels, counter_bits, max_jump, max_wheel_speed)
+    rules = counter_rules(wheels, counter_bits, max_jump, max_wheel_speed, max_wheel_accel)
     names = [w.name for w in wheels]
     tk = counter_readings(ticks, names)
     tt = _timestamps(t, tk, "ticks", names)
     scale = np.array([r.rad_per_tick for r in rules])
     check_method(method)
-    delta = partial(wheel_increments, rules, tt, tk, CHUNK)
+    start_pose = None if start is None else check_start(start)
     if robot.steerable:
-        return _integrate(robot, wheels, tt, delta, scale, steer, method, start)
+        s, pending = _steering(robot, steer, np.broadcast_shapes(tk.shape[:-2], tt.shape[:-1]), tk.shape[-2])
+        d = wheel_increments(rules, tt, tk, CHUNK, "ticks", pending)
+        return _integrate_steered(robot, names, tt, d, scale, s, method, start_pose)
     _no_steer(robot, steer)
     f = robot.fk_matrix(None, names)
     rows = robot.fk_rows(None, names)
-    out = _pose_array(tk.shape[:-2], tt.shape[:-1], tk.shape[-2], start)
+    out = _pose_array(tk.shape[:-2], tt.shape[:-1], tk.shape[-2], start_pose)
     lead, m = out.shape[:-2], tk.shape[-2] - 1
     inc = np.empty(lead + (m, 3))
     residual = np.empty(lead + (m, rows.shape[-2])) if _redundant(robot, rows) else None
     pose = out[..., 0, :]
     f_ticks = f * scale
+    carry = Carry()
     for s0 in range(0, m, CHUNK):
         s1 = min(m, s0 + CHUNK)
-        dt = check_times(tt[..., s0 : s1 + 1], s0)
-        d = checked_increments(rules, tk[..., s0 : s1 + 1, :], dt, s0)
+        dt, d = block_increments(rules, tt[..., s0 : s1 + 1], tk[..., s0 : s1 + 1, :], s0, carry)
         comps = np.matmul(f_ticks, np.swapaxes(d, -1, -2))  # (..., 3, block)
         integrate_components(
             comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], pose, method, out=out[..., s0 : s1 + 1, :]
@@ -169,20 +175,51 @@ def batch_odometry(
 
 
 def batch_odometry_from_angles(
-    robot: Robot, t, angles, *, steer=None, method: str = "exact", start=None, max_jump=None, max_wheel_speed=None
+    robot: Robot,
+    t,
+    angles,
+    *,
+    steer=None,
+    method: str = "exact",
+    start=None,
+    max_jump=None,
+    max_wheel_speed=None,
+    max_wheel_accel=None,
 ) -> OdometryResult:
     """Like :func:`batch_odometry` but from wheel angles ``(..., N, n_enc)`` [rad] (no counters;
-    the same physical jump rule)."""
+    the same physical rules on speed and its changes)."""
     wheels = encoded_wheels(robot)
-    rules = counter_rules(wheels, None, max_jump, max_wheel_speed)
+    rules = counter_rules(wheels, None, max_jump, max_wheel_speed, max_wheel_accel)
     names = [w.name for w in wheels]
-    a = np.asarray(angles, dtype=float)
+    a = _angle_array(angles, names)
     tt = _timestamps(t, a, "angles", names)
-    first_bad(~np.isfinite(a), "angles: non-finite wheel angle", names)
-    dt = check_times(tt, 0)
-    delta = np.diff(a, axis=-2)
-    check_angle_jumps(rules, delta, dt)
-    return _integrate(robot, wheels, tt, lambda: delta, np.ones(len(wheels)), steer, method, start)
+    check_method(method)
+    start_pose = None if start is None else check_start(start)
+    ones = np.ones(len(wheels))
+    if robot.steerable:
+        s, pending = _steering(robot, steer, np.broadcast_shapes(a.shape[:-2], tt.shape[:-1]), a.shape[-2])
+        d = wheel_increments(rules, tt, a, CHUNK, "rad", pending)
+        return _integrate_steered(robot, names, tt, d, ones, s, method, start_pose)
+    _no_steer(robot, steer)
+    d = wheel_increments(rules, tt, a, CHUNK, "rad")
+    f = robot.fk_matrix(None, names)
+    out = _pose_array(d.shape[:-2], tt.shape[:-1], d.shape[-2] + 1, start_pose)
+    comps = np.matmul(f, np.swapaxes(d, -1, -2))
+    integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], out[..., 0, :], method, out=out)
+    inc = np.swapaxes(comps, -1, -2)
+    rows = robot.fk_rows(None, names)
+    return OdometryResult(tt, out, inc, _residual(_fk_input(d, ones, f), rows, inc, np.diff(tt, axis=-1)))
+
+
+def _angle_array(angles, names) -> np.ndarray:
+    """Wheel angles ``(..., N, n)`` [rad] as float64; bools, text and unordered containers refused."""
+    a = as_reading_array(angles, names, "angles")
+    if a.dtype.kind not in "iufO":
+        raise OdometryInputError(f"angles: expected real numbers [rad] for wheels {names}, got dtype {a.dtype}")
+    try:
+        return a.astype(np.float64)
+    except (TypeError, ValueError):
+        raise OdometryInputError(f"angles: expected real numbers [rad] for wheels {names}") from None
 
 
 def _timestamps(t, readings: np.ndarray, what: str, names) -> np.ndarray:
@@ -190,7 +227,13 @@ def _timestamps(t, readings: np.ndarray, what: str, names) -> np.ndarray:
     n = len(names)
     if readings.ndim < 2 or readings.shape[-1] != n or readings.shape[-2] < 1:
         raise OdometryInputError(f"{what}: expected shape (..., N, {n}) for wheels {names}, got {readings.shape}")
-    tt = np.asarray(t, dtype=float)
+    why = None if isinstance(t, np.ndarray) else container_problem(t)
+    if why is not None:
+        raise OdometryInputError(f"t: {why}; give the timestamps as a list, tuple or array")
+    try:
+        tt = np.asarray(t, dtype=float)
+    except (TypeError, ValueError):
+        raise OdometryInputError(f"t: expected numbers [s], got {shorten(t)}") from None
     if tt.shape[-1:] != readings.shape[-2:-1]:
         raise OdometryInputError(
             f"t: expected {readings.shape[-2]} timestamps to match {what} {readings.shape}, got shape {tt.shape}"
@@ -209,56 +252,63 @@ def _no_steer(robot, steer) -> None:
         raise InputError(f"robot {robot.name!r} has no steerable wheel: do not pass steer")
 
 
-def _pose_array(lead_a, lead_b, n: int, start) -> np.ndarray:
+def _pose_array(lead_a, lead_b, n: int, start: np.ndarray | None) -> np.ndarray:
     """Empty poses ``(..., n, 3)`` with the first pose set to ``start`` (default origin)."""
-    start = None if start is None else _start(start)
     lead = np.broadcast_shapes(lead_a, lead_b, () if start is None else start.shape[:-1])
     out = np.empty(lead + (n, 3))
     out[..., 0, :] = 0.0 if start is None else start
     return out
 
 
-def _integrate(robot, wheels, t, delta, scale, steer, method, start) -> OdometryResult:
-    """Forward kinematics of the increments ``delta() * scale`` [rad] (steerable robots: per
-    interval), then pose integration."""
-    check_method(method)
-    names = [w.name for w in wheels]
-    if not robot.steerable:
-        _no_steer(robot, steer)
-        f = robot.fk_matrix(None, names)
-        d = delta()
-        out = _pose_array(d.shape[:-2], t.shape[:-1], d.shape[-2] + 1, start)
-        comps = np.matmul(f * scale, np.swapaxes(d, -1, -2))
-        integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], out[..., 0, :], method, out=out)
-        inc = np.swapaxes(comps, -1, -2)
-        rows = robot.fk_rows(None, names)
-        return OdometryResult(t, out, inc, _residual(_fk_input(d, scale, f), rows, inc, np.diff(t, axis=-1)))
+def steer_problem(value, wheel: str) -> str | None:
+    """Why a steering angle [rad] cannot be used (None if it can): not finite, or beyond
+    :data:`omnikin.integration.ANGLE_LIMIT` (two turns)."""
+    if not math.isfinite(value):
+        return f"steer: non-finite steering angle {value!r}, wheel {wheel!r}"
+    if abs(value) > ANGLE_LIMIT:
+        return f"steer: steering angle {value:.6g} rad of wheel {wheel!r} beyond +-4 pi (two turns)"
+    return None
+
+
+def _steering(robot, steer, lead: tuple, n: int) -> tuple[np.ndarray, Problem | None]:
+    """Steering angles ``(..., N, n_steer)`` [rad] of steerable robots, checked for shape, and
+    the first sample with a bad angle as a pending :class:`~omnikin.encoders.Problem`."""
+    names = robot.steer_names
     if steer is None:
         raise InputError(
-            f"robot {robot.name!r}: steerable wheels {robot.steer_names} need steering "
+            f"robot {robot.name!r}: steerable wheels {names} need steering "
             f"angles (steer, shape (..., N, {len(robot.steerable)}))"
         )
-    d = delta()
-    s = as_components(steer, len(robot.steerable), "steer")
-    want = d.shape[:-2] + (d.shape[-2] + 1, len(robot.steerable))
-    if s.ndim < 2 or s.shape[-2] != want[-2] or np.broadcast_shapes(s.shape, want) != want:
+    arr = as_reading_array(steer, names, "steer")
+    try:
+        s = arr.astype(np.float64) if arr.dtype.kind in "iufO" else None
+    except (TypeError, ValueError):
+        s = None
+    if s is None:
+        raise OdometryInputError(f"steer: expected steering angles [rad] for {names}, got {shorten(steer)}")
+    want = lead + (n, len(names))
+    if s.ndim < 2 or s.shape[-2:] != want[-2:] or np.broadcast_shapes(s.shape, want) != want:
         raise OdometryInputError(
             f"steer: expected shape {want} (one angle per steerable wheel and sample), got {s.shape}"
         )
-    first_bad(~np.isfinite(s), "steer: non-finite steering angle", robot.steer_names)
+    pending = problem_at(
+        ~(np.abs(s) <= ANGLE_LIMIT),
+        True,
+        0,
+        "steer",
+        lambda row, trial, j: steer_problem(float(s[trial + (row, j)]), names[j]) or "",
+    )
+    return s, pending
+
+
+def _integrate_steered(robot, names, t, d, scale, s, method, start) -> OdometryResult:
+    """Forward kinematics of the increments ``d * scale`` [rad] per interval, at the mean
+    steering of its two ends, then pose integration."""
     mid = mid_steer(s)
     f = robot.fk_matrix(mid, names)
     rows = robot.fk_rows(mid, names)
     angles = _fk_input(d, scale, f)
     inc = np.einsum("...ij,...j->...i", f, angles)
     comps = np.ascontiguousarray(np.swapaxes(inc, -1, -2))
-    poses = integrate_components(
-        comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], None if start is None else _start(start), method
-    )
+    poses = integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], start, method)
     return OdometryResult(t, poses, inc, _residual(angles, rows, inc, np.diff(t, axis=-1)))
-
-
-def _start(start) -> np.ndarray:
-    p = as_components(start, 3, "start")
-    require_finite(p, "start")
-    return p

@@ -25,7 +25,6 @@ from typing import Any
 import numpy as np
 
 from . import _stream_kernel as kernel
-from ._arrays import as_components
 from ._stream_kernel import (
     KIND_ANGLES,
     KIND_NONE,
@@ -38,13 +37,13 @@ from ._stream_kernel import (
     state_kind,
     state_time,
 )
-from .encoders import counter_rules, in_counter_range, show_number, wrap_scalar
+from .encoders import container_problem, counter_rules, exact_increment, in_counter_range, show_number
 from .errors import InputError, OdometryInputError, shorten
 from .geometry import wrap_angle
-from .integration import check_method
+from .integration import check_method, check_start
 from .linalg import rank
 from .model import Robot
-from .odometry import encoded_wheels, mid_steer
+from .odometry import encoded_wheels, mid_steer, steer_problem
 
 _WHAT = {KIND_TICKS: "tick reading", KIND_ANGLES: "wheel angle"}
 
@@ -70,10 +69,13 @@ class Odometry:
     duplicate: skipped, counted in ``duplicates`` and warned about once. Anything else
     that cannot be integrated raises :class:`OdometryInputError` and changes nothing.
 
-    Readings: Python ints of any size, NumPy integer scalars or rows of any integer type
-    (exact), or floats. ``counter_bits`` (else each wheel's ``encoder.counter_bits``),
-    ``max_jump`` [ticks] and ``max_wheel_speed`` [rad/s]: the counter and jump rules of
-    :mod:`omnikin.encoders`.
+    Readings, in the order of the encoded wheels: a list, tuple, NumPy row, array-like or
+    iterator (never a set, dict or text: :func:`omnikin.encoders.container_problem`) of Python
+    ints of any size, NumPy integer scalars (exact), or floats. ``counter_bits`` (else each
+    wheel's ``encoder.counter_bits``), ``max_jump`` [ticks], ``max_wheel_speed`` [rad/s] and
+    ``max_wheel_accel`` [rad/s^2]: the counter, jump and change-of-speed rules of
+    :mod:`omnikin.encoders`, applied exactly as batch odometry applies them. ``start``: the
+    pose of the first sample (:func:`omnikin.integration.check_start`).
 
     After each update: ``pose`` (x, y, theta) [m, m, rad; theta in [-pi, pi)], ``twist``
     (mean body twist over the last interval), ``residual`` (forward-kinematics residual
@@ -90,11 +92,12 @@ class Odometry:
         start=(0.0, 0.0, 0.0),
         max_jump=None,
         max_wheel_speed=None,
+        max_wheel_accel=None,
     ):
         self.robot = robot
         self.method = check_method(method)
         wheels = encoded_wheels(robot)
-        self.rules = counter_rules(wheels, counter_bits, max_jump, max_wheel_speed)
+        self.rules = counter_rules(wheels, counter_bits, max_jump, max_wheel_speed, max_wheel_accel)
         self.wheel_names = [w.name for w in wheels]
         self.counter_bits = tuple(r.bits for r in self.rules)
         """Counter width of each encoded wheel (None: no wrap-around)."""
@@ -121,6 +124,8 @@ class Odometry:
             fk_angles,
             kernel.tick_bounds(self.rules),
             kernel.angle_bounds(self.rules),
+            kernel.change_bounds(self.rules, "ticks"),
+            kernel.change_bounds(self.rules, "rad"),
             [r.bits for r in self.rules],
             self.method,
         )
@@ -139,10 +144,11 @@ class Odometry:
         self._build()
 
     def reset(self, pose=(0.0, 0.0, 0.0)) -> None:
-        """Forget the previous sample; the next one is the new zero, at ``pose``."""
-        p = as_components(pose, 3, "pose")
-        if p.shape != (3,) or not np.all(np.isfinite(p)):
-            raise InputError(f"pose: expected 3 finite numbers, got {shorten(pose)}")
+        """Forget the previous sample; the next one is the new zero, at ``pose``
+        (:func:`omnikin.integration.check_start`)."""
+        p = check_start(pose, "pose")
+        if p.shape != (3,):
+            raise InputError(f"pose: expected 3 numbers (x, y, theta), got shape {p.shape}")
         start = (float(p[0]), float(p[1]), float(wrap_angle(p[2])))
         self._state: tuple[Any, ...] = (
             (start, math.nan, math.nan, 0, math.nan, 0.0, 0.0, 0.0) + (0,) * self._n + (0.0,) * self._n
@@ -234,6 +240,9 @@ class Odometry:
     def _numbers(self, values, kind: int) -> tuple:
         """Readings as a tuple of Python ints (exact) or floats, or an error naming the wheel."""
         what = _WHAT[kind]
+        why = container_problem(values)
+        if why is not None:
+            raise self._fail(f"{what}s: {why}; give one per wheel {self.wheel_names} as a list, tuple or array")
         if isinstance(values, np.ndarray):
             if values.dtype.kind not in "iuf":
                 raise self._fail(f"{what}s: expected numbers for wheels {self.wheel_names}, got dtype {values.dtype}")
@@ -282,17 +291,24 @@ class Odometry:
         dt = t - state_time(st)
         if not dt > 0.0:
             return self._not_later(t, dt, values, previous, s)
+        if dt == math.inf:
+            raise self._fail("t: interval between timestamps too long")
+        linked = st[S_COUNT] > 1  # a previous interval to compare the speeds with
+        before = st[S_READ + self._n :]
         if kind == KIND_TICKS:
-            exact = [wrap_scalar(v - p, r.bits) for v, p, r in zip(values, previous, self.rules, strict=True)]
-            for d, r in zip(exact, self.rules, strict=True):
+            exact = [exact_increment(v, p, r.bits) for v, p, r in zip(values, previous, self.rules, strict=True)]
+            for d, r, b in zip(exact, self.rules, before, strict=True):
                 if abs(d) > r.limit(dt) or (r.half is not None and d == -r.half):
-                    raise self._fail(r.jump_message(d, dt))
+                    hint = r.wrap_hint(d, dt, b, st[S_DT]) if linked else r.wrap_hint(d, dt)
+                    raise self._fail(r.jump_message(d, dt, hint=hint))
             deltas = tuple(float(d) for d in exact)
         else:
-            deltas = tuple(v - p for v, p in zip(values, previous, strict=True))
+            exact = deltas = tuple(v - p for v, p in zip(values, previous, strict=True))
             for d, r in zip(deltas, self.rules, strict=True):
                 if abs(d) > r.angle_limit(dt):
                     raise self._fail(r.jump_message(d, dt, "rad"))
+        if linked:
+            self._check_changes(exact, deltas, before, st[S_DT], dt, kind)
         residual = None
         if self._steer is not None and s is not None:  # steerable wheels
             scale = self._scale if kind == KIND_TICKS else [1.0] * self._n
@@ -332,6 +348,15 @@ class Odometry:
         differs = " with different readings or steering" if dt == 0.0 else ""
         raise self._fail(f"timestamp {t!r} {what} the previous one {state_time(self._state)!r}{differs}")
 
+    def _check_changes(self, exact, deltas, before, dt_before: float, dt: float, kind: int) -> None:
+        """Raise if a wheel's increment changes faster than its change-of-speed rule allows
+        (:func:`omnikin.encoders.change_limit`, the expression batch odometry evaluates)."""
+        unit = "ticks" if kind == KIND_TICKS else "rad"
+        for e, d, b, r in zip(exact, deltas, before, self.rules, strict=True):
+            if not abs(d - b) <= r.change_limit(b, d, dt_before, dt, unit):
+                hint = r.wrap_hint(e, dt, b, dt_before) if unit == "ticks" else ""
+                raise self._fail(r.change_message(b, e, dt_before, dt, unit, hint))
+
     def _check_range(self, values) -> None:
         """Raise if a reading lies outside its wheel's counter (signed or unsigned)."""
         for v, r in zip(values, self.rules, strict=True):
@@ -348,11 +373,19 @@ class Odometry:
                 f"robot {self.robot.name!r}: steerable wheels {self.robot.steer_names} need "
                 f"their steering angles (steer=...)"
             )
-        s = as_components(steer, len(self.robot.steerable), "steer")
+        why = container_problem(steer)
+        if why is not None:
+            raise self._fail(f"steer: {why}; give one angle per wheel {self.robot.steer_names} as a list or array")
+        try:
+            s = np.asarray(steer, dtype=float)
+        except (TypeError, ValueError, OverflowError):
+            raise self._fail(f"steer: expected steering angles [rad] for {self.robot.steer_names}") from None
         if s.shape != (len(self.robot.steerable),):
             raise self._fail(
                 f"steer: expected {len(self.robot.steerable)} angles for {self.robot.steer_names}, got shape {s.shape}"
             )
-        if not np.all(np.isfinite(s)):
-            raise self._fail(f"non-finite steering angle {shorten(list(s))}")
+        for value, name in zip(s.tolist(), self.robot.steer_names, strict=True):
+            problem = steer_problem(value, name)
+            if problem is not None:
+                raise self._fail(problem)
         return s
