@@ -498,7 +498,7 @@ def _write_tick_log(args, robot, run) -> None:
     write_tick_log(
         args.log,
         run.t + args.start,
-        run.ticks,
+        run.readings,
         robot.encoded_names,
         run.steer,
         steer_names=robot.steer_names,

@@ -6,7 +6,10 @@ One run, for every trial at once (leading trial axis):
    its inverse kinematics gives every encoded wheel's commanded angle at each sample;
 2. each wheel controller holds its encoder at the commanded count: the encoder ticks are
    the commanded angle over the command model's angle per tick, rounded when quantised.
-   They are the same in every trial, and so is the odometry computed from them;
+   Its counter outputs them as such a counter does: a wheel whose ``encoder.counter_bits``
+   (of the command robot) is ``b`` reads ``ticks mod 2**b``, unsigned in ``[0, 2**b)`` like the
+   count register of a quadrature decoder or the AS5600's 12-bit angle (:func:`counter_output`).
+   They are the same in every trial, and so is the odometry computed from those readings;
 3. the true wheel angle is the ticks times the *true* angle per tick (encoder errors); in
    each sample each wheel's rolling distance gets its slip error and the true robot's
    forward kinematics (:meth:`omnikin.model.Robot.fk_matrix`) turns the wheel increments
@@ -41,9 +44,11 @@ from .motion import SampledPlan, sample_plan
 class SimulatedRun:
     """Result of :func:`simulate`.
 
-    ``t`` ``(N + 1,)`` [s]; ``ticks`` ``(N + 1, n_enc)`` encoder counts and ``steer``
-    ``(N + 1, n_steer)`` [rad] or None (the same in every trial); ``odometry``
-    ``(N + 1, 3)`` the odometry of ``odometry_robot`` from those ticks; ``truth``
+    ``t`` ``(N + 1,)`` [s]; ``ticks`` ``(N + 1, n_enc)`` encoder counts (the wheel turned
+    ``ticks`` times the angle per tick since the start: they never wrap); ``readings`` the same
+    counts as the counters output them (wrapped to each encoder's ``counter_bits``, unsigned;
+    what a tick log holds); ``steer`` ``(N + 1, n_steer)`` [rad] or None (the same in every
+    trial); ``odometry`` ``(N + 1, 3)`` the odometry of ``odometry_robot`` from the readings; ``truth``
     ``(trials, N + 1, 3)`` ground truth (or only its end, ``(trials, 1, 3)``, when not
     kept); ``measured`` ``(trials, 3)`` the end pose as measured.
     """
@@ -55,6 +60,7 @@ class SimulatedRun:
     odometry: np.ndarray
     truth: np.ndarray
     measured: np.ndarray
+    readings: np.ndarray
 
     @property
     def epsilon(self) -> np.ndarray:
@@ -142,14 +148,50 @@ def simulate(
     ticks = angles / cmd_rpt
     if noise.quantise:
         ticks = np.round(ticks).astype(np.int64)
+    readings = counter_output(ticks, [w.encoder.counter_bits for w in cmd_wheels])
     true_rpt = true_robot.rad_per_tick(names)
     dtrue = np.diff(ticks, axis=0).T * true_rpt[:, None]  # (n, N) true wheel increments [rad]
-    odometry = batch_odometry(odometry_robot, sampled.t, ticks, steer=steer).poses
+    # the plan's own speed steps are not checked: a plan timed without acceleration limits
+    # changes speed at once (the readings still pass every counter and speed rule)
+    odometry = batch_odometry(odometry_robot, sampled.t, readings, steer=steer, max_wheel_accel=math.inf).poses
     truth, z = _truth(true_robot, names, dtrue, steer, noise, gens, keep_truth)
     measured = truth[:, -1, :].copy()
     if z is not None:
         measured += z * np.array([noise.measurement, noise.measurement, noise.measurement_theta])
-    return SimulatedRun(sampled, sampled.t, ticks, steer, odometry, truth, measured)
+    return SimulatedRun(sampled, sampled.t, ticks, steer, odometry, truth, measured, readings)
+
+
+def counter_output(ticks: np.ndarray, bits) -> np.ndarray:
+    """What the counters output for the counts ``ticks`` ``(..., n)`` (int64, or float when
+    not quantised): wheel ``j`` with a width ``bits[j]`` reads ``ticks mod 2**bits[j]`` in
+    ``[0, 2**bits[j])`` (unsigned; exact for integers, and a float reading that would round up
+    to ``2**bits`` is taken as 0), the others ``ticks`` itself. Returns ``ticks`` when no wheel
+    has a width, else a new array (uint64 when a 64-bit counter holds integers)."""
+    if all(b is None for b in bits):
+        return ticks
+    if ticks.dtype.kind == "f":
+        out = ticks.copy()
+        for j, b in enumerate(bits):
+            if b is not None:
+                full = 2.0**b
+                col = np.mod(ticks[..., j], full)
+                col[col >= full] = 0.0
+                out[..., j] = col
+        return out
+    wrapped = ticks.astype(np.int64).view(np.uint64)  # a fresh copy; two's complement: ticks mod 2**64
+    for j, b in enumerate(bits):
+        if b is not None and b < 64:
+            wrapped[..., j] &= np.uint64((1 << b) - 1)
+    cols = [j for j, b in enumerate(bits) if b is not None]
+    if 64 not in bits:  # every reading fits int64
+        out = ticks.astype(np.int64)
+        out[..., cols] = wrapped[..., cols].astype(np.int64)
+        return out
+    if len(cols) == len(bits):
+        return wrapped
+    mixed = ticks.astype(object)  # uint64 readings beside negative counts: Python ints
+    mixed[..., cols] = wrapped[..., cols].astype(object)
+    return mixed
 
 
 def trial_generators(rng, trials: int) -> list[np.random.Generator]:
