@@ -481,6 +481,7 @@ def cmd_odometry(args) -> int:
             method=args.method,
             counter_bits=args.counter_bits,
             max_wheel_speed=args.max_wheel_speed,
+            max_wheel_accel=args.max_wheel_accel,
         )
     except OdometryInputError as exc:
         if exc.sample is None:
@@ -619,8 +620,10 @@ def build_parser() -> CommandParser:
         "  evo_traj tum traj.tum --plot\n"
         "  omnikin odometry my_robot.yaml log.csv -o - --counter-bits 16 | head\n\n"
         "tick readings: integers (ASCII digits, optional leading '-'), exact up to 64 bits.\n"
-        "A jump no wheel could make in one sample is an error: if the counters wrap,\n"
-        "give their width (--counter-bits or encoder.counter_bits in the robot file).",
+        "A jump no wheel could make in one sample, or a change of speed no wheel could make\n"
+        "between two samples, is an error: if the counters wrap, give their width\n"
+        "(--counter-bits or encoder.counter_bits in the robot file). docs/conventions.md\n"
+        "says which wrapped counters are caught at which sample rates.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
@@ -654,7 +657,14 @@ def build_parser() -> CommandParser:
         type=float,
         metavar="RAD_S",
         help="fastest a wheel turns [rad/s]: a tick jump needing more than 1.5x this is refused "
-        "(default: each wheel's max_speed, else 100 m/s at the rim)",
+        "(default: each wheel's max_speed, else 50 m/s at the rim)",
+    )
+    sp.add_argument(
+        "--max-wheel-accel",
+        type=float,
+        metavar="RAD_S2",
+        help="fastest a wheel's speed changes [rad/s^2]: a change between two consecutive intervals "
+        "needing more than 1.5x this is refused (default: 100 m/s^2 at the rim; 'inf': no bound)",
     )
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     sp.set_defaults(func=cmd_odometry)
