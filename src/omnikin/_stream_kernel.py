@@ -20,10 +20,10 @@ as plain data. Per sample, ``step_ticks`` does (conventions, Odometry):
    modulo ``2**bits`` for counters of a known width, after checking the reading lies in
    the counter's range), then as floats;
 3. every wheel's jump rule (:mod:`omnikin.encoders`) ``|d_j| <= limit_j(dt)`` and, from the
-   third sample on, its change-of-speed rule ``|d_j - q_j| <= change_limit_j(dt, dt_prev)``
-   (``q_j`` the previous increment), with the limits shrunk by :data:`SAFETY` so that float
-   rounding never accepts what the exact rule refuses; a sample that close to a limit goes to
-   the general path, which decides exactly;
+   third sample on, a sufficient form of its change-of-speed rule ``|d_j - q_j| <= A_j min(dt,
+   dt_prev) (dt + dt_prev) / 2 + 2 slack`` (``q_j`` the previous increment), with the limits
+   shrunk by :data:`SAFETY` so that float rounding never accepts what the exact rule refuses; a
+   sample beyond them goes to the general path, which decides exactly;
 4. body increment ``(a, b, phi) = F d`` (``F`` = forward kinematics per tick);
 5. the pose update of :mod:`omnikin.integration` (:data:`ADVANCE`).
 
@@ -44,7 +44,7 @@ from math import cos, floor, pi, sin
 
 import numpy as np
 
-from .encoders import QUANTISATION_SLACK
+from .encoders import QUANTISATION_SLACK, SAFETY
 from .geometry import SCALAR_TAYLOR_LIMIT, TWO_PI
 
 # --- state layout ------------------------------------------------------------------------------
@@ -69,10 +69,6 @@ def state_time(state) -> float:
     """Time [s] of the last accepted sample (NaN before the first)."""
     return state[S_TIME_ANGLES] if state_kind(state) == KIND_ANGLES else state[S_TIME_TICKS]
 
-
-SAFETY = 1.0 - 1e-12
-"""Shrinks the limits of the fast jump test by far more than float rounding (and the rounding of
-increments beyond 2**53 to floats): it never accepts what the exact rule refuses."""
 
 NUMPY_INTS = frozenset(
     {
@@ -152,8 +148,8 @@ class WheelBound:
 @dataclass(frozen=True)
 class ChangeBound:
     """The change-of-speed rule of one wheel (:func:`omnikin.encoders.change_limit`) as the
-    kernel evaluates it: ``half_accel`` is half the acceleration bound (inf: no rule) and
-    ``slack`` the quantisation slack of one increment [ticks or rad]."""
+    kernel tests it (:func:`_change_lines`): ``half_accel`` is half the acceleration bound
+    (inf: no rule) and ``slack`` the quantisation slack of one increment [ticks or rad]."""
 
     half_accel: float
     slack: float
@@ -199,32 +195,29 @@ def _check_lines(d: list[str], bounds: list[WheelBound]) -> list[str]:
 
 
 def _change_lines(d: list[str], bounds: list[ChangeBound]) -> list[str]:
-    """The change-of-speed test of every wheel with a bound, from the third sample on (``count``
-    samples accepted before this one): :func:`omnikin.encoders.change_limit` in the same order
-    of operations, times :data:`SAFETY`; near or past a limit the general path decides."""
-    active = [(j, b) for j, b in enumerate(bounds) if math.isfinite(b.half_accel)]
+    """The change-of-speed test of every wheel with a bound, in its cheap sufficient form:
+    :func:`omnikin.encoders.change_limit` is at least ``a min(dt, dtp) (dt + dtp) / 2 + 2 slack``
+    (both of its terms are), so an increment within that (times :data:`SAFETY`) of the previous
+    one passes; anything else (a wrap, a hard stop, intervals of different lengths with a change
+    of speed) goes to the general path, which evaluates the exact rule. From the third sample on
+    (``count`` samples accepted before this one)."""
+    active = [(v, b) for v, b in zip(d, bounds, strict=True) if math.isfinite(b.half_accel)]
     if not active:
         return []
-    lines = [
-        "if count > 1:",
-        "    g = dt - dtp",
-        "    if g < 0.0:",
-        "        g = -g",
-        "    s = dtp + dt",
-        "    w1 = dt * s",
-        "    w0 = dtp * s",
-    ]
-    for j, b in active:
-        half, slack = repr(b.half_accel), repr(b.slack)
-        lines += [
-            f"    x = g * ((q{j} if q{j} >= 0.0 else -q{j}) + {slack}) / dtp + {half} * w1",
-            f"    y = g * ((d{j} if d{j} >= 0.0 else -d{j}) + {slack}) / dt + {half} * w0",
-            f"    x = ((x if x < y else y) + {2.0 * b.slack!r}) * {SAFETY!r}",
-            f"    y = d{j} - q{j}",
-            "    if not -x <= y <= x:",
-            "        return None  # near or past the limit: the general path decides",
-        ]
-    return lines
+    lines = ["w = (dt if dt < dtp else dtp) * (dt + dtp)"]
+    names: dict[ChangeBound, str] = {}
+    tests = []
+    for v, b in active:
+        if b not in names:
+            names[b] = f"C{len(names)}"
+            lim = names[b]
+            lines.append(f"{lim} = {b.half_accel * SAFETY!r} * w + {2.0 * b.slack * SAFETY!r}")
+            lines.append(f"N{lim[1:]} = -{lim}")
+        lim = names[b]
+        tests.append(f"N{lim[1:]} <= {v} - q{v[1:]} <= {lim}")
+    lines.append(f"if not ({' and '.join(tests)}):")
+    lines.append("    return None  # beyond the cheap bound: the general path decides exactly")
+    return ["if count > 1:  # a previous interval to compare with"] + _indent("\n".join(lines))
 
 
 def _fk_lines(fk_rows, d: list[str]) -> list[str]:

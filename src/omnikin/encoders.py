@@ -24,14 +24,19 @@ a wrong pose, and refuse corrupted samples:
   ``|d| > 2**(bits-1) - 0.5`` (exactly half the range: direction undecidable);
 * **change of speed**: each wheel has an acceleration bound ``A`` [rad/s^2]: ``JUMP_MARGIN`` times
   an explicit ``max_wheel_accel``, else a rim acceleration of :data:`DEFAULT_RIM_ACCEL` over the
-  radius (``inf`` switches the rule off). Two consecutive increments ``d0`` over ``dt0`` and
-  ``d1`` over ``dt1`` are impossible when
-  ``|d1 - d0| > V |dt1 - dt0| + A min(dt0, dt1) (dt0 + dt1) / 2 + 2 QUANTISATION_SLACK`` (all in
-  ticks: ``V`` and ``A`` over ``|rad_per_tick|``). Derivation: the mean speeds over two
-  adjacent intervals differ by at most ``A (dt0 + dt1) / 2``, and
-  ``d1 - d0 = (dt1 - dt0) v1 + dt0 (v1 - v0) = (dt1 - dt0) v0 + dt1 (v1 - v0)``; the first term
-  absorbs timestamp jitter and missed samples. A wrapped ``b``-bit counter changes an
-  increment by ``2**b``: this rule catches it whenever ``2**b`` exceeds twice the bound.
+  radius (``inf`` switches the rule off). With ``A`` and ``s = QUANTISATION_SLACK`` in ticks, two
+  consecutive increments ``d0`` over ``dt0`` and ``d1`` over ``dt1`` are impossible when
+  ``|d1 - d0| > min(|dt1 - dt0| (|d0| + s) / dt0 + A dt1 (dt0 + dt1) / 2,
+  |dt1 - dt0| (|d1| + s) / dt1 + A dt0 (dt0 + dt1) / 2) + 2 s`` (:func:`change_limit`).
+  Derivation: the mean speeds ``v0``, ``v1`` of two adjacent intervals differ by at most
+  ``A (dt0 + dt1) / 2``, and ``d1 - d0 = (dt1 - dt0) v0 + dt1 (v1 - v0) = (dt1 - dt0) v1 +
+  dt0 (v1 - v0)`` with ``|v0| <= (|d0| + s) / dt0``, ``|v1| <= (|d1| + s) / dt1``: the first
+  terms absorb intervals of different lengths (a missed sample) and timestamp jitter in
+  proportion to the speed. For equal intervals ``dt`` the bound is ``A dt^2 + 2 s``. A counter
+  of ``b`` bits that wraps changes one increment by ``2**b``: this rule catches it whenever
+  ``2**b`` exceeds twice the bound (``docs/conventions.md`` lists which widths at which rates).
+  Wheel angles have this rule only with an explicit ``max_wheel_accel``: they come unwrapped
+  from drivers, and a live controller must not stop at an impact.
 
 The rule is applied to the float increments (the exact increments rounded once), by batch and
 streaming odometry alike, in the order of the samples. Within one sample the checks run in the
@@ -67,14 +72,21 @@ drive below 3 m/s and scaled autonomous race cars (F1TENTH) stay near 20 m/s; on
 autonomous race cars (the Indy Autonomous Challenge cars pass 70 m/s) are faster, and they give
 their wheels' ``max_speed`` (or ``max_wheel_speed``)."""
 DEFAULT_RIM_ACCEL = 30.0
-"""Rim acceleration [m/s^2] (about 10 g) bounding how fast a wheel's speed changes. Traction
-limits a robot to about 1 g (rubber on dry concrete); a wheel spinning free or braked by an
-impact changes faster, and 10 g leaves a margin of ten for that. Set ``max_wheel_accel`` for
-data with instantaneous speed steps (idealised simulations: ``math.inf`` switches the rule off)."""
+"""Rim acceleration [m/s^2] (about 3 g) bounding how fast a wheel's speed changes. Traction
+limits a wheel rolling on the floor to about 1 g (rubber on dry concrete, friction coefficient
+0.8 to 1); 3 g leaves a margin of three for wheels that slip, spin free or are braked by an
+impact. Between two intervals of ``dt`` the mean rim speed may then change by ``30 dt`` m/s
+(1.5 m/s at 20 Hz, 0.3 m/s at 100 Hz) plus the quantisation. Data that changes faster (a robot
+banging into walls at speed, hand-made logs with instantaneous speed steps) needs a larger
+``max_wheel_accel`` (``math.inf``: no rule)."""
 INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
 UINT64_END = 2**64
 FLOAT_EXACT = 2**53
 """Integers beyond this are not all floats: readings there must stay integers."""
+
+SAFETY = 1.0 - 1e-12
+"""Shrinks a bound used as a quick sufficient test by far more than float rounding (and the
+rounding of increments beyond 2**53 to floats): it never accepts what the exact rule refuses."""
 
 RANKS = {
     "time": 0,  # non-finite timestamp
@@ -108,7 +120,7 @@ def check_max_wheel_speed(speed) -> float | None:
 
 def check_max_wheel_accel(accel) -> float | None:
     """``max_wheel_accel`` [rad/s^2] > 0; ``inf`` switches the change-of-speed rule off."""
-    if accel is not None and not isinstance(accel, (bool, np.bool_)) and accel == math.inf:
+    if isinstance(accel, numbers.Real) and not isinstance(accel, (bool, np.bool_)) and accel == math.inf:
         return math.inf
     return _positive(accel, "max_wheel_accel", "a wheel acceleration > 0 [rad/s^2] (or inf: no bound)")
 
@@ -372,8 +384,10 @@ def nested_problem(value, names, what: str) -> OdometryInputError | None:
     number belongs, a non-number, or a row of the wrong length is reported.
     """
     depth, probe = 0, value
-    while container_problem(probe) is None and not isinstance(probe, np.ndarray) and len_or_none(probe):
+    while depth <= MAX_DIMS and container_problem(probe) is None and len_or_none(probe):
         depth, probe = depth + 1, next(iter(probe))
+    if depth > MAX_DIMS:  # a list that holds itself, or deeper than any array
+        return OdometryInputError(f"{what}: nested deeper than {MAX_DIMS} levels")
     depth = max(depth, 2)
 
     def walk(v, path):
@@ -409,6 +423,10 @@ def nested_problem(value, names, what: str) -> OdometryInputError | None:
     else:
         return OdometryInputError(f"{what}{list(path)}: {why}")
     return at_sample(detail, sample, trial)
+
+
+MAX_DIMS = 64
+"""NumPy's largest number of dimensions: deeper nesting is no array of readings."""
 
 
 def len_or_none(value) -> int:
@@ -692,35 +710,48 @@ def _trial_index(array: np.ndarray, trial: tuple) -> tuple:
 
 
 def _change_problem(rules, dt, delta, values, offset: int, carry: Carry, unit: str) -> Problem | None:
-    """The first pair of consecutive increments that breaks the change-of-speed rule."""
+    """The first pair of consecutive increments that breaks the change-of-speed rule: the pair
+    across the block boundary (``carry``), then the pairs within the block."""
     bounds = [r.change_bounds(unit) for r in rules]
     if all(a == math.inf for a, _ in bounds):
         return None
-    linked = carry.delta is not None and carry.dt is not None
-    if linked:
-        d = np.concatenate([carry.delta, delta], axis=-2)  # pair p: interval p - 1 and p of this block
-        gaps = np.concatenate([carry.dt, dt], axis=-1)
-    else:
-        d, gaps = delta, dt  # pair p: intervals p and p + 1
-    shift = 0 if linked else 1  # the later interval of pair p is interval p + shift of this block
-    if d.shape[-2] < 2:
-        return None
     a, slack = (np.array([b[i] for b in bounds]) for i in range(2))
-    d0, d1 = d[..., :-1, :], d[..., 1:, :]
+    if len(set(bounds)) == 1:
+        a, slack = a[:1], slack[:1]  # one bound for all wheels: limits (..., m, 1)
+    pairs = []  # (increments before, after, intervals before, after, interval index of `after` in the block)
+    if carry.delta is not None and carry.dt is not None:
+        pairs.append((carry.delta, delta[..., :1, :], carry.dt, dt[..., :1], 0))
+    pairs.append((delta[..., :-1, :], delta[..., 1:, :], dt[..., :-1], dt[..., 1:], 1))
+    for d0, d1, dt0, dt1, shift in pairs:
+        if d1.shape[-2] == 0:
+            continue
+        bad = _speed_changes(a, slack, d0, d1, dt0[..., None], dt1[..., None])
+
+        def describe(p, trial, j, d0=d0, d1=d1, dt0=dt0, dt1=dt1, shift=shift):
+            before, after = float(d0[_trial_index(d0, trial) + (p, j)]), float(d1[_trial_index(d1, trial) + (p, j)])
+            g0, g1 = _at(dt0, trial, p), _at(dt1, trial, p)
+            if unit != "ticks":
+                return rules[j].change_message(before, after, g0, g1, unit)
+            exact = _exact_difference_at(rules[j], values, trial, p + shift, j)
+            return rules[j].change_message(before, exact, g0, g1, unit, rules[j].wrap_hint(exact, g1, before, g0))
+
+        found = problem_at(bad, True, offset + 1 + shift, "change", describe)
+        if found is not None:
+            return found
+    return None
+
+
+def _speed_changes(a, slack, d0, d1, dt0, dt1) -> np.ndarray:
+    """Mask of the pairs breaking :func:`change_limit`. A cheap sufficient bound first (both
+    terms of the limit are at least ``a min(dt0, dt1) (dt0 + dt1) / 2``, shrunk by
+    :data:`SAFETY`); the exact limit only where that does not settle it (as the streaming kernel)."""
     with np.errstate(divide="ignore", invalid="ignore"):  # bad intervals are refused by their own check
-        limit = change_limit(a, slack, d0, d1, gaps[..., :-1, None], gaps[..., 1:, None])
-        bad = ~(np.abs(d1 - d0) <= limit)
-
-    def describe(p, trial, j):
-        ti = _trial_index(d, trial)
-        before, after = float(d[ti + (p, j)]), float(d[ti + (p + 1, j)])
-        g0, g1 = _at(gaps, trial, p), _at(gaps, trial, p + 1)
-        if unit != "ticks":
-            return rules[j].change_message(before, after, g0, g1, unit)
-        exact = _exact_difference_at(rules[j], values, trial, p + shift, j)
-        return rules[j].change_message(before, exact, g0, g1, unit, rules[j].wrap_hint(exact, g1, before, g0))
-
-    return problem_at(bad, True, offset + 1 + shift, "change", describe)
+        change = np.abs(d1 - d0)
+        span = np.minimum(dt0, dt1) * (dt0 + dt1)
+        cheap = (a * (0.5 * SAFETY)) * span + (2.0 * SAFETY) * slack
+        if np.all(change <= cheap):
+            return np.zeros(change.shape, dtype=bool)
+        return ~(change <= change_limit(a, slack, d0, d1, dt0, dt1))
 
 
 def _range_problems(rules, readings, offset: int) -> list[Problem]:

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import numbers
 import warnings
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -110,7 +111,7 @@ class Odometry:
         self._fk: np.ndarray | None = None if self._steerable else robot.fk_matrix(None, self.wheel_names)
         self._redundant = not self._steerable and rows.shape[0] > rank(rows @ robot.admissible_basis)
         self._build()
-        self.reset(start)
+        self._start(start, "start")
 
     def _build(self) -> None:
         """Compile (or fetch) the kernels of this configuration."""
@@ -146,9 +147,12 @@ class Odometry:
     def reset(self, pose=(0.0, 0.0, 0.0)) -> None:
         """Forget the previous sample; the next one is the new zero, at ``pose``
         (:func:`omnikin.integration.check_start`)."""
-        p = check_start(pose, "pose")
+        self._start(pose, "pose")
+
+    def _start(self, pose, what: str) -> None:
+        p = check_start(pose, what)
         if p.shape != (3,):
-            raise InputError(f"pose: expected 3 numbers (x, y, theta), got shape {p.shape}")
+            raise InputError(f"{what}: expected 3 numbers (x, y, theta), got shape {p.shape}")
         start = (float(p[0]), float(p[1]), float(wrap_angle(p[2])))
         self._state: tuple[Any, ...] = (
             (start, math.nan, math.nan, 0, math.nan, 0.0, 0.0, 0.0) + (0,) * self._n + (0.0,) * self._n
@@ -243,6 +247,11 @@ class Odometry:
         why = container_problem(values)
         if why is not None:
             raise self._fail(f"{what}s: {why}; give one per wheel {self.wheel_names} as a list, tuple or array")
+        if not isinstance(values, (np.ndarray, Sequence, Iterator)):  # an array-like (__array__)
+            try:
+                values = np.asarray(values)
+            except (TypeError, ValueError):
+                raise self._fail(f"{what}s: expected numbers for wheels {self.wheel_names}") from None
         if isinstance(values, np.ndarray):
             if values.dtype.kind not in "iuf":
                 raise self._fail(f"{what}s: expected numbers for wheels {self.wheel_names}, got dtype {values.dtype}")

@@ -8,7 +8,8 @@ One run, for every trial at once (leading trial axis):
    the commanded angle over the command model's angle per tick, rounded when quantised.
    Its counter outputs them as such a counter does: a wheel whose ``encoder.counter_bits``
    (of the command robot) is ``b`` reads ``ticks mod 2**b``, unsigned in ``[0, 2**b)`` like the
-   count register of a quadrature decoder or the AS5600's 12-bit angle (:func:`counter_output`).
+   count register of a quadrature decoder or the AS5600's 12-bit angle (:func:`counter_output`;
+   unquantised counts, an idealisation, wrap to the signed range instead, exactly).
    They are the same in every trial, and so is the odometry computed from those readings;
 3. the true wheel angle is the ticks times the *true* angle per tick (encoder errors); in
    each sample each wheel's rolling distance gets its slip error and the true robot's
@@ -46,8 +47,8 @@ class SimulatedRun:
 
     ``t`` ``(N + 1,)`` [s]; ``ticks`` ``(N + 1, n_enc)`` encoder counts (the wheel turned
     ``ticks`` times the angle per tick since the start: they never wrap); ``readings`` the same
-    counts as the counters output them (wrapped to each encoder's ``counter_bits``, unsigned;
-    what a tick log holds); ``steer`` ``(N + 1, n_steer)`` [rad] or None (the same in every
+    counts as the counters output them (wrapped to each encoder's ``counter_bits``:
+    :func:`counter_output`; what a tick log holds); ``steer`` ``(N + 1, n_steer)`` [rad] or None (the same in every
     trial); ``odometry`` ``(N + 1, 3)`` the odometry of ``odometry_robot`` from the readings; ``truth``
     ``(trials, N + 1, 3)`` ground truth (or only its end, ``(trials, 1, 3)``, when not
     kept); ``measured`` ``(trials, 3)`` the end pose as measured.
@@ -162,11 +163,15 @@ def simulate(
 
 
 def counter_output(ticks: np.ndarray, bits) -> np.ndarray:
-    """What the counters output for the counts ``ticks`` ``(..., n)`` (int64, or float when
-    not quantised): wheel ``j`` with a width ``bits[j]`` reads ``ticks mod 2**bits[j]`` in
-    ``[0, 2**bits[j])`` (unsigned; exact for integers, and a float reading that would round up
-    to ``2**bits`` is taken as 0), the others ``ticks`` itself. Returns ``ticks`` when no wheel
-    has a width, else a new array (uint64 when a 64-bit counter holds integers)."""
+    """What the counters output for the counts ``ticks`` ``(..., n)``: wheel ``j`` with a
+    width ``bits[j]`` reads ``ticks mod 2**bits[j]``, the others ``ticks`` itself.
+
+    Whole counts (int64) come out unsigned in ``[0, 2**bits)``, as a hardware count register
+    holds them (uint64 when a 64-bit counter is among them). Unquantised counts (float), which
+    no real counter outputs, come out as the nearest representative in
+    ``[-2**(bits-1), 2**(bits-1)]``: ``x - 2**bits rint(x / 2**bits)`` is exact (the result is a
+    multiple of the spacing of ``x`` and not larger), where ``x mod 2**bits`` would round a
+    small negative count up. Returns ``ticks`` itself when no wheel has a width."""
     if all(b is None for b in bits):
         return ticks
     if ticks.dtype.kind == "f":
@@ -174,9 +179,7 @@ def counter_output(ticks: np.ndarray, bits) -> np.ndarray:
         for j, b in enumerate(bits):
             if b is not None:
                 full = 2.0**b
-                col = np.mod(ticks[..., j], full)
-                col[col >= full] = 0.0
-                out[..., j] = col
+                out[..., j] = ticks[..., j] - full * np.rint(ticks[..., j] / full)
         return out
     wrapped = ticks.astype(np.int64).view(np.uint64)  # a fresh copy; two's complement: ticks mod 2**64
     for j, b in enumerate(bits):

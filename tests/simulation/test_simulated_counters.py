@@ -1,0 +1,128 @@
+"""A robot whose encoders declare ``counter_bits`` is simulated with the readings such counters
+output (wrapped, unsigned), and everything downstream reads them back.
+
+Before the fix a 12-bit robot could not be simulated once a count left 0 .. 4095 ("tick
+reading -2051 outside the range of a 12-bit counter"), neither by ``omnikin simulate --log``
+nor by ``omnikin umbmark``. Expected values: the readings are the counts modulo 2**12 (NumPy
+here), the poses the closed form of the true increments (``tomasi_helpers.tomasi_poses``), and
+a 12-bit robot must give exactly what the same robot without a counter width gives.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import omnikin_env
+from omnikin import batch_odometry, load_robot
+from omnikin.io.logs import read_tick_log
+from omnikin.plans import umbmark_square
+from omnikin.simulation.error_models import NoiseModel
+from omnikin.simulation.simulate import counter_output, simulate
+from tomasi_helpers import assert_poses_close, read_csv_traj, tomasi_poses
+
+
+def tomasi_file(path, bits):
+    """tomasi-omni3 as a robot file whose encoders are ``bits``-bit counters."""
+    path.write_text(
+        "omnikin: 1\nname: cb\nwheels:\n"
+        + "".join(
+            f"  - {{name: w{i + 1}, type: omni, distance: 0.113, angle_deg: {a}, radius: 0.04125, "
+            f"encoder: {{ticks_per_rev: 600, counter_bits: {bits}}}}}\n"
+            for i, a in enumerate((0, 120, 240))
+        ),
+        encoding="utf-8",
+    )
+    return path
+
+
+def run(*args, cwd):
+    return subprocess.run(
+        [sys.executable, "-m", "omnikin.cli.main", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=cwd,
+        env=omnikin_env(),
+    )
+
+
+def test_simulate_log_of_a_12_bit_robot_then_odometry(tmp_path):
+    """omnikin simulate cb12.yaml --log x.csv, then omnikin odometry cb12.yaml x.csv: the log holds
+    the counts modulo 4096, and its odometry is the closed form of the true increments, ending
+    where the simulator's own odometry ended and where the same run of tomasi-omni3 ends."""
+    robot = tomasi_file(tmp_path / "cb12.yaml", 12)
+    common = ["--path", "square cw rotate 1", "--rate", "50", "--seed", "4", "--json"]
+    sim = run("simulate", robot, "--log", "x.csv", *common, cwd=tmp_path)
+    assert sim.returncode == 0, sim.stderr
+    plain = run("simulate", "tomasi-omni3", "--log", "plain.csv", *common, cwd=tmp_path)
+    assert plain.returncode == 0, plain.stderr
+    wrapped = read_tick_log(tmp_path / "x.csv", load_robot(robot))
+    counts = read_tick_log(tmp_path / "plain.csv", load_robot("tomasi-omni3"))
+    assert counts.ticks.min() < 0  # the counts leave 0 .. 4095: the counter must wrap
+    assert wrapped.ticks.min() >= 0 and wrapped.ticks.max() < 4096
+    np.testing.assert_array_equal(wrapped.ticks, counts.ticks % 4096)
+    odo = run("odometry", robot, "x.csv", "-o", "traj.csv", cwd=tmp_path)
+    assert odo.returncode == 0, odo.stderr
+    traj = read_csv_traj(tmp_path / "traj.csv")[:, 1:]
+    assert_poses_close(traj, tomasi_poses(np.diff(counts.ticks, axis=0)), atol=1e-8)
+    assert traj[-1].tolist() == pytest.approx(json.loads(sim.stdout)["odometry_end"], abs=1e-9)
+    assert json.loads(sim.stdout)["odometry_end"] == json.loads(plain.stdout)["odometry_end"]
+    # read without the width the same log is refused, naming a line and the width to give
+    refused = run("odometry", "tomasi-omni3", "x.csv", "-o", "t2.csv", cwd=tmp_path)
+    assert refused.returncode == 2 and "read as a 12-bit counter" in refused.stderr
+    assert len(refused.stderr.strip().splitlines()) == 1
+
+
+def test_umbmark_of_a_12_bit_robot_matches_the_robot_without_a_width(tmp_path):
+    """omnikin umbmark cb12.yaml runs, and its results are those of tomasi-omni3 (same seed):
+    the counter width changes the readings, never the odometry."""
+    robot = tomasi_file(tmp_path / "cb12.yaml", 12)
+    out = {}
+    for name, r in (("cb12", robot), ("plain", "tomasi-omni3")):
+        proc = run("umbmark", r, "-o", name, "--runs", "2", "--json", "--figures", "svg", cwd=tmp_path)
+        assert proc.returncode == 0, proc.stderr
+        out[name] = json.loads(proc.stdout)
+    for key in ("before", "after", "systematic"):
+        assert out["cb12"][key] == out["plain"][key]
+
+
+@pytest.mark.parametrize("bits", [8, 16, 32, 64])
+def test_simulated_readings_are_the_counts_modulo_the_counter(tmp_path, bits):
+    """SimulatedRun.readings: counts modulo 2**bits in [0, 2**bits) (uint64 for 64 bits),
+    SimulatedRun.ticks the counts themselves; the odometry of the readings is the closed form."""
+    robot = load_robot(tomasi_file(tmp_path / "r.yaml", bits))
+    sim = simulate(umbmark_square("ccw", 1.0, "rotate"), robot, robot, rate=100.0, noise=NoiseModel(), rng=1)
+    counts = np.asarray(sim.ticks, dtype=object)
+    expected = counts % (2**bits)
+    assert np.asarray(sim.readings, dtype=object).tolist() == expected.tolist()
+    assert counts.min() < 0
+    poses = tomasi_poses(np.diff(sim.ticks, axis=0))
+    assert_poses_close(sim.odometry, poses, atol=1e-9)
+    assert_poses_close(batch_odometry(robot, sim.t, sim.readings).poses, poses, atol=1e-9)
+
+
+def test_unquantised_readings_of_a_12_bit_robot_wrap_as_floats(tmp_path):
+    """Without quantisation the simulated counts are real numbers: they wrap to the signed range, and
+    the odometry reads them back exactly as the robot without a width reads the counts."""
+    robot = load_robot(tomasi_file(tmp_path / "r.yaml", 12))
+    plain = load_robot("tomasi-omni3")
+    plan = umbmark_square("cw", 2.0, "rotate")
+    sim = simulate(plan, robot, robot, rate=50.0, noise=NoiseModel(quantise=False), rng=1)
+    ref = simulate(plan, plain, plain, rate=50.0, noise=NoiseModel(quantise=False), rng=1)
+    assert sim.readings.dtype == np.float64 and sim.readings.min() >= -2048 and sim.readings.max() <= 2048
+    assert sim.ticks.max() > 2048 or sim.ticks.min() < -2048  # they wrapped
+    np.testing.assert_array_equal(sim.ticks, ref.ticks)
+    assert_poses_close(sim.odometry, ref.odometry, atol=1e-9)
+
+
+def test_counter_output_mixes_widths():
+    ticks = np.array([[0, 0, 0], [-1, 70000, -5], [2**40, -(2**40), 3]], dtype=np.int64)
+    out = counter_output(ticks, [8, None, 64])
+    assert out.tolist() == [[0, 0, 0], [255, 70000, 2**64 - 5], [0, -(2**40), 3]]
+    assert counter_output(ticks, [None, None, None]) is ticks
+    assert counter_output(ticks, [8, 16, None]).dtype == np.int64
