@@ -56,6 +56,7 @@ from collections.abc import Callable, Iterator, Mapping, MappingView, Sequence
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, field
 from fractions import Fraction
+from functools import partial
 
 import numpy as np
 
@@ -649,7 +650,8 @@ def block_increments(
     and lies in this block. ``carry`` links the blocks and is updated.
     """
     names = [r.wheel for r in rules]
-    dt, problems = time_problems(t, offset)
+    dt, found_in_times = time_problems(t, offset)
+    problems: list[Problem | None] = list(found_in_times)
     if values.dtype.kind == "f":
         what = "ticks: non-finite reading" if unit == "ticks" else "angles: non-finite wheel angle"
         problems.append(
@@ -680,9 +682,9 @@ def block_increments(
     problems.append(_change_problem(rules, dt, delta, values, offset, carry, unit))
     if pending is not None and pending.sample <= offset + dt.shape[-1]:
         problems.append(pending)
-    problems = [p for p in problems if p is not None]
-    if problems:
-        raise min(problems).error()
+    found = [p for p in problems if p is not None]
+    if found:
+        raise min(found).error()
     carry.delta, carry.dt = delta[..., -1:, :], dt[..., -1:]
     return dt, delta
 
@@ -776,7 +778,7 @@ def _range_problems(rules, readings, offset: int) -> list[Problem]:
         row, trial, c = found
         j = cols[c]
         message = rules[j].range_message(readings[trial + (row, j)])
-        out.append(Problem(row + offset, RANKS["range"], trial, j, lambda message=message: message))
+        out.append(Problem(row + offset, RANKS["range"], trial, j, partial(str, message)))
     return out
 
 

@@ -304,6 +304,7 @@ class Odometry:
             raise self._fail("t: interval between timestamps too long")
         linked = st[S_COUNT] > 1  # a previous interval to compare the speeds with
         before = st[S_READ + self._n :]
+        exact: Sequence[Any]  # the increments as exact numbers (ticks) or floats (wheel angles)
         if kind == KIND_TICKS:
             exact = [exact_increment(v, p, r.bits) for v, p, r in zip(values, previous, self.rules, strict=True)]
             for d, r, b in zip(exact, self.rules, before, strict=True):

@@ -172,7 +172,7 @@ def test_any_counter_representation_integrates_the_true_increments(increments, b
     (unsigned, modulo 2**bits; without a width: plain integers, possibly beyond 64 bits). Batch and
     streaming both give the closed form of the true increments. Samples 0.1 s apart: arbitrary
     increments of up to 100 ticks change the speed by less than the default change-of-speed bound
-    (100 m/s^2 at the rim: 2315 ticks over two 0.1 s intervals)."""
+    (30 m/s^2 at the rim: 694 ticks between two 0.1 s intervals)."""
     tom = load_robot("tomasi-omni3")
     true = np.cumsum([[0, 0, 0]] + increments, axis=0, dtype=object) + offset
     readings = true % (1 << bits) if bits else true

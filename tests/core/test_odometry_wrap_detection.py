@@ -17,6 +17,8 @@ import sys
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from conftest import ROOT, omnikin_env
 from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
@@ -336,3 +338,50 @@ def test_documented_guarantee_table_follows_from_the_default_bounds():
             assert cell.strip() == (f"{rate:.2g}" if rate >= 0.1 else "< 0.1"), (name, b, cell)
         checked += 1
     assert checked >= 5
+
+
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from([0.01, 0.01, 0.01, 0.02, 0.005, 0.0, -0.004]),
+            st.tuples(*[st.integers(-30, 30)] * 3),
+            st.sampled_from([0, 0, 0, 0, 0, 256, -4096, 65536, 9999, 10**6]),
+            st.integers(0, 2),
+        ),
+        min_size=1,
+        max_size=25,
+    ),
+    st.sampled_from([None, 8, 12, 16]),
+    st.booleans(),
+)
+def test_batch_and_streaming_refuse_the_same_sample(steps, bits, floats):
+    """Random logs with wraps, jumps, stops, repeated and backward times: batch and streaming
+    accept the same logs (with the same poses) and refuse the same first sample, with the same
+    message for the counter rules."""
+    tom = load_robot("tomasi-omni3")
+    t, rows = [0.0], [[100, 200, 300]]
+    for dt, inc, jump, wheel in steps:
+        row = [r + d for r, d in zip(rows[-1], inc, strict=True)]
+        row[wheel] += jump
+        if dt == 0.0 and row == rows[-1]:
+            row[0] += 1  # not a duplicate (streaming skips those, batch refuses them)
+        t.append(t[-1] + dt)
+        rows.append(row)
+    if bits:
+        rows = [[v % (1 << bits) for v in r] for r in rows]
+    feed = [[float(v) for v in r] for r in rows] if floats else rows
+    b = batch_error(tom, t, np.array(feed), counter_bits=bits)
+    o = Odometry(tom, counter_bits=bits)
+    s, poses = None, []
+    try:
+        for k in range(len(t)):
+            poses.append(o.update(t[k], feed[k]))
+    except OdometryInputError as exc:
+        s = exc
+    assert (b is None) == (s is None), (b, s)
+    if b is None:
+        assert_poses_close(poses, batch_odometry(tom, t, np.array(feed), counter_bits=bits).poses, atol=1e-12)
+        return
+    assert b.sample == s.sample, (b, s)
+    if b.detail.startswith(("impossible", "tick reading")):
+        assert b.detail == s.detail

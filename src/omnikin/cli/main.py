@@ -25,6 +25,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from .. import __version__
+from ..encoders import DEFAULT_RIM_ACCEL, DEFAULT_RIM_SPEED
 from ..errors import InfeasibleTwistError, InputError, OmnikinError, OutputError, one_line
 from ..presets import PRESET_NAMES
 from .common import (
@@ -657,14 +658,14 @@ def build_parser() -> CommandParser:
         type=float,
         metavar="RAD_S",
         help="fastest a wheel turns [rad/s]: a tick jump needing more than 1.5x this is refused "
-        "(default: each wheel's max_speed, else 50 m/s at the rim)",
+        f"(default: each wheel's max_speed, else {DEFAULT_RIM_SPEED:g} m/s at the rim)",
     )
     sp.add_argument(
         "--max-wheel-accel",
         type=float,
         metavar="RAD_S2",
         help="fastest a wheel's speed changes [rad/s^2]: a change between two consecutive intervals "
-        "needing more than 1.5x this is refused (default: 100 m/s^2 at the rim; 'inf': no bound)",
+        f"needing more than 1.5x this is refused (default: {DEFAULT_RIM_ACCEL:g} m/s^2 at the rim; 'inf': no bound)",
     )
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     sp.set_defaults(func=cmd_odometry)
