@@ -15,26 +15,20 @@ used, so they share one vectorised kernel.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from ._arrays import as_real_array
 from .encoders import container_problem
-from .errors import InputError, shorten
-from .geometry import sinc, wrap_angle
+from .errors import InputError
+from .geometry import MAX_ANGLE, sinc, wrap_angle
 
 METHODS = ("exact", "midpoint", "euler")
 
 POSITION_LIMIT = 1.0e8
 """Largest ``|x|``, ``|y|`` [m] of a start pose: 100 000 km, beyond any terrestrial coordinate
 (UTM northings stay below 1e7 m); there a float still resolves 15 nm, so no increment of a
-wheel is lost, while ``1e300`` would swallow every one."""
-ANGLE_LIMIT = 4 * math.pi
-"""Largest ``|theta|`` of a start pose and ``|steering angle|`` [rad]: two turns, as robot files
-bound their angles (``angle_deg``, ``drive_deg``: -720 .. 720 deg). Angles count modulo 2 pi,
-but ``1e308`` has no digit left modulo 2 pi: it would silently become some other heading."""
-ANGLE_LIMIT_DEG = 720.0
-""":data:`ANGLE_LIMIT` in degrees (tick-log steering columns)."""
+wheel is lost, while ``1e300`` would swallow every one. The heading is bounded like every heading
+the core takes (:data:`omnikin.geometry.MAX_ANGLE`)."""
 
 
 def check_method(method: str) -> str:
@@ -43,21 +37,19 @@ def check_method(method: str) -> str:
     return method
 
 
-FIELDS = (("x", "m", POSITION_LIMIT), ("y", "m", POSITION_LIMIT), ("theta", "rad", ANGLE_LIMIT))
+FIELDS = (("x", "m", POSITION_LIMIT), ("y", "m", POSITION_LIMIT), ("theta", "rad", MAX_ANGLE))
 """Name, unit and bound of each component of a start pose."""
 
 
 def check_start(start, what: str = "start") -> np.ndarray:
     """A start pose ``(..., 3)`` (x, y, theta) [m, m, rad] as a float array, or
     :class:`InputError`: a list, tuple or array of finite numbers with ``|x|, |y| <=``
-    :data:`POSITION_LIMIT` and ``|theta| <=`` :data:`ANGLE_LIMIT`."""
+    :data:`POSITION_LIMIT` and ``|theta| <=`` :data:`~omnikin.geometry.MAX_ANGLE` (``1e308`` rad
+    has no digit left modulo 2 pi: it silently became heading 0)."""
     why = container_problem(start)
     if why is not None:
         raise InputError(f"{what}: expected (x, y, theta) as a list, tuple or array; {why}")
-    try:
-        p = np.asarray(start, dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        raise InputError(f"{what}: expected (x, y, theta) as numbers, got {shorten(start)}") from None
+    p = as_real_array(start, what)
     if p.ndim == 0 or p.shape[-1] != 3:
         raise InputError(f"{what}: expected shape (..., 3) (x, y, theta), got {p.shape}")
     bad = ~(np.abs(p) <= np.array([limit for _, _, limit in FIELDS]))

@@ -19,6 +19,7 @@ from typing import overload
 
 import numpy as np
 
+from ._arrays import as_real_array
 from .encoders import (
     Carry,
     Problem,
@@ -31,9 +32,9 @@ from .encoders import (
     wheel_increments,
 )
 from .errors import InputError, OdometryInputError, shorten
-from .geometry import wrap_angle
-from .integration import ANGLE_LIMIT, check_method, check_start, integrate_components
-from .model import Robot
+from .geometry import MAX_ANGLE, wrap_angle
+from .integration import check_method, check_start, integrate_components
+from .model import STEER_LIMIT_SLACK, Robot
 
 
 def encoded_wheels(robot: Robot):
@@ -230,10 +231,7 @@ def _timestamps(t, readings: np.ndarray, what: str, names) -> np.ndarray:
     why = None if isinstance(t, np.ndarray) else container_problem(t)
     if why is not None:
         raise OdometryInputError(f"t: {why}; give the timestamps as a list, tuple or array")
-    try:
-        tt = np.asarray(t, dtype=float)
-    except (TypeError, ValueError):
-        raise OdometryInputError(f"t: expected numbers [s], got {shorten(t)}") from None
+    tt = as_real_array(t, "t", OdometryInputError)
     if tt.shape[-1:] != readings.shape[-2:-1]:
         raise OdometryInputError(
             f"t: expected {readings.shape[-2]} timestamps to match {what} {readings.shape}, got shape {tt.shape}"
@@ -260,14 +258,30 @@ def _pose_array(lead_a, lead_b, n: int, start: np.ndarray | None) -> np.ndarray:
     return out
 
 
-def steer_problem(value, wheel: str) -> str | None:
-    """Why a steering angle [rad] cannot be used (None if it can): not finite, or beyond
-    :data:`omnikin.integration.ANGLE_LIMIT` (two turns)."""
+def steer_bounds(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
+    """Lowest and highest steering angle ``(n_steer,)`` [rad] of a sample: what the model takes
+    (:meth:`omnikin.model.Robot.fk_matrix`: the wheel's limits with their round-off slack, or
+    +-:data:`~omnikin.geometry.MAX_ANGLE` for a wheel that turns all the way round), so that
+    odometry refuses a bad angle at its sample rather than deep in the kinematics."""
+    lower, upper = robot._steer_limits
+    return np.maximum(lower - STEER_LIMIT_SLACK, -MAX_ANGLE), np.minimum(upper + STEER_LIMIT_SLACK, MAX_ANGLE)
+
+
+def steer_problem(robot: Robot, k: int, value: float) -> str | None:
+    """Why steering angle ``value`` [rad] of steerable wheel ``k`` cannot be used (None if it
+    can): not finite, or outside :func:`steer_bounds`."""
+    lower, upper = steer_bounds(robot)
+    if lower[k] <= value <= upper[k]:
+        return None
+    name = robot.steer_names[k]
     if not math.isfinite(value):
-        return f"steer: non-finite steering angle {value!r}, wheel {wheel!r}"
-    if abs(value) > ANGLE_LIMIT:
-        return f"steer: steering angle {value:.6g} rad of wheel {wheel!r} beyond +-4 pi (two turns)"
-    return None
+        return f"steer: non-finite steering angle {value!r}, wheel {name!r}"
+    limits = (
+        f"beyond +-{MAX_ANGLE:g} rad"
+        if upper[k] >= MAX_ANGLE
+        else f"outside its limits [{math.degrees(lower[k]):.6g}, {math.degrees(upper[k]):.6g}] deg"
+    )
+    return f"steer: wheel {name!r} steered to {value:.6g} rad ({math.degrees(value):.6g} deg), {limits}"
 
 
 def _steering(robot, steer, lead: tuple, n: int) -> tuple[np.ndarray, Problem | None]:
@@ -291,12 +305,13 @@ def _steering(robot, steer, lead: tuple, n: int) -> tuple[np.ndarray, Problem | 
         raise OdometryInputError(
             f"steer: expected shape {want} (one angle per steerable wheel and sample), got {s.shape}"
         )
+    lower, upper = steer_bounds(robot)
     pending = problem_at(
-        ~(np.abs(s) <= ANGLE_LIMIT),
+        ~((s >= lower) & (s <= upper)),
         True,
         0,
         "steer",
-        lambda row, trial, j: steer_problem(float(s[trial + (row, j)]), names[j]) or "",
+        lambda row, trial, j: steer_problem(robot, j, float(s[trial + (row, j)])) or "",
     )
     return s, pending
 

@@ -394,8 +394,8 @@ class Odometry:
             raise self._fail(
                 f"steer: expected {len(self.robot.steerable)} angles for {self.robot.steer_names}, got shape {s.shape}"
             )
-        for value, name in zip(s.tolist(), self.robot.steer_names, strict=True):
-            problem = steer_problem(value, name)
+        for k, value in enumerate(s.tolist()):
+            problem = steer_problem(self.robot, k, value)
             if problem is not None:
                 raise self._fail(problem)
         return s

@@ -127,11 +127,11 @@ def test_steering_and_times_without_order_are_refused(syn, tom):
 # --- start poses ------------------------------------------------------------------------------------------
 @pytest.mark.parametrize(
     "pose",
-    [[0, 0, 1e308], [0, 0, 4 * math.pi + 0.01], [1e300, 0, 0], [0, -1e9, 0], [0, 0, math.nan], {0.0, 1.0, 2.0}],
+    [[0, 0, 1e308], [0, 0, 1.0e7], [1e300, 0, 0], [0, -1e9, 0], [0, 0, math.nan], {0.0, 1.0, 2.0}, [True, 0, 0]],
 )
 def test_absurd_start_poses_are_refused_everywhere(tom, pose):
     """1e308 rad has no digit left modulo 2 pi (the estimator started at theta 0); 1e300 m
-    swallows every increment. Headings are bounded like robot-file angles (two turns)."""
+    swallows every increment. Headings are bounded like every heading the core takes (1e6 rad)."""
     o = Odometry(tom)
     with pytest.raises(InputError, match="pose"):
         o.reset(pose)
@@ -153,21 +153,31 @@ def test_large_but_real_start_poses_are_kept(tom):
 
 
 # --- steering angles ----------------------------------------------------------------------------------------
-@pytest.mark.parametrize("bad", [3.6e17, -13.0, math.inf])
-def test_absurd_steering_angles_refused_at_the_same_sample(syn, bad):
-    """Steering angles beyond two turns (as robot files bound angles) are refused by batch and
-    streaming at the same sample, before the speed rules look at that sample."""
+@pytest.mark.parametrize(
+    ("robot", "bad", "why"),
+    [
+        ("synchro", 3.6e17, "beyond +-1e+06 rad"),
+        ("synchro", math.inf, "non-finite"),
+        ("ackermann", 0.8, "outside its limits [-35, 35] deg"),
+    ],
+)
+def test_steering_angles_the_model_refuses_are_refused_at_their_sample(robot, bad, why):
+    """A steering angle beyond the wheel's limits (or +-1e6 rad for a wheel that turns all the way
+    round) is refused by batch and streaming at its sample, before the speed rules look at that
+    sample, rather than deep in the kinematics without a sample."""
+    r = load_robot(robot)
+    n, m = len(r.encoded), len(r.steerable)
     t = [0.0, 0.1, 0.2]
-    ticks = [[0] * 3, [10] * 3, [20] * 3]
-    steer = [[0.2] * 3, [0.2, 0.2, bad], [0.2] * 3]
+    ticks = [[0] * n, [10] * n, [20] * n]
+    steer = [[0.2] * m, [0.2] * (m - 1) + [bad], [0.2] * m]
     with pytest.raises(OdometryInputError) as b:
-        batch_odometry(syn, t, ticks, steer=steer)
-    o = Odometry(syn)
+        batch_odometry(r, t, ticks, steer=steer)
+    o = Odometry(r)
     with pytest.raises(OdometryInputError) as s:
         for k in range(3):
             o.update(t[k], ticks[k], steer[k])
     assert b.value.sample == s.value.sample == 1
-    assert b.value.detail == s.value.detail and "w3" in b.value.detail
+    assert b.value.detail == s.value.detail and r.steer_names[-1] in b.value.detail and why in b.value.detail
 
 
 # --- tick logs ------------------------------------------------------------------------------------------------
@@ -187,13 +197,20 @@ def test_tick_log_plain_decimals_are_read(tmp_path, capsys):
     assert rc == 0, err
 
 
-@pytest.mark.parametrize(("text", "why"), [("3.6e17", "-720 .. 720 deg"), ("1_0", "plain decimal"), ("721", "720")])
-def test_tick_log_steering_angle_bounded(tmp_path, capsys, syn, text, why):
-    header = "t," + ",".join(w.name for w in syn.encoded) + "," + ",".join(f"{n}_steer_deg" for n in syn.steer_names)
-    rows = [f"{0.1 * k:.1f}," + ",".join(["0"] * 3) + "," + ",".join(["5"] * 3) for k in range(3)]
+@pytest.mark.parametrize(
+    ("robot", "text", "why"),
+    [("synchro", "3.6e17", "beyond +-1e+06 rad"), ("synchro", "1_0", "not a number"), ("ackermann", "40", "limits")],
+)
+def test_tick_log_steering_angles_are_checked(tmp_path, capsys, robot, text, why):
+    """A steering column of 3.6e17 deg was accepted; now: a plain decimal, within what the model
+    takes, or one line naming the file line and the wheel."""
+    r = load_robot(robot)
+    n, m = len(r.encoded), len(r.steerable)
+    header = "t," + ",".join(w.name for w in r.encoded) + "," + ",".join(f"{name}_steer_deg" for name in r.steer_names)
+    rows = [f"{0.1 * k:.1f}," + ",".join([str(k)] * n) + "," + ",".join(["5"] * m) for k in range(3)]
     rows[1] = rows[1].rsplit(",", 1)[0] + "," + text
     log = tmp_path / "log.csv"
     log.write_text(header + "\n" + "\n".join(rows) + "\n", encoding="utf-8")
-    rc, _, err = cli(capsys, "odometry", "synchro", log, "-o", tmp_path / "o.csv")
+    rc, _, err = cli(capsys, "odometry", robot, log, "-o", tmp_path / "o.csv")
     line = one_line_error(rc, err)
-    assert "line 3" in line and f"{syn.steer_names[-1]}_steer_deg" in line and why in line
+    assert "line 3" in line and r.steer_names[-1] in line and why in line

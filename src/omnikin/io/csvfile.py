@@ -121,22 +121,3 @@ def number(text: str, source: str, line: int, column: str | int, error: type[Exc
     if not math.isfinite(value):
         raise error(f"{source}: line {line}, {where}: {shorten(text)} is too large (not a finite number)")
     return value
-
-
-PLAIN_DECIMAL = re.compile(r"[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?")
-"""A number as the project's tables spell it: optional sign, ASCII digits with an optional
-decimal point, optional exponent (``-1.5``, ``.5``, ``2e-3``)."""
-
-
-def plain_number(text: str, source: str, line: int, column: str | int, error: type[Exception]) -> float:
-    """Like :func:`number`, but only for a plain ASCII decimal number (:data:`PLAIN_DECIMAL`):
-    ``0_1`` (Python's digit grouping), digits of other scripts (``"\\u0661"``), ``nan``, ``inf``,
-    hexadecimal floats and inner blanks, all of which :class:`float` would read, are errors
-    naming file, line and column. Tick logs read their times and steering angles with it."""
-    if text and not PLAIN_DECIMAL.fullmatch(text):
-        where = f"field {column}" if isinstance(column, int) else f"column {shorten(column, 40)}"
-        raise error(
-            f"{source}: line {line}, {where}: not a plain decimal number: {shorten(text)} (sign, ASCII digits, "
-            f"'.', exponent, e.g. -1.5e-3)"
-        )
-    return number(text, source, line, column, error)

@@ -6,9 +6,9 @@ steerable wheel a column ``<wheel>_steer_deg`` with its steering angle [deg].
 Blank lines and lines starting with ``#`` are skipped.
 
 Times [s] and steering angles [deg] are plain ASCII decimal numbers
-(:func:`omnikin.io.csvfile.plain_number`: ``0_1``, digits of other scripts, ``inf`` and ``nan``
-are refused); a steering angle must lie within -720 .. 720 deg, as robot files bound their
-angles (:data:`omnikin.integration.ANGLE_LIMIT`).
+(:func:`omnikin.io.csvfile.number`: ``0_1``, digits of other scripts, ``inf`` and ``nan``
+are refused); the odometry refuses a steering angle outside its wheel's limits at its sample
+(:func:`omnikin.odometry.steer_bounds`).
 
 Tick readings are exact integers: plain ASCII decimal digits with an optional leading
 ``-`` (``0x10``, ``1e3``, ``5.0``, ``1_0``, digits of other scripts and inner spaces are
@@ -29,10 +29,9 @@ import numpy as np
 
 from ..encoders import INT64_MIN, UINT64_END, counter_readings
 from ..errors import InputError, OdometryInputError, shorten
-from ..integration import ANGLE_LIMIT_DEG
 from ..model import Robot
 from ..odometry import encoded_wheels
-from .csvfile import column_problems, plain_number, read_rows
+from .csvfile import column_problems, number, read_rows
 from .output import write_text
 from .trajectories import format_times
 
@@ -80,17 +79,6 @@ def tick_reading(text: str, source: str, line: int, column: str) -> int:
     return int(text)
 
 
-def steer_degrees(text: str, source: str, line: int, column: str) -> float:
-    """One steering angle [deg] of a tick log, within +-:data:`~omnikin.integration.ANGLE_LIMIT_DEG`."""
-    value = plain_number(text, source, line, column, OdometryInputError)
-    if abs(value) > ANGLE_LIMIT_DEG:
-        raise OdometryInputError(
-            f"{source}: line {line}, column {column!r}: steering angle {shorten(text)} deg outside "
-            f"-{ANGLE_LIMIT_DEG:g} .. {ANGLE_LIMIT_DEG:g} deg (two turns)"
-        )
-    return value
-
-
 def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
     """Read and check a tick log for ``robot`` (see module docstring)."""
     source = str(path)
@@ -123,9 +111,12 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
         if len(row) != len(header):
             raise OdometryInputError(f"{source}: line {line}: {len(row)} fields, header has {len(header)}")
         sample = (
-            plain_number(row[t_col], source, line, "t", OdometryInputError),
+            number(row[t_col], source, line, "t", OdometryInputError),
             tuple(tick_reading(row[j], source, line, name) for j, name in zip(tick_cols, wheels, strict=True)),
-            tuple(steer_degrees(row[j], source, line, name) for j, name in zip(steer_idx, steer_cols, strict=True)),
+            tuple(
+                number(row[j], source, line, name, OdometryInputError)
+                for j, name in zip(steer_idx, steer_cols, strict=True)
+            ),
         )
         if samples and sample == samples[-1]:
             duplicates.append(line)
