@@ -126,3 +126,14 @@ def test_counter_output_mixes_widths():
     assert out.tolist() == [[0, 0, 0], [255, 70000, 2**64 - 5], [0, -(2**40), 3]]
     assert counter_output(ticks, [None, None, None]) is ticks
     assert counter_output(ticks, [8, 16, None]).dtype == np.int64
+
+
+def test_an_odometry_robot_without_the_width_reads_the_counts_right(tmp_path):
+    """The readings of a 12-bit robot read by an odometry robot without a counter width (and the
+    other way round) are not misread: each reads the counts as its own counters output them."""
+    cb12 = load_robot(tomasi_file(tmp_path / "r.yaml", 12))
+    plain = load_robot("tomasi-omni3")
+    plan = umbmark_square("cw", 2.0, "rotate")
+    for command, odometry in ((cb12, plain), (plain, cb12)):
+        sim = simulate(plan, command, command, rate=50.0, noise=NoiseModel(), rng=1, odometry_robot=odometry)
+        assert_poses_close(sim.odometry, tomasi_poses(np.diff(sim.ticks, axis=0)), atol=1e-9)

@@ -129,7 +129,8 @@ def simulate(
     does not depend on how many trials follow it; trials that share a generator draw from
     it one after the other. ``true_robot`` must have the wheels of ``command_robot``
     (:func:`~omnikin.model.require_same_wheels`). ``odometry_robot`` defaults to
-    ``command_robot`` (the robot executes the path by its own model).
+    ``command_robot`` (the robot executes the path by its own model); it reads the counts as
+    its own encoders' counters output them (their ``counter_bits``).
     """
     noise = noise or NoiseModel()
     if isinstance(trials, bool) or not isinstance(trials, (int, np.integer)) or trials < 1:
@@ -149,12 +150,15 @@ def simulate(
     ticks = angles / cmd_rpt
     if noise.quantise:
         ticks = np.round(ticks).astype(np.int64)
-    readings = counter_output(ticks, [w.encoder.counter_bits for w in cmd_wheels])
+    widths = [w.encoder.counter_bits for w in cmd_wheels]
+    readings = counter_output(ticks, widths)
     true_rpt = true_robot.rad_per_tick(names)
     dtrue = np.diff(ticks, axis=0).T * true_rpt[:, None]  # (n, N) true wheel increments [rad]
     # the plan's own speed steps are not checked: a plan timed without acceleration limits
     # changes speed at once (the readings still pass every counter and speed rule)
-    odometry = batch_odometry(odometry_robot, sampled.t, readings, steer=steer, max_wheel_accel=math.inf).poses
+    odo_widths = [w.encoder.counter_bits for w in encoded_wheels(odometry_robot)]
+    seen = readings if odo_widths == widths else counter_output(ticks, odo_widths)  # as its own counters read
+    odometry = batch_odometry(odometry_robot, sampled.t, seen, steer=steer, max_wheel_accel=math.inf).poses
     truth, z = _truth(true_robot, names, dtrue, steer, noise, gens, keep_truth)
     measured = truth[:, -1, :].copy()
     if z is not None:
