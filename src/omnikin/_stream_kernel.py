@@ -171,6 +171,13 @@ def _indent(text: str, level: int = 1) -> list[str]:
     return ["    " * level + line for line in text.splitlines()]
 
 
+def _literal(x: float) -> str:
+    """A float constant as source text (``INF`` for an infinite bound: ``repr`` gives ``inf``)."""
+    if math.isinf(x):
+        return "INF" if x > 0 else "-INF"
+    return repr(x)
+
+
 def _check_lines(d: list[str], bounds: list[WheelBound]) -> list[str]:
     """``|d_j| <= min(slope_j dt + offset_j, cap_j) * SAFETY`` for every wheel, one limit per
     distinct rule; a sample near or past a limit is left to the general path's exact rule."""
@@ -181,11 +188,11 @@ def _check_lines(d: list[str], bounds: list[WheelBound]) -> list[str]:
             names[b] = f"L{len(names)}"
             lim = names[b]
             if b.slope:
-                lines.append(f"{lim} = {b.slope * SAFETY!r} * dt + {b.offset * SAFETY!r}")
+                lines.append(f"{lim} = {_literal(b.slope * SAFETY)} * dt + {_literal(b.offset * SAFETY)}")
                 if math.isfinite(b.cap):
-                    lines += [f"if {lim} > {b.cap * SAFETY!r}:", f"    {lim} = {b.cap * SAFETY!r}"]
+                    lines += [f"if {lim} > {_literal(b.cap * SAFETY)}:", f"    {lim} = {_literal(b.cap * SAFETY)}"]
             else:
-                lines.append(f"{lim} = {min(b.offset, b.cap) * SAFETY!r}")
+                lines.append(f"{lim} = {_literal(min(b.offset, b.cap) * SAFETY)}")
             lines.append(f"M{lim[1:]} = -{lim}")
         lim = names[b]
         tests.append(f"M{lim[1:]} <= {v} <= {lim}")
@@ -211,7 +218,7 @@ def _change_lines(d: list[str], bounds: list[ChangeBound]) -> list[str]:
         if b not in names:
             names[b] = f"C{len(names)}"
             lim = names[b]
-            lines.append(f"{lim} = {b.half_accel * SAFETY!r} * w + {2.0 * b.slack * SAFETY!r}")
+            lines.append(f"{lim} = {_literal(b.half_accel * SAFETY)} * w + {_literal(2.0 * b.slack * SAFETY)}")
             lines.append(f"N{lim[1:]} = -{lim}")
         lim = names[b]
         tests.append(f"N{lim[1:]} <= {v} - q{v[1:]} <= {lim}")

@@ -385,3 +385,16 @@ def test_batch_and_streaming_refuse_the_same_sample(steps, bits, floats):
     assert b.sample == s.sample, (b, s)
     if b.detail.startswith(("impossible", "tick reading")):
         assert b.detail == s.detail
+
+
+@pytest.mark.parametrize("kw", [{"max_wheel_speed": 1e308}, {"max_wheel_accel": 1e308}, {"max_wheel_accel": math.inf}])
+def test_huge_bounds_are_bounds_not_crashes(tom, kw):
+    """A bound that overflows to infinity in ticks (1.5e308 rad/s over 0.0105 rad per tick) was
+    written into the generated kernel as 'inf', a NameError on the first update."""
+    rows, t = [[0, 0, 0], [1, 1, 1], [5, 1, 1], [6, 1, 1]], [0.0, 0.1, 0.2, 0.3]
+    expected = tomasi_poses(np.diff(rows, axis=0))
+    o = Odometry(tom, **kw)
+    assert_poses_close([o.update(t[k], rows[k]) for k in range(4)], expected)
+    a = Odometry(tom, **kw)
+    assert_poses_close([a.update_angles(t[k], [v * TOMASI_RPT for v in rows[k]]) for k in range(4)], expected)
+    assert_poses_close(batch_odometry(tom, t, rows, **kw).poses, expected)
