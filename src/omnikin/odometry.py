@@ -31,7 +31,7 @@ from .encoders import (
     problem_at,
     wheel_increments,
 )
-from .errors import InputError, OdometryInputError, shorten
+from .errors import InputError, OdometryInputError
 from .geometry import MAX_ANGLE, wrap_angle
 from .integration import check_method, check_start, integrate_components
 from .model import STEER_LIMIT_SLACK, Robot
@@ -293,13 +293,8 @@ def _steering(robot, steer, lead: tuple, n: int) -> tuple[np.ndarray, Problem | 
             f"robot {robot.name!r}: steerable wheels {names} need steering "
             f"angles (steer, shape (..., N, {len(robot.steerable)}))"
         )
-    arr = as_reading_array(steer, names, "steer")
-    try:
-        s = arr.astype(np.float64) if arr.dtype.kind in "iufO" else None
-    except (TypeError, ValueError):
-        s = None
-    if s is None:
-        raise OdometryInputError(f"steer: expected steering angles [rad] for {names}, got {shorten(steer)}")
+    as_reading_array(steer, names, "steer")  # unordered containers and bad rows, named by sample
+    s = as_real_array(steer, "steer", OdometryInputError)  # then real numbers only
     want = lead + (n, len(names))
     if s.ndim < 2 or s.shape[-2:] != want[-2:] or np.broadcast_shapes(s.shape, want) != want:
         raise OdometryInputError(

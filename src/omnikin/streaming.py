@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from . import _stream_kernel as kernel
+from ._arrays import as_real_array
 from ._stream_kernel import (
     KIND_ANGLES,
     KIND_NONE,
@@ -387,9 +388,9 @@ class Odometry:
         if why is not None:
             raise self._fail(f"steer: {why}; give one angle per wheel {self.robot.steer_names} as a list or array")
         try:
-            s = np.asarray(steer, dtype=float)
-        except (TypeError, ValueError, OverflowError):
-            raise self._fail(f"steer: expected steering angles [rad] for {self.robot.steer_names}") from None
+            s = as_real_array(steer, "steer")
+        except InputError as exc:  # complex, bool, text, ragged: named at this sample
+            raise self._fail(str(exc)) from None
         if s.shape != (len(self.robot.steerable),):
             raise self._fail(
                 f"steer: expected {len(self.robot.steerable)} angles for {self.robot.steer_names}, got shape {s.shape}"
