@@ -92,3 +92,18 @@ def one_line_error(rc, err):
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("omnikin: error: "), err
     return lines[0]
+
+
+def tomasi_file(tmp_path, encoder_extra="", wheel_extra="", name="r.yaml"):
+    """tomasi-omni3 written out as a robot file, with extra encoder / wheel fields."""
+    p = tmp_path / name
+    p.write_text(
+        "omnikin: 1\nname: tomasi-file\nwheels:\n"
+        + "".join(
+            f"  - {{name: w{i + 1}, type: omni, distance: 0.113, angle_deg: {b}, radius: 0.04125{wheel_extra}, "
+            f"encoder: {{ticks_per_rev: 600{encoder_extra}}}}}\n"
+            for i, b in enumerate((0, 120, 240))
+        ),
+        encoding="utf-8",
+    )
+    return p

@@ -30,7 +30,16 @@ from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry
 from omnikin.errors import InputError, RobotFileError
 from omnikin.io.logs import read_tick_log, write_tick_log
 from omnikin.io.robot_file import robot_to_dict
-from tomasi_helpers import TOMASI_RPT, assert_poses_close, cli, one_line_error, read_csv_traj, tomasi_poses, write_log
+from tomasi_helpers import (
+    TOMASI_RPT,
+    assert_poses_close,
+    cli,
+    one_line_error,
+    read_csv_traj,
+    tomasi_file,
+    tomasi_poses,
+    write_log,
+)
 
 H = ["t", "w1", "w2", "w3"]
 TOMASI_R = 0.04125
@@ -45,21 +54,6 @@ def tom():
 def stream(robot, t, rows, **kw):
     o = Odometry(robot, **kw)
     return o, np.array([o.update(t[k], rows[k]) for k in range(len(t))], dtype=float)
-
-
-def tomasi_file(tmp_path, encoder_extra="", wheel_extra="", name="r.yaml"):
-    """tomasi-omni3 written out as a robot file, with extra encoder / wheel fields."""
-    p = tmp_path / name
-    p.write_text(
-        "omnikin: 1\nname: tomasi-file\nwheels:\n"
-        + "".join(
-            f"  - {{name: w{i + 1}, type: omni, distance: 0.113, angle_deg: {b}, radius: 0.04125{wheel_extra}, "
-            f"encoder: {{ticks_per_rev: 600{encoder_extra}}}}}\n"
-            for i, b in enumerate((0, 120, 240))
-        ),
-        encoding="utf-8",
-    )
-    return p
 
 
 # =====================================================================================================

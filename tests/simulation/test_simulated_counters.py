@@ -23,21 +23,12 @@ from omnikin.io.logs import read_tick_log
 from omnikin.plans import umbmark_square
 from omnikin.simulation.error_models import NoiseModel
 from omnikin.simulation.simulate import counter_output, simulate
-from tomasi_helpers import assert_poses_close, read_csv_traj, tomasi_poses
+from tomasi_helpers import assert_poses_close, read_csv_traj, tomasi_file, tomasi_poses
 
 
-def tomasi_file(path, bits):
+def counter_robot_file(path, bits):
     """tomasi-omni3 as a robot file whose encoders are ``bits``-bit counters."""
-    path.write_text(
-        "omnikin: 1\nname: cb\nwheels:\n"
-        + "".join(
-            f"  - {{name: w{i + 1}, type: omni, distance: 0.113, angle_deg: {a}, radius: 0.04125, "
-            f"encoder: {{ticks_per_rev: 600, counter_bits: {bits}}}}}\n"
-            for i, a in enumerate((0, 120, 240))
-        ),
-        encoding="utf-8",
-    )
-    return path
+    return tomasi_file(path.parent, f", counter_bits: {bits}", name=path.name)
 
 
 def run(*args, cwd):
@@ -55,7 +46,7 @@ def test_simulate_log_of_a_12_bit_robot_then_odometry(tmp_path):
     """omnikin simulate cb12.yaml --log x.csv, then omnikin odometry cb12.yaml x.csv: the log holds
     the counts modulo 4096, and its odometry is the closed form of the true increments, ending
     where the simulator's own odometry ended and where the same run of tomasi-omni3 ends."""
-    robot = tomasi_file(tmp_path / "cb12.yaml", 12)
+    robot = counter_robot_file(tmp_path / "cb12.yaml", 12)
     common = ["--path", "square cw rotate 1", "--rate", "50", "--seed", "4", "--json"]
     sim = run("simulate", robot, "--log", "x.csv", *common, cwd=tmp_path)
     assert sim.returncode == 0, sim.stderr
@@ -81,7 +72,7 @@ def test_simulate_log_of_a_12_bit_robot_then_odometry(tmp_path):
 def test_umbmark_of_a_12_bit_robot_matches_the_robot_without_a_width(tmp_path):
     """omnikin umbmark cb12.yaml runs, and its results are those of tomasi-omni3 (same seed):
     the counter width changes the readings, never the odometry."""
-    robot = tomasi_file(tmp_path / "cb12.yaml", 12)
+    robot = counter_robot_file(tmp_path / "cb12.yaml", 12)
     out = {}
     for name, r in (("cb12", robot), ("plain", "tomasi-omni3")):
         proc = run("umbmark", r, "-o", name, "--runs", "2", "--json", "--figures", "svg", cwd=tmp_path)
@@ -95,7 +86,7 @@ def test_umbmark_of_a_12_bit_robot_matches_the_robot_without_a_width(tmp_path):
 def test_simulated_readings_are_the_counts_modulo_the_counter(tmp_path, bits):
     """SimulatedRun.readings: counts modulo 2**bits in [0, 2**bits) (uint64 for 64 bits),
     SimulatedRun.ticks the counts themselves; the odometry of the readings is the closed form."""
-    robot = load_robot(tomasi_file(tmp_path / "r.yaml", bits))
+    robot = load_robot(counter_robot_file(tmp_path / "r.yaml", bits))
     sim = simulate(umbmark_square("ccw", 1.0, "rotate"), robot, robot, rate=100.0, noise=NoiseModel(), rng=1)
     counts = np.asarray(sim.ticks, dtype=object)
     expected = counts % (2**bits)
@@ -109,7 +100,7 @@ def test_simulated_readings_are_the_counts_modulo_the_counter(tmp_path, bits):
 def test_unquantised_readings_of_a_12_bit_robot_wrap_as_floats(tmp_path):
     """Without quantisation the simulated counts are real numbers: they wrap to the signed range, and
     the odometry reads them back exactly as the robot without a width reads the counts."""
-    robot = load_robot(tomasi_file(tmp_path / "r.yaml", 12))
+    robot = load_robot(counter_robot_file(tmp_path / "r.yaml", 12))
     plain = load_robot("tomasi-omni3")
     plan = umbmark_square("cw", 2.0, "rotate")
     sim = simulate(plan, robot, robot, rate=50.0, noise=NoiseModel(quantise=False), rng=1)
@@ -131,7 +122,7 @@ def test_counter_output_mixes_widths():
 def test_an_odometry_robot_without_the_width_reads_the_counts_right(tmp_path):
     """The readings of a 12-bit robot read by an odometry robot without a counter width (and the
     other way round) are not misread: each reads the counts as its own counters output them."""
-    cb12 = load_robot(tomasi_file(tmp_path / "r.yaml", 12))
+    cb12 = load_robot(counter_robot_file(tmp_path / "r.yaml", 12))
     plain = load_robot("tomasi-omni3")
     plan = umbmark_square("cw", 2.0, "rotate")
     for command, odometry in ((cb12, plain), (plain, cb12)):
