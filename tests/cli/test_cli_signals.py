@@ -105,3 +105,24 @@ def test_a_second_sigterm_does_not_cut_the_cleanup(tmp_path):
         time.sleep(0.005)
     ended_by_sigterm(proc)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_termination_a_library_turns_into_its_own_error_is_still_a_termination(monkeypatch, capsys):
+    """SIGTERM arriving inside a library's C code may come back as that library's own error
+    (matplotlib: 'initialization failed'): the command still ends as terminated (143), not
+    with the library's message."""
+    import omnikin.cli.main as cli
+
+    def library_call(args):
+        try:
+            signal.raise_signal(signal.SIGTERM)  # the handler raises Terminated here ...
+        except BaseException:
+            raise RuntimeError("initialization failed") from None  # ... which the library rewraps
+        return 0
+
+    monkeypatch.setattr(cli, "cmd_presets", library_call)
+    assert cli.main(["presets"]) == 143
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["omnikin: error: terminated (SIGTERM)"]
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_IGN  # later ones ignored to the end
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)

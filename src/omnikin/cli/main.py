@@ -710,16 +710,21 @@ def main(argv=None) -> int:
     (:func:`_standard_streams`).
     """
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
-    with _standard_streams(), _termination_unwinds():
-        return _main(argv)
+    with _standard_streams(), _termination_unwinds() as fired:
+        return _main(argv, fired)
 
 
-def _main(argv: list[str]) -> int:
+def _main(argv: list[str], fired: list[int]) -> int:
     try:
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning
             warnings.filterwarnings("error", category=RuntimeWarning, module=r"omnikin(\.|$)")
-            status = _run(argv)
+            try:
+                status = _run(argv)
+            except Exception:
+                if fired:  # a library turned the termination into an error of its own (matplotlib's
+                    raise Terminated(fired[0]) from None  # C code: 'initialization failed'): it is one
+                raise
             sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
             return status
     except UsageError as exc:
@@ -807,15 +812,17 @@ class Terminated(BaseException):
 
 
 @contextlib.contextmanager
-def _termination_unwinds() -> Iterator[None]:
+def _termination_unwinds() -> Iterator[list[int]]:
     """Turn the first termination signal into :class:`Terminated` while a command runs; later
     ones are ignored, to the end of the process (the cleanup the first one started must finish,
     and the process is ending). Without a signal the previous handlers come back after. A
-    signal the caller ignores (``nohup``) stays ignored. Only in the main thread."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
+    signal the caller ignores (``nohup``) stays ignored. Only in the main thread. Yields the
+    list of signals received, so that an error a library raised in place of the termination
+    (it arrived inside its C code) is still reported as the termination."""
     fired: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield fired
+        return
 
     def unwind(signum, frame):
         if not fired:
@@ -828,7 +835,7 @@ def _termination_unwinds() -> Iterator[None]:
         if handler is not signal.SIG_IGN:
             previous[sig] = signal.signal(sig, unwind)
     try:
-        yield
+        yield fired
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, signal.SIG_IGN if fired else signal.SIG_DFL if handler is None else handler)
