@@ -12,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, settings
 
 import omnikin
-from omnikin import Robot, Wheel
+from omnikin import Encoder, Robot, Wheel
 
 ROOT = Path(__file__).resolve().parents[1]
 """The repository (docs/, examples/, firmware/)."""
@@ -45,6 +45,24 @@ def omni_robot(angles_deg, distance=0.113, radius=0.04125, drive_offsets_deg=Non
             Wheel(f"w{i + 1}", "omni", distance * math.cos(b), distance * math.sin(b), b + math.pi / 2 + off, radius)
         )
     return Robot(name, tuple(wheels))
+
+
+def circle_wheels(n, distance=0.2, radius=0.05, ticks_per_rev=100):
+    """``n`` encoded omni wheels ``w0 .. w{n-1}`` evenly on a circle, driving along the CCW
+    tangent (for tests of how checks scale with the wheel count)."""
+    step = 2 * math.pi / n
+    return tuple(
+        Wheel(
+            f"w{i}",
+            "omni",
+            distance * math.cos(i * step),
+            distance * math.sin(i * step),
+            i * step + math.pi / 2,
+            radius,
+            encoder=Encoder(ticks_per_rev),
+        )
+        for i in range(n)
+    )
 
 
 @pytest.fixture

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from conftest import omni_robot
+from conftest import circle_wheels, omni_robot
 from omnikin import Encoder, InfeasibleTwistError, InputError, Robot, SingularLayoutError, Steer, Wheel, load_robot
 from omnikin.errors import OmnikinError
 
@@ -385,22 +385,6 @@ def _best_time(fn, repeats=3) -> float:
     return best
 
 
-def _many_wheels(n):
-    step = 2 * math.pi / n
-    return tuple(
-        Wheel(
-            f"w{i}",
-            "omni",
-            0.2 * math.cos(i * step),
-            0.2 * math.sin(i * step),
-            i * step + math.pi / 2,
-            0.05,
-            encoder=Encoder(100),
-        )
-        for i in range(n)
-    )
-
-
 def test_robot_validation_and_wheel_lookups_are_linear():
     """20 000 wheels: the duplicate-name check counted every name in the whole list (names.count) and
     each wheel look-up scanned the list, so 20 000 wheels took ~100x as long as 2 000. Linear work
@@ -414,14 +398,14 @@ def test_robot_validation_and_wheel_lookups_are_linear():
 
         return run
 
-    small, large = _many_wheels(2_000), _many_wheels(20_000)
+    small, large = circle_wheels(2_000), circle_wheels(20_000)
     t_small = _best_time(build_and_check(small))
     t_large = _best_time(build_and_check(large), repeats=1)
     assert t_large < 30 * t_small + 0.5, (t_small, t_large)
 
 
 def test_duplicate_among_many_wheels_is_found_and_named():
-    wheels = list(_many_wheels(20_000))
+    wheels = list(circle_wheels(20_000))
     wheels[-1] = Wheel("w7", "omni", 0.3, 0.0, math.pi / 2, 0.05)
     with pytest.raises(InputError, match=r"duplicate wheel name 'w7' \(also wheel #8\)$"):
         Robot("many", tuple(wheels))

@@ -4,7 +4,6 @@ devices and directories are refused, pipes read; header checks are linear in the
 
 from __future__ import annotations
 
-import math
 import os
 import re
 import threading
@@ -13,7 +12,8 @@ import time
 import numpy as np
 import pytest
 
-from omnikin import Encoder, OdometryInputError, Robot, Wheel, load_robot
+from conftest import circle_wheels
+from omnikin import OdometryInputError, Robot, load_robot
 from omnikin.cli.main import main
 from omnikin.io.csvfile import column_problems, iter_fields, number, read_rows
 from omnikin.io.logs import read_tick_log
@@ -126,22 +126,7 @@ def test_tick_log_of_many_wheels_is_read_in_linear_time(tmp_path):
     """The column look-up once searched the header for every wheel: quadratic in the wheel count."""
 
     def robot(n):
-        step = 2 * math.pi / n
-        return Robot(
-            "many",
-            tuple(
-                Wheel(
-                    f"w{i}",
-                    "omni",
-                    0.2 * math.cos(i * step),
-                    0.2 * math.sin(i * step),
-                    i * step + math.pi / 2,
-                    0.05,
-                    encoder=Encoder(100),
-                )
-                for i in range(n)
-            ),
-        )
+        return Robot("many", circle_wheels(n))
 
     def timed(n):
         r = robot(n)
