@@ -47,6 +47,16 @@ def omni_robot(angles_deg, distance=0.113, radius=0.04125, drive_offsets_deg=Non
     return Robot(name, tuple(wheels))
 
 
+def run_cli(capsys, *argv):
+    """Run ``omnikin`` in this process: ``(exit status, stdout, stderr)``. ``main`` returns a
+    status for everything, usage errors and ``--help`` included: anything it raises fails the test."""
+    from omnikin.cli.main import main
+
+    rc = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
 def circle_wheels(n, distance=0.2, radius=0.05, ticks_per_rev=100):
     """``n`` encoded omni wheels ``w0 .. w{n-1}`` evenly on a circle, driving along the CCW
     tangent (for tests of how checks scale with the wheel count)."""

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from omnikin.cli.main import main
+from conftest import run_cli as cli  # noqa: F401  (re-exported for the odometry tests)
 
 TOMASI_L, TOMASI_R = 0.113, 0.04125
 TOMASI_RPT = 2 * math.pi / 600  # rad per tick (600 ticks/rev, no gearbox)
@@ -67,15 +67,6 @@ def write_log(path, header, rows):
         for row in rows:
             f.write(",".join(str(v) for v in row) + "\n")
     return path
-
-
-def cli(capsys, *argv):
-    try:
-        rc = main([str(a) for a in argv])
-    except SystemExit as exc:
-        rc = exc.code
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 def read_csv_traj(path):

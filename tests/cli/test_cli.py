@@ -20,8 +20,8 @@ import yaml
 
 import omnikin
 from conftest import omnikin_env
+from conftest import run_cli as cli
 from omnikin import PRESET_NAMES
-from omnikin.cli.main import main
 from omnikin.presets import preset_path
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -76,14 +76,6 @@ def hand_J(name):
 
 
 # --- running the CLI -------------------------------------------------------------------------------------
-def cli(capsys, *argv):
-    """Run main(argv) in-process: (exit status, stdout, stderr); an uncaught exception fails the test."""
-    try:
-        rc = main([str(a) for a in argv])
-    except SystemExit as exc:  # argparse (usage errors, --help, --version)
-        rc = exc.code
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 def cli_json(capsys, *argv):

@@ -11,15 +11,10 @@ from __future__ import annotations
 import pytest
 
 from conftest import ROOT
+from conftest import run_cli as cli
 from omnikin.cli.main import main
 
 EXAMPLES = ROOT / "examples"
-
-
-def cli(capsys, *argv):
-    rc = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 @pytest.fixture(scope="module")

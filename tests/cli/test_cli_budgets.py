@@ -11,15 +11,10 @@ from pathlib import Path
 import pytest
 import yaml
 
+from conftest import run_cli as cli
 from omnikin.cli.budget import Budget, format_bytes, parse_duration, parse_size, require
 from omnikin.cli.main import main
 from omnikin.errors import ResourceLimitError
-
-
-def cli(capsys, *argv):
-    rc = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 def refused_quickly(capsys, argv, *fragments, seconds=10.0):

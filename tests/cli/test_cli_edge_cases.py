@@ -14,17 +14,11 @@ import math
 import numpy as np
 import pytest
 
+from conftest import run_cli
 from omnikin import (
     load_robot,
 )
 from omnikin.cli.main import main
-from omnikin.cli.main import main as cli_main
-
-
-def run_cli(capsys, *argv):
-    rc = cli_main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 def test_cli_villasenor_allow_infeasible(capsys):

@@ -16,17 +16,12 @@ import numpy as np
 import pytest
 
 from conftest import omnikin_env
+from conftest import run_cli as cli
 from omnikin.cli.main import MESSAGE_LIMIT, main
 
 TOMASI_J = np.array([[-math.sin(b), math.cos(b), 0.113] for b in np.radians([0.0, 120.0, 240.0])]) / 0.04125
 # omni4 (preset file): hubs at 45 + 90 k deg on a 0.2 m circle, drive = counter-clockwise tangent, r = 0.05
 OMNI4_J = np.array([[-math.sin(b), math.cos(b), 0.2] for b in np.radians([45.0, 135.0, 225.0, 315.0])]) / 0.05
-
-
-def cli(capsys, *argv):
-    rc = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 def one_line(rc, out, err, *fragments, status=2):

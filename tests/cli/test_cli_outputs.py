@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from conftest import omnikin_env
+from conftest import run_cli as cli
 from omnikin.cli.main import main
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -28,12 +29,6 @@ ROBOT = (
     "  - {name: b, type: omni, distance: 0.2, angle_deg: 210, radius: 0.05}\n"
     "  - {name: c, type: omni, distance: 0.2, angle_deg: 330, radius: 0.05}\n"
 )
-
-
-def cli(capsys, *argv):
-    rc = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 def refused(rc, err, *fragments):

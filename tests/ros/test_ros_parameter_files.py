@@ -10,16 +10,10 @@ from __future__ import annotations
 
 import pytest
 
+from conftest import run_cli
 from omnikin import (
     OmnikinError,
 )
-from omnikin.cli.main import main as cli_main
-
-
-def run_cli(capsys, *argv):
-    rc = cli_main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 @pytest.mark.parametrize(
