@@ -7,6 +7,9 @@ within 1.3x of the fastest path.
 References measured in the same run, interleaved with omnikin round by round:
 * ``reference step``: plain Python written for speed: the FK coefficients (per tick) and
   wheel count unrolled, the exact SE(2) step, no checks at all;
+* ``reference step, same checks``: the same, written by hand with the checks omnikin's fast
+  path makes (Python ints only, time order, every wheel's jump limit and change-of-speed
+  limit): what these checks cost in CPython at best, without a pure state;
 * ``plain loop``: a straightforward pure-Python estimator (loops over wheels and matrix
   entries), what one writes without tuning;
 * ``numpy per update``: the same with small NumPy arrays per sample.
@@ -56,6 +59,59 @@ class ReferenceStep:
             th -= 2 * pi * floor((th + pi) / (2 * pi))
         self.th = th
         self.prev = (t0, t1, t2)
+        return (self.x, self.y, th)
+
+
+class ReferenceCheckedStep(ReferenceStep):
+    """Reference: the unrolled exact step with omnikin's checks written by hand (Python ints,
+    time strictly later and finite, |d| <= rate dt + slack, |d - d_prev| <= accel dt dt_prev +
+    2 slack), raising on anything else: one call per sample, state on the instance."""
+
+    def __init__(self, fk_ticks, rate: float, slack: float, accel: float):
+        self.rate, self.slack, self.accel = rate, slack, accel
+        super().__init__(fk_ticks)
+
+    def reset(self):
+        super().reset()
+        self.t = self.dt = math.nan
+        self.q = (0.0, 0.0, 0.0)
+
+    def update(self, t, ticks):
+        if type(t) is not float:
+            raise TypeError("time")
+        t0, t1, t2 = ticks
+        if type(t0) is not int or type(t1) is not int or type(t2) is not int:
+            raise TypeError("ticks")
+        if self.prev is None:
+            self.prev, self.t = (t0, t1, t2), t
+            return (self.x, self.y, self.th)
+        dt = t - self.t
+        if not 0.0 < dt < math.inf:
+            raise ValueError("time order")
+        p0, p1, p2 = self.prev
+        d0, d1, d2 = t0 - p0 + 0.0, t1 - p1 + 0.0, t2 - p2 + 0.0
+        lim = self.rate * dt + self.slack
+        if not (-lim <= d0 <= lim and -lim <= d1 <= lim and -lim <= d2 <= lim):
+            raise ValueError("jump")
+        if self.dt == self.dt:
+            q0, q1, q2 = self.q
+            ch = self.accel * dt * self.dt + 2.0 * self.slack
+            if not (-ch <= d0 - q0 <= ch and -ch <= d1 - q1 <= ch and -ch <= d2 - q2 <= ch):
+                raise ValueError("change of speed")
+        a = self.f00 * d0 + self.f01 * d1 + self.f02 * d2
+        b = self.f10 * d0 + self.f11 * d1 + self.f12 * d2
+        phi = self.f20 * d0 + self.f21 * d1 + self.f22 * d2
+        h = 0.5 * phi
+        k = 1.0 - h * h / 6.0 if -0.1 < h < 0.1 else sin(h) / h
+        h += self.th
+        c, s = cos(h), sin(h)
+        self.x += k * (c * a - s * b)
+        self.y += k * (s * a + c * b)
+        th = self.th + phi
+        if th >= pi or th < -pi:
+            th -= 2 * pi * floor((th + pi) / (2 * pi))
+        self.th = th
+        self.prev, self.t, self.dt, self.q = (t0, t1, t2), t, dt, (d0, d1, d2)
         return (self.x, self.y, th)
 
 
@@ -144,8 +200,11 @@ def main(n: int = 2000, rounds: int = 40) -> dict:
 
         return go
 
+    rule = Odometry(robot).rules[0]  # the tick bounds of omnikin's default rules (every wheel alike)
+    accel, slack = rule.change_bounds("ticks")  # A [ticks/s^2], slack [ticks]
     runs = {
         "reference step": run(ReferenceStep(fk_ticks), ts, ints),
+        "reference step, same checks": run(ReferenceCheckedStep(fk_ticks, rule.rate, slack, accel / 2), ts, ints),
         "plain loop": run(PlainLoop(fk, scale), ts, ints),
         "numpy per update": run(NumpyPerUpdate(fk, scale), ts, ints),
     }
@@ -161,6 +220,7 @@ def main(n: int = 2000, rounds: int = 40) -> dict:
         for name in order:
             best[name] = min(best[name], best_time(runs[name], repeat=1) / n * 1e6)
     ref = best["reference step"]
+    checked = best["reference step, same checks"]
     fastest = best["omnikin, Python ints (list)"]
     print(f"streaming odometry update, tomasi-omni3, {n} samples per run (best of {rounds} interleaved rounds)")
     for name, us in best.items():
@@ -169,6 +229,7 @@ def main(n: int = 2000, rounds: int = 40) -> dict:
     print(
         f"  target fastest <= 1.2x reference step: {fastest / ref:.2f}x {'met' if fastest <= 1.2 * ref else 'NOT met'}"
     )
+    print(f"  fastest path / hand-written step with the same checks: {fastest / checked:.2f}x")
     print(
         f"  target every input type <= 1.3x fastest: worst {worst / fastest:.2f}x "
         f"{'met' if worst <= 1.3 * fastest else 'NOT met'}"
@@ -177,6 +238,7 @@ def main(n: int = 2000, rounds: int = 40) -> dict:
         "us_per_update": best,
         "ratio_to_reference": {k: v / ref for k, v in best.items()},
         "ratio_to_fastest": {k: v / fastest for k, v in best.items()},
+        "fastest_to_checked_reference": fastest / checked,
     }
 
 

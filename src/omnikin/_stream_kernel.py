@@ -20,10 +20,10 @@ as plain data. Per sample, ``step_ticks`` does (conventions, Odometry):
    modulo ``2**bits`` for counters of a known width, after checking the reading lies in
    the counter's range), then as floats;
 3. every wheel's jump rule (:mod:`omnikin.encoders`) ``|d_j| <= limit_j(dt)`` and, from the
-   third sample on, a sufficient form of its change-of-speed rule ``|d_j - q_j| <= A_j min(dt,
-   dt_prev) (dt + dt_prev) / 2 + 2 slack`` (``q_j`` the previous increment), with the limits
-   shrunk by :data:`SAFETY` so that float rounding never accepts what the exact rule refuses; a
-   sample beyond them goes to the general path, which decides exactly;
+   third sample on, a sufficient form of its change-of-speed rule ``|d_j - q_j| <= A_j dt
+   dt_prev / 2 + 2 slack`` (``q_j`` the previous increment; :func:`_change_lines`), with the
+   limits shrunk by :data:`SAFETY` so that float rounding never accepts what the exact rule
+   refuses; a sample beyond them goes to the general path, which decides exactly;
 4. body increment ``(a, b, phi) = F d`` (``F`` = forward kinematics per tick);
 5. the pose update of :mod:`omnikin.integration` (:data:`ADVANCE`).
 
@@ -48,13 +48,15 @@ from .encoders import QUANTISATION_SLACK, SAFETY
 from .geometry import SCALAR_TAYLOR_LIMIT, TWO_PI
 
 # --- state layout ------------------------------------------------------------------------------
-S_POSE, S_TIME_TICKS, S_TIME_ANGLES, S_COUNT, S_DT, S_INC, S_READ = 0, 1, 2, 3, 4, 5, 8
-"""State = ``(pose, t_ticks, t_angles, samples, dt, a, b, phi, reading_0..n-1, delta_0..n-1)``: the
-pose tuple (x, y, theta) [m, m, rad]; the time [s] of the last accepted sample in the slot of
-its kind (tick readings or wheel angles), the other slot NaN, both before the first sample, so
-that a kernel fed the other kind (or nothing yet) fails its time test and declines; how many
-samples were accepted; the last interval [s], its body increment (a, b, phi) [m, m, rad], the
-readings of the last sample and the wheel increments [ticks or rad]."""
+S_POSE, S_TIME_TICKS, S_TIME_ANGLES, S_COUNT, S_DT, S_READ = 0, 1, 2, 3, 4, 5
+"""State = ``(pose, t_ticks, t_angles, samples, dt, reading_0..n-1, delta_0..n-1)``: the pose
+tuple (x, y, theta) [m, m, rad]; the time [s] of the last accepted sample in the slot of its
+kind (tick readings or wheel angles), the other slot NaN, both before the first sample, so that
+a kernel fed the other kind (or nothing yet) fails its time test and declines; how many samples
+were accepted; the last interval [s] (NaN after the first sample: no interval yet, so a kernel
+with a change-of-speed test declines the second sample and the general path takes it); the
+readings of the last sample and the wheel increments over the last interval [ticks or rad]. The body increment of
+the last interval is not kept: it is ``fk(delta)``, recomputed bit for bit when asked for."""
 KIND_NONE, KIND_TICKS, KIND_ANGLES = 0, 1, 2
 
 
@@ -132,7 +134,7 @@ _CONSTANTS = {
     "NUMBERS": NUMBERS,
     "INDEX": operator.index,
 }
-"""Names the kernels use, bound as default arguments (fast local lookups; no globals)."""
+"""Names the kernels use: the globals of their own namespace (one per compiled source)."""
 
 
 @dataclass(frozen=True)
@@ -204,27 +206,28 @@ def _check_lines(d: list[str], bounds: list[WheelBound]) -> list[str]:
 def _change_lines(d: list[str], bounds: list[ChangeBound]) -> list[str]:
     """The change-of-speed test of every wheel with a bound, in its cheap sufficient form:
     :func:`omnikin.encoders.change_limit` is at least ``a min(dt, dtp) (dt + dtp) / 2 + 2 slack``
-    (both of its terms are), so an increment within that (times :data:`SAFETY`) of the previous
-    one passes; anything else (a wrap, a hard stop, intervals of different lengths with a change
-    of speed) goes to the general path, which evaluates the exact rule. From the third sample on
-    (``count`` samples accepted before this one)."""
+    (both of its terms are), and ``min(dt, dtp) (dt + dtp) >= dt dtp``, so an increment within
+    ``a dt dtp / 2 + 2 slack`` (times :data:`SAFETY`) of the previous one passes; anything else
+    (a wrap, a hard stop, very uneven intervals with a change of speed) goes to the general
+    path, which evaluates the exact rule. ``dtp`` is NaN before the second interval, so the test
+    fails there and the general path takes that sample (it has no previous speed to compare)."""
     active = [(v, b) for v, b in zip(d, bounds, strict=True) if math.isfinite(b.half_accel)]
     if not active:
         return []
-    lines = ["w = (dt if dt < dtp else dtp) * (dt + dtp)"]
+    lines = []
     names: dict[ChangeBound, str] = {}
     tests = []
     for v, b in active:
         if b not in names:
             names[b] = f"C{len(names)}"
             lim = names[b]
-            lines.append(f"{lim} = {_literal(b.half_accel * SAFETY)} * w + {_literal(2.0 * b.slack * SAFETY)}")
+            lines.append(f"{lim} = {_literal(b.half_accel * SAFETY)} * dt * dtp + {_literal(2.0 * b.slack * SAFETY)}")
             lines.append(f"N{lim[1:]} = -{lim}")
         lim = names[b]
         tests.append(f"N{lim[1:]} <= {v} - q{v[1:]} <= {lim}")
     lines.append(f"if not ({' and '.join(tests)}):")
     lines.append("    return None  # beyond the cheap bound: the general path decides exactly")
-    return ["if count > 1:  # a previous interval to compare with"] + _indent("\n".join(lines))
+    return lines
 
 
 def _fk_lines(fk_rows, d: list[str]) -> list[str]:
@@ -239,7 +242,7 @@ def _fk_lines(fk_rows, d: list[str]) -> list[str]:
 def _unpack(n: int, angles: bool) -> str:
     times = "_, t_prev" if angles else "t_prev, _"
     return (
-        f"(px, py, th), {times}, count, dtp, _, _, _, "
+        f"(px, py, th), {times}, count, dtp, "
         + ", ".join(f"p{j}" for j in range(n))
         + ", "
         + ", ".join(f"q{j}" for j in range(n))
@@ -259,7 +262,6 @@ def _step_source(
     """Source of ``name(state, t, values)``: one sample of ticks (or wheel angles) -> state or None."""
     v = [f"v{j}" for j in range(n)]
     d = [f"d{j}" for j in range(n)]
-    args = ", ".join(f"{k}={k}" for k in _CONSTANTS)
     body = [
         f"{_unpack(n, angles)} = state  # t_prev: NaN before the first sample or after the other kind",
         "try:",
@@ -310,12 +312,12 @@ def _step_source(
     body += _fk_lines(fk_rows, d)
     body += ADVANCE[method].splitlines() + _MOVE.splitlines()
     times = "NAN, t" if angles else "t, NAN"
-    body.append(f"return ((x, y, th), {times}, count + 1, dt, a, b, phi, {', '.join(v)}, {', '.join(d)})")
+    body.append(f"return ((x, y, th), {times}, count + 1, dt, {', '.join(v)}, {', '.join(d)})")
     doc = (
         f'"""One sample of {"wheel angles [rad]" if angles else "tick readings"} for {n} wheels, '
         f'{method} integration: the new state, or None."""'
     )
-    return f"def {name}(state, t, values, {args}):\n    {doc}\n" + "\n".join(_indent("\n".join(body))) + "\n"
+    return f"def {name}(state, t, values):\n    {doc}\n" + "\n".join(_indent("\n".join(body))) + "\n"
 
 
 def _fk_source(name: str, fk_rows, n: int) -> str:
@@ -329,10 +331,9 @@ def _fk_source(name: str, fk_rows, n: int) -> str:
 
 
 def _move_source(method: str) -> str:
-    args = ", ".join(f"{k}={k}" for k in _CONSTANTS)
     body = "px, py, th = pose\n" + ADVANCE[method] + _MOVE + "return (x, y, th)\n"
     return (
-        f'def move(pose, a, b, phi, {args}):\n    """Pose after the body increment (a, b, phi)."""\n'
+        'def move(pose, a, b, phi):\n    """Pose after the body increment (a, b, phi)."""\n'
         + "\n".join(_indent(body))
         + "\n"
     )

@@ -33,7 +33,6 @@ from ._stream_kernel import (
     KIND_TICKS,
     S_COUNT,
     S_DT,
-    S_INC,
     S_POSE,
     S_READ,
     state_kind,
@@ -155,10 +154,9 @@ class Odometry:
         if p.shape != (3,):
             raise InputError(f"{what}: expected 3 numbers (x, y, theta), got shape {p.shape}")
         start = (float(p[0]), float(p[1]), float(wrap_angle(p[2])))
-        self._state: tuple[Any, ...] = (
-            (start, math.nan, math.nan, 0, math.nan, 0.0, 0.0, 0.0) + (0,) * self._n + (0.0,) * self._n
-        )
+        self._state: tuple[Any, ...] = (start, math.nan, math.nan, 0, math.nan) + (0,) * self._n + (0.0,) * self._n
         self._steer: np.ndarray | None = None
+        self._steer_increment: tuple[float, float, float] | None = None
         self._steer_residual: list[float] | None = None
         self.duplicates = 0
         self._warned = False
@@ -177,6 +175,16 @@ class Odometry:
         """Samples accepted since the last reset (duplicates not counted)."""
         return self._state[S_COUNT]
 
+    def _increment(self) -> tuple[float, float, float]:
+        """Body increment (a, b, phi) [m, m, rad] of the last interval: as integrated (the
+        kernels' forward kinematics of the kept wheel increments, or the steering one)."""
+        if self._steer_increment is not None:
+            return self._steer_increment
+        st = self._state
+        body_increment = self._kernels.fk_ticks if state_kind(st) == KIND_TICKS else self._kernels.fk_angles
+        assert body_increment is not None  # built for every robot without steerable wheels
+        return body_increment(*st[S_READ + self._n :])
+
     @property
     def twist(self) -> tuple[float, float, float]:
         """Mean body twist (vx, vy, omega) [m/s, m/s, rad/s] over the last interval."""
@@ -184,7 +192,8 @@ class Odometry:
         if st[S_COUNT] < 2:
             return (0.0, 0.0, 0.0)
         dt = st[S_DT]
-        return (st[S_INC] / dt, st[S_INC + 1] / dt, st[S_INC + 2] / dt)
+        a, b, phi = self._increment()
+        return (a / dt, b / dt, phi / dt)
 
     @property
     def residual(self) -> list[float]:
@@ -199,7 +208,7 @@ class Odometry:
         delta = np.array(st[S_READ + self._n :], dtype=float)
         angles = delta * self._scale if state_kind(st) == KIND_TICKS else delta
         b = np.concatenate([angles, np.zeros(self._n_rows - self._n)])
-        inc = np.array(st[S_INC : S_INC + 3])
+        inc = np.array(self._increment())
         return [float(v) / st[S_DT] for v in b - self._rows @ inc]
 
     @property
@@ -320,26 +329,28 @@ class Odometry:
                     raise self._fail(r.jump_message(d, dt, "rad"))
         if linked:
             self._check_changes(exact, deltas, before, st[S_DT], dt, kind)
-        residual = None
+        residual = increment = None
         if self._steer is not None and s is not None:  # steerable wheels
             scale = self._scale if kind == KIND_TICKS else [1.0] * self._n
             mid = np.asarray(mid_steer(np.stack([self._steer, s])))[0]
             fk = self.robot.fk(np.array([d * k for d, k in zip(deltas, scale, strict=True)]), mid, self.wheel_names)
             a, b, phi = (float(v) for v in fk.twist)
+            increment = (a, b, phi)
             residual = [float(v) / dt for v in fk.residual]
         else:
             body_increment = self._kernels.fk_ticks if kind == KIND_TICKS else self._kernels.fk_angles
             assert body_increment is not None  # built for every robot without steerable wheels
             a, b, phi = body_increment(*deltas)
         pose = self._kernels.move(st[S_POSE], a, b, phi)
-        self._state = (pose,) + _times(t, kind) + (st[S_COUNT] + 1, dt, a, b, phi) + values + deltas
+        self._state = (pose,) + _times(t, kind) + (st[S_COUNT] + 1, dt, *values, *deltas)
         self._steer = s
+        self._steer_increment = increment
         self._steer_residual = residual
         return pose
 
     def _first(self, t, values, steer, kind):
         st = self._state
-        self._state = (st[S_POSE],) + _times(t, kind) + (1, math.nan, 0.0, 0.0, 0.0) + values + (0.0,) * self._n
+        self._state = (st[S_POSE],) + _times(t, kind) + (1, math.nan, *values) + (0.0,) * self._n
         self._steer = steer
         return self.pose
 

@@ -224,14 +224,16 @@ def test_streaming_python_and_numpy_scalars_of_64_bit_counter(tom):
 
 def test_numpy_inputs_take_the_generated_kernel(tom):
     """NumPy rows, NumPy scalars, np.float64 times and wheel angles are handled by the kernel itself,
-    not the (slow) general path: calling it directly gives a new state."""
+    not the (slow) general path: calling it directly gives a new state (from the third sample on:
+    the second has no previous speed for the change-of-speed test and takes the general path)."""
     o = Odometry(tom)
     o.update(0.0, [0, 0, 0])
+    o.update(0.1, [3, 4, 5])
     for t, row in (
-        (np.float64(0.1), np.array([3, 4, 5])),
-        (0.1, [np.int32(3), np.uint64(4), 5]),
-        (0.1, (3, 4, 5)),
-        (1, np.array([3, 4, 5], dtype=np.uint16)),
+        (np.float64(0.2), np.array([6, 8, 10])),
+        (0.2, [np.int32(6), np.uint64(8), 10]),
+        (0.2, (6, 8, 10)),
+        (1, np.array([6, 8, 10], dtype=np.uint16)),
     ):
         assert o._step_ticks(o._state, t, row) is not None, (t, row)
     a = Odometry(tom)
