@@ -38,6 +38,7 @@ from .errors import InfeasibleTwistError, InputError, SingularLayoutError, short
 from .geometry import MAX_ANGLE
 from .linalg import RANK_TOL, null_space, rank
 from .mobility import Configuration, Mobility, analyse, generic_configuration
+from .physical import PhysicalBody
 from .wheels import DERIVED_SUFFIXES, Wheel
 
 STEER_LIMIT_SLACK = 1e-9
@@ -216,6 +217,9 @@ class Robot:
     wheels: tuple[Wheel, ...]
     description: str = ""
     references: tuple[str, ...] = field(default_factory=tuple)
+    physical: PhysicalBody | None = None
+    """Physical fields of the chassis (mass, centre of mass, thickness) for physics engines;
+    None: derived from the layout (:mod:`omnikin.physics.description`)."""
 
     def __post_init__(self):
         problem = robot_name_problem(self.name)
@@ -226,6 +230,10 @@ class Robot:
         for i, w in enumerate(self.wheels):
             if not isinstance(w, Wheel):
                 raise InputError(f"robot {self.name!r}: wheel #{i + 1} is not a Wheel, got {shorten(w)}")
+        if self.physical is not None and not isinstance(self.physical, PhysicalBody):
+            raise InputError(
+                f"robot {self.name!r}: physical must be a PhysicalBody or None, got {shorten(self.physical)}"
+            )
         collisions = name_collisions([w.name for w in self.wheels])
         if collisions:
             raise InputError(f"robot {self.name!r}: {collisions[0][1]}")

@@ -35,6 +35,7 @@ import numpy as np
 
 from .errors import InfeasibleTwistError, InputError, shorten
 from .geometry import wrap_angle
+from .physical import PhysicalWheel
 
 WHEEL_TYPES = ("omni", "mecanum", "swedish", "standard", "steerable", "castor")
 SWEDISH_TYPES = ("omni", "mecanum", "swedish")
@@ -171,6 +172,9 @@ class Wheel:
     encoder: Encoder | None = None
     max_speed: float | None = None
     steer: Steer | None = None
+    physical: PhysicalWheel | None = None
+    """Physical fields (width, mass, rollers, friction, motor torque) for physics engines; None:
+    all derived from the layout (:mod:`omnikin.physics.description`)."""
 
     def __post_init__(self):
         """Check the name and every number against the ranges above (docs/conventions.md)."""
@@ -192,10 +196,14 @@ class Wheel:
         if self.max_speed is not None:
             # 0 (a locked wheel) is allowed here; a robot file describes a drivable robot and needs the range
             _require(range_problem(self.max_speed, 0.0, MAX_SPEED_RANGE[1], "rad/s"), f"{who} max_speed")
-        for part, kind in (("encoder", Encoder), ("steer", Steer)):
+        for part, kind in (("encoder", Encoder), ("steer", Steer), ("physical", PhysicalWheel)):
             value = getattr(self, part)
             if value is not None and not isinstance(value, kind):
-                raise InputError(f"{who} {part} must be an {kind.__name__} or None, got {shorten(value)}")
+                raise InputError(f"{who} {part} must be a {kind.__name__} or None, got {shorten(value)}")
+        if self.physical is not None:
+            self.physical.check(f"wheel {self.name!r}")
+            if not self.is_swedish and (self.physical.rollers is not None or self.physical.rows is not None):
+                raise InputError(f"{who} only Swedish wheels have rollers (physical.rollers, physical.rows)")
 
     # --- classification ---------------------------------------------------
     @property
