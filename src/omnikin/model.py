@@ -337,7 +337,7 @@ class Robot:
             return np.zeros(0)
         arr = as_components(steer, len(self.steerable), name)
         require_finite(arr, name)
-        lower, upper = self._steer_limits
+        lower, upper = self.steer_limits
         outside = (arr < lower - STEER_LIMIT_SLACK) | (arr > upper + STEER_LIMIT_SLACK) | (np.abs(arr) > MAX_ANGLE)
         if outside.any():
             index = tuple(int(i) for i in np.argwhere(outside)[0])
@@ -355,14 +355,20 @@ class Robot:
         return arr
 
     @cached_property
-    def _steer_limits(self) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper bounds ``(n_steer,)`` [rad] of the steering angles :meth:`_steer_array`
-        accepts: the wheel's limits, or +-inf (then :data:`~omnikin.geometry.MAX_ANGLE`) for a
-        wheel that turns all the way round (no ``steer``, or limits -180 .. 180 deg)."""
+    def steer_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Steering limits ``(lower, upper)``, each ``(n_steer,)`` [rad, relative to the wheel's
+        drive direction], over the steerable wheels in file order: each wheel's ``steer.lower``
+        and ``steer.upper``, or ``-inf`` and ``+inf`` for a wheel that turns all the way round
+        (no ``steer``, or limits -180 .. 180 deg: any orientation, up to
+        :data:`~omnikin.geometry.MAX_ANGLE` in size). The model accepts an angle up to
+        :data:`STEER_LIMIT_SLACK` beyond a finite limit (round-off of a conversion from degrees).
+        Read-only arrays (the robot keeps them)."""
         lims = [(w.steer.lower, w.steer.upper) if w.steer is not None else (-np.pi, np.pi) for w in self.steerable]
         full = [hi - lo >= 2 * np.pi - 1e-9 for lo, hi in lims]
         lower = np.array([-np.inf if f else lo for (lo, _), f in zip(lims, full, strict=True)])
         upper = np.array([np.inf if f else hi for (_, hi), f in zip(lims, full, strict=True)])
+        lower.setflags(write=False)
+        upper.setflags(write=False)
         return lower, upper
 
     def _steer_of(self, steer: np.ndarray) -> dict[str, np.ndarray]:
@@ -455,7 +461,7 @@ class Robot:
     def _fk_cache(self) -> dict:
         return {}
 
-    _CACHES = ("_jacobian_constant", "_fk_cache", "_by_name", "_rolling_index", "_steer_limits")
+    _CACHES = ("_jacobian_constant", "_fk_cache", "_by_name", "_rolling_index", "steer_limits")
 
     def __getstate__(self):
         """Pickle and deepcopy without the read-only matrix caches (NumPy does not keep the

@@ -260,10 +260,11 @@ def _pose_array(lead_a, lead_b, n: int, start: np.ndarray | None) -> np.ndarray:
 
 def steer_bounds(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     """Lowest and highest steering angle ``(n_steer,)`` [rad] of a sample: what the model takes
-    (:meth:`omnikin.model.Robot.fk_matrix`: the wheel's limits with their round-off slack, or
-    +-:data:`~omnikin.geometry.MAX_ANGLE` for a wheel that turns all the way round), so that
-    odometry refuses a bad angle at its sample rather than deep in the kinematics."""
-    lower, upper = robot._steer_limits
+    (:meth:`omnikin.model.Robot.fk_matrix`: :attr:`~omnikin.model.Robot.steer_limits` with
+    their round-off slack, or +-:data:`~omnikin.geometry.MAX_ANGLE` for a wheel that turns all
+    the way round), so that odometry refuses a bad angle at its sample rather than deep in the
+    kinematics."""
+    lower, upper = robot.steer_limits
     return np.maximum(lower - STEER_LIMIT_SLACK, -MAX_ANGLE), np.minimum(upper + STEER_LIMIT_SLACK, MAX_ANGLE)
 
 

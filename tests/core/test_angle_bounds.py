@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -128,3 +129,51 @@ def test_command_line_refuses_absurd_angles(argv, contains):
     )
     assert proc.returncode == 2 and proc.stdout == ""
     assert contains in proc.stderr and proc.stderr.count("\n") == 1, proc.stderr
+
+
+def test_steering_limits_are_public_in_radians_and_read_only(ackermann):
+    """Robot.steer_limits: the file's -35 .. 35 deg in radians for ackermann's front wheels,
+    -inf .. inf for villasenor-omni3's legs, which turn all the way round; the robot keeps
+    them, so a caller cannot change them (nor what the model then accepts)."""
+    lower, upper = ackermann.steer_limits
+    np.testing.assert_allclose(lower, [-LIMIT, -LIMIT], rtol=1e-15)
+    np.testing.assert_allclose(upper, [LIMIT, LIMIT], rtol=1e-15)
+    with pytest.raises(ValueError, match="read-only"):
+        upper[0] = math.pi
+    lower, upper = load_robot("villasenor-omni3").steer_limits
+    assert lower.tolist() == [-math.inf] * 3 and upper.tolist() == [math.inf] * 3
+
+
+def test_no_module_reaches_into_the_private_members_of_a_robot():
+    """Other modules use Robot's public interface: no ``robot._steer_limits`` (whose caching or
+    meaning may change with the model) outside omnikin/model.py."""
+    import ast
+
+    from conftest import SRC
+
+    package = Path(SRC) / "omnikin"
+    model = ast.parse((package / "model.py").read_text(encoding="utf-8"))
+    robot = next(n for n in model.body if isinstance(n, ast.ClassDef) and n.name == "Robot")
+    private = {
+        name
+        for n in ast.walk(robot)
+        for name in (
+            [n.name]
+            if isinstance(n, ast.FunctionDef)
+            else [t.id for t in n.targets if isinstance(t, ast.Name)]
+            if isinstance(n, ast.Assign)
+            else []
+        )
+        if name.startswith("_") and not name.startswith("__")
+    }
+    assert {"_steer_array", "_fk_rows"} <= private
+    reached = [
+        f"{path.relative_to(package)}:{n.lineno}: {ast.unparse(n)}"
+        for path in sorted(package.rglob("*.py"))
+        if path != package / "model.py"
+        for n in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+        if isinstance(n, ast.Attribute)
+        and n.attr in private
+        and not (isinstance(n.value, ast.Name) and n.value.id in ("self", "cls"))
+    ]
+    assert reached == []
