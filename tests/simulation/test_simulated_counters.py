@@ -128,3 +128,29 @@ def test_an_odometry_robot_without_the_width_reads_the_counts_right(tmp_path):
     for command, odometry in ((cb12, plain), (plain, cb12)):
         sim = simulate(plan, command, command, rate=50.0, noise=NoiseModel(), rng=1, odometry_robot=odometry)
         assert_poses_close(sim.odometry, tomasi_poses(np.diff(sim.ticks, axis=0)), atol=1e-9)
+
+
+def test_systematic_errors_keep_the_encoder_fields_they_do_not_change(tmp_path):
+    """A robot as built with a ticks-per-revolution error is still the robot of the file: its
+    12-bit counters, gearbox, direction, max_speed, description stay (before the fix the error
+    model rebuilt the Encoder from three fields and the counters lost their width). The only
+    change: ticks_per_rev 600 * (1 + 0.01) = 606."""
+    from dataclasses import fields
+
+    from omnikin.simulation.error_models import ErrorProfile, SystematicErrors, WheelErrors
+
+    path = tomasi_file(tmp_path, ", gear_ratio: 2.5, invert: true, counter_bits: 12", ", max_speed: 40")
+    robot = load_robot(path)
+    drawn = ErrorProfile(ticks=0.01).sample(robot, np.random.default_rng(3))
+    for errors in (SystematicErrors({w.name: WheelErrors(ticks=0.01) for w in robot.wheels}), drawn):
+        true = errors.apply(robot)
+        assert true.description == robot.description and true.references == robot.references
+        for nominal, built in zip(robot.wheels, true.wheels, strict=True):
+            assert built.encoder.ticks_per_rev != 600.0
+            for f in fields(built.encoder):
+                if f.name != "ticks_per_rev":
+                    assert getattr(built.encoder, f.name) == getattr(nominal.encoder, f.name), f.name
+            assert (built.encoder.counter_bits, built.encoder.gear_ratio, built.encoder.invert) == (12, 2.5, True)
+            assert (built.max_speed, built.steer) == (40.0, None)
+    exact = SystematicErrors({"w1": WheelErrors(ticks=0.01)}).apply(robot)
+    assert exact.wheels[0].encoder.ticks_per_rev == pytest.approx(606.0, rel=1e-15)

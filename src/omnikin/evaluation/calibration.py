@@ -309,7 +309,7 @@ def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Rob
     ident = _identifiability(names, sol.jac[: -len(names)], sol.jac, scale)
     errors = errors_from_vector(nominal, p)
     robot = errors.apply(nominal)
-    robot = Robot(nominal.name, robot.wheels, nominal.description + " (calibrated by omnikin)", nominal.references)
+    robot = replace(nominal, wheels=robot.wheels, description=nominal.description + " (calibrated by omnikin)")
     return CalibrationResult(
         nominal,
         errors,
@@ -436,4 +436,4 @@ def borenstein_calibrate(robot: Robot, result: UMBmarkResult) -> Robot:
         elif w.name == right.name:
             w = replace(w, radius=w.radius * b.c_R, y=mid - b.b_new / 2)
         wheels.append(w)
-    return Robot(robot.name, tuple(wheels), robot.description, robot.references)
+    return replace(robot, wheels=tuple(wheels))

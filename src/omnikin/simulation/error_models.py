@@ -34,7 +34,6 @@ import numpy as np
 
 from ..errors import InputError
 from ..model import Robot
-from ..wheels import Encoder
 
 
 @dataclass(frozen=True)
@@ -67,7 +66,9 @@ class SystematicErrors:
         object.__setattr__(self, "wheels", dict(self.wheels))
 
     def apply(self, robot: Robot) -> Robot:
-        """The true robot: ``robot`` with these errors built in."""
+        """The true robot: ``robot`` with these errors built in. Everything the errors do not
+        change is kept (each wheel's encoder ``gear_ratio``, ``invert``, ``counter_bits``, its
+        ``max_speed`` and ``steer``; the robot's description and references)."""
         unknown = sorted(set(self.wheels) - {w.name for w in robot.wheels})
         if unknown:
             raise InputError(f"errors name wheels {unknown} that robot {robot.name!r} does not have")
@@ -76,7 +77,7 @@ class SystematicErrors:
             e = self.wheels.get(w.name, WheelErrors())
             enc = w.encoder
             if enc is not None and e.ticks:
-                enc = Encoder(enc.ticks_per_rev * (1 + e.ticks), enc.gear_ratio, enc.invert)
+                enc = replace(enc, ticks_per_rev=enc.ticks_per_rev * (1 + e.ticks))
             roller = w.roller + e.roller if w.is_swedish and w.type != "omni" else w.roller
             if w.type == "omni" and e.roller:
                 # an omni wheel with a roller error is a Swedish wheel of that small angle
@@ -93,7 +94,7 @@ class SystematicErrors:
                     encoder=enc,
                 )
             )
-        return Robot(f"{robot.name} (as built)", tuple(wheels), robot.description, robot.references)
+        return replace(robot, name=f"{robot.name} (as built)", wheels=tuple(wheels))
 
     def as_dict(self) -> dict:
         return {
