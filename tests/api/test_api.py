@@ -234,10 +234,10 @@ def test_calibration_plan_lists_what_the_robot_can_drive():
 @pytest.mark.parametrize(
     "kwargs, contains",
     [
-        ({"rate": 1e-9}, "rate (--rate): the encoder sample rate must lie in [5, 10000] Hz, got 1e-09"),
+        ({"rate": 1e-9}, "rate (--rate): the sample rate must lie in [5, 10000] Hz, got 1e-09"),
         ({"rate": 4.99}, "must lie in [5, 10000] Hz"),
         ({"rate": 1e6}, "must lie in [5, 10000] Hz"),
-        ({"rate": 100 + 0j}, "rate (--rate): the encoder sample rate must be a number"),
+        ({"rate": 100 + 0j}, "rate (--rate): the sample rate must be a number"),
         ({"side": 1e-300}, "side (--side): the side of the UMBmark square must lie in [0.05, 100] m, got 1e-300"),
         ({"side": 0.049}, "must lie in [0.05, 100] m"),
         ({"side": 101.0}, "must lie in [0.05, 100] m"),

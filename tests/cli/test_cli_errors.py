@@ -304,3 +304,30 @@ def test_floating_point_trouble_in_omnikin_is_an_error_not_a_wrong_number(capsys
         lines = err.strip().splitlines()
         assert all(line.startswith("omnikin: ") for line in lines)
         assert lines[-1].startswith("omnikin: error: numerical failure")
+
+
+# --- sample rates of simulations ------------------------------------------------------------------------
+@pytest.mark.parametrize("rate", ["1e-9", "4.99", "0", "-5", "nan", "inf", "10000.5", "1e9", "1e300"])
+def test_simulate_refuses_a_rate_outside_5_hz_to_10_khz_like_umbmark(capsys, tmp_path, rate):
+    """'omnikin simulate --rate 1e-9' simulated a run of one sample (noise of the sampling, not
+    odometry); UMBmark's rate has always been bounded to 5 Hz .. 10 kHz. Both commands and the
+    Python entry points now refuse the same rates, in one line naming the option and the range."""
+    log = tmp_path / "log.csv"
+    for command in (["simulate", "tomasi-omni3", "--log", log], ["umbmark", "-o", tmp_path / "r"]):
+        one_line(*cli(capsys, *command, "--rate", rate), "--rate", "[5, 10000] Hz")
+    assert list(tmp_path.iterdir()) == []
+    import omnikin
+
+    with pytest.raises(omnikin.InputError, match=r"^rate: the sample rate .*\[5, 10000\] Hz") as info:
+        omnikin.simulate("tomasi-omni3", "spin 10", rate=float(rate))
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("rate", ["5", "10000"])
+def test_simulate_takes_the_ends_of_the_rate_range(capsys, rate):
+    """The ends are in the range. 'line 0.3' at the default 0.3 m/s and 0.5 m/s^2 is a
+    trapezoid of 0.6 s ramps and 0.4 s cruise: 1.6 s, i.e. 1.6 * rate intervals, plus one sample."""
+    rc, out, err = cli(capsys, "simulate", "tomasi-omni3", "--path", "line 0.3", "--rate", rate, "--log", "-")
+    assert rc == 0, err
+    rows = [line for line in out.splitlines() if line and not line.startswith("#")]
+    assert len(rows) - 1 == round(1.6 * float(rate)) + 1  # header, then one row per sample

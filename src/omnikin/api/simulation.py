@@ -53,14 +53,17 @@ def simulate(
     in the runs-file grammar (:func:`omnikin.plans.parse_plan`); ``true_robot`` (robot file or
     Robot) replaces the seeded draw of the
     ``errors`` profile; ``noise``: random errors (profile name or
-    :class:`~omnikin.simulation.error_models.NoiseModel`); ``rate`` [Hz]. The seed's first
+    :class:`~omnikin.simulation.error_models.NoiseModel`); ``rate`` [Hz], within
+    :data:`~omnikin.simulation.motion.RATE_RANGE` as for ``omnikin simulate``. The seed's first
     stream draws the robot as built (the same robot as ``omnikin umbmark --seed``), its second
     the run, as ``omnikin simulate`` does.
     """
     from ..evaluation.procedure import streams
     from ..plans import Plan, parse_plan
+    from ..simulation.motion import check_rate_range
     from ..simulation.simulate import simulate as simulate_run
 
+    check_rate_range(rate, "rate")
     nominal = robot_of(robot)
     plan = path if isinstance(path, Plan) else parse_plan(str(path))
     seeds = list(streams(seed).values())

@@ -168,6 +168,7 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.set_defaults(func=cmd_bag_export)
 
     from ..simulation.error_models import NOISE, PROFILES
+    from ..simulation.motion import RATE_RANGE
 
     sp = sub.add_parser(
         "simulate",
@@ -199,7 +200,13 @@ def add_parsers(sub, robot_help: str) -> None:
         help=f"random errors: {', '.join(sorted(NOISE))} (default typical)",
     )
     sp.add_argument("--seed", type=int, default=1, metavar="N", help="random seed (default 1)")
-    sp.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="sample rate of all topics (default 100)")
+    sp.add_argument(
+        "--rate",
+        type=float,
+        default=100.0,
+        metavar="HZ",
+        help=f"sample rate of all topics, {RATE_RANGE[0]:g} to {RATE_RANGE[1]:g} Hz (default 100)",
+    )
     sp.add_argument("--start", type=float, default=0.0, metavar="SEC", help="stamp of the first sample [s] (default 0)")
     add_output(
         sp,
@@ -381,7 +388,7 @@ def parse_paths(text: str):
 def cmd_simulate(args) -> int:
     from ..io.bags import record_run, require_rosbags
     from ..simulation.error_models import noise as noise_profile
-    from ..simulation.motion import estimated_samples
+    from ..simulation.motion import check_rate_range, estimated_samples
     from ..simulation.simulate import simulate
 
     if args.bag is None and args.log is None:
@@ -393,8 +400,7 @@ def cmd_simulate(args) -> int:
         _check_tick_log(args, robot)
     if args.seed < 0:
         raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
-    if not (math.isfinite(args.rate) and args.rate > 0):
-        raise InputError(f"--rate must be a positive number of samples per second, got {args.rate}")
+    check_rate_range(args.rate, "--rate")
     if not math.isfinite(args.start):
         raise InputError(f"--start must be a finite time [s], got {args.start}")
     plan = parse_paths(args.path)

@@ -22,6 +22,7 @@ from ..api.umbmark import DEFAULT_ROBOT, UMBmarkReport, analyze_umbmark, run_umb
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
 from ..simulation.error_models import NOISE, PROFILES
+from ..simulation.motion import RATE_RANGE
 from ..viz import FIGURE_FORMATS, MAX_DPI, check_dpi
 from .budget import add_budget_options, require
 from .common import add_output, add_output_options, command_inputs, console, declare_inputs
@@ -104,7 +105,11 @@ def add_parsers(sub, robot_help: str) -> None:
         help=f"random errors: {', '.join(sorted(NOISE))} (default {d['noise']})",
     )
     sp.add_argument(
-        "--rate", type=float, default=d["rate"], metavar="HZ", help=f"encoder sample rate [Hz] (default {d['rate']:g})"
+        "--rate",
+        type=float,
+        default=d["rate"],
+        metavar="HZ",
+        help=f"encoder sample rate [Hz], {RATE_RANGE[0]:g} to {RATE_RANGE[1]:g} (default {d['rate']:g})",
     )
     sp.add_argument(
         "--seed",

@@ -38,9 +38,8 @@ from ..model import Robot
 from ..odometry import encoded_wheels
 from ..plans import CalibrationRun, umbmark_square
 from ..simulation.error_models import NOISE, NoiseModel, SystematicErrors
-from ..simulation.motion import estimated_samples
+from ..simulation.motion import check_rate_range, estimated_samples
 from ..simulation.simulate import simulate
-from ..wheels import range_problem
 from .calibration import RECOMMENDED_REPEATS, CalibrationResult, borenstein_calibrate, recommended_runs
 from .calibration import calibrate as least_squares_calibration
 from .umbmark import (
@@ -72,11 +71,6 @@ MAX_TIME = 3600.0
 SAMPLES_PER_SECOND = 1e7
 """Simulation speed used to express a sample count as a time (docs/performance.md)."""
 
-RATE_RANGE = (5.0, 10_000.0)
-"""Encoder sample rate of a simulated study [Hz]: at least 5 samples per second (a UMBmark leg
-then still spans several samples; at 1e-9 Hz a run is one sample and the result is noise of the
-sampling, not odometry), at most 10 kHz (beyond any odometry loop; the cost grows with it)."""
-
 BYTES_PER_PROCEDURE = 4096
 """Memory of one kept UMBmark procedure (its result objects and return errors), generous."""
 
@@ -91,14 +85,13 @@ def streams(seed: int) -> dict:
 def check_settings(*, runs, trials, side, rate) -> None:
     """Refuse the first bad setting of a study with one line naming it and its command-line
     option: ``runs`` and ``trials`` whole numbers >= 1, ``side`` within
-    :data:`~omnikin.evaluation.umbmark.SIDE_RANGE`, ``rate`` within :data:`RATE_RANGE`."""
+    :data:`~omnikin.evaluation.umbmark.SIDE_RANGE`, ``rate`` within
+    :data:`~omnikin.simulation.motion.RATE_RANGE` (that of every simulated run)."""
     for name, value in (("runs", runs), ("trials", trials)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
             raise InputError(f"{name} (--{name}) must be a whole number >= 1, got {shorten(value)}")
     check_side(side)
-    problem = range_problem(rate, *RATE_RANGE, "Hz")
-    if problem:
-        raise InputError(f"rate (--rate): the encoder sample rate {problem}")
+    check_rate_range(rate, "rate (--rate)")
 
 
 def draw_as_built(robot: Robot, profile, seed) -> tuple[Robot, SystematicErrors]:

@@ -18,10 +18,19 @@ import numpy as np
 from ..errors import InputError
 from ..limits import MotionLimits, speed_scale
 from ..plans import Plan
+from ..wheels import range_problem
 
 # --- timing ----------------------------------------------------------------------------------------
 MAX_SAMPLES = 50_000_000
 """Largest number of samples one run may have (about 1.2 GB of increments)."""
+
+RATE_RANGE = (5.0, 10_000.0)
+"""Sample rate [Hz] of the runs omnikin's commands and entry points simulate (``omnikin
+simulate``, ``omnikin umbmark``, :func:`omnikin.simulate`, :func:`omnikin.run_umbmark`;
+:func:`check_rate_range`): at least 5 samples per second (a UMBmark leg then still spans several
+samples; at 1e-9 Hz a run is one sample and the result is noise of the sampling, not odometry),
+at most 10 kHz (beyond any odometry loop; the cost grows with it). The library's
+:func:`sample_plan` takes any positive rate."""
 
 
 @dataclass(frozen=True)
@@ -111,6 +120,16 @@ def estimated_samples(plan: Plan, robot, rate: float = 100.0, limits: MotionLimi
     _check_rate(rate)
     xi = np.array([seg.xi for seg in plan.segments])
     return _estimate(plan, speed_scale(robot, xi, limits), limits, rate)
+
+
+def check_rate_range(rate, name: str) -> float:
+    """``rate`` [Hz] if it lies in :data:`RATE_RANGE`, else an :class:`~omnikin.errors.InputError`
+    in one line naming ``name`` (the option or argument: ``--rate``) and the range."""
+    problem = range_problem(rate, *RATE_RANGE, "Hz")
+    if problem:
+        span = f"[{RATE_RANGE[0]:g}, {RATE_RANGE[1]:g}] Hz"
+        raise InputError(f"{name}: the sample rate {problem}" + ("" if span in problem else f"; it must lie in {span}"))
+    return float(rate)
 
 
 def _check_rate(rate: float) -> float:
