@@ -95,7 +95,8 @@ def odom_arrays(path, topic="/odom"):
         ]
     )
     twists = np.array([(m.twist.twist.linear.x, m.twist.twist.linear.y, m.twist.twist.angular.z) for _, _, m in msgs])
-    return stamps, wrap(poses), twists, msgs
+    poses[:, 2] = wrap(poses[:, 2])  # x and y as they are (metres, not angles)
+    return stamps, poses, twists, msgs
 
 
 def run_cli(argv):
@@ -200,6 +201,83 @@ def test_bag_odometry_options_and_mcap(circle_bag, tmp_path):
     # Euler integration is off by O(dt): close to, but not on, the circle
     err = np.abs(poses[:, :2] - circle(twist, t)[:, :2]).max()
     assert 1e-6 < err < 1e-2
+
+
+TOMASI_RPT = 2 * math.pi / 600  # rad per tick of tomasi-omni3's encoders
+
+
+def joint_state_bag(path, angles):
+    """tomasi-omni3's wheel angles ``(n, 3)`` [rad] as joint states w1 w2 w3 at 100 Hz."""
+    n = len(angles)
+    write_joint_states(path, ["w1", "w2", "w3"], angles, T0 + DT * np.arange(n))
+    return path, (DT * np.arange(n)) * 1e-9
+
+
+def test_bag_odometry_has_the_wheel_speed_bound_of_odometry(circle_bag, tmp_path):
+    """'omnikin bag odometry' gets --max-wheel-speed like 'omnikin odometry'. A 12-bit counter
+    read as a wheel angle jumps by 4096 - 4 ticks = 4092 * 2 pi / 600 = 42.85 rad in 10 ms when
+    it wraps: refused by default (50 m/s at the 41.25 mm rim: 1212 rad/s, 12.1 rad per sample);
+    with the bound raised beyond the jump (1.5 * 3000 rad/s * 10 ms = 45 rad) the user says it
+    is real, and it passes. A robot really that fast (60 m/s forward: w2 and w3 turn at
+    60 sin(60 deg) / 0.04125 = 1260 rad/s) is refused by default and, with --max-wheel-speed
+    1300, gives the closed-form circle; a bound below the circle bag's wheel speeds refuses it."""
+    ticks = np.rint(np.outer(np.arange(101) * 0.01, TOMASI_J @ [0.2, 0.1, 0.5]) / TOMASI_RPT)
+    wrapped, _ = joint_state_bag(tmp_path / "wrapped.bag", (ticks % 4096) * TOMASI_RPT)
+    assert np.diff(ticks % 4096, axis=0)[0, 1] == 4092  # w2's first step, -4 ticks, wraps to +4092 (42.85 rad)
+    with pytest.raises(OmnikinError, match=r"impossible jump of -?42\.\d+ rad in 0\.01 s, wheel 'w\d'"):
+        run_cli(["bag", "odometry", "tomasi-omni3", wrapped, "-o", tmp_path / "a.bag"])
+    assert (
+        run_cli(["bag", "odometry", "tomasi-omni3", wrapped, "-o", tmp_path / "b.bag", "--max-wheel-speed", 3000]) == 0
+    )
+    assert len(read_topic(tmp_path / "b.bag", "/odom")) == 101
+
+    fast = np.array([60.0, 0.0, 0.5])
+    t = np.arange(201) * 0.01
+    path, t = joint_state_bag(tmp_path / "fast.bag", np.outer(t, TOMASI_J @ fast))
+    with pytest.raises(OmnikinError, match=r"faster than 1212\.12 rad/s \(50 m/s at the rim\)"):
+        run_cli(["bag", "odometry", "tomasi-omni3", path, "-o", tmp_path / "c.bag"])
+    assert run_cli(["bag", "odometry", "tomasi-omni3", path, "-o", tmp_path / "d.bag", "--max-wheel-speed", 1300]) == 0
+    np.testing.assert_allclose(odom_arrays(tmp_path / "d.bag")[1], circle(fast, t), atol=1e-9)
+
+    slow = circle_bag[0]  # wheel speeds up to |J (0.2, 0.1, 0.5)| = 5.8 rad/s
+    with pytest.raises(OmnikinError, match=r"faster than 1\.5 rad/s \(1\.5 x max_wheel_speed 1 rad/s\)"):
+        run_cli(["bag", "odometry", "tomasi-omni3", slow, "-o", tmp_path / "e.bag", "--max-wheel-speed", 1])
+
+
+def test_bag_odometry_has_the_change_of_speed_bound_of_odometry(tmp_path):
+    """--max-wheel-accel reaches the bag's odometry. tomasi-omni3 at rest for 0.1 s, then at
+    twist (1, 0.5, 2): w1's angle grows by (0.5 + 0.113 * 2) / 0.04125 * 0.01 = 0.176 rad per
+    sample from one sample to the next. Joint states have no change-of-speed rule by default
+    (the closed form: at rest, then the circle from t = 0.1 s); with --max-wheel-accel 1 the
+    bound is 1.5 * 1 * 0.01^2 + 4 * 2 pi / 600 = 0.042 rad: refused."""
+    twist = np.array([1.0, 0.5, 2.0])
+    t = np.arange(201) * 0.01
+    moving = np.maximum(t - 0.1, 0.0)
+    path, t = joint_state_bag(tmp_path / "step.bag", np.outer(moving, TOMASI_J @ twist))
+    assert run_cli(["bag", "odometry", "tomasi-omni3", path, "-o", tmp_path / "a.bag"]) == 0
+    np.testing.assert_allclose(odom_arrays(tmp_path / "a.bag")[1], circle(twist, moving), atol=1e-9)
+    with pytest.raises(
+        OmnikinError, match=r"impossible change of speed, wheel 'w1'.*1\.5 x max_wheel_accel 1 rad/s\^2"
+    ):
+        run_cli(["bag", "odometry", "tomasi-omni3", path, "-o", tmp_path / "b.bag", "--max-wheel-accel", 1])
+    assert not (tmp_path / "b.bag").exists()
+
+
+@pytest.mark.parametrize("option", ["--max-wheel-speed", "--max-wheel-accel"])
+@pytest.mark.parametrize("value", ["0", "-3", "nan", "fast"])
+def test_bad_wheel_bounds_are_usage_errors_naming_the_option(capsys, tmp_path, option, value):
+    """Both odometry commands refuse a bound that is no bound before reading anything, in one
+    line naming the option and quoting the value as typed."""
+    from conftest import run_cli as main_cli
+
+    for command in (
+        ["bag", "odometry", "tomasi-omni3", tmp_path / "none.bag", "-o", tmp_path / "o.bag"],
+        ["odometry", "tomasi-omni3", tmp_path / "none.csv", "-o", tmp_path / "o.csv"],
+    ):
+        rc, out, err = main_cli(capsys, *command, option, value)
+        assert rc == 2 and out == "" and err.count("\n") == 1, err
+        assert f"argument {option}: '{value}'" in err, err
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_bag_odometry_falls_back_to_bag_time(tmp_path):

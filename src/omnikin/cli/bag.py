@@ -20,6 +20,7 @@ from .common import (
     add_method_option,
     add_output,
     add_output_options,
+    add_wheel_bound_options,
     console,
     declare_inputs,
     load_robot,
@@ -118,6 +119,7 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument("--odom-topic", default="/odom", metavar="TOPIC", help="output topic (default /odom)")
     add_method_option(sp)
+    add_wheel_bound_options(sp, angles=True)
     sp.add_argument(
         "--stamp",
         choices=("auto", "header", "bag"),
@@ -317,6 +319,8 @@ def cmd_bag_odometry(args) -> int:
             joint_states_topic=args.joint_states_topic,
             odom_topic=args.odom_topic,
             method=args.method,
+            max_wheel_speed=args.max_wheel_speed,
+            max_wheel_accel=args.max_wheel_accel,
             stamp=args.stamp,
             frame_id=args.frame_id,
             child_frame_id=args.child_frame_id,

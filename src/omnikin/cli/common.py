@@ -15,6 +15,7 @@ carries the data only). ``--json`` documents are printed with :func:`print_json`
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 from collections.abc import Iterator
 
@@ -159,4 +160,54 @@ def add_method_option(parser) -> None:
         choices=("exact", "midpoint", "euler"),
         default="exact",
         help="pose integration (default exact; the others exist for comparison)",
+    )
+
+
+# --- odometry bounds --------------------------------------------------------------------------------
+def _bound(check, what: str):
+    """An argparse ``type``: a number that ``check`` (an :mod:`omnikin.encoders` option check)
+    takes, else a usage error quoting the text as typed."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number ({what})") from None
+        try:
+            return check(value)
+        except InputError:
+            raise argparse.ArgumentTypeError(f"{text!r}: must be {what}") from None
+
+    return parse
+
+
+def add_wheel_bound_options(parser, *, angles: bool = False) -> None:
+    """``--max-wheel-speed RAD_S`` and ``--max-wheel-accel RAD_S2``: the speed and change-of-speed
+    rules of the odometry commands (:mod:`omnikin.encoders`, ``docs/conventions.md``), passed to
+    the estimator as ``max_wheel_speed`` and ``max_wheel_accel`` (None when not given: each
+    wheel's own bound). ``angles``: the command reads wheel angles (joint states), which have the
+    change-of-speed rule only when ``--max-wheel-accel`` is given; else encoder ticks."""
+    from ..encoders import (
+        DEFAULT_RIM_ACCEL,
+        DEFAULT_RIM_SPEED,
+        JUMP_MARGIN,
+        check_max_wheel_accel,
+        check_max_wheel_speed,
+    )
+
+    jump = "a wheel-angle jump" if angles else "a tick jump"
+    parser.add_argument(
+        "--max-wheel-speed",
+        type=_bound(check_max_wheel_speed, "a finite wheel speed > 0 [rad/s]"),
+        metavar="RAD_S",
+        help=f"fastest a wheel turns [rad/s]: {jump} needing more than {JUMP_MARGIN:g}x this is refused "
+        f"(default: each wheel's max_speed, else {DEFAULT_RIM_SPEED:g} m/s at the rim)",
+    )
+    default = "no bound for joint states" if angles else f"{DEFAULT_RIM_ACCEL:g} m/s^2 at the rim"
+    parser.add_argument(
+        "--max-wheel-accel",
+        type=_bound(check_max_wheel_accel, "a wheel acceleration > 0 [rad/s^2], or inf"),
+        metavar="RAD_S2",
+        help=f"fastest a wheel's speed changes [rad/s^2]: a change between two consecutive intervals "
+        f"needing more than {JUMP_MARGIN:g}x this is refused (default: {default}; 'inf': no bound)",
     )

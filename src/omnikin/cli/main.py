@@ -25,13 +25,13 @@ from collections.abc import Iterator
 import numpy as np
 
 from .. import __version__
-from ..encoders import DEFAULT_RIM_ACCEL, DEFAULT_RIM_SPEED
 from ..errors import InfeasibleTwistError, InputError, OmnikinError, OutputError, one_line
 from ..presets import PRESET_NAMES
 from .common import (
     add_method_option,
     add_output,
     add_output_options,
+    add_wheel_bound_options,
     command_inputs,
     console,
     declare_inputs,
@@ -653,20 +653,7 @@ def build_parser() -> CommandParser:
         help="encoder counters wrap at 2**N (e.g. 16, 32); default: each wheel's encoder.counter_bits "
         "in the robot file (a different value there is an error), else no wrap-around",
     )
-    sp.add_argument(
-        "--max-wheel-speed",
-        type=float,
-        metavar="RAD_S",
-        help="fastest a wheel turns [rad/s]: a tick jump needing more than 1.5x this is refused "
-        f"(default: each wheel's max_speed, else {DEFAULT_RIM_SPEED:g} m/s at the rim)",
-    )
-    sp.add_argument(
-        "--max-wheel-accel",
-        type=float,
-        metavar="RAD_S2",
-        help="fastest a wheel's speed changes [rad/s^2]: a change between two consecutive intervals "
-        f"needing more than 1.5x this is refused (default: {DEFAULT_RIM_ACCEL:g} m/s^2 at the rim; 'inf': no bound)",
-    )
+    add_wheel_bound_options(sp)
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     sp.set_defaults(func=cmd_odometry)
     from . import bag, ros, umbmark

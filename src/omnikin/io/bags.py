@@ -719,6 +719,8 @@ def bag_odometry(
     joint_states_topic: str = "/joint_states",
     odom_topic: str = "/odom",
     method: str = "exact",
+    max_wheel_speed: float | None = None,
+    max_wheel_accel: float | None = None,
     stamp: str = "auto",
     frame_id: str = "odom",
     child_frame_id: str = "base_link",
@@ -733,10 +735,15 @@ def bag_odometry(
     """Wheel odometry of the JointState topic of ``bag_in`` written as Odometry to the new bag ``bag_out``.
 
     Each output message has the stamp and the bag record time of the input sample it comes
-    from; the pose starts at the origin at the first sample.
+    from; the pose starts at the origin at the first sample. ``max_wheel_speed`` [rad/s] and
+    ``max_wheel_accel`` [rad/s^2]: the speed and change-of-speed rules of the wheel angles
+    (:func:`omnikin.odometry.batch_odometry_from_angles`; checked before the bag is read).
     """
+    from ..encoders import check_max_wheel_accel, check_max_wheel_speed
     from ..odometry import batch_odometry_from_angles
 
+    check_max_wheel_speed(max_wheel_speed)
+    check_max_wheel_accel(max_wheel_accel)
     check_frame_ids(frame_id, child_frame_id)
     require_new_bag(bag_out, inputs=[bag_in], force=force)
     js = read_joint_states(
@@ -749,7 +756,15 @@ def bag_odometry(
         max_message_bytes=max_message_bytes,
     )
     try:
-        res = batch_odometry_from_angles(robot, js.t, js.angles, steer=js.steer, method=method)
+        res = batch_odometry_from_angles(
+            robot,
+            js.t,
+            js.angles,
+            steer=js.steer,
+            method=method,
+            max_wheel_speed=max_wheel_speed,
+            max_wheel_accel=max_wheel_accel,
+        )
     except OmnikinError as exc:
         raise BagError(f"{bag_in}: topic {joint_states_topic!r}: {exc}") from None
     twists = np.zeros_like(res.poses)
