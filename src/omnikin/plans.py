@@ -33,8 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, shorten
 from .geometry import wrap_angle
+from .number_text import plain_number
 
 MAX_SEGMENT = 1e5
 """Longest segment [m or rad]: 100 km of travel, or about 16,000 turns in place. Beyond it a
@@ -137,13 +138,13 @@ def polyline(waypoints: Sequence[Sequence[float]], mode: str = "rotate") -> Plan
 
 def check_mode(mode: str) -> str:
     if mode not in ("rotate", "translate"):
-        raise InputError(f"unknown path mode {mode!r}; one of ['rotate', 'translate']")
+        raise InputError(f"unknown path mode {shorten(mode)}; one of ['rotate', 'translate']")
     return mode
 
 
 def check_direction(direction: str) -> str:
     if direction not in ("cw", "ccw"):
-        raise InputError(f"unknown UMBmark direction {direction!r}; one of ['cw', 'ccw']")
+        raise InputError(f"unknown UMBmark direction {shorten(direction)}; one of ['cw', 'ccw']")
     return direction
 
 
@@ -165,31 +166,56 @@ def umbmark_square(direction: str = "cw", side: float = 4.0, mode: str = "rotate
     return Plan(tuple(segs), f"umbmark-{direction}-{mode}")
 
 
+PATH_KINDS = ("square", "line", "spin", "arc")
+"""The first words of the paths of the text form (module docstring)."""
+
+PATH_GRAMMAR = (
+    "'square cw|ccw rotate|translate [SIDE]', 'line LENGTH [HEADING_DEG]', 'spin ANGLE_DEG' or 'arc RADIUS ANGLE_DEG'"
+)
+"""The text form of a path, as messages give it."""
+
+
 def parse_plan(text: str) -> Plan:
     """A plan from its text form (module docstring): ``square cw|ccw rotate|translate [SIDE]``,
-    ``line LENGTH [HEADING_DEG]``, ``spin ANGLE_DEG`` or ``arc RADIUS ANGLE_DEG``."""
+    ``line LENGTH [HEADING_DEG]``, ``spin ANGLE_DEG`` or ``arc RADIUS ANGLE_DEG``.
+
+    Its numbers are plain decimals, as in every table (:data:`omnikin.number_text.PLAIN_NUMBER`:
+    not ``nan``, ``inf``, ``1_0``, non-ASCII digits), whether the path comes from a runs file,
+    ``--path`` or Python. Anything else is an :class:`~omnikin.errors.InputError` in one line
+    naming the path and the word."""
+    if not isinstance(text, str):
+        raise InputError(f"path must be text ({PATH_GRAMMAR}), got {shorten(text)}")
     words = text.split()
     if not words:
         raise InputError("empty path")
+    where = f"path {shorten(text)}"
     kind, args = words[0].lower(), words[1:]
-    try:
-        nums = [float(a) for a in args[2:]] if kind == "square" else [float(a) for a in args]
-    except ValueError:
-        raise InputError(f"path {text!r}: numbers expected after {kind!r}") from None
+    if kind not in PATH_KINDS:
+        raise InputError(
+            f"{where}: unknown kind of path {shorten(words[0])}; one of {list(PATH_KINDS)} ({PATH_GRAMMAR})"
+        )
     if kind == "square":
         if len(args) not in (2, 3):
-            raise InputError(f"path {text!r}: expected 'square cw|ccw rotate|translate [SIDE]'")
-        return umbmark_square(args[0].lower(), nums[0] if nums else 4.0, args[1].lower())
+            raise InputError(f"{where}: expected 'square cw|ccw rotate|translate [SIDE]'")
+        side = _path_numbers(args[2:], where)
+        try:
+            return umbmark_square(args[0].lower(), side[0] if side else 4.0, args[1].lower())
+        except InputError as exc:
+            raise InputError(f"{where}: {exc}") from None
+    nums = _path_numbers(args, where)
     if kind == "line" and len(nums) in (1, 2):
         return line(nums[0], math.radians(nums[1]) if len(nums) == 2 else 0.0)
     if kind == "spin" and len(nums) == 1:
         return spin(math.radians(nums[0]))
     if kind == "arc" and len(nums) == 2:
         return arc(nums[0], math.radians(nums[1]))
-    raise InputError(
-        f"path {text!r}: expected 'square cw|ccw rotate|translate [SIDE]', 'line LENGTH "
-        f"[HEADING_DEG]', 'spin ANGLE_DEG' or 'arc RADIUS ANGLE_DEG'"
-    )
+    raise InputError(f"{where}: expected {PATH_GRAMMAR}")
+
+
+def _path_numbers(words: list[str], where: str) -> list[float]:
+    """The numbers of a path (:func:`omnikin.number_text.plain_number`); the first bad one is
+    an InputError naming the path."""
+    return [plain_number(w, where) for w in words]
 
 
 @dataclass(frozen=True)

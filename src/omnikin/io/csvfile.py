@@ -17,12 +17,12 @@ field.
 from __future__ import annotations
 
 import csv
-import math
 import re
 from collections import Counter
 from collections.abc import Iterator
 
 from ..errors import shorten
+from ..number_text import number_problem
 from .textfile import read_lines
 
 _SEPARATOR = re.compile(r"\s*,\s*|\s+")
@@ -96,28 +96,15 @@ def _names(names: list[str], limit: int = 8) -> str:
     return f"[{shown}{f', ... ({len(names)} in all)' if len(names) > limit else ''}]"
 
 
-PLAIN_NUMBER = re.compile(r"[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?")
-"""A number as the project's tables spell it: optional sign, ASCII digits with an optional
-decimal point, optional exponent (``-1.5``, ``.5``, ``2e-3``). Not ``nan``/``inf``, not
-Python's other spellings (``0_1``, non-ASCII digits such as ``\u0661``, ``0x1p3``), which
-:class:`float` would read."""
-
-
 def number(text: str, source: str, line: int, column: str | int, error: type[Exception]) -> float:
-    """The finite number ``text`` spells (:data:`PLAIN_NUMBER`), or ``error`` naming file, line
-    and column (a name, or a 1-based field number). Every number field of every table goes
-    through here: tick-log times, runs and measurements, trajectories."""
+    """The finite number ``text`` spells (:data:`omnikin.number_text.PLAIN_NUMBER`), or
+    ``error`` naming file, line and column (a name, or a 1-based field number) and what is wrong
+    (:func:`omnikin.number_text.number_problem`). Every number field of every table goes through
+    here: tick-log times, runs and measurements, trajectories."""
     where = f"field {column}" if isinstance(column, int) else f"column {shorten(column, 40)}"
     if not text:
         raise error(f"{source}: line {line}, {where}: empty field (every field needs a value)")
-    if not PLAIN_NUMBER.fullmatch(text):
-        if text.strip().lstrip("+-").lower() in ("nan", "inf", "infinity"):
-            raise error(f"{source}: line {line}, {where}: non-finite value {shorten(text)}")
-        raise error(
-            f"{source}: line {line}, {where}: not a number: {shorten(text)} (plain decimal: sign, "
-            f"ASCII digits, '.', exponent, e.g. -1.5e-3)"
-        )
-    value = float(text)
-    if not math.isfinite(value):
-        raise error(f"{source}: line {line}, {where}: {shorten(text)} is too large (not a finite number)")
-    return value
+    problem = number_problem(text)
+    if problem:
+        raise error(f"{source}: line {line}, {where}: {problem}")
+    return float(text)

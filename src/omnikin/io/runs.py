@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import InputError, OmnikinError, shorten
 from ..geometry import wrap_angle
 from ..plans import CalibrationRun, Plan, parse_plan
-from .csvfile import PLAIN_NUMBER, column_problems, number, read_rows
+from .csvfile import column_problems, number, read_rows
 
 
 class RunsFileError(InputError):
@@ -76,39 +76,17 @@ def _theta(source, header, line_no, row, which) -> float:
     return math.nan
 
 
-PATH_KINDS = frozenset({"square", "line", "spin", "arc"})
-"""The first words of the paths of the grammar (module docstring)."""
-
-PATH_WORDS = frozenset({"cw", "ccw", "rotate", "translate"})
-"""The other words of the path grammar; every other word of a path is a number."""
-
-
 def path_plan(text: str) -> Plan:
-    """The plan of one path of the grammar in the module docstring (:func:`omnikin.plans.parse_plan`).
-
-    Its numbers are plain decimals as in every table (:data:`omnikin.io.csvfile.PLAIN_NUMBER`:
-    not ``0_1``, non-ASCII digits, ``nan`` or ``inf``). One run drives one path: ``;`` (which
-    chains paths in ``omnikin simulate --path``) is refused here. Raises :class:`InputError`.
+    """The plan of one path of the grammar in the module docstring
+    (:func:`omnikin.plans.parse_plan`: plain numbers, as in every table). One run drives one
+    path: ``;`` (which chains paths in ``omnikin simulate --path``) is refused here. Raises
+    :class:`InputError`.
     """
     if ";" in text:
         raise InputError(
             f"path {shorten(text)}: one run is one path; ';' (chaining paths) is not allowed here, "
             "give each path its own run"
         )
-    words = text.split()
-    if not words:
-        raise InputError("empty path")
-    if words[0].lower() not in PATH_KINDS:
-        raise InputError(
-            f"path {shorten(text)}: unknown kind of path {shorten(words[0])}; one of {sorted(PATH_KINDS)} "
-            "(square cw|ccw rotate|translate [SIDE], line LENGTH [HEADING_DEG], spin ANGLE_DEG, arc RADIUS ANGLE_DEG)"
-        )
-    for word in words[1:]:
-        if word.lower() not in PATH_WORDS and not PLAIN_NUMBER.fullmatch(word):
-            raise InputError(
-                f"path {shorten(text)}: {shorten(word)} is neither a word of the path grammar nor a plain "
-                "number (sign, ASCII digits, '.', exponent)"
-            )
     return parse_plan(text)
 
 
