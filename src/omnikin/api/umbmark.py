@@ -18,8 +18,6 @@ from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT, RECOMMENDED_REPEATS
 from ..evaluation.procedure import (
     FLOOR_PROCEDURES,
-    MAX_MEMORY,
-    MAX_TIME,
     Cost,
     UMBmarkStudy,
     check_cost,
@@ -29,6 +27,7 @@ from ..evaluation.procedure import (
     umbmark_study,
 )
 from ..evaluation.umbmark import LEVEL, UNITS, UMBmarkResult, analyze
+from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..viz import DPI
 from .common import as_built, dumps, finite_or_none, noise_of, require_viz, robot_of, setting_name
 
@@ -268,8 +267,8 @@ def run_umbmark(
     seed: int = 1,
     trials: int = 1,
     calibrate: bool = True,
-    max_memory: float = MAX_MEMORY,
-    max_time: float = MAX_TIME,
+    max_memory: float = DEFAULT_MEMORY,
+    max_time: float = DEFAULT_TIME,
     progress=None,
 ) -> UMBmarkReport:
     """UMBmark of ``robot`` as built, calibration, UMBmark again (``omnikin umbmark``).

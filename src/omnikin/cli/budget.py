@@ -1,20 +1,20 @@
-"""Memory and time budgets: a job whose size the user controls is sized before it starts.
+"""Memory and time budgets of the commands: ``--max-memory SIZE`` and ``--max-time DURATION``.
 
 A simulation's rate and path, the messages of a bag, the length of a trajectory file, the
 number of Monte Carlo trials: omnikin cannot bound these itself, and a hostile or mistyped
-value (``--rate 1e9``) would end in a ``MemoryError`` traceback, or a machine swapping for an
-hour. A command estimates what the job needs from the sizes it is given and calls
-:func:`require` before the work; a job over budget is refused with one line naming the
-estimate, the limit, and what to change::
+value (``--rate 1e4 --path 'line 1e4'``) would end in a ``MemoryError`` traceback, or a machine
+swapping for an hour. A command estimates what the job needs from the sizes it is given and
+calls :func:`require` before the work; a job over budget is refused with one line naming the
+estimate, the limit, and what to change (the check of :mod:`omnikin.resource_limits`, which
+the Python entry points make too, with the limits named as options here)::
 
-    omnikin: error: simulate: about 6.1 GB of memory for 2.2e+07 samples, more than
+    omnikin: error: simulate: about 6.1G of memory for 2.2e+07 samples, more than
     --max-memory 2G; lower --rate or shorten --path, or raise --max-memory
 
-The limits are the options ``--max-memory SIZE`` and ``--max-time DURATION``
-(:func:`add_budget_options`). Each command's estimates use measured costs (memory rounded
-up; time per item on the fast side, so a job is refused for time only when clearly too
-long). A job estimated to take longer than :data:`NOTE_AFTER` seconds says so on standard
-error before it starts.
+The limits are the options of :func:`add_budget_options`. Each command's estimates use
+measured costs (memory rounded up; time per item on the fast side, so a job is refused for
+time only when clearly too long). A job estimated to take longer than :data:`NOTE_AFTER`
+seconds says so on standard error before it starts.
 
 For ``--trials`` / ``--runs`` of ``omnikin umbmark``: ``add_budget_options(parser)`` and
 ``require(args, "umbmark", memory=..., seconds=..., hint="lower --trials or --runs")``.
@@ -30,17 +30,22 @@ import sys
 from dataclasses import dataclass
 
 from ..errors import ResourceLimitError
+from ..resource_limits import (
+    DEFAULT_MEMORY,
+    DEFAULT_TIME,
+    SIZE_UNITS,
+    LimitNames,
+    format_bytes,
+    format_seconds,
+    require_within,
+)
 
-DEFAULT_MEMORY = 2 * 1024**3
-"""Default ``--max-memory`` [bytes]: 2 GiB."""
-
-DEFAULT_TIME = 3600.0
-"""Default ``--max-time`` [s]: one hour."""
+OPTIONS = LimitNames("--max-memory", "--max-time")
+"""The limits as the command line names them."""
 
 NOTE_AFTER = 30.0
 """Jobs estimated to take longer than this [s] say so before starting."""
 
-SIZE_UNITS = {"": 1, "b": 1, "k": 1024, "m": 1024**2, "g": 1024**3, "t": 1024**4}
 TIME_UNITS = {"": 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
 _QUANTITY = re.compile(r"\s*([-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([A-Za-z]*)\s*")
 
@@ -129,24 +134,18 @@ def require(
     size in the job's own terms (``"2.2e+07 samples"``), for the message.
     """
     budget = Budget.of(args)
-    of = f" for {size}" if size else ""
-    if memory is not None and not memory <= budget.memory:
-        raise ResourceLimitError(
-            f"{what}: about {format_bytes(memory)} of memory{of}, more than --max-memory "
-            f"{format_bytes(budget.memory)}; {hint}, or raise --max-memory",
-            needed=memory,
-            limit=budget.memory,
-            unit="bytes",
-        )
-    if seconds is not None and not seconds <= budget.seconds:
-        raise ResourceLimitError(
-            f"{what}: about {format_seconds(seconds)}{of}, more than --max-time "
-            f"{format_seconds(budget.seconds)}; {hint}, or raise --max-time",
-            needed=seconds,
-            limit=budget.seconds,
-            unit="seconds",
-        )
+    require_within(
+        what,
+        memory=memory,
+        seconds=seconds,
+        max_memory=budget.memory,
+        max_time=budget.seconds,
+        names=OPTIONS,
+        hint=hint,
+        size=size,
+    )
     if seconds is not None and seconds > NOTE_AFTER:
+        of = f" for {size}" if size else ""
         print(f"omnikin: note: {what}: this will take about {format_seconds(seconds)}{of}", file=sys.stderr)
 
 
@@ -157,7 +156,7 @@ def explained(args):
     try:
         yield
     except ResourceLimitError as exc:
-        option = "--max-time" if exc.unit == "seconds" else "--max-memory"
+        option = OPTIONS.time if exc.unit == "seconds" else OPTIONS.memory
         value = Budget.of(args).seconds if exc.unit == "seconds" else Budget.of(args).memory
         shown = format_seconds(value) if exc.unit == "seconds" else format_bytes(value)
         raise ResourceLimitError(
@@ -166,28 +165,3 @@ def explained(args):
             limit=exc.limit,
             unit=exc.unit,
         ) from None
-
-
-# --- formatting --------------------------------------------------------------------------------------
-def format_bytes(n: float) -> str:
-    """``2G``, ``1.5G``, ``300M``, ``12K``, ``100 bytes``, ``inf``."""
-    if not math.isfinite(n):
-        return str(n)
-    for unit in ("T", "G", "M", "K"):
-        scale = SIZE_UNITS[unit.lower()]
-        if n >= scale:
-            return f"{n / scale:.3g}{unit}"
-    return f"{n:.0f} bytes"
-
-
-def format_seconds(s: float) -> str:
-    """``45 s``, ``12 min``, ``3.5 h``, ``40 days``, ``inf``."""
-    if not math.isfinite(s):
-        return str(s)
-    if s < 120:
-        return f"{s:.3g} s"
-    if s < 3600:
-        return f"{s / 60:.3g} min"
-    if s < 3 * 86400:
-        return f"{s / 3600:.3g} h"
-    return f"{s / 86400:.3g} days"

@@ -33,10 +33,11 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, ResourceLimitError, shorten
+from ..errors import InputError, shorten
 from ..model import Robot
 from ..odometry import encoded_wheels
 from ..plans import CalibrationRun, umbmark_square
+from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME, LimitNames, require_within
 from ..simulation.error_models import NOISE, NoiseModel, SystematicErrors
 from ..simulation.motion import check_rate_range, estimated_samples
 from ..simulation.simulate import simulate
@@ -62,11 +63,8 @@ FLOOR_PROCEDURES = 400
 BORENSTEIN_ITERATIONS = 3
 """Iterations of Borenstein's correction in the comparison (differential drives)."""
 
-MAX_MEMORY = 2 * 1024**3
-"""Default memory budget of a study [bytes] (the command line's ``--max-memory``)."""
-
-MAX_TIME = 3600.0
-"""Default time budget of a study [s] (the command line's ``--max-time``)."""
+ARGUMENTS = LimitNames("max_memory", "max_time")
+"""The limits of a study as the Python entry points name them (:func:`check_cost`)."""
 
 SAMPLES_PER_SECOND = 1e7
 """Simulation speed used to express a sample count as a time (docs/performance.md)."""
@@ -133,25 +131,21 @@ def estimate_cost(
     return Cost(samples, memory)
 
 
-def check_cost(cost: Cost, *, max_memory: float = MAX_MEMORY, max_time: float = MAX_TIME) -> None:
-    """Refuse (:class:`~omnikin.errors.ResourceLimitError`, one line naming the limit) a study
-    estimated to need more than ``max_memory`` [bytes] or ``max_time`` [s]."""
-    if not cost.bytes <= max_memory:
-        raise ResourceLimitError(
-            f"UMBmark study: about {cost.bytes / 1024**3:.3g} GiB of memory, more than "
-            f"max_memory {max_memory / 1024**3:.3g} GiB; lower trials or runs",
-            needed=cost.bytes,
-            limit=max_memory,
-            unit="bytes",
-        )
-    if not cost.seconds <= max_time:
-        raise ResourceLimitError(
-            f"UMBmark study: about {cost.seconds:.3g} s for {cost.samples:.3g} robot-samples, "
-            f"more than max_time {max_time:.3g} s; lower trials, runs or rate",
-            needed=cost.seconds,
-            limit=max_time,
-            unit="seconds",
-        )
+def check_cost(cost: Cost, *, max_memory=DEFAULT_MEMORY, max_time=DEFAULT_TIME) -> None:
+    """Refuse (:class:`~omnikin.errors.ResourceLimitError`, one line naming the limit as the
+    argument ``max_memory`` or ``max_time``) a study estimated to need more than ``max_memory``
+    [bytes] or ``max_time`` [s]: the check of :func:`omnikin.resource_limits.require_within`,
+    which ``omnikin umbmark`` makes too (naming its options)."""
+    require_within(
+        "UMBmark study",
+        memory=cost.bytes,
+        seconds=cost.seconds,
+        max_memory=max_memory,
+        max_time=max_time,
+        names=ARGUMENTS,
+        hint="lower trials, runs or rate",
+        size=f"{cost.samples:.3g} robot-samples",
+    )
 
 
 @dataclass(frozen=True)
