@@ -47,10 +47,18 @@ def check_limits(max_memory, max_time, names: LimitNames) -> tuple[float, float]
     else an :class:`~omnikin.errors.InputError` naming the limit as ``names`` does."""
     out = []
     for value, name, unit in ((max_memory, names.memory, "bytes"), (max_time, names.time, "seconds")):
-        if isinstance(value, bool) or not isinstance(value, numbers.Real) or math.isnan(value) or not value > 0:
+        limit = _as_float(value) if isinstance(value, numbers.Real) and not isinstance(value, bool) else math.nan
+        if not limit > 0:  # also NaN: not a number, or not one
             raise InputError(f"{name} must be a number of {unit} > 0 (inf: no limit), got {shorten(value)}")
-        out.append(float(value))
+        out.append(limit)
     return out[0], out[1]
+
+
+def _as_float(value: numbers.Real) -> float:
+    try:
+        return float(value)
+    except OverflowError:  # an integer beyond floats: as good as no limit
+        return math.inf
 
 
 def require_within(
