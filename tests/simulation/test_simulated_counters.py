@@ -144,7 +144,6 @@ def test_systematic_errors_keep_the_encoder_fields_they_do_not_change(tmp_path):
     drawn = ErrorProfile(ticks=0.01).sample(robot, np.random.default_rng(3))
     for errors in (SystematicErrors({w.name: WheelErrors(ticks=0.01) for w in robot.wheels}), drawn):
         true = errors.apply(robot)
-        assert true.description == robot.description and true.references == robot.references
         for nominal, built in zip(robot.wheels, true.wheels, strict=True):
             assert built.encoder.ticks_per_rev != 600.0
             for f in fields(built.encoder):
@@ -154,3 +153,41 @@ def test_systematic_errors_keep_the_encoder_fields_they_do_not_change(tmp_path):
             assert (built.max_speed, built.steer) == (40.0, None)
     exact = SystematicErrors({"w1": WheelErrors(ticks=0.01)}).apply(robot)
     assert exact.wheels[0].encoder.ticks_per_rev == pytest.approx(606.0, rel=1e-15)
+
+
+def test_a_robot_as_built_or_calibrated_keeps_every_field_the_errors_do_not_change():
+    """Every field of the Robot but its name and wheels, and of each Wheel but the six the errors
+    move (x, y, drive, roller, radius, encoder), comes through SystematicErrors.apply, Borenstein's
+    correction and the least-squares calibration as it was: the physical fields of a physics
+    engine (mass, centre of mass, wheel width), the description and references, max_speed. A
+    re-built Robot(name, wheels, description, references) dropped the body's physical fields."""
+    from dataclasses import fields, replace
+
+    from omnikin.evaluation.calibration import borenstein_calibrate, calibrate
+    from omnikin.evaluation.umbmark import run_umbmark
+    from omnikin.physical import PhysicalBody, PhysicalWheel
+    from omnikin.plans import CalibrationRun, line, spin
+    from omnikin.simulation.error_models import SystematicErrors, WheelErrors
+
+    diff = load_robot("diff-drive")
+    robot = replace(
+        diff,
+        physical=PhysicalBody(mass=12.0, com=(0.01, 0.0, 0.05), height=0.1),
+        references=("Borenstein and Feng 1996",),
+        wheels=tuple(replace(w, physical=PhysicalWheel(width=0.03, mass=0.4), max_speed=30.0) for w in diff.wheels),
+    )
+    moved = {"x", "y", "drive", "roller", "radius", "encoder"}
+    true = SystematicErrors({"left": WheelErrors(radius=0.01, dy=0.002, ticks=0.001)}).apply(robot)
+    umb = run_umbmark(true, robot, side=1.0, mode="rotate", runs=1, noise=NoiseModel(quantise=False), rate=20.0)
+    runs = [CalibrationRun(line(1.0), (1.001, 0.002, 0.0)), CalibrationRun(spin(3.0), (0.0, 0.0, 3.01))]
+    for out, kept in (
+        (true, {f.name for f in fields(robot)} - {"name", "wheels"}),
+        (borenstein_calibrate(robot, umb[0]), {f.name for f in fields(robot)} - {"wheels"}),
+        (calibrate(robot, runs).robot, {f.name for f in fields(robot)} - {"wheels", "description"}),
+    ):
+        for name in kept:
+            assert getattr(out, name) == getattr(robot, name), name
+        for nominal, built in zip(robot.wheels, out.wheels, strict=True):
+            for f in fields(nominal):
+                if f.name not in moved:
+                    assert getattr(built, f.name) == getattr(nominal, f.name), (nominal.name, f.name)
