@@ -75,8 +75,9 @@ def test_negative_option_values_in_exponent_notation(capsys):
     np.testing.assert_allclose(json.loads(out)["twist"], [math.cos(h), -math.sin(h), 0], atol=1e-12)
 
 
-def test_negative_infinity_is_a_value_refused_by_the_model(capsys):
-    one_line(*cli(capsys, "ik", "tomasi-omni3", "-inf", "0", "0"), "twist")
+def test_negative_infinity_is_a_value_refused_as_not_finite(capsys):
+    """'-inf' is read as a value (not an option) and refused as one, naming the argument."""
+    one_line(*cli(capsys, "ik", "tomasi-omni3", "-inf", "0", "0"), "argument VX", "non-finite value '-inf'")
 
 
 def test_string_values_keep_their_spelling(capsys):
@@ -204,7 +205,7 @@ def test_no_suggestion_when_nothing_is_close(capsys):
 
 
 def test_usage_errors_are_one_line_and_point_to_help(capsys):
-    one_line(*cli(capsys, "ik", "tomasi-omni3", "zero", "0", "0"), "invalid float value: 'zero'", "omnikin ik --help")
+    one_line(*cli(capsys, "ik", "tomasi-omni3", "zero", "0", "0"), "argument VX: not a number: 'zero'", "omnikin ik --help")
     one_line(*cli(capsys, "ik"), "required", "ROBOT")
     one_line(*cli(capsys, "ik", "tomasi-omni3", "0", "0", "0", "7"), "unexpected argument '7'")
     one_line(*cli(capsys, "bag", "odometry", "tomasi-omni3"), "omnikin bag odometry --help")
@@ -314,7 +315,9 @@ def test_simulate_refuses_a_rate_outside_5_hz_to_10_khz_like_umbmark(capsys, tmp
     Python entry points now refuse the same rates, in one line naming the option and the range."""
     log = tmp_path / "log.csv"
     for command in (["simulate", "tomasi-omni3", "--log", log], ["umbmark", "-o", tmp_path / "r"]):
-        one_line(*cli(capsys, *command, "--rate", rate), "--rate", "[5, 10000] Hz")
+        rc, out, err = cli(capsys, *command, "--rate", rate)
+        # a number outside the range names the range; nan and inf are not numbers of the CLI at all
+        one_line(rc, out, err, "--rate", "[5, 10000] Hz" if rate not in ("nan", "inf") else "non-finite")
     assert list(tmp_path.iterdir()) == []
     import omnikin
 
@@ -331,3 +334,41 @@ def test_simulate_takes_the_ends_of_the_rate_range(capsys, rate):
     assert rc == 0, err
     rows = [line for line in out.splitlines() if line and not line.startswith("#")]
     assert len(rows) - 1 == round(1.6 * float(rate)) + 1  # header, then one row per sample
+
+
+@pytest.mark.parametrize("text", ["1_0", "\u0661", " 1", "0x1", "nan", "inf", "1e999", "", "1,5"])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ("ik", "tomasi-omni3", "{}", "0", "0"),
+        ("fk", "tomasi-omni3", "{}", "0", "0"),
+        ("umbmark", "--side", "{}"),
+    ],
+)
+def test_number_options_take_plain_finite_decimals_only(capsys, argv, text):
+    """Every number on the command line follows the one grammar of numbers read from text
+    (omnikin.number_text): Python's float() would read 1_0, non-ASCII digits, blanks, nan, inf."""
+    rc, _, err = cli(capsys, *[a.format(text) for a in argv])
+    assert rc == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("omnikin: error:")
+    assert "not a number" in lines[0] or "non-finite" in lines[0] or "too large" in lines[0]
+
+
+@pytest.mark.parametrize("text", ["1_0", "\u0661", "0x5", "5.0", " 5", ""])
+def test_whole_number_options_take_ascii_digits_only(capsys, text):
+    rc, _, err = cli(capsys, "umbmark", "--runs", text)
+    assert rc == 2 and "not a whole number" in err, err
+
+
+def test_plain_numbers_still_read_as_before(capsys):
+    """-0.5, .2, 2e-1 and +1 are plain decimals: ik gives the closed-form wheel speeds of the
+    seed robot (omega_i = (-sin a_i vx + cos a_i vy + L omega) / r)."""
+    rc, out, err = cli(capsys, "ik", "tomasi-omni3", "+1", "-0.5", ".2", "--json")
+    assert rc == 0, err
+    speeds = json.loads(out)["wheel_speeds"]
+    r, L = 0.04125, 0.113
+    for k in range(3):
+        a = math.radians(120 * k)
+        expected = (-math.sin(a) * 1 + math.cos(a) * -0.5 + L * 0.2) / r
+        assert speeds[k] == pytest.approx(expected, rel=1e-9)

@@ -24,8 +24,10 @@ from .common import (
     console,
     declare_inputs,
     load_robot,
+    number,
     print_json,
     robot_as_built,
+    whole,
 )
 
 # Measured costs of the bag commands (rosbags 0.11, CPython 3.11, tracemalloc peaks of 67,000-sample
@@ -130,14 +132,14 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("--child-frame-id", default="base_link", metavar="FRAME", help="child_frame_id (default base_link)")
     sp.add_argument(
         "--pose-cov-diag",
-        type=float,
+        type=number,
         nargs=6,
         metavar="V",
         help="pose covariance diagonal (x y z roll pitch yaw) [m^2, rad^2]; default zeros",
     )
     sp.add_argument(
         "--twist-cov-diag",
-        type=float,
+        type=number,
         nargs=6,
         metavar="V",
         help="twist covariance diagonal (vx vy vz wx wy wz); default zeros",
@@ -201,15 +203,17 @@ def add_parsers(sub, robot_help: str) -> None:
         metavar="PROFILE",
         help=f"random errors: {', '.join(sorted(NOISE))} (default typical)",
     )
-    sp.add_argument("--seed", type=int, default=1, metavar="N", help="random seed (default 1)")
+    sp.add_argument("--seed", type=whole, default=1, metavar="N", help="random seed (default 1)")
     sp.add_argument(
         "--rate",
-        type=float,
+        type=number,
         default=100.0,
         metavar="HZ",
         help=f"sample rate of all topics, {RATE_RANGE[0]:g} to {RATE_RANGE[1]:g} Hz (default 100)",
     )
-    sp.add_argument("--start", type=float, default=0.0, metavar="SEC", help="stamp of the first sample [s] (default 0)")
+    sp.add_argument(
+        "--start", type=number, default=0.0, metavar="SEC", help="stamp of the first sample [s] (default 0)"
+    )
     add_output(
         sp,
         "--bag",
@@ -242,18 +246,18 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("ref", metavar="REF", help="reference trajectory (TUM, KITTI or CSV)")
     sp.add_argument("est", metavar="EST", help="estimated trajectory (TUM, KITTI or CSV)")
     sp.add_argument("--align", action="store_true", help="align EST to REF by SE(2) least squares before the ATE")
-    sp.add_argument("--delta", type=int, default=1, metavar="N", help="RPE pose distance in frames (default 1)")
+    sp.add_argument("--delta", type=whole, default=1, metavar="N", help="RPE pose distance in frames (default 1)")
     sp.add_argument("--all-pairs", action="store_true", help="RPE over all pairs (i, i+N), not only consecutive")
     sp.add_argument(
         "--t-max-diff",
-        type=float,
+        type=number,
         default=0.01,
         metavar="SEC",
         help="largest time difference of associated poses [s] (default 0.01)",
     )
     sp.add_argument(
         "--t-offset",
-        type=float,
+        type=number,
         default=0.0,
         metavar="SEC",
         help="time offset added to EST's timestamps [s] (default 0)",

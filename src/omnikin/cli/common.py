@@ -17,10 +17,13 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
+import re
 from collections.abc import Iterator
 
-from ..errors import InputError
+from ..errors import InputError, shorten
 from ..io.output import Output, check_outputs, is_stdout
+from ..number_text import number_problem
 
 FORCE_HELP = "replace existing output files (never an input; a folder only if omnikin wrote it)"
 
@@ -163,16 +166,40 @@ def add_method_option(parser) -> None:
     )
 
 
+# --- numbers on the command line -------------------------------------------------------------------
+WHOLE_NUMBER = re.compile(r"[-+]?[0-9]+")
+"""A whole number as options spell it: optional sign and ASCII digits (not ``1_0``, ``0x10``,
+non-ASCII digits or blanks, which :class:`int` reads)."""
+
+
+def number(text: str) -> float:
+    """An argparse ``type``: a finite plain number (:mod:`omnikin.number_text`, the grammar of
+    every number omnikin reads from text), else a usage error naming what is wrong."""
+    problem = number_problem(text)
+    if problem:
+        raise argparse.ArgumentTypeError(problem)
+    return float(text)
+
+
+def whole(text: str) -> int:
+    """An argparse ``type``: a whole number in ASCII digits (:data:`WHOLE_NUMBER`)."""
+    if not isinstance(text, str) or not WHOLE_NUMBER.fullmatch(text):
+        raise argparse.ArgumentTypeError(f"not a whole number: {shorten(text)} (ASCII digits, e.g. 12)")
+    return int(text)
+
+
 # --- odometry bounds --------------------------------------------------------------------------------
 def _bound(check, what: str):
-    """An argparse ``type``: a number that ``check`` (an :mod:`omnikin.encoders` option check)
-    takes, else a usage error quoting the text as typed."""
+    """An argparse ``type``: a plain number or ``inf`` that ``check`` (an :mod:`omnikin.encoders`
+    option check) takes, else a usage error quoting the text as typed."""
 
     def parse(text: str) -> float:
-        try:
+        if text in ("inf", "+inf"):
+            value = math.inf
+        elif number_problem(text) is None:
             value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number ({what})") from None
+        else:
+            raise argparse.ArgumentTypeError(f"{shorten(text)} is not a number ({what})")
         try:
             return check(value)
         except InputError:

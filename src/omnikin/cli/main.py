@@ -36,8 +36,10 @@ from .common import (
     console,
     declare_inputs,
     load_robot,
+    number,
     print_json,
     running,
+    whole,
 )
 from .parser import CommandParser, UsageError
 
@@ -572,13 +574,13 @@ def build_parser() -> CommandParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
-    sp.add_argument("vx", type=float, metavar="VX", help="velocity along body x [m/s] (world x with --heading)")
-    sp.add_argument("vy", type=float, metavar="VY", help="velocity along body y [m/s] (world y with --heading)")
-    sp.add_argument("omega", type=float, metavar="OMEGA", help="turn rate [rad/s], counter-clockwise positive")
-    sp.add_argument("--heading", type=float, metavar="RAD", help="robot heading [rad]: VX VY are world-frame rates")
+    sp.add_argument("vx", type=number, metavar="VX", help="velocity along body x [m/s] (world x with --heading)")
+    sp.add_argument("vy", type=number, metavar="VY", help="velocity along body y [m/s] (world y with --heading)")
+    sp.add_argument("omega", type=number, metavar="OMEGA", help="turn rate [rad/s], counter-clockwise positive")
+    sp.add_argument("--heading", type=number, metavar="RAD", help="robot heading [rad]: VX VY are world-frame rates")
     sp.add_argument(
         "--steer-hint-deg",
-        type=float,
+        type=number,
         nargs="+",
         metavar="DEG",
         help="current steering angles [deg]: the nearest valid alignment is chosen",
@@ -600,10 +602,10 @@ def build_parser() -> CommandParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
-    sp.add_argument("speeds", type=float, nargs="+", metavar="W", help="wheel speeds [rad/s]")
+    sp.add_argument("speeds", type=number, nargs="+", metavar="W", help="wheel speeds [rad/s]")
     sp.add_argument(
         "--steer-deg",
-        type=float,
+        type=number,
         nargs="+",
         metavar="DEG",
         help="steering angles [deg] of the steerable wheels (required for them)",
@@ -648,7 +650,7 @@ def build_parser() -> CommandParser:
     add_method_option(sp)
     sp.add_argument(
         "--counter-bits",
-        type=int,
+        type=whole,
         metavar="N",
         help="encoder counters wrap at 2**N (e.g. 16, 32); default: each wheel's encoder.counter_bits "
         "in the robot file (a different value there is an error), else no wrap-around",

@@ -8,6 +8,7 @@ import textwrap
 import numpy as np
 
 from ..ros.params import DEFAULTS
+from .common import whole
 
 EPILOG = (
     """examples:
@@ -53,7 +54,7 @@ def add_parsers(sub, robot_help: str) -> None:
         metavar="DEV",
         help="serial back-end: one port for all wheels, or one port per driven wheel in file order",
     )
-    sp.add_argument("--baud", type=int, metavar="N", help="serial back-end: baud rate (default from the protocol)")
+    sp.add_argument("--baud", type=whole, metavar="N", help="serial back-end: baud rate (default from the protocol)")
     sp.add_argument("--params", metavar="FILE", help="parameter file (YAML, flat or ros__parameters)")
     sp.add_argument(
         "--errors",
@@ -61,7 +62,7 @@ def add_parsers(sub, robot_help: str) -> None:
         help="sim back-end: systematic error profile of the robot as built (default typical)",
     )
     sp.add_argument("--noise", metavar="PROFILE", help="sim back-end: random errors (default typical)")
-    sp.add_argument("--seed", type=int, metavar="N", help="sim back-end: random seed (default 1)")
+    sp.add_argument("--seed", type=whole, metavar="N", help="sim back-end: random seed (default 1)")
     sp.add_argument(
         "--ros-args",
         dest="ros_args",

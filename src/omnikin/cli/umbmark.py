@@ -25,7 +25,7 @@ from ..simulation.error_models import NOISE, PROFILES
 from ..simulation.motion import RATE_RANGE
 from ..viz import FIGURE_FORMATS, MAX_DPI, check_dpi
 from .budget import add_budget_options, require
-from .common import add_output, add_output_options, command_inputs, console, declare_inputs
+from .common import add_output, add_output_options, command_inputs, console, declare_inputs, number, whole
 
 DEFAULT_OUT = "umbmark-report"
 """The report folder of ``omnikin umbmark`` without ``-o``."""
@@ -93,10 +93,10 @@ def add_parsers(sub, robot_help: str) -> None:
         f"heading held (translate: robots that can move sideways); default {d['mode']}",
     )
     sp.add_argument(
-        "--runs", type=int, default=d["runs"], metavar="N", help=f"runs per direction (default {d['runs']})"
+        "--runs", type=whole, default=d["runs"], metavar="N", help=f"runs per direction (default {d['runs']})"
     )
     sp.add_argument(
-        "--side", type=float, default=d["side"], metavar="M", help=f"side of the square [m] (default {d['side']:g})"
+        "--side", type=number, default=d["side"], metavar="M", help=f"side of the square [m] (default {d['side']:g})"
     )
     sp.add_argument(
         "--noise",
@@ -106,14 +106,14 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument(
         "--rate",
-        type=float,
+        type=number,
         default=d["rate"],
         metavar="HZ",
         help=f"encoder sample rate [Hz], {RATE_RANGE[0]:g} to {RATE_RANGE[1]:g} (default {d['rate']:g})",
     )
     sp.add_argument(
         "--seed",
-        type=int,
+        type=whole,
         default=d["seed"],
         metavar="N",
         help=f"random seed (default {d['seed']}); the same seed builds the same robot, calibration and "
@@ -121,7 +121,7 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument(
         "--trials",
-        type=int,
+        type=whole,
         default=d["trials"],
         metavar="N",
         help="repeat each UMBmark procedure N times with fresh random errors (Monte Carlo; the robot "
@@ -151,7 +151,7 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument(
         "--dpi",
-        type=float,
+        type=number,
         default=WRITE["dpi"],
         metavar="N",
         help=f"resolution of PNG figures (default {WRITE['dpi']:g}, at most {MAX_DPI})",
@@ -191,7 +191,7 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument(
         "--side",
-        type=float,
+        type=number,
         default=4.0,
         metavar="M",
         help="with --plan: side of the squares and length of the lines [m] (default 4)",
@@ -211,7 +211,7 @@ def add_analyze_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser
     )
     p.add_argument(
         "--side",
-        type=float,
+        type=number,
         default=ANALYZE["side"],
         metavar="L",
         help=f"side of the square [m] (default {ANALYZE['side']:g})",
