@@ -255,7 +255,7 @@ def _physical_body(where: _Where, data: Any) -> PhysicalBody:
             values[key] = _number(where, data[key], None, f"physical.{key}")
     if "com" in data:
         com = data["com"]
-        if not isinstance(com, list) or len(com) != 3:
+        if not isinstance(com, (list, tuple)) or len(com) != 3:
             raise where.error(f"must be a list of 3 numbers [x, y, z] in m, got {shorten(com)}", None, "physical.com")
         values["com"] = tuple(
             _number(where, v, None, f"physical.com.{axis}") for axis, v in zip("xyz", com, strict=True)
