@@ -1,4 +1,4 @@
-"""Small input checks shared by the core: real numbers, shapes and finiteness with clear messages.
+"""Small input checks shared by the core: real numbers, ranges, shapes and finiteness with clear messages.
 
 Every public function that takes numbers (twists, wheel speeds, poses, steering angles,
 headings, times) reads them with :func:`as_real_array` or :func:`as_components`: only real
@@ -11,6 +11,7 @@ drops an imaginary part with only a ``ComplexWarning``, reads ``True`` as 1 and 
 
 from __future__ import annotations
 
+import math
 import numbers
 
 import numpy as np
@@ -100,3 +101,32 @@ def require_finite(arr: np.ndarray, name: str) -> None:
     if bad.any():
         index = tuple(int(i) for i in np.argwhere(bad)[0])
         raise InputError(f"{name}: non-finite value {float(arr[index])} at index {index}")
+
+
+def range_problem(value, low: float, high: float, unit: str = "") -> str | None:
+    """None if ``value`` is a finite real number in ``[low, high]``, else what is wrong with it.
+
+    The one range check of omnikin's parameters (wheels, physical fields, robot files, UMBmark
+    sides, rates): Python or NumPy ``int`` and ``float`` only (not ``bool``, not ``"0.5"``).
+    The text starts with ``must``/``number`` so that the caller prefixes what it checks:
+    ``f"wheel 'w1': radius {problem}"``.
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        return f"must be a number, got {shorten(value)}"
+    try:
+        x = float(value)
+    except OverflowError:
+        return f"number too large, got {shorten(value)}"
+    if not math.isfinite(x):
+        return f"must be finite, got {shorten(value)}"
+    if not low <= x <= high:
+        return f"must lie in [{low:.10g}, {high:.10g}]{' ' + unit if unit else ''}, got {x:g}"
+    return None
+
+
+def whole_problem(value, low: int, high: int) -> str | None:
+    """None if ``value`` is a whole number (Python or NumPy integer, not ``bool``, not ``2.0``)
+    in ``[low, high]``, else what is wrong with it (phrased like :func:`range_problem`)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
+        return f"must be a whole number from {low} to {high}, got {shorten(value)}"
+    return None

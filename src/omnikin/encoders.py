@@ -60,7 +60,9 @@ from functools import partial
 
 import numpy as np
 
+from ._arrays import whole_problem
 from .errors import InputError, OdometryInputError, shorten
+from .wheels import COUNTER_BITS_RANGE
 
 JUMP_MARGIN = 1.5
 """A wheel may turn (or change its speed) this much faster than its stated limit before a
@@ -106,8 +108,9 @@ earliest sample and, within it, the lowest rank)."""
 def check_bits(bits, what: str = "counter_bits") -> int | None:
     if bits is None:
         return None
-    if isinstance(bits, (bool, np.bool_)) or not isinstance(bits, (int, np.integer)) or not 2 <= bits <= 64:
-        raise OdometryInputError(f"{what} must be a whole number from 2 to 64, got {shorten(bits)}")
+    problem = whole_problem(bits, *COUNTER_BITS_RANGE)
+    if problem:
+        raise OdometryInputError(f"{what} {problem}")
     return int(bits)
 
 

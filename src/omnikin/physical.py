@@ -11,9 +11,9 @@ floor under the body centre used by the kinematics). SI units.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, fields
 
+from ._arrays import range_problem, whole_problem
 from .errors import InputError, shorten
 
 # --- ranges (docs/conventions.md, "Physical fields") --------------------------------------------
@@ -24,7 +24,9 @@ WIDTH_RANGE = (1e-4, 10.0)
 HEIGHT_RANGE = (1e-3, 10.0)
 """Chassis thickness [m]."""
 COM_LIMIT = 1e3
-"""Largest ``|x|``, ``|y|``, ``z`` of the centre of mass [m] (z above the floor, > 0)."""
+"""Largest ``|x|``, ``|y|``, ``z`` of the centre of mass [m], bounded like a wheel's position."""
+COM_Z_MIN = 1e-4
+"""Lowest height of the centre of mass above the floor [m]: it lies above the floor."""
 FRICTION_RANGE = (1e-3, 10.0)
 """Sliding friction coefficient between tyre (or roller) and floor: ice 0.01-0.05, rubber on
 concrete about 1, racing tyres up to about 2."""
@@ -37,20 +39,18 @@ ROWS_RANGE = (1, 4)
 
 
 def _number(owner: str, name: str, value, low: float, high: float, unit: str) -> None:
-    if value is None:
-        return
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(f"{owner}: physical.{name} must be a number [{unit}], got {shorten(value)}")
-    x = float(value)
-    if not (math.isfinite(x) and low <= x <= high):
-        raise InputError(f"{owner}: physical.{name} must lie in [{low:g}, {high:g}] {unit}, got {shorten(value)}")
+    """Raise :class:`InputError` naming ``owner`` and ``physical.<name>`` unless ``value`` is None
+    or a finite number in ``[low, high]`` (:func:`omnikin._arrays.range_problem`)."""
+    problem = None if value is None else range_problem(value, low, high, unit)
+    if problem:
+        raise InputError(f"{owner}: physical.{name} {problem}")
 
 
 def _whole(owner: str, name: str, value, low: int, high: int) -> None:
-    if value is None:
-        return
-    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-        raise InputError(f"{owner}: physical.{name} must be a whole number from {low} to {high}, got {shorten(value)}")
+    """As :func:`_number` for a whole number (:func:`omnikin._arrays.whole_problem`)."""
+    problem = None if value is None else whole_problem(value, low, high)
+    if problem:
+        raise InputError(f"{owner}: physical.{name} {problem}")
 
 
 @dataclass(frozen=True)
@@ -108,7 +108,7 @@ class PhysicalBody:
             if len(com) != 3:
                 raise InputError(f"body: physical.com must be 3 numbers (x, y, z) [m], got {shorten(self.com)}")
             for axis, v in zip("xyz", com, strict=True):
-                low = 1e-4 if axis == "z" else -COM_LIMIT
+                low = COM_Z_MIN if axis == "z" else -COM_LIMIT
                 _number("body", f"com.{axis}", v, low, COM_LIMIT, "m")
             object.__setattr__(self, "com", tuple(float(v) for v in com))
 

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._arrays import range_problem, whole_problem
 from .errors import InfeasibleTwistError, InputError, shorten
 from .geometry import wrap_angle
 from .physical import PhysicalWheel
@@ -62,25 +63,12 @@ ROLLER_LIMIT_DEG = 80.0
 TICKS_PER_REV_RANGE = (1.0, 2.0**32)
 """Encoder ticks per revolution of the encoder shaft: from a single index pulse to a 32-bit
 absolute encoder."""
+COUNTER_BITS_RANGE = (2, 64)
+"""Width of an encoder's hardware counter [bits]: from a 2-bit quadrature state to a 64-bit count."""
 GEAR_RATIO_RANGE = (1e-3, 1e4)
 """Encoder revolutions per wheel revolution: multi-stage gearboxes stay below 1e4."""
 MAX_SPEED_RANGE = (1e-3, 1e4)
 """Wheel speed limit [rad/s]: 1e4 rad/s is 95 000 rpm, beyond any wheel."""
-
-
-def range_problem(value, low: float, high: float, unit: str = "") -> str | None:
-    """None if ``value`` is a finite real number in ``[low, high]``, else what is wrong with it."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        return f"must be a number, got {shorten(value)}"
-    try:
-        x = float(value)
-    except OverflowError:
-        return f"number too large, got {shorten(value)}"
-    if not math.isfinite(x):
-        return f"must be finite, got {shorten(value)}"
-    if not low <= x <= high:
-        return f"must lie in [{low:.10g}, {high:.10g}]{' ' + unit if unit else ''}, got {x:g}"
-    return None
 
 
 def name_problem(name) -> str | None:
@@ -116,11 +104,8 @@ class Encoder:
     counter_bits: int | None = None
 
     def __post_init__(self):
-        bits = self.counter_bits
-        if bits is not None and (
-            isinstance(bits, (bool, np.bool_)) or not isinstance(bits, (int, np.integer)) or not 2 <= bits <= 64
-        ):
-            raise InputError(f"encoder counter_bits must be a whole number from 2 to 64, got {shorten(bits)}")
+        if self.counter_bits is not None:
+            _require(whole_problem(self.counter_bits, *COUNTER_BITS_RANGE), "encoder: counter_bits")
         _require(range_problem(self.ticks_per_rev, *TICKS_PER_REV_RANGE), "encoder: ticks_per_rev")
         _require(range_problem(self.gear_ratio, *GEAR_RATIO_RANGE), "encoder: gear_ratio")
         if not isinstance(self.invert, (bool, np.bool_)):
@@ -204,6 +189,8 @@ class Wheel:
             self.physical.check(f"wheel {self.name!r}")
             if not self.is_swedish and (self.physical.rollers is not None or self.physical.rows is not None):
                 raise InputError(f"{who} only Swedish wheels have rollers (physical.rollers, physical.rows)")
+            if self.is_castor and self.physical.max_torque is not None:
+                raise InputError(f"{who} a castor is passive: it has no motor (physical.max_torque)")
 
     # --- classification ---------------------------------------------------
     @property

@@ -165,7 +165,9 @@ def cmd_presets(args) -> int:
 
 # --- show --------------------------------------------------------------------------------
 def show_data(robot) -> dict:
-    """The ``show --json`` document."""
+    """The ``show --json`` document (physical fields as in the robot file: those given)."""
+    from ..io.robot_file import physical_to_dict
+
     m = robot.mobility
     wheels = []
     for w in robot.wheels:
@@ -194,12 +196,16 @@ def show_data(robot) -> dict:
             }
         if w.max_speed is not None:
             d["max_speed"] = w.max_speed
+        if w.physical is not None and w.physical.given:
+            d["physical"] = physical_to_dict(w.physical)
         wheels.append(d)
     fk = robot.fk_matrix()
+    body = physical_to_dict(robot.physical) if robot.physical is not None and robot.physical.given else None
     return {
         "name": robot.name,
         "description": robot.description,
         "references": list(robot.references),
+        **({"physical": body} if body else {}),
         "wheels": wheels,
         "wheel_names": robot.rolling_names,
         "steer_names": robot.steer_names,

@@ -25,13 +25,29 @@ import math
 import os
 import re
 from collections.abc import Mapping
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
+from .._arrays import range_problem, whole_problem
 from ..errors import OmnikinError, RobotFileError, did_you_mean, shorten
 from ..model import Robot, name_collisions, robot_name_problem
+from ..physical import (
+    COM_LIMIT,
+    COM_Z_MIN,
+    FRICTION_RANGE,
+    HEIGHT_RANGE,
+    MASS_RANGE,
+    ROLLERS_RANGE,
+    ROWS_RANGE,
+    TORQUE_RANGE,
+    WIDTH_RANGE,
+    PhysicalBody,
+    PhysicalWheel,
+)
 from ..presets import PRESET_NAMES, preset_path
 from ..wheels import (
+    COUNTER_BITS_RANGE,
     GEAR_RATIO_RANGE,
     MAX_SPEED_RANGE,
     OFFSET_RANGE,
@@ -45,12 +61,18 @@ from ..wheels import (
     Steer,
     Wheel,
     name_problem,
-    range_problem,
 )
 from .textfile import read_text
 
 SCHEMA_VERSION = 1
-TOP_KEYS = {"omnikin": True, "name": True, "description": False, "references": False, "wheels": True}
+TOP_KEYS = {
+    "omnikin": True,
+    "name": True,
+    "description": False,
+    "references": False,
+    "physical": False,
+    "wheels": True,
+}
 WHEEL_KEYS = {
     "name",
     "type",
@@ -64,9 +86,14 @@ WHEEL_KEYS = {
     "encoder",
     "max_speed",
     "steer",
+    "physical",
 }
 ENCODER_KEYS = {"ticks_per_rev", "gear_ratio", "invert", "counter_bits"}
 STEER_KEYS = {"offset", "min_deg", "max_deg"}
+PHYSICAL_WHEEL_KEYS = tuple(f.name for f in fields(PhysicalWheel))
+"""Keys of a wheel's ``physical:`` mapping (docs/conventions.md, "Physical fields")."""
+PHYSICAL_BODY_KEYS = tuple(f.name for f in fields(PhysicalBody))
+"""Keys of the top-level ``physical:`` mapping (the chassis)."""
 
 FIELD_RANGES: dict[str, tuple[float, float, str]] = {
     "x": (-POSITION_LIMIT, POSITION_LIMIT, "m"),
@@ -82,8 +109,23 @@ FIELD_RANGES: dict[str, tuple[float, float, str]] = {
     "steer.offset": (*OFFSET_RANGE, "m"),
     "steer.min_deg": (-180.0, 180.0, "deg"),
     "steer.max_deg": (-180.0, 180.0, "deg"),
+    "physical.width": (*WIDTH_RANGE, "m"),
+    "physical.mass": (*MASS_RANGE, "kg"),
+    "physical.friction": (*FRICTION_RANGE, ""),
+    "physical.max_torque": (*TORQUE_RANGE, "N m"),
+    "physical.height": (*HEIGHT_RANGE, "m"),
+    "physical.com.x": (-COM_LIMIT, COM_LIMIT, "m"),
+    "physical.com.y": (-COM_LIMIT, COM_LIMIT, "m"),
+    "physical.com.z": (COM_Z_MIN, COM_LIMIT, "m"),
 }
 """Allowed range of every numeric field (inclusive; docs/conventions.md gives the reasons)."""
+
+WHOLE_RANGES: dict[str, tuple[int, int]] = {
+    "encoder.counter_bits": COUNTER_BITS_RANGE,
+    "physical.rollers": ROLLERS_RANGE,
+    "physical.rows": ROWS_RANGE,
+}
+"""Allowed range of every field that holds a whole number (inclusive)."""
 
 DEFAULT_DRIVE_DEG = {"mecanum": 0.0}
 """Drive direction of a wheel type when ``drive_deg`` is omitted [deg]; omni wheels take the
@@ -120,11 +162,21 @@ def _number(where: _Where, value: Any, wheel: str | None, field: str) -> float:
     return float(value)
 
 
+def _whole(where: _Where, value: Any, wheel: str | None, field: str) -> int:
+    """``value`` as an int within ``WHOLE_RANGES[field]``, else an error naming wheel and field."""
+    problem = whole_problem(value, *WHOLE_RANGES[field])
+    if problem:
+        raise where.error(problem, wheel, field)
+    return int(value)
+
+
 def _check_keys(where: _Where, data: Mapping, allowed, wheel: str | None, field: str | None):
+    """Refuse keys of ``data`` not in ``allowed``, suggesting the closest allowed key of the first."""
     unknown = sorted(set(map(str, data)) - set(allowed))
     if unknown:
+        hint = did_you_mean(unknown[0], allowed) if len(unknown[0]) <= 100 else ""
         raise where.error(
-            f"unknown key(s) {shorten(unknown)}; allowed: {sorted(allowed)}", wheel, field if field else None
+            f"unknown key(s) {shorten(unknown)}; allowed: {sorted(allowed)}{hint}", wheel, field if field else None
         )
 
 
@@ -139,13 +191,7 @@ def _encoder(where: _Where, data: Any, wheel: str) -> Encoder:
     invert = data.get("invert", False)
     if not isinstance(invert, bool):
         raise where.error(f"must be true or false, got {shorten(invert)}", wheel, "encoder.invert")
-    bits = data.get("counter_bits")
-    if bits is not None and (isinstance(bits, bool) or not isinstance(bits, int) or not 2 <= bits <= 64):
-        raise where.error(
-            f"the width of the encoder's counter, a whole number from 2 to 64, got {shorten(bits)}",
-            wheel,
-            "encoder.counter_bits",
-        )
+    bits = _whole(where, data["counter_bits"], wheel, "encoder.counter_bits") if "counter_bits" in data else None
     return Encoder(tpr, gear, invert, bits)
 
 
@@ -159,6 +205,62 @@ def _steer(where: _Where, data: Any, wheel: str) -> Steer:
     if not lo < hi:
         raise where.error(f"need -180 <= min_deg < max_deg <= 180, got {lo:g} and {hi:g}", wheel, "steer")
     return Steer(offset, math.radians(lo), math.radians(hi))
+
+
+def _physical_mapping(where: _Where, data: Any, keys: tuple[str, ...], wheel: str | None) -> Mapping:
+    """``data``, a ``physical:`` mapping of some of ``keys``; an empty one (``physical:`` or
+    ``physical: {}``, often a slip of indentation) is an error: leave the key out instead."""
+    if data is None or (isinstance(data, Mapping) and not data):
+        raise where.error(
+            f"is empty: give some of {list(keys)}, or leave 'physical' out (the physics description "
+            f"then derives every field from the layout)",
+            wheel,
+            "physical",
+        )
+    if not isinstance(data, Mapping):
+        raise where.error(
+            f"must be a mapping with some of the keys {list(keys)}, got {shorten(data)}", wheel, "physical"
+        )
+    _check_keys(where, data, keys, wheel, "physical")
+    return data
+
+
+def _physical_wheel(where: _Where, data: Any, wheel: str, kind: str) -> PhysicalWheel:
+    """A wheel's ``physical:`` mapping (docs/conventions.md, "Physical fields"): each field in
+    its range, rollers only on Swedish wheels, no motor torque on a (passive) castor."""
+    data = _physical_mapping(where, data, PHYSICAL_WHEEL_KEYS, wheel)
+    for key in ("rollers", "rows"):
+        if key in data and kind not in SWEDISH_TYPES:
+            raise where.error(
+                f"only Swedish wheels (omni, mecanum, swedish) have rollers, not {kind!r}", wheel, f"physical.{key}"
+            )
+    if "max_torque" in data and kind == "castor":
+        raise where.error("a castor is passive: it has no motor", wheel, "physical.max_torque")
+    values: dict[str, Any] = {}
+    for key in PHYSICAL_WHEEL_KEYS:
+        if key in data:
+            field = f"physical.{key}"
+            check = _whole if field in WHOLE_RANGES else _number
+            values[key] = check(where, data[key], wheel, field)
+    return PhysicalWheel(**values)
+
+
+def _physical_body(where: _Where, data: Any) -> PhysicalBody:
+    """The top-level ``physical:`` mapping: chassis mass [kg], centre of mass ``com`` [x, y, z]
+    [m] (body frame, z above the floor) and thickness ``height`` [m]."""
+    data = _physical_mapping(where, data, PHYSICAL_BODY_KEYS, None)
+    values: dict[str, Any] = {}
+    for key in ("mass", "height"):
+        if key in data:
+            values[key] = _number(where, data[key], None, f"physical.{key}")
+    if "com" in data:
+        com = data["com"]
+        if not isinstance(com, (list, tuple)) or len(com) != 3:
+            raise where.error(f"must be a list of 3 numbers [x, y, z] in m, got {shorten(com)}", None, "physical.com")
+        values["com"] = tuple(
+            _number(where, v, None, f"physical.com.{axis}") for axis, v in zip("xyz", com, strict=True)
+        )
+    return PhysicalBody(**values)
 
 
 def _placement(where: _Where, data: Mapping, label: str) -> tuple[float, float]:
@@ -262,8 +364,9 @@ def _wheel(where: _Where, data: Any, index: int) -> Wheel:
         raise where.error("castors are passive and unmeasured in schema 1: remove 'encoder'", label, "encoder")
     encoder = _encoder(where, data["encoder"], label) if "encoder" in data else None
     max_speed = _number(where, data["max_speed"], label, "max_speed") if "max_speed" in data else None
+    physical = _physical_wheel(where, data["physical"], label, kind) if "physical" in data else None
     try:
-        return Wheel(name, kind, x, y, drive, radius, roller, encoder, max_speed, steer)
+        return Wheel(name, kind, x, y, drive, radius, roller, encoder, max_speed, steer, physical)
     except OmnikinError as exc:  # a combination the file checks above do not see
         raise where.error(str(exc), label) from None
 
@@ -293,6 +396,7 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> Robot:
     refs = data.get("references", [])
     if not isinstance(refs, list) or not all(isinstance(r, str) for r in refs):
         raise where.error(f"must be a list of strings, got {shorten(refs)}", None, "references")
+    physical = _physical_body(where, data["physical"]) if "physical" in data else None
     wheels = data["wheels"]
     if not isinstance(wheels, list) or not wheels:
         raise where.error(f"must be a non-empty list of wheels, got {shorten(wheels)}", None, "wheels")
@@ -300,7 +404,7 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> Robot:
     for i, problem in name_collisions([w.name for w in parsed]):
         raise where.error(problem, f"wheel {shorten(parsed[i].name)} (#{i + 1})", "name")
     try:
-        return Robot(name, tuple(parsed), description, tuple(refs))
+        return Robot(name, tuple(parsed), description, tuple(refs), physical)
     except OmnikinError as exc:
         raise RobotFileError(f"{source}: {exc}") from None
 
@@ -592,14 +696,33 @@ def robot_to_dict(robot: Robot) -> dict:
                 "min_deg": _clean(math.degrees(w.steer.lower)),
                 "max_deg": _clean(math.degrees(w.steer.upper)),
             }
+        if w.physical is not None and w.physical.given:
+            d["physical"] = physical_to_dict(w.physical)
         wheels.append(d)
-    return {
+    out: dict[str, Any] = {
         "omnikin": SCHEMA_VERSION,
         "name": robot.name,
         "description": robot.description,
         "references": list(robot.references),
-        "wheels": wheels,
     }
+    if robot.physical is not None and robot.physical.given:
+        out["physical"] = physical_to_dict(robot.physical)
+    out["wheels"] = wheels
+    return out
+
+
+def physical_to_dict(physical: PhysicalWheel | PhysicalBody) -> dict[str, Any]:
+    """The ``physical:`` mapping of a wheel or the chassis: the fields given (a field left out is
+    derived by the physics description), as plain ints, floats and lists."""
+    out: dict[str, Any] = {}
+    for key, value in physical.given.items():
+        if key in ("rollers", "rows"):
+            out[key] = int(value)
+        elif key == "com":
+            out[key] = [float(v) for v in value]
+        else:
+            out[key] = float(value)
+    return out
 
 
 def robot_text(robot: Robot, path: str | Path) -> str:
