@@ -205,7 +205,9 @@ def test_no_suggestion_when_nothing_is_close(capsys):
 
 
 def test_usage_errors_are_one_line_and_point_to_help(capsys):
-    one_line(*cli(capsys, "ik", "tomasi-omni3", "zero", "0", "0"), "argument VX: not a number: 'zero'", "omnikin ik --help")
+    one_line(
+        *cli(capsys, "ik", "tomasi-omni3", "zero", "0", "0"), "argument VX: not a number: 'zero'", "omnikin ik --help"
+    )
     one_line(*cli(capsys, "ik"), "required", "ROBOT")
     one_line(*cli(capsys, "ik", "tomasi-omni3", "0", "0", "0", "7"), "unexpected argument '7'")
     one_line(*cli(capsys, "bag", "odometry", "tomasi-omni3"), "omnikin bag odometry --help")
