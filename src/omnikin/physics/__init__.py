@@ -1,0 +1,14 @@
+"""Physics simulation of any robot file (extra ``physics``: MuJoCo).
+
+- :mod:`~omnikin.physics.description`: the robot as a physical body (chassis, wheels, rollers,
+  joints, motors), derived from the wheel layout with documented defaults; pure data and NumPy;
+- :mod:`~omnikin.physics.mjcf`: MuJoCo's XML model (MJCF) of a description, as text;
+- :mod:`~omnikin.physics.engine`: :class:`~omnikin.physics.engine.PhysicsSim`, the model
+  stepped in MuJoCo with ramped wheel commands, encoders and ground truth;
+- :mod:`~omnikin.physics.backend`: :class:`~omnikin.physics.backend.PhysicsBackend`, the
+  runtime's wheel back-end on top of it (a drop-in for the kinematic
+  :class:`~omnikin.simulation.backend.SimBackend`).
+
+Only the engine and the back-end import ``mujoco``; the description and the MJCF text work
+without it.
+"""

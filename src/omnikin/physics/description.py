@@ -1,0 +1,641 @@
+"""A robot as a physical body: chassis, wheels, rollers, joints and motors, derived from any
+:class:`~omnikin.model.Robot` (pure data and NumPy; no physics engine needed).
+
+:func:`describe` turns the kinematic robot (wheel positions, drive directions, radii, roller
+angles, steering) into the frozen :class:`PhysicalRobot` that :mod:`omnikin.physics.mjcf`
+writes as a MuJoCo model and a viewer can draw. Every quantity the robot file does not give
+has a default below, with its reasoning; the optional ``physical:`` fields of the file
+(:class:`~omnikin.physical.PhysicalBody` on the robot, :class:`~omnikin.physical.PhysicalWheel`
+on each wheel) override them. ``docs/physics.md`` repeats the table.
+
+Frames and units: SI, radians. The **body frame** is that of ``docs/conventions.md``
+(``base_link``: x forward, y left, z up) with its origin **on the floor** under the
+kinematic reference point, so that the pose of the chassis body is the robot's pose
+``(x, y, theta)``. A wheel's frame has its origin at the hub centre, x along the drive
+direction ``u = (cos delta, sin delta, 0)``, y along the axle ``a = z x u =
+(-sin delta, cos delta, 0)`` and z up: a positive rotation about +y is a positive wheel speed
+(it drives the hub along +u). The hub of wheel ``i`` sits at height ``r_i``: every wheel
+touches the floor with the chassis level, whatever the radii.
+
+Rollers of Swedish wheels (omni: roller angle ``gamma = 0``, mecanum: +-45 deg, any angle up
+to the schema's 80 deg). ``R`` rows of ``n`` rollers each; row ``j`` is turned about the axle
+by ``j 2 pi / (n R)`` against row 0 (staggered evenly) and sits at ``y_j`` along the axle.
+Each roller is an **ellipsoid of revolution** (exactly round cross-section, so a roller's own
+spin never lifts the wheel) with semi-axis ``a`` along its spin axis and ``b`` across it, its
+centre at distance ``c`` from the axle. The roller at angle ``psi`` about the axle (0 at the
+bottom) has its centre at ``R_y(psi) (0, y_j, -c)`` and its spin axis
+``e = R_y(psi) (cos gamma, sin gamma, 0)``: at the bottom it lies along ``delta + gamma`` in
+the floor plane, the direction along which the contact cannot slip (``omnikin.wheels``).
+
+*Envelope.* With the roller at angle ``phi`` from the bottom, the height of the axle above the
+floor is the roller's support function in the vertical direction (``e.z = -cos(gamma)
+sin(phi)``)::
+
+    h(phi) = c cos(phi) + sqrt(b^2 + (a^2 - b^2) cos^2(gamma) sin^2(phi)).
+
+The envelope follows the wheel's circle to fourth order when ``h''(0) = 0``, the
+**osculation condition** ``(a^2 - b^2) cos^2(gamma) = b c``; then
+``h(phi) = c cos(phi) + sqrt(b^2 + b c sin^2(phi)) = (b + c) - c (b + c) phi^4 / (8 b) + ...``
+(for gamma = 0 it says ``a^2 = b (b + c)``: the curvature ``b / a^2`` of the ellipse's crest
+equals that of the wheel's circle). A roller spans the angle ``+-alpha`` about the axle seen
+from the side, ``tan(alpha) = a cos(gamma) / c``; the rollers of one row meet end to end in
+that view: ``alpha = pi / n``. With ``T = tan(alpha)`` and crest radius ``b + c = 1`` the two
+conditions give ``b^2 (T^2 + sin^2 gamma) - b (2 T^2 + 1) + T^2 = 0``, whose small root is
+``b = 2 T^2 / (2 T^2 + 1 + sqrt(1 + 4 T^2 cos^2 gamma))`` (``T^2 / (1 + 2 T^2)`` to first
+order), then ``c = 1 - b`` and ``a = c T / cos(gamma)``. The wheel rests on the roller nearest
+the bottom, so each roller carries it over ``|phi| <= phi_h = pi / (n R)``, where ``h`` falls
+by the **height ripple** ``h(0) - h(phi_h)``. On a convex profile rolling without slip the
+hub advances by ``h(phi) d(phi)``: the effective rolling radius is the *mean* of ``h`` over
+``[-phi_h, phi_h]``, not its crest. All lengths are therefore scaled so that this mean is the
+file's radius ``r``: the crest lies half the ripple or so above ``r`` and the rollers roll
+exactly ``r`` per radian on average (:class:`RollerSet`).
+
+Defaults (each overridden by the field named in brackets):
+
+==========================  ===============================================================
+chassis shape               a cylinder when the mounting points ``(x, y)`` of the wheels
+                            (steering axes for steered wheels and castors) are three or more
+                            evenly spaced on a circle (a rotationally symmetric base: omni3,
+                            omni4, synchro, XR4000), radius that circle, centred at their
+                            centroid; else a box over those points (its extent at least one
+                            mean wheel diameter in each direction)
+chassis thickness           the mean rolling radius ``r_m`` (``physical.height``); centred at
+                            the mean hub height ``r_m``, so its bottom clears the floor by
+                            ``r_m / 2``
+chassis mass                ``1000 kg/m^3`` times the chassis volume (``physical.mass``): a
+                            robot is batteries (2000-2500 kg/m^3), electronics and an aluminium
+                            frame with air in between, on average about the density of water
+chassis centre of mass      over the centroid of the wheels' contact points, at the height of
+                            the chassis centre (``physical.com``): a builder balances a robot over
+                            its wheels, and so every layout that can stand does (for symmetric
+                            layouts this is the centre of the chassis shape; the trailing legs
+                            of Villasenor's robot put it well away from their steering axes).
+                            The inertia is that of the uniform shape about its own centre
+wheel width                 standard wheels and castors ``0.4 r`` (tyres are 0.3-0.5 of their
+                            radius wide); Swedish wheels the width of their rows of rollers,
+                            ``R`` times a roller's extent along the axle
+                            (``physical.width``; then the rows share the given width evenly)
+wheel mass                  a solid cylinder of ``1000 kg/m^3`` (plastic hub with lightening
+                            holes, rubber tyre or rollers) (``physical.mass``); Swedish wheels
+                            put half of it in their rollers, steered wheels and castors carry a
+                            fork of a quarter of the wheel's mass
+rows of rollers             2 for omni wheels (gamma = 0): one row leaves gaps between its
+                            rollers, two staggered rows give the continuous contact of built
+                            omni wheels; 1 for inclined rollers (mecanum), which overlap in
+                            the side view (``physical.rows``)
+rollers per row             ``ceil(12 / R)``: a roller hands the wheel over every 15 deg,
+                            for a height ripple below 0.5 % (omni, 2 x 6) and 1 % (mecanum,
+                            1 x 12) of the radius, zero on average (``physical.rollers``)
+friction                    1.0, rubber on concrete (``physical.friction``)
+driven wheels               those with an encoder or a ``physical.max_torque``; if none has
+                            either, every rolling wheel (castors are always passive)
+motor torque                the torque at which the wheel slips under its static load
+                            ``N_i``, ``mu N_i r`` (:func:`wheel_loads`; ``m g / n`` for
+                            symmetric layouts): a stronger motor only spins its wheel
+                            (``physical.max_torque``)
+steering torque             ``mu N_i (trail + r)``: enough to drag the contact
+                            sideways on the lever of the trail, or to twist it on the spot
+                            (``physical.max_torque``, the same limit as the wheel motor's)
+motor speed                 the wheel's ``max_speed``, else a rim speed of 3 m/s (indoor and
+                            service robots drive below 3 m/s)
+command ramp                wheel speeds change at most at ``alpha = tau / (2 I_eff)`` [rad/s^2],
+                            ``I_eff = I_wheel + (m / n_driven) r^2`` the wheel's inertia plus
+                            its share of the robot's mass seen through the radius: half the
+                            torque accelerates the robot, half is left to the speed servo for
+                            the uneven share of the load; with the default torque the rim
+                            accelerates at most at ``mu g / 2``, below the slip limit. A step
+                            command would saturate the motors and spin the wheels
+speed servo                 a PI controller as in built wheel controllers: gain
+                            ``I_eff / 5 ms`` [N m s/rad] (the wheel speed follows the ramp with
+                            a time constant of 5 ms; the implicit integrator keeps it stable at
+                            any step) and integral time 50 ms, so that a steady load (the
+                            centripetal force on a curve) leaves no speed error; the integral
+                            is held within one full torque (anti-windup)
+steering                    PI position servo with full torque at 0.05 rad of error, damped
+                            critically on the steered parts' inertia, integral time 50 ms,
+                            ramped at pi rad/s
+                            (half a turn per second: hobby servos turn 60 deg in 0.1-0.2 s,
+                            cars lock to lock in about a second)
+==========================  ===============================================================
+
+A robot whose contact points do not surround its centre of mass cannot stand (two wheels on
+one axle and no castor): :attr:`PhysicalRobot.support_margin` is then not positive, and the
+engine refuses it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..model import Robot
+from ..physical import PhysicalWheel
+from ..wheels import Wheel
+
+GRAVITY = 9.81
+"""Standard gravity [m/s^2]."""
+CHASSIS_DENSITY = 1000.0
+"""Mean density of a chassis [kg/m^3] (module docstring)."""
+WHEEL_DENSITY = 1000.0
+"""Mean density of a wheel taken as a solid cylinder [kg/m^3]."""
+TYRE_WIDTH_PER_RADIUS = 0.4
+"""Width of standard wheels and castors per unit radius."""
+ROLLER_MASS_SHARE = 0.5
+"""Part of a Swedish wheel's mass in its rollers."""
+FORK_MASS_SHARE = 0.25
+"""Mass of the fork of a steered wheel or castor per unit wheel mass."""
+FRICTION = 1.0
+"""Sliding friction between tyre or roller and floor (rubber on concrete)."""
+RIM_SPEED = 3.0
+"""Default rim speed limit [m/s] of a motor."""
+HANDOFF_DEG = 15.0
+"""Largest angle [deg] a roller carries the wheel before the next one takes over (default count)."""
+SERVO_TIME_CONSTANT = 0.005
+"""Time constant [s] of the wheel speed servo."""
+INTEGRAL_TIME = 0.05
+"""Integral time [s] of the wheel speed servo."""
+ACCEL_TORQUE_SHARE = 0.5
+"""Part of the motor torque the command ramp may use to accelerate."""
+STEER_RATE = math.pi
+"""Default steering rate limit [rad/s]."""
+STEER_FULL_TORQUE_ANGLE = 0.05
+"""Steering error [rad] at which the steering servo gives its full torque."""
+CIRCLE_TOLERANCE = 1e-3
+"""Relative tolerance for mounting points evenly spaced on a circle (cylinder chassis)."""
+
+
+@dataclass(frozen=True)
+class Chassis:
+    """The chassis (body frame). ``shape`` ``"cylinder"`` (``size = (radius, half height)``) or
+    ``"box"`` (``size = (half x, half y, half z)``) centred at ``centre`` [m]; ``mass`` [kg],
+    ``com`` [m] and principal moments ``inertia`` [kg m^2] about the com along the body axes."""
+
+    shape: str
+    centre: tuple[float, float, float]
+    size: tuple[float, ...]
+    mass: float
+    com: tuple[float, float, float]
+    inertia: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Roller:
+    """One roller in its wheel's frame: centre ``position`` [m], unit spin ``axis``, ``row``
+    (0-based) and ``index`` in its row."""
+
+    row: int
+    index: int
+    position: tuple[float, float, float]
+    axis: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class RollerSet:
+    """The rollers of a Swedish wheel (module docstring, "Rollers").
+
+    ``rows`` x ``per_row`` ellipsoids of semi-axes ``half_length`` (``a``, along the spin axis)
+    and ``radius`` (``b``, across), centres at ``centre_radius`` (``c``) from the axle and
+    ``offsets`` [m] along it per row; ``crest`` = ``b + c`` [m], ``ripple`` [m] the fall of the
+    axle between two hand-overs, ``mass`` [kg] and ``inertia`` (about the spin axis, across)
+    [kg m^2] of one roller."""
+
+    angle: float
+    rows: int
+    per_row: int
+    half_length: float
+    radius: float
+    centre_radius: float
+    crest: float
+    ripple: float
+    offsets: tuple[float, ...]
+    mass: float
+    inertia: tuple[float, float]
+    rollers: tuple[Roller, ...]
+
+
+@dataclass(frozen=True)
+class Motor:
+    """A wheel motor: torque limit [N m], speed limit [rad/s], the command ramp's acceleration
+    limit [rad/s^2], the speed servo's gain [N m s/rad] and integral time [s] (a PI controller:
+    torque ``gain (e + z)``, ``dz/dt = e / integral_time``, ``e`` the speed error [rad/s])."""
+
+    max_torque: float
+    max_speed: float
+    max_accel: float
+    gain: float
+    integral_time: float
+
+
+@dataclass(frozen=True)
+class Steering:
+    """The vertical steering joint of a steered wheel or castor, through ``pivot`` (x, y) [m,
+    body frame]; the wheel's hub trails it by ``trail`` [m] against the drive direction.
+    ``limits`` [rad] relative to the mounting drive direction (None: turns all the way round).
+    ``actuated``: a position servo with ``max_torque`` [N m], ``max_rate`` [rad/s] (command
+    ramp), ``stiffness`` [N m/rad], ``damping`` [N m s/rad] and ``integral_time`` [s] (PI, as
+    :class:`Motor`); a castor swivels freely.
+    ``fork_mass`` [kg] and ``fork_inertia`` [kg m^2] (principal moments, fork frame) of the
+    part that turns with the steering, wheel excluded; ``inertia`` [kg m^2] of everything that
+    turns about the steering axis."""
+
+    pivot: tuple[float, float]
+    trail: float
+    limits: tuple[float, float] | None
+    actuated: bool
+    max_torque: float
+    max_rate: float
+    stiffness: float
+    damping: float
+    integral_time: float
+    fork_mass: float
+    fork_inertia: tuple[float, float, float]
+    inertia: float
+
+
+@dataclass(frozen=True)
+class WheelBody:
+    """One wheel as a body (module docstring for frames).
+
+    ``hub`` [m, body frame] at zero steering, ``drive`` ``delta`` [rad] at zero steering,
+    ``axle`` the unit axle ``(-sin delta, cos delta, 0)``; ``radius`` the file's rolling radius
+    [m], ``width`` [m], ``mass`` [kg] of the whole wheel; ``hub_mass`` [kg] and ``hub_inertia``
+    (about the axle, across) [kg m^2] of the wheel without rollers; ``friction``; ``driven``
+    with its ``motor`` (None when passive); ``rollers`` (Swedish wheels), ``steering`` (steered
+    wheels and castors); ``fields`` names the physical fields the file gave."""
+
+    name: str
+    type: str
+    hub: tuple[float, float, float]
+    drive: float
+    axle: tuple[float, float, float]
+    radius: float
+    width: float
+    mass: float
+    hub_mass: float
+    hub_inertia: tuple[float, float]
+    friction: float
+    driven: bool
+    motor: Motor | None
+    rollers: RollerSet | None
+    steering: Steering | None
+    fields: tuple[str, ...]
+
+    @property
+    def reach(self) -> float:
+        """Lowest point of the wheel below its hub at zero wheel angle [m]: the crest of the
+        bottom roller, or the radius."""
+        return self.rollers.crest if self.rollers is not None else self.radius
+
+
+@dataclass(frozen=True)
+class PhysicalRobot:
+    """The physical description of a robot: its ``chassis`` and ``wheels`` (file order, castors
+    included), ``gravity`` [m/s^2], total ``mass`` [kg], and ``support_margin`` [m]: distance of
+    the robot's centre of mass (projected on the floor) inside the polygon of the wheels'
+    contact points, negative outside (the robot tips over), 0 when the contacts are collinear."""
+
+    name: str
+    chassis: Chassis
+    wheels: tuple[WheelBody, ...]
+    gravity: float
+    mass: float
+    com: tuple[float, float, float]
+    support_margin: float
+
+    @property
+    def driven(self) -> tuple[WheelBody, ...]:
+        return tuple(w for w in self.wheels if w.driven)
+
+    @property
+    def steered(self) -> tuple[WheelBody, ...]:
+        """Wheels with an actuated steering joint (the robot's steerable wheels, file order)."""
+        return tuple(w for w in self.wheels if w.steering is not None and w.steering.actuated)
+
+    def wheel(self, name: str) -> WheelBody:
+        for w in self.wheels:
+            if w.name == name:
+                return w
+        raise InputError(f"robot {self.name!r} has no wheel {name!r}")
+
+
+# --- rollers -----------------------------------------------------------------------------------
+def roller_shape(gamma: float, per_row: int) -> tuple[float, float, float]:
+    """``(a, b, c)`` of an osculating roller of a wheel with crest radius 1 (module docstring):
+    roller angle ``gamma`` [rad], ``per_row`` rollers meeting end to end in the side view."""
+    t2 = math.tan(math.pi / per_row) ** 2
+    cg = math.cos(gamma)
+    b = 2.0 * t2 / (2.0 * t2 + 1.0 + math.sqrt(1.0 + 4.0 * t2 * cg * cg))
+    c = 1.0 - b
+    a = c * math.sqrt(t2) / cg
+    return a, b, c
+
+
+def axle_height(b: float, c: float, phi) -> np.ndarray:
+    """Height of the axle above the floor [units of b, c] with an osculating roller at angle
+    ``phi`` [rad] from the bottom: ``c cos(phi) + sqrt(b^2 + b c sin^2(phi))``."""
+    phi = np.asarray(phi, dtype=float)
+    return c * np.cos(phi) + np.sqrt(b * b + b * c * np.sin(phi) ** 2)
+
+
+def roller_geometry(wheel: Wheel, rows: int, per_row: int) -> tuple[float, float, float, float, float]:
+    """``(a, b, c, ripple, row_width)`` [m] of the rollers of Swedish ``wheel``: the osculating
+    shape scaled so that the mean axle height over a roller's hand-over interval
+    ``|phi| <= pi / (per_row rows)`` is the wheel's radius (module docstring); ``row_width`` is a
+    roller's extent along the axle, ``2 sqrt(b^2 + (a^2 - b^2) sin^2 gamma)``."""
+    a1, b1, c1 = roller_shape(wheel.roller, per_row)
+    half = math.pi / (per_row * rows)
+    phi = np.linspace(-half, half, 401)
+    heights = axle_height(b1, c1, phi)
+    mean = float(np.sum(heights[1:] + heights[:-1]) * (phi[1] - phi[0]) / 2.0) / (2.0 * half)
+    scale = wheel.radius / mean
+    a, b, c = a1 * scale, b1 * scale, c1 * scale
+    ripple = float(heights[200] - heights[0]) * scale
+    sg = math.sin(wheel.roller)
+    return a, b, c, ripple, 2.0 * math.sqrt(b * b + (a * a - b * b) * sg * sg)
+
+
+def roller_set(wheel: Wheel, rows: int, per_row: int, width: float | None, mass: float) -> RollerSet:
+    """The rollers of Swedish ``wheel`` (module docstring): :func:`roller_geometry`, the rows
+    staggered evenly about the axle, spread evenly over ``width`` [m] (None: all in the wheel's
+    mid-plane); ``mass`` [kg] of all rollers."""
+    gamma = wheel.roller
+    a, b, c, ripple, _ = roller_geometry(wheel, rows, per_row)
+    spread = 0.0 if width is None else width / rows
+    offsets = tuple((j - (rows - 1) / 2.0) * spread for j in range(rows))
+    each = mass / (rows * per_row)
+    cg, sg = math.cos(gamma), math.sin(gamma)
+    rollers = []
+    for j in range(rows):
+        for k in range(per_row):
+            psi = 2.0 * math.pi * k / per_row + 2.0 * math.pi * j / (per_row * rows)
+            cp, sp = math.cos(psi), math.sin(psi)
+            rollers.append(Roller(j, k, (-c * sp, offsets[j], -c * cp), (cg * cp, sg, -cg * sp)))
+    return RollerSet(
+        angle=gamma,
+        rows=rows,
+        per_row=per_row,
+        half_length=a,
+        radius=b,
+        centre_radius=c,
+        crest=b + c,
+        ripple=ripple,
+        offsets=offsets,
+        mass=each,
+        inertia=(0.4 * each * b * b, 0.2 * each * (a * a + b * b)),
+        rollers=tuple(rollers),
+    )
+
+
+def default_rows(wheel: Wheel) -> int:
+    """2 staggered rows for omni rollers (gamma = 0), 1 for inclined ones (module docstring)."""
+    return 2 if wheel.roller == 0.0 else 1
+
+
+def default_rollers(rows: int) -> int:
+    """Rollers per row so that a roller hands over every :data:`HANDOFF_DEG` (at least 3)."""
+    return max(3, math.ceil(180.0 / (rows * HANDOFF_DEG) - 1e-9))
+
+
+# --- chassis ------------------------------------------------------------------------------------
+def mounting_points(robot: Robot) -> np.ndarray:
+    """``(n, 2)`` mounting points [m]: hub positions, steering axes for steered wheels and castors."""
+    return np.array([[w.x, w.y] for w in robot.wheels], dtype=float)
+
+
+def regular_circle(points: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """``(centre, radius)`` when three or more ``points`` lie evenly spaced on a circle about
+    their centroid (within :data:`CIRCLE_TOLERANCE`), else None."""
+    n = len(points)
+    if n < 3:
+        return None
+    centre = points.mean(axis=0)
+    rel = points - centre
+    dist = np.hypot(rel[:, 0], rel[:, 1])
+    radius = float(dist.mean())
+    if radius <= 0.0 or np.max(np.abs(dist - radius)) > CIRCLE_TOLERANCE * radius:
+        return None
+    angles = np.sort(np.arctan2(rel[:, 1], rel[:, 0]))
+    gaps = np.diff(np.concatenate([angles, angles[:1] + 2.0 * math.pi]))
+    if np.max(np.abs(gaps - 2.0 * math.pi / n)) > CIRCLE_TOLERANCE * 2.0 * math.pi:
+        return None
+    return centre, radius
+
+
+def chassis_shape(robot: Robot, mean_radius: float, height: float) -> tuple[str, tuple, tuple]:
+    """``(shape, centre, size)`` of the chassis (module docstring, "chassis shape")."""
+    points = mounting_points(robot)
+    circle = regular_circle(points)
+    if circle is not None:
+        centre, radius = circle
+        return "cylinder", (float(centre[0]), float(centre[1]), mean_radius), (radius, height / 2.0)
+    low, high = points.min(axis=0), points.max(axis=0)
+    centre = (low + high) / 2.0
+    half = np.maximum((high - low) / 2.0, mean_radius)
+    return "box", (float(centre[0]), float(centre[1]), mean_radius), (float(half[0]), float(half[1]), height / 2.0)
+
+
+def shape_volume_inertia(shape: str, size: tuple, mass: float) -> tuple[float, tuple[float, float, float]]:
+    """Volume [m^3] and principal moments about the centre [kg m^2] of a uniform cylinder
+    (radius, half height) or box (half extents)."""
+    if shape == "cylinder":
+        radius, half = size
+        h = 2.0 * half
+        side = mass * (3.0 * radius * radius + h * h) / 12.0
+        return math.pi * radius * radius * h, (side, side, mass * radius * radius / 2.0)
+    lx, ly, lz = (2.0 * s for s in size)
+    inertia = (mass * (ly * ly + lz * lz) / 12.0, mass * (lx * lx + lz * lz) / 12.0, mass * (lx * lx + ly * ly) / 12.0)
+    return lx * ly * lz, inertia
+
+
+# --- support polygon -------------------------------------------------------------------------
+def convex_hull(points: np.ndarray) -> np.ndarray:
+    """Vertices of the convex hull of ``(n, 2)`` points, counter-clockwise (Andrew's monotone
+    chain); collinear points are dropped."""
+    pts = sorted({(float(p[0]), float(p[1])) for p in points})
+    if len(pts) < 3:
+        return np.array(pts, dtype=float).reshape(-1, 2)
+
+    def cross(o, a, b) -> float:
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower: list = []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    upper: list = []
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return np.array(lower[:-1] + upper[:-1], dtype=float)
+
+
+def wheel_loads(contacts: np.ndarray, com: np.ndarray, weight: float) -> np.ndarray:
+    """Static normal loads [N] of wheels at ``contacts`` ``(n, 2)`` [m] carrying ``weight`` [N]
+    whose line of action passes through ``com`` (x, y): the force and moment balance
+    ``sum N_i = W``, ``sum N_i x_i = W x``, ``sum N_i y_i = W y``; its least-norm solution (exact
+    for three wheels not in a line, the even share for symmetric layouts), at least 1 % of the
+    even share (a robot that cannot stand is refused by the engine, not here)."""
+    a = np.vstack([np.ones(len(contacts)), contacts[:, 0], contacts[:, 1]])
+    b = weight * np.array([1.0, com[0], com[1]])
+    loads = np.linalg.pinv(a) @ b
+    return np.maximum(loads, 0.01 * weight / len(contacts))
+
+
+def support_margin(contacts: np.ndarray, point: np.ndarray) -> float:
+    """Signed distance [m] of ``point`` inside the convex hull of ``contacts`` (negative
+    outside, 0 when the hull has no area)."""
+    hull = convex_hull(contacts)
+    if len(hull) < 3:
+        return 0.0
+    margin = math.inf
+    for i in range(len(hull)):
+        p, q = hull[i], hull[(i + 1) % len(hull)]
+        edge = q - p
+        inward = np.array([-edge[1], edge[0]]) / math.hypot(edge[0], edge[1])
+        margin = min(margin, float(inward @ (point - p)))
+    return margin
+
+
+# --- wheels ---------------------------------------------------------------------------------
+def _given(wheel: Wheel) -> PhysicalWheel:
+    return wheel.physical if wheel.physical is not None else PhysicalWheel()
+
+
+def _wheel_mass_and_width(wheel: Wheel) -> tuple[float, float, RollerSet | None, float]:
+    """Mass [kg], width [m], rollers and hub radius [m] of ``wheel`` (rollers weigh their share)."""
+    given = _given(wheel)
+    r = wheel.radius
+    if not wheel.is_swedish:
+        width = given.width if given.width is not None else TYRE_WIDTH_PER_RADIUS * r
+        mass = given.mass if given.mass is not None else WHEEL_DENSITY * math.pi * r * r * width
+        return mass, width, None, r
+    rows = given.rows if given.rows is not None else default_rows(wheel)
+    per_row = given.rollers if given.rollers is not None else default_rollers(rows)
+    width = given.width if given.width is not None else roller_geometry(wheel, rows, per_row)[4]
+    mass = given.mass if given.mass is not None else WHEEL_DENSITY * math.pi * r * r * width
+    rollers = roller_set(wheel, rows, per_row, given.width, ROLLER_MASS_SHARE * mass)
+    return mass, width, rollers, rollers.centre_radius
+
+
+def describe(robot: Robot) -> PhysicalRobot:
+    """The physical description of ``robot`` (module docstring for every default)."""
+    if not isinstance(robot, Robot):
+        raise InputError(f"describe: expected a Robot, got {type(robot).__name__}")
+    body = robot.physical
+    rolling = robot.rolling
+    mean_radius = float(np.mean([w.radius for w in rolling]))
+    height = body.height if body is not None and body.height is not None else mean_radius
+    shape, centre, size = chassis_shape(robot, mean_radius, height)
+    volume, _ = shape_volume_inertia(shape, size, 1.0)
+    chassis_mass = body.mass if body is not None and body.mass is not None else CHASSIS_DENSITY * volume
+    _, chassis_inertia = shape_volume_inertia(shape, size, chassis_mass)
+    contacts = np.array(
+        [[w.x - w.offset * math.cos(w.drive), w.y - w.offset * math.sin(w.drive)] for w in robot.wheels]
+    )
+    balanced = (*(float(v) for v in contacts.mean(axis=0)), centre[2])
+    com = body.com if body is not None and body.com is not None else balanced
+
+    parts = [_wheel_mass_and_width(w) for w in robot.wheels]
+    fork_masses = [
+        FORK_MASS_SHARE * m if (w.is_steerable or w.is_castor) else 0.0
+        for w, (m, *_) in zip(robot.wheels, parts, strict=True)
+    ]
+    total = chassis_mass + sum(p[0] for p in parts) + sum(fork_masses)
+
+    explicit = [w for w in rolling if w.encoder is not None or _given(w).max_torque is not None]
+    driven_names = {w.name for w in (explicit or rolling)}
+    moments = chassis_mass * np.asarray(com, dtype=float)
+    for w, (mass, *_), fork_mass, (cx, cy) in zip(robot.wheels, parts, fork_masses, contacts, strict=True):
+        moments = moments + mass * np.array([cx, cy, w.radius]) + fork_mass * np.array([w.x, w.y, w.radius])
+    robot_com = moments / total
+    loads = wheel_loads(contacts, robot_com[:2], total * GRAVITY)
+
+    wheels = []
+    for w, (mass, width, rollers, hub_radius), load in zip(robot.wheels, parts, loads, strict=True):
+        given = _given(w)
+        friction = given.friction if given.friction is not None else FRICTION
+        delta = float(w.drive)
+        cd, sd = math.cos(delta), math.sin(delta)
+        trail = w.offset if (w.is_steerable or w.is_castor) else 0.0
+        hub = (w.x - trail * cd, w.y - trail * sd, w.radius)
+        hub_mass = mass - (rollers.mass * len(rollers.rollers) if rollers is not None else 0.0)
+        hub_inertia = (hub_mass * hub_radius**2 / 2.0, hub_mass * (3.0 * hub_radius**2 + width**2) / 12.0)
+        torque = given.max_torque
+        if torque is None:
+            torque = friction * load * w.radius
+        motor = None
+        driven = w.name in driven_names
+        if driven:
+            wheel_axle = hub_inertia[0] + (mass - hub_mass) * hub_radius**2
+            i_eff = wheel_axle + total / len(driven_names) * w.radius**2
+            max_speed = w.max_speed if w.max_speed else RIM_SPEED / w.radius
+            gain = i_eff / SERVO_TIME_CONSTANT
+            motor = Motor(torque, max_speed, ACCEL_TORQUE_SHARE * torque / i_eff, gain, INTEGRAL_TIME)
+        steering = None
+        if w.is_steerable or w.is_castor:
+            fork = max(w.radius / 2.0, 1e-3)
+            fork_inertia = (fork_mass * fork * fork / 6.0,) * 3
+            turning = fork_inertia[2] + hub_inertia[1] + hub_mass * trail * trail
+            limits = None
+            if w.steer is not None and (w.steer.lower > -math.pi + 1e-9 or w.steer.upper < math.pi - 1e-9):
+                limits = (float(w.steer.lower), float(w.steer.upper))
+            steer_torque = given.max_torque
+            if steer_torque is None:
+                steer_torque = friction * load * (trail + w.radius)
+            stiffness = steer_torque / STEER_FULL_TORQUE_ANGLE
+            steering = Steering(
+                pivot=(float(w.x), float(w.y)),
+                trail=float(trail),
+                limits=limits,
+                actuated=w.is_steerable,
+                max_torque=steer_torque,
+                max_rate=STEER_RATE,
+                stiffness=stiffness,
+                damping=2.0 * math.sqrt(stiffness * turning),
+                integral_time=INTEGRAL_TIME,
+                fork_mass=fork_mass,
+                fork_inertia=fork_inertia,
+                inertia=turning,
+            )
+        wheels.append(
+            WheelBody(
+                name=w.name,
+                type=w.type,
+                hub=hub,
+                drive=delta,
+                axle=(-sd, cd, 0.0),
+                radius=w.radius,
+                width=width,
+                mass=mass,
+                hub_mass=hub_mass,
+                hub_inertia=hub_inertia,
+                friction=friction,
+                driven=driven,
+                motor=motor,
+                rollers=rollers,
+                steering=steering,
+                fields=tuple(sorted(given.given)),
+            )
+        )
+    chassis = Chassis(
+        shape,
+        centre,
+        tuple(float(s) for s in size),
+        chassis_mass,
+        (float(com[0]), float(com[1]), float(com[2])),
+        chassis_inertia,
+    )
+    return PhysicalRobot(
+        name=robot.name,
+        chassis=chassis,
+        wheels=tuple(wheels),
+        gravity=GRAVITY,
+        mass=total,
+        com=(float(robot_com[0]), float(robot_com[1]), float(robot_com[2])),
+        support_margin=support_margin(contacts, robot_com[:2]),
+    )

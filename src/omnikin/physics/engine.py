@@ -1,0 +1,324 @@
+"""A robot stepped in MuJoCo: :class:`PhysicsSim` (extra ``physics``).
+
+The model is the MJCF of :mod:`omnikin.physics.mjcf`. The simulation
+
+- **settles** the robot at the start: it is put down with its lowest roller (or tyre) on the
+  floor, held with zero wheel commands until the contacts have taken its weight (the chassis
+  stops moving vertically), then moved back to the start pose with zero velocity, so the run
+  starts at rest without a bounce; the clock and the encoders start there at zero;
+- takes **wheel commands** (:meth:`PhysicsSim.command`): speeds [rad/s] of the rolling wheels in
+  file order (as :meth:`omnikin.model.Robot.ik` returns them; entries of passive wheels are
+  ignored) and steering angles [rad] of the steerable wheels. A command is reached through a
+  **ramp**: each step the servo set-point moves towards it by at most the motor's acceleration
+  limit times the step (:class:`~omnikin.physics.description.Motor`; why: a step command asks
+  for an infinite acceleration, the servo saturates at the torque limit and the wheel spins
+  on the floor), steering by at most its rate limit. Speeds beyond a motor's limit are held at
+  the limit and steering angles beyond their wheel's limits at the limit, as the hardware does;
+- reads **encoders** from the wheel joint angles, quantised to whole ticks of each encoder
+  (``ticks_per_rev`` and ``gear_ratio``, sign of ``invert``) and wrapped like the hardware
+  counter when the encoder has ``counter_bits``
+  (:func:`omnikin.simulation.simulate.counter_output`);
+- gives the **ground truth**: pose ``(x, y, theta)`` of the chassis (its frame is the robot's
+  body frame; ``theta`` counted continuously, not wrapped) and body twist ``(vx, vy, omega)``
+  of ``docs/conventions.md``, from MuJoCo's ``mj_objectVelocity`` for the chassis *frame*
+  (``mjOBJ_XBODY``; ``mjOBJ_BODY`` would give the velocity of its centre of mass), rotated
+  from world axes into the body's heading.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import InputError, OmnikinError, shorten
+from ..geometry import wrap_angle
+from ..model import Robot
+from ..simulation.simulate import counter_output
+from .description import PhysicalRobot, describe
+from .mjcf import DEFAULT_STEP, mjcf
+
+SETTLE_MIN = 0.05
+"""Shortest settling time [s] at the start."""
+SETTLE_MAX = 2.0
+"""Longest settling time [s]: a robot still moving then is reported as unable to stand."""
+SETTLE_SPEED = 1e-4
+"""Vertical speed [m/s] and tilt rate [rad/s] of the chassis below which it has settled."""
+UNWRAP_CHUNK = 10
+"""Steps between two updates of the continuous heading: below pi per chunk up to 150 rad/s at 2 ms."""
+
+
+class PhysicsError(OmnikinError, RuntimeError):
+    """The physics simulation failed while running (it diverged, or the robot cannot stand)."""
+
+
+def _mujoco():
+    try:
+        import mujoco
+    except ImportError as e:  # pragma: no cover - the extra is installed wherever tests run
+        raise InputError(f"the physics engine needs MuJoCo: pip install 'omnikin[physics]' ({e})") from None
+    return mujoco
+
+
+def _yaw(xmat: np.ndarray) -> float:
+    """Heading [rad] of a body's x axis projected on the floor, from its 3x3 rotation (row-major)."""
+    return math.atan2(xmat[3], xmat[0])
+
+
+class PhysicsSim:
+    """``robot`` as a MuJoCo model, settled at ``start`` ``(x, y, theta)`` [m, m, rad], stepped
+    at ``step`` [s] (module docstring). ``description``: a physical description of ``robot``
+    (default :func:`~omnikin.physics.description.describe`)."""
+
+    def __init__(
+        self,
+        robot: Robot,
+        *,
+        start=(0.0, 0.0, 0.0),
+        step: float = DEFAULT_STEP,
+        description: PhysicalRobot | None = None,
+    ):
+        mujoco = _mujoco()
+        self._mj = mujoco
+        self.robot = robot
+        self.description = description if description is not None else describe(robot)
+        if self.description.support_margin <= 0.0:
+            raise InputError(
+                f"robot {robot.name!r} cannot stand: its centre of mass lies "
+                f"{-self.description.support_margin:.3g} m outside the polygon of its wheels' contact points"
+            )
+        start = np.asarray(start, dtype=float)
+        if start.shape != (3,) or not np.all(np.isfinite(start)):
+            raise InputError(f"start pose must be 3 finite numbers (x, y, theta), got {shorten(start.tolist())}")
+        self.xml = mjcf(self.description, step)
+        self.model = mujoco.MjModel.from_xml_string(self.xml)
+        self.data = mujoco.MjData(self.model)
+        self.step_size = float(self.model.opt.timestep)
+        m = self.model
+
+        def joint(name: str) -> int:
+            return mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
+
+        def actuator(name: str) -> int:
+            return mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, name)
+
+        wheels = {w.name: w for w in self.description.wheels}
+        rolling = robot.rolling_names
+        self._wheel_qpos = np.array([m.jnt_qposadr[joint(n)] for n in rolling])
+        self._wheel_dof = np.array([m.jnt_dofadr[joint(n)] for n in rolling])
+        driven = [i for i, n in enumerate(rolling) if wheels[n].driven]
+        self._driven = np.array(driven, dtype=int)
+        self._drive_ctrl = np.array([actuator(rolling[i]) for i in driven], dtype=int)
+        motors = [wheels[rolling[i]].motor for i in driven]
+        self._max_speed = np.array([mo.max_speed for mo in motors if mo is not None])
+        self._speed_step = np.array([mo.max_accel * self.step_size for mo in motors if mo is not None])
+        self._integral_gain = np.array([self.step_size / mo.integral_time for mo in motors if mo is not None])
+        self._windup = np.array([mo.max_torque / mo.gain for mo in motors if mo is not None])
+        self._drive_dof = self._wheel_dof[self._driven]
+        steer = robot.steer_names
+        self._steer_qpos = np.array([m.jnt_qposadr[joint(f"{n}_steer")] for n in steer], dtype=int)
+        self._steer_ctrl = np.array([actuator(f"{n}_steer") for n in steer], dtype=int)
+        steerings = [wheels[n].steering for n in steer]
+        self._steer_step = np.array([s.max_rate * self.step_size for s in steerings if s is not None])
+        self._steer_limits = [s.limits for s in steerings if s is not None]
+        self._steer_gain = np.array([self.step_size / s.integral_time for s in steerings if s is not None])
+        self._steer_windup = np.array([s.max_torque / s.stiffness for s in steerings if s is not None])
+        self._steer_integral = np.zeros(len(steer))
+        self._chassis = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "chassis")
+        self._free = m.jnt_qposadr[joint("chassis:free")]
+        self._free_dof = m.jnt_dofadr[joint("chassis:free")]
+        encoded = robot.encoded_names
+        self._encoded = np.array(robot.rolling_index(encoded), dtype=int)
+        self._rad_per_tick = robot.rad_per_tick(encoded) if encoded else np.zeros(0)
+        self._bits = [robot.wheel(n).encoder.counter_bits for n in encoded]  # type: ignore[union-attr]
+
+        self._speed_target = np.zeros(len(driven))
+        self._speed_set = np.zeros(len(driven))
+        self._integral = np.zeros(len(driven))
+        self._ramping = False
+        self._steer_target = np.zeros(len(steer))
+        self._steer_set = np.zeros(len(steer))
+        self._velocity = np.zeros(6)
+        self._settle(start)
+
+    # --- start ---------------------------------------------------------------------------------
+    def _settle(self, start: np.ndarray) -> None:
+        """Let the robot take its weight, then put it back at ``start`` at rest (module docstring)."""
+        mj, m, d = self._mj, self.model, self.data
+        mj.mj_forward(m, d)
+        settled = False
+        steps_min = max(1, round(SETTLE_MIN / self.step_size))
+        for k in range(round(SETTLE_MAX / self.step_size)):
+            mj.mj_step(m, d)
+            v = d.qvel[self._free_dof : self._free_dof + 6]
+            if k >= steps_min and abs(v[2]) < SETTLE_SPEED and abs(v[3]) < SETTLE_SPEED and abs(v[4]) < SETTLE_SPEED:
+                settled = True
+                break
+        self._check()
+        if not settled:
+            raise PhysicsError(
+                f"robot {self.robot.name!r} did not come to rest on the floor within {SETTLE_MAX:g} s "
+                f"(it tips over or bounces)"
+            )
+        q = d.qpos[self._free : self._free + 7]
+        yaw = _yaw(d.xmat[self._chassis])
+        turn = float(start[2]) - yaw
+        q[0], q[1] = start[0], start[1]  # the body origin to the start, turned about it by `turn`
+        spin = np.array([math.cos(turn / 2.0), 0.0, 0.0, math.sin(turn / 2.0)])
+        quat = np.empty(4)
+        mj.mju_mulQuat(quat, spin, q[3:7].copy())
+        q[3:7] = quat
+        d.qvel[:] = 0.0
+        d.qacc_warmstart[:] = 0.0
+        d.time = 0.0
+        mj.mj_forward(m, d)
+        self._zero = d.qpos[self._wheel_qpos].copy()
+        self._heading = float(start[2])
+        self._last_yaw = _yaw(d.xmat[self._chassis])
+        self._steps = 0
+
+    # --- commands ---------------------------------------------------------------------------------
+    def command(self, wheel_speeds, steer=None) -> None:
+        """Set the wheel speeds [rad/s] of the rolling wheels (file order) and, for steerable
+        wheels, the steering angles [rad]; reached through the ramp (module docstring)."""
+        speeds = np.asarray(wheel_speeds, dtype=float)
+        n = len(self.robot.rolling)
+        if speeds.shape != (n,) or not np.all(np.isfinite(speeds)):
+            raise InputError(
+                f"robot {self.robot.name!r}: expected {n} finite wheel speeds [rad/s] (rolling wheels "
+                f"{shorten(self.robot.rolling_names)}), got {shorten(np.asarray(wheel_speeds).tolist())}"
+            )
+        self._speed_target = np.clip(speeds[self._driven], -self._max_speed, self._max_speed)
+        self._ramping = self.ramping
+        if steer is None:
+            return
+        angles = np.asarray(steer, dtype=float)
+        k = len(self._steer_ctrl)
+        if angles.shape != (k,) or not np.all(np.isfinite(angles)):
+            raise InputError(
+                f"robot {self.robot.name!r}: expected {k} finite steering angles [rad] "
+                f"(steerable wheels {shorten(self.robot.steer_names)}), got {shorten(np.asarray(steer).tolist())}"
+            )
+        for i, limits in enumerate(self._steer_limits):
+            if limits is None:  # turns all the way round: the nearest turn of the angle
+                angles[i] = self._steer_set[i] + wrap_angle(float(angles[i] - self._steer_set[i]))
+            else:
+                angles[i] = min(max(angles[i], limits[0]), limits[1])
+        self._steer_target = angles
+        self._ramping = self.ramping
+
+    @property
+    def ramping(self) -> bool:
+        """True while a set-point has not reached its command."""
+        return not (
+            np.array_equal(self._speed_set, self._speed_target) and np.array_equal(self._steer_set, self._steer_target)
+        )
+
+    # --- stepping ----------------------------------------------------------------------------------
+    def step(self, n: int = 1) -> None:
+        """Advance ``n`` time steps."""
+        mj, m, d = self._mj, self.model, self.data
+        for _ in range(int(n)):
+            self._control()
+            mj.mj_step(m, d)
+            self._steps += 1
+            if self._steps % UNWRAP_CHUNK == 0:
+                self._track_heading()
+        self._track_heading()
+        self._check()
+
+    def advance(self, t: float) -> None:
+        """Step until the simulation time reaches ``t`` [s] (to the nearest step)."""
+        t = float(t)
+        if not math.isfinite(t):
+            raise InputError(f"advance: time must be finite, got {t!r}")
+        n = round((t - self.time) / self.step_size)
+        if n > 0:
+            self.step(n)
+
+    def _control(self) -> None:
+        """One step of the ramps and of the wheels' PI speed controllers (module docstring)."""
+        d = self.data
+        if self._ramping:
+            self._speed_set += np.clip(self._speed_target - self._speed_set, -self._speed_step, self._speed_step)
+            if len(self._steer_ctrl):
+                self._steer_set += np.clip(self._steer_target - self._steer_set, -self._steer_step, self._steer_step)
+            self._ramping = self.ramping
+        error = self._speed_set - d.qvel[self._drive_dof]
+        self._integral = np.clip(self._integral + error * self._integral_gain, -self._windup, self._windup)
+        d.ctrl[self._drive_ctrl] = self._speed_set + self._integral
+        if len(self._steer_ctrl):
+            error = self._steer_set - d.qpos[self._steer_qpos]
+            self._steer_integral = np.clip(
+                self._steer_integral + error * self._steer_gain, -self._steer_windup, self._steer_windup
+            )
+            d.ctrl[self._steer_ctrl] = self._steer_set + self._steer_integral
+
+    def _track_heading(self) -> None:
+        yaw = _yaw(self.data.xmat[self._chassis])
+        self._heading += wrap_angle(yaw - self._last_yaw)
+        self._last_yaw = yaw
+
+    def _check(self) -> None:
+        """Refuse to go on after MuJoCo found the state not finite (it then resets the state and
+        counts a warning) or the state is not finite."""
+        d, warnings = self.data, self._mj.mjtWarning
+        bad = sum(
+            d.warning[w].number for w in (warnings.mjWARN_BADQACC, warnings.mjWARN_BADQPOS, warnings.mjWARN_BADQVEL)
+        )
+        if bad or not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
+            raise PhysicsError(
+                f"robot {self.robot.name!r}: the physics simulation diverged at t = {d.time:.4g} s "
+                f"(try a smaller time step)"
+            )
+
+    # --- readings ------------------------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        """Simulation time [s] since the end of settling."""
+        return float(self.data.time)
+
+    @property
+    def pose(self) -> np.ndarray:
+        """Ground-truth pose ``(x, y, theta)`` [m, m, rad] of the body frame; ``theta`` continuous."""
+        q = self.data.qpos[self._free : self._free + 3]
+        self._track_heading()
+        return np.array([q[0], q[1], self._heading])
+
+    @property
+    def height(self) -> float:
+        """Height [m] of the body frame's origin above the floor (0 in the design; the contacts sink)."""
+        return float(self.data.qpos[self._free + 2])
+
+    @property
+    def twist(self) -> np.ndarray:
+        """Ground-truth body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] (module docstring)."""
+        mj = self._mj
+        mj.mj_objectVelocity(self.model, self.data, mj.mjtObj.mjOBJ_XBODY, self._chassis, self._velocity, 0)
+        w, v = self._velocity[:3], self._velocity[3:]
+        yaw = _yaw(self.data.xmat[self._chassis])
+        c, s = math.cos(yaw), math.sin(yaw)
+        return np.array([c * v[0] + s * v[1], -s * v[0] + c * v[1], w[2]])
+
+    @property
+    def wheel_angles(self) -> np.ndarray:
+        """Angles [rad] of the rolling wheels (file order) since the start."""
+        return self.data.qpos[self._wheel_qpos] - self._zero
+
+    @property
+    def wheel_speeds(self) -> np.ndarray:
+        """Speeds [rad/s] of the rolling wheels (file order)."""
+        return self.data.qvel[self._wheel_dof].copy()
+
+    @property
+    def steer_angles(self) -> np.ndarray:
+        """Steering angles [rad] of the steerable wheels (file order), relative to their mounting
+        drive direction, wrapped to ``[-pi, pi)``."""
+        return wrap_angle(self.data.qpos[self._steer_qpos])
+
+    def encoder_ticks(self) -> np.ndarray:
+        """Encoder readings of the encoded wheels (file order): whole ticks
+        ``round(angle / rad_per_tick)``, wrapped modulo ``2**counter_bits`` where the encoder has
+        a counter width (unsigned, as the hardware register holds them)."""
+        counts = np.rint(self.wheel_angles[self._encoded] / self._rad_per_tick).astype(np.int64)
+        return counter_output(counts, self._bits)

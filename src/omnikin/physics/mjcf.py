@@ -1,0 +1,208 @@
+"""MuJoCo's XML model (MJCF) of a physical description (:mod:`omnikin.physics.description`).
+
+:func:`mjcf` writes the text with :mod:`xml.etree.ElementTree` (every value an attribute, so
+names and numbers are escaped by the writer, never pasted into markup); it does not need
+``mujoco``. The model:
+
+- ``<option>``: the ``implicitfast`` integrator (velocity-dependent forces, here the speed
+  servos, integrated implicitly: stable at any servo gain), time step 2 ms by default,
+  elliptic friction cones (isotropic friction: a pyramid would favour its edge directions);
+- a floor plane and one free body ``chassis`` whose frame is the robot's body frame with its
+  origin on the floor, so the chassis pose is the robot's pose;
+- per wheel a body ``NAME:wheel`` (frame: x along the drive direction, y along the axle) with
+  a hinge joint ``NAME`` about its axle; standard wheels and castors roll on a tyre that is an
+  ellipsoid of revolution about the axle (semi-axes ``r``, ``width / 2``, ``r``: exactly round
+  in the wheel plane, rounded across it), which touches the floor in one point in the wheel's
+  mid-plane as the kinematics assumes (a cylinder touches it at both rim edges, which slide
+  against each other whenever the wheel turns about a vertical axis, and then transmits no
+  drive force without slipping by about ``omega width / 2``: a differential drive turning on
+  the spot lost 11 % of its rate that way); Swedish wheels on ellipsoid rollers
+  ``NAME:roller:ROW:K``, each a body with a free hinge joint of the same name about its spin
+  axis; steered wheels and castors hang from a fork body
+  ``NAME:fork`` with a vertical hinge joint ``NAME_steer`` through the steering axis;
+- actuators: a velocity servo ``NAME`` on each driven wheel (``kv`` the servo gain,
+  ``forcerange`` the motor torque, ``ctrlrange`` the speed limit) and a position servo
+  ``NAME_steer`` on each steering joint of a steerable wheel (castors swivel freely);
+- contacts only between the wheels (tyres, rollers) and the floor (``contype``/``conaffinity``
+  bits: the robot's parts never collide with each other, so rollers may overlap their hub; the
+  chassis is drawn only: MuJoCo 4.0.0 reports a false contact tens of millimetres deep between
+  a plane and a cylinder standing exactly upright on it when rounding leaves 1e-17 in its
+  rotation matrix, which launched the robot into the air), three friction
+  dimensions (``condim 3``: sliding in the plane, no torsional or rolling friction), the
+  wheel's friction coefficient (MuJoCo takes the larger of two geoms' coefficients: the floor's
+  is 0) and a contact softness of :data:`CONTACT_SOLREF`.
+
+Names: wheel names are letters, digits and underscores (``omnikin.wheels.NAME_PATTERN``); the
+names MuJoCo needs to be unique get a suffix with ``:``, which no wheel name holds, so a wheel
+called ``chassis`` or ``w1_roller`` cannot collide with anything generated. Joint and actuator
+names of the wheels and steering joints are those of ROS ``joint_states`` (``NAME``,
+``NAME_steer``).
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+from ..errors import InputError, shorten
+from ..model import Robot
+from .description import PhysicalRobot, WheelBody, describe
+
+DEFAULT_STEP = 0.002
+"""Time step [s]: 500 Hz resolves the contact dynamics of rollers a few millimetres thick."""
+STEP_RANGE = (1e-5, 0.004)
+"""Time steps [s] :func:`mjcf` accepts: the contacts' time constant (:data:`CONTACT_SOLREF`) must
+stay at least twice the step."""
+CONTACT_SOLREF = (0.004, 1.0)
+"""Contact time constant [s] and damping ratio: critically damped, stiff enough that the wheels
+sink less than 0.1 % of their radius under the robot's weight (the sinking shortens the
+rolling radius, so it is a kinematic error), and no shorter than twice the time step, below
+which MuJoCo's soft contacts lose their meaning."""
+CONTACT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
+"""Contact impedance: at rest (penetration beyond 1 mm) 99 % of the constraint is enforced."""
+ROBOT_BITS = (2, 1)
+"""``contype``, ``conaffinity`` of the robot's geoms: they collide with the floor only."""
+FLOOR_BITS = (1, 2)
+"""``contype``, ``conaffinity`` of the floor."""
+VISUAL_GROUP = 1
+"""Geom group of the parts that are drawn but never touch anything (hubs of Swedish wheels, forks)."""
+
+
+def _num(x: float) -> str:
+    return format(float(x), ".15g")
+
+
+def _vec(values) -> str:
+    return " ".join(_num(v) for v in values)
+
+
+def _sub(parent: ET.Element, tag: str, **attrs) -> ET.Element:
+    return ET.SubElement(parent, tag, {k: v for k, v in attrs.items() if v is not None})
+
+
+def _contact(geom: ET.Element, friction: float) -> None:
+    geom.set("contype", str(ROBOT_BITS[0]))
+    geom.set("conaffinity", str(ROBOT_BITS[1]))
+    geom.set("condim", "3")
+    geom.set("friction", _vec((friction, 0.0, 0.0)))
+    geom.set("solref", _vec(CONTACT_SOLREF))
+    geom.set("solimp", _vec(CONTACT_SOLIMP))
+
+
+def _visual(geom: ET.Element) -> None:
+    geom.set("contype", "0")
+    geom.set("conaffinity", "0")
+    geom.set("group", str(VISUAL_GROUP))
+
+
+def _inertial(body: ET.Element, mass: float, diag, pos=(0.0, 0.0, 0.0)) -> None:
+    _sub(body, "inertial", pos=_vec(pos), mass=_num(mass), diaginertia=_vec(diag))
+
+
+def _wheel(parent: ET.Element, wheel: WheelBody, pos, yaw: float | None) -> None:
+    """The wheel body of ``wheel`` at ``pos`` in ``parent`` (turned by ``yaw`` about z)."""
+    body = _sub(
+        parent, "body", name=f"{wheel.name}:wheel", pos=_vec(pos), euler=None if yaw is None else _vec((0, 0, yaw))
+    )
+    axle, across = wheel.hub_inertia
+    _inertial(body, wheel.hub_mass, (across, axle, across))
+    _sub(body, "joint", name=wheel.name, type="hinge", axis="0 1 0")
+    rollers = wheel.rollers
+    if rollers is None:
+        tyre = _sub(body, "geom", name=f"{wheel.name}:tyre", type="ellipsoid")
+        tyre.set("size", _vec((wheel.radius, wheel.width / 2.0, wheel.radius)))
+        tyre.set("mass", "0")
+        _contact(tyre, wheel.friction)
+        return
+    hub = _sub(body, "geom", name=f"{wheel.name}:hub", type="cylinder", zaxis="0 1 0")
+    hub.set("size", _vec((max(rollers.centre_radius - rollers.radius, 0.2 * wheel.radius), wheel.width / 2.0)))
+    hub.set("mass", "0")
+    _visual(hub)
+    spin, side = rollers.inertia
+    for roller in rollers.rollers:
+        name = f"{wheel.name}:roller:{roller.row}:{roller.index}"
+        rb = _sub(body, "body", name=name, pos=_vec(roller.position), zaxis=_vec(roller.axis))
+        _inertial(rb, rollers.mass, (side, side, spin))
+        _sub(rb, "joint", name=name, type="hinge", axis="0 0 1")
+        geom = _sub(rb, "geom", name=name, type="ellipsoid")
+        geom.set("size", _vec((rollers.radius, rollers.radius, rollers.half_length)))
+        geom.set("mass", "0")
+        _contact(geom, wheel.friction)
+
+
+def _steered(parent: ET.Element, wheel: WheelBody) -> None:
+    """Fork with its vertical steering joint, then the wheel trailing the axis."""
+    steering = wheel.steering
+    assert steering is not None
+    pivot = (steering.pivot[0], steering.pivot[1], wheel.radius)
+    fork = _sub(parent, "body", name=f"{wheel.name}:fork", pos=_vec(pivot), euler=_vec((0, 0, wheel.drive)))
+    _inertial(fork, steering.fork_mass, steering.fork_inertia)
+    joint = _sub(fork, "joint", name=f"{wheel.name}_steer", type="hinge", axis="0 0 1")
+    if steering.limits is not None:
+        joint.set("range", _vec(steering.limits))
+    size = max(wheel.radius / 4.0, 1e-3)
+    stem = _sub(fork, "geom", name=f"{wheel.name}:fork", type="box", size=_vec((size, size / 2.0, size / 2.0)))
+    stem.set("pos", _vec((-steering.trail / 2.0, 0.0, wheel.radius)))
+    stem.set("mass", "0")
+    _visual(stem)
+    _wheel(fork, wheel, (-steering.trail, 0.0, 0.0), None)
+
+
+def mjcf(robot: PhysicalRobot | Robot, step: float = DEFAULT_STEP) -> str:
+    """The MJCF text of ``robot`` (a description, or a robot to :func:`describe`; module
+    docstring) with time step ``step`` [s] (:data:`STEP_RANGE`)."""
+    if isinstance(robot, Robot):
+        robot = describe(robot)
+    if isinstance(step, bool) or not isinstance(step, (int, float)) or not STEP_RANGE[0] <= step <= STEP_RANGE[1]:
+        raise InputError(f"time step must be a number in [{STEP_RANGE[0]:g}, {STEP_RANGE[1]:g}] s, got {shorten(step)}")
+    root = ET.Element("mujoco", model=robot.name)
+    _sub(root, "compiler", angle="radian", autolimits="true", inertiafromgeom="false")
+    option = _sub(root, "option", timestep=_num(step), integrator="implicitfast", cone="elliptic")
+    option.set("gravity", _vec((0.0, 0.0, -robot.gravity)))
+    asset = _sub(root, "asset")
+    _sub(asset, "texture", name="floor", type="2d", builtin="checker", width="512", height="512")
+    asset[-1].set("rgb1", "0.82 0.82 0.8")
+    asset[-1].set("rgb2", "0.72 0.72 0.7")
+    _sub(asset, "material", name="floor", texture="floor", texrepeat="4 4", texuniform="true")
+
+    world = _sub(root, "worldbody")
+    _sub(world, "light", name="sun", directional="true", pos="0 0 5", dir="0 0 -1")
+    floor = _sub(world, "geom", name="floor", type="plane", size="0 0 0.1", material="floor")
+    floor.set("contype", str(FLOOR_BITS[0]))
+    floor.set("conaffinity", str(FLOOR_BITS[1]))
+    floor.set("friction", "0 0 0")
+    floor.set("solref", _vec(CONTACT_SOLREF))
+    floor.set("solimp", _vec(CONTACT_SOLIMP))
+
+    lift = max(0.0, max(w.reach - w.radius for w in robot.wheels))
+    chassis = _sub(world, "body", name="chassis", pos=_vec((0.0, 0.0, lift)))
+    _sub(chassis, "freejoint", name="chassis:free")
+    c = robot.chassis
+    _inertial(chassis, c.mass, c.inertia, c.com)
+    plate = _sub(chassis, "geom", name="chassis", type=c.shape, pos=_vec(c.centre), size=_vec(c.size))
+    plate.set("mass", "0")
+    plate.set("rgba", "0.3 0.45 0.65 1")
+    _visual(plate)  # MuJoCo 4.0's plane-cylinder test finds a deep false contact under a level cylinder
+    for wheel in robot.wheels:
+        if wheel.steering is not None:
+            _steered(chassis, wheel)
+        else:
+            _wheel(chassis, wheel, wheel.hub, wheel.drive)
+
+    actuators = _sub(root, "actuator")
+    for wheel in robot.wheels:
+        motor = wheel.motor
+        if motor is not None:
+            servo = _sub(actuators, "velocity", name=wheel.name, joint=wheel.name, kv=_num(motor.gain))
+            servo.set("forcerange", _vec((-motor.max_torque, motor.max_torque)))
+            servo.set("ctrlrange", _vec((-motor.max_speed, motor.max_speed)))
+    for wheel in robot.steered:
+        steering = wheel.steering
+        assert steering is not None
+        name = f"{wheel.name}_steer"
+        servo = _sub(actuators, "position", name=name, joint=name, kp=_num(steering.stiffness))
+        servo.set("kv", _num(steering.damping))
+        servo.set("forcerange", _vec((-steering.max_torque, steering.max_torque)))
+        if steering.limits is not None:
+            servo.set("ctrlrange", _vec(steering.limits))
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode") + "\n"
