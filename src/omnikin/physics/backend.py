@@ -1,0 +1,120 @@
+"""The physics wheel back-end of the runtime: the robot as built, in MuJoCo (:class:`PhysicsBackend`).
+
+It implements :class:`omnikin.runtime.backends.WheelBackend` as a drop-in for the kinematic
+:class:`omnikin.simulation.backend.SimBackend` (same constructor shape, same ``truth``): wheel
+commands go to the driven wheels' motors of :class:`~omnikin.physics.engine.PhysicsSim`
+(ramped, torque-limited; zero-order hold between calls), the model is stepped up to each call's
+time, and the encoders are read from the wheel joints. Slip, wheel dynamics and roller contact
+come from the physics, so there is no noise model; ``quantise`` switches the tick
+quantisation off.
+
+Readings as the runtime's driver would give them: the encoder of the robot *as built*
+(``true_robot``) counts whole ticks of its wheel's angle, and the driver converts them with the
+*nominal* robot's scale, ``position = ticks * rad_per_tick`` [rad] (the same scale error a
+real driver makes when the file's ``ticks_per_rev`` or ``gear_ratio`` is wrong); speeds are the
+joint speeds converted with the same ratio. The clock starts at the first call, as in
+``SimBackend``; calls with a time not after the last one move nothing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError, shorten
+from ..geometry import wrap_angle
+from ..model import Robot, require_same_wheels
+from ..runtime.backends import WheelState
+from .engine import PhysicsSim
+from .mjcf import DEFAULT_STEP
+
+
+class PhysicsBackend:
+    """The robot as built (``true_robot``, default ``robot``), simulated in MuJoCo from ``start``
+    ``(x, y, theta)`` at time step ``step`` [s] (module docstring). ``truth`` is its true pose
+    (heading wrapped to ``[-pi, pi)``, as ``SimBackend``'s); ``sim`` the simulation itself."""
+
+    def __init__(
+        self,
+        robot: Robot,
+        true_robot: Robot | None = None,
+        *,
+        start=(0.0, 0.0, 0.0),
+        step: float = DEFAULT_STEP,
+        quantise: bool = True,
+    ):
+        self.robot = robot
+        self.true_robot = true_robot or robot
+        require_same_wheels(robot, self.true_robot)
+        self.encoded = robot.encoded_names
+        if not self.encoded:
+            raise InputError(f"robot {robot.name!r}: the physics back-end needs encoded (driven) wheels")
+        self.sim = PhysicsSim(self.true_robot, start=start, step=step)
+        self.quantise = bool(quantise)
+        true = self.true_robot
+        self._order = np.array([robot.rolling_index([n])[0] for n in true.rolling_names], dtype=int)
+        self._steer_order = np.array([robot.steer_names.index(n) for n in true.steer_names], dtype=int)
+        self._encoded = np.array(true.rolling_index(self.encoded), dtype=int)
+        true_scale = true.rad_per_tick(self.encoded)
+        self._true_rpt = true_scale
+        self._scale = robot.rad_per_tick(self.encoded) / true_scale
+        self._steer: np.ndarray | None = np.zeros(len(robot.steerable)) if robot.steerable else None
+        self._t0: float | None = None
+        self.writes = 0
+        self.reads = 0
+
+    @property
+    def truth(self) -> np.ndarray:
+        """True pose ``(x, y, theta)`` [m, m, rad] of the robot as built, ``theta`` wrapped."""
+        pose = self.sim.pose
+        pose[2] = wrap_angle(float(pose[2]))
+        return pose
+
+    def write(self, t: float, speeds, steer=None) -> None:
+        speeds = np.asarray(speeds, dtype=float)
+        n = len(self.robot.rolling_names)
+        if speeds.shape != (n,) or not np.all(np.isfinite(speeds)):
+            raise InputError(f"physics back-end: expected {n} finite wheel speeds, got {shorten(speeds.tolist())}")
+        if steer is not None and self._steer is not None:
+            angles = np.asarray(steer, dtype=float)
+            if angles.shape != self._steer.shape or not np.all(np.isfinite(angles)):
+                raise InputError(
+                    f"physics back-end: expected {len(self._steer)} finite steering angles, "
+                    f"got {shorten(angles.tolist())}"
+                )
+            self._steer = angles.copy()
+        self._advance(t)
+        steer_true = None if self._steer is None else self._steer[self._steer_order]
+        self.sim.command(speeds[self._order], steer_true)
+        self.writes += 1
+
+    def read(self, t: float) -> WheelState:
+        self._advance(t)
+        self.reads += 1
+        angles = self.sim.wheel_angles[self._encoded]
+        if self.quantise:
+            positions = np.rint(angles / self._true_rpt) * self._true_rpt * self._scale
+        else:
+            positions = angles * self._scale
+        speeds = self.sim.wheel_speeds[self._encoded] * self._scale
+        steer = None
+        if self._steer is not None:
+            steer = np.empty(len(self._steer))
+            steer[self._steer_order] = self.sim.steer_angles
+        return WheelState(float(t), positions, speeds, steer)
+
+    def _advance(self, t: float) -> None:
+        if self._t0 is None:  # the first call starts the clock
+            self._t0 = float(t)
+            return
+        self.sim.advance(float(t) - self._t0)
+
+    def stats(self) -> dict:
+        return {
+            "backend": "physics",
+            "writes": self.writes,
+            "reads": self.reads,
+            "sim_time": self.sim.time,
+        }
+
+    def close(self) -> None:
+        pass

@@ -1,0 +1,77 @@
+"""The physics back-end (omnikin.physics.backend.PhysicsBackend) as a drop-in for SimBackend:
+the runtime drives it, its odometry follows the physics' ground truth."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mujoco", reason="the physics back-end needs MuJoCo (extra 'physics')")
+
+from omnikin import Encoder, load_robot  # noqa: E402
+from omnikin.errors import InputError  # noqa: E402
+from omnikin.geometry import wrap_angle  # noqa: E402
+from omnikin.physics.backend import PhysicsBackend  # noqa: E402
+from omnikin.runtime.base import BaseRuntime  # noqa: E402
+
+DT = 0.02
+
+
+@pytest.mark.parametrize(
+    "name, twist, tolerance",
+    [
+        ("tomasi-omni3", (0.2, 0.1, 0.5), 0.005),
+        # the car's wheels slip while the steering turns in at the start (the physics, not the model)
+        ("ackermann", (0.4, 0.0, 0.3), 0.015),
+    ],
+)
+def test_the_runtime_drives_the_physics_and_its_odometry_follows_the_truth(name, twist, tolerance):
+    robot = load_robot(name)
+    backend = PhysicsBackend(robot)
+    assert all(callable(getattr(backend, m)) for m in ("write", "read", "stats", "close"))
+    rt = BaseRuntime(robot, backend, cmd_vel_timeout=0.0)
+    rt.command(twist, 0.0)
+    for k in range(151):  # 3 s
+        res = rt.step(k * DT)
+    truth = backend.truth
+    travelled = np.hypot(*truth[:2])
+    assert travelled > 0.5
+    error = np.hypot(*(np.array(rt.pose[:2]) - truth[:2]))
+    assert error < tolerance * travelled  # odometry from the physics' encoders
+    assert abs(wrap_angle(rt.pose[2] - truth[2])) < 0.01
+    assert res.state.t == pytest.approx(3.0)
+    stats = backend.stats()
+    assert stats["backend"] == "physics" and stats["writes"] == stats["reads"] == 151
+    assert stats["sim_time"] == pytest.approx(3.0)
+
+
+def test_positions_are_whole_ticks_of_the_built_encoder_in_the_nominal_scale():
+    robot = load_robot("tomasi-omni3")
+    # as built, the encoders count twice as many ticks per turn as the file says
+    true = replace(robot, wheels=tuple(replace(w, encoder=Encoder(1200)) for w in robot.wheels))
+    backend = PhysicsBackend(robot, true)
+    backend.read(0.0)
+    backend.write(0.0, [3.0, 3.0, 3.0])
+    state = backend.read(1.0)
+    nominal = 2 * math.pi / 600
+    ticks = state.positions / nominal
+    assert ticks == pytest.approx(np.rint(ticks), abs=1e-9)
+    # the driver's scale is the file's: it reads twice the true angle
+    assert state.positions == pytest.approx(2 * backend.sim.wheel_angles, abs=nominal)
+    assert state.velocities == pytest.approx(2 * backend.sim.wheel_speeds)
+    unquantised = PhysicsBackend(robot, quantise=False)
+    unquantised.read(0.0)
+    unquantised.write(0.0, [3.0, 3.0, 3.0])
+    assert unquantised.read(0.5).positions == pytest.approx(unquantised.sim.wheel_angles, abs=1e-15)
+
+
+def test_a_robot_as_built_with_other_wheels_or_bad_commands_is_refused():
+    robot = load_robot("tomasi-omni3")
+    with pytest.raises(InputError, match="does not fit"):
+        PhysicsBackend(robot, load_robot("omni4"))
+    backend = PhysicsBackend(robot)
+    with pytest.raises(InputError, match="expected 3 finite wheel speeds"):
+        backend.write(0.0, [1.0, float("inf"), 0.0])

@@ -1,0 +1,219 @@
+"""The robot stepped in MuJoCo (omnikin.physics.engine.PhysicsSim): rest, the motions of
+Garcia-Sillas et al., commanded against simulated twists, encoders. Expected values come from
+the kinematics (Robot.fk of the commanded wheel speeds) and closed forms, never from the engine.
+
+Tolerances: the twist is compared as ``(vx, vy, l omega)``, ``l`` the largest wheel distance
+from the body origin, so that linear and angular errors weigh alike; averaged over 2 s after
+0.5 s of ramp."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (extra 'physics')")
+
+from omnikin import Encoder, Robot, Wheel, load_robot  # noqa: E402
+from omnikin.errors import InputError  # noqa: E402
+from omnikin.physics.description import describe  # noqa: E402
+from omnikin.physics.engine import PhysicsSim  # noqa: E402
+from omnikin.presets import PRESET_NAMES  # noqa: E402
+
+RAMP = 0.5
+WINDOW = 2.0
+
+
+def lever(robot) -> float:
+    return max(math.hypot(w.x, w.y) for w in robot.wheels)
+
+
+def scaled(robot, twist):
+    t = np.asarray(twist, dtype=float)
+    return np.array([t[0], t[1], lever(robot) * t[2]])
+
+
+def drive(sim: PhysicsSim, speeds, steer=None, every: int = 5):
+    """Command, wait the ramp, then sample the twist and pose over the window."""
+    sim.command(speeds, steer)
+    sim.advance(RAMP)
+    twists, poses = [], [sim.pose]
+    while sim.time < RAMP + WINDOW - 1e-9:
+        sim.step(every)
+        twists.append(sim.twist)
+        poses.append(sim.pose)
+    return np.mean(twists, axis=0), np.array(poses)
+
+
+def relative_error(robot, measured, expected) -> float:
+    return float(
+        np.linalg.norm(scaled(robot, measured) - scaled(robot, expected)) / np.linalg.norm(scaled(robot, expected))
+    )
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_every_preset_loads_and_rests_without_bouncing_or_drifting(name):
+    robot = load_robot(name)
+    sim = PhysicsSim(robot)
+    assert mujoco.MjModel.from_xml_string(sim.xml).nbody == sim.model.nbody
+    assert sim.time == 0.0 and sim.pose == pytest.approx([0, 0, 0], abs=1e-12)
+    heights = []
+    for _ in range(100):  # 2 s
+        sim.step(10)
+        heights.append(sim.height)
+    r = min(w.radius for w in robot.wheels)
+    assert np.ptp(heights) < 1e-5 * r  # no bounce
+    assert abs(np.mean(heights)) < 1e-3 * r  # the contacts sink less than 0.1 % of the radius
+    assert np.hypot(*sim.pose[:2]) < 1e-5 and abs(sim.pose[2]) < 2e-5  # no drift
+    assert np.abs(sim.wheel_angles).max() < 1e-4
+
+
+def test_wheel_one_at_rest_and_the_others_opposite_drive_a_straight_line():
+    """Garcia-Sillas et al., the first motion: wheels 2 and 3 equal and opposite, wheel 1 at rest."""
+    robot = load_robot("tomasi-omni3")
+    speeds = np.array([0.0, 6.0, -6.0])
+    expected = robot.fk(speeds).twist
+    assert abs(expected[2]) < 1e-12 and abs(expected[1]) < 1e-12  # the kinematics: along -x
+    assert expected[0] < 0
+    sim = PhysicsSim(robot)
+    twist, poses = drive(sim, speeds)
+    assert relative_error(robot, twist, expected) < 0.005
+    path = poses[:, :2] - poses[0, :2]
+    heading = path[-1] / np.linalg.norm(path[-1])
+    assert heading == pytest.approx([-1.0, 0.0], abs=0.005)
+    side = path[:, 0] * heading[1] - path[:, 1] * heading[0]
+    assert np.abs(side).max() < 0.005 * np.linalg.norm(path[-1])  # a straight line
+    assert abs(poses[-1, 2] - poses[0, 2]) < 0.005
+
+
+def test_three_equal_wheel_speeds_turn_the_robot_on_the_spot():
+    """Garcia-Sillas et al., the second motion: all three wheels at the same speed."""
+    robot = load_robot("tomasi-omni3")
+    speeds = np.array([5.0, 5.0, 5.0])
+    expected = robot.fk(speeds).twist
+    assert expected[:2] == pytest.approx([0, 0], abs=1e-12)
+    sim = PhysicsSim(robot)
+    twist, poses = drive(sim, speeds)
+    assert relative_error(robot, twist, expected) < 0.005
+    turned = poses[-1, 2] - poses[0, 2]
+    assert turned == pytest.approx(expected[2] * WINDOW, rel=0.005)
+    assert np.hypot(*(poses[:, :2] - poses[0, :2]).T).max() < 1e-3  # the centre stays put
+
+
+@pytest.mark.parametrize("twist", [(0.3, 0.0, 0.0), (0.0, 0.3, 0.0), (0.2, 0.1, 0.4)])
+def test_omni4_follows_the_kinematic_twist(twist):
+    robot = load_robot("omni4")
+    speeds = robot.ik(twist).wheel_speeds
+    measured, _ = drive(PhysicsSim(robot), speeds)
+    assert relative_error(robot, measured, robot.fk(speeds).twist) < 0.005
+
+
+def effective_mecanum(robot, per_row: int):
+    """The robot whose rollers have the angle a mecanum wheel shows on average: the roller axis
+    tilts out of the floor by the wheel angle phi, so the contact cannot slip along a direction
+    with tan(gamma') = tan(gamma) / cos(phi); averaged over the hand-over interval
+    |phi| <= pi / n: k = mean(sec phi) = ln(sec(pi/n) + tan(pi/n)) / (pi/n)."""
+    half = math.pi / per_row
+    k = math.log(1 / math.cos(half) + math.tan(half)) / half
+    return Robot("effective", tuple(replace(w, roller=math.atan(k * math.tan(w.roller))) for w in robot.wheels)), k
+
+
+@pytest.mark.parametrize("twist", [(0.0, 0.3, 0.0), (0.3, 0.0, 0.0), (0.0, 0.0, 1.0)])
+def test_mecanum4_strafes_as_its_inclined_rollers_say(twist):
+    robot = load_robot("mecanum4")
+    rows = describe(robot).wheels[0].rollers
+    assert rows.rows == 1
+    effective, k = effective_mecanum(robot, rows.per_row)
+    speeds = robot.ik(twist).wheel_speeds
+    measured, _ = drive(PhysicsSim(robot), speeds)
+    assert relative_error(robot, measured, effective.fk(speeds).twist) < 0.002
+    if twist[1]:  # strafing: 1/k of the kinematic speed (1.2 % slower with 12 rollers)
+        assert measured[1] == pytest.approx(twist[1] / k, rel=0.002)
+        assert abs(measured[1] - twist[1]) > 0.005 * twist[1]
+
+
+def test_a_differential_drive_does_not_strafe():
+    robot = load_robot("diff-drive")
+    commanded = (0.3, 0.0, 0.6)
+    speeds = robot.ik(commanded).wheel_speeds
+    measured, poses = drive(PhysicsSim(robot), speeds)
+    assert relative_error(robot, measured, commanded) < 0.005
+    assert abs(measured[1]) < 0.005 * commanded[0]  # no sideways motion on the arc
+    # on the spot: turns about the axle's middle
+    sim = PhysicsSim(robot)
+    measured, poses = drive(sim, robot.ik((0.0, 0.0, 1.0)).wheel_speeds)
+    assert measured == pytest.approx([0.0, 0.0, 1.0], abs=0.005)
+    assert np.hypot(*(poses[:, :2] - poses[0, :2]).T).max() < 2e-3
+
+
+def test_steered_robots_follow_their_steering():
+    robot = load_robot("ackermann")
+    ik = robot.ik((0.5, 0.0, 0.4))
+    measured, _ = drive(PhysicsSim(robot), ik.wheel_speeds, ik.steer_angles)
+    assert relative_error(robot, measured, (0.5, 0.0, 0.4)) < 0.005
+
+
+def test_encoder_ticks_are_the_joint_angles_in_whole_ticks():
+    robot = load_robot("tomasi-omni3")
+    sim = PhysicsSim(robot)
+    assert sim.encoder_ticks().tolist() == [0, 0, 0]
+    sim.command([4.0, -3.0, 2.0])
+    sim.advance(1.0)
+    rpt = 2 * math.pi / 600
+    ticks = sim.encoder_ticks()
+    assert ticks.dtype == np.int64
+    assert np.abs(ticks * rpt - sim.wheel_angles).max() <= rpt / 2
+    # about the commanded turns (the ramp takes a few ms)
+    assert ticks * rpt == pytest.approx([4.0, -3.0, 2.0], rel=0.02)
+
+
+def test_encoder_counters_wrap_and_invert_like_the_hardware():
+    robot = load_robot("tomasi-omni3")
+    wheels = [replace(w, encoder=Encoder(600, counter_bits=8, invert=(i == 1))) for i, w in enumerate(robot.wheels)]
+    sim = PhysicsSim(replace(robot, wheels=tuple(wheels)))
+    sim.command([6.0, 6.0, -6.0])
+    sim.advance(0.5)
+    counts = np.rint(sim.wheel_angles / (2 * math.pi / 600) * np.array([1, -1, 1])).astype(np.int64)
+    assert np.abs(counts).min() > 256  # the counters did wrap
+    assert sim.encoder_ticks().tolist() == (counts % 256).tolist()
+
+
+def test_a_step_command_is_ramped_at_the_motors_acceleration_limit():
+    robot = load_robot("tomasi-omni3")
+    sim = PhysicsSim(robot)
+    accel = describe(robot).wheels[0].motor.max_accel
+    sim.command([20.0, 20.0, 20.0])
+    sim.step(10)
+    assert np.abs(sim.wheel_speeds).max() <= accel * sim.time * 1.05
+    sim.advance(0.5)
+    assert sim.wheel_speeds == pytest.approx([20.0] * 3, rel=1e-3)
+
+
+def test_the_simulation_starts_settled_at_the_start_pose():
+    robot = load_robot("diff-drive")
+    sim = PhysicsSim(robot, start=(1.0, -2.0, 2.5))
+    assert sim.pose == pytest.approx([1.0, -2.0, 2.5], abs=1e-12)
+    sim.command(robot.ik((0.2, 0.0, 0.0)).wheel_speeds)
+    sim.advance(1.0)
+    moved = sim.pose[:2] - np.array([1.0, -2.0])
+    assert moved / np.linalg.norm(moved) == pytest.approx([math.cos(2.5), math.sin(2.5)], abs=2e-3)
+
+
+def test_wrong_commands_and_robots_that_cannot_stand_are_refused():
+    robot = load_robot("ackermann")
+    sim = PhysicsSim(robot)
+    with pytest.raises(InputError, match="expected 4 finite wheel speeds"):
+        sim.command([1.0, 1.0])
+    with pytest.raises(InputError, match="expected 2 finite steering angles"):
+        sim.command([1.0] * 4, [0.1, float("nan")])
+    segway = Robot(
+        "segway",
+        (
+            Wheel("left", "standard", 0.0, 0.2, 0.0, 0.1, encoder=Encoder(100)),
+            Wheel("right", "standard", 0.0, -0.2, 0.0, 0.1, encoder=Encoder(100)),
+        ),
+    )
+    with pytest.raises(InputError, match="cannot stand"):
+        PhysicsSim(segway)
