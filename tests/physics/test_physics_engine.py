@@ -65,7 +65,7 @@ def test_every_preset_loads_and_rests_without_bouncing_or_drifting(name):
         heights.append(sim.height)
     r = min(w.radius for w in robot.wheels)
     assert np.ptp(heights) < 1e-5 * r  # no bounce
-    assert abs(np.mean(heights)) < 1e-3 * r  # the contacts sink less than 0.1 % of the radius
+    assert abs(np.mean(heights)) < 1e-3 * r  # at its design height, within 0.1 % of the radius
     assert np.hypot(*sim.pose[:2]) < 1e-5 and abs(sim.pose[2]) < 2e-5  # no drift
     assert np.abs(sim.wheel_angles).max() < 1e-4
 
