@@ -13,7 +13,11 @@ The model is the MJCF of :mod:`omnikin.physics.mjcf`. The simulation
   limit times the step (:class:`~omnikin.physics.description.Motor`; why: a step command asks
   for an infinite acceleration, the servo saturates at the torque limit and the wheel spins
   on the floor), steering by at most its rate limit. Speeds beyond a motor's limit are held at
-  the limit and steering angles beyond their wheel's limits at the limit, as the hardware does;
+  the limit and steering angles beyond their wheel's limits at the limit, as the hardware does.
+  Each step the engine closes the integral part of the PI controllers: the velocity servo of a
+  wheel (MuJoCo's ``velocity`` actuator, the proportional part, integrated implicitly) gets the
+  set-point plus ``z``, ``dz/dt = (set-point - speed) / integral_time``, ``|z|`` at most the
+  speed error at which the motor gives its full torque; the steering servos likewise on angles;
 - reads **encoders** from the wheel joint angles, quantised to whole ticks of each encoder
   (``ticks_per_rev`` and ``gear_ratio``, sign of ``invert``) and wrapped like the hardware
   counter when the encoder has ``counter_bits``
@@ -56,7 +60,7 @@ def _mujoco():
     try:
         import mujoco
     except ImportError as e:  # pragma: no cover - the extra is installed wherever tests run
-        raise InputError(f"the physics engine needs MuJoCo: pip install 'omnikin[physics]' ({e})") from None
+        raise InputError(f'the physics engine needs MuJoCo: pip install "omnikin[physics]" ({e})') from None
     return mujoco
 
 
@@ -82,6 +86,11 @@ class PhysicsSim:
         self._mj = mujoco
         self.robot = robot
         self.description = description if description is not None else describe(robot)
+        if [w.name for w in self.description.wheels] != robot.wheel_names:
+            raise InputError(
+                f"robot {robot.name!r}: the physical description has wheels "
+                f"{shorten([w.name for w in self.description.wheels])}, the robot {shorten(robot.wheel_names)}"
+            )
         if self.description.support_margin <= 0.0:
             raise InputError(
                 f"robot {robot.name!r} cannot stand: its centre of mass lies "
@@ -216,7 +225,9 @@ class PhysicsSim:
 
     # --- stepping ----------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
-        """Advance ``n`` time steps."""
+        """Advance ``n`` time steps (a whole number >= 0)."""
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+            raise InputError(f"step: the number of steps must be a whole number >= 0, got {shorten(n)}")
         mj, m, d = self._mj, self.model, self.data
         for _ in range(int(n)):
             self._control()
