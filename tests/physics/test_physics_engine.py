@@ -217,3 +217,10 @@ def test_wrong_commands_and_robots_that_cannot_stand_are_refused():
     )
     with pytest.raises(InputError, match="cannot stand"):
         PhysicsSim(segway)
+    for n in (-1, 1.5, True, "2"):
+        with pytest.raises(InputError, match="whole number"):
+            sim.step(n)
+    with pytest.raises(InputError, match="finite"):
+        sim.advance(float("nan"))
+    with pytest.raises(InputError, match="physical description has wheels"):
+        PhysicsSim(robot, description=describe(load_robot("diff-drive")))
