@@ -227,3 +227,26 @@ def test_a_time_step_out_of_range_is_refused():
     for step in (0.0, -0.001, 0.01, float("nan"), "0.002", True):
         with pytest.raises(InputError, match="time step"):
             mjcf(load_robot("diff-drive"), step)
+
+
+def test_a_robot_file_s_physical_fields_reach_the_model(tmp_path):
+    path = tmp_path / "built.yaml"
+    path.write_text(
+        "omnikin: 1\n"
+        "name: built\n"
+        "physical: {mass: 2.5, com: [0.0, 0.01, 0.06], height: 0.02}\n"
+        "wheels:\n"
+        "  - {name: a, type: omni, distance: 0.15, angle_deg: 0, radius: 0.04,\n"
+        "     physical: {width: 0.03, mass: 0.12, rollers: 7, rows: 2, friction: 0.8, max_torque: 0.4}}\n"
+        "  - {name: b, type: omni, distance: 0.15, angle_deg: 120, radius: 0.04}\n"
+        "  - {name: c, type: omni, distance: 0.15, angle_deg: 240, radius: 0.04}\n"
+    )
+    d = describe(load_robot(path))
+    assert (d.chassis.mass, d.chassis.com, 2 * d.chassis.size[1]) == (2.5, (0.0, 0.01, 0.06), pytest.approx(0.02))
+    a = d.wheel("a")
+    assert (a.width, a.mass, a.friction, a.motor.max_torque) == (0.03, 0.12, 0.8, 0.4)
+    assert (a.rollers.rows, a.rollers.per_row) == (2, 7)
+    root = ET.fromstring(mjcf(d))
+    assert len([b for b in root.iter("body") if b.get("name", "").startswith("a:roller:")]) == 14
+    geom = next(g for g in root.iter("geom") if g.get("name") == "a:roller:1:6")
+    assert geom.get("friction").split()[0] == "0.8"
