@@ -1,4 +1,4 @@
-"""Robot files: duplicate keys refused (YAML and JSON), YAML 1.1 exponents read as numbers.
+"""Robot files: duplicate keys refused (YAML and JSON), explicit YAML tags refused, exponents read as numbers.
 
 Regression tests of the review findings, grouped here by module. Expected values are derived
 independently of the code under test (closed forms typed in from the geometry, least squares
@@ -7,8 +7,12 @@ computed with NumPy, or the batch odometry as reference for the streaming estima
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import pytest
 
+from conftest import omnikin_env
 from omnikin import (
     RobotFileError,
     load_robot,
@@ -121,3 +125,98 @@ def test_ros_parameter_files_refuse_the_same_number_forms(tmp_path, literal, mes
     assert text.startswith(f"{path}: line 3 column 19: ") and message in text, text
     path.write_text("omnikin:\n  ros__parameters:\n    publish_rate: 100\n")
     assert load_params(path)["publish_rate"] == 100
+
+
+# --- explicit tags: refused, never handed to PyYAML's own readers --------------------------------
+# Each of these once ended in "internal error: ValueError/IndexError" (PyYAML's int/float readers
+# fail on them) or was read past the number grammar (non-ASCII digits, blanks: 1.5).
+TAGGED = [
+    "!!int 'abc'",
+    "!!int ''",
+    "!!float ''",
+    "!!int '0:12'",
+    "!!int '0x'",
+    "!!float '0x10'",
+    "!!float '\u0661.\u0665'",  # Arabic-Indic 1.5
+    "!!float '\uff11.\uff15'",  # full-width 1.5
+    "!!float '1.5 '",
+    "!!int '\u0663'",
+    "!!int '0o17'",
+    "!!int 12",
+    "!!float 1.5",
+    "!!str 1.5",
+    "!!bool yes",
+    "!!timestamp 2001-01-01",
+    "!!binary AAAA",
+    "!!set {a}",
+    "!!omap [a: 1]",
+    "! 12",
+]
+
+
+@pytest.mark.parametrize("value", TAGGED)
+def test_explicitly_tagged_values_are_refused_naming_the_line_and_column(tmp_path, value):
+    path = tmp_path / "robot.yaml"
+    path.write_text(omni3_text(angle=value))
+    with pytest.raises(RobotFileError) as info:
+        load_robot(path)
+    text = str(info.value)
+    tag = value.split()[0]
+    # angle_deg of wheel b is on line 8, its value after "    angle_deg: " (14 characters)
+    assert text.startswith(f"{path}: line 8 column 16: explicit tag '{tag}' not allowed"), text
+    assert "\n" not in text and "write a number plain (1.5)" in text, text
+
+
+def test_a_tagged_key_or_list_item_is_refused_too(tmp_path):
+    path = tmp_path / "robot.yaml"
+    path.write_text(omni3_text().replace("    radius: 0.05\n", "    !!str radius: 0.05\n"))
+    with pytest.raises(RobotFileError, match=r": line 9 column 5: explicit tag '!!str' not allowed"):
+        load_robot(path)
+    path.write_text(omni3_text().replace("references", "x") + "references: [a, !!str b]\n")
+    with pytest.raises(RobotFileError, match=r": line 12 column 17: explicit tag '!!str' not allowed"):
+        load_robot(path)
+
+
+@pytest.mark.parametrize("literal, base", [("0x_", "hexadecimal"), ("-0b_", "binary")])
+def test_yaml11_numbers_pyyaml_cannot_read_are_refused_as_such(tmp_path, literal, base):
+    # YAML 1.1's integer pattern matches 0x_ and 0b_, but they hold no digit: no value to suggest
+    # (the value on line 10 starts after "    encoder: {ticks_per_rev: ", 29 characters)
+    path = tmp_path / "robot.yaml"
+    path.write_text(omni3_text(ticks=literal))
+    with pytest.raises(RobotFileError) as info:
+        load_robot(path)
+    assert str(info.value) == (
+        f"{path}: line 10 column 30: {literal} is a {base} number in YAML 1.1, not a plain decimal: "
+        "write a plain decimal number"
+    )
+
+
+def test_show_refuses_a_tagged_number_in_one_line_with_status_2(tmp_path):
+    path = tmp_path / "robot.yaml"
+    path.write_text(omni3_text(ticks="!!int 'abc'"))
+    p = subprocess.run(
+        [sys.executable, "-m", "omnikin.cli.main", "show", str(path), "--json"],
+        capture_output=True,
+        text=True,
+        env=omnikin_env(),
+        timeout=120,
+    )
+    assert p.returncode == 2 and p.stdout == "", (p.returncode, p.stderr)
+    assert p.stderr.splitlines() == [
+        f"omnikin: error: {path}: line 10 column 30: explicit tag '!!int' not allowed: YAML readers "
+        "disagree on tags (PyYAML reads !!float '1' as 1.0, ROS 2 as the text '1'): write a number "
+        "plain (1.5), text in quotes"
+    ]
+
+
+@pytest.mark.parametrize("value", ["!!float 'x'", "!!float '1.5 '", "!!int '0x'"])
+def test_ros_parameter_files_refuse_explicit_tags(tmp_path, value):
+    from omnikin.errors import InputError
+    from omnikin.ros.params import load_params
+
+    path = tmp_path / "params.yaml"
+    path.write_text(f"omnikin:\n  ros__parameters:\n    publish_rate: {value}\n")
+    with pytest.raises(InputError) as info:
+        load_params(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: line 3 column 19: explicit tag '{value.split()[0]}' not allowed"), text

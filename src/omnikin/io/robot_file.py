@@ -10,11 +10,13 @@ Degrees appear only in fields ending in ``_deg``; the loaded
 Hostile files are refused before they cost time or memory (docs/conventions.md, "Robot
 file"): only regular files up to 256 KiB are read (:mod:`omnikin.io.textfile`); the YAML
 reader (:func:`strict_yaml_loader`, also used for ROS parameter files) refuses anchors,
-aliases and merge keys (a 1 KB alias bomb would otherwise expand to gigabytes), nesting
+aliases and merge keys (a 1 KB alias bomb would otherwise expand to gigabytes), explicit tags
+(PyYAML reads ``!!float '1'`` as a number, ROS 2's parameter parser as text), nesting
 deeper than :data:`MAX_DEPTH`, duplicate keys, over-long integer literals, and numbers that
 YAML readers read differently (YAML 1.1, which PyYAML follows, reads ``0120`` as the octal 80,
 ``2:00`` as 120 and ``0x1``, ``0b1``, ``1_000`` as numbers; YAML 1.2 reads ``0120`` as 120 and
-``2:00`` as text): a number in an omnikin file is a plain decimal, ``120`` not ``0120``. JSON
+``2:00`` as text): a number in an omnikin file is a plain decimal as
+:mod:`omnikin.number_text` spells it (ASCII digits), ``120`` not ``0120``. JSON
 gets the same depth, key and integer checks (it has no other number forms).
 """
 
@@ -32,6 +34,7 @@ from typing import Any
 from .._arrays import range_problem, whole_problem
 from ..errors import OmnikinError, RobotFileError, did_you_mean, shorten
 from ..model import Robot, name_collisions, robot_name_problem
+from ..number_text import PLAIN_NUMBER, PLAIN_NUMBER_HELP, number_problem
 from ..physical import (
     COM_LIMIT,
     COM_Z_MIN,
@@ -423,13 +426,16 @@ _NO_ALIASES = (
 def strict_yaml_loader():
     """A PyYAML SafeLoader for robot and parameter files (module docstring).
 
-    Refuses, with the line and column: anchors and aliases, merge keys (``<<``), nesting deeper
-    than :data:`MAX_DEPTH`, keys that are not scalars, duplicate keys, and the YAML 1.1 number
-    forms other readers read differently (octal ``0120``, base-60 ``2:00`` and ``1:30.5``,
-    hexadecimal ``0x1``, binary ``0b1``, digit separators ``1_000``; the message gives the plain
-    decimal to write). Reads ``5e-2`` as a float (YAML 1.2); a plain decimal integer of more
-    than :data:`MAX_INT_CHARS` digits as a float (refused by the range of its field). ROS 2's
-    own parameter parser (rcl_yaml_param_parser) refuses aliases too.
+    Refuses, with the line and column: anchors and aliases, merge keys (``<<``), explicit tags
+    (``!!float '1'``: :data:`_NO_TAGS`), nesting deeper than :data:`MAX_DEPTH`, keys that are not
+    scalars, duplicate keys, and the YAML 1.1 number forms other readers read differently (octal
+    ``0120``, base-60 ``2:00`` and ``1:30.5``, hexadecimal ``0x1``, binary ``0b1``, digit
+    separators ``1_000``; the message gives the plain decimal to write). A number is accepted
+    only as the one number grammar spells it (:data:`omnikin.number_text.PLAIN_NUMBER`; a whole
+    number as a plain decimal without leading zeros), besides YAML's ``.inf`` and ``.nan``, which
+    the range of their field refuses by name. Reads ``5e-2`` as a float (YAML 1.2); a plain
+    decimal integer of more than :data:`MAX_INT_CHARS` digits as a float (refused by the range of
+    its field). ROS 2's own parameter parser (rcl_yaml_param_parser) refuses aliases too.
     """
     import yaml
     from yaml.composer import ComposerError
@@ -442,6 +448,9 @@ def strict_yaml_loader():
             event = self.peek_event()
             if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None) is not None:
                 raise ComposerError(None, None, _NO_ALIASES, event.start_mark)
+            tag = getattr(event, "tag", None)
+            if tag is not None:
+                raise _RefusedYaml(_tag_problem(tag), event.start_mark)
             if self.depth >= MAX_DEPTH:
                 raise ComposerError(None, None, f"nested deeper than {MAX_DEPTH} levels", event.start_mark)
             self.depth += 1
@@ -470,21 +479,32 @@ def strict_yaml_loader():
             return float(value)
         return value
 
+    def yaml11_value(loader, node):
+        """What YAML 1.1 (PyYAML) reads the number ``node`` as, for the hint; None where it fails
+        (``0x_`` is a YAML 1.1 integer that PyYAML cannot convert) or the text is too long."""
+        convert = yaml.SafeLoader.construct_yaml_int if "int" in node.tag else yaml.SafeLoader.construct_yaml_float
+        if len(node.value) > MAX_INT_CHARS:
+            return None
+        try:
+            return convert(loader, node)
+        except (ValueError, IndexError):
+            return None
+
     def integer(loader, node):
         text = loader.construct_scalar(node)
         if not _DECIMAL_INT.fullmatch(text):
-            value = yaml.SafeLoader.construct_yaml_int(loader, node) if len(text) <= MAX_INT_CHARS else None
-            raise _NumberFormError(_number_form_problem(text, value), node)
+            raise _RefusedYaml(_number_form_problem(text, yaml11_value(loader, node)), node.start_mark)
         if len(text) <= MAX_INT_CHARS:
             return int(text)
         return float(text)  # inf or a huge float: refused by the range of its field
 
     def real(loader, node):
         text = loader.construct_scalar(node)
-        if ":" in text or "_" in text:
-            value = yaml.SafeLoader.construct_yaml_float(loader, node) if len(text) <= MAX_INT_CHARS else None
-            raise _NumberFormError(_number_form_problem(text, value), node)
-        return yaml.SafeLoader.construct_yaml_float(loader, node)
+        if _YAML_NON_FINITE.fullmatch(text):
+            return yaml.SafeLoader.construct_yaml_float(loader, node)  # refused by its field's range
+        if not PLAIN_NUMBER.fullmatch(text):
+            raise _RefusedYaml(_number_form_problem(text, yaml11_value(loader, node)), node.start_mark)
+        return float(text)
 
     StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
     StrictLoader.add_constructor("tag:yaml.org,2002:str", scalar)
@@ -496,13 +516,28 @@ def strict_yaml_loader():
 _DECIMAL_INT = re.compile(r"[-+]?(?:0|[1-9][0-9]*)")
 """The integers every reader reads alike (YAML 1.1 and 1.2, JSON): plain decimal, no leading zero."""
 
+_YAML_NON_FINITE = re.compile(r"[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN)")
+"""YAML's spellings of infinity and NaN: read as floats, then refused by the range of the field
+they stand in, which names it."""
+
+_NO_TAGS = (
+    "YAML readers disagree on tags (PyYAML reads !!float '1' as 1.0, ROS 2 as the text '1'): "
+    "write a number plain (1.5), text in quotes"
+)
+
+
+def _tag_problem(tag: str) -> str:
+    """Why the explicit tag ``tag`` (as PyYAML resolves it) is refused, naming it as written."""
+    shown = "!!" + tag.removeprefix("tag:yaml.org,2002:") if tag.startswith("tag:yaml.org,2002:") else tag
+    return f"explicit tag {shorten(shown)} not allowed: {_NO_TAGS}"
+
 
 def _number_form_problem(text: str, value) -> str:
     """Why the YAML 1.1 number ``text`` is refused (:func:`strict_yaml_loader`), with the plain
     decimal to write instead; ``value`` is what YAML 1.1 (PyYAML) reads, None if not computed."""
     body = text.lstrip("+-").lower()
     digits = body.replace("_", "")
-    sign = text[0] if text[0] in "+-" else ""
+    sign = text[:1] if text[:1] in ("+", "-") else ""
     if len(text) > 40:  # a hostile literal: named by its start, no value quoted
         text, value = f"{text[:24]}... ({len(text)} characters)", None
     read = "" if value is None else f" ({value!r})"
@@ -516,17 +551,20 @@ def _number_form_problem(text: str, value) -> str:
         plain = sign + (digits.lstrip("0") or "0")
         instead = f"write {plain}, not {text}" if value is not None else "write it without leading zeros"
         return f"{text} is octal in YAML 1.1{read} but decimal in YAML 1.2: {instead}"
-    return f"{text} has digit separators (_), one number in YAML 1.1 only{read}: {instead}"
+    if "_" in body:
+        return f"{text} has digit separators (_), one number in YAML 1.1 only{read}: {instead}"
+    return number_problem(text) or f"{shorten(text)} is not a plain decimal number ({PLAIN_NUMBER_HELP})"
 
 
-class _NumberFormError(Exception):
-    """A number written in a YAML 1.1 form that other readers read differently (raised out of the
-    loader; :func:`parse_yaml` names the file, line and column)."""
+class _RefusedYaml(Exception):
+    """Valid YAML that omnikin refuses: an explicit tag, or a number written in a YAML 1.1 form that
+    other readers read differently (raised out of the loader; :func:`parse_yaml` names the file,
+    line and column)."""
 
-    def __init__(self, problem: str, node):
+    def __init__(self, problem: str, mark):
         super().__init__(problem)
         self.problem = problem
-        self.mark = node.start_mark
+        self.mark = mark
 
 
 def parse_yaml(text: str, source: str, error: type[Exception] = RobotFileError) -> Any:
@@ -536,7 +574,7 @@ def parse_yaml(text: str, source: str, error: type[Exception] = RobotFileError) 
 
     try:
         return yaml.load(text, Loader=strict_yaml_loader())
-    except _NumberFormError as exc:
+    except _RefusedYaml as exc:
         raise error(f"{source}: line {exc.mark.line + 1} column {exc.mark.column + 1}: {exc.problem}") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)

@@ -18,7 +18,7 @@
 | ``link_retry_period`` | 1.0 | s between attempts to re-arm a lost serial link (0: stay stopped) |
 
 A ``--params FILE`` is YAML (read with :func:`omnikin.io.robot_file.strict_yaml_loader`:
-duplicate keys refused, ``2e-4`` a number), either flat (``cmd_vel_timeout: 0.2``) or in the
+duplicate keys and explicit tags refused, ``2e-4`` a number), either flat (``cmd_vel_timeout: 0.2``) or in the
 ROS layout (``omnikin_base: {ros__parameters: {...}}``); nested keys join with dots
 (``linear: {x: {max_velocity: 0.5}}`` is ``linear.x.max_velocity``). Unknown names are errors
 that suggest the closest known name, and so is a parameter spelled twice (flat and nested).
