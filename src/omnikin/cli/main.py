@@ -165,48 +165,23 @@ def cmd_presets(args) -> int:
 
 # --- show --------------------------------------------------------------------------------
 def show_data(robot) -> dict:
-    """The ``show --json`` document (physical fields as in the robot file: those given)."""
-    from ..io.robot_file import physical_to_dict
+    """The ``show --json`` document: the robot's fields as its robot file holds them, written by
+    the one serialiser (:func:`~omnikin.io.robot_file.robot_to_dict`, without the schema
+    version; physical fields only those given), each wheel's polar placement (``distance`` [m],
+    ``angle_deg``) and roller angle (``roller_deg``, 0 for wheels without rollers at an angle),
+    then the kinematic matrices and the mobility analysis."""
+    from ..io.robot_file import robot_to_dict
 
     m = robot.mobility
-    wheels = []
-    for w in robot.wheels:
-        d = {
-            "name": w.name,
-            "type": w.type,
-            "x": w.x,
-            "y": w.y,
-            "distance": math.hypot(w.x, w.y),
-            "angle_deg": math.degrees(math.atan2(w.y, w.x)),
-            "drive_deg": math.degrees(w.drive),
-            "roller_deg": math.degrees(w.roller),
-            "radius": w.radius,
-        }
-        if w.encoder is not None:
-            d["encoder"] = {
-                "ticks_per_rev": w.encoder.ticks_per_rev,
-                "gear_ratio": w.encoder.gear_ratio,
-                "invert": w.encoder.invert,
-            }
-        if w.steer is not None:
-            d["steer"] = {
-                "offset": w.steer.offset,
-                "min_deg": math.degrees(w.steer.lower),
-                "max_deg": math.degrees(w.steer.upper),
-            }
-        if w.max_speed is not None:
-            d["max_speed"] = w.max_speed
-        if w.physical is not None and w.physical.given:
-            d["physical"] = physical_to_dict(w.physical)
-        wheels.append(d)
+    data = robot_to_dict(robot)
+    del data["omnikin"]
+    for d, w in zip(data["wheels"], robot.wheels, strict=True):
+        d["distance"] = math.hypot(w.x, w.y)
+        d["angle_deg"] = math.degrees(math.atan2(w.y, w.x))
+        d.setdefault("roller_deg", math.degrees(w.roller))
     fk = robot.fk_matrix()
-    body = physical_to_dict(robot.physical) if robot.physical is not None and robot.physical.given else None
     return {
-        "name": robot.name,
-        "description": robot.description,
-        "references": list(robot.references),
-        **({"physical": body} if body else {}),
-        "wheels": wheels,
+        **data,
         "wheel_names": robot.rolling_names,
         "steer_names": robot.steer_names,
         "ik_matrix": robot.ik_matrix.tolist(),

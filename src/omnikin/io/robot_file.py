@@ -704,6 +704,13 @@ def _clean(x: float) -> float:
     return float(round(float(x), 12))
 
 
+def _count(x) -> int | float:
+    """A count that may be fractional (ticks per revolution): an int when whole, so that a file
+    saying 512 is written back as 512, not 512.0; else a float."""
+    x = float(x)
+    return int(x) if x.is_integer() else x
+
+
 def robot_to_dict(robot: Robot) -> dict:
     """Schema-1 mapping of ``robot`` (Cartesian placement, explicit drive_deg)."""
     wheels = []
@@ -720,7 +727,7 @@ def robot_to_dict(robot: Robot) -> dict:
         d["radius"] = float(w.radius)
         if w.encoder is not None:
             d["encoder"] = {
-                "ticks_per_rev": float(w.encoder.ticks_per_rev),
+                "ticks_per_rev": _count(w.encoder.ticks_per_rev),
                 "gear_ratio": float(w.encoder.gear_ratio),
                 "invert": bool(w.encoder.invert),
             }
