@@ -16,7 +16,7 @@ import numbers
 
 import numpy as np
 
-from .errors import InputError, one_line, shorten
+from .errors import InputError, digits_apart, one_line, shorten
 
 REAL_KINDS = frozenset("iuf")
 """NumPy dtype kinds read as real numbers: signed and unsigned integers, floating point."""
@@ -108,20 +108,28 @@ def range_problem(value, low: float, high: float, unit: str = "") -> str | None:
 
     The one range check of omnikin's parameters (wheels, physical fields, robot files, UMBmark
     sides, rates): Python or NumPy ``int`` and ``float`` only (not ``bool``, not ``"0.5"``).
-    The text starts with ``must``/``number`` so that the caller prefixes what it checks:
-    ``f"wheel 'w1': radius {problem}"``.
+    The text starts with ``must`` so that the caller prefixes what it checks:
+    ``f"wheel 'w1': radius {problem}"``. A value outside the range is printed with the digits
+    that tell it from the bound (:func:`~omnikin.errors.digits_apart`), the bounds with as many
+    or 10.
     """
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         return f"must be a number, got {shorten(value)}"
     try:
         x = float(value)
-    except OverflowError:
-        return f"number too large, got {shorten(value)}"
+    except OverflowError:  # an int beyond the largest float: outside every range
+        return f"{_span(low, high, unit, 10)}, got {shorten(value)}"
     if not math.isfinite(x):
         return f"must be finite, got {shorten(value)}"
     if not low <= x <= high:
-        return f"must lie in [{low:.10g}, {high:.10g}]{' ' + unit if unit else ''}, got {x:g}"
+        p = digits_apart(x, low if x < low else high)
+        return f"{_span(low, high, unit, max(p, 10))}, got {x:.{p}g}"
     return None
+
+
+def _span(low: float, high: float, unit: str, digits: int) -> str:
+    """``must lie in [low, high] unit``, the bounds printed with ``digits`` significant digits."""
+    return f"must lie in [{low:.{digits}g}, {high:.{digits}g}]{' ' + unit if unit else ''}"
 
 
 def whole_problem(value, low: int, high: int) -> str | None:

@@ -213,7 +213,7 @@ class CounterRule:
         """Why ``delta`` [``unit``: ticks, or rad for wheel angles] over ``dt`` [s] is
         impossible, with the way out (one line)."""
         if self.max_jump is not None:
-            why = f"more than max_jump={self.max_jump:g} ticks"
+            why = f"more than max_jump={show_number(self.max_jump)} ticks"
         else:
             why = f"faster than {self.speed:.6g} rad/s ({self.source})"
         head = f"impossible jump of {show_number(delta)} {unit} in {dt:.6g} s, wheel {self.wheel!r}: {why}"

@@ -124,3 +124,19 @@ def shorten(value: object, limit: int = 60) -> str:
     if len(text) <= limit:
         return text
     return text[: limit - 15] + f"... ({len(text)} chars)"
+
+
+def digits_apart(x: float, bound: float, least: int = 6) -> int:
+    """The fewest significant digits, at least ``least``, at which ``x`` and ``bound`` print apart
+    with ``f"{x:.{p}g}"`` (17, enough for any two doubles, if they are equal).
+
+    A message that prints a value against a bound it breaks formats the value with these digits
+    and the bound with these or more: rounding keeps order, so a value above the bound prints
+    above it. ``:g`` alone (6 digits) printed 4.9999999999 as 5 against ``[5, 10000]``, and a
+    float32 ``1e-4`` (9.9999997e-05 as a double) as 0.0001.
+    """
+    x, bound = float(x), float(bound)
+    for p in range(least, 17):
+        if f"{x:.{p}g}" != f"{bound:.{p}g}":
+            return p
+    return 17

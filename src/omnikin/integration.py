@@ -19,7 +19,7 @@ import numpy as np
 
 from ._arrays import as_real_array
 from .encoders import container_problem
-from .errors import InputError
+from .errors import InputError, digits_apart
 from .geometry import MAX_ANGLE, sinc, wrap_angle
 
 METHODS = ("exact", "midpoint", "euler")
@@ -57,8 +57,10 @@ def check_start(start, what: str = "start") -> np.ndarray:
         index = tuple(int(i) for i in np.argwhere(bad)[0])
         name, unit, limit = FIELDS[index[-1]]
         where = f" at index {index[:-1]}" if p.ndim > 1 else ""
+        digits = digits_apart(abs(float(p[index])), limit)
         raise InputError(
-            f"{what}: {name} = {float(p[index]):.6g} {unit}{where} is not a finite number within +-{limit:.6g} {unit}"
+            f"{what}: {name} = {float(p[index]):.{digits}g} {unit}{where} is not a finite number within "
+            f"+-{limit:.{digits}g} {unit}"
         )
     return p
 

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import digits_apart
 from .linalg import null_space, rank
 from .wheels import Wheel
 
@@ -86,8 +87,9 @@ class Mobility:
         if self.well_conditioned:
             return None
         c = self.condition_number
+        p = digits_apart(c, CONDITION_WARNING, 3)
         return (
-            f"badly conditioned wheel layout: condition number {c:.3g} > {CONDITION_WARNING:g}, so a 1 % "
+            f"badly conditioned wheel layout: condition number {c:.{p}g} > {CONDITION_WARNING:g}, so a 1 % "
             f"error in the wheel speeds can become a {c:.3g} % error of the twist in its worst direction "
             f"(check drive_deg and roller_deg of the wheels)"
         )

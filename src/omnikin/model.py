@@ -34,7 +34,7 @@ from functools import cached_property
 import numpy as np
 
 from ._arrays import as_components, as_real_array, require_finite
-from .errors import InfeasibleTwistError, InputError, SingularLayoutError, shorten
+from .errors import InfeasibleTwistError, InputError, SingularLayoutError, digits_apart, shorten
 from .geometry import MAX_ANGLE
 from .linalg import RANK_TOL, null_space, rank
 from .mobility import Configuration, Mobility, analyse, generic_configuration
@@ -134,8 +134,9 @@ def heading_array(heading, name: str = "heading") -> np.ndarray:
     if big.any():
         index = tuple(int(i) for i in np.argwhere(big)[0])
         at = f" at index {index}" if index else ""
+        p = digits_apart(abs(float(th[index])), MAX_ANGLE)
         raise InputError(
-            f"{name}{at}: {float(th[index]):.6g} rad is beyond +-{MAX_ANGLE:g} rad; give the heading in radians "
+            f"{name}{at}: {float(th[index]):.{p}g} rad is beyond +-{MAX_ANGLE:g} rad; give the heading in radians "
             f"(wrapped, or unwrapped over fewer than {MAX_ANGLE / (2 * np.pi):.0f} turns)"
         )
     return th
@@ -343,13 +344,17 @@ class Robot:
             index = tuple(int(i) for i in np.argwhere(outside)[0])
             k = index[-1]
             at = f" at index {index[:-1]}" if len(index) > 1 else ""
+            value = float(arr[index])
             if math.isinf(lower[k]):
+                p = digits_apart(abs(value), MAX_ANGLE)
                 limits = f"beyond +-{MAX_ANGLE:g} rad"
             else:
-                limits = f"outside its limits [{math.degrees(lower[k]):.6g}, {math.degrees(upper[k]):.6g}] deg"
+                lo, hi = math.degrees(lower[k]), math.degrees(upper[k])
+                p = digits_apart(math.degrees(value), lo if value < lower[k] else hi)
+                limits = f"outside its limits [{lo:.{p}g}, {hi:.{p}g}] deg"
             raise InputError(
-                f"{name}{at}: wheel {self.steerable[k].name!r} steered to {float(arr[index]):.6g} rad "
-                f"({math.degrees(float(arr[index])):.6g} deg), {limits} "
+                f"{name}{at}: wheel {self.steerable[k].name!r} steered to {value:.{p}g} rad "
+                f"({math.degrees(value):.{p}g} deg), {limits} "
                 f"(steering angles are in radians, relative to the wheel's drive_deg)"
             )
         return arr

@@ -31,7 +31,7 @@ from .encoders import (
     problem_at,
     wheel_increments,
 )
-from .errors import InputError, OdometryInputError
+from .errors import InputError, OdometryInputError, digits_apart
 from .geometry import MAX_ANGLE, wrap_angle
 from .integration import check_method, check_start, integrate_components
 from .model import STEER_LIMIT_SLACK, Robot
@@ -277,12 +277,14 @@ def steer_problem(robot: Robot, k: int, value: float) -> str | None:
     name = robot.steer_names[k]
     if not math.isfinite(value):
         return f"steer: non-finite steering angle {value!r}, wheel {name!r}"
-    limits = (
-        f"beyond +-{MAX_ANGLE:g} rad"
-        if upper[k] >= MAX_ANGLE
-        else f"outside its limits [{math.degrees(lower[k]):.6g}, {math.degrees(upper[k]):.6g}] deg"
-    )
-    return f"steer: wheel {name!r} steered to {value:.6g} rad ({math.degrees(value):.6g} deg), {limits}"
+    if upper[k] >= MAX_ANGLE:
+        p = digits_apart(abs(value), MAX_ANGLE)
+        limits = f"beyond +-{MAX_ANGLE:g} rad"
+    else:
+        lo, hi = math.degrees(lower[k]), math.degrees(upper[k])
+        p = digits_apart(math.degrees(value), lo if value < lower[k] else hi)
+        limits = f"outside its limits [{lo:.{p}g}, {hi:.{p}g}] deg"
+    return f"steer: wheel {name!r} steered to {value:.{p}g} rad ({math.degrees(value):.{p}g} deg), {limits}"
 
 
 def _steering(robot, steer, lead: tuple, n: int) -> tuple[np.ndarray, Problem | None]:

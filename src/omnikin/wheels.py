@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._arrays import range_problem, whole_problem
-from .errors import InfeasibleTwistError, InputError, shorten
+from .errors import InfeasibleTwistError, InputError, digits_apart, shorten
 from .geometry import wrap_angle
 from .physical import PhysicalWheel
 
@@ -136,7 +136,8 @@ class Steer:
         _require(range_problem(self.lower, -math.pi, math.pi, "rad"), "steer: lower")
         _require(range_problem(self.upper, -math.pi, math.pi, "rad"), "steer: upper")
         if not self.lower < self.upper:
-            raise InputError(f"steer: need lower < upper, got {self.lower:g} and {self.upper:g} rad")
+            p = digits_apart(self.lower, self.upper)
+            raise InputError(f"steer: need lower < upper, got {self.lower:.{p}g} and {self.upper:.{p}g} rad")
 
 
 @dataclass(frozen=True)

@@ -75,7 +75,7 @@ def test_roller_counts_are_whole_numbers_in_range(field, low, high):
         (float("inf"), "must be finite, got inf"),
         (True, "must be a number, got True"),
         ("0.03", "must be a number, got '0.03'"),
-        (10**400, "number too large"),
+        (10**400, "must lie in ["),
     ],
 )
 def test_wheel_width_refuses_what_a_radius_refuses_in_the_same_words(value, words):

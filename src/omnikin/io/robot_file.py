@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from .._arrays import range_problem, whole_problem
-from ..errors import OmnikinError, RobotFileError, did_you_mean, shorten
+from ..errors import OmnikinError, RobotFileError, did_you_mean, digits_apart, shorten
 from ..model import Robot, name_collisions, robot_name_problem
 from ..number_text import PLAIN_NUMBER, PLAIN_NUMBER_HELP, number_problem
 from ..physical import (
@@ -206,7 +206,8 @@ def _steer(where: _Where, data: Any, wheel: str) -> Steer:
     lo = _number(where, data.get("min_deg", -180.0), wheel, "steer.min_deg")
     hi = _number(where, data.get("max_deg", 180.0), wheel, "steer.max_deg")
     if not lo < hi:
-        raise where.error(f"need -180 <= min_deg < max_deg <= 180, got {lo:g} and {hi:g}", wheel, "steer")
+        p = digits_apart(lo, hi)
+        raise where.error(f"need -180 <= min_deg < max_deg <= 180, got {lo:.{p}g} and {hi:.{p}g}", wheel, "steer")
     return Steer(offset, math.radians(lo), math.radians(hi))
 
 

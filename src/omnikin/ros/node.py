@@ -36,7 +36,7 @@ import time
 
 import numpy as np
 
-from ..errors import InputError, LinkError, OmnikinError
+from ..errors import InputError, LinkError, OmnikinError, digits_apart
 from ..limits import MotionLimits
 from ..runtime.base import BaseRuntime
 from . import messages, require_rclpy
@@ -89,9 +89,11 @@ class BaseNode(Node):
         p = validate({k: self.get_parameter(k).value for k in DEFAULTS}, "--ros-args / parameters")
         link_timeout = getattr(backend, "link_timeout", None)
         if link_timeout is not None and 1.0 / p["publish_rate"] > 0.5 * link_timeout:
+            least = 2.0 / link_timeout
+            digits = digits_apart(p["publish_rate"], least)
             raise InputError(
-                f"publish_rate {p['publish_rate']:g} Hz is too slow for the serial link: the wheel controllers "
-                f"stop after {link_timeout:g} s without a frame; use at least {2.0 / link_timeout:g} Hz"
+                f"publish_rate {p['publish_rate']:.{digits}g} Hz is too slow for the serial link: the wheel "
+                f"controllers stop after {link_timeout:g} s without a frame; use at least {least:.{digits}g} Hz"
             )
         limits = MotionLimits(
             linear=p["linear.x.max_velocity"],

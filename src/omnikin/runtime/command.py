@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, digits_apart
 from ..limits import MotionLimits, saturate
 from ..model import Robot
 
@@ -74,7 +74,12 @@ class CommandFilter:
         bounds = [self.limits.linear, self.limits.linear, self.limits.angular]
         for value, bound, name in zip(v, bounds, ("vx", "vy", "omega"), strict=True):
             if bound is not None and abs(value) > self.reject_above * bound:
-                return self._reject(f"{name} = {value:g} is beyond {self.reject_above:g} times its limit {bound:g}")
+                most = self.reject_above * bound
+                digits = digits_apart(abs(value), most)
+                return self._reject(
+                    f"{name} = {value:.{digits}g} is beyond {most:.{digits}g} ({self.reject_above:g} times its "
+                    f"limit {bound:g})"
+                )
         if self.robot.fixed:
             n = self.robot.admissible_basis
             p = n @ (n.T @ v)

@@ -49,7 +49,7 @@ import time
 import numpy as np
 
 from ..encoders import wrap_scalar
-from ..errors import InputError, LinkError, OmnikinError
+from ..errors import InputError, LinkError, OmnikinError, digits_apart
 from ..model import Robot
 from .backends import WheelState
 from .protocol import (
@@ -468,7 +468,8 @@ class SerialBackend:
                 self._lose(
                     t,
                     f"serial back-end: link lost: wheel {name!r} (index {self.index[name]}) on {url} "
-                    f"sent no valid frame for {silent:.3f} s{never}, beyond {what} {limit:g} s; "
+                    f"sent no valid frame for {silent:.{digits_apart(silent, limit, 3)}g} s{never}, beyond {what} "
+                    f"{limit:g} s; "
                     "all wheels commanded to zero",
                     name,
                     url,
