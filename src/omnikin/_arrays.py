@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Iterator, Mapping, MappingView, Sequence
+from collections.abc import Set as AbstractSet
 
 import numpy as np
 
@@ -138,3 +140,27 @@ def whole_problem(value, low: int, high: int) -> str | None:
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
         return f"must be a whole number from {low} to {high}, got {shorten(value)}"
     return None
+
+
+TEXT_TYPES = (str, bytes, bytearray, memoryview)
+"""Text and bytes: sequences, but of characters, never numbers."""
+
+
+def container_problem(value, order: str = "the wheels' order") -> str | None:
+    """Why ``value`` cannot hold numbers in a defined order (``order``: what the order means,
+    for the message), or None if it can.
+
+    Lists, tuples and other sequences, NumPy arrays, array-likes (``__array__``) and iterators
+    (a generator, ``map``) give their items in a defined order. A set or a dict (or its views)
+    does not: ``{0.5, 3.0, 0.25}`` iterates in hash order, not as written. Text and bytes are
+    not numbers (``b'\\x05\\x07\\x09'`` would be taken as 5, 7, 9). Anything else is not a sequence.
+    """
+    if isinstance(value, np.ndarray):
+        return None
+    if isinstance(value, TEXT_TYPES):
+        return f"{type(value).__name__} {shorten(value, 40)} is text, not numbers"
+    if isinstance(value, (AbstractSet, Mapping, MappingView)):
+        return f"a {type(value).__name__} has no defined order ({order} would be lost)"
+    if isinstance(value, (Sequence, Iterator)) or hasattr(value, "__array__") or hasattr(value, "__array_interface__"):
+        return None
+    return f"a {type(value).__name__} is not a sequence"

@@ -52,15 +52,14 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Callable, Iterator, Mapping, MappingView, Sequence
-from collections.abc import Set as AbstractSet
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from functools import partial
 
 import numpy as np
 
-from ._arrays import whole_problem
+from ._arrays import TEXT_TYPES, container_problem, whole_problem
 from .errors import InputError, OdometryInputError, shorten
 from .wheels import COUNTER_BITS_RANGE
 
@@ -353,29 +352,7 @@ def show_number(value) -> str:
     return shorten(value)
 
 
-# --- containers of readings -------------------------------------------------------------------
-_TEXT = (str, bytes, bytearray, memoryview)
-
-
-def container_problem(value) -> str | None:
-    """Why ``value`` cannot hold readings in wheel order, or None if it can.
-
-    Lists, tuples and other sequences, NumPy arrays, array-likes (``__array__``) and iterators
-    (a generator, ``map``) give their items in a defined order. A set or a dict (or its views)
-    does not: its order is not the wheels' order. Text and bytes are not numbers
-    (``b'\\x05\\x07\\x09'`` would be taken as 5, 7, 9). Anything else is not a sequence.
-    """
-    if isinstance(value, np.ndarray):
-        return None
-    if isinstance(value, _TEXT):
-        return f"{type(value).__name__} {shorten(value, 40)} is text, not numbers"
-    if isinstance(value, (AbstractSet, Mapping, MappingView)):
-        return f"a {type(value).__name__} has no defined order (the wheels' order would be lost)"
-    if isinstance(value, (Sequence, Iterator)) or hasattr(value, "__array__") or hasattr(value, "__array_interface__"):
-        return None
-    return f"a {type(value).__name__} is not a sequence"
-
-
+# --- containers of readings (whether one has an order: omnikin._arrays.container_problem) -----
 def _is_number(value) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
@@ -435,7 +412,7 @@ MAX_DIMS = 64
 
 def len_or_none(value) -> int:
     """Length of a sequence (0 for anything else, iterators included: they are not walked)."""
-    return len(value) if isinstance(value, Sequence) and not isinstance(value, _TEXT) else 0
+    return len(value) if isinstance(value, Sequence) and not isinstance(value, TEXT_TYPES) else 0
 
 
 # --- exact increments (scalars: the streaming estimator) -----------------------------------------

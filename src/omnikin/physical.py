@@ -11,9 +11,10 @@ floor under the body centre used by the kinematics). SI units.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, fields
 
-from ._arrays import range_problem, whole_problem
+from ._arrays import container_problem, range_problem, whole_problem
 from .errors import InputError, shorten
 
 # --- ranges (docs/conventions.md, "Physical fields") --------------------------------------------
@@ -104,7 +105,10 @@ class PhysicalBody:
         _number("body", "mass", self.mass, *MASS_RANGE, "kg")
         _number("body", "height", self.height, *HEIGHT_RANGE, "m")
         if self.com is not None:
-            com = tuple(self.com)
+            why = container_problem(self.com, "the order x, y, z")
+            if why:
+                raise InputError(f"body: physical.com must be 3 numbers (x, y, z) [m] in order: {why}")
+            com = tuple(itertools.islice(self.com, 4))  # an endless iterator is not read to its end
             if len(com) != 3:
                 raise InputError(f"body: physical.com must be 3 numbers (x, y, z) [m], got {shorten(self.com)}")
             for axis, v in zip("xyz", com, strict=True):

@@ -7,6 +7,7 @@ so a wheel's radius and a wheel's width refuse the same kinds of value in the sa
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -103,6 +104,33 @@ def test_body_fields_out_of_range_are_refused_naming_the_field(kw, fragment):
     with pytest.raises(InputError) as info:
         PhysicalBody(**kw)
     assert str(info.value).startswith("body: ") and fragment in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "com, fragment",
+    [
+        ({0.5, 3.0, 0.25}, "a set has no defined order (the order x, y, z would be lost)"),
+        ({"x": 0.0, "y": 0.0, "z": 0.1}, "a dict has no defined order (the order x, y, z would be lost)"),
+        (
+            {"x": 0.0, "y": 0.0, "z": 0.1}.values(),
+            "a dict_values has no defined order (the order x, y, z would be lost)",
+        ),
+        ("0.1", "str '0.1' is text, not numbers"),
+        (0.1, "a float is not a sequence"),
+    ],
+)
+def test_a_centre_of_mass_in_a_container_without_order_is_refused(com, fragment):
+    # a set of (0.5, 3.0, 0.25) iterates as (0.25, 0.5, 3.0) or so: z would become 3 m
+    with pytest.raises(InputError) as info:
+        PhysicalBody(com=com)
+    assert str(info.value) == f"body: physical.com must be 3 numbers (x, y, z) [m] in order: {fragment}"
+
+
+def test_a_centre_of_mass_from_any_ordered_container_is_kept_in_order():
+    for com in ([0.5, -0.25, 0.1], (0.5, -0.25, 0.1), np.array([0.5, -0.25, 0.1]), iter([0.5, -0.25, 0.1])):
+        assert PhysicalBody(com=com).com == (0.5, -0.25, 0.1)
+    with pytest.raises(InputError, match=r"^body: physical\.com must be 3 numbers \(x, y, z\) \[m\], got count"):
+        PhysicalBody(com=itertools.count(1))  # endless: read no further than a fourth item
 
 
 @pytest.mark.parametrize("kind", ["standard", "steerable", "castor"])
