@@ -982,3 +982,40 @@ def test_firmware_follows_speed_commands_and_stops_on_link_loss(tmp_path, config
     assert hb_after and all(m["status"] & PROTO.status_bit("LINK_OK") == 0 for m in hb_after)
     before_motion = states[states[:, 0] < 0.095]
     assert np.all(before_motion[:, 2] == 0)  # motor off until the host speaks
+
+
+@pytest.mark.parametrize(
+    "extra, expected",
+    [
+        ("x: !!int abc\n", "explicit tag"),
+        ("x: !!str 5\n", "explicit tag"),
+        ("x: &a [1, 1]\ny: [*a, *a]\n", "anchors and aliases"),
+        ("x: 0x_\n", "not valid YAML data"),
+    ],
+)
+def test_a_user_protocol_file_is_plain_yaml_data_or_one_line_error(tmp_path, extra, expected):
+    """A protocol description given by path is read like every other file of the user: tags,
+    anchors (alias bombs) and PyYAML's failing number constructors give a ProtocolError that
+    names the file, never a bare ValueError."""
+    from importlib import resources
+
+    from omnikin.runtime.protocol import ProtocolError, load_protocol
+
+    good = resources.files("omnikin.runtime").joinpath("protocol.yaml").read_text(encoding="utf-8")
+    path = tmp_path / "p.yaml"
+    path.write_text(extra + good, encoding="utf-8")
+    with pytest.raises(ProtocolError, match=expected) as info:
+        load_protocol(path)
+    assert str(path) in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_protocol_file_is_size_bounded_and_regular(tmp_path):
+    from omnikin.runtime.protocol import ProtocolError, load_protocol
+    from omnikin.runtime.protocol.schema import MAX_PROTOCOL_BYTES
+
+    big = tmp_path / "big.yaml"
+    big.write_text("a: '" + "x" * MAX_PROTOCOL_BYTES + "'\n", encoding="utf-8")
+    with pytest.raises(ProtocolError, match="larger than 256 KiB"):
+        load_protocol(big)
+    with pytest.raises(ProtocolError, match="not a regular file"):
+        load_protocol(tmp_path)

@@ -385,8 +385,16 @@ def parse_protocol(doc: dict, source: str = "<dict>") -> Protocol:
     )
 
 
+MAX_PROTOCOL_BYTES = 256 * 1024
+"""Largest protocol description read [bytes]: the shipped one is about 6 KiB."""
+
+
 def load_protocol(path=None) -> Protocol:
-    """The protocol of ``path`` (default: the package's ``protocol.yaml``, read once)."""
+    """The protocol of ``path`` (default: the package's ``protocol.yaml``, read once).
+
+    A user's file is read as plain YAML data only: at most :data:`MAX_PROTOCOL_BYTES`, no
+    anchors or aliases (an alias bomb of a few hundred bytes expands to gigabytes), no explicit
+    tags (``!!int 'abc'``); anything else is a one-line :class:`ProtocolError` naming the file."""
     if path is None:
         return _default_protocol()
     import yaml
@@ -396,14 +404,42 @@ def load_protocol(path=None) -> Protocol:
     except TypeError:
         raise ProtocolError(f"protocol description: expected a path, got {shorten(path)}") from None
     try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+        if path.exists() and not path.is_file():  # a folder, FIFO or device: never read
+            raise ProtocolError(f"{path}: cannot read the protocol description: not a regular file")
+        with path.open("rb") as f:
+            raw = f.read(MAX_PROTOCOL_BYTES + 1)
+        if len(raw) > MAX_PROTOCOL_BYTES:
+            raise ProtocolError(f"{path}: larger than {MAX_PROTOCOL_BYTES // 1024} KiB: not a protocol description")
+        text = raw.decode("utf-8")
+        _plain_yaml(yaml, text, path)
+        doc = yaml.safe_load(text)
+    except ProtocolError:
+        raise
     except OSError as exc:
         raise ProtocolError(f"{path}: cannot read the protocol description: {exc.strerror or exc}") from None
     except UnicodeDecodeError as exc:
         raise ProtocolError(f"{path}: the protocol description is not UTF-8 text (byte {exc.start})") from None
     except yaml.YAMLError as exc:
         raise ProtocolError(f"{path}: not valid YAML: {_yaml_problem(exc)}") from None
+    except (ValueError, IndexError, TypeError, OverflowError) as exc:  # PyYAML's number constructors
+        raise ProtocolError(f"{path}: not valid YAML data: {shorten(str(exc))}") from None
     return parse_protocol(doc, str(path))
+
+
+def _plain_yaml(yaml, text: str, path: Path) -> None:
+    """Raise :class:`ProtocolError` at the first anchor, alias or explicit tag of ``text``."""
+    for event in yaml.parse(text, Loader=yaml.SafeLoader):
+        mark = event.start_mark
+        where = f"{path}: line {mark.line + 1} column {mark.column + 1}"
+        if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
+            raise ProtocolError(f"{where}: anchors and aliases are not allowed in a protocol description")
+        tag = getattr(event, "tag", None)
+        implicit = getattr(event, "implicit", True)
+        explicit = tag is not None and not (implicit if isinstance(implicit, bool) else any(implicit))
+        if explicit:
+            raise ProtocolError(
+                f"{where}: explicit tag {shorten(tag)} not allowed: write numbers plain, text in quotes"
+            )
 
 
 def _yaml_problem(exc) -> str:
