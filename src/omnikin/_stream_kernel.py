@@ -15,10 +15,13 @@ as plain data. Per sample, ``step_ticks`` does (conventions, Odometry):
 
 1. accept lists and tuples of Python ints or NumPy integer scalars, and NumPy rows (converted
    exactly; bools, floats, iterators and anything else are left to the general path), the
-   timestamp as a float;
-2. counter increments ``d_j = ticks_j - prev_j`` in exact integer arithmetic (wrapped
-   modulo ``2**bits`` for counters of a known width, after checking the reading lies in
-   the counter's range), then as floats;
+   timestamp as a float; an interval longer than :func:`longest_interval` goes to the general
+   path (its step might leave the bounds of :func:`omnikin.integration.step_problem`);
+2. counter increments ``d_j = ticks_j - prev_j`` in exact arithmetic (wrapped modulo
+   ``2**bits`` for counters of a known width, after checking the reading lies in the
+   counter's range), rounded once to floats: the state keeps the previous readings as exact
+   numbers (ints, or the Fraction a float reading holds), never as floats, so ``ticks_j -
+   prev_j`` is exact (``int - float`` rounds the int first beyond 2**53);
 3. every wheel's jump rule (:mod:`omnikin.encoders`) ``|d_j| <= limit_j(dt)`` and, from the
    third sample on, a sufficient form of its change-of-speed rule ``|d_j - q_j| <= A_j dt
    dt_prev / 2 + 2 slack`` (``q_j`` the previous increment; :func:`_change_lines`), with the
@@ -46,6 +49,7 @@ import numpy as np
 
 from .encoders import QUANTISATION_SLACK, SAFETY
 from .geometry import SCALAR_TAYLOR_LIMIT, TWO_PI
+from .integration import STEP_BOUNDS
 
 # --- state layout ------------------------------------------------------------------------------
 S_POSE, S_TIME_TICKS, S_TIME_ANGLES, S_COUNT, S_DT, S_READ = 0, 1, 2, 3, 4, 5
@@ -55,8 +59,11 @@ kind (tick readings or wheel angles), the other slot NaN, both before the first 
 a kernel fed the other kind (or nothing yet) fails its time test and declines; how many samples
 were accepted; the last interval [s] (NaN after the first sample: no interval yet, so a kernel
 with a change-of-speed test declines the second sample and the general path takes it); the
-readings of the last sample and the wheel increments over the last interval [ticks or rad]. The body increment of
-the last interval is not kept: it is ``fk(delta)``, recomputed bit for bit when asked for."""
+readings of the last sample (tick readings as exact numbers: Python ints, or Fractions;
+wheel angles as floats) and the wheel increments over the last interval [ticks or rad,
+floats]. The body increment of the last interval is not kept: it is ``fk(delta)``, recomputed
+bit for bit when asked for. Pickles carry the version of this layout
+(:data:`omnikin.streaming.STATE_FORMAT`)."""
 KIND_NONE, KIND_TICKS, KIND_ANGLES = 0, 1, 2
 
 
@@ -259,7 +266,8 @@ def _step_source(
     method: str,
     angles: bool,
 ) -> str:
-    """Source of ``name(state, t, values)``: one sample of ticks (or wheel angles) -> state or None."""
+    """Source of ``name(state, t, values)``: one sample of ticks (or wheel angles) -> state or None.
+    Intervals longer than :func:`longest_interval` go to the general path."""
     v = [f"v{j}" for j in range(n)]
     d = [f"d{j}" for j in range(n)]
     body = [
@@ -304,8 +312,8 @@ def _step_source(
         "except (TypeError, ValueError, OverflowError):",
         "    return None  # the general path names what is wrong",
         "dt = t - t_prev",
-        "if not 0.0 < dt < INF:",
-        "    return None",
+        f"if not 0.0 < dt < {_literal(longest_interval(fk_rows, bounds))}:",
+        "    return None  # not later, or so long that the step may be out of bounds: the general path decides",
     ]
     body += _check_lines(d, bounds)
     body += _change_lines(d, changes)
@@ -318,6 +326,28 @@ def _step_source(
         f'{method} integration: the new state, or None."""'
     )
     return f"def {name}(state, t, values):\n    {doc}\n" + "\n".join(_indent("\n".join(body))) + "\n"
+
+
+def longest_interval(fk_rows, bounds: list[WheelBound]) -> float:
+    """Longest interval [s] (0: none, inf: any) over which every wheel increment the kernel's jump
+    test passes (``|d_j| <= min(slope_j dt + offset_j, cap_j) SAFETY``) gives a body increment
+    ``F d`` within the bounds of one step (:data:`omnikin.integration.STEP_BOUNDS`, shrunk by
+    :data:`SAFETY`): ``|(F d)_r| <= sum_j |F_rj| |d_j|``. A longer interval goes to the general
+    path, which applies :func:`omnikin.integration.step_problem` to the increment it computes,
+    so the kernel never passes a step the general path refuses."""
+    longest = math.inf
+    for row, limit in zip(fk_rows, STEP_BOUNDS, strict=True):
+        terms = [(abs(c), b) for c, b in zip(row, bounds, strict=True) if c != 0.0]
+        room = float(limit) * SAFETY
+        if sum(c * b.cap * SAFETY for c, b in terms) <= room:
+            continue  # the caps alone keep it within bounds (inf caps: never)
+        slope = sum(c * b.slope * SAFETY for c, b in terms)
+        base = sum(c * min(b.offset, b.cap) * SAFETY for c, b in terms)
+        if slope == 0.0:
+            longest = longest if base <= room else 0.0
+        else:
+            longest = min(longest, max(0.0, (room - base) / slope))
+    return longest
 
 
 def _fk_source(name: str, fk_rows, n: int) -> str:

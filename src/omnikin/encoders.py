@@ -61,7 +61,8 @@ import numpy as np
 
 from ._arrays import TEXT_TYPES, container_problem, whole_problem
 from .errors import InputError, OdometryInputError, shorten
-from .wheels import COUNTER_BITS_RANGE
+from .geometry import MAX_ANGLE
+from .wheels import COUNTER_BITS_RANGE, MAX_SPEED_RANGE
 
 JUMP_MARGIN = 1.5
 """A wheel may turn (or change its speed) this much faster than its stated limit before a
@@ -98,6 +99,7 @@ RANKS = {
     "order": 4,  # timestamp not later than the previous one, or an infinite interval
     "jump": 5,  # the speed rule
     "change": 6,  # the change-of-speed rule
+    "motion": 7,  # the body increment of the interval beyond the bounds of one step
 }
 """Order of the checks of one sample (streaming runs them in this order; batch reports the
 earliest sample and, within it, the lowest rank)."""
@@ -113,19 +115,31 @@ def check_bits(bits, what: str = "counter_bits") -> int | None:
     return int(bits)
 
 
+MAX_JUMP_TEXT = "a finite number of ticks > 0"
+MAX_WHEEL_SPEED_TEXT = f"a wheel speed in [{MAX_SPEED_RANGE[0]:g}, {MAX_SPEED_RANGE[1]:g}] rad/s"
+"""What ``max_wheel_speed`` must be: the range of a wheel's ``max_speed`` in a robot file
+(:data:`omnikin.wheels.MAX_SPEED_RANGE`; 1e4 rad/s is 95 000 rpm, beyond any wheel)."""
+MAX_WHEEL_ACCEL_TEXT = "a wheel acceleration > 0 [rad/s^2] (or inf: no bound)"
+
+
 def check_max_jump(max_jump) -> float | None:
-    return _positive(max_jump, "max_jump", "a finite number of ticks > 0")
+    """``max_jump`` [ticks] > 0 (each wheel's bound in radians is checked by :func:`counter_rules`)."""
+    return _positive(max_jump, "max_jump", MAX_JUMP_TEXT)
 
 
 def check_max_wheel_speed(speed) -> float | None:
-    return _positive(speed, "max_wheel_speed", "a finite wheel speed > 0 [rad/s]")
+    """``max_wheel_speed`` [rad/s] within :data:`omnikin.wheels.MAX_SPEED_RANGE`."""
+    value = _positive(speed, "max_wheel_speed", MAX_WHEEL_SPEED_TEXT)
+    if value is not None and not MAX_SPEED_RANGE[0] <= value <= MAX_SPEED_RANGE[1]:
+        raise OdometryInputError(f"max_wheel_speed must be {MAX_WHEEL_SPEED_TEXT}, got {value:g}")
+    return value
 
 
 def check_max_wheel_accel(accel) -> float | None:
     """``max_wheel_accel`` [rad/s^2] > 0; ``inf`` switches the change-of-speed rule off."""
     if isinstance(accel, numbers.Real) and not isinstance(accel, (bool, np.bool_)) and accel == math.inf:
         return math.inf
-    return _positive(accel, "max_wheel_accel", "a wheel acceleration > 0 [rad/s^2] (or inf: no bound)")
+    return _positive(accel, "max_wheel_accel", MAX_WHEEL_ACCEL_TEXT)
 
 
 def _positive(value, name: str, what: str) -> float | None:
@@ -244,15 +258,18 @@ class CounterRule:
             f"({-half} .. {2 * half - 1}), wheel {self.wheel!r}"
         )
 
-    def wrap_hint(self, delta, dt, before=None, dt_before=None) -> str:
+    def wrap_hint(self, delta, dt, before=None, dt_before=None, readings=()) -> str:
         """For a wheel without counter width: ``"; read as a 12-bit counter it is 11 ticks"`` for
         the widest counter that makes the exact increment ``delta`` over ``dt`` plausible, and
         with the previous increment ``before`` over ``dt_before`` (the pair may hold the wrap in
-        either interval) ``"; read as a 12-bit counter they are -1 then -4 ticks"``; else ``""``."""
+        either interval) ``"; read as a 12-bit counter they are -1 then -4 ticks"``; else ``""``.
+        A width is offered only if the ``readings`` of the interval lie in its counter's range."""
         if self.bits is not None:
             return ""
         first = None if before is None else exact_value(before)
         for bits in range(64, 1, -1):
+            if not all(in_counter_range(v, bits) for v in readings):
+                break  # out of range for this width, and for every narrower one
             top = 2.0 ** (bits - 1) - 0.5
             wrapped = wrap_exact(delta, bits)
             if abs(wrapped) > min(self.limit(dt), top):
@@ -300,7 +317,11 @@ def counter_rules(
 
     ``counter_bits`` applies to every wheel; a wheel whose robot file gives another
     ``encoder.counter_bits`` is an error (neither is guessed to win). Without it each wheel
-    uses its own ``encoder.counter_bits`` (or none).
+    uses its own ``encoder.counter_bits`` (or none). ``max_wheel_speed`` lies in the range of a
+    robot file's ``max_speed``, and ``max_jump`` may not let a wheel turn more than
+    :data:`~omnikin.geometry.MAX_ANGLE` in one interval: physical bounds, so that no option
+    lets a corrupt sample through (the body increment of an interval has its own bounds,
+    :func:`omnikin.integration.step_problem`).
     """
     bits = check_bits(counter_bits)
     max_jump = check_max_jump(max_jump)
@@ -313,6 +334,12 @@ def counter_rules(
             raise InputError(
                 f"counter_bits={bits} contradicts encoder.counter_bits: {own} of wheel {w.name!r} "
                 f"in the robot file; give one of them"
+            )
+        if max_jump is not None and max_jump * abs(w.encoder.rad_per_tick) > MAX_ANGLE:
+            raise OdometryInputError(
+                f"max_jump={max_jump:g} ticks would let wheel {w.name!r} turn "
+                f"{max_jump * abs(w.encoder.rad_per_tick):.6g} rad in one interval, beyond the "
+                f"{MAX_ANGLE:g} rad bound on every angle the core takes"
             )
         if speed is not None:
             bound, source = JUMP_MARGIN * speed, f"{JUMP_MARGIN:g} x max_wheel_speed {speed:g} rad/s"
@@ -435,11 +462,36 @@ def wrap_scalar(delta, bits: int | None):
 
 
 def exact_value(value):
-    """A reading as an exact number: ints as they are, whole floats as ints, other floats as
-    the Fraction they hold exactly."""
-    if isinstance(value, int):
+    """A finite reading as an exact number: integers (Python or NumPy) as Python ints, whole
+    floats as ints, other floats as the Fraction they hold exactly (a Fraction as it is).
+
+    The streaming estimator keeps its readings in this form, so that its generated kernel
+    subtracts the next integer reading exactly (``int - float`` rounds twice beyond 2**53)."""
+    if isinstance(value, (int, Fraction)):
         return value
+    if isinstance(value, np.integer):
+        return int(value)
+    value = float(value)
     return int(value) if value.is_integer() else Fraction(value)
+
+
+def as_float(value) -> float:
+    """A real number (Python int of any size, Fraction, NumPy scalar) as a float, +-inf
+    beyond the float range (``float(10**400)`` raises OverflowError)."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf if value > 0 else -math.inf
+
+
+def as_floats(values: np.ndarray) -> np.ndarray:
+    """An array of real numbers as float64, each converted by :func:`as_float` (an object
+    array may hold integers beyond the float range)."""
+    if values.dtype != object:
+        return values.astype(np.float64)
+    out = np.empty(values.shape)
+    out.reshape(-1)[:] = [as_float(v) for v in values.reshape(-1)]
+    return out
 
 
 def exact_increment(new, old, bits: int | None):
@@ -459,7 +511,10 @@ def counter_readings(ticks, names) -> np.ndarray:
     NumPy integer arrays are kept as they are (no copy); lists of Python integers become
     int64, uint64 (beyond 2**63, e.g. a 64-bit unsigned counter) or, when they fit neither,
     an object array of Python ints, never float64 (which would round them beyond 2**53).
-    Floats are allowed; bools, complex numbers, text, unordered containers (sets, dicts) and
+    Floats are allowed: float64 when every integer among them is a float exactly, else (floats
+    mixed with integers beyond 2**53) an object array of the exact numbers (ints, and the
+    Fraction a non-integral float holds), so that the increments are exact, as the streaming
+    estimator takes them. Bools, complex numbers, text, unordered containers (sets, dicts) and
     anything else are refused, naming the sample.
     """
     arr = as_reading_array(ticks, names, "ticks")
@@ -507,9 +562,11 @@ def _exact_from_python(ticks, converted: np.ndarray, names) -> np.ndarray:
             if not _is_number(v):
                 raise OdometryInputError(f"ticks: reading {show_number(v)} for wheels {names} is not a number")
         if any(ok and abs(int(v)) > FLOAT_EXACT for ok, v in zip(integral, flat, strict=True)):
-            raise OdometryInputError(
-                "ticks: integer readings beyond 2**53 mixed with floats would be rounded; give integers only"
-            )
+            # floats would round these integers: every reading as the exact number it is
+            # (non-finite floats stay floats and are refused at their sample)
+            exact = np.empty(len(flat), dtype=object)
+            exact[:] = [v if ok else _exact_or_non_finite(float(v)) for ok, v in zip(integral, flat, strict=True)]
+            return exact.reshape(obj.shape)
         return obj.astype(np.float64)
     values = [int(v) for v in flat]
     if not values or (min(values) >= INT64_MIN and max(values) <= INT64_MAX):
@@ -519,6 +576,11 @@ def _exact_from_python(ticks, converted: np.ndarray, names) -> np.ndarray:
     out = np.empty(len(values), dtype=object)
     out[:] = values
     return out.reshape(obj.shape)
+
+
+def _exact_or_non_finite(value: float):
+    """A float reading as the exact number it holds (:func:`exact_value`), or itself if NaN or inf."""
+    return exact_value(value) if math.isfinite(value) else value
 
 
 # --- the first problem of a block -------------------------------------------------------------------
@@ -580,11 +642,22 @@ def first_bad(mask, what: str, names=None, offset: int = 0) -> None:
         raise_at(what + (f", wheel {names[wheel]!r}" if wheels else ""), row + offset, trial)
 
 
+def timestamp_problem(value) -> str | None:
+    """Why ``value`` cannot be a timestamp [s]: a bool, text, a complex number or any other
+    object that is no real number (None if it is one; finiteness is checked with the intervals).
+    The streaming estimator asks this of each timestamp, batch odometry of each it cannot read
+    as a float, so both refuse the same sample."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        return f"timestamp must be a number [s], got {shorten(value)}"
+    return None
+
+
 def time_problems(t: np.ndarray, offset: int) -> tuple[np.ndarray, list[Problem]]:
     """Intervals ``(..., m)`` [s] of the timestamps ``t`` ``(..., m + 1)`` (row 0 is sample
     ``offset``), and the first non-finite timestamp and first interval that is not a positive
     finite number."""
-    dt = np.diff(t, axis=-1)
+    with np.errstate(over="ignore", invalid="ignore"):  # refused below
+        dt = np.diff(t, axis=-1)
     if np.all(dt > 0) and np.all(dt < np.inf):
         return dt, []
     found = [
@@ -619,7 +692,14 @@ class Carry:
 
 
 def block_increments(
-    rules, t: np.ndarray, values: np.ndarray, offset: int, carry: Carry, unit: str = "ticks", pending=None
+    rules,
+    t: np.ndarray,
+    values: np.ndarray,
+    offset: int,
+    carry: Carry,
+    unit: str = "ticks",
+    pending=None,
+    motion=None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Checked increments of one block: ``(dt (..., m), delta (..., m, n))`` [s, ``unit`` as
     float] of ``values`` ``(..., m + 1, n)`` (readings from :func:`counter_readings`, or wheel
@@ -627,35 +707,40 @@ def block_increments(
 
     Raises :class:`OdometryInputError` for the earliest refused sample (module docstring), or
     ``pending`` (a :class:`Problem` found elsewhere, e.g. a steering angle) if it comes first
-    and lies in this block. ``carry`` links the blocks and is updated.
+    and lies in this block. ``motion(dt, delta, offset)``, if given, is called with the
+    intervals before the first of those problems and returns the first whose body increment is
+    refused (a :class:`Problem` of rank ``"motion"``) or None. ``carry`` links the blocks and is
+    updated. Increments beyond the float range are +-inf (refused by ``motion``).
     """
     names = [r.wheel for r in rules]
     dt, found_in_times = time_problems(t, offset)
     problems: list[Problem | None] = list(found_in_times)
-    if values.dtype.kind == "f":
+    unreadable = non_finite(values)
+    if unreadable is not None:
         what = "ticks: non-finite reading" if unit == "ticks" else "angles: non-finite wheel angle"
-        problems.append(
-            problem_at(~np.isfinite(values), True, offset, "reading", lambda r, tr, j: f"{what}, wheel {names[j]!r}")
-        )
+        problems.append(problem_at(unreadable, True, offset, "reading", lambda r, tr, j: f"{what}, wheel {names[j]!r}"))
     if unit == "ticks":
         problems += _range_problems(rules, values, offset)
         exact = _exact_differences(rules, values)
-        delta = exact.astype(np.float64)
-        bad = ~(np.abs(exact if exact.dtype == object else delta) <= _limits(rules, dt))
+        with np.errstate(over="ignore", invalid="ignore"):  # NaN readings, endless intervals: refused as such
+            delta = as_floats(exact)
+            bad = ~(np.abs(exact if exact.dtype == object else delta) <= _limits(rules, dt))
         for j, r in enumerate(rules):
             if r.bits == 64 and exact.dtype.kind == "i":  # -2**63: half the range, no float between it and the limit
                 bad[..., j] |= exact[..., j] == INT64_MIN
     else:
-        exact = delta = np.diff(values, axis=-2)
-        limit = np.stack([np.broadcast_to(r.angle_limit(dt), dt.shape) for r in rules], axis=-1)
-        bad = ~(np.abs(delta) <= limit)
+        with np.errstate(over="ignore", invalid="ignore"):
+            exact = delta = np.diff(values, axis=-2)
+            limit = np.stack([np.broadcast_to(r.angle_limit(dt), dt.shape) for r in rules], axis=-1)
+            bad = ~(np.abs(delta) <= limit)
 
     def jump(row, trial, j):
         gap = _at(dt, trial, row)
         if unit != "ticks":
-            return rules[j].jump_message(float(delta[trial + (row, j)]), gap, unit)
+            return rules[j].jump_message(float(delta[_trial_index(delta, trial) + (row, j)]), gap, unit)
         d = _exact_difference_at(rules[j], values, trial, row, j)
-        hint = rules[j].wrap_hint(d, gap, *_previous(delta, dt, carry, trial, row, j))
+        ends = _readings_at(values, trial, row, j)
+        hint = rules[j].wrap_hint(d, gap, *_previous(delta, dt, carry, trial, row, j), readings=ends)
         return rules[j].jump_message(d, gap, hint=hint)
 
     problems.append(problem_at(bad, True, offset + 1, "jump", jump))
@@ -663,10 +748,27 @@ def block_increments(
     if pending is not None and pending.sample <= offset + dt.shape[-1]:
         problems.append(pending)
     found = [p for p in problems if p is not None]
-    if found:
-        raise min(found).error()
+    first = min(found) if found else None
+    clean = dt.shape[-1] if first is None else first.sample - offset - 1  # intervals before it
+    if motion is not None and clean > 0:
+        refused = motion(dt[..., :clean], delta[..., :clean, :], offset)
+        if refused is not None:
+            raise refused.error()
+    if first is not None:
+        raise first.error()
     carry.delta, carry.dt = delta[..., -1:, :], dt[..., -1:]
     return dt, delta
+
+
+def non_finite(values: np.ndarray) -> np.ndarray | None:
+    """Mask of the readings that are not finite numbers (float NaN or inf, also inside an object
+    array of exact readings, :func:`counter_readings`), or None for integer arrays."""
+    if values.dtype.kind == "f":
+        return ~np.isfinite(values)
+    if values.dtype == object:
+        flags = [isinstance(v, float) and not math.isfinite(v) for v in values.reshape(-1)]
+        return np.array(flags, dtype=bool).reshape(values.shape)
+    return None
 
 
 def _at(array: np.ndarray, trial: tuple, row: int) -> float:
@@ -715,7 +817,9 @@ def _change_problem(rules, dt, delta, values, offset: int, carry: Carry, unit: s
             if unit != "ticks":
                 return rules[j].change_message(before, after, g0, g1, unit)
             exact = _exact_difference_at(rules[j], values, trial, p + shift, j)
-            return rules[j].change_message(before, exact, g0, g1, unit, rules[j].wrap_hint(exact, g1, before, g0))
+            ends = _readings_at(values, trial, p + shift, j)
+            hint = rules[j].wrap_hint(exact, g1, before, g0, readings=ends)
+            return rules[j].change_message(before, exact, g0, g1, unit, hint)
 
         found = problem_at(bad, True, offset + 1 + shift, "change", describe)
         if found is not None:
@@ -727,7 +831,7 @@ def _speed_changes(a, slack, d0, d1, dt0, dt1) -> np.ndarray:
     """Mask of the pairs breaking :func:`change_limit`. A cheap sufficient bound first (both
     terms of the limit are at least ``a min(dt0, dt1) (dt0 + dt1) / 2``, shrunk by
     :data:`SAFETY`); the exact limit only where that does not settle it (as the streaming kernel)."""
-    with np.errstate(divide="ignore", invalid="ignore"):  # bad intervals are refused by their own check
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):  # bad intervals: refused by their own check
         change = np.abs(d1 - d0)
         span = np.minimum(dt0, dt1) * (dt0 + dt1)
         cheap = (a * (0.5 * SAFETY)) * span + (2.0 * SAFETY) * slack
@@ -745,8 +849,10 @@ def _range_problems(rules, readings, offset: int) -> list[Problem]:
             continue
         if readings.dtype.kind == "f":
             ok = block.min() >= low and block.max() < high
-        else:
+        elif readings.dtype.kind in "iu":
             ok = int(block.min()) >= low and int(block.max()) < high
+        else:  # exact Python numbers (ints, Fractions) and non-finite floats: compared one by one
+            ok = False
         if ok:
             continue
         if readings.dtype.kind == "u":
@@ -754,7 +860,8 @@ def _range_problems(rules, readings, offset: int) -> list[Problem]:
         else:
             mask = ~((block >= low) & (block < high))
         found = earliest(mask, True)
-        assert found is not None
+        if found is None:
+            continue
         row, trial, c = found
         j = cols[c]
         message = rules[j].range_message(readings[trial + (row, j)])
@@ -818,11 +925,14 @@ def _float_differences(rules, readings: np.ndarray) -> np.ndarray:
 
 def _exact_difference_at(rule, readings, trial: tuple, k: int, j: int):
     """The wrapped increment between rows k and k+1 of wheel j, as an exact Python number."""
+    a, b = _readings_at(readings, trial, k, j)
+    return wrap_exact(b - a, rule.bits)
+
+
+def _readings_at(readings, trial: tuple, k: int, j: int) -> tuple:
+    """Rows k and k+1 of wheel j as exact Python numbers (:func:`exact_value`)."""
     index = _trial_index(readings, trial)
-    a, b = readings[index + (k, j)], readings[index + (k + 1, j)]
-    if readings.dtype.kind == "f":
-        return exact_increment(float(b), float(a), rule.bits)
-    return wrap_exact(int(b) - int(a), rule.bits)
+    return exact_value(readings[index + (k, j)]), exact_value(readings[index + (k + 1, j)])
 
 
 def _by_bits(rules):
@@ -837,8 +947,9 @@ def _limits(rules, dt: np.ndarray) -> np.ndarray:
     return np.stack([np.broadcast_to(r.limit(dt), dt.shape) for r in rules], axis=-1)
 
 
-def wheel_increments(rules, t, values, block: int, unit: str = "ticks", pending=None) -> np.ndarray:
-    """All checked increments ``(..., N - 1, n)`` [``unit``], computed ``block`` samples at a time."""
+def wheel_increments(rules, t, values, block: int, unit: str = "ticks", pending=None, motion=None) -> np.ndarray:
+    """All checked increments ``(..., N - 1, n)`` [``unit``], computed ``block`` samples at a time
+    (:func:`block_increments`)."""
     m = values.shape[-2] - 1
     lead = np.broadcast_shapes(values.shape[:-2], t.shape[:-1])
     out = np.empty(lead + (m, len(rules)))
@@ -846,7 +957,7 @@ def wheel_increments(rules, t, values, block: int, unit: str = "ticks", pending=
     for s0 in range(0, m, block):
         s1 = min(m, s0 + block)
         _, out[..., s0:s1, :] = block_increments(
-            rules, t[..., s0 : s1 + 1], values[..., s0 : s1 + 1, :], s0, carry, unit, pending
+            rules, t[..., s0 : s1 + 1], values[..., s0 : s1 + 1, :], s0, carry, unit, pending, motion
         )
     if pending is not None:  # in the last block at the latest, unless there is no interval
         raise pending.error()

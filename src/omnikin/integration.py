@@ -15,6 +15,8 @@ used, so they share one vectorised kernel.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ._arrays import as_real_array
@@ -39,6 +41,35 @@ def check_method(method: str) -> str:
 
 FIELDS = (("x", "m", POSITION_LIMIT), ("y", "m", POSITION_LIMIT), ("theta", "rad", MAX_ANGLE))
 """Name, unit and bound of each component of a start pose."""
+
+STEP_FIELDS = (
+    ("displacement along the body x axis", "m", POSITION_LIMIT),
+    ("displacement along the body y axis", "m", POSITION_LIMIT),
+    ("rotation", "rad", MAX_ANGLE),
+)
+"""What each component ``(a, b, phi)`` of the body increment of one interval is, its unit and
+its bound: the bounds of a pose (:data:`FIELDS`). A larger step is no motion of a wheeled robot
+between two samples but a corrupt reading or a counter reset: a rotation of ``1e15`` rad has no
+digit left modulo 2 pi (the heading becomes noise), a displacement of ``1e300`` m swallows every
+later increment."""
+
+STEP_BOUNDS = np.array([limit for _, _, limit in STEP_FIELDS])
+"""The bounds of :data:`STEP_FIELDS` as an array ``(3,)`` [m, m, rad]."""
+
+
+def step_problem(a: float, b: float, phi: float, dt: float) -> str | None:
+    """Why the body increment ``(a, b, phi)`` [m, m, rad] of one interval of ``dt`` [s] cannot
+    be integrated (a component beyond :data:`STEP_FIELDS`, or not a finite number), else None.
+    Batch and streaming odometry refuse such an interval at its sample."""
+    for k in (2, 0, 1):  # the rotation first: a wheel that jumps turns the body most of all
+        (what, unit, limit), value = STEP_FIELDS[k], (a, b, phi)[k]
+        if not abs(value) <= limit:
+            size = f"of {value:.6g} {unit}" if math.isfinite(value) else "beyond the float range"
+            return (
+                f"impossible motion in one interval of {dt:.6g} s: a {what} {size}, beyond +-{limit:g} {unit} "
+                f"(a corrupt reading or a counter reset?)"
+            )
+    return None
 
 
 def check_start(start, what: str = "start") -> np.ndarray:

@@ -21,19 +21,23 @@ import numpy as np
 
 from ._arrays import as_real_array
 from .encoders import (
+    SAFETY,
     Carry,
     Problem,
+    as_float,
+    as_floats,
     as_reading_array,
     block_increments,
     container_problem,
     counter_readings,
     counter_rules,
     problem_at,
+    timestamp_problem,
     wheel_increments,
 )
 from .errors import InputError, OdometryInputError, digits_apart
 from .geometry import MAX_ANGLE, wrap_angle
-from .integration import check_method, check_start, integrate_components
+from .integration import STEP_BOUNDS, check_method, check_start, integrate_components, step_problem
 from .model import STEER_LIMIT_SLACK, Robot
 
 
@@ -112,6 +116,110 @@ def _fk_input(delta, scale, fk) -> np.ndarray:
     return angles
 
 
+def fk_coefficients(f: np.ndarray, scale) -> list[list[float]]:
+    """The rows (a, b, phi) of a constant forward-kinematics operator ``f`` ``(3, n)`` times
+    ``scale`` per wheel, as Python floats: the body increment per tick (``scale``: rad per tick)
+    or per radian (ones). The streaming kernels have them written in; batch odometry uses the
+    same numbers."""
+    return [[float(v) * float(k) for v, k in zip(row[: len(scale)], scale, strict=True)] for row in f]
+
+
+def body_steps(coefficients: list[list[float]], delta: np.ndarray) -> np.ndarray:
+    """Body increments ``(..., m, 3)`` [m, m, rad] of wheel increments ``delta`` ``(..., m, n)``
+    with the constant :func:`fk_coefficients`, each component summed over the wheels in their
+    order and without the terms of zero coefficient: the arithmetic of the streaming kernel
+    (``omnikin._stream_kernel._fk_lines``), to the bit, so that batch and streaming odometry
+    refuse the same steps (:func:`omnikin.integration.step_problem`)."""
+    out = np.zeros(delta.shape[:-1] + (3,))
+    for r, row in enumerate(coefficients):
+        acc = None
+        for j, c in enumerate(row):
+            if c != 0.0:
+                acc = c * delta[..., j] if acc is None else acc + c * delta[..., j]
+        if acc is not None:
+            out[..., r] = acc
+    return out
+
+
+def steered_steps(f: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """Body increments ``(..., 3)`` = ``f`` ``(..., 3, k)`` times ``angles`` ``(..., k)``, summed
+    in the order of the columns (one interval in streaming odometry, all of them in batch: the
+    same arithmetic)."""
+    acc = f[..., 0] * angles[..., None, 0]
+    for j in range(1, f.shape[-1]):
+        acc = acc + f[..., j] * angles[..., None, j]
+    return acc
+
+
+def step_problem_at(steps: np.ndarray, dt: np.ndarray, offset: int) -> Problem | None:
+    """The first interval (row ``r`` is sample ``offset + 1 + r``) whose body increment in
+    ``steps`` ``(..., m, 3)`` over ``dt`` ``(..., m)`` [s] is refused by
+    :func:`omnikin.integration.step_problem`, as a :class:`~omnikin.encoders.Problem`."""
+    with np.errstate(invalid="ignore"):
+        beyond = np.any(~(np.abs(steps) <= STEP_BOUNDS), axis=-1)
+
+    def describe(row, trial, _):
+        lead = steps.shape[:-2]
+        index = tuple(i if n > 1 else 0 for i, n in zip(trial[len(trial) - len(lead) :], lead, strict=True))
+        a, b, phi = (float(v) for v in steps[index + (row,)])
+        lead_dt = dt.shape[:-1]
+        at = tuple(i if n > 1 else 0 for i, n in zip(trial[len(trial) - len(lead_dt) :], lead_dt, strict=True))
+        return step_problem(a, b, phi, float(dt[at + (row,)])) or ""
+
+    return problem_at(beyond, False, offset + 1, "motion", describe)
+
+
+class StepCheck:
+    """The ``motion`` check of :func:`omnikin.encoders.block_increments` for robots without
+    steerable wheels: the first interval whose body increment (:func:`body_steps`) is beyond
+    the bounds of one step. A block whose longest interval lets no wheel reach them (every
+    increment is within its jump limit there) is passed without computing them."""
+
+    def __init__(self, coefficients: list[list[float]], rules, unit: str):
+        self.coefficients = coefficients
+        self.rules = rules
+        self.unit = unit
+
+    def __call__(self, dt: np.ndarray, delta: np.ndarray, offset: int) -> Problem | None:
+        longest = float(np.max(dt))
+        limits = [r.limit(longest) if self.unit == "ticks" else r.angle_limit(longest) for r in self.rules]
+        reach = [sum(abs(c) * lim for c, lim in zip(row, limits, strict=True) if c) for row in self.coefficients]
+        if all(x <= bound * SAFETY for x, bound in zip(reach, STEP_BOUNDS, strict=True)):
+            return None
+        with np.errstate(over="ignore", invalid="ignore"):
+            return step_problem_at(body_steps(self.coefficients, delta), dt, offset)
+
+
+class SteeredSteps:
+    """The ``motion`` check of :func:`omnikin.encoders.block_increments` for robots with steerable
+    wheels: the operator of each interval at its mean steering, the body increments
+    (:func:`steered_steps`), kept block by block for the integration, and the first beyond the
+    bounds of one step."""
+
+    def __init__(self, robot: Robot, names, steer: np.ndarray, scale):
+        self.robot, self.names, self.scale = robot, names, scale
+        with np.errstate(invalid="ignore", over="ignore"):  # bad angles: refused at their sample
+            self.mid = mid_steer(steer)
+        self.blocks: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def __call__(self, dt: np.ndarray, delta: np.ndarray, offset: int) -> Problem | None:
+        m = delta.shape[-2]
+        f = self.robot.fk_matrix(self.mid[..., offset : offset + m, :], self.names)  # (3, k) if constant
+        angles = _fk_input(delta, self.scale, f)
+        with np.errstate(over="ignore", invalid="ignore"):
+            steps = steered_steps(f if f.ndim > 2 else f[..., None, :, :], angles)
+        self.blocks.append((angles, steps))
+        return step_problem_at(steps, dt, offset)
+
+    def joined(self) -> tuple[np.ndarray, np.ndarray]:
+        """The wheel angles ``(..., N - 1, k)`` [rad] and body increments ``(..., N - 1, 3)`` of every
+        interval."""
+        if len(self.blocks) == 1:
+            return self.blocks[0]
+        angles, steps = zip(*self.blocks, strict=True)
+        return np.concatenate(angles, axis=-2), np.concatenate(steps, axis=-2)
+
+
 def batch_odometry(
     robot: Robot,
     t,
@@ -141,14 +249,16 @@ def batch_odometry(
     rules = counter_rules(wheels, counter_bits, max_jump, max_wheel_speed, max_wheel_accel)
     names = [w.name for w in wheels]
     tk = counter_readings(ticks, names)
-    tt = _timestamps(t, tk, "ticks", names)
+    tt, pending = _timestamps(t, tk, "ticks", names)
     scale = np.array([r.rad_per_tick for r in rules])
     check_method(method)
     start_pose = None if start is None else check_start(start)
     if robot.steerable:
-        s, pending = _steering(robot, steer, np.broadcast_shapes(tk.shape[:-2], tt.shape[:-1]), tk.shape[-2])
-        d = wheel_increments(rules, tt, tk, CHUNK, "ticks", pending)
-        return _integrate_steered(robot, names, tt, d, scale, s, method, start_pose)
+        lead = np.broadcast_shapes(tk.shape[:-2], tt.shape[:-1])
+        s, steering = _steering(robot, steer, lead, tk.shape[-2])
+        steps = SteeredSteps(robot, names, s, scale)
+        wheel_increments(rules, tt, tk, CHUNK, "ticks", _earliest(pending, steering), steps)
+        return _integrate_steered(robot, names, tt, steps, lead, method, start_pose)
     _no_steer(robot, steer)
     f = robot.fk_matrix(None, names)
     rows = robot.fk_rows(None, names)
@@ -158,10 +268,13 @@ def batch_odometry(
     residual = np.empty(lead + (m, rows.shape[-2])) if _redundant(robot, rows) else None
     pose = out[..., 0, :]
     f_ticks = f * scale
+    check = StepCheck(fk_coefficients(f, scale), rules, "ticks")
     carry = Carry()
     for s0 in range(0, m, CHUNK):
         s1 = min(m, s0 + CHUNK)
-        dt, d = block_increments(rules, tt[..., s0 : s1 + 1], tk[..., s0 : s1 + 1, :], s0, carry)
+        dt, d = block_increments(
+            rules, tt[..., s0 : s1 + 1], tk[..., s0 : s1 + 1, :], s0, carry, "ticks", pending, check
+        )
         comps = np.matmul(f_ticks, np.swapaxes(d, -1, -2))  # (..., 3, block)
         integrate_components(
             comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], pose, method, out=out[..., s0 : s1 + 1, :]
@@ -170,6 +283,8 @@ def batch_odometry(
         if residual is not None:
             residual[..., s0:s1, :] = _residual(_fk_input(d, scale, f), rows, inc[..., s0:s1, :], dt)
         pose = out[..., s1, :]
+    if pending is not None:  # a single sample: no block
+        raise pending.error()
     if residual is None:
         residual = np.broadcast_to(np.zeros(()), lead + (m, rows.shape[-2]))
     return OdometryResult(tt, out, inc, residual)
@@ -193,17 +308,19 @@ def batch_odometry_from_angles(
     rules = counter_rules(wheels, None, max_jump, max_wheel_speed, max_wheel_accel)
     names = [w.name for w in wheels]
     a = _angle_array(angles, names)
-    tt = _timestamps(t, a, "angles", names)
+    tt, pending = _timestamps(t, a, "angles", names)
     check_method(method)
     start_pose = None if start is None else check_start(start)
     ones = np.ones(len(wheels))
     if robot.steerable:
-        s, pending = _steering(robot, steer, np.broadcast_shapes(a.shape[:-2], tt.shape[:-1]), a.shape[-2])
-        d = wheel_increments(rules, tt, a, CHUNK, "rad", pending)
-        return _integrate_steered(robot, names, tt, d, ones, s, method, start_pose)
+        lead = np.broadcast_shapes(a.shape[:-2], tt.shape[:-1])
+        s, steering = _steering(robot, steer, lead, a.shape[-2])
+        steps = SteeredSteps(robot, names, s, ones)
+        wheel_increments(rules, tt, a, CHUNK, "rad", _earliest(pending, steering), steps)
+        return _integrate_steered(robot, names, tt, steps, lead, method, start_pose)
     _no_steer(robot, steer)
-    d = wheel_increments(rules, tt, a, CHUNK, "rad")
     f = robot.fk_matrix(None, names)
+    d = wheel_increments(rules, tt, a, CHUNK, "rad", pending, StepCheck(fk_coefficients(f, ones), rules, "rad"))
     out = _pose_array(d.shape[:-2], tt.shape[:-1], d.shape[-2] + 1, start_pose)
     comps = np.matmul(f, np.swapaxes(d, -1, -2))
     integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], out[..., 0, :], method, out=out)
@@ -212,26 +329,43 @@ def batch_odometry_from_angles(
     return OdometryResult(tt, out, inc, _residual(_fk_input(d, ones, f), rows, inc, np.diff(tt, axis=-1)))
 
 
+def _earliest(*problems: Problem | None) -> Problem | None:
+    """The first of the problems found before the increments (timestamps, steering), or None."""
+    found = [p for p in problems if p is not None]
+    return min(found) if found else None
+
+
 def _angle_array(angles, names) -> np.ndarray:
-    """Wheel angles ``(..., N, n)`` [rad] as float64; bools, text and unordered containers refused."""
+    """Wheel angles ``(..., N, n)`` [rad] as float64 (+-inf beyond the float range: refused at
+    their sample as non-finite); bools, text and unordered containers refused."""
     a = as_reading_array(angles, names, "angles")
     if a.dtype.kind not in "iufO":
         raise OdometryInputError(f"angles: expected real numbers [rad] for wheels {names}, got dtype {a.dtype}")
     try:
-        return a.astype(np.float64)
+        return as_floats(a)
     except (TypeError, ValueError):
         raise OdometryInputError(f"angles: expected real numbers [rad] for wheels {names}") from None
 
 
-def _timestamps(t, readings: np.ndarray, what: str, names) -> np.ndarray:
-    """Timestamps as float64 ``(..., N)`` after checking the shapes of ``readings`` ``(..., N, n)``."""
+def _timestamps(t, readings: np.ndarray, what: str, names) -> tuple[np.ndarray, Problem | None]:
+    """Timestamps as float64 ``(..., N)`` after checking the shapes of ``readings`` ``(..., N, n)``,
+    and the first timestamp that is no number as a pending :class:`~omnikin.encoders.Problem`
+    (it reads as 0 here; refused at its sample, as the streaming estimator refuses it). Integers
+    beyond the float range read as +-inf (refused at their sample as non-finite)."""
     n = len(names)
     if readings.ndim < 2 or readings.shape[-1] != n or readings.shape[-2] < 1:
         raise OdometryInputError(f"{what}: expected shape (..., N, {n}) for wheels {names}, got {readings.shape}")
     why = None if isinstance(t, np.ndarray) else container_problem(t)
     if why is not None:
         raise OdometryInputError(f"t: {why}; give the timestamps as a list, tuple or array")
-    tt = as_real_array(t, "t", OdometryInputError)
+    pending = None
+    try:
+        tt = as_real_array(t, "t", OdometryInputError)
+    except OdometryInputError:
+        located = _located_times(t)
+        if located is None:
+            raise
+        tt, pending = located
     if tt.shape[-1:] != readings.shape[-2:-1]:
         raise OdometryInputError(
             f"t: expected {readings.shape[-2]} timestamps to match {what} {readings.shape}, got shape {tt.shape}"
@@ -242,7 +376,29 @@ def _timestamps(t, readings: np.ndarray, what: str, names) -> np.ndarray:
         raise OdometryInputError(
             f"t: leading shape {tt.shape[:-1]} does not broadcast with {what} {readings.shape[:-2]}"
         ) from None
-    return tt
+    return tt, pending
+
+
+def _located_times(t) -> tuple[np.ndarray, Problem | None] | None:
+    """Timestamps that are not all floats: as float64 (beyond the float range +-inf, no number 0)
+    and the first that is no number (:func:`omnikin.encoders.timestamp_problem`), or None if
+    ``t`` is not a rectangular array of scalars (the caller's message stands)."""
+    try:
+        obj = np.array(t, dtype=object)
+    except (TypeError, ValueError):
+        return None
+    flat = obj.reshape(-1)
+    if obj.ndim == 0 or any(container_problem(v) is None and not isinstance(v, np.generic) for v in flat):
+        return None  # nested unevenly: not a table of timestamps
+    problems = [timestamp_problem(v) for v in flat]
+    values = np.array([0.0 if p else as_float(v) for p, v in zip(problems, flat, strict=True)]).reshape(obj.shape)
+    bad = np.array([p is not None for p in problems]).reshape(obj.shape)
+    pending = problem_at(bad, False, 0, "time", lambda row, trial, _: f"t: {problems[_flat_index(obj, trial, row)]}")
+    return values, pending
+
+
+def _flat_index(array: np.ndarray, trial: tuple, row: int) -> int:
+    return int(np.ravel_multi_index(trial + (row,), array.shape))
 
 
 def _no_steer(robot, steer) -> None:
@@ -314,14 +470,14 @@ def _steering(robot, steer, lead: tuple, n: int) -> tuple[np.ndarray, Problem | 
     return s, pending
 
 
-def _integrate_steered(robot, names, t, d, scale, s, method, start) -> OdometryResult:
-    """Forward kinematics of the increments ``d * scale`` [rad] per interval, at the mean
-    steering of its two ends, then pose integration."""
-    mid = mid_steer(s)
-    f = robot.fk_matrix(mid, names)
-    rows = robot.fk_rows(mid, names)
-    angles = _fk_input(d, scale, f)
-    inc = np.einsum("...ij,...j->...i", f, angles)
+def _integrate_steered(robot, names, t, steps: SteeredSteps, lead: tuple, method, start) -> OdometryResult:
+    """Pose integration of the body increments of each interval (:class:`SteeredSteps`, at the
+    mean steering of its two ends), with the residual of the fitted rows. ``lead``: the
+    leading shape of the readings and timestamps."""
+    if not steps.blocks:  # a single sample: no interval
+        steps(np.zeros(t.shape[:-1] + (0,)), np.zeros(lead + (0, len(names))), 0)
+    angles, inc = steps.joined()
+    rows = robot.fk_rows(steps.mid, names)
     comps = np.ascontiguousarray(np.swapaxes(inc, -1, -2))
     poses = integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], start, method)
     return OdometryResult(t, poses, inc, _residual(angles, rows, inc, np.diff(t, axis=-1)))

@@ -38,20 +38,42 @@ from ._stream_kernel import (
     state_kind,
     state_time,
 )
-from .encoders import container_problem, counter_rules, exact_increment, in_counter_range, show_number
+from .encoders import (
+    as_float,
+    container_problem,
+    counter_rules,
+    exact_increment,
+    exact_value,
+    in_counter_range,
+    show_number,
+    timestamp_problem,
+)
 from .errors import InputError, OdometryInputError, shorten
 from .geometry import wrap_angle
-from .integration import check_method, check_start
+from .integration import check_method, check_start, step_problem
 from .linalg import rank
 from .model import Robot
-from .odometry import encoded_wheels, mid_steer, steer_problem
+from .odometry import encoded_wheels, fk_coefficients, mid_steer, steer_problem, steered_steps
 
 _WHAT = {KIND_TICKS: "tick reading", KIND_ANGLES: "wheel angle"}
+
+STATE_FORMAT = 2
+"""Version of the pickled state of :class:`Odometry` (its attributes and the layout of the state
+tuple, :data:`omnikin._stream_kernel.S_POSE`); a pickle of another version is refused on load
+rather than failing later or integrating wrongly. Pickles without it are format 1 (tick readings
+kept as floats). Raise it whenever the state changes."""
 
 
 def _times(t: float, kind: int) -> tuple[float, float]:
     """The two time slots of the state (see :data:`omnikin._stream_kernel.S_POSE`)."""
     return (t, math.nan) if kind == KIND_TICKS else (math.nan, t)
+
+
+def _kept(values: tuple, kind: int) -> tuple:
+    """Readings as the state keeps them: tick readings as exact numbers (ints, or the Fraction
+    a non-integral float holds: :func:`omnikin.encoders.exact_value`), so that the kernel's
+    ``v - p`` of the next integer reading is exact; wheel angles as floats."""
+    return tuple(exact_value(v) for v in values) if kind == KIND_TICKS else values
 
 
 def _decline(state, t, values):
@@ -117,8 +139,8 @@ class Odometry:
         """Compile (or fetch) the kernels of this configuration."""
         fk_angles = fk_ticks = None
         if self._fk is not None:
-            fk_angles = [[float(v) for v in row[: self._n]] for row in self._fk]
-            fk_ticks = [[v * s for v, s in zip(row, self._scale, strict=True)] for row in fk_angles]
+            fk_angles = fk_coefficients(self._fk, [1.0] * self._n)
+            fk_ticks = fk_coefficients(self._fk, self._scale)
         self._kernels = kernel.build(
             self._n,
             fk_ticks,
@@ -241,12 +263,10 @@ class Odometry:
         return OdometryInputError(f"sample {k}: {detail}", sample=k, detail=detail)
 
     def _time(self, t) -> float:
-        if isinstance(t, (bool, np.bool_)) or not isinstance(t, numbers.Real):
-            raise self._fail(f"timestamp must be a number [s], got {shorten(t)}")
-        try:
-            value = float(t)
-        except OverflowError:
-            value = math.inf
+        problem = timestamp_problem(t)
+        if problem is not None:
+            raise self._fail(problem)
+        value = as_float(t)
         if not math.isfinite(value):
             raise self._fail(f"non-finite timestamp {show_number(t)}")
         return value
@@ -283,13 +303,10 @@ class Odometry:
             if isinstance(v, numbers.Integral) and kind == KIND_TICKS:
                 out.append(int(v))
                 continue
-            try:
-                v = float(v)
-            except OverflowError:
-                v = math.inf
-            if not math.isfinite(v):
+            number = as_float(v)
+            if not math.isfinite(number):
                 raise self._fail(f"non-finite {what} {show_number(v)}, wheel {name!r}")
-            out.append(v)
+            out.append(number)
         return tuple(out)
 
     def _update_general(self, t, readings, steer, kind: int):
@@ -317,40 +334,57 @@ class Odometry:
         exact: Sequence[Any]  # the increments as exact numbers (ticks) or floats (wheel angles)
         if kind == KIND_TICKS:
             exact = [exact_increment(v, p, r.bits) for v, p, r in zip(values, previous, self.rules, strict=True)]
-            for d, r, b in zip(exact, self.rules, before, strict=True):
+            for d, r, b, v, p in zip(exact, self.rules, before, values, previous, strict=True):
                 if abs(d) > r.limit(dt) or (r.half is not None and d == -r.half):
-                    hint = r.wrap_hint(d, dt, b, st[S_DT]) if linked else r.wrap_hint(d, dt)
+                    ends = (exact_value(p), exact_value(v))
+                    hint = r.wrap_hint(d, dt, b, st[S_DT], ends) if linked else r.wrap_hint(d, dt, readings=ends)
                     raise self._fail(r.jump_message(d, dt, hint=hint))
-            deltas = tuple(float(d) for d in exact)
+            deltas = tuple(as_float(d) for d in exact)  # +-inf beyond the float range: refused below
         else:
             exact = deltas = tuple(v - p for v, p in zip(values, previous, strict=True))
             for d, r in zip(deltas, self.rules, strict=True):
                 if abs(d) > r.angle_limit(dt):
                     raise self._fail(r.jump_message(d, dt, "rad"))
         if linked:
-            self._check_changes(exact, deltas, before, st[S_DT], dt, kind)
+            self._check_changes(exact, deltas, before, st[S_DT], dt, kind, values, previous)
         residual = increment = None
         if self._steer is not None and s is not None:  # steerable wheels
-            scale = self._scale if kind == KIND_TICKS else [1.0] * self._n
-            mid = np.asarray(mid_steer(np.stack([self._steer, s])))[0]
-            fk = self.robot.fk(np.array([d * k for d, k in zip(deltas, scale, strict=True)]), mid, self.wheel_names)
-            a, b, phi = (float(v) for v in fk.twist)
+            a, b, phi, residual = self._steered_increment(deltas, s, dt, kind)
             increment = (a, b, phi)
-            residual = [float(v) / dt for v in fk.residual]
         else:
             body_increment = self._kernels.fk_ticks if kind == KIND_TICKS else self._kernels.fk_angles
             assert body_increment is not None  # built for every robot without steerable wheels
             a, b, phi = body_increment(*deltas)
+        problem = step_problem(a, b, phi, dt)
+        if problem is not None:
+            raise self._fail(problem)
         pose = self._kernels.move(st[S_POSE], a, b, phi)
-        self._state = (pose,) + _times(t, kind) + (st[S_COUNT] + 1, dt, *values, *deltas)
+        self._state = (pose,) + _times(t, kind) + (st[S_COUNT] + 1, dt, *_kept(values, kind), *deltas)
         self._steer = s
         self._steer_increment = increment
         self._steer_residual = residual
         return pose
 
+    def _steered_increment(self, deltas, steer, dt: float, kind: int):
+        """Body increment (a, b, phi) [m, m, rad] of wheel increments ``deltas`` [ticks or rad]
+        at the mean steering of the interval, and the residual [rad/s]: the operator and the
+        arithmetic of batch odometry (:class:`omnikin.odometry.SteeredSteps`) on one interval."""
+        scale = self._scale if kind == KIND_TICKS else [1.0] * self._n
+        mid = mid_steer(np.stack([self._steer, steer]))
+        f = self.robot.fk_matrix(mid, self.wheel_names)  # (1, 3, k), or (3, k) if the encoded wheels do not steer
+        rows = self.robot.fk_rows(mid, self.wheel_names)
+        f, rows = f.reshape(f.shape[-2:]), rows.reshape(rows.shape[-2:])
+        angles = np.zeros(f.shape[-1])
+        angles[: self._n] = [d * k for d, k in zip(deltas, scale, strict=True)]
+        with np.errstate(over="ignore", invalid="ignore"):
+            inc = steered_steps(f, angles)
+            residual = [float(v) / dt for v in angles - rows @ inc]
+        a, b, phi = (float(v) for v in inc)
+        return a, b, phi, residual
+
     def _first(self, t, values, steer, kind):
         st = self._state
-        self._state = (st[S_POSE],) + _times(t, kind) + (1, math.nan, *values) + (0.0,) * self._n
+        self._state = (st[S_POSE],) + _times(t, kind) + (1, math.nan, *_kept(values, kind)) + (0.0,) * self._n
         self._steer = steer
         return self.pose
 
@@ -370,13 +404,14 @@ class Odometry:
         differs = " with different readings or steering" if dt == 0.0 else ""
         raise self._fail(f"timestamp {t!r} {what} the previous one {state_time(self._state)!r}{differs}")
 
-    def _check_changes(self, exact, deltas, before, dt_before: float, dt: float, kind: int) -> None:
+    def _check_changes(self, exact, deltas, before, dt_before: float, dt: float, kind: int, values, previous) -> None:
         """Raise if a wheel's increment changes faster than its change-of-speed rule allows
         (:func:`omnikin.encoders.change_limit`, the expression batch odometry evaluates)."""
         unit = "ticks" if kind == KIND_TICKS else "rad"
-        for e, d, b, r in zip(exact, deltas, before, self.rules, strict=True):
+        for e, d, b, r, v, p in zip(exact, deltas, before, self.rules, values, previous, strict=True):
             if not abs(d - b) <= r.change_limit(b, d, dt_before, dt, unit):
-                hint = r.wrap_hint(e, dt, b, dt_before) if unit == "ticks" else ""
+                ends = (exact_value(p), exact_value(v)) if unit == "ticks" else ()
+                hint = r.wrap_hint(e, dt, b, dt_before, ends) if unit == "ticks" else ""
                 raise self._fail(r.change_message(b, e, dt_before, dt, unit, hint))
 
     def _check_range(self, values) -> None:

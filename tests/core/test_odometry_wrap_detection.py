@@ -387,10 +387,11 @@ def test_batch_and_streaming_refuse_the_same_sample(steps, bits, floats):
         assert b.detail == s.detail
 
 
-@pytest.mark.parametrize("kw", [{"max_wheel_speed": 1e308}, {"max_wheel_accel": 1e308}, {"max_wheel_accel": math.inf}])
+@pytest.mark.parametrize("kw", [{"max_wheel_speed": 1e4}, {"max_wheel_accel": 1e308}, {"max_wheel_accel": math.inf}])
 def test_huge_bounds_are_bounds_not_crashes(tom, kw):
-    """A bound that overflows to infinity in ticks (1.5e308 rad/s over 0.0105 rad per tick) was
-    written into the generated kernel as 'inf', a NameError on the first update."""
+    """A bound that overflows to infinity in ticks (1.5e308 rad/s^2 over 0.0105 rad per tick) was
+    written into the generated kernel as 'inf', a NameError on the first update (a wheel speed
+    is bounded like a robot file's max_speed, at most 1e4 rad/s)."""
     rows, t = [[0, 0, 0], [1, 1, 1], [5, 1, 1], [6, 1, 1]], [0.0, 0.1, 0.2, 0.3]
     expected = tomasi_poses(np.diff(rows, axis=0))
     o = Odometry(tom, **kw)

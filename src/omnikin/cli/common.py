@@ -218,6 +218,8 @@ def add_wheel_bound_options(parser, *, angles: bool = False) -> None:
         DEFAULT_RIM_ACCEL,
         DEFAULT_RIM_SPEED,
         JUMP_MARGIN,
+        MAX_WHEEL_ACCEL_TEXT,
+        MAX_WHEEL_SPEED_TEXT,
         check_max_wheel_accel,
         check_max_wheel_speed,
     )
@@ -225,7 +227,7 @@ def add_wheel_bound_options(parser, *, angles: bool = False) -> None:
     jump = "a wheel-angle jump" if angles else "a tick jump"
     parser.add_argument(
         "--max-wheel-speed",
-        type=_bound(check_max_wheel_speed, "a finite wheel speed > 0 [rad/s]"),
+        type=_bound(check_max_wheel_speed, MAX_WHEEL_SPEED_TEXT),
         metavar="RAD_S",
         help=f"fastest a wheel turns [rad/s]: {jump} needing more than {JUMP_MARGIN:g}x this is refused "
         f"(default: each wheel's max_speed, else {DEFAULT_RIM_SPEED:g} m/s at the rim)",
@@ -233,7 +235,7 @@ def add_wheel_bound_options(parser, *, angles: bool = False) -> None:
     default = "no bound for joint states" if angles else f"{DEFAULT_RIM_ACCEL:g} m/s^2 at the rim"
     parser.add_argument(
         "--max-wheel-accel",
-        type=_bound(check_max_wheel_accel, "a wheel acceleration > 0 [rad/s^2], or inf"),
+        type=_bound(check_max_wheel_accel, MAX_WHEEL_ACCEL_TEXT),
         metavar="RAD_S2",
         help=f"fastest a wheel's speed changes [rad/s^2]: a change between two consecutive intervals "
         f"needing more than {JUMP_MARGIN:g}x this is refused (default: {default}; 'inf': no bound)",
