@@ -41,6 +41,8 @@ import hashlib
 import linecache
 import math
 import operator
+import threading
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
 from math import cos, floor, pi, sin
@@ -369,20 +371,35 @@ def _move_source(method: str) -> str:
     )
 
 
-_COMPILED: dict[str, dict] = {}
-"""Kernels compiled so far, by source: pure functions, shared by every estimator that needs them."""
+CACHE_SIZE = 64
+"""Most configurations whose kernels are kept compiled (least recently built dropped first, with
+their :mod:`linecache` entry): a program that builds estimators for ever new robots (a
+calibration sweep, a fuzzer) keeps at most this many (each about 30 kB). An estimator keeps its
+own kernels; only a traceback through a dropped kernel shows no source lines."""
+
+_COMPILED: OrderedDict[str, tuple[str, dict]] = OrderedDict()
+"""Kernels compiled so far, by source (at most :data:`CACHE_SIZE`, most recently built last):
+the linecache name and the pure functions, shared by every estimator that needs them."""
+_LOCK = threading.Lock()
 
 
 def _compile(source: str) -> dict:
-    found = _COMPILED.get(source)
-    if found is not None:
-        return found
+    with _LOCK:
+        found = _COMPILED.get(source)
+        if found is not None:
+            _COMPILED.move_to_end(source)
+            return found[1]
     filename = f"<omnikin-kernel-{hashlib.sha1(source.encode()).hexdigest()[:12]}>"
-    linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
     namespace = dict(_CONSTANTS)
     exec(compile(source, filename, "exec"), namespace)
     functions = {k: v for k, v in namespace.items() if k not in _CONSTANTS and callable(v) and k != "__builtins__"}
-    _COMPILED[source] = functions
+    with _LOCK:
+        linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
+        _COMPILED[source] = (filename, functions)
+        _COMPILED.move_to_end(source)
+        while len(_COMPILED) > CACHE_SIZE:
+            _, (dropped, _) = _COMPILED.popitem(last=False)
+            linecache.cache.pop(dropped, None)
     return functions
 
 
