@@ -160,9 +160,18 @@ class Odometry:
         state = dict(self.__dict__)
         for name in ("_kernels", "_step_ticks", "_step_angles"):
             state.pop(name, None)
+        state["_format"] = STATE_FORMAT
         return state
 
     def __setstate__(self, state: dict) -> None:
+        found = state.get("_format", 1) if isinstance(state, dict) else None
+        if found != STATE_FORMAT:
+            raise InputError(
+                f"cannot load this Odometry: it was pickled in state format {shorten(found, 20)} (another omnikin "
+                f"version), this version reads format {STATE_FORMAT}; create the estimator anew"
+            )
+        state = dict(state)
+        del state["_format"]
         self.__dict__.update(state)
         self._build()
 
