@@ -124,21 +124,29 @@ def fk_coefficients(f: np.ndarray, scale) -> list[list[float]]:
     return [[float(v) * float(k) for v, k in zip(row[: len(scale)], scale, strict=True)] for row in f]
 
 
-def body_steps(coefficients: list[list[float]], delta: np.ndarray) -> np.ndarray:
-    """Body increments ``(..., m, 3)`` [m, m, rad] of wheel increments ``delta`` ``(..., m, n)``
-    with the constant :func:`fk_coefficients`, each component summed over the wheels in their
+def body_components(coefficients: list[list[float]], delta: np.ndarray) -> list[np.ndarray]:
+    """Body increments ``a``, ``b``, ``phi`` ``(..., m)`` [m, m, rad] of wheel increments ``delta``
+    ``(..., m, n)`` with the constant :func:`fk_coefficients`, each summed over the wheels in their
     order and without the terms of zero coefficient: the arithmetic of the streaming kernel
-    (``omnikin._stream_kernel._fk_lines``), to the bit, so that batch and streaming odometry
-    refuse the same steps (:func:`omnikin.integration.step_problem`)."""
-    out = np.zeros(delta.shape[:-1] + (3,))
-    for r, row in enumerate(coefficients):
+    (``omnikin._stream_kernel._fk_lines``), so that batch and streaming odometry compute the same
+    body increments to the bit (and refuse the same steps, :func:`omnikin.integration.step_problem`)."""
+    columns = [delta[..., j] for j in range(delta.shape[-1])]
+    out = []
+    for row in coefficients:
         acc = None
-        for j, c in enumerate(row):
+        for c, column in zip(row, columns, strict=True):
             if c != 0.0:
-                acc = c * delta[..., j] if acc is None else acc + c * delta[..., j]
-        if acc is not None:
-            out[..., r] = acc
+                if acc is None:
+                    acc = c * column
+                else:
+                    acc += c * column
+        out.append(np.zeros(delta.shape[:-1]) if acc is None else acc)
     return out
+
+
+def body_steps(coefficients: list[list[float]], delta: np.ndarray) -> np.ndarray:
+    """:func:`body_components` as one array ``(..., m, 3)``."""
+    return np.stack(body_components(coefficients, delta), axis=-1)
 
 
 def steered_steps(f: np.ndarray, angles: np.ndarray) -> np.ndarray:
@@ -241,9 +249,13 @@ def batch_odometry(
     any integer type are exact (see :func:`omnikin.encoders.counter_readings`);
     ``counter_bits`` (else each wheel's ``encoder.counter_bits``), ``max_jump`` [ticks],
     ``max_wheel_speed`` [rad/s] and ``max_wheel_accel`` [rad/s^2] are the counter, jump and
-    change-of-speed rules of :mod:`omnikin.encoders`. The earliest bad sample raises
+    change-of-speed rules of :mod:`omnikin.encoders`; the body increment of an interval must lie
+    within :func:`omnikin.integration.step_problem`. The earliest bad sample raises
     :class:`OdometryInputError` with its index in ``.sample`` (the same sample the streaming
-    estimator refuses).
+    estimator refuses). The increments and twists are the streaming estimator's (to the bit
+    without steerable wheels: :func:`body_components`), the poses agree with its poses to
+    rounding (cumulative sums here, one step at a time there; ``docs/conventions.md``, "Batch
+    and streaming odometry agree").
     """
     wheels = encoded_wheels(robot)
     rules = counter_rules(wheels, counter_bits, max_jump, max_wheel_speed, max_wheel_accel)
@@ -267,7 +279,6 @@ def batch_odometry(
     inc = np.empty(lead + (m, 3))
     residual = np.empty(lead + (m, rows.shape[-2])) if _redundant(robot, rows) else None
     pose = out[..., 0, :]
-    f_ticks = f * scale
     check = StepCheck(fk_coefficients(f, scale), rules, "ticks")
     carry = Carry()
     for s0 in range(0, m, CHUNK):
@@ -275,11 +286,9 @@ def batch_odometry(
         dt, d = block_increments(
             rules, tt[..., s0 : s1 + 1], tk[..., s0 : s1 + 1, :], s0, carry, "ticks", pending, check
         )
-        comps = np.matmul(f_ticks, np.swapaxes(d, -1, -2))  # (..., 3, block)
-        integrate_components(
-            comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], pose, method, out=out[..., s0 : s1 + 1, :]
-        )
-        inc[..., s0:s1, :] = np.swapaxes(comps, -1, -2)
+        a, b, phi = body_components(check.coefficients, d)
+        integrate_components(a, b, phi, pose, method, out=out[..., s0 : s1 + 1, :])
+        inc[..., s0:s1, 0], inc[..., s0:s1, 1], inc[..., s0:s1, 2] = a, b, phi
         if residual is not None:
             residual[..., s0:s1, :] = _residual(_fk_input(d, scale, f), rows, inc[..., s0:s1, :], dt)
         pose = out[..., s1, :]
@@ -320,11 +329,12 @@ def batch_odometry_from_angles(
         return _integrate_steered(robot, names, tt, steps, lead, method, start_pose)
     _no_steer(robot, steer)
     f = robot.fk_matrix(None, names)
-    d = wheel_increments(rules, tt, a, CHUNK, "rad", pending, StepCheck(fk_coefficients(f, ones), rules, "rad"))
+    check = StepCheck(fk_coefficients(f, ones), rules, "rad")
+    d = wheel_increments(rules, tt, a, CHUNK, "rad", pending, check)
     out = _pose_array(d.shape[:-2], tt.shape[:-1], d.shape[-2] + 1, start_pose)
-    comps = np.matmul(f, np.swapaxes(d, -1, -2))
-    integrate_components(comps[..., 0, :], comps[..., 1, :], comps[..., 2, :], out[..., 0, :], method, out=out)
-    inc = np.swapaxes(comps, -1, -2)
+    comps = body_components(check.coefficients, d)
+    integrate_components(*comps, out[..., 0, :], method, out=out)
+    inc = np.stack(comps, axis=-1)
     rows = robot.fk_rows(None, names)
     return OdometryResult(tt, out, inc, _residual(_fk_input(d, ones, f), rows, inc, np.diff(tt, axis=-1)))
 

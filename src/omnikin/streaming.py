@@ -5,8 +5,8 @@ holds every rule on readings, wrap-around and jumps), forward kinematics with th
 constant (or, with steerable wheels, per-interval) operator, and the pose update of
 :mod:`omnikin.integration`. Without steerable wheels a generated kernel
 (:mod:`omnikin._stream_kernel`), a pure function of the state, takes every sample it has no
-doubt about; the general path here takes the rest and either integrates it the same way or
-raises.
+doubt about; the general path here takes the rest and either integrates it as the kernel
+would, to the bit (the kernel's forward kinematics and pose update are its own), or raises.
 
 The whole estimate lives in one immutable state tuple replaced on success, so an update
 that raises leaves the estimator exactly as it was, and estimators copy
@@ -97,8 +97,15 @@ class Odometry:
     ints of any size, NumPy integer scalars (exact), or floats. ``counter_bits`` (else each
     wheel's ``encoder.counter_bits``), ``max_jump`` [ticks], ``max_wheel_speed`` [rad/s] and
     ``max_wheel_accel`` [rad/s^2]: the counter, jump and change-of-speed rules of
-    :mod:`omnikin.encoders`, applied exactly as batch odometry applies them. ``start``: the
-    pose of the first sample (:func:`omnikin.integration.check_start`).
+    :mod:`omnikin.encoders`, applied exactly as batch odometry applies them; a step beyond the
+    bounds of :func:`omnikin.integration.step_problem` is refused too. ``start``: the pose of
+    the first sample (:func:`omnikin.integration.check_start`).
+
+    Against :func:`omnikin.odometry.batch_odometry` on the same samples: the same refused sample,
+    the same wheel increments, body increments and twists (to the bit without steerable wheels),
+    poses that agree to rounding; a repeated sample is skipped here, refused there
+    (``docs/conventions.md``, "Batch and streaming odometry agree"). Copies and pickles carry
+    :data:`STATE_FORMAT`.
 
     After each update: ``pose`` (x, y, theta) [m, m, rad; theta in [-pi, pi)], ``twist``
     (mean body twist over the last interval), ``residual`` (forward-kinematics residual
