@@ -333,7 +333,7 @@ def batch_odometry_from_angles(
     d = wheel_increments(rules, tt, a, CHUNK, "rad", pending, check)
     out = _pose_array(d.shape[:-2], tt.shape[:-1], d.shape[-2] + 1, start_pose)
     comps = body_components(check.coefficients, d)
-    integrate_components(*comps, out[..., 0, :], method, out=out)
+    integrate_components(comps[0], comps[1], comps[2], out[..., 0, :], method, out=out)
     inc = np.stack(comps, axis=-1)
     rows = robot.fk_rows(None, names)
     return OdometryResult(tt, out, inc, _residual(_fk_input(d, ones, f), rows, inc, np.diff(tt, axis=-1)))

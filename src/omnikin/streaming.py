@@ -385,11 +385,12 @@ class Odometry:
         """Body increment (a, b, phi) [m, m, rad] of wheel increments ``deltas`` [ticks or rad]
         at the mean steering of the interval, and the residual [rad/s]: the operator and the
         arithmetic of batch odometry (:class:`omnikin.odometry.SteeredSteps`) on one interval."""
+        assert self._steer is not None  # the steering of the previous sample
         scale = self._scale if kind == KIND_TICKS else [1.0] * self._n
         mid = mid_steer(np.stack([self._steer, steer]))
-        f = self.robot.fk_matrix(mid, self.wheel_names)  # (1, 3, k), or (3, k) if the encoded wheels do not steer
-        rows = self.robot.fk_rows(mid, self.wheel_names)
-        f, rows = f.reshape(f.shape[-2:]), rows.reshape(rows.shape[-2:])
+        # (1, 3, k) and (1, k, 3), or without the 1 when the encoded wheels do not steer
+        f = self.robot.fk_matrix(mid, self.wheel_names).reshape(3, -1)
+        rows = self.robot.fk_rows(mid, self.wheel_names).reshape(-1, 3)
         angles = np.zeros(f.shape[-1])
         angles[: self._n] = [d * k for d, k in zip(deltas, scale, strict=True)]
         with np.errstate(over="ignore", invalid="ignore"):
