@@ -59,7 +59,7 @@ from functools import partial
 
 import numpy as np
 
-from ._arrays import TEXT_TYPES, container_problem, whole_problem
+from ._arrays import TEXT_TYPES, container_problem, range_problem, whole_problem
 from .errors import InputError, OdometryInputError, shorten
 from .geometry import MAX_ANGLE
 from .wheels import COUNTER_BITS_RANGE, MAX_SPEED_RANGE
@@ -129,10 +129,12 @@ def check_max_jump(max_jump) -> float | None:
 
 def check_max_wheel_speed(speed) -> float | None:
     """``max_wheel_speed`` [rad/s] within :data:`omnikin.wheels.MAX_SPEED_RANGE`."""
-    value = _positive(speed, "max_wheel_speed", MAX_WHEEL_SPEED_TEXT)
-    if value is not None and not MAX_SPEED_RANGE[0] <= value <= MAX_SPEED_RANGE[1]:
-        raise OdometryInputError(f"max_wheel_speed must be {MAX_WHEEL_SPEED_TEXT}, got {value:g}")
-    return value
+    if speed is None:
+        return None
+    problem = range_problem(speed, *MAX_SPEED_RANGE, "rad/s")
+    if problem is not None:
+        raise OdometryInputError(f"max_wheel_speed {problem}")
+    return float(speed)
 
 
 def check_max_wheel_accel(accel) -> float | None:
@@ -337,7 +339,7 @@ def counter_rules(
             )
         if max_jump is not None and max_jump * abs(w.encoder.rad_per_tick) > MAX_ANGLE:
             raise OdometryInputError(
-                f"max_jump={max_jump:g} ticks would let wheel {w.name!r} turn "
+                f"max_jump={show_number(max_jump)} ticks would let wheel {w.name!r} turn "
                 f"{max_jump * abs(w.encoder.rad_per_tick):.6g} rad in one interval, beyond the "
                 f"{MAX_ANGLE:g} rad bound on every angle the core takes"
             )

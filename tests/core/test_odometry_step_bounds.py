@@ -90,7 +90,7 @@ def test_a_wheel_speed_bound_outside_the_robot_file_range_is_refused(tomasi, spe
         lambda: Odometry(tomasi, max_wheel_speed=speed),
         lambda: batch_odometry(tomasi, [0.0, 1.0], [[0, 0, 0], [1, 1, 1]], max_wheel_speed=speed),
     ):
-        with pytest.raises(OdometryInputError, match="max_wheel_speed must be") as exc:
+        with pytest.raises(OdometryInputError, match="max_wheel_speed must") as exc:
             make()
         assert "\n" not in str(exc.value)
 
