@@ -77,7 +77,7 @@ def check_start(start, what: str = "start") -> np.ndarray:
     :class:`InputError`: a list, tuple or array of finite numbers with ``|x|, |y| <=``
     :data:`POSITION_LIMIT` and ``|theta| <=`` :data:`~omnikin.geometry.MAX_ANGLE` (``1e308`` rad
     has no digit left modulo 2 pi: it silently became heading 0)."""
-    why = container_problem(start)
+    why = container_problem(start, order="the order x, y, theta")
     if why is not None:
         raise InputError(f"{what}: expected (x, y, theta) as a list, tuple or array; {why}")
     p = as_real_array(start, what)
