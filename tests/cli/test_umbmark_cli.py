@@ -629,6 +629,21 @@ def test_umbmark_bad_options(capsys, tmp_path, monkeypatch, argv, contains):
     assert not (tmp_path / "umbmark-report").exists()
 
 
+@pytest.mark.parametrize("dpi", ["1", "0.5", "49.99", "1201", "1e9"])
+def test_umbmark_refuses_a_resolution_outside_screens_to_print_before_the_study(capsys, tmp_path, dpi):
+    """'--dpi 1' crashed with 'internal error: RuntimeError FT_Set_Char_Size' after the whole study
+    had run; '--dpi 0.5' exited 0 with figures of a few pixels. Now a usage error naming --dpi and
+    the range (50 dpi, the coarsest screens, to 1200 dpi, print), before any simulation."""
+    import time
+
+    start = time.monotonic()
+    line = assert_usage_error(
+        capsys, "umbmark", "diff-drive", "--dpi", dpi, "-o", tmp_path / "r", contains=["--dpi", "[50, 1200] dpi"]
+    )
+    assert time.monotonic() - start < 5 and "internal error" not in line
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_umbmark_negative_seed(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert_usage_error(capsys, "umbmark", "--seed", "-1", "--runs", "1", "--rate", "20", contains=["seed"])

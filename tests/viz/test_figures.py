@@ -90,6 +90,27 @@ def test_unsupported_format_or_dpi_is_refused(tmp_path, name, dpi, contains):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("dpi", [0.5, 1, 3, 49.9, 1200.5, True, math.nan])
+def test_a_resolution_outside_screens_to_print_is_refused_before_drawing(tmp_path, dpi):
+    """dpi 1 crashed inside matplotlib (FreeType: 'invalid ppem value') after the whole study;
+    0.5 wrote a 3 x 3 pixel figure. The range is 50 (the coarsest screens) to 1200 dpi (print)."""
+    from omnikin.errors import InputError
+
+    with pytest.raises(InputError, match=r"dpi must .*screens to print"):
+        save_figure(euclidean_errors_figure(seeded_results()), tmp_path / "f.png", dpi=dpi)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_ends_of_the_resolution_range_are_drawn(tmp_path):
+    """At 50 and 1200 dpi a PNG is its size in inches times the resolution (IHDR), text and all."""
+    fig = layout_figure(load_robot("tomasi-omni3"))  # 6.0 x 6.6 inches
+    for dpi in (50, 1200):
+        path = tmp_path / f"l{dpi}.png"
+        save_figure(fig, path, dpi=dpi)
+        width, height = struct.unpack(">II", path.read_bytes()[16:24])
+        assert (width, height) == (round(6.0 * dpi), round(6.6 * dpi))
+
+
 # --- what the UMBmark figures show --------------------------------------------------------------------------
 def test_every_run_is_one_marker_drawn_above_a_hollow_centre_of_gravity():
     results = seeded_results()

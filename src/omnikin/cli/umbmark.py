@@ -23,7 +23,7 @@ from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
 from ..simulation.error_models import NOISE, PROFILES
 from ..simulation.motion import RATE_RANGE
-from ..viz import FIGURE_FORMATS, MAX_DPI, check_dpi
+from ..viz import FIGURE_FORMATS, MAX_DPI, MIN_DPI, dpi_problem
 from .budget import add_budget_options, require
 from .common import add_output, add_output_options, command_inputs, console, declare_inputs, number, whole
 
@@ -151,10 +151,11 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument(
         "--dpi",
-        type=number,
+        type=dpi,
         default=WRITE["dpi"],
         metavar="N",
-        help=f"resolution of PNG figures (default {WRITE['dpi']:g}, at most {MAX_DPI})",
+        help=f"resolution of PNG figures [dots per inch], {MIN_DPI} (screens) to {MAX_DPI} (print; "
+        f"default {WRITE['dpi']:g})",
     )
     sp.add_argument("--json", action="store_true", help="print result.json instead of tables")
     add_budget_options(sp)
@@ -244,6 +245,17 @@ def analyze_parser() -> argparse.ArgumentParser:
 
 
 # --- helpers -----------------------------------------------------------------------------------------
+def dpi(text: str) -> float:
+    """An argparse ``type``: the resolution of ``--dpi`` [dots per inch], a plain number
+    (:func:`~omnikin.cli.common.number`) in the range of :func:`omnikin.viz.dpi_problem`, so that
+    a resolution no figure can be drawn at is a usage error before the study runs."""
+    value = number(text)
+    problem = dpi_problem(value)
+    if problem:
+        raise argparse.ArgumentTypeError(problem)
+    return value
+
+
 def _factor(x) -> str:
     return "unbounded" if x is None else f"{x:.3g}"
 
@@ -275,7 +287,6 @@ class _Status:
 # --- umbmark -----------------------------------------------------------------------------------------
 def cmd_umbmark(args) -> int:
     inputs = command_inputs(args)
-    check_dpi(args.dpi)  # refuse before the simulation, not after
     cost = umbmark_cost(
         args.robot,
         mode=args.mode,

@@ -15,8 +15,15 @@ FIGURE_FORMATS = ("png", "svg", "pdf")
 DPI = 200
 """Default resolution of raster (PNG) figures [dots per inch]."""
 
+MIN_DPI = 50
+"""Lowest resolution accepted [dots per inch]: the coarsest screens a figure is looked at on (a
+1080p television of 40 inches is 55 dpi; desktop screens are 90 to 220). Below it the figures'
+smallest (7 pt) text is under 5 pixels high, a 6-inch figure shrinks to a thumbnail whose layout
+collapses, and at a few dpi FreeType refuses to draw text at all."""
+
 MAX_DPI = 1200
-"""Highest resolution accepted: a 7 x 5 inch figure at 1200 dpi is 50 megapixels."""
+"""Highest resolution accepted [dots per inch]: what journals ask of line art (1000 to 1200 dpi;
+photographs 300); a 7 x 5 inch figure at 1200 dpi is already 50 megapixels (200 MB in memory)."""
 
 
 def require_matplotlib():
@@ -35,12 +42,25 @@ def new_figure(**kwargs):
     return Figure(layout="constrained", **kwargs)
 
 
-def check_dpi(dpi) -> float:
-    """``dpi`` as a number in ``(0, MAX_DPI]``, else :class:`~omnikin.errors.InputError`."""
+def dpi_problem(dpi) -> str | None:
+    """None if ``dpi`` [dots per inch] is a real number in ``[MIN_DPI, MAX_DPI]`` (the range of
+    screens and print), else what is wrong with it (``must lie in [50, 1200] dpi, got 1 ...``)."""
+    from .._arrays import range_problem
+
+    problem = range_problem(dpi, MIN_DPI, MAX_DPI, "dpi")
+    return None if problem is None else f"{problem} (screens to print)"
+
+
+def check_dpi(dpi, name: str = "dpi") -> float:
+    """``dpi`` as a float if :func:`dpi_problem` finds nothing, else
+    :class:`~omnikin.errors.InputError` naming ``name``. Checked before any work: by
+    :meth:`omnikin.UMBmarkReport.write` before a figure is drawn, by ``omnikin umbmark --dpi``
+    when the command line is read."""
     from ..errors import InputError
 
-    if isinstance(dpi, bool) or not isinstance(dpi, (int, float)) or not (0 < dpi <= MAX_DPI):
-        raise InputError(f"dpi must be a number above 0 and at most {MAX_DPI}, got {dpi!r}")
+    problem = dpi_problem(dpi)
+    if problem:
+        raise InputError(f"{name} {problem}")
     return float(dpi)
 
 
