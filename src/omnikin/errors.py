@@ -87,15 +87,20 @@ class LinkError(OmnikinError, RuntimeError):
 
 def one_line(text: object, limit: int = 300) -> str:
     """``text`` as one line of at most ``limit`` characters: runs of white space (newlines
-    included) become one space, and a longer text is cut with a note of its length.
+    included) become one space, and a longer text keeps its beginning and its end (where a
+    message says what is wrong), with a note of its length in between.
 
     For messages of other libraries that span several lines (a YAML parser's, a bag
-    reader's), quoted inside omnikin's one-line errors.
+    reader's), quoted inside omnikin's one-line errors, and the last bound of every error the
+    command line prints: a message that quotes a long value in full still ends with its reason.
     """
     flat = " ".join(str(text).split())
     if len(flat) <= limit:
         return flat
-    return flat[: limit - 20].rstrip() + f"... ({len(flat)} chars)"
+    note = f" ... ({len(flat)} chars) ... "
+    keep = max(limit - len(note), 2)
+    head = keep // 2
+    return flat[:head] + note + flat[len(flat) - (keep - head) :]
 
 
 def did_you_mean(word: str, choices) -> str:

@@ -374,3 +374,68 @@ def test_plain_numbers_still_read_as_before(capsys):
         a = math.radians(120 * k)
         expected = (-math.sin(a) * 1 + math.cos(a) * -0.5 + L * 0.2) / r
         assert speeds[k] == pytest.approx(expected, rel=1e-9)
+
+
+# --- typed text is quoted shortened, so that the reason survives -------------------------------------------
+HUGE = "x" * 100_000
+
+
+@pytest.mark.parametrize(
+    "argv, reason",
+    [
+        ([HUGE], "unknown command"),
+        (["ik", "tomasi-omni3", "0", "0", "0", HUGE], "unexpected argument"),
+        (["ik", "tomasi-omni3", "0", "0", "0", "--" + HUGE], "unknown option"),
+        (["ik", "tomasi-omni3", "0", "0", "0", "--json=" + HUGE], "ignored explicit argument"),
+        (["ik", "tomasi-omni3", "0", "0", "0", "--heading", HUGE], "not a number"),
+        (["odometry", "tomasi-omni3", "log.csv", "-o", "-", "--method", HUGE], "invalid choice"),
+        (["odometry", "tomasi-omni3", "log.csv", "-o", "-", "--max-wheel-speed", "0" * 100_000], "must be a finite"),
+        (["odometry", "tomasi-omni3", "log.csv", "-o", "-", "--max-wheel-accel", "1" * 400], "too large"),
+        (["odometry", "tomasi-omni3", "log.csv", "-o", "-", "--counter-bits", "1" * 5000], "at most 20"),
+        (["simulate", "tomasi-omni3", "--log", "-", "--path", "line 1;;" + HUGE], "empty part"),
+    ],
+    ids=lambda v: v if isinstance(v, str) else " ".join(a[:12] for a in v),
+)
+def test_a_huge_typed_value_is_quoted_short_and_the_reason_survives(capsys, argv, reason):
+    """With a 100,000-character value the error line (cut at MESSAGE_LIMIT) held the value only;
+    argparse said 'invalid whole value' of 5000 digits. Every path quotes the text shortened, and
+    the line still says what is wrong."""
+    line = one_line(*cli(capsys, *argv), reason)
+    assert len(line) <= len("omnikin: error: ") + MESSAGE_LIMIT
+    assert "x" * 200 not in line and "1" * 200 not in line and "0" * 200 not in line
+
+
+def test_the_last_bound_of_an_error_line_keeps_its_end(capsys):
+    """A library message quoting 1000 characters of a 100,000-character robot path: the line is
+    cut in the middle, not at the end, so it still says what is wrong (and the presets)."""
+    line = one_line(*cli(capsys, "ik", HUGE, "0", "0", "0"), "no such robot file or preset", "omni4")
+    assert len(line) <= len("omnikin: error: ") + MESSAGE_LIMIT and "chars) ..." in line
+
+
+def test_whole_numbers_take_at_most_twenty_digits(capsys):
+    """Twenty digits hold 2**64 - 1; the 21st is refused with its count, not with int()'s digit limit."""
+    rc, out, err = cli(capsys, "simulate", "diff-drive", "--path", "line 0.1", "--log", "-", "--seed", "0" * 19 + "7")
+    assert rc == 0, err
+    assert "--seed 7 " in out  # the log's comment: the seed as read
+    one_line(*cli(capsys, "simulate", "diff-drive", "--log", "-", "--seed", "0" * 20 + "7"), "21 digits", "at most 20")
+
+
+@pytest.mark.parametrize("typed", [" -1", " 1", "-1 ", "\t-1"])
+def test_a_number_with_a_blank_is_refused_whatever_its_sign(capsys, typed):
+    """' -1' was accepted (the parser took off a blank it had not added) while ' 1' was refused."""
+    one_line(*cli(capsys, "ik", "tomasi-omni3", typed, "0", "0"), "argument VX", "not a number", repr(typed))
+    one_line(*cli(capsys, "ik", "tomasi-omni3", "0", "0", "0", "--heading", typed), "--heading", repr(typed))
+
+
+def test_every_negative_value_the_help_shows_is_a_value(capsys):
+    """'omnikin --help' gave -inf as an example of a negative number read as a value, which every
+    number option refuses: each example there is now taken by 'ik' as the twist's vx."""
+    assert main(["--help"]) == 0
+    text = capsys.readouterr().out
+    line = next(line for line in text.splitlines() if line.startswith("negative numbers are values"))
+    examples = [w.strip("(),.") for w in line.split(":", 1)[1].split() if w.startswith(("-", "(-"))]
+    assert len(examples) >= 4, line
+    for example in examples:
+        rc, out, err = cli(capsys, "ik", "tomasi-omni3", example, "0", "0", "--json")
+        assert rc == 0, (example, err)
+        assert json.loads(out)["twist"][0] == float(example) < 0

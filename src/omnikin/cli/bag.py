@@ -384,7 +384,7 @@ def parse_paths(text: str):
     plan = None
     for part in parts:
         if not part:
-            raise InputError(f"--path {text!r}: empty part between ';'")
+            raise InputError(f"--path {shorten(text)}: empty part between ';'")
         try:
             p = path_plan(part)
         except OmnikinError as exc:

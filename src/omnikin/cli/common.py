@@ -171,6 +171,10 @@ WHOLE_NUMBER = re.compile(r"[-+]?[0-9]+")
 """A whole number as options spell it: optional sign and ASCII digits (not ``1_0``, ``0x10``,
 non-ASCII digits or blanks, which :class:`int` reads)."""
 
+WHOLE_DIGITS = 20
+"""Most digits of a whole-number option: 2**64 has 20, more than any count, width, seed or baud
+rate needs (and :class:`int` refuses text of more than 4300 digits with a message of its own)."""
+
 
 def number(text: str) -> float:
     """An argparse ``type``: a finite plain number (:mod:`omnikin.number_text`, the grammar of
@@ -182,9 +186,15 @@ def number(text: str) -> float:
 
 
 def whole(text: str) -> int:
-    """An argparse ``type``: a whole number in ASCII digits (:data:`WHOLE_NUMBER`)."""
+    """An argparse ``type``: a whole number in ASCII digits (:data:`WHOLE_NUMBER`), at most
+    :data:`WHOLE_DIGITS` of them."""
     if not isinstance(text, str) or not WHOLE_NUMBER.fullmatch(text):
         raise argparse.ArgumentTypeError(f"not a whole number: {shorten(text)} (ASCII digits, e.g. 12)")
+    digits = len(text.lstrip("+-"))
+    if digits > WHOLE_DIGITS:
+        raise argparse.ArgumentTypeError(
+            f"{shorten(text)}: a whole number of {digits} digits; at most {WHOLE_DIGITS} are taken"
+        )
     return int(text)
 
 
@@ -196,14 +206,15 @@ def _bound(check, what: str):
     def parse(text: str) -> float:
         if text in ("inf", "+inf"):
             value = math.inf
-        elif number_problem(text) is None:
-            value = float(text)
         else:
-            raise argparse.ArgumentTypeError(f"{shorten(text)} is not a number ({what})")
+            problem = number_problem(text)
+            if problem:
+                raise argparse.ArgumentTypeError(f"{problem} ({what})")
+            value = float(text)
         try:
             return check(value)
         except InputError:
-            raise argparse.ArgumentTypeError(f"{text!r}: must be {what}") from None
+            raise argparse.ArgumentTypeError(f"{shorten(text)}: must be {what}") from None
 
     return parse
 

@@ -62,7 +62,7 @@ EPILOG = """examples:
 
 units: SI and radians; degrees only where an option or column ends in -deg/_deg.
 frames: body x forward, y left, angles counter-clockwise (REP-103).
-negative numbers are values: omnikin ik tomasi-omni3 -2.5e-3 0 -1e-1 (-inf, -1E3 too).
+negative numbers are values: omnikin ik tomasi-omni3 -2.5e-3 0 -1e-1 (-1E3, -.5 too).
 options may come before, between or after the positional arguments.
 
 output files: no command writes over one of its inputs, --force or not. An existing file is

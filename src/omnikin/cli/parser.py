@@ -7,12 +7,15 @@
   names the closest known ones (:func:`omnikin.errors.did_you_mean`; argparse before Python
   3.14 has no suggestions).
 * **Negative numbers are values.** ``omnikin ik tomasi-omni3 -2.5e-3 0 0``: argparse takes any
-  argument that starts with ``-`` for an option unless it looks like ``-2`` or ``-2.5`` (before
-  Python 3.13 it does not know ``-2.5e-3``, ``-1e3`` or ``-inf``). Arguments that are negative
-  numbers in Python's float syntax are handed to argparse with a leading space, which argparse
-  reads as a value; the space is taken off before the value is converted (``type``) or stored,
-  so messages and values show the exact spelling. (``--`` before the values, or
-  ``--option=-1e3``, work too.)
+  argument that starts with ``-`` for an option unless it looks like ``-2`` or ``-2.5`` (it does
+  not know ``-2.5e-3``, ``-1e3`` or ``-5M``). Its test for a negative number is replaced by
+  :data:`NEGATIVE_NUMBER`, so these arguments are values, handed to the ``type`` as typed (the
+  one argparse attribute this class sets). Nothing is added to or taken off an argument:
+  ``" -1"`` is refused like ``" 1"``. (``--`` before the values, or ``--option=-1e3``, work too.)
+* **Typed text is quoted shortened.** Every message that quotes an argument (an unknown command
+  or option, an unexpected argument, an invalid choice, argparse's own messages) quotes at most
+  :func:`omnikin.errors.shorten` of it, so that the reason after it survives the bounded error
+  line of ``omnikin.cli.main``.
 * **Options and positionals mix freely.** ``omnikin calibrate ROBOT --side 3 RUNS -o out.yaml``:
   a command without sub-commands is parsed like :meth:`argparse.ArgumentParser.parse_intermixed_args`
   (options first, then the positionals left, in order), so an optional positional after an
@@ -31,19 +34,22 @@ import argparse
 import re
 import sys
 
-from ..errors import InputError, did_you_mean
+from ..errors import InputError, did_you_mean, shorten
 
 NEGATIVE_NUMBER = re.compile(r"-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?[a-z]*|-(inf|infinity|nan)", re.IGNORECASE)
 """A negative number in Python's float syntax, or with a unit (matched in full): ``-2``,
 ``-2.5``, ``-.5``, ``-2.5e-3``, ``-1E3``, ``-inf``, ``-nan``, ``-5M``, ``-2h`` (no option of
-omnikin starts with ``-`` and a digit)."""
+omnikin starts with ``-`` and a digit). Such an argument is a value, never an option."""
 
-_VALUE_MARK = " "
-"""Prefix that makes argparse read an argument as a value (an argument with a space is never
-an option) and that :class:`float` and :class:`int` ignore."""
+_NEGATIVE_VALUE = re.compile(rf"(?:{NEGATIVE_NUMBER.pattern})\Z", re.IGNORECASE)
+""":data:`NEGATIVE_NUMBER` in the form argparse applies its own test (``match``: the whole argument)."""
 
 _PARSER = "_omnikin_parser"
 """Namespace attribute naming the innermost parser that ran (for suggestions), removed after parsing."""
+
+
+QUOTE_LIMIT = 60
+"""Longest argument a message quotes in full [characters] (:func:`omnikin.errors.shorten`'s cut)."""
 
 
 class UsageError(InputError):
@@ -69,7 +75,9 @@ class CommandParser(argparse.ArgumentParser):
         self._commands: dict[str, CommandParser] = {}
         self._subcommands = None
         self._passes = False  # inside the two passes of argparse's intermixed parsing
+        self._typed: list[str] = []  # the arguments this parser was given, for bounded messages
         super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_VALUE  # argparse's test: a value, not an option
         for parent in kwargs.get("parents", ()):
             self._option_names += getattr(parent, "option_names", [])
 
@@ -109,20 +117,17 @@ class CommandParser(argparse.ArgumentParser):
 
     # --- parsing ---------------------------------------------------------------------------------------
     def parse_known_args(self, args=None, namespace=None):
-        if self._passes:  # a pass of parse_known_intermixed_args: arguments marked already
+        if self._passes:  # a pass of parse_known_intermixed_args
             return super().parse_known_args(args, namespace)
         args = [str(a) for a in (sys.argv[1:] if args is None else args)]
-        marked = {_VALUE_MARK + a: a for a in args if NEGATIVE_NUMBER.fullmatch(a)}
-        args = [_VALUE_MARK + a if NEGATIVE_NUMBER.fullmatch(a) else a for a in args]
+        self._typed = args
         if args and args[0] in self._commands:
-            namespace, extras = self._commands[args[0]].parse_known_args(args[1:], namespace)
-        else:
-            self._check_command(args)
-            namespace, extras = self._parse_mixed(args, namespace)
+            return self._commands[args[0]].parse_known_args(args[1:], namespace)
+        self._check_command(args)
+        namespace, extras = self._parse_mixed(args, namespace)
         if not hasattr(namespace, _PARSER):
             setattr(namespace, _PARSER, self)
-        _unmark(namespace, marked)
-        return namespace, [marked.get(a, a) for a in extras]
+        return namespace, extras
 
     def parse_args(self, args=None, namespace=None):
         namespace, extras = self.parse_known_args(args, namespace)
@@ -145,45 +150,49 @@ class CommandParser(argparse.ArgumentParser):
         finally:
             self._passes = False
 
-    def _get_value(self, action, arg_string):
-        """Take off the mark of a negative number before argparse converts or stores the value."""
-        if arg_string.startswith(_VALUE_MARK) and NEGATIVE_NUMBER.fullmatch(arg_string[len(_VALUE_MARK) :]):
-            arg_string = arg_string[len(_VALUE_MARK) :]
-        return super()._get_value(action, arg_string)
+    def _check_value(self, action, value):
+        """argparse's check of ``choices``, quoting the value shortened, with suggestions."""
+        if action.choices is not None and value not in action.choices:
+            names = [str(c) for c in action.choices]
+            raise argparse.ArgumentError(
+                action,
+                f"invalid choice: {shorten(value)}{did_you_mean(value, names)} (choose from {', '.join(names)})",
+            )
 
     def error(self, message: str):
-        """Raise :class:`UsageError` (argparse would print the usage block and exit)."""
-        raise UsageError(message, command=self.command_name)
+        """Raise :class:`UsageError` (argparse would print the usage block and exit), every typed
+        argument in ``message`` quoted shortened (:meth:`_bounded`)."""
+        raise UsageError(self._bounded(message), command=self.command_name)
 
     # --- messages ---------------------------------------------------------------------------------------
+    def _bounded(self, message: str) -> str:
+        """``message`` with each long argument this parser was given (or its value after ``=``,
+        or after a one-letter option such as ``-oFILE``) quoted as :func:`shorten` quotes it:
+        argparse's own messages quote values in full (``ignored explicit argument``, ``invalid
+        int value``)."""
+        for typed in sorted(set(self._typed), key=len, reverse=True):
+            for text in (typed, typed.partition("=")[2], typed[2:]):
+                if len(text) > QUOTE_LIMIT and text in message:
+                    message = message.replace(repr(text), shorten(text)).replace(text, shorten(text))
+        return message
+
     def _check_command(self, args: list[str]) -> None:
         """An unknown sub-command is named with the closest known ones (the first argument that
         is not an option; no parser of omnikin has an option with a value before its sub-command)."""
         if self._subcommands is None:
             return
-        word = next((a for a in args if not a.startswith("-")), None)
+        word = next((a for a in args if not a.startswith("-") or _NEGATIVE_VALUE.match(a)), None)
         names = self.command_names
         if word is not None and word not in names:
-            self.error(f"unknown command {word!r}{did_you_mean(word, names)} (commands: {', '.join(names)})")
+            self.error(f"unknown command {shorten(word)}{did_you_mean(word, names)} (commands: {', '.join(names)})")
 
     def _unrecognized(self, extras: list[str]) -> str:
         first = extras[0]
-        if first.startswith("-") and not NEGATIVE_NUMBER.fullmatch(first):
+        if first.startswith("-") and not _NEGATIVE_VALUE.match(first):
             name = first.split("=", 1)[0]
-            message = f"unknown option {name!r}{did_you_mean(name, self._option_names)}"
+            message = f"unknown option {shorten(name)}{did_you_mean(name, self._option_names)}"
         else:
-            message = f"unexpected argument {first!r}"
+            message = f"unexpected argument {shorten(first)}"
         if len(extras) > 1:
             message += f" (and {len(extras) - 1} more argument(s))"
         return message
-
-
-def _unmark(namespace, marked: dict) -> None:
-    """Give string values read from marked arguments their exact spelling back."""
-    if not marked:
-        return
-    for key, value in vars(namespace).items():
-        if isinstance(value, str) and value in marked:
-            setattr(namespace, key, marked[value])
-        elif isinstance(value, list) and any(isinstance(v, str) and v in marked for v in value):
-            setattr(namespace, key, [marked.get(v, v) if isinstance(v, str) else v for v in value])
