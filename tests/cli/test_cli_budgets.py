@@ -3,8 +3,10 @@ line naming the limit and the option, instead of a MemoryError traceback or an h
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
+import re
 import time
 from pathlib import Path
 
@@ -39,16 +41,77 @@ def refused_quickly(capsys, argv, *fragments, seconds=10.0):
         ("100", 100),
         ("3GiB", 3 * 1024**3),
         ("1e3", 1000),
-        ("4kb", 4096),
+        ("4k", 4096),
+        ("2g", 2 * 1024**3),
+        ("1TiB", 1024**4),
+        ("7B", 7),
     ],
 )
 def test_sizes(text, value):
     assert parse_size(text) == value
 
 
-@pytest.mark.parametrize("text, value", [("90", 90.0), ("10m", 600.0), ("2h", 7200.0), ("1.5 s", 1.5), ("1d", 86400.0)])
+@pytest.mark.parametrize(
+    "text, value", [("90", 90.0), ("10m", 600.0), ("10min", 600.0), ("2h", 7200.0), ("1.5s", 1.5), ("1d", 86400.0)]
+)
 def test_durations(text, value):
     assert parse_duration(text) == value
+
+
+@pytest.mark.parametrize(
+    "text, why",
+    [
+        (" 2G", "not a size"),
+        ("2G\n", "not a size"),
+        ("2G ", "not a size"),
+        ("2 G", "not a size"),
+        ("2\u3000G", "not a size"),
+        ("\u00a02G", "not a size"),
+        ("\u0661G", "not a size"),
+        ("1_000", "not a size"),
+        ("2Gb", "unknown unit 'Gb'"),
+        ("2bb", "unknown unit 'bb'"),
+        ("4kb", "unknown unit 'kb'"),
+        ("2GB", "unknown unit 'GB'"),
+        ("2Gi", "unknown unit 'Gi'"),
+    ],
+)
+def test_a_size_is_a_plain_number_and_a_unit_of_the_table(text, why):
+    """' 2G', '2G\\n' and Unicode blanks were read as 2 GiB, '2Gb' (gigabits elsewhere) as 2 GiB
+    and '2bb' as 2 bytes: a size is now a plain number (the grammar of every number omnikin reads)
+    followed at once by a unit of one strict table."""
+    with pytest.raises(argparse.ArgumentTypeError, match=re.escape(why)) as info:
+        parse_size(text)
+    assert "powers of 1024" in str(info.value) and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "text, why",
+    [
+        (" 90", "not a duration"),
+        ("90\n", "not a duration"),
+        ("1.5 s", "not a duration"),
+        ("2H", "unknown unit 'H'"),
+        ("3hours", "unknown unit 'hours'"),
+    ],
+)
+def test_a_duration_is_a_plain_number_and_a_unit_of_the_table(text, why):
+    with pytest.raises(argparse.ArgumentTypeError, match=re.escape(why)):
+        parse_duration(text)
+
+
+def test_the_help_names_the_units_of_sizes_and_durations(capsys):
+    assert main(["simulate", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "K, M, G or T, powers of 1024 (also KiB, MiB, GiB, TiB)" in text
+    assert "s, m (or min), h or d" in text
+
+
+def test_a_blank_before_a_limit_is_a_usage_error_naming_the_option(capsys, tmp_path):
+    refused_quickly(
+        capsys, ["umbmark", "diff-drive", "--max-memory", " 2G", "-o", tmp_path / "r"], "argument --max-memory", "' 2G'"
+    )
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.parametrize("text", ["", "G", "1Q", "-5M", "nan", "inf", "0", "1e400"])

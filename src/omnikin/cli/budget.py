@@ -29,11 +29,11 @@ import re
 import sys
 from dataclasses import dataclass
 
-from ..errors import ResourceLimitError
+from ..errors import ResourceLimitError, shorten
+from ..number_text import PLAIN_NUMBER
 from ..resource_limits import (
     DEFAULT_MEMORY,
     DEFAULT_TIME,
-    SIZE_UNITS,
     LimitNames,
     format_bytes,
     format_seconds,
@@ -46,8 +46,28 @@ OPTIONS = LimitNames("--max-memory", "--max-time")
 NOTE_AFTER = 30.0
 """Jobs estimated to take longer than this [s] say so before starting."""
 
-TIME_UNITS = {"": 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
-_QUANTITY = re.compile(r"\s*([-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([A-Za-z]*)\s*")
+SIZE_SUFFIXES = {
+    "": 1,
+    "B": 1,
+    **{f"{letter}{tail}": 1024**power for power, letter in enumerate("KMGT", 1) for tail in ("", "iB")},
+    **{letter: 1024**power for power, letter in enumerate("kmgt", 1)},
+}
+"""The units of ``--max-memory`` [bytes per unit], exactly as written: none or ``B`` (bytes),
+``K``, ``M``, ``G``, ``T`` (also lower-case) or ``KiB``, ``MiB``, ``GiB``, ``TiB``: powers of
+1024. Not ``GB`` or ``Gb`` (10**9 bytes or bits elsewhere), nor anything else."""
+
+SIZE_HELP = "bytes, or a number with K, M, G or T, powers of 1024 (also KiB, MiB, GiB, TiB), e.g. 512M, 2G"
+"""How :data:`SIZE_SUFFIXES` is described in the help and in messages."""
+
+TIME_SUFFIXES = {"": 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
+"""The units of ``--max-time`` [seconds per unit], exactly as written: none or ``s`` (seconds),
+``m`` or ``min`` (minutes), ``h`` (hours), ``d`` (days)."""
+
+TIME_HELP = "seconds, or a number with s, m (or min), h or d, e.g. 90, 10m, 2h"
+"""How :data:`TIME_SUFFIXES` is described in the help and in messages."""
+
+_UNIT = re.compile(r"[A-Za-z]*\Z")
+"""The unit of a quantity: the ASCII letters that end it."""
 
 
 @dataclass(frozen=True)
@@ -70,33 +90,38 @@ class Budget:
 
 
 # --- options ---------------------------------------------------------------------------------------------
-def parse_size(text: str) -> int:
-    """A memory size: bytes, or a number with K, M, G or T (powers of 1024; ``512M``, ``1.5G``)."""
-    m = _QUANTITY.fullmatch(str(text))
-    unit = m.group(2).lower().removesuffix("ib").removesuffix("b") if m else ""
-    if not m or unit not in SIZE_UNITS:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a size (bytes, or a number with K, M, G or T: 512M, 2G)")
-    value = float(m.group(1)) * SIZE_UNITS[unit]
+def quantity(text: str, units: dict, what: str, spelling: str) -> float:
+    """The value of ``text``, a number in the one grammar of numbers
+    (:data:`omnikin.number_text.PLAIN_NUMBER`: no blanks, ``_``, other scripts' digits, ``inf``)
+    followed at once by one of ``units`` (suffix -> scale), times the unit's scale; else an
+    argparse usage error naming ``what`` (``"size"``) and how it is written (``spelling``)."""
+    unit = _UNIT.search(text).group() if isinstance(text, str) else ""
+    digits = text[: len(text) - len(unit)] if isinstance(text, str) else text
+    if not isinstance(digits, str) or not PLAIN_NUMBER.fullmatch(digits):
+        raise argparse.ArgumentTypeError(f"not a {what}: {shorten(text)} ({spelling})")
+    if unit not in units:
+        raise argparse.ArgumentTypeError(f"{shorten(text)}: unknown unit {shorten(unit)} of a {what} ({spelling})")
+    value = float(digits) * units[unit]
     if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"{text!r} is too large for a size (not a finite number of bytes)")
+        raise argparse.ArgumentTypeError(f"{shorten(text)} is too large for a {what} (not a finite number)")
+    return value
+
+
+def parse_size(text: str) -> int:
+    """A memory size [bytes]: bytes, or a number with a unit of :data:`SIZE_SUFFIXES` (``512M``,
+    ``1.5G``, ``2GiB``), at least one byte."""
+    value = quantity(text, SIZE_SUFFIXES, "size", SIZE_HELP)
     if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r}: a size must be at least one byte")
+        raise argparse.ArgumentTypeError(f"{shorten(text)}: a size must be at least one byte")
     return int(value)
 
 
 def parse_duration(text: str) -> float:
-    """A duration [s]: seconds, or a number with s, m (min), h or d (``90``, ``10m``, ``2h``)."""
-    m = _QUANTITY.fullmatch(str(text))
-    unit = m.group(2).lower() if m else ""
-    if not m or unit not in TIME_UNITS:
-        raise argparse.ArgumentTypeError(
-            f"{text!r} is not a duration (seconds, or a number with s, m, h or d: 90, 10m, 2h)"
-        )
-    value = float(m.group(1)) * TIME_UNITS[unit]
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"{text!r} is too large for a duration (not a finite number of seconds)")
+    """A duration [s]: seconds, or a number with a unit of :data:`TIME_SUFFIXES` (``90``,
+    ``10m``, ``2h``), positive."""
+    value = quantity(text, TIME_SUFFIXES, "duration", TIME_HELP)
     if value <= 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: a duration must be positive")
+        raise argparse.ArgumentTypeError(f"{shorten(text)}: a duration must be positive")
     return value
 
 
@@ -107,7 +132,7 @@ def add_budget_options(parser, *, time: bool = True) -> None:
         type=parse_size,
         default=DEFAULT_MEMORY,
         metavar="SIZE",
-        help=f"refuse to start a job estimated to need more memory (bytes, or K/M/G/T; default "
+        help=f"refuse to start a job estimated to need more memory ({SIZE_HELP}; default "
         f"{format_bytes(DEFAULT_MEMORY)})",
     )
     if time:
@@ -116,7 +141,7 @@ def add_budget_options(parser, *, time: bool = True) -> None:
             type=parse_duration,
             default=DEFAULT_TIME,
             metavar="DURATION",
-            help=f"refuse to start a job estimated to take longer (seconds, or m/h: 90, 10m, 2h; "
+            help=f"refuse to start a job estimated to take longer ({TIME_HELP}; "
             f"default {format_seconds(DEFAULT_TIME)})",
         )
 
