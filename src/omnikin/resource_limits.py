@@ -57,8 +57,8 @@ def check_limits(max_memory, max_time, names: LimitNames) -> tuple[float, float]
 def _as_float(value: numbers.Real) -> float:
     try:
         return float(value)
-    except OverflowError:  # an integer beyond floats: as good as no limit
-        return math.inf
+    except OverflowError:  # an integer beyond floats: as good as no limit, or as far below zero
+        return math.inf if value > 0 else -math.inf
 
 
 def require_within(
