@@ -4,9 +4,11 @@ defaults equal to the command line's, results that plot themselves."""
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import json
 import math
+import re
 import subprocess
 import sys
 
@@ -14,7 +16,7 @@ import numpy as np
 import pytest
 
 import omnikin
-from conftest import omnikin_env
+from conftest import omni_robot, omnikin_env, run_cli
 from omnikin.cli.main import build_parser
 
 ENTRY_POINTS = ("simulate", "run_umbmark", "analyze_umbmark", "calibrate", "calibration_plan", "plot_layout")
@@ -96,6 +98,8 @@ def signature_defaults(function) -> dict:
                 "noise": "noise",
                 "seed": "seed",
                 "rate": "rate",
+                "max_memory": "max_memory",
+                "max_time": "max_time",
             },
         ),
         ("calibrate", omnikin.calibration_plan, {"side": "side"}),
@@ -146,6 +150,55 @@ def test_simulate_is_omnikin_simulate_without_the_bag(tmp_path):
     assert sim.run.truth[0, -1].tolist() == cli["truth_end"]
     assert sim.run.odometry[-1].tolist() == cli["odometry_end"]
     assert sim.end_error.tolist() == pytest.approx(cli["end_error"], abs=1e-15)
+
+
+def test_simulate_refuses_a_run_beyond_its_memory_before_starting(capsys):
+    """omnikin.simulate('tomasi-omni3', 'line 1400', rate=10000) started a 26 GB job that
+    'omnikin simulate' refuses. 1400 m at tomasi's default 0.3 m/s take 4667 s, 4.67e7 samples at
+    10 kHz: at least 2.2e10 bytes at the smallest measured 472 bytes per sample. Python and the
+    command line now refuse it alike, at once, each naming the limit its own way."""
+    import time
+
+    from omnikin.errors import ResourceLimitError
+
+    start = time.monotonic()
+    with pytest.raises(ResourceLimitError) as info:
+        omnikin.simulate("tomasi-omni3", "line 1400", rate=10000.0)
+    assert time.monotonic() - start < 5
+    assert info.value.unit == "bytes" and info.value.needed > 1400 / 0.3 * 1e4 * 472
+    assert info.value.limit == 2 * 1024**3 and "max_memory 2G" in str(info.value) and "\n" not in str(info.value)
+    rc, out, err = run_cli(capsys, "simulate", "tomasi-omni3", "--path", "line 1400", "--rate", "1e4", "--log", "-")
+    assert rc == 2 and out == "" and "--max-memory 2G" in err
+    pattern = r"about (\S+) of memory for (\S+) samples"
+    assert re.search(pattern, err).groups() == re.search(pattern, str(info.value)).groups()
+    with pytest.raises(ResourceLimitError, match=r"more than max_time 1 s; lower rate or shorten path"):
+        omnikin.simulate("tomasi-omni3", "line 100", rate=10000.0, max_memory=math.inf, max_time=1.0)
+    with pytest.raises(omnikin.InputError, match=r"^max_memory must be a number of bytes"):
+        omnikin.simulate("tomasi-omni3", "line 1", max_memory="2G")
+
+
+@pytest.mark.parametrize("wheels", [3, 12])
+def test_the_memory_estimate_of_a_simulation_bounds_what_it_takes(wheels):
+    """The estimate the check compares with the limit is at least the peak tracemalloc measures."""
+    import tracemalloc
+
+    from omnikin.plans import parse_plan
+    from omnikin.simulation.simulate import run_cost
+
+    robot = omni_robot([360 * k / wheels for k in range(wheels)], name=f"omni{wheels}")
+    robot = omnikin.Robot(
+        robot.name, tuple(dataclasses.replace(w, encoder=omnikin.Encoder(2000)) for w in robot.wheels)
+    )
+    omnikin.simulate(robot, "line 0.1", rate=100.0, errors="none")  # imports and caches outside the measure
+    tracemalloc.start()
+    try:
+        sim = omnikin.simulate(robot, "line 20", rate=1000.0, errors="none")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    cost = run_cost(parse_plan("line 20"), robot, 1000.0)
+    assert cost.samples + 1 >= len(sim.run.t) > 60_000  # intervals, within one sample per segment
+    assert peak <= cost.bytes < 2 * peak
 
 
 def test_results_plot_themselves(tmp_path):

@@ -292,6 +292,27 @@ def test_sample_plan_errors(robots):
         sample_plan(line(1.0), robots["tomasi-omni3"], 100.0, MotionLimits(linear=None, angular=None))
     with pytest.raises(OmnikinError):
         MotionLimits(linear=-1.0)
+    with pytest.raises(OmnikinError, match="positive number of samples per second, got True"):
+        sample_plan(line(1.0), robots["tomasi-omni3"], True)  # not 1 Hz
+
+
+@pytest.mark.parametrize("rate", [True, 0.5, 4.99, 10000.5, 1e5, np.float64(1e9)])
+def test_a_simulation_refuses_a_rate_outside_the_range_where_it_starts(robots, rate):
+    """simulate(..., rate=True) ran at 1 Hz, and 0.5 Hz or 1e5 Hz were simulated when the call
+    came from below the entry points: the one range, 5 Hz to 10 kHz, is checked where every
+    simulation starts, also for a plan sampled beforehand."""
+    robot = robots["tomasi-omni3"]
+    with pytest.raises(OmnikinError, match=r"^rate: the sample rate .*\[5, 10000\] Hz"):
+        simulate(line(1.0), robot, robot, rate=rate)
+    if not isinstance(rate, bool) and rate < 1e6:  # sample_plan itself refuses 1e9 samples by size
+        with pytest.raises(OmnikinError, match=r"^rate: the sample rate .*\[5, 10000\] Hz"):
+            simulate(sample_plan(line(0.1), robot, rate), robot, robot)
+
+
+def test_a_simulation_takes_the_ends_of_the_rate_range(robots):
+    robot = robots["tomasi-omni3"]
+    for rate in (5, 10000.0):
+        assert simulate(line(0.1), robot, robot, rate=rate).sampled.rate == rate
 
 
 # =====================================================================================================

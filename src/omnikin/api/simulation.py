@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import Robot
+from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..simulation.simulate import SimulatedRun
 from .common import as_built, noise_of, require_viz, robot_of
 
@@ -44,7 +45,16 @@ class Simulation:
 
 
 def simulate(
-    robot, path=DEFAULT_PATH, *, true_robot=None, errors="typical", noise="typical", seed: int = 1, rate: float = 100.0
+    robot,
+    path=DEFAULT_PATH,
+    *,
+    true_robot=None,
+    errors="typical",
+    noise="typical",
+    seed: int = 1,
+    rate: float = 100.0,
+    max_memory: float = DEFAULT_MEMORY,
+    max_time: float = DEFAULT_TIME,
 ) -> Simulation:
     """Simulate ``robot`` as built driving ``path`` commanded by its nominal model
     (``omnikin simulate``, without the bag).
@@ -56,16 +66,32 @@ def simulate(
     :class:`~omnikin.simulation.error_models.NoiseModel`); ``rate`` [Hz], within
     :data:`~omnikin.simulation.motion.RATE_RANGE` as for ``omnikin simulate``. The seed's first
     stream draws the robot as built (the same robot as ``omnikin umbmark --seed``), its second
-    the run, as ``omnikin simulate`` does.
+    the run, as ``omnikin simulate`` does. A run estimated to need more than ``max_memory``
+    [bytes] or ``max_time`` [s] is refused before it starts
+    (:func:`~omnikin.simulation.simulate.run_cost`, the estimate ``omnikin simulate`` checks
+    against ``--max-memory`` and ``--max-time``).
     """
-    from ..evaluation.procedure import streams
+    from ..evaluation.procedure import ARGUMENTS, streams
     from ..plans import Plan, parse_plan
+    from ..resource_limits import require_within
     from ..simulation.motion import check_rate_range
+    from ..simulation.simulate import run_cost
     from ..simulation.simulate import simulate as simulate_run
 
     check_rate_range(rate, "rate")
     nominal = robot_of(robot)
     plan = path if isinstance(path, Plan) else parse_plan(str(path))
+    cost = run_cost(plan, nominal, rate)
+    require_within(
+        "simulate",
+        memory=cost.bytes,
+        seconds=cost.seconds,
+        max_memory=max_memory,
+        max_time=max_time,
+        names=ARGUMENTS,
+        hint="lower rate or shorten path",
+        size=f"{cost.samples:.3g} samples",
+    )
     seeds = list(streams(seed).values())
     true, injected = as_built(nominal, true_robot, errors, seeds[0])
     run = simulate_run(plan, true, nominal, rate=rate, noise=noise_of(noise), trials=1, rng=seeds[1])

@@ -39,10 +39,11 @@ POSE_BYTES = 600
 """bag export: per pose message read and its line of text (measured 545)."""
 MESSAGE_SECONDS = 10e-6
 """Reading (deserializing) or writing (serializing) one message."""
-SIM_SAMPLE_BYTES = 600
-"""simulate: per sample, the simulation's arrays and the bag's (four messages, streamed; measured 547)."""
 SIM_SAMPLE_SECONDS = 4 * MESSAGE_SECONDS
-"""simulate: per sample, its four messages made and written."""
+"""simulate --bag: per sample, its four messages made and written (the simulation itself, and the
+memory of it all: :func:`omnikin.simulation.simulate.run_cost`)."""
+LOG_ROW_SECONDS = 5e-6
+"""simulate --log: per sample, its row of the tick log made and written (measured 19 us)."""
 LARGEST_MESSAGE_SHARE = 64
 """One message may use at most 1/64 of --max-memory (its bytes decoded into Python objects)."""
 
@@ -396,8 +397,8 @@ def parse_paths(text: str):
 def cmd_simulate(args) -> int:
     from ..io.bags import record_run, require_rosbags
     from ..simulation.error_models import noise as noise_profile
-    from ..simulation.motion import check_rate_range, estimated_samples
-    from ..simulation.simulate import simulate
+    from ..simulation.motion import check_rate_range
+    from ..simulation.simulate import run_cost, simulate
 
     if args.bag is None and args.log is None:
         raise InputError("simulate: give --bag OUT.bag and/or --log LOG.csv")
@@ -413,13 +414,14 @@ def cmd_simulate(args) -> int:
         raise InputError(f"--start must be a finite time [s], got {args.start}")
     plan = parse_paths(args.path)
     noise = noise_profile(args.noise)
-    samples = estimated_samples(plan, robot, args.rate)
+    cost = run_cost(plan, robot, args.rate)
+    writing = (SIM_SAMPLE_SECONDS if args.bag is not None else 0.0) + (LOG_ROW_SECONDS if args.log else 0.0)
     require(
         args,
         "simulate",
-        memory=samples * SIM_SAMPLE_BYTES,
-        seconds=samples * SIM_SAMPLE_SECONDS,
-        size=f"{samples:.3g} samples",
+        memory=cost.bytes,
+        seconds=cost.seconds + cost.samples * writing,
+        size=f"{cost.samples:.3g} samples",
         hint="lower --rate or shorten --path",
     )
     seeds = np.random.SeedSequence(args.seed).spawn(2)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, shorten
 from ..limits import MotionLimits, speed_scale
 from ..plans import Plan
 from ..wheels import range_problem
@@ -25,12 +25,13 @@ MAX_SAMPLES = 50_000_000
 """Largest number of samples one run may have (about 1.2 GB of increments)."""
 
 RATE_RANGE = (5.0, 10_000.0)
-"""Sample rate [Hz] of the runs omnikin's commands and entry points simulate (``omnikin
-simulate``, ``omnikin umbmark``, :func:`omnikin.simulate`, :func:`omnikin.run_umbmark`;
-:func:`check_rate_range`): at least 5 samples per second (a UMBmark leg then still spans several
-samples; at 1e-9 Hz a run is one sample and the result is noise of the sampling, not odometry),
-at most 10 kHz (beyond any odometry loop; the cost grows with it). The library's
-:func:`sample_plan` takes any positive rate."""
+"""Sample rate [Hz] of every simulated run: checked where a simulation starts
+(:func:`omnikin.simulation.simulate.simulate`, so also ``omnikin simulate``, ``omnikin umbmark``,
+:func:`omnikin.simulate`, :func:`omnikin.run_umbmark`; :func:`check_rate_range`): at least 5
+samples per second (a UMBmark leg then still spans several samples; at 1e-9 Hz a run is one
+sample and the result is noise of the sampling, not odometry), at most 10 kHz (beyond any
+odometry loop; the cost grows with it). :func:`sample_plan` alone (timing, no simulation) takes
+any positive rate."""
 
 
 @dataclass(frozen=True)
@@ -132,10 +133,13 @@ def check_rate_range(rate, name: str) -> float:
     return float(rate)
 
 
-def _check_rate(rate: float) -> float:
-    if not (math.isfinite(rate) and rate > 0):
-        raise InputError(f"rate must be a positive number of samples per second, got {rate!r}")
-    return rate
+def _check_rate(rate) -> float:
+    """``rate`` [Hz] as a float if it is a real positive finite number (not a bool: ``True`` is
+    no rate), else an InputError."""
+    problem = range_problem(rate, 0.0, math.inf, "Hz")
+    if problem or not rate > 0:
+        raise InputError(f"rate must be a positive number of samples per second, got {shorten(rate)}")
+    return float(rate)
 
 
 def _estimate(plan: Plan, vmax, limits: MotionLimits, rate: float) -> float:
