@@ -206,11 +206,10 @@ def _bound(check, what: str):
     def parse(text: str) -> float:
         if text in ("inf", "+inf"):
             value = math.inf
-        else:
-            problem = number_problem(text)
-            if problem:
-                raise argparse.ArgumentTypeError(f"{problem} ({what})")
+        elif number_problem(text) is None:
             value = float(text)
+        else:
+            raise argparse.ArgumentTypeError(f"{shorten(text)} is not a finite plain number ({what})")
         try:
             return check(value)
         except InputError:
