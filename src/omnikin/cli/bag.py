@@ -410,11 +410,10 @@ def cmd_simulate(args) -> int:
     if args.seed < 0:
         raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
     check_rate_range(args.rate, "--rate")
-    if not math.isfinite(args.start):
-        raise InputError(f"--start must be a finite time [s], got {args.start}")
     plan = parse_paths(args.path)
     noise = noise_profile(args.noise)
     cost = run_cost(plan, robot, args.rate)
+    _check_stamps(args, duration=cost.samples / args.rate)
     writing = (SIM_SAMPLE_SECONDS if args.bag is not None else 0.0) + (LOG_ROW_SECONDS if args.log else 0.0)
     require(
         args,
@@ -488,6 +487,19 @@ def cmd_simulate(args) -> int:
         )
     )
     return 0
+
+
+def _check_stamps(args, duration: float) -> None:
+    """Refuse a --start whose stamps an output cannot hold (:func:`~omnikin.simulation.motion.check_start`),
+    before simulating: a bag's ROS 2 times (integer nanoseconds from 0 to 2**31 - 1 s), a tick
+    log's times (read back as floats). ``duration`` [s]: at least the run's."""
+    from ..io.bags import NS, ROS_TIME_SPAN
+    from ..simulation.motion import check_start
+
+    if args.bag is not None:
+        check_start(args.start, duration, args.rate, "--start", output="a ROS 2 bag", span=ROS_TIME_SPAN, step=1 / NS)
+    if args.log is not None:
+        check_start(args.start, duration, args.rate, "--start", output="a tick log")
 
 
 def _check_tick_log(args, robot) -> None:

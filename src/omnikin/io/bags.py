@@ -57,6 +57,7 @@ import numpy as np
 from ..errors import InputError, OmnikinError, ResourceLimitError, one_line, shorten
 from ..geometry import between, log
 from ..model import Robot
+from ..simulation.motion import check_start
 from .output import check_output, data_folder
 
 BAGS_EXTRA = 'pip install "omnikin[bags]"'
@@ -71,6 +72,10 @@ STEER_SUFFIX = "_steer"
 STAMPS = ("auto", "header", "bag")
 
 NS = 1_000_000_000
+
+ROS_TIME_SPAN = (0.0, 2.0**31 - 1)
+"""The times [s] a ROS 2 bag can stamp: ``builtin_interfaces/Time`` holds int32 seconds, and
+rclcpp, rclpy and MCAP (unsigned log times) refuse a negative time."""
 
 
 TOPIC = re.compile(r"^/?[A-Za-z_~][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
@@ -830,11 +835,9 @@ def record_run(
     if unknown:
         raise BagError(f"unknown run topic key(s) {unknown}; keys are {sorted(RUN_TOPICS)}")
     check_frame_ids(frame_id, child_frame_id)
-    if not math.isfinite(start):
-        raise BagError(f"start time must be finite, got {start!r}")
-    end = start + float(run.t[-1])
-    if not (-(2**31) <= start and end < 2**31):
-        raise BagError(f"stamps from {start:.6g} s to {end:.6g} s do not fit a ROS time (int32 seconds)")
+    start = check_start(
+        start, float(run.t[-1]), run.sampled.rate, "start", output="a ROS 2 bag", span=ROS_TIME_SPAN, step=1 / NS
+    )
     t = np.asarray(run.t, dtype=float)
     stamps = seconds_to_ns(t) + round(start * 1e9)
     truth = np.asarray(run.truth)[0]

@@ -135,9 +135,9 @@ def read_tick_log(path: str | Path, robot: Robot) -> TickLog:
 def tick_log_lines(t, ticks, wheel_names, steer=None, steer_names=(), comment: str | None = None) -> list[str]:
     """The lines of a tick log (without newlines): optional ``# comment`` lines, the header, the rows.
 
-    ``t`` (N,) [s] (float, or int64 nanoseconds written exactly); ``ticks`` (N, n) whole
-    numbers (written exactly; floats must be whole); ``steer`` (N, n_steer) [rad], written in
-    degrees, for the wheels ``steer_names``.
+    ``t`` (N,) [s] (float, or int64 nanoseconds written exactly; increasing as written);
+    ``ticks`` (N, n) whole numbers (written exactly; floats must be whole); ``steer``
+    (N, n_steer) [rad], written in degrees, for the wheels ``steer_names``.
     """
     names = [str(n) for n in wheel_names]
     tk = np.asarray(ticks)
@@ -155,6 +155,7 @@ def tick_log_lines(t, ticks, wheel_names, steer=None, steer_names=(), comment: s
     times = format_times(t)
     if len(times) != len(tk):
         raise InputError(f"{len(times)} timestamps for {len(tk)} rows of ticks")
+    _require_increasing(times)
     steer_names = [str(n) for n in steer_names]
     columns = ["t"] + names + [f"{n}_steer_deg" for n in steer_names]
     deg = None
@@ -173,6 +174,20 @@ def tick_log_lines(t, ticks, wheel_names, steer=None, steer_names=(), comment: s
             cells += [repr(float(v) + 0.0) for v in deg[k]]
         out.append(",".join(cells))
     return out
+
+
+def _require_increasing(times: list[str]) -> None:
+    """Refuse times that, as written and read back (floats, as :func:`read_tick_log` reads
+    them), do not increase: the odometry would refuse the log (a time too large for its
+    sample rate rounds several samples to one stamp)."""
+    back = np.array(times, dtype=float)
+    stuck = np.flatnonzero(~(np.diff(back) > 0))
+    if stuck.size:
+        k = int(stuck[0]) + 1
+        raise InputError(
+            f"t: sample {k} at {shorten(times[k])} s does not come after sample {k - 1} at "
+            f"{shorten(times[k - 1])} s as written: a tick log's times must increase"
+        )
 
 
 def write_tick_log(path, t, ticks, wheel_names, steer=None, *, steer_names=(), comment: str | None = None) -> None:

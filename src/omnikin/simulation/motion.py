@@ -133,6 +133,56 @@ def check_rate_range(rate, name: str) -> float:
     return float(rate)
 
 
+# --- stamps ------------------------------------------------------------------------------------------
+STAMP_RESOLUTION = 1e-3
+"""Coarsest rounding of a sample's time [share of the sample interval] an output may make. A time
+kept as a float (a tick log read back) is rounded to the float spacing at its size, 2.2e-16 of
+it: at ``--start 1e16`` every stamp of a 100 Hz run was 1e16 or 1e16 + 2 (64 samples on one
+time), which the odometry refuses; a thousandth of the interval leaves the stamps distinct and
+the speeds computed from them true to 0.1 %."""
+
+
+def check_start(
+    start,
+    duration: float,
+    rate: float,
+    name: str = "start",
+    *,
+    output: str = "the output",
+    span: tuple[float, float] = (-math.inf, math.inf),
+    step: float | None = None,
+) -> float:
+    """``start`` [s] as a float if the stamps ``start + k / rate`` of a run of ``duration`` [s]
+    fit ``output``, else an :class:`~omnikin.errors.InputError` naming ``name`` (``--start``)
+    and ``output``: the one check of a run's start time, for every output that stamps its samples.
+
+    The stamps must lie in ``span`` [s] (what the output holds: a ROS 2 time runs from 0 to
+    2**31 - 1 s) and the output's rounding of a stamp, ``step`` [s] (1e-9 for integer
+    nanoseconds; None: a float, rounded to its spacing at the largest stamp), must be at most
+    :data:`STAMP_RESOLUTION` of the sample interval ``1 / rate``, so the stamps stay distinct.
+    """
+    problem = range_problem(start, -math.inf, math.inf, "s")
+    if problem:
+        raise InputError(f"{name}: the start time {problem}")
+    first, last = float(start), float(start) + float(duration)
+    low, high = span
+    if not (low <= first and last <= high):
+        raise InputError(
+            f"{name}: stamps from {first:.6g} s to {last:.6g} s do not fit {output}, whose times run "
+            f"from {low:.10g} to {high:.10g} s"
+        )
+    rounding = float(np.spacing(max(abs(first), abs(last)))) if step is None else step
+    interval = 1.0 / rate
+    if rounding > STAMP_RESOLUTION * interval:
+        reach = STAMP_RESOLUTION * interval / np.finfo(float).eps
+        raise InputError(
+            f"{name}: {output} holds a time near {max(abs(first), abs(last)):.6g} s only to {rounding:.3g} s, "
+            f"more than {STAMP_RESOLUTION:g} of the sample interval {interval:.3g} s at {rate:g} Hz: the "
+            f"stamps would collapse; start within about +-{reach:.3g} s of 0 (or lower the rate)"
+        )
+    return first
+
+
 def _check_rate(rate) -> float:
     """``rate`` [Hz] as a float if it is a real positive finite number (not a bool: ``True`` is
     no rate), else an InputError."""
