@@ -213,7 +213,12 @@ def add_parsers(sub, robot_help: str) -> None:
         help=f"sample rate of all topics, {RATE_RANGE[0]:g} to {RATE_RANGE[1]:g} Hz (default 100)",
     )
     sp.add_argument(
-        "--start", type=number, default=0.0, metavar="SEC", help="stamp of the first sample [s] (default 0)"
+        "--start",
+        type=number,
+        default=0.0,
+        metavar="SEC",
+        help="stamp of the first sample [s] (default 0); a bag stamps 0 to 2147483647 s (ROS 2 time), and "
+        "the stamps must stay distinct at --rate",
     )
     add_output(
         sp,
