@@ -33,6 +33,12 @@ MAX_ANGLE = 1e6
 160 000 turns: an unwrapped heading of days of spinning). A double still resolves such an angle
 to 1e-10 rad; beyond it a value like 1e308 is a typo whose sine and cosine mean nothing."""
 
+MAX_DIRECTION_DEG = 720.0
+"""Largest ``|direction|`` [deg] a person writes: a wheel's ``angle_deg`` and ``drive_deg`` in a
+robot file, the ``HEADING_DEG`` of a path (:func:`omnikin.plans.parse_plan`). Directions count
+modulo 360; two turns leave room for computed layouts (``30 + k 120``), while ``1e300`` has no
+digit left modulo 360 (its direction would be the rounding of the conversion to radians)."""
+
 SCALAR_TAYLOR_LIMIT = 1e-4
 """Below this |x| the scalar :func:`sinc_scalar` uses ``1 - x^2/6`` (truncation < 1e-18)."""
 

@@ -28,18 +28,33 @@ calibration fits and what measurement files hold.
 from __future__ import annotations
 
 import math
+import re
+import unicodedata
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from ._arrays import range_problem
 from .errors import InputError, shorten
-from .geometry import wrap_angle
+from .geometry import MAX_DIRECTION_DEG, wrap_angle
 from .number_text import plain_number
 
 MAX_SEGMENT = 1e5
 """Longest segment [m or rad]: 100 km of travel, or about 16,000 turns in place. Beyond it a
 plan is a typo (``line 1e308``), not a robot's path: refused before anything is sampled."""
+
+MAX_HEADING = math.radians(MAX_DIRECTION_DEG)
+"""Largest ``|heading|`` [rad] of a :func:`line`: a direction, bounded like every direction a
+person writes (:data:`omnikin.geometry.MAX_DIRECTION_DEG`, two turns)."""
+
+MAX_TURN_DEG = math.degrees(MAX_SEGMENT)
+"""Largest ``|ANGLE_DEG|`` [deg] of a ``spin`` or an ``arc`` in the text form: the longest
+segment, :data:`MAX_SEGMENT` rad (about 5.7e6 deg)."""
+
+PATH_BLANKS = " \t"
+"""The characters that separate the words of a path (ASCII blanks); any other white space
+(a newline, U+3000, U+001C, ...) is refused, where :meth:`str.split` would take it."""
 
 
 @dataclass(frozen=True)
@@ -88,7 +103,11 @@ class Plan:
 
 # --- path builders -----------------------------------------------------------------------------
 def line(distance: float, heading: float = 0.0) -> Plan:
-    """Straight translation by ``distance`` [m] along body direction ``heading`` [rad]."""
+    """Straight translation by ``distance`` [m] along body direction ``heading`` [rad],
+    ``|heading| <=`` :data:`MAX_HEADING`."""
+    problem = range_problem(heading, -MAX_HEADING, MAX_HEADING, "rad")
+    if problem:
+        raise InputError(f"line heading {problem} (a direction: two turns either way)")
     sign = 1.0 if distance >= 0 else -1.0
     return Plan((Segment((sign * math.cos(heading), sign * math.sin(heading), 0.0), abs(distance), "line"),), "line")
 
@@ -99,9 +118,14 @@ def spin(angle: float) -> Plan:
 
 
 def arc(radius: float, angle: float) -> Plan:
-    """Drive forward on a circle of ``radius`` [m] (centre on the left if ``angle`` > 0) by ``angle`` [rad]."""
-    if not radius > 0:
-        raise InputError(f"arc radius must be > 0, got {radius!r}")
+    """Drive forward on a circle of ``radius`` [m] (centre on the left if ``angle`` > 0) by
+    ``angle`` [rad], a turn of at most :data:`MAX_SEGMENT` rad."""
+    problem = range_problem(radius, 0.0, math.inf, "m")
+    if problem or not (radius > 0 and math.isfinite(1.0 / radius)):
+        raise InputError(f"arc radius must be > 0 with a finite curvature 1/radius, got {shorten(radius)} m")
+    problem = range_problem(angle, -MAX_SEGMENT, MAX_SEGMENT, "rad")
+    if problem:
+        raise InputError(f"arc angle {problem} (the longest turn)")
     sign = 1.0 if angle >= 0 else -1.0
     return Plan((Segment((1.0, 0.0, sign / radius), abs(angle) * radius, "arc"),), "arc")
 
@@ -179,16 +203,19 @@ def parse_plan(text: str) -> Plan:
     """A plan from its text form (module docstring): ``square cw|ccw rotate|translate [SIDE]``,
     ``line LENGTH [HEADING_DEG]``, ``spin ANGLE_DEG`` or ``arc RADIUS ANGLE_DEG``.
 
-    Its numbers are plain decimals, as in every table (:data:`omnikin.number_text.PLAIN_NUMBER`:
-    not ``nan``, ``inf``, ``1_0``, non-ASCII digits), whether the path comes from a runs file,
-    ``--path`` or Python. Anything else is an :class:`~omnikin.errors.InputError` in one line
-    naming the path and the word."""
+    Its words are separated by ASCII blanks (:data:`PATH_BLANKS`); its numbers are plain
+    decimals, as in every table (:data:`omnikin.number_text.PLAIN_NUMBER`: not ``nan``, ``inf``,
+    ``1_0``, non-ASCII digits), whether the path comes from a runs file, ``--path`` or Python.
+    ``HEADING_DEG`` is a direction within +-:data:`~omnikin.geometry.MAX_DIRECTION_DEG`,
+    ``ANGLE_DEG`` a turn within +-:data:`MAX_TURN_DEG`. Anything else is an
+    :class:`~omnikin.errors.InputError` in one line naming the path and what is wrong, in the
+    units it was written in."""
     if not isinstance(text, str):
         raise InputError(f"path must be text ({PATH_GRAMMAR}), got {shorten(text)}")
-    words = text.split()
+    where = f"path {shorten(text)}"
+    words = path_words(text, where)
     if not words:
         raise InputError("empty path")
-    where = f"path {shorten(text)}"
     kind, args = words[0].lower(), words[1:]
     if kind not in PATH_KINDS:
         raise InputError(
@@ -203,13 +230,38 @@ def parse_plan(text: str) -> Plan:
         except InputError as exc:
             raise InputError(f"{where}: {exc}") from None
     nums = _path_numbers(args, where)
-    if kind == "line" and len(nums) in (1, 2):
-        return line(nums[0], math.radians(nums[1]) if len(nums) == 2 else 0.0)
-    if kind == "spin" and len(nums) == 1:
-        return spin(math.radians(nums[0]))
-    if kind == "arc" and len(nums) == 2:
-        return arc(nums[0], math.radians(nums[1]))
+    try:
+        if kind == "line" and len(nums) in (1, 2):
+            heading = nums[1] if len(nums) == 2 else 0.0
+            _require_degrees(heading, MAX_DIRECTION_DEG, "heading", "a direction: two turns either way")
+            return line(nums[0], math.radians(heading))
+        if kind == "spin" and len(nums) == 1:
+            _require_degrees(nums[0], MAX_TURN_DEG, "angle", f"the longest turn, {MAX_SEGMENT:g} rad")
+            return spin(math.radians(nums[0]))
+        if kind == "arc" and len(nums) == 2:
+            _require_degrees(nums[1], MAX_TURN_DEG, "angle", f"the longest turn, {MAX_SEGMENT:g} rad")
+            return arc(nums[0], math.radians(nums[1]))
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}") from None
     raise InputError(f"{where}: expected {PATH_GRAMMAR}")
+
+
+def path_words(text: str, where: str = "path") -> list[str]:
+    """The words of a path: ``text`` split at runs of :data:`PATH_BLANKS`; other white space
+    is an InputError naming ``where`` and the character."""
+    odd = next((c for c in text if c.isspace() and c not in PATH_BLANKS), None)
+    if odd is not None:
+        raise InputError(
+            f"{where}: white space U+{ord(odd):04X} {unicodedata.name(odd, '')}".rstrip()
+            + "; separate the words with spaces"
+        )
+    return [w for w in re.split(f"[{PATH_BLANKS}]+", text) if w]
+
+
+def _require_degrees(value: float, limit: float, what: str, why: str) -> None:
+    """Refuse ``|value| > limit`` [deg] with a message in degrees, as the path was written."""
+    if not abs(value) <= limit:
+        raise InputError(f"{what} {value:g} deg is beyond +-{limit:.6g} deg ({why})")
 
 
 def _path_numbers(words: list[str], where: str) -> list[float]:

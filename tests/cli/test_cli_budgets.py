@@ -145,13 +145,13 @@ def test_hostile_simulation_sizes_are_refused_at_once(capsys, tmp_path, extra):
     assert not bag.exists() and list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("path", ["line 1e12", "spin 1e15"])
-def test_absurd_path_lengths_are_refused_by_the_plan(capsys, tmp_path, path):
+@pytest.mark.parametrize(
+    "path, why", [("line 1e12", "length must be from 0 to 100000"), ("spin 1e15", "beyond +-5.72958e+06 deg")]
+)
+def test_absurd_path_lengths_are_refused_by_the_plan(capsys, tmp_path, path, why):
     pytest.importorskip("rosbags")
     bag = tmp_path / "x.bag"
-    refused_quickly(
-        capsys, ["simulate", "tomasi-omni3", "--path", path, "--bag", bag], "--path", "length must be from 0 to 100000"
-    )
+    refused_quickly(capsys, ["simulate", "tomasi-omni3", "--path", path, "--bag", bag], "--path", why)
     assert list(tmp_path.iterdir()) == []
 
 

@@ -7,7 +7,7 @@ import math
 import pytest
 
 
-@pytest.mark.parametrize("text", ["line 1e308", "line -1e6", "spin 1e9", "arc 1 1e9", "square cw rotate 1e6"])
+@pytest.mark.parametrize("text", ["line 1e308", "line -1e6", "arc 10000 720", "square cw rotate 1e6"])
 def test_absurd_plan_lengths_are_refused_before_sampling(text):
     """A path no robot drives (a typo such as ``line 1e308``) is refused when the plan is made,
     naming the limit, instead of being fitted or sampled."""
@@ -79,3 +79,77 @@ def test_bad_paths_are_named_in_one_bounded_line(text, contains):
     with pytest.raises(InputError) as info:
         parse_plan(text)
     assert contains in str(info.value) and "\n" not in str(info.value) and len(str(info.value)) < 400
+
+
+# --- angles of paths ---------------------------------------------------------------------------------------
+@pytest.mark.parametrize("text", ["line 4 1e300", "line 4 -1e300", "line 4 720.001", "line 4 -1000"])
+def test_a_heading_is_a_direction_within_two_turns_like_a_robot_files(text):
+    """'line 4 1e300' was accepted with whatever direction 1e300 deg rounds to in radians. A
+    heading is a direction: within +-720 deg, the bound of a robot file's angle_deg/drive_deg."""
+    from omnikin.errors import InputError
+    from omnikin.io.robot_file import FIELD_RANGES
+    from omnikin.plans import parse_plan
+
+    assert FIELD_RANGES["angle_deg"][:2] == FIELD_RANGES["drive_deg"][:2] == (-720.0, 720.0)
+    with pytest.raises(InputError, match=rf"^path {text!r}: heading \S+ deg is beyond \+-720 deg"):
+        parse_plan(text)
+
+
+def test_headings_of_two_turns_either_way_are_directions():
+    """720 deg and -630 deg are the directions 0 and 90 deg."""
+    from omnikin.plans import parse_plan
+
+    for text, deg in (("line 4 720", 0.0), ("line 4 -630", 90.0), ("line 4 -720", 0.0)):
+        (seg,) = parse_plan(text).segments
+        assert seg.xi[:2] == pytest.approx((math.cos(math.radians(deg)), math.sin(math.radians(deg))), abs=1e-12)
+
+
+@pytest.mark.parametrize("text", ["spin 1e9", "spin -5.73e6", "arc 1 1e9", "arc 0.001 -1e7"])
+def test_a_turn_is_refused_in_the_degrees_it_was_written_in(text):
+    """'spin 1e9' said 'length must be from 0 to 100000 [m or rad], got 1.7e7' (radians, while
+    the path is in degrees). The longest turn is 1e5 rad = 5.72958e6 deg."""
+    from omnikin.errors import InputError
+    from omnikin.plans import parse_plan
+
+    with pytest.raises(InputError, match=rf"^path {text!r}: angle \S+ deg is beyond \+-5.72958e\+06 deg") as info:
+        parse_plan(text)
+    assert "rad, got" not in str(info.value)
+    assert parse_plan("spin 5.7e6").segments[0].length == pytest.approx(math.radians(5.7e6))
+
+
+@pytest.mark.parametrize("radius", ["1e-320", "4e-324", "0", "-1"])
+def test_an_arc_without_a_finite_curvature_names_the_path(radius):
+    """'arc 1e-320 90' failed with 'segment: xi must be a finite non-zero twist' (1/1e-320 is
+    inf), without the path."""
+    from omnikin.errors import InputError
+    from omnikin.plans import parse_plan
+
+    text = f"arc {radius} 90"
+    with pytest.raises(InputError, match=rf"^path {text!r}: arc radius must be > 0 with a finite curvature"):
+        parse_plan(text)
+
+
+@pytest.mark.parametrize("blank", ["\x1c", "\x1f", "\u3000", "\u00a0", "\u2003", "\n", "\r", "\x0b", "\x85"])
+def test_words_of_a_path_are_separated_by_ascii_blanks_only(blank):
+    """str.split() also split at U+001C (file separator) and U+3000 (ideographic space): such a
+    path was read as if spaced. Words are separated by spaces and tabs; any other white space is
+    refused, naming its code point."""
+    from omnikin.errors import InputError
+    from omnikin.plans import parse_plan
+
+    text = f"line{blank}4"
+    with pytest.raises(InputError, match=rf"^path .*: white space U\+{ord(blank):04X}\b.*separate the words"):
+        parse_plan(text)
+    assert parse_plan("line \t 4  \t90").segments[0].length == 4.0
+
+
+def test_python_builders_bound_their_angles_in_radians():
+    from omnikin.errors import InputError
+    from omnikin.plans import arc, line
+
+    with pytest.raises(InputError, match=r"line heading must lie in \[-12.566\d*, 12.566\d*\] rad"):
+        line(1.0, 1e300)
+    with pytest.raises(InputError, match=r"arc angle must lie in \[-100000, 100000\] rad"):
+        arc(1.0, 2e5)
+    with pytest.raises(InputError, match=r"arc radius must be > 0 with a finite curvature"):
+        arc(1e-320, 1.0)

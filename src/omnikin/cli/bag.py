@@ -383,8 +383,9 @@ def parse_paths(text: str):
     """A plan from one or more ``;``-separated paths of the runs-file grammar
     (:func:`omnikin.io.runs.path_plan`: plain numbers)."""
     from ..io.runs import path_plan
+    from ..plans import PATH_BLANKS
 
-    parts = [p.strip() for p in text.split(";")]
+    parts = [p.strip(PATH_BLANKS) for p in text.split(";")]
     if not any(parts):
         raise InputError("--path: empty path")
     plan = None

@@ -33,6 +33,7 @@ from typing import Any
 
 from .._arrays import range_problem, whole_problem
 from ..errors import OmnikinError, RobotFileError, did_you_mean, digits_apart, shorten
+from ..geometry import MAX_DIRECTION_DEG
 from ..model import Robot, name_collisions, robot_name_problem
 from ..number_text import PLAIN_NUMBER, PLAIN_NUMBER_HELP, number_problem
 from ..physical import (
@@ -102,8 +103,8 @@ FIELD_RANGES: dict[str, tuple[float, float, str]] = {
     "x": (-POSITION_LIMIT, POSITION_LIMIT, "m"),
     "y": (-POSITION_LIMIT, POSITION_LIMIT, "m"),
     "distance": (0.0, POSITION_LIMIT, "m"),
-    "angle_deg": (-720.0, 720.0, "deg"),
-    "drive_deg": (-720.0, 720.0, "deg"),
+    "angle_deg": (-MAX_DIRECTION_DEG, MAX_DIRECTION_DEG, "deg"),
+    "drive_deg": (-MAX_DIRECTION_DEG, MAX_DIRECTION_DEG, "deg"),
     "roller_deg": (-ROLLER_LIMIT_DEG, ROLLER_LIMIT_DEG, "deg"),
     "radius": (*RADIUS_RANGE, "m"),
     "max_speed": (*MAX_SPEED_RANGE, "rad/s"),

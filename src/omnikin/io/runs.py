@@ -130,7 +130,7 @@ def read_calibration_runs(path, sigma=DEFAULT_SIGMA) -> list[CalibrationRun]:
     plans: dict[str, Plan] = {}
     out = []
     for line_no, row in rows:
-        key = " ".join(row["path"].lower().split())
+        key = row["path"]  # parsed once per spelling (parse_plan splits at ASCII blanks only)
         if key not in plans:
             try:
                 plans[key] = path_plan(key)
