@@ -174,11 +174,11 @@ def check_start(
     rounding = float(np.spacing(max(abs(first), abs(last)))) if step is None else step
     interval = 1.0 / rate
     if rounding > STAMP_RESOLUTION * interval:
-        reach = STAMP_RESOLUTION * interval / np.finfo(float).eps
+        reach = 2.0 ** (math.floor(math.log2(STAMP_RESOLUTION * interval)) + 53)  # doubles below: fine enough
         raise InputError(
             f"{name}: {output} holds a time near {max(abs(first), abs(last)):.6g} s only to {rounding:.3g} s, "
             f"more than {STAMP_RESOLUTION:g} of the sample interval {interval:.3g} s at {rate:g} Hz: the "
-            f"stamps would collapse; start within about +-{reach:.3g} s of 0 (or lower the rate)"
+            f"stamps would collapse; keep them within +-{reach:.3g} s of 0 (or lower the rate)"
         )
     return first
 
