@@ -164,3 +164,14 @@ def container_problem(value, order: str = "the wheels' order") -> str | None:
     if isinstance(value, (Sequence, Iterator)) or hasattr(value, "__array__") or hasattr(value, "__array_interface__"):
         return None
     return f"a {type(value).__name__} is not a sequence"
+
+
+def frozen(array) -> np.ndarray:
+    """A read-only copy of ``array`` that stays read-only: its data lives in an immutable
+    ``bytes`` object, so ``setflags(write=True)`` raises ``ValueError`` on it, on its ``base``
+    and on every view of it (an array owning its data could be made writeable again).
+
+    For arrays an object keeps and hands out (a robot's cached matrices and limits): a caller
+    cannot change the object's state through them; copy one to modify it."""
+    a = np.ascontiguousarray(array)
+    return np.frombuffer(a.tobytes(), dtype=a.dtype).reshape(a.shape)

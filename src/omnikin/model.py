@@ -28,12 +28,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import cached_property
 
 import numpy as np
 
-from ._arrays import as_components, as_real_array, require_finite
+from ._arrays import as_components, as_real_array, frozen, require_finite
 from .errors import InfeasibleTwistError, InputError, SingularLayoutError, digits_apart, shorten
 from .geometry import MAX_ANGLE
 from .linalg import RANK_TOL, null_space, rank
@@ -367,14 +367,12 @@ class Robot:
         (no ``steer``, or limits -180 .. 180 deg: any orientation, up to
         :data:`~omnikin.geometry.MAX_ANGLE` in size). The model accepts an angle up to
         :data:`STEER_LIMIT_SLACK` beyond a finite limit (round-off of a conversion from degrees).
-        Read-only arrays (the robot keeps them)."""
+        Read-only arrays, for good (:func:`~omnikin._arrays.frozen`: the robot keeps them)."""
         lims = [(w.steer.lower, w.steer.upper) if w.steer is not None else (-np.pi, np.pi) for w in self.steerable]
         full = [hi - lo >= 2 * np.pi - 1e-9 for lo, hi in lims]
         lower = np.array([-np.inf if f else lo for (lo, _), f in zip(lims, full, strict=True)])
         upper = np.array([np.inf if f else hi for (_, hi), f in zip(lims, full, strict=True)])
-        lower.setflags(write=False)
-        upper.setflags(write=False)
-        return lower, upper
+        return frozen(lower), frozen(upper)
 
     def _steer_of(self, steer: np.ndarray) -> dict[str, np.ndarray]:
         return {w.name: steer[..., i] for i, w in enumerate(self.steerable)}
@@ -383,7 +381,7 @@ class Robot:
         """Wheel Jacobian ``(..., n, 3)``: ``omega = J twist`` [rad/s per twist].
 
         Without steerable wheels the matrix is constant: it is built once and returned
-        read-only (copy it to modify it).
+        read-only for good (:func:`~omnikin._arrays.frozen`; copy it to modify it).
         """
         if wheels is None and self._constant_at(steer):
             return self._jacobian_constant
@@ -405,9 +403,7 @@ class Robot:
 
     @cached_property
     def _jacobian_constant(self) -> np.ndarray:
-        rows = np.stack([w.rolling_row() for w in self.rolling])
-        rows.setflags(write=False)
-        return rows
+        return frozen(np.stack([w.rolling_row() for w in self.rolling]))
 
     @property
     def ik_matrix(self) -> np.ndarray:
@@ -416,13 +412,13 @@ class Robot:
 
     @cached_property
     def fixed_constraints(self) -> np.ndarray:
-        """Sliding rows ``C_f`` ``(n_fixed, 3)`` of the fixed standard wheels."""
-        return np.array([w.sliding_row() for w in self.fixed]).reshape(-1, 3)
+        """Sliding rows ``C_f`` ``(n_fixed, 3)`` of the fixed standard wheels (read-only for good)."""
+        return frozen(np.array([w.sliding_row() for w in self.fixed]).reshape(-1, 3))
 
     @cached_property
     def admissible_basis(self) -> np.ndarray:
-        """Orthonormal basis ``N`` ``(3, k)`` of twists the fixed wheels allow."""
-        return null_space(self.fixed_constraints, 3)
+        """Orthonormal basis ``N`` ``(3, k)`` of twists the fixed wheels allow (read-only for good)."""
+        return frozen(null_space(self.fixed_constraints, 3))
 
     def fk_rows(self, steer=None, wheels: Sequence[str] | None = None) -> np.ndarray:
         """Rows ``A = [J; S/r]`` ``(..., n_rows, 3)`` that forward kinematics fits (module docstring).
@@ -450,7 +446,8 @@ class Robot:
         """Forward-kinematics operator ``(..., 3, n_rows)``: ``twist = F [omega; 0]``.
 
         Without steerable wheels the operator is constant: it is computed once per wheel
-        subset and returned read-only (copy it to modify it).
+        subset and returned read-only for good (:func:`~omnikin._arrays.frozen`; copy it to
+        modify it).
         """
         constant = self._constant_at(steer)
         key = wheels = None if wheels is None else tuple(wheels)
@@ -458,19 +455,27 @@ class Robot:
             return self._fk_cache[key]
         f = self._fk_operator(self._fk_rows(self._steer_array(steer), wheels))
         if constant:
-            f.setflags(write=False)
-            self._fk_cache[key] = f
+            f = self._fk_cache[key] = frozen(f)
         return f
 
     @cached_property
     def _fk_cache(self) -> dict:
         return {}
 
-    _CACHES = ("_jacobian_constant", "_fk_cache", "_by_name", "_rolling_index", "steer_limits")
+    _CACHES = (
+        "_jacobian_constant",
+        "_fk_cache",
+        "_by_name",
+        "_rolling_index",
+        "steer_limits",
+        "fixed_constraints",
+        "admissible_basis",
+        "generic_configuration",
+    )
 
     def __getstate__(self):
-        """Pickle and deepcopy without the read-only matrix caches (NumPy does not keep the
-        read-only flag through them); a copy rebuilds its own."""
+        """Pickle and deepcopy without the read-only caches (NumPy does not keep the read-only
+        flag through them); a copy rebuilds its own."""
         return {k: v for k, v in self.__dict__.items() if k not in self._CACHES}
 
     def _fk_operator(self, a: np.ndarray) -> np.ndarray:
@@ -486,7 +491,10 @@ class Robot:
     # --- analysis ------------------------------------------------------------------
     @cached_property
     def generic_configuration(self) -> Configuration:
-        return generic_configuration(self.wheels)
+        """A generic admissible configuration (:func:`omnikin.mobility.generic_configuration`),
+        its arrays read-only for good (the robot's mobility is computed from it)."""
+        config = generic_configuration(self.wheels)
+        return Configuration(*(frozen(getattr(config, f.name)) for f in fields(config)))
 
     @cached_property
     def mobility(self) -> Mobility:
