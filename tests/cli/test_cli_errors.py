@@ -439,3 +439,23 @@ def test_every_negative_value_the_help_shows_is_a_value(capsys):
         rc, out, err = cli(capsys, "ik", "tomasi-omni3", example, "0", "0", "--json")
         assert rc == 0, (example, err)
         assert json.loads(out)["twist"][0] == float(example) < 0
+
+
+@pytest.mark.parametrize(
+    "baud, why",
+    [
+        ("0", "got 0"),
+        ("-5", "got -5"),
+        ("49", "got 49"),
+        ("12000001", "got 12000001"),
+        ("99999999999999999999", "from 50 to 12000000"),
+        ("9" * 23, "at most 20"),
+    ],
+)
+def test_ros_refuses_a_baud_rate_no_uart_runs_at_as_a_usage_error(capsys, baud, why):
+    """'omnikin ros --baud 0' passed the parser and failed later as a link error (status 1)."""
+    one_line(
+        *cli(capsys, "ros", "diff-drive", "--backend", "serial", "--port", "/dev/omnikin-none", "--baud", baud),
+        "ros: argument --baud",
+        why,
+    )

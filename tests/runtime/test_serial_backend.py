@@ -426,3 +426,13 @@ def test_protocol_timing_is_the_default(tomasi):
                 t.heartbeat_period,
             )
             assert backend.baud == 115200
+
+
+@pytest.mark.parametrize("baud", [0, -5, 49, 12_000_001, 10**20, 115200.0, True, "115200"])
+def test_a_baud_rate_no_uart_runs_at_is_refused_before_a_port_opens(tomasi, baud):
+    """Baud 0 or 1e20 went to pyserial and failed as a link error; 50 (POSIX B50) to 12 Mbaud
+    (FTDI FT232H) are the rates of UARTs, whole numbers."""
+    from omnikin.errors import InputError
+
+    with pytest.raises(InputError, match=r"^serial back-end: baud: the baud rate must be a whole number from 50 to"):
+        SerialBackend(tomasi, "/dev/omnikin-no-such-port", baud)

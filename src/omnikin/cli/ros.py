@@ -54,7 +54,9 @@ def add_parsers(sub, robot_help: str) -> None:
         metavar="DEV",
         help="serial back-end: one port for all wheels, or one port per driven wheel in file order",
     )
-    sp.add_argument("--baud", type=whole, metavar="N", help="serial back-end: baud rate (default from the protocol)")
+    sp.add_argument(
+        "--baud", type=baud, metavar="N", help="serial back-end: baud rate of the ports (default from the protocol)"
+    )
     sp.add_argument("--params", metavar="FILE", help="parameter file (YAML, flat or ros__parameters)")
     sp.add_argument(
         "--errors",
@@ -71,6 +73,20 @@ def add_parsers(sub, robot_help: str) -> None:
         help="ROS arguments passed to rclpy (e.g. -p publish_rate:=100.0)",
     )
     sp.set_defaults(func=cmd_ros)
+
+
+def baud(text: str) -> int:
+    """An argparse ``type``: ``--baud``, a whole number (:func:`~omnikin.cli.common.whole`) in
+    the range of UARTs (:data:`omnikin.runtime.serial_backend.BAUD_RANGE`), so that a rate no
+    port runs at is a usage error, not a link error after the start."""
+    from ..errors import InputError
+    from ..runtime.serial_backend import check_baud
+
+    value = whole(text)
+    try:
+        return check_baud(value)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("baud: ")) from None
 
 
 def cmd_ros(args) -> int:

@@ -48,6 +48,7 @@ import time
 
 import numpy as np
 
+from .._arrays import whole_problem
 from ..encoders import wrap_scalar
 from ..errors import InputError, LinkError, OmnikinError, digits_apart
 from ..model import Robot
@@ -71,6 +72,21 @@ class LinkLostError(LinkError):
         super().__init__(message)
         self.wheel = wheel
         self.port = port
+
+
+BAUD_RANGE = (50, 12_000_000)
+"""Baud rates of a serial link [bit/s]: from 50, the slowest rate of POSIX terminals (``B50``),
+to 12 Mbaud, the fastest USB-serial bridges (FTDI FT232H). Beyond them no UART runs: a rate
+outside is a typo, refused before a port is opened."""
+
+
+def check_baud(baud, name: str = "baud") -> int:
+    """``baud`` [bit/s] as an int if it is a whole number in :data:`BAUD_RANGE`, else an
+    :class:`~omnikin.errors.InputError` naming ``name`` (``--baud``)."""
+    problem = whole_problem(baud, *BAUD_RANGE)
+    if problem:
+        raise InputError(f"{name}: the baud rate {problem} (the rates of UARTs)")
+    return int(baud)
 
 
 def _require_serial():
@@ -129,7 +145,7 @@ class SerialBackend:
         self.link_timeout = self._positive(link_timeout, p.timing.link_timeout, "link_timeout")
         self.connect_timeout = self._positive(connect_timeout, p.timing.connect_timeout, "connect_timeout")
         self.heartbeat_period = self._positive(heartbeat_period, p.timing.heartbeat_period, "heartbeat_period")
-        self.baud = int(baud if baud is not None else p.serial["baud"])
+        self.baud = check_baud(baud if baud is not None else p.serial["baud"], "serial back-end: baud")
         self.port_of = self._map_ports(ports)
         self._rpt = dict(zip(self.encoded, robot.rad_per_tick(self.encoded).tolist(), strict=True))
         self._ticks = {n: 0 for n in self.encoded}
