@@ -459,3 +459,17 @@ def test_ros_refuses_a_baud_rate_no_uart_runs_at_as_a_usage_error(capsys, baud, 
         "ros: argument --baud",
         why,
     )
+
+
+@pytest.mark.parametrize(
+    "argv, reason",
+    [
+        (["simulate", "diff-drive", "--errors", HUGE, "--log", "-"], "unknown error profile"),
+        (["simulate", "diff-drive", "--noise", HUGE, "--log", "-"], "unknown noise profile"),
+        (["show", "diff-drive", "--plot", "a." + "x" * 200], "unknown drawing format"),
+    ],
+    ids=["errors", "noise", "plot"],
+)
+def test_names_typed_for_profiles_and_formats_are_quoted_short(capsys, argv, reason):
+    line = one_line(*cli(capsys, *argv), reason)
+    assert "x" * 100 not in line

@@ -25,7 +25,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from .. import __version__
-from ..errors import InfeasibleTwistError, InputError, OmnikinError, OutputError, one_line
+from ..errors import InfeasibleTwistError, InputError, OmnikinError, OutputError, one_line, shorten
 from ..presets import PRESET_NAMES
 from .common import (
     add_method_option,
@@ -308,7 +308,7 @@ def _plot_format(args) -> str:
     suffix = os.path.splitext(args.plot)[1].lower().lstrip(".")
     if suffix not in formats:
         raise CliError(
-            f"--plot {args.plot}: unknown drawing format {suffix or '(no extension)'!r}; "
+            f"--plot {shorten(args.plot)}: unknown drawing format {shorten(suffix) if suffix else '(no extension)'}; "
             f"one of {', '.join(sorted(formats))}"
         )
     return suffix

@@ -32,7 +32,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, did_you_mean, shorten
 from ..model import Robot
 
 
@@ -177,12 +177,16 @@ NOISE = {
 
 
 def profile(name: str) -> ErrorProfile:
-    if name not in PROFILES:
-        raise InputError(f"unknown error profile {name!r}; one of {sorted(PROFILES)}")
+    """The systematic error profile called ``name`` (:data:`PROFILES`)."""
+    if not isinstance(name, str) or name not in PROFILES:
+        raise InputError(
+            f"unknown error profile {shorten(name)}{did_you_mean(name, PROFILES)}; one of {sorted(PROFILES)}"
+        )
     return PROFILES[name]
 
 
 def noise(name: str) -> NoiseModel:
-    if name not in NOISE:
-        raise InputError(f"unknown noise profile {name!r}; one of {sorted(NOISE)}")
+    """The random error model called ``name`` (:data:`NOISE`)."""
+    if not isinstance(name, str) or name not in NOISE:
+        raise InputError(f"unknown noise profile {shorten(name)}{did_you_mean(name, NOISE)}; one of {sorted(NOISE)}")
     return NOISE[name]
