@@ -58,7 +58,7 @@ def _as_float(value: numbers.Real) -> float:
     try:
         return float(value)
     except OverflowError:  # an integer beyond floats: as good as no limit, or as far below zero
-        return math.inf if value > 0 else -math.inf
+        return -math.inf if value < 0 else math.inf
 
 
 def require_within(

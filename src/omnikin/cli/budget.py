@@ -95,7 +95,8 @@ def quantity(text: str, units: dict, what: str, spelling: str) -> float:
     (:data:`omnikin.number_text.PLAIN_NUMBER`: no blanks, ``_``, other scripts' digits, ``inf``)
     followed at once by one of ``units`` (suffix -> scale), times the unit's scale; else an
     argparse usage error naming ``what`` (``"size"``) and how it is written (``spelling``)."""
-    unit = _UNIT.search(text).group() if isinstance(text, str) else ""
+    found = _UNIT.search(text) if isinstance(text, str) else None
+    unit = found.group() if found else ""
     digits = text[: len(text) - len(unit)] if isinstance(text, str) else text
     if not isinstance(digits, str) or not PLAIN_NUMBER.fullmatch(digits):
         raise argparse.ArgumentTypeError(f"not a {what}: {shorten(text)} ({spelling})")
