@@ -260,8 +260,9 @@ def path_words(text: str, where: str = "path") -> list[str]:
 
 def _require_degrees(value: float, limit: float, what: str, why: str) -> None:
     """Refuse ``|value| > limit`` [deg] with a message in degrees, as the path was written."""
-    if not abs(value) <= limit:
-        raise InputError(f"{what} {value:g} deg is beyond +-{limit:.6g} deg ({why})")
+    problem = range_problem(value, -limit, limit, "deg")
+    if problem:
+        raise InputError(f"{what} {problem} ({why})")
 
 
 def _path_numbers(words: list[str], where: str) -> list[float]:

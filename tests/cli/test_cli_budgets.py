@@ -146,7 +146,11 @@ def test_hostile_simulation_sizes_are_refused_at_once(capsys, tmp_path, extra):
 
 
 @pytest.mark.parametrize(
-    "path, why", [("line 1e12", "length must be from 0 to 100000"), ("spin 1e15", "beyond +-5.72958e+06 deg")]
+    "path, why",
+    [
+        ("line 1e12", "length must be from 0 to 100000"),
+        ("spin 1e15", "angle must lie in [-5729577.951, 5729577.951] deg, got 1e+15"),
+    ],
 )
 def test_absurd_path_lengths_are_refused_by_the_plan(capsys, tmp_path, path, why):
     pytest.importorskip("rosbags")

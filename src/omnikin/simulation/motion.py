@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, shorten
+from ..errors import InputError, digits_apart, shorten
 from ..limits import MotionLimits, speed_scale
 from ..plans import Plan
 from ..wheels import range_problem
@@ -167,8 +167,9 @@ def check_start(
     first, last = float(start), float(start) + float(duration)
     low, high = span
     if not (low <= first and last <= high):
+        p = max(digits_apart(first, low), digits_apart(last, high))  # printed apart from the bounds they break
         raise InputError(
-            f"{name}: stamps from {first:.6g} s to {last:.6g} s do not fit {output}, whose times run "
+            f"{name}: stamps from {first:.{p}g} s to {last:.{p}g} s do not fit {output}, whose times run "
             f"from {low:.10g} to {high:.10g} s"
         )
     rounding = float(np.spacing(max(abs(first), abs(last)))) if step is None else step
