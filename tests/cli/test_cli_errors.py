@@ -473,3 +473,12 @@ def test_ros_refuses_a_baud_rate_no_uart_runs_at_as_a_usage_error(capsys, baud, 
 def test_names_typed_for_profiles_and_formats_are_quoted_short(capsys, argv, reason):
     line = one_line(*cli(capsys, *argv), reason)
     assert "x" * 100 not in line
+
+
+@pytest.mark.parametrize("path", ["line 0", "spin 0", "spin -0", "line 0; spin 0"])
+def test_a_path_that_does_not_move_writes_no_log_odometry_would_refuse(capsys, tmp_path, path):
+    """A path of zero length lasts 0 s: one sample, a tick log that omnikin odometry refuses
+    (it needs two). simulate refuses it instead, and writes nothing."""
+    log = tmp_path / "log.csv"
+    one_line(*cli(capsys, "simulate", "tomasi-omni3", "--path", path, "--log", log), "does not move the robot")
+    assert not log.exists()

@@ -685,3 +685,12 @@ def test_library_writers_check_frame_ids_too(tmp_path):
             bags.write_odometry(tmp_path / "o.bag", stamps, poses, poses, frame_id=frame, child_frame_id=child)
     bags.write_odometry(tmp_path / "o.bag", stamps, poses, poses, frame_id="robot1/odom", child_frame_id="robot1/base")
     assert bags.read_poses(tmp_path / "o.bag", "/odom").child_frame_id == "robot1/base"
+
+
+def test_a_huge_missing_topic_name_is_quoted_short_and_the_reason_kept(circle_bag, tmp_path):
+    path = circle_bag[0]
+    topic = "/" + "j" * 100_000
+    with pytest.raises(OmnikinError) as info:
+        run_cli(["bag", "odometry", "tomasi-omni3", path, "-o", tmp_path / "o", "--joint-states-topic", topic])
+    message = str(info.value)
+    assert len(message) < 1000 and "no topic" in message and "it has: /chatter" in message

@@ -232,7 +232,7 @@ def _messages(
         conns = [c for c in reader.connections if c.topic == topic]
         if not conns:
             have = ", ".join(f"{c.topic} ({c.msgtype})" for c in sorted(reader.connections, key=lambda c: c.topic))
-            raise BagError(f"{bag}: no topic {topic!r} in the bag; it has: {one_line(have or 'no topics', 500)}")
+            raise BagError(f"{bag}: no topic {shorten(topic)} in the bag; it has: {one_line(have or 'no topics', 500)}")
         bad = sorted({c.msgtype for c in conns if c.msgtype not in allowed})
         if bad:
             raise BagError(f"{bag}: topic {topic!r} carries {', '.join(bad)}; expected {' or '.join(allowed)}")

@@ -174,6 +174,8 @@ def simulate(
     require_same_wheels(command_robot, true_robot)
     odometry_robot = odometry_robot or command_robot
     sampled = plan if isinstance(plan, SampledPlan) else sample_plan(plan, command_robot, rate, limits)
+    if len(sampled.t) < 2:  # a tick log of one sample is no run: odometry needs two
+        raise InputError("the path does not move the robot (it lasts 0 s): nothing to simulate; give a length > 0")
     cmd_wheels = encoded_wheels(command_robot)
     names = [w.name for w in cmd_wheels]
     true_wheels = [true_robot.wheel(n) for n in names]
