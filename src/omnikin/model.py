@@ -204,6 +204,20 @@ class FKResult:
         return np.linalg.norm(self.residual / safe, axis=-1) * safe[..., 0]
 
 
+def steering_beyond(wheel: str, value: float, lower: float, upper: float) -> str:
+    """``wheel 'w' steered to V rad (D deg), outside its limits [lo, hi] deg`` (or ``beyond
+    +-MAX_ANGLE rad`` for a wheel that turns all the way round), printed with the digits that
+    tell ``value`` from the limit it passes (:func:`~omnikin.errors.digits_apart`)."""
+    if math.isinf(lower) or upper >= MAX_ANGLE:
+        p = digits_apart(abs(value), MAX_ANGLE)
+        limits = f"beyond +-{MAX_ANGLE:g} rad"
+    else:
+        lo, hi = math.degrees(lower), math.degrees(upper)
+        p = digits_apart(math.degrees(value), lo if value < lower else hi)
+        limits = f"outside its limits [{lo:.{p}g}, {hi:.{p}g}] deg"
+    return f"wheel {wheel!r} steered to {value:.{p}g} rad ({math.degrees(value):.{p}g} deg), {limits}"
+
+
 @dataclass(frozen=True)
 class Robot:
     """A wheeled mobile robot: a name and its wheels (see :mod:`omnikin.wheels`).
@@ -345,16 +359,8 @@ class Robot:
             k = index[-1]
             at = f" at index {index[:-1]}" if len(index) > 1 else ""
             value = float(arr[index])
-            if math.isinf(lower[k]):
-                p = digits_apart(abs(value), MAX_ANGLE)
-                limits = f"beyond +-{MAX_ANGLE:g} rad"
-            else:
-                lo, hi = math.degrees(lower[k]), math.degrees(upper[k])
-                p = digits_apart(math.degrees(value), lo if value < lower[k] else hi)
-                limits = f"outside its limits [{lo:.{p}g}, {hi:.{p}g}] deg"
             raise InputError(
-                f"{name}{at}: wheel {self.steerable[k].name!r} steered to {value:.{p}g} rad "
-                f"({math.degrees(value):.{p}g} deg), {limits} "
+                f"{name}{at}: {steering_beyond(self.steerable[k].name, value, lower[k], upper[k])} "
                 f"(steering angles are in radians, relative to the wheel's drive_deg)"
             )
         return arr

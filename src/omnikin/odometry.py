@@ -35,10 +35,10 @@ from .encoders import (
     timestamp_problem,
     wheel_increments,
 )
-from .errors import InputError, OdometryInputError, digits_apart
+from .errors import InputError, OdometryInputError
 from .geometry import MAX_ANGLE, wrap_angle
 from .integration import STEP_BOUNDS, check_method, check_start, integrate_components, step_problem
-from .model import STEER_LIMIT_SLACK, Robot
+from .model import STEER_LIMIT_SLACK, Robot, steering_beyond
 
 
 def encoded_wheels(robot: Robot):
@@ -443,14 +443,7 @@ def steer_problem(robot: Robot, k: int, value: float) -> str | None:
     name = robot.steer_names[k]
     if not math.isfinite(value):
         return f"steer: non-finite steering angle {value!r}, wheel {name!r}"
-    if upper[k] >= MAX_ANGLE:
-        p = digits_apart(abs(value), MAX_ANGLE)
-        limits = f"beyond +-{MAX_ANGLE:g} rad"
-    else:
-        lo, hi = math.degrees(lower[k]), math.degrees(upper[k])
-        p = digits_apart(math.degrees(value), lo if value < lower[k] else hi)
-        limits = f"outside its limits [{lo:.{p}g}, {hi:.{p}g}] deg"
-    return f"steer: wheel {name!r} steered to {value:.{p}g} rad ({math.degrees(value):.{p}g} deg), {limits}"
+    return f"steer: {steering_beyond(name, value, lower[k], upper[k])}"
 
 
 def _steering(robot, steer, lead: tuple, n: int) -> tuple[np.ndarray, Problem | None]:
