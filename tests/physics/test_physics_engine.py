@@ -224,3 +224,21 @@ def test_wrong_commands_and_robots_that_cannot_stand_are_refused():
         sim.advance(float("nan"))
     with pytest.raises(InputError, match="physical description has wheels"):
         PhysicsSim(robot, description=describe(load_robot("diff-drive")))
+
+
+def test_commands_beyond_the_motor_limits_are_held_there_and_counted():
+    """A wheel speed beyond the motor's speed limit is held at the limit (as a motor would) and
+    the command is counted in ``saturated`` (and the back-end's stats), never silently."""
+    from omnikin.physics.backend import PhysicsBackend
+    from omnikin.physics.engine import PhysicsSim
+
+    robot = load_robot("tomasi-omni3")
+    sim = PhysicsSim(robot)
+    limit = 3.0 / robot.wheels[0].radius  # the default motor speed: a rim speed of 3 m/s
+    sim.command([0.5 * limit, 0.0, 0.0])
+    assert sim.saturated == 0
+    sim.command([2.0 * limit, 0.0, 0.0])
+    assert sim.saturated == 1
+    backend = PhysicsBackend(robot)
+    backend.write(0.0, [0.0, 2.0 * limit, 0.0])
+    assert backend.stats()["saturated"] == 1

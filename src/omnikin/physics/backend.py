@@ -114,6 +114,7 @@ class PhysicsBackend:
             "writes": self.writes,
             "reads": self.reads,
             "sim_time": self.sim.time,
+            "saturated": self.sim.saturated,
         }
 
     def close(self) -> None:

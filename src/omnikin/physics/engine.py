@@ -142,6 +142,9 @@ class PhysicsSim:
         self._bits = [robot.wheel(n).encoder.counter_bits for n in encoded]  # type: ignore[union-attr]
 
         self._speed_target = np.zeros(len(driven))
+        self.saturated = 0
+        """Commands that asked a motor for more than its speed limit, or a steering joint for an
+        angle beyond its limits (held at the limit, as the motor or the end stop would)."""
         self._speed_set = np.zeros(len(driven))
         self._integral = np.zeros(len(driven))
         self._ramping = False
@@ -197,9 +200,12 @@ class PhysicsSim:
                 f"robot {self.robot.name!r}: expected {n} finite wheel speeds [rad/s] (rolling wheels "
                 f"{shorten(self.robot.rolling_names)}), got {shorten(np.asarray(wheel_speeds).tolist())}"
             )
-        self._speed_target = np.clip(speeds[self._driven], -self._max_speed, self._max_speed)
+        wanted = speeds[self._driven]
+        self._speed_target = np.clip(wanted, -self._max_speed, self._max_speed)
+        clipped = not np.array_equal(self._speed_target, wanted)
         self._ramping = self.ramping
         if steer is None:
+            self.saturated += clipped
             return
         angles = np.asarray(steer, dtype=float)
         k = len(self._steer_ctrl)
@@ -211,8 +217,10 @@ class PhysicsSim:
         for i, limits in enumerate(self._steer_limits):
             if limits is None:  # turns all the way round: the nearest turn of the angle
                 angles[i] = self._steer_set[i] + wrap_angle(float(angles[i] - self._steer_set[i]))
-            else:
+            elif not limits[0] <= angles[i] <= limits[1]:
                 angles[i] = min(max(angles[i], limits[0]), limits[1])
+                clipped = True
+        self.saturated += clipped
         self._steer_target = angles
         self._ramping = self.ramping
 
