@@ -645,6 +645,9 @@ def build_parser() -> CommandParser:
     _add_umbmark_analyze(sub.choices["umbmark"])
     bag.add_parsers(sub, robot_help)
     ros.add_parsers(sub, robot_help)
+    from . import sim
+
+    sim.add_parsers(sub, robot_help)
     return p
 
 

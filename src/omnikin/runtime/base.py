@@ -88,6 +88,14 @@ class BaseRuntime:
         """Offer a velocity command ``(vx, vy, omega)`` at time ``t``; False if rejected."""
         return self.filter.command(twist, t)
 
+    def steer_to(self, angles) -> None:
+        """Steer the steerable wheels (file order) to ``angles`` [rad] while the filtered twist is
+        zero (a stopped robot keeps its steering); the next motion steers from there."""
+        a = np.asarray(angles, dtype=float)
+        if a.shape != self._steer_cmd.shape or not np.all(np.isfinite(a)):
+            raise InputError(f"robot {self.robot.name!r}: expected {len(self._steer_cmd)} finite steering angles [rad]")
+        self._steer_cmd = a.copy()
+
     def step(self, t: float) -> StepResult:
         """Measure, update odometry, then command the wheels, at time ``t`` [s]."""
         state = self.backend.read(t)

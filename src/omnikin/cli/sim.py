@@ -1,0 +1,76 @@
+"""``omnikin sim``: drive a robot from the keyboard in MuJoCo's viewer window (extra ``physics``)."""
+
+from __future__ import annotations
+
+import argparse
+
+from .common import add_output, add_output_options, declare_inputs, load_robot, number
+
+EPILOG = """keys (the window must have the keyboard focus):
+  W / S      drive forward / back at --speed (sets vx; the other components stay)
+  A / D      drive left / right at --speed (sets vy; dropped on robots with fixed wheels)
+  Q / E      turn counter-clockwise / clockwise at --turn (sets omega)
+  space      stop (the target twist becomes zero)
+  [ / ]      steer every steerable wheel 15 deg clockwise / counter-clockwise (robot at rest)
+  1 / 2 / 3  camera: free (mouse: left drag rotates, right drag moves, wheel zooms) / top / follow
+
+A move key drives while it is held: letting it go sets its component back to zero, space
+stops everything. (Should the window report presses only, a press sets the target until
+another key changes it, or with --hold S for S seconds, when the command timeout stops the
+robot.) Every target passes the runtime's command filter: speed limits --max-speed and
+--max-turn, acceleration limits. The window shows pose, twist and wheel speeds.
+
+examples:
+  omnikin sim tomasi-omni3
+  omnikin sim villasenor-omni3 --camera follow
+  xvfb-run -a omnikin sim omni4 --duration 10 --report run.json     without a screen"""
+
+
+def add_parsers(sub, robot_help: str) -> None:
+    sp = sub.add_parser(
+        "sim",
+        help="interactive simulator: drive a robot from the keyboard in MuJoCo's viewer",
+        description="Open the robot's physics model (docs/physics.md) in MuJoCo's viewer window and "
+        "drive it from the keyboard through the runtime's command filter and limits.",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sp.add_argument("robot", metavar="ROBOT", help=robot_help)
+    sp.add_argument("--duration", type=number, metavar="S", help="close the window after S seconds (default: never)")
+    sp.add_argument("--camera", choices=("free", "top", "follow"), default="free", help="first camera (default free)")
+    sp.add_argument("--speed", type=number, default=0.2, metavar="V", help="speed of W/S/A/D [m/s] (default 0.2)")
+    sp.add_argument("--turn", type=number, default=0.5, metavar="W", help="turn rate of Q/E [rad/s] (default 0.5)")
+    sp.add_argument(
+        "--hold", type=number, default=0.0, metavar="S", help="a press drives for S seconds (default 0: until changed)"
+    )
+    sp.add_argument("--max-speed", type=number, default=0.3, metavar="V", help="speed limit [m/s] (default 0.3)")
+    sp.add_argument("--max-turn", type=number, default=1.0, metavar="W", help="turn rate limit [rad/s] (default 1)")
+    add_output(sp, "--report", metavar="FILE.json", help="write what the run did as JSON (final pose, keys pressed)")
+    add_output_options(sp)
+    declare_inputs(sp, robots=("robot",))
+    sp.set_defaults(func=cmd_sim)
+
+
+def cmd_sim(args) -> int:
+    from ..errors import InputError
+    from ..io.jsonfile import to_json
+    from ..io.output import write_text
+    from ..limits import MotionLimits
+
+    if args.duration is not None and args.duration <= 0:
+        raise InputError(f"--duration must be positive [s], got {args.duration:g}")
+    if args.hold < 0:
+        raise InputError(f"--hold must be >= 0 [s], got {args.hold:g}")
+    for flag, value in (("--speed", args.speed), ("--turn", args.turn)):
+        if value <= 0:
+            raise InputError(f"{flag} must be positive, got {value:g}")
+    from ..physics.interactive import InteractiveSim, require_display
+
+    require_display()  # before the model is built: the one line comes at once
+    robot = load_robot(args.robot)
+    limits = MotionLimits(linear=args.max_speed, angular=args.max_turn)
+    sim = InteractiveSim(robot, speed=args.speed, turn=args.turn, hold=args.hold, camera=args.camera, limits=limits)
+    reason = sim.run(args.duration)
+    if args.report:
+        write_text(args.report, to_json(sim.report(reason)) + "\n")
+    return 0
