@@ -50,7 +50,7 @@ import numpy as np
 from ..errors import InputError
 from ..limits import MotionLimits
 from ..model import Robot
-from ..runtime.base import BaseRuntime
+from ..runtime.base import BaseRuntime, StepResult
 from .backend import PhysicsBackend
 
 CONTROL_PERIOD = 0.02
@@ -179,7 +179,7 @@ class InteractiveSim:
         self._glfw_callback = None
         self.releases = False
         self._steer = np.zeros(len(robot.steerable))
-        self._last = None
+        self._last: StepResult | None = None
         self.t = 0.0
 
     # --- keys (called in the viewer's thread: only queued) --------------------------------------
@@ -205,7 +205,7 @@ class InteractiveSim:
             import glfw
 
             window = glfw.get_current_context()
-            set_callback = glfw._glfw.glfwSetKeyCallback
+            set_callback = glfw._glfw.glfwSetKeyCallback  # type: ignore[attr-defined]
             self._glfw_callback = set_callback.restype(self._on_glfw_key)
             self._viewer_keys = set_callback(window, self._glfw_callback)
         except Exception:  # noqa: BLE001 (private API of the bindings: fall back to presses)
