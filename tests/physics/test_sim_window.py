@@ -133,7 +133,7 @@ def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_p
     # what the ramp down after the release gains (the same acceleration limit both ways)
     held = events[1]["t"] - events[0]["t"]
     after_forward = events[2]["pose"]
-    assert held > 1.0
+    assert held > 0.5  # simulated time: a loaded machine may run the simulation slower than the clock
     assert after_forward[0] == pytest.approx(SPEED * held, rel=0.05, abs=0.005)
     assert abs(after_forward[1]) < 0.01 * after_forward[0] and abs(after_forward[2]) < 0.01
 

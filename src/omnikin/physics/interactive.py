@@ -57,9 +57,10 @@ CONTROL_PERIOD = 0.02
 """Simulated time [s] between two control steps of the runtime (50 Hz)."""
 STEER_STEP = math.radians(15.0)
 """Steering turned by one press of ``[`` or ``]`` [rad]."""
-CATCH_UP = 0.1
+CATCH_UP = 0.25
 """Most simulated time [s] run between two frames when the simulation falls behind the clock:
-the window stays responsive, and a machine too slow for real time runs it slower."""
+the window stays responsive (a frame at least every 0.25 s of simulated time; software OpenGL
+under load draws about 5-10 frames per second), and a machine too slow for real time runs it slower."""
 SHUTDOWN_WAIT = 5.0
 """Longest wait [s] for the viewer's render thread to end after the window is closed."""
 CAMERAS = ("free", "top", "follow")
