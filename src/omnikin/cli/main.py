@@ -639,7 +639,7 @@ def build_parser() -> CommandParser:
     add_wheel_bound_options(sp)
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     sp.set_defaults(func=cmd_odometry)
-    from . import bag, ros, umbmark
+    from . import bag, export, ros, umbmark
 
     umbmark.add_parsers(sub, robot_help)
     _add_umbmark_analyze(sub.choices["umbmark"])
@@ -648,6 +648,7 @@ def build_parser() -> CommandParser:
     from . import sim
 
     sim.add_parsers(sub, robot_help)
+    export.add_parsers(sub, robot_help)
     return p
 
 
