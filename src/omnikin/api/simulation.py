@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import InputError, shorten
 from ..model import Robot
 from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..simulation.simulate import SimulatedRun
@@ -50,9 +51,11 @@ def simulate(
     *,
     true_robot=None,
     errors="typical",
-    noise="typical",
+    noise=None,
     seed: int = 1,
     rate: float = 100.0,
+    engine: str = "kinematic",
+    step: float | None = None,
     max_memory: float = DEFAULT_MEMORY,
     max_time: float = DEFAULT_TIME,
 ) -> Simulation:
@@ -63,13 +66,18 @@ def simulate(
     in the runs-file grammar (:func:`omnikin.plans.parse_plan`); ``true_robot`` (robot file or
     Robot) replaces the seeded draw of the
     ``errors`` profile; ``noise``: random errors (profile name or
-    :class:`~omnikin.simulation.error_models.NoiseModel`); ``rate`` [Hz], within
+    :class:`~omnikin.simulation.error_models.NoiseModel`; default ``"typical"``); ``rate`` [Hz], within
     :data:`~omnikin.simulation.motion.RATE_RANGE` as for ``omnikin simulate``. The seed's first
     stream draws the robot as built (the same robot as ``omnikin umbmark --seed``), its second
     the run, as ``omnikin simulate`` does. A run estimated to need more than ``max_memory``
     [bytes] or ``max_time`` [s] is refused before it starts
     (:func:`~omnikin.simulation.simulate.run_cost`, the estimate ``omnikin simulate`` checks
     against ``--max-memory`` and ``--max-time``).
+
+    ``engine="physics"`` drives the robot as built in MuJoCo instead
+    (:func:`omnikin.physics.run.simulate_physics`, ``omnikin simulate --engine physics``) at
+    time step ``step`` [s] (default 2 ms): the same plan, rate and robot as built; ``noise``
+    must then be left out (the physics has no random error model).
     """
     from ..evaluation.procedure import ARGUMENTS, streams
     from ..plans import Plan, parse_plan
@@ -79,13 +87,26 @@ def simulate(
     from ..simulation.simulate import simulate as simulate_run
 
     check_rate_range(rate, "rate")
+    if engine not in ("kinematic", "physics"):
+        raise InputError(f"engine must be 'kinematic' or 'physics', got {shorten(engine)}")
+    if engine == "physics" and noise is not None:
+        raise InputError(
+            "noise: the physics engine has no random error model (slip comes from the contacts); leave it out"
+        )
+    if engine == "kinematic" and step is not None:
+        raise InputError("step is the time step of the physics engine: give engine='physics' or leave it out")
     nominal = robot_of(robot)
     plan = path if isinstance(path, Plan) else parse_plan(str(path))
     cost = run_cost(plan, nominal, rate)
+    seconds = cost.seconds
+    if engine == "physics":
+        from ..physics.run import SECONDS_PER_SIMULATED_SECOND, TAIL_MAX
+
+        seconds = (cost.samples / rate + TAIL_MAX) * SECONDS_PER_SIMULATED_SECOND
     require_within(
         "simulate",
         memory=cost.bytes,
-        seconds=cost.seconds,
+        seconds=seconds,
         max_memory=max_memory,
         max_time=max_time,
         names=ARGUMENTS,
@@ -94,5 +115,11 @@ def simulate(
     )
     seeds = list(streams(seed).values())
     true, injected = as_built(nominal, true_robot, errors, seeds[0])
-    run = simulate_run(plan, true, nominal, rate=rate, noise=noise_of(noise), trials=1, rng=seeds[1])
+    if engine == "physics":
+        from ..physics.mjcf import DEFAULT_STEP
+        from ..physics.run import simulate_physics
+
+        run = simulate_physics(plan, true, nominal, rate=rate, step=DEFAULT_STEP if step is None else step)
+    else:
+        run = simulate_run(plan, true, nominal, rate=rate, noise=noise_of(noise or "typical"), trials=1, rng=seeds[1])
     return Simulation(nominal, true, injected, path.name if isinstance(path, Plan) else str(path), run)

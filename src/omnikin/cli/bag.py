@@ -44,6 +44,10 @@ SIM_SAMPLE_SECONDS = 4 * MESSAGE_SECONDS
 memory of it all: :func:`omnikin.simulation.simulate.run_cost`)."""
 LOG_ROW_SECONDS = 5e-6
 """simulate --log: per sample, its row of the tick log made and written (measured 19 us)."""
+ENGINES = ("kinematic", "physics")
+"""simulate --engine: the kinematic simulation (omnikin.simulation) or MuJoCo (omnikin.physics)."""
+PROGRESS_AFTER = 3.0
+"""simulate --engine physics shows its progress once a run has taken this long [s]."""
 LARGEST_MESSAGE_SHARE = 64
 """One message may use at most 1/64 of --max-memory (its bytes decoded into Python objects)."""
 
@@ -64,6 +68,13 @@ SIMULATE_EPILOG = """examples:
   omnikin simulate diff-drive --path 'square ccw rotate 2' --errors none --noise none --bag sim.bag
   omnikin simulate mecanum4 --path 'line 2 90; spin 180; arc 1 90' --rate 50 --seed 7 --bag sim.bag
   omnikin bag export sim.bag --topic /ground_truth --format tum -o truth.tum
+  omnikin simulate tomasi-omni3 --engine physics --errors none --path 'line 1' --log log.csv
+
+engines: kinematic (default) integrates the wheels' motion with the --errors and --noise models;
+physics drives the robot as built (--errors or --true-robot) in MuJoCo with real rollers, motors
+and contacts (extra physics, docs/physics.md): the same plan and limits, wheel speeds commanded at
+--rate, the run sampled on until the robot stops; it has no --noise model (slip comes from the
+contacts) and takes --step, its time step.
 
 paths (';' chains several): 'square cw|ccw rotate|translate [SIDE]', 'line LENGTH [HEADING_DEG]',
 'spin ANGLE_DEG', 'arc RADIUS ANGLE_DEG'. Topics: /ground_truth and /odom (nav_msgs/Odometry),
@@ -172,6 +183,7 @@ def add_parsers(sub, robot_help: str) -> None:
     declare_inputs(sp, "bag")
     sp.set_defaults(func=cmd_bag_export)
 
+    from ..physics.mjcf import DEFAULT_STEP, STEP_RANGE
     from ..simulation.error_models import NOISE, PROFILES
     from ..simulation.motion import RATE_RANGE
 
@@ -180,7 +192,7 @@ def add_parsers(sub, robot_help: str) -> None:
         help="simulate a run and record it to a ROS 2 bag",
         description="Simulate ROBOT as built (systematic --errors, random --noise) driving a path "
         "commanded by its nominal model, and record ground truth, odometry, wheel "
-        "joint states and cmd_vel to a new bag.",
+        "joint states and cmd_vel to a new bag and/or the encoder tick log.",
         epilog=SIMULATE_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -200,9 +212,21 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("--true-robot", metavar="FILE", help="the robot as built (replaces --errors)")
     sp.add_argument(
         "--noise",
-        default="typical",
         metavar="PROFILE",
-        help=f"random errors: {', '.join(sorted(NOISE))} (default typical)",
+        help=f"random errors: {', '.join(sorted(NOISE))} (default typical; kinematic engine only)",
+    )
+    sp.add_argument(
+        "--engine",
+        choices=ENGINES,
+        default="kinematic",
+        help="kinematic: wheel motion and error models; physics: MuJoCo with rollers and motors "
+        "(extra physics; see below) (default kinematic)",
+    )
+    sp.add_argument(
+        "--step",
+        type=number,
+        metavar="SEC",
+        help=f"time step of the physics engine [s], {STEP_RANGE[0]:g} to {STEP_RANGE[1]:g} (default {DEFAULT_STEP:g})",
     )
     sp.add_argument("--seed", type=whole, default=1, metavar="N", help="random seed (default 1)")
     sp.add_argument(
@@ -408,31 +432,43 @@ def cmd_simulate(args) -> int:
 
     if args.bag is None and args.log is None:
         raise InputError("simulate: give --bag OUT.bag and/or --log LOG.csv")
+    physics = _engine_options(args)
     if args.bag is not None:
         require_rosbags()
     robot = load_robot(args.robot)
-    if args.log is not None:
+    if args.log is not None and not physics:
         _check_tick_log(args, robot)
     if args.seed < 0:
         raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
     check_rate_range(args.rate, "--rate")
     plan = parse_paths(args.path)
-    noise = noise_profile(args.noise)
+    noise = None if physics else noise_profile(args.noise)
     cost = run_cost(plan, robot, args.rate)
-    _check_stamps(args, duration=cost.samples / args.rate)
+    duration = cost.samples / args.rate
+    seconds = cost.seconds
+    if physics:
+        from ..physics.run import SECONDS_PER_SIMULATED_SECOND, TAIL_MAX
+
+        duration += TAIL_MAX  # the run goes on until the robot stops
+        seconds = duration * SECONDS_PER_SIMULATED_SECOND
+    samples = duration * args.rate
+    _check_stamps(args, duration=duration)
     writing = (SIM_SAMPLE_SECONDS if args.bag is not None else 0.0) + (LOG_ROW_SECONDS if args.log else 0.0)
     require(
         args,
         "simulate",
-        memory=cost.bytes,
-        seconds=cost.seconds + cost.samples * writing,
+        memory=cost.bytes * samples / max(cost.samples, 1.0),
+        seconds=seconds + samples * writing,
         size=f"{cost.samples:.3g} samples",
         hint="lower --rate or shorten --path",
     )
     seeds = np.random.SeedSequence(args.seed).spawn(2)
     true, errors = robot_as_built(robot, args.true_robot, args.errors, seeds[0])
     try:
-        run = simulate(plan, true, robot, rate=args.rate, noise=noise, trials=1, rng=seeds[1])
+        if physics:
+            run = _simulate_physics(args, plan, true, robot)
+        else:
+            run = simulate(plan, true, robot, rate=args.rate, noise=noise, trials=1, rng=seeds[1])
     except InfeasibleTwistError as exc:
         raise InputError(f"--path {shorten(args.path)}: {exc.detail}; choose a path this robot can drive") from None
     custom = {
@@ -440,9 +476,11 @@ def cmd_simulate(args) -> int:
         "omnikin.path": args.path,
         "omnikin.seed": str(args.seed),
         "omnikin.errors": "file " + args.true_robot if args.true_robot else args.errors,
-        "omnikin.noise": args.noise,
         "omnikin.rate": f"{args.rate:g}",
+        "omnikin.engine": args.engine,
     }
+    if not physics:
+        custom["omnikin.noise"] = args.noise
     counts = (
         record_run(args.bag, run, robot, start=args.start, storage=args.storage, custom=custom, force=args.force)
         if args.bag is not None
@@ -460,6 +498,8 @@ def cmd_simulate(args) -> int:
         "errors": None if args.true_robot else args.errors,
         "true_robot": args.true_robot,
         "noise": args.noise,
+        "engine": args.engine,
+        "step": args.step,
         "seed": args.seed,
         "rate": args.rate,
         "samples": len(run.t),
@@ -477,9 +517,10 @@ def cmd_simulate(args) -> int:
     if args.json:
         print_json(summary)
         return 0
+    noise_text = args.noise or "from the contacts"
     console(120).print(
-        f"{robot.name}: '{args.path}' at {args.rate:g} Hz, {summary['samples']} samples over "
-        f"{summary['duration']:.6g} s (errors {summary['errors'] or 'from ' + args.true_robot}, noise {args.noise}, "
+        f"{robot.name}: '{args.path}' at {args.rate:g} Hz ({args.engine} engine), {summary['samples']} samples over "
+        f"{summary['duration']:.6g} s (errors {summary['errors'] or 'from ' + args.true_robot}, noise {noise_text}, "
         f"seed {args.seed})\n"
         f"end pose: truth x={truth_end[0]:.6g} m, y={truth_end[1]:.6g} m, theta={truth_end[2]:.6g} rad; odometry "
         f"x={odom_end[0]:.6g} m, y={odom_end[1]:.6g} m, theta={odom_end[2]:.6g} rad "
@@ -493,6 +534,58 @@ def cmd_simulate(args) -> int:
         )
     )
     return 0
+
+
+def _engine_options(args) -> bool:
+    """Check the options against ``--engine`` and fill in the engine's defaults (``--noise``
+    typical for the kinematic engine; ``--step`` 2 ms for physics); True for physics.
+    The physics engine maps ``--errors``, ``--true-robot`` and ``--seed`` (the robot as built is
+    the physical model), has no random errors (a ``--noise`` other than none is refused: slip
+    comes from the contacts, the encoders count whole ticks); ``--step`` is the physics engine's alone."""
+    if args.engine != "physics":
+        if args.step is not None:
+            raise InputError("--step is the time step of the physics engine: add --engine physics or drop --step")
+        args.noise = args.noise or "typical"
+        return False
+    if args.noise is not None:
+        raise InputError(
+            f"--noise {shorten(args.noise)}: the physics engine has no random error model (slip comes from "
+            f"the wheels' contacts, its encoders count whole ticks); drop --noise"
+        )
+    from ..physics.mjcf import DEFAULT_STEP, STEP_RANGE
+
+    args.step = DEFAULT_STEP if args.step is None else args.step
+    if not STEP_RANGE[0] <= args.step <= STEP_RANGE[1]:
+        raise InputError(f"--step must be a time step from {STEP_RANGE[0]:g} to {STEP_RANGE[1]:g} s, got {args.step:g}")
+    return True
+
+
+def _simulate_physics(args, plan, true, robot):
+    """:func:`omnikin.physics.run.simulate_physics` with a progress bar on standard error once the
+    run has taken :data:`PROGRESS_AFTER` seconds (shown on a terminal only)."""
+    import time
+
+    from ..physics.run import simulate_physics
+
+    started = time.monotonic()
+    bar: list = []
+
+    def progress(done: float, total: float) -> None:
+        if not bar:
+            if time.monotonic() - started < PROGRESS_AFTER:
+                return
+            from rich.progress import Progress
+
+            display = Progress(console=console(stderr=True), transient=True)
+            display.start()
+            bar.extend([display, display.add_task("simulating (physics)", total=total)])
+        bar[0].update(bar[1], completed=done)
+
+    try:
+        return simulate_physics(plan, true, robot, rate=args.rate, step=args.step, progress=progress)
+    finally:
+        if bar:
+            bar[0].stop()
 
 
 def _check_stamps(args, duration: float) -> None:
@@ -527,7 +620,9 @@ def _write_tick_log(args, robot, run) -> None:
     command = " ".join(
         ["omnikin simulate", shlex.quote(args.robot), "--path", shlex.quote(args.path)]
         + (["--true-robot", shlex.quote(args.true_robot)] if args.true_robot else ["--errors", args.errors])
-        + ["--noise", args.noise, "--seed", str(args.seed), "--rate", f"{args.rate:g}", "--log", shlex.quote(args.log)]
+        + (["--engine", "physics", "--step", f"{args.step:g}"] if args.engine == "physics" else ["--noise", args.noise])
+        + ["--seed", str(args.seed), "--rate", f"{args.rate:g}"]
+        + ["--log", shlex.quote(args.log)]
     )
     write_tick_log(
         args.log,

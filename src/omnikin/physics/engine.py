@@ -335,9 +335,13 @@ class PhysicsSim:
         drive direction, wrapped to ``[-pi, pi)``."""
         return wrap_angle(self.data.qpos[self._steer_qpos])
 
+    def encoder_counts(self) -> np.ndarray:
+        """Whole ticks ``round(angle / rad_per_tick)`` the encoded wheels (file order) turned since
+        the start, never wrapped (int64)."""
+        return np.rint(self.wheel_angles[self._encoded] / self._rad_per_tick).astype(np.int64)
+
     def encoder_ticks(self) -> np.ndarray:
-        """Encoder readings of the encoded wheels (file order): whole ticks
-        ``round(angle / rad_per_tick)``, wrapped modulo ``2**counter_bits`` where the encoder has
-        a counter width (unsigned, as the hardware register holds them)."""
-        counts = np.rint(self.wheel_angles[self._encoded] / self._rad_per_tick).astype(np.int64)
-        return counter_output(counts, self._bits)
+        """Encoder readings of the encoded wheels (file order): :meth:`encoder_counts` wrapped
+        modulo ``2**counter_bits`` where the encoder has a counter width (unsigned, as the
+        hardware register holds them)."""
+        return counter_output(self.encoder_counts(), self._bits)

@@ -1,0 +1,130 @@
+"""A plan driven in the physics engine: :func:`simulate_physics`, the physics twin of
+:func:`omnikin.simulation.simulate.simulate` (``omnikin simulate --engine physics``).
+
+The plan is timed and sampled for the commanding (nominal) robot exactly as the kinematic
+engine does it (:func:`~omnikin.simulation.motion.sample_plan`, the same limits), and the
+commanded wheel angles of every rolling wheel at the samples are those of
+:func:`~omnikin.simulation.simulate.commanded_angles`. Sample ``k`` commands each wheel the
+mean speed ``(angle_{k+1} - angle_k) / dt`` [rad/s] of its interval (and the interval's
+steering), held for the interval (zero-order hold at the plan's rate, as a wheel controller
+receiving set-points does); :class:`~omnikin.physics.engine.PhysicsSim` of the robot *as built*
+ramps and servos the motors and steps MuJoCo up to the next sample, where the encoders are read.
+
+After the plan the wheels are commanded to stop and the run goes on, sampled at the same rate,
+until the robot is at rest (:data:`REST_SPEED`, :data:`REST_TURN`) or :data:`TAIL_MAX` has
+passed: the ramps make the wheels lag the set-points while accelerating and lead them while
+braking, by the same distance, so the robot ends where the plan ends only once it has stopped.
+
+The result is a :class:`~omnikin.simulation.simulate.SimulatedRun` (one trial) as the kinematic
+engine gives it, so that its tick log, bag and summary are written by the same code:
+``ticks`` are the whole ticks the encoders of the robot as built counted (never wrapped),
+``readings`` those counts as the command robot's counters output them
+(:func:`~omnikin.simulation.simulate.counter_output`), ``steer`` the steering angles the
+steering joints reached [rad], ``odometry`` the command robot's odometry of the readings,
+``truth`` the chassis pose (heading continuous), ``measured`` the true end pose (the physics has
+no measurement noise), ``sampled`` the plan's samples with zero-progress samples for the tail.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from ..errors import InputError
+from ..limits import MotionLimits
+from ..model import Robot, require_same_wheels
+from ..odometry import batch_odometry, encoded_wheels
+from ..plans import Plan
+from ..simulation.motion import SampledPlan, check_rate_range, sample_plan
+from ..simulation.simulate import SimulatedRun, commanded_angles, counter_output
+from .engine import PhysicsSim
+from .mjcf import DEFAULT_STEP
+
+REST_SPEED = 1e-4
+"""Speed [m/s] of the chassis below which it is at rest after the plan."""
+REST_TURN = 1e-3
+"""Turn rate [rad/s] of the chassis below which it is at rest after the plan."""
+TAIL_MAX = 5.0
+"""Longest time [s] the run goes on after the plan while the robot comes to rest."""
+
+SECONDS_PER_SIMULATED_SECOND = 0.005
+"""Computing time per simulated second, on the fast side (200 x real time; measured 47-218 x on
+one core of a 2-core machine, docs/physics.md): a run is refused for time only when clearly too
+long."""
+
+
+def simulate_physics(
+    plan: Plan | SampledPlan,
+    true_robot: Robot,
+    command_robot: Robot,
+    *,
+    rate: float = 100.0,
+    limits: MotionLimits | None = None,
+    step: float = DEFAULT_STEP,
+    progress: Callable[[float, float], None] | None = None,
+) -> SimulatedRun:
+    """``plan`` commanded by ``command_robot`` and driven by ``true_robot`` in MuJoCo at time step
+    ``step`` [s] (module docstring); ``rate`` [Hz] as for the kinematic engine. ``progress``, if
+    given, is called now and then with the simulated time and the plan's duration [s]."""
+    check_rate_range(plan.rate if isinstance(plan, SampledPlan) else rate, "rate")
+    require_same_wheels(command_robot, true_robot)
+    sampled = plan if isinstance(plan, SampledPlan) else sample_plan(plan, command_robot, rate, limits)
+    if len(sampled.t) < 2:
+        raise InputError("the path does not move the robot (it lasts 0 s): nothing to simulate; give a length > 0")
+    names = [w.name for w in encoded_wheels(command_robot)]
+    if [w.name for w in true_robot.encoded] != names:
+        raise InputError(f"true robot {true_robot.name!r}: its encoded wheels must be {names}")
+    angles, steer_cmd = commanded_angles(sampled, command_robot, command_robot.rolling)
+    dt = np.diff(sampled.t)
+    speeds = np.diff(angles, axis=0) / dt[:, None]
+    sim = PhysicsSim(true_robot, step=step)
+    steerable = bool(command_robot.steerable)
+    samples = len(dt)
+    duration = float(sampled.t[-1])
+    times, poses, counts, steers = [0.0], [sim.pose], [sim.encoder_counts()], [sim.steer_angles]
+    report = max(1, samples // 200)
+    stop = np.zeros(speeds.shape[1])
+    k = 0
+    while True:
+        plan_sample = k < samples
+        if plan_sample:
+            sim.command(speeds[k], steer_cmd[k] if steer_cmd is not None else None)
+            t_next = float(sampled.t[k + 1])
+        else:
+            sim.command(stop, steer_cmd[-1] if steer_cmd is not None else None)
+            t_next = times[-1] + 1.0 / sampled.rate
+        sim.advance(t_next)
+        times.append(t_next)
+        poses.append(sim.pose)
+        counts.append(sim.encoder_counts())
+        steers.append(sim.steer_angles)
+        k += 1
+        if progress is not None and k % report == 0:
+            progress(min(t_next, duration), duration)
+        if not plan_sample and (_at_rest(sim) or t_next - duration >= TAIL_MAX):
+            break
+    if progress is not None:
+        progress(duration, duration)
+    tail = len(times) - 1 - samples
+    t = np.array(times)
+    extended = SampledPlan(
+        sampled.plan,
+        sampled.rate,
+        t,
+        np.concatenate([sampled.progress, np.zeros(tail)]),
+        np.concatenate([sampled.segment, np.full(tail, sampled.segment[-1])]),
+        sampled.xi,
+    )
+    ticks = np.array(counts, dtype=np.int64)
+    readings = counter_output(ticks, [command_robot.wheel(n).encoder.counter_bits for n in names])  # type: ignore[union-attr]
+    steer = np.array(steers) if steerable else None
+    odometry = batch_odometry(command_robot, t, readings, steer=steer, max_wheel_accel=math.inf).poses
+    truth = np.array(poses)[None]
+    return SimulatedRun(extended, t, ticks, steer, odometry, truth, truth[:, -1, :].copy(), readings)
+
+
+def _at_rest(sim: PhysicsSim) -> bool:
+    twist = sim.twist
+    return not sim.ramping and math.hypot(twist[0], twist[1]) < REST_SPEED and abs(twist[2]) < REST_TURN

@@ -1,0 +1,114 @@
+"""``omnikin simulate --engine physics`` and ``omnikin.simulate(..., engine="physics")``: the plan of
+the kinematic engine driven in MuJoCo, its tick log read back by ``omnikin odometry``.
+
+Expected values: the closed form of ``--path 'line 1'`` (1 m along x, heading 0) and the wheel
+angles of that line, ``J (1, 0, 0)`` [rad] over the file's angle per tick. Tolerance 0.5 % of the
+distance, the tolerance of the physics' validation (docs/physics.md: twists within 0.5 % of the
+kinematics, measured 0.04-0.13 %; odometry from the simulated encoders within 0.5 % of the
+truth), for the truth and the odometry alike.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import omnikin
+from conftest import omnikin_env, run_cli
+from omnikin import load_robot
+
+TOLERANCE = 0.005
+"""Of the 1 m line: 5 mm in position, 5 mrad in heading (docs/physics.md, "Validation")."""
+
+
+def run(*argv, cwd):
+    return subprocess.run(
+        [sys.executable, "-m", "omnikin.cli.main", *argv],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        env=omnikin_env(),
+        timeout=300,
+    )
+
+
+@pytest.mark.parametrize("name", ["tomasi-omni3", "omni4", "diff-drive", "ackermann"])
+def test_physics_line_log_read_by_odometry_ends_at_one_metre_like_the_truth(name, tmp_path):
+    sim = run("simulate", name, "--engine", "physics", "--errors", "none", "--path", "line 1", "--log", "log.csv",
+              "--json", cwd=tmp_path)  # fmt: skip
+    assert sim.returncode == 0, sim.stderr
+    summary = json.loads(sim.stdout)
+    assert summary["engine"] == "physics"
+    odo = run("odometry", name, "log.csv", "-o", "traj.csv", "--json", cwd=tmp_path)
+    assert odo.returncode == 0, odo.stderr
+    odometry = np.array(json.loads(odo.stdout)["final_pose"])
+    truth = np.array(summary["truth_end"])
+    for pose in (odometry, truth):
+        np.testing.assert_allclose(pose, (1.0, 0.0, 0.0), atol=TOLERANCE)
+    np.testing.assert_allclose(odometry, summary["odometry_end"], atol=1e-9)  # the log is the run's odometry
+    assert abs(truth[0] - odometry[0]) < TOLERANCE
+
+
+def test_physics_tick_log_holds_whole_ticks_of_the_wheel_angles_of_the_line(tmp_path):
+    robot = load_robot("tomasi-omni3")
+    proc = run("simulate", "tomasi-omni3", "--engine", "physics", "--errors", "none", "--path", "line 1",
+               "--log", "log.csv", cwd=tmp_path)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    lines = [line for line in (tmp_path / "log.csv").read_text().splitlines() if not line.startswith("#")]
+    rows = list(csv.reader(lines))
+    assert rows[0] == ["t", *robot.encoded_names]
+    assert all(re.fullmatch(r"-?\d+", cell) for row in rows[1:] for cell in row[1:])  # integer ticks
+    last = np.array([int(c) for c in rows[-1][1:]])
+    angles = robot.ik_matrix @ np.array([1.0, 0.0, 0.0])  # rad, wheel speeds per unit twist times 1 m
+    expected = angles / robot.rad_per_tick(robot.encoded_names)
+    assert np.all(np.abs(last - expected) <= np.maximum(1.0, TOLERANCE * np.abs(expected)))
+    assert np.all(np.diff(np.array([float(r[0]) for r in rows[1:]])) > 0)
+
+
+@pytest.mark.parametrize(
+    ("options", "named"),
+    [
+        (["--engine", "physics", "--noise", "typical"], "--noise"),
+        (["--engine", "physics", "--noise", "none"], "--noise"),
+        (["--step", "0.001"], "--step"),
+        (["--engine", "physics", "--step", "0.01"], "--step"),
+    ],
+)
+def test_options_of_the_other_engine_are_refused_in_one_line(options, named, tmp_path, capsys):
+    rc, _, err = run_cli(
+        capsys, "simulate", "tomasi-omni3", "--path", "line 1", "--log", tmp_path / "log.csv", *options
+    )
+    assert rc == 2
+    assert err.count("\n") == 1 and named in err
+    assert not (tmp_path / "log.csv").exists()
+
+
+def test_physics_engine_drives_the_robot_as_built_like_the_kinematic_engine(tmp_path, capsys):
+    """--errors typical with --seed: the same robot as built in both engines; the kinematic
+    engine's truth (its random slip is below 0.1 mm on 1 m) is the expected end pose."""
+    ends = {}
+    for engine in ("kinematic", "physics"):
+        rc, out, err = run_cli(capsys, "simulate", "tomasi-omni3", "--engine", engine, "--path", "line 1",
+                               "--seed", "3", "--log", tmp_path / f"{engine}.csv", "--json")  # fmt: skip
+        assert rc == 0, err
+        summary = json.loads(out)
+        ends[engine] = np.array(summary["truth_end"])
+    assert summary["noise"] is None and summary["injected_errors"]
+    off_nominal = np.hypot(*ends["kinematic"][:2] - (1.0, 0.0))
+    assert off_nominal > 2 * TOLERANCE  # the errors matter: the test could fail
+    np.testing.assert_allclose(ends["physics"], ends["kinematic"], atol=TOLERANCE)
+
+
+def test_python_api_runs_the_physics_engine_and_refuses_noise():
+    sim = omnikin.simulate("diff-drive", "line 1", errors="none", engine="physics")
+    np.testing.assert_allclose(sim.run.truth[0, -1], (1.0, 0.0, 0.0), atol=TOLERANCE)
+    with pytest.raises(ValueError, match="noise"):
+        omnikin.simulate("diff-drive", "line 1", errors="none", noise="typical", engine="physics")
+    with pytest.raises(ValueError, match="engine"):
+        omnikin.simulate("diff-drive", "line 1", engine="mujoco")
