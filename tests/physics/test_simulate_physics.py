@@ -45,6 +45,7 @@ def test_physics_line_log_read_by_odometry_ends_at_one_metre_like_the_truth(name
     assert sim.returncode == 0, sim.stderr
     summary = json.loads(sim.stdout)
     assert summary["engine"] == "physics"
+    assert summary["saturated_commands"] == 0  # the plan keeps the motors' limits
     odo = run("odometry", name, "log.csv", "-o", "traj.csv", "--json", cwd=tmp_path)
     assert odo.returncode == 0, odo.stderr
     odometry = np.array(json.loads(odo.stdout)["final_pose"])
@@ -112,3 +113,20 @@ def test_python_api_runs_the_physics_engine_and_refuses_noise():
         omnikin.simulate("diff-drive", "line 1", errors="none", noise="typical", engine="physics")
     with pytest.raises(ValueError, match="engine"):
         omnikin.simulate("diff-drive", "line 1", engine="mujoco")
+
+
+def test_commands_beyond_the_motors_speed_limit_are_counted_and_warned(tmp_path, capsys):
+    """The robot as built (a file) has motors of 1 rad/s; the nominal robot plans the line for its
+    own limits (about 12 rad/s), so the moving samples ask for more: held at the limit, and said so."""
+    from omnikin.io.robot_file import robot_to_dict
+
+    data = robot_to_dict(load_robot("tomasi-omni3"))
+    for wheel in data["wheels"]:
+        wheel["max_speed"] = 1.0
+    slow = tmp_path / "slow.json"
+    slow.write_text(json.dumps(data))
+    rc, out, err = run_cli(capsys, "simulate", "tomasi-omni3", "--engine", "physics", "--true-robot", slow,
+                           "--path", "line 1", "--log", tmp_path / "log.csv", "--json")  # fmt: skip
+    assert rc == 0, err
+    assert json.loads(out)["saturated_commands"] > 0
+    assert err.count("\n") == 1 and "held at the limit" in err

@@ -115,6 +115,7 @@ def simulate(
     )
     seeds = list(streams(seed).values())
     true, injected = as_built(nominal, true_robot, errors, seeds[0])
+    run: SimulatedRun
     if engine == "physics":
         from ..physics.mjcf import DEFAULT_STEP
         from ..physics.run import simulate_physics

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 
 import numpy as np
 
@@ -514,6 +515,15 @@ def cmd_simulate(args) -> int:
     }
     if errors is not None:
         summary["injected_errors"] = errors.as_dict()
+    saturated = getattr(run, "saturated", 0)
+    if physics:
+        summary["saturated_commands"] = saturated
+    if saturated:
+        print(
+            f"omnikin: warning: {robot.name}: {saturated} of {len(run.t) - 1} commands asked a motor beyond its "
+            f"speed limit or a steering joint beyond its end stop and were held at the limit",
+            file=sys.stderr,
+        )
     if args.json:
         print_json(summary)
         return 0

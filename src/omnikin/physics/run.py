@@ -15,7 +15,8 @@ until the robot is at rest (:data:`REST_SPEED`, :data:`REST_TURN`) or :data:`TAI
 passed: the ramps make the wheels lag the set-points while accelerating and lead them while
 braking, by the same distance, so the robot ends where the plan ends only once it has stopped.
 
-The result is a :class:`~omnikin.simulation.simulate.SimulatedRun` (one trial) as the kinematic
+The result is a :class:`PhysicsRun`, a :class:`~omnikin.simulation.simulate.SimulatedRun` (one
+trial) as the kinematic
 engine gives it, so that its tick log, bag and summary are written by the same code:
 ``ticks`` are the whole ticks the encoders of the robot as built counted (never wrapped),
 ``readings`` those counts as the command robot's counters output them
@@ -29,6 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -55,6 +57,15 @@ one core of a 2-core machine, docs/physics.md): a run is refused for time only w
 long."""
 
 
+@dataclass(frozen=True)
+class PhysicsRun(SimulatedRun):
+    """A :class:`~omnikin.simulation.simulate.SimulatedRun` driven in the physics engine;
+    ``saturated`` counts the samples whose command a motor's speed limit or a steering end stop
+    held at the limit (:attr:`omnikin.physics.engine.PhysicsSim.saturated`)."""
+
+    saturated: int = 0
+
+
 def simulate_physics(
     plan: Plan | SampledPlan,
     true_robot: Robot,
@@ -64,7 +75,7 @@ def simulate_physics(
     limits: MotionLimits | None = None,
     step: float = DEFAULT_STEP,
     progress: Callable[[float, float], None] | None = None,
-) -> SimulatedRun:
+) -> PhysicsRun:
     """``plan`` commanded by ``command_robot`` and driven by ``true_robot`` in MuJoCo at time step
     ``step`` [s] (module docstring); ``rate`` [Hz] as for the kinematic engine. ``progress``, if
     given, is called now and then with the simulated time and the plan's duration [s]."""
@@ -122,7 +133,8 @@ def simulate_physics(
     steer = np.array(steers) if steerable else None
     odometry = batch_odometry(command_robot, t, readings, steer=steer, max_wheel_accel=math.inf).poses
     truth = np.array(poses)[None]
-    return SimulatedRun(extended, t, ticks, steer, odometry, truth, truth[:, -1, :].copy(), readings)
+    measured = truth[:, -1, :].copy()
+    return PhysicsRun(extended, t, ticks, steer, odometry, truth, measured, readings, saturated=sim.saturated)
 
 
 def _at_rest(sim: PhysicsSim) -> bool:
