@@ -305,6 +305,11 @@ class PhysicsSim:
         return np.array([q[0], q[1], self._heading])
 
     @property
+    def tilt(self) -> float:
+        """Angle [rad] between the chassis' z axis and the vertical (0 standing level)."""
+        return math.acos(max(-1.0, min(1.0, float(self.data.xmat[self._chassis][8]))))
+
+    @property
     def height(self) -> float:
         """Height [m] of the body frame's origin above the floor (0 in the design; the contacts sink)."""
         return float(self.data.qpos[self._free + 2])

@@ -10,6 +10,14 @@ steering), held for the interval (zero-order hold at the plan's rate, as a wheel
 receiving set-points does); :class:`~omnikin.physics.engine.PhysicsSim` of the robot *as built*
 ramps and servos the motors and steps MuJoCo up to the next sample, where the encoders are read.
 
+Steering first: a segment whose steering differs from the angles the steering joints reached
+(by more than :data:`STEER_ALIGNED`) starts with the wheels commanded to stand and the new
+steering, sampled on until the joints have reached it and the robot is at rest (at most
+:data:`ALIGN_MAX`), as a controller of steered wheels does: the kinematic plan turns the wheels
+at once, which off-centred legs swinging under a moving robot cannot (Villasenor's robot tips
+over). A robot that tips over anyway (:data:`TIPPED`) ends the run with
+:class:`~omnikin.physics.engine.PhysicsError` naming the time.
+
 After the plan the wheels are commanded to stop and the run goes on, sampled at the same rate,
 until the robot is at rest (:data:`REST_SPEED`, :data:`REST_TURN`) or :data:`TAIL_MAX` has
 passed: the ramps make the wheels lag the set-points while accelerating and lead them while
@@ -35,13 +43,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..geometry import wrap_angle
 from ..limits import MotionLimits
 from ..model import Robot, require_same_wheels
 from ..odometry import batch_odometry, encoded_wheels
 from ..plans import Plan
 from ..simulation.motion import SampledPlan, check_rate_range, sample_plan
 from ..simulation.simulate import SimulatedRun, commanded_angles, counter_output
-from .engine import PhysicsSim
+from .engine import PhysicsError, PhysicsSim
 from .mjcf import DEFAULT_STEP
 
 REST_SPEED = 1e-4
@@ -50,6 +59,13 @@ REST_TURN = 1e-3
 """Turn rate [rad/s] of the chassis below which it is at rest after the plan."""
 TAIL_MAX = 5.0
 """Longest time [s] the run goes on after the plan while the robot comes to rest."""
+STEER_ALIGNED = 0.01
+"""Steering error [rad] below which a segment's steering counts as reached."""
+ALIGN_MAX = 5.0
+"""Longest time [s] a segment waits for its steering before it drives."""
+TIPPED = 0.2
+"""Tilt [rad] of the chassis beyond which the robot has tipped over (it stands level within
+milliradians: the contacts sink 0.01-0.1 % of a wheel's radius)."""
 
 SECONDS_PER_SIMULATED_SECOND = 0.005
 """Computing time per simulated second, on the fast side (200 x real time; measured 47-218 x on
@@ -95,39 +111,50 @@ def simulate_physics(
     samples = len(dt)
     duration = float(sampled.t[-1])
     times, poses, counts, steers = [0.0], [sim.pose], [sim.encoder_counts()], [sim.steer_angles]
+    progress_of: list[float] = []
+    segment_of: list[int] = []
     report = max(1, samples // 200)
     stop = np.zeros(speeds.shape[1])
-    k = 0
-    while True:
-        plan_sample = k < samples
-        if plan_sample:
-            sim.command(speeds[k], steer_cmd[k] if steer_cmd is not None else None)
-            t_next = float(sampled.t[k + 1])
-        else:
-            sim.command(stop, steer_cmd[-1] if steer_cmd is not None else None)
-            t_next = times[-1] + 1.0 / sampled.rate
+    period = 1.0 / sampled.rate
+
+    def sample(wheels, steer, t_next: float, done: float, segment: int) -> None:
+        sim.command(wheels, steer)
         sim.advance(t_next)
+        if sim.tilt > TIPPED:
+            raise PhysicsError(
+                f"robot {true_robot.name!r} tipped over at t = {t_next:.4g} s (chassis tilted "
+                f"{math.degrees(sim.tilt):.3g} deg): its contacts left the support of its weight"
+            )
         times.append(t_next)
         poses.append(sim.pose)
         counts.append(sim.encoder_counts())
         steers.append(sim.steer_angles)
-        k += 1
-        if progress is not None and k % report == 0:
-            progress(min(t_next, duration), duration)
-        if not plan_sample and (_at_rest(sim) or t_next - duration >= TAIL_MAX):
-            break
+        progress_of.append(done)
+        segment_of.append(segment)
+
+    behind = 0.0  # time [s] the run is behind the plan's clock (samples waiting for the steering)
+    for k in range(samples):
+        segment = int(sampled.segment[k])
+        steer_k = steer_cmd[k] if steer_cmd is not None else None
+        if steer_k is not None and (k == 0 or segment != sampled.segment[k - 1]):
+            waited = 0.0
+            while waited < ALIGN_MAX and not (
+                np.max(np.abs(wrap_angle(steer_k - sim.steer_angles))) < STEER_ALIGNED and _at_rest(sim)
+            ):
+                behind += period
+                waited += period
+                sample(stop, steer_k, times[-1] + period, 0.0, segment)
+        sample(speeds[k], steer_k, float(sampled.t[k + 1]) + behind, float(sampled.progress[k]), segment)
+        if progress is not None and (k + 1) % report == 0:
+            progress(float(sampled.t[k + 1]), duration)
+    last_steer = steer_cmd[-1] if steer_cmd is not None else None
+    end = times[-1]
+    while not (_at_rest(sim) or times[-1] - end >= TAIL_MAX):
+        sample(stop, last_steer, times[-1] + period, 0.0, int(sampled.segment[-1]))
     if progress is not None:
         progress(duration, duration)
-    tail = len(times) - 1 - samples
     t = np.array(times)
-    extended = SampledPlan(
-        sampled.plan,
-        sampled.rate,
-        t,
-        np.concatenate([sampled.progress, np.zeros(tail)]),
-        np.concatenate([sampled.segment, np.full(tail, sampled.segment[-1])]),
-        sampled.xi,
-    )
+    extended = SampledPlan(sampled.plan, sampled.rate, t, np.array(progress_of), np.array(segment_of), sampled.xi)
     ticks = np.array(counts, dtype=np.int64)
     readings = counter_output(ticks, [command_robot.wheel(n).encoder.counter_bits for n in names])  # type: ignore[union-attr]
     steer = np.array(steers) if steerable else None
