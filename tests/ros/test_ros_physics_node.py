@@ -19,6 +19,7 @@ import pytest
 
 pytest.importorskip("mujoco", reason="the physics back-end needs MuJoCo (extra 'physics')")
 
+from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402 (after the importorskips)
 from test_ros_node import (  # noqa: E402 (after the importorskips there and above)
     RELIABLE_ALL,
     Odometry,
@@ -117,3 +118,64 @@ def test_the_physics_node_drives_forward_publishes_truth_and_stops_after_the_tim
         graph.close()
         rc, took = proc.terminate()
         assert rc == 0, proc.stderr()
+
+
+SLOW_NODE = """\
+import pathlib
+import sys
+import time
+
+from omnikin import load_robot
+from omnikin.cli.ros import PHYSICS_MAX_LAG
+from omnikin.physics.backend import PhysicsBackend
+from omnikin.ros.node import run
+from omnikin.ros.params import load_params
+
+
+class SlowPhysics(PhysicsBackend):
+    \"\"\"The physics back-end of the node, whose read takes 0.4 s while the file 'slow' exists.\"\"\"
+
+    def read(self, t):
+        if pathlib.Path("slow").exists():
+            time.sleep(0.4)
+        return super().read(t)
+
+
+robot = load_robot("tomasi-omni3")
+sys.exit(run(robot, SlowPhysics(robot, max_lag=PHYSICS_MAX_LAG), load_params(None)))
+"""
+
+
+def test_a_slow_physics_step_is_counted_and_the_simulation_drops_time_instead_of_falling_behind(tmp_path):
+    """Cycles of 0.4 s at 50 Hz: each overruns the period; the next one would have 0.42 s to catch
+    up, beyond max_lag 0.25 s, so about 0.17 s is dropped per cycle. /diagnostics says both (WARN),
+    the node keeps publishing, and it is OK again once the cycles are fast."""
+    script = tmp_path / "slow_node.py"
+    script.write_text(SLOW_NODE)
+    proc, graph = start(tmp_path, [], script=script)
+    try:
+        (tmp_path / "slow").write_text("")
+        t_slow = time.monotonic()
+        n = graph.n_odom()
+        time.sleep(2.5)
+        assert graph.n_odom() > n, "no odometry while the cycles are slow"
+        warned = [d for d in graph.diags if d[0] > t_slow + 1.0]
+        assert warned, "no /diagnostics while the cycles are slow"
+        _, _, values, status = warned[-1]
+        print(
+            f"slow physics: {status.message!r}; {values['loop_overruns']} overruns, longest cycle "
+            f"{values['loop_time_max_ms']} ms, {values['link_time_dropped']} s dropped"
+        )
+        assert status.level == DiagnosticStatus.WARN
+        assert "control cycle(s) overran the period" in status.message and "behind real time" in status.message
+        assert int(values["loop_overruns"]) >= 2 and float(values["loop_time_max_ms"]) >= 400.0
+        assert float(values["link_time_dropped"]) > 0.1 and int(values["link_lag_events"]) >= 1
+        (tmp_path / "slow").unlink()
+        t_fast = time.monotonic()
+        assert wait_for(
+            lambda: graph.last_diag()[0] > t_fast + 1.5 and graph.last_diag()[3].level == DiagnosticStatus.OK, 5.0
+        ), graph.last_diag()[3].message
+        assert "Traceback" not in proc.stderr()
+    finally:
+        graph.close()
+        proc.close()
