@@ -41,6 +41,7 @@ from __future__ import annotations
 import dataclasses
 import signal
 import time
+from typing import Any
 
 import numpy as np
 
@@ -124,6 +125,7 @@ class BaseNode(Node):
         self.joint_pub = self.create_publisher(JointState, "joint_states", qos)
         self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.truth_pub = None  # ground truth: only a simulated back-end knows it
+        self._simulated: Any = backend  # its ``truth`` [m, m, rad], when it has one
         if getattr(backend, "truth", None) is not None:
             self.truth_pub = self.create_publisher(Odometry, "ground_truth", qos)
         self._last_truth: tuple | None = None  # (runtime time [s], true pose)
@@ -146,7 +148,7 @@ class BaseNode(Node):
         self._overruns_window = 0  # ... since the previous diagnostics
         self._loop_time_max = 0.0  # [s] the longest cycle since the previous diagnostics
         self._dropped_window = 0.0  # [s] simulated time dropped, at the previous diagnostics
-        self._first_loop = None
+        self._first_loop: float | None = None
         self._window = (time.monotonic(), 0)  # (time, published) at the last diagnostics
         self.link_error = ""
         self.stale_commands = 0  # TwistStamped older than cmd_vel_timeout, ignored
@@ -258,7 +260,7 @@ class BaseNode(Node):
         cycle (the SE(2) logarithm of the true increment over the cycle time, as ``odom``'s)."""
         if self.truth_pub is None:
             return
-        pose = np.array(self.runtime.backend.truth, dtype=float)
+        pose = np.array(self._simulated.truth, dtype=np.float64)
         twist = np.zeros(3)
         if self._last_truth is not None and now > self._last_truth[0]:
             twist = log(between(self._last_truth[1], pose)) / (now - self._last_truth[0])
