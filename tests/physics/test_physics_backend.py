@@ -75,3 +75,24 @@ def test_a_robot_as_built_with_other_wheels_or_bad_commands_is_refused():
     backend = PhysicsBackend(robot)
     with pytest.raises(InputError, match="expected 3 finite wheel speeds"):
         backend.write(0.0, [1.0, float("inf"), 0.0])
+
+
+def test_real_time_mode_drops_what_it_cannot_catch_up_and_counts_it():
+    robot = load_robot("tomasi-omni3")
+    exact = PhysicsBackend(robot)
+    exact.read(10.0)
+    exact.read(11.0)
+    assert exact.stats()["sim_time"] == pytest.approx(1.0) and exact.stats()["time_dropped"] == 0.0
+    backend = PhysicsBackend(robot, max_lag=0.1)
+    backend.read(10.0)  # starts the clock
+    backend.read(10.05)  # within max_lag: caught up exactly
+    assert backend.stats()["sim_time"] == pytest.approx(0.05)
+    backend.read(11.05)  # one second late: 0.1 s simulated, 0.9 s dropped
+    stats = backend.stats()
+    assert stats["sim_time"] == pytest.approx(0.15)
+    assert stats["time_dropped"] == pytest.approx(0.9) and stats["lag_events"] == 1
+    backend.read(11.07)  # on time again: the simulation follows 0.9 s behind the caller
+    assert backend.stats()["sim_time"] == pytest.approx(0.17) and backend.stats()["lag_events"] == 1
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(InputError, match="max_lag"):
+            PhysicsBackend(robot, max_lag=bad)

@@ -166,6 +166,14 @@ def test_periods_missed_before_the_first_cycle_and_rate():
         ({"rejected": 1, "waiting_for": "w1,w2"}, m.WARN, "waiting for the wheel controllers of w1,w2"),
         ({"waiting_for": "w1", "step_error": "bad read"}, m.ERROR, "wheels stopped: control step failed: bad read"),
         ({"step_error": "bad read", "link_error": "port gone"}, m.ERROR, "wheels stopped: port gone"),
+        ({"overruns": 3}, m.WARN, "3 control cycle(s) overran the period"),
+        ({"dropped": 0.5}, m.WARN, "simulation 0.5 s behind real time"),
+        (
+            {"stale": 1, "overruns": 1, "dropped": 0.125},
+            m.WARN,
+            "1 stale command(s) ignored; 1 control cycle(s) overran the period; simulation 0.125 s behind real time",
+        ),
+        ({"overruns": 2, "step_error": "bad read"}, m.ERROR, "wheels stopped: control step failed: bad read"),
         (
             {"rejected": 5, "stale": 1, "waiting_for": "w1", "link_error": "port gone"},
             m.ERROR,
@@ -202,6 +210,8 @@ def test_diagnostic_values():
         step_errors=6,
         last_step_error="boom",
         link_stats={"backend": "sim", "reads": 9},
+        loop_overruns=4,
+        loop_time_max_ms=21.23456,
     )
     assert all(isinstance(k, str) and isinstance(v, str) for k, v in kv)
     d = dict(kv)
@@ -210,6 +220,8 @@ def test_diagnostic_values():
         "odom_published": "120",
         "loop_rate_hz": "49.877",
         "periods_missed": "2",
+        "loop_overruns": "4",
+        "loop_time_max_ms": "21.235",
         "commands_accepted": "7",
         "commands_rejected": "2",
         "command_timeouts": "1",

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import pytest
 
-from conftest import run_cli
+from conftest import omnikin_env, run_cli
 from omnikin import (
     OmnikinError,
 )
@@ -48,3 +48,39 @@ def test_ros_parameter_exponent_floats(tmp_path):
 def test_ros_serial_only_options_with_sim_backend(capsys):
     rc, _, err = run_cli(capsys, "ros", "tomasi-omni3", "--port", "/dev/ttyUSB0")
     assert rc == 2 and "apply only to --backend serial" in err
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (["--noise", "none", "--seed", "3"], "--noise, --seed apply only to --backend sim"),
+        (["--baud", "115200"], "--baud apply only to --backend serial"),
+    ],
+)
+def test_ros_physics_backend_refuses_the_options_of_other_backends(capsys, options, message):
+    rc, _, err = run_cli(capsys, "ros", "tomasi-omni3", "--backend", "physics", *options)
+    assert rc == 2 and err.strip() == f"omnikin: error: {message}"
+
+
+def test_ros_physics_backend_without_mujoco_names_the_physics_extra(tmp_path):
+    """In a clean interpreter where importing mujoco fails: one line naming the extra."""
+    import subprocess
+    import sys
+
+    pytest.importorskip("rclpy", reason="the node checks rclpy before the back-end (extra ros)")
+    code = (
+        "import sys\n"
+        "class Block:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name.split('.')[0] == 'mujoco':\n"
+        "            raise ImportError(f'No module named {name!r}')\n"
+        "sys.meta_path.insert(0, Block())\n"
+        "from omnikin.cli.main import main\n"
+        "sys.exit(main(['ros', 'tomasi-omni3', '--backend', 'physics']))\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code], env=omnikin_env(), cwd=tmp_path, capture_output=True, text=True, timeout=60
+    )
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2, proc.stderr
+    assert len(lines) == 1 and 'pip install "omnikin[physics]"' in lines[0], proc.stderr

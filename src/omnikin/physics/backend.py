@@ -14,9 +14,20 @@ Readings as the runtime's driver would give them: the encoder of the robot *as b
 real driver makes when the file's ``ticks_per_rev`` or ``gear_ratio`` is wrong); speeds are the
 joint speeds converted with the same ratio. The clock starts at the first call, as in
 ``SimBackend``; calls with a time not after the last one move nothing.
+
+**Real time** (``max_lag``, the ROS node's wall clock): each call steps the model up to the
+time it is asked for, so a late call catches up. Where the physics runs slower than real time,
+catching up fully would make every call later than the last; with ``max_lag`` [s] a call steps
+at most ``max_lag`` of simulated time beyond where the model stands, and the rest of the
+interval is *dropped*: the simulation clock slips behind the caller's, the robot moves as if
+the dropped time had not passed (as Gazebo's real-time factor below 1 does). ``stats()``
+counts it (``time_dropped`` [s], ``lag_events``) so it is never silent. ``None`` (the default)
+catches up exactly, as offline runs need.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -41,6 +52,7 @@ class PhysicsBackend:
         start=(0.0, 0.0, 0.0),
         step: float = DEFAULT_STEP,
         quantise: bool = True,
+        max_lag: float | None = None,
     ):
         self.robot = robot
         self.true_robot = true_robot or robot
@@ -50,6 +62,11 @@ class PhysicsBackend:
             raise InputError(f"robot {robot.name!r}: the physics back-end needs encoded (driven) wheels")
         self.sim = PhysicsSim(self.true_robot, start=start, step=step)
         self.quantise = bool(quantise)
+        if max_lag is not None and not (math.isfinite(max_lag) and max_lag > 0.0):
+            raise InputError(f"physics back-end: max_lag must be a finite time > 0 s, got {shorten(max_lag)}")
+        self.max_lag = max_lag
+        self.time_dropped = 0.0  # [s] of the caller's clock not simulated (real-time mode)
+        self.lag_events = 0  # calls that dropped time
         true = self.true_robot
         self._order = np.array([robot.rolling_index([n])[0] for n in true.rolling_names], dtype=int)
         self._steer_order = np.array([robot.steer_names.index(n) for n in true.steer_names], dtype=int)
@@ -106,6 +123,12 @@ class PhysicsBackend:
         if self._t0 is None:  # the first call starts the clock
             self._t0 = float(t)
             return
+        behind = float(t) - self._t0 - self.sim.time
+        if self.max_lag is not None and behind > self.max_lag:
+            dropped = behind - self.max_lag
+            self._t0 += dropped  # the simulation clock slips behind the caller's
+            self.time_dropped += dropped
+            self.lag_events += 1
         self.sim.advance(float(t) - self._t0)
 
     def stats(self) -> dict:
@@ -115,6 +138,8 @@ class PhysicsBackend:
             "reads": self.reads,
             "sim_time": self.sim.time,
             "saturated": self.sim.saturated,
+            "time_dropped": self.time_dropped,
+            "lag_events": self.lag_events,
         }
 
     def close(self) -> None:

@@ -130,15 +130,21 @@ def diagnostic_values(
     step_errors: int,
     last_step_error: str,
     link_stats: Mapping,
+    loop_overruns: int = 0,
+    loop_time_max_ms: float = 0.0,
 ) -> list:
     """``(key, value)`` strings of the ``omnikin base`` status (``docs/ros.md``, section Topics):
     ``command_stats`` holds the command filter's counts (``accepted``, ``rejected``,
     ``timeouts``, ``saturated``, ``projected``, ``last_reject_reason``), ``link_stats`` the
-    back-end's statistics (keys prefixed ``link_``)."""
+    back-end's statistics (keys prefixed ``link_``); ``loop_overruns`` counts the control cycles
+    longer than the period since the start, ``loop_time_max_ms`` is the longest cycle [ms] since
+    the previous status."""
     values = {
         "odom_published": published,
         "loop_rate_hz": round(float(loop_rate_hz), 3),
         "periods_missed": periods_missed,
+        "loop_overruns": loop_overruns,
+        "loop_time_max_ms": round(float(loop_time_max_ms), 3),
         "commands_accepted": command_stats["accepted"],
         "commands_rejected": command_stats["rejected"],
         "command_timeouts": command_stats["timeouts"],
@@ -157,7 +163,14 @@ def diagnostic_values(
 
 
 def diagnostic_status(
-    *, rejected: int = 0, stale: int = 0, waiting_for: str = "", link_error: str = "", step_error: str = ""
+    *,
+    rejected: int = 0,
+    stale: int = 0,
+    waiting_for: str = "",
+    link_error: str = "",
+    step_error: str = "",
+    overruns: int = 0,
+    dropped: float = 0.0,
 ) -> tuple:
     """``(level, message)`` of the ``omnikin base`` status, first rule that applies:
 
@@ -165,7 +178,10 @@ def diagnostic_status(
     2. ERROR ``wheels stopped: control step failed: <error>`` when a control step failed since
        the previous status (``step_error``; a bug or a bad back-end, not a lost link);
     3. WARN ``waiting for the wheel controllers of <wheels>`` after (re-)arming a link;
-    4. WARN ``<n> command(s) rejected`` and/or ``<n> stale command(s) ignored``, counts since start;
+    4. WARN ``<n> command(s) rejected`` and/or ``<n> stale command(s) ignored``, counts since start,
+       and/or ``<n> control cycle(s) overran the period`` (``overruns``) and/or ``simulation
+       <s> s behind real time`` (``dropped`` [s] of simulated time the physics back-end could
+       not keep up with), both since the previous status;
     5. OK ``running``.
     """
     if link_error:
@@ -177,6 +193,10 @@ def diagnostic_status(
     problems = ([f"{rejected} command(s) rejected"] if rejected else []) + (
         [f"{stale} stale command(s) ignored"] if stale else []
     )
+    if overruns:
+        problems.append(f"{overruns} control cycle(s) overran the period")
+    if dropped > 0.0:
+        problems.append(f"simulation {dropped:.3g} s behind real time")
     if problems:
         return WARN, "; ".join(problems)
     return OK, "running"

@@ -4,7 +4,10 @@ Subscribes ``cmd_vel`` (``geometry_msgs/Twist``, or ``TwistStamped`` with
 ``use_stamped_vel``); publishes ``odom`` (``nav_msgs/Odometry`` with twist and a
 motion-dependent covariance), ``joint_states`` (wheel positions [rad] and speeds [rad/s],
 steering joints ``<wheel>_steer``), ``/diagnostics`` (command and link statistics, the
-forward-kinematics residual) and, when ``tf2_msgs`` is importable, ``/tf`` odom -> base_link.
+forward-kinematics residual), ``ground_truth`` (``nav_msgs/Odometry``, the simulated robot's
+true pose and mean twist over the last cycle, in the frames of ``odom``; only with a simulated
+back-end, one that has a ``truth`` pose) and, when ``tf2_msgs`` is importable, ``/tf`` odom ->
+base_link.
 ``tf2_msgs`` is not among the ROS 2 wheels on PyPI: with the PyPI install the node says so
 once and publishes no ``/tf``; run it from a ROS 2 install (``source /opt/ros/<distro>/
 setup.bash``) to get it. Parameters: :mod:`omnikin.ros.params`; message content:
@@ -16,6 +19,11 @@ the runtime is the monotonic clock; message stamps are the node's ROS clock. A
 ``TwistStamped`` counts from its stamp (:func:`omnikin.ros.messages.command_time`), a
 ``Twist`` from its arrival. On shutdown (SIGINT, SIGTERM) the wheels are commanded to zero
 before the node exits.
+
+Overruns: a control cycle that takes longer than the period (a slow back-end: the physics
+catching up, a slow link) is counted (``loop_overruns``, the longest cycle in
+``loop_time_max_ms``) and makes ``/diagnostics`` WARN until a status without one, as does
+simulated time the physics back-end dropped because it ran slower than real time.
 
 Failures of a control step: a :class:`~omnikin.errors.LinkError` is a lost link (the
 back-end already commands zero speeds; the node retries every ``link_retry_period``). Any
@@ -33,10 +41,12 @@ from __future__ import annotations
 import dataclasses
 import signal
 import time
+from typing import Any
 
 import numpy as np
 
 from ..errors import InputError, LinkError, OmnikinError, digits_apart
+from ..geometry import between, log
 from ..limits import MotionLimits
 from ..runtime.base import BaseRuntime
 from . import messages, require_rclpy
@@ -114,6 +124,12 @@ class BaseNode(Node):
         self.odom_pub = self.create_publisher(Odometry, "odom", qos)
         self.joint_pub = self.create_publisher(JointState, "joint_states", qos)
         self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self.truth_pub = None  # ground truth: only a simulated back-end knows it
+        self._simulated: Any = backend  # its ``truth`` [m, m, rad], when it has one
+        if getattr(backend, "truth", None) is not None:
+            self.truth_pub = self.create_publisher(Odometry, "ground_truth", qos)
+        self._last_truth: tuple | None = None  # (runtime time [s], true pose)
+        self._zero3 = np.zeros((3, 3))
         self.tf_pub = None
         if p["enable_odom_tf"]:
             if TFMessage is None:
@@ -128,7 +144,11 @@ class BaseNode(Node):
         self._next_retry = None
         self.period = 1.0 / p["publish_rate"]
         self.loops = 0  # control cycles run
-        self._first_loop = None
+        self.overruns = 0  # control cycles that took longer than the period
+        self._overruns_window = 0  # ... since the previous diagnostics
+        self._loop_time_max = 0.0  # [s] the longest cycle since the previous diagnostics
+        self._dropped_window = 0.0  # [s] simulated time dropped, at the previous diagnostics
+        self._first_loop: float | None = None
         self._window = (time.monotonic(), 0)  # (time, published) at the last diagnostics
         self.link_error = ""
         self.stale_commands = 0  # TwistStamped older than cmd_vel_timeout, ignored
@@ -170,6 +190,20 @@ class BaseNode(Node):
 
     def _loop(self):
         now = self.now_s()
+        try:
+            self._cycle(now)
+        finally:
+            took = self.now_s() - now
+            self._loop_time_max = max(self._loop_time_max, took)
+            if took > self.period:
+                self.overruns += 1
+                self._overruns_window += 1
+                self.get_logger().warning(
+                    f"control cycle took {took * 1e3:.1f} ms, longer than the period {self.period * 1e3:.1f} ms",
+                    throttle_duration_sec=5.0,
+                )
+
+    def _cycle(self, now: float) -> None:
         if self._first_loop is None:
             self._first_loop = now
         self.loops += 1
@@ -186,6 +220,7 @@ class BaseNode(Node):
         self.link_error = ""
         self._next_retry = None
         self._publish(res)
+        self._publish_truth(now)
 
     def _publish(self, res) -> None:
         stamp = self.get_clock().now().to_msg()
@@ -219,6 +254,28 @@ class BaseNode(Node):
             rot.x, rot.y, rot.z, rot.w = c["rotation"]
             self.tf_pub.publish(TFMessage(transforms=[tf]))
         self.published += 1
+
+    def _publish_truth(self, now: float) -> None:
+        """``ground_truth``: the back-end's true pose, and the mean body twist since the previous
+        cycle (the SE(2) logarithm of the true increment over the cycle time, as ``odom``'s)."""
+        if self.truth_pub is None:
+            return
+        pose = np.array(self._simulated.truth, dtype=np.float64)
+        twist = np.zeros(3)
+        if self._last_truth is not None and now > self._last_truth[0]:
+            twist = log(between(self._last_truth[1], pose)) / (now - self._last_truth[0])
+        self._last_truth = (now, pose)
+        c = messages.odometry_content(pose, twist, self._zero3, self._zero3)
+        msg = Odometry()
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.frame_id = self.p["odom_frame_id"]
+        msg.child_frame_id = self.p["base_frame_id"]
+        p, tw = msg.pose.pose, msg.twist.twist
+        p.position.x, p.position.y, p.position.z = c["position"]
+        p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w = c["orientation"]
+        tw.linear.x, tw.linear.y, tw.linear.z = c["linear"]
+        tw.angular.x, tw.angular.y, tw.angular.z = c["angular"]
+        self.truth_pub.publish(msg)
 
     def _step_failed(self, exc: Exception, now: float) -> None:
         """A control step raised a non-link error: stop the wheels, drop the command, report."""
@@ -263,6 +320,10 @@ class BaseNode(Node):
         t_prev, n_prev = self._window
         self._window = (now, self.published)
         link_stats = self.runtime.backend.stats()
+        dropped = float(link_stats.get("time_dropped", 0.0))
+        dropped_window, self._dropped_window = dropped - self._dropped_window, dropped
+        overruns_window, self._overruns_window = self._overruns_window, 0
+        loop_time_max, self._loop_time_max = self._loop_time_max, 0.0
         values = messages.diagnostic_values(
             published=self.published,
             loop_rate_hz=messages.rate(self.published, n_prev, now, t_prev),
@@ -275,6 +336,8 @@ class BaseNode(Node):
             step_errors=self.step_errors,
             last_step_error=self.last_step_error,
             link_stats=link_stats,
+            loop_overruns=self.overruns,
+            loop_time_max_ms=1e3 * loop_time_max,
         )
         level, message = messages.diagnostic_status(
             rejected=s.rejected,
@@ -282,6 +345,8 @@ class BaseNode(Node):
             waiting_for=str(link_stats.get("waiting_for", "")),
             link_error=self.link_error,
             step_error=self._step_error_window,
+            overruns=overruns_window,
+            dropped=dropped_window,
         )
         self._step_error_window = ""
         status = DiagnosticStatus(

@@ -1,0 +1,181 @@
+"""``omnikin ros ROBOT --backend physics`` on a real ROS 2 graph: the node steps the MuJoCo
+model to the wall clock, answers ``cmd_vel`` and publishes ``ground_truth`` beside ``odom``.
+
+Closed form (``tests/ros/test_ros_node.py``): accelerating at a to v and braking at a are
+mirror images, so a forward command held from ``first`` to ``last`` and then left to time out
+covers ``v (last - first + cmd_vel_timeout)`` along +x. The physics adds the wheel servos' lag,
+which is the same on both ramps, and roller contact (0.04 % of the distance for tomasi-omni3,
+docs/physics.md); the tolerance covers the command's delivery jitter (a few ms at v).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mujoco", reason="the physics back-end needs MuJoCo (extra 'physics')")
+
+from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402 (after the importorskips)
+from test_ros_node import (  # noqa: E402 (after the importorskips there and above)
+    RELIABLE_ALL,
+    Odometry,
+    _ros_environment,  # noqa: F401 (the module's ROS environment, autouse)
+    start,
+    wait_for,
+    yaw_of,
+)
+
+pytestmark = pytest.mark.ros
+
+V = 0.2  # commanded forward speed [m/s] (below linear.x.max_velocity 0.3)
+TIMEOUT = 0.5  # cmd_vel_timeout [s], the default
+TOLERANCE = 0.01  # [m] on the closed-form distance
+
+
+def xy_yaw(msg) -> np.ndarray:
+    p = msg.pose.pose
+    return np.array([p.position.x, p.position.y, yaw_of(p.orientation)])
+
+
+class Truth:
+    """The test side's subscription to ``ground_truth``."""
+
+    def __init__(self, graph):
+        self.lock = threading.Lock()
+        self.msgs: list = []  # (receive time [monotonic s], msg)
+        graph.node.create_subscription(Odometry, "ground_truth", self._on, RELIABLE_ALL)
+
+    def _on(self, msg):
+        with self.lock:
+            self.msgs.append((time.monotonic(), msg))
+
+    def last(self):
+        with self.lock:
+            return self.msgs[-1][1] if self.msgs else None
+
+
+def settled(graph, truth, settle: float = 0.3, timeout: float = 10.0):
+    """Wait until odometry and truth move less than 0.1 mm over ``settle`` s; their last messages."""
+
+    def still():
+        now = time.monotonic()
+        with graph.lock, truth.lock:
+            recent = [xy_yaw(m) for t, m in graph.odom if t > now - settle]
+            recent_truth = [xy_yaw(m) for t, m in truth.msgs if t > now - settle]
+        return (
+            len(recent) >= 5
+            and len(recent_truth) >= 5
+            and np.ptp(recent, axis=0)[:2].max() < 1e-4
+            and np.ptp(recent_truth, axis=0)[:2].max() < 1e-4
+        )
+
+    assert wait_for(still, timeout), "the robot did not come to rest"
+    return graph.last_odom(), truth.last()
+
+
+def test_the_physics_node_drives_forward_publishes_truth_and_stops_after_the_timeout(tmp_path):
+    proc, graph = start(tmp_path, ["tomasi-omni3", "--backend", "physics"])
+    try:
+        truth = Truth(graph)
+        assert wait_for(lambda: truth.last() is not None, 10.0), f"no ground_truth\n{proc.stderr()}"
+        odom0, truth0 = settled(graph, truth)
+        assert truth0.header.frame_id == "odom" and truth0.child_frame_id == "base_link"
+        first, last = graph.drive(vx=V, duration=1.5)
+        assert wait_for(lambda: graph.last_odom().twist.twist.linear.x > 0.5 * V, 2.0), "the node did not answer"
+        odom1, truth1 = settled(graph, truth)
+        expected = V * (last - first + TIMEOUT)
+        d_odom = xy_yaw(odom1) - xy_yaw(odom0)
+        d_truth = xy_yaw(truth1) - xy_yaw(truth0)
+        print(
+            f"physics node: closed form {expected:.4f} m (T = {last - first:.3f} s); odom dx {d_odom[0]:.4f} "
+            f"dy {d_odom[1]:.5f} m; truth dx {d_truth[0]:.4f} dy {d_truth[1]:.5f} m dtheta {d_truth[2]:.5f} rad"
+        )
+        for what, d in (("odom", d_odom), ("ground_truth", d_truth)):
+            assert d[0] == pytest.approx(expected, abs=TOLERANCE), (what, d, expected)
+            assert abs(d[1]) < 0.01 * expected and abs(d[2]) < 0.01, (what, d)
+        # stopped: nothing moves any more, the truth's twist is zero
+        time.sleep(0.5)
+        assert xy_yaw(graph.last_odom())[:2] == pytest.approx(xy_yaw(odom1)[:2], abs=1e-4)
+        assert xy_yaw(truth.last())[:2] == pytest.approx(xy_yaw(truth1)[:2], abs=1e-4)
+        tw = truth.last().twist.twist
+        assert math.hypot(tw.linear.x, tw.linear.y) < 1e-3
+        _, _, values, _ = graph.next_diag()
+        print(
+            "physics node diagnostics: "
+            + ", ".join(
+                f"{k} {values[k]}" for k in ("loop_overruns", "loop_time_max_ms", "link_time_dropped", "loop_rate_hz")
+            )
+        )
+        assert values["link_backend"] == "physics"
+        assert int(values["command_timeouts"]) >= 1
+        assert float(values["link_sim_time"]) > 2.0
+        assert "Traceback" not in proc.stderr()
+    finally:
+        graph.close()
+        rc, took = proc.terminate()
+        assert rc == 0, proc.stderr()
+
+
+SLOW_NODE = """\
+import pathlib
+import sys
+import time
+
+from omnikin import load_robot
+from omnikin.cli.ros import PHYSICS_MAX_LAG
+from omnikin.physics.backend import PhysicsBackend
+from omnikin.ros.node import run
+from omnikin.ros.params import load_params
+
+
+class SlowPhysics(PhysicsBackend):
+    \"\"\"The physics back-end of the node, whose read takes 0.4 s while the file 'slow' exists.\"\"\"
+
+    def read(self, t):
+        if pathlib.Path("slow").exists():
+            time.sleep(0.4)
+        return super().read(t)
+
+
+robot = load_robot("tomasi-omni3")
+sys.exit(run(robot, SlowPhysics(robot, max_lag=PHYSICS_MAX_LAG), load_params(None)))
+"""
+
+
+def test_a_slow_physics_step_is_counted_and_the_simulation_drops_time_instead_of_falling_behind(tmp_path):
+    """Cycles of 0.4 s at 50 Hz: each overruns the period; the next one would have 0.42 s to catch
+    up, beyond max_lag 0.25 s, so about 0.17 s is dropped per cycle. /diagnostics says both (WARN),
+    the node keeps publishing, and it is OK again once the cycles are fast."""
+    script = tmp_path / "slow_node.py"
+    script.write_text(SLOW_NODE)
+    proc, graph = start(tmp_path, [], script=script)
+    try:
+        (tmp_path / "slow").write_text("")
+        t_slow = time.monotonic()
+        n = graph.n_odom()
+        time.sleep(2.5)
+        assert graph.n_odom() > n, "no odometry while the cycles are slow"
+        warned = [d for d in graph.diags if d[0] > t_slow + 1.0]
+        assert warned, "no /diagnostics while the cycles are slow"
+        _, _, values, status = warned[-1]
+        print(
+            f"slow physics: {status.message!r}; {values['loop_overruns']} overruns, longest cycle "
+            f"{values['loop_time_max_ms']} ms, {values['link_time_dropped']} s dropped"
+        )
+        assert status.level == DiagnosticStatus.WARN
+        assert "control cycle(s) overran the period" in status.message and "behind real time" in status.message
+        assert int(values["loop_overruns"]) >= 2 and float(values["loop_time_max_ms"]) >= 400.0
+        assert float(values["link_time_dropped"]) > 0.1 and int(values["link_lag_events"]) >= 1
+        (tmp_path / "slow").unlink()
+        t_fast = time.monotonic()
+        assert wait_for(
+            lambda: graph.last_diag()[0] > t_fast + 1.5 and graph.last_diag()[3].level == DiagnosticStatus.OK, 5.0
+        ), graph.last_diag()[3].message
+        assert "Traceback" not in proc.stderr()
+    finally:
+        graph.close()
+        proc.close()
