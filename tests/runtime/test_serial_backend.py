@@ -109,12 +109,18 @@ def test_speeds_commanded_arrive_and_heartbeats_flow(rig):
     poll(backend, lambda s: all(math.isclose(fake.speed(i), speeds[i], abs_tol=1e-12) for i in range(3)), speeds=speeds)
     state = poll(backend, lambda s: np.allclose(s.velocities, speeds), speeds=speeds)
     assert state.steer is None and state.positions.shape == (3,)
-    t0 = time.monotonic()
-    poll(backend, lambda s: time.monotonic() - t0 > 0.35, speeds=speeds)
+
+    # the link keeps flowing: wait for counts, not for a wall time (a loaded machine may starve
+    # the fake controller's thread for a while without anything being wrong with the link)
+    def flowing(_):
+        s = backend.stats()
+        seen = {m.wheel for m in list(fake.received) if m.name == "HEARTBEAT"}
+        return seen == {0, 1, 2} and s["heartbeats_tx"] >= 3 * 3 and s["heartbeats_rx"] >= 3 and s["reports"] > 30
+
+    poll(backend, flowing, timeout=10.0, speeds=speeds)
     beats = [m for m in fake.received if m.name == "HEARTBEAT"]
     assert {m.wheel for m in beats} == {0, 1, 2}
     s = backend.stats()
-    assert s["heartbeats_tx"] >= 3 * 3 and s["heartbeats_rx"] >= 3 and s["reports"] > 30
     assert s["frames_ok"] > 0 and s["corrupt"] == s["short"] == s["out_of_order"] == 0 and not s["link_lost"]
     assert fake.decoder.stats.frames_ok > 0 and fake.decoder.stats.corrupt == 0
     assert all(fake.decoder.stats.as_dict()[k] == 0 for k in ("lost", "duplicates", "out_of_order"))
