@@ -36,11 +36,15 @@ def scaled(robot, twist):
 
 
 def drive(sim: PhysicsSim, speeds, steer=None, every: int = 5):
-    """Command, wait the ramp, then sample the twist and pose over the window."""
+    """Command, wait RAMP or until the ramp has reached the command if later, then sample the
+    twist and pose over the window."""
     sim.command(speeds, steer)
     sim.advance(RAMP)
+    while sim.ramping:
+        sim.step(every)
+    start = sim.time
     twists, poses = [], [sim.pose]
-    while sim.time < RAMP + WINDOW - 1e-9:
+    while sim.time < start + WINDOW - 1e-9:
         sim.step(every)
         twists.append(sim.twist)
         poses.append(sim.pose)
@@ -159,14 +163,17 @@ def test_encoder_ticks_are_the_joint_angles_in_whole_ticks():
     robot = load_robot("tomasi-omni3")
     sim = PhysicsSim(robot)
     assert sim.encoder_ticks().tolist() == [0, 0, 0]
-    sim.command([4.0, -3.0, 2.0])
+    speeds = np.array([4.0, -3.0, 2.0])
+    sim.command(speeds)
     sim.advance(1.0)
     rpt = 2 * math.pi / 600
     ticks = sim.encoder_ticks()
     assert ticks.dtype == np.int64
     assert np.abs(ticks * rpt - sim.wheel_angles).max() <= rpt / 2
-    # about the commanded turns (the ramp takes a few ms)
-    assert ticks * rpt == pytest.approx([4.0, -3.0, 2.0], rel=0.02)
+    # about the commanded turns: the wheels ramp together over t_r = max |w| / alpha, so each
+    # turns w (1 s - t_r / 2)
+    ramp_time = np.abs(speeds).max() / describe(robot).wheels[0].motor.max_accel
+    assert ticks * rpt == pytest.approx(speeds * (1.0 - ramp_time / 2.0), rel=0.02)
 
 
 def test_encoder_counters_wrap_and_invert_like_the_hardware():
@@ -174,7 +181,7 @@ def test_encoder_counters_wrap_and_invert_like_the_hardware():
     wheels = [replace(w, encoder=Encoder(600, counter_bits=8, invert=(i == 1))) for i, w in enumerate(robot.wheels)]
     sim = PhysicsSim(replace(robot, wheels=tuple(wheels)))
     sim.command([6.0, 6.0, -6.0])
-    sim.advance(0.5)
+    sim.advance(1.0)
     counts = np.rint(sim.wheel_angles / (2 * math.pi / 600) * np.array([1, -1, 1])).astype(np.int64)
     assert np.abs(counts).min() > 256  # the counters did wrap
     assert sim.encoder_ticks().tolist() == (counts % 256).tolist()
@@ -187,7 +194,7 @@ def test_a_step_command_is_ramped_at_the_motors_acceleration_limit():
     sim.command([20.0, 20.0, 20.0])
     sim.step(10)
     assert np.abs(sim.wheel_speeds).max() <= accel * sim.time * 1.05
-    sim.advance(0.5)
+    sim.advance(20.0 / accel + 0.3)
     assert sim.wheel_speeds == pytest.approx([20.0] * 3, rel=1e-3)
 
 

@@ -116,14 +116,13 @@ steering torque             ``mu N_i (trail + r)``: enough to drag the contact
                             (``physical.max_torque``, the same limit as the wheel motor's)
 motor speed                 the wheel's ``max_speed``, else a rim speed of 3 m/s (indoor and
                             service robots drive below 3 m/s)
-command ramp                wheel speeds change at most at ``alpha = tau / (2 I_eff)`` [rad/s^2],
-                            ``I_eff = I_wheel + (m / n_driven) r^2`` the wheel's inertia plus
-                            its share of the robot's mass seen through the radius: half the
-                            torque accelerates the robot, half is left to the speed servo for
-                            the uneven share of the load; with the default torque and an even
-                            load the rim accelerates at most at ``mu g / 2``, below the slip
-                            limit. A step
-                            command would saturate the motors and spin the wheels
+command ramp                every driven wheel's rim accelerates at most at ``a`` [m/s^2]
+                            (``alpha_i = a / r_i`` [rad/s^2]), the largest ``a`` at which, for
+                            the worst body acceleration the wheels can then produce, each
+                            wheel's traction stays within half its friction limit
+                            ``mu_i N_i`` and its motor within half its torque ("Command
+                            ramp" below). A step command would saturate the motors and spin
+                            the wheels
 speed servo                 a PI controller as in built wheel controllers: gain
                             ``I_eff / 5 ms`` [N m s/rad] (the wheel speed follows the ramp with
                             a time constant of 5 ms; the implicit integrator keeps it stable at
@@ -136,6 +135,29 @@ steering                    PI position servo with full torque at 0.05 rad of er
                             60 deg in 0.1-0.2 s, cars lock to lock in about a second)
 ==========================  ===============================================================
 
+*Command ramp* (:func:`ramp_rim_acceleration`). The ramp bounds each wheel's acceleration, not
+the body's: on omni4 the wheels stand at 45 deg to a forward motion, so the body accelerates
+``sqrt(2)`` times as fast as the rims and needs ``sqrt(2)`` times the traction a rim
+acceleration would suggest. The ramp is therefore derived from the body dynamics. With ``J``
+the driven wheels' rows (``omega = J xi``, :meth:`~omnikin.model.Robot.jacobian` at zero
+steering, twist ``xi = (vx, vy, omega)`` of the body frame) the set-points move along a straight
+line in wheel-speed space (the engine's ramp), so the body accelerations the wheels can produce
+at rim acceleration ``a`` are ``P(a) = {xi' in the row space of J : |r_i J_i xi'| <= a}``. The
+body (planar mass matrix about the body origin, ``M = [[m, 0, -m c_y], [0, m, m c_x], [-m c_y,
+m c_x, I_z]]``, ``c`` the centre of mass, ``I_z`` the yaw inertia about the origin) then needs
+the generalised force ``M xi'``, which the wheels' axle torques ``t`` give as ``J^T t``. PI servos
+of gains ``K`` tracking consistent set-points on rigid contacts give ``t = K (s - J xi)``, a
+vector in the column space of ``J``; the one solution there is ``t = K J (J^T K J)^+ M xi'`` (for
+a layout without redundancy, the only solution). Wheel ``i`` transmits it as a contact force
+``F_i = |t_i| |J_i,xy|`` along its non-slip direction (virtual work: ``F_i e_i . v_c =
+t_i J_i . xi``), and its motor gives ``|t_i| + I_i alpha_i`` (``I_i`` its own axle inertia).
+All of this is linear in ``a``, so the largest ``a`` with ``F_i <= f mu_i N_i`` and motor torque
+``<= f tau_i`` for every wheel and every ``xi'`` in ``P(a)`` (the maximum of ``|c . xi'|`` over a
+polytope lies at a vertex) is found in closed form; ``f = 1/2`` (:data:`RAMP_SHARE`): the other
+half is for uneven loads, the servo's tracking error and the contacts' compliance. Not counted:
+the sideways forces of fixed standard wheels (constraint forces, not the motors'), Coriolis
+terms while turning, and steering (the rows at the mounting angles).
+
 A robot whose contact points do not surround its centre of mass cannot stand (two wheels on
 one axle and no castor): :attr:`PhysicalRobot.support_margin` is then not positive, and the
 engine refuses it.
@@ -144,7 +166,8 @@ engine refuses it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from itertools import combinations
 
 import numpy as np
 
@@ -175,8 +198,9 @@ SERVO_TIME_CONSTANT = 0.005
 """Time constant [s] of the wheel speed servo."""
 INTEGRAL_TIME = 0.05
 """Integral time [s] of the wheel speed servo."""
-ACCEL_TORQUE_SHARE = 0.5
-"""Part of the motor torque the command ramp may use to accelerate."""
+RAMP_SHARE = 0.5
+"""Part of each wheel's friction limit ``mu N`` and of its motor torque the command ramp may ask
+for (module docstring, "Command ramp")."""
 STEER_RATE = math.pi
 """Default steering rate limit [rad/s]."""
 STEER_FULL_TORQUE_ANGLE = 0.05
@@ -519,6 +543,63 @@ def support_margin(contacts: np.ndarray, point: np.ndarray) -> float:
     return margin
 
 
+# --- command ramp -------------------------------------------------------------------------------
+def planar_mass_matrix(mass: float, com, yaw_inertia: float) -> np.ndarray:
+    """Mass matrix ``(3, 3)`` of a rigid body for the planar twist ``(vx, vy, omega)`` of the body
+    frame: ``mass`` [kg], centre of mass ``com`` (x, y) [m] and ``yaw_inertia`` [kg m^2] about
+    the body origin's vertical axis (kinetic energy ``xi^T M xi / 2``)."""
+    cx, cy = float(com[0]), float(com[1])
+    return np.array([[mass, 0.0, -mass * cy], [0.0, mass, mass * cx], [-mass * cy, mass * cx, yaw_inertia]])
+
+
+def polytope_max(rows: np.ndarray, costs: np.ndarray) -> np.ndarray:
+    """For each row ``c`` of ``costs`` ``(k, d)``, ``max |c . x|`` over ``x`` in the row space of
+    ``rows`` ``(n, d)`` with ``|rows x|_inf <= 1`` (a bounded polytope there): the largest value
+    over its vertices, where ``rank`` of the constraints are active."""
+    u, sv, vt = np.linalg.svd(rows, full_matrices=False)
+    rank = int(np.sum(sv > sv[0] * 1e-9)) if len(sv) else 0
+    if rank == 0:
+        return np.zeros(len(costs))
+    basis = vt[:rank].T  # (d, rank): x = basis y
+    g = rows @ basis
+    values = costs @ basis
+    best = np.zeros(len(costs))
+    signs = np.array(np.meshgrid(*[[-1.0, 1.0]] * rank)).reshape(rank, -1).T
+    for chosen in combinations(range(len(g)), rank):
+        a = g[list(chosen)]
+        if abs(np.linalg.det(a)) < 1e-12 * max(1.0, float(np.abs(a).max()) ** rank):
+            continue
+        for y in np.linalg.solve(a, signs.T).T:
+            if np.abs(g @ y).max() <= 1.0 + 1e-9:
+                best = np.maximum(best, np.abs(values @ y))
+    return best
+
+
+def ramp_rim_acceleration(
+    rows: np.ndarray,
+    radii: np.ndarray,
+    mass_matrix: np.ndarray,
+    traction_limits: np.ndarray,
+    torque_limits: np.ndarray,
+    axle_inertia: np.ndarray,
+    gains: np.ndarray,
+    share: float = RAMP_SHARE,
+) -> float:
+    """The command ramp's rim acceleration ``a`` [m/s^2] (module docstring, "Command ramp"):
+    the largest at which no driven wheel needs more than ``share`` of its friction limit
+    ``traction_limits`` (``mu_i N_i`` [N]) or of its ``torque_limits`` [N m] for any body
+    acceleration the wheels can produce. ``rows`` ``(n, 3)`` the driven wheels' rows [rad/s per
+    twist], ``radii`` [m], ``mass_matrix`` :func:`planar_mass_matrix`, ``axle_inertia`` [kg m^2]
+    each wheel's own inertia about its axle, ``gains`` the speed servos' gains [N m s/rad]."""
+    k = np.diag(gains)
+    distribution = k @ rows @ np.linalg.pinv(rows.T @ k @ rows) @ mass_matrix  # axle torque per xi'
+    torque = polytope_max(radii[:, None] * rows, distribution)  # max |t_i| per unit rim acceleration
+    force = torque * np.hypot(rows[:, 0], rows[:, 1])
+    needed = np.concatenate([force / traction_limits, (torque + axle_inertia / radii) / torque_limits])
+    worst = float(needed.max())
+    return share / worst if worst > 0.0 else math.inf
+
+
 # --- wheels ---------------------------------------------------------------------------------
 def _given(wheel: Wheel) -> PhysicalWheel:
     return wheel.physical if wheel.physical is not None else PhysicalWheel()
@@ -574,6 +655,7 @@ def describe(robot: Robot) -> PhysicalRobot:
     loads = wheel_loads(contacts, robot_com[:2], total * GRAVITY)
 
     wheels = []
+    ramp_inputs: list[tuple[Wheel, float, float]] = []  # driven wheel, mu N [N], axle inertia [kg m^2]
     for w, (mass, width, rollers, hub_radius), load in zip(robot.wheels, parts, loads, strict=True):
         given = _given(w)
         friction = given.friction if given.friction is not None else FRICTION
@@ -593,7 +675,8 @@ def describe(robot: Robot) -> PhysicalRobot:
             i_eff = wheel_axle + total / len(driven_names) * w.radius**2
             max_speed = w.max_speed if w.max_speed else RIM_SPEED / w.radius
             gain = i_eff / SERVO_TIME_CONSTANT
-            motor = Motor(torque, max_speed, ACCEL_TORQUE_SHARE * torque / i_eff, gain, INTEGRAL_TIME)
+            motor = Motor(torque, max_speed, 0.0, gain, INTEGRAL_TIME)  # max_accel: ramp below
+            ramp_inputs.append((w, load * friction, wheel_axle))
         steering = None
         if w.is_steerable or w.is_castor:
             fork = max(w.radius / 2.0, 1e-3)
@@ -640,6 +723,7 @@ def describe(robot: Robot) -> PhysicalRobot:
                 fields=tuple(sorted(given.given)),
             )
         )
+    wheels = _with_ramp(robot, wheels, ramp_inputs, total, robot_com, chassis_mass, com, chassis_inertia[2])
     chassis = Chassis(
         shape,
         centre,
@@ -657,3 +741,39 @@ def describe(robot: Robot) -> PhysicalRobot:
         com=(float(robot_com[0]), float(robot_com[1]), float(robot_com[2])),
         support_margin=support_margin(contacts, robot_com[:2]),
     )
+
+
+def _with_ramp(
+    robot: Robot,
+    wheels: list[WheelBody],
+    driven: list[tuple[Wheel, float, float]],
+    total: float,
+    robot_com: np.ndarray,
+    chassis_mass: float,
+    chassis_com,
+    chassis_yaw_inertia: float,
+) -> list[WheelBody]:
+    """``wheels`` with the command ramp of :func:`ramp_rim_acceleration` in their motors."""
+    if not driven:
+        return wheels
+    yaw = chassis_yaw_inertia + chassis_mass * (chassis_com[0] ** 2 + chassis_com[1] ** 2)
+    for body in wheels:  # the wheels and forks as point masses at their hubs, plus their own turn
+        rest = body.mass + (body.steering.fork_mass if body.steering is not None else 0.0)
+        yaw += rest * (body.hub[0] ** 2 + body.hub[1] ** 2) + body.hub_inertia[1]
+    by_name = {b.name: b for b in wheels}
+    motors = [by_name[w.name].motor for w, _, _ in driven]
+    rows = robot.jacobian(wheels=[w.name for w, _, _ in driven])
+    if robot.steerable:
+        rows = rows[0] if rows.ndim == 3 else rows
+    radii = np.array([w.radius for w, _, _ in driven])
+    accel = ramp_rim_acceleration(
+        np.asarray(rows, dtype=float),
+        radii,
+        planar_mass_matrix(total, robot_com[:2], yaw),
+        np.array([traction for _, traction, _ in driven]),
+        np.array([m.max_torque for m in motors if m is not None]),
+        np.array([inertia for _, _, inertia in driven]),
+        np.array([m.gain for m in motors if m is not None]),
+    )
+    ramps = {w.name: accel / w.radius for w, _, _ in driven}
+    return [replace(b, motor=replace(b.motor, max_accel=ramps[b.name])) if b.motor is not None else b for b in wheels]

@@ -9,10 +9,12 @@ The model is the MJCF of :mod:`omnikin.physics.mjcf`. The simulation
 - takes **wheel commands** (:meth:`PhysicsSim.command`): speeds [rad/s] of the rolling wheels in
   file order (as :meth:`omnikin.model.Robot.ik` returns them; entries of passive wheels are
   ignored) and steering angles [rad] of the steerable wheels. A command is reached through a
-  **ramp**: each step the servo set-point moves towards it by at most the motor's acceleration
-  limit times the step (:class:`~omnikin.physics.description.Motor`; why: a step command asks
-  for an infinite acceleration, the servo saturates at the torque limit and the wheel spins
-  on the floor), steering by at most its rate limit. Speeds beyond a motor's limit are held at
+  **ramp**: each step the wheels' set-points move together along the straight line towards
+  it, each by at most its motor's acceleration limit times the step
+  (:class:`~omnikin.physics.description.Motor`; why: a step command asks for an infinite
+  acceleration, the servo saturates at the torque limit and the wheel spins on the floor; why
+  together: set-points on that line stay consistent with one body motion, where wheels ramped
+  one by one would disagree and fight), steering by at most its rate limit. Speeds beyond a motor's limit are held at
   the limit and steering angles beyond their wheel's limits at the limit, as the hardware does.
   Each step the engine closes the integral part of the PI controllers: the velocity servo of a
   wheel (MuJoCo's ``velocity`` actuator, the proportional part, integrated implicitly) gets the
@@ -259,7 +261,9 @@ class PhysicsSim:
         """One step of the ramps and of the wheels' PI speed controllers (module docstring)."""
         d = self.data
         if self._ramping:
-            self._speed_set += np.clip(self._speed_target - self._speed_set, -self._speed_step, self._speed_step)
+            change = self._speed_target - self._speed_set
+            room = np.divide(self._speed_step, np.abs(change), out=np.full_like(change, np.inf), where=change != 0)
+            self._speed_set += change * min(1.0, float(room.min(initial=np.inf)))
             if len(self._steer_ctrl):
                 self._steer_set += np.clip(self._steer_target - self._steer_set, -self._steer_step, self._steer_step)
             self._ramping = self.ramping
