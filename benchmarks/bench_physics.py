@@ -5,10 +5,19 @@ MuJoCo, and to settle it on the floor; then the ratio of simulated to wall time 
 a constant twist at the default 2 ms step (the servos, ramps and heading tracking of
 ``PhysicsSim.step`` included). Best of three, in one process, so on one core; run it under
 ``taskset -c 0`` to pin it.
+
+Then the scaling of independent runs over processes: ``PARALLEL_RUNS`` independent drives of
+tomasi-omni3 (each its own ``PhysicsSim``, settled and driven ``SIM_SECONDS``) spread over a pool
+of 1, then of 2 worker processes (``multiprocessing``, started and warmed up before the clock
+starts); throughput = simulated seconds of all runs per wall second, and the ratio of the two
+throughputs in the same run (2.0 would be perfect scaling on two free cores). Do not pin this
+part: it needs the cores it measures.
 """
 
 from __future__ import annotations
 
+import multiprocessing
+import os
 import time
 
 from _common import best_time, save
@@ -26,6 +35,8 @@ ROBOTS = {
     "xr4000": (0.2, 0.1, 0.3),
 }
 SIM_SECONDS = 5.0
+PARALLEL_ROBOT = "tomasi-omni3"
+PARALLEL_RUNS = 16
 
 
 def real_time_factor(name: str, twist) -> float:
@@ -39,6 +50,55 @@ def real_time_factor(name: str, twist) -> float:
         sim.advance(SIM_SECONDS)
         best = max(best, SIM_SECONDS / (time.perf_counter() - t0))
     return best
+
+
+def independent_run(seconds: float) -> tuple[float, float]:
+    """One drive of PARALLEL_ROBOT for ``seconds`` of simulated time, from a fresh ``PhysicsSim``:
+    ``(simulated seconds, CPU seconds of the worker)``."""
+    cpu = time.process_time()
+    robot = load_robot(PARALLEL_ROBOT)
+    sim = PhysicsSim(robot)
+    sim.command(robot.ik(ROBOTS[PARALLEL_ROBOT]).wheel_speeds)
+    sim.advance(seconds)
+    return sim.time, time.process_time() - cpu
+
+
+def parallel_throughput(processes: int, runs: int) -> tuple[float, float]:
+    """``runs`` independent runs over ``processes`` workers: simulated seconds per wall second,
+    and per CPU second of the workers (equal for 1 and 2 processes when the runs do not slow
+    each other down; then the wall ratio says how many cores were free)."""
+    with multiprocessing.get_context("spawn").Pool(processes) as pool:
+        pool.map(independent_run, [0.01] * processes, chunksize=1)  # start and import in every worker
+        t0 = time.perf_counter()
+        results = pool.map(independent_run, [SIM_SECONDS] * runs, chunksize=1)
+        wall = time.perf_counter() - t0
+    simulated = sum(r[0] for r in results)
+    return simulated / wall, simulated / sum(r[1] for r in results)
+
+
+def scaling() -> dict:
+    """Throughput of independent runs in 1 and 2 processes, and their ratio, in the same run."""
+    load = os.getloadavg()[0]
+    one, one_cpu = parallel_throughput(1, PARALLEL_RUNS)
+    two, two_cpu = parallel_throughput(2, PARALLEL_RUNS)
+    print(
+        f"independent runs ({PARALLEL_RUNS} x {SIM_SECONDS:g} s of {PARALLEL_ROBOT}; {os.cpu_count()} cores, "
+        f"load {load:.2f} before): x real time per wall second 1 process {one:.1f}, 2 processes {two:.1f}, "
+        f"ratio {two / one:.2f}; per CPU second {one_cpu:.1f} and {two_cpu:.1f}, ratio {two_cpu / one_cpu:.2f}"
+    )
+    return {
+        "robot": PARALLEL_ROBOT,
+        "runs": PARALLEL_RUNS,
+        "sim_seconds_each": SIM_SECONDS,
+        "cores": os.cpu_count(),
+        "load_before": load,
+        "throughput_1_process": one,
+        "throughput_2_processes": two,
+        "ratio": two / one,
+        "per_cpu_second_1_process": one_cpu,
+        "per_cpu_second_2_processes": two_cpu,
+        "per_cpu_ratio": two_cpu / one_cpu,
+    }
 
 
 def main() -> dict:
@@ -65,6 +125,7 @@ def main() -> dict:
             "real_time_factor": rtf,
         }
         print(f"  {name:<14s} {bodies:6d} {write * 1e3:10.2f} {compile_ * 1e3:12.2f} {settle * 1e3:12.1f} {rtf:12.1f}")
+    out["parallel"] = scaling()
     return out
 
 
