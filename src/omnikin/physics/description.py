@@ -124,7 +124,9 @@ command ramp                every driven wheel's rim accelerates at most at ``a`
                             ramp" below). A step command would saturate the motors and spin
                             the wheels
 speed servo                 a PI controller as in built wheel controllers: gain
-                            ``I_eff / 5 ms`` [N m s/rad] (the wheel speed follows the ramp with
+                            ``I_eff / 5 ms`` [N m s/rad], ``I_eff = I_wheel + (m / n_driven)
+                            r^2`` the wheel's inertia plus its share of the robot's mass seen
+                            through the radius (the wheel speed follows the ramp with
                             a time constant of 5 ms; the implicit integrator keeps it stable at
                             any step) and integral time 50 ms, so that a steady load (the
                             centripetal force on a curve) leaves no speed error; the integral
