@@ -38,7 +38,13 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
     lines = [
         f"# UMBmark report: {report.robot.name}",
         "",
-        f"Robot as built: {built}. Random errors: {s['noise']!r} profile. {s['runs']} runs per direction on a "
+        f"Robot as built: {built}. "
+        + (
+            "Engine: physics (MuJoCo, rollers and motors; the random errors are the contacts')."
+            if doc["engine"] == "physics"
+            else f"Random errors: {s['noise']!r} profile."
+        )
+        + f" {s['runs']} runs per direction on a "
         f"{s['side']:g} m square, {s['mode']} mode, encoders sampled at {s['rate']:g} Hz"
         + (f", {s['trials']} procedures (Monte Carlo)." if s["trials"] > 1 else "."),
         "",
@@ -78,14 +84,21 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
                 f"{_interval_mm(d['e_max_syst_interval'])} | {'yes' if d['at_noise_floor'] else 'no'} |"
             )
     floor = doc["noise_floor"]
-    lines += [
-        "",
-        f"Noise floor: a perfectly calibrated robot shows E_max,syst of {mm_text(floor['e_max_syst_median'])} "
-        f"mm (median) and up to {mm_text(floor['e_max_syst_p95'])} mm (95th percentile) over "
-        f"{floor['procedures']} procedures "
-        "with these random errors; a value at or below the 95th percentile cannot be told from a perfect "
-        "calibration.",
-    ]
+    if doc["engine"] == "physics":
+        lines += [
+            "",
+            f"Floor: the nominal robot (no systematic errors) driven by its own model in the physics engine shows "
+            f"E_max,syst of {mm_text(floor['e_max_syst_median'])} mm: what the roller contact alone gives.",
+        ]
+    else:
+        lines += [
+            "",
+            f"Noise floor: a perfectly calibrated robot shows E_max,syst of {mm_text(floor['e_max_syst_median'])} "
+            f"mm (median) and up to {mm_text(floor['e_max_syst_p95'])} mm (95th percentile) over "
+            f"{floor['procedures']} procedures "
+            "with these random errors; a value at or below the 95th percentile cannot be told from a perfect "
+            "calibration.",
+        ]
     for key, label in (("before", "Before calibration"), ("after", "After calibration")):
         if key in doc and doc[key]["at_noise_floor"]:
             lines += [

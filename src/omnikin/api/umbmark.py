@@ -16,6 +16,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT, RECOMMENDED_REPEATS
+from ..evaluation.physics_study import check_engine, check_physics_noise, physics_cost, physics_umbmark_study
 from ..evaluation.procedure import (
     FLOOR_PROCEDURES,
     Cost,
@@ -65,8 +66,9 @@ class UMBmarkReport(UMBmarkStudy):
         doc: dict[str, Any] = {
             "format": RESULT_FORMAT,
             "units": RESULT_UNITS,
-            "methods": METHODS,
+            "methods": PHYSICS_METHODS if self.engine == "physics" else METHODS,
             "settings": {**self.settings, "confidence_level": self.level},
+            "engine": self.engine,
             "robot": robot_to_dict(self.robot),
             "true_robot": robot_to_dict(self.true_robot),
         }
@@ -174,7 +176,8 @@ class UMBmarkReport(UMBmarkStudy):
         robot = s.get("robot") or self.robot.name
         return (
             f"omnikin umbmark {robot} --mode {self.mode} --runs {self.runs} --side {self.side:g} "
-            f"--rate {self.rate:g} --seed {s.get('seed')} --noise {s.get('noise')}"
+            f"--rate {self.rate:g} --seed {s.get('seed')}"
+            + (" --engine physics" if self.engine == "physics" else f" --noise {s.get('noise')}")
             + (f" --true-robot {s['true_robot']}" if s.get("true_robot") else f" --errors {s.get('errors')}")
             + (f" --trials {self.trials}" if self.trials > 1 else "")
             + ("" if s.get("calibrate", True) else " --no-calibrate")
@@ -253,6 +256,17 @@ METHODS = {
 }
 """How each reported quantity is defined (copied into ``result.json``)."""
 
+PHYSICS_METHODS = {
+    **METHODS,
+    "engine": "physics: every run driven in MuJoCo (rollers, motors; omnikin.physics) by the robot as built, "
+    "one run at a time; no random error model (the contacts' slip, whole encoder ticks); deterministic",
+    "noise_floor": "the floor of the physics engine: E_max,syst of the nominal robot (no systematic errors) "
+    "commanded by its own model, the same runs and square: what the roller contact alone gives "
+    "(procedures: 1); at_noise_floor: E_max,syst at or below it",
+    "systematic": "E_max,syst of the first procedure (the physics engine has no random errors)",
+}
+"""How each quantity of a physics study is defined (``result.json`` of ``--engine physics``)."""
+
 
 def run_umbmark(
     robot=DEFAULT_ROBOT,
@@ -262,11 +276,12 @@ def run_umbmark(
     mode: str = "rotate",
     runs: int = 5,
     side: float = 4.0,
-    noise="typical",
+    noise=None,
     rate: float = 100.0,
     seed: int = 1,
     trials: int = 1,
     calibrate: bool = True,
+    engine: str = "kinematic",
     max_memory: float = DEFAULT_MEMORY,
     max_time: float = DEFAULT_TIME,
     progress=None,
@@ -275,42 +290,49 @@ def run_umbmark(
 
     ``robot``: preset name, robot file or Robot; ``true_robot`` (file or Robot) replaces the
     seeded draw of the ``errors`` profile; ``mode``: ``rotate`` or ``translate``; ``runs`` per
-    direction; ``side`` [m]; ``noise``: random errors; ``rate`` [Hz]; ``trials``: repeated
+    direction; ``side`` [m]; ``noise``: random errors (default ``typical``; refused by the physics
+    engine, whose random errors are its contacts'); ``rate`` [Hz]; ``trials``: repeated
     UMBmark procedures (Monte Carlo over the noise; the robot as built and its calibration
-    stay the same); ``calibrate``: run the calibration step (:mod:`omnikin.evaluation.procedure`).
-    ``progress`` is called with the name of each step. A study estimated to need more than
+    stay the same); ``calibrate``: run the calibration step (:mod:`omnikin.evaluation.procedure`);
+    ``engine``: ``kinematic`` or ``physics`` (every run in MuJoCo, and the floor of the nominal
+    robot: :mod:`omnikin.evaluation.physics_study`). ``progress`` is called with the name of each
+    step (of each run, in physics). A study estimated to need more than
     ``max_memory`` [bytes] or ``max_time`` [s] is refused up front
     (:func:`~omnikin.evaluation.procedure.check_cost`).
     """
+    noise = engine_noise(engine, noise)
     nominal = robot_of(robot)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
     seeds = streams(seed)
-    noise_model = noise_of(noise)
+    noise_model = None if noise is None else noise_of(noise)
     check_cost(
-        umbmark_cost(nominal, mode=mode, runs=runs, side=side, rate=rate, trials=trials, calibrate=calibrate),
+        umbmark_cost(
+            nominal, mode=mode, runs=runs, side=side, rate=rate, trials=trials, calibrate=calibrate, engine=engine
+        ),
         max_memory=max_memory,
         max_time=max_time,
     )
     true, injected = as_built(nominal, true_robot, errors, seeds["robot"])
-    study = umbmark_study(
-        nominal,
-        true,
+    common: dict[str, Any] = dict(
         injected=injected,
         side=float(side),
         mode=mode,
         runs=int(runs),
         rate=float(rate),
         trials=int(trials),
-        noise=noise_model,
-        seed=seed,
         calibrate=calibrate,
         progress=progress,
     )
+    if noise_model is None:
+        study = physics_umbmark_study(nominal, true, **common)
+    else:
+        study = umbmark_study(nominal, true, noise=noise_model, seed=seed, **common)
     settings = {
         "robot": setting_name(robot),
         "true_robot": setting_name(true_robot),
         "errors": None if true_robot is not None else setting_name(errors),
         "noise": setting_name(noise),
+        "engine": engine,
         "mode": mode,
         "runs": int(runs),
         "side": float(side),
@@ -322,6 +344,17 @@ def run_umbmark(
     return UMBmarkReport(**{f.name: getattr(study, f.name) for f in fields(study)}, settings=settings)
 
 
+def engine_noise(engine: str, noise):
+    """The noise model ``engine`` runs with: ``noise`` (default ``typical``) for the kinematic
+    engine, None for the physics engine, which refuses one in one line
+    (:func:`~omnikin.evaluation.physics_study.check_physics_noise`); an unknown engine is refused."""
+    check_engine(engine)
+    if engine == "physics":
+        check_physics_noise(noise)
+        return None
+    return "typical" if noise is None else noise
+
+
 def umbmark_cost(
     robot=DEFAULT_ROBOT,
     *,
@@ -331,13 +364,15 @@ def umbmark_cost(
     rate: float = 100.0,
     trials: int = 1,
     calibrate: bool = True,
+    engine: str = "kinematic",
 ) -> Cost:
     """What :func:`run_umbmark` with these settings will take (robot-samples, memory, time):
-    :func:`~omnikin.evaluation.procedure.estimate_cost`."""
+    :func:`~omnikin.evaluation.procedure.estimate_cost`, or
+    :func:`~omnikin.evaluation.physics_study.physics_cost` for the physics engine."""
+    check_engine(engine)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
-    return estimate_cost(
-        robot_of(robot), side=side, mode=mode, runs=runs, rate=rate, trials=trials, calibrate=calibrate
-    )
+    cost = physics_cost if engine == "physics" else estimate_cost
+    return cost(robot_of(robot), side=side, mode=mode, runs=runs, rate=rate, trials=trials, calibrate=calibrate)
 
 
 # --- analyze ---------------------------------------------------------------------------------------

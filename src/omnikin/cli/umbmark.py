@@ -18,9 +18,17 @@ from ..api.calibration import calibrate as api_calibrate
 from ..api.calibration import calibration_plan
 from ..api.common import dumps
 from ..api.report import mm_text
-from ..api.umbmark import DEFAULT_ROBOT, UMBmarkReport, analyze_umbmark, run_umbmark, umbmark_cost
+from ..api.umbmark import (
+    DEFAULT_ROBOT,
+    UMBmarkReport,
+    analyze_umbmark,
+    engine_noise,
+    run_umbmark,
+    umbmark_cost,
+)
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
+from ..evaluation.physics_study import ENGINES
 from ..simulation.error_models import NOISE, PROFILES
 from ..simulation.motion import RATE_RANGE
 from ..viz import FIGURE_FORMATS, MAX_DPI, MIN_DPI, dpi_problem
@@ -102,7 +110,15 @@ def add_parsers(sub, robot_help: str) -> None:
         "--noise",
         default=d["noise"],
         metavar="PROFILE",
-        help=f"random errors: {', '.join(sorted(NOISE))} (default {d['noise']})",
+        help=f"random errors: {', '.join(sorted(NOISE))} (default typical; kinematic engine only)",
+    )
+    sp.add_argument(
+        "--engine",
+        choices=ENGINES,
+        default=d["engine"],
+        help="kinematic: wheel motion with the --errors and --noise models; physics: every run in MuJoCo "
+        "(rollers, motors; extra physics) on the robot as built, and the floor: UMBmark of the nominal "
+        f"robot, what roller contact alone gives (default {d['engine']})",
     )
     sp.add_argument(
         "--rate",
@@ -287,6 +303,7 @@ class _Status:
 # --- umbmark -----------------------------------------------------------------------------------------
 def cmd_umbmark(args) -> int:
     inputs = command_inputs(args)
+    engine_noise(args.engine, args.noise)  # refuse a noise model for physics before the cost note
     cost = umbmark_cost(
         args.robot,
         mode=args.mode,
@@ -295,6 +312,7 @@ def cmd_umbmark(args) -> int:
         rate=args.rate,
         trials=args.trials,
         calibrate=args.calibrate,
+        engine=args.engine,
     )
     require(
         args,
@@ -317,6 +335,7 @@ def cmd_umbmark(args) -> int:
             seed=args.seed,
             trials=args.trials,
             calibrate=args.calibrate,
+            engine=args.engine,
             max_memory=args.max_memory,
             max_time=args.max_time,
             progress=status.step,
@@ -357,14 +376,20 @@ def _print_summary(report: UMBmarkReport, doc: dict, out) -> None:
     con = console(120)
     con.print(
         f"UMBmark: {report.robot.name} as built, {s['runs']} runs per direction, {s['side']:g} m square, "
-        f"{s['mode']} mode"
+        f"{s['mode']} mode, {doc['engine']} engine"
     )
     con.print(_umbmark_table(doc))
     floor = doc["noise_floor"]
-    con.print(
-        f"noise floor (perfectly calibrated robot, same random errors): median "
-        f"{mm_text(floor['e_max_syst_median'])} mm, 95th percentile {mm_text(floor['e_max_syst_p95'])} mm"
-    )
+    if doc["engine"] == "physics":
+        con.print(
+            "floor (nominal robot in physics, roller contact alone): E_max,syst "
+            f"{mm_text(floor['e_max_syst_median'])} mm"
+        )
+    else:
+        con.print(
+            f"noise floor (perfectly calibrated robot, same random errors): median "
+            f"{mm_text(floor['e_max_syst_median'])} mm, 95th percentile {mm_text(floor['e_max_syst_p95'])} mm"
+        )
     bor = report.before[0].borenstein
     if bor is not None:
         con.print(f"Borenstein (before): {bor.describe()}")

@@ -102,14 +102,18 @@ def draw_as_built(robot: Robot, profile, seed) -> tuple[Robot, SystematicErrors]
 
 @dataclass(frozen=True)
 class Cost:
-    """What a study will take: ``samples`` robot-samples simulated and ``bytes`` of memory."""
+    """What a study will take: ``samples`` robot-samples simulated, ``bytes`` of memory and
+    ``seconds_per_sample`` [s] of computing time per sample (the kinematic engine's
+    :data:`SAMPLES_PER_SECOND` by default)."""
 
     samples: float
     bytes: float
+    seconds_per_sample: float = 1.0 / SAMPLES_PER_SECOND
 
     @property
     def seconds(self) -> float:
-        return self.samples / SAMPLES_PER_SECOND
+        """Computing time [s]."""
+        return self.samples * self.seconds_per_sample
 
 
 def estimate_cost(
@@ -158,7 +162,8 @@ class UMBmarkStudy:
     ``borenstein``: E_max,syst [m] after each iteration of Borenstein's correction (or
     None); ``systematic``: E_max,syst [m] without random errors, ``{"before", "after"}``;
     ``trajectories``: ``{"before"|"after": {"cw"|"ccw": SimulatedRun}}``, the first run of
-    each direction with its ground truth.
+    each direction with its ground truth; ``engine``: ``kinematic`` (this module) or ``physics``
+    (:mod:`omnikin.evaluation.physics_study`, whose ``floor`` is the nominal robot's UMBmark).
     """
 
     robot: Robot
@@ -179,6 +184,7 @@ class UMBmarkStudy:
     floor: NoiseFloor
     trajectories: dict
     level: float = LEVEL
+    engine: str = "kinematic"
 
     @property
     def reduction_factor(self) -> float | None:

@@ -1,0 +1,225 @@
+"""The UMBmark study in the physics engine (``omnikin umbmark --engine physics``).
+
+The steps of :func:`~omnikin.evaluation.procedure.umbmark_study`, every run driven by
+:func:`~omnikin.physics.run.simulate_physics` (MuJoCo, rollers and motors) on the robot as
+built, one run at a time (the physics has no trial axis: ``trials`` procedures are
+``trials * runs`` runs per direction, each simulated on its own):
+
+1. UMBmark before calibration, the robot as built commanded by its nominal model
+   (Borenstein and Feng, "Measurement and correction of systematic odometry errors in mobile
+   robots", 1996);
+2. calibration (unless switched off): every run of
+   :func:`~omnikin.evaluation.calibration.recommended_runs` driven
+   :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times, its true end pose the
+   measurement, and the least-squares calibration
+   (:func:`~omnikin.evaluation.calibration.calibrate`);
+3. UMBmark after calibration, the robot commanded by its calibrated model;
+4. the floor: UMBmark of the *nominal* robot (no systematic errors) commanded by its own model,
+   ``runs`` runs per direction: what the roller contact alone gives, the least E_max,syst a
+   calibration of the kinematic model can reach in this engine. It takes the place of the
+   kinematic study's noise floor (:class:`~omnikin.evaluation.umbmark.NoiseFloor` of these
+   procedures).
+
+The physics engine has no random error model: slip comes from the wheels' contacts and the
+encoders count whole ticks, so a noise model is refused (:func:`check_physics_noise`); the
+engine is deterministic, so repeated runs of one path agree and the systematic part is the
+result itself. Borenstein's iterated correction (kinematic study, differential drives) is not
+run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError, shorten
+from ..model import Robot
+from ..odometry import encoded_wheels
+from ..plans import CalibrationRun, Plan, umbmark_square
+from ..simulation.error_models import NOISE, SystematicErrors
+from ..simulation.motion import estimated_samples
+from .calibration import RECOMMENDED_REPEATS, CalibrationResult, recommended_runs
+from .calibration import calibrate as least_squares_calibration
+from .procedure import Cost, UMBmarkStudy, check_settings
+from .umbmark import NoiseFloor, UMBmarkResult, analyze, square_refusal
+
+ENGINES = ("kinematic", "physics")
+"""The engines of the UMBmark study: the kinematic simulation or MuJoCo (:mod:`omnikin.physics`)."""
+
+SECONDS_PER_SIMULATED_SECOND = 0.015
+"""Computing time [s] per simulated second of a physics run: measured 0.013-0.018 s on one core
+of a shared 2-core machine (a 1 m UMBmark square of tomasi-omni3 at 50 Hz, 24 s simulated in
+0.3-0.4 s, model building included; the whole 1 m study, 56 runs, in 13 s where
+:func:`physics_cost` estimates 16 s)."""
+
+TAIL_SECONDS = 2.0
+"""Simulated time [s] a run is counted for after its plan (the robot coming to rest,
+:data:`omnikin.physics.run.TAIL_MAX` at most) in the cost estimate."""
+
+BYTES = 256 * 1024**2
+"""Memory of a physics study [bytes]: MuJoCo's model and data and the kept runs, generous."""
+
+Progress = Callable[[str], None]
+
+
+def check_engine(engine) -> str:
+    """``engine`` if it is one of :data:`ENGINES`, else :class:`~omnikin.errors.InputError`."""
+    if engine not in ENGINES:
+        raise InputError(f"engine (--engine) must be one of {', '.join(ENGINES)}, got {shorten(engine)}")
+    return engine
+
+
+def check_physics_noise(noise) -> None:
+    """Refuse a noise model for the physics engine (one line): it has none of its own, its
+    random errors are those of the roller contact; ``None`` (not given) passes."""
+    if noise is not None:
+        raise InputError(
+            f"noise (--noise) {shorten(noise if isinstance(noise, str) else type(noise).__name__)}: the physics "
+            "engine has no random error model (slip comes from the wheels' roller contact, its encoders count "
+            "whole ticks); drop --noise"
+        )
+
+
+def physics_cost(robot: Robot, *, side: float, mode: str, runs: int, rate: float, trials: int, calibrate: bool) -> Cost:
+    """Samples, memory and computing time of :func:`physics_umbmark_study`: every run's
+    samples (:func:`~omnikin.simulation.motion.estimated_samples`, an upper bound) plus
+    :data:`TAIL_SECONDS`, at :data:`SECONDS_PER_SIMULATED_SECOND`."""
+    square = estimated_samples(umbmark_square("cw", side, mode), robot, rate)
+    squares = 2 * runs * (trials * (2 if calibrate else 1) + 1)  # before, after, the floor
+    samples = squares * square
+    plans = squares
+    if calibrate:
+        calibration = recommended_runs(robot, side)
+        samples += RECOMMENDED_REPEATS * sum(estimated_samples(plan, robot, rate) for _, plan in calibration)
+        plans += RECOMMENDED_REPEATS * len(calibration)
+    samples += plans * TAIL_SECONDS * rate
+    return Cost(samples, float(BYTES), seconds_per_sample=SECONDS_PER_SIMULATED_SECOND / rate)
+
+
+def _drive(plan: Plan, true_robot: Robot, command: Robot, rate: float):
+    from ..physics.run import simulate_physics
+
+    return simulate_physics(plan, true_robot, command, rate=rate)
+
+
+def physics_umbmark(
+    true_robot: Robot,
+    command: Robot,
+    *,
+    side: float,
+    mode: str,
+    runs: int,
+    rate: float,
+    trials: int = 1,
+    progress: Progress | None = None,
+    label: str = "UMBmark",
+) -> tuple[list[UMBmarkResult], dict]:
+    """``trials`` UMBmark procedures of ``runs`` runs per direction in the physics engine,
+    ``true_robot`` commanded by ``command``. Returns one
+    :class:`~omnikin.evaluation.umbmark.UMBmarkResult` per procedure and the first run of each
+    direction (``{"cw"|"ccw": PhysicsRun}``, with its ground truth). ``progress`` is called with
+    ``label`` and the run's number before each run."""
+    refusal = square_refusal(command, side, mode)
+    if refusal is not None:
+        raise InputError(f"robot {command.name!r} cannot drive the UMBmark square in {mode!r} mode ({refusal})")
+    total = 2 * trials * runs
+    eps: dict[str, list] = {"cw": [], "ccw": []}
+    first: dict = {}
+    for direction in ("cw", "ccw"):
+        plan = umbmark_square(direction, side, mode)
+        for _ in range(trials * runs):
+            if progress is not None:
+                progress(f"{label}: run {len(eps['cw']) + len(eps['ccw']) + 1} of {total}")
+            run = _drive(plan, true_robot, command, rate)
+            first.setdefault(direction, run)
+            eps[direction].append(run.epsilon[0])
+    results = [
+        analyze(
+            np.array(eps["cw"][k * runs : (k + 1) * runs]),
+            np.array(eps["ccw"][k * runs : (k + 1) * runs]),
+            side,
+            command,
+            mode,
+        )
+        for k in range(trials)
+    ]
+    return results, first
+
+
+def physics_calibration_runs(
+    true_robot: Robot, robot: Robot, *, side: float, rate: float, progress: Progress | None = None
+) -> list[CalibrationRun]:
+    """The recommended calibration runs of ``robot``, each driven
+    :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times in the physics engine by
+    ``true_robot`` commanded by ``robot``; the measured end pose is the true one (the default
+    measurement sigma of :class:`~omnikin.plans.CalibrationRun`, as a runs file is read)."""
+    plans = recommended_runs(robot, side)
+    total = len(plans) * RECOMMENDED_REPEATS
+    out: list[CalibrationRun] = []
+    for text, plan in plans:
+        for _ in range(RECOMMENDED_REPEATS):
+            if progress is not None:
+                progress(f"calibration runs: run {len(out) + 1} of {total}")
+            run = _drive(plan, true_robot, robot, rate)
+            out.append(CalibrationRun(plan, tuple(run.measured[0]), text))
+    return out
+
+
+def physics_umbmark_study(
+    robot: Robot,
+    true_robot: Robot,
+    *,
+    injected: SystematicErrors | None = None,
+    side: float,
+    mode: str,
+    runs: int,
+    rate: float,
+    trials: int,
+    calibrate: bool,
+    progress: Progress | None = None,
+) -> UMBmarkStudy:
+    """The study of the module docstring, as a :class:`~omnikin.evaluation.procedure.UMBmarkStudy`
+    (``engine`` "physics", ``noise`` none, ``floor`` the nominal robot's UMBmark, ``systematic``
+    the results themselves, no Borenstein comparison)."""
+    check_settings(runs=runs, trials=trials, side=side, rate=rate)
+    encoded_wheels(robot)
+    opts: dict[str, Any] = dict(side=side, mode=mode, runs=runs, rate=rate, progress=progress)
+    before, first = physics_umbmark(true_robot, robot, trials=trials, label="UMBmark before calibration", **opts)
+    trajectories = {"before": first}
+    systematic = {"before": before[0].e_max_syst}
+    after: list | None = None
+    cal: CalibrationResult | None = None
+    cal_runs: list[CalibrationRun] = []
+    if calibrate:
+        cal_runs = physics_calibration_runs(true_robot, robot, side=side, rate=rate, progress=progress)
+        if progress is not None:
+            progress("least-squares calibration")
+        cal = least_squares_calibration(robot, cal_runs)
+        after, trajectories["after"] = physics_umbmark(
+            true_robot, cal.robot, trials=trials, label="UMBmark after calibration", **opts
+        )
+        systematic["after"] = after[0].e_max_syst
+    nominal, _ = physics_umbmark(robot, robot, label="floor (nominal robot)", **opts)
+    floor = NoiseFloor(np.array([nominal[0].e_max_syst]))
+    return UMBmarkStudy(
+        robot,
+        true_robot,
+        injected,
+        side,
+        mode,
+        runs,
+        rate,
+        trials,
+        NOISE["none"],
+        before,
+        after,
+        cal,
+        cal_runs,
+        None,
+        systematic,
+        floor,
+        trajectories,
+        engine="physics",
+    )

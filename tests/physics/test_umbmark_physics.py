@@ -1,0 +1,121 @@
+"""``omnikin umbmark --engine physics`` and ``omnikin.run_umbmark(..., engine="physics")``: the
+UMBmark study with every run driven in MuJoCo on the robot as built, and the floor of the nominal
+robot.
+
+Expected values, independent of the code under test:
+- the floor: the convergence probe of a 1 m square of the nominal tomasi-omni3 in physics at 50 Hz
+  (end heading +-0.13 deg, x -1.24 mm, y -+1.03 mm: a return error of about 2 mm, mirror-symmetric
+  in cw and ccw), bounded here by :data:`FLOOR_BOUND`;
+- the robot as built: the kinematic engine's UMBmark of the same robot without random errors
+  (the seed builds the same robot in both engines), which the physics must match within the
+  floor and the physics' validation tolerance (0.5 % of the distance driven, docs/physics.md);
+- calibration: the kinematic study's assertion, E_max,syst reduced several-fold.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from conftest import run_cli
+from omnikin.api.umbmark import run_umbmark, umbmark_cost
+from omnikin.errors import InputError, ResourceLimitError
+
+pytest.importorskip("mujoco")
+
+SMALL = dict(side=1.0, runs=1, rate=50.0, seed=1)
+"""A small study: tomasi-omni3, a 1 m square, one run per direction, 50 Hz."""
+
+FLOOR_BOUND = 0.005
+"""Bound [m] of the floor of a 1 m square: the probe's return error is about 2 mm."""
+
+PATH = 4.0
+"""Distance [m] of one run of a 1 m square."""
+
+TOLERANCE = 0.005 * PATH
+"""The physics' validation tolerance (0.5 % of the distance) over one run [m]."""
+
+
+@pytest.fixture(scope="module")
+def study():
+    return run_umbmark("tomasi-omni3", engine="physics", **SMALL)
+
+
+def test_floor_of_the_nominal_robot_is_a_few_millimetres(study):
+    floor = study.floor.values
+    assert len(floor) == 1
+    assert 0.0 < floor[0] < FLOOR_BOUND
+
+
+def test_robot_as_built_shows_its_injected_errors_above_the_floor(study):
+    kinematic = run_umbmark("tomasi-omni3", noise="none", calibrate=False, **SMALL)
+    expected = kinematic.before[0].e_max_syst
+    before = study.before[0].e_max_syst
+    assert before > 5 * study.floor.values[0]
+    assert abs(before - expected) <= study.floor.values[0] + TOLERANCE
+
+
+def test_calibration_from_physics_runs_reduces_the_error_several_fold(study):
+    before, after = study.before[0].e_max_syst, study.after[0].e_max_syst
+    assert after < before / 5
+    assert after < FLOOR_BOUND
+    assert study.calibration.fits
+    assert study.systematic == {"before": before, "after": after}
+
+
+def test_result_and_report_state_the_engine_and_the_floor(study, tmp_path):
+    doc = study.write(tmp_path / "report", figure_format="svg")
+    assert doc["engine"] == "physics" and doc["settings"]["engine"] == "physics"
+    assert doc["settings"]["noise"] is None
+    assert "roller contact" in doc["methods"]["noise_floor"]
+    assert doc["noise_floor"]["e_max_syst_median"] == pytest.approx(study.floor.values[0])
+    on_disk = json.loads((tmp_path / "report" / "result.json").read_text())
+    assert on_disk["engine"] == "physics"
+    report = (tmp_path / "report" / "report.md").read_text()
+    assert "Engine: physics" in report and "roller contact alone" in report
+    assert "--engine physics" in study.command_line() and "--noise" not in study.command_line()
+
+
+def test_kinematic_cost_keeps_its_samples_per_second():
+    cost = umbmark_cost("tomasi-omni3", side=1.0, runs=1, rate=50.0)
+    assert cost.seconds == pytest.approx(cost.samples / 1e7)
+
+
+def test_physics_cost_is_wall_time_per_simulated_second():
+    cost = umbmark_cost("tomasi-omni3", engine="physics", side=1.0, runs=1, rate=50.0)
+    # 56 runs of about 24 s simulated each (the squares; the calibration runs are of the same order)
+    assert 5.0 < cost.seconds < 60.0
+    with pytest.raises(ResourceLimitError, match="max_time"):
+        run_umbmark("tomasi-omni3", engine="physics", max_time=1.0, **SMALL)
+
+
+@pytest.mark.parametrize("noise", ["typical", "none"])
+def test_physics_refuses_a_noise_model_in_one_line(noise):
+    with pytest.raises(InputError, match=r"physics engine has no random error model") as info:
+        run_umbmark("tomasi-omni3", engine="physics", noise=noise, **SMALL)
+    assert "\n" not in str(info.value)
+
+
+def test_unknown_engine_is_refused_naming_the_choices():
+    with pytest.raises(InputError, match=r"engine \(--engine\) must be one of kinematic, physics"):
+        run_umbmark("tomasi-omni3", engine="mujoco", **SMALL)
+
+
+def test_cli_umbmark_engine_physics_without_calibration(capsys, tmp_path):
+    out = tmp_path / "r"
+    rc, stdout, err = run_cli(
+        capsys, "umbmark", "--engine", "physics", "--side", "1", "--runs", "1", "--rate", "50",
+        "--no-calibrate", "--json", "-o", out, "--figures", "svg",
+    )  # fmt: skip
+    assert rc == 0, err
+    doc = json.loads(stdout)
+    assert doc["engine"] == "physics" and "after" not in doc
+    assert 0.0 < doc["noise_floor"]["e_max_syst_median"] < FLOOR_BOUND
+
+
+def test_cli_refuses_noise_with_the_physics_engine(capsys, tmp_path):
+    rc, _, err = run_cli(capsys, "umbmark", "--engine", "physics", "--noise", "typical", "-o", tmp_path / "r")
+    assert rc == 2
+    assert err.count("\n") == 1 and "drop --noise" in err
+    assert not (tmp_path / "r").exists()
