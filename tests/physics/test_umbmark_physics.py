@@ -66,6 +66,8 @@ def test_calibration_from_physics_runs_reduces_the_error_several_fold(study):
 
 def test_result_and_report_state_the_engine_and_the_floor(study, tmp_path):
     doc = study.write(tmp_path / "report", figure_format="svg")
+    figure = (tmp_path / "report" / "return_errors.svg").read_text()
+    assert "floor (nominal robot in physics)" in figure and "noise floor" not in figure
     assert doc["engine"] == "physics" and doc["settings"]["engine"] == "physics"
     assert doc["settings"]["noise"] is None
     assert "roller contact" in doc["methods"]["noise_floor"]
@@ -74,6 +76,8 @@ def test_result_and_report_state_the_engine_and_the_floor(study, tmp_path):
     assert on_disk["engine"] == "physics"
     report = (tmp_path / "report" / "report.md").read_text()
     assert "Engine: physics" in report and "roller contact alone" in report
+    assert doc["after"]["at_noise_floor"] and "After calibration, E_max,syst" in report
+    assert "is at or below the floor" in report and "noise floor" not in report.lower()
     assert "--engine physics" in study.command_line() and "--noise" not in study.command_line()
 
 
@@ -119,3 +123,16 @@ def test_cli_refuses_noise_with_the_physics_engine(capsys, tmp_path):
     assert rc == 2
     assert err.count("\n") == 1 and "drop --noise" in err
     assert not (tmp_path / "r").exists()
+
+
+def test_trials_are_independent_runs_reported_one_by_one():
+    steps: list[str] = []
+    report = run_umbmark("tomasi-omni3", engine="physics", trials=2, calibrate=False, progress=steps.append, **SMALL)
+    # 2 procedures x 1 run x 2 directions before, then the floor's 1 run x 2 directions
+    assert steps == [f"UMBmark before calibration: run {k} of 4" for k in (1, 2, 3, 4)] + [
+        f"floor (nominal robot): run {k} of 2" for k in (1, 2)
+    ]
+    first, second = report.before
+    # the engine is deterministic: two independently simulated procedures agree
+    assert second.e_max_syst == pytest.approx(first.e_max_syst, abs=1e-9)
+    assert report.as_dict()["monte_carlo"]["before"]["procedures"] == 2

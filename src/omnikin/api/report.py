@@ -68,12 +68,13 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         ]
     else:
         lines += ["2. No calibration (`--no-calibrate`)."]
+    floor_name = "floor" if doc["engine"] == "physics" else "noise floor"
     lines += [
-        f"{'4' if s['calibrate'] else '3'}. The noise floor: {doc['methods']['noise_floor']}.",
+        f"{'4' if s['calibrate'] else '3'}. The {floor_name}: {doc['methods']['noise_floor']}.",
         "",
         "## Results",
         "",
-        f"| | r_cg cw [mm] | r_cg ccw [mm] | E_max,syst [mm] | {level} interval [mm] | at the noise floor |",
+        f"| | r_cg cw [mm] | r_cg ccw [mm] | E_max,syst [mm] | {level} interval [mm] | at the {floor_name} |",
         "|---|---:|---:|---:|---:|:---:|",
     ]
     for key, label in (("before", "before"), ("after", "after calibration")):
@@ -103,8 +104,13 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         if key in doc and doc[key]["at_noise_floor"]:
             lines += [
                 "",
-                f"**{label}, E_max,syst ({mm_text(doc[key]['e_max_syst'])} mm) is at the noise floor**: the "
-                "systematic error left is below what UMBmark with this many runs can detect.",
+                (
+                    f"**{label}, E_max,syst ({mm_text(doc[key]['e_max_syst'])} mm) is at or below the floor**: "
+                    "no larger than the roller contact alone gives the nominal robot."
+                    if doc["engine"] == "physics"
+                    else f"**{label}, E_max,syst ({mm_text(doc[key]['e_max_syst'])} mm) is at the noise floor**: "
+                    "the systematic error left is below what UMBmark with this many runs can detect."
+                ),
             ]
     if "after" in doc:
         r, ri = doc["reduction_factor"], doc["reduction_factor_interval"]

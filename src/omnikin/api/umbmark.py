@@ -110,7 +110,9 @@ class UMBmarkReport(UMBmarkStudy):
 
         title = f"UMBmark of {self.robot.name} as built ({self.mode} mode, {self.side:g} m square)"
         out = {
-            "return_errors": fig.return_errors_figure(self.first(), title, floor=self.floor.limit),
+            "return_errors": fig.return_errors_figure(
+                self.first(), title, floor=self.floor.limit, floor_label=self._floor_label
+            ),
             "euclidean_errors": fig.euclidean_errors_figure(self.first(), title),
             "trajectories": fig.trajectories_figure(
                 {STAGES[k]: v for k, v in self.trajectories.items()}, self.side, title
@@ -120,9 +122,18 @@ class UMBmarkReport(UMBmarkStudy):
             values: dict[str, Any] = {"before": [r.e_max_syst for r in self.before]}
             if self.after is not None:
                 values["after calibration"] = [r.e_max_syst for r in self.after]
-            values["perfectly calibrated (noise floor)"] = self.floor.values
+            physics = self.engine == "physics"
+            values["floor (nominal robot in physics)" if physics else "perfectly calibrated (noise floor)"] = (
+                self.floor.values
+            )
             out["monte_carlo"] = fig.monte_carlo_figure(values, f"{fig.E_MAX} over {self.trials} procedures")
         return out
+
+    @property
+    def _floor_label(self) -> str:
+        if self.engine == "physics":
+            return "floor (nominal robot in physics)"
+        return "noise floor (95th percentile)"
 
     def plot(self, kind: str = "return_errors"):
         """One figure of :meth:`figures` (default: the return positions, before and after)."""
@@ -260,10 +271,12 @@ PHYSICS_METHODS = {
     **METHODS,
     "engine": "physics: every run driven in MuJoCo (rollers, motors; omnikin.physics) by the robot as built, "
     "one run at a time; no random error model (the contacts' slip, whole encoder ticks); deterministic",
-    "noise_floor": "the floor of the physics engine: E_max,syst of the nominal robot (no systematic errors) "
+    "noise_floor": "in the physics engine, E_max,syst of the nominal robot (no systematic errors) "
     "commanded by its own model, the same runs and square: what the roller contact alone gives "
-    "(procedures: 1); at_noise_floor: E_max,syst at or below it",
+    "(procedures: 1); at_noise_floor: E_max,syst at or below that floor",
     "systematic": "E_max,syst of the first procedure (the physics engine has no random errors)",
+    "e_max_syst_interval": METHODS["e_max_syst_interval"] + "; zero width in physics: the engine is deterministic, "
+    "the runs of one direction agree",
 }
 """How each quantity of a physics study is defined (``result.json`` of ``--engine physics``)."""
 

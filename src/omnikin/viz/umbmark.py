@@ -41,9 +41,12 @@ def _run_style(stage: str, direction: str) -> dict:
     }
 
 
-def return_errors_figure(results: dict, title: str = "", floor: float | None = None):
+def return_errors_figure(
+    results: dict, title: str = "", floor: float | None = None, floor_label: str = "noise floor (95th percentile)"
+):
     """Return positions [mm]; ``results``: ``{stage: UMBmarkResult}``; ``floor``: the noise
-    floor [m] (:class:`~omnikin.evaluation.umbmark.NoiseFloor` ``.limit``), drawn as a circle."""
+    floor [m] (:class:`~omnikin.evaluation.umbmark.NoiseFloor` ``.limit``), drawn as a circle
+    labelled ``floor_label``."""
     from matplotlib.patches import Circle
 
     fig = new_figure(figsize=(4.4 * len(results) + 0.4, 5.4))
@@ -82,7 +85,7 @@ def return_errors_figure(results: dict, title: str = "", floor: float | None = N
                     color="0.45",
                     zorder=1,
                     gid="noise-floor",
-                    label="noise floor (95th percentile)",
+                    label=floor_label,
                 )
             )
         ax.scatter([0], [0], s=50, marker="+", color="k", lw=1.0, zorder=4, gid="origin", label="start = goal")
