@@ -136,3 +136,12 @@ def test_trials_are_independent_runs_reported_one_by_one():
     # the engine is deterministic: two independently simulated procedures agree
     assert second.e_max_syst == pytest.approx(first.e_max_syst, abs=1e-9)
     assert report.as_dict()["monte_carlo"]["before"]["procedures"] == 2
+
+
+def test_a_robot_that_cannot_drive_the_square_is_refused_as_in_the_kinematic_study():
+    with pytest.raises(InputError) as kinematic:
+        run_umbmark("ackermann", noise="none", **SMALL)
+    with pytest.raises(InputError) as physics:
+        run_umbmark("ackermann", engine="physics", **SMALL)
+    assert str(physics.value) == str(kinematic.value)
+    assert "UMBmark does not apply to it" in str(physics.value)

@@ -58,6 +58,8 @@ UMBMARK_EPILOG = f"""examples:
   omnikin umbmark diff-drive -o dd-report  any robot (preset or file); Borenstein's correction too
   omnikin umbmark mecanum4 --mode translate --trials 200 --json
   omnikin umbmark my.yaml --true-robot as_built.yaml --noise none --figures pdf
+  omnikin umbmark --engine physics --side 1 --rate 50   every run in MuJoCo (extra physics), and the
+                                           floor: the nominal robot's UMBmark in physics
   omnikin umbmark analyze measured.csv --robot diff-drive     for a real robot's runs
 
 Every robot goes through the same steps; the calibration drives the runs of

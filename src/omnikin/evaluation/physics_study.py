@@ -43,7 +43,7 @@ from ..simulation.motion import estimated_samples
 from .calibration import RECOMMENDED_REPEATS, CalibrationResult, recommended_runs
 from .calibration import calibrate as least_squares_calibration
 from .procedure import Cost, UMBmarkStudy, check_settings
-from .umbmark import NoiseFloor, UMBmarkResult, analyze, square_refusal
+from .umbmark import NoiseFloor, UMBmarkResult, analyze, require_square
 
 ENGINES = ("kinematic", "physics")
 """The engines of the UMBmark study: the kinematic simulation or MuJoCo (:mod:`omnikin.physics`)."""
@@ -121,9 +121,7 @@ def physics_umbmark(
     :class:`~omnikin.evaluation.umbmark.UMBmarkResult` per procedure and the first run of each
     direction (``{"cw"|"ccw": PhysicsRun}``, with its ground truth). ``progress`` is called with
     ``label`` and the run's number before each run."""
-    refusal = square_refusal(command, side, mode)
-    if refusal is not None:
-        raise InputError(f"robot {command.name!r} cannot drive the UMBmark square in {mode!r} mode ({refusal})")
+    require_square(command, side, mode)
     total = 2 * trials * runs
     eps: dict[str, list] = {"cw": [], "ccw": []}
     first: dict = {}

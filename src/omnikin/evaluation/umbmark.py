@@ -375,6 +375,22 @@ def square_refusal(robot: Robot, side: float, mode: str) -> str | None:
     return None
 
 
+def require_square(robot: Robot, side: float, mode: str) -> None:
+    """Refuse (one line, :class:`~omnikin.errors.InputError`) a ``mode`` the robot cannot drive
+    the UMBmark square of ``side`` [m] in (:func:`square_refusal`), saying whether the other
+    mode would do."""
+    check_mode(mode)
+    refusal = square_refusal(robot, side, mode)
+    if refusal is not None:
+        other = {"rotate": "translate", "translate": "rotate"}[mode]
+        hint = (
+            f"the other mode is {other!r}"
+            if square_refusal(robot, side, other) is None
+            else "nor in the other mode: UMBmark does not apply to it"
+        )
+        raise InputError(f"robot {robot.name!r} cannot drive the UMBmark square in {mode!r} mode ({refusal}); {hint}")
+
+
 def run_umbmark(
     true_robot: Robot,
     command_robot: Robot,
@@ -401,18 +417,7 @@ def run_umbmark(
     """
     if not isinstance(runs, (int, np.integer)) or runs < 1:
         raise InputError(f"runs must be a whole number >= 1, got {runs!r}")
-    check_mode(mode)
-    refusal = square_refusal(command_robot, side, mode)
-    if refusal is not None:
-        other = {"rotate": "translate", "translate": "rotate"}[mode]
-        hint = (
-            f"the other mode is {other!r}"
-            if square_refusal(command_robot, side, other) is None
-            else "nor in the other mode: UMBmark does not apply to it"
-        )
-        raise InputError(
-            f"robot {command_robot.name!r} cannot drive the UMBmark square in {mode!r} mode ({refusal}); {hint}"
-        )
+    require_square(command_robot, side, mode)
     gens = procedure_generators(rng, trials)
     per_run = [g for g in gens for _ in range(runs)]  # procedure k's runs share its generator
     sims = {}
