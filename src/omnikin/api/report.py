@@ -40,7 +40,7 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         "",
         f"Robot as built: {built}. "
         + (
-            "Engine: physics (MuJoCo, rollers and motors; the random errors are the contacts')."
+            "Engine: physics (MuJoCo, rollers and motors; no random error model: slip comes from the contacts)."
             if doc["engine"] == "physics"
             else f"Random errors: {s['noise']!r} profile."
         )

@@ -356,7 +356,8 @@ def _umbmark_table(doc: dict):
 
     level = f"{doc['settings']['confidence_level'] * 100:g} %"
     t = Table()
-    for col in ("", "r_cg cw [mm]", "r_cg ccw [mm]", "E_max,syst [mm]", f"{level} interval [mm]", "noise floor"):
+    floor = "floor" if doc["engine"] == "physics" else "noise floor"
+    for col in ("", "r_cg cw [mm]", "r_cg ccw [mm]", "E_max,syst [mm]", f"{level} interval [mm]", floor):
         t.add_column(col, justify="right" if col else "left")
     for key, label in (("before", "before"), ("after", "after calibration")):
         if key in doc:
