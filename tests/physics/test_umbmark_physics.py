@@ -145,3 +145,14 @@ def test_a_robot_that_cannot_drive_the_square_is_refused_as_in_the_kinematic_stu
         run_umbmark("ackermann", engine="physics", **SMALL)
     assert str(physics.value) == str(kinematic.value)
     assert "UMBmark does not apply to it" in str(physics.value)
+
+
+def test_cli_summary_names_the_engine_and_the_floor(capsys, tmp_path):
+    rc, stdout, err = run_cli(
+        capsys, "umbmark", "--engine", "physics", "--side", "1", "--runs", "1", "--rate", "50",
+        "--no-calibrate", "-o", tmp_path / "r", "--figures", "svg",
+    )  # fmt: skip
+    assert rc == 0, err
+    assert "physics engine" in stdout
+    assert "floor (nominal robot in physics, roller contact alone)" in stdout
+    assert "noise floor" not in stdout
