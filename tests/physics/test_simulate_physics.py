@@ -165,3 +165,17 @@ def test_steered_wheels_reach_the_segments_steering_before_they_drive(tmp_path, 
     moving = next(r for r in rows if any(int(r[w]) != 0 for w in ("w1", "w2", "w3")))
     for w in ("w1", "w2", "w3"):
         assert abs(float(moving[f"{w}_steer_deg"]) - 45.0) < 1.0  # within 0.6 deg (0.01 rad) and a tick's roll
+
+
+def test_physics_truth_headings_are_wrapped_like_the_kinematic_engine():
+    """Ten turns on the spot: the truth's heading lies in [-pi, pi) (it read 62.8 rad), and it
+    differs from the exact end (0 after ten turns) by the engine's rotation error only: within
+    0.5 % of the 20 pi turned (docs/physics.md validation tolerance)."""
+    import math
+
+    import omnikin
+
+    sim = omnikin.simulate("tomasi-omni3", "spin 3600", engine="physics", errors="none")
+    headings = sim.run.truth[..., 2]
+    assert np.all((-math.pi <= headings) & (headings < math.pi))
+    assert abs(headings[0, -1]) < 0.005 * 20 * math.pi

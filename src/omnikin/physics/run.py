@@ -160,6 +160,7 @@ def simulate_physics(
     steer = np.array(steers) if steerable else None
     odometry = batch_odometry(command_robot, t, readings, steer=steer, max_wheel_accel=math.inf).poses
     truth = np.array(poses)[None]
+    truth[..., 2] = wrap_angle(truth[..., 2])  # headings in [-pi, pi), as the kinematic engine's truth
     measured = truth[:, -1, :].copy()
     return PhysicsRun(extended, t, ticks, steer, odometry, truth, measured, readings, saturated=sim.saturated)
 
