@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +30,20 @@ def omnikin_env(**extra: str) -> dict:
     env = dict(os.environ, **extra)
     env["PYTHONPATH"] = SRC + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     return env
+
+
+def run_entry_point(*argv, cwd=None, timeout: float = 120) -> subprocess.CompletedProcess:
+    """Run ``omnikin ARGV`` as a user does, in a fresh process importing this checkout's omnikin
+    (:func:`omnikin_env`) from any working folder ``cwd``; text output captured; ``timeout`` [s]
+    guards against a hang."""
+    return subprocess.run(
+        [sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        env=omnikin_env(),
+        timeout=timeout,
+    )
 
 
 # no wall-clock limits: a loaded CI machine must not fail a test for being slow

@@ -7,14 +7,11 @@ built gets wrong."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
 import omnikin
-from conftest import omnikin_env
+from conftest import run_entry_point
 from omnikin import InputError, load_robot
 from omnikin.plans import line
 from omnikin.presets import preset_path
@@ -98,13 +95,7 @@ def test_command_line_refuses_a_true_robot_with_other_wheels(tmp_path, command):
         + ["--runs", "1", "-o", str(tmp_path / "x")],
         "simulate": ["simulate", "tomasi-omni3", "--true-robot", str(path), "--log", str(tmp_path / "x.csv")],
     }[command]
-    proc = subprocess.run(
-        [sys.executable, "-m", "omnikin.cli.main", *argv],
-        capture_output=True,
-        text=True,
-        env=omnikin_env(),
-        timeout=120,
-    )
+    proc = run_entry_point(*argv)
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr == (
         "omnikin: error: true robot 'as-built' does not fit robot 'tomasi-omni3': it has wheel 'w4', which "

@@ -12,15 +12,14 @@ import json
 import math
 import shutil
 import subprocess
-import sys
 
 import numpy as np
 import pytest
 import yaml
 
 import omnikin
-from conftest import omnikin_env
 from conftest import run_cli as cli
+from conftest import run_entry_point
 from omnikin import PRESET_NAMES
 from omnikin.presets import preset_path
 
@@ -85,18 +84,7 @@ def cli_json(capsys, *argv):
     return json.loads(out)
 
 
-def run(*argv, timeout=120, cwd=None):
-    """The real entry point in a subprocess, running this checkout's omnikin from any folder (a
-    relative PYTHONPATH would fall back to whatever omnikin is installed)."""
-    env = omnikin_env()
-    return subprocess.run(
-        [sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]],
-        env=env,
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-    )
+run = run_entry_point  # the real entry point in a subprocess, this checkout's omnikin from any folder
 
 
 def assert_clean_error(rc, err, *fragments):

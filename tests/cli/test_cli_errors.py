@@ -15,7 +15,7 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import omnikin_env
+from conftest import omnikin_env, run_entry_point
 from conftest import run_cli as cli
 from omnikin.cli.main import MESSAGE_LIMIT, main
 
@@ -34,16 +34,7 @@ def one_line(rc, out, err, *fragments, status=2):
     return err.strip()
 
 
-def entry_point(*argv, cwd=None):
-    env = omnikin_env()
-    return subprocess.run(
-        [sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]],
-        env=env,
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+entry_point = run_entry_point
 
 
 # --- negative numbers are values ------------------------------------------------------------------------

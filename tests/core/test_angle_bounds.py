@@ -6,14 +6,12 @@ line naming the argument, the wheel and the limits (docs/conventions.md, "Angles
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from conftest import omnikin_env
+from conftest import run_entry_point
 from omnikin import InputError, load_robot
 from omnikin.geometry import MAX_ANGLE
 
@@ -124,9 +122,7 @@ def test_wheels_that_turn_all_the_way_round_accept_any_orientation_up_to_the_bou
     ],
 )
 def test_command_line_refuses_absurd_angles(argv, contains):
-    proc = subprocess.run(
-        [sys.executable, "-m", "omnikin.cli.main", *argv], capture_output=True, text=True, env=omnikin_env(), timeout=60
-    )
+    proc = run_entry_point(*argv, timeout=60)
     assert proc.returncode == 2 and proc.stdout == ""
     assert contains in proc.stderr and proc.stderr.count("\n") == 1, proc.stderr
 

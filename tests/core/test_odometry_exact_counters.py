@@ -12,10 +12,7 @@ import copy
 import json
 import linecache
 import math
-import os
 import pickle
-import subprocess
-import sys
 import traceback
 import tracemalloc
 import warnings
@@ -25,7 +22,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import ROOT  # noqa: E402
+from conftest import ROOT, run_entry_point  # noqa: E402
 from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
 from omnikin.errors import InputError, RobotFileError
 from omnikin.io.logs import read_tick_log, write_tick_log
@@ -561,15 +558,7 @@ def test_write_tick_log_refuses_fractional_ticks(tom, tmp_path):
 
 def run_omnikin(*args, cwd):
     """The command line in a fresh process, importing this checkout's omnikin."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
-    return subprocess.run(
-        [sys.executable, "-m", "omnikin.cli.main", *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=cwd,
-        env=env,
-    )
+    return run_entry_point(*args, cwd=cwd, timeout=300)
 
 
 def test_simulate_log_then_odometry_as_written(tmp_path):

@@ -8,13 +8,12 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
-import sys
 import warnings
 from pathlib import Path
 
 import pytest
 
-from conftest import omnikin_env
+from conftest import run_entry_point
 from omnikin import load_robot
 from omnikin.io.robot_file import PresetShadowWarning, is_preset_spec, robot_file_of
 from omnikin.presets import PRESET_NAMES, preset_path
@@ -24,14 +23,7 @@ SHIPPED_WHEELS = {"omni4": 4, "mecanum4": 4, "tomasi-omni3": 3, "diff-drive": 3}
 
 
 def omnikin(cwd: Path, *argv: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "omnikin.cli.main", *argv],
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        env=omnikin_env(),
-        timeout=120,
-    )
+    return run_entry_point(*argv, cwd=cwd)
 
 
 @pytest.fixture

@@ -14,14 +14,12 @@ import csv
 import json
 import math
 import re
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 import omnikin
-from conftest import omnikin_env, run_cli
+from conftest import run_cli, run_entry_point
 from omnikin import load_robot
 
 TOLERANCE = 0.005
@@ -29,14 +27,7 @@ TOLERANCE = 0.005
 
 
 def run(*argv, cwd):
-    return subprocess.run(
-        [sys.executable, "-m", "omnikin.cli.main", *argv],
-        capture_output=True,
-        text=True,
-        cwd=cwd,
-        env=omnikin_env(),
-        timeout=300,
-    )
+    return run_entry_point(*argv, cwd=cwd, timeout=300)
 
 
 HALF = math.sqrt(0.5)

@@ -11,13 +11,11 @@ a 12-bit robot must give exactly what the same robot without a counter width giv
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
-from conftest import omnikin_env
+from conftest import run_entry_point
 from omnikin import batch_odometry, load_robot
 from omnikin.io.logs import read_tick_log
 from omnikin.plans import umbmark_square
@@ -32,14 +30,7 @@ def counter_robot_file(path, bits):
 
 
 def run(*args, cwd):
-    return subprocess.run(
-        [sys.executable, "-m", "omnikin.cli.main", *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=cwd,
-        env=omnikin_env(),
-    )
+    return run_entry_point(*args, cwd=cwd, timeout=300)
 
 
 def test_simulate_log_of_a_12_bit_robot_then_odometry(tmp_path):
