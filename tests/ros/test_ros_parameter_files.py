@@ -51,15 +51,34 @@ def test_ros_serial_only_options_with_sim_backend(capsys):
 
 
 @pytest.mark.parametrize(
-    "options, message",
+    "backend, options, message",
     [
-        (["--noise", "none", "--seed", "3"], "--noise, --seed apply only to --backend sim"),
-        (["--baud", "115200"], "--baud apply only to --backend serial"),
+        (
+            "physics",
+            ["--noise", "none", "--seed", "3"],
+            "--noise 'none': the physics engine has no random error model (slip comes from the wheels' "
+            "contacts, its encoders count whole ticks); drop --noise",
+        ),
+        ("physics", ["--baud", "115200"], "--baud apply only to --backend serial"),
+        ("serial", ["--errors", "none", "--seed", "3"], "--errors, --seed apply only to --backend sim or physics"),
+        ("serial", ["--true-robot", "x.yaml"], "--true-robot apply only to --backend sim or physics"),
+        (
+            "physics",
+            ["--errors", "none", "--true-robot", "x.yaml"],
+            "--errors and --true-robot both give the robot as built: give one of them",
+        ),
     ],
 )
-def test_ros_physics_backend_refuses_the_options_of_other_backends(capsys, options, message):
-    rc, _, err = run_cli(capsys, "ros", "tomasi-omni3", "--backend", "physics", *options)
+def test_ros_backends_refuse_the_options_of_other_backends(capsys, backend, options, message):
+    rc, _, err = run_cli(capsys, "ros", "tomasi-omni3", "--backend", backend, *options)
     assert rc == 2 and err.strip() == f"omnikin: error: {message}"
+
+
+def test_ros_true_robot_of_other_wheels_is_refused_before_the_node_starts(capsys, tmp_path):
+    """--true-robot builds the robot as built of both simulated back-ends: a file whose wheels
+    are not the nominal robot's is refused in one line naming the difference."""
+    rc, _, err = run_cli(capsys, "ros", "tomasi-omni3", "--backend", "physics", "--true-robot", "diff-drive")
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and "diff-drive" in err, err
 
 
 def test_ros_physics_backend_without_mujoco_names_the_physics_extra(tmp_path):

@@ -29,6 +29,8 @@ from test_ros_node import (  # noqa: E402 (after the importorskips there and abo
     yaw_of,
 )
 
+from conftest import constant_twist_pose  # noqa: E402 (after the importorskip above)
+
 pytestmark = pytest.mark.ros
 
 V = 0.2  # commanded forward speed [m/s] (below linear.x.max_velocity 0.3)
@@ -78,7 +80,7 @@ def settled(graph, truth, settle: float = 0.3, timeout: float = 10.0):
 
 
 def test_the_physics_node_drives_forward_publishes_truth_and_stops_after_the_timeout(tmp_path):
-    proc, graph = start(tmp_path, ["tomasi-omni3", "--backend", "physics"])
+    proc, graph = start(tmp_path, ["tomasi-omni3", "--backend", "physics", "--errors", "none"])
     try:
         truth = Truth(graph)
         assert wait_for(lambda: truth.last() is not None, 10.0), f"no ground_truth\n{proc.stderr()}"
@@ -179,3 +181,98 @@ def test_a_slow_physics_step_is_counted_and_the_simulation_drops_time_instead_of
     finally:
         graph.close()
         proc.close()
+
+
+# --- the robot as built on the physics: odometry drifts from ground_truth by what the errors imply -----
+def relative(a, b) -> np.ndarray:
+    """Pose ``b`` in the frame of pose ``a`` (both ``(x, y, theta)`` in one world frame)."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return np.array([c * dx + s * dy, -s * dx + c * dy, math.remainder(b[2] - a[2], 2 * math.pi)])
+
+
+def compose(a, b) -> np.ndarray:
+    """Pose ``b`` (given in the frame of ``a``) in ``a``'s world frame."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return np.array([a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], a[2] + b[2]])
+
+
+def twist_of(pose) -> np.ndarray:
+    """The body twist that, held for one second, moves the robot by ``pose`` (SE(2) logarithm):
+    ``(x, y) = V (vx, vy)`` with ``V = [[s/th, -(1-c)/th], [(1-c)/th, s/th]]``."""
+    x, y, th = pose
+    if abs(th) < 1e-12:
+        return np.array([x, y, th])
+    s, c = math.sin(th), math.cos(th)
+    v = np.array([[s / th, -(1 - c) / th], [(1 - c) / th, s / th]])
+    return np.array([*np.linalg.solve(v, [x, y]), th])
+
+
+def truth_from_odometry(odom_poses, to_true) -> np.ndarray:
+    """The true robot's motion implied by the odometry's: every increment between two odometry
+    poses is a body twist ``xi`` of the nominal model; the wheels turned ``J xi`` (nominal
+    Jacobian ``J``), and the robot as built, rolling without slip, moved by
+    ``J_true^-1 S^-1 J xi`` (``S``: its encoders' scale against the nominal); ``to_true`` is that
+    matrix. The increments composed from the start, in the start's body frame."""
+    pose = np.zeros(3)
+    for a, b in zip(odom_poses[:-1], odom_poses[1:], strict=True):
+        pose = compose(pose, constant_twist_pose(to_true @ twist_of(relative(a, b)), 1.0))
+    return pose
+
+
+DRIVE = 4.0  # [s] of forward commands at V: about 0.9 m
+
+
+@pytest.mark.parametrize("errors", ["typical", "none"])
+def test_the_physics_node_with_errors_drifts_from_ground_truth_by_what_the_robot_as_built_implies(tmp_path, errors):
+    """``--errors typical --seed 1``: the robot as built is the draw ``omnikin simulate`` makes
+    for seed 1 (wheels' radii, hub positions, drive directions off by 0.1-1 %); the nominal
+    odometry then drifts from ``ground_truth`` by the kinematics of that robot (a few mm and
+    mrad over 0.9 m, :func:`truth_from_odometry`). ``--errors none``: they agree within the
+    encoder quantisation and the contacts' sink (0.05 % of the distance, docs/physics.md)."""
+    from omnikin import load_robot
+    from omnikin.api.common import as_built
+
+    nominal = load_robot("tomasi-omni3")
+    true, _ = as_built(nominal, None, errors, np.random.SeedSequence(1).spawn(2)[0])
+    scale = nominal.rad_per_tick(nominal.encoded_names) / true.rad_per_tick(nominal.encoded_names)
+    to_true = np.linalg.solve(true.jacobian(), nominal.jacobian() / scale[:, None])
+    # odometry quantisation: each reading within half a tick q/2 of the wheel's angle
+    half_tick = np.abs(np.linalg.pinv(nominal.jacobian())) @ (nominal.rad_per_tick() / 2)
+
+    proc, graph = start(tmp_path, ["tomasi-omni3", "--backend", "physics", "--errors", errors, "--seed", "1"])
+    try:
+        truth = Truth(graph)
+        assert wait_for(lambda: truth.last() is not None, 10.0), f"no ground_truth\n{proc.stderr()}"
+        _, truth0 = settled(graph, truth)
+        with graph.lock:
+            i0 = len(graph.odom) - 1
+        graph.drive(vx=V, duration=DRIVE)
+        _, truth1 = settled(graph, truth)
+        with graph.lock:
+            odom_poses = [xy_yaw(m) for _, m in graph.odom[i0:]]
+        assert "Traceback" not in proc.stderr()
+    finally:
+        graph.close()
+        rc, _ = proc.terminate()
+        assert rc == 0, proc.stderr()
+
+    odom = relative(odom_poses[0], odom_poses[-1])
+    seen = relative(xy_yaw(truth0), xy_yaw(truth1))
+    expected = truth_from_odometry(odom_poses, to_true)
+    distance = float(np.hypot(*odom[:2]))
+    # the quantisation's heading error turns the path: up to half_tick[2] * distance sideways
+    tol_xy = float(np.hypot(*half_tick[:2])) + half_tick[2] * distance + 5e-4 * distance
+    tol_th = half_tick[2] + 1e-3
+    print(
+        f"--errors {errors}: odometry {odom}, ground truth {seen}, implied by the robot as built {expected}; "
+        f"tolerance {tol_xy * 1e3:.2f} mm, {tol_th * 1e3:.2f} mrad"
+    )
+    assert distance > 0.8
+    assert np.hypot(*(seen[:2] - expected[:2])) < tol_xy, (seen, expected)
+    assert abs(seen[2] - expected[2]) < tol_th, (seen, expected)
+    drift = np.hypot(*(expected[:2] - odom[:2]))
+    if errors == "none":
+        assert drift < 1e-9
+    else:  # the drift the test finds is well beyond its tolerance: without the errors it fails
+        assert drift > 3 * tol_xy and abs(expected[2] - odom[2]) > 3 * tol_th, (drift, expected, odom)

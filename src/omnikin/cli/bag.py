@@ -18,6 +18,8 @@ from ..errors import InfeasibleTwistError, InputError, OmnikinError, shorten
 from ..geometry import wrap_angle
 from .budget import Budget, add_budget_options, explained, require
 from .common import (
+    PHYSICS_HAS_NO_NOISE,
+    add_as_built_options,
     add_method_option,
     add_output,
     add_output_options,
@@ -185,7 +187,7 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.set_defaults(func=cmd_bag_export)
 
     from ..physics.mjcf import DEFAULT_STEP, STEP_RANGE
-    from ..simulation.error_models import NOISE, PROFILES
+    from ..simulation.error_models import NOISE
     from ..simulation.motion import RATE_RANGE
 
     sp = sub.add_parser(
@@ -204,13 +206,7 @@ def add_parsers(sub, robot_help: str) -> None:
         metavar="PATH",
         help="the path (see below; default 'square cw rotate 4')",
     )
-    sp.add_argument(
-        "--errors",
-        default="typical",
-        metavar="PROFILE",
-        help=f"systematic error profile: {', '.join(sorted(PROFILES))} (default typical)",
-    )
-    sp.add_argument("--true-robot", metavar="FILE", help="the robot as built (replaces --errors)")
+    add_as_built_options(sp)
     sp.add_argument(
         "--noise",
         metavar="PROFILE",
@@ -229,7 +225,6 @@ def add_parsers(sub, robot_help: str) -> None:
         metavar="SEC",
         help=f"time step of the physics engine [s], {STEP_RANGE[0]:g} to {STEP_RANGE[1]:g} (default {DEFAULT_STEP:g})",
     )
-    sp.add_argument("--seed", type=whole, default=1, metavar="N", help="random seed (default 1)")
     sp.add_argument(
         "--rate",
         type=number,
@@ -558,10 +553,7 @@ def _engine_options(args) -> bool:
         args.noise = args.noise or "typical"
         return False
     if args.noise is not None:
-        raise InputError(
-            f"--noise {shorten(args.noise)}: the physics engine has no random error model (slip comes from "
-            f"the wheels' contacts, its encoders count whole ticks); drop --noise"
-        )
+        raise InputError(f"--noise {shorten(args.noise)}: {PHYSICS_HAS_NO_NOISE}")
     from ..physics.mjcf import DEFAULT_STEP, STEP_RANGE
 
     args.step = DEFAULT_STEP if args.step is None else args.step

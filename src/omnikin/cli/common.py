@@ -37,6 +37,38 @@ def robot_as_built(robot, true_robot: str | None, errors: str, seed):
     return as_built(robot, true_robot or None, errors, seed)
 
 
+PHYSICS_HAS_NO_NOISE = (
+    "the physics engine has no random error model (slip comes from the wheels' contacts, its encoders "
+    "count whole ticks); drop --noise"
+)
+"""Why ``--noise`` is refused wherever the robot as built drives in physics (``simulate --engine
+physics``, ``ros --backend physics``)."""
+
+
+def add_as_built_options(parser, *, defaults: bool = True, scope: str = "") -> None:
+    """``--errors PROFILE``, ``--true-robot FILE`` and ``--seed N``: the robot as built
+    (:func:`robot_as_built`: a seeded draw of the error profile, or a file replacing it).
+    ``defaults``: typical and 1 filled in by the parser; else ``None`` (the command tells given
+    options from absent ones, and fills in the same defaults). ``scope``: prefix of the help
+    naming where the options apply (``"simulated back-ends: "``)."""
+    from ..simulation.error_models import PROFILES
+
+    parser.add_argument(
+        "--errors",
+        default="typical" if defaults else None,
+        metavar="PROFILE",
+        help=f"{scope}systematic error profile of the robot as built: {', '.join(sorted(PROFILES))} (default typical)",
+    )
+    parser.add_argument("--true-robot", metavar="FILE", help=f"{scope}the robot as built (replaces --errors)")
+    parser.add_argument(
+        "--seed",
+        type=whole,
+        default=1 if defaults else None,
+        metavar="N",
+        help=f"{scope}random seed (default 1)",
+    )
+
+
 class _Stdout:
     """Whether the running command writes data to standard output (an output ``-``), set by
     :func:`running` while the command runs: its messages then go to standard error

