@@ -73,9 +73,9 @@ def _window(display: str, sim: subprocess.Popen) -> str:
     raise AssertionError("no MuJoCo window appeared within 30 s")
 
 
-def _start(display: str, *args: str) -> subprocess.Popen:
+def _start(display: str, *args: str, robot: str = "tomasi-omni3") -> subprocess.Popen:
     return subprocess.Popen(
-        [sys.executable, "-m", "omnikin.cli.main", "sim", "tomasi-omni3", *args],
+        [sys.executable, "-m", "omnikin.cli.main", "sim", robot, *args],
         env=omnikin_env(DISPLAY=display),
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -83,12 +83,33 @@ def _start(display: str, *args: str) -> subprocess.Popen:
     )
 
 
-def _blue_fraction(image) -> float:
-    """Share of the pixels whose colour is the chassis' blue (blue clearly above red and green;
-    the floor is grey-white, the sky black)."""
-    rgb = np.asarray(image.convert("RGB"), dtype=int)
+def _blue(rgb: np.ndarray) -> np.ndarray:
+    """The pixels whose colour is the chassis' blue (blue clearly above red and green; the floor
+    is grey-white, the sky black, the wheels dark grey)."""
     r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
-    return float(np.mean((b > 120) & (b > r + 40) & (b > g + 15)))
+    return (b > 120) & (b > r + 40) & (b > g + 15)
+
+
+def _blue_fraction(image) -> float:
+    """Share of the pixels of ``image`` (PIL) in the chassis' blue."""
+    return float(np.mean(_blue(np.asarray(image.convert("RGB"), dtype=int))))
+
+
+def _window_shot(display: str, win: str) -> np.ndarray:
+    """The window's pixels (rows top down, RGB) from a screenshot of the display."""
+    from PIL import ImageGrab
+
+    geometry = dict(line.split("=") for line in _xdotool(display, "getwindowgeometry", "--shell", win).split())
+    left, top, width, height = (int(geometry[k]) for k in ("X", "Y", "WIDTH", "HEIGHT"))
+    shot = ImageGrab.grab(xdisplay=display).crop((left, top, left + width, top + height))
+    return np.asarray(shot.convert("RGB"), dtype=int)
+
+
+def _blue_centre(rgb: np.ndarray) -> np.ndarray:
+    """Centroid ``(column, row)`` [px] of the chassis' blue in a window's pixels."""
+    rows, cols = np.nonzero(_blue(rgb))
+    assert len(rows) > 100, "the chassis is not in the window"
+    return np.array([cols.mean(), rows.mean()])
 
 
 def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_path):
@@ -175,3 +196,122 @@ def test_without_a_display_the_simulator_says_how_to_get_one(capsys, monkeypatch
     rc, out, err = run_cli(capsys, "sim", "tomasi-omni3", "--duration", "1")
     assert rc == 2
     assert len(err.strip().splitlines()) == 1 and "DISPLAY" in err and "xvfb-run" in err
+
+
+STEP = math.radians(15.0)  # one press of [ or ]
+
+
+def _readout_shown(rgb: np.ndarray) -> bool:
+    """The readout's overlay in the window's top left corner: a dark box (the floor seen from the
+    top camera is white and light grey) holding light text."""
+    grey = rgb[10:140, 10:360].mean(axis=2)
+    return bool(np.mean(grey < 170) > 0.8 and 0.02 < np.mean(grey > 230) < 0.2)
+
+
+def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_where_they_should(display, tmp_path):
+    """synchro: three centred steered wheels, so steering at rest turns each tyre about its own
+    contact point and the robot neither moves nor tips (villasenor-omni3's trailing legs tip it
+    over when they swing, docs/physics.md known limits; xr4000's 20 mm trail drags its hubs).
+
+    ``]`` ``]`` ``[`` steer every wheel to +15, +30, +15 deg; then W: the kinematics of
+    ``vx`` on a synchro drive is every wheel at 0 deg rolling at ``v / r``, so the wheels steer
+    back and the robot drives along its +x axis (heading kept) at ``--speed`` for the time held.
+    ``]`` pressed while driving does nothing (steering by hand only at rest).
+
+    The top camera looks straight down from ``d = 8 e`` (``e`` the robot's extent, 0.25 m) onto
+    the start: a point at height ``z`` moving ``dx`` along +x moves ``dx (H / 2) / ((d - z)
+    tan(fovy / 2))`` pixels to the right in a window ``H`` pixels high (pinhole camera). The
+    follow camera keeps the chassis in the middle of the window after it drove off."""
+    import mujoco
+    from PIL import Image
+
+    from omnikin import load_robot
+    from omnikin.physics.mjcf import mjcf
+
+    robot = load_robot("synchro")
+    report = tmp_path / "run.json"
+    sim = _start(
+        display, "--duration", "14", "--camera", "top", "--speed", str(SPEED), "--report", str(report), robot="synchro"
+    )
+    try:
+        win = _window(display, sim)
+        _xdotool(display, "windowfocus", win)
+        for key in ("bracketright", "bracketright", "bracketleft"):
+            _xdotool(display, "key", key)
+            time.sleep(0.8)
+        at_start = _window_shot(display, win)
+        _xdotool(display, "keydown", "w")
+        time.sleep(1.5)
+        _xdotool(display, "keyup", "w")
+        time.sleep(1.0)
+        top_after = _window_shot(display, win)
+        _xdotool(display, "key", "3")
+        time.sleep(0.5)
+        _xdotool(display, "keydown", "w")
+        time.sleep(0.7)
+        _xdotool(display, "key", "bracketright")  # while driving: ignored
+        time.sleep(0.8)
+        _xdotool(display, "keyup", "w")
+        time.sleep(1.0)
+        follow_after = _window_shot(display, win)
+        _, err = sim.communicate(timeout=30)
+        for name, rgb in (("at_start", at_start), ("top_after", top_after), ("follow_after", follow_after)):
+            Image.fromarray(rgb.astype(np.uint8)).save(tmp_path / f"{name}.png")  # to look at when it fails
+    finally:
+        if sim.poll() is None:
+            sim.kill()
+            sim.wait()
+    assert sim.returncode == 0, err
+    run = json.loads(report.read_text())
+    events = run["events"]
+    names = [e["key"] for e in events]
+    assert names == [
+        "steer_left",
+        "steer_left",
+        "steer_right",
+        "forward",
+        "release",
+        "camera_follow",
+        "forward",
+        "steer_left",
+        "release",
+    ], names
+
+    # each event records the steering reached before it: 0, +15, +30, then +15 when W is pressed
+    for event, angle in zip(events[:4], (0.0, STEP, 2 * STEP, STEP), strict=True):
+        assert event["steer"] == pytest.approx([angle] * 3, abs=math.radians(0.5)), (event["key"], event["steer"])
+    # steering at rest moved nothing
+    assert math.hypot(*events[3]["pose"][:2]) < 1e-3 and abs(events[3]["pose"][2]) < 1e-3
+
+    # W: every wheel steered back to 0 deg, the robot drove along +x at --speed for the time held
+    held = events[4]["t"] - events[3]["t"]
+    after = events[5]["pose"]
+    assert held > 0.5
+    assert events[4]["steer"] == pytest.approx([0.0] * 3, abs=math.radians(0.5))
+    assert after[0] == pytest.approx(SPEED * held, rel=0.05, abs=0.005)
+    assert abs(after[1]) < 0.01 * after[0] and abs(after[2]) < 0.01
+    # ] while driving left the steering where the kinematics put it
+    assert events[8]["steer"] == pytest.approx([0.0] * 3, abs=math.radians(0.5))
+    assert run["pose"][0] > after[0] + 0.1 and run["steer"] == pytest.approx([0.0] * 3, abs=math.radians(0.5))
+
+    # the top camera did not move: the chassis' top face (z = 1.5 r: thickness r centred at hub
+    # height r) moved to the right by the distance driven, at the pinhole camera's scale
+    height = at_start.shape[0]
+    extent = max(max(abs(w.x), abs(w.y)) + w.radius for w in robot.wheels)
+    top_face = 1.5 * robot.wheels[0].radius
+    fovy = math.radians(mujoco.MjModel.from_xml_string(mjcf(robot)).vis.global_.fovy)
+    px_per_m = (height / 2) / ((8 * extent - top_face) * math.tan(fovy / 2))
+    start_px, moved_px = _blue_centre(at_start), _blue_centre(top_after)
+    centre = np.array([at_start.shape[1], height]) / 2
+    print(f"top camera: chassis at {start_px} px, after {after[0]:.3f} m at {moved_px} px ({px_per_m:.1f} px/m)")
+    assert np.hypot(*(start_px - centre)) < 0.02 * height
+    assert moved_px[0] - start_px[0] == pytest.approx(after[0] * px_per_m, rel=0.1)
+    assert abs(moved_px[1] - start_px[1]) < 0.02 * height
+
+    # the follow camera: the chassis in the middle of the window, although it drove on
+    follow_px = _blue_centre(follow_after)
+    print(f"follow camera: chassis at {follow_px} px after driving to x = {run['pose'][0]:.3f} m")
+    assert np.hypot(*(follow_px - centre)) < 0.05 * height
+
+    # the readout is drawn (seen from the top camera, over the light floor)
+    assert _readout_shown(at_start) and _readout_shown(top_after)

@@ -25,8 +25,13 @@ by the filter.
 steerable wheel by ``-/+ STEER_STEP`` while the robot stands (target zero); the next motion
 steers as the kinematics needs.
 
-**Camera:** 1 free (mouse: left drag rotates, right drag moves, wheel zooms), 2 top (looking
-down on the robot), 3 follow (tracks the chassis). The window shows pose, twist and wheel speeds.
+**Camera** (:meth:`InteractiveSim._set_camera`), each from :data:`CAMERA_DISTANCE` times the
+robot's extent (the largest ``max(|x|, |y|) + r`` of its wheels) away: 1 free (mouse: left drag
+rotates, right drag moves, wheel zooms), 2 top (straight down on the pose where it was chosen,
+world +x to the right and +y up in the window; it stays there while the robot drives off),
+3 follow (MuJoCo's tracking camera: it keeps the chassis in the middle of the window, seen from
+behind at 30 deg elevation along the heading it had when chosen). The window shows pose, twist,
+target, wheel speeds and steering angles.
 
 Clock: the simulation runs in real time when the machine keeps up (else slower); control steps
 every :data:`CONTROL_PERIOD` simulated seconds. The run ends when the window is closed, after
@@ -64,6 +69,8 @@ under load draws about 5-10 frames per second), and a machine too slow for real 
 SHUTDOWN_WAIT = 5.0
 """Longest wait [s] for the viewer's render thread to end after the window is closed."""
 CAMERAS = ("free", "top", "follow")
+CAMERA_DISTANCE = 8.0
+"""Distance of every camera preset from its point of view, in units of the robot's extent."""
 
 KEY_W, KEY_S, KEY_A, KEY_D, KEY_Q, KEY_E = (ord(c) for c in "WSADQE")
 KEY_SPACE = 32
@@ -235,13 +242,13 @@ class InteractiveSim:
                 return
             if not pressed:
                 if self.teleop.release(key):
-                    self.events.append({"t": self.t, "key": "release", "pose": self.backend.truth.tolist()})
+                    self._record("release")
                     self.runtime.command(self.teleop.target.copy(), self.t)
                 continue
             action = self.teleop.press(key)
             if action is None:
                 continue
-            self.events.append({"t": self.t, "key": action, "pose": self.backend.truth.tolist()})
+            self._record(action)
             if action.startswith("camera_"):
                 self.camera = action.removeprefix("camera_")
                 self._set_camera(viewer)
@@ -249,6 +256,19 @@ class InteractiveSim:
                 self._turn_steering(STEER_STEP if action == "steer_left" else -STEER_STEP)
             else:
                 self.runtime.command(self.teleop.target.copy(), self.t)
+
+    def _record(self, key: str) -> None:
+        """One entry of :attr:`events`: the action, simulated time [s], true pose and the
+        steering angles the joints had reached (:meth:`steer_reached`)."""
+        self.events.append(
+            {"t": self.t, "key": key, "pose": self.backend.truth.tolist(), "steer": self.steer_reached()}
+        )
+
+    def steer_reached(self) -> list[float]:
+        """Steering angles [rad] of the steerable wheels (file order) at the last control step,
+        as the runtime measured them (empty without steerable wheels)."""
+        state = self._last.state if self._last is not None else None
+        return [] if state is None or state.steer is None else [float(a) for a in state.steer]
 
     def _turn_steering(self, angle: float) -> None:
         """Turn every steerable wheel by ``angle`` [rad] while the robot stands still."""
@@ -270,13 +290,13 @@ class InteractiveSim:
             if self.camera == "follow":
                 cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
                 cam.trackbodyid = self.backend.sim._chassis
-                cam.distance = 8.0 * size
+                cam.distance = CAMERA_DISTANCE * size
                 cam.elevation = -30.0
-                cam.azimuth = math.degrees(pose[2]) + 180.0
+                cam.azimuth = math.degrees(pose[2])  # the direction it looks: from behind
             else:
                 cam.type = mujoco.mjtCamera.mjCAMERA_FREE
                 cam.lookat[:] = (pose[0], pose[1], 0.0)
-                cam.distance = 8.0 * size
+                cam.distance = CAMERA_DISTANCE * size
                 cam.elevation = -90.0 if self.camera == "top" else -30.0
                 cam.azimuth = 90.0 if self.camera == "top" else 135.0
 
@@ -342,7 +362,7 @@ class InteractiveSim:
 
     def report(self, reason: str) -> dict:
         """What the run did, for ``--report``: final pose and twist (ground truth, odometry),
-        key presses with their simulated time."""
+        steering angles reached [rad], key presses with their simulated time, pose and steering."""
         return {
             "robot": self.robot.name,
             "end": reason,
@@ -350,6 +370,7 @@ class InteractiveSim:
             "pose": self.backend.truth.tolist(),
             "twist": self.backend.sim.twist.tolist(),
             "odometry_pose": list(self.runtime.pose),
+            "steer": self.steer_reached(),
             "target": self.teleop.target.tolist(),
             "presses": dict(self.teleop.presses),
             "releases": self.releases,
