@@ -254,8 +254,12 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
         _xdotool(display, "keyup", "w")
         time.sleep(1.0)
         follow_after = _window_shot(display, win)
+        _xdotool(display, "key", "Tab")  # not the simulator's: goes on to the viewer (its left panel)
+        time.sleep(0.7)
+        viewer_panel = _window_shot(display, win)
         _, err = sim.communicate(timeout=30)
-        for name, rgb in (("at_start", at_start), ("top_after", top_after), ("follow_after", follow_after)):
+        shots = {"at_start": at_start, "top_after": top_after, "follow_after": follow_after, "panel": viewer_panel}
+        for name, rgb in shots.items():
             Image.fromarray(rgb.astype(np.uint8)).save(tmp_path / f"{name}.png")  # to look at when it fails
     finally:
         if sim.poll() is None:
@@ -315,3 +319,10 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
 
     # the readout is drawn (seen from the top camera, over the light floor)
     assert _readout_shown(at_start) and _readout_shown(top_after)
+
+    # the simulator took the keys over (releases seen) and still hands the viewer the keys it does
+    # not use: Tab opened the viewer's left panel (dark) where the grey floor was
+    assert run["releases"]
+    strip = (slice(int(0.4 * height), int(0.95 * height)), slice(5, 240))  # the panel is 250 px wide
+    assert np.mean(follow_after[strip].mean(axis=2) < 60) < 0.05
+    assert np.mean(viewer_panel[strip].mean(axis=2) < 60) > 0.5

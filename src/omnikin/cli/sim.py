@@ -11,14 +11,16 @@ EPILOG = """keys (the window must have the keyboard focus):
   A / D      drive left / right at --speed (sets vy; dropped on robots with fixed wheels)
   Q / E      turn counter-clockwise / clockwise at --turn (sets omega)
   space      stop (the target twist becomes zero)
-  [ / ]      steer every steerable wheel 15 deg clockwise / counter-clockwise (robot at rest)
-  1 / 2 / 3  camera: free (mouse: left drag rotates, right drag moves, wheel zooms) / top / follow
+  [ / ]      steer every steerable wheel 15 deg clockwise / counter-clockwise (robot at rest;
+             the next move steers as the kinematics needs)
+  1 / 2 / 3  camera: free (mouse: left drag rotates, right drag moves, wheel zooms) / top (down
+             on where the robot stood) / follow (tracks the chassis from behind)
 
 A move key drives while it is held: letting it go sets its component back to zero, space
 stops everything. (Should the window report presses only, a press sets the target until
 another key changes it, or with --hold S for S seconds, when the command timeout stops the
 robot.) Every target passes the runtime's command filter: speed limits --max-speed and
---max-turn, acceleration limits. The window shows pose, twist and wheel speeds.
+--max-turn, acceleration limits. The window shows pose, twist, wheel speeds and steering.
 
 examples:
   omnikin sim tomasi-omni3
@@ -45,7 +47,12 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument("--max-speed", type=number, default=0.3, metavar="V", help="speed limit [m/s] (default 0.3)")
     sp.add_argument("--max-turn", type=number, default=1.0, metavar="W", help="turn rate limit [rad/s] (default 1)")
-    add_output(sp, "--report", metavar="FILE.json", help="write what the run did as JSON (final pose, keys pressed)")
+    add_output(
+        sp,
+        "--report",
+        metavar="FILE.json",
+        help="write what the run did as JSON (final pose and steering, keys pressed)",
+    )
     add_output_options(sp)
     declare_inputs(sp, robots=("robot",))
     sp.set_defaults(func=cmd_sim)

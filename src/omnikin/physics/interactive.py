@@ -207,7 +207,13 @@ class InteractiveSim:
         toggles wireframe, S shadows, D the floor, 1-3 geom groups, [ ] cameras); other keys
         (Esc, F1, Tab) go on to it. The first press already reached it: a shortcut it toggled
         is toggled back by giving it the press once more. Without the GLFW bindings the
-        viewer's presses alone drive (module docstring)."""
+        viewer's presses alone drive (module docstring).
+
+        This needs the bindings' raw ``glfwSetKeyCallback``, which returns the C function it
+        replaces. The public ``glfw.set_key_callback`` cannot chain: it returns only a callback
+        set through the bindings themselves, ``None`` for the viewer's, which is set in C++
+        (checked with pyGLFW 2.11 and MuJoCo 4.0.0), so Esc, F1 and Tab would stop reaching
+        the viewer."""
         self._hooked = True
         try:
             import glfw
