@@ -6,6 +6,10 @@ mirror images, so a forward command held from ``first`` to ``last`` and then lef
 covers ``v (last - first + cmd_vel_timeout)`` along +x. The physics adds the wheel servos' lag,
 which is the same on both ramps, and roller contact (0.04 % of the distance for tomasi-omni3,
 docs/physics.md); the tolerance covers the command's delivery jitter (a few ms at v).
+
+With ``--errors`` the model is the robot as built while the odometry is the nominal robot's:
+the truth is the odometry's increments through the drawn robot's kinematics
+(:func:`truth_from_odometry`).
 """
 
 from __future__ import annotations
