@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from conftest import run_cli
@@ -106,16 +107,26 @@ def test_unknown_engine_is_refused_naming_the_choices():
         run_umbmark("tomasi-omni3", engine="mujoco", **SMALL)
 
 
-def test_cli_umbmark_engine_physics_without_calibration(capsys, tmp_path):
+def test_cli_umbmark_engine_physics_states_the_floor_with_its_spread_over_roller_phases(capsys, tmp_path):
     out = tmp_path / "r"
     rc, stdout, err = run_cli(
-        capsys, "umbmark", "--engine", "physics", "--side", "1", "--runs", "1", "--rate", "50",
+        capsys, "umbmark", "--engine", "physics", "--side", "1", "--runs", "3", "--rate", "50",
         "--no-calibrate", "--json", "-o", out, "--figures", "svg",
     )  # fmt: skip
     assert rc == 0, err
     doc = json.loads(stdout)
     assert doc["engine"] == "physics" and "after" not in doc
-    assert 0.0 < doc["noise_floor"]["e_max_syst_median"] < FLOOR_BOUND
+    floor = doc["noise_floor"]
+    assert floor["procedures"] == 1
+    assert 0.0 < floor["e_max_syst_median"] < FLOOR_BOUND
+    # three runs per direction at their own roller phases: an interval of nonzero width around the floor
+    low, high = floor["e_max_syst_interval"]
+    assert low < floor["e_max_syst_median"] < high
+    assert floor["e_max_syst_limit"] == high
+    assert doc["before"]["e_max_syst_interval"][1] > doc["before"]["e_max_syst_interval"][0]
+    report = (out / "report.md").read_text()
+    assert f"interval over the runs' spread {low * 1000:.2f} to {high * 1000:.2f} mm" in report
+    assert "roller phases" in doc["methods"]["noise_floor"]
 
 
 def test_cli_refuses_noise_with_the_physics_engine(capsys, tmp_path):
@@ -125,17 +136,32 @@ def test_cli_refuses_noise_with_the_physics_engine(capsys, tmp_path):
     assert not (tmp_path / "r").exists()
 
 
-def test_trials_are_independent_runs_reported_one_by_one():
+def test_trials_are_runs_at_their_own_roller_phases_and_make_the_floor():
     steps: list[str] = []
     report = run_umbmark("tomasi-omni3", engine="physics", trials=2, calibrate=False, progress=steps.append, **SMALL)
-    # 2 procedures x 1 run x 2 directions before, then the floor's 1 run x 2 directions
+    # 2 procedures x 1 run x 2 directions before, then as many of the nominal robot for the floor
     assert steps == [f"UMBmark before calibration: run {k} of 4" for k in (1, 2, 3, 4)] + [
-        f"floor (nominal robot): run {k} of 2" for k in (1, 2)
+        f"floor (nominal robot): run {k} of 4" for k in (1, 2, 3, 4)
     ]
     first, second = report.before
-    # the engine is deterministic: two independently simulated procedures agree
-    assert second.e_max_syst == pytest.approx(first.e_max_syst, abs=1e-9)
-    assert report.as_dict()["monte_carlo"]["before"]["procedures"] == 2
+    # each run starts its wheels at other roller phases: the procedures differ, by less than the floor
+    assert first.e_max_syst != second.e_max_syst
+    assert abs(second.e_max_syst - first.e_max_syst) < FLOOR_BOUND
+    assert len(report.floor.values) == 2 and all(0.0 < v < FLOOR_BOUND for v in report.floor.values)
+    doc = report.as_dict()
+    assert doc["monte_carlo"]["before"]["procedures"] == 2
+    assert doc["noise_floor"]["procedures"] == 2
+
+
+def test_same_seed_same_runs_other_seed_other_roller_phases():
+    settings = dict(SMALL, calibrate=False)
+    one = run_umbmark("tomasi-omni3", engine="physics", true_robot="tomasi-omni3", **settings)
+    again = run_umbmark("tomasi-omni3", engine="physics", true_robot="tomasi-omni3", **settings)
+    other = run_umbmark("tomasi-omni3", engine="physics", true_robot="tomasi-omni3", **dict(settings, seed=2))
+    ends = [np.vstack([r.before[0].cw.epsilon, r.before[0].ccw.epsilon]) for r in (one, again, other)]
+    assert np.array_equal(ends[0], ends[1])
+    assert not np.allclose(ends[0], ends[2], rtol=0.0, atol=1e-7)
+    assert one.floor.values[0] == again.floor.values[0] != other.floor.values[0]
 
 
 def test_a_robot_that_cannot_drive_the_square_is_refused_as_in_the_kinematic_study():

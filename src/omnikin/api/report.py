@@ -26,6 +26,24 @@ def _factor(x) -> str:
     return f"{x:.0f}" if x >= 100 else f"{x:.3g}"
 
 
+def physics_floor_text(floor: dict, level: str) -> str:
+    """The physics floor of ``result.json`` (``noise_floor``) in one sentence: median and 95th
+    percentile over the procedures, and the confidence interval of the first one from its runs'
+    spread over roller phases."""
+    n = floor["procedures"]
+    text = (
+        f"E_max,syst {mm_text(floor['e_max_syst_median'])} mm"
+        + (f" (median of {n} procedures, 95th percentile {mm_text(floor['e_max_syst_p95'])} mm)" if n > 1 else "")
+        + ", every run at its own roller phases"
+    )
+    interval = floor.get("e_max_syst_interval")
+    if interval:
+        text += f"; {level} interval over the runs' spread {_interval_mm(interval)} mm"
+    else:
+        text += "; no interval (needs 3 runs per direction)"
+    return text
+
+
 def umbmark_markdown(report, doc: dict, figures: list) -> str:
     """The report of a :class:`~omnikin.api.umbmark.UMBmarkReport` whose ``result.json`` is ``doc``."""
     s = doc["settings"]
@@ -88,8 +106,9 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
     if doc["engine"] == "physics":
         lines += [
             "",
-            f"Floor: the nominal robot (no systematic errors) driven by its own model in the physics engine shows "
-            f"E_max,syst of {mm_text(floor['e_max_syst_median'])} mm: what the roller contact alone gives.",
+            "Floor: the nominal robot (no systematic errors) driven by its own model in the physics engine shows "
+            f"{physics_floor_text(floor, level)}: what the roller contact alone gives. A value up to "
+            f"{mm_text(floor['e_max_syst_limit'])} mm cannot be told from it.",
         ]
     else:
         lines += [

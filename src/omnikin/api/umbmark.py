@@ -270,13 +270,16 @@ METHODS = {
 PHYSICS_METHODS = {
     **METHODS,
     "engine": "physics: every run driven in MuJoCo (rollers, motors; omnikin.physics) by the robot as built, "
-    "one run at a time; no random error model (the contacts' slip, whole encoder ticks); deterministic",
+    "one run at a time; no random error model (the contacts' slip, whole encoder ticks); each run starts every "
+    "wheel at a roller phase drawn uniformly over its roller pitch from the seed (same seed, same runs)",
     "noise_floor": "in the physics engine, E_max,syst of the nominal robot (no systematic errors) "
-    "commanded by its own model, the same runs and square: what the roller contact alone gives "
-    "(procedures: 1); at_noise_floor: E_max,syst at or below that floor",
-    "systematic": "E_max,syst of the first procedure (the physics engine has no random errors)",
-    "e_max_syst_interval": METHODS["e_max_syst_interval"] + "; zero width in physics: the engine is deterministic, "
-    "the runs of one direction agree",
+    "commanded by its own model, trials procedures of the same runs and square, each run at its own roller "
+    "phases: what the roller contact alone gives; median and 95th percentile over the procedures, "
+    "e_max_syst_interval the confidence interval of the first procedure from its runs' spread; "
+    "at_noise_floor: E_max,syst at or below e_max_syst_limit, the larger of the 95th percentile and the "
+    "interval's upper end",
+    "systematic": "E_max,syst of the first procedure (the physics engine has no random error model)",
+    "e_max_syst_interval": METHODS["e_max_syst_interval"] + "; in physics the runs differ by their roller phases",
 }
 """How each quantity of a physics study is defined (``result.json`` of ``--engine physics``)."""
 
@@ -337,7 +340,7 @@ def run_umbmark(
         progress=progress,
     )
     if noise_model is None:
-        study = physics_umbmark_study(nominal, true, **common)
+        study = physics_umbmark_study(nominal, true, seed=seed, **common)
     else:
         study = umbmark_study(nominal, true, noise=noise_model, seed=seed, **common)
     settings = {

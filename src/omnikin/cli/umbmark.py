@@ -17,7 +17,7 @@ from pathlib import Path
 from ..api.calibration import calibrate as api_calibrate
 from ..api.calibration import calibration_plan
 from ..api.common import dumps
-from ..api.report import mm_text
+from ..api.report import mm_text, physics_floor_text
 from ..api.umbmark import (
     DEFAULT_ROBOT,
     UMBmarkReport,
@@ -384,10 +384,8 @@ def _print_summary(report: UMBmarkReport, doc: dict, out) -> None:
     con.print(_umbmark_table(doc))
     floor = doc["noise_floor"]
     if doc["engine"] == "physics":
-        con.print(
-            "floor (nominal robot in physics, roller contact alone): E_max,syst "
-            f"{mm_text(floor['e_max_syst_median'])} mm"
-        )
+        level = f"{s['confidence_level'] * 100:g} %"
+        con.print(f"floor (nominal robot in physics, roller contact alone): {physics_floor_text(floor, level)}")
     else:
         con.print(
             f"noise floor (perfectly calibrated robot, same random errors): median "

@@ -14,22 +14,28 @@ built, one run at a time (the physics has no trial axis: ``trials`` procedures a
    measurement, and the least-squares calibration
    (:func:`~omnikin.evaluation.calibration.calibrate`);
 3. UMBmark after calibration, the robot commanded by its calibrated model;
-4. the floor: UMBmark of the *nominal* robot (no systematic errors) commanded by its own model,
-   ``runs`` runs per direction: what the roller contact alone gives, the least E_max,syst a
-   calibration of the kinematic model can reach in this engine. It takes the place of the
-   kinematic study's noise floor (:class:`~omnikin.evaluation.umbmark.NoiseFloor` of these
-   procedures).
+4. the floor (:class:`PhysicsFloor`): UMBmark of the *nominal* robot (no systematic errors)
+   commanded by its own model, ``trials`` procedures of ``runs`` runs per direction: what the
+   roller contact alone gives, the least E_max,syst a calibration of the kinematic model can
+   reach in this engine. It takes the place of the kinematic study's noise floor
+   (:class:`~omnikin.evaluation.umbmark.NoiseFloor` of these procedures).
 
 The physics engine has no random error model: slip comes from the wheels' contacts and the
-encoders count whole ticks, so a noise model is refused (:func:`check_physics_noise`); the
-engine is deterministic, so repeated runs of one path agree and the systematic part is the
-result itself. Borenstein's iterated correction (kinematic study, differential drives) is not
-run.
+encoders count whole ticks, so a noise model is refused (:func:`check_physics_noise`). The
+engine is deterministic; what differs from run to run, as on a built robot, is where in their
+roller pitch the wheels start: every run starts each wheel at a **roller phase** drawn
+uniformly from ``[0, 1)`` of its pitch (:func:`~omnikin.physics.engine.roller_offsets`), from
+the stage's stream of the study's seed (:func:`~omnikin.evaluation.procedure.streams`: the
+same seed gives the same runs, the cw and ccw runs of a stage their own child streams, so the
+first procedure does not depend on ``trials``). The confidence intervals and the floor thus
+carry the spread over roller phases. Borenstein's iterated correction (kinematic study,
+differential drives) is not run.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -42,8 +48,8 @@ from ..simulation.error_models import NOISE, SystematicErrors
 from ..simulation.motion import estimated_samples
 from .calibration import RECOMMENDED_REPEATS, CalibrationResult, recommended_runs
 from .calibration import calibrate as least_squares_calibration
-from .procedure import Cost, UMBmarkStudy, check_settings
-from .umbmark import NoiseFloor, UMBmarkResult, analyze, require_square
+from .procedure import Cost, UMBmarkStudy, check_settings, streams
+from .umbmark import LEVEL, NoiseFloor, UMBmarkResult, analyze, require_square
 
 ENGINES = ("kinematic", "physics")
 """The engines of the UMBmark study: the kinematic simulation or MuJoCo (:mod:`omnikin.physics`)."""
@@ -87,7 +93,7 @@ def physics_cost(robot: Robot, *, side: float, mode: str, runs: int, rate: float
     samples (:func:`~omnikin.simulation.motion.estimated_samples`, an upper bound) plus
     :data:`TAIL_SECONDS`, at :data:`SECONDS_PER_SIMULATED_SECOND`."""
     square = estimated_samples(umbmark_square("cw", side, mode), robot, rate)
-    squares = 2 * runs * (trials * (2 if calibrate else 1) + 1)  # before, after, the floor
+    squares = 2 * runs * trials * (3 if calibrate else 2)  # before, after, the floor
     samples = squares * square
     plans = squares
     if calibrate:
@@ -98,10 +104,44 @@ def physics_cost(robot: Robot, *, side: float, mode: str, runs: int, rate: float
     return Cost(samples, float(BYTES), seconds_per_sample=SECONDS_PER_SIMULATED_SECOND / rate)
 
 
-def _drive(plan: Plan, true_robot: Robot, command: Robot, rate: float):
+@dataclass(frozen=True)
+class PhysicsFloor(NoiseFloor):
+    """The floor of the physics study: ``values`` E_max,syst [m] of the nominal robot's
+    procedures (module docstring) and ``interval`` the confidence interval [m] of the first
+    one's E_max,syst from the spread of its runs over roller phases
+    (:meth:`~omnikin.evaluation.umbmark.UMBmarkResult.e_max_interval`; None with fewer than 3
+    runs per direction). :attr:`limit`, the largest E_max,syst that cannot be told from the
+    nominal robot's, is the larger of the 95th percentile of ``values`` and the interval's upper
+    end."""
+
+    interval: tuple[float, float] | None = None
+
+    @property
+    def p95(self) -> float:
+        """95th percentile of ``values`` [m]."""
+        return float(np.percentile(self.values, 95))
+
+    @property
+    def limit(self) -> float:
+        """The larger of :attr:`p95` and the interval's upper end [m]."""
+        return max(self.p95, self.interval[1]) if self.interval is not None else self.p95
+
+    def as_dict(self) -> dict:
+        return {
+            **NoiseFloor.as_dict(self),
+            "e_max_syst_p95": self.p95,
+            "e_max_syst_limit": self.limit,
+            "e_max_syst_interval": list(self.interval) if self.interval is not None else None,
+        }
+
+
+def _drive(plan: Plan, true_robot: Robot, command: Robot, rate: float, rng: np.random.Generator):
+    """``plan`` driven in physics, each wheel of ``true_robot`` started at a roller phase drawn
+    uniformly from ``[0, 1)`` by ``rng`` (module docstring)."""
     from ..physics.run import simulate_physics
 
-    return simulate_physics(plan, true_robot, command, rate=rate)
+    phase = rng.random(len(true_robot.rolling))
+    return simulate_physics(plan, true_robot, command, rate=rate, roller_phase=phase)
 
 
 def physics_umbmark(
@@ -112,12 +152,14 @@ def physics_umbmark(
     mode: str,
     runs: int,
     rate: float,
+    seed: np.random.SeedSequence,
     trials: int = 1,
     progress: Progress | None = None,
     label: str = "UMBmark",
 ) -> tuple[list[UMBmarkResult], dict]:
     """``trials`` UMBmark procedures of ``runs`` runs per direction in the physics engine,
-    ``true_robot`` commanded by ``command``. Returns one
+    ``true_robot`` commanded by ``command``, the roller phases of each direction's runs drawn
+    from its own child of ``seed`` (module docstring). Returns one
     :class:`~omnikin.evaluation.umbmark.UMBmarkResult` per procedure and the first run of each
     direction (``{"cw"|"ccw": PhysicsRun}``, with its ground truth). ``progress`` is called with
     ``label`` and the run's number before each run."""
@@ -125,12 +167,13 @@ def physics_umbmark(
     total = 2 * trials * runs
     eps: dict[str, list] = {"cw": [], "ccw": []}
     first: dict = {}
-    for direction in ("cw", "ccw"):
+    for direction, child in zip(("cw", "ccw"), seed.spawn(2), strict=True):
         plan = umbmark_square(direction, side, mode)
+        rng = np.random.default_rng(child)
         for _ in range(trials * runs):
             if progress is not None:
                 progress(f"{label}: run {len(eps['cw']) + len(eps['ccw']) + 1} of {total}")
-            run = _drive(plan, true_robot, command, rate)
+            run = _drive(plan, true_robot, command, rate, rng)
             first.setdefault(direction, run)
             eps[direction].append(run.epsilon[0])
     results = [
@@ -147,12 +190,20 @@ def physics_umbmark(
 
 
 def physics_calibration_runs(
-    true_robot: Robot, robot: Robot, *, side: float, rate: float, progress: Progress | None = None
+    true_robot: Robot,
+    robot: Robot,
+    *,
+    side: float,
+    rate: float,
+    seed: np.random.SeedSequence,
+    progress: Progress | None = None,
 ) -> list[CalibrationRun]:
     """The recommended calibration runs of ``robot``, each driven
     :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times in the physics engine by
-    ``true_robot`` commanded by ``robot``; the measured end pose is the true one (the default
-    measurement sigma of :class:`~omnikin.plans.CalibrationRun`, as a runs file is read)."""
+    ``true_robot`` commanded by ``robot``, roller phases drawn from ``seed``; the measured end
+    pose is the true one (the default measurement sigma of
+    :class:`~omnikin.plans.CalibrationRun`, as a runs file is read)."""
+    rng = np.random.default_rng(seed)
     plans = recommended_runs(robot, side)
     total = len(plans) * RECOMMENDED_REPEATS
     out: list[CalibrationRun] = []
@@ -160,7 +211,7 @@ def physics_calibration_runs(
         for _ in range(RECOMMENDED_REPEATS):
             if progress is not None:
                 progress(f"calibration runs: run {len(out) + 1} of {total}")
-            run = _drive(plan, true_robot, robot, rate)
+            run = _drive(plan, true_robot, robot, rate, rng)
             out.append(CalibrationRun(plan, tuple(run.measured[0]), text))
     return out
 
@@ -176,31 +227,37 @@ def physics_umbmark_study(
     rate: float,
     trials: int,
     calibrate: bool,
+    seed: int,
     progress: Progress | None = None,
+    level: float = LEVEL,
 ) -> UMBmarkStudy:
     """The study of the module docstring, as a :class:`~omnikin.evaluation.procedure.UMBmarkStudy`
-    (``engine`` "physics", ``noise`` none, ``floor`` the nominal robot's UMBmark, ``systematic``
-    the results themselves, no Borenstein comparison)."""
+    (``engine`` "physics", ``noise`` none, ``floor`` the nominal robot's :class:`PhysicsFloor`
+    with its interval at ``level``, ``systematic`` the first procedures, no Borenstein
+    comparison); roller phases from ``seed``."""
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
     encoded_wheels(robot)
-    opts: dict[str, Any] = dict(side=side, mode=mode, runs=runs, rate=rate, progress=progress)
-    before, first = physics_umbmark(true_robot, robot, trials=trials, label="UMBmark before calibration", **opts)
+    rng = streams(seed)
+    opts: dict[str, Any] = dict(side=side, mode=mode, runs=runs, rate=rate, trials=trials, progress=progress)
+    before, first = physics_umbmark(true_robot, robot, seed=rng["before"], label="UMBmark before calibration", **opts)
     trajectories = {"before": first}
     systematic = {"before": before[0].e_max_syst}
     after: list | None = None
     cal: CalibrationResult | None = None
     cal_runs: list[CalibrationRun] = []
     if calibrate:
-        cal_runs = physics_calibration_runs(true_robot, robot, side=side, rate=rate, progress=progress)
+        cal_runs = physics_calibration_runs(
+            true_robot, robot, side=side, rate=rate, seed=rng["calibration"], progress=progress
+        )
         if progress is not None:
             progress("least-squares calibration")
         cal = least_squares_calibration(robot, cal_runs)
         after, trajectories["after"] = physics_umbmark(
-            true_robot, cal.robot, trials=trials, label="UMBmark after calibration", **opts
+            true_robot, cal.robot, seed=rng["after"], label="UMBmark after calibration", **opts
         )
         systematic["after"] = after[0].e_max_syst
-    nominal, _ = physics_umbmark(robot, robot, label="floor (nominal robot)", **opts)
-    floor = NoiseFloor(np.array([nominal[0].e_max_syst]))
+    nominal, _ = physics_umbmark(robot, robot, seed=rng["floor"], label="floor (nominal robot)", **opts)
+    floor = PhysicsFloor(np.array([r.e_max_syst for r in nominal]), nominal[0].e_max_interval(level))
     return UMBmarkStudy(
         robot,
         true_robot,
@@ -219,5 +276,6 @@ def physics_umbmark_study(
         systematic,
         floor,
         trajectories,
+        level=level,
         engine="physics",
     )

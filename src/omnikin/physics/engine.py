@@ -2,8 +2,10 @@
 
 The model is the MJCF of :mod:`omnikin.physics.mjcf`. The simulation
 
-- **settles** the robot at the start: it is put down with its lowest roller (or tyre) on the
-  floor, held with zero wheel commands until the contacts have taken its weight (the chassis
+- **settles** the robot at the start: each wheel turned to its **roller phase** (a fraction
+  of its roller pitch ``2 pi / (n R)``, ``n`` rollers in each of ``R`` rows, :func:`roller_offsets`;
+  0 by default: a roller of the first row straight below the axle), it is put down with its lowest
+  roller (or tyre) on the floor, held with zero wheel commands until the contacts have taken its weight (the chassis
   stops moving vertically), then moved back to the start pose with zero velocity, so the run
   starts at rest without a bounce; the clock and the encoders start there at zero;
 - takes **wheel commands** (:meth:`PhysicsSim.command`): speeds [rad/s] of the rolling wheels in
@@ -66,6 +68,46 @@ def _mujoco():
     return mujoco
 
 
+def roller_pitch(wheel) -> float:
+    """Angle [rad] between two hand-overs of ``wheel``'s rollers (a
+    :class:`~omnikin.physics.description.WheelBody`): ``2 pi / (n R)`` for ``R`` staggered rows
+    of ``n`` rollers; 0 for a wheel without rollers."""
+    rollers = wheel.rollers
+    return 0.0 if rollers is None else 2.0 * math.pi / (rollers.per_row * rollers.rows)
+
+
+def roller_offsets(description: PhysicalRobot, rolling: list[str], phase) -> np.ndarray:
+    """Start angles [rad] of the joints of the ``rolling`` wheels (names, file order) for roller
+    ``phase``: a number or one number per rolling wheel, each a fraction in ``[0, 1)`` of the
+    wheel's :func:`roller_pitch` (0: a roller of the first row straight below the axle). The
+    angle is ``phase * pitch``; wheels without rollers get 0. Bad input: :class:`InputError`
+    naming the wheel."""
+    values = np.asarray(phase, dtype=float) if _is_numeric(phase) else None
+    if values is None or values.ndim > 1 or (values.ndim == 1 and len(values) != len(rolling)):
+        raise InputError(
+            f"roller_phase must be a number or one number per rolling wheel ({shorten(rolling)}), "
+            f"each a fraction of the roller pitch in [0, 1), got {shorten(phase)}"
+        )
+    values = np.broadcast_to(values, (len(rolling),))
+    wheels = {w.name: w for w in description.wheels}
+    for name, value in zip(rolling, values, strict=True):
+        if not 0.0 <= value < 1.0:
+            raise InputError(
+                f"roller_phase of wheel {name!r} must be a fraction of the roller pitch in [0, 1), "
+                f"got {shorten(float(value))}"
+            )
+    return np.array([v * roller_pitch(wheels[n]) for n, v in zip(rolling, values, strict=True)])
+
+
+def _is_numeric(value) -> bool:
+    """A real number or a flat sequence of real numbers (no bools, strings or None)."""
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError):
+        return False
+    return array.dtype.kind in "iuf"
+
+
 def _yaw(xmat: np.ndarray) -> float:
     """Heading [rad] of a body's x axis projected on the floor, from its 3x3 rotation (row-major)."""
     return math.atan2(xmat[3], xmat[0])
@@ -74,7 +116,10 @@ def _yaw(xmat: np.ndarray) -> float:
 class PhysicsSim:
     """``robot`` as a MuJoCo model, settled at ``start`` ``(x, y, theta)`` [m, m, rad], stepped
     at ``step`` [s] (module docstring). ``description``: a physical description of ``robot``
-    (default :func:`~omnikin.physics.description.describe`)."""
+    (default :func:`~omnikin.physics.description.describe`). ``roller_phase``: where in its
+    roller pitch each wheel starts, a fraction in ``[0, 1)`` of the pitch, one for every wheel or
+    one per rolling wheel (file order); wheels without rollers ignore it (:func:`roller_offsets`).
+    The encoders start at zero whatever the phase."""
 
     def __init__(
         self,
@@ -83,6 +128,7 @@ class PhysicsSim:
         start=(0.0, 0.0, 0.0),
         step: float = DEFAULT_STEP,
         description: PhysicalRobot | None = None,
+        roller_phase=0.0,
     ):
         mujoco = _mujoco()
         self._mj = mujoco
@@ -153,12 +199,15 @@ class PhysicsSim:
         self._steer_target = np.zeros(len(steer))
         self._steer_set = np.zeros(len(steer))
         self._velocity = np.zeros(6)
+        self.roller_offsets = roller_offsets(self.description, rolling, roller_phase)
+        """Wheel joint angles [rad] of the rolling wheels (file order) at the start of settling."""
         self._settle(start)
 
     # --- start ---------------------------------------------------------------------------------
     def _settle(self, start: np.ndarray) -> None:
         """Let the robot take its weight, then put it back at ``start`` at rest (module docstring)."""
         mj, m, d = self._mj, self.model, self.data
+        d.qpos[self._wheel_qpos] = self.roller_offsets
         mj.mj_forward(m, d)
         settled = False
         steps_min = max(1, round(SETTLE_MIN / self.step_size))

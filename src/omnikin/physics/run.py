@@ -91,10 +91,14 @@ def simulate_physics(
     limits: MotionLimits | None = None,
     step: float = DEFAULT_STEP,
     progress: Callable[[float, float], None] | None = None,
+    roller_phase=0.0,
 ) -> PhysicsRun:
     """``plan`` commanded by ``command_robot`` and driven by ``true_robot`` in MuJoCo at time step
     ``step`` [s] (module docstring); ``rate`` [Hz] as for the kinematic engine. ``progress``, if
-    given, is called now and then with the simulated time and the plan's duration [s]."""
+    given, is called now and then with the simulated time and the plan's duration [s].
+    ``roller_phase``: where in its roller pitch each wheel of ``true_robot`` starts, a fraction in
+    ``[0, 1)`` for every wheel or one per rolling wheel
+    (:func:`~omnikin.physics.engine.roller_offsets`); the encoders start at zero."""
     check_rate_range(plan.rate if isinstance(plan, SampledPlan) else rate, "rate")
     require_same_wheels(command_robot, true_robot)
     sampled = plan if isinstance(plan, SampledPlan) else sample_plan(plan, command_robot, rate, limits)
@@ -106,7 +110,7 @@ def simulate_physics(
     angles, steer_cmd = commanded_angles(sampled, command_robot, command_robot.rolling)
     dt = np.diff(sampled.t)
     speeds = np.diff(angles, axis=0) / dt[:, None]
-    sim = PhysicsSim(true_robot, step=step)
+    sim = PhysicsSim(true_robot, step=step, roller_phase=roller_phase)
     steerable = bool(command_robot.steerable)
     samples = len(dt)
     duration = float(sampled.t[-1])
