@@ -224,9 +224,11 @@ def test_the_description_and_the_mjcf_work_without_mujoco():
 def test_a_time_step_out_of_range_is_refused():
     from omnikin.errors import InputError
 
-    for step in (0.0, -0.001, 0.01, float("nan"), "0.002", True):
+    # 3 and 4 ms: more than half the contacts' 4 ms time constant, which MuJoCo would lengthen
+    for step in (0.0, -0.001, 0.01, 0.004, 0.003, float("nan"), "0.002", True):
         with pytest.raises(InputError, match="time step"):
             mjcf(load_robot("diff-drive"), step)
+    assert "<option" in mjcf(load_robot("diff-drive"), 0.002)
 
 
 def test_a_robot_file_s_physical_fields_reach_the_model(tmp_path):

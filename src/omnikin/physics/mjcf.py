@@ -49,12 +49,15 @@ from .description import PhysicalRobot, WheelBody, describe
 
 DEFAULT_STEP = 0.002
 """Time step [s]: 500 Hz resolves the contact dynamics of rollers a few millimetres thick."""
-STEP_RANGE = (1e-5, 0.004)
-"""Time steps [s] :func:`mjcf` accepts: the contacts' time constant (:data:`CONTACT_SOLREF`) must
-stay at least twice the step."""
 CONTACT_SOLREF = (0.004, 1.0)
 """Contact time constant [s] and damping ratio: critically damped, and no shorter than twice
 the default time step, below which MuJoCo's soft contacts lose their meaning."""
+STEP_RANGE = (1e-5, CONTACT_SOLREF[0] / 2.0)
+"""Time steps [s] :func:`mjcf` accepts: at most half the contacts' time constant
+(:data:`CONTACT_SOLREF`). MuJoCo raises a time constant below twice the step to twice the step
+(its ``refsafe`` flag), so a longer step would silently simulate softer contacts: at 4 ms the
+wheels of tomasi-omni3 sank 112 um instead of 16 um, the same as a time constant of 8 ms, and
+the UMBmark floor's heading bias grew from 0.15 to 0.57 deg (docs/physics.md, "Convergence")."""
 CONTACT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
 """Contact impedance (MuJoCo's default width, 95 % of a contact enforced when shallow, 99 % from
 1 mm deep). The wheels sink 0.01-0.1 % of their radius under the robot's weight, which shortens
@@ -156,7 +159,10 @@ def mjcf(robot: PhysicalRobot | Robot, step: float = DEFAULT_STEP) -> str:
     if isinstance(robot, Robot):
         robot = describe(robot)
     if isinstance(step, bool) or not isinstance(step, (int, float)) or not STEP_RANGE[0] <= step <= STEP_RANGE[1]:
-        raise InputError(f"time step must be a number in [{STEP_RANGE[0]:g}, {STEP_RANGE[1]:g}] s, got {shorten(step)}")
+        raise InputError(
+            f"time step must be a number in [{STEP_RANGE[0]:g}, {STEP_RANGE[1]:g}] s (at most half the contact "
+            f"time constant), got {shorten(step)}"
+        )
     root = ET.Element("mujoco", model=robot.name)
     _sub(root, "compiler", angle="radian", autolimits="true", inertiafromgeom="false")
     option = _sub(root, "option", timestep=_num(step), integrator="implicitfast", cone="elliptic")
