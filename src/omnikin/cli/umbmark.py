@@ -119,8 +119,9 @@ def add_parsers(sub, robot_help: str) -> None:
         choices=ENGINES,
         default=d["engine"],
         help="kinematic: wheel motion with the --errors and --noise models; physics: every run in MuJoCo "
-        "(rollers, motors; extra physics) on the robot as built, and the floor: UMBmark of the nominal "
-        f"robot, what roller contact alone gives (default {d['engine']})",
+        "(rollers, motors; extra physics) on the robot as built, each run at roller phases drawn from --seed, "
+        "and the floor: UMBmark of the nominal robot, what roller contact alone gives, with its spread "
+        f"(default {d['engine']})",
     )
     sp.add_argument(
         "--rate",
@@ -135,7 +136,7 @@ def add_parsers(sub, robot_help: str) -> None:
         default=d["seed"],
         metavar="N",
         help=f"random seed (default {d['seed']}); the same seed builds the same robot, calibration and "
-        "first procedures whatever --trials",
+        "first procedures whatever --trials (in physics: the same roller phases of every run)",
     )
     sp.add_argument(
         "--trials",
