@@ -271,7 +271,7 @@ PHYSICS_METHODS = {
     **METHODS,
     "engine": "physics: every run driven in MuJoCo (rollers, motors; omnikin.physics) by the robot as built, "
     "one run at a time; no random error model (the contacts' slip, whole encoder ticks); each run starts every "
-    "wheel at a roller phase drawn uniformly over its roller pitch from the seed (same seed, same runs)",
+    "wheel at a roller phase drawn uniformly over its roller period from the seed (same seed, same runs)",
     "noise_floor": "in the physics engine, E_max,syst of the nominal robot (no systematic errors) "
     "commanded by its own model, trials procedures of the same runs and square, each run at its own roller "
     "phases: what the roller contact alone gives; median and 95th percentile over the procedures, "

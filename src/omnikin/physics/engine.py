@@ -3,10 +3,11 @@
 The model is the MJCF of :mod:`omnikin.physics.mjcf`. The simulation
 
 - **settles** the robot at the start: each wheel turned to its **roller phase** (a fraction
-  of its roller pitch ``2 pi / (n R)``, ``n`` rollers in each of ``R`` rows, :func:`roller_offsets`;
-  0 by default: a roller of the first row straight below the axle), it is put down with its lowest
-  roller (or tyre) on the floor, held with zero wheel commands until the contacts have taken its weight (the chassis
-  stops moving vertically), then moved back to the start pose with zero velocity, so the run
+  of its roller period, the wheel angle after which its rollers repeat, :func:`roller_period`;
+  0 by default: a roller of the first row straight below the axle; :func:`roller_offsets`), it
+  is put down with its lowest roller (or tyre) on the floor, held with zero wheel commands until
+  the contacts have taken its weight (the chassis stops moving vertically), then moved back to
+  the start pose with zero velocity, so the run
   starts at rest without a bounce; the clock and the encoders start there at zero;
 - takes **wheel commands** (:meth:`PhysicsSim.command`): speeds [rad/s] of the rolling wheels in
   file order (as :meth:`omnikin.model.Robot.ik` returns them; entries of passive wheels are
@@ -71,35 +72,42 @@ def _mujoco():
     return mujoco
 
 
-def roller_pitch(wheel) -> float:
-    """Angle [rad] between two hand-overs of ``wheel``'s rollers (a
-    :class:`~omnikin.physics.description.WheelBody`): ``2 pi / (n R)`` for ``R`` staggered rows
-    of ``n`` rollers; 0 for a wheel without rollers."""
+def roller_period(wheel) -> float:
+    """Wheel angle [rad] after which the rollers of ``wheel`` (a
+    :class:`~omnikin.physics.description.WheelBody`) stand as they stood: the pitch
+    ``2 pi / (n R)`` between two hand-overs when its ``R`` staggered rows of ``n`` rollers all lie
+    in the wheel's mid-plane (the rows are alike), ``2 pi / n`` (``R`` pitches) when the rows sit
+    side by side (``physical.width``: the rows differ by their place along the axle, so a phase
+    within one pitch would reach only the configurations in which a given row carries the wheel
+    first, and the mirror image of a run would be missing); 0 for a wheel without rollers."""
     rollers = wheel.rollers
-    return 0.0 if rollers is None else 2.0 * math.pi / (rollers.per_row * rollers.rows)
+    if rollers is None:
+        return 0.0
+    rows_alike = len(set(rollers.offsets)) == 1
+    return 2.0 * math.pi / (rollers.per_row * (rollers.rows if rows_alike else 1))
 
 
 def roller_offsets(description: PhysicalRobot, rolling: list[str], phase) -> np.ndarray:
     """Start angles [rad] of the joints of the ``rolling`` wheels (names, file order) for roller
     ``phase``: a number or one number per rolling wheel, each a fraction in ``[0, 1)`` of the
-    wheel's :func:`roller_pitch` (0: a roller of the first row straight below the axle). The
-    angle is ``phase * pitch``; wheels without rollers get 0. Bad input: :class:`InputError`
+    wheel's :func:`roller_period` (0: a roller of the first row straight below the axle). The
+    angle is ``phase * period``; wheels without rollers get 0. Bad input: :class:`InputError`
     naming the wheel."""
     values = np.asarray(phase, dtype=float) if _is_numeric(phase) else None
     if values is None or values.ndim > 1 or (values.ndim == 1 and len(values) != len(rolling)):
         raise InputError(
             f"roller_phase must be a number or one number per rolling wheel ({shorten(rolling)}), "
-            f"each a fraction of the roller pitch in [0, 1), got {shorten(phase)}"
+            f"each a fraction of the roller period in [0, 1), got {shorten(phase)}"
         )
     values = np.broadcast_to(values, (len(rolling),))
     wheels = {w.name: w for w in description.wheels}
     for name, value in zip(rolling, values, strict=True):
         if not 0.0 <= value < 1.0:
             raise InputError(
-                f"roller_phase of wheel {name!r} must be a fraction of the roller pitch in [0, 1), "
+                f"roller_phase of wheel {name!r} must be a fraction of the roller period in [0, 1), "
                 f"got {shorten(float(value))}"
             )
-    return np.array([v * roller_pitch(wheels[n]) for n, v in zip(rolling, values, strict=True)])
+    return np.array([v * roller_period(wheels[n]) for n, v in zip(rolling, values, strict=True)])
 
 
 def _is_numeric(value) -> bool:
@@ -120,9 +128,9 @@ class PhysicsSim:
     """``robot`` as a MuJoCo model, settled at ``start`` ``(x, y, theta)`` [m, m, rad], stepped
     at ``step`` [s] (module docstring). ``description``: a physical description of ``robot``
     (default :func:`~omnikin.physics.description.describe`). ``roller_phase``: where in its
-    roller pitch each wheel starts, a fraction in ``[0, 1)`` of the pitch, one for every wheel or
-    one per rolling wheel (file order); wheels without rollers ignore it (:func:`roller_offsets`).
-    The encoders start at zero whatever the phase."""
+    roller period each wheel starts, a fraction in ``[0, 1)`` of it (:func:`roller_period`), one
+    for every wheel or one per rolling wheel (file order); wheels without rollers ignore it
+    (:func:`roller_offsets`). The encoders start at zero whatever the phase."""
 
     def __init__(
         self,

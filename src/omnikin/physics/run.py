@@ -96,8 +96,8 @@ def simulate_physics(
     """``plan`` commanded by ``command_robot`` and driven by ``true_robot`` in MuJoCo at time step
     ``step`` [s] (module docstring); ``rate`` [Hz] as for the kinematic engine. ``progress``, if
     given, is called now and then with the simulated time and the plan's duration [s].
-    ``roller_phase``: where in its roller pitch each wheel of ``true_robot`` starts, a fraction in
-    ``[0, 1)`` for every wheel or one per rolling wheel
+    ``roller_phase``: where in its roller period each wheel of ``true_robot`` starts, a fraction
+    in ``[0, 1)`` for every wheel or one per rolling wheel
     (:func:`~omnikin.physics.engine.roller_offsets`); the encoders start at zero."""
     check_rate_range(plan.rate if isinstance(plan, SampledPlan) else rate, "rate")
     require_same_wheels(command_robot, true_robot)
