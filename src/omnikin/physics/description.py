@@ -26,8 +26,9 @@ it, ``y_j = (j - (R - 1) / 2) w / R``, as on a built wheel. Why the default: the
 stays on the wheel's mid-plane, where the kinematics puts it. Rows side by side put it ``d``
 off that plane on alternate rollers, and the hub's lever about the robot centre alternates
 between ``l + d`` and ``l - d``: the robot turns ``l^2 / (l^2 - d^2)`` times as fast as the
-kinematics says (0.6 % for tomasi-omni3 with rows 17 mm apart, measured 0.6 %). That is how a
-built double-row wheel drives; give its width to see it.
+kinematics says on average (0.57 % for tomasi-omni3 with rows 17 mm apart; measured
+0.30-0.83 % depending on how the wheels' roller phases stand to each other, docs/physics.md).
+That is how a built double-row wheel drives; give its width to see it.
 Each roller is an **ellipsoid of revolution** (exactly round cross-section, so a roller's own
 spin never lifts the wheel) with semi-axis ``a`` along its spin axis and ``b`` across it, its
 centre at distance ``c`` from the axle. The roller at angle ``psi`` about the axle (0 at the
