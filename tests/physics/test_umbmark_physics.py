@@ -182,3 +182,35 @@ def test_cli_summary_names_the_engine_and_the_floor(capsys, tmp_path):
     assert "physics engine" in stdout
     assert "floor (nominal robot in physics, roller contact alone)" in stdout
     assert "noise floor" not in stdout
+
+
+def test_time_step_belongs_to_the_physics_engine_and_is_checked_before_work():
+    with pytest.raises(InputError, match=r"^step \(--step\) is the time step of the physics engine"):
+        run_umbmark("tomasi-omni3", step=0.001, noise="none", **SMALL)
+    for bad in (0.004, 0.0, -1e-3, float("nan"), True, "0.001"):
+        with pytest.raises(InputError, match=r"^step \(--step\) must be a time step in \[1e-05, 0\.002\] s"):
+            run_umbmark("tomasi-omni3", engine="physics", step=bad, max_time=1e-9, **SMALL)
+    # the computing time is proportional to the number of steps per simulated second
+    half = umbmark_cost("tomasi-omni3", engine="physics", step=0.001, side=1.0, runs=1, rate=50.0)
+    default = umbmark_cost("tomasi-omni3", engine="physics", side=1.0, runs=1, rate=50.0)
+    assert half.seconds == pytest.approx(2.0 * default.seconds, rel=1e-12)
+    assert half.samples == default.samples
+
+
+def test_cli_umbmark_runs_at_the_given_time_step_and_says_so(capsys, tmp_path):
+    args = ("--engine", "physics", "--side", "1", "--runs", "1", "--rate", "50", "--no-calibrate", "--json")
+    rc, stdout, err = run_cli(capsys, "umbmark", *args, "--step", "0.001", "-o", tmp_path / "fine", "--figures", "svg")
+    assert rc == 0, err
+    fine = json.loads(stdout)
+    rc, stdout, err = run_cli(capsys, "umbmark", *args, "-o", tmp_path / "default", "--figures", "svg")
+    assert rc == 0, err
+    default = json.loads(stdout)
+    assert fine["settings"]["step"] == 0.001 and default["settings"]["step"] == 0.002
+    # same seed, same roller phases: only the step differs, and the runs with it (by far less than the floor)
+    before = [doc["before"]["e_max_syst"] for doc in (fine, default)]
+    assert before[0] != before[1] and abs(before[0] - before[1]) < FLOOR_BOUND
+    report = (tmp_path / "fine" / "report.md").read_text()
+    assert "MuJoCo at a 1 ms time step" in report and "--engine physics --step 0.001" in report
+    assert "--step" not in (tmp_path / "default" / "report.md").read_text()
+    rc, _, err = run_cli(capsys, "umbmark", "--step", "0.001", "-o", tmp_path / "k")
+    assert rc == 2 and err.count("\n") == 1 and "--engine physics" in err and not (tmp_path / "k").exists()

@@ -56,8 +56,8 @@ def test_ros_serial_only_options_with_sim_backend(capsys):
         (
             "physics",
             ["--noise", "none", "--seed", "3"],
-            "--noise 'none': the physics engine has no random error model (slip comes from the wheels' "
-            "contacts, its encoders count whole ticks); drop --noise",
+            "noise (--noise) 'none': the physics engine has no random error model (slip comes from the wheels' roller "
+            "contact, its encoders count whole ticks); drop --noise",
         ),
         ("physics", ["--baud", "115200"], "--baud apply only to --backend serial"),
         ("serial", ["--errors", "none", "--seed", "3"], "--errors, --seed apply only to --backend sim or physics"),

@@ -58,7 +58,8 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         "",
         f"Robot as built: {built}. "
         + (
-            "Engine: physics (MuJoCo, rollers and motors; no random error model: slip comes from the contacts)."
+            f"Engine: physics (MuJoCo at a {s['step'] * 1e3:g} ms time step, rollers and motors; no random error "
+            "model: slip comes from the contacts)."
             if doc["engine"] == "physics"
             else f"Random errors: {s['noise']!r} profile."
         )

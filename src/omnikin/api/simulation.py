@@ -6,7 +6,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, shorten
 from ..model import Robot
 from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..simulation.simulate import SimulatedRun
@@ -79,6 +78,7 @@ def simulate(
     time step ``step`` [s] (default 2 ms): the same plan, rate and robot as built; ``noise``
     must then be left out (the physics has no random error model).
     """
+    from ..evaluation.physics_study import engine_options
     from ..evaluation.procedure import ARGUMENTS, streams
     from ..plans import Plan, parse_plan
     from ..resource_limits import require_within
@@ -87,14 +87,7 @@ def simulate(
     from ..simulation.simulate import simulate as simulate_run
 
     check_rate_range(rate, "rate")
-    if engine not in ("kinematic", "physics"):
-        raise InputError(f"engine must be 'kinematic' or 'physics', got {shorten(engine)}")
-    if engine == "physics" and noise is not None:
-        raise InputError(
-            "noise: the physics engine has no random error model (slip comes from the contacts); leave it out"
-        )
-    if engine == "kinematic" and step is not None:
-        raise InputError("step is the time step of the physics engine: give engine='physics' or leave it out")
+    noise, step = engine_options(engine, noise, step)
     nominal = robot_of(robot)
     plan = path if isinstance(path, Plan) else parse_plan(str(path))
     cost = run_cost(plan, nominal, rate)
@@ -117,10 +110,10 @@ def simulate(
     true, injected = as_built(nominal, true_robot, errors, seeds[0])
     run: SimulatedRun
     if engine == "physics":
-        from ..physics.mjcf import DEFAULT_STEP
         from ..physics.run import simulate_physics
 
-        run = simulate_physics(plan, true, nominal, rate=rate, step=DEFAULT_STEP if step is None else step)
+        assert step is not None
+        run = simulate_physics(plan, true, nominal, rate=rate, step=step)
     else:
-        run = simulate_run(plan, true, nominal, rate=rate, noise=noise_of(noise or "typical"), trials=1, rng=seeds[1])
+        run = simulate_run(plan, true, nominal, rate=rate, noise=noise_of(noise), trials=1, rng=seeds[1])
     return Simulation(nominal, true, injected, path.name if isinstance(path, Plan) else str(path), run)

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT, RECOMMENDED_REPEATS
-from ..evaluation.physics_study import check_engine, check_physics_noise, physics_cost, physics_umbmark_study
+from ..evaluation.physics_study import engine_options, physics_cost, physics_umbmark_study
 from ..evaluation.procedure import (
     FLOOR_PROCEDURES,
     Cost,
@@ -28,6 +28,7 @@ from ..evaluation.procedure import (
     umbmark_study,
 )
 from ..evaluation.umbmark import LEVEL, UNITS, UMBmarkResult, analyze
+from ..physics.mjcf import DEFAULT_STEP
 from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..viz import DPI
 from .common import as_built, dumps, finite_or_none, noise_of, require_viz, robot_of, setting_name
@@ -188,11 +189,15 @@ class UMBmarkReport(UMBmarkStudy):
         return (
             f"omnikin umbmark {robot} --mode {self.mode} --runs {self.runs} --side {self.side:g} "
             f"--rate {self.rate:g} --seed {s.get('seed')}"
-            + (" --engine physics" if self.engine == "physics" else f" --noise {s.get('noise')}")
+            + (self._physics_options() if self.engine == "physics" else f" --noise {s.get('noise')}")
             + (f" --true-robot {s['true_robot']}" if s.get("true_robot") else f" --errors {s.get('errors')}")
             + (f" --trials {self.trials}" if self.trials > 1 else "")
             + ("" if s.get("calibrate", True) else " --no-calibrate")
         )
+
+    def _physics_options(self) -> str:
+        step = self.settings.get("step")
+        return " --engine physics" + (f" --step {step:g}" if step is not None and step != DEFAULT_STEP else "")
 
     def _measurement_note(self, stage: str) -> str:
         robot = self.settings.get("robot") or self.robot.name
@@ -298,6 +303,7 @@ def run_umbmark(
     trials: int = 1,
     calibrate: bool = True,
     engine: str = "kinematic",
+    step: float | None = None,
     max_memory: float = DEFAULT_MEMORY,
     max_time: float = DEFAULT_TIME,
     progress=None,
@@ -311,19 +317,28 @@ def run_umbmark(
     UMBmark procedures (Monte Carlo over the noise; the robot as built and its calibration
     stay the same); ``calibrate``: run the calibration step (:mod:`omnikin.evaluation.procedure`);
     ``engine``: ``kinematic`` or ``physics`` (every run in MuJoCo, and the floor of the nominal
-    robot: :mod:`omnikin.evaluation.physics_study`). ``progress`` is called with the name of each
+    robot: :mod:`omnikin.evaluation.physics_study`) at time step ``step`` [s] (default 2 ms;
+    physics only). ``progress`` is called with the name of each
     step (of each run, in physics). A study estimated to need more than
     ``max_memory`` [bytes] or ``max_time`` [s] is refused up front
     (:func:`~omnikin.evaluation.procedure.check_cost`).
     """
-    noise = engine_noise(engine, noise)
+    noise, step = engine_options(engine, noise, step)
     nominal = robot_of(robot)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
     seeds = streams(seed)
     noise_model = None if noise is None else noise_of(noise)
     check_cost(
         umbmark_cost(
-            nominal, mode=mode, runs=runs, side=side, rate=rate, trials=trials, calibrate=calibrate, engine=engine
+            nominal,
+            mode=mode,
+            runs=runs,
+            side=side,
+            rate=rate,
+            trials=trials,
+            calibrate=calibrate,
+            engine=engine,
+            step=step,
         ),
         max_memory=max_memory,
         max_time=max_time,
@@ -340,7 +355,8 @@ def run_umbmark(
         progress=progress,
     )
     if noise_model is None:
-        study = physics_umbmark_study(nominal, true, seed=seed, **common)
+        assert step is not None
+        study = physics_umbmark_study(nominal, true, seed=seed, step=step, **common)
     else:
         study = umbmark_study(nominal, true, noise=noise_model, seed=seed, **common)
     settings = {
@@ -349,6 +365,7 @@ def run_umbmark(
         "errors": None if true_robot is not None else setting_name(errors),
         "noise": setting_name(noise),
         "engine": engine,
+        "step": step,
         "mode": mode,
         "runs": int(runs),
         "side": float(side),
@@ -358,17 +375,6 @@ def run_umbmark(
         "calibrate": bool(calibrate),
     }
     return UMBmarkReport(**{f.name: getattr(study, f.name) for f in fields(study)}, settings=settings)
-
-
-def engine_noise(engine: str, noise):
-    """The noise model ``engine`` runs with: ``noise`` (default ``typical``) for the kinematic
-    engine, None for the physics engine, which refuses one in one line
-    (:func:`~omnikin.evaluation.physics_study.check_physics_noise`); an unknown engine is refused."""
-    check_engine(engine)
-    if engine == "physics":
-        check_physics_noise(noise)
-        return None
-    return "typical" if noise is None else noise
 
 
 def umbmark_cost(
@@ -381,14 +387,17 @@ def umbmark_cost(
     trials: int = 1,
     calibrate: bool = True,
     engine: str = "kinematic",
+    step: float | None = None,
 ) -> Cost:
     """What :func:`run_umbmark` with these settings will take (robot-samples, memory, time):
     :func:`~omnikin.evaluation.procedure.estimate_cost`, or
     :func:`~omnikin.evaluation.physics_study.physics_cost` for the physics engine."""
-    check_engine(engine)
+    _, step = engine_options(engine, None, step)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
-    cost = physics_cost if engine == "physics" else estimate_cost
-    return cost(robot_of(robot), side=side, mode=mode, runs=runs, rate=rate, trials=trials, calibrate=calibrate)
+    settings: dict[str, Any] = dict(side=side, mode=mode, runs=runs, rate=rate, trials=trials, calibrate=calibrate)
+    if step is not None:
+        return physics_cost(robot_of(robot), step=step, **settings)
+    return estimate_cost(robot_of(robot), **settings)
 
 
 # --- analyze ---------------------------------------------------------------------------------------

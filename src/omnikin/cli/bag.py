@@ -18,11 +18,11 @@ from ..errors import InfeasibleTwistError, InputError, OmnikinError, shorten
 from ..geometry import wrap_angle
 from .budget import Budget, add_budget_options, explained, require
 from .common import (
-    PHYSICS_HAS_NO_NOISE,
     add_as_built_options,
     add_method_option,
     add_output,
     add_output_options,
+    add_step_option,
     add_wheel_bound_options,
     console,
     declare_inputs,
@@ -186,7 +186,6 @@ def add_parsers(sub, robot_help: str) -> None:
     declare_inputs(sp, "bag")
     sp.set_defaults(func=cmd_bag_export)
 
-    from ..physics.mjcf import DEFAULT_STEP, STEP_RANGE
     from ..simulation.error_models import NOISE
     from ..simulation.motion import RATE_RANGE
 
@@ -219,12 +218,7 @@ def add_parsers(sub, robot_help: str) -> None:
         help="kinematic: wheel motion and error models; physics: MuJoCo with rollers and motors "
         "(extra physics; see below) (default kinematic)",
     )
-    sp.add_argument(
-        "--step",
-        type=number,
-        metavar="SEC",
-        help=f"time step of the physics engine [s], {STEP_RANGE[0]:g} to {STEP_RANGE[1]:g} (default {DEFAULT_STEP:g})",
-    )
+    add_step_option(sp)
     sp.add_argument(
         "--rate",
         type=number,
@@ -547,19 +541,10 @@ def _engine_options(args) -> bool:
     The physics engine maps ``--errors``, ``--true-robot`` and ``--seed`` (the robot as built is
     the physical model), has no random errors (a ``--noise`` other than none is refused: slip
     comes from the contacts, the encoders count whole ticks); ``--step`` is the physics engine's alone."""
-    if args.engine != "physics":
-        if args.step is not None:
-            raise InputError("--step is the time step of the physics engine: add --engine physics or drop --step")
-        args.noise = args.noise or "typical"
-        return False
-    if args.noise is not None:
-        raise InputError(f"--noise {shorten(args.noise)}: {PHYSICS_HAS_NO_NOISE}")
-    from ..physics.mjcf import DEFAULT_STEP, STEP_RANGE
+    from ..evaluation.physics_study import engine_options
 
-    args.step = DEFAULT_STEP if args.step is None else args.step
-    if not STEP_RANGE[0] <= args.step <= STEP_RANGE[1]:
-        raise InputError(f"--step must be a time step from {STEP_RANGE[0]:g} to {STEP_RANGE[1]:g} s, got {args.step:g}")
-    return True
+    args.noise, args.step = engine_options(args.engine, args.noise, args.step)
+    return args.engine == "physics"
 
 
 def _simulate_physics(args, plan, true, robot):

@@ -37,14 +37,6 @@ def robot_as_built(robot, true_robot: str | None, errors: str, seed):
     return as_built(robot, true_robot or None, errors, seed)
 
 
-PHYSICS_HAS_NO_NOISE = (
-    "the physics engine has no random error model (slip comes from the wheels' contacts, its encoders "
-    "count whole ticks); drop --noise"
-)
-"""Why ``--noise`` is refused wherever the robot as built drives in physics (``simulate --engine
-physics``, ``ros --backend physics``)."""
-
-
 def add_as_built_options(parser, *, defaults: bool = True, scope: str = "") -> None:
     """``--errors PROFILE``, ``--true-robot FILE`` and ``--seed N``: the robot as built
     (:func:`robot_as_built`: a seeded draw of the error profile, or a file replacing it).
@@ -66,6 +58,19 @@ def add_as_built_options(parser, *, defaults: bool = True, scope: str = "") -> N
         default=1 if defaults else None,
         metavar="N",
         help=f"{scope}random seed (default 1)",
+    )
+
+
+def add_step_option(parser, what: str = "time step of the physics engine") -> None:
+    """``--step SEC``, the physics engine's time step (default None: 2 ms, filled in and checked
+    by :func:`omnikin.physics.mjcf.time_step`)."""
+    from ..physics.mjcf import DEFAULT_STEP, STEP_RANGE
+
+    parser.add_argument(
+        "--step",
+        type=number,
+        metavar="SEC",
+        help=f"{what} [s], {STEP_RANGE[0]:g} to {STEP_RANGE[1]:g} (default {DEFAULT_STEP:g})",
     )
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import add_output, add_output_options, console, declare_inputs, load_robot, number
+from .common import add_output, add_output_options, add_step_option, console, declare_inputs, load_robot
 
 MJCF_EPILOG = """examples:
   omnikin mjcf tomasi-omni3 -o tomasi.xml
@@ -34,8 +34,6 @@ no ellipsoids: tyres are cylinders, rollers cylinders (drawn) and spheres (colli
 
 def add_parsers(sub, robot_help: str) -> None:
     """Add ``mjcf`` and ``urdf`` to ``sub``."""
-    from ..physics.mjcf import DEFAULT_STEP, STEP_RANGE
-
     sp = sub.add_parser(
         "mjcf",
         help="the robot's physical model as MuJoCo XML (MJCF)",
@@ -46,13 +44,7 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     add_output(sp, "-o", "--output", required=True, metavar="OUT.xml", help="file to write ('-': standard output)")
-    sp.add_argument(
-        "--step",
-        type=number,
-        default=DEFAULT_STEP,
-        metavar="SEC",
-        help=f"simulation time step [s], {STEP_RANGE[0]:g} to {STEP_RANGE[1]:g} (default {DEFAULT_STEP:g})",
-    )
+    add_step_option(sp, "simulation time step")
     add_output_options(sp)
     declare_inputs(sp, robots=("robot",))
     sp.set_defaults(func=cmd_mjcf)
@@ -82,10 +74,10 @@ def _write(args, text: str, what: str) -> int:
 
 
 def cmd_mjcf(args) -> int:
-    from ..physics.mjcf import mjcf
+    from ..physics.mjcf import mjcf, time_step
 
     robot = load_robot(args.robot)
-    return _write(args, mjcf(robot, args.step), f"MJCF model of {robot.name}")
+    return _write(args, mjcf(robot, time_step(args.step, "--step")), f"MJCF model of {robot.name}")
 
 
 def cmd_urdf(args) -> int:

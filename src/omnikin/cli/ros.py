@@ -8,7 +8,7 @@ import textwrap
 import numpy as np
 
 from ..ros.params import DEFAULTS
-from .common import PHYSICS_HAS_NO_NOISE, add_as_built_options, whole
+from .common import add_as_built_options, whole
 
 EPILOG = (
     """examples:
@@ -103,7 +103,7 @@ def baud(text: str) -> int:
 
 
 def cmd_ros(args) -> int:
-    from ..errors import InputError, shorten
+    from ..errors import InputError
     from ..ros import require_rclpy
     from ..ros.params import check_names, load_params, ros_args_names
     from ..runtime.backends import WheelBackend
@@ -121,8 +121,10 @@ def cmd_ros(args) -> int:
     def given(names):
         return [f"--{n.replace('_', '-')}" for n in names if getattr(args, n) is not None]
 
-    if args.backend == "physics" and args.noise is not None:
-        raise InputError(f"--noise {shorten(args.noise)}: {PHYSICS_HAS_NO_NOISE}")
+    if args.backend == "physics":
+        from ..evaluation.physics_study import check_physics_noise
+
+        check_physics_noise(args.noise)
     for owners, options in OPTIONS_OF.items():
         if args.backend not in owners and given(options):
             raise InputError(f"{', '.join(given(options))} apply only to --backend {' or '.join(owners)}")

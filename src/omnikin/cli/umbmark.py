@@ -22,18 +22,26 @@ from ..api.umbmark import (
     DEFAULT_ROBOT,
     UMBmarkReport,
     analyze_umbmark,
-    engine_noise,
     run_umbmark,
     umbmark_cost,
 )
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
-from ..evaluation.physics_study import ENGINES
+from ..evaluation.physics_study import ENGINES, engine_options
 from ..simulation.error_models import NOISE, PROFILES
 from ..simulation.motion import RATE_RANGE
 from ..viz import FIGURE_FORMATS, MAX_DPI, MIN_DPI, dpi_problem
 from .budget import add_budget_options, require
-from .common import add_output, add_output_options, command_inputs, console, declare_inputs, number, whole
+from .common import (
+    add_output,
+    add_output_options,
+    add_step_option,
+    command_inputs,
+    console,
+    declare_inputs,
+    number,
+    whole,
+)
 
 DEFAULT_OUT = "umbmark-report"
 """The report folder of ``omnikin umbmark`` without ``-o``."""
@@ -123,6 +131,7 @@ def add_parsers(sub, robot_help: str) -> None:
         "and the floor: UMBmark of the nominal robot, what roller contact alone gives, with its spread "
         f"(default {d['engine']})",
     )
+    add_step_option(sp, "time step of the physics engine (--engine physics)")
     sp.add_argument(
         "--rate",
         type=number,
@@ -306,7 +315,7 @@ class _Status:
 # --- umbmark -----------------------------------------------------------------------------------------
 def cmd_umbmark(args) -> int:
     inputs = command_inputs(args)
-    engine_noise(args.engine, args.noise)  # refuse a noise model for physics before the cost note
+    engine_options(args.engine, args.noise, args.step)  # refuse a wrong engine option before the cost note
     cost = umbmark_cost(
         args.robot,
         mode=args.mode,
@@ -316,6 +325,7 @@ def cmd_umbmark(args) -> int:
         trials=args.trials,
         calibrate=args.calibrate,
         engine=args.engine,
+        step=args.step,
     )
     require(
         args,
@@ -339,6 +349,7 @@ def cmd_umbmark(args) -> int:
             trials=args.trials,
             calibrate=args.calibrate,
             engine=args.engine,
+            step=args.step,
             max_memory=args.max_memory,
             max_time=args.max_time,
             progress=status.step,

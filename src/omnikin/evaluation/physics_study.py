@@ -43,6 +43,7 @@ import numpy as np
 from ..errors import InputError, shorten
 from ..model import Robot
 from ..odometry import encoded_wheels
+from ..physics.mjcf import DEFAULT_STEP, time_step
 from ..plans import CalibrationRun, Plan, umbmark_square
 from ..simulation.error_models import NOISE, SystematicErrors
 from ..simulation.motion import estimated_samples
@@ -88,10 +89,40 @@ def check_physics_noise(noise) -> None:
         )
 
 
-def physics_cost(robot: Robot, *, side: float, mode: str, runs: int, rate: float, trials: int, calibrate: bool) -> Cost:
+def engine_options(engine, noise, step) -> tuple[str | None, float | None]:
+    """The noise model and the time step ``engine`` runs with, checked in one place for every
+    command and entry point that offers an engine choice: the kinematic engine takes ``noise``
+    (default ``typical``) and refuses a time step; the physics engine refuses a noise model
+    (:func:`check_physics_noise`) and takes ``step`` [s]
+    (:func:`omnikin.physics.mjcf.time_step`, default 2 ms). Returns ``(noise, step)``, the
+    other one None."""
+    check_engine(engine)
+    if engine == "physics":
+        check_physics_noise(noise)
+        return None, time_step(step, "step (--step)")
+    if step is not None:
+        raise InputError(
+            "step (--step) is the time step of the physics engine: choose the physics engine (--engine physics) "
+            "or leave the step out"
+        )
+    return ("typical" if noise is None else noise), None
+
+
+def physics_cost(
+    robot: Robot,
+    *,
+    side: float,
+    mode: str,
+    runs: int,
+    rate: float,
+    trials: int,
+    calibrate: bool,
+    step: float = DEFAULT_STEP,
+) -> Cost:
     """Samples, memory and computing time of :func:`physics_umbmark_study`: every run's
     samples (:func:`~omnikin.simulation.motion.estimated_samples`, an upper bound) plus
-    :data:`TAIL_SECONDS`, at :data:`SECONDS_PER_SIMULATED_SECOND`."""
+    :data:`TAIL_SECONDS`, at :data:`SECONDS_PER_SIMULATED_SECOND` for the default step, in
+    proportion to the number of steps for a time step ``step`` [s]."""
     square = estimated_samples(umbmark_square("cw", side, mode), robot, rate)
     squares = 2 * runs * trials * (3 if calibrate else 2)  # before, after, the floor
     samples = squares * square
@@ -101,7 +132,8 @@ def physics_cost(robot: Robot, *, side: float, mode: str, runs: int, rate: float
         samples += RECOMMENDED_REPEATS * sum(estimated_samples(plan, robot, rate) for _, plan in calibration)
         plans += RECOMMENDED_REPEATS * len(calibration)
     samples += plans * TAIL_SECONDS * rate
-    return Cost(samples, float(BYTES), seconds_per_sample=SECONDS_PER_SIMULATED_SECOND / rate)
+    per_second = SECONDS_PER_SIMULATED_SECOND * DEFAULT_STEP / step
+    return Cost(samples, float(BYTES), seconds_per_sample=per_second / rate)
 
 
 @dataclass(frozen=True)
@@ -135,13 +167,13 @@ class PhysicsFloor(NoiseFloor):
         }
 
 
-def _drive(plan: Plan, true_robot: Robot, command: Robot, rate: float, rng: np.random.Generator):
-    """``plan`` driven in physics, each wheel of ``true_robot`` started at a roller phase drawn
-    uniformly from ``[0, 1)`` by ``rng`` (module docstring)."""
+def _drive(plan: Plan, true_robot: Robot, command: Robot, rate: float, step: float, rng: np.random.Generator):
+    """``plan`` driven in physics at time step ``step`` [s], each wheel of ``true_robot``
+    started at a roller phase drawn uniformly from ``[0, 1)`` by ``rng`` (module docstring)."""
     from ..physics.run import simulate_physics
 
     phase = rng.random(len(true_robot.rolling))
-    return simulate_physics(plan, true_robot, command, rate=rate, roller_phase=phase)
+    return simulate_physics(plan, true_robot, command, rate=rate, step=step, roller_phase=phase)
 
 
 def physics_umbmark(
@@ -154,12 +186,13 @@ def physics_umbmark(
     rate: float,
     seed: np.random.SeedSequence,
     trials: int = 1,
+    step: float = DEFAULT_STEP,
     progress: Progress | None = None,
     label: str = "UMBmark",
 ) -> tuple[list[UMBmarkResult], dict]:
     """``trials`` UMBmark procedures of ``runs`` runs per direction in the physics engine,
     ``true_robot`` commanded by ``command``, the roller phases of each direction's runs drawn
-    from its own child of ``seed`` (module docstring). Returns one
+    from its own child of ``seed`` (module docstring), at time step ``step`` [s]. Returns one
     :class:`~omnikin.evaluation.umbmark.UMBmarkResult` per procedure and the first run of each
     direction (``{"cw"|"ccw": PhysicsRun}``, with its ground truth). ``progress`` is called with
     ``label`` and the run's number before each run."""
@@ -173,7 +206,7 @@ def physics_umbmark(
         for _ in range(trials * runs):
             if progress is not None:
                 progress(f"{label}: run {len(eps['cw']) + len(eps['ccw']) + 1} of {total}")
-            run = _drive(plan, true_robot, command, rate, rng)
+            run = _drive(plan, true_robot, command, rate, step, rng)
             first.setdefault(direction, run)
             eps[direction].append(run.epsilon[0])
     results = [
@@ -196,11 +229,13 @@ def physics_calibration_runs(
     side: float,
     rate: float,
     seed: np.random.SeedSequence,
+    step: float = DEFAULT_STEP,
     progress: Progress | None = None,
 ) -> list[CalibrationRun]:
     """The recommended calibration runs of ``robot``, each driven
     :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times in the physics engine by
-    ``true_robot`` commanded by ``robot``, roller phases drawn from ``seed``; the measured end
+    ``true_robot`` commanded by ``robot`` at time step ``step`` [s], roller phases drawn from
+    ``seed``; the measured end
     pose is the true one (the default measurement sigma of
     :class:`~omnikin.plans.CalibrationRun`, as a runs file is read)."""
     rng = np.random.default_rng(seed)
@@ -211,7 +246,7 @@ def physics_calibration_runs(
         for _ in range(RECOMMENDED_REPEATS):
             if progress is not None:
                 progress(f"calibration runs: run {len(out) + 1} of {total}")
-            run = _drive(plan, true_robot, robot, rate, rng)
+            run = _drive(plan, true_robot, robot, rate, step, rng)
             out.append(CalibrationRun(plan, tuple(run.measured[0]), text))
     return out
 
@@ -228,17 +263,18 @@ def physics_umbmark_study(
     trials: int,
     calibrate: bool,
     seed: int,
+    step: float = DEFAULT_STEP,
     progress: Progress | None = None,
     level: float = LEVEL,
 ) -> UMBmarkStudy:
     """The study of the module docstring, as a :class:`~omnikin.evaluation.procedure.UMBmarkStudy`
     (``engine`` "physics", ``noise`` none, ``floor`` the nominal robot's :class:`PhysicsFloor`
     with its interval at ``level``, ``systematic`` the first procedures, no Borenstein
-    comparison); roller phases from ``seed``."""
+    comparison); roller phases from ``seed``, time step ``step`` [s]."""
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
     encoded_wheels(robot)
     rng = streams(seed)
-    opts: dict[str, Any] = dict(side=side, mode=mode, runs=runs, rate=rate, trials=trials, progress=progress)
+    opts: dict[str, Any] = dict(side=side, mode=mode, runs=runs, rate=rate, trials=trials, step=step, progress=progress)
     before, first = physics_umbmark(true_robot, robot, seed=rng["before"], label="UMBmark before calibration", **opts)
     trajectories = {"before": first}
     systematic = {"before": before[0].e_max_syst}
@@ -247,7 +283,7 @@ def physics_umbmark_study(
     cal_runs: list[CalibrationRun] = []
     if calibrate:
         cal_runs = physics_calibration_runs(
-            true_robot, robot, side=side, rate=rate, seed=rng["calibration"], progress=progress
+            true_robot, robot, side=side, rate=rate, seed=rng["calibration"], step=step, progress=progress
         )
         if progress is not None:
             progress("least-squares calibration")

@@ -103,7 +103,8 @@ rows of rollers             2 for omni wheels (gamma = 0): one row leaves gaps b
                             the side view (``physical.rows``)
 rollers per row             ``ceil(12 / R)``: 12 rollers around the wheel, each carrying it
                             over 30 deg (+-15 deg about the bottom), for a height ripple below
-                            0.5 % (omni, 2 x 6) and 1 % (mecanum, 1 x 12) of the radius, zero on average (``physical.rollers``)
+                            0.5 % (omni, 2 x 6) and 1 % (mecanum, 1 x 12) of the radius, zero
+                            on average (``physical.rollers``)
 friction                    1.0, rubber on concrete (``physical.friction``)
 driven wheels               those with an encoder or a ``physical.max_torque``; if none has
                             either, every rolling wheel (castors are always passive)

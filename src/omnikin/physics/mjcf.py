@@ -153,16 +153,25 @@ def _steered(parent: ET.Element, wheel: WheelBody) -> None:
     _wheel(fork, wheel, (-steering.trail, 0.0, 0.0), None)
 
 
-def mjcf(robot: PhysicalRobot | Robot, step: float = DEFAULT_STEP) -> str:
-    """The MJCF text of ``robot`` (a description, or a robot to :func:`describe`; module
-    docstring) with time step ``step`` [s] (:data:`STEP_RANGE`)."""
-    if isinstance(robot, Robot):
-        robot = describe(robot)
+def time_step(step: float | None = None, name: str = "time step") -> float:
+    """``step`` [s] (:data:`DEFAULT_STEP` when None) if it lies in :data:`STEP_RANGE`, else
+    :class:`~omnikin.errors.InputError` naming it as ``name`` (``"--step"``)."""
+    if step is None:
+        return DEFAULT_STEP
     if isinstance(step, bool) or not isinstance(step, (int, float)) or not STEP_RANGE[0] <= step <= STEP_RANGE[1]:
         raise InputError(
-            f"time step must be a number in [{STEP_RANGE[0]:g}, {STEP_RANGE[1]:g}] s (at most half the contact "
+            f"{name} must be a time step in [{STEP_RANGE[0]:g}, {STEP_RANGE[1]:g}] s (at most half the contact "
             f"time constant), got {shorten(step)}"
         )
+    return float(step)
+
+
+def mjcf(robot: PhysicalRobot | Robot, step: float = DEFAULT_STEP) -> str:
+    """The MJCF text of ``robot`` (a description, or a robot to :func:`describe`; module
+    docstring) with time step ``step`` [s] (:data:`STEP_RANGE`, :func:`time_step`)."""
+    if isinstance(robot, Robot):
+        robot = describe(robot)
+    step = time_step(step)
     root = ET.Element("mujoco", model=robot.name)
     _sub(root, "compiler", angle="radian", autolimits="true", inertiafromgeom="false")
     option = _sub(root, "option", timestep=_num(step), integrator="implicitfast", cone="elliptic")
