@@ -3,6 +3,7 @@ real key events (xdotool), its end state read from ``--report``, its window from
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -11,6 +12,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -73,14 +75,22 @@ def _window(display: str, sim: subprocess.Popen) -> str:
     raise AssertionError("no MuJoCo window appeared within 30 s")
 
 
-def _start(display: str, *args: str, robot: str = "tomasi-omni3") -> subprocess.Popen:
-    return subprocess.Popen(
+@contextlib.contextmanager
+def _running(display: str, *args: str, robot: str = "tomasi-omni3") -> Iterator[subprocess.Popen]:
+    """``omnikin sim ROBOT ARGS`` on ``display``, killed on the way out if it still runs."""
+    sim = subprocess.Popen(
         [sys.executable, "-m", "omnikin.cli.main", "sim", robot, *args],
         env=omnikin_env(DISPLAY=display),
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
     )
+    try:
+        yield sim
+    finally:
+        if sim.poll() is None:
+            sim.kill()
+            sim.wait()
 
 
 def _blue(rgb: np.ndarray) -> np.ndarray:
@@ -116,8 +126,9 @@ def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_p
     from PIL import ImageGrab
 
     report = tmp_path / "run.json"
-    sim = _start(display, "--duration", "10", "--speed", str(SPEED), "--turn", str(TURN), "--report", str(report))
-    try:
+    with _running(
+        display, "--duration", "10", "--speed", str(SPEED), "--turn", str(TURN), "--report", str(report)
+    ) as sim:
         win = _window(display, sim)
         _xdotool(display, "windowfocus", win)
         _xdotool(display, "keydown", "w")  # forward while held
@@ -139,10 +150,6 @@ def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_p
         time.sleep(1.2)
         _xdotool(display, "keyup", "w")
         _, err = sim.communicate(timeout=30)
-    finally:
-        if sim.poll() is None:
-            sim.kill()
-            sim.wait()
     assert sim.returncode == 0, err
     run = json.loads(report.read_text())
     assert run["end"] == "duration" and run["releases"]
@@ -175,15 +182,10 @@ def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_p
 
 
 def test_a_termination_signal_closes_the_window_and_exits_like_every_command(display):
-    sim = _start(display)  # no --duration: runs until stopped
-    try:
+    with _running(display) as sim:  # no --duration: runs until stopped
         _window(display, sim)
         sim.send_signal(signal.SIGTERM)
         _, err = sim.communicate(timeout=30)
-    finally:
-        if sim.poll() is None:
-            sim.kill()
-            sim.wait()
     # 143 = 128 + SIGTERM, the status of every omnikin command; not 139 (a segfault in the X
     # error of a render thread drawing while the process exits)
     assert sim.returncode == 143, err
@@ -230,10 +232,9 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
 
     robot = load_robot("synchro")
     report = tmp_path / "run.json"
-    sim = _start(
+    with _running(
         display, "--duration", "14", "--camera", "top", "--speed", str(SPEED), "--report", str(report), robot="synchro"
-    )
-    try:
+    ) as sim:
         win = _window(display, sim)
         _xdotool(display, "windowfocus", win)
         for key in ("bracketright", "bracketright", "bracketleft"):
@@ -261,10 +262,6 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
         shots = {"at_start": at_start, "top_after": top_after, "follow_after": follow_after, "panel": viewer_panel}
         for name, rgb in shots.items():
             Image.fromarray(rgb.astype(np.uint8)).save(tmp_path / f"{name}.png")  # to look at when it fails
-    finally:
-        if sim.poll() is None:
-            sim.kill()
-            sim.wait()
     assert sim.returncode == 0, err
     run = json.loads(report.read_text())
     events = run["events"]
