@@ -160,7 +160,9 @@ All of this is linear in ``a``, so the largest ``a`` with ``F_i <= f mu_i N_i`` 
 polytope lies at a vertex) is found in closed form; ``f = 1/2`` (:data:`RAMP_SHARE`): the other
 half is for uneven loads, the servo's tracking error and the contacts' compliance. Not counted:
 the sideways forces of fixed standard wheels (constraint forces, not the motors'), Coriolis
-terms while turning, and steering (the rows at the mounting angles).
+terms while turning, and steering (the rows at the mounting angles). Body motions the rims
+barely drive (parallel drive directions off by a robot's mounting errors) are left out of
+``P(a)`` (:func:`drivable_rows`).
 
 A robot whose contact points do not surround its centre of mass cannot stand (two wheels on
 one axle and no castor): :attr:`PhysicalRobot.support_margin` is then not positive, and the
@@ -205,6 +207,10 @@ INTEGRAL_TIME = 0.05
 RAMP_SHARE = 0.5
 """Part of each wheel's friction limit ``mu N`` and of its motor torque the command ramp may ask
 for (module docstring, "Command ramp")."""
+DRIVABLE = 0.05
+"""Relative singular value of the rim rows below which a body motion counts as not driven by the
+rims (:func:`drivable_rows`): about 3 deg between drive directions, six times the mounting
+error of the ``typical`` profile, a seventh of the smallest of a layout that drives it."""
 STEER_RATE = math.pi
 """Default steering rate limit [rad/s]."""
 STEER_FULL_TORQUE_ANGLE = 0.05
@@ -579,6 +585,26 @@ def polytope_max(rows: np.ndarray, costs: np.ndarray) -> np.ndarray:
     return best
 
 
+def drivable_rows(rows: np.ndarray, radii: np.ndarray, lever: float) -> np.ndarray:
+    """``rows`` ``(n, 3)`` [rad/s per twist] without the body motions the rims barely drive: with
+    the rim rows ``r_i J_i`` on the scaled twist ``(vx, vy, lever omega)``, singular directions
+    below :data:`DRIVABLE` of the largest are dropped (truncated singular value decomposition).
+
+    Why: wheels whose drive directions are parallel (a synchronous drive or XR4000 at their
+    mounting steering) produce no acceleration across them; the robot *as built*, its drive
+    directions off by its mounting errors (0.5 deg sigma in the ``typical`` profile), formally
+    does, with singular values of about 0.001 of the largest. Taken as real, such a direction
+    turns rim accelerations into body accelerations a thousand times larger and the ramp into
+    6e-5 m/s^2 (the synchronous drive as built could not start in a UMBmark run); the motion is
+    the tyres' sideways grip's, not the motors'. Layouts that drive every direction have ratios
+    of 0.38 (ackermann's rear axle) to 1."""
+    scale = np.array([1.0, 1.0, float(lever)])
+    rim = radii[:, None] * rows / scale
+    u, sv, vt = np.linalg.svd(rim, full_matrices=False)
+    keep = sv > DRIVABLE * sv[0] if len(sv) else np.zeros(0, dtype=bool)
+    return (u[:, keep] * sv[keep]) @ vt[keep] * scale / radii[:, None]
+
+
 def ramp_rim_acceleration(
     rows: np.ndarray,
     radii: np.ndarray,
@@ -587,6 +613,7 @@ def ramp_rim_acceleration(
     torque_limits: np.ndarray,
     axle_inertia: np.ndarray,
     gains: np.ndarray,
+    lever: float = 1.0,
     share: float = RAMP_SHARE,
 ) -> float:
     """The command ramp's rim acceleration ``a`` [m/s^2] (module docstring, "Command ramp"):
@@ -594,7 +621,11 @@ def ramp_rim_acceleration(
     ``traction_limits`` (``mu_i N_i`` [N]) or of its ``torque_limits`` [N m] for any body
     acceleration the wheels can produce. ``rows`` ``(n, 3)`` the driven wheels' rows [rad/s per
     twist], ``radii`` [m], ``mass_matrix`` :func:`planar_mass_matrix`, ``axle_inertia`` [kg m^2]
-    each wheel's own inertia about its axle, ``gains`` the speed servos' gains [N m s/rad]."""
+    each wheel's own inertia about its axle, ``gains`` the speed servos' gains [N m s/rad].
+    ``lever`` [m]: the length that makes a turn rate comparable with a speed (the largest wheel
+    distance from the body origin); the rows are first cut to their well-conditioned part
+    (:func:`drivable_rows`)."""
+    rows = drivable_rows(rows, radii, lever)
     k = np.diag(gains)
     distribution = k @ rows @ np.linalg.pinv(rows.T @ k @ rows) @ mass_matrix  # axle torque per xi'
     torque = polytope_max(radii[:, None] * rows, distribution)  # max |t_i| per unit rim acceleration
@@ -778,6 +809,7 @@ def _with_ramp(
         np.array([m.max_torque for m in motors if m is not None]),
         np.array([inertia for _, _, inertia in driven]),
         np.array([m.gain for m in motors if m is not None]),
+        lever=max(math.hypot(w.x, w.y) for w in robot.wheels) or 1.0,
     )
     ramps = {w.name: accel / w.radius for w, _, _ in driven}
     return [replace(b, motor=replace(b.motor, max_accel=ramps[b.name])) if b.motor is not None else b for b in wheels]
