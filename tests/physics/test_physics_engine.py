@@ -18,7 +18,7 @@ mujoco = pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (
 
 from omnikin import Encoder, Robot, Wheel, load_robot  # noqa: E402
 from omnikin.errors import InputError  # noqa: E402
-from omnikin.physics.description import describe, support_margin  # noqa: E402
+from omnikin.physics.description import describe, steered_support_margin  # noqa: E402
 from omnikin.physics.engine import PhysicsSim  # noqa: E402
 from omnikin.physics.run import TIPPED  # noqa: E402
 from omnikin.presets import PRESET_NAMES  # noqa: E402
@@ -200,14 +200,6 @@ def steer_first(sim: PhysicsSim, steer) -> None:
     raise AssertionError(f"steering not set within 5 s: error {error.max():.3g} rad")
 
 
-def support_at(robot, steer) -> float:
-    """Distance [m] of the robot's centre of mass (:func:`describe`) inside the polygon of its
-    contacts with the steerable wheels at ``steer`` [rad] (negative: outside, it cannot stand)."""
-    angles = dict(zip(robot.steer_names, np.atleast_1d(steer), strict=True))
-    contacts = np.array([w.contact_point(angles.get(w.name, 0.0)) for w in robot.wheels])
-    return support_margin(contacts, np.asarray(describe(robot).com[:2]))
-
-
 @pytest.mark.parametrize("name", PRESET_NAMES)
 def test_every_preset_drives_its_motions_as_its_kinematics_say(name):
     """Every preset, every motion its mobility allows (forward, sideways, an arc, combined with a
@@ -225,7 +217,9 @@ def test_every_preset_drives_its_motions_as_its_kinematics_say(name):
     for label, _, ik in motions:
         sim = PhysicsSim(robot)  # from rest (a shared model would keep its free rollers' spin)
         steer = ik.steer_angles if robot.steerable else None
-        if steer is not None and support_at(robot, steer) <= 0.0:  # it cannot stand there
+        if (
+            steer is not None and steered_support_margin(robot, describe(robot).com, steer) <= 0.0
+        ):  # it cannot stand there
             sim.command(np.zeros(len(robot.rolling)), steer)
             tilts = [sim.tilt for _ in range(40) if sim.advance(sim.time + 0.05) is None]
             assert max(tilts) > TIPPED, f"{name} {label}: stands where its contacts do not surround its weight"

@@ -136,13 +136,22 @@ def test_commands_beyond_the_motors_speed_limit_are_counted_and_warned(tmp_path,
     assert err.count("\n") == 1 and "held at the limit" in err
 
 
-def test_a_robot_that_tips_over_ends_the_run_with_one_line(tmp_path, capsys):
-    """Villasenor's legs trail up to 255 mm behind steering axes 150 mm apart: swinging them to
-    90 deg takes the contacts out from under the centre of mass (docs/physics.md, "Known limits")."""
+@pytest.mark.parametrize(
+    ("path", "message"),
+    [
+        # legs parallel to y: the contacts lie 0.17-0.2 m behind the hips, the centre of mass 74 mm outside them
+        ("line 1 90", "cannot stand with the steering of segment 1 of the path"),
+        # legs parallel to x stand (10 mm of support) but the swing there carries the chassis over
+        ("line 1", "tipped over at t ="),
+    ],
+)
+def test_a_robot_that_cannot_stand_or_tips_over_ends_the_run_with_one_line(tmp_path, capsys, path, message):
+    """Villasenor's legs trail up to 255 mm behind steering axes 150 mm apart: their contacts
+    swing with the steering (docs/physics.md, "Known limits")."""
     rc, _, err = run_cli(capsys, "simulate", "villasenor-omni3", "--engine", "physics", "--errors", "none",
-                         "--path", "line 1 90", "--log", tmp_path / "log.csv")  # fmt: skip
+                         "--path", path, "--log", tmp_path / "log.csv")  # fmt: skip
     assert rc == 1
-    assert err.count("\n") == 1 and "tipped over at t =" in err
+    assert err.count("\n") == 1 and message in err
     assert not (tmp_path / "log.csv").exists()
 
 

@@ -553,6 +553,16 @@ def support_margin(contacts: np.ndarray, point: np.ndarray) -> float:
     return margin
 
 
+def steered_support_margin(robot: Robot, com, steer) -> float:
+    """:func:`support_margin` of the centre of mass ``com`` (x, y) [m] among the contacts of
+    ``robot``'s wheels with its steerable wheels at ``steer`` [rad] (file order): an off-centred
+    wheel's contact trails its steering axis and swings round it as it steers
+    (:meth:`omnikin.wheels.Wheel.contact_point`); castors and fixed wheels at their mounting."""
+    angles = dict(zip(robot.steer_names, np.atleast_1d(np.asarray(steer, dtype=float)), strict=True))
+    contacts = np.array([w.contact_point(angles.get(w.name, 0.0)) for w in robot.wheels])
+    return support_margin(contacts, np.asarray(com, dtype=float)[:2])
+
+
 # --- command ramp -------------------------------------------------------------------------------
 def planar_mass_matrix(mass: float, com, yaw_inertia: float) -> np.ndarray:
     """Mass matrix ``(3, 3)`` of a rigid body for the planar twist ``(vx, vy, omega)`` of the body

@@ -50,6 +50,7 @@ from ..odometry import batch_odometry, encoded_wheels
 from ..plans import Plan
 from ..simulation.motion import SampledPlan, check_rate_range, sample_plan
 from ..simulation.simulate import SimulatedRun, commanded_angles, counter_output
+from .description import steered_support_margin
 from .engine import PhysicsError, PhysicsSim
 from .mjcf import DEFAULT_STEP
 
@@ -141,6 +142,7 @@ def simulate_physics(
         segment = int(sampled.segment[k])
         steer_k = steer_cmd[k] if steer_cmd is not None else None
         if steer_k is not None and (k == 0 or segment != sampled.segment[k - 1]):
+            _require_support(sim, steer_k, segment)
             waited = 0.0
             while waited < ALIGN_MAX and not (
                 np.max(np.abs(wrap_angle(steer_k - sim.steer_angles))) < STEER_ALIGNED and _at_rest(sim)
@@ -167,6 +169,20 @@ def simulate_physics(
     truth[..., 2] = wrap_angle(truth[..., 2])  # headings in [-pi, pi), as the kinematic engine's truth
     measured = truth[:, -1, :].copy()
     return PhysicsRun(extended, t, ticks, steer, odometry, truth, measured, readings, saturated=sim.saturated)
+
+
+def _require_support(sim: PhysicsSim, steer: np.ndarray, segment: int) -> None:
+    """Refuse, before steering, a segment whose steering puts the contacts of the robot's wheels
+    (off-centred wheels swing theirs round the steering axes) where they do not surround its
+    centre of mass: it would tip over (:class:`~omnikin.physics.engine.PhysicsError`)."""
+    margin = steered_support_margin(sim.robot, sim.description.com, steer)
+    if margin <= 0.0:
+        degrees = ", ".join(f"{math.degrees(a):.4g}" for a in steer)
+        raise PhysicsError(
+            f"robot {sim.robot.name!r} cannot stand with the steering of segment {segment + 1} of the path "
+            f"({degrees} deg): its off-centred wheels' contacts would leave its centre of mass "
+            f"{-1000.0 * margin:.3g} mm outside their support, and it would tip over"
+        )
 
 
 def _at_rest(sim: PhysicsSim) -> bool:
