@@ -17,9 +17,14 @@ rad/s, with rank tolerance) with the fixed wheels' constraints imposed exactly::
     twist = N pinv(A N) b,   A = [J; S / r],   b = [omega; 0]
 
 where ``N`` spans the null space of ``C_f`` and ``S`` holds the sliding rows of
-centred steerable wheels at their measured steering angles, each divided by its
-radius so that it weighs like a wheel-speed reading of zero (a measured steering
-angle says that hub does not slide sideways). For a layout of Swedish wheels
+steerable wheels at their measured steering angles (:meth:`omnikin.wheels.Wheel.swivel_row`),
+each divided by its radius so that it weighs like a wheel-speed reading of zero: a measured
+steering angle says that the contact does not slide sideways. For an off-centred wheel the row
+reads ``offset * beta' / r`` at steering rate ``beta'``; forward kinematics and odometry take
+the steering as steady over an interval (zero), as the kinematic engines drive it (they turn
+the steering at once, between samples). Without these rows the off-centred wheels of XR4000
+standing parallel leave the motion across them to rounding: in a physics run, steering angles
+0.2 urad apart turned encoder ticks into kilometres of odometry. For a layout of Swedish wheels
 only, ``N = I`` and ``A = J``: ``twist = pinv(J) omega`` exactly as in the
 conventions. The residual ``b - A twist`` measures slip / model error.
 """
@@ -190,7 +195,7 @@ class FKResult:
     """Forward kinematics: ``twist`` ``(..., 3)``, ``residual`` ``(..., n_rows)``.
 
     The residual rows are the wheel readings [rad/s] followed by one row per
-    centred steerable wheel (its side slip over its radius [rad/s]).
+    steerable wheel (its side slip over its radius [rad/s]).
     """
 
     twist: np.ndarray
@@ -429,8 +434,8 @@ class Robot:
     def fk_rows(self, steer=None, wheels: Sequence[str] | None = None) -> np.ndarray:
         """Rows ``A = [J; S/r]`` ``(..., n_rows, 3)`` that forward kinematics fits (module docstring).
 
-        ``J``: rolling rows of the chosen wheels; ``S/r``: sliding rows of the chosen centred
-        steerable wheels over their radii. ``steer`` ``(..., n_steer)`` [rad].
+        ``J``: rolling rows of the chosen wheels; ``S/r``: sliding rows of the chosen steerable
+        wheels over their radii (:meth:`omnikin.wheels.Wheel.swivel_row`). ``steer`` ``(..., n_steer)`` [rad].
         """
         return self._fk_rows(self._steer_array(steer), wheels)
 
@@ -439,9 +444,7 @@ class Robot:
         jac = self._jacobian(steer, wheels)
         chosen = {w.name for w in (self.rolling if wheels is None else [self.wheel(n) for n in wheels])}
         by = self._steer_of(steer)
-        extra = [
-            w.sliding_row(by[w.name]) / w.radius for w in self.steerable if w.is_centred_steerable and w.name in chosen
-        ]
+        extra = [w.swivel_row(by[w.name]) / w.radius for w in self.steerable if w.name in chosen]
         if not extra:
             return jac
         shape = np.broadcast_shapes(jac.shape[:-2], *[e.shape[:-1] for e in extra])

@@ -109,7 +109,7 @@ class Odometry:
 
     After each update: ``pose`` (x, y, theta) [m, m, rad; theta in [-pi, pi)], ``twist``
     (mean body twist over the last interval), ``residual`` (forward-kinematics residual
-    [rad/s], one entry per fitted row: the wheels, then centred steerable wheels), ``t``,
+    [rad/s], one entry per fitted row: the wheels, then steerable wheels), ``t``,
     ``samples``.
     """
 

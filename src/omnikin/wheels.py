@@ -22,7 +22,9 @@ Rows implemented here (each a ``(..., 3)`` array acting on the twist):
   (the swivel moves the contact along ``u``'s normal only).
 * sliding row, standard and centred-steerable wheels: no side slip,
   ``(-sin delta, cos delta) . v_p = 0`` i.e.
-  ``[-sin delta, cos delta, x cos delta + y sin delta] . twist = 0`` [m/s].
+  ``[-sin delta, cos delta, x cos delta + y sin delta] . twist = 0`` [m/s];
+  off-centred steerable wheels (``swivel_row``): the contact does not slide sideways,
+  ``(-sin delta, cos delta) . v_p - offset omega = offset beta'`` at steering rate ``beta'``.
 """
 
 from __future__ import annotations
@@ -254,6 +256,16 @@ class Wheel:
         out[..., 0] = -sd
         out[..., 1] = cd
         out[..., 2] = self.x * cd + self.y * sd
+        return out
+
+    def swivel_row(self, steer=0.0) -> np.ndarray:
+        """Sliding row ``(..., 3)`` [m/s per twist] of a steerable wheel, off-centred or not:
+        ``n . v_p - offset * omega`` (``n = (-sin delta, cos delta)``), which equals
+        ``offset * beta'`` at steering rate ``beta'`` (the contact, trailing ``p`` by ``offset``
+        along ``-u``, does not slide sideways); for a centred wheel the plain
+        :meth:`sliding_row` (= 0)."""
+        out = self.sliding_row(steer)
+        out[..., 2] -= self.offset
         return out
 
     def roller_row(self) -> np.ndarray:

@@ -226,6 +226,21 @@ def test_off_centred_steerable_needs_no_steering_rate():
         assert n @ vc == pytest.approx(0.0, abs=1e-12)
 
 
+@pytest.mark.parametrize("heading", [0.0, 90.0])
+def test_off_centred_wheels_standing_parallel_still_give_the_motion(heading):
+    """XR4000 driving straight: its four wheels stand parallel, so their rolling rows see no motion
+    across them. Measured steering angles a fraction of a microradian apart (a physics run) and
+    wheel speeds off by a tick's worth must not turn that blind direction into kilometres: the
+    off-centred wheels' contacts do not slide sideways either (n . v_p = offset omega, steady)."""
+    robot = load_robot("xr4000")
+    twist = 0.3 * np.array([math.cos(math.radians(heading)), math.sin(math.radians(heading)), 0.0])
+    ik = robot.ik(twist)
+    steer = ik.steer_angles + np.array([1.2e-7, -0.4e-7, 0.9e-7, -1.2e-7])
+    speeds = ik.wheel_speeds + np.array([1e-3, -1e-3, -1e-3, 1e-3])
+    measured = robot.fk(speeds, steer).twist
+    assert measured == pytest.approx(twist, abs=1e-3)  # the speeds' error: 5e-5 m/s at the rims
+
+
 def test_steerable_fk_round_trip():
     for name in ("ackermann", "synchro", "xr4000", "villasenor-omni3"):
         robot = load_robot(name)
