@@ -34,6 +34,7 @@ pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (extra 'ph
 from omnikin import load_robot  # noqa: E402
 from omnikin.physics.description import describe  # noqa: E402
 from omnikin.physics.engine import PhysicsSim  # noqa: E402
+from omnikin.physics.mjcf import DEFAULT_STEP  # noqa: E402
 from omnikin.streaming import Odometry  # noqa: E402
 
 DT = 0.05  # encoder read interval [s]
@@ -41,9 +42,8 @@ HOLD = 1.0  # time each step command is held [s]
 SLIP = 0.1  # largest rim slip [m/s] that is still rolling (the soft contacts creep): 20 % of 0.5 m/s
 STEPS = {  # step commands reachable by the motors: 0.5 m/s along x, along y, a turn
     "omni4": [(0.5, 0.0, 0.0), (0.0, 0.5, 0.0), (0.0, 0.0, 1.0)],
-    # mecanum4 strafing is left out: its first 50 ms after a 0.5 m/s sideways step still show a
-    # residual of 0.14 rad/s (2.2 times the bound; none at half the ramp): a load the ramp's
-    # derivation does not count (known limit, docs/physics.md)
+    # mecanum4 strafing runs at a 1 ms step (below): at the default 2 ms the first 20 ms of the
+    # servo's transient overshoot the ramp's torque 2.3-fold (a discretisation effect, docs/physics.md)
     "mecanum4": [(0.5, 0.0, 0.0), (0.0, 0.0, 1.0)],
     "tomasi-omni3": [(0.5, 0.0, 0.0), (0.0, 0.5, 0.0), (0.0, 0.0, 1.0)],
     "diff-drive": [(0.5, 0.0, 0.0), (0.0, 0.0, 1.0)],
@@ -74,16 +74,17 @@ def effective_kinematics(robot):
     return replace(robot, wheels=tuple(wheels))
 
 
-def step_drive(robot, description=None):
-    """Each step command held HOLD s then a step to rest; the largest residual [rad/s] and rim slip [m/s]."""
-    sim = PhysicsSim(robot, description=description)
+def step_drive(robot, description=None, twists=None, step=DEFAULT_STEP):
+    """Each step command (``twists``, default ``STEPS[robot.name]``) held HOLD s then a step to
+    rest, at time step ``step`` [s]; the largest residual [rad/s] and rim slip [m/s]."""
+    sim = PhysicsSim(robot, description=description, step=step)
     rolling = effective_kinematics(robot)
     odometry = Odometry(rolling)
     odometry.update(0.0, sim.encoder_ticks())
     rows = np.asarray(rolling.jacobian())
     radii = np.array([w.radius for w in robot.rolling])
     residual = slip = 0.0
-    for twist in STEPS[robot.name]:
+    for twist in STEPS[robot.name] if twists is None else twists:
         for command in (robot.ik(twist).wheel_speeds, np.zeros(len(radii))):
             sim.command(command)
             start = sim.time
@@ -101,5 +102,18 @@ def test_a_step_command_at_the_default_ramp_leaves_the_wheels_rolling(name):
     bound = quantisation_bound(robot, DT)
     residual, slip = step_drive(robot)
     print(f"{name}: residual {residual:.4f} rad/s (bound {bound:.4f}), rim slip {slip * 1e3:.1f} mm/s")
+    assert residual <= bound * (1 + 1e-9) + 1e-9
+    assert slip < SLIP
+
+
+def test_mecanum4_strafing_from_rest_leaves_the_wheels_rolling_at_a_converged_step():
+    """The strafing step at 1 ms: the ramp's derivation holds once the servo's start-up transient
+    is resolved (at 2 ms the first 20 ms overshoot the ramp's torque 2.3-fold and the wheels that
+    the lateral acceleration unloads reach their friction limit; docs/physics.md, "The command
+    ramp")."""
+    robot = load_robot("mecanum4")
+    bound = quantisation_bound(robot, DT)
+    residual, slip = step_drive(robot, twists=[(0.0, 0.5, 0.0)], step=0.001)
+    print(f"mecanum4 strafing at 1 ms: residual {residual:.4f} rad/s (bound {bound:.4f}), rim slip {slip * 1e3:.1f} mm/s")
     assert residual <= bound * (1 + 1e-9) + 1e-9
     assert slip < SLIP
