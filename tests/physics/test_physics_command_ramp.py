@@ -114,6 +114,8 @@ def test_mecanum4_strafing_from_rest_leaves_the_wheels_rolling_at_a_converged_st
     robot = load_robot("mecanum4")
     bound = quantisation_bound(robot, DT)
     residual, slip = step_drive(robot, twists=[(0.0, 0.5, 0.0)], step=0.001)
-    print(f"mecanum4 strafing at 1 ms: residual {residual:.4f} rad/s (bound {bound:.4f}), rim slip {slip * 1e3:.1f} mm/s")
+    print(
+        f"mecanum4 strafing at 1 ms: residual {residual:.4f} rad/s (bound {bound:.4f}), rim slip {slip * 1e3:.1f} mm/s"
+    )
     assert residual <= bound * (1 + 1e-9) + 1e-9
     assert slip < SLIP
