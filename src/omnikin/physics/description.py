@@ -24,10 +24,14 @@ by default every row in the wheel's mid-plane (``y_j = 0``; the rollers of diffe
 overlap, which the simulation allows), with ``physical.width`` ``w`` the rows spread evenly over
 it, ``y_j = (j - (R - 1) / 2) w / R``, as on a built wheel. Why the default: the contact then
 stays on the wheel's mid-plane, where the kinematics puts it. Rows side by side put it ``d``
-off that plane on alternate rollers, and the hub's lever about the robot centre alternates
-between ``l + d`` and ``l - d``: the robot turns ``l^2 / (l^2 - d^2)`` times as fast as the
-kinematics says on average (0.57 % for tomasi-omni3 with rows 17 mm apart; measured
-0.30-0.83 % depending on how the wheels' roller phases stand to each other, docs/physics.md).
+off that plane on alternate rollers: each wheel's lever about the robot centre alternates
+between ``l + d`` and ``l - d``, and the body rolls on whichever rows carry its wheels, about a
+shifted instantaneous centre. For three wheels 120 deg apart it turns at ``(r omega / l) /
+(1 + S d / (3 l))``, ``S`` the sum over the wheels of +1 (outer row) or -1 (inner row);
+averaged over the rollers' period the excess over the kinematics depends on the wheels'
+relative roller phases: ``d^2 / (l^2 - d^2)`` all in phase (0.57 % for tomasi-omni3 with rows
+17 mm apart), ``d^2 / (9 l^2)`` with one half a period off (0.063 %), ``d^2 / (3 l^2)`` on
+average over random phases (docs/physics.md, "Rows side by side", with the measurements).
 That is how a built double-row wheel drives; give its width to see it.
 Each roller is an **ellipsoid of revolution** (exactly round cross-section, so a roller's own
 spin never lifts the wheel) with semi-axis ``a`` along its spin axis and ``b`` across it, its
