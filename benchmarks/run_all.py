@@ -20,7 +20,14 @@ from _common import machine, save  # noqa: E402
 
 if __name__ == "__main__":
     print("machine:", machine())
-    for module in (bench_streaming, bench_batch, bench_accuracy, bench_simulation, bench_umbmark, bench_runtime):
+    modules = [bench_streaming, bench_batch, bench_accuracy, bench_simulation, bench_umbmark, bench_runtime]
+    try:
+        import bench_physics  # needs the extra 'physics' (MuJoCo)
+
+        modules.append(bench_physics)
+    except ImportError as e:
+        print(f"physics skipped: {e} (pip install -e '.[physics]')")
+    for module in modules:
         name = module.__name__.replace("bench_", "")
         path = save(name, module.main())
         print(f"-> {path}\n")
