@@ -177,9 +177,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from itertools import combinations
 
 import numpy as np
+from scipy.spatial import ConvexHull, QhullError
 
 from ..errors import InputError
 from ..model import Robot
@@ -578,25 +578,33 @@ def planar_mass_matrix(mass: float, com, yaw_inertia: float) -> np.ndarray:
 
 def polytope_max(rows: np.ndarray, costs: np.ndarray) -> np.ndarray:
     """For each row ``c`` of ``costs`` ``(k, d)``, ``max |c . x|`` over ``x`` in the row space of
-    ``rows`` ``(n, d)`` with ``|rows x|_inf <= 1`` (a bounded polytope there): the largest value
-    over its vertices, where ``rank`` of the constraints are active."""
-    u, sv, vt = np.linalg.svd(rows, full_matrices=False)
+    ``rows`` ``(n, d)`` with ``|rows x|_inf <= 1`` (a bounded, centrally symmetric polytope there):
+    the largest value over its vertices.
+
+    In the orthonormal coordinates ``y`` of the row space (``x = B y``, ``g_i = rows_i B``) the
+    polytope ``{y : |g_i . y| <= 1}`` is the polar of the convex hull of the points ``+-g_i``
+    (Ziegler, "Lectures on Polytopes", 2.3): each facet ``{p : h . p = 1}`` of that hull is the
+    vertex ``y = h`` of the polytope. The hull of ``2 n`` points in the rank (at most 3)
+    dimensions costs ``O(n log n)`` (Qhull, Barber, Dobkin and Huhdanpaa, "The Quickhull
+    algorithm for convex hulls"), where enumerating every choice of ``rank`` active constraints
+    cost ``O(n^rank)``: 512 wheels took minutes, now about a millisecond."""
+    _, sv, vt = np.linalg.svd(rows, full_matrices=False)
     rank = int(np.sum(sv > sv[0] * 1e-9)) if len(sv) else 0
     if rank == 0:
         return np.zeros(len(costs))
     basis = vt[:rank].T  # (d, rank): x = basis y
     g = rows @ basis
-    values = costs @ basis
-    best = np.zeros(len(costs))
-    signs = np.array(np.meshgrid(*[[-1.0, 1.0]] * rank)).reshape(rank, -1).T
-    for chosen in combinations(range(len(g)), rank):
-        a = g[list(chosen)]
-        if abs(np.linalg.det(a)) < 1e-12 * max(1.0, float(np.abs(a).max()) ** rank):
-            continue
-        for y in np.linalg.solve(a, signs.T).T:
-            if np.abs(g @ y).max() <= 1.0 + 1e-9:
-                best = np.maximum(best, np.abs(values @ y))
-    return best
+    values = costs @ basis  # (k, rank)
+    if rank == 1:  # a segment: |y| <= 1 / max |g_i|
+        return np.abs(values[:, 0]) / float(np.abs(g).max())
+    points = np.vstack([g, -g])
+    try:
+        hull = ConvexHull(points)
+    except QhullError:  # nearly flat within the rank kept: joggle the input (relative 1e-11)
+        hull = ConvexHull(points, qhull_options="QJ")
+    # facet equations: normal . p + offset <= 0 inside, offset < 0 (the origin is inside)
+    vertices = hull.equations[:, :-1] / -hull.equations[:, -1:]
+    return np.abs(values @ vertices.T).max(axis=1)
 
 
 def drivable_rows(rows: np.ndarray, radii: np.ndarray, lever: float) -> np.ndarray:
