@@ -190,10 +190,11 @@ def test_time_step_belongs_to_the_physics_engine_and_is_checked_before_work():
     for bad in (0.004, 0.0, -1e-3, float("nan"), True, "0.001"):
         with pytest.raises(InputError, match=r"^step \(--step\) must be a time step in \[1e-05, 0\.002\] s"):
             run_umbmark("tomasi-omni3", engine="physics", step=bad, max_time=1e-9, **SMALL)
-    # the computing time is proportional to the number of steps per simulated second
+    # the computing time follows the number of steps per simulated second (each step's cost is
+    # measured on the model, within some 30 %; the samples' share does not change with the step)
     half = umbmark_cost("tomasi-omni3", engine="physics", step=0.001, side=1.0, runs=1, rate=50.0)
     default = umbmark_cost("tomasi-omni3", engine="physics", side=1.0, runs=1, rate=50.0)
-    assert half.seconds == pytest.approx(2.0 * default.seconds, rel=1e-12)
+    assert 1.4 * default.seconds < half.seconds < 2.6 * default.seconds
     assert half.samples == default.samples
 
 

@@ -91,29 +91,22 @@ def simulate(
     nominal = robot_of(robot)
     plan = path if isinstance(path, Plan) else parse_plan(str(path))
     cost = run_cost(plan, nominal, rate)
-    seconds = cost.seconds
-    if engine == "physics":
-        from ..physics.run import SECONDS_PER_SIMULATED_SECOND, TAIL_MAX
-
-        seconds = (cost.samples / rate + TAIL_MAX) * SECONDS_PER_SIMULATED_SECOND
-    require_within(
-        "simulate",
-        memory=cost.bytes,
-        seconds=seconds,
-        max_memory=max_memory,
-        max_time=max_time,
-        names=ARGUMENTS,
-        hint="lower rate or shorten path",
-        size=f"{cost.samples:.3g} samples",
-    )
     seeds = list(streams(seed).values())
     true, injected = as_built(nominal, true_robot, errors, seeds[0])
-    run: SimulatedRun
+    limits = dict(max_memory=max_memory, max_time=max_time, names=ARGUMENTS, size=f"{cost.samples:.3g} samples")
     if engine == "physics":
-        from ..physics.run import simulate_physics
+        from ..physics.cost import physics_run_cost
+        from ..physics.run import TAIL_MAX, simulate_physics
+        from ..simulation.motion import sample_plan
 
         assert step is not None
-        run = simulate_physics(plan, true, nominal, rate=rate, step=step)
+        tail = cost.bytes / max(cost.samples, 1.0) * TAIL_MAX * rate
+        require_within("simulate", memory=cost.bytes + tail, hint="lower rate or shorten path", **limits)
+        sampled = sample_plan(plan, nominal, rate)
+        estimate = physics_run_cost(sampled, true, nominal, step)
+        require_within("simulate", seconds=estimate.seconds, hint="shorten path or raise step", **limits)
+        run: SimulatedRun = simulate_physics(sampled, true, nominal, rate=rate, step=step)
     else:
+        require_within("simulate", memory=cost.bytes, seconds=cost.seconds, hint="lower rate or shorten path", **limits)
         run = simulate_run(plan, true, nominal, rate=rate, noise=noise_of(noise), trials=1, rng=seeds[1])
     return Simulation(nominal, true, injected, path.name if isinstance(path, Plan) else str(path), run)

@@ -9,6 +9,7 @@ it and :meth:`~UMBmarkReport.write` writes the report folder.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 from typing import Any
 
@@ -27,7 +28,8 @@ from ..evaluation.procedure import (
     streams,
     umbmark_study,
 )
-from ..evaluation.umbmark import LEVEL, UNITS, UMBmarkResult, analyze
+from ..evaluation.umbmark import LEVEL, UNITS, UMBmarkResult, analyze, require_square
+from ..odometry import encoded_wheels
 from ..physics.mjcf import DEFAULT_STEP
 from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..viz import DPI
@@ -307,6 +309,7 @@ def run_umbmark(
     max_memory: float = DEFAULT_MEMORY,
     max_time: float = DEFAULT_TIME,
     progress=None,
+    on_cost: Callable[[Cost], None] | None = None,
 ) -> UMBmarkReport:
     """UMBmark of ``robot`` as built, calibration, UMBmark again (``omnikin umbmark``).
 
@@ -321,29 +324,33 @@ def run_umbmark(
     physics only). ``progress`` is called with the name of each
     step (of each run, in physics). A study estimated to need more than
     ``max_memory`` [bytes] or ``max_time`` [s] is refused up front
-    (:func:`~omnikin.evaluation.procedure.check_cost`).
+    (:func:`~omnikin.evaluation.procedure.check_cost`), after every setting has been checked;
+    ``on_cost``, if given, is called with that estimate first (``omnikin umbmark`` checks it
+    against its options and says when the study will take long).
     """
     noise, step = engine_options(engine, noise, step)
     nominal = robot_of(robot)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
     seeds = streams(seed)
     noise_model = None if noise is None else noise_of(noise)
-    check_cost(
-        umbmark_cost(
-            nominal,
-            mode=mode,
-            runs=runs,
-            side=side,
-            rate=rate,
-            trials=trials,
-            calibrate=calibrate,
-            engine=engine,
-            step=step,
-        ),
-        max_memory=max_memory,
-        max_time=max_time,
-    )
+    encoded_wheels(nominal)  # UMBmark measures with the encoders
+    require_square(nominal, side, mode)
     true, injected = as_built(nominal, true_robot, errors, seeds["robot"])
+    # every setting checked: only now the estimate (in physics: the model built and timed)
+    cost = umbmark_cost(
+        nominal,
+        mode=mode,
+        runs=runs,
+        side=side,
+        rate=rate,
+        trials=trials,
+        calibrate=calibrate,
+        engine=engine,
+        step=step,
+    )
+    if on_cost is not None:
+        on_cost(cost)
+    check_cost(cost, max_memory=max_memory, max_time=max_time)
     common: dict[str, Any] = dict(
         injected=injected,
         side=float(side),

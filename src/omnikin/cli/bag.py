@@ -9,6 +9,7 @@ RPE, in the plane).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 
@@ -414,6 +415,16 @@ def parse_paths(text: str):
     return plan
 
 
+@contextlib.contextmanager
+def _drivable(args):
+    """A path the robot cannot drive (:class:`~omnikin.errors.InfeasibleTwistError`) as one line
+    naming ``--path``."""
+    try:
+        yield
+    except InfeasibleTwistError as exc:
+        raise InputError(f"--path {shorten(args.path)}: {exc.detail}; choose a path this robot can drive") from None
+
+
 def cmd_simulate(args) -> int:
     from ..io.bags import record_run, require_rosbags
     from ..simulation.error_models import noise as noise_profile
@@ -436,11 +447,21 @@ def cmd_simulate(args) -> int:
     cost = run_cost(plan, robot, args.rate)
     duration = cost.samples / args.rate
     seconds = cost.seconds
+    seeds = np.random.SeedSequence(args.seed).spawn(2)
+    true, errors = robot_as_built(robot, args.true_robot, args.errors, seeds[0])
+    sampled = None
     if physics:
-        from ..physics.run import SECONDS_PER_SIMULATED_SECOND, TAIL_MAX
+        from ..physics.cost import physics_run_cost
+        from ..physics.run import TAIL_MAX
+        from ..simulation.motion import sample_plan
 
-        duration += TAIL_MAX  # the run goes on until the robot stops
-        seconds = duration * SECONDS_PER_SIMULATED_SECOND
+        # the samples' memory first (the run can only add its tail), then the plan sampled
+        tail = cost.bytes / max(cost.samples, 1.0) * TAIL_MAX * args.rate
+        require(args, "simulate", memory=cost.bytes + tail, hint="lower --rate or shorten --path")
+        with _drivable(args):
+            sampled = sample_plan(plan, robot, args.rate)
+            physics_cost = physics_run_cost(sampled, true, robot, args.step)
+        duration, seconds = physics_cost.simulated, physics_cost.seconds  # the waits and the tail at their limits
     samples = duration * args.rate
     _check_stamps(args, duration=duration)
     writing = (SIM_SAMPLE_SECONDS if args.bag is not None else 0.0) + (LOG_ROW_SECONDS if args.log else 0.0)
@@ -450,17 +471,13 @@ def cmd_simulate(args) -> int:
         memory=cost.bytes * samples / max(cost.samples, 1.0),
         seconds=seconds + samples * writing,
         size=f"{cost.samples:.3g} samples",
-        hint="lower --rate or shorten --path",
+        hint="shorten --path or raise --step" if physics else "lower --rate or shorten --path",
     )
-    seeds = np.random.SeedSequence(args.seed).spawn(2)
-    true, errors = robot_as_built(robot, args.true_robot, args.errors, seeds[0])
-    try:
-        if physics:
-            run = _simulate_physics(args, plan, true, robot)
+    with _drivable(args):
+        if sampled is not None:
+            run = _simulate_physics(args, sampled, true, robot)
         else:
             run = simulate(plan, true, robot, rate=args.rate, noise=noise, trials=1, rng=seeds[1])
-    except InfeasibleTwistError as exc:
-        raise InputError(f"--path {shorten(args.path)}: {exc.detail}; choose a path this robot can drive") from None
     custom = {
         "omnikin.robot": robot.name,
         "omnikin.path": args.path,

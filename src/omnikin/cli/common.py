@@ -37,6 +37,13 @@ def robot_as_built(robot, true_robot: str | None, errors: str, seed):
     return as_built(robot, true_robot or None, errors, seed)
 
 
+def as_built_group(parser):
+    """The group ``--errors`` and ``--true-robot`` belong to: both give the robot as built, so the
+    parser refuses the two together in one line ("argument --true-robot: not allowed with
+    argument --errors"), whatever the command (a given ``--errors`` is never silently ignored)."""
+    return parser.add_mutually_exclusive_group()
+
+
 def add_as_built_options(parser, *, defaults: bool = True, scope: str = "") -> None:
     """``--errors PROFILE``, ``--true-robot FILE`` and ``--seed N``: the robot as built
     (:func:`robot_as_built`: a seeded draw of the error profile, or a file replacing it).
@@ -45,13 +52,14 @@ def add_as_built_options(parser, *, defaults: bool = True, scope: str = "") -> N
     naming where the options apply (``"simulated back-ends: "``)."""
     from ..simulation.error_models import PROFILES
 
-    parser.add_argument(
+    group = as_built_group(parser)
+    group.add_argument(
         "--errors",
         default="typical" if defaults else None,
         metavar="PROFILE",
         help=f"{scope}systematic error profile of the robot as built: {', '.join(sorted(PROFILES))} (default typical)",
     )
-    parser.add_argument("--true-robot", metavar="FILE", help=f"{scope}the robot as built (replaces --errors)")
+    group.add_argument("--true-robot", metavar="FILE", help=f"{scope}the robot as built (replaces --errors)")
     parser.add_argument(
         "--seed",
         type=whole,

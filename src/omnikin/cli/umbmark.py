@@ -23,11 +23,10 @@ from ..api.umbmark import (
     UMBmarkReport,
     analyze_umbmark,
     run_umbmark,
-    umbmark_cost,
 )
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
-from ..evaluation.physics_study import ENGINES, engine_options
+from ..evaluation.physics_study import ENGINES
 from ..simulation.error_models import NOISE, PROFILES
 from ..simulation.motion import RATE_RANGE
 from ..viz import FIGURE_FORMATS, MAX_DPI, MIN_DPI, dpi_problem
@@ -36,6 +35,7 @@ from .common import (
     add_output,
     add_output_options,
     add_step_option,
+    as_built_group,
     command_inputs,
     console,
     declare_inputs,
@@ -94,10 +94,11 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument(
         "robot", nargs="?", default=d["robot"], metavar="ROBOT", help=f"{robot_help} (default {d['robot']})"
     )
-    sp.add_argument(
+    as_built = as_built_group(sp)
+    as_built.add_argument(
         "--true-robot", metavar="FILE", default=d["true_robot"], help="the robot as built (replaces --errors)"
     )
-    sp.add_argument(
+    as_built.add_argument(
         "--errors",
         default=d["errors"],
         metavar="PROFILE",
@@ -315,26 +316,19 @@ class _Status:
 # --- umbmark -----------------------------------------------------------------------------------------
 def cmd_umbmark(args) -> int:
     inputs = command_inputs(args)
-    engine_options(args.engine, args.noise, args.step)  # refuse a wrong engine option before the cost note
-    cost = umbmark_cost(
-        args.robot,
-        mode=args.mode,
-        runs=args.runs,
-        side=args.side,
-        rate=args.rate,
-        trials=args.trials,
-        calibrate=args.calibrate,
-        engine=args.engine,
-        step=args.step,
-    )
-    require(
-        args,
-        "umbmark",
-        memory=cost.bytes,
-        seconds=cost.seconds,
-        size=f"{cost.samples:.3g} robot-samples",
-        hint="lower --trials, --runs or --rate",
-    )
+
+    def within_budget(cost) -> None:  # every setting checked by now: refuse, or say it will take long
+        require(
+            args,
+            "umbmark",
+            memory=cost.bytes,
+            seconds=cost.seconds,
+            size=f"{cost.samples:.3g} robot-samples",
+            hint="lower --trials or --runs, or raise --step"
+            if args.engine == "physics"
+            else "lower --trials, --runs or --rate",
+        )
+
     with _Status(args.json) as status:
         report = run_umbmark(
             args.robot,
@@ -353,6 +347,7 @@ def cmd_umbmark(args) -> int:
             max_memory=args.max_memory,
             max_time=args.max_time,
             progress=status.step,
+            on_cost=within_budget,
         )
         status.step("report")
         doc = report.write(args.out, figure_format=args.figures, dpi=args.dpi, inputs=inputs)

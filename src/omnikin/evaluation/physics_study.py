@@ -46,7 +46,6 @@ from ..odometry import encoded_wheels
 from ..physics.mjcf import DEFAULT_STEP, time_step
 from ..plans import CalibrationRun, Plan, umbmark_square
 from ..simulation.error_models import NOISE, SystematicErrors
-from ..simulation.motion import estimated_samples
 from .calibration import RECOMMENDED_REPEATS, CalibrationResult, recommended_runs
 from .calibration import calibrate as least_squares_calibration
 from .procedure import Cost, UMBmarkStudy, check_settings, streams
@@ -54,16 +53,6 @@ from .umbmark import LEVEL, NoiseFloor, UMBmarkResult, analyze, require_square
 
 ENGINES = ("kinematic", "physics")
 """The engines of the UMBmark study: the kinematic simulation or MuJoCo (:mod:`omnikin.physics`)."""
-
-SECONDS_PER_SIMULATED_SECOND = 0.015
-"""Computing time [s] per simulated second of a physics run: measured 0.013-0.018 s on one core
-of a shared 2-core machine (a 1 m UMBmark square of tomasi-omni3 at 50 Hz, 24 s simulated in
-0.3-0.4 s, model building included; the whole 1 m study, 56 runs, in 13 s where
-:func:`physics_cost` estimates 16 s)."""
-
-TAIL_SECONDS = 2.0
-"""Simulated time [s] a run is counted for after its plan (the robot coming to rest,
-:data:`omnikin.physics.run.TAIL_MAX` at most) in the cost estimate."""
 
 BYTES = 256 * 1024**2
 """Memory of a physics study [bytes]: MuJoCo's model and data and the kept runs, generous."""
@@ -120,20 +109,24 @@ def physics_cost(
     step: float = DEFAULT_STEP,
 ) -> Cost:
     """Samples, memory and computing time of :func:`physics_umbmark_study`: every run's
-    samples (:func:`~omnikin.simulation.motion.estimated_samples`, an upper bound) plus
-    :data:`TAIL_SECONDS`, at :data:`SECONDS_PER_SIMULATED_SECOND` for the default step, in
-    proportion to the number of steps for a time step ``step`` [s]."""
-    square = estimated_samples(umbmark_square("cw", side, mode), robot, rate)
-    squares = 2 * runs * trials * (3 if calibrate else 2)  # before, after, the floor
-    samples = squares * square
-    plans = squares
+    estimate (:func:`omnikin.physics.cost.physics_run_cost`: its simulated time bounded, the
+    waits for the steering and the tail at their limits, at the cost of a time step measured
+    once on ``robot``'s model at time step ``step`` [s], the model's construction counted for
+    every run)."""
+    from ..physics.cost import measure_step_seconds, physics_run_cost
+    from ..simulation.motion import sample_plan
+
+    measured = measure_step_seconds(robot, step)
+    squares = runs * trials * (3 if calibrate else 2)  # per direction: before, after, the floor
+    driven = [(umbmark_square(direction, side, mode), squares) for direction in ("cw", "ccw")]
     if calibrate:
-        calibration = recommended_runs(robot, side)
-        samples += RECOMMENDED_REPEATS * sum(estimated_samples(plan, robot, rate) for _, plan in calibration)
-        plans += RECOMMENDED_REPEATS * len(calibration)
-    samples += plans * TAIL_SECONDS * rate
-    per_second = SECONDS_PER_SIMULATED_SECOND * DEFAULT_STEP / step
-    return Cost(samples, float(BYTES), seconds_per_sample=per_second / rate)
+        driven += [(plan, RECOMMENDED_REPEATS) for _, plan in recommended_runs(robot, side)]
+    samples = seconds = 0.0
+    for plan, count in driven:
+        run = physics_run_cost(sample_plan(plan, robot, rate), robot, robot, step, measured=measured)
+        samples += count * run.samples
+        seconds += count * run.seconds
+    return Cost(samples, float(BYTES), seconds_per_sample=seconds / max(samples, 1.0))
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,129 @@
+"""What a physics run will take, before it starts: :func:`physics_run_cost`, the one estimate
+``omnikin simulate --engine physics``, :func:`omnikin.simulate` and ``omnikin umbmark --engine
+physics`` check against ``--max-time`` / ``max_time``.
+
+Computing time = (time steps) x (measured seconds per step) + (samples) x
+:data:`SAMPLE_SECONDS` + the model's construction, with
+
+* the seconds per step **measured on the model itself**, on this machine, just before the run
+  (:func:`measure_step_seconds`): the robot as built is made into its MuJoCo model, set down on
+  the floor, and driven for up to :data:`PROBE_STEPS` steps (at most :data:`PROBE_SECONDS` of
+  wall time) through :class:`~omnikin.physics.engine.PhysicsSim`, its servos and ramps included.
+  A step's cost grows with the bodies, rollers and contacts of the model and shrinks with nothing
+  the layout tells in advance (3 rollers or 256 per wheel, 3 wheels or 64: 6 us to 10 ms a step),
+  so no formula in the model's size is used;
+* the simulated time **bounded from above** (:func:`simulated_bound`): the plan's duration, plus
+  :data:`~omnikin.physics.run.ALIGN_MAX` for every segment whose steering differs from the one
+  before it (the run waits for the steering joints, at most that long), plus
+  :data:`~omnikin.physics.run.TAIL_MAX` after the plan (the run goes on until the robot is at
+  rest, at most that long); the steps are that time over the time step.
+
+The estimate is thus on the slow side: a run takes at most about as long as estimated (the
+per-step cost varies by 10-30 % as the contacts change), and runs that end early (the robot at
+rest at once, steering reached quickly) take less: docs/physics.md gives estimate and actual
+for several robots, steps and paths.
+
+A MuJoCo run cannot be stopped halfway and resumed, so a run over budget is refused up front,
+never cut short.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..geometry import wrap_angle
+from ..model import Robot
+from ..simulation.motion import SampledPlan
+from ..simulation.simulate import segment_rates
+from .engine import PhysicsSim
+from .run import ALIGN_MAX, STEER_ALIGNED, TAIL_MAX
+
+PROBE_WARMUP = 20
+"""Time steps driven before the measurement (the first steps of a run cost more)."""
+PROBE_STEPS = 500
+"""Time steps driven to measure a step's cost (after the model has settled on the floor)."""
+PROBE_SECONDS = 0.3
+"""Wall time [s] after which the measurement stops, however few steps it took (a model of
+thousands of rollers)."""
+PROBE_SPEED = 0.2
+"""Speed [m/s] of the body along its x axis the wheels are commanded during the measurement
+(rolling contacts cost more than resting ones)."""
+SAMPLE_SECONDS = 2.5e-5
+"""Computing time [s] per sample of a run beyond its time steps (reading the encoders and the
+pose, commanding the next set-points): measured 20-21 us for tomasi-omni3 and diff-drive (line
+10 at 1000 Hz against 10 Hz) on one core of a 2-core machine."""
+
+
+@dataclass(frozen=True)
+class PhysicsCost:
+    """A physics run's estimate: ``simulated`` [s] of simulated time (upper bound), ``steps``
+    time steps, ``samples`` samples, ``seconds`` [s] of computing time, of which ``step_seconds``
+    [s] per time step as measured."""
+
+    simulated: float
+    steps: float
+    samples: float
+    seconds: float
+    step_seconds: float
+
+
+def measure_step_seconds(robot: Robot, step: float) -> tuple[float, float]:
+    """Seconds of computing time per time step of ``robot``'s physics model at time step
+    ``step`` [s], driven at :data:`PROBE_SPEED` (module docstring), and the seconds its
+    construction took (model, settling). Bad robots are refused as the run would refuse them."""
+    start = time.perf_counter()
+    sim = PhysicsSim(robot, step=step)
+    built = time.perf_counter() - start
+    rows = np.asarray(robot.jacobian(), dtype=float)
+    sim.command(rows @ np.array([PROBE_SPEED, 0.0, 0.0]), np.zeros(len(robot.steer_names)) if robot.steerable else None)
+    sim.step(PROBE_WARMUP)
+    steps, chunk = 0, 20
+    start = time.perf_counter()
+    while steps < PROBE_STEPS and time.perf_counter() - start < PROBE_SECONDS:
+        sim.step(chunk)
+        steps += chunk
+    return (time.perf_counter() - start) / steps, built
+
+
+def steering_waits(sampled: SampledPlan, robot: Robot) -> int:
+    """How many segments of ``sampled`` start with steering of ``robot`` that differs (by more
+    than :data:`~omnikin.physics.run.STEER_ALIGNED`) from the steering before them (the
+    mounting, zero, for the first): each may wait up to :data:`~omnikin.physics.run.ALIGN_MAX`."""
+    if not robot.steerable:
+        return 0
+    _, steer = segment_rates(sampled.xi, robot, robot.rolling_names)
+    used = np.unique(sampled.segment)
+    angles = np.vstack([np.zeros(steer.shape[1]), np.asarray(steer)[used]])
+    change = np.max(np.abs(wrap_angle(np.diff(angles, axis=0))), axis=1)
+    return int(np.sum(change > STEER_ALIGNED))
+
+
+def simulated_bound(sampled: SampledPlan, robot: Robot) -> float:
+    """Upper bound [s] of the simulated time of ``sampled`` driven by ``robot`` in
+    :func:`~omnikin.physics.run.simulate_physics`: the plan, the steering waits at their
+    limit, the tail at its limit (module docstring)."""
+    return float(sampled.t[-1]) + ALIGN_MAX * steering_waits(sampled, robot) + TAIL_MAX
+
+
+def physics_run_cost(
+    sampled: SampledPlan,
+    true_robot: Robot,
+    command_robot: Robot,
+    step: float,
+    *,
+    measured: tuple[float, float] | None = None,
+) -> PhysicsCost:
+    """The estimate of the module docstring for ``sampled`` commanded by ``command_robot``,
+    driven by ``true_robot`` at time step ``step`` [s]. ``measured``: what
+    :func:`measure_step_seconds` gave for ``true_robot`` at ``step`` (for many runs of one
+    model); None: measured now."""
+    step_seconds, built = measured if measured is not None else measure_step_seconds(true_robot, step)
+    simulated = simulated_bound(sampled, command_robot)
+    steps = math.ceil(simulated / step)
+    samples = simulated * sampled.rate
+    seconds = built + steps * step_seconds + samples * SAMPLE_SECONDS
+    return PhysicsCost(simulated, steps, samples, seconds, step_seconds)

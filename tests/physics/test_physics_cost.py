@@ -1,0 +1,175 @@
+"""What a physics run will take, estimated before it starts (:mod:`omnikin.physics.cost`), and
+the refusal of ``--max-time`` / ``max_time`` built on it.
+
+Expected values: the run itself, timed here (computing time, simulated time); the estimate must
+not fall below it (the simulated time is an upper bound; the cost of a step, measured on the
+model, varies by some 10-30 % as the contacts change: :data:`SLACK`) nor lie far above it
+(:data:`OVER`, for runs long enough that the tail's bound does not dominate).
+"""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+import yaml
+
+import omnikin
+from conftest import run_cli
+from omnikin import load_robot
+from omnikin.errors import ResourceLimitError
+from omnikin.physics.cost import physics_run_cost, simulated_bound
+from omnikin.physics.run import simulate_physics
+from omnikin.plans import parse_plan
+from omnikin.presets import preset_path
+from omnikin.simulation.motion import sample_plan
+
+pytest.importorskip("mujoco")
+
+SLACK = 1.5
+"""The actual computing time may exceed the estimate by this factor (a step's cost varies with
+the contacts; the machine is shared)."""
+OVER = 3.0
+"""The estimate may exceed the actual computing time by this factor (the tail and the steering
+waits counted at their limits)."""
+
+
+def robot_with(tmp_path, preset: str, physical: dict, name: str = "variant"):
+    """``preset`` with ``physical`` fields on every wheel, as a robot file."""
+    doc = yaml.safe_load(preset_path(preset).read_text())
+    for wheel in doc["wheels"]:
+        wheel["physical"] = dict(physical)
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    return load_robot(path)
+
+
+def timed_run(robot, path: str, rate: float, step: float):
+    parts = [parse_plan(part) for part in path.split(";")]
+    plan = parts[0]
+    for part in parts[1:]:
+        plan = plan + part
+    sampled = sample_plan(plan, robot, rate)
+    estimate = physics_run_cost(sampled, robot, robot, step)
+    start = time.perf_counter()
+    run = simulate_physics(sampled, robot, robot, rate=rate, step=step)
+    return estimate, time.perf_counter() - start, float(run.t[-1]), sampled
+
+
+@pytest.mark.parametrize(
+    ("preset", "physical", "path", "rate", "step"),
+    [
+        ("tomasi-omni3", {}, "line 6", 50.0, 0.002),
+        ("tomasi-omni3", {}, "line 1", 100.0, 0.0005),  # a smaller step: more steps per second
+        ("tomasi-omni3", {"rollers": 24, "rows": 4}, "line 2", 50.0, 0.002),  # 288 rollers
+        ("mecanum4", {}, "spin 40", 20.0, 0.002),
+        ("diff-drive", {}, "line 3", 200.0, 0.001),
+    ],
+)
+def test_the_estimate_bounds_a_run_s_computing_time_for_models_steps_and_paths(
+    tmp_path, preset, physical, path, rate, step
+):
+    # the old estimate, 5 ms per simulated second whatever the model and step, was 2-50 times short
+    robot = robot_with(tmp_path, preset, physical) if physical else load_robot(preset)
+    estimate, wall, simulated, _ = timed_run(robot, path, rate, step)
+    assert simulated <= estimate.simulated
+    assert wall <= SLACK * estimate.seconds
+    assert estimate.seconds <= OVER * wall
+
+
+def test_steering_waits_are_counted_in_the_simulated_bound(tmp_path):
+    # motors too weak to drive: every segment waits for its steering and rest, up to ALIGN_MAX
+    robot = robot_with(tmp_path, "synchro", {"max_torque": 1e-5})
+    path = "; ".join(["line 0.01 90; line 0.01 0"] * 3)
+    estimate, _, simulated, sampled = timed_run(robot, path, 50.0, 0.002)
+    assert simulated > 4.0 * float(sampled.t[-1])  # the waits dominate the run
+    assert simulated <= simulated_bound(sampled, robot) == estimate.simulated
+
+
+def test_simulate_refuses_a_run_over_max_time_up_front_for_a_small_step(tmp_path, capsys):
+    # line 1 at 10 us steps takes about 10 s: refused within the second, not after simulating
+    start = time.perf_counter()
+    rc, _, err = run_cli(
+        capsys,
+        "simulate",
+        "tomasi-omni3",
+        "--engine",
+        "physics",
+        "--errors",
+        "none",
+        "--path",
+        "line 1",
+        "--step",
+        "1e-5",
+        "--max-time",
+        "3",
+        "--log",
+        tmp_path / "o.csv",
+    )
+    assert rc == 2 and time.perf_counter() - start < 3.0
+    assert err.count("\n") == 1 and "more than --max-time 3 s" in err and "--step" in err
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_the_python_api_refuses_a_heavy_model_over_max_time(tmp_path):
+    robot = robot_with(tmp_path, "tomasi-omni3", {"rollers": 24, "rows": 4})
+    with pytest.raises(ResourceLimitError, match="max_time"):
+        omnikin.simulate(robot, "line 4", errors="none", engine="physics", max_time=0.2)
+
+
+def weak_synchro_path(tmp_path):
+    """synchro whose motors cannot move it, and a path of 20 segments each steering anew: every
+    segment waits up to ALIGN_MAX (5 s) for its steering and rest, 82 s simulated in all."""
+    robot = robot_with(tmp_path, "synchro", {"max_torque": 1e-5}, name="weak")
+    return tmp_path / "weak.yaml", "; ".join(["line 0.01 90; line 0.01 0"] * 10), robot
+
+
+def test_simulate_checks_the_bag_s_stamps_against_the_steering_waits_before_simulating(tmp_path, capsys):
+    # the plan lasts 13 s, the run 82 s: 30 s of room left in the bag's times is too little
+    pytest.importorskip("rosbags")
+    file, path, _ = weak_synchro_path(tmp_path)
+    start = time.perf_counter()
+    rc, _, err = run_cli(
+        capsys,
+        "simulate",
+        file,
+        "--engine",
+        "physics",
+        "--errors",
+        "none",
+        "--path",
+        path,
+        "--bag",
+        tmp_path / "o.bag",
+        "--start",
+        str(2**31 - 1 - 30),
+    )
+    assert rc == 2 and "do not fit a ROS 2 bag" in err and err.count("\n") == 1
+    assert time.perf_counter() - start < 5.0  # refused before simulating (which takes about 1.5 s and more)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ("--seed", "-1"),
+        ("diff-drive", "--mode", "translate"),
+        ("--runs", "0"),
+        ("--errors", "none", "--true-robot", str(preset_path("omni4"))),
+    ],
+)
+def test_umbmark_physics_refuses_bad_settings_in_one_line_before_its_cost_note(tmp_path, capsys, argv):
+    rc, _, err = run_cli(capsys, "umbmark", "--engine", "physics", "-o", tmp_path / "report", *argv)
+    assert rc == 2 and err.count("\n") == 1 and err.startswith("omnikin: error:")
+    assert not (tmp_path / "report").exists()
+
+
+def test_the_robot_as_built_drawn_out_of_range_is_named_as_the_draw(tmp_path, capsys):
+    # radius 0.1 mm, the least a file may give: the typical draw makes it smaller
+    doc = yaml.safe_load(preset_path("tomasi-omni3").read_text())
+    for wheel in doc["wheels"]:
+        wheel["radius"] = 0.0001
+        wheel["distance"] = 0.0003
+    (tmp_path / "tiny.yaml").write_text(yaml.safe_dump(doc))
+    rc, _, err = run_cli(capsys, "umbmark", tmp_path / "tiny.yaml", "-o", tmp_path / "report")
+    assert rc == 2 and err.count("\n") == 1
+    assert "as built" in err and "--errors" in err and "radius must lie in" in err
