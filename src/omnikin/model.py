@@ -343,12 +343,14 @@ class Robot:
             ) from None
 
     # --- matrices ---------------------------------------------------------------
-    def _steer_array(self, steer, name: str = "steer") -> np.ndarray:
+    def _steer_array(self, steer, name: str = "steer", *, within_limits: bool = True) -> np.ndarray:
         """Steering angles ``(..., n_steer)`` [rad], checked (docs/conventions.md, "Angles"): real
         and finite; a wheel with steering limits within them (:data:`STEER_LIMIT_SLACK`), a wheel
         that turns all the way round (limits -180 .. 180 deg) any angle up to
         :data:`~omnikin.geometry.MAX_ANGLE` in size (an orientation; the interval steering of
-        odometry may cross +-180 deg). Else an InputError naming ``name``, the wheel and the angle."""
+        odometry may cross +-180 deg). Else an InputError naming ``name``, the wheel and the angle.
+        ``within_limits=False``: a preference, not a steering (the hint of :meth:`ik`, zero by
+        default even for a wheel whose limits exclude zero), checked for its size only."""
         if steer is None:
             return np.zeros(len(self.steerable))
         if not self.steerable:
@@ -357,7 +359,8 @@ class Robot:
             return np.zeros(0)
         arr = as_components(steer, len(self.steerable), name)
         require_finite(arr, name)
-        lower, upper = self.steer_limits
+        free = np.full(len(self.steerable), np.inf)
+        lower, upper = self.steer_limits if within_limits else (-free, free)
         outside = (arr < lower - STEER_LIMIT_SLACK) | (arr > upper + STEER_LIMIT_SLACK) | (np.abs(arr) > MAX_ANGLE)
         if outside.any():
             index = tuple(int(i) for i in np.argwhere(outside)[0])
@@ -590,7 +593,7 @@ class Robot:
         require_finite(t, "twist")
         if heading is not None:
             t = self.body_twist(t, heading)
-        hint = self._steer_array(steer_hint, "steer_hint")
+        hint = self._steer_array(steer_hint, "steer_hint", within_limits=False)
         if hint.ndim > 1 and np.broadcast_shapes(hint.shape[:-1], t.shape[:-1]) != t.shape[:-1]:
             raise InputError(f"steer_hint: shape {hint.shape} does not fit twists of shape {t.shape}")
         with _checked_after():

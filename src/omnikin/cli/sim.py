@@ -68,7 +68,13 @@ def cmd_sim(args) -> int:
         raise InputError(f"--duration must be positive [s], got {args.duration:g}")
     if args.hold < 0:
         raise InputError(f"--hold must be >= 0 [s], got {args.hold:g}")
-    for flag, value in (("--speed", args.speed), ("--turn", args.turn)):
+    positive = (
+        ("--speed", args.speed),
+        ("--turn", args.turn),
+        ("--max-speed", args.max_speed),
+        ("--max-turn", args.max_turn),
+    )
+    for flag, value in positive:  # every option MotionLimits and the keys need positive, named as given
         if value <= 0:
             raise InputError(f"{flag} must be positive, got {value:g}")
     from ..physics.interactive import InteractiveSim, require_display

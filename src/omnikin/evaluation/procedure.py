@@ -97,7 +97,13 @@ def draw_as_built(robot: Robot, profile, seed) -> tuple[Robot, SystematicErrors]
     (:class:`~omnikin.simulation.error_models.ErrorProfile`) from ``seed`` (a SeedSequence or
     int) applied to ``robot``. Returns the true robot and the errors drawn."""
     drawn = profile.sample(robot, np.random.default_rng(seed))
-    return drawn.apply(robot), drawn
+    try:
+        return drawn.apply(robot), drawn
+    except InputError as exc:  # a drawn error took a field out of its range: say it is the draw's
+        raise InputError(
+            f"robot {robot.name!r} as built (its systematic errors drawn from the errors profile (--errors) and "
+            f"seed (--seed)) is not a valid robot: {exc}; choose errors none, another seed or a larger robot"
+        ) from None
 
 
 @dataclass(frozen=True)

@@ -48,7 +48,7 @@ from ..limits import MotionLimits
 from ..model import Robot, require_same_wheels
 from ..odometry import batch_odometry, encoded_wheels
 from ..plans import Plan
-from ..simulation.motion import SampledPlan, check_rate_range, sample_plan
+from ..simulation.motion import SampledPlan, check_rate_range, require_motion, sample_plan
 from ..simulation.simulate import SimulatedRun, commanded_angles, counter_output
 from .description import steered_support_margin
 from .engine import PhysicsError, PhysicsSim
@@ -67,11 +67,6 @@ ALIGN_MAX = 5.0
 TIPPED = 0.2
 """Tilt [rad] of the chassis beyond which the robot has tipped over (it stands level within
 milliradians: the contacts sink 0.01-0.1 % of a wheel's radius)."""
-
-SECONDS_PER_SIMULATED_SECOND = 0.005
-"""Computing time per simulated second, on the fast side (200 x real time; measured 47-218 x on
-one core of a 2-core machine, docs/physics.md): a run is refused for time only when clearly too
-long."""
 
 
 @dataclass(frozen=True)
@@ -103,8 +98,7 @@ def simulate_physics(
     check_rate_range(plan.rate if isinstance(plan, SampledPlan) else rate, "rate")
     require_same_wheels(command_robot, true_robot)
     sampled = plan if isinstance(plan, SampledPlan) else sample_plan(plan, command_robot, rate, limits)
-    if len(sampled.t) < 2:
-        raise InputError("the path does not move the robot (it lasts 0 s): nothing to simulate; give a length > 0")
+    require_motion(sampled)
     names = [w.name for w in encoded_wheels(command_robot)]
     if [w.name for w in true_robot.encoded] != names:
         raise InputError(f"true robot {true_robot.name!r}: its encoded wheels must be {names}")

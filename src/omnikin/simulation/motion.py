@@ -114,6 +114,15 @@ def sample_plan(plan: Plan, robot, rate: float = 100.0, limits: MotionLimits | N
     return SampledPlan(plan, rate, t, progress, segment, xi)
 
 
+def require_motion(sampled: SampledPlan) -> None:
+    """Refuse (one line) a sampled plan that lasts 0 s (``line 0``, ``spin 0``, ``arc 0 0``):
+    nothing to simulate, and odometry needs two samples."""
+    if len(sampled.t) < 2:
+        raise InputError(
+            "the path does not move the robot (it lasts 0 s): nothing to simulate; give a length or angle other than 0"
+        )
+
+
 def estimated_samples(plan: Plan, robot, rate: float = 100.0, limits: MotionLimits | None = None) -> float:
     """Number of samples :func:`sample_plan` would make (an upper bound, within one sample per
     segment), computed without sampling: for sizing a job before starting it."""

@@ -38,7 +38,7 @@ from ..odometry import batch_odometry, encoded_wheels
 from ..plans import Plan
 from ..rng import make_rng
 from .error_models import NoiseModel
-from .motion import SampledPlan, check_rate_range, estimated_samples, sample_plan
+from .motion import SampledPlan, check_rate_range, estimated_samples, require_motion, sample_plan
 
 # Measured cost of one simulated run (one trial, ground truth kept): tracemalloc peaks of
 # omnikin.simulate over 3e5-7e5 samples (CPython 3.11, NumPy 1.26) were 472, 504, 536, 792 and 1696
@@ -174,8 +174,7 @@ def simulate(
     require_same_wheels(command_robot, true_robot)
     odometry_robot = odometry_robot or command_robot
     sampled = plan if isinstance(plan, SampledPlan) else sample_plan(plan, command_robot, rate, limits)
-    if len(sampled.t) < 2:  # a tick log of one sample is no run: odometry needs two
-        raise InputError("the path does not move the robot (it lasts 0 s): nothing to simulate; give a length > 0")
+    require_motion(sampled)
     cmd_wheels = encoded_wheels(command_robot)
     names = [w.name for w in cmd_wheels]
     true_wheels = [true_robot.wheel(n) for n in names]
