@@ -18,7 +18,7 @@ import omnikin
 from conftest import run_cli
 from omnikin import load_robot
 from omnikin.errors import ResourceLimitError
-from omnikin.physics.cost import physics_run_cost, simulated_bound
+from omnikin.physics.cost import physics_run_cost, real_time_shortfall, simulated_bound
 from omnikin.physics.run import simulate_physics
 from omnikin.plans import parse_plan
 from omnikin.presets import preset_path
@@ -173,3 +173,23 @@ def test_the_robot_as_built_drawn_out_of_range_is_named_as_the_draw(tmp_path, ca
     rc, _, err = run_cli(capsys, "umbmark", tmp_path / "tiny.yaml", "-o", tmp_path / "report")
     assert rc == 2 and err.count("\n") == 1
     assert "as built" in err and "--errors" in err and "radius must lie in" in err
+
+
+def test_a_model_too_slow_for_real_time_is_named_before_a_real_time_run(tmp_path):
+    # 24 omni wheels of 64 x 4 rollers: a quarter of real time here, 8 times short of the margin
+    wheels = [
+        {
+            "name": f"w{i + 1}",
+            "type": "omni",
+            "distance": 1.2,
+            "angle_deg": 15.0 * i,
+            "radius": 0.04125,
+            "encoder": {"ticks_per_rev": 600},
+            "physical": {"rollers": 64, "rows": 4},
+        }
+        for i in range(24)
+    ]
+    (tmp_path / "rollers.yaml").write_text(yaml.safe_dump({"omnikin": 1, "name": "rollers", "wheels": wheels}))
+    message = real_time_shortfall(load_robot(tmp_path / "rollers.yaml"), "it will run slower")
+    assert message is not None and "x real time on this machine" in message and "\n" not in message
+    assert real_time_shortfall(load_robot("tomasi-omni3"), "it will run slower") is None

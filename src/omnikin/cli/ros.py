@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import textwrap
 
 import numpy as np
@@ -147,8 +148,12 @@ def cmd_ros(args) -> int:
         backend.wait_ready()
     elif args.backend == "physics":
         from ..physics.backend import PhysicsBackend
+        from ..physics.cost import real_time_shortfall
 
         backend = PhysicsBackend(robot, true, max_lag=PHYSICS_MAX_LAG)
+        slow = real_time_shortfall(true, "the back-end will drop simulated time (counted in /diagnostics)")
+        if slow:
+            print(f"omnikin: note: ros: {slow}", file=sys.stderr)
     else:
         backend = SimBackend(robot, true, noise_profile(args.noise or "typical"), rng=seeds[1])
     from ..ros.node import run

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from .common import add_output, add_output_options, declare_inputs, load_robot, number
 
@@ -77,10 +78,14 @@ def cmd_sim(args) -> int:
     for flag, value in positive:  # every option MotionLimits and the keys need positive, named as given
         if value <= 0:
             raise InputError(f"{flag} must be positive, got {value:g}")
+    from ..physics.cost import real_time_shortfall
     from ..physics.interactive import InteractiveSim, require_display
 
     require_display()  # before the model is built: the one line comes at once
     robot = load_robot(args.robot)
+    slow = real_time_shortfall(robot, "the simulation will run slower than the clock")
+    if slow:
+        print(f"omnikin: note: sim: {slow}", file=sys.stderr)
     limits = MotionLimits(linear=args.max_speed, angular=args.max_turn)
     sim = InteractiveSim(robot, speed=args.speed, turn=args.turn, hold=args.hold, camera=args.camera, limits=limits)
     reason = sim.run(args.duration)

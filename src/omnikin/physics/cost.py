@@ -25,6 +25,11 @@ for several robots, steps and paths.
 
 A MuJoCo run cannot be stopped halfway and resumed, so a run over budget is refused up front,
 never cut short.
+
+``omnikin sim`` and ``omnikin ros --backend physics`` run in real time instead: they measure the
+same step cost first (:func:`real_time_factor`) and say in one line when this machine cannot
+keep up with the model (``sim`` then runs slower than the clock; the ROS back-end drops
+simulated time and counts it in ``/diagnostics``).
 """
 
 from __future__ import annotations
@@ -40,6 +45,7 @@ from ..model import Robot
 from ..simulation.motion import SampledPlan
 from ..simulation.simulate import segment_rates
 from .engine import PhysicsSim
+from .mjcf import DEFAULT_STEP
 from .run import ALIGN_MAX, STEER_ALIGNED, TAIL_MAX
 
 PROBE_WARMUP = 20
@@ -52,6 +58,9 @@ thousands of rollers)."""
 PROBE_SPEED = 0.2
 """Speed [m/s] of the body along its x axis the wheels are commanded during the measurement
 (rolling contacts cost more than resting ones)."""
+REAL_TIME_MARGIN = 2.0
+"""A model run in real time should step at least this many times faster than the clock: the
+rest of each control period goes to the controller, the window or the ROS node."""
 SAMPLE_SECONDS = 2.5e-5
 """Computing time [s] per sample of a run beyond its time steps (reading the encoders and the
 pose, commanding the next set-points): measured 20-21 us for tomasi-omni3 and diff-drive (line
@@ -127,3 +136,23 @@ def physics_run_cost(
     samples = simulated * sampled.rate
     seconds = built + steps * step_seconds + samples * SAMPLE_SECONDS
     return PhysicsCost(simulated, steps, samples, seconds, step_seconds)
+
+
+def real_time_factor(robot: Robot, step: float = DEFAULT_STEP) -> float:
+    """How many times faster than the clock ``robot``'s model steps on this machine at time step
+    ``step`` [s] (:func:`measure_step_seconds`; below 1 it cannot run in real time)."""
+    seconds, _ = measure_step_seconds(robot, step)
+    return step / seconds
+
+
+def real_time_shortfall(robot: Robot, consequence: str) -> str | None:
+    """One line saying that ``robot``'s model steps too slowly for real time on this machine
+    (less than :data:`REAL_TIME_MARGIN` times the clock) and what follows (``consequence``), or
+    None when it keeps up."""
+    factor = real_time_factor(robot)
+    if factor >= REAL_TIME_MARGIN:
+        return None
+    return (
+        f"robot {robot.name!r} steps at about {factor:.2g} x real time on this machine (physics alone, "
+        f"{REAL_TIME_MARGIN:g} x wanted): {consequence}"
+    )
