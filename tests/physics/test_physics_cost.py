@@ -175,21 +175,38 @@ def test_the_robot_as_built_drawn_out_of_range_is_named_as_the_draw(tmp_path, ca
     assert "as built" in err and "--errors" in err and "radius must lie in" in err
 
 
-def test_a_model_too_slow_for_real_time_is_named_before_a_real_time_run(tmp_path):
-    # 24 omni wheels of 64 x 4 rollers: a quarter of real time here, 8 times short of the margin
+def ring_of_roller_wheels(tmp_path, count: int):
+    """``count`` omni wheels of 64 x 4 rollers on a ring, as a robot file."""
     wheels = [
         {
             "name": f"w{i + 1}",
             "type": "omni",
-            "distance": 1.2,
-            "angle_deg": 15.0 * i,
+            "distance": 0.05 * count,
+            "angle_deg": 360.0 * i / count,
             "radius": 0.04125,
             "encoder": {"ticks_per_rev": 600},
             "physical": {"rollers": 64, "rows": 4},
         }
-        for i in range(24)
+        for i in range(count)
     ]
-    (tmp_path / "rollers.yaml").write_text(yaml.safe_dump({"omnikin": 1, "name": "rollers", "wheels": wheels}))
-    message = real_time_shortfall(load_robot(tmp_path / "rollers.yaml"), "it will run slower")
+    path = tmp_path / f"rollers{count}.yaml"
+    path.write_text(yaml.safe_dump({"omnikin": 1, "name": "rollers", "wheels": wheels}))
+    return path
+
+
+def test_a_model_too_large_for_max_time_is_refused_without_building_it(tmp_path, capsys):
+    # 64 wheels of 256 rollers: 16 450 bodies, 21 s to compile, ten times that to drive a metre
+    start = time.perf_counter()
+    rc, _, err = run_cli(
+        capsys, "simulate", ring_of_roller_wheels(tmp_path, 64), "--engine", "physics", "--errors", "none",
+        "--path", "line 1", "--max-time", "1", "--log", tmp_path / "o.csv",
+    )  # fmt: skip
+    assert rc == 2 and "more than --max-time 1 s" in err and err.count("\n") == 1
+    assert time.perf_counter() - start < 5.0
+
+
+def test_a_model_too_slow_for_real_time_is_named_before_a_real_time_run(tmp_path):
+    # 24 omni wheels of 64 x 4 rollers: a quarter of real time here, 8 times short of the margin
+    message = real_time_shortfall(load_robot(ring_of_roller_wheels(tmp_path, 24)), "it will run slower")
     assert message is not None and "x real time on this machine" in message and "\n" not in message
     assert real_time_shortfall(load_robot("tomasi-omni3"), "it will run slower") is None

@@ -103,7 +103,7 @@ def simulate(
         tail = cost.bytes / max(cost.samples, 1.0) * TAIL_MAX * rate
         require_within("simulate", memory=cost.bytes + tail, hint="lower rate or shorten path", **limits)
         sampled = sample_plan(plan, nominal, rate)
-        estimate = physics_run_cost(sampled, true, nominal, step)
+        estimate = physics_run_cost(sampled, true, nominal, step, budget=max_time)
         require_within("simulate", seconds=estimate.seconds, hint="shorten path or raise step", **limits)
         run: SimulatedRun = simulate_physics(sampled, true, nominal, rate=rate, step=step)
     else:

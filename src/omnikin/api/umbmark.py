@@ -347,6 +347,7 @@ def run_umbmark(
         calibrate=calibrate,
         engine=engine,
         step=step,
+        max_time=max_time,
     )
     if on_cost is not None:
         on_cost(cost)
@@ -395,15 +396,17 @@ def umbmark_cost(
     calibrate: bool = True,
     engine: str = "kinematic",
     step: float | None = None,
+    max_time: float | None = None,
 ) -> Cost:
     """What :func:`run_umbmark` with these settings will take (robot-samples, memory, time):
     :func:`~omnikin.evaluation.procedure.estimate_cost`, or
-    :func:`~omnikin.evaluation.physics_study.physics_cost` for the physics engine."""
+    :func:`~omnikin.evaluation.physics_study.physics_cost` for the physics engine (which
+    does not build a model whose size alone says it takes longer than ``max_time`` [s])."""
     _, step = engine_options(engine, None, step)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
     settings: dict[str, Any] = dict(side=side, mode=mode, runs=runs, rate=rate, trials=trials, calibrate=calibrate)
     if step is not None:
-        return physics_cost(robot_of(robot), step=step, **settings)
+        return physics_cost(robot_of(robot), step=step, budget=max_time, **settings)
     return estimate_cost(robot_of(robot), **settings)
 
 

@@ -460,7 +460,7 @@ def cmd_simulate(args) -> int:
         require(args, "simulate", memory=cost.bytes + tail, hint="lower --rate or shorten --path")
         with _drivable(args):
             sampled = sample_plan(plan, robot, args.rate)
-            physics_cost = physics_run_cost(sampled, true, robot, args.step)
+            physics_cost = physics_run_cost(sampled, true, robot, args.step, budget=Budget.of(args).seconds)
         duration, seconds = physics_cost.simulated, physics_cost.seconds  # the waits and the tail at their limits
     samples = duration * args.rate
     _check_stamps(args, duration=duration)

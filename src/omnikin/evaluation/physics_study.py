@@ -107,23 +107,31 @@ def physics_cost(
     trials: int,
     calibrate: bool,
     step: float = DEFAULT_STEP,
+    budget: float | None = None,
 ) -> Cost:
     """Samples, memory and computing time of :func:`physics_umbmark_study`: every run's
     estimate (:func:`omnikin.physics.cost.physics_run_cost`: its simulated time bounded, the
     waits for the steering and the tail at their limits, at the cost of a time step measured
     once on ``robot``'s model at time step ``step`` [s], the model's construction counted for
-    every run)."""
-    from ..physics.cost import measure_step_seconds, physics_run_cost
+    every run). With ``budget`` [s], a model whose size alone says the study takes longer is not
+    built (:func:`omnikin.physics.cost.size_lower_bound`: that bound is the estimate)."""
+    from ..physics.cost import measure_step_seconds, physics_run_cost, simulated_bound, size_lower_bound
     from ..simulation.motion import sample_plan
 
-    measured = measure_step_seconds(robot, step)
     squares = runs * trials * (3 if calibrate else 2)  # per direction: before, after, the floor
     driven = [(umbmark_square(direction, side, mode), squares) for direction in ("cw", "ccw")]
     if calibrate:
         driven += [(plan, RECOMMENDED_REPEATS) for _, plan in recommended_runs(robot, side)]
+    sampled = [(sample_plan(plan, robot, rate), count) for plan, count in driven]
+    if budget is not None:  # a model too large for the budget by its size alone is not built
+        least = sum(count * size_lower_bound(robot, simulated_bound(s, robot) / step) for s, count in sampled)
+        if least > budget:
+            samples = sum(count * simulated_bound(s, robot) * rate for s, count in sampled)
+            return Cost(samples, float(BYTES), seconds_per_sample=least / max(samples, 1.0))
+    measured = measure_step_seconds(robot, step)
     samples = seconds = 0.0
-    for plan, count in driven:
-        run = physics_run_cost(sample_plan(plan, robot, rate), robot, robot, step, measured=measured)
+    for plan, count in sampled:
+        run = physics_run_cost(plan, robot, robot, step, measured=measured)
         samples += count * run.samples
         seconds += count * run.seconds
     return Cost(samples, float(BYTES), seconds_per_sample=seconds / max(samples, 1.0))
