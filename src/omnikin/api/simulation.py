@@ -93,7 +93,11 @@ def simulate(
     cost = run_cost(plan, nominal, rate)
     seeds = list(streams(seed).values())
     true, injected = as_built(nominal, true_robot, errors, seeds[0])
-    limits = dict(max_memory=max_memory, max_time=max_time, names=ARGUMENTS, size=f"{cost.samples:.3g} samples")
+
+    def within(**estimate) -> None:  # memory, seconds and what to change: refused beyond the limits
+        size = f"{cost.samples:.3g} samples"
+        require_within("simulate", max_memory=max_memory, max_time=max_time, names=ARGUMENTS, size=size, **estimate)
+
     if engine == "physics":
         from ..physics.cost import physics_run_cost
         from ..physics.run import TAIL_MAX, simulate_physics
@@ -101,12 +105,12 @@ def simulate(
 
         assert step is not None
         tail = cost.bytes / max(cost.samples, 1.0) * TAIL_MAX * rate
-        require_within("simulate", memory=cost.bytes + tail, hint="lower rate or shorten path", **limits)
+        within(memory=cost.bytes + tail, hint="lower rate or shorten path")
         sampled = sample_plan(plan, nominal, rate)
         estimate = physics_run_cost(sampled, true, nominal, step, budget=max_time)
-        require_within("simulate", seconds=estimate.seconds, hint="shorten path or raise step", **limits)
+        within(seconds=estimate.seconds, hint="shorten path or raise step")
         run: SimulatedRun = simulate_physics(sampled, true, nominal, rate=rate, step=step)
     else:
-        require_within("simulate", memory=cost.bytes, seconds=cost.seconds, hint="lower rate or shorten path", **limits)
+        within(memory=cost.bytes, seconds=cost.seconds, hint="lower rate or shorten path")
         run = simulate_run(plan, true, nominal, rate=rate, noise=noise_of(noise), trials=1, rng=seeds[1])
     return Simulation(nominal, true, injected, path.name if isinstance(path, Plan) else str(path), run)

@@ -151,7 +151,7 @@ def cmd_ros(args) -> int:
         from ..physics.cost import real_time_shortfall
 
         backend = PhysicsBackend(robot, true, max_lag=PHYSICS_MAX_LAG)
-        slow = real_time_shortfall(true, "the back-end will drop simulated time (counted in /diagnostics)")
+        slow = real_time_shortfall(true or robot, "the back-end will drop simulated time (counted in /diagnostics)")
         if slow:
             print(f"omnikin: note: ros: {slow}", file=sys.stderr)
     else:
