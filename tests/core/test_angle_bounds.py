@@ -76,7 +76,6 @@ def test_steering_outside_the_wheel_limits_is_refused(ackermann, steer, wheel):
         ("steer", lambda: ackermann.fk_matrix(steer)),
         ("steer", lambda: ackermann.fk_rows(steer)),
         ("steer", lambda: ackermann.fk_rank(steer)),
-        ("steer_hint", lambda: ackermann.ik([0.2, 0.0, 0.0], steer_hint=steer)),
     ):
         with pytest.raises(InputError) as info:
             call()
@@ -85,6 +84,17 @@ def test_steering_outside_the_wheel_limits_is_refused(ackermann, steer, wheel):
             message.startswith(f"{name}: wheel {wheel!r} steered to ") and "outside its limits [-35, 35] deg" in message
         )
         assert "\n" not in message
+
+
+def test_a_steering_hint_is_a_preference_not_checked_against_the_limits(ackermann):
+    # the hint only picks the branch; beyond the limits the wheel takes the one within them.
+    # Front wheels of a turn to the left (omega > 0): both steer positive, within +-35 deg.
+    twist = [0.2, 0.0, 0.1]
+    expected = ackermann.ik(twist).steer_angles
+    for hint in ([math.radians(90), math.radians(90)], [0.0, -math.radians(36)], [LIMIT + 1e-6, 0.0]):
+        np.testing.assert_allclose(ackermann.ik(twist, steer_hint=hint).steer_angles, expected)
+    with pytest.raises(InputError, match=r"^steer_hint: wheel 'front_left' steered to .* beyond"):
+        ackermann.ik(twist, steer_hint=[1e20, 0.0])  # not an angle at all: refused
 
 
 def test_steering_at_the_limits_is_accepted(ackermann):

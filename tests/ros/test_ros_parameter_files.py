@@ -65,7 +65,7 @@ def test_ros_serial_only_options_with_sim_backend(capsys):
         (
             "physics",
             ["--errors", "none", "--true-robot", "x.yaml"],
-            "--errors and --true-robot both give the robot as built: give one of them",
+            "ros: argument --true-robot: not allowed with argument --errors (see omnikin ros --help)",
         ),
     ],
 )
