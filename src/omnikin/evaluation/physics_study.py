@@ -123,8 +123,9 @@ def physics_cost(
     if calibrate:
         driven += [(plan, RECOMMENDED_REPEATS) for _, plan in recommended_runs(robot, side)]
     sampled = [(sample_plan(plan, robot, rate), count) for plan, count in driven]
-    if budget is not None:  # a model too large for the budget by its size alone is not built
-        least = sum(count * size_lower_bound(robot, simulated_bound(s, robot) / step) for s, count in sampled)
+    bounds = [size_lower_bound(robot, simulated_bound(s, robot) / step) for s, _ in sampled]
+    if budget is not None and None not in bounds:  # a model too large by its size alone is not built
+        least = sum(count * bound for (_, count), bound in zip(sampled, bounds, strict=True) if bound is not None)
         if least > budget:
             samples = sum(count * simulated_bound(s, robot) * rate for s, count in sampled)
             return Cost(samples, float(BYTES), seconds_per_sample=least / max(samples, 1.0))

@@ -14,8 +14,8 @@ Computing time = (time steps) x (measured seconds per step) + (samples) x
   so no formula in the model's size is used;
 * before the model is built, a **lower bound** from its size (:func:`size_lower_bound`: bodies
   x :data:`COMPILE_SECONDS_PER_BODY` to compile it, and :data:`STEP_SECONDS_PER_BODY` per body
-  and step): a model so large that even this exceeds the budget is refused without building it
-  (64 wheels of 256 rollers take 21 s to compile);
+  and step): a model slow to build (3 000 bodies and more) so large that even this exceeds the
+  budget is refused without building it (64 wheels of 256 rollers take 21 s to compile);
 * the simulated time **bounded from above** (:func:`simulated_bound`): the plan's duration, plus
   :data:`~omnikin.physics.run.ALIGN_MAX` for every segment whose steering differs from the one
   before it (the run waits for the steering joints, at most that long), plus
@@ -101,10 +101,14 @@ def model_bodies(robot: Robot) -> int:
     return bodies
 
 
-def size_lower_bound(robot: Robot, steps: float) -> float:
+def size_lower_bound(robot: Robot, steps: float) -> float | None:
     """Least computing time [s] of ``steps`` time steps of ``robot``'s model, building it
-    included, from its size alone (:func:`model_bodies`; module docstring)."""
+    included, from its size alone (:func:`model_bodies`; module docstring); None for a model
+    quick to build (less than :data:`PROBE_SECONDS` by this bound), whose measured cost is the
+    better estimate."""
     bodies = model_bodies(robot)
+    if bodies * COMPILE_SECONDS_PER_BODY < PROBE_SECONDS:
+        return None
     return bodies * (COMPILE_SECONDS_PER_BODY + steps * STEP_SECONDS_PER_BODY)
 
 
@@ -165,7 +169,7 @@ def physics_run_cost(
     samples = simulated * sampled.rate
     if measured is None and budget is not None:
         least = size_lower_bound(true_robot, steps)
-        if least > budget:
+        if least is not None and least > budget:
             return PhysicsCost(simulated, steps, samples, least, least / steps)
     step_seconds, built = measured if measured is not None else measure_step_seconds(true_robot, step)
     seconds = built + steps * step_seconds + samples * SAMPLE_SECONDS
