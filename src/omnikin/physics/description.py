@@ -136,7 +136,9 @@ speed servo                 a PI controller as in built wheel controllers: gain
                             a time constant of 5 ms; the implicit integrator keeps it stable at
                             any step) and integral time 50 ms, so that a steady load (the
                             centripetal force on a curve) leaves no speed error; the integral
-                            is held within one full torque (anti-windup)
+                            is held within one full torque (anti-windup); a motor rotor
+                            inertia where the wheel alone is too light for the gain ("Rotor
+                            inertia" below)
 steering                    PI position servo with full torque at 0.05 rad of error, damped
                             critically on the steered parts' inertia, integral time 50 ms,
                             ramped at pi rad/s (half a turn per second: hobby servos turn
@@ -167,6 +169,21 @@ the sideways forces of fixed standard wheels (constraint forces, not the motors'
 terms while turning, and steering (the rows at the mounting angles). Body motions the rims
 barely drive (parallel drive directions off by a robot's mounting errors) are left out of
 ``P(a)`` (:func:`drivable_rows`).
+
+*Rotor inertia* (:func:`rotor_inertia`, MuJoCo's joint ``armature``). MuJoCo integrates the
+speed servo implicitly (``implicitfast``): over a step ``h`` the wheel's own axle inertia
+``I`` responds to a torque as ``I + kv h`` would, while the contact solver predicts the
+wheel's response from ``I`` alone; the gain ``kv = I_eff / 5 ms`` grows with the robot's mass
+through ``I_eff``, ``I`` does not. Measured on tomasi-omni3 (``line 1``, 2 ms): ``kv h / I`` up
+to 17 (5 kg chassis) tracks the wheel speeds within 1 %; 63 (20 kg) falls into a limit cycle
+(wheel speeds -5.1 to -3.4 rad/s about -4.2, the robot 3 % too far), as do a wheel of
+``physical.mass`` 1 g and 64 rollers in one row. Built wheels do not have that problem: a
+geared motor's rotor, seen through the gear (its inertia times the ratio squared), usually
+outweighs the wheel. Every driven wheel therefore gets the rotor inertia that keeps
+``kv h_max / (I + rotor) <= 15`` (:data:`SERVO_STEP_RATIO`) at the longest accepted step
+``h_max = 2 ms`` (so the model is the same at every step): with it all three track within 1 %.
+It lengthens the servo's time constant by at most ``h_max / 15 = 0.13 ms`` and counts in the
+command ramp as axle inertia; the presets (ratios 3.4 to 13.9) get none.
 
 A robot whose contact points do not surround its centre of mass cannot stand (two wheels on
 one axle and no castor): :attr:`PhysicalRobot.support_margin` is then not positive, and the
@@ -206,6 +223,13 @@ HANDOFF_DEG = 15.0
 """Largest angle [deg] a roller carries the wheel before the next one takes over (default count)."""
 SERVO_TIME_CONSTANT = 0.005
 """Time constant [s] of the wheel speed servo."""
+MAX_STEP = 0.002
+"""Longest time step [s] the engine accepts (:data:`omnikin.physics.mjcf.STEP_RANGE`)."""
+SERVO_STEP_RATIO = 15.0
+"""Largest ``gain * MAX_STEP / I_axle`` of a wheel's speed servo (module docstring, "Rotor
+inertia"): beyond it a wheel whose own axle inertia is small against the robot's mass it drives
+falls into a limit cycle (tomasi-omni3 with a 20 kg chassis: ratio 63, wheel speeds -5.1 to
+-3.4 rad/s about -4.2); the presets lie at 3.4 to 13.9."""
 INTEGRAL_TIME = 0.05
 """Integral time [s] of the wheel speed servo."""
 RAMP_SHARE = 0.5
@@ -276,13 +300,15 @@ class RollerSet:
 class Motor:
     """A wheel motor: torque limit [N m], speed limit [rad/s], the command ramp's acceleration
     limit [rad/s^2], the speed servo's gain [N m s/rad] and integral time [s] (a PI controller:
-    torque ``gain (e + z)``, ``dz/dt = e / integral_time``, ``e`` the speed error [rad/s])."""
+    torque ``gain (e + z)``, ``dz/dt = e / integral_time``, ``e`` the speed error [rad/s]), and
+    the rotor's inertia seen at the axle, ``armature`` [kg m^2] (:func:`rotor_inertia`)."""
 
     max_torque: float
     max_speed: float
     max_accel: float
     gain: float
     integral_time: float
+    armature: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -351,7 +377,8 @@ class PhysicalRobot:
     """The physical description of a robot: its ``chassis`` and ``wheels`` (file order, castors
     included), ``gravity`` [m/s^2], total ``mass`` [kg], and ``support_margin`` [m]: distance of
     the robot's centre of mass (projected on the floor) inside the polygon of the wheels'
-    contact points, negative outside (the robot tips over), 0 when the contacts are collinear."""
+    contact points, negative outside (the robot tips over); contacts in a line have no inside:
+    minus the distance to their segment (:func:`support_margin`)."""
 
     name: str
     chassis: Chassis
@@ -544,10 +571,11 @@ def wheel_loads(contacts: np.ndarray, com: np.ndarray, weight: float) -> np.ndar
 
 def support_margin(contacts: np.ndarray, point: np.ndarray) -> float:
     """Signed distance [m] of ``point`` inside the convex hull of ``contacts`` (negative
-    outside, 0 when the hull has no area)."""
+    outside). A hull without area (one contact, or all in a line) has no inside: the margin is
+    minus the distance to that point or segment, 0 on it."""
     hull = convex_hull(contacts)
     if len(hull) < 3:
-        return 0.0
+        return -segment_distance(point, hull[0], hull[-1])
     margin = math.inf
     for i in range(len(hull)):
         p, q = hull[i], hull[(i + 1) % len(hull)]
@@ -555,6 +583,15 @@ def support_margin(contacts: np.ndarray, point: np.ndarray) -> float:
         inward = np.array([-edge[1], edge[0]]) / math.hypot(edge[0], edge[1])
         margin = min(margin, float(inward @ (point - p)))
     return margin
+
+
+def segment_distance(point: np.ndarray, start: np.ndarray, end: np.ndarray) -> float:
+    """Distance [m] from ``point`` to the segment from ``start`` to ``end`` (x, y), a point
+    when they coincide: to the nearest point ``start + t (end - start)``, ``t`` clipped to [0, 1]."""
+    edge = np.asarray(end, dtype=float) - start
+    length2 = float(edge @ edge)
+    t = 0.0 if length2 == 0.0 else min(1.0, max(0.0, float((point - start) @ edge) / length2))
+    return float(np.hypot(*(np.asarray(point, dtype=float) - start - t * edge)))
 
 
 def steered_support_margin(robot: Robot, com, steer) -> float:
@@ -657,6 +694,14 @@ def ramp_rim_acceleration(
     return share / worst if worst > 0.0 else math.inf
 
 
+def rotor_inertia(gain: float, axle_inertia: float, step: float = MAX_STEP) -> float:
+    """The motor rotor's inertia [kg m^2] seen at the axle of a wheel whose speed servo has
+    ``gain`` [N m s/rad] and whose own inertia about its axle is ``axle_inertia`` [kg m^2]: the
+    least that keeps ``gain step / (axle_inertia + rotor) <= SERVO_STEP_RATIO`` at the longest
+    ``step`` [s] (module docstring, "Rotor inertia"); 0 when the wheel alone suffices."""
+    return max(0.0, gain * step / SERVO_STEP_RATIO - axle_inertia)
+
+
 # --- wheels ---------------------------------------------------------------------------------
 def _given(wheel: Wheel) -> PhysicalWheel:
     return wheel.physical if wheel.physical is not None else PhysicalWheel()
@@ -732,8 +777,9 @@ def describe(robot: Robot) -> PhysicalRobot:
             i_eff = wheel_axle + total / len(driven_names) * w.radius**2
             max_speed = w.max_speed if w.max_speed else RIM_SPEED / w.radius
             gain = i_eff / SERVO_TIME_CONSTANT
-            motor = Motor(torque, max_speed, 0.0, gain, INTEGRAL_TIME)  # max_accel: ramp below
-            ramp_inputs.append((w, load * friction, wheel_axle))
+            rotor = rotor_inertia(gain, wheel_axle)
+            motor = Motor(torque, max_speed, 0.0, gain, INTEGRAL_TIME, rotor)  # max_accel: ramp below
+            ramp_inputs.append((w, load * friction, wheel_axle + rotor))
         steering = None
         if w.is_steerable or w.is_castor:
             fork = max(w.radius / 2.0, 1e-3)

@@ -45,14 +45,15 @@ import xml.etree.ElementTree as ET
 
 from ..errors import InputError, shorten
 from ..model import Robot
-from .description import PhysicalRobot, WheelBody, describe
+from .description import MAX_STEP, PhysicalRobot, WheelBody, describe
+from .validity import check_resolvable
 
 DEFAULT_STEP = 0.002
 """Time step [s]: 500 Hz resolves the contact dynamics of rollers a few millimetres thick."""
-CONTACT_SOLREF = (0.004, 1.0)
+CONTACT_SOLREF = (2.0 * MAX_STEP, 1.0)
 """Contact time constant [s] and damping ratio: critically damped, and no shorter than twice
 the default time step, below which MuJoCo's soft contacts lose their meaning."""
-STEP_RANGE = (1e-5, CONTACT_SOLREF[0] / 2.0)
+STEP_RANGE = (1e-5, MAX_STEP)
 """Time steps [s] :func:`mjcf` accepts: at most half the contacts' time constant
 (:data:`CONTACT_SOLREF`). MuJoCo raises a time constant below twice the step to twice the step
 (its ``refsafe`` flag), so a longer step would silently simulate softer contacts: at 4 ms the
@@ -111,7 +112,15 @@ def _wheel(parent: ET.Element, wheel: WheelBody, pos, yaw: float | None) -> None
     )
     axle, across = wheel.hub_inertia
     _inertial(body, wheel.hub_mass, (across, axle, across))
-    _sub(body, "joint", name=wheel.name, type="hinge", axis="0 1 0")
+    armature = wheel.motor.armature if wheel.motor is not None and wheel.motor.armature > 0.0 else None
+    _sub(
+        body,
+        "joint",
+        name=wheel.name,
+        type="hinge",
+        axis="0 1 0",
+        armature=None if armature is None else _num(armature),
+    )
     rollers = wheel.rollers
     if rollers is None:
         tyre = _sub(body, "geom", name=f"{wheel.name}:tyre", type="ellipsoid")
@@ -168,10 +177,12 @@ def time_step(step: float | None = None, name: str = "time step") -> float:
 
 def mjcf(robot: PhysicalRobot | Robot, step: float = DEFAULT_STEP) -> str:
     """The MJCF text of ``robot`` (a description, or a robot to :func:`describe`; module
-    docstring) with time step ``step`` [s] (:data:`STEP_RANGE`, :func:`time_step`)."""
+    docstring) with time step ``step`` [s] (:data:`STEP_RANGE`, :func:`time_step`). A robot the
+    engine cannot resolve is refused in one line (:func:`omnikin.physics.validity.check_resolvable`)."""
     if isinstance(robot, Robot):
         robot = describe(robot)
     step = time_step(step)
+    check_resolvable(robot)
     root = ET.Element("mujoco", model=robot.name)
     _sub(root, "compiler", angle="radian", autolimits="true", inertiafromgeom="false")
     option = _sub(root, "option", timestep=_num(step), integrator="implicitfast", cone="elliptic")
