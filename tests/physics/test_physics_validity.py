@@ -1,0 +1,145 @@
+"""What the physics engine accepts (docs/physics.md, "What the engine accepts";
+``omnikin.physics.validity``): every robot file within the documented ranges of its
+``physical:`` fields either drives like its kinematics at the default 2 ms step or is refused
+up front in one line naming the quantity, its value and the range.
+
+Expected values: ``line 1`` ends at ``(1, 0, 0)`` (the closed form of the plan) and a constant
+command ``v`` is held by wheel speeds ``J v`` (the inverse kinematics), independent of the
+engine. Tolerances: 1 % of the line (10 mm, 10 mrad), 2 % of the commanded wheel speed once the
+ramp is done (a limit cycle, as a 20 kg chassis gave before the rotor inertia, swings 20 %),
+except for 3 rollers in one row, whose wheel speed swings by physics the kinematics leaves out
+(the axle bobs by 7.4 % of the radius each roller). The tracking command does not turn: rows
+side by side change the turn rate (docs/physics.md, "Rows side by side").
+A support margin is the distance of a point to a segment (two wheels on one axle)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from conftest import SRC, run_entry_point
+from omnikin import load_robot
+from omnikin.physics.description import describe, support_margin
+from omnikin.physics.engine import PhysicsSim
+from omnikin.physics.run import simulate_physics
+from omnikin.plans import line
+
+TOMASI = Path(SRC) / "omnikin" / "presets" / "tomasi-omni3.yaml"
+LINE_TOLERANCE = 0.01
+"""Of the 1 m line: 10 mm in position, 10 mrad in heading."""
+TRACKING_TOLERANCE = 0.02
+"""Largest wheel speed error once the ramp is done, relative to the command."""
+
+
+def tomasi_file(tmp_path: Path, body=None, wheel=None, **layout) -> Path:
+    """tomasi-omni3 with ``physical`` fields ``body`` (robot) and ``wheel`` (every wheel) and the
+    wheels' ``layout`` fields (radius, distance) replaced, written as a robot file."""
+    data = yaml.safe_load(TOMASI.read_text())
+    if body:
+        data["physical"] = body
+    for w in data["wheels"]:
+        w.update(layout)
+        if wheel:
+            w["physical"] = {**w.get("physical", {}), **wheel}
+    path = tmp_path / "robot.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+SWEEP = [
+    pytest.param({"mass": 1.0}, None, {}, True, id="chassis-1kg"),
+    pytest.param({"mass": 5.0}, None, {}, True, id="chassis-5kg"),
+    pytest.param({"mass": 20.0}, None, {}, True, id="chassis-20kg"),
+    pytest.param({"mass": 50.0}, None, {}, True, id="chassis-50kg"),
+    pytest.param({"mass": 1e5}, None, {}, True, id="chassis-max"),
+    pytest.param(None, {"mass": 1e-4}, {}, True, id="wheel-mass-min"),
+    pytest.param(None, {"mass": 1e5}, {}, True, id="wheel-mass-max"),
+    pytest.param(None, {"rollers": 3, "rows": 1}, {}, False, id="rollers-3x1"),
+    pytest.param(None, {"rollers": 32, "rows": 2}, {}, True, id="rollers-32x2"),
+    pytest.param(None, {"rollers": 64, "rows": 1}, {}, True, id="rollers-64x1"),
+    pytest.param(None, {"rollers": 24, "rows": 4}, {}, True, id="rollers-24x4"),
+    pytest.param(None, {"rollers": 64, "rows": 4}, {}, True, id="rollers-64x4"),
+    pytest.param(None, {"width": 1e-4}, {}, True, id="width-min"),
+    pytest.param(None, {"width": 0.05}, {}, True, id="width-wide"),
+    pytest.param(None, {"width": 0.2}, {}, True, id="width-near-centre"),
+    pytest.param({"height": 1e-3}, None, {}, True, id="height-min"),
+    pytest.param({"height": 10.0}, None, {}, True, id="height-max"),
+    pytest.param(None, None, {"radius": 0.01, "distance": 0.03}, True, id="radius-10mm"),
+    pytest.param({"mass": 100.0}, None, {"radius": 1.0, "distance": 3.0}, True, id="radius-1m"),
+]
+
+
+@pytest.mark.parametrize(("body", "wheel", "layout", "track"), SWEEP)
+def test_physical_fields_at_their_extremes_drive_like_the_kinematics(tmp_path, body, wheel, layout, track):
+    robot = load_robot(tomasi_file(tmp_path, body, wheel, **layout))
+    end = simulate_physics(line(1.0), robot, robot, rate=100).truth.reshape(-1, 3)[-1]
+    assert abs(end[0] - 1.0) <= LINE_TOLERANCE and abs(end[1]) <= LINE_TOLERANCE
+    assert abs(math.remainder(end[2], 2 * math.pi)) <= LINE_TOLERANCE
+
+    if not track:
+        return
+    sim = PhysicsSim(robot)
+    command = robot.ik((0.2, 0.1, 0.0)).wheel_speeds  # no turn: rows side by side change its rate
+    sim.command(command)
+    sim.advance(1.0)
+    worst = 0.0
+    for _ in range(150):  # 0.3 s
+        sim.step()
+        worst = max(worst, float(np.max(np.abs(sim.wheel_speeds - command))))
+    assert worst <= TRACKING_TOLERANCE * float(np.max(np.abs(command)))
+
+
+REFUSED = [
+    pytest.param(None, None, {"radius": 1e-4, "distance": 3e-4}, "radius 0.0001 m", id="tiny"),
+    pytest.param(None, None, {"radius": 0.003, "distance": 0.009}, "radius 0.003 m", id="3mm"),
+    pytest.param(None, None, {"radius": 10.0, "distance": 1000.0}, "chassis: mass 3.14e+10 kg", id="huge"),
+    pytest.param(None, None, {"radius": 0.5, "distance": 100.0}, "chassis: mass 1.57e+07 kg", id="large"),
+    pytest.param({"mass": 1e5}, None, {"radius": 0.5, "distance": 100.0}, "motor torque", id="large-torque"),
+    pytest.param(None, {"rollers": 64, "rows": 4, "mass": 1e-4}, {}, "roller mass", id="light-rollers"),
+    pytest.param(None, {"width": 10.0}, {}, "physical.width 10 m", id="width-past-centre"),
+]
+
+
+@pytest.mark.parametrize(("body", "wheel", "layout", "names"), REFUSED)
+def test_robots_the_engine_cannot_resolve_are_refused_in_one_line_before_any_file(tmp_path, body, wheel, layout, names):
+    path = tomasi_file(tmp_path, body, wheel, **layout)
+    out = tmp_path / "robot.xml"
+    result = run_entry_point("mjcf", path, "-o", out, cwd=tmp_path)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and names in lines[0], result.stderr
+    assert not out.exists()
+    simulated = run_entry_point(
+        "simulate", path, "--engine", "physics", "--errors", "none", "--path", "line 1", "--log", "o.csv", cwd=tmp_path
+    )
+    assert simulated.returncode == 2 and simulated.stderr.strip() == lines[0]
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_support_margin_of_contacts_in_a_line_is_the_distance_to_them():
+    axle = np.array([[0.0, 0.2], [0.0, -0.2]])
+    assert support_margin(axle, np.array([-0.3, 0.0])) == pytest.approx(-0.3)
+    assert support_margin(axle, np.array([0.3, 0.6])) == pytest.approx(-math.hypot(0.3, 0.4))
+    assert support_margin(np.vstack([axle, [[0.0, 0.0]]]), np.array([0.0, 0.5])) == pytest.approx(-0.3)
+    assert support_margin(axle[:1], np.array([0.3, 0.6])) == pytest.approx(-0.5)
+    assert support_margin(axle, np.array([0.0, 0.1])) == 0.0
+
+
+def test_two_wheels_without_castor_name_how_far_their_centre_of_mass_lies_off_the_axle(tmp_path):
+    path = tmp_path / "two.yaml"
+    path.write_text(
+        "omnikin: 1\nname: two\nphysical: {com: [-0.3, 0, 0.05]}\nwheels:\n"
+        "- {name: l, type: standard, x: 0, y: 0.2, drive_deg: 0, radius: 0.05, encoder: {ticks_per_rev: 100}}\n"
+        "- {name: r, type: standard, x: 0, y: -0.2, drive_deg: 0, radius: 0.05, encoder: {ticks_per_rev: 100}}\n"
+    )
+    com_x = describe(load_robot(path)).com[0]  # the axle is x = 0: the distance is |com_x|
+    assert com_x < -0.1
+    result = run_entry_point(
+        "simulate", path, "--engine", "physics", "--errors", "none", "--path", "line 1", "--log", "o.csv", cwd=tmp_path
+    )
+    assert result.returncode == 2
+    assert f"lies {-com_x:.3g} m outside" in result.stderr, result.stderr
