@@ -143,3 +143,18 @@ def test_two_wheels_without_castor_name_how_far_their_centre_of_mass_lies_off_th
     )
     assert result.returncode == 2
     assert f"lies {-com_x:.3g} m outside" in result.stderr, result.stderr
+
+
+def test_a_nearly_unloaded_wheel_does_not_hold_back_the_others(tmp_path):
+    """mecanum4 with its centre of mass 19 mm inside the support polygon near one wheel: that
+    wheel carries almost nothing; the other three drive ``line 1`` (before: it ended at 0.665 m,
+    the command ramp waiting for the unloaded wheel's traction)."""
+    data = yaml.safe_load((Path(SRC) / "omnikin" / "presets" / "mecanum4.yaml").read_text())
+    data["physical"] = {"com": [0.23, 0.14, 0.05], "mass": 10.0}
+    path = tmp_path / "corner.yaml"
+    path.write_text(yaml.safe_dump(data))
+    robot = load_robot(path)
+    assert 0.0 < describe(robot).support_margin < 0.03
+    end = simulate_physics(line(1.0), robot, robot, rate=100).truth.reshape(-1, 3)[-1]
+    assert abs(end[0] - 1.0) <= LINE_TOLERANCE and abs(end[1]) <= LINE_TOLERANCE
+    assert abs(math.remainder(end[2], 2 * math.pi)) <= LINE_TOLERANCE

@@ -130,9 +130,14 @@ command ramp                every driven wheel's rim accelerates at most at ``a`
                             ramp" below). A step command would saturate the motors and spin
                             the wheels
 speed servo                 a PI controller as in built wheel controllers: gain
-                            ``I_eff / 5 ms`` [N m s/rad], ``I_eff = I_wheel + (m / n_driven)
+                            ``I_eff / 5 ms`` [N m s/rad], ``I_eff = I_wheel + m (N_i / sum N_j)
                             r^2`` the wheel's inertia plus its share of the robot's mass seen
-                            through the radius (the wheel speed follows the ramp with
+                            through the radius, shared among the driven wheels ``j`` as they
+                            carry the weight (``m / n_driven`` when they carry it evenly; a
+                            nearly unloaded wheel would otherwise be asked for a quarter of
+                            the traction, and the command ramp would wait for it: mecanum4
+                            with its centre of mass 19 mm inside one corner, ``line 1``
+                            ended at 0.665 m, now 0.9993 m) (the wheel speed follows the ramp with
                             a time constant of 5 ms; the implicit integrator keeps it stable at
                             any step) and integral time 50 ms, so that a steady load (the
                             centripetal force on a curve) leaves no speed error; the integral
@@ -756,6 +761,7 @@ def describe(robot: Robot) -> PhysicalRobot:
     robot_com = moments / total
     loads = wheel_loads(contacts, robot_com[:2], total * GRAVITY)
 
+    driven_load = sum(n for w, n in zip(robot.wheels, loads, strict=True) if w.name in driven_names)
     wheels = []
     ramp_inputs: list[tuple[Wheel, float, float]] = []  # driven wheel, mu N [N], axle inertia [kg m^2]
     for w, (mass, width, rollers, hub_radius), load in zip(robot.wheels, parts, loads, strict=True):
@@ -774,7 +780,7 @@ def describe(robot: Robot) -> PhysicalRobot:
         driven = w.name in driven_names
         if driven:
             wheel_axle = hub_inertia[0] + (mass - hub_mass) * hub_radius**2
-            i_eff = wheel_axle + total / len(driven_names) * w.radius**2
+            i_eff = wheel_axle + total * load / driven_load * w.radius**2
             max_speed = w.max_speed if w.max_speed else RIM_SPEED / w.radius
             gain = i_eff / SERVO_TIME_CONSTANT
             rotor = rotor_inertia(gain, wheel_axle)
