@@ -780,7 +780,7 @@ def describe(robot: Robot) -> PhysicalRobot:
         driven = w.name in driven_names
         if driven:
             wheel_axle = hub_inertia[0] + (mass - hub_mass) * hub_radius**2
-            i_eff = wheel_axle + total * load / driven_load * w.radius**2
+            i_eff = wheel_axle + total * float(load / driven_load) * w.radius**2
             max_speed = w.max_speed if w.max_speed else RIM_SPEED / w.radius
             gain = i_eff / SERVO_TIME_CONSTANT
             rotor = rotor_inertia(gain, wheel_axle)
