@@ -158,3 +158,22 @@ def test_a_nearly_unloaded_wheel_does_not_hold_back_the_others(tmp_path):
     end = simulate_physics(line(1.0), robot, robot, rate=100).truth.reshape(-1, 3)[-1]
     assert abs(end[0] - 1.0) <= LINE_TOLERANCE and abs(end[1]) <= LINE_TOLERANCE
     assert abs(math.remainder(end[2], 2 * math.pi)) <= LINE_TOLERANCE
+
+
+@pytest.mark.parametrize(
+    ("name", "mass", "heading"),
+    [("synchro", 1000.0, 0.0), ("synchro", 1000.0, 0.5), ("xr4000", 100.0, 0.0), ("xr4000", 100.0, 0.5)]
+    + [("ackermann", 500.0, 0.0)],  # ackermann drives only straight
+)
+def test_steered_robots_with_heavy_payloads_steer_and_drive_like_the_kinematics(tmp_path, name, mass, heading):
+    """The steering servo's stiffness grows with the load on the wheel; before the steering
+    rotor inertia synchro with 1000 kg tipped over and xr4000 with 100 kg ended 86 mm off.
+    Expected: ``line 1 HEADING`` ends at ``(cos, sin, 0)``."""
+    data = yaml.safe_load((Path(SRC) / "omnikin" / "presets" / f"{name}.yaml").read_text())
+    data.setdefault("physical", {})["mass"] = mass
+    path = tmp_path / "heavy.yaml"
+    path.write_text(yaml.safe_dump(data))
+    robot = load_robot(path)
+    end = simulate_physics(line(1.0, heading), robot, robot, rate=100).truth.reshape(-1, 3)[-1]
+    assert np.hypot(end[0] - math.cos(heading), end[1] - math.sin(heading)) <= LINE_TOLERANCE
+    assert abs(math.remainder(end[2], 2 * math.pi)) <= LINE_TOLERANCE

@@ -188,7 +188,12 @@ outweighs the wheel. Every driven wheel therefore gets the rotor inertia that ke
 ``kv h_max / (I + rotor) <= 15`` (:data:`SERVO_STEP_RATIO`) at the longest accepted step
 ``h_max = 2 ms`` (so the model is the same at every step): with it all three track within 1 %.
 It lengthens the servo's time constant by at most ``h_max / 15 = 0.13 ms`` and counts in the
-command ramp as axle inertia; the presets (ratios 3.4 to 13.9) get none.
+command ramp as axle inertia; the presets (ratios 3.4 to 13.9) get none. The steering servo's
+stiffness (full torque at 0.05 rad) grows with the load as well; its spring acts explicitly, so
+its natural frequency ``sqrt(k / I)`` must stay within one radian per step: a steering rotor
+inertia keeps ``k h_max^2 / I <= 1`` (:func:`steering_rotor_inertia`; presets 0.01 to 0.86).
+Without it synchro with a 1000 kg chassis (ratio 122) tipped over in ``line 1``, xr4000 with
+100 kg (8.1) ended it 86 mm off.
 
 A robot whose contact points do not surround its centre of mass cannot stand (two wheels on
 one axle and no castor): :attr:`PhysicalRobot.support_margin` is then not positive, and the
@@ -326,7 +331,8 @@ class Steering:
     :class:`Motor`); a castor swivels freely.
     ``fork_mass`` [kg] and ``fork_inertia`` [kg m^2] (principal moments, fork frame) of the
     part that turns with the steering, wheel excluded; ``inertia`` [kg m^2] of everything that
-    turns about the steering axis."""
+    turns about the steering axis, the steering motor's rotor ``armature`` [kg m^2]
+    (:func:`steering_rotor_inertia`) included."""
 
     pivot: tuple[float, float]
     trail: float
@@ -340,6 +346,7 @@ class Steering:
     fork_mass: float
     fork_inertia: tuple[float, float, float]
     inertia: float
+    armature: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -707,6 +714,15 @@ def rotor_inertia(gain: float, axle_inertia: float, step: float = MAX_STEP) -> f
     return max(0.0, gain * step / SERVO_STEP_RATIO - axle_inertia)
 
 
+def steering_rotor_inertia(stiffness: float, inertia: float, step: float = MAX_STEP) -> float:
+    """The steering motor rotor's inertia [kg m^2] seen at the steering axis of a position servo
+    of ``stiffness`` [N m/rad] turning ``inertia`` [kg m^2]: the least that keeps
+    ``stiffness step^2 / (inertia + rotor) <= 1`` at the longest ``step`` [s], i.e. the servo's
+    natural frequency at most one radian per step (its stiffness acts explicitly; module
+    docstring, "Rotor inertia"); 0 when the steered parts alone suffice."""
+    return max(0.0, stiffness * step * step - inertia)
+
+
 # --- wheels ---------------------------------------------------------------------------------
 def _given(wheel: Wheel) -> PhysicalWheel:
     return wheel.physical if wheel.physical is not None else PhysicalWheel()
@@ -798,6 +814,8 @@ def describe(robot: Robot) -> PhysicalRobot:
             if steer_torque is None:
                 steer_torque = friction * load * (trail + w.radius)
             stiffness = steer_torque / STEER_FULL_TORQUE_ANGLE
+            steer_rotor = steering_rotor_inertia(stiffness, turning) if w.is_steerable else 0.0
+            turning += steer_rotor
             steering = Steering(
                 pivot=(float(w.x), float(w.y)),
                 trail=float(trail),
@@ -811,6 +829,7 @@ def describe(robot: Robot) -> PhysicalRobot:
                 fork_mass=fork_mass,
                 fork_inertia=fork_inertia,
                 inertia=turning,
+                armature=steer_rotor,
             )
         wheels.append(
             WheelBody(

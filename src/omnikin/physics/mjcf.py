@@ -152,6 +152,8 @@ def _steered(parent: ET.Element, wheel: WheelBody) -> None:
     fork = _sub(parent, "body", name=f"{wheel.name}:fork", pos=_vec(pivot), euler=_vec((0, 0, wheel.drive)))
     _inertial(fork, steering.fork_mass, steering.fork_inertia)
     joint = _sub(fork, "joint", name=f"{wheel.name}_steer", type="hinge", axis="0 0 1")
+    if steering.armature > 0.0:
+        joint.set("armature", _num(steering.armature))
     if steering.limits is not None:
         joint.set("range", _vec(steering.limits))
     size = max(wheel.radius / 4.0, 1e-3)
