@@ -57,6 +57,7 @@ SWEEP = [
     pytest.param({"mass": 50.0}, None, {}, True, id="chassis-50kg"),
     pytest.param({"mass": 1e5}, None, {}, True, id="chassis-max"),
     pytest.param(None, {"mass": 1e-4}, {}, True, id="wheel-mass-min"),
+    pytest.param({"mass": 1e5}, {"mass": 0.011}, {}, True, id="mass-ratio-9e6"),
     pytest.param(None, {"mass": 1e5}, {}, True, id="wheel-mass-max"),
     pytest.param(None, {"rollers": 3, "rows": 1}, {}, False, id="rollers-3x1"),
     pytest.param(None, {"rollers": 32, "rows": 2}, {}, True, id="rollers-32x2"),
@@ -101,6 +102,7 @@ REFUSED = [
     pytest.param({"mass": 1e5}, None, {"radius": 0.5, "distance": 100.0}, "motor torque", id="large-torque"),
     pytest.param(None, {"rollers": 64, "rows": 4, "mass": 1e-4}, {}, "roller mass", id="light-rollers"),
     pytest.param(None, {"width": 10.0}, {}, "physical.width 10 m", id="width-past-centre"),
+    pytest.param({"mass": 1e5}, {"mass": 1e-4}, {}, "carries a robot of 1e+05 kg", id="mass-ratio"),
 ]
 
 

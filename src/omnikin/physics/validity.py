@@ -22,6 +22,10 @@ The conditions (SI units):
   own distance from the body origin along it, ``|hub . axle|``, would roll on the far side of
   the robot's centre (the turn rate's closed form ``l^2 / (l^2 - d^2)`` changes sign at
   ``d = l``): tomasi-omni3 with ``width`` 10 m drove ``line 1`` to 0.25 m.
+- **Wheels against the weight they carry.** The robot's mass over a wheel's mass at most
+  :data:`MAX_MASS_RATIO`: tomasi-omni3 drove ``line 1`` within 0.1 % up to 1e7 (100 t on
+  10 g wheels, 10 t on 1 g) and diverged at 1e8 (10 t on 0.1 g wheels) and 1e9; the contact
+  solver loses the light rollers under loads that many times their weight.
 - **Bodies MuJoCo can load.** MuJoCo refuses moving bodies whose mass or principal inertia is
   not above ``mjMINVAL`` (1e-15); every body needs at least :data:`MIN_MASS` and
   :data:`MIN_INERTIA`, twice that. Rollers bind first: a roller's spin inertia is
@@ -40,6 +44,8 @@ from .description import PhysicalRobot, WheelBody, roller_shape
 MIN_RADIUS = 0.01
 """Smallest wheel radius [m] the engine accepts: the contacts' sinking (16-25 um) shortens the
 rolling radius by at most about 0.25 % (module docstring)."""
+MAX_MASS_RATIO = 1e7
+"""Largest ratio of the robot's mass to a wheel's mass (module docstring)."""
 MJ_MINVAL = 1e-15
 """MuJoCo's ``mjMINVAL``: moving bodies need a mass and principal inertias above it."""
 MIN_MASS = 2.0 * MJ_MINVAL
@@ -120,6 +126,13 @@ def check_resolvable(robot: PhysicalRobot) -> None:
                 torque = wheel.steering.max_torque
                 why = "as mu N (trail + r)"
                 _derived(owner, "steering torque", torque, "N m", TORQUE_RANGE, "its physical.max_torque", why)
+    lightest = min(robot.wheels, key=lambda w: w.mass)
+    if robot.mass > MAX_MASS_RATIO * lightest.mass:
+        raise InputError(
+            f"wheel {lightest.name!r}: mass {lightest.mass:.3g} kg carries a robot of {robot.mass:.3g} kg, "
+            f"{robot.mass / lightest.mass:.2g} times its own; the physics engine resolves at most {MAX_MASS_RATIO:g}: "
+            f"give it a physical.mass of at least {robot.mass / MAX_MASS_RATIO:.3g} kg or a lighter chassis"
+        )
     _check_bodies("robot", [("chassis", chassis.mass, chassis.inertia)], "a heavier chassis (physical.mass)")
     for wheel in robot.wheels:
         advice = "a heavier wheel (physical.mass)"
