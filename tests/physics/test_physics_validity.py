@@ -180,3 +180,17 @@ def test_steered_robots_with_heavy_payloads_steer_and_drive_like_the_kinematics(
     end = simulate_physics(line(1.0, heading), robot, robot, rate=100).truth.reshape(-1, 3)[-1]
     assert np.hypot(end[0] - math.cos(heading), end[1] - math.sin(heading)) <= LINE_TOLERANCE
     assert abs(math.remainder(end[2], 2 * math.pi)) <= LINE_TOLERANCE
+
+
+def test_two_wheels_with_their_centre_of_mass_on_the_axle_are_refused_without_a_negative_zero(tmp_path):
+    path = tmp_path / "two.yaml"
+    path.write_text(
+        "omnikin: 1\nname: two\nwheels:\n"
+        "- {name: l, type: standard, x: 0, y: 0.2, drive_deg: 0, radius: 0.05, encoder: {ticks_per_rev: 100}}\n"
+        "- {name: r, type: standard, x: 0, y: -0.2, drive_deg: 0, radius: 0.05, encoder: {ticks_per_rev: 100}}\n"
+    )
+    result = run_entry_point(
+        "simulate", path, "--engine", "physics", "--errors", "none", "--path", "line 1", "--log", "o.csv", cwd=tmp_path
+    )
+    assert result.returncode == 2
+    assert "lies on the edge of the polygon" in result.stderr and "-0" not in result.stderr, result.stderr

@@ -150,10 +150,12 @@ class PhysicsSim:
                 f"robot {robot.name!r}: the physical description has wheels "
                 f"{shorten([w.name for w in self.description.wheels])}, the robot {shorten(robot.wheel_names)}"
             )
-        if self.description.support_margin <= 0.0:
+        margin = self.description.support_margin
+        if margin <= 0.0:
+            where = f"{-margin:.3g} m outside" if margin < 0.0 else "on the edge of"
             raise InputError(
-                f"robot {robot.name!r} cannot stand: its centre of mass lies "
-                f"{-self.description.support_margin:.3g} m outside the polygon of its wheels' contact points"
+                f"robot {robot.name!r} cannot stand: its centre of mass lies {where} the polygon of its wheels' "
+                "contact points" + ("" if margin < 0.0 else " (or on the line they stand in)")
             )
         start = np.asarray(start, dtype=float)
         if start.shape != (3,) or not np.all(np.isfinite(start)):
