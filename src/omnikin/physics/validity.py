@@ -9,7 +9,7 @@ The conditions (SI units):
 - **Wheel size.** The contacts are soft with a fixed time constant (2 ``MAX_STEP`` = 4 ms,
   :data:`omnikin.physics.mjcf.CONTACT_SOLREF`); MuJoCo's soft contact holds a weight by sinking
   ``x = g (1 - d) / d (d_max tc)^2`` whatever the size (``d`` the impedance, 0.95 when shallow:
-  8 um; measured 13-25 um), which shortens the rolling radius: a robot on wheels of radius
+  8 um; the measured shortfalls below say 13-25 um), which shortens the rolling radius: a robot on wheels of radius
   ``r`` drives about ``16-25 um / r`` short (tomasi-omni3's layout, ``line 1``: 0.04 % at 41 mm;
   0.23 % at 5 mm, 0.48 % with the hubs ten radii out; 0.43 % at 3 mm). Below
   :data:`MIN_RADIUS` the shortfall approaches the validation tolerance of 0.5 %.
@@ -31,8 +31,10 @@ The conditions (SI units):
   :data:`MIN_INERTIA`, twice that. Rollers bind first: a roller's spin inertia is
   ``0.4 m b^2``, its cross-section radius ``b`` about ``r tan^2(pi / n)``.
 
-The servo's stability at the step is not a condition here: the description gives every driven
-wheel the rotor inertia that keeps it (:func:`omnikin.physics.description.rotor_inertia`).
+The servos' stability at the step is not a condition here: the description gives every driven
+wheel and every steering joint the rotor inertia that keeps it
+(:func:`~omnikin.physics.description.rotor_inertia`,
+:func:`~omnikin.physics.description.steering_rotor_inertia`).
 """
 
 from __future__ import annotations
