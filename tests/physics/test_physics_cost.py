@@ -51,9 +51,9 @@ def timed_run(robot, path: str, rate: float, step: float):
         plan = plan + part
     sampled = sample_plan(plan, robot, rate)
     estimate = physics_run_cost(sampled, robot, robot, step)
-    start = time.perf_counter()
+    start = time.process_time()  # computing time, as the estimate counts it
     run = simulate_physics(sampled, robot, robot, rate=rate, step=step)
-    return estimate, time.perf_counter() - start, float(run.t[-1]), sampled
+    return estimate, time.process_time() - start, float(run.t[-1]), sampled
 
 
 @pytest.mark.parametrize(

@@ -5,7 +5,8 @@ physics`` check against ``--max-time`` / ``max_time``.
 Computing time = (time steps) x (measured seconds per step) + (samples) x
 :data:`SAMPLE_SECONDS` + the model's construction, with
 
-* the seconds per step **measured on the model itself**, on this machine, just before the run
+* the seconds per step **measured on the model itself**, on this machine, just before the run,
+  as this process's CPU time (other work on the machine stretches the clock, not the count)
   (:func:`measure_step_seconds`): the robot as built is made into its MuJoCo model, set down on
   the floor, and driven for up to :data:`PROBE_STEPS` steps (at most :data:`PROBE_SECONDS` of
   wall time) through :class:`~omnikin.physics.engine.PhysicsSim`, its servos and ramps included.
@@ -115,19 +116,22 @@ def size_lower_bound(robot: Robot, steps: float) -> float | None:
 def measure_step_seconds(robot: Robot, step: float) -> tuple[float, float]:
     """Seconds of computing time per time step of ``robot``'s physics model at time step
     ``step`` [s], driven at :data:`PROBE_SPEED` (module docstring), and the seconds its
-    construction took (model, settling). Bad robots are refused as the run would refuse them."""
-    start = time.perf_counter()
+    construction took (model, settling). Bad robots are refused as the run would refuse them.
+    Computing time is this process's CPU time (``time.process_time``): other work on the
+    machine slows the clock, not the count, so the estimate does not depend on the moment it
+    was measured."""
+    cpu = time.process_time()
     sim = PhysicsSim(robot, step=step)
-    built = time.perf_counter() - start
+    built = time.process_time() - cpu
     rows = np.asarray(robot.jacobian(), dtype=float)
     sim.command(rows @ np.array([PROBE_SPEED, 0.0, 0.0]), np.zeros(len(robot.steer_names)) if robot.steerable else None)
     sim.step(PROBE_WARMUP)
     steps, chunk = 0, 20
-    start = time.perf_counter()
+    cpu, start = time.process_time(), time.perf_counter()
     while steps < PROBE_STEPS and time.perf_counter() - start < PROBE_SECONDS:
         sim.step(chunk)
         steps += chunk
-    return (time.perf_counter() - start) / steps, built
+    return (time.process_time() - cpu) / steps, built
 
 
 def steering_waits(sampled: SampledPlan, robot: Robot) -> int:
