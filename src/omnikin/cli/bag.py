@@ -523,7 +523,9 @@ def cmd_simulate(args) -> int:
         summary["injected_errors"] = errors.as_dict()
     saturated = getattr(run, "saturated", 0)
     if physics:
-        summary["saturated_commands"] = saturated
+        summary.update(run.summary())
+        for problem in run.problems():  # the run did not drive as commanded: one line each
+            print(f"omnikin: warning: {robot.name}: {problem}", file=sys.stderr)
     if saturated:
         print(
             f"omnikin: warning: {robot.name}: {saturated} of {len(run.t) - 1} commands asked a motor beyond its "

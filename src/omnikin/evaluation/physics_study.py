@@ -169,13 +169,29 @@ class PhysicsFloor(NoiseFloor):
         }
 
 
-def _drive(plan: Plan, true_robot: Robot, command: Robot, rate: float, step: float, rng: np.random.Generator):
+def _drive(
+    plan: Plan, true_robot: Robot, command: Robot, rate: float, step: float, rng: np.random.Generator, name: str
+):
     """``plan`` driven in physics at time step ``step`` [s], each wheel of ``true_robot``
-    started at a roller phase drawn uniformly from ``[0, 1)`` by ``rng`` (module docstring)."""
+    started at a roller phase drawn uniformly from ``[0, 1)`` by ``rng`` (module docstring).
+    A run that did not drive as commanded (:meth:`~omnikin.physics.run.PhysicsRun.problems`: a
+    wheel lagging or slipping, its steering or rest not reached) ends the study with
+    :class:`~omnikin.physics.engine.PhysicsError` naming it as ``name``: its end pose would enter
+    the statistics as an odometry error it is not."""
+    from ..physics.engine import PhysicsError
     from ..physics.run import simulate_physics
 
     phase = rng.random(len(true_robot.rolling))
-    return simulate_physics(plan, true_robot, command, rate=rate, step=step, roller_phase=phase)
+    run = simulate_physics(plan, true_robot, command, rate=rate, step=step, roller_phase=phase)
+    problems = run.problems()
+    if problems:
+        more = f" (and {len(problems) - 1} more problems)" if len(problems) > 1 else ""
+        raise PhysicsError(
+            f"{name}: robot {true_robot.name!r} did not drive as commanded: {problems[0]}{more}; the study would "
+            f"average this run's end pose as odometry error, so it stops (simulate the path with "
+            f"`omnikin simulate --engine physics` to see every problem)"
+        )
+    return run
 
 
 def physics_umbmark(
@@ -208,7 +224,8 @@ def physics_umbmark(
         for _ in range(trials * runs):
             if progress is not None:
                 progress(f"{label}: run {len(eps['cw']) + len(eps['ccw']) + 1} of {total}")
-            run = _drive(plan, true_robot, command, rate, step, rng)
+            number = len(eps["cw"]) + len(eps["ccw"]) + 1
+            run = _drive(plan, true_robot, command, rate, step, rng, f"{label}, run {number} of {total} ({direction})")
             first.setdefault(direction, run)
             eps[direction].append(run.epsilon[0])
     results = [
@@ -248,7 +265,9 @@ def physics_calibration_runs(
         for _ in range(RECOMMENDED_REPEATS):
             if progress is not None:
                 progress(f"calibration runs: run {len(out) + 1} of {total}")
-            run = _drive(plan, true_robot, robot, rate, step, rng)
+            run = _drive(
+                plan, true_robot, robot, rate, step, rng, f"calibration run {len(out) + 1} of {total} ({text})"
+            )
             out.append(CalibrationRun(plan, tuple(run.measured[0]), text))
     return out
 
@@ -273,7 +292,10 @@ def physics_umbmark_study(
     (``engine`` "physics", ``noise`` none, ``floor`` the nominal robot's :class:`PhysicsFloor`
     with its interval at ``level``, ``systematic`` the first procedures, no Borenstein
     comparison); roller phases from ``seed``, time step ``step`` [s]."""
+    from ..physics.run import check_rate_steps
+
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
+    check_rate_steps(rate, step)
     encoded_wheels(robot)
     rng = streams(seed)
     opts: dict[str, Any] = dict(side=side, mode=mode, runs=runs, rate=rate, trials=trials, step=step, progress=progress)

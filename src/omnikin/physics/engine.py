@@ -36,7 +36,9 @@ The model is the MJCF of :mod:`omnikin.physics.mjcf`. The simulation
 
 from __future__ import annotations
 
+import contextlib
 import math
+import numbers
 
 import numpy as np
 
@@ -58,10 +60,66 @@ SETTLE_SPEED = 1e-4
 """Vertical speed [m/s] and tilt rate [rad/s] of the chassis below which it has settled."""
 UNWRAP_CHUNK = 10
 """Steps between two updates of the continuous heading: below pi per chunk up to 150 rad/s at 2 ms."""
+START_MAX = 1e5
+"""Largest ``|x|``, ``|y|`` [m] and ``|theta|`` [rad] of a start pose: there doubles still resolve
+1.5e-11 m (rad), a millionth of the contacts' sinking; at 1e300 MuJoCo's contacts diverge."""
+ADVANCE_MAX = 3600.0
+"""Longest simulated time [s] one call of :meth:`PhysicsSim.advance` or :meth:`PhysicsSim.step`
+runs (about a minute of computing for a preset at 2 ms): a longer run is several calls, and a
+hostile ``advance(1e300)`` is refused instead of stepping for ever."""
+TRACK_TIME = 0.1
+"""Window [s] of the wheels' tracking error: the root mean square of the rim speed error
+``r (set-point - speed)`` over an exponential window of this length (20 time constants of the
+5 ms speed servo, which closes an error it has the torque for within a few) is what
+:data:`TRACK_ERROR` bounds."""
+TRACK_ERROR = 0.02
+"""Bound [m/s] on a driven wheel's root mean square rim speed error over :data:`TRACK_TIME`:
+beyond it the wheel does not follow its set-points (torque-limited, or oscillating); the presets'
+wheels stay below a fifth of it (docs/physics.md, "Runs that do not drive as commanded")."""
 
 
 class PhysicsError(OmnikinError, RuntimeError):
     """The physics simulation failed while running (it diverged, or the robot cannot stand)."""
+
+
+class DivergedError(PhysicsError):
+    """MuJoCo found the state not finite (or huge) and reset it: ``time`` [s] the simulated time
+    at which it did (counted from the start of settling when ``settling``), ``step`` [s] the time
+    step. The message gives no advice about an option: the caller that has a ``--step`` adds it."""
+
+    def __init__(self, message: str, *, time: float, settling: bool, step: float):
+        super().__init__(message)
+        self.time = time
+        self.settling = settling
+        self.step = step
+
+
+def _ignore_warning(message: str) -> None:
+    """MuJoCo's warning handler while omnikin steps it: the warnings are counted in ``data.warning``
+    (read by :meth:`PhysicsSim._check`); MuJoCo's default handler would print them on standard
+    output and append them to ``MUJOCO_LOG.TXT`` in the current folder."""
+
+
+@contextlib.contextmanager
+def _quiet(mujoco):
+    """MuJoCo's warnings routed to :func:`_ignore_warning` for the block, the caller's handler back
+    after it (``mujoco.set_mju_user_warning`` is process-wide)."""
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(_ignore_warning)
+    try:
+        yield
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
+def finite_vector(value, size: int) -> np.ndarray | None:
+    """``value`` as ``size`` finite floats, or None when it is not that (a string, a nested list,
+    a wrong length, NaN): the caller refuses it in its own words."""
+    try:
+        array = np.array(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    return array if array.shape == (size,) and np.all(np.isfinite(array)) else None
 
 
 def _mujoco():
@@ -157,9 +215,13 @@ class PhysicsSim:
                 f"robot {robot.name!r} cannot stand: its centre of mass lies {where} the polygon of its wheels' "
                 "contact points" + ("" if margin < 0.0 else " (or on the line they stand in)")
             )
-        start = np.asarray(start, dtype=float)
-        if start.shape != (3,) or not np.all(np.isfinite(start)):
-            raise InputError(f"start pose must be 3 finite numbers (x, y, theta), got {shorten(start.tolist())}")
+        pose = finite_vector(start, 3)
+        if pose is None or np.max(np.abs(pose)) > START_MAX:
+            raise InputError(
+                f"start pose must be 3 finite numbers (x, y, theta) within +-{START_MAX:g} m and rad (beyond, "
+                f"doubles no longer resolve the contacts), got {shorten(start)}"
+            )
+        start = pose
         self.xml = mjcf(self.description, step)
         self.model = mujoco.MjModel.from_xml_string(self.xml)
         self.data = mujoco.MjData(self.model)
@@ -184,6 +246,16 @@ class PhysicsSim:
         self._speed_step = np.array([mo.max_accel * self.step_size for mo in motors if mo is not None])
         self._integral_gain = np.array([self.step_size / mo.integral_time for mo in motors if mo is not None])
         self._windup = np.array([mo.max_torque / mo.gain for mo in motors if mo is not None])
+        self._driven_radius = np.array([robot.wheel(rolling[i]).radius for i in driven])
+        self.driven_names = [rolling[i] for i in driven]
+        """Names of the driven wheels (file order): the wheels of :attr:`lag_time` and friends."""
+        self._track_alpha = self.step_size / TRACK_TIME
+        self._track_ms = np.zeros(len(driven))
+        self._lag_steps = np.zeros(len(driven), dtype=np.int64)
+        self.lag_start = np.full(len(driven), math.nan)
+        """Per driven wheel, the time [s] its tracking error first exceeded :data:`TRACK_ERROR` (NaN: never)."""
+        self.lag_worst = np.zeros(len(driven))
+        """Per driven wheel, the largest root mean square rim speed error [m/s] over :data:`TRACK_TIME`."""
         self._drive_dof = self._wheel_dof[self._driven]
         steer = robot.steer_names
         self._steer_qpos = np.array([m.jnt_qposadr[joint(f"{n}_steer")] for n in steer], dtype=int)
@@ -224,13 +296,18 @@ class PhysicsSim:
         mj.mj_forward(m, d)
         settled = False
         steps_min = max(1, round(SETTLE_MIN / self.step_size))
-        for k in range(round(SETTLE_MAX / self.step_size)):
-            mj.mj_step(m, d)
-            v = d.qvel[self._free_dof : self._free_dof + 6]
-            if k >= steps_min and abs(v[2]) < SETTLE_SPEED and abs(v[3]) < SETTLE_SPEED and abs(v[4]) < SETTLE_SPEED:
-                settled = True
-                break
-        self._check()
+        h = self.step_size
+        with _quiet(mj):
+            for k in range(round(SETTLE_MAX / h)):
+                mj.mj_step(m, d)
+                if abs(d.time - (k + 1) * h) > h / 2:  # MuJoCo reset the diverged state
+                    self._diverged(k * h, settling=True)
+                v = d.qvel[self._free_dof : self._free_dof + 6]
+                still = abs(v[2]) < SETTLE_SPEED and abs(v[3]) < SETTLE_SPEED and abs(v[4]) < SETTLE_SPEED
+                if k >= steps_min and still:
+                    settled = True
+                    break
+        self._check(settling=True)
         if not settled:
             raise PhysicsError(
                 f"robot {self.robot.name!r} did not come to rest on the floor within {SETTLE_MAX:g} s "
@@ -257,12 +334,12 @@ class PhysicsSim:
     def command(self, wheel_speeds, steer=None) -> None:
         """Set the wheel speeds [rad/s] of the rolling wheels (file order) and, for steerable
         wheels, the steering angles [rad]; reached through the ramp (module docstring)."""
-        speeds = np.asarray(wheel_speeds, dtype=float)
         n = len(self.robot.rolling)
-        if speeds.shape != (n,) or not np.all(np.isfinite(speeds)):
+        speeds = finite_vector(wheel_speeds, n)
+        if speeds is None:
             raise InputError(
                 f"robot {self.robot.name!r}: expected {n} finite wheel speeds [rad/s] (rolling wheels "
-                f"{shorten(self.robot.rolling_names)}), got {shorten(np.asarray(wheel_speeds).tolist())}"
+                f"{shorten(self.robot.rolling_names)}), got {shorten(wheel_speeds)}"
             )
         wanted = speeds[self._driven]
         self._speed_target = np.clip(wanted, -self._max_speed, self._max_speed)
@@ -271,12 +348,12 @@ class PhysicsSim:
         if steer is None:
             self.saturated += clipped
             return
-        angles = np.asarray(steer, dtype=float)
         k = len(self._steer_ctrl)
-        if angles.shape != (k,) or not np.all(np.isfinite(angles)):
+        angles = finite_vector(steer, k)
+        if angles is None:
             raise InputError(
                 f"robot {self.robot.name!r}: expected {k} finite steering angles [rad] "
-                f"(steerable wheels {shorten(self.robot.steer_names)}), got {shorten(np.asarray(steer).tolist())}"
+                f"(steerable wheels {shorten(self.robot.steer_names)}), got {shorten(steer)}"
             )
         for i, limits in enumerate(self._steer_limits):
             if limits is None:  # turns all the way round: the nearest turn of the angle
@@ -297,25 +374,39 @@ class PhysicsSim:
 
     # --- stepping ----------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
-        """Advance ``n`` time steps (a whole number >= 0)."""
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
-            raise InputError(f"step: the number of steps must be a whole number >= 0, got {shorten(n)}")
+        """Advance ``n`` time steps (a whole number >= 0, at most :data:`ADVANCE_MAX` of simulated
+        time). Raises :class:`DivergedError` at the step where MuJoCo finds the state not finite."""
+        most = round(ADVANCE_MAX / self.step_size)
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 0 <= n <= most:
+            raise InputError(
+                f"step: the number of steps must be a whole number from 0 to {most} ({ADVANCE_MAX:g} s), "
+                f"got {shorten(n)}"
+            )
         mj, m, d = self._mj, self.model, self.data
-        for _ in range(int(n)):
-            self._control()
-            mj.mj_step(m, d)
-            self._steps += 1
-            if self._steps % UNWRAP_CHUNK == 0:
-                self._track_heading()
+        h = self.step_size
+        with _quiet(mj):
+            for _ in range(int(n)):
+                self._control()
+                mj.mj_step(m, d)
+                self._steps += 1
+                if abs(d.time - self._steps * h) > h / 2:  # MuJoCo reset the diverged state
+                    self._diverged((self._steps - 1) * h, settling=False)
+                if self._steps % UNWRAP_CHUNK == 0:
+                    self._track_heading()
         self._track_heading()
         self._check()
 
     def advance(self, t: float) -> None:
-        """Step until the simulation time reaches ``t`` [s] (to the nearest step)."""
-        t = float(t)
-        if not math.isfinite(t):
-            raise InputError(f"advance: time must be finite, got {t!r}")
-        n = round((t - self.time) / self.step_size)
+        """Step until the simulation time reaches ``t`` [s] (to the nearest step; at most
+        :data:`ADVANCE_MAX` beyond the present time)."""
+        if isinstance(t, bool) or not isinstance(t, numbers.Real) or not math.isfinite(t):
+            raise InputError(f"advance: time must be a finite number of seconds, got {shorten(t)}")
+        if t - self.time > ADVANCE_MAX:
+            raise InputError(
+                f"advance: at most {ADVANCE_MAX:g} s of simulated time per call (now t = {self.time:.6g} s), got "
+                f"{shorten(t)}; advance in several calls"
+            )
+        n = round((float(t) - self.time) / self.step_size)
         if n > 0:
             self.step(n)
 
@@ -330,6 +421,13 @@ class PhysicsSim:
                 self._steer_set += np.clip(self._steer_target - self._steer_set, -self._steer_step, self._steer_step)
             self._ramping = self.ramping
         error = self._speed_set - d.qvel[self._drive_dof]
+        rim = error * self._driven_radius
+        self._track_ms += (rim * rim - self._track_ms) * self._track_alpha
+        beyond = self._track_ms > TRACK_ERROR * TRACK_ERROR
+        if beyond.any():
+            self._lag_steps += beyond
+            self.lag_start[beyond & np.isnan(self.lag_start)] = d.time
+            np.maximum(self.lag_worst, np.sqrt(self._track_ms), out=self.lag_worst)
         self._integral = np.clip(self._integral + error * self._integral_gain, -self._windup, self._windup)
         d.ctrl[self._drive_ctrl] = self._speed_set + self._integral
         if len(self._steer_ctrl):
@@ -344,20 +442,44 @@ class PhysicsSim:
         self._heading += wrap_angle(yaw - self._last_yaw)
         self._last_yaw = yaw
 
-    def _check(self) -> None:
+    def _check(self, settling: bool = False) -> None:
         """Refuse to go on after MuJoCo found the state not finite (it then resets the state and
-        counts a warning) or the state is not finite."""
+        counts a warning; :meth:`step` catches the step where it did) or the state is not finite."""
         d, warnings = self.data, self._mj.mjtWarning
         bad = sum(
             d.warning[w].number for w in (warnings.mjWARN_BADQACC, warnings.mjWARN_BADQPOS, warnings.mjWARN_BADQVEL)
         )
         if bad or not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
-            raise PhysicsError(
-                f"robot {self.robot.name!r}: the physics simulation diverged at t = {d.time:.4g} s "
-                f"(try a smaller time step)"
-            )
+            self._diverged(self._steps * self.step_size if not settling else float(d.time), settling=settling)
+
+    def _diverged(self, t: float, settling: bool) -> None:
+        """Raise :class:`DivergedError` at simulated time ``t`` [s] (of settling when ``settling``)."""
+        when = f"while settling on the floor, {t:.4g} s after it was put down" if settling else f"at t = {t:.4g} s"
+        cause = (
+            "the robot cannot even stand: check its sizes and physical fields (masses, radii, torques)"
+            if settling
+            else "check the commands and the robot's physical fields (masses, radii, torques)"
+        )
+        raise DivergedError(
+            f"robot {self.robot.name!r}: the physics simulation diverged {when} (MuJoCo found a non-finite or huge "
+            f"acceleration at a {self.step_size:g} s time step); {cause}",
+            time=t,
+            settling=settling,
+            step=self.step_size,
+        )
 
     # --- readings ------------------------------------------------------------------------------------
+    @property
+    def lag_time(self) -> np.ndarray:
+        """Per driven wheel (:attr:`driven_names`), the time [s] its root mean square rim speed
+        error over :data:`TRACK_TIME` exceeded :data:`TRACK_ERROR`: it did not follow its set-points."""
+        return self._lag_steps * self.step_size
+
+    @property
+    def tracking_error(self) -> np.ndarray:
+        """Per driven wheel, the present root mean square rim speed error [m/s] over :data:`TRACK_TIME`."""
+        return np.sqrt(self._track_ms)
+
     @property
     def time(self) -> float:
         """Simulation time [s] since the end of settling."""

@@ -41,6 +41,7 @@ names of the wheels and steering joints are those of ROS ``joint_states`` (``NAM
 
 from __future__ import annotations
 
+import numbers
 import xml.etree.ElementTree as ET
 
 from ..errors import InputError, shorten
@@ -169,7 +170,7 @@ def time_step(step: float | None = None, name: str = "time step") -> float:
     :class:`~omnikin.errors.InputError` naming it as ``name`` (``"--step"``)."""
     if step is None:
         return DEFAULT_STEP
-    if isinstance(step, bool) or not isinstance(step, (int, float)) or not STEP_RANGE[0] <= step <= STEP_RANGE[1]:
+    if isinstance(step, bool) or not isinstance(step, numbers.Real) or not STEP_RANGE[0] <= step <= STEP_RANGE[1]:
         raise InputError(
             f"{name} must be a time step in [{STEP_RANGE[0]:g}, {STEP_RANGE[1]:g}] s (at most half the contact "
             f"time constant), got {shorten(step)}"

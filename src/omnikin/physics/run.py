@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, OdometryInputError
 from ..geometry import wrap_angle
 from ..limits import MotionLimits
 from ..model import Robot, require_same_wheels
@@ -51,8 +51,8 @@ from ..plans import Plan
 from ..simulation.motion import SampledPlan, check_rate_range, require_motion, sample_plan
 from ..simulation.simulate import SimulatedRun, commanded_angles, counter_output
 from .description import steered_support_margin
-from .engine import PhysicsError, PhysicsSim
-from .mjcf import DEFAULT_STEP
+from .engine import TRACK_ERROR, TRACK_TIME, DivergedError, PhysicsError, PhysicsSim
+from .mjcf import DEFAULT_STEP, STEP_RANGE, time_step
 
 REST_SPEED = 1e-4
 """Speed [m/s] of the chassis below which it is at rest after the plan."""
@@ -68,14 +68,100 @@ TIPPED = 0.2
 """Tilt [rad] of the chassis beyond which the robot has tipped over (it stands level within
 milliradians: the contacts sink 0.01-0.1 % of a wheel's radius)."""
 
+SLIP_TIME = 0.2
+"""Window [s] of a wheel's slip: the root mean square over an exponential window of this length,
+taken at the samples, of the rim speed ``r (omega - J_i xi)`` the wheel turns beyond what the
+chassis' true twist ``xi`` rolls it (``J_i`` its row of the robot as built at the steering
+reached), bounded by :data:`SLIP_ERROR`."""
+SLIP_ERROR = 0.05
+"""Bound [m/s] on a driven wheel's root mean square slip over :data:`SLIP_TIME`: beyond it the
+wheel spins or skids on the floor (the soft contacts creep 21-49 mm/s for a moment while a
+0.5 m/s step ramps; docs/physics.md)."""
+
+END_ERROR = 0.005
+"""Rim distance [m] a driven wheel may end off the angle it was commanded to turn (plus
+:data:`END_SHARE` of that distance): the ramps make it lag while accelerating and lead while
+braking by the same angle, so a wheel that followed its commands ends on them within the servo's
+last error (the presets: below 1 mm on a 1 m square)."""
+END_SHARE = 0.01
+"""Share of a driven wheel's commanded rim distance it may end off it (:data:`END_ERROR`)."""
+
+
+@dataclass(frozen=True)
+class WheelTrouble:
+    """A driven wheel that did not do what it was commanded for ``seconds`` [s] of the run, first
+    at ``start`` [s]; ``worst`` [m/s] its largest root mean square rim speed error (``kind``
+    "lagged": behind or around its set-points, :data:`~omnikin.physics.engine.TRACK_ERROR`;
+    "slipped": spinning or skidding on the floor, :data:`SLIP_ERROR`)."""
+
+    wheel: str
+    kind: str
+    seconds: float
+    start: float
+    worst: float
+
+    def text(self) -> str:
+        bound, window = (TRACK_ERROR, TRACK_TIME) if self.kind == "lagged" else (SLIP_ERROR, SLIP_TIME)
+        what = "did not follow its set-points" if self.kind == "lagged" else "slipped on the floor"
+        return (
+            f"wheel {self.wheel!r} {what} for {self.seconds:.3g} s from t = {self.start:.4g} s (rim speed error up "
+            f"to {self.worst:.3g} m/s root mean square over {window:g} s, bound {bound:g} m/s)"
+        )
+
 
 @dataclass(frozen=True)
 class PhysicsRun(SimulatedRun):
     """A :class:`~omnikin.simulation.simulate.SimulatedRun` driven in the physics engine;
     ``saturated`` counts the samples whose command a motor's speed limit or a steering end stop
-    held at the limit (:attr:`omnikin.physics.engine.PhysicsSim.saturated`)."""
+    held at the limit (:attr:`omnikin.physics.engine.PhysicsSim.saturated`); ``wheels`` the
+    driven wheels that lagged their set-points or slipped (:class:`WheelTrouble`);
+    ``steering_not_reached`` the segments (1-based) that drove after :data:`ALIGN_MAX` without
+    their steering; ``at_rest`` False when the robot still moved :data:`TAIL_MAX` after the plan;
+    ``short`` the driven wheels that ended off the angle they were commanded to turn
+    (:data:`END_ERROR`): ``(wheel, rim distance short [m], rim distance commanded [m])``."""
 
     saturated: int = 0
+    wheels: tuple[WheelTrouble, ...] = ()
+    steering_not_reached: tuple[int, ...] = ()
+    at_rest: bool = True
+    short: tuple[tuple[str, float, float], ...] = ()
+
+    @property
+    def troubled(self) -> bool:
+        """True when the run did not drive as commanded (:meth:`problems` is not empty)."""
+        return bool(self.problems())
+
+    def problems(self) -> list[str]:
+        """One phrase per way the run did not drive as commanded (a wheel lagging or slipping,
+        steering not reached, not at rest at the end); empty for a clean run. Saturated commands
+        are not among them: the limit is the robot's, the run drove what it could."""
+        out = [w.text() for w in self.wheels]
+        for name, off, total in self.short:
+            where = "short of" if off * total >= 0 else "beyond"
+            out.append(
+                f"wheel {name!r} ended {1000.0 * abs(off):.4g} mm of rim {where} the {1000.0 * abs(total):.4g} mm it "
+                f"was commanded to turn"
+            )
+        if self.steering_not_reached:
+            segments = ", ".join(str(k) for k in self.steering_not_reached[:10])
+            more = f" and {len(self.steering_not_reached) - 10} more" if len(self.steering_not_reached) > 10 else ""
+            out.append(
+                f"the steering of segment {segments}{more} was not reached within {ALIGN_MAX:g} s (driven anyway)"
+            )
+        if not self.at_rest:
+            out.append(f"the robot was still moving {TAIL_MAX:g} s after the plan ended (its end pose is not final)")
+        return out
+
+    def summary(self) -> dict:
+        """The counts of :meth:`problems` for a JSON summary (``saturated_commands`` too)."""
+        return {
+            "saturated_commands": self.saturated,
+            "lagging_wheels": {w.wheel: w.seconds for w in self.wheels if w.kind == "lagged"},
+            "slipping_wheels": {w.wheel: w.seconds for w in self.wheels if w.kind == "slipped"},
+            "wheels_off_command": {name: off for name, off, _ in self.short},
+            "steering_not_reached": list(self.steering_not_reached),
+            "at_rest": self.at_rest,
+        }
 
 
 def simulate_physics(
@@ -95,13 +181,57 @@ def simulate_physics(
     ``roller_phase``: where in its roller period each wheel of ``true_robot`` starts, a fraction
     in ``[0, 1)`` for every wheel or one per rolling wheel
     (:func:`~omnikin.physics.engine.roller_offsets`); the encoders start at zero."""
-    check_rate_range(plan.rate if isinstance(plan, SampledPlan) else rate, "rate")
+    rate = check_rate_range(plan.rate if isinstance(plan, SampledPlan) else rate, "rate")
+    check_rate_steps(rate, step)
     require_same_wheels(command_robot, true_robot)
     sampled = plan if isinstance(plan, SampledPlan) else sample_plan(plan, command_robot, rate, limits)
     require_motion(sampled)
     names = [w.name for w in encoded_wheels(command_robot)]
     if [w.name for w in true_robot.encoded] != names:
         raise InputError(f"true robot {true_robot.name!r}: its encoded wheels must be {names}")
+    try:
+        return _drive(sampled, true_robot, command_robot, names, step, progress, roller_phase)
+    except DivergedError as exc:
+        if exc.step > STEP_RANGE[0] * 1.0001:
+            raise DivergedError(
+                f"{exc}; or try a smaller time step (--step, now {exc.step:g} s)",
+                time=exc.time,
+                settling=exc.settling,
+                step=exc.step,
+            ) from None
+        raise
+
+
+def check_rate_steps(rate: float, step: float) -> None:
+    """Refuse a sample ``rate`` [Hz] whose period is not a whole number of time steps ``step``
+    [s] (one line, naming the nearest rates that are): the engine reads the encoders after whole
+    steps, so a stamp between two steps would name a time the reading was not taken at (the
+    kinematic engine's tick log holds the readings at its stamps); 300 Hz at 2 ms alternated
+    2- and 1-step intervals stamped 3.33 ms apart."""
+    step = time_step(step, "step (--step)")
+    steps = 1.0 / (rate * step)
+    if round(steps) >= 1 and abs(steps - round(steps)) <= 1e-6 * steps:
+        return
+    below = max(1, math.ceil(steps))
+    near = sorted({1.0 / (n * step) for n in (below, max(1, math.floor(steps)))}, reverse=True)
+    options = " or ".join(f"{r:.6g}" for r in near)
+    raise InputError(
+        f"rate (--rate) {rate:g} Hz: its period {1000.0 / rate:.4g} ms is not a whole number of physics time "
+        f"steps ({step:g} s), so the encoders could not be read at the stamped times; choose --rate {options} "
+        f"(1 / (n x step)), or a --step that divides the period"
+    )
+
+
+def _drive(
+    sampled: SampledPlan,
+    true_robot: Robot,
+    command_robot: Robot,
+    names: list[str],
+    step: float,
+    progress: Callable[[float, float], None] | None,
+    roller_phase,
+) -> PhysicsRun:
+    """:func:`simulate_physics` after its checks."""
     angles, steer_cmd = commanded_angles(sampled, command_robot, command_robot.rolling)
     dt = np.diff(sampled.t)
     speeds = np.diff(angles, axis=0) / dt[:, None]
@@ -115,10 +245,12 @@ def simulate_physics(
     report = max(1, samples // 200)
     stop = np.zeros(speeds.shape[1])
     period = 1.0 / sampled.rate
+    slip = _SlipWatch(sim, true_robot, period)
 
     def sample(wheels, steer, t_next: float, done: float, segment: int) -> None:
         sim.command(wheels, steer)
         sim.advance(t_next)
+        slip.update()
         if sim.tilt > TIPPED:
             raise PhysicsError(
                 f"robot {true_robot.name!r} tipped over at t = {t_next:.4g} s (chassis tilted "
@@ -132,6 +264,7 @@ def simulate_physics(
         segment_of.append(segment)
 
     behind = 0.0  # time [s] the run is behind the plan's clock (samples waiting for the steering)
+    not_reached: list[int] = []
     for k in range(samples):
         segment = int(sampled.segment[k])
         steer_k = steer_cmd[k] if steer_cmd is not None else None
@@ -144,6 +277,8 @@ def simulate_physics(
                 behind += period
                 waited += period
                 sample(stop, steer_k, times[-1] + period, 0.0, segment)
+            if np.max(np.abs(wrap_angle(steer_k - sim.steer_angles))) >= STEER_ALIGNED:
+                not_reached.append(segment + 1)
         sample(speeds[k], steer_k, float(sampled.t[k + 1]) + behind, float(sampled.progress[k]), segment)
         if progress is not None and (k + 1) % report == 0:
             progress(float(sampled.t[k + 1]), duration)
@@ -151,6 +286,16 @@ def simulate_physics(
     end = times[-1]
     while not (_at_rest(sim) or times[-1] - end >= TAIL_MAX):
         sample(stop, last_steer, times[-1] + period, 0.0, int(sampled.segment[-1]))
+    at_rest = _at_rest(sim)
+    driven = command_robot.rolling_index(sim.driven_names)
+    radius = np.array([true_robot.wheel(n).radius for n in sim.driven_names])
+    commanded = (angles[-1] - angles[0])[driven] * radius
+    turned = sim.wheel_angles[driven] * radius
+    short = tuple(
+        (name, float(commanded[i] - turned[i]), float(commanded[i]))
+        for i, name in enumerate(sim.driven_names)
+        if abs(commanded[i] - turned[i]) > END_ERROR + END_SHARE * abs(commanded[i])
+    )
     if progress is not None:
         progress(duration, duration)
     t = np.array(times)
@@ -158,11 +303,82 @@ def simulate_physics(
     ticks = np.array(counts, dtype=np.int64)
     readings = counter_output(ticks, [command_robot.wheel(n).encoder.counter_bits for n in names])  # type: ignore[union-attr]
     steer = np.array(steers) if steerable else None
-    odometry = batch_odometry(command_robot, t, readings, steer=steer, max_wheel_accel=math.inf).poses
+    try:
+        odometry = batch_odometry(command_robot, t, readings, steer=steer, max_wheel_accel=math.inf).poses
+    except OdometryInputError as exc:  # the simulated wheels, not the input, broke the odometry's checks
+        at = f" at t = {t[exc.sample]:.4g} s" if exc.sample is not None and 0 <= exc.sample < len(t) else ""
+        raise PhysicsError(
+            f"robot {true_robot.name!r}: the simulated wheels turned implausibly{at} ({exc.detail}): a failure of "
+            f"the physics simulation (the wheels spun or the model was unstable), not of the robot file's encoders"
+        ) from None
     truth = np.array(poses)[None]
     truth[..., 2] = wrap_angle(truth[..., 2])  # headings in [-pi, pi), as the kinematic engine's truth
     measured = truth[:, -1, :].copy()
-    return PhysicsRun(extended, t, ticks, steer, odometry, truth, measured, readings, saturated=sim.saturated)
+    troubles = [
+        WheelTrouble(name, "lagged", float(sim.lag_time[i]), float(sim.lag_start[i]), float(sim.lag_worst[i]))
+        for i, name in enumerate(sim.driven_names)
+        if sim.lag_time[i] > 0.0
+    ] + slip.troubles()
+    return PhysicsRun(
+        extended,
+        t,
+        ticks,
+        steer,
+        odometry,
+        truth,
+        measured,
+        readings,
+        saturated=sim.saturated,
+        wheels=tuple(troubles),
+        steering_not_reached=tuple(not_reached),
+        at_rest=at_rest,
+        short=short,
+    )
+
+
+class _SlipWatch:
+    """The slip of each driven wheel of ``sim`` at the samples (:data:`SLIP_TIME`,
+    :data:`SLIP_ERROR`), ``period`` [s] apart."""
+
+    def __init__(self, sim: PhysicsSim, robot: Robot, period: float):
+        self.sim, self.robot = sim, robot
+        self.names = sim.driven_names
+        self.index = robot.rolling_index(self.names)
+        self.radius = np.array([robot.wheel(n).radius for n in self.names])
+        self.alpha = min(1.0, period / SLIP_TIME)
+        self.period = period
+        self.ms = np.zeros(len(self.names))
+        self.seconds = np.zeros(len(self.names))
+        self.start = np.full(len(self.names), math.nan)
+        self.worst = np.zeros(len(self.names))
+        self.last_steer: np.ndarray | None = None
+
+    def update(self) -> None:
+        """Take the sample; one across which the steering moved (more than :data:`STEER_ALIGNED`)
+        is left out: off-centred wheels steered carry the chassis without rolling
+        (docs/physics.md, known limits), which the steady-steering rows count as slip."""
+        sim = self.sim
+        steer = sim.steer_angles if self.robot.steerable else None
+        if steer is not None:
+            moved = self.last_steer is not None and np.max(np.abs(wrap_angle(steer - self.last_steer))) > STEER_ALIGNED
+            self.last_steer = steer
+            if moved:
+                return
+        rolled = self.robot.jacobian(steer) @ sim.twist
+        rim = (sim.wheel_speeds - rolled)[self.index] * self.radius
+        self.ms += (rim * rim - self.ms) * self.alpha
+        beyond = self.ms > SLIP_ERROR * SLIP_ERROR
+        if beyond.any():
+            self.seconds += beyond * self.period
+            self.start[beyond & np.isnan(self.start)] = sim.time
+            np.maximum(self.worst, np.sqrt(self.ms), out=self.worst)
+
+    def troubles(self) -> list[WheelTrouble]:
+        return [
+            WheelTrouble(n, "slipped", float(self.seconds[i]), float(self.start[i]), float(self.worst[i]))
+            for i, n in enumerate(self.names)
+            if self.seconds[i] > 0.0
+        ]
 
 
 def _require_support(sim: PhysicsSim, steer: np.ndarray, segment: int) -> None:
