@@ -133,7 +133,13 @@ def test_commands_beyond_the_motors_speed_limit_are_counted_and_warned(tmp_path,
                            "--path", "line 1", "--log", tmp_path / "log.csv", "--json")  # fmt: skip
     assert rc == 0, err
     assert json.loads(out)["saturated_commands"] > 0
-    assert err.count("\n") == 1 and "held at the limit" in err
+    lines = err.splitlines()
+    assert all(line.startswith("omnikin: warning: tomasi-omni3: ") for line in lines), err
+    assert sum("held at the limit" in line for line in lines) == 1
+    # held at 1 rad/s the wheels turn less than commanded, and the run says by how much (each line
+    # names a wheel; w1 stands on a line along x: cos(90 deg) = 0 of the metre)
+    short = [line for line in lines if "short of the 866 mm it was commanded to turn" in line]
+    assert {re.search(r"wheel '(\w+)'", line).group(1) for line in short} == {"w2", "w3"}, err
 
 
 @pytest.mark.parametrize(

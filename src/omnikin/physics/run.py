@@ -42,6 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..encoders import QUANTISATION_SLACK, counter_rules
 from ..errors import InputError, OdometryInputError
 from ..geometry import wrap_angle
 from ..limits import MotionLimits
@@ -303,6 +304,7 @@ def _drive(
     ticks = np.array(counts, dtype=np.int64)
     readings = counter_output(ticks, [command_robot.wheel(n).encoder.counter_bits for n in names])  # type: ignore[union-attr]
     steer = np.array(steers) if steerable else None
+    _require_plausible_wheels(command_robot, true_robot, t, ticks)
     try:
         odometry = batch_odometry(command_robot, t, readings, steer=steer, max_wheel_accel=math.inf).poses
     except OdometryInputError as exc:  # the simulated wheels, not the input, broke the odometry's checks
@@ -333,6 +335,31 @@ def _drive(
         steering_not_reached=tuple(not_reached),
         at_rest=at_rest,
         short=short,
+    )
+
+
+def _require_plausible_wheels(robot: Robot, true_robot: Robot, t: np.ndarray, ticks: np.ndarray) -> None:
+    """Refuse (:class:`~omnikin.physics.engine.PhysicsError`, one line naming the wheel and the
+    time) simulated encoders of ``true_robot`` that turned faster than the odometry of ``robot``
+    accepts (:func:`~omnikin.encoders.counter_rules`, the speed bound of each encoded wheel): the
+    wheel spun in the simulation (the model was unstable or it lost its grip), where the odometry
+    would blame the input and suggest a counter width. ``ticks``: never wrapped, one column per
+    encoded wheel, at the times ``t`` [s]."""
+    if len(t) < 2:
+        return
+    dt = np.diff(t)
+    rules = counter_rules(encoded_wheels(robot))
+    rates = np.array([rule.rate for rule in rules])
+    beyond = np.abs(np.diff(ticks, axis=0)) > rates * dt[:, None] + QUANTISATION_SLACK
+    if not beyond.any():
+        return
+    k, i = (int(v) for v in np.argwhere(beyond)[0])  # the earliest interval, its first wheel
+    rule = rules[i]
+    speed = abs(int(ticks[k + 1, i]) - int(ticks[k, i])) * abs(rule.rad_per_tick) / dt[k]
+    raise PhysicsError(
+        f"robot {true_robot.name!r}: the simulated wheel {rule.wheel!r} spun at {speed:.4g} rad/s between "
+        f"t = {t[k]:.4g} and {t[k + 1]:.4g} s, faster than {rule.speed:.4g} rad/s ({rule.source}): the physics "
+        f"simulation failed (the model was unstable or the wheel lost its grip), not the encoders"
     )
 
 
