@@ -300,7 +300,7 @@ class PhysicsSim:
         with _quiet(mj):
             for k in range(round(SETTLE_MAX / h)):
                 mj.mj_step(m, d)
-                if abs(d.time - (k + 1) * h) > h / 2:  # MuJoCo reset the diverged state
+                if abs(d.time - (k + 1) * h) > h / 2 or (k == 0 and self._warned()):  # MuJoCo reset the state
                     self._diverged(k * h, settling=True)
                 v = d.qvel[self._free_dof : self._free_dof + 6]
                 still = abs(v[2]) < SETTLE_SPEED and abs(v[3]) < SETTLE_SPEED and abs(v[4]) < SETTLE_SPEED
@@ -389,8 +389,8 @@ class PhysicsSim:
                 self._control()
                 mj.mj_step(m, d)
                 self._steps += 1
-                if abs(d.time - self._steps * h) > h / 2:  # MuJoCo reset the diverged state
-                    self._diverged((self._steps - 1) * h, settling=False)
+                if abs(d.time - self._steps * h) > h / 2 or (self._steps == 1 and self._warned()):
+                    self._diverged((self._steps - 1) * h, settling=False)  # MuJoCo reset the state
                 if self._steps % UNWRAP_CHUNK == 0:
                     self._track_heading()
         self._track_heading()
@@ -442,14 +442,19 @@ class PhysicsSim:
         self._heading += wrap_angle(yaw - self._last_yaw)
         self._last_yaw = yaw
 
+    def _warned(self) -> int:
+        """How often MuJoCo found the state not finite or huge (and reset it: its clock restarts at 0,
+        which is how :meth:`step` finds the step where it happened, except from time 0)."""
+        d, warnings = self.data, self._mj.mjtWarning
+        return sum(
+            d.warning[w].number for w in (warnings.mjWARN_BADQACC, warnings.mjWARN_BADQPOS, warnings.mjWARN_BADQVEL)
+        )
+
     def _check(self, settling: bool = False) -> None:
         """Refuse to go on after MuJoCo found the state not finite (it then resets the state and
         counts a warning; :meth:`step` catches the step where it did) or the state is not finite."""
-        d, warnings = self.data, self._mj.mjtWarning
-        bad = sum(
-            d.warning[w].number for w in (warnings.mjWARN_BADQACC, warnings.mjWARN_BADQPOS, warnings.mjWARN_BADQVEL)
-        )
-        if bad or not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
+        d = self.data
+        if self._warned() or not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
             self._diverged(self._steps * self.step_size if not settling else float(d.time), settling=settling)
 
     def _diverged(self, t: float, settling: bool) -> None:
