@@ -96,3 +96,28 @@ def test_real_time_mode_drops_what_it_cannot_catch_up_and_counts_it():
     for bad in (0.0, -1.0, float("nan"), float("inf")):
         with pytest.raises(InputError, match="max_lag"):
             PhysicsBackend(robot, max_lag=bad)
+
+
+def test_a_wheel_braked_beyond_its_motor_is_named_in_the_stats_for_the_time_it_was():
+    """The ROS node's /diagnostics carry the back-end's stats: wheel w2 of tomasi-omni3, braked by
+    an external torque of twice its motor's from t = 0.5 s to 1.5 s, cannot follow its set-point;
+    unbraked, no wheel is named (docs/physics.md, "Runs that do not drive as commanded")."""
+    import mujoco
+
+    robot = load_robot("tomasi-omni3")
+    stats = []
+    for brake in (0.0, 2.0):
+        backend = PhysicsBackend(robot)
+        sim = backend.sim
+        body = mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_BODY, "w2:wheel")
+        torque = next(w.motor.max_torque for w in sim.description.wheels if w.name == "w2")
+        backend.read(0.0)
+        backend.write(0.0, [0.0, -4.2, 4.2])
+        backend.read(0.5)
+        axle = sim.data.xmat[body].reshape(3, 3)[:, 1]  # the wheel joint turns about the body's y axis
+        sim.data.xfrc_applied[body, 3:] = brake * torque * axle  # against w2's negative speed
+        backend.read(1.5)
+        stats.append(backend.stats()["wheels_lagging"])
+    assert stats[0] == ""
+    named = dict(item.rsplit(" ", 2)[:2] for item in stats[1].split(", "))
+    assert 0.8 <= float(named["w2"]) <= 1.0, stats[1]

@@ -138,6 +138,11 @@ class PhysicsBackend:
             "reads": self.reads,
             "sim_time": self.sim.time,
             "saturated": self.sim.saturated,
+            "wheels_lagging": ", ".join(  # wheels that did not follow their set-points, and for how long
+                f"{name} {seconds:.3g} s"
+                for name, seconds in zip(self.sim.driven_names, self.sim.lag_time, strict=True)
+                if seconds > 0.0
+            ),
             "time_dropped": self.time_dropped,
             "lag_events": self.lag_events,
         }

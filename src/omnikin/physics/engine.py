@@ -249,8 +249,9 @@ class PhysicsSim:
         self._driven_radius = np.array([robot.wheel(rolling[i]).radius for i in driven])
         self.driven_names = [rolling[i] for i in driven]
         """Names of the driven wheels (file order): the wheels of :attr:`lag_time` and friends."""
-        self._track_alpha = self.step_size / TRACK_TIME
+        self._track_alpha = min(1.0, UNWRAP_CHUNK * self.step_size / TRACK_TIME)
         self._track_ms = np.zeros(len(driven))
+        self._track_sum = np.zeros(len(driven))
         self._lag_steps = np.zeros(len(driven), dtype=np.int64)
         self.lag_start = np.full(len(driven), math.nan)
         """Per driven wheel, the time [s] its tracking error first exceeded :data:`TRACK_ERROR` (NaN: never)."""
@@ -393,8 +394,20 @@ class PhysicsSim:
                     self._diverged((self._steps - 1) * h, settling=False)  # MuJoCo reset the state
                 if self._steps % UNWRAP_CHUNK == 0:
                     self._track_heading()
+                    self._track_window()
         self._track_heading()
         self._check()
+
+    def _track_window(self) -> None:
+        """Move the wheels' tracking window (:data:`TRACK_TIME`) on by the last
+        :data:`UNWRAP_CHUNK` steps (their mean squared rim speed error, summed by :meth:`_control`)."""
+        self._track_ms += (self._track_sum / UNWRAP_CHUNK - self._track_ms) * self._track_alpha
+        self._track_sum[:] = 0.0
+        beyond = self._track_ms > TRACK_ERROR * TRACK_ERROR
+        if beyond.any():
+            self._lag_steps += beyond * UNWRAP_CHUNK
+            self.lag_start[beyond & np.isnan(self.lag_start)] = self.data.time
+            np.maximum(self.lag_worst, np.sqrt(self._track_ms), out=self.lag_worst)
 
     def advance(self, t: float) -> None:
         """Step until the simulation time reaches ``t`` [s] (to the nearest step; at most
@@ -422,12 +435,7 @@ class PhysicsSim:
             self._ramping = self.ramping
         error = self._speed_set - d.qvel[self._drive_dof]
         rim = error * self._driven_radius
-        self._track_ms += (rim * rim - self._track_ms) * self._track_alpha
-        beyond = self._track_ms > TRACK_ERROR * TRACK_ERROR
-        if beyond.any():
-            self._lag_steps += beyond
-            self.lag_start[beyond & np.isnan(self.lag_start)] = d.time
-            np.maximum(self.lag_worst, np.sqrt(self._track_ms), out=self.lag_worst)
+        self._track_sum += rim * rim
         self._integral = np.clip(self._integral + error * self._integral_gain, -self._windup, self._windup)
         d.ctrl[self._drive_ctrl] = self._speed_set + self._integral
         if len(self._steer_ctrl):

@@ -23,6 +23,13 @@ until the robot is at rest (:data:`REST_SPEED`, :data:`REST_TURN`) or :data:`TAI
 passed: the ramps make the wheels lag the set-points while accelerating and lead them while
 braking, by the same distance, so the robot ends where the plan ends only once it has stopped.
 
+The run watches for not driving as commanded (docs/physics.md, "Runs that do not drive as
+commanded"): driven wheels lagging their set-points (the engine's
+:data:`~omnikin.physics.engine.TRACK_ERROR`), slipping (:data:`SLIP_ERROR`) or ending off the
+angle they were commanded to turn (:data:`END_ERROR`), steering not reached within
+:data:`ALIGN_MAX`, the robot not at rest after :data:`TAIL_MAX`; :meth:`PhysicsRun.problems`
+words them. Its sample ``rate`` must have a period of whole time steps (:func:`check_rate_steps`).
+
 The result is a :class:`PhysicsRun`, a :class:`~omnikin.simulation.simulate.SimulatedRun` (one
 trial) as the kinematic
 engine gives it, so that its tick log, bag and summary are written by the same code:
