@@ -93,6 +93,17 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         "",
         "## Results",
         "",
+    ]
+    troubled = doc.get("physics_problems", [])
+    if troubled:
+        lines += [
+            f'**{len(troubled)} runs did not drive as commanded** (docs/physics.md, "Runs that do not drive as '
+            'commanded"); their end poses are in the numbers below as if they were odometry errors:',
+            "",
+            *[f"- {p[:400]}" for p in troubled],
+            "",
+        ]
+    lines += [
         f"| | r_cg cw [mm] | r_cg ccw [mm] | E_max,syst [mm] | {level} interval [mm] | at the {floor_name} |",
         "|---|---:|---:|---:|---:|:---:|",
     ]

@@ -101,6 +101,8 @@ class UMBmarkReport(UMBmarkStudy):
             doc["monte_carlo"] = {"before": _stats(self.before)}
             if self.after is not None:
                 doc["monte_carlo"]["after calibration"] = _stats(self.after)
+        if self.engine == "physics":
+            doc["physics_problems"] = list(self.problems)  # runs that did not drive as commanded
         doc["files"] = list(files or [])
         return doc
 

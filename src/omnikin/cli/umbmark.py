@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import sys
 from pathlib import Path
 
 from ..api.calibration import calibrate as api_calibrate
@@ -351,6 +352,8 @@ def cmd_umbmark(args) -> int:
         )
         status.step("report")
         doc = report.write(args.out, figure_format=args.figures, dpi=args.dpi, inputs=inputs)
+    for problem in doc.get("physics_problems", []):  # runs that did not drive as commanded: one line each
+        print(f"omnikin: warning: {problem}", file=sys.stderr)
     if args.json:
         print(dumps(doc), end="")
         return 0

@@ -170,27 +170,29 @@ class PhysicsFloor(NoiseFloor):
 
 
 def _drive(
-    plan: Plan, true_robot: Robot, command: Robot, rate: float, step: float, rng: np.random.Generator, name: str
+    plan: Plan,
+    true_robot: Robot,
+    command: Robot,
+    rate: float,
+    step: float,
+    rng: np.random.Generator,
+    name: str,
+    problems: list[str] | None,
 ):
     """``plan`` driven in physics at time step ``step`` [s], each wheel of ``true_robot``
     started at a roller phase drawn uniformly from ``[0, 1)`` by ``rng`` (module docstring).
     A run that did not drive as commanded (:meth:`~omnikin.physics.run.PhysicsRun.problems`: a
-    wheel lagging or slipping, its steering or rest not reached) ends the study with
-    :class:`~omnikin.physics.engine.PhysicsError` naming it as ``name``: its end pose would enter
-    the statistics as an odometry error it is not."""
-    from ..physics.engine import PhysicsError
+    wheel lagging, slipping or off its commanded turn, steering or rest not reached) is added to
+    ``problems`` as one line naming it as ``name``: its end pose enters the statistics as an
+    odometry error, and the report must say which runs it should not trust."""
     from ..physics.run import simulate_physics
 
     phase = rng.random(len(true_robot.rolling))
     run = simulate_physics(plan, true_robot, command, rate=rate, step=step, roller_phase=phase)
-    problems = run.problems()
-    if problems:
-        more = f" (and {len(problems) - 1} more problems)" if len(problems) > 1 else ""
-        raise PhysicsError(
-            f"{name}: robot {true_robot.name!r} did not drive as commanded: {problems[0]}{more}; the study would "
-            f"average this run's end pose as odometry error, so it stops (simulate the path with "
-            f"`omnikin simulate --engine physics` to see every problem)"
-        )
+    found = run.problems()
+    if found and problems is not None:
+        more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
+        problems.append(f"{name}: {found[0]}{more}")
     return run
 
 
@@ -207,13 +209,15 @@ def physics_umbmark(
     step: float = DEFAULT_STEP,
     progress: Progress | None = None,
     label: str = "UMBmark",
+    problems: list[str] | None = None,
 ) -> tuple[list[UMBmarkResult], dict]:
     """``trials`` UMBmark procedures of ``runs`` runs per direction in the physics engine,
     ``true_robot`` commanded by ``command``, the roller phases of each direction's runs drawn
     from its own child of ``seed`` (module docstring), at time step ``step`` [s]. Returns one
     :class:`~omnikin.evaluation.umbmark.UMBmarkResult` per procedure and the first run of each
     direction (``{"cw"|"ccw": PhysicsRun}``, with its ground truth). ``progress`` is called with
-    ``label`` and the run's number before each run."""
+    ``label`` and the run's number before each run; runs that did not drive as commanded are
+    added to ``problems`` (:func:`_drive`)."""
     require_square(command, side, mode)
     total = 2 * trials * runs
     eps: dict[str, list] = {"cw": [], "ccw": []}
@@ -225,7 +229,8 @@ def physics_umbmark(
             if progress is not None:
                 progress(f"{label}: run {len(eps['cw']) + len(eps['ccw']) + 1} of {total}")
             number = len(eps["cw"]) + len(eps["ccw"]) + 1
-            run = _drive(plan, true_robot, command, rate, step, rng, f"{label}, run {number} of {total} ({direction})")
+            name = f"{label}, run {number} of {total} ({direction})"
+            run = _drive(plan, true_robot, command, rate, step, rng, name, problems)
             first.setdefault(direction, run)
             eps[direction].append(run.epsilon[0])
     results = [
@@ -250,6 +255,7 @@ def physics_calibration_runs(
     seed: np.random.SeedSequence,
     step: float = DEFAULT_STEP,
     progress: Progress | None = None,
+    problems: list[str] | None = None,
 ) -> list[CalibrationRun]:
     """The recommended calibration runs of ``robot``, each driven
     :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times in the physics engine by
@@ -265,9 +271,8 @@ def physics_calibration_runs(
         for _ in range(RECOMMENDED_REPEATS):
             if progress is not None:
                 progress(f"calibration runs: run {len(out) + 1} of {total}")
-            run = _drive(
-                plan, true_robot, robot, rate, step, rng, f"calibration run {len(out) + 1} of {total} ({text})"
-            )
+            name = f"calibration run {len(out) + 1} of {total} ({text})"
+            run = _drive(plan, true_robot, robot, rate, step, rng, name, problems)
             out.append(CalibrationRun(plan, tuple(run.measured[0]), text))
     return out
 
@@ -298,7 +303,10 @@ def physics_umbmark_study(
     check_rate_steps(rate, step)
     encoded_wheels(robot)
     rng = streams(seed)
-    opts: dict[str, Any] = dict(side=side, mode=mode, runs=runs, rate=rate, trials=trials, step=step, progress=progress)
+    problems: list[str] = []
+    opts: dict[str, Any] = dict(
+        side=side, mode=mode, runs=runs, rate=rate, trials=trials, step=step, progress=progress, problems=problems
+    )
     before, first = physics_umbmark(true_robot, robot, seed=rng["before"], label="UMBmark before calibration", **opts)
     trajectories = {"before": first}
     systematic = {"before": before[0].e_max_syst}
@@ -307,7 +315,14 @@ def physics_umbmark_study(
     cal_runs: list[CalibrationRun] = []
     if calibrate:
         cal_runs = physics_calibration_runs(
-            true_robot, robot, side=side, rate=rate, seed=rng["calibration"], step=step, progress=progress
+            true_robot,
+            robot,
+            side=side,
+            rate=rate,
+            seed=rng["calibration"],
+            step=step,
+            progress=progress,
+            problems=problems,
         )
         if progress is not None:
             progress("least-squares calibration")
@@ -338,4 +353,5 @@ def physics_umbmark_study(
         trajectories,
         level=level,
         engine="physics",
+        problems=tuple(problems),
     )

@@ -191,6 +191,9 @@ class UMBmarkStudy:
     trajectories: dict
     level: float = LEVEL
     engine: str = "kinematic"
+    problems: tuple[str, ...] = ()
+    """Physics engine: one line per run that did not drive as commanded, naming the run
+    (:meth:`omnikin.physics.run.PhysicsRun.problems`); its end pose is in the statistics."""
 
     @property
     def reduction_factor(self) -> float | None:
