@@ -21,6 +21,7 @@ import pytest
 import omnikin
 from conftest import run_cli, run_entry_point
 from omnikin import load_robot
+from omnikin.presets import preset_path
 
 TOLERANCE = 0.005
 """Of the 1 m line: 5 mm in position, 5 mrad in heading (docs/physics.md, "Validation")."""
@@ -199,3 +200,32 @@ def test_xr4000_steered_sideways_at_rest_is_carried_by_its_trail_and_its_odometr
     truth, odometry = sim.run.truth[0, -1], sim.run.odometry[-1]
     assert odometry == pytest.approx([0.0, 1.0, 0.0], abs=1e-3)
     assert truth == pytest.approx([-d, 1.0 + d, 0.0], abs=1e-3)
+
+
+def test_steering_held_at_its_end_stop_is_logged_within_the_limits(tmp_path):
+    """synchro with steering limits 10..80 deg starts with its wheels pressed against the 10 deg
+    stop; MuJoCo's soft joint limit lets them sit nanoradians past it, which the tick log must
+    not carry (its reader refuses angles outside the file's limits)."""
+    text = (
+        preset_path("synchro")
+        .read_text()
+        .replace(
+            "encoder: {ticks_per_rev: 1024}}", "encoder: {ticks_per_rev: 1024}, steer: {min_deg: 10, max_deg: 80}}"
+        )
+    )
+    assert text.count("min_deg: 10") == 3
+    (tmp_path / "limited.yaml").write_text(text)
+    sim = run("simulate", "./limited.yaml", "--engine", "physics", "--errors", "none", "--path", "line 1 45",
+              "--log", "log.csv", "--json", cwd=tmp_path)  # fmt: skip
+    assert sim.returncode == 0, sim.stderr
+    with open(tmp_path / "log.csv") as f:
+        steering = np.array(
+            [
+                [float(row[k]) for k in row if k.endswith("_steer_deg")]
+                for row in csv.DictReader(line for line in f if not line.startswith("#"))
+            ]
+        )
+    assert steering.min() >= 10.0 and steering.max() <= 80.0
+    assert steering[1] == pytest.approx([10.0] * 3, abs=1e-6)  # at the stop when the run starts
+    summary = json.loads(sim.stdout)
+    np.testing.assert_allclose(summary["truth_end"], (HALF, HALF, 0.0), atol=TOLERANCE)

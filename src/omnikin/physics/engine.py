@@ -264,6 +264,8 @@ class PhysicsSim:
         steerings = [wheels[n].steering for n in steer]
         self._steer_step = np.array([s.max_rate * self.step_size for s in steerings if s is not None])
         self._steer_limits = [s.limits for s in steerings if s is not None]
+        self._steer_low = np.array([-np.inf if lim is None else lim[0] for lim in self._steer_limits])
+        self._steer_high = np.array([np.inf if lim is None else lim[1] for lim in self._steer_limits])
         self._steer_gain = np.array([self.step_size / s.integral_time for s in steerings if s is not None])
         self._steer_windup = np.array([s.max_torque / s.stiffness for s in steerings if s is not None])
         self._steer_integral = np.zeros(len(steer))
@@ -538,8 +540,10 @@ class PhysicsSim:
     @property
     def steer_angles(self) -> np.ndarray:
         """Steering angles [rad] of the steerable wheels (file order), relative to their mounting
-        drive direction, wrapped to ``[-pi, pi)``."""
-        return wrap_angle(self.data.qpos[self._steer_qpos])
+        drive direction, wrapped to ``[-pi, pi)``; within the wheel's steering limits, as its
+        angle sensor reads a joint held at its end stop (MuJoCo's soft joint limit lets the
+        joint press a few nanoradians past it, which the file's limits would refuse)."""
+        return np.clip(wrap_angle(self.data.qpos[self._steer_qpos]), self._steer_low, self._steer_high)
 
     def encoder_counts(self) -> np.ndarray:
         """Whole ticks ``round(angle / rad_per_tick)`` the encoded wheels (file order) turned since
