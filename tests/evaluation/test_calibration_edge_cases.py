@@ -60,3 +60,19 @@ def test_a_robot_without_encoders_is_refused_by_every_measuring_command(tmp_path
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and "no wheel has an 'encoder' entry" in err[0], err
     assert not (tmp_path / "r").exists()
+
+
+def test_runs_no_robot_of_the_layout_can_explain_are_refused_in_one_line():
+    """Every recommended run measured as ending where it started (a robot that never moved):
+    only wheels of vanishing radius explain that; the fit leaves the file's ranges on the way and
+    says so instead of an internal error about a trial wheel."""
+    from omnikin import load_robot
+    from omnikin.evaluation.calibration import CalibrationFitError, calibrate, recommended_runs
+    from omnikin.plans import CalibrationRun
+
+    robot = load_robot("tomasi-omni3")
+    plans = recommended_runs(robot, 1.0)
+    runs = [CalibrationRun(plan, (0.0, 0.0, 0.0), text) for text, plan in plans for _ in range(3)]
+    with pytest.raises(CalibrationFitError, match=r"^calibration: no robot of this layout explains the runs") as info:
+        calibrate(robot, runs)
+    assert "\n" not in str(info.value) and "radius must lie in" in str(info.value)

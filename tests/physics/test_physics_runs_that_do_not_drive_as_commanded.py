@@ -117,6 +117,24 @@ def test_the_umbmark_study_names_every_run_that_did_not_drive_as_commanded(tmp_p
     assert "**4 runs did not drive as commanded**" in (tmp_path / "report" / "report.md").read_text()
 
 
+def test_a_study_whose_calibration_runs_did_not_drive_reports_without_a_calibration(tmp_path, capsys):
+    """Motors too weak to move the robot: the calibration runs end where they started, which no
+    robot of the layout explains (the fit runs the radii to nothing). The study still writes its
+    report, says why there is no calibration, and names the runs (it stopped with an error about a
+    trial wheel's radius before)."""
+    weak = _variant(tmp_path, "weak", max_torque=2e-5)
+    rc, out, err = run_cli(capsys, "umbmark", weak, "--engine", "physics", "--errors", "none", "--side", "1",
+                           "--runs", "1", "--rate", "50", "-o", tmp_path / "report", "--json")  # fmt: skip
+    assert rc == 0, err
+    doc = json.loads((tmp_path / "report" / "result.json").read_text())
+    assert "calibration" not in doc and "after" not in doc
+    failed = [p for p in doc["physics_problems"] if p.startswith("calibration: no robot of this layout explains")]
+    assert len(failed) == 1 and "\n" not in failed[0]
+    assert any(p.startswith("calibration run 1 of ") for p in doc["physics_problems"])
+    report = (tmp_path / "report" / "report.md").read_text()
+    assert "no robot of this layout explains them" in report and "no UMBmark after calibration" in report
+
+
 def test_simulated_wheels_spinning_past_the_odometry_bound_are_a_physics_failure(tmp_path, capsys):
     """tomasi-omni3 with a 1000 kg chassis (in the documented range): at the 2 ms step its wheels
     spun at about 1300 rad/s, which the odometry refused as an impossible jump and blamed on the

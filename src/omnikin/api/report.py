@@ -76,7 +76,12 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         "returned home; the return error of a run is the true end pose minus the odometry end pose, "
         "E_max,syst the larger distance of the two directions' centres of gravity from the origin.",
     ]
-    if s["calibrate"]:
+    if s["calibrate"] and "calibration" not in doc:  # the fit failed (physics: runs that did not drive)
+        lines += [
+            "2. Calibration: the recommended runs were driven, but no robot of this layout explains them (the "
+            "least-squares fit went out of range; below); no UMBmark after calibration.",
+        ]
+    elif s["calibrate"]:
         cal = doc["calibration"]
         lines += [
             f"2. Calibration: the {len(cal['paths'])} recommended runs ({', '.join(cal['paths'])}), each "

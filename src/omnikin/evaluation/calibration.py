@@ -273,6 +273,11 @@ def _residuals(
     return res[np.isfinite(res)]
 
 
+class CalibrationFitError(InputError):
+    """The least-squares fit of :func:`calibrate` left the ranges a robot file allows: the runs
+    are not explained by the robot's radii, hub positions and drive directions."""
+
+
 def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Robot | None = None) -> CalibrationResult:
     """Least-squares calibration of ``nominal`` from ``runs`` (module docstring).
 
@@ -303,7 +308,14 @@ def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Rob
 
     q0 = np.zeros(len(names))
     r0 = fun(q0)[: -len(names)]
-    sol = least_squares(fun, q0, method="trf", x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    try:
+        sol = least_squares(fun, q0, method="trf", x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    except InputError as e:  # the fit left the robot file's ranges: no robot of this layout drove these runs
+        raise CalibrationFitError(
+            f"calibration: no robot of this layout explains the runs (the least-squares fit of radii, hub positions "
+            f"and drive directions went out of range: {e}); check the measured end poses and that the robot drove "
+            "as commanded"
+        ) from None
     p = sol.x * scale
     r1 = sol.fun[: -len(names)]
     ident = _identifiability(names, sol.jac[: -len(names)], sol.jac, scale)

@@ -46,7 +46,7 @@ from ..odometry import encoded_wheels
 from ..physics.mjcf import DEFAULT_STEP, time_step
 from ..plans import CalibrationRun, Plan, umbmark_square
 from ..simulation.error_models import NOISE, SystematicErrors
-from .calibration import RECOMMENDED_REPEATS, CalibrationResult, recommended_runs
+from .calibration import RECOMMENDED_REPEATS, CalibrationFitError, CalibrationResult, recommended_runs
 from .calibration import calibrate as least_squares_calibration
 from .procedure import Cost, UMBmarkStudy, check_settings, streams
 from .umbmark import LEVEL, NoiseFloor, UMBmarkResult, analyze, require_square
@@ -326,11 +326,15 @@ def physics_umbmark_study(
         )
         if progress is not None:
             progress("least-squares calibration")
-        cal = least_squares_calibration(robot, cal_runs)
-        after, trajectories["after"] = physics_umbmark(
-            true_robot, cal.robot, seed=rng["after"], label="UMBmark after calibration", **opts
-        )
-        systematic["after"] = after[0].e_max_syst
+        try:
+            cal = least_squares_calibration(robot, cal_runs)
+        except CalibrationFitError as e:  # runs that did not drive as commanded: no after, the report says why
+            problems.append(str(e))
+        if cal is not None:
+            after, trajectories["after"] = physics_umbmark(
+                true_robot, cal.robot, seed=rng["after"], label="UMBmark after calibration", **opts
+            )
+            systematic["after"] = after[0].e_max_syst
     nominal, _ = physics_umbmark(robot, robot, seed=rng["floor"], label="floor (nominal robot)", **opts)
     floor = PhysicsFloor(np.array([r.e_max_syst for r in nominal]), nominal[0].e_max_interval(level))
     return UMBmarkStudy(
