@@ -21,7 +21,7 @@ from omnikin import load_robot
 from omnikin.errors import InputError
 from omnikin.physics.engine import ADVANCE_MAX, DivergedError, PhysicsSim
 from omnikin.physics.mjcf import time_step
-from omnikin.physics.run import simulate_physics
+from omnikin.physics.run import check_rate_steps, simulate_physics
 from omnikin.plans import parse_plan
 
 KICK = """
@@ -135,7 +135,7 @@ def test_a_numpy_time_step_is_a_time_step():
         time_step("0.001")
 
 
-@pytest.mark.parametrize(("rate", "valid"), [(300, "500 or 250"), (10000, "500"), (30, "31.25 or 29.4118")])
+@pytest.mark.parametrize(("rate", "valid"), [(300, "500 or 250"), (10000, "500"), (30, "31.25 or 29.4117647")])
 def test_a_rate_whose_period_is_not_whole_time_steps_is_refused(tmp_path, capsys, rate, valid):
     """At 2 ms the rates whose period is whole steps are 1 / (n 2 ms) = 500 / n Hz."""
     rc, out, err = run_cli(capsys, "simulate", "tomasi-omni3", "--engine", "physics", "--path", "line 1",
@@ -143,6 +143,17 @@ def test_a_rate_whose_period_is_not_whole_time_steps_is_refused(tmp_path, capsys
     assert rc == 2 and err.count("\n") == 1
     assert f"choose --rate {valid} (1 / (n x step))" in err
     assert not (tmp_path / "log.csv").exists()
+
+
+def test_the_rates_a_refusal_suggests_are_accepted():
+    """1 / (n x 10 us): 2941.18 Hz lies 1.2e-6 off n = 34 and is refused; both rates the message
+    names must pass the same check (printed as 2941.18 and 3030.3 they did not all)."""
+    with pytest.raises(InputError) as info:
+        check_rate_steps(2941.18, 1e-5)
+    suggested = re.search(r"choose --rate (\S+) or (\S+) \(", str(info.value)).groups()
+    assert [float(r) for r in suggested] == pytest.approx([1e5 / 33, 1e5 / 34], rel=1e-8)
+    for rate in suggested:
+        check_rate_steps(float(rate), 1e-5)
 
 
 def test_the_tick_log_stamps_are_the_times_the_encoders_were_read():
@@ -155,3 +166,15 @@ def test_the_tick_log_stamps_are_the_times_the_encoders_were_read():
     increments = np.diff(run.ticks[:, 0])
     cruise = increments[len(increments) // 3 : len(increments) // 2]
     assert cruise.max() - cruise.min() <= 1
+
+
+def test_a_divergence_advises_a_smaller_step_only_where_the_caller_has_one():
+    diverged = DivergedError(
+        "robot 'r': the physics simulation diverged at t = 0.5 s", time=0.5, settling=False, step=0.002
+    )
+    assert str(diverged.explained()) == str(diverged)  # ros, sim: no --step to give
+    advised = diverged.explained(" (while measured)", step_option=True)
+    assert str(advised).endswith("(while measured); or try a smaller time step (--step, now 0.002 s)")
+    assert (advised.time, advised.settling, advised.step) == (0.5, False, 0.002)
+    smallest = DivergedError("diverged", time=0.5, settling=True, step=1e-5)
+    assert str(smallest.explained(step_option=True)) == "diverged"  # no smaller step is accepted

@@ -51,7 +51,7 @@ def test_wheels_without_grip_are_reported_short_of_the_turn_they_were_commanded(
     assert summary["truth_end"][0] < 0.1  # the line is not driven...
     off = summary["wheels_off_command"]  # ...and the run says which wheels and by how much
     assert set(off) == {"w2", "w3"}
-    assert all(0.8 * RIM < 1000.0 * abs(v) <= RIM for v in off.values())
+    assert all(0.8 * RIM < 1000.0 * v <= RIM for v in off.values())  # positive: short of the turn, either way round
     assert set(summary["lagging_wheels"]) == {"w2", "w3"}  # their motors (mu N r) cannot follow either
     short = [line for line in lines if f"short of the {RIM:.4g} mm it was commanded to turn" in line]
     assert {re.search(r"wheel '(\w+)'", line).group(1) for line in short} == {"w2", "w3"}

@@ -129,7 +129,7 @@ def physics_cost(
         if least > budget:
             samples = sum(count * simulated_bound(s, robot) * rate for s, count in sampled)
             return Cost(samples, float(BYTES), seconds_per_sample=least / max(samples, 1.0))
-    measured = measure_step_seconds(robot, step)
+    measured = measure_step_seconds(robot, step, step_option=True)
     samples = seconds = 0.0
     for plan, count in sampled:
         run = physics_run_cost(plan, robot, robot, step, measured=measured)

@@ -50,7 +50,7 @@ from ..model import Robot
 from ..simulation.motion import SampledPlan
 from ..simulation.simulate import segment_rates
 from .description import describe
-from .engine import PhysicsSim
+from .engine import DivergedError, PhysicsSim
 from .mjcf import DEFAULT_STEP
 from .run import ALIGN_MAX, STEER_ALIGNED, TAIL_MAX
 
@@ -113,13 +113,23 @@ def size_lower_bound(robot: Robot, steps: float) -> float | None:
     return bodies * (COMPILE_SECONDS_PER_BODY + steps * STEP_SECONDS_PER_BODY)
 
 
-def measure_step_seconds(robot: Robot, step: float) -> tuple[float, float]:
+def measure_step_seconds(robot: Robot, step: float, *, step_option: bool = False) -> tuple[float, float]:
     """Seconds of computing time per time step of ``robot``'s physics model at time step
     ``step`` [s], driven at :data:`PROBE_SPEED` (module docstring), and the seconds its
     construction took (model, settling). Bad robots are refused as the run would refuse them.
     Computing time is this process's CPU time (``time.process_time``): other work on the
     machine slows the clock, not the count, so the estimate does not depend on the moment it
-    was measured."""
+    was measured. A model that diverges while measured is refused as the run would be
+    (:class:`~omnikin.physics.engine.DivergedError`, saying when; with the ``--step`` advice for
+    callers that have the option, ``step_option``)."""
+    try:
+        return _measure(robot, step)
+    except DivergedError as exc:
+        note = f" (while its computing time was measured, driven straight at {PROBE_SPEED:g} m/s before the run)"
+        raise exc.explained(note, step_option=step_option) from None
+
+
+def _measure(robot: Robot, step: float) -> tuple[float, float]:
     cpu = time.process_time()
     sim = PhysicsSim(robot, step=step)
     built = time.process_time() - cpu
@@ -175,7 +185,7 @@ def physics_run_cost(
         least = size_lower_bound(true_robot, steps)
         if least is not None and least > budget:
             return PhysicsCost(simulated, steps, samples, least, least / steps)
-    step_seconds, built = measured if measured is not None else measure_step_seconds(true_robot, step)
+    step_seconds, built = measured if measured is not None else measure_step_seconds(true_robot, step, step_option=True)
     seconds = built + steps * step_seconds + samples * SAMPLE_SECONDS
     return PhysicsCost(simulated, steps, samples, seconds, step_seconds)
 

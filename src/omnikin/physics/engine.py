@@ -47,7 +47,7 @@ from ..geometry import wrap_angle
 from ..model import Robot
 from ..simulation.simulate import counter_output
 from .description import PhysicalRobot, describe
-from .mjcf import DEFAULT_STEP, mjcf
+from .mjcf import DEFAULT_STEP, STEP_RANGE, mjcf
 
 SETTLE_MIN = 0.05
 """Shortest settling time [s] at the start."""
@@ -92,6 +92,14 @@ class DivergedError(PhysicsError):
         self.time = time
         self.settling = settling
         self.step = step
+
+    def explained(self, note: str = "", *, step_option: bool = False) -> DivergedError:
+        """This error with ``note`` appended and, for callers that have a ``--step`` option
+        (``step_option``), the advice to try a smaller time step while one is accepted."""
+        text = str(self) + note
+        if step_option and self.step > STEP_RANGE[0] * 1.0001:
+            text += f"; or try a smaller time step (--step, now {self.step:g} s)"
+        return DivergedError(text, time=self.time, settling=self.settling, step=self.step)
 
 
 def _ignore_warning(message: str) -> None:

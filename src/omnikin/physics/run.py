@@ -60,7 +60,7 @@ from ..simulation.motion import SampledPlan, check_rate_range, require_motion, s
 from ..simulation.simulate import SimulatedRun, commanded_angles, counter_output
 from .description import steered_support_margin
 from .engine import TRACK_ERROR, TRACK_TIME, DivergedError, PhysicsError, PhysicsSim
-from .mjcf import DEFAULT_STEP, STEP_RANGE, time_step
+from .mjcf import DEFAULT_STEP, time_step
 
 REST_SPEED = 1e-4
 """Speed [m/s] of the chassis below which it is at rest after the plan."""
@@ -166,7 +166,8 @@ class PhysicsRun(SimulatedRun):
             "saturated_commands": self.saturated,
             "lagging_wheels": {w.wheel: w.seconds for w in self.wheels if w.kind == "lagged"},
             "slipping_wheels": {w.wheel: w.seconds for w in self.wheels if w.kind == "slipped"},
-            "wheels_off_command": {name: off for name, off, _ in self.short},
+            # rim [m] short of the commanded turn (negative: beyond it), whichever way it turned
+            "wheels_off_command": {name: math.copysign(off, off * total) for name, off, total in self.short},
             "steering_not_reached": list(self.steering_not_reached),
             "at_rest": self.at_rest,
         }
@@ -200,14 +201,7 @@ def simulate_physics(
     try:
         return _drive(sampled, true_robot, command_robot, names, step, progress, roller_phase)
     except DivergedError as exc:
-        if exc.step > STEP_RANGE[0] * 1.0001:
-            raise DivergedError(
-                f"{exc}; or try a smaller time step (--step, now {exc.step:g} s)",
-                time=exc.time,
-                settling=exc.settling,
-                step=exc.step,
-            ) from None
-        raise
+        raise exc.explained(step_option=True) from None
 
 
 def check_rate_steps(rate: float, step: float) -> None:
@@ -222,7 +216,7 @@ def check_rate_steps(rate: float, step: float) -> None:
         return
     below = max(1, math.ceil(steps))
     near = sorted({1.0 / (n * step) for n in (below, max(1, math.floor(steps)))}, reverse=True)
-    options = " or ".join(f"{r:.6g}" for r in near)
+    options = " or ".join(f"{r:.9g}" for r in near)  # to 5e-9: within the 1e-6 a rate is accepted
     raise InputError(
         f"rate (--rate) {rate:g} Hz: its period {1000.0 / rate:.4g} ms is not a whole number of physics time "
         f"steps ({step:g} s), so the encoders could not be read at the stamped times; choose --rate {options} "
