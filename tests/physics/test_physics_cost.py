@@ -155,6 +155,7 @@ def test_simulate_checks_the_bag_s_stamps_against_the_steering_waits_before_simu
         ("diff-drive", "--mode", "translate"),
         ("--runs", "0"),
         ("--errors", "none", "--true-robot", str(preset_path("omni4"))),
+        ("--step", "0.0015"),  # 100 Hz is not a whole number of 1.5 ms steps
     ],
 )
 def test_umbmark_physics_refuses_bad_settings_in_one_line_before_its_cost_note(tmp_path, capsys, argv):

@@ -333,6 +333,10 @@ def run_umbmark(
     noise, step = engine_options(engine, noise, step)
     nominal = robot_of(robot)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
+    if step is not None:
+        from ..physics.run import check_rate_steps
+
+        check_rate_steps(rate, step)  # the encoders read at whole steps
     seeds = streams(seed)
     noise_model = None if noise is None else noise_of(noise)
     encoded_wheels(nominal)  # UMBmark measures with the encoders
