@@ -373,6 +373,13 @@ class _SlipWatch:
         self.names = sim.driven_names
         self.index = robot.rolling_index(self.names)
         self.radius = np.array([robot.wheel(n).radius for n in self.names])
+        bodies = {w.name: w for w in sim.description.wheels}
+        # rows side by side: the contact lies up to this far [m] along the axle from the mid-plane
+        # the rows J_i describe, where the body's turn omega moves the floor by omega d along the
+        # drive direction: rolling, not slip (docs/physics.md, "Rows side by side")
+        self.offset = np.array(
+            [max(map(abs, r.offsets)) if (r := bodies[n].rollers) is not None else 0.0 for n in self.names]
+        )
         self.alpha = min(1.0, period / SLIP_TIME)
         self.period = period
         self.ms = np.zeros(len(self.names))
@@ -393,7 +400,8 @@ class _SlipWatch:
             if moved:
                 return
         rolled = self.robot.jacobian(steer) @ sim.twist
-        rim = (sim.wheel_speeds - rolled)[self.index] * self.radius
+        rim = np.abs((sim.wheel_speeds - rolled)[self.index] * self.radius)
+        rim = np.maximum(rim - abs(sim.twist[2]) * self.offset, 0.0)
         self.ms += (rim * rim - self.ms) * self.alpha
         beyond = self.ms > SLIP_ERROR * SLIP_ERROR
         if beyond.any():
