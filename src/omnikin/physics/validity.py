@@ -107,8 +107,8 @@ def check_resolvable(robot: PhysicalRobot) -> None:
         if wheel.radius < MIN_RADIUS:
             raise InputError(
                 f"wheel {wheel.name!r}: radius {wheel.radius:.3g} m is below the {MIN_RADIUS:g} m the physics engine "
-                f"resolves (its contacts sink 16-40 um whatever the size, which would shorten the rolling radius by more "
-                f"than 0.4 %)"
+                "resolves (its contacts sink 16-40 um whatever the size, which would shorten the rolling radius by "
+                "more than 0.4 %)"
             )
     for wheel in robot.wheels:
         rollers = wheel.rollers
