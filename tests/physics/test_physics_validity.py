@@ -203,3 +203,15 @@ def test_two_wheels_with_their_centre_of_mass_on_the_axle_are_refused_without_a_
     )
     assert result.returncode == 2
     assert "lies on the edge of the polygon" in result.stderr and "-0" not in result.stderr, result.stderr
+
+
+def test_a_drawn_robot_as_built_the_engine_cannot_resolve_is_named_as_the_draw(tmp_path):
+    """Wheels of exactly 10 mm pass; the typical error profile draws radii a few tenths of a
+    percent smaller, which the engine refuses: the message says the values are the draw's."""
+    path = tomasi_file(tmp_path, None, None, radius=0.01, distance=0.03)
+    result = run_entry_point(
+        "simulate", path, "--engine", "physics", "--seed", "1", "--path", "line 1", "--log", "o.csv", cwd=tmp_path
+    )
+    assert result.returncode == 2
+    line = result.stderr.strip()
+    assert "\n" not in line and "drawn from the --errors profile with --seed" in line and "radius 0.00997 m" in line

@@ -102,7 +102,21 @@ def _bodies(wheel: WheelBody) -> list[tuple[str, float, tuple[float, ...]]]:
 
 def check_resolvable(robot: PhysicalRobot) -> None:
     """Raise :class:`~omnikin.errors.InputError` (one line) unless ``robot`` meets the
-    conditions of the module docstring; the first condition broken is named."""
+    conditions of the module docstring; the first condition broken is named. A robot drawn by an
+    error profile (its name ends in "(as built)") is named as the draw, whose values the user did
+    not write."""
+    try:
+        _check(robot)
+    except InputError as e:
+        if robot.name.endswith("(as built)"):
+            raise InputError(
+                f"robot {robot.name!r}, drawn from the --errors profile with --seed: {e} (another --seed or "
+                "--errors none builds another)"
+            ) from None
+        raise
+
+
+def _check(robot: PhysicalRobot) -> None:
     for wheel in robot.wheels:
         if wheel.radius < MIN_RADIUS:
             raise InputError(

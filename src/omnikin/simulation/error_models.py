@@ -94,6 +94,8 @@ class SystematicErrors:
                     encoder=enc,
                 )
             )
+        if all(not any(vars(e).values()) for e in self.wheels.values()):
+            return robot  # built exactly as designed (--errors none): the robot itself, by its name
         return replace(robot, name=f"{robot.name} (as built)", wheels=tuple(wheels))
 
     def as_dict(self) -> dict:
