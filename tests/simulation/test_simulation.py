@@ -665,3 +665,13 @@ def test_simulate_refuses_plans_the_command_model_cannot_drive(robots):
     dd = robots["diff-drive"]
     with pytest.raises(OmnikinError):
         simulate(umbmark_square("cw", 4.0, "translate"), dd, dd)
+
+
+def test_a_robot_built_without_errors_is_the_robot_itself_by_its_name():
+    from omnikin.simulation.error_models import SystematicErrors, WheelErrors
+
+    robot = load_robot("tomasi-omni3")
+    assert SystematicErrors({}).apply(robot) is robot
+    assert SystematicErrors({"w1": WheelErrors()}).apply(robot) is robot
+    built = SystematicErrors({"w1": WheelErrors(radius=0.01)}).apply(robot)
+    assert built.name == "tomasi-omni3 (as built)" and built.wheel("w1").radius == robot.wheel("w1").radius * 1.01
