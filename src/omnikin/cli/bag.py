@@ -29,6 +29,7 @@ from .common import (
     declare_inputs,
     load_robot,
     number,
+    physics_hint,
     print_json,
     robot_as_built,
     whole,
@@ -471,7 +472,7 @@ def cmd_simulate(args) -> int:
         memory=cost.bytes * samples / max(cost.samples, 1.0),
         seconds=seconds + samples * writing,
         size=f"{cost.samples:.3g} samples",
-        hint="shorten --path or raise --step" if physics else "lower --rate or shorten --path",
+        hint=physics_hint(args.step, "shorten --path") if physics else "lower --rate or shorten --path",
     )
     with _drivable(args):
         if sampled is not None:

@@ -82,6 +82,15 @@ def add_step_option(parser, what: str = "time step of the physics engine") -> No
     )
 
 
+def physics_hint(step: float, *changes: str) -> str:
+    """What would make a physics run cheaper: ``changes`` (e.g. "shorten --path") and, while the
+    time step ``step`` [s] is below the largest accepted, "raise --step"."""
+    from ..physics.mjcf import STEP_RANGE
+
+    options = [*changes, *(["raise --step"] if step < STEP_RANGE[1] * (1 - 1e-9) else [])]
+    return " or ".join(options) if options else "no setting makes it cheaper: raise --max-time"
+
+
 class _Stdout:
     """Whether the running command writes data to standard output (an output ``-``), set by
     :func:`running` while the command runs: its messages then go to standard error

@@ -41,6 +41,7 @@ from .common import (
     console,
     declare_inputs,
     number,
+    physics_hint,
     whole,
 )
 
@@ -319,13 +320,19 @@ def cmd_umbmark(args) -> int:
     inputs = command_inputs(args)
 
     def within_budget(cost) -> None:  # every setting checked by now: refuse, or say it will take long
+        from ..physics.mjcf import time_step
+
         require(
             args,
             "umbmark",
             memory=cost.bytes,
             seconds=cost.seconds,
             size=f"{cost.samples:.3g} robot-samples",
-            hint="lower --trials or --runs, or raise --step"
+            hint=physics_hint(
+                time_step(args.step),
+                *[f"lower {option}" for option in ("--trials", "--runs") if getattr(args, option[2:]) > 1],
+                "shorten --side",
+            )
             if args.engine == "physics"
             else "lower --trials, --runs or --rate",
         )
