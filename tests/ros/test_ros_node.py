@@ -214,8 +214,8 @@ class Graph:
 
     def _on_odom(self, msg):
         with self.lock:
-            if msg.header.frame_id != self.odom_frame:  # a CI run once received another test's node
-                self.strays += 1  # ("flat_odom") across ROS domains: not this node's odometry
+            if msg.header.frame_id != self.odom_frame:  # another node on this domain (one left over
+                self.strays += 1  # from an interrupted run once drove a test's graph): not the node's
                 return
             self.odom.append((time.monotonic(), msg))
 
