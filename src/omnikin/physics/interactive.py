@@ -48,7 +48,6 @@ import os
 import queue
 import threading
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -56,6 +55,7 @@ from ..errors import InputError
 from ..limits import MotionLimits
 from ..model import Robot
 from ..runtime.base import BaseRuntime, StepResult
+from ..runtime.teleop import Teleop
 from .backend import PhysicsBackend
 
 CONTROL_PERIOD = 0.02
@@ -77,64 +77,25 @@ KEY_SPACE = 32
 KEY_LEFT_BRACKET, KEY_RIGHT_BRACKET = ord("["), ord("]")
 KEY_1, KEY_2, KEY_3 = ord("1"), ord("2"), ord("3")
 """GLFW key codes as the viewer's ``key_callback`` receives them (letters upper case)."""
-TELEOP_KEYS = frozenset(
-    (KEY_W, KEY_S, KEY_A, KEY_D, KEY_Q, KEY_E, KEY_SPACE, KEY_LEFT_BRACKET, KEY_RIGHT_BRACKET, KEY_1, KEY_2, KEY_3)
-)
 GLFW_RELEASE, GLFW_PRESS, GLFW_REPEAT = 0, 1, 2
 
 
-@dataclass
-class Teleop:
-    """The target twist set by key presses (module docstring): ``speed`` [m/s], ``turn`` [rad/s]."""
-
-    speed: float
-    turn: float
-    target: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    presses: dict = field(default_factory=dict)
-
-    MOVES = {KEY_W: (0, 1.0), KEY_S: (0, -1.0), KEY_A: (1, 1.0), KEY_D: (1, -1.0), KEY_Q: (2, 1.0), KEY_E: (2, -1.0)}
-
-    def release(self, key: int) -> bool:
-        """A move key let go: its component back to zero unless another key set it since;
-        True when the target changed."""
-        if key not in self.MOVES:
-            return False
-        axis, sign = self.MOVES[key]
-        value = sign * (self.turn if axis == 2 else self.speed)
-        if self.target[axis] != value:
-            return False
-        self.target[axis] = 0.0
-        return True
-
-    def press(self, key: int) -> str | None:
-        """Apply one key press; returns the action's name (``None`` for a key without one)."""
-        moves = {
-            KEY_W: ("forward", 0, self.speed),
-            KEY_S: ("back", 0, -self.speed),
-            KEY_A: ("left", 1, self.speed),
-            KEY_D: ("right", 1, -self.speed),
-            KEY_Q: ("turn_left", 2, self.turn),
-            KEY_E: ("turn_right", 2, -self.turn),
-        }
-        others = {
-            KEY_SPACE: "stop",
-            KEY_LEFT_BRACKET: "steer_right",
-            KEY_RIGHT_BRACKET: "steer_left",
-            KEY_1: "camera_free",
-            KEY_2: "camera_top",
-            KEY_3: "camera_follow",
-        }
-        if key in moves:
-            name, axis, value = moves[key]
-            self.target[axis] = value
-        elif key in others:
-            name = others[key]
-            if name == "stop":
-                self.target[:] = 0.0
-        else:
-            return None
-        self.presses[name] = self.presses.get(name, 0) + 1
-        return name
+KEY_ACTIONS = {
+    KEY_W: "forward",
+    KEY_S: "back",
+    KEY_A: "left",
+    KEY_D: "right",
+    KEY_Q: "turn_left",
+    KEY_E: "turn_right",
+    KEY_SPACE: "stop",
+    KEY_LEFT_BRACKET: "steer_right",
+    KEY_RIGHT_BRACKET: "steer_left",
+    KEY_1: "camera_free",
+    KEY_2: "camera_top",
+    KEY_3: "camera_follow",
+}
+"""What each key of the window does (the moves and stop are :class:`~omnikin.runtime.teleop.Teleop`'s)."""
+TELEOP_KEYS = frozenset(KEY_ACTIONS)
 
 
 def require_display() -> None:
@@ -169,15 +130,12 @@ class InteractiveSim:
         camera: str = "free",
         limits: MotionLimits | None = None,
     ):
-        for name, value in (("speed", speed), ("turn", turn)):
-            if not (math.isfinite(value) and value > 0):
-                raise InputError(f"{name} must be a positive number, got {value!r}")
         if camera not in CAMERAS:
             raise InputError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
+        self.teleop = Teleop(speed, turn)
         self.robot = robot
         self.backend = PhysicsBackend(robot)
         self.runtime = BaseRuntime(robot, self.backend, limits=limits, cmd_vel_timeout=hold)
-        self.teleop = Teleop(speed, turn)
         self.camera = camera
         self.events: list[dict] = []
         self._keys: queue.SimpleQueue[tuple[int, bool]] = queue.SimpleQueue()
@@ -246,14 +204,15 @@ class InteractiveSim:
                 key, pressed = self._keys.get_nowait()
             except queue.Empty:
                 return
+            action = KEY_ACTIONS.get(key)
+            if action is None:
+                continue
             if not pressed:
-                if self.teleop.release(key):
+                if self.teleop.release(action):
                     self._record("release")
                     self.runtime.command(self.teleop.target.copy(), self.t)
                 continue
-            action = self.teleop.press(key)
-            if action is None:
-                continue
+            self.teleop.press(action)
             self._record(action)
             if action.startswith("camera_"):
                 self.camera = action.removeprefix("camera_")
