@@ -645,9 +645,10 @@ def build_parser() -> CommandParser:
     _add_umbmark_analyze(sub.choices["umbmark"])
     bag.add_parsers(sub, robot_help)
     ros.add_parsers(sub, robot_help)
-    from . import sim
+    from . import sim, view
 
     sim.add_parsers(sub, robot_help)
+    view.add_parsers(sub, robot_help)
     export.add_parsers(sub, robot_help)
     return p
 

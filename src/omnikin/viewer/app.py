@@ -1,0 +1,149 @@
+"""``omnikin view ROBOT``: the robot in 3D in the browser, driven from the page.
+
+:class:`LiveViewer` puts together the scene (:mod:`omnikin.viewer.scene`), the robot and its
+runtime (:mod:`omnikin.viewer.live`), the page's controls and readouts
+(:mod:`omnikin.viewer.panel`) and the front server (:mod:`omnikin.viewer.front`) that carries
+the keyboard. The viser server listens on loopback only; the user's address is the front's.
+
+Clock: real time. A control step runs every :data:`CONTROL_PERIOD` s of wall time, and at
+once when a key message arrives (the pose a key changes is on the page within a step); the
+scene is sent after every step, the trails, table and plots every :data:`SLOW_PERIOD` s.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import threading
+import time
+
+import viser
+
+from ..model import Robot
+from .front import FrontServer
+from .live import LiveRobot, Snapshot
+from .panel import Panel
+from .scene import RobotDrawing, Trail, draw_ground, draw_umbmark_square
+
+CONTROL_PERIOD = 0.02
+"""Wall time [s] between two control steps (50 Hz)."""
+SLOW_PERIOD = 0.2
+"""Wall time [s] between two updates of the trails, the table and the plots."""
+TRUTH_COLOUR = (30, 160, 60)
+ODOMETRY_COLOUR = (200, 60, 200)
+
+
+@contextlib.contextmanager
+def _quiet():
+    """viser prints a banner with its own (loopback) address and a line when it stops; the
+    user's address is the front's, printed by the command."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        yield
+
+
+class LiveViewer:
+    """The viewer of a live robot (module docstring): ``live`` drives it, ``host``/``port`` is
+    where the page is served (port 0: a free one, see :attr:`url`); ``umbmark_side`` [m] draws
+    the UMBmark squares (0: none)."""
+
+    def __init__(self, live: LiveRobot, host: str = "127.0.0.1", port: int = 8080, *, umbmark_side: float = 4.0):
+        self.live = live
+        self._wake = threading.Event()
+        self._closed = threading.Event()
+        with _quiet():
+            self.server = viser.ViserServer(host="127.0.0.1", port=_free_port(), label="omnikin", verbose=False)
+        try:
+            self.front = FrontServer(host, port, self.server.get_port(), on_key=self._on_key)
+            self.front.start()
+        except BaseException:
+            with _quiet():
+                self.server.stop()
+            raise
+        scene = self.server.scene
+        extent = max(5.0, umbmark_side + 1.0)
+        draw_ground(scene, extent, 0.1)
+        if umbmark_side > 0:
+            draw_umbmark_square(scene, umbmark_side)
+        self.drawing = RobotDrawing(scene, live.description)
+        self.odometry_frame = scene.add_frame("/odometry", axes_length=0.1, axes_radius=0.004)
+        self.trails = {
+            "truth": Trail(scene, "/trails/truth", TRUTH_COLOUR),
+            "odometry": Trail(scene, "/trails/odometry", ODOMETRY_COLOUR),
+        }
+        self.panel = Panel(self.server, live, clear_trails=self.clear_trails)
+        self.last: Snapshot | None = None
+        self.steps = 0
+
+    @property
+    def url(self) -> str:
+        host = self.front.host
+        shown = "127.0.0.1" if host in ("", "0.0.0.0") else ("[::1]" if host == "::" else host)
+        if ":" in shown and not shown.startswith("["):
+            shown = f"[{shown}]"
+        return f"http://{shown}:{self.front.port}/"
+
+    def _on_key(self, message: dict) -> None:
+        self.live.key(message)
+        self._wake.set()
+
+    def clear_trails(self) -> None:
+        for trail in self.trails.values():
+            trail.clear()
+
+    def run(self, duration: float | None = None) -> str:
+        """Serve until :meth:`close` (``"closed"``) or ``duration`` [s] of wall time
+        (``"duration"``); a :class:`KeyboardInterrupt` leaves through the caller."""
+        start = time.monotonic()
+        slow_next = 0.0
+        while not self._closed.is_set():
+            now = time.monotonic() - start
+            if duration is not None and now >= duration:
+                return "duration"
+            snapshot, actions = self.live.step(now)
+            self.last = snapshot
+            self.steps += 1
+            for action in actions:
+                self.panel.camera_action(action)
+            with self.server.atomic():
+                self._draw(snapshot)
+                self.panel.fast(snapshot)
+                if now >= slow_next:
+                    slow_next = now + SLOW_PERIOD
+                    for trail in self.trails.values():
+                        trail.flush()
+                    self.panel.slow(snapshot)
+            self.server.flush()
+            self._wake.wait(max(0.0, CONTROL_PERIOD - (time.monotonic() - start - now)))
+            self._wake.clear()
+        return "closed"
+
+    def _draw(self, s: Snapshot) -> None:
+        self.drawing.update(s.truth, s.wheel_angles, s.steer)
+        x, y, theta = s.odometry
+        self.odometry_frame.position = (x, y, 0.005)
+        self.odometry_frame.wxyz = (math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2))
+        self.trails["truth"].add(s.truth[0], s.truth[1])
+        self.trails["odometry"].add(x, y)
+
+    def close(self) -> None:
+        """Stop the loop, the servers and the engine."""
+        self._closed.set()
+        self._wake.set()
+        self.front.stop()
+        with _quiet():
+            self.server.stop()
+        self.live.close()
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def robot_extent(robot: Robot) -> float:
+    """The robot's reach from its reference point [m]: the largest ``max(|x|, |y|) + r`` of its wheels."""
+    return max(max(abs(w.x), abs(w.y)) + w.radius for w in robot.wheels)

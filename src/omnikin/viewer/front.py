@@ -1,0 +1,256 @@
+"""The viewer's front server: one address for the page, the 3D scene and the keyboard.
+
+viser serves its page and its scene over one port but passes no key events to Python (its
+client handles keys for its own shortcuts only), and it cannot serve a script of ours. The
+front server therefore stands on the user's address (``--host``, ``--port``) in front of a
+viser server that listens on loopback only:
+
+- ``GET /`` (and ``/index.html``): viser's own client page (bundled in the viser wheel, no
+  internet needed) with ``<script src="/omnikin/teleop.js">`` added to its head;
+- ``GET /omnikin/teleop.js``: the key script (:file:`teleop.js`): held keys as press and
+  release messages over a WebSocket;
+- WebSocket ``/omnikin/keys``: those messages, each handed to ``on_key`` as a dict
+  (:func:`parse_key_message` checks them; anything else is counted in :attr:`FrontServer.rejected`);
+- any other WebSocket: relayed both ways, message by message, to the viser server (the
+  client connects to the page's own origin, so it lands here).
+
+Every WebSocket must come from a page of this server (its ``Origin`` header names the same
+host and port as its ``Host`` header): another web site open in the user's browser cannot
+drive the robot (cross-site WebSocket hijacking).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import gzip
+import http
+import json
+import threading
+from collections.abc import Callable
+from importlib import resources
+from pathlib import Path
+from urllib.parse import urlsplit
+
+from websockets.asyncio.client import connect
+from websockets.asyncio.server import ServerConnection, serve
+from websockets.datastructures import Headers
+from websockets.exceptions import ConnectionClosed
+from websockets.http11 import Request, Response
+
+from ..errors import InputError, shorten
+
+KEYS_PATH = "/omnikin/keys"
+SCRIPT_PATH = "/omnikin/teleop.js"
+KEY_MESSAGE_TYPES = ("press", "release", "release_all", "alive")
+KEY_ACTIONS = (
+    "forward",
+    "back",
+    "left",
+    "right",
+    "turn_left",
+    "turn_right",
+    "stop",
+    "steer_left",
+    "steer_right",
+    "camera_free",
+    "camera_top",
+    "camera_follow",
+)
+"""The actions :file:`teleop.js` sends (W S A D Q E, space, ] [, 1 2 3)."""
+MAX_KEY_MESSAGE = 256
+"""Longest key message [bytes]; a longer one closes its socket."""
+START_TIMEOUT = 10.0
+"""Longest wait [s] for the server to listen."""
+
+
+def parse_key_message(text) -> dict | None:
+    """The key message ``text`` as ``{"type": ..., "action": ...}``, or None when it is not one
+    (not JSON, not an object, an unknown type or action)."""
+    if not isinstance(text, str):
+        return None
+    try:
+        message = json.loads(text)
+    except ValueError:
+        return None
+    if not isinstance(message, dict) or message.get("type") not in KEY_MESSAGE_TYPES:
+        return None
+    kind = message["type"]
+    if kind in ("press", "release"):
+        action = message.get("action")
+        if action not in KEY_ACTIONS:
+            return None
+        return {"type": kind, "action": action}
+    return {"type": kind}
+
+
+def viser_page() -> bytes:
+    """viser's client page with the key script added to its head."""
+    import viser
+
+    path = Path(viser.__file__).resolve().parent / "client" / "build" / "index.html"
+    try:
+        page = path.read_text(encoding="utf-8")
+    except OSError as e:
+        raise InputError(f"viser's client page is missing ({path}: {e.strerror}): reinstall viser") from None
+    head = page.find("</head>")
+    if head < 0:
+        raise InputError(f"viser's client page {path} has no </head>: this viser is not supported")
+    tag = f'<script src="{SCRIPT_PATH}"></script>'
+    return (page[:head] + tag + page[head:]).encode("utf-8")
+
+
+def same_origin(request: Request) -> bool:
+    """True when the request's ``Origin`` names the host and port it was sent to (``Host``)."""
+    origin, host = request.headers.get("Origin"), request.headers.get("Host")
+    if not origin or not host:
+        return False
+    parts = urlsplit(origin)
+    return parts.scheme in ("http", "https") and parts.netloc.lower() == host.lower()
+
+
+def _response(status: http.HTTPStatus, body: bytes, content_type: str, gzipped: bool = False) -> Response:
+    headers = Headers()
+    headers["Content-Type"] = content_type
+    headers["Content-Length"] = str(len(body))
+    headers["Cache-Control"] = "no-store"
+    if gzipped:
+        headers["Content-Encoding"] = "gzip"
+    return Response(status.value, status.phrase, headers, body)
+
+
+class FrontServer:
+    """Serves the page and the keys on ``host:port`` and relays the scene to the viser server on
+    ``127.0.0.1:inner_port`` (module docstring). ``on_key`` is called in the server's thread."""
+
+    def __init__(self, host: str, port: int, inner_port: int, on_key: Callable[[dict], None]):
+        self.host = host
+        self.port = port
+        self.inner_port = inner_port
+        self.on_key = on_key
+        self.rejected = 0
+        self.key_messages = 0
+        page = viser_page()
+        self._page = page
+        self._page_gzip = gzip.compress(page)
+        self._script = resources.files("omnikin.viewer").joinpath("teleop.js").read_bytes()
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._stop: asyncio.Event | None = None
+        self._thread: threading.Thread | None = None
+        self._ready = threading.Event()
+        self._error: BaseException | None = None
+
+    # --- HTTP ----------------------------------------------------------------------------------
+    def _process_request(self, connection: ServerConnection, request: Request) -> Response | None:
+        path = urlsplit(request.path).path
+        if request.headers.get("Upgrade", "").lower() == "websocket":
+            if not same_origin(request):
+                return _response(http.HTTPStatus.FORBIDDEN, b"cross-origin WebSocket refused\n", "text/plain")
+            return None
+        if path in ("/", "/index.html"):
+            if "gzip" in request.headers.get("Accept-Encoding", ""):
+                return _response(http.HTTPStatus.OK, self._page_gzip, "text/html; charset=utf-8", gzipped=True)
+            return _response(http.HTTPStatus.OK, self._page, "text/html; charset=utf-8")
+        if path == SCRIPT_PATH:
+            return _response(http.HTTPStatus.OK, self._script, "application/javascript; charset=utf-8")
+        return _response(http.HTTPStatus.NOT_FOUND, b"not found\n", "text/plain")
+
+    # --- WebSockets ----------------------------------------------------------------------------
+    async def _handle(self, connection: ServerConnection) -> None:
+        request = connection.request
+        if request is not None and urlsplit(request.path).path == KEYS_PATH:
+            await self._keys(connection)
+        else:
+            await self._relay(connection)
+
+    async def _keys(self, connection: ServerConnection) -> None:
+        try:
+            async for text in connection:
+                if len(text) > MAX_KEY_MESSAGE:
+                    self.rejected += 1
+                    await connection.close(code=1009, reason="key message too long")
+                    break
+                message = parse_key_message(text)
+                if message is None:
+                    self.rejected += 1
+                    continue
+                self.key_messages += 1
+                self.on_key(message)
+        except ConnectionClosed:
+            pass
+        finally:
+            self.on_key({"type": "release_all"})  # a closed page holds no key
+
+    async def _relay(self, connection: ServerConnection) -> None:
+        protocols = [connection.subprotocol] if connection.subprotocol else None
+        try:
+            async with connect(
+                f"ws://127.0.0.1:{self.inner_port}", subprotocols=protocols, max_size=None, compression=None
+            ) as inner:
+
+                async def pump(source, sink) -> None:
+                    async for message in source:
+                        await sink.send(message)
+
+                tasks = [asyncio.create_task(pump(connection, inner)), asyncio.create_task(pump(inner, connection))]
+                done, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+                for task in pending:
+                    task.cancel()
+        except (ConnectionClosed, OSError):
+            pass
+
+    @staticmethod
+    def _select_subprotocol(connection: ServerConnection, offered):
+        return next((p for p in offered if p.startswith("viser-v")), None)
+
+    # --- life ----------------------------------------------------------------------------------
+    def start(self) -> None:
+        """Listen in a thread of its own; returns when listening (the port taken when ``port``
+        was 0) or raises :class:`InputError` naming the address when it cannot."""
+        self._thread = threading.Thread(target=self._run, name="omnikin-view-front", daemon=True)
+        self._thread.start()
+        if not self._ready.wait(START_TIMEOUT):
+            raise InputError(
+                f"the viewer did not start listening on {self.host}:{self.port} within {START_TIMEOUT:g} s"
+            )
+        if self._error is not None:
+            error = self._error
+            reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+            raise InputError(
+                f"cannot listen on {shorten(self.host)}:{self.port} ({reason}): choose another --port or --host"
+            ) from None
+
+    def _run(self) -> None:
+        loop = asyncio.new_event_loop()
+        self._loop = loop
+        try:
+            loop.run_until_complete(self._serve())
+        except BaseException as e:  # noqa: BLE001 (reported by start())
+            self._error = e
+            self._ready.set()
+        finally:
+            loop.close()
+
+    async def _serve(self) -> None:
+        self._stop = asyncio.Event()
+        async with serve(
+            self._handle,
+            self.host,
+            self.port,
+            process_request=self._process_request,
+            select_subprotocol=self._select_subprotocol,
+            max_size=None,
+            compression=None,
+        ) as server:
+            self.port = server.sockets[0].getsockname()[1] if server.sockets else self.port
+            self._ready.set()
+            await self._stop.wait()
+
+    def stop(self) -> None:
+        """Stop listening and close every connection."""
+        if self._loop is not None and self._stop is not None and not self._loop.is_closed():
+            try:
+                self._loop.call_soon_threadsafe(self._stop.set)
+            except RuntimeError:
+                pass
+        if self._thread is not None:
+            self._thread.join(START_TIMEOUT)

@@ -1,0 +1,217 @@
+"""The robot the viewer drives: an engine, the runtime, and the inputs of the page.
+
+:class:`LiveRobot` joins a wheel back-end (``kinematic``: :class:`~omnikin.simulation.backend.SimBackend`,
+the robot moved exactly by its wheels; ``physics``: :class:`~omnikin.physics.backend.PhysicsBackend`,
+MuJoCo with rollers, extra ``physics``) and :class:`~omnikin.runtime.base.BaseRuntime`, whose
+command filter (speed and acceleration limits, command timeout) every input passes, as on the
+real robot. Inputs arrive from other threads (the page's keys, its controls) and are queued;
+:meth:`LiveRobot.step` applies them, runs one control step at the given time and returns a
+:class:`Snapshot` of everything the page shows.
+
+Inputs: key messages of :mod:`omnikin.viewer.front` (held keys through
+:class:`~omnikin.runtime.teleop.Teleop`; a held key whose page has been silent for
+:data:`KEY_SILENCE` s is released, so a closed tab or a lost link stops the robot), a twist set
+on the page's controls (held until changed or stopped), a stop, and steering by hand (robots
+with steerable wheels, at rest). While a target is non-zero it is offered to the runtime at
+every step, so the command timeout only acts when the inputs stop.
+"""
+
+from __future__ import annotations
+
+import math
+import queue
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..limits import MotionLimits
+from ..model import Robot
+from ..physics.description import PhysicalRobot, describe
+from ..runtime.base import BaseRuntime, StepResult
+from ..runtime.teleop import Teleop
+from ..simulation.backend import SimBackend
+
+ENGINES = ("kinematic", "physics")
+KEY_SILENCE = 0.5
+"""Time [s] after which a held key whose page sent nothing (no ``alive``) is released."""
+STEER_STEP = math.radians(15.0)
+"""Steering turned by one press of ``[`` or ``]`` [rad]."""
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """One control step as the page shows it. Poses ``(x, y, theta)`` [m, m, rad] in the world
+    frame; twists ``(vx, vy, omega)`` [m/s, m/s, rad/s] in the body frame. Per wheel
+    (description order, castors included): ``wheel_angles`` [rad] and ``wheel_speeds`` [rad/s]
+    of the true wheels, ``steer`` [rad] relative to the mounting drive direction (NaN: not
+    steered). ``residual``: the forward-kinematics residual of the odometry [rad/s]."""
+
+    t: float
+    truth: tuple[float, float, float]
+    odometry: tuple[float, float, float]
+    twist: tuple[float, float, float]
+    command: tuple[float, float, float]
+    target: tuple[float, float, float]
+    wheel_angles: np.ndarray
+    wheel_speeds: np.ndarray
+    steer: np.ndarray
+    residual: tuple[float, ...]
+
+
+class LiveRobot:
+    """``robot`` driven by the page (module docstring). ``speed`` [m/s] and ``turn`` [rad/s]: what a
+    held key sets; ``limits``, ``timeout`` [s]: the runtime's command filter; ``step`` [s]: the
+    physics engine's time step (None: its default)."""
+
+    def __init__(
+        self,
+        robot: Robot,
+        engine: str = "kinematic",
+        *,
+        speed: float = 0.2,
+        turn: float = 0.5,
+        limits: MotionLimits | None = None,
+        timeout: float = 0.5,
+        step: float | None = None,
+    ):
+        if engine not in ENGINES:
+            raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
+        self.teleop = Teleop(speed, turn)
+        self.robot = robot
+        self.engine = engine
+        self.description: PhysicalRobot = describe(robot)
+        if engine == "physics":
+            from ..physics.backend import PhysicsBackend
+            from ..physics.mjcf import DEFAULT_STEP
+
+            self.backend: SimBackend | PhysicsBackend = PhysicsBackend(robot, step=step or DEFAULT_STEP)
+        else:
+            self.backend = SimBackend(robot)
+        self.runtime = BaseRuntime(robot, self.backend, limits=limits, cmd_vel_timeout=timeout)
+        self._inputs: queue.SimpleQueue[tuple[str, object]] = queue.SimpleQueue()
+        names = [w.name for w in self.description.wheels]
+        self._rolling = np.array([names.index(n) for n in robot.rolling_names], dtype=int)
+        self._steered = np.array([names.index(n) for n in robot.steer_names], dtype=int)
+        self._angles = np.zeros(len(names))
+        self._speeds = np.zeros(len(names))  # the kinematic wheels' speeds over the coming interval
+        self._steer_hand = np.zeros(len(robot.steerable))
+        self._set_twist = np.zeros(3)
+        self._last_key_message = -math.inf
+        self._last: StepResult | None = None
+        self.t = 0.0
+
+    # --- inputs (any thread) --------------------------------------------------------------------
+    def key(self, message: dict) -> None:
+        """A key message of the page (:func:`omnikin.viewer.front.parse_key_message`)."""
+        self._inputs.put(("key", message))
+
+    def set_twist(self, twist) -> None:
+        """Drive at ``twist`` (on-screen controls) until it is changed or stopped."""
+        self._inputs.put(("twist", np.asarray(twist, dtype=float).reshape(3).copy()))
+
+    def stop(self) -> None:
+        """Stop: every target zero; the robot decelerates within its limits."""
+        self._inputs.put(("stop", None))
+
+    def steer_by(self, angle: float) -> None:
+        """Turn every steerable wheel by ``angle`` [rad] (robot at rest; ignored while it moves)."""
+        self._inputs.put(("steer", float(angle)))
+
+    # --- the control step -------------------------------------------------------------------------
+    def _apply_inputs(self, t: float) -> list[str]:
+        """Apply queued inputs; returns the page actions that are not teleop (camera presets)."""
+        actions = []
+        while True:
+            try:
+                kind, value = self._inputs.get_nowait()
+            except queue.Empty:
+                break
+            if kind == "key":
+                assert isinstance(value, dict)
+                self._last_key_message = t
+                kind_of = value["type"]
+                if kind_of == "press":
+                    action = value["action"]
+                    if action == "stop":
+                        self._set_twist[:] = 0.0
+                    if action in ("steer_left", "steer_right"):
+                        self._turn_steering(STEER_STEP if action == "steer_left" else -STEER_STEP)
+                    elif not self.teleop.press(action):
+                        actions.append(action)
+                elif kind_of == "release":
+                    self.teleop.release(value["action"])
+                elif kind_of == "release_all":
+                    self.teleop.release_all()
+            elif kind == "twist":
+                assert isinstance(value, np.ndarray)
+                self._set_twist = value
+            elif kind == "stop":
+                self.teleop.release_all()
+                self._set_twist[:] = 0.0
+            elif kind == "steer":
+                assert isinstance(value, float)
+                self._turn_steering(value)
+        if np.any(self.teleop.target) and t - self._last_key_message > KEY_SILENCE:
+            self.teleop.release_all()  # the page fell silent with a key held
+        return actions
+
+    @property
+    def target(self) -> np.ndarray:
+        """The twist asked for now: held keys' components, else the controls' twist."""
+        keys = self.teleop.target
+        return keys.copy() if np.any(keys) else self._set_twist.copy()
+
+    def _turn_steering(self, angle: float) -> None:
+        if not len(self._steer_hand) or np.any(self.target) or np.any(self.runtime.filter.current):
+            return
+        current = self._last.steer if self._last is not None and self._last.steer is not None else self._steer_hand
+        self._steer_hand = np.asarray(current, dtype=float) + angle
+        self.runtime.steer_to(self._steer_hand)
+
+    def step(self, t: float) -> tuple[Snapshot, list[str]]:
+        """Apply the inputs and run one control step at time ``t`` [s]; the snapshot and the page
+        actions the caller handles (camera presets)."""
+        actions = self._apply_inputs(t)
+        target = self.target
+        if np.any(target) or np.any(self.runtime.filter.target):
+            self.runtime.command(target, t)
+        dt = max(0.0, t - self.t)
+        self.t = t
+        result = self.runtime.step(t)
+        self._last = result
+        return self._snapshot(result, target, dt), actions
+
+    def _snapshot(self, result: StepResult, target: np.ndarray, dt: float) -> Snapshot:
+        n = len(self.description.wheels)
+        speeds = np.zeros(n)
+        steer = np.full(n, np.nan)
+        if self.engine == "physics":
+            sim = self.backend.sim  # type: ignore[union-attr]
+            self._angles[self._rolling] = sim.wheel_angles
+            speeds[self._rolling] = sim.wheel_speeds
+            if len(self._steered):
+                steer[self._steered] = sim.steer_angles
+            truth = self.backend.truth
+        else:
+            self._angles += self._speeds * dt  # the speeds the wheels turned at since the last step
+            speeds[self._rolling] = result.wheel_speeds
+            self._speeds = speeds
+            if len(self._steered) and result.steer is not None:
+                steer[self._steered] = result.steer
+            truth = self.backend.truth
+        return Snapshot(
+            t=result.t,
+            truth=(float(truth[0]), float(truth[1]), float(truth[2])),
+            odometry=tuple(float(v) for v in result.pose),  # type: ignore[arg-type]
+            twist=tuple(float(v) for v in result.twist),  # type: ignore[arg-type]
+            command=tuple(float(v) for v in result.command),  # type: ignore[arg-type]
+            target=tuple(float(v) for v in target),  # type: ignore[arg-type]
+            wheel_angles=self._angles.copy(),
+            wheel_speeds=speeds,
+            steer=steer,
+            residual=tuple(float(v) for v in result.residual),
+        )
+
+    def close(self) -> None:
+        self.backend.close()
