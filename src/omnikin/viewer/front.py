@@ -25,6 +25,7 @@ import asyncio
 import gzip
 import http
 import json
+import os
 import threading
 from collections.abc import Callable
 from importlib import resources
@@ -106,6 +107,16 @@ def same_origin(request: Request) -> bool:
         return False
     parts = urlsplit(origin)
     return parts.scheme in ("http", "https") and parts.netloc.lower() == host.lower()
+
+
+def _reason(error: BaseException) -> str:
+    """What went wrong when listening, in a few words (``address already in use``)."""
+    if isinstance(error, OSError):
+        if error.errno and error.errno > 0:
+            return os.strerror(error.errno).lower()
+        if error.strerror:
+            return error.strerror.lower()
+    return str(error)[:100]
 
 
 def _response(status: http.HTTPStatus, body: bytes, content_type: str, gzipped: bool = False) -> Response:
@@ -214,9 +225,8 @@ class FrontServer:
             )
         if self._error is not None:
             error = self._error
-            reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
             raise InputError(
-                f"cannot listen on {shorten(self.host)}:{self.port} ({reason}): choose another --port or --host"
+                f"cannot listen on {shorten(self.host)}:{self.port} ({_reason(error)}): choose another --port or --host"
             ) from None
 
     def _run(self) -> None:

@@ -1,0 +1,111 @@
+"""The robot behind the viewer: held keys drive it through the runtime's command filter.
+
+Expected motions come from the documented semantics of the filter (the twist ramps towards
+the target by ``accel * dt`` per step; the kinematic engine moves at the speed written at a
+step until the next one), summed step by step, never from the code under test.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from omnikin.io.robot_file import load_robot
+from omnikin.limits import MotionLimits
+from omnikin.viewer.live import KEY_SILENCE, LiveRobot
+
+DT = 0.02
+ACCEL = 0.5  # MotionLimits' default linear acceleration [m/s^2]
+SPEED = 0.2
+
+
+def drive(live, steps, on_step=None, start=0):
+    snapshot = None
+    for k in range(start, start + steps + 1):
+        t = k * DT
+        if on_step:
+            on_step(k, t)
+        snapshot, _ = live.step(t)
+    return snapshot
+
+
+def ramp_distance(speed, accel, press_step, release_step, steps):
+    """Distance covered when the twist ramps (by accel*DT per step) to ``speed`` from the
+    press and back to zero from the release, each step's speed held until the next."""
+    v, x = 0.0, 0.0
+    for k in range(steps):
+        target = speed if press_step <= k < release_step else 0.0
+        v = v + max(-accel * DT, min(accel * DT, target - v)) if k > 0 else 0.0
+        x += v * DT
+    return x
+
+
+def test_holding_w_drives_forward_as_the_ramped_command_says_and_releasing_stops():
+    live = LiveRobot(load_robot("tomasi-omni3"), speed=SPEED, limits=MotionLimits(linear=0.3))
+
+    def keys(k, t):
+        if k == 0:
+            live.key({"type": "press", "action": "forward"})
+        elif k == 50:
+            live.key({"type": "release", "action": "forward"})
+        elif k % 5 == 0 and k < 50:
+            live.key({"type": "alive"})
+
+    s = drive(live, 100, keys)
+    expected = ramp_distance(SPEED, ACCEL, 0, 50, 100)
+    assert s.truth[0] == pytest.approx(expected, abs=1e-9)
+    assert abs(s.truth[1]) < 1e-12 and abs(s.truth[2]) < 1e-12
+    assert s.command == (0.0, 0.0, 0.0)
+
+
+def test_a_held_key_whose_page_falls_silent_is_released():
+    live = LiveRobot(load_robot("tomasi-omni3"), speed=SPEED)
+    s = drive(live, 100, lambda k, t: live.key({"type": "press", "action": "left"}) if k == 0 else None)
+    release = next(k for k in range(101) if k * DT > KEY_SILENCE)
+    assert s.truth[1] == pytest.approx(ramp_distance(SPEED, ACCEL, 0, release, 100), abs=1e-9)
+    assert s.command == (0.0, 0.0, 0.0)
+
+
+def test_a_differential_drive_does_not_strafe_but_turns_on_q():
+    live = LiveRobot(load_robot("diff-drive"), speed=SPEED, turn=0.5)
+
+    def keys(k, t):
+        live.key({"type": "press" if k == 0 else "alive", "action": "left"} if k == 0 else {"type": "alive"})
+
+    s = drive(live, 25, keys)
+    assert np.allclose(s.truth, 0.0, atol=1e-12)
+    live.key({"type": "release", "action": "left"})
+    live.key({"type": "press", "action": "turn_left"})
+    for k in range(26, 76):
+        live.key({"type": "alive"})
+        s, _ = live.step(k * DT)
+    assert s.truth[2] > 0.1 and math.hypot(s.truth[0], s.truth[1]) < 1e-9
+
+
+def test_brackets_steer_the_steerable_wheels_at_rest_and_camera_keys_come_back_as_actions():
+    robot = load_robot("ackermann")
+    live = LiveRobot(robot)
+    live.key({"type": "press", "action": "steer_left"})
+    live.key({"type": "press", "action": "camera_top"})
+    s, actions = live.step(0.0)
+    s, _ = live.step(DT)
+    names = [w.name for w in live.description.wheels]
+    steered = [names.index(n) for n in robot.steer_names]
+    assert actions == ["camera_top"]
+    np.testing.assert_allclose(s.steer[steered], math.radians(15.0), atol=1e-12)
+    assert np.all(np.isnan(np.delete(s.steer, steered)))
+
+
+def test_the_page_s_twist_holds_until_stop_and_wheel_angles_follow_the_inverse_kinematics():
+    robot = load_robot("tomasi-omni3")
+    live = LiveRobot(robot)
+    live.set_twist((0.0, 0.0, 0.4))
+    s = drive(live, 150)
+    assert s.command[2] == pytest.approx(0.4)
+    # every wheel of an omni3 turns at omega * L / r at a pure rotation: its angle is the
+    # heading turned times L / r
+    l_over_r = [math.hypot(w.x, w.y) / w.radius for w in robot.wheels]
+    np.testing.assert_allclose(s.wheel_angles, s.truth[2] * np.array(l_over_r), rtol=1e-9)
+    live.stop()
+    s = drive(live, 60, start=151)
+    assert s.command == (0.0, 0.0, 0.0)
