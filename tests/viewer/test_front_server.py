@@ -6,7 +6,7 @@ import json
 import queue
 
 import pytest
-from websockets.exceptions import InvalidStatus
+from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import connect
 
 from omnikin.errors import InputError
@@ -58,7 +58,7 @@ def test_a_long_key_message_closes_its_socket(front):
     server, received = front
     with connect(f"ws://127.0.0.1:{server.port}{KEYS_PATH}", origin=f"http://127.0.0.1:{server.port}") as ws:
         ws.send(json.dumps({"type": "alive", "pad": "x" * 100_000}))
-        with pytest.raises(Exception):
+        with pytest.raises(ConnectionClosed):
             ws.recv(timeout=5)
     assert received.get(timeout=5) == {"type": "release_all"}
     assert server.rejected == 1
