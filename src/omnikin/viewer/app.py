@@ -20,10 +20,9 @@ import time
 
 import viser
 
-from ..model import Robot
 from .front import FrontServer
 from .live import LiveRobot, Snapshot
-from .panel import Panel
+from .panel import CameraControl, DriveControls, Readouts, robot_extent
 from .scene import RobotDrawing, Trail, draw_ground, draw_umbmark_square
 
 CONTROL_PERIOD = 0.02
@@ -71,7 +70,9 @@ class LiveViewer:
             "truth": Trail(scene, "/trails/truth", TRUTH_COLOUR),
             "odometry": Trail(scene, "/trails/odometry", ODOMETRY_COLOUR),
         }
-        self.panel = Panel(self.server, live, clear_trails=self.clear_trails)
+        self.drive = DriveControls(self.server, live)
+        self.camera = CameraControl(self.server, robot_extent(live.description), clear_trails=self.clear_trails)
+        self.readouts = Readouts(self.server, live.description)
         self.last: Snapshot | None = None
         self.steps = 0
 
@@ -104,15 +105,16 @@ class LiveViewer:
             self.last = snapshot
             self.steps += 1
             for action in actions:
-                self.panel.camera_action(action)
+                self.camera.action(action)
             with self.server.atomic():
                 self._draw(snapshot)
-                self.panel.fast(snapshot)
+                self.readouts.fast(snapshot)
+                self.camera.follow(snapshot.truth)
                 if now >= slow_next:
                     slow_next = now + SLOW_PERIOD
                     for trail in self.trails.values():
                         trail.flush()
-                    self.panel.slow(snapshot)
+                    self.readouts.slow(snapshot)
             self.server.flush()
             self._wake.wait(max(0.0, CONTROL_PERIOD - (time.monotonic() - start - now)))
             self._wake.clear()
@@ -142,8 +144,3 @@ def _free_port() -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.bind(("127.0.0.1", 0))
         return int(s.getsockname()[1])
-
-
-def robot_extent(robot: Robot) -> float:
-    """The robot's reach from its reference point [m]: the largest ``max(|x|, |y|) + r`` of its wheels."""
-    return max(max(abs(w.x), abs(w.y)) + w.radius for w in robot.wheels)

@@ -27,6 +27,7 @@ import numpy as np
 import viser
 import viser.uplot as uplot
 
+from ..physics.description import PhysicalRobot
 from .live import LiveRobot, Snapshot
 
 PLOT_SPAN = 10.0
@@ -46,20 +47,21 @@ def _f(value: float) -> str:
     return format(float(value), ".17g")
 
 
-class Panel:
-    """The side panel of a live viewer (module docstring)."""
+def robot_extent(description: PhysicalRobot) -> float:
+    """The robot's reach from its reference point [m]: the largest ``max(|x|, |y|) + r`` of its
+    wheels (hubs at zero steering)."""
+    return max(max(abs(w.hub[0]), abs(w.hub[1])) + w.radius for w in description.wheels)
 
-    def __init__(self, server: viser.ViserServer, live: LiveRobot, *, clear_trails: Callable[[], None]):
-        self.server = server
+
+class DriveControls:
+    """The Drive folder of a live viewer: key help, a twist held until Stop, steering by hand."""
+
+    def __init__(self, server: viser.ViserServer, live: LiveRobot):
         self.live = live
         gui = server.gui
         limits = live.runtime.filter.limits
         top_speed = limits.linear if limits.linear is not None else 2 * live.teleop.speed
         top_turn = limits.angular if limits.angular is not None else 2 * live.teleop.turn
-        extent = max(max(abs(w.x), abs(w.y)) + w.radius for w in live.robot.wheels)
-        self.view_size_default = VIEW_SIZE * extent
-        self.camera = "free"
-
         with gui.add_folder("Drive"):
             gui.add_markdown(KEY_HELP)
             self.vx = gui.add_slider("vx [m/s]", -top_speed, top_speed, top_speed / 50, 0.0)
@@ -68,56 +70,57 @@ class Panel:
             drive = gui.add_button("Drive", hint="drive at the twist of the sliders until Stop")
             stop = gui.add_button("Stop", color="red", hint="every target zero (space)")
             drive.on_click(lambda _: live.set_twist((self.vx.value, self.vy.value, self.omega.value)))
-            stop.on_click(lambda _: self._stop())
+            stop.on_click(lambda _: self.stop())
             if live.robot.steerable:
                 steer = gui.add_button_group("steer (at rest)", ("-15 deg", "+15 deg"))
                 steer.on_click(lambda e: live.steer_by(math.radians(15.0 if e.target.value == "+15 deg" else -15.0)))
-        with gui.add_folder("Camera"):
-            self.camera_buttons = gui.add_button_group("preset", CAMERAS)
-            self.camera_buttons.on_click(lambda e: self.set_camera(e.target.value))
-            self.view_size = gui.add_slider(
-                "view size [m]", extent, 40 * extent, extent / 10, round(self.view_size_default, 3)
-            )
-            gui.add_button("Clear trails").on_click(lambda _: clear_trails())
-        with gui.add_folder("Readouts"):
-            self.readout = gui.add_html(self._readout_html(None))
-            self.table = gui.add_html("")
-            names = [w.name for w in live.description.wheels]
-            self._times: deque[float] = deque()
-            self._speeds: deque[np.ndarray] = deque()
-            series = [uplot.Series(label="t [s]")] + [
-                uplot.Series(label=name, stroke=PLOT_COLOURS[i % len(PLOT_COLOURS)], width=1.5)
-                for i, name in enumerate(names)
-            ]
-            empty = tuple(np.zeros(1) for _ in range(len(names) + 1))
-            self.plot = gui.add_uplot(
-                empty, tuple(series), title="wheel speeds [rad/s]", aspect=1.6, scales={"x": {"time": False}}
-            )
 
-    def _stop(self) -> None:
+    def stop(self) -> None:
         for slider in (self.vx, self.vy, self.omega):
             slider.value = 0.0  # type: ignore[misc]  # (viser: a props field shadows the setter for mypy)
         self.live.stop()
 
-    # --- camera ------------------------------------------------------------------------------
-    def camera_action(self, action: str) -> None:
+
+class CameraControl:
+    """The Camera folder: presets (module docstring) for every page, the view size, and the
+    trails' Clear button when ``clear_trails`` is given."""
+
+    def __init__(self, server: viser.ViserServer, extent: float, clear_trails: Callable[[], None] | None = None):
+        self.server = server
+        self.camera = "free"
+        self.pose: tuple[float, float, float] | None = None
+        gui = server.gui
+        with gui.add_folder("Camera"):
+            self.buttons = gui.add_button_group("preset", CAMERAS)
+            self.buttons.on_click(lambda e: self.set(e.target.value))
+            self.view_size = gui.add_slider(
+                "view size [m]", extent, 40 * extent, extent / 10, round(VIEW_SIZE * extent, 3)
+            )
+            if clear_trails is not None:
+                gui.add_button("Clear trails").on_click(lambda _: clear_trails())
+
+    def action(self, action: str) -> None:
         """A page action of the keys: ``camera_free``, ``camera_top``, ``camera_follow``."""
         if action.startswith("camera_"):
-            self.set_camera(action.removeprefix("camera_"))
+            self.set(action.removeprefix("camera_"))
 
-    def set_camera(self, preset: str) -> None:
+    def set(self, preset: str) -> None:
         if preset not in CAMERAS:
             return
         self.camera = preset
-        if self.live_snapshot is not None:
-            self._place_cameras(self.live_snapshot)
+        if self.pose is not None:
+            self._place(self.pose)
 
-    live_snapshot: Snapshot | None = None
+    def follow(self, pose: tuple[float, float, float]) -> None:
+        """The robot is at ``pose``: a following camera moves with it."""
+        self.pose = pose
+        if self.camera == "follow":
+            self._place(pose)
 
-    def _place_cameras(self, s: Snapshot) -> None:
+    def _place(self, pose: tuple[float, float, float]) -> None:
         if self.camera == "free":
             return
-        x, y, theta = s.truth
+        x, y, theta = pose
         size = float(self.view_size.value)
         for client in self.server.get_clients().values():
             camera = client.camera
@@ -135,76 +138,103 @@ class Panel:
                 )
             camera.look_at = (x, y, 0.0)
 
-    # --- readouts ----------------------------------------------------------------------------
+
+class Readouts:
+    """The Readouts folder: the readout (every step), the joint table and the wheel-speed plot
+    (:meth:`slow`); :meth:`reset` forgets the plot's history (a replay jumping in time)."""
+
+    def __init__(self, server: viser.ViserServer, description: PhysicalRobot):
+        self.description = description
+        gui = server.gui
+        with gui.add_folder("Readouts"):
+            self.readout = gui.add_html(readout_html(None))
+            self.table = gui.add_html("")
+            names = [w.name for w in description.wheels]
+            self._times: deque[float] = deque()
+            self._speeds: deque[np.ndarray] = deque()
+            series = [uplot.Series(label="t [s]")] + [
+                uplot.Series(label=name, stroke=PLOT_COLOURS[i % len(PLOT_COLOURS)], width=1.5)
+                for i, name in enumerate(names)
+            ]
+            empty = tuple(np.zeros(1) for _ in range(len(names) + 1))
+            self.plot = gui.add_uplot(
+                empty, tuple(series), title="wheel speeds [rad/s]", aspect=1.6, scales={"x": {"time": False}}
+            )
+
+    def reset(self) -> None:
+        self._times.clear()
+        self._speeds.clear()
+
     def fast(self, s: Snapshot) -> None:
-        """Every control step: the readout, the plot's data, a following camera."""
-        first = self.live_snapshot is None
-        self.live_snapshot = s
-        self.readout.content = self._readout_html(s)
+        """Every step: the readout and the plot's data."""
+        self.readout.content = readout_html(s)
+        if self._times and s.t < self._times[-1]:
+            self.reset()
         self._times.append(s.t)
         self._speeds.append(s.wheel_speeds.copy())
         while self._times and self._times[0] < s.t - PLOT_SPAN:
             self._times.popleft()
             self._speeds.popleft()
-        if self.camera == "follow" or (first and self.camera == "top"):
-            self._place_cameras(s)
 
     def slow(self, s: Snapshot) -> None:
         """A few times a second: the joint table and the plot."""
-        self.table.content = self._table_html(s)
+        self.table.content = joint_table_html(self.description, s)
         if len(self._times) >= 2:
             speeds = np.array(self._speeds)
             self.plot.data = (np.array(self._times), *speeds.T)
 
-    def _readout_html(self, s: Snapshot | None) -> str:
-        if s is None:
-            return '<div id="omnikin-readout">waiting for the first step</div>'
-        x, y, th = s.truth
-        ox, oy, oth = s.odometry
-        attributes = {
-            "t": s.t,
-            "x": x,
-            "y": y,
-            "theta": th,
-            "odom-x": ox,
-            "odom-y": oy,
-            "odom-theta": oth,
-            "vx": s.twist[0],
-            "vy": s.twist[1],
-            "omega": s.twist[2],
-        }
-        data = " ".join(f'data-{k}="{_f(v)}"' for k, v in attributes.items())
-        residual = math.sqrt(sum(r * r for r in s.residual)) if s.residual else 0.0
-        rows = [
-            ("t", f"{s.t:.2f} s"),
-            ("pose", f"x {x:+.3f} m, y {y:+.3f} m, theta {math.degrees(th):+.1f} deg"),
-            ("odometry", f"x {ox:+.3f} m, y {oy:+.3f} m, theta {math.degrees(oth):+.1f} deg"),
-            ("twist", f"vx {s.twist[0]:+.3f} m/s, vy {s.twist[1]:+.3f} m/s, omega {s.twist[2]:+.3f} rad/s"),
-            ("command", f"vx {s.command[0]:+.3f}, vy {s.command[1]:+.3f}, omega {s.command[2]:+.3f}"),
-            ("FK residual", f"{residual:.2e} rad/s"),
-        ]
-        body = "".join(f"<tr><td>{k}</td><td>{html.escape(v)}</td></tr>" for k, v in rows)
-        return f'<div id="omnikin-readout" {data}><table style="font-size:0.8em">{body}</table></div>'
 
-    def _table_html(self, s: Snapshot) -> str:
-        x0, y0, th = s.truth
-        c, si = math.cos(th), math.sin(th)
-        head = (
-            "<tr><th>wheel</th><th>steer [deg]</th><th>angle [deg]</th><th>speed [rad/s]</th><th>hub x, y [m]</th></tr>"
+def readout_html(s: Snapshot | None) -> str:
+    """Pose, twist, command and residual of ``s`` as the readout element (module docstring)."""
+    if s is None:
+        return '<div id="omnikin-readout">waiting for the first step</div>'
+    x, y, th = s.truth
+    ox, oy, oth = s.odometry
+    attributes = {
+        "t": s.t,
+        "x": x,
+        "y": y,
+        "theta": th,
+        "odom-x": ox,
+        "odom-y": oy,
+        "odom-theta": oth,
+        "vx": s.twist[0],
+        "vy": s.twist[1],
+        "omega": s.twist[2],
+    }
+    data = " ".join(f'data-{k}="{_f(v)}"' for k, v in attributes.items())
+    residual = math.sqrt(sum(r * r for r in s.residual)) if s.residual else 0.0
+    rows = [
+        ("t", f"{s.t:.2f} s"),
+        ("pose", f"x {x:+.3f} m, y {y:+.3f} m, theta {math.degrees(th):+.1f} deg"),
+        ("odometry", f"x {ox:+.3f} m, y {oy:+.3f} m, theta {math.degrees(oth):+.1f} deg"),
+        ("twist", f"vx {s.twist[0]:+.3f} m/s, vy {s.twist[1]:+.3f} m/s, omega {s.twist[2]:+.3f} rad/s"),
+        ("command", f"vx {s.command[0]:+.3f}, vy {s.command[1]:+.3f}, omega {s.command[2]:+.3f}"),
+        ("FK residual", f"{residual:.2e} rad/s"),
+    ]
+    body = "".join(f"<tr><td>{k}</td><td>{html.escape(v)}</td></tr>" for k, v in rows)
+    return f'<div id="omnikin-readout" {data}><table style="font-size:0.8em">{body}</table></div>'
+
+
+def joint_table_html(description: PhysicalRobot, s: Snapshot) -> str:
+    """The joint table of ``s`` (module docstring): per wheel steering and wheel angle, speed,
+    hub position in the world."""
+    x0, y0, th = s.truth
+    c, si = math.cos(th), math.sin(th)
+    head = "<tr><th>wheel</th><th>steer [deg]</th><th>angle [deg]</th><th>speed [rad/s]</th><th>hub x, y [m]</th></tr>"
+    rows = []
+    for i, w in enumerate(description.wheels):
+        hx, hy = w.hub[0], w.hub[1]
+        if w.steering is not None and math.isfinite(s.steer[i]):
+            px, py = w.steering.pivot
+            a = s.steer[i]
+            dx, dy = hx - px, hy - py
+            hx, hy = px + math.cos(a) * dx - math.sin(a) * dy, py + math.sin(a) * dx + math.cos(a) * dy
+        wx, wy = x0 + c * hx - si * hy, y0 + si * hx + c * hy
+        steer = f"{math.degrees(s.steer[i]):+.1f}" if math.isfinite(s.steer[i]) else "-"
+        rows.append(
+            f"<tr><td>{html.escape(w.name)}</td><td>{steer}</td>"
+            f"<td>{math.degrees(s.wheel_angles[i]) % 360:.1f}</td><td>{s.wheel_speeds[i]:+.2f}</td>"
+            f"<td>{wx:+.3f}, {wy:+.3f}</td></tr>"
         )
-        rows = []
-        for i, w in enumerate(self.live.description.wheels):
-            hx, hy = w.hub[0], w.hub[1]
-            if w.steering is not None and math.isfinite(s.steer[i]):
-                px, py = w.steering.pivot
-                a = s.steer[i]
-                dx, dy = hx - px, hy - py
-                hx, hy = px + math.cos(a) * dx - math.sin(a) * dy, py + math.sin(a) * dx + math.cos(a) * dy
-            wx, wy = x0 + c * hx - si * hy, y0 + si * hx + c * hy
-            steer = f"{math.degrees(s.steer[i]):+.1f}" if math.isfinite(s.steer[i]) else "-"
-            rows.append(
-                f"<tr><td>{html.escape(w.name)}</td><td>{steer}</td>"
-                f"<td>{math.degrees(s.wheel_angles[i]) % 360:.1f}</td><td>{s.wheel_speeds[i]:+.2f}</td>"
-                f"<td>{wx:+.3f}, {wy:+.3f}</td></tr>"
-            )
-        return f'<table id="omnikin-joints" style="font-size:0.75em">{head}{"".join(rows)}</table>'
+    return f'<table id="omnikin-joints" style="font-size:0.75em">{head}{"".join(rows)}</table>'
