@@ -29,6 +29,7 @@ from ..limits import MotionLimits
 from ..model import Robot
 from ..physics.description import PhysicalRobot, describe
 from ..runtime.base import BaseRuntime, StepResult
+from ..runtime.goal import GoalSeeker
 from ..runtime.teleop import Teleop
 from ..simulation.backend import SimBackend
 
@@ -98,6 +99,8 @@ class LiveRobot:
         self._steer_hand = np.zeros(len(robot.steerable))
         self._set_twist = np.zeros(3)
         self._last_key_message = -math.inf
+        self.seeker: GoalSeeker | None = None
+        self.arrived: tuple[float, float, float] | None = None  # the last goal reached
         self._last: StepResult | None = None
         self.t = 0.0
 
@@ -114,6 +117,11 @@ class LiveRobot:
         """Stop: every target zero; the robot decelerates within its limits."""
         self._inputs.put(("stop", None))
 
+    def go_to(self, goal) -> None:
+        """Drive to ``goal`` ``(x, y, theta)`` [m, m, rad] (:class:`~omnikin.runtime.goal.GoalSeeker`,
+        steering by the odometry); a key, a twist or a stop cancels it."""
+        self._inputs.put(("goal", tuple(float(v) for v in goal)))
+
     def steer_by(self, angle: float) -> None:
         """Turn every steerable wheel by ``angle`` [rad] (robot at rest; ignored while it moves)."""
         self._inputs.put(("steer", float(angle)))
@@ -127,6 +135,8 @@ class LiveRobot:
                 kind, value = self._inputs.get_nowait()
             except queue.Empty:
                 break
+            if kind in ("key", "twist", "stop"):
+                self.seeker = None  # the user takes over
             if kind == "key":
                 assert isinstance(value, dict)
                 self._last_key_message = t
@@ -149,6 +159,18 @@ class LiveRobot:
             elif kind == "stop":
                 self.teleop.release_all()
                 self._set_twist[:] = 0.0
+            elif kind == "goal":
+                limits = self.runtime.filter.limits
+                self.seeker = GoalSeeker(
+                    self.robot,
+                    value,  # type: ignore[arg-type]
+                    speed=min(self.teleop.speed, limits.linear or math.inf),
+                    turn=min(self.teleop.turn, limits.angular or math.inf),
+                    accel=limits.linear_accel,
+                    angular_accel=limits.angular_accel,
+                )
+                self.teleop.release_all()
+                self._set_twist[:] = 0.0
             elif kind == "steer":
                 assert isinstance(value, float)
                 self._turn_steering(value)
@@ -158,9 +180,23 @@ class LiveRobot:
 
     @property
     def target(self) -> np.ndarray:
-        """The twist asked for now: held keys' components, else the controls' twist."""
+        """The twist asked for now: held keys' components, else the controls' twist (the goal
+        seeker's is in :meth:`step`)."""
         keys = self.teleop.target
         return keys.copy() if np.any(keys) else self._set_twist.copy()
+
+    def _seek(self, t: float) -> np.ndarray | None:
+        """The goal seeker's twist at the odometry's pose; None without a goal (dropped once reached).
+        The pose is the last step's: the twist acts from this step to the next, 1.5 steps later on
+        average."""
+        if self.seeker is None:
+            return None
+        twist = self.seeker.twist(self.runtime.pose, lead=1.5 * max(0.0, t - self.t))
+        if twist is None:
+            self.arrived = self.seeker.goal
+            self.seeker = None
+            return np.zeros(3)
+        return twist
 
     def _turn_steering(self, angle: float) -> None:
         if not len(self._steer_hand) or np.any(self.target) or np.any(self.runtime.filter.current):
@@ -173,7 +209,8 @@ class LiveRobot:
         """Apply the inputs and run one control step at time ``t`` [s]; the snapshot and the page
         actions the caller handles (camera presets)."""
         actions = self._apply_inputs(t)
-        target = self.target
+        seeking = self._seek(t)
+        target = self.target if seeking is None else seeking
         if np.any(target) or np.any(self.runtime.filter.target):
             self.runtime.command(target, t)
         dt = max(0.0, t - self.t)
