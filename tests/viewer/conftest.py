@@ -8,14 +8,18 @@ viser 1.1.1, on this 2-core machine without a GPU):
   it prints from /etc/chromium.d is harmless) through ``chromium.launch(executable_path=...)``;
   Playwright cannot download browsers here. Playwright already adds --headless, --no-sandbox, a
   new empty --user-data-dir per launch and most quiet-network flags; ``CHROMIUM_FLAGS`` adds
-  --disable-gpu, --disable-quic and the loopback-only resolver rules. A launch takes ~0.5 s.
+  --disable-gpu, --disable-quic and the loopback-only resolver rules.
 - WebGL2 works headless with --disable-gpu: ANGLE on SwiftShader's Vulkan, in software
   (``--enable-unsafe-swiftshader`` is kept though Chromium 150 headless does not need it).
   viser shows a "Software WebGL rendering detected" notice in the top-left corner.
 - Readiness: connected = the control panel's green cloud icon
-  (``browser.VISER_CONNECTED``, ~0.6 s after ``goto``; the label text can be replaced by the
+  (``browser.VISER_CONNECTED``, 0.6-0.9 s after ``goto``; the label text can be replaced by the
   server's). Drawn = the scene's colour in a screenshot (``wait_for_colour``): viser draws on
-  demand (``frameloop="demand"``), so connected does not mean drawn.
+  demand (``frameloop="demand"``), so connected does not mean drawn. The default environment
+  map (HDRI) takes 3-9 s of software set-up per page load, during which the page draws no frame
+  and screenshots stall; ``scene.configure_environment_map(hdri=None)`` draws in ~0.5 s.
+- Cost: Playwright's driver starts in 0.25 s, Chromium in 0.2 s; with a viser page open
+  Chromium holds ~500 MiB (PSS) and the node driver ~120 MiB.
 - No external request: ``context.route`` aborts and logs non-loopback HTTP from the page and its
   workers but never sees WebSockets; ``page.on("websocket")`` sees every WebSocket, also a
   worker's (viser opens its socket in a Web Worker). Do not use ``context.route_web_socket``: it
