@@ -20,7 +20,7 @@ from urllib.parse import urlsplit
 import numpy as np
 
 if TYPE_CHECKING:
-    from playwright.sync_api import Page, Route, WebSocket
+    from playwright.sync_api import ConsoleMessage, Error, Page, Route, ViewportSize, WebSocket
 
 LOOPBACK_RULES = "MAP * ~NOTFOUND , EXCLUDE 127.0.0.1 , EXCLUDE localhost , EXCLUDE [::1]"
 """Chromium's host-resolver rules: every host but the loopback ones fails to resolve, IP
@@ -41,7 +41,7 @@ CHROMIUM_FLAGS = (
 """Flags on top of Playwright's own (it adds --headless, --no-sandbox, a new empty
 --user-data-dir per launch and some of the above; repeating them keeps this list complete)."""
 
-VIEWPORT = {"width": 1024, "height": 768}
+VIEWPORT: ViewportSize = {"width": 1024, "height": 768}
 """The page size [CSS px]; screenshots are this size (device scale factor 1)."""
 
 
@@ -104,9 +104,16 @@ class PageLog:
             if not is_local(socket.url):
                 self.external.append(socket.url)
 
+        def on_console(message: ConsoleMessage) -> None:
+            if message.type == "error":
+                self.console_errors.append(message.text)
+
+        def on_page_error(error: Error) -> None:
+            self.page_errors.append(str(error))
+
         page.on("websocket", on_websocket)
-        page.on("console", lambda message: message.type == "error" and self.console_errors.append(message.text))
-        page.on("pageerror", lambda error: self.page_errors.append(str(error)))
+        page.on("console", on_console)
+        page.on("pageerror", on_page_error)
 
 
 def wait_for(page: Page, js_expr: str, timeout: float = 10.0) -> Any:

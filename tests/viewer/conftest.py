@@ -26,8 +26,9 @@ viser 1.1.1, on this 2-core machine without a GPU):
   sees only main-thread sockets and replaces them with a mock relayed through Playwright. The
   resolver rules make every other host, IP literals included, fail to resolve: needed, since
   this network answers some outside addresses (a WebSocket to 93.184.216.34 got an HTTP 404).
-- Console: viser logs only warnings (THREE.Clock deprecated; "GPU stall due to ReadPixels" on
-  screenshots); ``page_log.console_errors`` and ``page_errors`` are empty on a clean page.
+- Console: viser logs only warnings (THREE.Clock deprecated, "GPU stall due to ReadPixels");
+  ``page_log.console_errors`` and ``page_errors`` stay empty on a clean page. Blocked requests
+  and failed WebSockets add console errors of their own.
 - Keys: ``page.keyboard.down`` does not auto-repeat (``hold_key(repeat_every=...)`` emulates it).
   viser's own camera moves on W/A/S/D/Q/E and the arrow keys (document keydown listeners, fresh
   presses only): teleop keys reach it too. Compare key timing on the page's clock
