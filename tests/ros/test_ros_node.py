@@ -376,8 +376,10 @@ class TestDiffDriveNode:
         _, g = diff_node
         assert wait_for(lambda: len(g.joints) >= 3, 5.0)
         js = g.joints[-1][1]
-        assert list(js.name) == ["left", "right"]  # rolling, encoded wheels; no castor
-        assert len(js.position) == len(js.velocity) == 2
+        # the measured joints first (rolling, encoded wheels), then the castor, moved as the
+        # odometry implies (tests/ros/test_ros_rviz.py)
+        assert list(js.name) == ["left", "right", "castor_steer", "castor"]
+        assert len(js.position) == len(js.velocity) == 4
         assert all(math.isfinite(v) for v in [*js.position, *js.velocity])
 
     def test_commands_move_the_robot_as_the_closed_form_says(self, diff_node):
@@ -476,6 +478,7 @@ class TestDiffDriveNode:
 FLAT = """\
 use_stamped_vel: true
 enable_odom_tf: false
+link_tf_rate: 0.0
 odom_frame_id: flat_odom
 base_frame_id: flat_base
 publish_rate: 25.0
@@ -514,7 +517,7 @@ def test_stamped_commands_and_flat_params(tmp_path):
         assert yaw_of(q) == pytest.approx(0.5 * (last - first + 0.3), abs=0.5 * tol_t)
         assert_psd(cov(m2.pose.covariance), "pose covariance")
         js = g.joints[-1][1]
-        assert list(js.name) == ["w1", "w2", "w3"]
+        assert list(js.name)[:3] == ["w1", "w2", "w3"]  # the encoded wheels first, then the rollers
         # publish_rate 25 Hz
         with g.lock:
             stamps = np.array([stamp_s(m.header.stamp) for (_, m) in g.odom])
@@ -523,7 +526,7 @@ def test_stamped_commands_and_flat_params(tmp_path):
         # period, and the mean rate is at most the set rate
         assert np.median(np.diff(stamps)) == pytest.approx(0.04, rel=0.05), np.diff(stamps)
         assert rate <= 25.5, f"{rate:.2f} Hz"
-        # enable_odom_tf false: no /tf publisher, hence no warning about tf2_msgs
+        # enable_odom_tf false and link_tf_rate 0: no /tf publisher, hence no warning about tf2_msgs
         rc, _ = proc.terminate()
         assert rc == 0, proc.stderr()
         assert "tf2_msgs" not in proc.stderr()

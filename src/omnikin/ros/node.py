@@ -2,12 +2,18 @@
 
 Subscribes ``cmd_vel`` (``geometry_msgs/Twist``, or ``TwistStamped`` with
 ``use_stamped_vel``); publishes ``odom`` (``nav_msgs/Odometry`` with twist and a
-motion-dependent covariance), ``joint_states`` (wheel positions [rad] and speeds [rad/s],
-steering joints ``<wheel>_steer``), ``/diagnostics`` (command and link statistics, the
-forward-kinematics residual), ``ground_truth`` (``nav_msgs/Odometry``, the simulated robot's
-true pose and mean twist over the last cycle, in the frames of ``odom``; only with a simulated
-back-end, one that has a ``truth`` pose) and, when ``tf2_msgs`` is importable, ``/tf`` odom ->
-base_link.
+motion-dependent covariance), ``joint_states`` (every movable joint of the robot's URDF: first
+the encoded wheels' positions [rad] and speeds [rad/s] and the steering joints ``<wheel>_steer``
+as measured, then the joints no sensor reads, moved as the odometry's body motion implies:
+:mod:`omnikin.ros.joint_motion`), ``robot_description`` (``std_msgs/String``, the URDF of
+:func:`omnikin.physics.urdf.urdf`, once, transient local: a subscriber that comes later still
+gets it), ``/diagnostics`` (command and link statistics, the forward-kinematics residual),
+``ground_truth`` (``nav_msgs/Odometry``, the simulated robot's true pose and mean twist over
+the last cycle, in the frames of ``odom``; only with a simulated back-end, one that has a
+``truth`` pose) and, when ``tf2_msgs`` is importable, ``/tf``: odom -> base_link and, at most
+``link_tf_rate`` times a second, every URDF link in its parent link
+(:mod:`omnikin.ros.link_frames`), and ``/tf_static`` (transient local): ``base_frame_id`` ->
+the URDF's ``base_link`` when the two names differ, and the URDF's fixed joints if any.
 ``tf2_msgs`` is not among the ROS 2 wheels on PyPI: with the PyPI install the node says so
 once and publishes no ``/tf``; run it from a ROS 2 install (``source /opt/ros/<distro>/
 setup.bash``) to get it. Parameters: :mod:`omnikin.ros.params`; message content:
@@ -48,8 +54,12 @@ import numpy as np
 from ..errors import InputError, LinkError, OmnikinError, digits_apart
 from ..geometry import between, log
 from ..limits import MotionLimits
+from ..physics.description import describe
+from ..physics.urdf import BASE_LINK, urdf
 from ..runtime.base import BaseRuntime
 from . import messages, require_rclpy
+from .joint_motion import JointMotion
+from .link_frames import LinkFrames, urdf_joints
 from .params import DEFAULTS, check_names, validate
 
 try:
@@ -61,8 +71,9 @@ try:
     from rclpy.clock import Clock, ClockType
     from rclpy.executors import ExternalShutdownException
     from rclpy.node import Node
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState
+    from std_msgs.msg import String
 except ImportError:
     require_rclpy()  # without rclpy: the one-line error naming the ros extra
     raise  # rclpy there, a message package missing: its name
@@ -74,6 +85,16 @@ except ImportError:  # not among the ROS 2 wheels on PyPI
     TransformStamped = TFMessage = None
 
 NODE_NAME = "omnikin_base"
+
+LATCHED = QoSProfile(
+    depth=1,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+"""QoS of ``robot_description`` and ``/tf_static``: published once, kept for late subscribers
+(a subscriber gets the message only if it asks for transient local durability too, as
+robot_state_publisher's subscribers and rviz2's configuration here do)."""
 
 
 def _seconds(stamp) -> float:
@@ -131,14 +152,17 @@ class BaseNode(Node):
         self._last_truth: tuple | None = None  # (runtime time [s], true pose)
         self._zero3 = np.zeros((3, 3))
         self.tf_pub = None
-        if p["enable_odom_tf"]:
+        self._describe_robot(robot)
+        wants_tf = p["enable_odom_tf"] or (p["link_tf_rate"] > 0.0 and self.link_frames is not None)
+        if wants_tf:
             if TFMessage is None:
                 self.get_logger().warning(
                     "tf2_msgs is not importable (it is not among the ROS 2 wheels on PyPI): no /tf "
-                    "odom->base_link; run this node from a ROS 2 install to publish it"
+                    "(odom->base_link, the robot's links); run this node from a ROS 2 install to publish it"
                 )
             else:
                 self.tf_pub = self.create_publisher(TFMessage, "/tf", qos)
+                self._publish_static_tf()
         self.published = 0
         self.link_rearms = 0  # lost links re-armed (serial back-end)
         self._next_retry = None
@@ -157,11 +181,57 @@ class BaseNode(Node):
         self._step_error_window = ""  # the last such error since the previous diagnostics
         self.joint_names = list(self.runtime.encoded)
         self.steer_names = [f"{n}_steer" for n in robot.steer_names]
+        self._link_tf_due = 0.0  # [s, monotonic] when the links' transforms are next due
         # the loop runs on the steady clock, as the runtime does: a step of the system clock
         # (the ROS clock without sim time) neither stalls it nor makes it skip periods
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(self.period, self._loop, clock=steady)
         self.create_timer(1.0, self._diagnostics, clock=steady)
+
+    def _describe_robot(self, robot) -> None:
+        """Publish ``robot_description`` (once, latched) and prepare the joints and links the
+        URDF adds to the measured ones; a robot the URDF writer refuses (a wheel name meeting a
+        name built from another) runs without them, with a warning."""
+        self.joint_motion: JointMotion | None = None
+        self.link_frames: LinkFrames | None = None
+        try:
+            body = describe(robot)
+            text = urdf(body)
+            self.joint_motion = JointMotion(robot, self.runtime.encoded, body)
+        except InputError as exc:
+            self.get_logger().warning(f"no robot_description, link transforms or unmeasured joints: {exc}")
+            return
+        self.description_pub = self.create_publisher(String, "robot_description", LATCHED)
+        self.description_pub.publish(String(data=text))
+        self.link_frames = LinkFrames(urdf_joints(text))
+        measured = list(self.runtime.encoded) + [f"{n}_steer" for n in robot.steer_names]
+        order = {name: i for i, name in enumerate(measured + self.joint_motion.names)}
+        self._link_order = np.array([order[n] for n in self.link_frames.movable_names], dtype=int)
+
+    def _transform(self, stamp, parent: str, child: str, translation, rotation):
+        tf = TransformStamped()
+        tf.header.stamp = stamp
+        tf.header.frame_id = parent
+        tf.child_frame_id = child
+        tr, rot = tf.transform.translation, tf.transform.rotation
+        tr.x, tr.y, tr.z = (float(v) for v in translation)
+        rot.x, rot.y, rot.z, rot.w = (float(v) for v in rotation)
+        return tf
+
+    def _publish_static_tf(self) -> None:
+        """``/tf_static`` once: ``base_frame_id`` -> the URDF's base link (identity) when the
+        names differ, and the URDF's fixed joints."""
+        stamp = self.get_clock().now().to_msg()
+        transforms = []
+        if self.link_frames is not None and self.p["link_tf_rate"] > 0.0:
+            if self.p["base_frame_id"] != BASE_LINK:
+                transforms.append(self._transform(stamp, self.p["base_frame_id"], BASE_LINK, (0, 0, 0), (0, 0, 0, 1)))
+            xyz, rot = self.link_frames.still()
+            for j, t, q in zip(self.link_frames.fixed, xyz, rot, strict=True):
+                transforms.append(self._transform(stamp, j.parent, j.child, t, q))
+        if transforms:
+            self.static_tf_pub = self.create_publisher(TFMessage, "/tf_static", LATCHED)
+            self.static_tf_pub.publish(TFMessage(transforms=transforms))
 
     def now_s(self) -> float:
         """Runtime time [s]: the monotonic clock, the same one the back-ends use."""
@@ -239,21 +309,45 @@ class BaseNode(Node):
         self.odom_pub.publish(odom)
         js = JointState()
         js.header.stamp = stamp
-        js.name, js.position, js.velocity = messages.joint_state_content(
+        names, positions, velocities = messages.joint_state_content(
             self.joint_names, res.state.positions, res.state.velocities, self.steer_names, res.state.steer
         )
+        if self.joint_motion is not None:
+            more_positions, more_velocities = self.joint_motion.update(res.state.t, res.twist, res.state.steer)
+            names = names + self.joint_motion.names
+            positions = positions + more_positions.tolist()
+            velocities = velocities + more_velocities.tolist()
+        js.name, js.position, js.velocity = names, positions, velocities
         self.joint_pub.publish(js)
         if self.tf_pub is not None:
-            c = messages.transform_content(res.pose)
-            tf = TransformStamped()
-            tf.header.stamp = stamp
-            tf.header.frame_id = self.p["odom_frame_id"]
-            tf.child_frame_id = self.p["base_frame_id"]
-            tr, rot = tf.transform.translation, tf.transform.rotation
-            tr.x, tr.y, tr.z = c["translation"]
-            rot.x, rot.y, rot.z, rot.w = c["rotation"]
-            self.tf_pub.publish(TFMessage(transforms=[tf]))
+            transforms = []
+            if self.p["enable_odom_tf"]:
+                c = messages.transform_content(res.pose)
+                transforms.append(
+                    self._transform(stamp, self.p["odom_frame_id"], self.p["base_frame_id"], **c)
+                )
+            transforms += self._link_transforms(stamp, positions)
+            if transforms:
+                self.tf_pub.publish(TFMessage(transforms=transforms))
         self.published += 1
+
+    def _link_transforms(self, stamp, positions) -> list:
+        """Every movable URDF joint's child link in its parent at the joint positions of this
+        ``joint_states``, when ``link_tf_rate`` says they are due; else none."""
+        rate = self.p["link_tf_rate"]
+        if self.link_frames is None or rate <= 0.0:
+            return []
+        now = self.now_s()
+        if now < self._link_tf_due:
+            return []
+        due = self._link_tf_due + 1.0 / rate
+        self._link_tf_due = due if due > now else now + 1.0 / rate  # late (a stall): count from now
+        moved = np.asarray(positions, dtype=float)[self._link_order]
+        xyz, rot = self.link_frames.moved(moved)
+        return [
+            self._transform(stamp, j.parent, j.child, t, q)
+            for j, t, q in zip(self.link_frames.movable, xyz, rot, strict=True)
+        ]
 
     def _publish_truth(self, now: float) -> None:
         """``ground_truth``: the back-end's true pose, and the mean body twist since the previous

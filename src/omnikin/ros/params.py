@@ -7,6 +7,7 @@
 | ``odom_frame_id`` | ``odom`` | frame of the odometry pose |
 | ``base_frame_id`` | ``base_link`` | body frame |
 | ``enable_odom_tf`` | true | publish odom -> base_link on ``/tf`` (needs ``tf2_msgs``) |
+| ``link_tf_rate`` | 30.0 | Hz, at most, of the robot's links on ``/tf`` for rviz2's RobotModel (0: none; needs ``tf2_msgs``) |
 | ``use_stamped_vel`` | false | subscribe ``geometry_msgs/TwistStamped`` instead of ``Twist`` (timed from its stamp) |
 | ``linear.x.max_velocity`` | 0.3 | m/s, bound on the body speed ``hypot(vx, vy)`` |
 | ``linear.x.max_acceleration`` | 0.5 | m/s^2 |
@@ -41,6 +42,7 @@ DEFAULTS = {
     "odom_frame_id": "odom",
     "base_frame_id": "base_link",
     "enable_odom_tf": True,
+    "link_tf_rate": 30.0,
     "use_stamped_vel": False,
     "linear.x.max_velocity": 0.3,
     "linear.x.max_acceleration": 0.5,
@@ -137,6 +139,7 @@ def load_params(path: str | Path | None) -> dict:
 RANGES = {
     "cmd_vel_timeout": (0.0, 3600.0, True),
     "publish_rate": (0.0, 10000.0, False),
+    "link_tf_rate": (0.0, 10000.0, True),
     "linear.x.max_velocity": (0.0, 1e3, False),
     "linear.x.max_acceleration": (0.0, 1e4, False),
     "angular.z.max_velocity": (0.0, 1e3, False),
