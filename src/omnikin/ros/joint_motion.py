@@ -12,10 +12,12 @@ are measured (the back-end's reading); the rest follows from the odometry's body
 * a castor (joints ``NAME_steer``, ``NAME``) swivels as its trailing contact does not slide
   sideways, ``d beta' = n . v_p - d omega`` (``d`` the trail, ``n = (-sin a, cos a)``, ``v_p``
   the velocity of the floor point under the swivel axis; :meth:`~omnikin.wheels.Wheel.swivel_row`),
-  integrated with one Euler step per interval while the axis moves less than ``d`` in it, and
-  set to the steady angle (:meth:`~omnikin.wheels.Wheel.align`, the branch nearest its angle)
-  when it moves more (the swivel then settles within the interval) or the castor has no trail;
-  it rolls by its rolling row at that swivel angle;
+  integrated with one Euler step per interval while the axis moves less than ``d`` in it (the
+  step is then stable and does not overshoot: the swivel's rate changes by at most ``|v_p| / d``
+  per radian), else set to the trailing steady angle ``atan2(v_p) - asin(d omega / |v_p|)`` (the
+  swivel settles within the interval; the contact trails the axis); a castor without trail
+  points along ``v_p`` (:meth:`~omnikin.wheels.Wheel.align`, the way round nearer its angle).
+  It rolls by its rolling row at that swivel angle;
 * each roller ``NAME_roller_ROW_K`` of a Swedish wheel spins about its own axis ``e`` (the
   URDF joint axis; at the bottom of the wheel ``e`` lies on the floor along ``a = delta +
   gamma``). The wheel's rim point at the contact moves with ``v_p - r omega_i u`` (``u`` the
@@ -37,6 +39,7 @@ Angles are counted from zero at the start [rad], unwrapped, as the encoders' are
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -68,7 +71,10 @@ class JointMotion:
         self._roller_rows = -np.array([w.roller_row() for w in swedish], dtype=float).reshape(-1, 3) / radius[:, None]
         self._per_wheel = np.array([len(r.rollers) for r in rollers if r is not None], dtype=int)
         roller_names = [
-            f"{b.name}_roller_{r.row}_{r.index}" for b in body.wheels if b.rollers is not None for r in b.rollers.rollers
+            f"{b.name}_roller_{r.row}_{r.index}"
+            for b in body.wheels
+            if b.rollers is not None
+            for r in b.rollers.rollers
         ]
         self.names = (
             [w.name for w in self._spun]
@@ -99,13 +105,16 @@ class JointMotion:
         swivel_rate = np.zeros(len(self._castors))
         castor_rate = np.zeros(len(self._castors))
         for k, c in enumerate(self._castors):
-            before = self._swivel[k]
-            moves = float(np.hypot(*c.hub_velocity(tw))) * dt
-            if c.offset > 0.0 and moves <= c.offset:
-                after = before + dt * float(c.swivel_row(before) @ tw) / c.offset
-            else:
+            after = before = self._swivel[k]
+            vx, vy = c.hub_velocity(tw)
+            speed = math.hypot(vx, vy)
+            if c.offset == 0.0:  # no trail: along the motion, either way round (the nearer)
                 after = float(c.align(tw, before, strict=False)[0])
-                after = before + float(wrap_angle(after - before))  # unwrapped: the nearest turn
+            elif speed * dt <= c.offset:  # one Euler step; stable, no overshoot, while |v_p| dt <= d
+                after = before + dt * float(c.swivel_row(before) @ tw) / c.offset
+            elif abs(c.offset * tw[2]) <= speed:  # settles within the interval: the trailing steady angle
+                after = math.atan2(vy, vx) - math.asin(c.offset * tw[2] / speed) - c.drive
+            after = before + float(wrap_angle(after - before))  # unwrapped: the nearest turn
             self._swivel[k] = after
             swivel_rate[k] = (after - before) / dt if dt > 0.0 else 0.0
             castor_rate[k] = float(c.rolling_row(after) @ tw)
@@ -116,7 +125,5 @@ class JointMotion:
         positions = np.concatenate(
             [self._spin, self._swivel, self._castor_spin, np.repeat(self._roller_angle, self._per_wheel)]
         )
-        velocities = np.concatenate(
-            [spin_rate, swivel_rate, castor_rate, np.repeat(roller_rate, self._per_wheel)]
-        )
+        velocities = np.concatenate([spin_rate, swivel_rate, castor_rate, np.repeat(roller_rate, self._per_wheel)])
         return positions, velocities

@@ -323,9 +323,7 @@ class BaseNode(Node):
             transforms = []
             if self.p["enable_odom_tf"]:
                 c = messages.transform_content(res.pose)
-                transforms.append(
-                    self._transform(stamp, self.p["odom_frame_id"], self.p["base_frame_id"], **c)
-                )
+                transforms.append(self._transform(stamp, self.p["odom_frame_id"], self.p["base_frame_id"], **c))
             transforms += self._link_transforms(stamp, positions)
             if transforms:
                 self.tf_pub.publish(TFMessage(transforms=transforms))

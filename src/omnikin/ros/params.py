@@ -7,7 +7,7 @@
 | ``odom_frame_id`` | ``odom`` | frame of the odometry pose |
 | ``base_frame_id`` | ``base_link`` | body frame |
 | ``enable_odom_tf`` | true | publish odom -> base_link on ``/tf`` (needs ``tf2_msgs``) |
-| ``link_tf_rate`` | 30.0 | Hz, at most, of the robot's links on ``/tf`` for rviz2's RobotModel (0: none; needs ``tf2_msgs``) |
+| ``link_tf_rate`` | 30.0 | Hz (at most) of the robot's links on ``/tf`` for rviz2 (0: none; needs ``tf2_msgs``) |
 | ``use_stamped_vel`` | false | subscribe ``geometry_msgs/TwistStamped`` instead of ``Twist`` (timed from its stamp) |
 | ``linear.x.max_velocity`` | 0.3 | m/s, bound on the body speed ``hypot(vx, vy)`` |
 | ``linear.x.max_acceleration`` | 0.5 | m/s^2 |
