@@ -20,9 +20,12 @@ EPILOG = (
   omnikin ros tomasi-omni3 --backend physics --errors none   the nominal robot in MuJoCo
   omnikin ros tomasi-omni3 --backend serial --port /dev/ttyUSB0 /dev/ttyUSB1 /dev/ttyUSB2
   (another terminal)  ros2 topic pub -r 10 /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"
+  (another terminal)  rviz2 -d "$(omnikin ros --rviz-config)"     see the robot move in rviz2
 
-topics: cmd_vel in; odom, joint_states, /diagnostics (and /tf with tf2_msgs) out; with a
-simulated back-end also ground_truth (the true pose, nav_msgs/Odometry).
+topics: cmd_vel in; odom, joint_states (every joint of the robot's URDF), robot_description
+(the URDF, latched), /diagnostics out, and with tf2_msgs (a ROS 2 install) /tf: odom ->
+base_link and every link of the URDF; with a simulated back-end also ground_truth (the true
+pose, nav_msgs/Odometry).
 """
     + textwrap.fill(
         "parameters (ros2_controllers names where the meaning is the same): "
@@ -44,6 +47,9 @@ OPTIONS_OF = {
 simulated back-ends both drive the robot as built (``--errors``, ``--true-robot``, ``--seed``:
 the same draw for the same seed as ``omnikin simulate``); only the kinematic one has ``--noise``."""
 
+RVIZ_ALONE = ("params", "port", "baud", "errors", "true_robot", "seed", "noise", "ros_args")
+"""Options that ``--rviz-config`` (print a path, start nothing) refuses to be given with."""
+
 PHYSICS_MAX_LAG = 0.25
 """[s] of simulated time one control cycle may catch up on the physics back-end; beyond it the
 simulation drops wall-clock time, counted in ``/diagnostics`` (``PhysicsBackend``'s ``max_lag``)."""
@@ -58,7 +64,13 @@ def add_parsers(sub, robot_help: str) -> None:
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    sp.add_argument("robot", metavar="ROBOT", help=robot_help)
+    sp.add_argument("robot", metavar="ROBOT", nargs="?", help=robot_help)
+    sp.add_argument(
+        "--rviz-config",
+        action="store_true",
+        help="print the path of omnikin's rviz2 configuration and exit (fixed frame odom, the robot "
+        'model, TF, odom and ground_truth): rviz2 -d "$(omnikin ros --rviz-config)"',
+    )
     sp.add_argument(
         "--backend",
         choices=("sim", "physics", "serial"),
@@ -112,6 +124,21 @@ def cmd_ros(args) -> int:
     from ..simulation.error_models import noise as noise_profile
     from .common import load_robot, robot_as_built
 
+    if args.rviz_config:
+        from ..ros import RVIZ_CONFIG
+
+        others = ["ROBOT"] if args.robot is not None else []
+        others += [f"--{n.replace('_', '-')}" for n in RVIZ_ALONE if getattr(args, n) is not None]
+        others += [f"--backend {args.backend}"] if args.backend != "sim" else []
+        if others:
+            raise InputError(
+                "--rviz-config only prints the path of the rviz2 configuration: give it alone "
+                f"(not with {', '.join(others)})"
+            )
+        print(RVIZ_CONFIG)
+        return 0
+    if args.robot is None:
+        raise InputError("omnikin ros needs ROBOT (a preset or a robot file), or --rviz-config")
     robot = load_robot(args.robot)
     values = load_params(args.params)
     # -p names checked before a back-end opens (the node checks every override again, with

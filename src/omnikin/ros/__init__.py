@@ -1,5 +1,10 @@
 """ROS 2 shell around :class:`omnikin.runtime.base.BaseRuntime` (extra ``omnikin[ros]``)."""
 
+from pathlib import Path
+
+RVIZ_CONFIG = Path(__file__).resolve().with_name("omnikin.rviz")
+"""rviz2's configuration for the node (package data; ``omnikin ros --rviz-config`` prints its path)."""
+
 
 def require_rclpy():
     """Import rclpy or raise an error naming the extra to install."""
