@@ -16,6 +16,7 @@ from omnikin import load_robot
 from omnikin.errors import InputError
 from omnikin.physics.urdf import urdf
 from omnikin.presets import PRESET_NAMES
+from omnikin.ros.joint_motion import JointMotion
 from omnikin.ros.link_frames import LinkFrames, urdf_joints
 
 
@@ -118,7 +119,8 @@ def test_prismatic_joint_travels_along_its_turned_axis_and_fixed_joints_stay():
     ("text", "says"),
     [
         (PRISMATIC.replace('type="prismatic"', 'type="floating"'), "type 'floating'"),
-        (PRISMATIC.replace('xyz="2 0 0"', 'xyz="0 0 0"'), "the axis is zero"),
+        (PRISMATIC.replace('xyz="2 0 0"', 'xyz="0 0 0"'), "finite, non-zero length"),
+        (PRISMATIC.replace('xyz="2 0 0"', 'xyz="1 0"'), "three finite numbers"),
         (PRISMATIC.replace('xyz="2 0 0"', 'xyz="1 nan 0"'), "three finite numbers"),
         (PRISMATIC.replace('<parent link="base_link"/>', ""), "needs a parent and a child"),
     ],
@@ -129,7 +131,33 @@ def test_joints_it_cannot_move_are_refused_in_one_line(text, says):
     assert "URDF joint" in str(info.value) and "\n" not in str(info.value)
 
 
+def test_a_huge_axis_is_only_a_direction():
+    frames = LinkFrames(urdf_joints(PRISMATIC.replace('xyz="2 0 0"', 'xyz="1e308 1e308 0"')))
+    assert frames.movable[0].axis == pytest.approx((math.sqrt(0.5), math.sqrt(0.5), 0.0), rel=1e-15)
+
+
 def test_positions_must_match_the_movable_joints():
     frames = LinkFrames(urdf_joints(PRISMATIC))
     with pytest.raises(InputError, match="1 movable joints, 2 positions"):
         frames.moved([0.0, 1.0])
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_joint_states_names_place_every_link(name):
+    """The node's joint_states (measured joints, then JointMotion's) hold every movable joint:
+    the index picks each joint's own position (here: its position in the message plus one)."""
+    robot = load_robot(name)
+    frames = LinkFrames(urdf_joints(urdf(robot)))
+    names = (
+        robot.encoded_names + [f"{n}_steer" for n in robot.steer_names] + JointMotion(robot, robot.encoded_names).names
+    )
+    index = frames.index_in(names)
+    positions = np.arange(len(names), dtype=float) + 1.0
+    assert [names[i] for i in index] == frames.movable_names
+    assert positions[index].tolist() == [names.index(n) + 1.0 for n in frames.movable_names]
+
+
+def test_a_joint_missing_from_the_positions_is_named():
+    frames = LinkFrames(urdf_joints(urdf(load_robot("diff-drive"))))
+    with pytest.raises(InputError, match="castor_steer"):
+        frames.index_in(["left", "right", "castor"])

@@ -23,6 +23,7 @@ qx(roll)`` (Hamilton product, :func:`quaternion_multiply`).
 
 from __future__ import annotations
 
+import math
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -63,7 +64,8 @@ def _triple(element: ET.Element | None, attr: str, default: tuple, where: str) -
         values = ()
     if len(values) != 3 or not all(np.isfinite(values)):
         raise InputError(f"{where}: {attr} must be three finite numbers, got {shorten(text)}")
-    return values  # type: ignore[return-value]
+    x, y, z = values
+    return x, y, z
 
 
 def urdf_joints(text: str) -> list[UrdfJoint]:
@@ -81,10 +83,10 @@ def urdf_joints(text: str) -> list[UrdfJoint]:
         if parent is None or child is None or not parent.get("link") or not child.get("link"):
             raise InputError(f"{where}: needs a parent and a child link")
         origin = element.find("origin")
-        axis = np.array(_triple(element.find("axis"), "xyz", (1.0, 0.0, 0.0), where))
-        norm = float(np.linalg.norm(axis))
-        if norm == 0.0:
-            raise InputError(f"{where}: the axis is zero")
+        ax, ay, az = _triple(element.find("axis"), "xyz", (1.0, 0.0, 0.0), where)
+        norm = math.hypot(ax, ay, az)  # no overflow on the way
+        if not (norm > 0.0 and np.isfinite(norm)):
+            raise InputError(f"{where}: the axis must have a finite, non-zero length")
         joints.append(
             UrdfJoint(
                 name,
@@ -93,7 +95,7 @@ def urdf_joints(text: str) -> list[UrdfJoint]:
                 child.get("link", ""),
                 _triple(origin, "xyz", (0.0, 0.0, 0.0), where),
                 _triple(origin, "rpy", (0.0, 0.0, 0.0), where),
-                tuple(float(v) for v in axis / norm),  # type: ignore[arg-type]
+                (ax / norm, ay / norm, az / norm),
             )
         )
     return joints
@@ -148,6 +150,15 @@ class LinkFrames:
         self._prismatic = np.array([j.type == "prismatic" for j in m], dtype=bool)
         # R0 k: a prismatic joint's direction of travel in the parent link
         self._travel = quaternion_rotate(self._origin, self._axis)
+
+    def index_in(self, names: Sequence[str]) -> np.ndarray:
+        """Where each movable joint is in ``names`` (a ``joint_states`` message's): ``moved``
+        then takes ``positions[index]``; a movable joint missing from ``names`` is an error."""
+        where = {name: i for i, name in enumerate(names)}
+        missing = [n for n in self.movable_names if n not in where]
+        if missing:
+            raise InputError(f"joint positions lack the URDF joint(s) {shorten(missing)}")
+        return np.array([where[n] for n in self.movable_names], dtype=int)
 
     def moved(self, positions) -> tuple[np.ndarray, np.ndarray]:
         """``(translations (n, 3) [m], rotations (n, 4))`` of the movable joints' child links in

@@ -205,8 +205,7 @@ class BaseNode(Node):
         self.description_pub.publish(String(data=text))
         self.link_frames = LinkFrames(urdf_joints(text))
         measured = list(self.runtime.encoded) + [f"{n}_steer" for n in robot.steer_names]
-        order = {name: i for i, name in enumerate(measured + self.joint_motion.names)}
-        self._link_order = np.array([order[n] for n in self.link_frames.movable_names], dtype=int)
+        self._link_order = self.link_frames.index_in(measured + self.joint_motion.names)
 
     def _transform(self, stamp, parent: str, child: str, translation, rotation):
         tf = TransformStamped()
