@@ -15,7 +15,8 @@ import time
 
 import numpy as np
 import pytest
-from test_ros_node import _ros_environment, start, wait_for, yaw_of  # noqa: F401 (_ros_environment: autouse fixture)
+from test_ros_node import _domain as _unused_domain
+from test_ros_node import _ros_environment, rclpy, start, wait_for, yaw_of  # noqa: F401 (_ros_environment: autouse fixture)
 from urdf_parser_py.urdf import URDF
 
 from omnikin import load_robot
@@ -126,3 +127,42 @@ def test_joint_states_carry_every_movable_urdf_joint_of_castors_and_steered_whee
     finally:
         g.close()
         proc.close()
+
+
+@pytest.mark.parametrize("name", ["tomasi-omni3", "diff-drive", "xr4000"])
+def test_the_nodes_link_transforms_place_every_urdf_link_at_the_joint_positions(name):
+    """The node in this process, on rclpy's default context (/tf itself needs tf2_msgs, which
+    the PyPI wheels lack): one control step, then the transforms it would publish on /tf name
+    every link of the URDF but base_link as a child, each at its joint's origin in its parent,
+    and a second call within 1 / link_tf_rate publishes none."""
+    from omnikin.ros.node import BaseNode
+    from omnikin.ros.params import DEFAULTS
+    from omnikin.simulation.backend import SimBackend
+    from omnikin.simulation.error_models import noise
+
+    robot = load_robot(name)
+    parsed = URDF.from_xml_string(urdf(robot))
+    from rclpy.signals import SignalHandlerOptions
+
+    rclpy.init(domain_id=_unused_domain(), signal_handler_options=SignalHandlerOptions.NO)  # the node's default context
+    node = None
+    try:
+        node = BaseNode(robot, SimBackend(robot, None, noise("none")), dict(DEFAULTS), name="rviz_probe")
+        res = node.runtime.step(time.monotonic())
+        steer = [] if res.state.steer is None else list(res.state.steer)
+        implied, _ = node.joint_motion.update(res.state.t, res.twist, res.state.steer)
+        positions = [*res.state.positions, *steer, *implied]
+        stamp = node.get_clock().now().to_msg()
+        transforms = node._link_transforms(stamp, positions)
+        assert {t.child_frame_id for t in transforms} | {"base_link"} == {link.name for link in parsed.links}
+        origin = {j.child: (j.parent, j.origin.xyz) for j in parsed.joints}
+        for t in transforms:
+            parent, xyz = origin[t.child_frame_id]
+            assert t.header.frame_id == parent
+            tr = t.transform.translation
+            assert [tr.x, tr.y, tr.z] == pytest.approx(xyz, abs=1e-15)
+        assert node._link_transforms(stamp, positions) == []
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.shutdown()

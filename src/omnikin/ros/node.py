@@ -65,7 +65,7 @@ from .params import DEFAULTS, check_names, validate
 try:
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-    from geometry_msgs.msg import Twist, TwistStamped
+    from geometry_msgs.msg import TransformStamped, Twist, TwistStamped
     from nav_msgs.msg import Odometry
     from rcl_interfaces.msg import ParameterDescriptor
     from rclpy.clock import Clock, ClockType
@@ -79,10 +79,9 @@ except ImportError:
     raise  # rclpy there, a message package missing: its name
 
 try:
-    from geometry_msgs.msg import TransformStamped
     from tf2_msgs.msg import TFMessage
 except ImportError:  # not among the ROS 2 wheels on PyPI
-    TransformStamped = TFMessage = None
+    TFMessage = None
 
 NODE_NAME = "omnikin_base"
 
