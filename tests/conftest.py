@@ -4,32 +4,16 @@ wheel layouts built from first principles."""
 from __future__ import annotations
 
 import math
-import os
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, settings
 
-import omnikin
+from browser_fixtures import browser, page, page_log  # noqa: F401  (the viewer tests' fixtures)
 from omnikin import Encoder, Robot, Wheel
-
-ROOT = Path(__file__).resolve().parents[1]
-"""The repository (docs/, examples/, firmware/)."""
-
-SRC = str(Path(omnikin.__file__).resolve().parents[1])
-"""The folder holding the omnikin under test: subprocesses (the CLI, ROS nodes) must import
-this one, whatever their working folder."""
-
-
-def omnikin_env(**extra: str) -> dict:
-    """The environment for an omnikin subprocess: this process's, with :data:`SRC` first on
-    ``PYTHONPATH`` (``extra`` variables added)."""
-    env = dict(os.environ, **extra)
-    env["PYTHONPATH"] = SRC + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
-    return env
+from omnikin_paths import ROOT, SRC, omnikin_env  # noqa: F401  (re-exported: tests import them from here)
 
 
 def run_entry_point(*argv, cwd=None, timeout: float = 120) -> subprocess.CompletedProcess:

@@ -14,9 +14,9 @@ from urdf_parser_py.urdf import URDF
 
 from omnikin import load_robot
 from omnikin.errors import InputError
+from omnikin.physics.joint_motion import JointMotion
 from omnikin.physics.urdf import urdf
 from omnikin.presets import PRESET_NAMES
-from omnikin.ros.joint_motion import JointMotion
 from omnikin.ros.link_frames import LinkFrames, urdf_joints
 
 

@@ -109,3 +109,19 @@ def test_the_page_s_twist_holds_until_stop_and_wheel_angles_follow_the_inverse_k
     live.stop()
     s = drive(live, 60, start=151)
     assert s.command == (0.0, 0.0, 0.0)
+
+
+def test_rollers_turn_as_the_sideways_slide_of_their_contact_says():
+    """Omni wheels (roller angle 0) translating by Y along y: the rim's contact point slides
+    along the axle n = (-sin delta, cos delta) by cos(delta) Y, which the roller in contact takes
+    up by turning -cos(delta) Y / b (b its radius at the contact, right-hand about its axis)."""
+    live = LiveRobot(load_robot("tomasi-omni3"))
+    live.set_twist((0.0, 0.15, 0.0))
+    s = drive(live, 100)
+    live.stop()
+    s = drive(live, 40, start=101)
+    travelled = s.truth[1]
+    assert travelled > 0.1 and abs(s.truth[0]) < 1e-12
+    for i, wheel in enumerate(live.description.wheels):
+        expected = -math.cos(wheel.drive) * travelled / wheel.rollers.radius
+        assert s.roller_angles[i] == pytest.approx(expected, rel=1e-9, abs=1e-9)

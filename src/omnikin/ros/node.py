@@ -5,7 +5,7 @@ Subscribes ``cmd_vel`` (``geometry_msgs/Twist``, or ``TwistStamped`` with
 motion-dependent covariance), ``joint_states`` (every movable joint of the robot's URDF: first
 the encoded wheels' positions [rad] and speeds [rad/s] and the steering joints ``<wheel>_steer``
 as measured, then the joints no sensor reads, moved as the odometry's body motion implies:
-:mod:`omnikin.ros.joint_motion`), ``robot_description`` (``std_msgs/String``, the URDF of
+:mod:`omnikin.physics.joint_motion`), ``robot_description`` (``std_msgs/String``, the URDF of
 :func:`omnikin.physics.urdf.urdf`, once, transient local: a subscriber that comes later still
 gets it), ``/diagnostics`` (command and link statistics, the forward-kinematics residual),
 ``ground_truth`` (``nav_msgs/Odometry``, the simulated robot's true pose and mean twist over
@@ -55,10 +55,10 @@ from ..errors import InputError, LinkError, OmnikinError, digits_apart
 from ..geometry import between, log
 from ..limits import MotionLimits
 from ..physics.description import describe
+from ..physics.joint_motion import JointMotion
 from ..physics.urdf import BASE_LINK, urdf
 from ..runtime.base import BaseRuntime
 from . import messages, require_rclpy
-from .joint_motion import JointMotion
 from .link_frames import LinkFrames, urdf_joints
 from .params import DEFAULTS, check_names, validate
 

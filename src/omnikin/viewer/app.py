@@ -22,7 +22,7 @@ import viser
 
 from .front import FrontServer
 from .live import LiveRobot, Snapshot
-from .panel import CameraControl, DriveControls, Readouts, robot_extent
+from .panel import CameraControl, DriveControls, GoalMarker, Readouts, robot_extent
 from .scene import RobotDrawing, Trail, draw_ground, draw_umbmark_square
 
 CONTROL_PERIOD = 0.02
@@ -48,6 +48,8 @@ class LiveViewer:
 
     def __init__(self, live: LiveRobot, host: str = "127.0.0.1", port: int = 8080, *, umbmark_side: float = 4.0):
         self.live = live
+        self._start = time.monotonic()  # the robot's clock: seconds since the viewer was made
+        live.clock = self.clock
         self._wake = threading.Event()
         self._closed = threading.Event()
         with _quiet():
@@ -60,6 +62,11 @@ class LiveViewer:
                 self.server.stop()
             raise
         scene = self.server.scene
+        # image-based lighting costs a browser without a GPU seconds per page load; plain lights
+        # show the robot's colours as they are
+        scene.configure_environment_map(hdri=None)
+        scene.add_light_ambient("/lights/ambient", intensity=0.6)
+        scene.add_light_directional("/lights/sun", intensity=1.2, position=(2.0, -3.0, 5.0))
         extent = max(5.0, umbmark_side + 1.0)
         draw_ground(scene, extent, 0.1)
         if umbmark_side > 0:
@@ -73,6 +80,7 @@ class LiveViewer:
         self.drive = DriveControls(self.server, live)
         self.camera = CameraControl(self.server, robot_extent(live.description), clear_trails=self.clear_trails)
         self.readouts = Readouts(self.server, live.description)
+        self.goal = GoalMarker(self.server, live)
         self.last: Snapshot | None = None
         self.steps = 0
 
@@ -83,6 +91,10 @@ class LiveViewer:
         if ":" in shown and not shown.startswith("["):
             shown = f"[{shown}]"
         return f"http://{shown}:{self.front.port}/"
+
+    def clock(self) -> float:
+        """The robot's time [s] (wall clock since the viewer was made)."""
+        return time.monotonic() - self._start
 
     def _on_key(self, message: dict) -> None:
         self.live.key(message)
@@ -98,8 +110,8 @@ class LiveViewer:
         start = time.monotonic()
         slow_next = 0.0
         while not self._closed.is_set():
-            now = time.monotonic() - start
-            if duration is not None and now >= duration:
+            now = self.clock()
+            if duration is not None and time.monotonic() - start >= duration:
                 return "duration"
             snapshot, actions = self.live.step(now)
             self.last = snapshot
@@ -109,6 +121,7 @@ class LiveViewer:
             with self.server.atomic():
                 self._draw(snapshot)
                 self.readouts.fast(snapshot)
+                self.goal.show(snapshot)
                 self.camera.follow(snapshot.truth)
                 if now >= slow_next:
                     slow_next = now + SLOW_PERIOD
@@ -116,12 +129,12 @@ class LiveViewer:
                         trail.flush()
                     self.readouts.slow(snapshot)
             self.server.flush()
-            self._wake.wait(max(0.0, CONTROL_PERIOD - (time.monotonic() - start - now)))
+            self._wake.wait(max(0.0, CONTROL_PERIOD - (self.clock() - now)))
             self._wake.clear()
         return "closed"
 
     def _draw(self, s: Snapshot) -> None:
-        self.drawing.update(s.truth, s.wheel_angles, s.steer)
+        self.drawing.update(s.truth, s.wheel_angles, s.steer, s.roller_angles)
         x, y, theta = s.odometry
         self.odometry_frame.position = (x, y, 0.005)
         self.odometry_frame.wxyz = (math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2))

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import queue
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,6 +29,7 @@ from ..errors import InputError
 from ..limits import MotionLimits
 from ..model import Robot
 from ..physics.description import PhysicalRobot, describe
+from ..physics.joint_motion import JointMotion
 from ..runtime.base import BaseRuntime, StepResult
 from ..runtime.goal import GoalSeeker
 from ..runtime.teleop import Teleop
@@ -46,7 +48,9 @@ class Snapshot:
     frame; twists ``(vx, vy, omega)`` [m/s, m/s, rad/s] in the body frame. Per wheel
     (description order, castors included): ``wheel_angles`` [rad] and ``wheel_speeds`` [rad/s]
     of the true wheels, ``steer`` [rad] relative to the mounting drive direction (NaN: not
-    steered). ``residual``: the forward-kinematics residual of the odometry [rad/s]."""
+    steered; a castor's swivel). ``residual``: the forward-kinematics residual of the odometry
+    [rad/s]. ``roller_angles`` [rad] and ``roller_speeds`` [rad/s] per wheel (None: no rollers):
+    the roller in contact, as the body motion implies (:mod:`omnikin.physics.joint_motion`)."""
 
     t: float
     truth: tuple[float, float, float]
@@ -58,6 +62,8 @@ class Snapshot:
     wheel_speeds: np.ndarray
     steer: np.ndarray
     residual: tuple[float, ...]
+    roller_angles: tuple[float | None, ...] = ()
+    roller_speeds: tuple[float | None, ...] = ()
 
 
 class LiveRobot:
@@ -90,11 +96,16 @@ class LiveRobot:
         else:
             self.backend = SimBackend(robot)
         self.runtime = BaseRuntime(robot, self.backend, limits=limits, cmd_vel_timeout=timeout)
-        self._inputs: queue.SimpleQueue[tuple[str, object]] = queue.SimpleQueue()
+        self._inputs: queue.SimpleQueue[tuple[float | None, str, object]] = queue.SimpleQueue()
+        self.clock: Callable[[], float] | None = None  # the time [s] of step()'s clock, for arrivals
         names = [w.name for w in self.description.wheels]
         self._rolling = np.array([names.index(n) for n in robot.rolling_names], dtype=int)
         self._steered = np.array([names.index(n) for n in robot.steer_names], dtype=int)
         self._angles = np.zeros(len(names))
+        self.joints = JointMotion(robot, robot.rolling_names, self.description)  # castors, rollers
+        self._castors = np.array([names.index(n) for n in self.joints.castor_names], dtype=int)
+        self._swedish = [i for i, w in enumerate(self.description.wheels) if w.rollers is not None]
+        self._moved = np.zeros(3)  # the twist the kinematic robot moved at since the last step
         self._speeds = np.zeros(len(names))  # the kinematic wheels' speeds over the coming interval
         self._steer_hand = np.zeros(len(robot.steerable))
         self._set_twist = np.zeros(3)
@@ -105,77 +116,75 @@ class LiveRobot:
         self.t = 0.0
 
     # --- inputs (any thread) --------------------------------------------------------------------
+    def _put(self, kind: str, value: object) -> None:
+        """Queue an input with the time it arrived (:attr:`clock`; None: at the next step)."""
+        self._inputs.put((None if self.clock is None else self.clock(), kind, value))
+
     def key(self, message: dict) -> None:
         """A key message of the page (:func:`omnikin.viewer.front.parse_key_message`)."""
-        self._inputs.put(("key", message))
+        self._put("key", message)
 
     def set_twist(self, twist) -> None:
         """Drive at ``twist`` (on-screen controls) until it is changed or stopped."""
-        self._inputs.put(("twist", np.asarray(twist, dtype=float).reshape(3).copy()))
+        self._put("twist", np.asarray(twist, dtype=float).reshape(3).copy())
 
     def stop(self) -> None:
         """Stop: every target zero; the robot decelerates within its limits."""
-        self._inputs.put(("stop", None))
+        self._put("stop", None)
 
     def go_to(self, goal) -> None:
         """Drive to ``goal`` ``(x, y, theta)`` [m, m, rad] (:class:`~omnikin.runtime.goal.GoalSeeker`,
         steering by the odometry); a key, a twist or a stop cancels it."""
-        self._inputs.put(("goal", tuple(float(v) for v in goal)))
+        self._put("goal", tuple(float(v) for v in goal))
 
     def steer_by(self, angle: float) -> None:
         """Turn every steerable wheel by ``angle`` [rad] (robot at rest; ignored while it moves)."""
-        self._inputs.put(("steer", float(angle)))
+        self._put("steer", float(angle))
 
     # --- the control step -------------------------------------------------------------------------
-    def _apply_inputs(self, t: float) -> list[str]:
-        """Apply queued inputs; returns the page actions that are not teleop (camera presets)."""
-        actions = []
-        while True:
-            try:
-                kind, value = self._inputs.get_nowait()
-            except queue.Empty:
-                break
-            if kind in ("key", "twist", "stop"):
-                self.seeker = None  # the user takes over
-            if kind == "key":
-                assert isinstance(value, dict)
-                self._last_key_message = t
-                kind_of = value["type"]
-                if kind_of == "press":
-                    action = value["action"]
-                    if action == "stop":
-                        self._set_twist[:] = 0.0
-                    if action in ("steer_left", "steer_right"):
-                        self._turn_steering(STEER_STEP if action == "steer_left" else -STEER_STEP)
-                    elif not self.teleop.press(action):
-                        actions.append(action)
-                elif kind_of == "release":
-                    self.teleop.release(value["action"])
-                elif kind_of == "release_all":
-                    self.teleop.release_all()
-            elif kind == "twist":
-                assert isinstance(value, np.ndarray)
-                self._set_twist = value
-            elif kind == "stop":
+    def _apply_input(self, t: float, kind: str, value: object) -> list[str]:
+        """Apply one input that arrived at ``t`` [s]; returns the page actions that are not teleop
+        (camera presets)."""
+        actions: list[str] = []
+        if kind in ("key", "twist", "stop"):
+            self.seeker = None  # the user takes over
+        if kind == "key":
+            assert isinstance(value, dict)
+            self._last_key_message = t
+            kind_of = value["type"]
+            if kind_of == "press":
+                action = value["action"]
+                if action == "stop":
+                    self._set_twist[:] = 0.0
+                if action in ("steer_left", "steer_right"):
+                    self._turn_steering(STEER_STEP if action == "steer_left" else -STEER_STEP)
+                elif not self.teleop.press(action):
+                    actions.append(action)
+            elif kind_of == "release":
+                self.teleop.release(value["action"])
+            elif kind_of == "release_all":
                 self.teleop.release_all()
-                self._set_twist[:] = 0.0
-            elif kind == "goal":
-                limits = self.runtime.filter.limits
-                self.seeker = GoalSeeker(
-                    self.robot,
-                    value,  # type: ignore[arg-type]
-                    speed=min(self.teleop.speed, limits.linear or math.inf),
-                    turn=min(self.teleop.turn, limits.angular or math.inf),
-                    accel=limits.linear_accel,
-                    angular_accel=limits.angular_accel,
-                )
-                self.teleop.release_all()
-                self._set_twist[:] = 0.0
-            elif kind == "steer":
-                assert isinstance(value, float)
-                self._turn_steering(value)
-        if np.any(self.teleop.target) and t - self._last_key_message > KEY_SILENCE:
-            self.teleop.release_all()  # the page fell silent with a key held
+        elif kind == "twist":
+            assert isinstance(value, np.ndarray)
+            self._set_twist = value
+        elif kind == "stop":
+            self.teleop.release_all()
+            self._set_twist[:] = 0.0
+        elif kind == "goal":
+            limits = self.runtime.filter.limits
+            self.seeker = GoalSeeker(
+                self.robot,
+                value,  # type: ignore[arg-type]
+                speed=min(self.teleop.speed, limits.linear or math.inf),
+                turn=min(self.teleop.turn, limits.angular or math.inf),
+                accel=limits.linear_accel,
+                angular_accel=limits.angular_accel,
+            )
+            self.teleop.release_all()
+            self._set_twist[:] = 0.0
+        elif kind == "steer":
+            assert isinstance(value, float)
+            self._turn_steering(value)
         return actions
 
     @property
@@ -207,8 +216,24 @@ class LiveRobot:
 
     def step(self, t: float) -> tuple[Snapshot, list[str]]:
         """Apply the inputs and run one control step at time ``t`` [s]; the snapshot and the page
-        actions the caller handles (camera presets)."""
-        actions = self._apply_inputs(t)
+        actions the caller handles (camera presets). An input that arrived between the last step
+        and ``t`` (its :attr:`clock` time) gets a control step at its arrival first, so a loop that
+        runs late does not delay what the input does."""
+        actions: list[str] = []
+        while True:
+            try:
+                at, kind, value = self._inputs.get_nowait()
+            except queue.Empty:
+                break
+            if at is not None and self.t < at < t:
+                self._control(at)
+            actions += self._apply_input(t if at is None else min(at, t), kind, value)
+        if np.any(self.teleop.target) and t - self._last_key_message > KEY_SILENCE:
+            self.teleop.release_all()  # the page fell silent with a key held
+        return self._control(t), actions
+
+    def _control(self, t: float) -> Snapshot:
+        """One control step at ``t`` [s] with the targets as they are."""
         seeking = self._seek(t)
         target = self.target if seeking is None else seeking
         if np.any(target) or np.any(self.runtime.filter.target):
@@ -217,7 +242,7 @@ class LiveRobot:
         self.t = t
         result = self.runtime.step(t)
         self._last = result
-        return self._snapshot(result, target, dt), actions
+        return self._snapshot(result, target, dt)
 
     def _snapshot(self, result: StepResult, target: np.ndarray, dt: float) -> Snapshot:
         n = len(self.description.wheels)
@@ -230,13 +255,25 @@ class LiveRobot:
             if len(self._steered):
                 steer[self._steered] = sim.steer_angles
             truth = self.backend.truth
+            moved = sim.twist
         else:
+            moved = self._moved
+            self._moved = np.asarray(result.command, dtype=float)
             self._angles += self._speeds * dt  # the speeds the wheels turned at since the last step
             speeds[self._rolling] = result.wheel_speeds
             self._speeds = speeds
             if len(self._steered) and result.steer is not None:
                 steer[self._steered] = result.steer
             truth = self.backend.truth
+        self.joints.update(result.t, moved, result.state.steer)
+        if len(self._castors):
+            self._angles[self._castors] = self.joints.castor_angles
+            steer[self._castors] = self.joints.castor_swivels
+        rollers: list[float | None] = [None] * n
+        roller_speeds: list[float | None] = [None] * n
+        for k, (angle, rate) in enumerate(zip(self.joints.roller_angles, self.joints.roller_rates, strict=True)):
+            rollers[self._swedish[k]] = float(angle)
+            roller_speeds[self._swedish[k]] = float(rate)
         return Snapshot(
             t=result.t,
             truth=(float(truth[0]), float(truth[1]), float(truth[2])),
@@ -248,6 +285,8 @@ class LiveRobot:
             wheel_speeds=speeds,
             steer=steer,
             residual=tuple(float(v) for v in result.residual),
+            roller_angles=tuple(rollers),
+            roller_speeds=tuple(roller_speeds),
         )
 
     def close(self) -> None:

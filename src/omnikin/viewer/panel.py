@@ -9,8 +9,8 @@
   cameras frame.
 - **Readouts**: pose (true and odometry), twist, command, forward-kinematics residual, every
   control step; a table of the joints like Villasenor et al.'s (their Fig. 9): per wheel its
-  steering angle and wheel angle [deg], speed [rad/s] and the position of its hub in the world
-  [m]; a plot of the wheel speeds over the last :data:`PLOT_SPAN` s.
+  steering angle and wheel angle [deg], speed and its rollers' speed [rad/s] and the position of
+  its hub in the world [m]; a plot of the wheel speeds over the last :data:`PLOT_SPAN` s.
 
 The readout's numbers are also in the ``data-`` attributes of the element ``#omnikin-readout``
 (full precision), for programs that read the page.
@@ -79,6 +79,52 @@ class DriveControls:
         for slider in (self.vx, self.vy, self.omega):
             slider.value = 0.0  # type: ignore[misc]  # (viser: a props field shadows the setter for mypy)
         self.live.stop()
+
+
+class GoalMarker:
+    """A goal to drive to: a marker on the floor (drag its arrows to move it, its ring to turn
+    it) and the Goal folder: Go (drive there, :class:`~omnikin.runtime.goal.GoalSeeker`, by the
+    odometry), the path the layout takes, and whether dropping the marker starts the drive."""
+
+    def __init__(self, server: viser.ViserServer, live: LiveRobot):
+        self.live = live
+        self.controls = server.scene.add_transform_controls(
+            "/goal",
+            scale=0.4,
+            active_axes=(True, True, False),
+            disable_sliders=False,
+            position=(1.0, 0.0, 0.0),
+        )
+        server.scene.add_frame("/goal/heading", axes_length=0.15, axes_radius=0.006)
+        gui = server.gui
+        with gui.add_folder("Goal"):
+            self.go_on_drop = gui.add_checkbox("drive when dropped", True)
+            go = gui.add_button("Go to the marker", hint="drive there along a path the wheels can make")
+            self.status = gui.add_markdown("drag the marker on the floor, then Go")
+        go.on_click(lambda _: self.go())
+        self.controls.on_drag_end(lambda _: self.go() if self.go_on_drop.value else None)
+
+    def pose(self) -> tuple[float, float, float]:
+        """The marker's pose ``(x, y, theta)`` [m, m, rad] on the floor (its yaw)."""
+        x, y, _ = (float(v) for v in self.controls.position)
+        w, qx, qy, qz = (float(v) for v in self.controls.wxyz)
+        return x, y, math.atan2(2.0 * (w * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+
+    def go(self) -> None:
+        self.live.go_to(self.pose())
+
+    def show(self, s: Snapshot) -> None:
+        """The seeker's state in the folder (only when it changed)."""
+        seeker = self.live.seeker
+        if seeker is not None:
+            text = f"driving: {seeker.strategy}, {seeker.phase}"
+        elif self.live.arrived is not None:
+            x, y, th = self.live.arrived
+            text = f"arrived at x {x:+.3f} m, y {y:+.3f} m, theta {math.degrees(th):+.1f} deg (by the odometry)"
+        else:
+            return
+        if self.status.content != text:
+            self.status.content = text
 
 
 class CameraControl:
@@ -221,7 +267,10 @@ def joint_table_html(description: PhysicalRobot, s: Snapshot) -> str:
     hub position in the world."""
     x0, y0, th = s.truth
     c, si = math.cos(th), math.sin(th)
-    head = "<tr><th>wheel</th><th>steer [deg]</th><th>angle [deg]</th><th>speed [rad/s]</th><th>hub x, y [m]</th></tr>"
+    head = (
+        "<tr><th>wheel</th><th>steer [deg]</th><th>angle [deg]</th><th>speed [rad/s]</th>"
+        "<th>rollers [rad/s]</th><th>hub x, y [m]</th></tr>"
+    )
     rows = []
     for i, w in enumerate(description.wheels):
         hx, hy = w.hub[0], w.hub[1]
@@ -232,9 +281,12 @@ def joint_table_html(description: PhysicalRobot, s: Snapshot) -> str:
             hx, hy = px + math.cos(a) * dx - math.sin(a) * dy, py + math.sin(a) * dx + math.cos(a) * dy
         wx, wy = x0 + c * hx - si * hy, y0 + si * hx + c * hy
         steer = f"{math.degrees(s.steer[i]):+.1f}" if math.isfinite(s.steer[i]) else "-"
+        speed = s.roller_speeds[i] if i < len(s.roller_speeds) else None
+        roller = "-" if speed is None else f"{speed:+.2f}"
         rows.append(
             f"<tr><td>{html.escape(w.name)}</td><td>{steer}</td>"
             f"<td>{math.degrees(s.wheel_angles[i]) % 360:.1f}</td><td>{s.wheel_speeds[i]:+.2f}</td>"
+            f"<td>{roller}</td>"
             f"<td>{wx:+.3f}, {wy:+.3f}</td></tr>"
         )
     return f'<table id="omnikin-joints" style="font-size:0.75em">{head}{"".join(rows)}</table>'

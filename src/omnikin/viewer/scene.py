@@ -31,7 +31,7 @@ import viser.transforms as vtf
 
 from ..physics.description import PhysicalRobot, WheelBody
 
-CHASSIS_COLOUR = (70, 130, 180)
+CHASSIS_COLOUR = (20, 160, 170)
 TYRE_COLOUR = (45, 45, 45)
 HUB_COLOUR = (170, 170, 170)
 ROLLER_COLOUR = (235, 140, 40)

@@ -46,7 +46,7 @@ import numpy as np
 
 from ..geometry import wrap_angle
 from ..model import Robot
-from ..physics.description import PhysicalRobot, describe
+from .description import PhysicalRobot, describe
 
 
 class JointMotion:
@@ -85,7 +85,35 @@ class JointMotion:
         self._spin = np.zeros(len(self._spun))
         self._castor_spin = np.zeros(len(self._castors))
         self._roller_angle = np.zeros(len(swedish))
+        self._roller_rate = np.zeros(len(swedish))
         self._t: float | None = None
+
+    @property
+    def castor_names(self) -> list[str]:
+        """The castors (file order) whose swivel and spin :attr:`castor_swivels` and
+        :attr:`castor_angles` give."""
+        return [c.name for c in self._castors]
+
+    @property
+    def castor_swivels(self) -> np.ndarray:
+        """Swivel angles [rad] of the castors, relative to their mounting drive direction."""
+        return self._swivel.copy()
+
+    @property
+    def castor_angles(self) -> np.ndarray:
+        """Wheel angles [rad] the castors have rolled since the start."""
+        return self._castor_spin.copy()
+
+    @property
+    def roller_angles(self) -> np.ndarray:
+        """Roller angle [rad] of each Swedish wheel (description order; every roller of a wheel
+        has it, module docstring)."""
+        return self._roller_angle.copy()
+
+    @property
+    def roller_rates(self) -> np.ndarray:
+        """Roller speed [rad/s] of each Swedish wheel (description order) over the last interval."""
+        return self._roller_rate.copy()
 
     def update(self, t: float, twist, steer=None) -> tuple[np.ndarray, np.ndarray]:
         """Advance to time ``t`` [s] with the odometry's ``twist`` ``(vx, vy, omega)`` over the
@@ -119,6 +147,7 @@ class JointMotion:
             swivel_rate[k] = (after - before) / dt if dt > 0.0 else 0.0
             castor_rate[k] = float(c.rolling_row(after) @ tw)
         roller_rate = self._roller_rows @ tw
+        self._roller_rate = roller_rate
         self._spin += spin_rate * dt
         self._castor_spin += castor_rate * dt
         self._roller_angle += roller_rate * dt

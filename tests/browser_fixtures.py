@@ -1,5 +1,6 @@
-"""Browser fixtures for the viewer tests: one headless Chromium per session, a fresh context and
-page per test, every page guarded against leaving the machine. Helpers are in ``browser.py``.
+"""Browser fixtures for the viewer tests (loaded by the root conftest, so that no second
+``conftest`` module shadows it): one headless Chromium per session, a fresh context and page per
+test, every page guarded against leaving the machine. Helpers are in ``browser.py``.
 
 What the next engineer needs to know (measured with Debian's Chromium 150, Playwright 1.65,
 viser 1.1.1, on this 2-core machine without a GPU):
@@ -43,6 +44,7 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
 import pytest
+
 from browser import CHROMIUM_FLAGS, VIEWPORT, PageLog, find_chromium
 
 if TYPE_CHECKING:

@@ -1,4 +1,4 @@
-"""The joints no sensor reads (omnikin.ros.joint_motion): their names are the URDF's, and they
+"""The joints no sensor reads (omnikin.physics.joint_motion): their names are the URDF's, and they
 move as closed forms of rigid-body kinematics say, with every geometric quantity read from the
 URDF (urdf_parser_py) or the robot file, never from the code under test."""
 
@@ -11,9 +11,9 @@ import pytest
 from urdf_parser_py.urdf import URDF
 
 from omnikin import load_robot
+from omnikin.physics.joint_motion import JointMotion
 from omnikin.physics.urdf import urdf
 from omnikin.presets import PRESET_NAMES
-from omnikin.ros.joint_motion import JointMotion
 
 DT = 0.02  # [s] the control interval of the runs below
 

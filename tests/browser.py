@@ -1,8 +1,8 @@
 """Helpers for driving a real browser page in the viewer tests: the Chromium command line, the
 request guard, waiting on the page, keys, page-side time and reading colours off a screenshot.
 
-The fixtures that use them (``browser``, ``page``, ``page_log``) are in ``conftest.py`` next to
-this file, which also explains the flags and the pitfalls.
+The fixtures that use them (``browser``, ``page``, ``page_log``) are in ``browser_fixtures.py``,
+which also explains the flags and the pitfalls.
 """
 
 from __future__ import annotations
@@ -149,7 +149,8 @@ KEY_RECORDER = """() => {
   window.__keyEvents = [];
   for (const type of ['keydown', 'keyup'])
     window.addEventListener(type, (e) => window.__keyEvents.push(
-      {type: e.type, key: e.key, code: e.code, repeat: e.repeat, t: e.timeStamp / 1000}), true);
+      {type: e.type, key: e.key, code: e.code, repeat: e.repeat, t: e.timeStamp / 1000,
+       handled: performance.now() / 1000}), true);
 }"""
 
 
@@ -161,7 +162,9 @@ def record_keys(page: Page) -> None:
 
 def recorded_keys(page: Page) -> list[dict]:
     """The key events logged since :func:`record_keys`: dicts with ``type``, ``key``, ``code``,
-    ``repeat`` and ``t`` (the event's ``timeStamp`` [s], on :func:`page_seconds`' clock)."""
+    ``repeat``, ``t`` (the event's ``timeStamp`` [s], on :func:`page_seconds`' clock: when the
+    key went down or up) and ``handled`` [s, same clock]: when the page's handlers ran, which is
+    later while the page's thread is busy (drawing a frame in software takes tens of ms)."""
     return page.evaluate("window.__keyEvents")
 
 
