@@ -17,8 +17,8 @@ import time
 
 import numpy as np
 import pytest
-from browser import colour_mask, hold_key, page_seconds, record_keys, recorded_keys, screenshot_rgb, wait_for
 
+from browser import colour_mask, hold_key, page_seconds, record_keys, recorded_keys, screenshot_rgb, wait_for
 from omnikin.viewer.scene import CHASSIS_COLOUR
 from omnikin_paths import omnikin_env
 
@@ -116,6 +116,17 @@ def test_a_held_key_drives_as_far_as_the_kinematics_say_and_its_release_stops(vi
     assert after[axis] - before[axis] == pytest.approx(expected, abs=abs(rate) * 0.1)
     for other in {"x", "y", "theta"} - {axis}:
         assert abs(after[other] - before[other]) < 1e-9
+
+
+def test_teleop_keys_do_not_reach_viser_s_camera_controls(view, page):
+    """viser's camera moves on W/A/S/D/Q/E through listeners on the document: the key script
+    takes them at the window, before the document sees them; other keys pass."""
+    view(page)
+    page.evaluate("() => { window.__doc = []; document.addEventListener('keydown', (e) => window.__doc.push(e.key)); }")
+    for key in ("w", "a", "q", "x"):
+        page.keyboard.press(key)
+    wait_for(page, "window.__doc.length > 0")
+    assert page.evaluate("window.__doc") == ["x"]
 
 
 def test_a_differential_drive_does_not_strafe_on_a_but_turns_on_q(view, page):
