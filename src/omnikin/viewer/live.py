@@ -36,8 +36,10 @@ from ..runtime.teleop import Teleop
 from ..simulation.backend import SimBackend
 
 ENGINES = ("kinematic", "physics")
-KEY_SILENCE = 0.5
-"""Time [s] after which a held key whose page sent nothing (no ``alive``) is released."""
+KEY_SILENCE = 1.0
+"""Time [s] after which a held key whose page sent nothing (no ``alive``, sent every 0.1 s while a
+key is down) is released: ten heartbeats, so that a page whose thread is busy drawing a frame in
+software (100-300 ms on a loaded machine without a GPU) does not stop the robot."""
 STEER_STEP = math.radians(15.0)
 """Steering turned by one press of ``[`` or ``]`` [rad]."""
 
