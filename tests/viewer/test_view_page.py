@@ -172,4 +172,6 @@ def test_a_key_press_reaches_the_pose_on_the_page_within_a_few_control_steps(vie
     down = next(e["t"] for e in recorded_keys(page) if e["type"] == "keydown")
     assert down >= pressed_at - 1e-3
     latency = moved - down
-    assert 0 < latency < 0.25, f"{latency * 1000:.0f} ms from the key to the pose on the page"
+    assert 0 < latency < 0.5, (
+        f"{latency * 1000:.0f} ms from the key to the pose on the page"
+    )  # (benchmark: median 33 ms)
