@@ -154,6 +154,7 @@ class UMBmarkReport(UMBmarkStudy):
         Returns the ``result.json`` document written."""
         from ..io.output import check_output, report_folder
         from ..io.robot_file import robot_text
+        from ..io.run_poses import run_poses_text
         from ..io.runs import calibration_runs_text, umbmark_measurements_text
         from ..viz import check_dpi, save_figure
         from ..viz import figure_format as check_format
@@ -174,6 +175,8 @@ class UMBmarkReport(UMBmarkStudy):
             texts["measurements_after.csv"] = umbmark_measurements_text(self.after[0], self._measurement_note("after"))
             texts["calibrated_robot.yaml"] = robot_text(self.calibration.robot, "calibrated_robot.yaml")
             texts["calibration_runs.csv"] = calibration_runs_text(self.calibration_runs, self._runs_note())
+        if self.run_poses:
+            texts["run_poses.csv"] = run_poses_text(self.run_poses, self._poses_note())
         names = [f"{stem}.{figure_format}" for stem in figures]
         files = ["report.md", "result.json", *texts, *names]
         doc = self.as_dict(files)
@@ -209,6 +212,12 @@ class UMBmarkReport(UMBmarkStudy):
             f"UMBmark {stage} calibration, simulated by: {self.command_line()}\n"
             f"first procedure, {self.runs} runs per direction; read it with: omnikin umbmark analyze FILE "
             f"--robot {robot} --side {self.side:g}"
+        )
+
+    def _poses_note(self) -> str:
+        return (
+            f"simulated by: {self.command_line()}\n"
+            f"replay it with: omnikin view --replay REPORT_FOLDER (robot as built: true_robot.yaml)"
         )
 
     def _runs_note(self) -> str:

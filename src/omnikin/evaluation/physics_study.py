@@ -49,6 +49,7 @@ from ..simulation.error_models import NOISE, SystematicErrors
 from .calibration import RECOMMENDED_REPEATS, CalibrationFitError, CalibrationResult, recommended_runs
 from .calibration import calibrate as least_squares_calibration
 from .procedure import Cost, UMBmarkStudy, check_settings, streams
+from .run_poses import RunPoses, kept_run, stride
 from .umbmark import LEVEL, NoiseFloor, UMBmarkResult, analyze, require_square
 
 ENGINES = ("kinematic", "physics")
@@ -210,6 +211,8 @@ def physics_umbmark(
     progress: Progress | None = None,
     label: str = "UMBmark",
     problems: list[str] | None = None,
+    poses: list[RunPoses] | None = None,
+    phase: str = "before",
 ) -> tuple[list[UMBmarkResult], dict]:
     """``trials`` UMBmark procedures of ``runs`` runs per direction in the physics engine,
     ``true_robot`` commanded by ``command``, the roller phases of each direction's runs drawn
@@ -217,7 +220,8 @@ def physics_umbmark(
     :class:`~omnikin.evaluation.umbmark.UMBmarkResult` per procedure and the first run of each
     direction (``{"cw"|"ccw": PhysicsRun}``, with its ground truth). ``progress`` is called with
     ``label`` and the run's number before each run; runs that did not drive as commanded are
-    added to ``problems`` (:func:`_drive`)."""
+    added to ``problems`` (:func:`_drive`); the runs of the first procedure are added to
+    ``poses`` as :class:`~omnikin.evaluation.run_poses.RunPoses` of ``phase``."""
     require_square(command, side, mode)
     total = 2 * trials * runs
     eps: dict[str, list] = {"cw": [], "ccw": []}
@@ -225,7 +229,8 @@ def physics_umbmark(
     for direction, child in zip(("cw", "ccw"), seed.spawn(2), strict=True):
         plan = umbmark_square(direction, side, mode)
         rng = np.random.default_rng(child)
-        for _ in range(trials * runs):
+        k = 0
+        for index in range(trials * runs):
             if progress is not None:
                 progress(f"{label}: run {len(eps['cw']) + len(eps['ccw']) + 1} of {total}")
             number = len(eps["cw"]) + len(eps["ccw"]) + 1
@@ -233,6 +238,9 @@ def physics_umbmark(
             run = _drive(plan, true_robot, command, rate, step, rng, name, problems)
             first.setdefault(direction, run)
             eps[direction].append(run.epsilon[0])
+            if poses is not None and index < runs:
+                k = k or stride(len(run.t), rate, runs)
+                poses.append(kept_run(phase, direction, index + 1, run.t, run.truth[0], run.odometry, k))
     results = [
         analyze(
             np.array(eps["cw"][k * runs : (k + 1) * runs]),
@@ -304,10 +312,13 @@ def physics_umbmark_study(
     encoded_wheels(robot)
     rng = streams(seed)
     problems: list[str] = []
+    poses: list[RunPoses] = []
     opts: dict[str, Any] = dict(
         side=side, mode=mode, runs=runs, rate=rate, trials=trials, step=step, progress=progress, problems=problems
     )
-    before, first = physics_umbmark(true_robot, robot, seed=rng["before"], label="UMBmark before calibration", **opts)
+    before, first = physics_umbmark(
+        true_robot, robot, seed=rng["before"], label="UMBmark before calibration", poses=poses, **opts
+    )
     trajectories = {"before": first}
     systematic = {"before": before[0].e_max_syst}
     after: list | None = None
@@ -332,7 +343,13 @@ def physics_umbmark_study(
             problems.append(str(e))
         if cal is not None:
             after, trajectories["after"] = physics_umbmark(
-                true_robot, cal.robot, seed=rng["after"], label="UMBmark after calibration", **opts
+                true_robot,
+                cal.robot,
+                seed=rng["after"],
+                label="UMBmark after calibration",
+                poses=poses,
+                phase="after",
+                **opts,
             )
             systematic["after"] = after[0].e_max_syst
     nominal, _ = physics_umbmark(robot, robot, seed=rng["floor"], label="floor (nominal robot)", **opts)
@@ -358,4 +375,5 @@ def physics_umbmark_study(
         level=level,
         engine="physics",
         problems=tuple(problems),
+        run_poses=tuple(poses),
     )

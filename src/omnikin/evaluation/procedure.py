@@ -43,6 +43,7 @@ from ..simulation.motion import check_rate_range, estimated_samples
 from ..simulation.simulate import simulate
 from .calibration import RECOMMENDED_REPEATS, CalibrationResult, borenstein_calibrate, recommended_runs
 from .calibration import calibrate as least_squares_calibration
+from .run_poses import DIRECTIONS, RunPoses, kept_run, stride
 from .umbmark import (
     LEVEL,
     NoiseFloor,
@@ -50,6 +51,7 @@ from .umbmark import (
     check_side,
     differential_pair,
     noise_floor,
+    procedure_generators,
     reduction_interval,
     run_umbmark,
 )
@@ -129,7 +131,7 @@ def estimate_cost(
     square and of the calibration runs (:func:`~omnikin.simulation.motion.estimated_samples`, an
     upper bound computed without sampling)."""
     square = estimated_samples(umbmark_square("cw", side, mode), robot, rate)
-    procedures = trials * (2 if calibrate else 1) + FLOOR_PROCEDURES
+    procedures = trials * (2 if calibrate else 1) + FLOOR_PROCEDURES + (2 if calibrate else 1)  # + the run poses
     samples = 2.0 * runs * square * procedures + 2 * 2 * 2 * square  # + systematic part, trajectories
     if calibrate:
         samples += (
@@ -194,6 +196,9 @@ class UMBmarkStudy:
     problems: tuple[str, ...] = ()
     """Physics engine: one line per run that did not drive as commanded, naming the run
     (:meth:`omnikin.physics.run.PhysicsRun.problems`); its end pose is in the statistics."""
+    run_poses: tuple[RunPoses, ...] = ()
+    """The poses over time of every run of the first procedure before (and after) calibration,
+    at a bounded rate (:mod:`omnikin.evaluation.run_poses`): the runs of the measurement files."""
 
     @property
     def reduction_factor(self) -> float | None:
@@ -244,6 +249,7 @@ def umbmark_study(
     opts: dict[str, Any] = dict(side=side, mode=mode, runs=runs, noise=noise, rate=rate)
     step("UMBmark before calibration")
     before = run_umbmark(true_robot, robot, trials=trials, rng=rng["before"], **opts)
+    poses = first_procedure_poses("before", true_robot, robot, rng=rng["before"], **opts)
     step("trajectories for the figures")
     traj_rng = np.random.default_rng(rng["trajectories"])
     trajectories = {"before": _trajectories(true_robot, robot, traj_rng, **opts)}
@@ -265,6 +271,7 @@ def umbmark_study(
             bor = _borenstein(true_robot, robot, before[0], np.random.default_rng(rng["borenstein"]), opts)
         step("UMBmark after calibration")
         after = run_umbmark(true_robot, cal.robot, trials=trials, rng=rng["after"], **opts)
+        poses += first_procedure_poses("after", true_robot, cal.robot, rng=rng["after"], **opts)
         trajectories["after"] = _trajectories(true_robot, cal.robot, traj_rng, **opts)
         systematic["after"] = run_umbmark(true_robot, cal.robot, **quiet)[0].e_max_syst
     step("noise floor")
@@ -287,7 +294,27 @@ def umbmark_study(
         systematic,
         floor,
         trajectories,
+        run_poses=tuple(poses),
     )
+
+
+def first_procedure_poses(
+    phase: str, true_robot: Robot, command: Robot, *, rng, side, mode, runs, noise, rate
+) -> list[RunPoses]:
+    """The runs of the first procedure of :func:`~omnikin.evaluation.umbmark.run_umbmark` with
+    ``rng`` (the same draws: procedure 0's generator, cw runs then ccw runs, one run after the
+    other), each kept at a bounded rate (:mod:`omnikin.evaluation.run_poses`); simulated one
+    run at a time, so the memory is that of one run's ground truth."""
+    generator = procedure_generators(rng, 1)[0]
+    out = []
+    for direction in DIRECTIONS:
+        plan = umbmark_square(direction, side, mode)
+        k = 0
+        for run in range(1, runs + 1):
+            sim = simulate(plan, true_robot, command, rate=rate, noise=noise, trials=1, rng=generator)
+            k = k or stride(len(sim.t), rate, runs)
+            out.append(kept_run(phase, direction, run, sim.t, sim.truth[0], sim.odometry, k))
+    return out
 
 
 def simulate_calibration_runs(

@@ -47,19 +47,25 @@ def _refuse_empty(fields: list[str], names: list[str] | None, source: str, line:
 def read_rows(path, error: type[Exception]) -> list[tuple[int, list[str]]]:
     """``[(line_number, fields), ...]`` of the CSV lines that are not blank or comments, the
     header first; fields are stripped of blanks and never empty (module docstring)."""
+    return list(iter_rows(path, error))
+
+
+def iter_rows(path, error: type[Exception]) -> Iterator[tuple[int, list[str]]]:
+    """:func:`read_rows` one row at a time, for files too long to hold as text."""
     source = str(path)
     reader = csv.reader(text for _, text in read_lines(path, error, what="a CSV file"))
-    rows: list[tuple[int, list[str]]] = []
+    header: list[str] | None = None
     try:
         for r in reader:
             if not r or (len(r) == 1 and not r[0].strip()) or r[0].lstrip().startswith("#"):
                 continue
             fields = [c.strip() for c in r]
-            _refuse_empty(fields, rows[0][1] if rows else None, source, reader.line_num, error)
-            rows.append((reader.line_num, fields))
+            _refuse_empty(fields, header, source, reader.line_num, error)
+            if header is None:
+                header = fields
+            yield reader.line_num, fields
     except csv.Error as exc:
         raise error(f"{source}: line {reader.line_num}: malformed CSV: {exc}") from None
-    return rows
 
 
 def iter_fields(path, error: type[Exception], names: list[str] | None = None) -> Iterator[tuple[int, list[str]]]:
