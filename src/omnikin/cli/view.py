@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from .budget import Budget, add_budget_options
 from .common import add_step_option, declare_inputs, load_robot, number, whole
 
 EPILOG = """the page (open the printed address in a browser; click the scene so that it has the keys):
@@ -22,10 +23,26 @@ Every command passes the runtime's command filter: --max-speed, --max-turn, and 
 On a robot's own computer, serve to the network with --host 0.0.0.0 and open
 http://ROBOT-ADDRESS:PORT/ on a laptop (anyone who reaches the port can drive the robot).
 
+replay (--replay: no driving; keys 1/2/3 still move the camera):
+  omnikin view --replay REPORT_DIR
+      the runs of an 'omnikin umbmark' report folder (its run_poses.csv: before and after
+      calibration, cw and ccw, every run of the first procedure); the report names its robot
+      (true_robot.yaml, the robot as built that drove the runs), so give no ROBOT
+  omnikin view ROBOT --replay BAG
+      a ROS 2 bag (rosbag2 folder, .db3 or .mcap) of ROBOT: the true poses of
+      --ground-truth-topic (default /ground_truth), the odometry of --odom-topic (default
+      /odom), the wheel angles and steering of --joint-states-topic (default /joint_states; joint
+      name = wheel name, W_steer for steering; without it, from the kinematics); the bags of
+      'omnikin simulate ROBOT --path ... --bag OUT.bag' have all three
+The Replay folder has the run selector, a time slider, Play/Pause and the playback speed; the
+whole true and odometry paths of the run are drawn, the robot at the slider's time.
+
 examples:
   omnikin view tomasi-omni3
   omnikin view mecanum4 --engine physics --port 8081
-  omnikin view ackermann --duration 60"""
+  omnikin view ackermann --duration 60
+  omnikin view --replay umbmark-report
+  omnikin view tomasi-omni3 --replay run.bag"""
 
 
 def add_parsers(sub, robot_help: str) -> None:
@@ -39,7 +56,9 @@ def add_parsers(sub, robot_help: str) -> None:
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    sp.add_argument("robot", metavar="ROBOT", help=robot_help)
+    sp.add_argument(
+        "robot", metavar="ROBOT", nargs="?", help=f"{robot_help} (not with --replay REPORT_DIR: the report names it)"
+    )
     sp.add_argument(
         "--engine",
         choices=("kinematic", "physics"),
@@ -62,7 +81,18 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument("--duration", type=number, metavar="S", help="stop serving after S seconds (default: Ctrl-C)")
     add_step_option(sp, "time step of the physics engine (--engine physics)")
-    declare_inputs(sp, robots=("robot",))
+    replay = sp.add_argument_group("replay")
+    replay.add_argument(
+        "--replay",
+        metavar="REPORT_DIR|BAG",
+        help="play back the runs of an omnikin umbmark report folder, or a ROS 2 bag of ROBOT (see below)",
+    )
+    for role, default in (("ground-truth", "/ground_truth"), ("odom", "/odom"), ("joint-states", "/joint_states")):
+        replay.add_argument(
+            f"--{role}-topic", default=default, metavar="TOPIC", help=f"--replay BAG: {role} topic (default {default})"
+        )
+    add_budget_options(sp, time=False)
+    declare_inputs(sp, "replay", robots=("robot",))
     sp.set_defaults(func=cmd_view)
 
 
@@ -97,6 +127,10 @@ def cmd_view(args) -> int:
         raise InputError(f"--duration must be positive [s], got {args.duration:g}")
     if args.port > 65535:
         raise InputError(f"--port must be 0 to 65535, got {args.port}")
+    if args.replay is not None:
+        return cmd_replay(args)
+    if args.robot is None:
+        raise InputError("view: give ROBOT (a preset name or a robot file), or --replay REPORT_DIR")
     if args.step is not None and args.engine != "physics":
         raise InputError("--step applies only to --engine physics")
     require_viser()
@@ -124,6 +158,54 @@ def cmd_view(args) -> int:
         raise
     try:
         print(f"omnikin view: {robot.name} ({args.engine}) at {viewer.url}  (Ctrl-C stops)", flush=True)
+        viewer.run(args.duration)
+    finally:
+        viewer.close()
+    sys.stdout.flush()
+    return 0
+
+
+POSE_BYTES = 600
+"""--replay BAG: memory per pose or joint-state message read [bytes] (that of omnikin bag export)."""
+LARGEST_MESSAGE_SHARE = 64
+"""--replay BAG: one message may use at most 1/64 of --max-memory (as omnikin bag)."""
+
+
+def cmd_replay(args) -> int:
+    from ..errors import InputError
+    from ..io.bags import check_topic
+
+    if args.engine != "kinematic" or args.step is not None:
+        flag = "--step" if args.step is not None else "--engine"
+        raise InputError(f"{flag} does not apply to --replay (the runs are recorded, not simulated)")
+    require_viser()
+    topics = {
+        "ground_truth": check_topic(args.ground_truth_topic, "--ground-truth-topic"),
+        "odom": check_topic(args.odom_topic, "--odom-topic"),
+        "joint_states": check_topic(args.joint_states_topic, "--joint-states-topic"),
+    }
+    from ..viewer.replay_page import ReplayViewer
+    from ..viewer.replay_sources import load_replay
+
+    robot = load_robot(args.robot) if args.robot is not None else None
+    budget = Budget.of(args)
+    source = load_replay(
+        args.replay,
+        robot,
+        topics,
+        max_messages=budget.messages(POSE_BYTES),
+        max_message_bytes=int(budget.memory // LARGEST_MESSAGE_SHARE),
+    )
+    for note in source.notes:
+        print(f"omnikin view: {note}", file=sys.stderr)
+    viewer = ReplayViewer(source, args.host, args.port)
+    try:
+        runs = len(source.tracks)
+        print(
+            f"omnikin view: replay of {source.label} ({source.robot.name}, {runs} run{'s' if runs != 1 else ''}) at "
+            f"{viewer.url}  (Ctrl-C stops)",
+            flush=True,
+        )
         viewer.run(args.duration)
     finally:
         viewer.close()

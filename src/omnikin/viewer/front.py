@@ -150,6 +150,16 @@ class FrontServer:
         self._ready = threading.Event()
         self._error: BaseException | None = None
 
+    @property
+    def url(self) -> str:
+        """The page's address as a browser on this computer opens it (a wildcard host as
+        127.0.0.1 or [::1], an IPv6 address in brackets)."""
+        host = self.host
+        shown = "127.0.0.1" if host in ("", "0.0.0.0") else ("[::1]" if host == "::" else host)
+        if ":" in shown and not shown.startswith("["):
+            shown = f"[{shown}]"
+        return f"http://{shown}:{self.port}/"
+
     # --- HTTP ----------------------------------------------------------------------------------
     def _process_request(self, connection: ServerConnection, request: Request) -> Response | None:
         path = urlsplit(request.path).path

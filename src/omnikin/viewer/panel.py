@@ -256,7 +256,7 @@ def readout_html(s: Snapshot | None) -> str:
         ("odometry", f"x {ox:+.3f} m, y {oy:+.3f} m, theta {math.degrees(oth):+.1f} deg"),
         ("twist", f"vx {s.twist[0]:+.3f} m/s, vy {s.twist[1]:+.3f} m/s, omega {s.twist[2]:+.3f} rad/s"),
         ("command", f"vx {s.command[0]:+.3f}, vy {s.command[1]:+.3f}, omega {s.command[2]:+.3f}"),
-        ("FK residual", f"{residual:.2e} rad/s"),
+        ("FK residual", f"{residual:.2e} rad/s" if s.residual else "- (not measured)"),
     ]
     body = "".join(f"<tr><td>{k}</td><td>{html.escape(v)}</td></tr>" for k, v in rows)
     return f'<div id="omnikin-readout" {data}><table style="font-size:0.8em">{body}</table></div>'

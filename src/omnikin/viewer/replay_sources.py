@@ -1,0 +1,192 @@
+"""What ``omnikin view --replay`` plays: the runs of an UMBmark report or of a ROS 2 bag.
+
+- **A report folder** of ``omnikin umbmark`` (:func:`load_report`): the robot as built
+  (``true_robot.yaml``: the robot that drove the runs), the square's side (``result.json``,
+  ``settings.side``) and the runs of ``run_poses.csv`` (:mod:`omnikin.io.run_poses`), one
+  :class:`~omnikin.viewer.replay.Track` per run, named ``before cw run 1``.
+- **A bag** (:func:`load_bag`: a rosbag2 folder, a ``.db3`` or ``.mcap`` file, as
+  :mod:`omnikin.io.bags` reads them) of a robot the caller names: one track from the
+  ``nav_msgs/Odometry`` (or ``PoseStamped``) topics of the ground truth (default
+  ``/ground_truth``) and of the odometry (default ``/odom``), and the measured wheel angles and
+  steering of ``sensor_msgs/JointState`` (default ``/joint_states``; joint name = wheel name,
+  ``W_steer`` for steering) when the bag has that topic. Times are header stamps, from the
+  earliest of the topics. A bag with only one of the two pose topics is played with that one
+  for both (:attr:`ReplaySource.notes` says so); a bag with neither is refused, naming the
+  topics it has.
+
+:func:`load_replay` tells the two apart. Every problem is one line naming the file (and the
+line or topic): :class:`ReplayError` or the reader's own error.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import InputError, one_line, shorten
+from ..model import Robot
+from .replay import JointSeries, PoseSeries, Track
+
+REPORT_FILES = ("true_robot.yaml", "result.json", "run_poses.csv")
+BAG_TOPICS = {"ground_truth": "/ground_truth", "odom": "/odom", "joint_states": "/joint_states"}
+"""The topics a bag is replayed from, by role (``omnikin simulate --bag`` writes these)."""
+MAX_RESULT_BYTES = 1 << 22
+"""Largest ``result.json`` read [bytes] (a report's is some 20 KB)."""
+
+
+class ReplayError(InputError):
+    """Something to replay that cannot be: the message names the file or topic."""
+
+
+@dataclass(frozen=True)
+class ReplaySource:
+    """The robot that drove the runs, the tracks, the UMBmark square's side [m] (None: not a
+    UMBmark run) and ``notes``: lines to tell the user (a topic missing from a bag)."""
+
+    label: str
+    robot: Robot
+    tracks: list[Track]
+    side: float | None = None
+    notes: list[str] = field(default_factory=list)
+
+
+def is_report(path) -> bool:
+    """A folder holding ``result.json`` or ``run_poses.csv``: an UMBmark report."""
+    p = Path(path)
+    return p.is_dir() and any((p / name).exists() for name in ("result.json", "run_poses.csv"))
+
+
+def load_report(folder) -> ReplaySource:
+    """The report folder ``folder`` as a :class:`ReplaySource` (module docstring)."""
+    from ..evaluation.umbmark import check_side
+    from ..io.robot_file import load_robot
+    from ..io.run_poses import read_run_poses
+    from ..io.textfile import read_text
+
+    base = Path(folder)
+    if not base.is_dir():
+        raise ReplayError(f"{one_line(folder, 300)}: not a folder (expected an omnikin umbmark report folder)")
+    missing = [name for name in REPORT_FILES if not (base / name).exists()]
+    if missing:
+        why = (
+            "; reports of omnikin before run_poses.csv have no runs to replay: run omnikin umbmark again"
+            if missing == ["run_poses.csv"]
+            else ""
+        )
+        raise ReplayError(f"{folder}: an omnikin umbmark report needs {', '.join(missing)}, not found{why}")
+    robot = load_robot(base / "true_robot.yaml")
+    result = base / "result.json"
+    text = read_text(result, ReplayError, what="a result.json", max_bytes=MAX_RESULT_BYTES)
+    try:
+        doc = json.loads(text)
+    except ValueError as exc:
+        raise ReplayError(f"{result}: not JSON ({one_line(exc)})") from None
+    if isinstance(doc, dict) and isinstance(doc.get("settings"), dict):
+        side = doc["settings"].get("side")
+    else:
+        side = None
+    if isinstance(side, bool) or not isinstance(side, (int, float)) or not math.isfinite(side):
+        raise ReplayError(f"{result}: settings.side is {shorten(side)}, expected the square's side [m]")
+    try:
+        check_side(float(side))
+    except InputError as exc:
+        raise ReplayError(f"{result}: settings.side: {exc}") from None
+    tracks = []
+    for run in read_run_poses(base / "run_poses.csv"):
+        tracks.append(Track(run.name, PoseSeries(run.t, run.truth), PoseSeries(run.t, run.odometry)))
+    return ReplaySource(str(folder), robot, tracks, float(side))
+
+
+def load_bag(
+    bag,
+    robot: Robot,
+    topics: dict | None = None,
+    *,
+    max_messages: int | None = None,
+    max_message_bytes: int | None = None,
+) -> ReplaySource:
+    """The bag ``bag`` of ``robot`` as a :class:`ReplaySource` of one track (module
+    docstring); ``topics`` renames the roles of :data:`BAG_TOPICS`; ``max_messages`` and
+    ``max_message_bytes`` bound what is read per topic (:mod:`omnikin.io.bags`)."""
+    from ..io.bags import BagError, read_joint_states, read_poses, topic_types
+
+    names = dict(BAG_TOPICS, **(topics or {}))
+    unknown = sorted(set(names) - set(BAG_TOPICS))
+    if unknown:
+        raise ReplayError(f"unknown bag topic role(s) {unknown}; roles are {sorted(BAG_TOPICS)}")
+    present = topic_types(bag)
+    have = ", ".join(f"{t} ({present[t]})" for t in sorted(present)) or "no topics"
+    truth_topic, odom_topic = names["ground_truth"], names["odom"]
+    if truth_topic not in present and odom_topic not in present:
+        raise ReplayError(
+            f"{bag}: no ground truth topic {truth_topic} and no odometry topic {odom_topic} to replay "
+            f"(--ground-truth-topic, --odom-topic); the bag has: {one_line(have, 500)}"
+        )
+    bounds = {"max_messages": max_messages, "max_message_bytes": max_message_bytes}
+    notes = []
+    truth = read_poses(bag, truth_topic, **bounds) if truth_topic in present else None
+    odom = read_poses(bag, odom_topic, **bounds) if odom_topic in present else None
+    if truth is None:
+        notes.append(f"{bag}: no ground truth topic {truth_topic}: the robot is drawn at its odometry {odom_topic}")
+    if odom is None:
+        notes.append(f"{bag}: no odometry topic {odom_topic}: the odometry shown is the ground truth {truth_topic}")
+    joints = None
+    if names["joint_states"] in present:
+        joints = read_joint_states(bag, robot, names["joint_states"], stamp="header", **bounds)
+    else:
+        notes.append(
+            f"{bag}: no joint states topic {names['joint_states']}: wheel angles and steering from the kinematics"
+        )
+    first_truth = truth if truth is not None else odom
+    first_odom = odom if odom is not None else truth
+    assert first_truth is not None and first_odom is not None
+    starts = [int(first_truth.stamps[0]), int(first_odom.stamps[0])] + ([int(joints.stamps[0])] if joints else [])
+    t0 = min(starts)
+
+    def series(track, topic) -> PoseSeries:
+        try:
+            return PoseSeries((track.stamps - t0) * 1e-9, track.poses)
+        except InputError as exc:
+            raise BagError(f"{bag}: topic {topic!r}: {exc}") from None
+
+    joint_series = None
+    if joints is not None:
+        joint_series = JointSeries(
+            (joints.stamps - t0) * 1e-9,
+            tuple(joints.wheel_names),
+            joints.angles,
+            tuple(robot.steer_names) if joints.steer is not None else (),
+            joints.steer,
+        )
+    track = Track(
+        Path(bag).name or str(bag),
+        series(first_truth, first_truth.topic),
+        series(first_odom, first_odom.topic),
+        joint_series,
+    )
+    return ReplaySource(str(bag), robot, [track], None, notes)
+
+
+def load_replay(path, robot: Robot | None, topics: dict | None = None, **bounds) -> ReplaySource:
+    """A report folder (``robot`` must be None: the report names its robot) or a bag of
+    ``robot`` (required), as :class:`ReplaySource`."""
+    if is_report(path):
+        if robot is not None:
+            raise ReplayError(
+                f"{path}: an UMBmark report names its robot (true_robot.yaml, the robot as built): "
+                "give no ROBOT with --replay REPORT_DIR"
+            )
+        return load_report(path)
+    p = Path(path)
+    if p.is_dir() and not (p / "metadata.yaml").exists():
+        raise ReplayError(
+            f"{path}: neither an omnikin umbmark report folder (result.json, run_poses.csv) nor a ROS 2 bag "
+            "(a folder with metadata.yaml, a .db3 or .mcap file)"
+        )
+    if robot is None:
+        raise ReplayError(
+            f"{path}: a bag does not say which robot drove it: give ROBOT (omnikin view ROBOT --replay BAG)"
+        )
+    return load_bag(path, robot, topics, **bounds)
