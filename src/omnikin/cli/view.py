@@ -179,13 +179,14 @@ def cmd_replay(args) -> int:
         flag = "--step" if args.step is not None else "--engine"
         raise InputError(f"{flag} does not apply to --replay (the runs are recorded, not simulated)")
     require_viser()
-    topics = {
-        "ground_truth": check_topic(args.ground_truth_topic, "--ground-truth-topic"),
-        "odom": check_topic(args.odom_topic, "--odom-topic"),
-        "joint_states": check_topic(args.joint_states_topic, "--joint-states-topic"),
-    }
     from ..viewer.replay_page import ReplayViewer
-    from ..viewer.replay_sources import load_replay
+    from ..viewer.replay_sources import BAG_TOPICS, load_replay
+
+    topics = {
+        role: check_topic(getattr(args, f"{role}_topic"), f"--{role.replace('_', '-')}-topic")
+        for role in ("ground_truth", "odom", "joint_states")
+    }
+    named = tuple(role for role, topic in topics.items() if topic != BAG_TOPICS[role])  # must be in the bag
 
     robot = load_robot(args.robot) if args.robot is not None else None
     budget = Budget.of(args)
@@ -193,6 +194,7 @@ def cmd_replay(args) -> int:
         args.replay,
         robot,
         topics,
+        required=named,
         max_messages=budget.messages(POSE_BYTES),
         max_message_bytes=int(budget.memory // LARGEST_MESSAGE_SHARE),
     )

@@ -11,14 +11,15 @@ one row per kept sample (:mod:`omnikin.evaluation.run_poses`): ``phase`` ``befor
 measurement file of that phase, in order), ``t`` [s] since the run's start, the true pose
 ``x``, ``y`` [m], ``theta`` [rad] and the odometry pose ``odom_x``, ``odom_y`` [m],
 ``odom_theta`` [rad], in the start frame (first leg along +x). The rows of one run are
-together, their times strictly increasing; the last row of a run is its end pose.
+together, their times strictly increasing; the last row of a run is its end pose. The first
+line, ``# omnikin-run-poses/1: N rows, ...``, counts the data rows: a file cut short is refused.
 
 Reading refuses, in one line naming the file and the line: a missing, unknown or duplicate
 column, an unknown phase or direction, a run number that is not a whole number >= 1, a
 number that is not finite, a time that does not increase, a run whose rows are split by
-another run's, a run of one sample; and a file of more than :data:`MAX_READ_ROWS` rows or
-:data:`MAX_READ_BYTES` bytes (:class:`~omnikin.errors.ResourceLimitError`, before it is read
-when its size is known).
+another run's, a run of one sample, fewer or more rows than the first line announces; and a
+file of more than :data:`MAX_READ_ROWS` rows or :data:`MAX_READ_BYTES` bytes
+(:class:`~omnikin.errors.ResourceLimitError`, before it is read when its size is known).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from __future__ import annotations
 import csv
 import io
 import os
+import re
 from array import array
 
 import numpy as np
@@ -33,6 +35,7 @@ import numpy as np
 from ..errors import InputError, ResourceLimitError, shorten
 from ..evaluation.run_poses import DIRECTIONS, MAX_RATE, MAX_ROWS, PHASES, RunPoses
 from .csvfile import column_problems, iter_rows, number
+from .textfile import read_lines
 
 COLUMNS = ("phase", "direction", "run", "t", "x", "y", "theta", "odom_x", "odom_y", "odom_theta")
 FORMAT = "omnikin-run-poses/1"
@@ -43,6 +46,10 @@ MAX_READ_BYTES = 128 * 1024**2
 """Largest file read [bytes]: 128 MiB, rows of about 160 bytes."""
 
 
+ANNOUNCED = re.compile(rf"# {re.escape(FORMAT)}: (\d{{1,12}}) rows\b")
+"""The format line: the first line of a file omnikin wrote, with its count of data rows."""
+
+
 class RunPosesFileError(InputError):
     """A run-poses file that cannot be read; the message names the file and the line."""
 
@@ -51,8 +58,10 @@ def run_poses_text(runs, comment: str | None = None) -> str:
     """The file of the module docstring for :class:`~omnikin.evaluation.run_poses.RunPoses`
     ``runs``: times to 1 us, lengths to 1 um, angles to 1e-7 rad; ``comment`` (how the runs
     were made) becomes ``#`` lines after the format's own."""
+    runs = list(runs)
+    rows = sum(len(r.t) for r in runs)
     head = [
-        f"{FORMAT}: the poses of the runs of the first UMBmark procedure over time",
+        f"{FORMAT}: {rows} rows, the poses of the runs of the first UMBmark procedure over time",
         "columns: phase (before/after calibration), direction (cw/ccw), run (1, 2, ...: the rows of "
         "measurements_PHASE.csv in order),",
         "t [s] since the run's start, true pose x, y [m], theta [rad], odometry pose odom_x, odom_y [m], "
@@ -109,11 +118,29 @@ class _Run:
         self.columns = [array("d") for _ in range(7)]
 
 
+def _announced_rows(path) -> int | None:
+    """The row count of the format line (the file's first line), None without one."""
+    for _, text in read_lines(path, RunPosesFileError, what="a CSV file"):
+        found = ANNOUNCED.match(text)
+        return int(found.group(1)) if found else None
+    return None
+
+
+def _ends_with_newline(path) -> bool:
+    with open(path, "rb") as f:
+        f.seek(0, os.SEEK_END)
+        if f.tell() == 0:
+            return False
+        f.seek(-1, os.SEEK_END)
+        return f.read(1) == b"\n"
+
+
 def read_run_poses(path, *, max_rows: int = MAX_READ_ROWS) -> list[RunPoses]:
     """The runs of a run-poses file (module docstring), in file order; theta and odom_theta
     as written (not wrapped)."""
     source = str(path)
     _check_size(path)
+    announced = _announced_rows(path) if os.path.isfile(path) else None
     rows = iter_rows(path, RunPosesFileError)
     first = next(rows, None)
     if first is None:
@@ -173,6 +200,12 @@ def read_run_poses(path, *, max_rows: int = MAX_READ_ROWS) -> list[RunPoses]:
             column.append(value)
     if not runs:
         raise RunPosesFileError(f"{source}: no data rows after the header")
+    if announced is not None and not _ends_with_newline(path):
+        raise RunPosesFileError(f"{source}: the last line has no line end: the file is cut short (truncated)")
+    if announced is not None and announced != count:
+        raise RunPosesFileError(
+            f"{source}: {count} data rows, line 1 announces {announced}: the file is truncated or was edited"
+        )
     out = []
     for r in runs:
         data = [np.frombuffer(c, dtype=float) for c in r.columns]

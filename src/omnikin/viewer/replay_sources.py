@@ -104,12 +104,14 @@ def load_bag(
     robot: Robot,
     topics: dict | None = None,
     *,
+    required: tuple[str, ...] = (),
     max_messages: int | None = None,
     max_message_bytes: int | None = None,
 ) -> ReplaySource:
     """The bag ``bag`` of ``robot`` as a :class:`ReplaySource` of one track (module
-    docstring); ``topics`` renames the roles of :data:`BAG_TOPICS`; ``max_messages`` and
-    ``max_message_bytes`` bound what is read per topic (:mod:`omnikin.io.bags`)."""
+    docstring); ``topics`` renames the roles of :data:`BAG_TOPICS`; a role in ``required``
+    (a topic the user named) must be in the bag; ``max_messages`` and ``max_message_bytes``
+    bound what is read per topic (:mod:`omnikin.io.bags`)."""
     from ..io.bags import BagError, read_joint_states, read_poses, topic_types
 
     names = dict(BAG_TOPICS, **(topics or {}))
@@ -119,6 +121,11 @@ def load_bag(
     present = topic_types(bag)
     have = ", ".join(f"{t} ({present[t]})" for t in sorted(present)) or "no topics"
     truth_topic, odom_topic = names["ground_truth"], names["odom"]
+    for role in required:
+        if names[role] not in present:
+            raise ReplayError(
+                f"{bag}: no topic {shorten(names[role])} ({role.replace('_', ' ')}); the bag has: {one_line(have, 500)}"
+            )
     if truth_topic not in present and odom_topic not in present:
         raise ReplayError(
             f"{bag}: no ground truth topic {truth_topic} and no odometry topic {odom_topic} to replay "
@@ -169,9 +176,9 @@ def load_bag(
     return ReplaySource(str(bag), robot, [track], None, notes)
 
 
-def load_replay(path, robot: Robot | None, topics: dict | None = None, **bounds) -> ReplaySource:
+def load_replay(path, robot: Robot | None, topics: dict | None = None, **options) -> ReplaySource:
     """A report folder (``robot`` must be None: the report names its robot) or a bag of
-    ``robot`` (required), as :class:`ReplaySource`."""
+    ``robot`` (required), as :class:`ReplaySource`; ``options`` those of :func:`load_bag`."""
     if is_report(path):
         if robot is not None:
             raise ReplayError(
@@ -180,6 +187,11 @@ def load_replay(path, robot: Robot | None, topics: dict | None = None, **bounds)
             )
         return load_report(path)
     p = Path(path)
+    if not p.exists():
+        raise ReplayError(
+            f"{one_line(path, 300)}: no such report folder or bag (an omnikin umbmark report folder, a rosbag2 "
+            "folder, a .db3 or .mcap file)"
+        )
     if p.is_dir() and not (p / "metadata.yaml").exists():
         raise ReplayError(
             f"{path}: neither an omnikin umbmark report folder (result.json, run_poses.csv) nor a ROS 2 bag "
@@ -189,4 +201,4 @@ def load_replay(path, robot: Robot | None, topics: dict | None = None, **bounds)
         raise ReplayError(
             f"{path}: a bag does not say which robot drove it: give ROBOT (omnikin view ROBOT --replay BAG)"
         )
-    return load_bag(path, robot, topics, **bounds)
+    return load_bag(path, robot, topics, **options)

@@ -1,0 +1,161 @@
+"""omnikin view --replay: the runs an UMBmark report keeps, and the command playing a report
+or a bag (real processes: omnikin umbmark, omnikin simulate --bag, omnikin view)."""
+
+import csv
+import http.client
+import math
+import re
+import subprocess
+import sys
+from urllib.parse import urlsplit
+
+import numpy as np
+import pytest
+
+from conftest import omnikin_env, run_entry_point
+from omnikin.io.robot_file import load_robot
+from omnikin.io.run_poses import read_run_poses
+from omnikin.physics.description import describe
+from omnikin.viewer.replay import TrackReplay
+from omnikin.viewer.replay_sources import load_report
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("umbmark") / "report"
+    done = run_entry_point("umbmark", "--runs", "1", "--side", "1", "--noise", "none", "-o", folder)
+    assert done.returncode == 0, done.stderr
+    return folder
+
+
+@pytest.fixture(scope="module")
+def bag(tmp_path_factory):
+    path = tmp_path_factory.mktemp("bag") / "run.bag"
+    done = run_entry_point("simulate", "tomasi-omni3", "--path", "line 0.5; spin 90", "--bag", path)
+    assert done.returncode == 0, done.stderr
+    return path
+
+
+def measurement_rows(path):
+    with open(path, encoding="utf-8") as f:
+        return list(csv.DictReader(line for line in f if not line.startswith("#")))
+
+
+def test_the_report_keeps_every_run_and_each_ends_where_the_measurement_file_says(report):
+    """measurements_PHASE.csv (written from the UMBmark statistics, another path) holds per run
+    the true end minus the odometry end (x_abs - x_calc, 1 um); run k of a direction in
+    run_poses.csv must end there, and its replay at the end of the run must show that pose."""
+    runs = read_run_poses(report / "run_poses.csv")
+    assert sorted(r.name for r in runs) == sorted(f"{p} {d} run 1" for p in ("before", "after") for d in ("cw", "ccw"))
+    source = load_report(report)
+    robot = load_robot(report / "true_robot.yaml")
+    assert source.side == 1.0 and source.robot == robot
+    description = describe(robot)
+    for phase in ("before", "after"):
+        rows = measurement_rows(report / f"measurements_{phase}.csv")
+        for direction in ("cw", "ccw"):
+            expected = [r for r in rows if r["direction"] == direction]
+            kept = [r for r in runs if r.phase == phase and r.direction == direction]
+            assert len(kept) == len(expected) == 1
+            for row, run in zip(expected, kept, strict=True):
+                end = run.truth[-1] - run.odometry[-1]
+                assert end[0] == pytest.approx(float(row["x_abs"]) - float(row["x_calc"]), abs=2e-6)
+                assert end[1] == pytest.approx(float(row["y_abs"]) - float(row["y_calc"]), abs=2e-6)
+                heading = math.radians(float(row["theta_abs_deg"]) - float(row["theta_calc_deg"]))
+                assert math.remainder(end[2] - heading, 2 * math.pi) == pytest.approx(0.0, abs=1e-6)
+                track = next(t for t in source.tracks if t.name == run.name)
+                shown = TrackReplay(robot, description, track).snapshot(track.duration)
+                assert shown.truth[:2] == pytest.approx(tuple(run.truth[-1, :2]), abs=1e-9)
+                assert shown.odometry[:2] == pytest.approx(tuple(run.odometry[-1, :2]), abs=1e-9)
+                assert np.diff(run.t).max() <= 0.05 + 1e-9  # kept at 20 Hz (every 5th sample at 100 Hz)
+
+
+def serve(*argv, seconds=4.0):
+    """Run ``omnikin view ARGV --port 0 --duration seconds``, fetch the page while it serves;
+    returns (exit code, stdout, stderr, page status)."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "omnikin.cli.main", "view", *map(str, argv), "--port", "0", "--duration", str(seconds)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=omnikin_env(),
+    )
+    try:
+        first = proc.stdout.readline()
+        status = None
+        found = re.search(r"http://\S+/", first)
+        if found:
+            parts = urlsplit(found.group(0))
+            conn = http.client.HTTPConnection(parts.hostname, parts.port, timeout=10)
+            conn.request("GET", "/")
+            status = conn.getresponse().status
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    return proc.returncode, first + out, err, status
+
+
+def test_view_replays_a_report_for_a_few_seconds(report):
+    code, out, err, status = serve("--replay", report)
+    assert code == 0 and status == 200, err
+    assert "replay of" in out and "4 runs" in out and err == ""
+
+
+def test_view_replays_a_bag_of_omnikin_simulate(bag):
+    code, out, err, status = serve("tomasi-omni3", "--replay", bag)
+    assert code == 0 and status == 200, err
+    assert "1 run" in out and err == ""
+
+
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (("--replay", "{bag}"), "give ROBOT"),
+        (("tomasi-omni3", "--replay", "{report}"), "give no ROBOT"),
+        (("tomasi-omni3", "--replay", "{bag}", "--odom-topic", "/wheel_odom"), "no topic '/wheel_odom'"),
+        (("mecanum4", "--replay", "{bag}"), "the topic's joints are ['w1', 'w2', 'w3']"),
+        (("--replay", "{missing}"), "no such report folder or bag"),
+        (("--replay", "{report}", "--engine", "physics"), "--engine does not apply to --replay"),
+    ],
+)
+def test_view_replay_refuses_in_one_line(report, bag, tmp_path, argv, words):
+    names = {"bag": bag, "report": report, "missing": tmp_path / "nothing"}
+    done = run_entry_point("view", *[a.format(**names) for a in argv], "--port", "0", "--duration", "1")
+    assert done.returncode != 0 and "Traceback" not in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and words in done.stderr, done.stderr
+
+
+def test_a_bag_without_pose_topics_names_what_it_has(bag):
+    done = run_entry_point(
+        "view", "tomasi-omni3", "--replay", bag, "--ground-truth-topic", "/a", "--odom-topic", "/b", "--duration", "1"
+    )
+    assert done.returncode != 0 and len(done.stderr.strip().splitlines()) == 1
+    assert "/joint_states (sensor_msgs/msg/JointState)" in done.stderr and "/a" in done.stderr
+
+
+@pytest.mark.parametrize("damage", ["missing", "truncated", "nan", "huge"])
+def test_a_damaged_report_is_one_line(report, tmp_path, damage):
+    import shutil
+
+    copy = tmp_path / "report"
+    shutil.copytree(report, copy)
+    target = copy / "run_poses.csv"
+    if damage == "missing":
+        target.unlink()
+    elif damage == "truncated":
+        text = target.read_text()
+        target.write_text(text[: len(text) // 2 - 7])
+    elif damage == "nan":
+        lines = target.read_text().splitlines()
+        fields = lines[-5].split(",")
+        fields[4] = "nan"
+        lines[-5] = ",".join(fields)
+        target.write_text("\n".join(lines) + "\n")
+    else:
+        with open(target, "r+b") as f:
+            f.truncate(1 << 40)
+    done = run_entry_point("view", "--replay", copy, "--port", "0", "--duration", "1")
+    assert done.returncode != 0 and "Traceback" not in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and "run_poses.csv" in done.stderr, done.stderr
