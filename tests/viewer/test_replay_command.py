@@ -41,17 +41,27 @@ def measurement_rows(path):
         return list(csv.DictReader(line for line in f if not line.startswith("#")))
 
 
-def test_the_report_keeps_every_run_and_each_ends_where_the_measurement_file_says(report):
+@pytest.fixture(scope="module")
+def physics_report(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("umbmark") / "physics"
+    done = run_entry_point(
+        "umbmark", "--engine", "physics", "--runs", "1", "--side", "1", "--no-calibrate", "-o", folder
+    )
+    assert done.returncode == 0, done.stderr
+    return folder
+
+
+def check_ends(report, phases):
     """measurements_PHASE.csv (written from the UMBmark statistics, another path) holds per run
     the true end minus the odometry end (x_abs - x_calc, 1 um); run k of a direction in
     run_poses.csv must end there, and its replay at the end of the run must show that pose."""
     runs = read_run_poses(report / "run_poses.csv")
-    assert sorted(r.name for r in runs) == sorted(f"{p} {d} run 1" for p in ("before", "after") for d in ("cw", "ccw"))
+    assert sorted(r.name for r in runs) == sorted(f"{p} {d} run 1" for p in phases for d in ("cw", "ccw"))
     source = load_report(report)
     robot = load_robot(report / "true_robot.yaml")
     assert source.side == 1.0 and source.robot == robot
     description = describe(robot)
-    for phase in ("before", "after"):
+    for phase in phases:
         rows = measurement_rows(report / f"measurements_{phase}.csv")
         for direction in ("cw", "ccw"):
             expected = [r for r in rows if r["direction"] == direction]
@@ -68,6 +78,15 @@ def test_the_report_keeps_every_run_and_each_ends_where_the_measurement_file_say
                 assert shown.truth[:2] == pytest.approx(tuple(run.truth[-1, :2]), abs=1e-9)
                 assert shown.odometry[:2] == pytest.approx(tuple(run.odometry[-1, :2]), abs=1e-9)
                 assert np.diff(run.t).max() <= 0.05 + 1e-9  # kept at 20 Hz (every 5th sample at 100 Hz)
+
+
+def test_the_report_keeps_every_run_and_each_ends_where_the_measurement_file_says(report):
+    check_ends(report, ("before", "after"))
+
+
+def test_a_physics_report_keeps_its_runs_too(physics_report):
+    """The physics engine measures the true end pose exactly (no measurement noise)."""
+    check_ends(physics_report, ("before",))
 
 
 def serve(*argv, seconds=4.0):

@@ -133,9 +133,9 @@ class ReplayViewer:
         self.playing = False
         duration = self.replay.duration
         with self.server.atomic():
-            self.slider.max = max(duration, TIME_STEP)  # type: ignore[misc]
+            self.slider.max = max(duration, TIME_STEP)
             self.slider.value = 0.0  # type: ignore[misc]  # (viser: a props field shadows the setter for mypy)
-            self.play_button.label = "Play"  # type: ignore[misc]
+            self.play_button.label = "Play"
             for key, series in (("truth", track.truth), ("odometry", track.odometry)):
                 trail = self.trails[key]
                 trail.clear()
@@ -161,7 +161,7 @@ class ReplayViewer:
         if playing and self.t >= self.replay.duration:
             self.t = 0.0
         self.playing = playing
-        self.play_button.label = "Pause" if playing else "Play"  # type: ignore[misc]
+        self.play_button.label = "Pause" if playing else "Play"
 
     def run(self, duration: float | None = None) -> str:
         """Serve until :meth:`close` (``"closed"``) or ``duration`` [s] of wall time

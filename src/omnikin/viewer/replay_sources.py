@@ -10,9 +10,9 @@
   ``/ground_truth``) and of the odometry (default ``/odom``), and the measured wheel angles and
   steering of ``sensor_msgs/JointState`` (default ``/joint_states``; joint name = wheel name,
   ``W_steer`` for steering) when the bag has that topic. Times are header stamps, from the
-  earliest of the topics. A bag with only one of the two pose topics is played with that one
-  for both (:attr:`ReplaySource.notes` says so); a bag with neither is refused, naming the
-  topics it has.
+  earliest of the topics. A bag with only one of the two pose topics at their default names is
+  played with that one for both (:attr:`ReplaySource.notes` says so); a bag with neither, or
+  without a topic the user named, is refused, naming the topics it has.
 
 :func:`load_replay` tells the two apart. Every problem is one line naming the file (and the
 line or topic): :class:`ReplayError` or the reader's own error.
@@ -131,17 +131,27 @@ def load_bag(
             f"{bag}: no ground truth topic {truth_topic} and no odometry topic {odom_topic} to replay "
             f"(--ground-truth-topic, --odom-topic); the bag has: {one_line(have, 500)}"
         )
-    bounds = {"max_messages": max_messages, "max_message_bytes": max_message_bytes}
     notes = []
-    truth = read_poses(bag, truth_topic, **bounds) if truth_topic in present else None
-    odom = read_poses(bag, odom_topic, **bounds) if odom_topic in present else None
+    truth, odom = (
+        read_poses(bag, topic, max_messages=max_messages, max_message_bytes=max_message_bytes)
+        if topic in present
+        else None
+        for topic in (truth_topic, odom_topic)
+    )
     if truth is None:
         notes.append(f"{bag}: no ground truth topic {truth_topic}: the robot is drawn at its odometry {odom_topic}")
     if odom is None:
         notes.append(f"{bag}: no odometry topic {odom_topic}: the odometry shown is the ground truth {truth_topic}")
     joints = None
     if names["joint_states"] in present:
-        joints = read_joint_states(bag, robot, names["joint_states"], stamp="header", **bounds)
+        joints = read_joint_states(
+            bag,
+            robot,
+            names["joint_states"],
+            stamp="header",
+            max_messages=max_messages,
+            max_message_bytes=max_message_bytes,
+        )
     else:
         notes.append(
             f"{bag}: no joint states topic {names['joint_states']}: wheel angles and steering from the kinematics"
