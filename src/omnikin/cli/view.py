@@ -52,7 +52,8 @@ def add_parsers(sub, robot_help: str) -> None:
         description="Serve a web page with the robot in 3D (drawn from the physical description the "
         "physics engine uses: chassis, wheels, rollers, steering legs), its true and odometry "
         "trails on a ground grid with the UMBmark squares, and drive it with the keyboard or the "
-        "page's controls through the runtime's command filter.",
+        "page's controls through the runtime's command filter; or, with --replay, play back the runs of an "
+        "UMBmark report or a ROS 2 bag with a timeline.",
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

@@ -23,6 +23,7 @@ import math
 import threading
 import time
 
+import numpy as np
 import viser
 
 from .app import CONTROL_PERIOD, ODOMETRY_COLOUR, SLOW_PERIOD, TRUTH_COLOUR, _free_port, _quiet
@@ -74,9 +75,7 @@ class ReplayViewer:
                 self.server.stop()
             raise
         scene = self.server.scene
-        reach = max(
-            max(abs(v) for p in (tr.truth.poses, tr.odometry.poses) for v in p[:, :2].ravel()) for tr in source.tracks
-        )
+        reach = max(float(np.abs(s.poses[:, :2]).max()) for tr in source.tracks for s in (tr.truth, tr.odometry))
         side = source.side or 0.0
         extent = max(5.0, side + 1.0, math.ceil(reach) + 1.0)
         draw_ground(scene, extent, 0.1)
