@@ -23,7 +23,7 @@ import viser
 from .front import FrontServer
 from .live import LiveRobot, Snapshot
 from .panel import CameraControl, DriveControls, GoalMarker, Readouts, robot_extent
-from .scene import RobotDrawing, Trail, draw_ground, draw_umbmark_square
+from .scene import RobotDrawing, Trail, draw_ground, draw_umbmark_square, plain_lights
 
 CONTROL_PERIOD = 0.02
 """Wall time [s] between two control steps (50 Hz)."""
@@ -62,11 +62,7 @@ class LiveViewer:
                 self.server.stop()
             raise
         scene = self.server.scene
-        # image-based lighting costs a browser without a GPU seconds per page load; plain lights
-        # show the robot's colours as they are
-        scene.configure_environment_map(hdri=None)
-        scene.add_light_ambient("/lights/ambient", intensity=0.6)
-        scene.add_light_directional("/lights/sun", intensity=1.2, position=(2.0, -3.0, 5.0))
+        plain_lights(scene)
         extent = max(5.0, umbmark_side + 1.0)
         draw_ground(scene, extent, 0.1)
         if umbmark_side > 0:

@@ -32,7 +32,7 @@ from .live import Snapshot
 from .panel import CameraControl, Readouts, robot_extent
 from .replay import TrackReplay
 from .replay_sources import ReplaySource
-from .scene import RobotDrawing, Trail, draw_ground, draw_umbmark_square
+from .scene import RobotDrawing, Trail, draw_ground, draw_umbmark_square, plain_lights
 
 SPEEDS = ("0.25", "0.5", "1", "2", "4", "8", "16")
 """Playback speeds offered (times real time)."""
@@ -75,6 +75,7 @@ class ReplayViewer:
                 self.server.stop()
             raise
         scene = self.server.scene
+        plain_lights(scene)
         reach = max(float(np.abs(s.poses[:, :2]).max()) for tr in source.tracks for s in (tr.truth, tr.odometry))
         side = source.side or 0.0
         extent = max(5.0, side + 1.0, math.ceil(reach) + 1.0)
