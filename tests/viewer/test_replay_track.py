@@ -137,3 +137,32 @@ def test_an_ackermann_replay_steers_its_front_wheels_along_their_hubs_and_holds_
         assert s.steer[names.index("front_left")] == pytest.approx(math.atan2(0.12, 0.25), abs=1e-9)
         assert s.steer[names.index("front_right")] == pytest.approx(math.atan2(0.12, 0.35), abs=1e-9)
         assert all(math.isnan(s.steer[i]) for i, n in enumerate(names) if n not in robot.steer_names)
+
+
+def test_rollers_and_castors_move_as_the_recorded_motion_makes_them():
+    """tomasi-omni3 translating at vx = 0.2 m/s: wheel w_i (drive direction a_i) has its hub
+    moving across its drive by n . v = -sin(a_i) vx (n = (-sin a, cos a)), which its rollers
+    (radius b at the contact, gamma = 0) take up by spinning at -(n . v) / b = sin(a_i) vx / b;
+    a roller angle is that rate times the time. diff-drive driving straight at 0.3 m/s: its
+    castor (trail 0.03 m, aligned) keeps its swivel at 0 and rolls v t / 0.03 rad."""
+    vx = 0.2
+    t = np.arange(0.0, 2.01, 0.5)
+    poses = np.column_stack([vx * t, 0 * t, 0 * t])
+    robot = load_robot("tomasi-omni3")
+    description = describe(robot)
+    replay = TrackReplay(robot, description, Track("x", PoseSeries(t, poses), PoseSeries(t, poses)))
+    for time in (0.25, 1.0, 1.9):
+        s = replay.snapshot(time)
+        for i, wheel in enumerate(description.wheels):
+            rate = math.sin(wheel.drive) * vx / wheel.rollers.radius
+            assert s.roller_speeds[i] == pytest.approx(rate, rel=1e-9, abs=1e-12)
+            assert s.roller_angles[i] == pytest.approx(rate * time, rel=1e-9, abs=1e-12)
+    v = 0.3
+    poses = np.column_stack([v * t, 0 * t, 0 * t])
+    robot = load_robot("diff-drive")
+    description = describe(robot)
+    names = [w.name for w in description.wheels]
+    replay = TrackReplay(robot, description, Track("x", PoseSeries(t, poses), PoseSeries(t, poses)))
+    s = replay.snapshot(1.3)
+    assert s.steer[names.index("castor")] == pytest.approx(0.0, abs=1e-12)
+    assert s.wheel_angles[names.index("castor")] == pytest.approx(v * 1.3 / 0.03, rel=1e-9)

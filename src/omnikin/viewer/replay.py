@@ -17,9 +17,11 @@ shows at time ``t``: the interpolated poses, the true twist ``xi_k`` of the inte
 ``t`` (the interval that starts at ``t`` at a sample time; zero outside the run), and the
 wheels: per interval the robot's inverse kinematics of ``xi_k`` (:meth:`omnikin.model.Robot.ik`,
 wheel speeds and steering angles; steering held through an interval at rest), the wheel angles
-their integral from 0; measured joints, when the track has them, replace those of the wheels
-they name (angles and steering interpolated linearly in time, speeds their finite
-differences).
+their integral from 0; castors (swivel and roll) and the rollers of Swedish wheels as the body's
+motion moves them (:class:`~omnikin.physics.joint_motion.JointMotion`, as on the live page),
+interval after interval, linear in time within one; measured joints, when the track has them,
+replace those of the wheels they name (angles and steering interpolated linearly in time,
+speeds their finite differences).
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from ..errors import InputError
 from ..geometry import between, compose, exp, log
 from ..model import Robot
 from ..physics.description import PhysicalRobot
+from ..physics.joint_motion import JointMotion
 from .live import Snapshot
 
 REST = 1e-12
@@ -161,6 +164,7 @@ class TrackReplay:
         self._steer = steer
         self._angles = np.zeros((len(truth.t), self._speeds.shape[1]))
         np.cumsum(self._speeds * np.diff(truth.t)[:, None], axis=0, out=self._angles[1:])
+        self._passive(robot, description, truth, steer)
         joints = track.joints
         self._joint_rolling = (
             np.array([names.index(n) for n in joints.wheels], dtype=int) if joints is not None else None
@@ -168,6 +172,30 @@ class TrackReplay:
         self._joint_steered = (
             np.array([names.index(n) for n in joints.steered], dtype=int) if joints is not None else None
         )
+
+    def _passive(self, robot: Robot, description: PhysicalRobot, truth: PoseSeries, steer: np.ndarray) -> None:
+        """Castors and rollers at every sample, as the body's motion moves them
+        (:class:`~omnikin.physics.joint_motion.JointMotion`, the live viewer's rule), interval
+        after interval."""
+        names = [w.name for w in description.wheels]
+        joints = JointMotion(robot, robot.rolling_names, description)
+        self._castors = np.array([names.index(n) for n in joints.castor_names], dtype=int)
+        self._swedish = [i for i, w in enumerate(description.wheels) if w.rollers is not None]
+        n = len(truth.t)
+        self._swivel = np.zeros((n, len(self._castors)))
+        self._castor_angle = np.zeros((n, len(self._castors)))
+        self._roller_angle = np.zeros((n, len(self._swedish)))
+        self._roller_rate = np.zeros((max(n - 1, 1), len(self._swedish)))
+        if not len(self._castors) and not self._swedish:
+            return
+        joints.update(float(truth.t[0]), np.zeros(3), steer[0] if steer.size else None)
+        self._swivel[0] = joints.castor_swivels
+        for k in range(n - 1):
+            joints.update(float(truth.t[k + 1]), truth.twists[k], steer[k] if steer.size else None)
+            self._swivel[k + 1] = joints.castor_swivels
+            self._castor_angle[k + 1] = joints.castor_angles
+            self._roller_angle[k + 1] = joints.roller_angles
+            self._roller_rate[k] = joints.roller_rates
 
     @property
     def duration(self) -> float:
@@ -201,6 +229,23 @@ class TrackReplay:
             speeds[self._joint_rolling] = j_speeds
             if j_steer is not None and self._joint_steered is not None and len(self._joint_steered):
                 steer[self._joint_steered] = j_steer
+        rollers: list[float | None] = [None] * self._n
+        roller_speeds: list[float | None] = [None] * self._n
+        if k < 0 or k >= n_int:
+            row = 0 if k < 0 else n_int
+            if len(self._castors):
+                angles[self._castors] = self._castor_angle[row]
+                steer[self._castors] = self._swivel[row]
+            for j, wheel in enumerate(self._swedish):
+                rollers[wheel], roller_speeds[wheel] = float(self._roller_angle[row, j]), 0.0
+        else:
+            s = (time - truth.t[k]) / (truth.t[k + 1] - truth.t[k])  # castors and rollers: linear in time
+            if len(self._castors):
+                angles[self._castors] = self._castor_angle[k] + s * (self._castor_angle[k + 1] - self._castor_angle[k])
+                steer[self._castors] = self._swivel[k] + s * (self._swivel[k + 1] - self._swivel[k])
+            for j, wheel in enumerate(self._swedish):
+                a, b = self._roller_angle[k, j], self._roller_angle[k + 1, j]
+                rollers[wheel], roller_speeds[wheel] = float(a + s * (b - a)), float(self._roller_rate[k, j])
         pose = truth.at(time)
         odometry = self.track.odometry.at(time)
         twist = truth.twist(time)
@@ -215,4 +260,6 @@ class TrackReplay:
             wheel_speeds=speeds,
             steer=steer,
             residual=(),
+            roller_angles=tuple(rollers),
+            roller_speeds=tuple(roller_speeds),
         )

@@ -201,7 +201,7 @@ class ReplayViewer:
         self.last = s
         self.frames += 1
         with self.server.atomic():
-            self.drawing.update(s.truth, s.wheel_angles, s.steer)
+            self.drawing.update(s.truth, s.wheel_angles, s.steer, s.roller_angles)
             x, y, theta = s.odometry
             self.odometry_frame.position = (x, y, 0.005)
             self.odometry_frame.wxyz = (math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2))
