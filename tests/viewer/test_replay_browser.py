@@ -10,8 +10,8 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from browser import wait_for, wait_for_viser
 
+from browser import wait_for, wait_for_viser
 from omnikin.io.robot_file import load_robot
 from omnikin.viewer.replay import PoseSeries, Track
 from omnikin.viewer.replay_page import ReplayViewer
