@@ -12,33 +12,14 @@ scene is sent after every step, the trails, table and plots every :data:`SLOW_PE
 
 from __future__ import annotations
 
-import contextlib
-import io
 import math
 import threading
 import time
 
-import viser
-
-from .front import FrontServer
 from .live import LiveRobot, Snapshot
 from .panel import CameraControl, DriveControls, GoalMarker, Readouts, robot_extent
 from .scene import RobotDrawing, Trail, draw_ground, draw_umbmark_square, plain_lights
-
-CONTROL_PERIOD = 0.02
-"""Wall time [s] between two control steps (50 Hz)."""
-SLOW_PERIOD = 0.2
-"""Wall time [s] between two updates of the trails, the table and the plots."""
-TRUTH_COLOUR = (30, 160, 60)
-ODOMETRY_COLOUR = (200, 60, 200)
-
-
-@contextlib.contextmanager
-def _quiet():
-    """viser prints a banner with its own (loopback) address and a line when it stops; the
-    user's address is the front's, printed by the command."""
-    with contextlib.redirect_stdout(io.StringIO()):
-        yield
+from .serving import CONTROL_PERIOD, ODOMETRY_COLOUR, SLOW_PERIOD, TRUTH_COLOUR, PageServers
 
 
 class LiveViewer:
@@ -52,15 +33,8 @@ class LiveViewer:
         live.clock = self.clock
         self._wake = threading.Event()
         self._closed = threading.Event()
-        with _quiet():
-            self.server = viser.ViserServer(host="127.0.0.1", port=_free_port(), label="omnikin", verbose=False)
-        try:
-            self.front = FrontServer(host, port, self.server.get_port(), on_key=self._on_key)
-            self.front.start()
-        except BaseException:
-            with _quiet():
-                self.server.stop()
-            raise
+        self.servers = PageServers(host, port, self._on_key)
+        self.server = self.servers.viser
         scene = self.server.scene
         plain_lights(scene)
         extent = max(5.0, umbmark_side + 1.0)
@@ -82,11 +56,7 @@ class LiveViewer:
 
     @property
     def url(self) -> str:
-        host = self.front.host
-        shown = "127.0.0.1" if host in ("", "0.0.0.0") else ("[::1]" if host == "::" else host)
-        if ":" in shown and not shown.startswith("["):
-            shown = f"[{shown}]"
-        return f"http://{shown}:{self.front.port}/"
+        return self.servers.url
 
     def clock(self) -> float:
         """The robot's time [s] (wall clock since the viewer was made)."""
@@ -141,15 +111,5 @@ class LiveViewer:
         """Stop the loop, the servers and the engine."""
         self._closed.set()
         self._wake.set()
-        self.front.stop()
-        with _quiet():
-            self.server.stop()
+        self.servers.stop()
         self.live.close()
-
-
-def _free_port() -> int:
-    import socket
-
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])

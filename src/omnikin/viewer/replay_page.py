@@ -24,15 +24,13 @@ import threading
 import time
 
 import numpy as np
-import viser
 
-from .app import CONTROL_PERIOD, ODOMETRY_COLOUR, SLOW_PERIOD, TRUTH_COLOUR, _free_port, _quiet
-from .front import FrontServer
 from .live import Snapshot
 from .panel import CameraControl, Readouts, robot_extent
 from .replay import TrackReplay
 from .replay_sources import ReplaySource
 from .scene import RobotDrawing, Trail, draw_ground, draw_umbmark_square, plain_lights
+from .serving import CONTROL_PERIOD, ODOMETRY_COLOUR, SLOW_PERIOD, TRUTH_COLOUR, PageServers
 
 SPEEDS = ("0.25", "0.5", "1", "2", "4", "8", "16")
 """Playback speeds offered (times real time)."""
@@ -65,15 +63,8 @@ class ReplayViewer:
         self._wake = threading.Event()
         self._closed = threading.Event()
         self._actions: list[str] = []
-        with _quiet():
-            self.server = viser.ViserServer(host="127.0.0.1", port=_free_port(), label="omnikin", verbose=False)
-        try:
-            self.front = FrontServer(host, port, self.server.get_port(), on_key=self._on_key)
-            self.front.start()
-        except BaseException:
-            with _quiet():
-                self.server.stop()
-            raise
+        self.servers = PageServers(host, port, self._on_key)
+        self.server = self.servers.viser
         scene = self.server.scene
         plain_lights(scene)
         reach = max(float(np.abs(s.poses[:, :2]).max()) for tr in source.tracks for s in (tr.truth, tr.odometry))
@@ -111,7 +102,7 @@ class ReplayViewer:
 
     @property
     def url(self) -> str:
-        return self.front.url
+        return self.servers.url
 
     # --- page events (viser's and the front server's threads) ------------------------------------
     def _on_key(self, message: dict) -> None:
@@ -218,6 +209,4 @@ class ReplayViewer:
         """Stop the loop and the servers."""
         self._closed.set()
         self._wake.set()
-        self.front.stop()
-        with _quiet():
-            self.server.stop()
+        self.servers.stop()
