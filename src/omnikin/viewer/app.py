@@ -12,14 +12,13 @@ scene is sent after every step, the trails, table and plots every :data:`SLOW_PE
 
 from __future__ import annotations
 
-import math
 import threading
 import time
 
 from .live import LiveRobot, Snapshot
 from .panel import CameraControl, DriveControls, GoalMarker, Readouts, robot_extent
-from .scene import RobotDrawing, Trail, draw_ground, draw_umbmark_square, plain_lights
-from .serving import CONTROL_PERIOD, ODOMETRY_COLOUR, SLOW_PERIOD, TRUTH_COLOUR, PageServers
+from .scene import RobotView, draw_world
+from .serving import CONTROL_PERIOD, SLOW_PERIOD, PageServers
 
 
 class LiveViewer:
@@ -35,20 +34,11 @@ class LiveViewer:
         self._closed = threading.Event()
         self.servers = PageServers(host, port, self._on_key)
         self.server = self.servers.viser
-        scene = self.server.scene
-        plain_lights(scene)
-        extent = max(5.0, umbmark_side + 1.0)
-        draw_ground(scene, extent, 0.1)
-        if umbmark_side > 0:
-            draw_umbmark_square(scene, umbmark_side)
-        self.drawing = RobotDrawing(scene, live.description)
-        self.odometry_frame = scene.add_frame("/odometry", axes_length=0.1, axes_radius=0.004)
-        self.trails = {
-            "truth": Trail(scene, "/trails/truth", TRUTH_COLOUR),
-            "odometry": Trail(scene, "/trails/odometry", ODOMETRY_COLOUR),
-        }
+        draw_world(self.server.scene, max(5.0, umbmark_side + 1.0), umbmark_side)
+        self.robot = RobotView(self.server.scene, live.description)
+        self.trails = self.robot.trails
         self.drive = DriveControls(self.server, live)
-        self.camera = CameraControl(self.server, robot_extent(live.description), clear_trails=self.clear_trails)
+        self.camera = CameraControl(self.server, robot_extent(live.description), clear_trails=self.robot.clear_trails)
         self.readouts = Readouts(self.server, live.description)
         self.goal = GoalMarker(self.server, live)
         self.last: Snapshot | None = None
@@ -65,10 +55,6 @@ class LiveViewer:
     def _on_key(self, message: dict) -> None:
         self.live.key(message)
         self._wake.set()
-
-    def clear_trails(self) -> None:
-        for trail in self.trails.values():
-            trail.clear()
 
     def run(self, duration: float | None = None) -> str:
         """Serve until :meth:`close` (``"closed"``) or ``duration`` [s] of wall time
@@ -100,12 +86,9 @@ class LiveViewer:
         return "closed"
 
     def _draw(self, s: Snapshot) -> None:
-        self.drawing.update(s.truth, s.wheel_angles, s.steer, s.roller_angles)
-        x, y, theta = s.odometry
-        self.odometry_frame.position = (x, y, 0.005)
-        self.odometry_frame.wxyz = (math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2))
+        self.robot.show(s)
         self.trails["truth"].add(s.truth[0], s.truth[1])
-        self.trails["odometry"].add(x, y)
+        self.trails["odometry"].add(s.odometry[0], s.odometry[1])
 
     def close(self) -> None:
         """Stop the loop, the servers and the engine."""

@@ -29,8 +29,8 @@ from .live import Snapshot
 from .panel import CameraControl, Readouts, robot_extent
 from .replay import TrackReplay
 from .replay_sources import ReplaySource
-from .scene import RobotDrawing, Trail, draw_ground, draw_umbmark_square, plain_lights
-from .serving import CONTROL_PERIOD, ODOMETRY_COLOUR, SLOW_PERIOD, TRUTH_COLOUR, PageServers
+from .scene import RobotView, draw_world
+from .serving import CONTROL_PERIOD, SLOW_PERIOD, PageServers
 
 SPEEDS = ("0.25", "0.5", "1", "2", "4", "8", "16")
 """Playback speeds offered (times real time)."""
@@ -66,19 +66,12 @@ class ReplayViewer:
         self.servers = PageServers(host, port, self._on_key)
         self.server = self.servers.viser
         scene = self.server.scene
-        plain_lights(scene)
         reach = max(float(np.abs(s.poses[:, :2]).max()) for tr in source.tracks for s in (tr.truth, tr.odometry))
         side = source.side or 0.0
         extent = max(5.0, side + 1.0, math.ceil(reach) + 1.0)
-        draw_ground(scene, extent, 0.1)
-        if side > 0:
-            draw_umbmark_square(scene, side)
-        self.drawing = RobotDrawing(scene, self.description)
-        self.odometry_frame = scene.add_frame("/odometry", axes_length=0.1, axes_radius=0.004)
-        self.trails = {
-            "truth": Trail(scene, "/trails/truth", TRUTH_COLOUR, capacity=10**6, spacing=0.0),
-            "odometry": Trail(scene, "/trails/odometry", ODOMETRY_COLOUR, capacity=10**6, spacing=0.0),
-        }
+        draw_world(scene, extent, side)
+        self.robot = RobotView(scene, self.description, capacity=10**6, spacing=0.0)
+        self.trails = self.robot.trails
         gui = self.server.gui
         names = [tr.name for tr in source.tracks]
         with gui.add_folder("Replay"):
@@ -192,10 +185,7 @@ class ReplayViewer:
         self.last = s
         self.frames += 1
         with self.server.atomic():
-            self.drawing.update(s.truth, s.wheel_angles, s.steer, s.roller_angles)
-            x, y, theta = s.odometry
-            self.odometry_frame.position = (x, y, 0.005)
-            self.odometry_frame.wxyz = (math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2))
+            self.robot.show(s)
             if self.playing:
                 self.slider.value = round(self.t / TIME_STEP) * TIME_STEP  # type: ignore[misc]
             self.status.content = status_html(self.replay.track.name, self.t, self.replay.duration, self.playing)

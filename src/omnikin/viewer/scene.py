@@ -30,6 +30,7 @@ import viser
 import viser.transforms as vtf
 
 from ..physics.description import PhysicalRobot, WheelBody
+from .live import Snapshot
 
 CHASSIS_COLOUR = (20, 160, 170)
 TYRE_COLOUR = (45, 45, 45)
@@ -201,6 +202,43 @@ class RobotDrawing:
                 handle, base = drawn
                 turn = vtf.SO3.from_x_radians(np.asarray(roller_angles[i], dtype=float)).as_matrix()
                 handle.batched_wxyzs = vtf.SO3.from_matrix(base @ turn).wxyz
+
+
+TRUTH_COLOUR = (30, 160, 60)
+ODOMETRY_COLOUR = (200, 60, 200)
+
+
+def draw_world(scene: viser.SceneApi, extent: float, umbmark_side: float) -> None:
+    """Lights, a ground grid ``2 extent`` [m] wide (10 cm cells) and the UMBmark squares of side
+    ``umbmark_side`` [m] from the origin (0: none)."""
+    plain_lights(scene)
+    draw_ground(scene, extent, 0.1)
+    if umbmark_side > 0:
+        draw_umbmark_square(scene, umbmark_side)
+
+
+class RobotView:
+    """The robot (:class:`RobotDrawing`), its odometry's frame and the trails of its true pose
+    (green) and odometry (magenta); ``trail`` passes options to both :class:`Trail` s."""
+
+    def __init__(self, scene: viser.SceneApi, description: PhysicalRobot, **trail):
+        self.drawing = RobotDrawing(scene, description)
+        self.odometry_frame = scene.add_frame("/odometry", axes_length=0.1, axes_radius=0.004)
+        self.trails = {
+            "truth": Trail(scene, "/trails/truth", TRUTH_COLOUR, **trail),
+            "odometry": Trail(scene, "/trails/odometry", ODOMETRY_COLOUR, **trail),
+        }
+
+    def clear_trails(self) -> None:
+        for trail in self.trails.values():
+            trail.clear()
+
+    def show(self, s: Snapshot) -> None:
+        """The robot at ``s``'s true pose with its joints, the odometry's frame at its pose."""
+        self.drawing.update(s.truth, s.wheel_angles, s.steer, s.roller_angles)
+        x, y, theta = s.odometry
+        self.odometry_frame.position = (x, y, 0.005)
+        self.odometry_frame.wxyz = (math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2))
 
 
 def plain_lights(scene: viser.SceneApi) -> None:

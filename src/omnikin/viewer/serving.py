@@ -21,8 +21,6 @@ CONTROL_PERIOD = 0.02
 """Wall time [s] between two updates of a page's scene (50 Hz)."""
 SLOW_PERIOD = 0.2
 """Wall time [s] between two updates of the trails, the table and the plots."""
-TRUTH_COLOUR = (30, 160, 60)
-ODOMETRY_COLOUR = (200, 60, 200)
 
 
 @contextlib.contextmanager
