@@ -15,7 +15,7 @@ from __future__ import annotations
 import threading
 import time
 
-from .live import LiveRobot, Snapshot
+from .live import PageRobot, Snapshot
 from .panel import CameraControl, DriveControls, GoalMarker, Readouts, robot_extent
 from .scene import RobotView, draw_world
 from .serving import CONTROL_PERIOD, SLOW_PERIOD, PageServers
@@ -26,7 +26,7 @@ class LiveViewer:
     where the page is served (port 0: a free one, see :attr:`url`); ``umbmark_side`` [m] draws
     the UMBmark squares (0: none)."""
 
-    def __init__(self, live: LiveRobot, host: str = "127.0.0.1", port: int = 8080, *, umbmark_side: float = 4.0):
+    def __init__(self, live: PageRobot, host: str = "127.0.0.1", port: int = 8080, *, umbmark_side: float = 4.0):
         self.live = live
         self._start = time.monotonic()  # the robot's clock: seconds since the viewer was made
         live.clock = self.clock

@@ -68,54 +68,43 @@ class Snapshot:
     roller_speeds: tuple[float | None, ...] = ()
 
 
-class LiveRobot:
-    """``robot`` driven by the page (module docstring). ``speed`` [m/s] and ``turn`` [rad/s]: what a
-    held key sets; ``limits``, ``timeout`` [s]: the runtime's command filter; ``step`` [s]: the
-    physics engine's time step (None: its default)."""
+class PageRobot:
+    """A robot the page drives (module docstring): its inputs, held keys and goal seeker.
+    Subclasses say how a control step runs (:meth:`_control`), where the robot thinks it is
+    (:attr:`pose`) and whether it steers by hand (:meth:`_turn_steering`). ``speed`` [m/s] and
+    ``turn`` [rad/s]: what a held key sets; ``limits``: the speeds and accelerations the page's
+    sliders and the goal seeker use."""
 
-    def __init__(
-        self,
-        robot: Robot,
-        engine: str = "kinematic",
-        *,
-        speed: float = 0.2,
-        turn: float = 0.5,
-        limits: MotionLimits | None = None,
-        timeout: float = 0.5,
-        step: float | None = None,
-    ):
-        if engine not in ENGINES:
-            raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
+    def __init__(self, robot: Robot, *, speed: float = 0.2, turn: float = 0.5, limits: MotionLimits | None = None):
         self.teleop = Teleop(speed, turn)
         self.robot = robot
-        self.engine = engine
+        self.limits = limits or MotionLimits()
         self.description: PhysicalRobot = describe(robot)
-        if engine == "physics":
-            from ..physics.backend import PhysicsBackend
-            from ..physics.mjcf import DEFAULT_STEP
-
-            self.backend: SimBackend | PhysicsBackend = PhysicsBackend(robot, step=step or DEFAULT_STEP)
-        else:
-            self.backend = SimBackend(robot)
-        self.runtime = BaseRuntime(robot, self.backend, limits=limits, cmd_vel_timeout=timeout)
         self._inputs: queue.SimpleQueue[tuple[float | None, str, object]] = queue.SimpleQueue()
         self.clock: Callable[[], float] | None = None  # the time [s] of step()'s clock, for arrivals
-        names = [w.name for w in self.description.wheels]
-        self._rolling = np.array([names.index(n) for n in robot.rolling_names], dtype=int)
-        self._steered = np.array([names.index(n) for n in robot.steer_names], dtype=int)
-        self._angles = np.zeros(len(names))
-        self.joints = JointMotion(robot, robot.rolling_names, self.description)  # castors, rollers
-        self._castors = np.array([names.index(n) for n in self.joints.castor_names], dtype=int)
-        self._swedish = [i for i, w in enumerate(self.description.wheels) if w.rollers is not None]
-        self._moved = np.zeros(3)  # the twist the kinematic robot moved at since the last step
-        self._speeds = np.zeros(len(names))  # the kinematic wheels' speeds over the coming interval
-        self._steer_hand = np.zeros(len(robot.steerable))
         self._set_twist = np.zeros(3)
         self._last_key_message = -math.inf
         self.seeker: GoalSeeker | None = None
         self.arrived: tuple[float, float, float] | None = None  # the last goal reached
-        self._last: StepResult | None = None
         self.t = 0.0
+
+    can_steer = False
+    """Whether the page's steering keys and buttons turn the wheels."""
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        """The pose the robot steers to a goal by (its odometry) [m, m, rad]."""
+        raise NotImplementedError
+
+    def _control(self, t: float) -> Snapshot:
+        """One control step at ``t`` [s] with the targets as they are."""
+        raise NotImplementedError
+
+    def _turn_steering(self, angle: float) -> None:
+        """Turn the steerable wheels by ``angle`` [rad] (robots that steer by hand)."""
+
+    def close(self) -> None:
+        """Release what the robot holds (engine, link)."""
 
     # --- inputs (any thread) --------------------------------------------------------------------
     def _put(self, kind: str, value: object) -> None:
@@ -173,7 +162,7 @@ class LiveRobot:
             self.teleop.release_all()
             self._set_twist[:] = 0.0
         elif kind == "goal":
-            limits = self.runtime.filter.limits
+            limits = self.limits
             self.seeker = GoalSeeker(
                 self.robot,
                 value,  # type: ignore[arg-type]
@@ -202,19 +191,12 @@ class LiveRobot:
         average."""
         if self.seeker is None:
             return None
-        twist = self.seeker.twist(self.runtime.pose, lead=1.5 * max(0.0, t - self.t))
+        twist = self.seeker.twist(self.pose, lead=1.5 * max(0.0, t - self.t))
         if twist is None:
             self.arrived = self.seeker.goal
             self.seeker = None
             return np.zeros(3)
         return twist
-
-    def _turn_steering(self, angle: float) -> None:
-        if not len(self._steer_hand) or np.any(self.target) or np.any(self.runtime.filter.current):
-            return
-        current = self._last.steer if self._last is not None and self._last.steer is not None else self._steer_hand
-        self._steer_hand = np.asarray(current, dtype=float) + angle
-        self.runtime.steer_to(self._steer_hand)
 
     def step(self, t: float) -> tuple[Snapshot, list[str]]:
         """Apply the inputs and run one control step at time ``t`` [s]; the snapshot and the page
@@ -233,6 +215,60 @@ class LiveRobot:
         if np.any(self.teleop.target) and t - self._last_key_message > KEY_SILENCE:
             self.teleop.release_all()  # the page fell silent with a key held
         return self._control(t), actions
+
+
+class LiveRobot(PageRobot):
+    """``robot`` simulated behind the page (module docstring): ``engine`` kinematic or physics,
+    ``limits`` and ``timeout`` [s] the runtime's command filter; ``step`` [s]: the physics
+    engine's time step (None: its default)."""
+
+    def __init__(
+        self,
+        robot: Robot,
+        engine: str = "kinematic",
+        *,
+        speed: float = 0.2,
+        turn: float = 0.5,
+        limits: MotionLimits | None = None,
+        timeout: float = 0.5,
+        step: float | None = None,
+    ):
+        if engine not in ENGINES:
+            raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
+        super().__init__(robot, speed=speed, turn=turn, limits=limits)
+        self.engine = engine
+        if engine == "physics":
+            from ..physics.backend import PhysicsBackend
+            from ..physics.mjcf import DEFAULT_STEP
+
+            self.backend: SimBackend | PhysicsBackend = PhysicsBackend(robot, step=step or DEFAULT_STEP)
+        else:
+            self.backend = SimBackend(robot)
+        self.runtime = BaseRuntime(robot, self.backend, limits=self.limits, cmd_vel_timeout=timeout)
+        self.can_steer = bool(robot.steerable)
+        names = [w.name for w in self.description.wheels]
+        self._rolling = np.array([names.index(n) for n in robot.rolling_names], dtype=int)
+        self._steered = np.array([names.index(n) for n in robot.steer_names], dtype=int)
+        self._angles = np.zeros(len(names))
+        self.joints = JointMotion(robot, robot.rolling_names, self.description)  # castors, rollers
+        self._castors = np.array([names.index(n) for n in self.joints.castor_names], dtype=int)
+        self._swedish = [i for i, w in enumerate(self.description.wheels) if w.rollers is not None]
+        self._moved = np.zeros(3)  # the twist the kinematic robot moved at since the last step
+        self._speeds = np.zeros(len(names))  # the kinematic wheels' speeds over the coming interval
+        self._steer_hand = np.zeros(len(robot.steerable))
+        self._last: StepResult | None = None
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        x, y, theta = self.runtime.pose
+        return float(x), float(y), float(theta)
+
+    def _turn_steering(self, angle: float) -> None:
+        if not len(self._steer_hand) or np.any(self.target) or np.any(self.runtime.filter.current):
+            return
+        current = self._last.steer if self._last is not None and self._last.steer is not None else self._steer_hand
+        self._steer_hand = np.asarray(current, dtype=float) + angle
+        self.runtime.steer_to(self._steer_hand)
 
     def _control(self, t: float) -> Snapshot:
         """One control step at ``t`` [s] with the targets as they are."""

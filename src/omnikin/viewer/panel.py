@@ -28,7 +28,7 @@ import viser
 import viser.uplot as uplot
 
 from ..physics.description import PhysicalRobot
-from .live import LiveRobot, Snapshot
+from .live import PageRobot, Snapshot
 
 PLOT_SPAN = 10.0
 """Time span [s] of the wheel-speed plot."""
@@ -56,10 +56,10 @@ def robot_extent(description: PhysicalRobot) -> float:
 class DriveControls:
     """The Drive folder of a live viewer: key help, a twist held until Stop, steering by hand."""
 
-    def __init__(self, server: viser.ViserServer, live: LiveRobot):
+    def __init__(self, server: viser.ViserServer, live: PageRobot):
         self.live = live
         gui = server.gui
-        limits = live.runtime.filter.limits
+        limits = live.limits
         top_speed = limits.linear if limits.linear is not None else 2 * live.teleop.speed
         top_turn = limits.angular if limits.angular is not None else 2 * live.teleop.turn
         with gui.add_folder("Drive"):
@@ -71,7 +71,7 @@ class DriveControls:
             stop = gui.add_button("Stop", color="red", hint="every target zero (space)")
             drive.on_click(lambda _: live.set_twist((self.vx.value, self.vy.value, self.omega.value)))
             stop.on_click(lambda _: self.stop())
-            if live.robot.steerable:
+            if live.can_steer:
                 steer = gui.add_button_group("steer (at rest)", ("-15 deg", "+15 deg"))
                 steer.on_click(lambda e: live.steer_by(math.radians(15.0 if e.target.value == "+15 deg" else -15.0)))
 
@@ -86,7 +86,7 @@ class GoalMarker:
     it) and the Goal folder: Go (drive there, :class:`~omnikin.runtime.goal.GoalSeeker`, by the
     odometry), the path the layout takes, and whether dropping the marker starts the drive."""
 
-    def __init__(self, server: viser.ViserServer, live: LiveRobot):
+    def __init__(self, server: viser.ViserServer, live: PageRobot):
         self.live = live
         self.controls = server.scene.add_transform_controls(
             "/goal",
