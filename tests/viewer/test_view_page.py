@@ -54,10 +54,11 @@ def view():
     for proc in procs:
         proc.terminate()
         try:
-            proc.communicate(timeout=10)
+            _, err = proc.communicate(timeout=10)
         except subprocess.TimeoutExpired:
             proc.kill()
-            proc.communicate()
+            _, err = proc.communicate()
+        assert "Traceback" not in err, f"the viewer printed a traceback: {err[-2000:]}"
 
 
 def pose(page):

@@ -37,6 +37,11 @@ replay (--replay: no driving; keys 1/2/3 still move the camera):
 The Replay folder has the run selector, a time slider, Play/Pause and the playback speed; the
 whole true and odometry paths of the run are drawn, the robot at the slider's time.
 
+live ROS (--ros): the page follows a running 'omnikin ros ROBOT' node in the same
+ROS_DOMAIN_ID: the robot at its ground_truth (else its odometry), its odom and joint_states;
+the keys, controls and goal publish cmd_vel (the node's limits and cmd_vel_timeout act).
+  omnikin ros tomasi-omni3 &  omnikin view tomasi-omni3 --ros
+
 examples:
   omnikin view tomasi-omni3
   omnikin view mecanum4 --engine physics --port 8081
@@ -63,8 +68,16 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument(
         "--engine",
         choices=("kinematic", "physics"),
-        default="kinematic",
-        help="kinematic: moved exactly by its wheels; physics: MuJoCo with rollers (extra physics)",
+        help="kinematic (default): moved exactly by its wheels; physics: MuJoCo with rollers (extra physics)",
+    )
+    sp.add_argument(
+        "--ros",
+        action="store_true",
+        help="follow a running 'omnikin ros ROBOT' node (odom, joint_states, ground_truth) in ROS_DOMAIN_ID "
+        "and drive it: the page's commands go to its cmd_vel (extra ros)",
+    )
+    sp.add_argument(
+        "--stamped", action="store_true", help="--ros: send geometry_msgs/TwistStamped (the node's use_stamped_vel)"
     )
     sp.add_argument("--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1: this computer only)")
     sp.add_argument(
@@ -75,7 +88,10 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("--max-speed", type=number, default=0.3, metavar="V", help="speed limit [m/s] (default 0.3)")
     sp.add_argument("--max-turn", type=number, default=1.0, metavar="W", help="turn rate limit [rad/s] (default 1)")
     sp.add_argument(
-        "--timeout", type=number, default=0.5, metavar="S", help="command timeout [s] (default 0.5; 0: none)"
+        "--timeout",
+        type=number,
+        metavar="S",
+        help="command timeout [s] (default 0.5; 0: none; with --ros the node's cmd_vel_timeout applies)",
     )
     sp.add_argument(
         "--umbmark-side", type=number, default=4.0, metavar="M", help="side of the UMBmark squares drawn [m] (0: none)"
@@ -121,7 +137,7 @@ def cmd_view(args) -> int:
     for flag, value in positive:
         if value <= 0:
             raise InputError(f"{flag} must be positive, got {value:g}")
-    for flag, value in (("--timeout", args.timeout), ("--umbmark-side", args.umbmark_side)):
+    for flag, value in (("--timeout", args.timeout or 0.0), ("--umbmark-side", args.umbmark_side)):
         if value < 0:
             raise InputError(f"{flag} must be >= 0, got {value:g}")
     if args.duration is not None and args.duration <= 0:
@@ -129,9 +145,15 @@ def cmd_view(args) -> int:
     if args.port > 65535:
         raise InputError(f"--port must be 0 to 65535, got {args.port}")
     if args.replay is not None:
+        if args.ros:
+            raise InputError("--ros and --replay are two different views: give one of them")
         return cmd_replay(args)
     if args.robot is None:
         raise InputError("view: give ROBOT (a preset name or a robot file), or --replay REPORT_DIR")
+    if args.stamped and not args.ros:
+        raise InputError("--stamped applies only to --ros")
+    if args.ros:
+        return cmd_ros_view(args)
     if args.step is not None and args.engine != "physics":
         raise InputError("--step applies only to --engine physics")
     require_viser()
@@ -140,30 +162,64 @@ def cmd_view(args) -> int:
         from ..physics.mjcf import time_step
 
         time_step(args.step)
-    from ..viewer.app import LiveViewer
     from ..viewer.live import LiveRobot
 
+    engine = args.engine or "kinematic"
     live = LiveRobot(
         robot,
-        args.engine,
+        engine,
         speed=args.speed,
         turn=args.turn,
         limits=MotionLimits(linear=args.max_speed, angular=args.max_turn),
-        timeout=args.timeout,
+        timeout=0.5 if args.timeout is None else args.timeout,
         step=args.step,
     )
+    return serve_live(live, args, f"{robot.name} ({engine})")
+
+
+def serve_live(live, args, what: str) -> int:
+    """Serve the live page of ``live`` (a :class:`~omnikin.viewer.live.PageRobot`) until
+    --duration or Ctrl-C; ``what`` names it in the line with the address."""
+    from ..viewer.app import LiveViewer
+
     try:
         viewer = LiveViewer(live, args.host, args.port, umbmark_side=args.umbmark_side)
     except BaseException:
         live.close()
         raise
     try:
-        print(f"omnikin view: {robot.name} ({args.engine}) at {viewer.url}  (Ctrl-C stops)", flush=True)
+        print(f"omnikin view: {what} at {viewer.url}  (Ctrl-C stops)", flush=True)
         viewer.run(args.duration)
     finally:
         viewer.close()
     sys.stdout.flush()
     return 0
+
+
+def cmd_ros_view(args) -> int:
+    """``--ros``: the page follows and drives a running node (:mod:`omnikin.viewer.ros_robot`)."""
+    import os
+
+    from ..errors import InputError
+    from ..limits import MotionLimits
+
+    for flag, given in (("--engine", args.engine), ("--step", args.step), ("--timeout", args.timeout)):
+        if given is not None:
+            raise InputError(f"{flag} does not apply to --ros (the node simulates or drives the robot)")
+    require_viser()
+    from ..viewer.ros_robot import RosRobot, require_ros
+
+    require_ros()
+    robot = load_robot(args.robot)
+    live = RosRobot(
+        robot,
+        speed=args.speed,
+        turn=args.turn,
+        limits=MotionLimits(linear=args.max_speed, angular=args.max_turn),
+        stamped=args.stamped,
+    )
+    domain = os.environ.get("ROS_DOMAIN_ID", "0")
+    return serve_live(live, args, f"the ROS node of {robot.name} (ROS_DOMAIN_ID {domain})")
 
 
 POSE_BYTES = 600
@@ -176,8 +232,8 @@ def cmd_replay(args) -> int:
     from ..errors import InputError
     from ..io.bags import check_topic
 
-    if args.engine != "kinematic" or args.step is not None:
-        flag = "--step" if args.step is not None else "--engine"
+    if args.engine is not None or args.step is not None or args.timeout is not None:
+        flag = "--step" if args.step is not None else ("--engine" if args.engine is not None else "--timeout")
         raise InputError(f"{flag} does not apply to --replay (the runs are recorded, not simulated)")
     require_viser()
     from ..viewer.replay_page import ReplayViewer

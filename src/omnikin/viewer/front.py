@@ -209,13 +209,17 @@ class FrontServer:
             ) as inner:
 
                 async def pump(source, sink) -> None:
-                    async for message in source:
-                        await sink.send(message)
+                    try:
+                        async for message in source:
+                            await sink.send(message)
+                    except ConnectionClosed:
+                        pass  # either side went away: the other is closed below
 
                 tasks = [asyncio.create_task(pump(connection, inner)), asyncio.create_task(pump(inner, connection))]
-                done, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+                _, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
                 for task in pending:
                     task.cancel()
+                await asyncio.gather(*pending, return_exceptions=True)
         except (ConnectionClosed, OSError):
             pass
 

@@ -1,0 +1,216 @@
+"""The robot behind the page is a running ``omnikin ros`` node (``omnikin view ROBOT --ros``,
+extras ``viewer`` and ``ros``).
+
+:class:`RosRobot` is a ROS 2 node of its own (``omnikin_view``, in the domain of
+``ROS_DOMAIN_ID`` like any ROS 2 program) that subscribes to the node's ``odom``,
+``joint_states`` and, when a simulated back-end publishes it, ``ground_truth``
+(``nav_msgs/Odometry``, ``sensor_msgs/JointState``; :mod:`omnikin.ros.node`), and publishes
+the page's commands on ``cmd_vel`` (``geometry_msgs/Twist``, or ``TwistStamped`` with
+``stamped``, as the node's ``use_stamped_vel``) at every control step while a target is set,
+and zero once when it is released. The node's own command filter, limits and timeout act on
+them: the page drives the robot as any ROS teleop would, and a page that falls silent stops it
+(the node's ``cmd_vel_timeout``).
+
+The page shows what the node publishes: the pose of ``ground_truth`` as the robot (else the
+odometry's), the odometry's pose and twist, the wheels, steering and rollers of
+``joint_states`` (joint names as in the URDF, :mod:`omnikin.physics.urdf`: ``W``, ``W_steer``,
+``W_roller_ROW_K``). The goal seeker steers by the odometry. Steering by hand is not a
+``cmd_vel`` command: the page's steering keys do nothing here.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+
+import numpy as np
+
+from ..errors import InputError
+from ..limits import MotionLimits
+from ..model import Robot
+from .live import PageRobot, Snapshot
+
+NODE_NAME = "omnikin_view"
+TRUTH_FRESH = 1.0
+"""Age [s] beyond which the last ``ground_truth`` no longer stands for the robot (the odometry
+does)."""
+
+
+def require_ros():
+    """rclpy and the message packages, or one line naming the extra."""
+    try:
+        import rclpy  # noqa: F401
+        from geometry_msgs.msg import Twist, TwistStamped  # noqa: F401
+        from nav_msgs.msg import Odometry  # noqa: F401
+        from sensor_msgs.msg import JointState  # noqa: F401
+    except ImportError as e:
+        raise InputError(
+            f'omnikin view --ros needs rclpy and the ROS 2 messages: pip install "omnikin[ros]" ({e})'
+        ) from None
+
+
+def _yaw(q) -> float:
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def _pose(msg) -> tuple[float, float, float]:
+    p = msg.pose.pose
+    return float(p.position.x), float(p.position.y), _yaw(p.orientation)
+
+
+class RosRobot(PageRobot):
+    """A running node followed and driven from the page (module docstring)."""
+
+    def __init__(
+        self,
+        robot: Robot,
+        *,
+        speed: float = 0.2,
+        turn: float = 0.5,
+        limits: MotionLimits | None = None,
+        stamped: bool = False,
+    ):
+        require_ros()
+        import rclpy
+        from geometry_msgs.msg import Twist, TwistStamped
+        from nav_msgs.msg import Odometry
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from sensor_msgs.msg import JointState
+
+        super().__init__(robot, speed=speed, turn=turn, limits=limits)
+        self._twist_type = TwistStamped if stamped else Twist
+        self.stamped = stamped
+        self._lock = threading.Lock()
+        self.odom = None  # the last messages (their arrival times on the page's clock)
+        self.truth = None
+        self.joint_states: dict[str, tuple[float, float]] = {}
+        self._truth_at = -math.inf
+        self.messages = {"odom": 0, "ground_truth": 0, "joint_states": 0}
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        try:
+            self.node = rclpy.create_node(NODE_NAME, context=self.context)
+            qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+            self.node.create_subscription(Odometry, "odom", self._on_odom, qos)
+            self.node.create_subscription(Odometry, "ground_truth", self._on_truth, qos)
+            self.node.create_subscription(JointState, "joint_states", self._on_joints, qos)
+            self.publisher = self.node.create_publisher(self._twist_type, "cmd_vel", qos)
+            self.executor = SingleThreadedExecutor(context=self.context)
+            self.executor.add_node(self.node)
+        except BaseException:
+            rclpy.shutdown(context=self.context)
+            raise
+        self._spinner = threading.Thread(target=self._spin, name="omnikin-view-ros", daemon=True)
+        self._spinner.start()
+        names = [w.name for w in self.description.wheels]
+        self._names = names
+        self._command = np.zeros(3)
+        self._sent_zero = True
+
+    def _spin(self) -> None:
+        try:
+            self.executor.spin()
+        except Exception:  # noqa: BLE001 (the context shut down under it: the viewer is closing)
+            pass
+
+    def _now(self) -> float:
+        return self.clock() if self.clock is not None else 0.0
+
+    # --- subscriptions (the spinner's thread) -----------------------------------------------------
+    def _on_odom(self, msg) -> None:
+        with self._lock:
+            self.odom = msg
+            self.messages["odom"] += 1
+
+    def _on_truth(self, msg) -> None:
+        with self._lock:
+            self.truth = msg
+            self._truth_at = self._now()
+            self.messages["ground_truth"] += 1
+
+    def _on_joints(self, msg) -> None:
+        n = min(len(msg.name), len(msg.position))
+        velocities = list(msg.velocity) + [0.0] * max(0, n - len(msg.velocity))
+        with self._lock:
+            for name, position, velocity in zip(msg.name[:n], msg.position[:n], velocities[:n], strict=True):
+                self.joint_states[name] = (float(position), float(velocity))
+            self.messages["joint_states"] += 1
+
+    # --- the page's robot -------------------------------------------------------------------------
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        with self._lock:
+            odom = self.odom
+        return _pose(odom) if odom is not None else (0.0, 0.0, 0.0)
+
+    def _publish(self, twist: np.ndarray) -> None:
+        msg = self._twist_type()
+        body = msg.twist if self.stamped else msg
+        if self.stamped:
+            msg.header.stamp = self.node.get_clock().now().to_msg()
+            msg.header.frame_id = "base_link"
+        body.linear.x, body.linear.y, body.angular.z = (float(v) for v in twist)
+        self.publisher.publish(msg)
+
+    def _control(self, t: float) -> Snapshot:
+        seeking = self._seek(t)
+        target = self.target if seeking is None else seeking
+        if np.any(target):
+            self._publish(target)
+            self._sent_zero = False
+        elif not self._sent_zero:
+            self._publish(np.zeros(3))  # released: stop now, not at the node's timeout
+            self._sent_zero = True
+        self._command = target
+        self.t = t
+        return self._snapshot(t, target)
+
+    def _snapshot(self, t: float, target: np.ndarray) -> Snapshot:
+        with self._lock:
+            odom, truth, truth_at = self.odom, self.truth, self._truth_at
+            joints = dict(self.joint_states)
+        odometry = _pose(odom) if odom is not None else (0.0, 0.0, 0.0)
+        fresh = truth is not None and t - truth_at <= TRUTH_FRESH
+        twist = (0.0, 0.0, 0.0)
+        if odom is not None:
+            tw = odom.twist.twist
+            twist = (float(tw.linear.x), float(tw.linear.y), float(tw.angular.z))
+        n = len(self._names)
+        angles, speeds, steer = np.zeros(n), np.zeros(n), np.full(n, np.nan)
+        rollers: list[float | None] = [None] * n
+        roller_speeds: list[float | None] = [None] * n
+        for i, wheel in enumerate(self.description.wheels):
+            angles[i], speeds[i] = joints.get(wheel.name, (0.0, 0.0))
+            if wheel.steering is not None and f"{wheel.name}_steer" in joints:
+                steer[i] = joints[f"{wheel.name}_steer"][0]
+            if wheel.rollers is not None:
+                first = wheel.rollers.rollers[0]
+                rollers[i], roller_speeds[i] = joints.get(f"{wheel.name}_roller_{first.row}_{first.index}", (0.0, 0.0))
+        return Snapshot(
+            t=t,
+            truth=_pose(truth) if fresh else odometry,
+            odometry=odometry,
+            twist=twist,
+            command=(float(target[0]), float(target[1]), float(target[2])),
+            target=(float(target[0]), float(target[1]), float(target[2])),
+            wheel_angles=angles,
+            wheel_speeds=speeds,
+            steer=steer,
+            residual=(),
+            roller_angles=tuple(rollers),
+            roller_speeds=tuple(roller_speeds),
+        )
+
+    def close(self) -> None:
+        """Stop the robot (a zero command), leave the ROS graph."""
+        import rclpy
+
+        try:
+            if not self._sent_zero:
+                self._publish(np.zeros(3))
+            self.executor.shutdown(timeout_sec=1.0)
+            self.node.destroy_node()
+        finally:
+            rclpy.shutdown(context=self.context)
+            self._spinner.join(2.0)

@@ -1,0 +1,30 @@
+"""``omnikin view``: options that do not go together, and values out of range, are one line
+each, before anything is served."""
+
+import pytest
+
+from conftest import run_cli
+
+
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (["tomasi-omni3", "--ros", "--engine", "physics"], "--engine does not apply to --ros"),
+        (["tomasi-omni3", "--ros", "--timeout", "1"], "--timeout does not apply to --ros"),
+        (["tomasi-omni3", "--ros", "--step", "0.001"], "--step does not apply to --ros"),
+        (["tomasi-omni3", "--stamped"], "--stamped applies only to --ros"),
+        (["tomasi-omni3", "--ros", "--replay", "somewhere"], "--ros and --replay are two different views"),
+        (["tomasi-omni3", "--step", "0.001"], "--step applies only to --engine physics"),
+        (["tomasi-omni3", "--speed", "0"], "--speed must be positive"),
+        (["tomasi-omni3", "--timeout", "-1"], "--timeout must be >= 0"),
+        (["tomasi-omni3", "--port", "65536"], "--port must be 0 to 65535"),
+        (["tomasi-omni3", "--duration", "0"], "--duration must be positive"),
+        ([], "give ROBOT"),
+    ],
+)
+def test_view_refuses_in_one_line(capsys, argv, words):
+    rc, out, err = (
+        run_cli(capsys, "view", *argv, "--port", "0") if "--port" not in argv else run_cli(capsys, "view", *argv)
+    )
+    assert rc == 2 and out == ""
+    assert words in err and len(err.strip().splitlines()) == 1, err
