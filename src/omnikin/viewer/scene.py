@@ -74,6 +74,22 @@ def ellipsoid_mesh(semi_axes: Sequence[float], segments: int = 12) -> tuple[np.n
     return vertices.astype(np.float32), np.asarray(faces, dtype=np.int32)
 
 
+def drawn_box(description: PhysicalRobot) -> np.ndarray:
+    """Half sizes [m] of a box chassis as drawn: the description's box reaches the wheels' hubs,
+    which would hide them from above; each side is drawn inside the wheels beside it (those
+    farther out than half the box), unless that would leave less than 30 % of it."""
+    chassis = description.chassis
+    half = np.asarray(chassis.size, dtype=float).copy()
+    centre = np.asarray(chassis.centre[:2], dtype=float)
+    for axis in (0, 1):
+        beside = [w for w in description.wheels if abs(w.hub[axis] - centre[axis]) >= 0.5 * half[axis]]
+        if beside:
+            inner = min(abs(w.hub[axis] - centre[axis]) - 0.6 * max(w.width, 0.2 * w.radius) for w in beside)
+            if inner >= 0.3 * half[axis]:
+                half[axis] = min(half[axis], inner)
+    return half
+
+
 def roller_base_rotations(wheel: WheelBody) -> np.ndarray:
     """Rotation matrices (n, 3, 3) taking a roller's own x to its spin axis in the wheel frame
     at wheel angle 0: ``R_y(psi) R_z(gamma)``, ``psi`` the roller's angle about the axle (from its
@@ -112,7 +128,7 @@ class RobotDrawing:
             scene.add_box(
                 f"{root}/chassis",
                 color=CHASSIS_COLOUR,
-                dimensions=2 * np.asarray(chassis.size, dtype=float),
+                dimensions=2 * drawn_box(description),
                 position=chassis.centre,
                 opacity=opacity,
             )
