@@ -4,6 +4,8 @@ against other web sites (real sockets on loopback, a real WebSocket client)."""
 import http.client
 import json
 import queue
+import socket
+import time
 
 import pytest
 from websockets.exceptions import ConnectionClosed, InvalidStatus
@@ -89,3 +91,51 @@ def test_a_port_in_use_is_one_line_naming_the_address(front):
         match=rf"cannot listen on '127\.0\.0\.1':{server.port} \(address already in use\): choose another --port",
     ):
         other.start()
+
+
+def test_a_flood_of_key_messages_is_dropped_beyond_what_a_page_sends(front):
+    from omnikin.viewer.front import KEY_BURST, KEY_RATE
+
+    server, received = front
+    with connect(f"ws://127.0.0.1:{server.port}{KEYS_PATH}", origin=f"http://127.0.0.1:{server.port}") as ws:
+        start = time.monotonic()
+        for _ in range(2000):
+            ws.send('{"type": "alive"}')
+        elapsed = time.monotonic() - start
+    assert received.get(timeout=5) == {"type": "alive"}
+    time.sleep(0.3)
+    assert server.key_messages <= KEY_BURST + KEY_RATE * (elapsed + 0.5)
+    assert server.key_messages + server.rejected == 2000
+
+
+def test_requests_that_are_not_a_get_or_not_http_are_closed_and_counted_without_a_word(front, capfd):
+    server, _ = front
+    for raw in (b"POST / HTTP/1.1\r\nHost: x\r\n\r\n", b"GARBAGE\r\n\r\n", b"GET / HTTP/1.1\r\nX: " + b"a" * 100_000):
+        with socket.create_connection(("127.0.0.1", server.port), timeout=5) as s:
+            s.sendall(raw + b"\r\n\r\n")
+            s.settimeout(5)
+            try:
+                while s.recv(65536):
+                    pass
+            except OSError:
+                pass
+    time.sleep(0.3)
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+    assert server.problems >= 3
+
+
+def test_websockets_beyond_the_limit_are_closed(front):
+    from omnikin.viewer.front import MAX_CONNECTIONS
+
+    server, _ = front
+    origin = f"http://127.0.0.1:{server.port}"
+    sockets = [connect(f"ws://127.0.0.1:{server.port}{KEYS_PATH}", origin=origin) for _ in range(MAX_CONNECTIONS)]
+    try:
+        with connect(f"ws://127.0.0.1:{server.port}{KEYS_PATH}", origin=origin) as extra:
+            with pytest.raises(ConnectionClosed) as e:
+                extra.recv(timeout=5)
+            assert e.value.rcvd is not None and e.value.rcvd.code == 1013
+    finally:
+        for ws in sockets:
+            ws.close()

@@ -125,3 +125,17 @@ def test_rollers_turn_as_the_sideways_slide_of_their_contact_says():
     for i, wheel in enumerate(live.description.wheels):
         expected = -math.cos(wheel.drive) * travelled / wheel.rollers.radius
         assert s.roller_angles[i] == pytest.approx(expected, rel=1e-9, abs=1e-9)
+
+
+def test_a_flood_of_inputs_makes_a_bounded_number_of_extra_control_steps():
+    from omnikin.viewer.live import MAX_SUBSTEPS
+
+    live = LiveRobot(load_robot("tomasi-omni3"))
+    arrivals = iter(np.linspace(0.001, 0.0199, 500))
+    live.clock = lambda: float(next(arrivals))
+    live.step(0.0)
+    steps = live.runtime.steps
+    for _ in range(500):
+        live.key({"type": "alive"})
+    live.step(0.02)
+    assert live.runtime.steps - steps <= MAX_SUBSTEPS + 1

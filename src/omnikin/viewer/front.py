@@ -14,6 +14,11 @@ viser server that listens on loopback only:
 - any other WebSocket: relayed both ways, message by message, to the viser server (the
   client connects to the page's own origin, so it lands here).
 
+Nothing a peer sends prints a traceback: the WebSocket library's log (a request that is not a
+GET, a broken handshake, a peer gone mid-message) and any error left in the server's tasks are
+counted in :attr:`FrontServer.problems` (the last one in :attr:`FrontServer.last_problem`),
+never printed; the connection concerned is closed.
+
 Every WebSocket must come from a page of this server (its ``Origin`` header names the same
 host and port as its ``Host`` header): another web site open in the user's browser cannot
 drive the robot (cross-site WebSocket hijacking).
@@ -25,6 +30,7 @@ import asyncio
 import gzip
 import http
 import json
+import logging
 import os
 import threading
 from collections.abc import Callable
@@ -60,6 +66,11 @@ KEY_ACTIONS = (
 """The actions :file:`teleop.js` sends (W S A D Q E, space, ] [, 1 2 3)."""
 MAX_KEY_MESSAGE = 256
 """Longest key message [bytes]; a longer one closes its socket."""
+KEY_RATE, KEY_BURST = 100.0, 50
+"""Key messages a socket may send [1/s] after a burst of that many: a page sends one per key
+change and an ``alive`` every 0.1 s; the rest is dropped and counted in ``rejected``."""
+MAX_CONNECTIONS = 64
+"""WebSockets served at once (pages' scene relays and key channels); more are closed (1013)."""
 START_TIMEOUT = 10.0
 """Longest wait [s] for the server to listen."""
 
@@ -109,6 +120,18 @@ def same_origin(request: Request) -> bool:
     return parts.scheme in ("http", "https") and parts.netloc.lower() == host.lower()
 
 
+class _Counted(logging.Handler):
+    """Counts what the WebSocket library logs for one server, printing nothing."""
+
+    def __init__(self, front: FrontServer):
+        super().__init__(logging.WARNING)
+        self.front = front
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.front.problems += 1
+        self.front.last_problem = record.getMessage()[:200]
+
+
 def _reason(error: BaseException) -> str:
     """What went wrong when listening, in a few words (``address already in use``)."""
     if isinstance(error, OSError):
@@ -140,6 +163,11 @@ class FrontServer:
         self.on_key = on_key
         self.rejected = 0
         self.key_messages = 0
+        self.connections = 0  # WebSockets open now
+        self.problems = 0  # what the WebSocket library logged, or a task left as an error (module docstring)
+        self.last_problem = ""
+        self._log = logging.Logger("omnikin.viewer.front")  # not the root's: nothing reaches the terminal
+        self._log.addHandler(_Counted(self))
         page = viser_page()
         self._page = page
         self._page_gzip = gzip.compress(page)
@@ -177,15 +205,31 @@ class FrontServer:
 
     # --- WebSockets ----------------------------------------------------------------------------
     async def _handle(self, connection: ServerConnection) -> None:
-        request = connection.request
-        if request is not None and urlsplit(request.path).path == KEYS_PATH:
-            await self._keys(connection)
-        else:
-            await self._relay(connection)
+        if self.connections >= MAX_CONNECTIONS:
+            self.rejected += 1
+            await connection.close(code=1013, reason="too many connections")
+            return
+        self.connections += 1
+        try:
+            request = connection.request
+            if request is not None and urlsplit(request.path).path == KEYS_PATH:
+                await self._keys(connection)
+            else:
+                await self._relay(connection)
+        finally:
+            self.connections -= 1
 
     async def _keys(self, connection: ServerConnection) -> None:
+        loop = asyncio.get_running_loop()
+        tokens, refilled = float(KEY_BURST), loop.time()
         try:
             async for text in connection:
+                now = loop.time()
+                tokens, refilled = min(float(KEY_BURST), tokens + (now - refilled) * KEY_RATE), now
+                if tokens < 1.0:
+                    self.rejected += 1  # faster than any page types: dropped
+                    continue
+                tokens -= 1.0
                 if len(text) > MAX_KEY_MESSAGE:
                     self.rejected += 1
                     await connection.close(code=1009, reason="key message too long")
@@ -243,8 +287,13 @@ class FrontServer:
                 f"cannot listen on {shorten(self.host)}:{self.port} ({_reason(error)}): choose another --port or --host"
             ) from None
 
+    def _on_loop_error(self, loop, context: dict) -> None:
+        self.problems += 1
+        self.last_problem = str(context.get("exception") or context.get("message", ""))[:200]
+
     def _run(self) -> None:
         loop = asyncio.new_event_loop()
+        loop.set_exception_handler(self._on_loop_error)
         self._loop = loop
         try:
             loop.run_until_complete(self._serve())
@@ -264,6 +313,7 @@ class FrontServer:
             select_subprotocol=self._select_subprotocol,
             max_size=None,
             compression=None,
+            logger=self._log,
         ) as server:
             self.port = server.sockets[0].getsockname()[1] if server.sockets else self.port
             self._ready.set()

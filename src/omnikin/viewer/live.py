@@ -40,6 +40,11 @@ KEY_SILENCE = 1.0
 """Time [s] after which a held key whose page sent nothing (no ``alive``, sent every 0.1 s while a
 key is down) is released: ten heartbeats, so that a page whose thread is busy drawing a frame in
 software (100-300 ms on a loaded machine without a GPU) does not stop the robot."""
+MAX_SUBSTEPS = 8
+"""Inputs that get a control step of their own at their arrival, per step; later ones in the
+same step (a flood) are applied at the step's time, so the work per step stays bounded."""
+MIN_SUBSTEP = 0.001
+"""Shortest interval [s] between two control steps made for arrivals."""
 STEER_STEP = math.radians(15.0)
 """Steering turned by one press of ``[`` or ``]`` [rad]."""
 
@@ -204,13 +209,15 @@ class PageRobot:
         and ``t`` (its :attr:`clock` time) gets a control step at its arrival first, so a loop that
         runs late does not delay what the input does."""
         actions: list[str] = []
-        while True:
+        substeps = 0
+        for _ in range(self._inputs.qsize()):  # what is queued now; later inputs wait for the next step
             try:
                 at, kind, value = self._inputs.get_nowait()
             except queue.Empty:
                 break
-            if at is not None and self.t < at < t:
+            if at is not None and self.t + MIN_SUBSTEP < at < t and substeps < MAX_SUBSTEPS:
                 self._control(at)
+                substeps += 1
             actions += self._apply_input(t if at is None else min(at, t), kind, value)
         if np.any(self.teleop.target) and t - self._last_key_message > KEY_SILENCE:
             self.teleop.release_all()  # the page fell silent with a key held
