@@ -139,3 +139,71 @@ def test_websockets_beyond_the_limit_are_closed(front):
     finally:
         for ws in sockets:
             ws.close()
+
+
+@pytest.mark.parametrize("name", ["evil.example", "attacker.com", "127.0.0.1.nip.io"])
+def test_a_host_name_that_is_not_this_computer_s_gets_neither_page_nor_socket(front, name):
+    """DNS rebinding: a site re-points its name at 127.0.0.1; its page then sends Host and Origin
+    with its own name, which match each other but name no address of this computer."""
+    server, received = front
+    host = f"{name}:{server.port}"
+    assert get(server, "/", headers={"Host": host})[0] == 403
+    assert upgrade(server, host=host, origin=f"http://{host}").startswith(b"HTTP/1.1 403")
+    assert received.empty()
+
+
+def test_a_request_with_two_host_or_origin_headers_is_refused(front):
+    server, _ = front
+    own = f"127.0.0.1:{server.port}"
+    doubled = f"Host: evil.example:{server.port}\r\n"
+    assert upgrade(server, host=own, origin=f"http://{own}", extra=doubled).startswith(b"HTTP/1.1 403")
+    assert upgrade(server, host=own, origin=f"http://{own}").startswith(b"HTTP/1.1 101")
+
+
+def test_localhost_and_address_literals_are_this_computer(front):
+    server, received = front
+    for host in (f"localhost:{server.port}", f"127.0.0.1:{server.port}"):
+        assert get(server, "/", headers={"Host": host})[0] == 200
+    with connect(f"ws://localhost:{server.port}{KEYS_PATH}", origin=f"http://localhost:{server.port}") as ws:
+        ws.send(json.dumps({"type": "press", "action": "back"}))
+        assert received.get(timeout=5) == {"type": "press", "action": "back"}
+
+
+def test_a_message_beyond_the_limit_closes_its_socket_before_it_is_all_read(front):
+    from omnikin.viewer.front import MAX_INCOMING
+
+    server, _ = front
+    with connect(f"ws://127.0.0.1:{server.port}{KEYS_PATH}", origin=f"http://127.0.0.1:{server.port}") as ws:
+        with pytest.raises(ConnectionClosed) as e:
+            ws.send("x" * (MAX_INCOMING + 1))
+            ws.recv(timeout=5)
+    assert e.value.rcvd is None or e.value.rcvd.code == 1009
+
+
+def upgrade(server, *, host, origin, extra="", keep=None):
+    """A WebSocket upgrade of the key channel sent by hand: the server's first reply bytes. With
+    ``keep`` (a list), the open socket is appended to it instead of being closed."""
+    raw = socket.create_connection(("127.0.0.1", server.port), timeout=5)
+    raw.sendall(
+        f"GET {KEYS_PATH} HTTP/1.1\r\nHost: {host}\r\n{extra}Upgrade: websocket\r\nConnection: Upgrade\r\n"
+        f"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\nOrigin: {origin}\r\n\r\n".encode()
+    )
+    reply = raw.recv(4096)
+    if keep is None:
+        raw.close()
+    else:
+        keep.append(raw)
+    return reply
+
+
+def test_a_peer_that_never_answers_the_close_does_not_hold_up_the_stop():
+    server = FrontServer("127.0.0.1", 0, inner_port=9, on_key=lambda m: None)
+    server.start()
+    kept: list = []
+    own = f"127.0.0.1:{server.port}"
+    assert upgrade(server, host=own, origin=f"http://{own}", keep=kept).startswith(b"HTTP/1.1 101")
+    raw = kept[0]  # upgraded; from now on it reads nothing and answers nothing
+    start = time.monotonic()
+    server.stop()
+    raw.close()
+    assert time.monotonic() - start < 3.0

@@ -19,9 +19,13 @@ GET, a broken handshake, a peer gone mid-message) and any error left in the serv
 counted in :attr:`FrontServer.problems` (the last one in :attr:`FrontServer.last_problem`),
 never printed; the connection concerned is closed.
 
-Every WebSocket must come from a page of this server (its ``Origin`` header names the same
-host and port as its ``Host`` header): another web site open in the user's browser cannot
-drive the robot (cross-site WebSocket hijacking).
+Every request must name this computer in its ``Host`` header (an IP address, ``localhost`` or
+one of its host names, :func:`trusted_host`): a web site whose name was re-pointed at this
+computer (DNS rebinding) gets neither the page nor a WebSocket. Every WebSocket must come from a
+page of this server (its ``Origin`` header names the same host and port as its ``Host`` header):
+another web site open in the user's browser cannot drive the robot (cross-site WebSocket
+hijacking). A page's message may be at most :data:`MAX_INCOMING` bytes; a peer that does not
+answer the closing handshake is dropped after :data:`CLOSE_TIMEOUT`.
 """
 
 from __future__ import annotations
@@ -29,9 +33,11 @@ from __future__ import annotations
 import asyncio
 import gzip
 import http
+import ipaddress
 import json
 import logging
 import os
+import socket
 import threading
 from collections.abc import Callable
 from importlib import resources
@@ -69,6 +75,11 @@ MAX_KEY_MESSAGE = 256
 KEY_RATE, KEY_BURST = 100.0, 50
 """Key messages a socket may send [1/s] after a burst of that many: a page sends one per key
 change and an ``alive`` every 0.1 s; the rest is dropped and counted in ``rejected``."""
+MAX_INCOMING = 1 << 20
+"""Largest message [bytes] a page may send (viser's client sends camera moves and GUI values,
+the key script a few bytes): a larger one closes its socket before it is buffered further."""
+CLOSE_TIMEOUT = 1.0
+"""Longest wait [s] for a peer's closing handshake; a silent peer does not hold up the exit."""
 MAX_CONNECTIONS = 64
 """WebSockets served at once (pages' scene relays and key channels); more are closed (1013)."""
 START_TIMEOUT = 10.0
@@ -111,9 +122,40 @@ def viser_page() -> bytes:
     return (page[:head] + tag + page[head:]).encode("utf-8")
 
 
+def own_names() -> frozenset[str]:
+    """The names this computer answers to: ``localhost`` and its host names."""
+    names = {"localhost"}
+    for name in (socket.gethostname(), socket.getfqdn()):
+        if name:
+            names.add(name.lower().rstrip("."))
+    return frozenset(names)
+
+
+def trusted_host(host: str | None, names: frozenset[str]) -> bool:
+    """True when a request's ``Host`` header names this computer: an IP address literal (a web
+    site cannot make a browser send one for its own name) or one of ``names``. Any other name
+    may be a site whose DNS was re-pointed at this computer (DNS rebinding): it gets nothing."""
+    if not host:
+        return False
+    name = urlsplit(f"http://{host}").hostname
+    if name is None:
+        return False
+    try:
+        ipaddress.ip_address(name)
+        return True
+    except ValueError:
+        return name.lower() in names
+
+
+def header(request: Request, name: str) -> str | None:
+    """The request's one header ``name``; None when it is missing or given more than once."""
+    values = request.headers.get_all(name)
+    return values[0] if len(values) == 1 else None
+
+
 def same_origin(request: Request) -> bool:
     """True when the request's ``Origin`` names the host and port it was sent to (``Host``)."""
-    origin, host = request.headers.get("Origin"), request.headers.get("Host")
+    origin, host = header(request, "Origin"), header(request, "Host")
     if not origin or not host:
         return False
     parts = urlsplit(origin)
@@ -166,6 +208,7 @@ class FrontServer:
         self.connections = 0  # WebSockets open now
         self.problems = 0  # what the WebSocket library logged, or a task left as an error (module docstring)
         self.last_problem = ""
+        self._names = own_names()
         self._log = logging.Logger("omnikin.viewer.front")  # not the root's: nothing reaches the terminal
         self._log.addHandler(_Counted(self))
         page = viser_page()
@@ -191,12 +234,15 @@ class FrontServer:
     # --- HTTP ----------------------------------------------------------------------------------
     def _process_request(self, connection: ServerConnection, request: Request) -> Response | None:
         path = urlsplit(request.path).path
-        if request.headers.get("Upgrade", "").lower() == "websocket":
+        if not trusted_host(header(request, "Host"), self._names):
+            self.rejected += 1
+            return _response(http.HTTPStatus.FORBIDDEN, b"unknown host name\n", "text/plain")
+        if (header(request, "Upgrade") or "").lower() == "websocket":
             if not same_origin(request):
                 return _response(http.HTTPStatus.FORBIDDEN, b"cross-origin WebSocket refused\n", "text/plain")
             return None
         if path in ("/", "/index.html"):
-            if "gzip" in request.headers.get("Accept-Encoding", ""):
+            if "gzip" in (header(request, "Accept-Encoding") or ""):
                 return _response(http.HTTPStatus.OK, self._page_gzip, "text/html; charset=utf-8", gzipped=True)
             return _response(http.HTTPStatus.OK, self._page, "text/html; charset=utf-8")
         if path == SCRIPT_PATH:
@@ -249,7 +295,12 @@ class FrontServer:
         protocols = [connection.subprotocol] if connection.subprotocol else None
         try:
             async with connect(
-                f"ws://127.0.0.1:{self.inner_port}", subprotocols=protocols, max_size=None, compression=None
+                f"ws://127.0.0.1:{self.inner_port}",
+                subprotocols=protocols,
+                max_size=None,  # viser's own scene messages (this computer's) may be large
+                compression=None,
+                close_timeout=CLOSE_TIMEOUT,
+                logger=self._log,
             ) as inner:
 
                 async def pump(source, sink) -> None:
@@ -311,8 +362,9 @@ class FrontServer:
             self.port,
             process_request=self._process_request,
             select_subprotocol=self._select_subprotocol,
-            max_size=None,
+            max_size=MAX_INCOMING,
             compression=None,
+            close_timeout=CLOSE_TIMEOUT,
             logger=self._log,
         ) as server:
             self.port = server.sockets[0].getsockname()[1] if server.sockets else self.port

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import logging
 import socket
 from collections.abc import Callable, Iterator
 
@@ -37,12 +38,23 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
+def quiet_library_logs() -> None:
+    """The WebSocket library's own log (viser's server on loopback uses it; a page's malformed
+    message, relayed, makes it log a traceback) goes nowhere: nothing a peer sends prints on the
+    user's terminal (the front server counts its own, :attr:`FrontServer.problems`)."""
+    library = logging.getLogger("websockets")
+    library.propagate = False
+    if not any(isinstance(h, logging.NullHandler) for h in library.handlers):
+        library.addHandler(logging.NullHandler())
+
+
 class PageServers:
     """viser on ``127.0.0.1`` and the front server on ``host:port`` (0: a free port), key messages
     to ``on_key``; raises :class:`~omnikin.errors.InputError` in one line when the address
     cannot be served (nothing left running)."""
 
     def __init__(self, host: str, port: int, on_key: Callable[[dict], None]):
+        quiet_library_logs()
         with quiet():
             self.viser = viser.ViserServer(host="127.0.0.1", port=free_port(), label="omnikin", verbose=False)
         try:
