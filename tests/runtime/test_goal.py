@@ -56,7 +56,7 @@ def test_each_layout_takes_the_path_its_wheels_allow(name, expected):
 @pytest.mark.parametrize("goal", [(1.0, 0.5, math.pi / 2), (-0.6, -0.3, -2.5), (0.0, 0.4, 0.0)])
 def test_a_holonomic_robot_drives_straight_to_the_goal_and_ends_at_its_heading(name, goal):
     live, path = run_to(name, goal)
-    assert live.arrived == goal
+    assert live.arrived is not None and math.dist(live.arrived[:2], goal[:2]) < 0.003  # the odometry at arrival
     end = path[-1]
     assert math.hypot(end[0] - goal[0], end[1] - goal[1]) < 0.0015
     assert abs(math.remainder(end[2] - goal[2], 2 * math.pi)) < math.radians(0.6)
@@ -67,7 +67,7 @@ def test_a_holonomic_robot_drives_straight_to_the_goal_and_ends_at_its_heading(n
 @pytest.mark.parametrize("goal", [(1.0, 0.5, math.pi / 2), (-0.5, 0.1, 0.0), (0.3, -0.8, math.pi)])
 def test_a_differential_drive_turns_drives_straight_and_turns(goal):
     live, path = run_to("diff-drive", goal)
-    assert live.arrived == goal
+    assert live.arrived is not None and math.dist(live.arrived[:2], goal[:2]) < 0.003  # the odometry at arrival
     end = path[-1]
     assert math.hypot(end[0] - goal[0], end[1] - goal[1]) < 0.003
     assert abs(math.remainder(end[2] - goal[2], 2 * math.pi)) < math.radians(0.6)
@@ -80,7 +80,7 @@ def test_a_car_reaches_the_goal_on_arcs_its_steering_allows_even_inside_its_turn
     robot = load_robot("ackermann")
     radius = 1.0 / tightest_curvature(robot)
     live, path = run_to("ackermann", goal)
-    assert live.arrived == goal
+    assert live.arrived is not None and math.dist(live.arrived[:2], goal[:2]) < 0.003  # the odometry at arrival
     end = path[-1]
     assert math.hypot(end[0] - goal[0], end[1] - goal[1]) < 0.002
     assert live.runtime.filter.stats.rejected == 0  # no command needed steering beyond the limits

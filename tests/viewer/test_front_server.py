@@ -15,10 +15,15 @@ from omnikin.errors import InputError
 from omnikin.viewer.front import KEYS_PATH, SCRIPT_PATH, FrontServer, parse_key_message
 
 
+def without_source(message: dict) -> dict:
+    assert isinstance(message.pop("source"), int)  # every message says which socket it came from
+    return message
+
+
 @pytest.fixture
 def front():
     received: queue.SimpleQueue = queue.SimpleQueue()
-    server = FrontServer("127.0.0.1", 0, inner_port=9, on_key=received.put)
+    server = FrontServer("127.0.0.1", 0, inner_port=9, on_key=lambda m: received.put(without_source(m)))
     server.start()
     yield server, received
     server.stop()

@@ -139,3 +139,37 @@ def test_a_flood_of_inputs_makes_a_bounded_number_of_extra_control_steps():
         live.key({"type": "alive"})
     live.step(0.02)
     assert live.runtime.steps - steps <= MAX_SUBSTEPS + 1
+
+
+def test_one_page_s_heartbeat_does_not_keep_another_page_s_held_key():
+    live = LiveRobot(load_robot("tomasi-omni3"))
+
+    def keys(k, t):
+        if k == 0:
+            live.key({"type": "press", "action": "forward", "source": "a"})  # then page a falls silent
+        live.key({"type": "alive", "source": "b"})  # page b is alive and holds nothing
+
+    s = drive(live, 100, keys)
+    release = next(k for k in range(101) if k * DT > KEY_SILENCE)
+    assert s.truth[0] == pytest.approx(ramp_distance(SPEED, ACCEL, 0, release, 100), abs=1e-9)
+
+
+def test_a_page_that_closes_releases_its_keys_only():
+    live = LiveRobot(load_robot("tomasi-omni3"))
+    live.key({"type": "press", "action": "forward", "source": "a"})
+    live.key({"type": "press", "action": "turn_left", "source": "b"})
+    live.step(0.0)
+    live.key({"type": "release_all", "source": "a"})
+    s, _ = live.step(DT)
+    assert s.target == (0.0, 0.0, live.teleop.turn)
+
+
+@pytest.mark.parametrize("goal", [(float("nan"), 0.0, 0.0), (1.0, 0.0, float("inf")), ("a", 1, 2), (1.0,)])
+def test_a_bad_goal_from_the_page_is_refused_in_one_line_and_the_robot_goes_on(goal):
+    live = LiveRobot(load_robot("tomasi-omni3"))
+    live.set_twist((0.1, 0.0, 0.0))
+    live.step(0.0)
+    live.go_to(goal)
+    s, _ = live.step(DT)
+    assert "a goal is three finite numbers" in live.notice and "\n" not in live.notice
+    assert live.seeker is None and s.target == (0.1, 0.0, 0.0)

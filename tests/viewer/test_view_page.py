@@ -176,3 +176,34 @@ def test_a_key_press_reaches_the_pose_on_the_page_within_a_few_control_steps(vie
     assert 0 < latency < 0.5, (
         f"{latency * 1000:.0f} ms from the key to the pose on the page"
     )  # (benchmark: median 33 ms)
+
+
+def test_a_twist_set_on_the_page_stops_when_the_last_page_closes(browser):
+    """The Drive button's twist holds until Stop: with no page left to press Stop, it stops."""
+    import threading
+
+    from omnikin.io.robot_file import load_robot
+    from omnikin.viewer.app import LiveViewer
+    from omnikin.viewer.live import LiveRobot
+
+    live = LiveRobot(load_robot("tomasi-omni3"))
+    viewer = LiveViewer(live, "127.0.0.1", 0)
+    loop = threading.Thread(target=viewer.run, args=(60,), daemon=True)
+    loop.start()
+    context = browser.new_context()
+    try:
+        page = context.new_page()
+        page.goto(viewer.url)
+        page.wait_for_selector(f"{READOUT}[data-x]", timeout=30000)
+        live.set_twist((0.2, 0.0, 0.0))  # as the Drive button does
+        time.sleep(1.0)
+        assert viewer.last.command[0] > 0.1
+        page.close()
+        deadline = time.monotonic() + 5.0
+        while time.monotonic() < deadline and viewer.last.command != (0.0, 0.0, 0.0):
+            time.sleep(0.05)
+        assert viewer.last.command == (0.0, 0.0, 0.0)
+    finally:
+        context.close()
+        viewer.close()
+        loop.join(5)

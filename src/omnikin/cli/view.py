@@ -137,12 +137,15 @@ def cmd_view(args) -> int:
     for flag, value in positive:
         if value <= 0:
             raise InputError(f"{flag} must be positive, got {value:g}")
-    for flag, value in (("--timeout", args.timeout or 0.0), ("--umbmark-side", args.umbmark_side)):
-        if value < 0:
-            raise InputError(f"{flag} must be >= 0, got {value:g}")
+    if args.timeout is not None and args.timeout < 0:
+        raise InputError(f"--timeout must be >= 0, got {args.timeout:g}")
+    if args.umbmark_side != 0:
+        from ..evaluation.umbmark import check_side
+
+        check_side(args.umbmark_side, "--umbmark-side (0: none)")
     if args.duration is not None and args.duration <= 0:
         raise InputError(f"--duration must be positive [s], got {args.duration:g}")
-    if args.port > 65535:
+    if not 0 <= args.port <= 65535:
         raise InputError(f"--port must be 0 to 65535, got {args.port}")
     if args.replay is not None:
         if args.ros:

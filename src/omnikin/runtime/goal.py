@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, shorten
 from ..geometry import wrap_angle
 from ..model import Robot
 
@@ -119,9 +119,12 @@ class GoalSeeker:
     _omega: float = field(default=0.0, init=False, repr=False)  # the turn rate last commanded [rad/s]
 
     def __post_init__(self):
-        goal = tuple(float(v) for v in self.goal)
+        try:
+            goal = tuple(float(v) for v in self.goal)
+        except (TypeError, ValueError):
+            goal = ()
         if len(goal) != 3 or not all(math.isfinite(v) for v in goal):
-            raise InputError(f"a goal is three finite numbers (x [m], y [m], theta [rad]), got {self.goal!r}")
+            raise InputError(f"a goal is three finite numbers (x [m], y [m], theta [rad]), got {shorten(self.goal)}")
         self.goal = (goal[0], goal[1], goal[2])
         self.strategy = self.strategy or strategy_for(self.robot)
         if self.strategy not in STRATEGIES:

@@ -34,13 +34,19 @@ class LiveViewer:
         self._closed = threading.Event()
         self.servers = PageServers(host, port, self._on_key)
         self.server = self.servers.viser
-        draw_world(self.server.scene, max(5.0, umbmark_side + 1.0), umbmark_side)
-        self.robot = RobotView(self.server.scene, live.description)
-        self.trails = self.robot.trails
-        self.drive = DriveControls(self.server, live)
-        self.camera = CameraControl(self.server, robot_extent(live.description), clear_trails=self.robot.clear_trails)
-        self.readouts = Readouts(self.server, live.description)
-        self.goal = GoalMarker(self.server, live)
+        try:  # (Ctrl-C while the page is being built stops the servers too)
+            self.server.on_client_disconnect(self._on_page_gone)
+            draw_world(self.server.scene, max(5.0, umbmark_side + 1.0), umbmark_side)
+            self.robot = RobotView(self.server.scene, live.description)
+            self.trails = self.robot.trails
+            self.drive = DriveControls(self.server, live)
+            extent = robot_extent(live.description)
+            self.camera = CameraControl(self.server, extent, clear_trails=self.robot.clear_trails)
+            self.readouts = Readouts(self.server, live.description)
+            self.goal = GoalMarker(self.server, live)
+        except BaseException:
+            self.servers.stop()
+            raise
         self.last: Snapshot | None = None
         self.steps = 0
 
@@ -51,6 +57,12 @@ class LiveViewer:
     def clock(self) -> float:
         """The robot's time [s] (wall clock since the viewer was made)."""
         return time.monotonic() - self._start
+
+    def _on_page_gone(self, client) -> None:
+        """The last page closed: whatever it set (a twist, a goal) stops; nobody is watching."""
+        if not [c for c in self.server.get_clients() if c != client.client_id]:
+            self.live.stop()
+            self._wake.set()
 
     def _on_key(self, message: dict) -> None:
         self.live.key(message)

@@ -9,8 +9,9 @@ viser server that listens on loopback only:
   internet needed) with ``<script src="/omnikin/teleop.js">`` added to its head;
 - ``GET /omnikin/teleop.js``: the key script (:file:`teleop.js`): held keys as press and
   release messages over a WebSocket;
-- WebSocket ``/omnikin/keys``: those messages, each handed to ``on_key`` as a dict
-  (:func:`parse_key_message` checks them; anything else is counted in :attr:`FrontServer.rejected`);
+- WebSocket ``/omnikin/keys``: those messages, each handed to ``on_key`` as a dict with the
+  socket's identity as ``source`` (:func:`parse_key_message` checks them; anything else is counted
+  in :attr:`FrontServer.rejected`);
 - any other WebSocket: relayed both ways, message by message, to the viser server (the
   client connects to the page's own origin, so it lands here).
 
@@ -285,11 +286,12 @@ class FrontServer:
                     self.rejected += 1
                     continue
                 self.key_messages += 1
+                message["source"] = id(connection)  # whose keys: each page's are held and released apart
                 self.on_key(message)
         except ConnectionClosed:
             pass
         finally:
-            self.on_key({"type": "release_all"})  # a closed page holds no key
+            self.on_key({"type": "release_all", "source": id(connection)})  # a closed page holds no key
 
     async def _relay(self, connection: ServerConnection) -> None:
         protocols = [connection.subprotocol] if connection.subprotocol else None

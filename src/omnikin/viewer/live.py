@@ -32,7 +32,7 @@ from ..physics.description import PhysicalRobot, describe
 from ..physics.joint_motion import JointMotion
 from ..runtime.base import BaseRuntime, StepResult
 from ..runtime.goal import GoalSeeker
-from ..runtime.teleop import Teleop
+from ..runtime.teleop import MOVES, Teleop
 from ..simulation.backend import SimBackend
 
 ENGINES = ("kinematic", "physics")
@@ -88,9 +88,12 @@ class PageRobot:
         self._inputs: queue.SimpleQueue[tuple[float | None, str, object]] = queue.SimpleQueue()
         self.clock: Callable[[], float] | None = None  # the time [s] of step()'s clock, for arrivals
         self._set_twist = np.zeros(3)
-        self._last_key_message = -math.inf
+        self._held: dict[object, set[str]] = {}  # per key channel ("source"): the move keys it holds
+        self._heard: dict[object, float] = {}  # ... and when it last sent anything [s]
+        self.notice = ""  # the last input refused, in one line (the page shows it)
         self.seeker: GoalSeeker | None = None
-        self.arrived: tuple[float, float, float] | None = None  # the last goal reached
+        self.arrived: tuple[float, float, float] | None = None  # the odometry's pose at the last goal reached
+        self.arrived_heading = True  # whether the seeker steered the heading to the goal's
         self.t = 0.0
 
     can_steer = False
@@ -131,7 +134,7 @@ class PageRobot:
     def go_to(self, goal) -> None:
         """Drive to ``goal`` ``(x, y, theta)`` [m, m, rad] (:class:`~omnikin.runtime.goal.GoalSeeker`,
         steering by the odometry); a key, a twist or a stop cancels it."""
-        self._put("goal", tuple(float(v) for v in goal))
+        self._put("goal", goal)  # checked when applied: a bad goal is refused there, in one line
 
     def steer_by(self, angle: float) -> None:
         """Turn every steerable wheel by ``angle`` [rad] (robot at rest; ignored while it moves)."""
@@ -146,7 +149,9 @@ class PageRobot:
             self.seeker = None  # the user takes over
         if kind == "key":
             assert isinstance(value, dict)
-            self._last_key_message = t
+            source = value.get("source")
+            held = self._held.setdefault(source, set())
+            self._heard[source] = t
             kind_of = value["type"]
             if kind_of == "press":
                 action = value["action"]
@@ -154,12 +159,16 @@ class PageRobot:
                     self._set_twist[:] = 0.0
                 if action in ("steer_left", "steer_right"):
                     self._turn_steering(STEER_STEP if action == "steer_left" else -STEER_STEP)
-                elif not self.teleop.press(action):
+                elif self.teleop.press(action):
+                    if action in MOVES:
+                        held.add(action)
+                else:
                     actions.append(action)
             elif kind_of == "release":
+                held.discard(value["action"])
                 self.teleop.release(value["action"])
             elif kind_of == "release_all":
-                self.teleop.release_all()
+                self._release(source)
         elif kind == "twist":
             assert isinstance(value, np.ndarray)
             self._set_twist = value
@@ -198,7 +207,8 @@ class PageRobot:
             return None
         twist = self.seeker.twist(self.pose, lead=1.5 * max(0.0, t - self.t))
         if twist is None:
-            self.arrived = self.seeker.goal
+            self.arrived = self.pose
+            self.arrived_heading = self.seeker.controls_heading
             self.seeker = None
             return np.zeros(3)
         return twist
@@ -218,10 +228,19 @@ class PageRobot:
             if at is not None and self.t + MIN_SUBSTEP < at < t and substeps < MAX_SUBSTEPS:
                 self._control(at)
                 substeps += 1
-            actions += self._apply_input(t if at is None else min(at, t), kind, value)
-        if np.any(self.teleop.target) and t - self._last_key_message > KEY_SILENCE:
-            self.teleop.release_all()  # the page fell silent with a key held
+            try:
+                actions += self._apply_input(t if at is None else min(at, t), kind, value)
+            except InputError as e:  # a page's input never stops the viewer: it is refused, and said
+                self.notice = str(e)
+        for source in [s for s, held in self._held.items() if held and t - self._heard[s] > KEY_SILENCE]:
+            self._release(source)  # that page fell silent with a key held
         return self._control(t), actions
+
+    def _release(self, source) -> None:
+        """Every key ``source`` (a page's key channel) holds, let go; the others' stay held."""
+        for action in self._held.pop(source, set()):
+            self.teleop.release(action)
+        self._heard.pop(source, None)
 
 
 class LiveRobot(PageRobot):

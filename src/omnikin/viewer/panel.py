@@ -102,7 +102,12 @@ class GoalMarker:
             go = gui.add_button("Go to the marker", hint="drive there along a path the wheels can make")
             self.status = gui.add_markdown("drag the marker on the floor, then Go")
         go.on_click(lambda _: self.go())
-        self.controls.on_drag_end(lambda _: self.go() if self.go_on_drop.value else None)
+        self.controls.on_update(self._dropped)
+
+    def _dropped(self, event) -> None:
+        """A drag of the marker ended: drive there when "drive when dropped" is on."""
+        if getattr(event, "phase", None) == "end" and self.go_on_drop.value:
+            self.go()
 
     def pose(self) -> tuple[float, float, float]:
         """The marker's pose ``(x, y, theta)`` [m, m, rad] on the floor (its yaw)."""
@@ -111,16 +116,21 @@ class GoalMarker:
         return x, y, math.atan2(2.0 * (w * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
 
     def go(self) -> None:
+        self.live.notice = ""
         self.live.go_to(self.pose())
 
     def show(self, s: Snapshot) -> None:
         """The seeker's state in the folder (only when it changed)."""
         seeker = self.live.seeker
-        if seeker is not None:
+        if self.live.notice:
+            text = f"refused: {html.escape(self.live.notice)}"
+        elif seeker is not None:
             text = f"driving: {seeker.strategy}, {seeker.phase}"
         elif self.live.arrived is not None:
             x, y, th = self.live.arrived
-            text = f"arrived at x {x:+.3f} m, y {y:+.3f} m, theta {math.degrees(th):+.1f} deg (by the odometry)"
+            text = f"arrived: the odometry reads x {x:+.3f} m, y {y:+.3f} m, theta {math.degrees(th):+.1f} deg"
+            if not self.live.arrived_heading:
+                text += " (this layout cannot turn to the marker's heading: it ends where the path ends)"
         else:
             return
         if self.status.content != text:

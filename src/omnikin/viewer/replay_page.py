@@ -65,33 +65,37 @@ class ReplayViewer:
         self._actions: list[str] = []
         self.servers = PageServers(host, port, self._on_key)
         self.server = self.servers.viser
-        scene = self.server.scene
-        reach = max(float(np.abs(s.poses[:, :2]).max()) for tr in source.tracks for s in (tr.truth, tr.odometry))
-        side = source.side or 0.0
-        extent = max(5.0, side + 1.0, math.ceil(reach) + 1.0)
-        draw_world(scene, extent, side)
-        self.robot = RobotView(scene, self.description, capacity=10**6, spacing=0.0)
-        self.trails = self.robot.trails
-        gui = self.server.gui
-        names = [tr.name for tr in source.tracks]
-        with gui.add_folder("Replay"):
-            gui.add_markdown(f"**{html.escape(source.label)}** (robot {html.escape(source.robot.name)})")
-            self.run_choice = gui.add_dropdown("run", names, initial_value=names[0])
-            self.slider = gui.add_slider("time [s]", 0.0, 1.0, TIME_STEP, 0.0)
-            self.play_button = gui.add_button("Play", hint="play from the slider's time; again: pause")
-            self.speed = gui.add_dropdown("speed [x real time]", SPEEDS, initial_value="1")
-            self.status = gui.add_html("")
-        self.camera = CameraControl(self.server, robot_extent(self.description))
-        self.readouts = Readouts(self.server, self.description)
-        self.run_choice.on_update(lambda _: self._request("run"))
-        self.slider.on_update(lambda e: self._request("seek") if e.client_id is not None else None)
-        self.play_button.on_click(lambda _: self._request("toggle"))
-        self.playing = False
-        self.t = 0.0
-        self.replay: TrackReplay | None = None
-        self.last: Snapshot | None = None
-        self.frames = 0
-        self._select(names[0])
+        try:  # (Ctrl-C while the page is being built stops the servers too)
+            scene = self.server.scene
+            reach = max(float(np.abs(s.poses[:, :2]).max()) for tr in source.tracks for s in (tr.truth, tr.odometry))
+            side = source.side or 0.0
+            extent = max(5.0, side + 1.0, math.ceil(reach) + 1.0)
+            draw_world(scene, extent, side)
+            self.robot = RobotView(scene, self.description, capacity=10**6, spacing=0.0)
+            self.trails = self.robot.trails
+            gui = self.server.gui
+            names = [tr.name for tr in source.tracks]
+            with gui.add_folder("Replay"):
+                gui.add_markdown(f"**{html.escape(source.label)}** (robot {html.escape(source.robot.name)})")
+                self.run_choice = gui.add_dropdown("run", names, initial_value=names[0])
+                self.slider = gui.add_slider("time [s]", 0.0, 1.0, TIME_STEP, 0.0)
+                self.play_button = gui.add_button("Play", hint="play from the slider's time; again: pause")
+                self.speed = gui.add_dropdown("speed [x real time]", SPEEDS, initial_value="1")
+                self.status = gui.add_html("")
+            self.camera = CameraControl(self.server, robot_extent(self.description))
+            self.readouts = Readouts(self.server, self.description)
+            self.run_choice.on_update(lambda _: self._request("run"))
+            self.slider.on_update(lambda e: self._request("seek") if e.client_id is not None else None)
+            self.play_button.on_click(lambda _: self._request("toggle"))
+            self.playing = False
+            self.t = 0.0
+            self.replay: TrackReplay | None = None
+            self.last: Snapshot | None = None
+            self.frames = 0
+            self._select(names[0])
+        except BaseException:
+            self.servers.stop()
+            raise
 
     @property
     def url(self) -> str:

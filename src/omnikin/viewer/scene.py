@@ -266,20 +266,40 @@ def plain_lights(scene: viser.SceneApi) -> None:
     scene.add_light_directional("/lights/sun", intensity=1.2, position=(2.0, -3.0, 5.0))
 
 
+MAX_GROUND = 1000.0
+"""Largest half width [m] of the ground grid: a run that goes farther (or a hostile file's
+coordinates) gets a grid this wide, not one without bound."""
+SCALE_LABELS = 10
+"""Most labels along the ground's scale."""
+
+
 def draw_ground(scene: viser.SceneApi, extent: float, cell: float) -> None:
-    """A ground grid in the floor plane, ``2 extent`` [m] wide, lines every ``cell`` [m] and a
-    darker line every metre, with labels of the scale along +x."""
+    """A ground grid in the floor plane, ``2 extent`` [m] wide (at most ``2 MAX_GROUND``), lines
+    every ``cell`` [m] (coarser by tens so that a side has at most 1000 cells) and a darker line
+    every metre (likewise), with at most :data:`SCALE_LABELS` labels of the scale along +x at
+    1, 2 or 5 times a power of ten metres."""
+    extent = min(float(extent), MAX_GROUND) if math.isfinite(extent) and extent > 0 else MAX_GROUND
+    while 2 * extent / cell > 1000:
+        cell *= 10
+    section = max(1.0, cell * 10) if cell >= 1.0 else 1.0
     scene.add_grid(
         "/ground",
         width=2 * extent,
         height=2 * extent,
         plane="xy",
         cell_size=cell,
-        section_size=1.0,
+        section_size=section,
         infinite_grid=False,
     )
-    for k in range(1, int(extent) + 1):
-        scene.add_label(f"/ground/scale{k}", f"{k} m", position=(float(k), -0.05, 0.0), font_screen_scale=0.7)
+    step = max(1.0, scale_step(extent, SCALE_LABELS))
+    for k in range(1, min(SCALE_LABELS, int(extent / step)) + 1):
+        scene.add_label(f"/ground/scale{k}", f"{k * step:g} m", position=(k * step, -0.05, 0.0), font_screen_scale=0.7)
+
+
+def scale_step(extent: float, labels: int) -> float:
+    """The smallest of 1, 2, 5 times a power of ten [m] that puts at most ``labels`` marks in ``extent``."""
+    power = 10.0 ** math.floor(math.log10(max(extent / labels, 1e-9)))
+    return next(m * power for m in (1.0, 2.0, 5.0, 10.0) if extent / (m * power) <= labels)
 
 
 def draw_umbmark_square(scene: viser.SceneApi, side: float, start=(0.0, 0.0, 0.0)) -> None:
