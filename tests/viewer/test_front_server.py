@@ -212,3 +212,14 @@ def test_a_peer_that_never_answers_the_close_does_not_hold_up_the_stop():
     server.stop()
     raw.close()
     assert time.monotonic() - start < 3.0
+
+
+def test_this_computer_s_own_names_and_the_served_name_are_trusted():
+    from omnikin.viewer.front import own_names, trusted_host
+
+    host = socket.gethostname().lower()
+    names = own_names("robot-7.example")
+    for name in (host, f"{host.split('.')[0]}.local", "localhost", "robot-7.example", "10.0.0.4", "[fe80::1]"):
+        assert trusted_host(f"{name}:8080", names), name
+    assert not trusted_host("robot-8.example:8080", names)
+    assert not trusted_host(None, names) and not trusted_host("", names)

@@ -192,11 +192,22 @@ def serve_live(live, args, what: str) -> int:
         raise
     try:
         print(f"omnikin view: {what} at {viewer.url}  (Ctrl-C stops)", flush=True)
+        wildcard_note(args.host, viewer.servers.front.port)
         viewer.run(args.duration)
     finally:
         viewer.close()
     sys.stdout.flush()
     return 0
+
+
+def wildcard_note(host: str, port: int) -> None:
+    """Say so when the page is served on every network this computer is on."""
+    if host in ("", "0.0.0.0", "::"):
+        print(
+            f"omnikin view: note: serving every network interface: anyone who reaches port {port} can drive "
+            "the robot (--host 127.0.0.1 serves this computer only)",
+            file=sys.stderr,
+        )
 
 
 def cmd_ros_view(args) -> int:
@@ -268,6 +279,7 @@ def cmd_replay(args) -> int:
             f"{viewer.url}  (Ctrl-C stops)",
             flush=True,
         )
+        wildcard_note(args.host, viewer.servers.front.port)
         viewer.run(args.duration)
     finally:
         viewer.close()

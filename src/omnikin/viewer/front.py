@@ -123,13 +123,25 @@ def viser_page() -> bytes:
     return (page[:head] + tag + page[head:]).encode("utf-8")
 
 
-def own_names() -> frozenset[str]:
-    """The names this computer answers to: ``localhost`` and its host names."""
+def own_names(served: str = "") -> frozenset[str]:
+    """The names this computer answers to: ``localhost``, its host names (with ``.local``, its
+    mDNS name) and the name it was told to serve on (``served``, when not an address)."""
     names = {"localhost"}
-    for name in (socket.gethostname(), socket.getfqdn()):
-        if name:
-            names.add(name.lower().rstrip("."))
+    for name in (socket.gethostname(), socket.getfqdn(), served):
+        name = (name or "").lower().rstrip(".")
+        if not name or name == "localhost" or _is_address(name):
+            continue
+        names.add(name)
+        names.add(f"{name.split('.')[0]}.local")
     return frozenset(names)
+
+
+def _is_address(name: str) -> bool:
+    try:
+        ipaddress.ip_address(name.strip("[]"))
+    except ValueError:
+        return False
+    return True
 
 
 def trusted_host(host: str | None, names: frozenset[str]) -> bool:
@@ -141,11 +153,7 @@ def trusted_host(host: str | None, names: frozenset[str]) -> bool:
     name = urlsplit(f"http://{host}").hostname
     if name is None:
         return False
-    try:
-        ipaddress.ip_address(name)
-        return True
-    except ValueError:
-        return name.lower() in names
+    return _is_address(name) or name.lower() in names
 
 
 def header(request: Request, name: str) -> str | None:
@@ -209,7 +217,7 @@ class FrontServer:
         self.connections = 0  # WebSockets open now
         self.problems = 0  # what the WebSocket library logged, or a task left as an error (module docstring)
         self.last_problem = ""
-        self._names = own_names()
+        self._names = own_names(host)
         self._log = logging.Logger("omnikin.viewer.front")  # not the root's: nothing reaches the terminal
         self._log.addHandler(_Counted(self))
         page = viser_page()

@@ -36,6 +36,11 @@ MAX_RESULT_BYTES = 1 << 22
 """Largest ``result.json`` read [bytes] (a report's is some 20 KB)."""
 
 
+def shown(path) -> str:
+    """A path as an error message names it: on one line, at most 200 characters."""
+    return one_line(path, 200)
+
+
 class ReplayError(InputError):
     """Something to replay that cannot be: the message names the file or topic."""
 
@@ -75,7 +80,7 @@ def load_report(folder) -> ReplaySource:
             if missing == ["run_poses.csv"]
             else ""
         )
-        raise ReplayError(f"{folder}: an omnikin umbmark report needs {', '.join(missing)}, not found{why}")
+        raise ReplayError(f"{shown(folder)}: an omnikin umbmark report needs {', '.join(missing)}, not found{why}")
     robot = load_robot(base / "true_robot.yaml")
     result = base / "result.json"
     text = read_text(result, ReplayError, what="a result.json", max_bytes=MAX_RESULT_BYTES)
@@ -124,11 +129,12 @@ def load_bag(
     for role in required:
         if names[role] not in present:
             raise ReplayError(
-                f"{bag}: no topic {shorten(names[role])} ({role.replace('_', ' ')}); the bag has: {one_line(have, 500)}"
+                f"{shown(bag)}: no topic {shorten(names[role])} ({role.replace('_', ' ')}); "
+                f"the bag has: {one_line(have, 500)}"
             )
     if truth_topic not in present and odom_topic not in present:
         raise ReplayError(
-            f"{bag}: no ground truth topic {truth_topic} and no odometry topic {odom_topic} to replay "
+            f"{shown(bag)}: no ground truth topic {truth_topic} and no odometry topic {odom_topic} to replay "
             f"(--ground-truth-topic, --odom-topic); the bag has: {one_line(have, 500)}"
         )
     notes = []
@@ -139,9 +145,13 @@ def load_bag(
         for topic in (truth_topic, odom_topic)
     )
     if truth is None:
-        notes.append(f"{bag}: no ground truth topic {truth_topic}: the robot is drawn at its odometry {odom_topic}")
+        notes.append(
+            f"{shown(bag)}: no ground truth topic {truth_topic}: the robot is drawn at its odometry {odom_topic}"
+        )
     if odom is None:
-        notes.append(f"{bag}: no odometry topic {odom_topic}: the odometry shown is the ground truth {truth_topic}")
+        notes.append(
+            f"{shown(bag)}: no odometry topic {odom_topic}: the odometry shown is the ground truth {truth_topic}"
+        )
     joints = None
     if names["joint_states"] in present:
         joints = read_joint_states(
@@ -154,7 +164,8 @@ def load_bag(
         )
     else:
         notes.append(
-            f"{bag}: no joint states topic {names['joint_states']}: wheel angles and steering from the kinematics"
+            f"{shown(bag)}: no joint states topic {names['joint_states']}: wheel angles and steering from the "
+            "kinematics"
         )
     first_truth = truth if truth is not None else odom
     first_odom = odom if odom is not None else truth
@@ -166,7 +177,7 @@ def load_bag(
         try:
             return PoseSeries((track.stamps - t0) * 1e-9, track.poses)
         except InputError as exc:
-            raise BagError(f"{bag}: topic {topic!r}: {exc}") from None
+            raise BagError(f"{shown(bag)}: topic {topic!r}: {exc}") from None
 
     joint_series = None
     if joints is not None:
@@ -192,7 +203,7 @@ def load_replay(path, robot: Robot | None, topics: dict | None = None, **options
     if is_report(path):
         if robot is not None:
             raise ReplayError(
-                f"{path}: an UMBmark report names its robot (true_robot.yaml, the robot as built): "
+                f"{shown(path)}: an UMBmark report names its robot (true_robot.yaml, the robot as built): "
                 "give no ROBOT with --replay REPORT_DIR"
             )
         return load_report(path)
@@ -204,11 +215,11 @@ def load_replay(path, robot: Robot | None, topics: dict | None = None, **options
         )
     if p.is_dir() and not (p / "metadata.yaml").exists():
         raise ReplayError(
-            f"{path}: neither an omnikin umbmark report folder (result.json, run_poses.csv) nor a ROS 2 bag "
+            f"{shown(path)}: neither an omnikin umbmark report folder (result.json, run_poses.csv) nor a ROS 2 bag "
             "(a folder with metadata.yaml, a .db3 or .mcap file)"
         )
     if robot is None:
         raise ReplayError(
-            f"{path}: a bag does not say which robot drove it: give ROBOT (omnikin view ROBOT --replay BAG)"
+            f"{shown(path)}: a bag does not say which robot drove it: give ROBOT (omnikin view ROBOT --replay BAG)"
         )
     return load_bag(path, robot, topics, **options)
