@@ -190,6 +190,12 @@ def serve_live(live, args, what: str) -> int:
     except BaseException:
         live.close()
         raise
+    return serve(viewer, args, what)
+
+
+def serve(viewer, args, what: str) -> int:
+    """Print where ``viewer`` (a live or replay page) is served, run it until --duration or
+    Ctrl-C, and close it whatever happens."""
     try:
         print(f"omnikin view: {what} at {viewer.url}  (Ctrl-C stops)", flush=True)
         wildcard_note(args.host, viewer.servers.front.port)
@@ -272,16 +278,5 @@ def cmd_replay(args) -> int:
     for note in source.notes:
         print(f"omnikin view: {note}", file=sys.stderr)
     viewer = ReplayViewer(source, args.host, args.port)
-    try:
-        runs = len(source.tracks)
-        print(
-            f"omnikin view: replay of {source.label} ({source.robot.name}, {runs} run{'s' if runs != 1 else ''}) at "
-            f"{viewer.url}  (Ctrl-C stops)",
-            flush=True,
-        )
-        wildcard_note(args.host, viewer.servers.front.port)
-        viewer.run(args.duration)
-    finally:
-        viewer.close()
-    sys.stdout.flush()
-    return 0
+    runs = len(source.tracks)
+    return serve(viewer, args, f"replay of {source.label} ({source.robot.name}, {runs} run{'s' if runs != 1 else ''})")
