@@ -27,6 +27,12 @@ if __name__ == "__main__":
         modules.append(bench_physics)
     except ImportError as e:
         print(f"physics skipped: {e} (pip install -e '.[physics]')")
+    try:
+        import bench_viewer  # needs the extra 'viewer' and Debian's Chromium
+
+        modules.append(bench_viewer)
+    except ImportError as e:
+        print(f"viewer skipped: {e} (pip install -e '.[viewer]')")
     for module in modules:
         name = module.__name__.replace("bench_", "")
         path = save(name, module.main())
