@@ -49,6 +49,46 @@ STEER_STEP = math.radians(15.0)
 """Steering turned by one press of ``[`` or ``]`` [rad]."""
 
 
+def triple(values) -> tuple[float, float, float]:
+    """Three numbers (a pose or a twist) as the plain floats a :class:`Snapshot` holds."""
+    a, b, c = (float(v) for v in values)
+    return a, b, c
+
+
+@dataclass(frozen=True)
+class WheelSlots:
+    """Where each group of wheels sits in a :class:`Snapshot`'s per-wheel arrays (the order of
+    the physical description's wheels): the robot's rolling and steered wheels (file order), the
+    castors of :class:`~omnikin.physics.joint_motion.JointMotion` and the Swedish wheels."""
+
+    count: int
+    rolling: np.ndarray
+    steered: np.ndarray
+    castors: np.ndarray
+    swedish: np.ndarray
+
+    @classmethod
+    def of(cls, robot: Robot, description: PhysicalRobot, joints: JointMotion) -> WheelSlots:
+        names = [w.name for w in description.wheels]
+
+        def slots(group) -> np.ndarray:
+            return np.array([names.index(n) for n in group], dtype=int)
+
+        swedish = [w.name for w in description.wheels if w.rollers is not None]
+        return cls(
+            len(names), slots(robot.rolling_names), slots(robot.steer_names), slots(joints.castor_names), slots(swedish)
+        )
+
+    def rollers(self, angles, rates) -> tuple[tuple[float | None, ...], tuple[float | None, ...]]:
+        """Per wheel the roller angle and speed of each Swedish wheel (``angles``, ``rates`` in
+        description order of the Swedish wheels), None for the others."""
+        out_angles: list[float | None] = [None] * self.count
+        out_rates: list[float | None] = [None] * self.count
+        for slot, angle, rate in zip(self.swedish, angles, rates, strict=True):
+            out_angles[slot], out_rates[slot] = float(angle), float(rate)
+        return tuple(out_angles), tuple(out_rates)
+
+
 @dataclass(frozen=True)
 class Snapshot:
     """One control step as the page shows it. Poses ``(x, y, theta)`` [m, m, rad] in the world
@@ -272,22 +312,17 @@ class LiveRobot(PageRobot):
             self.backend = SimBackend(robot)
         self.runtime = BaseRuntime(robot, self.backend, limits=self.limits, cmd_vel_timeout=timeout)
         self.can_steer = bool(robot.steerable)
-        names = [w.name for w in self.description.wheels]
-        self._rolling = np.array([names.index(n) for n in robot.rolling_names], dtype=int)
-        self._steered = np.array([names.index(n) for n in robot.steer_names], dtype=int)
-        self._angles = np.zeros(len(names))
         self.joints = JointMotion(robot, robot.rolling_names, self.description)  # castors, rollers
-        self._castors = np.array([names.index(n) for n in self.joints.castor_names], dtype=int)
-        self._swedish = [i for i, w in enumerate(self.description.wheels) if w.rollers is not None]
+        self.slots = WheelSlots.of(robot, self.description, self.joints)
+        self._angles = np.zeros(self.slots.count)
         self._moved = np.zeros(3)  # the twist the kinematic robot moved at since the last step
-        self._speeds = np.zeros(len(names))  # the kinematic wheels' speeds over the coming interval
+        self._speeds = np.zeros(self.slots.count)  # the kinematic wheels' speeds over the coming interval
         self._steer_hand = np.zeros(len(robot.steerable))
         self._last: StepResult | None = None
 
     @property
     def pose(self) -> tuple[float, float, float]:
-        x, y, theta = self.runtime.pose
-        return float(x), float(y), float(theta)
+        return triple(self.runtime.pose)
 
     def _turn_steering(self, angle: float) -> None:
         if not len(self._steer_hand) or np.any(self.target) or np.any(self.runtime.filter.current):
@@ -309,48 +344,42 @@ class LiveRobot(PageRobot):
         return self._snapshot(result, target, dt)
 
     def _snapshot(self, result: StepResult, target: np.ndarray, dt: float) -> Snapshot:
-        n = len(self.description.wheels)
-        speeds = np.zeros(n)
-        steer = np.full(n, np.nan)
+        slots = self.slots
+        speeds = np.zeros(slots.count)
+        steer = np.full(slots.count, np.nan)
         if self.engine == "physics":
             sim = self.backend.sim  # type: ignore[union-attr]
-            self._angles[self._rolling] = sim.wheel_angles
-            speeds[self._rolling] = sim.wheel_speeds
-            if len(self._steered):
-                steer[self._steered] = sim.steer_angles
-            truth = self.backend.truth
+            self._angles[slots.rolling] = sim.wheel_angles
+            speeds[slots.rolling] = sim.wheel_speeds
+            if len(slots.steered):
+                steer[slots.steered] = sim.steer_angles
             moved = sim.twist
         else:
             moved = self._moved
             self._moved = np.asarray(result.command, dtype=float)
             self._angles += self._speeds * dt  # the speeds the wheels turned at since the last step
-            speeds[self._rolling] = result.wheel_speeds
+            speeds[slots.rolling] = result.wheel_speeds
             self._speeds = speeds
-            if len(self._steered) and result.steer is not None:
-                steer[self._steered] = result.steer
-            truth = self.backend.truth
+            if len(slots.steered) and result.steer is not None:
+                steer[slots.steered] = result.steer
         self.joints.update(result.t, moved, result.state.steer)
-        if len(self._castors):
-            self._angles[self._castors] = self.joints.castor_angles
-            steer[self._castors] = self.joints.castor_swivels
-        rollers: list[float | None] = [None] * n
-        roller_speeds: list[float | None] = [None] * n
-        for k, (angle, rate) in enumerate(zip(self.joints.roller_angles, self.joints.roller_rates, strict=True)):
-            rollers[self._swedish[k]] = float(angle)
-            roller_speeds[self._swedish[k]] = float(rate)
+        if len(slots.castors):
+            self._angles[slots.castors] = self.joints.castor_angles
+            steer[slots.castors] = self.joints.castor_swivels
+        rollers, roller_speeds = slots.rollers(self.joints.roller_angles, self.joints.roller_rates)
         return Snapshot(
             t=result.t,
-            truth=(float(truth[0]), float(truth[1]), float(truth[2])),
-            odometry=tuple(float(v) for v in result.pose),  # type: ignore[arg-type]
-            twist=tuple(float(v) for v in result.twist),  # type: ignore[arg-type]
-            command=tuple(float(v) for v in result.command),  # type: ignore[arg-type]
-            target=tuple(float(v) for v in target),  # type: ignore[arg-type]
+            truth=triple(self.backend.truth),
+            odometry=triple(result.pose),
+            twist=triple(result.twist),
+            command=triple(result.command),
+            target=triple(target),
             wheel_angles=self._angles.copy(),
             wheel_speeds=speeds,
             steer=steer,
             residual=tuple(float(v) for v in result.residual),
-            roller_angles=tuple(rollers),
-            roller_speeds=tuple(roller_speeds),
+            roller_angles=rollers,
+            roller_speeds=roller_speeds,
         )
 
     def close(self) -> None:

@@ -25,6 +25,7 @@ from collections.abc import Callable
 
 import numpy as np
 import viser
+import viser.transforms as vtf
 import viser.uplot as uplot
 
 from ..physics.description import PhysicalRobot
@@ -112,8 +113,7 @@ class GoalMarker:
     def pose(self) -> tuple[float, float, float]:
         """The marker's pose ``(x, y, theta)`` [m, m, rad] on the floor (its yaw)."""
         x, y, _ = (float(v) for v in self.controls.position)
-        w, qx, qy, qz = (float(v) for v in self.controls.wxyz)
-        return x, y, math.atan2(2.0 * (w * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+        return x, y, float(vtf.SO3(np.asarray(self.controls.wxyz, dtype=float)).compute_yaw_radians())
 
     def go(self) -> None:
         self.live.notice = ""

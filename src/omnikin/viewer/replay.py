@@ -37,7 +37,7 @@ from ..geometry import between, compose, exp, log
 from ..model import Robot
 from ..physics.description import PhysicalRobot
 from ..physics.joint_motion import JointMotion
-from .live import Snapshot
+from .live import Snapshot, WheelSlots, triple
 
 REST = 1e-12
 """Twist norm [m/s, rad/s] below which an interval is at rest (its steering held)."""
@@ -147,9 +147,8 @@ class TrackReplay:
         self.robot = robot
         self.track = track
         names = [w.name for w in description.wheels]
-        self._n = len(names)
-        self._rolling = np.array([names.index(n) for n in robot.rolling_names], dtype=int)
-        self._steered = np.array([names.index(n) for n in robot.steer_names], dtype=int)
+        joint_motion = JointMotion(robot, robot.rolling_names, description)
+        self.slots = WheelSlots.of(robot, description, joint_motion)
         truth = track.truth
         ik = robot.ik(truth.twists, on_infeasible="return")
         self._speeds = np.asarray(ik.wheel_speeds, dtype=float).reshape(len(truth.twists), -1)
@@ -164,7 +163,7 @@ class TrackReplay:
         self._steer = steer
         self._angles = np.zeros((len(truth.t), self._speeds.shape[1]))
         np.cumsum(self._speeds * np.diff(truth.t)[:, None], axis=0, out=self._angles[1:])
-        self._passive(robot, description, truth, steer)
+        self._passive(joint_motion, truth, steer)
         joints = track.joints
         self._joint_rolling = (
             np.array([names.index(n) for n in joints.wheels], dtype=int) if joints is not None else None
@@ -173,20 +172,16 @@ class TrackReplay:
             np.array([names.index(n) for n in joints.steered], dtype=int) if joints is not None else None
         )
 
-    def _passive(self, robot: Robot, description: PhysicalRobot, truth: PoseSeries, steer: np.ndarray) -> None:
-        """Castors and rollers at every sample, as the body's motion moves them
-        (:class:`~omnikin.physics.joint_motion.JointMotion`, the live viewer's rule), interval
-        after interval."""
-        names = [w.name for w in description.wheels]
-        joints = JointMotion(robot, robot.rolling_names, description)
-        self._castors = np.array([names.index(n) for n in joints.castor_names], dtype=int)
-        self._swedish = [i for i, w in enumerate(description.wheels) if w.rollers is not None]
+    def _passive(self, joints: JointMotion, truth: PoseSeries, steer: np.ndarray) -> None:
+        """Castors and rollers at every sample, as the body's motion moves them (``joints``, the
+        live viewer's rule), interval after interval."""
+        castors, swedish = len(self.slots.castors), len(self.slots.swedish)
         n = len(truth.t)
-        self._swivel = np.zeros((n, len(self._castors)))
-        self._castor_angle = np.zeros((n, len(self._castors)))
-        self._roller_angle = np.zeros((n, len(self._swedish)))
-        self._roller_rate = np.zeros((max(n - 1, 1), len(self._swedish)))
-        if not len(self._castors) and not self._swedish:
+        self._swivel = np.zeros((n, castors))
+        self._castor_angle = np.zeros((n, castors))
+        self._roller_angle = np.zeros((n, swedish))
+        self._roller_rate = np.zeros((max(n - 1, 1), swedish))
+        if not castors and not swedish:
             return
         joints.update(float(truth.t[0]), np.zeros(3), steer[0] if steer.size else None)
         self._swivel[0] = joints.castor_swivels
@@ -204,11 +199,12 @@ class TrackReplay:
     def snapshot(self, time: float) -> Snapshot:
         """What the page shows at ``time`` [s]."""
         truth = self.track.truth
+        slots = self.slots
         k = _interval(truth.t, time)
         n_int = len(truth.t) - 1
-        angles = np.zeros(self._n)
-        speeds = np.zeros(self._n)
-        steer = np.full(self._n, math.nan)
+        angles = np.zeros(slots.count)
+        speeds = np.zeros(slots.count)
+        steer = np.full(slots.count, math.nan)
         if k < 0:
             kinematic_angles, kinematic_speeds, kinematic_steer = self._angles[0], 0.0, self._steer[0]
         elif k >= n_int:
@@ -218,10 +214,10 @@ class TrackReplay:
             kinematic_angles = self._angles[k] + self._speeds[k] * dt
             kinematic_speeds = self._speeds[k]
             kinematic_steer = self._steer[k]
-        angles[self._rolling] = kinematic_angles
-        speeds[self._rolling] = kinematic_speeds
-        if len(self._steered):
-            steer[self._steered] = kinematic_steer
+        angles[slots.rolling] = kinematic_angles
+        speeds[slots.rolling] = kinematic_speeds
+        if len(slots.steered):
+            steer[slots.steered] = kinematic_steer
         joints = self.track.joints
         if joints is not None:
             j_angles, j_speeds, j_steer = joints.values(time)
@@ -229,37 +225,34 @@ class TrackReplay:
             speeds[self._joint_rolling] = j_speeds
             if j_steer is not None and self._joint_steered is not None and len(self._joint_steered):
                 steer[self._joint_steered] = j_steer
-        rollers: list[float | None] = [None] * self._n
-        roller_speeds: list[float | None] = [None] * self._n
         if k < 0 or k >= n_int:
             row = 0 if k < 0 else n_int
-            if len(self._castors):
-                angles[self._castors] = self._castor_angle[row]
-                steer[self._castors] = self._swivel[row]
-            for j, wheel in enumerate(self._swedish):
-                rollers[wheel], roller_speeds[wheel] = float(self._roller_angle[row, j]), 0.0
+            castor_angles, swivels = self._castor_angle[row], self._swivel[row]
+            roller_angles, roller_rates = self._roller_angle[row], np.zeros(len(slots.swedish))
         else:
             s = (time - truth.t[k]) / (truth.t[k + 1] - truth.t[k])  # castors and rollers: linear in time
-            if len(self._castors):
-                angles[self._castors] = self._castor_angle[k] + s * (self._castor_angle[k + 1] - self._castor_angle[k])
-                steer[self._castors] = self._swivel[k] + s * (self._swivel[k + 1] - self._swivel[k])
-            for j, wheel in enumerate(self._swedish):
-                a, b = self._roller_angle[k, j], self._roller_angle[k + 1, j]
-                rollers[wheel], roller_speeds[wheel] = float(a + s * (b - a)), float(self._roller_rate[k, j])
+            castor_angles = self._castor_angle[k] + s * (self._castor_angle[k + 1] - self._castor_angle[k])
+            swivels = self._swivel[k] + s * (self._swivel[k + 1] - self._swivel[k])
+            roller_angles = self._roller_angle[k] + s * (self._roller_angle[k + 1] - self._roller_angle[k])
+            roller_rates = self._roller_rate[k]
+        if len(slots.castors):
+            angles[slots.castors] = castor_angles
+            steer[slots.castors] = swivels
+        rollers, roller_speeds = slots.rollers(roller_angles, roller_rates)
         pose = truth.at(time)
         odometry = self.track.odometry.at(time)
         twist = truth.twist(time)
         return Snapshot(
             t=float(time),
-            truth=(float(pose[0]), float(pose[1]), float(pose[2])),
-            odometry=(float(odometry[0]), float(odometry[1]), float(odometry[2])),
-            twist=(float(twist[0]), float(twist[1]), float(twist[2])),
+            truth=triple(pose),
+            odometry=triple(odometry),
+            twist=triple(twist),
             command=(0.0, 0.0, 0.0),
             target=(0.0, 0.0, 0.0),
             wheel_angles=angles,
             wheel_speeds=speeds,
             steer=steer,
             residual=(),
-            roller_angles=tuple(rollers),
-            roller_speeds=tuple(roller_speeds),
+            roller_angles=rollers,
+            roller_speeds=roller_speeds,
         )

@@ -26,9 +26,10 @@ import threading
 import numpy as np
 
 from ..errors import InputError
+from ..io.bags import yaw_of
 from ..limits import MotionLimits
 from ..model import Robot
-from .live import PageRobot, Snapshot
+from .live import PageRobot, Snapshot, triple
 
 NODE_NAME = "omnikin_view"
 TRUTH_FRESH = 1.0
@@ -49,13 +50,9 @@ def require_ros():
         ) from None
 
 
-def _yaw(q) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
 def _pose(msg) -> tuple[float, float, float]:
     p = msg.pose.pose
-    return float(p.position.x), float(p.position.y), _yaw(p.orientation)
+    return float(p.position.x), float(p.position.y), yaw_of(p.orientation)
 
 
 class RosRobot(PageRobot):
@@ -103,9 +100,6 @@ class RosRobot(PageRobot):
             raise
         self._spinner = threading.Thread(target=self._spin, name="omnikin-view-ros", daemon=True)
         self._spinner.start()
-        names = [w.name for w in self.description.wheels]
-        self._names = names
-        self._command = np.zeros(3)
         self._sent_zero = True
 
     def _spin(self) -> None:
@@ -162,7 +156,6 @@ class RosRobot(PageRobot):
         elif not self._sent_zero:
             self._publish(np.zeros(3))  # released: stop now, not at the node's timeout
             self._sent_zero = True
-        self._command = target
         self.t = t
         return self._snapshot(t, target)
 
@@ -176,7 +169,7 @@ class RosRobot(PageRobot):
         if odom is not None:
             tw = odom.twist.twist
             twist = (float(tw.linear.x), float(tw.linear.y), float(tw.angular.z))
-        n = len(self._names)
+        n = len(self.description.wheels)
         angles, speeds, steer = np.zeros(n), np.zeros(n), np.full(n, np.nan)
         rollers: list[float | None] = [None] * n
         roller_speeds: list[float | None] = [None] * n
@@ -192,8 +185,8 @@ class RosRobot(PageRobot):
             truth=_pose(truth) if fresh else odometry,
             odometry=odometry,
             twist=twist,
-            command=(float(target[0]), float(target[1]), float(target[2])),
-            target=(float(target[0]), float(target[1]), float(target[2])),
+            command=triple(target),
+            target=triple(target),
             wheel_angles=angles,
             wheel_speeds=speeds,
             steer=steer,
