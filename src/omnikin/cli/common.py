@@ -82,6 +82,31 @@ def add_step_option(parser, what: str = "time step of the physics engine") -> No
     )
 
 
+def add_teleop_options(parser) -> None:
+    """``--speed``, ``--turn`` (what a held key sets) and ``--max-speed``, ``--max-turn`` (the
+    runtime's limits) of the commands driven from the keyboard (``sim``, ``view``)."""
+    parser.add_argument("--speed", type=number, default=0.2, metavar="V", help="speed of W/S/A/D [m/s] (default 0.2)")
+    parser.add_argument("--turn", type=number, default=0.5, metavar="W", help="turn rate of Q/E [rad/s] (default 0.5)")
+    parser.add_argument("--max-speed", type=number, default=0.3, metavar="V", help="speed limit [m/s] (default 0.3)")
+    parser.add_argument("--max-turn", type=number, default=1.0, metavar="W", help="turn rate limit [rad/s] (default 1)")
+
+
+def teleop_limits(args):
+    """The :class:`~omnikin.limits.MotionLimits` of :func:`add_teleop_options`, every one of the
+    four options checked positive first (one line naming the option as typed)."""
+    from ..limits import MotionLimits
+
+    for flag, value in (
+        ("--speed", args.speed),
+        ("--turn", args.turn),
+        ("--max-speed", args.max_speed),
+        ("--max-turn", args.max_turn),
+    ):
+        if value <= 0:
+            raise InputError(f"{flag} must be positive, got {value:g}")
+    return MotionLimits(linear=args.max_speed, angular=args.max_turn)
+
+
 def physics_hint(step: float, *changes: str) -> str:
     """What would make a physics run cheaper: ``changes`` (e.g. "shorten --path") and, while the
     time step ``step`` [s] is below the largest accepted, "raise --step"."""

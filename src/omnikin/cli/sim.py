@@ -5,7 +5,15 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import add_output, add_output_options, declare_inputs, load_robot, number
+from .common import (
+    add_output,
+    add_output_options,
+    add_teleop_options,
+    declare_inputs,
+    load_robot,
+    number,
+    teleop_limits,
+)
 
 EPILOG = """keys (the window must have the keyboard focus):
   W / S      drive forward / back at --speed (sets vx; the other components stay)
@@ -41,13 +49,10 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
     sp.add_argument("--duration", type=number, metavar="S", help="close the window after S seconds (default: never)")
     sp.add_argument("--camera", choices=("free", "top", "follow"), default="free", help="first camera (default free)")
-    sp.add_argument("--speed", type=number, default=0.2, metavar="V", help="speed of W/S/A/D [m/s] (default 0.2)")
-    sp.add_argument("--turn", type=number, default=0.5, metavar="W", help="turn rate of Q/E [rad/s] (default 0.5)")
+    add_teleop_options(sp)
     sp.add_argument(
         "--hold", type=number, default=0.0, metavar="S", help="a press drives for S seconds (default 0: until changed)"
     )
-    sp.add_argument("--max-speed", type=number, default=0.3, metavar="V", help="speed limit [m/s] (default 0.3)")
-    sp.add_argument("--max-turn", type=number, default=1.0, metavar="W", help="turn rate limit [rad/s] (default 1)")
     add_output(
         sp,
         "--report",
@@ -63,21 +68,12 @@ def cmd_sim(args) -> int:
     from ..errors import InputError
     from ..io.jsonfile import to_json
     from ..io.output import write_text
-    from ..limits import MotionLimits
 
     if args.duration is not None and args.duration <= 0:
         raise InputError(f"--duration must be positive [s], got {args.duration:g}")
     if args.hold < 0:
         raise InputError(f"--hold must be >= 0 [s], got {args.hold:g}")
-    positive = (
-        ("--speed", args.speed),
-        ("--turn", args.turn),
-        ("--max-speed", args.max_speed),
-        ("--max-turn", args.max_turn),
-    )
-    for flag, value in positive:  # every option MotionLimits and the keys need positive, named as given
-        if value <= 0:
-            raise InputError(f"{flag} must be positive, got {value:g}")
+    limits = teleop_limits(args)
     from ..physics.cost import real_time_shortfall
     from ..physics.interactive import InteractiveSim, require_display
 
@@ -86,7 +82,6 @@ def cmd_sim(args) -> int:
     slow = real_time_shortfall(robot, "the simulation will run slower than the clock")
     if slow:
         print(f"omnikin: note: sim: {slow}", file=sys.stderr)
-    limits = MotionLimits(linear=args.max_speed, angular=args.max_turn)
     sim = InteractiveSim(robot, speed=args.speed, turn=args.turn, hold=args.hold, camera=args.camera, limits=limits)
     reason = sim.run(args.duration)
     if args.report:

@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from .budget import Budget, add_budget_options
-from .common import add_step_option, declare_inputs, load_robot, number, whole
+from .common import add_step_option, add_teleop_options, declare_inputs, load_robot, number, teleop_limits, whole
 
 EPILOG = """the page (open the printed address in a browser; click the scene so that it has the keys):
   W / S      drive forward / back at --speed while held
@@ -83,10 +83,7 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument(
         "--port", type=whole, default=8080, metavar="PORT", help="port to serve on (default 8080; 0: any free)"
     )
-    sp.add_argument("--speed", type=number, default=0.2, metavar="V", help="speed of W/S/A/D [m/s] (default 0.2)")
-    sp.add_argument("--turn", type=number, default=0.5, metavar="W", help="turn rate of Q/E [rad/s] (default 0.5)")
-    sp.add_argument("--max-speed", type=number, default=0.3, metavar="V", help="speed limit [m/s] (default 0.3)")
-    sp.add_argument("--max-turn", type=number, default=1.0, metavar="W", help="turn rate limit [rad/s] (default 1)")
+    add_teleop_options(sp)
     sp.add_argument(
         "--timeout",
         type=number,
@@ -126,17 +123,8 @@ def require_viser():
 
 def cmd_view(args) -> int:
     from ..errors import InputError
-    from ..limits import MotionLimits
 
-    positive = (
-        ("--speed", args.speed),
-        ("--turn", args.turn),
-        ("--max-speed", args.max_speed),
-        ("--max-turn", args.max_turn),
-    )
-    for flag, value in positive:
-        if value <= 0:
-            raise InputError(f"{flag} must be positive, got {value:g}")
+    limits = teleop_limits(args)
     if args.timeout is not None and args.timeout < 0:
         raise InputError(f"--timeout must be >= 0, got {args.timeout:g}")
     if args.umbmark_side != 0:
@@ -156,7 +144,7 @@ def cmd_view(args) -> int:
     if args.stamped and not args.ros:
         raise InputError("--stamped applies only to --ros")
     if args.ros:
-        return cmd_ros_view(args)
+        return cmd_ros_view(args, limits)
     if args.step is not None and args.engine != "physics":
         raise InputError("--step applies only to --engine physics")
     require_viser()
@@ -173,7 +161,7 @@ def cmd_view(args) -> int:
         engine,
         speed=args.speed,
         turn=args.turn,
-        limits=MotionLimits(linear=args.max_speed, angular=args.max_turn),
+        limits=limits,
         timeout=0.5 if args.timeout is None else args.timeout,
         step=args.step,
     )
@@ -216,12 +204,11 @@ def wildcard_note(host: str, port: int) -> None:
         )
 
 
-def cmd_ros_view(args) -> int:
+def cmd_ros_view(args, limits) -> int:
     """``--ros``: the page follows and drives a running node (:mod:`omnikin.viewer.ros_robot`)."""
     import os
 
     from ..errors import InputError
-    from ..limits import MotionLimits
 
     for flag, given in (("--engine", args.engine), ("--step", args.step), ("--timeout", args.timeout)):
         if given is not None:
@@ -235,7 +222,7 @@ def cmd_ros_view(args) -> int:
         robot,
         speed=args.speed,
         turn=args.turn,
-        limits=MotionLimits(linear=args.max_speed, angular=args.max_turn),
+        limits=limits,
         stamped=args.stamped,
     )
     domain = os.environ.get("ROS_DOMAIN_ID", "0")

@@ -52,24 +52,12 @@ from websockets.exceptions import ConnectionClosed
 from websockets.http11 import Request, Response
 
 from ..errors import InputError, shorten
+from ..runtime.teleop import MOVES
 
 KEYS_PATH = "/omnikin/keys"
 SCRIPT_PATH = "/omnikin/teleop.js"
 KEY_MESSAGE_TYPES = ("press", "release", "release_all", "alive")
-KEY_ACTIONS = (
-    "forward",
-    "back",
-    "left",
-    "right",
-    "turn_left",
-    "turn_right",
-    "stop",
-    "steer_left",
-    "steer_right",
-    "camera_free",
-    "camera_top",
-    "camera_follow",
-)
+KEY_ACTIONS = (*MOVES, "stop", "steer_left", "steer_right", "camera_free", "camera_top", "camera_follow")
 """The actions :file:`teleop.js` sends (W S A D Q E, space, ] [, 1 2 3)."""
 MAX_KEY_MESSAGE = 256
 """Longest key message [bytes]; a longer one closes its socket."""
