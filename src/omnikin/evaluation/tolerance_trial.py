@@ -10,6 +10,11 @@ and, with ``calibrate``, the recommended calibration runs, the least-squares cal
 calibrated robot. Beside the measured ``E_max,syst`` it reports the systematic part alone: the
 same procedures without random errors (one run per direction), before and after.
 
+With ``engine="physics"`` every run is driven in MuJoCo
+(:func:`~omnikin.evaluation.physics_study.physics_umbmark`, rollers and motors; the runs'
+randomness is the wheels' roller phases, no noise model): the systematic parts are then NaN
+(the physics has no noise to leave out).
+
 Unlike :func:`~omnikin.evaluation.procedure.umbmark_study` (one robot as built, its report with
 figures and a noise floor), a trial is cheap (about 0.15 s for tomasi-omni3 at the defaults, one
 core) and its randomness comes from one :class:`numpy.random.SeedSequence`, split into the
@@ -28,6 +33,7 @@ import numpy as np
 from ..model import Robot
 from ..simulation.error_models import NOISE, ErrorProfile, NoiseModel
 from .calibration import calibrate as least_squares_calibration
+from .physics_study import check_engine, physics_calibration_runs, physics_umbmark
 from .procedure import check_settings, draw_as_built, simulate_calibration_runs
 from .umbmark import run_umbmark
 
@@ -46,9 +52,11 @@ class TrialSettings:
     rate: float = 100.0
     noise: NoiseModel = field(default_factory=lambda: NOISE["typical"])
     calibrate: bool = True
+    engine: str = "kinematic"
 
     def __post_init__(self):
         check_settings(runs=self.runs, trials=1, side=self.side, rate=self.rate)
+        check_engine(self.engine)
 
 
 @dataclass(frozen=True)
@@ -87,6 +95,8 @@ def tolerance_trial(
     """One trial (module docstring) of ``robot`` built within ``tolerances``."""
     streams = trial_streams(seed)
     true_robot, _ = draw_as_built(robot, tolerances, streams["robot"])
+    if settings.engine == "physics":
+        return _physics_trial(robot, true_robot, settings, streams)
     opts: dict[str, Any] = dict(
         side=settings.side, mode=settings.mode, runs=settings.runs, noise=settings.noise, rate=settings.rate
     )
@@ -102,3 +112,19 @@ def tolerance_trial(
     after = run_umbmark(true_robot, calibrated, rng=streams["after"], **opts)[0].e_max_syst
     systematic_after = run_umbmark(true_robot, calibrated, **quiet)[0].e_max_syst
     return TrialResult(before, after, systematic_before, systematic_after)
+
+
+def _physics_trial(
+    robot: Robot, true_robot: Robot, settings: TrialSettings, streams: dict[str, np.random.SeedSequence]
+) -> TrialResult:
+    """The trial in the physics engine (module docstring), roller phases from ``streams``."""
+    opts: dict[str, Any] = dict(side=settings.side, mode=settings.mode, runs=settings.runs, rate=settings.rate)
+    before = physics_umbmark(true_robot, robot, seed=streams["before"], **opts)[0][0].e_max_syst
+    if not settings.calibrate:
+        return TrialResult(before, math.nan, math.nan, math.nan)
+    runs = physics_calibration_runs(
+        true_robot, robot, side=settings.side, rate=settings.rate, seed=streams["calibration"]
+    )
+    calibrated = least_squares_calibration(robot, runs).robot
+    after = physics_umbmark(true_robot, calibrated, seed=streams["after"], **opts)[0][0].e_max_syst
+    return TrialResult(before, after, math.nan, math.nan)

@@ -115,18 +115,27 @@ class ErrorProfile:
     drive: float = 0.0  # rad
     roller: float = 0.0  # rad
     ticks: float = 0.0  # relative
+    hub: float = 0.0  # m, hub displacement in any direction (isotropic, each of x and y)
 
     def sample(self, robot: Robot, rng) -> SystematicErrors:
-        """Draw one robot's worth of errors (``rng``: a numpy Generator or a seed)."""
+        """Draw one robot's worth of errors (``rng``: a numpy Generator or a seed).
+
+        Per wheel six standard normals ``z`` in a fixed order (radius, radial, tangential, drive,
+        roller, ticks), whatever the profile, so that two profiles sampled from the same seed
+        draw the same build scaled: radius ``radius z0``; hub moved ``(distance + hub) z1``
+        radially and ``(d angle + hub) z2`` along the circle of radius ``d`` through it (``hub``
+        thus an isotropic displacement of sigma ``hub`` in x and in y); drive ``drive z3``;
+        roller ``roller z4``; ticks ``ticks z5``."""
         rng = np.random.default_rng(rng)
         out = {}
         for w in robot.wheels:
             z = rng.standard_normal(6)
             dist = math.hypot(w.x, w.y)
             beta = math.atan2(w.y, w.x)
-            dr, da = self.distance * z[1], self.angle * z[2]
-            dx = dr * math.cos(beta) - dist * da * math.sin(beta)
-            dy = dr * math.sin(beta) + dist * da * math.cos(beta)
+            dr = (self.distance + self.hub) * z[1]
+            dt = (dist * self.angle + self.hub) * z[2]  # along the circle [m]
+            dx = dr * math.cos(beta) - dt * math.sin(beta)
+            dy = dr * math.sin(beta) + dt * math.cos(beta)
             drive = self.drive * z[3]
             if w.is_fixed:
                 # rigid fixed wheels that are toed in or not coaxial admit no motion: keep only
