@@ -59,6 +59,7 @@ EPILOG = """examples:
   omnikin bag export sim.bag --topic /ground_truth --format tum -o truth.tum
   omnikin metrics truth.tum odom.tum --align       ATE and RPE (evo's definitions)
   omnikin ros tomasi-omni3                         the ROS 2 base driver (extra ros)
+  omnikin sweep examples/tolerance.yaml -o study/  tolerance study on Dask (extra sweep)
 
 units: SI and radians; degrees only where an option or column ends in -deg/_deg.
 frames: body x forward, y left, angles counter-clockwise (REP-103).
@@ -77,7 +78,8 @@ limits: commands whose size you choose (umbmark --trials/--runs, simulate --rate
   (default 1h).
 errors: one line 'omnikin: error: ...' on stderr; exit status 2 for bad input or usage, 1 when
   something fails while running (writing an output, a hardware link), 130 on Ctrl-C, 143 on
-  SIGTERM (timeout, kill); interrupted or terminated, a command leaves no partial output."""
+  SIGTERM (timeout, kill); interrupted or terminated, a command leaves no partial output
+  (omnikin sweep keeps the tasks it finished, to resume from)."""
 
 MESSAGE_LIMIT = 800
 """Longest error or warning line printed [characters]."""
@@ -645,10 +647,11 @@ def build_parser() -> CommandParser:
     _add_umbmark_analyze(sub.choices["umbmark"])
     bag.add_parsers(sub, robot_help)
     ros.add_parsers(sub, robot_help)
-    from . import sim, view
+    from . import sim, sweep, view
 
     sim.add_parsers(sub, robot_help)
     view.add_parsers(sub, robot_help)
+    sweep.add_parsers(sub, robot_help)
     export.add_parsers(sub, robot_help)
     return p
 
@@ -714,8 +717,8 @@ def _main(argv: list[str], fired: list[int]) -> int:
         return _fail(exc, 1)
     except ImportError as exc:  # an optional extra is missing (the message names it)
         return _fail(exc, 2)
-    except KeyboardInterrupt:
-        return _fail("interrupted", 130)
+    except KeyboardInterrupt as exc:  # a command may say what is kept (omnikin sweep: how to resume)
+        return _fail(f"interrupted; {exc}" if str(exc) else "interrupted", 130)
     except Terminated as exc:
         return _fail(f"terminated ({signal.Signals(exc.signum).name})", 128 + exc.signum)
     except BrokenPipeError:  # the reader of standard output went away: stop quietly

@@ -1,0 +1,206 @@
+"""Running a study's tasks on Dask: an embedded local cluster, or a cluster the user runs.
+
+:func:`dask_client` gives a :class:`distributed.Client`:
+
+* **embedded** (the default): a ``LocalCluster`` of ``workers`` processes (all cores), one
+  thread each (the trials hold the GIL: threads in one process would take turns), every
+  listener on loopback (``127.0.0.1``, the dashboard on a free port), the Dask logs silenced
+  (what goes wrong reaches the user as omnikin's own one-line messages), and two Dask defaults
+  switched off that cost a CPU-bound NumPy workload 20 to 30 % (measured, ``docs/sweeps.md``):
+  the workers' statistical profiler and the ``MALLOC_TRIM_THRESHOLD_`` the nanny sets;
+* **a scheduler address** (``tcp://host:8786``): the client connects to it, waits for a
+  worker, and checks that the workers run the same omnikin and NumPy as the client (otherwise a
+  worker's result could differ, or it could not even import the task).
+
+This module imports Dask: import it after :func:`omnikin.sweep.run.require_sweep`.
+
+Workers ignore Ctrl-C (:class:`IgnoreInterrupts`): the embedded cluster's workers share the
+terminal's process group, and a Ctrl-C meant for ``omnikin sweep`` must end the study with one
+line, not a traceback from every worker.
+
+:func:`run_tasks` submits the tasks and hands each result to the caller as soon as it
+arrives (as completed, in any order), then releases it: a result held on a worker would be lost
+with the worker. A task that raises is retried once (Dask's ``retries``); a task whose workers
+die is rescheduled by Dask itself (``distributed.scheduler.allowed-failures``, 3 by default) and
+then fails with ``KilledWorker``; either way its failure is handed to the caller, the study
+goes on.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import logging
+import os
+import signal
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from distributed import WorkerPlugin
+
+from ..errors import InputError, LinkError, one_line, shorten
+
+RETRIES = 1
+"""Reruns of a task that raised (Dask's ``retries``); worker deaths are counted apart."""
+
+CONNECT_TIMEOUT = 10.0
+"""How long the client tries to reach a scheduler [s]."""
+
+WORKER_WAIT = 60.0
+"""How long a study waits for the first worker of a cluster [s]."""
+
+EMBEDDED_CONFIG = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.nanny.pre-spawn-environ": {"OMP_NUM_THREADS": 1, "MKL_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1},
+    "distributed.logging.distributed": "critical",
+}
+"""Dask configuration of the embedded cluster (module docstring)."""
+
+
+class IgnoreInterrupts(WorkerPlugin):
+    """A Dask worker plugin: the worker process ignores SIGINT (module docstring)."""
+
+    name = "omnikin-ignore-interrupts"
+
+    def setup(self, worker) -> None:
+        with contextlib.suppress(ValueError):  # not the main thread of the worker: nothing to do
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+    def teardown(self, worker) -> None:
+        pass
+
+
+@dataclass(frozen=True)
+class Cluster:
+    """A connected client; ``where`` says in words where the tasks run, ``dashboard`` the
+    dashboard's address (or how to get one)."""
+
+    client: Any
+    where: str
+    dashboard: str
+    workers: int
+
+
+def _versions() -> tuple[str, str]:
+    import numpy
+
+    from .. import __version__
+
+    return __version__, numpy.__version__
+
+
+def _dashboard(client) -> str:
+    if importlib.util.find_spec("bokeh") is None:
+        return "none (pip install bokeh to get Dask's dashboard)"
+    return str(client.dashboard_link)
+
+
+@contextlib.contextmanager
+def dask_client(scheduler: str | None = None, workers: int | None = None) -> Iterator[Cluster]:
+    """A :class:`Cluster`: embedded with ``workers`` processes (default: every core), or the
+    cluster whose scheduler listens at ``scheduler`` (module docstring)."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    if scheduler is None:
+        count = workers or os.cpu_count() or 1
+        with dask.config.set(EMBEDDED_CONFIG):
+            cluster = LocalCluster(
+                n_workers=count,
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address="127.0.0.1:0",
+                silence_logs=logging.CRITICAL,
+            )
+            try:
+                client = Client(cluster)
+                try:
+                    client.register_plugin(IgnoreInterrupts())
+                    yield Cluster(client, f"a local cluster of {count} worker processes", _dashboard(client), count)
+                finally:
+                    client.close()
+            finally:
+                cluster.close()
+        return
+    with dask.config.set({"distributed.logging.distributed": "critical"}):
+        try:
+            client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s")
+        except (OSError, TimeoutError) as exc:
+            raise LinkError(f"scheduler {shorten(scheduler)}: cannot connect: {one_line(exc, 200)}") from None
+        except ValueError as exc:  # not an address Dask understands
+            raise InputError(
+                f"scheduler (--scheduler) {shorten(scheduler)}: not a scheduler address ({one_line(exc, 200)}); "
+                "give one like tcp://HOST:8786"
+            ) from None
+        try:
+            count = _check_workers(client, scheduler)
+            yield Cluster(client, f"the cluster at {scheduler} ({count} workers)", _dashboard(client), count)
+        finally:
+            client.close()
+
+
+def _check_workers(client, scheduler: str) -> int:
+    """Wait for a worker; refuse workers whose omnikin or NumPy differ from the client's."""
+    try:
+        client.wait_for_workers(1, timeout=WORKER_WAIT)
+    except TimeoutError:
+        raise LinkError(f"scheduler {scheduler}: no worker joined within {WORKER_WAIT:g} s; start workers") from None
+    try:
+        found = client.run(_versions)
+    except Exception as exc:  # noqa: BLE001 - a worker without omnikin fails to unpickle the function
+        raise LinkError(
+            f"scheduler {scheduler}: its workers cannot run omnikin ({one_line(exc, 200)}); "
+            "install omnikin[sweep] where the workers run"
+        ) from None
+    mine = _versions()
+    for address, theirs in found.items():
+        if tuple(theirs) != mine:
+            raise LinkError(
+                f"scheduler {scheduler}: worker {address} runs omnikin {theirs[0]} with NumPy {theirs[1]}, this "
+                f"client omnikin {mine[0]} with NumPy {mine[1]}; results must come from the same code: "
+                "install the same versions on the workers"
+            )
+    return len(found)
+
+
+@dataclass(frozen=True)
+class Task:
+    """One task: trials ``first..stop-1`` of the point at ``index`` of the study."""
+
+    index: int
+    first: int
+    stop: int
+
+    @property
+    def trials(self) -> int:
+        return self.stop - self.first
+
+
+def run_tasks(
+    client,
+    function: Callable[..., Any],
+    tasks: Sequence[Task],
+    arguments: Callable[[Task], tuple],
+    names: Callable[[Task], str],
+    done: Callable[[Task, Any, BaseException | None], None],
+) -> None:
+    """Run ``function(*arguments(task))`` for every task on ``client``; call ``done(task, result,
+    None)`` for each result, ``done(task, None, error)`` for each task that failed (module
+    docstring), as they arrive. ``names(task)`` is the task's key in Dask (shown on the dashboard)."""
+    from distributed import as_completed
+
+    futures = {}
+    for task in tasks:
+        future = client.submit(function, *arguments(task), key=names(task), retries=RETRIES, pure=False)
+        futures[future.key] = (future, task)
+    for future in as_completed([f for f, _ in futures.values()]):
+        _, task = futures.pop(future.key)
+        try:
+            result = future.result()
+        except Exception as exc:  # noqa: BLE001 - a task's failure (any kind) is reported, the study goes on
+            done(task, None, exc)
+        else:
+            done(task, result, None)
+        future.release()
