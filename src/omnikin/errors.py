@@ -30,6 +30,17 @@ class RobotFileError(InputError):
     """A robot file (or dict) breaks schema version 1 of ``docs/conventions.md``."""
 
 
+class StudyFileError(InputError):
+    """A study file of ``omnikin sweep`` (:mod:`omnikin.sweep.spec`) is bad. The message names
+    the file, the line and the field; ``line`` (1-based) and ``field`` (``factors.scale.count``)
+    say the same for an edge, None when the problem is not tied to one (an unreadable file)."""
+
+    def __init__(self, message: str, *, line: int | None = None, field: str | None = None):
+        super().__init__(message)
+        self.line = line
+        self.field = field
+
+
 class SingularLayoutError(InputError):
     """The wheel layout cannot realise or observe the motion its type promises."""
 
