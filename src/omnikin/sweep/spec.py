@@ -98,6 +98,7 @@ from ..io.textfile import read_text
 from ..model import Robot, robot_name_problem
 from ..odometry import encoded_wheels
 from ..plans import check_mode
+from ..presets import PRESET_NAMES
 from ..simulation.error_models import NOISE
 from ..simulation.motion import RATE_RANGE, check_rate_range
 from ..wheels import TICKS_PER_REV_RANGE
@@ -399,6 +400,12 @@ def _load_robots(where: _Where, names: list[str], base: Path, side: float, mode:
                 robot = load_robot(name)
             else:
                 file = os.path.join(base, name)
+                if not os.path.lexists(file):  # False, not an OSError, for a name too long or with NUL
+                    raise where.error(
+                        path,
+                        f"no preset of that name, nor a robot file {shorten(file)} (robot files are relative to "
+                        f"the study file's folder){did_you_mean(name, PRESET_NAMES)}; got {shorten(name)}",
+                    )
                 real = os.path.realpath(file) if "\0" not in file else file
                 robot = read[real] if real in read else load_robot(file)
                 read[real] = robot
