@@ -190,9 +190,10 @@ class _Where:
             path = path[:-1]
         return self.lines.get(path, 1)
 
-    def error(self, path: tuple, problem: str) -> StudyFileError:
+    def error(self, path: tuple, problem: str, at: tuple | None = None) -> StudyFileError:
+        """The error ``problem`` of the field ``path``, on the line of ``at`` (default: of ``path``)."""
         field = field_name(path)
-        line = self.line(path)
+        line = self.line(path if at is None else at)
         head = f"{self.source}: line {line}: " + (f"{field}: " if field else "")
         return StudyFileError(head + problem, line=line, field=field or None)
 
@@ -232,6 +233,28 @@ def key_lines(node, path: tuple = (), lines: dict[tuple, int] | None = None) -> 
             lines.setdefault(inner, item.start_mark.line + 1)
             key_lines(item, inner, lines)
     return lines
+
+
+_BOOLEANS = ("true", "True", "TRUE", "false", "False", "FALSE")
+"""How a boolean is written: the spellings YAML 1.1 (PyYAML) and YAML 1.2 both read as booleans."""
+
+
+def yaml11_boolean(node):
+    """The first scalar of the node tree ``node`` that PyYAML (YAML 1.1) reads as a boolean but
+    YAML 1.2 as text (``yes``, ``no``, ``on``, ``off``, ``y``, ``n``), or None."""
+    import yaml
+
+    stack = [node]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, yaml.ScalarNode):
+            if item.tag == "tag:yaml.org,2002:bool" and item.value not in _BOOLEANS:
+                return item
+        elif isinstance(item, yaml.MappingNode):
+            stack.extend(v for pair in reversed(item.value) for v in reversed(pair))
+        elif isinstance(item, yaml.SequenceNode):
+            stack.extend(reversed(item.value))
+    return None
 
 
 # --- small checks -------------------------------------------------------------------------------
@@ -462,8 +485,17 @@ def parse_study(text: str, source: str, base: Path) -> Study:
     import yaml
 
     data = parse_yaml(text, source, StudyFileError)
-    lines = key_lines(yaml.compose(text, Loader=strict_yaml_loader())) if data is not None else {}
-    where = _Where(source, lines)
+    tree = yaml.compose(text, Loader=strict_yaml_loader()) if data is not None else None
+    where = _Where(source, key_lines(tree) if tree is not None else {})
+    if tree is not None:
+        boolean = yaml11_boolean(tree)
+        if boolean is not None:
+            mark = boolean.start_mark
+            raise StudyFileError(
+                f"{source}: line {mark.line + 1} column {mark.column + 1}: {shorten(boolean.value)} is a boolean in "
+                "YAML 1.1 but text in YAML 1.2: write true or false (text in quotes)",
+                line=mark.line + 1,
+            )
     if data is None:
         raise where.error((), "empty: a study file needs at least omnikin_sweep: 1, robots, seed and trials")
     if not isinstance(data, Mapping):
@@ -486,7 +518,7 @@ def parse_study(text: str, source: str, base: Path) -> Study:
     draws = 0
     if design == "random":
         if "points" not in data:
-            raise where.error(("points",), "required in the random design: how many settings to draw")
+            raise where.error(("points",), "required in the random design: how many settings to draw", at=("design",))
         draws = _whole(where, ("points",), data["points"], *POINTS_RANGE)
     elif "points" in data:
         raise where.error(("points",), "only in the random design (a grid runs every combination of the factors)")
