@@ -14,6 +14,7 @@ use, so ``import omnikin`` loads neither SciPy nor matplotlib):
 - their results plot themselves: ``result.plot()`` returns a matplotlib ``Figure`` (extra ``viz``).
 """
 
+from ._version import __version__
 from .errors import (
     InfeasibleTwistError,
     InputError,
@@ -28,8 +29,6 @@ from .odometry import OdometryResult, batch_odometry, batch_odometry_from_angles
 from .presets import PRESET_NAMES
 from .streaming import Odometry
 from .wheels import Encoder, Steer, Wheel
-
-__version__ = "0.1.0"
 
 _API = (
     "simulate",

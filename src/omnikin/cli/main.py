@@ -24,7 +24,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..errors import InfeasibleTwistError, InputError, OmnikinError, OutputError, one_line, shorten
 from ..presets import PRESET_NAMES
 from .common import (

@@ -85,7 +85,7 @@ class Cluster:
 def _versions() -> tuple[str, str]:
     import numpy
 
-    from .. import __version__
+    from .._version import __version__
 
     return __version__, numpy.__version__
 

@@ -65,7 +65,9 @@ def _trial_samples(robot: Robot, side: float, mode: str, runs: int, rate: float,
     square = estimated_samples(umbmark_square("cw", side, mode), robot, rate)
     samples = 2.0 * (runs + 1) * square * (2 if calibrate else 1)  # the procedures and their systematic parts
     if calibrate:
-        samples += RECOMMENDED_REPEATS * sum(estimated_samples(plan, robot, rate) for _, plan in recommended_runs(robot, side))
+        samples += RECOMMENDED_REPEATS * sum(
+            estimated_samples(plan, robot, rate) for _, plan in recommended_runs(robot, side)
+        )
     return samples
 
 
@@ -75,7 +77,9 @@ def trial_seconds(point: Point, robot: Robot) -> float:
     if point.engine == "physics":
         return math.inf
     try:
-        samples = _trial_samples(point.robot_for(robot), point.side, point.mode, point.runs, point.rate, point.calibrate)
+        samples = _trial_samples(
+            point.robot_for(robot), point.side, point.mode, point.runs, point.rate, point.calibrate
+        )
     except InputError:  # a point whose runs cannot be planned: its trials fail fast
         return 0.0
     return samples / TRIAL_SAMPLES_PER_SECOND
@@ -105,7 +109,9 @@ def plan_tasks(study: Study, coverage: Coverage, workers: int, task_trials: int 
         if index not in sizes:
             point = study.points[index]
             seconds = trial_seconds(point, study.robots[point.robot])
-            sizes[index] = task_trials or int(min(MAX_TRIALS_PER_TASK, max(1, round(TASK_SECONDS / max(seconds, 1e-9)))))
+            sizes[index] = task_trials or int(
+                min(MAX_TRIALS_PER_TASK, max(1, round(TASK_SECONDS / max(seconds, 1e-9))))
+            )
     if task_trials is None:
         total = sum(stop - first for _, first, stop in missing)
         tasks = sum(math.ceil((stop - first) / sizes[i]) for i, first, stop in missing)
@@ -176,7 +182,9 @@ def _compute(study, folder, tasks, scheduler, workers, progress, result, failed_
     def done(task, columns, error) -> None:
         point = study.points[task.index]
         if error is not None:
-            reason = f"task of trials {task.first} to {task.stop - 1} failed: {type(error).__name__}: {one_line(error, 200)}"
+            reason = (
+                f"task of trials {task.first} to {task.stop - 1} failed: {type(error).__name__}: {one_line(error, 200)}"
+            )
             failed_rows.append(error_rows(point, range(task.first, task.stop), reason))
             result.failed_tasks += 1
         else:
@@ -230,8 +238,10 @@ def _finish(study: Study, folder: StudyFolder, failed_rows: Sequence[dict], resu
     summary = summarize(columns, study)
     schema = pa.schema([(name, pa.type_for_alias(kind)) for name, kind in SUMMARY_COLUMNS])
     summary_table = pa.Table.from_pydict(
-        {name: [None if isinstance(v, float) and np.isnan(v) and kind != "float64" else v for v in summary[name]]
-         for name, kind in SUMMARY_COLUMNS},
+        {
+            name: [None if isinstance(v, float) and np.isnan(v) and kind != "float64" else v for v in summary[name]]
+            for name, kind in SUMMARY_COLUMNS
+        },
         schema=schema,
     )
     result.files.append(folder.write_table("summary.parquet", summary_table))

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..errors import InputError, OutputError, OutputExistsError, one_line, shorten
 from ..io.output import atomic_write, write_text
 from ..io.textfile import read_text

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Mapping, Sequence
 
 from ..errors import OmnikinError, one_line
 from ..evaluation.tolerance_trial import tolerance_trial
@@ -34,7 +35,7 @@ def run_trials(robot: Robot, point: Point, seed: int, first: int, stop: int) -> 
     study's), as columns of :data:`~omnikin.sweep.study.TRIAL_COLUMNS` (module docstring)."""
     nominal = point.robot_for(robot)
     tolerances, settings = point.tolerances, point.settings
-    done = []
+    done: list[tuple[int, dict[str, float] | None, str | None, float]] = []
     for k in range(first, stop):
         start = time.perf_counter()
         try:
@@ -46,7 +47,7 @@ def run_trials(robot: Robot, point: Point, seed: int, first: int, stop: int) -> 
     return _rows(point, done)
 
 
-def _rows(point: Point, done: list) -> dict[str, list]:
+def _rows(point: Point, done: Sequence[tuple[int, Mapping[str, float] | None, str | None, float]]) -> dict[str, list]:
     columns: dict[str, list] = {name: [] for name, _ in TRIAL_COLUMNS}
     settings = point.as_dict()
     key = point_key(point)
