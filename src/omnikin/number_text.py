@@ -6,6 +6,10 @@ Python) spell a number the same way: an optional sign, ASCII digits with an opti
 point, an optional exponent (:data:`PLAIN_NUMBER`), and its value must be finite. Python's
 :class:`float` reads much more (``nan``, ``inf``, ``1_000``, Arabic-Indic or full-width
 digits, blanks around the number); here those are refused, with the reason.
+
+The other way, numbers written for people in reports and summaries: :func:`mm_text` (metres as
+millimetres) and :func:`ratio_text` (a ratio such as a reduction factor), shared by every
+report (``omnikin umbmark``, ``omnikin sweep``).
 """
 
 from __future__ import annotations
@@ -47,3 +51,19 @@ def plain_number(text: str, what: str) -> float:
     if problem:
         raise InputError(f"{what}: {problem}")
     return float(text)
+
+
+def mm_text(x) -> str:
+    """Metres as millimetres to 0.01 mm for tables and summaries: ``0.00``, never ``-0.00``;
+    ``unbounded`` for None (an open interval end), ``-`` for a non-finite number."""
+    if x is None:
+        return "unbounded"
+    return f"{x * 1000 + 0.0:.2f}".replace("-0.00", "0.00") if math.isfinite(x) else "-"
+
+
+def ratio_text(x) -> str:
+    """A ratio for the text: three significant digits, whole numbers from 100 on; ``unbounded``
+    for None (an open interval end)."""
+    if x is None:
+        return "unbounded"
+    return f"{x:.0f}" if x >= 100 else f"{x:.3g}"

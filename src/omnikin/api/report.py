@@ -2,28 +2,13 @@
 
 from __future__ import annotations
 
-import math
-
-
-def mm_text(x) -> str:
-    """Metres as millimetres to 0.01 mm for tables and summaries: ``0.00``, never ``-0.00``;
-    ``unbounded`` for None (an open interval end), ``-`` for a non-finite number."""
-    if x is None:
-        return "unbounded"
-    return f"{x * 1000 + 0.0:.2f}".replace("-0.00", "0.00") if math.isfinite(x) else "-"
+from ..number_text import mm_text, ratio_text
 
 
 def _interval_mm(interval) -> str:
     if not interval:
         return "n/a (needs 3 runs per direction)"
     return f"{mm_text(interval[0])} to {mm_text(interval[1])}"
-
-
-def _factor(x) -> str:
-    """A ratio for the text: three significant digits, whole numbers from 100 on."""
-    if x is None:
-        return "unbounded"
-    return f"{x:.0f}" if x >= 100 else f"{x:.3g}"
 
 
 def physics_floor_text(floor: dict, level: str) -> str:
@@ -150,10 +135,10 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
             ]
     if "after" in doc:
         r, ri = doc["reduction_factor"], doc["reduction_factor_interval"]
-        ri_text = f"{_factor(ri[0])} to {_factor(ri[1])}" if ri else "n/a (needs 3 runs per direction)"
+        ri_text = f"{ratio_text(ri[0])} to {ratio_text(ri[1])}" if ri else "n/a (needs 3 runs per direction)"
         lines += [
             "",
-            f"Reduction factor of E_max,syst: {_factor(r)} ({level} interval {ri_text})."
+            f"Reduction factor of E_max,syst: {ratio_text(r)} ({level} interval {ri_text})."
             + (
                 " The upper end is unbounded because the value after calibration is consistent with zero."
                 if ri and ri[1] is None
@@ -167,7 +152,7 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         f"{mm_text(sysm['e_max_syst_before'])} mm before"
         + (
             f", {mm_text(sysm['e_max_syst_after'])} mm after calibration "
-            f"(reduction {_factor(sysm['reduction_factor'])})."
+            f"(reduction {ratio_text(sysm['reduction_factor'])})."
             if "e_max_syst_after" in sysm
             else "."
         ),

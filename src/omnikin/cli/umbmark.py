@@ -18,7 +18,7 @@ from pathlib import Path
 from ..api.calibration import calibrate as api_calibrate
 from ..api.calibration import calibration_plan
 from ..api.common import dumps
-from ..api.report import mm_text, physics_floor_text
+from ..api.report import physics_floor_text
 from ..api.umbmark import (
     DEFAULT_ROBOT,
     UMBmarkReport,
@@ -28,6 +28,7 @@ from ..api.umbmark import (
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
 from ..evaluation.physics_study import ENGINES
+from ..number_text import mm_text
 from ..simulation.error_models import NOISE, PROFILES
 from ..simulation.motion import RATE_RANGE
 from ..viz import FIGURE_FORMATS, MAX_DPI, MIN_DPI, dpi_problem
