@@ -9,10 +9,10 @@ exact for a power law; else linear).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 BELOW = "below over the whole grid"
 ABOVE = "above over the whole grid"
@@ -36,7 +36,7 @@ class Crossing:
     note: str = ""
 
 
-def threshold(factor: Sequence[float], curve: Sequence[float], target: float) -> Crossing:
+def threshold(factor: ArrayLike, curve: ArrayLike, target: float) -> Crossing:
     """The largest ``factor`` value at which ``curve`` stays below ``target``, walking from the
     small end (``factor`` sorted ascending).
 

@@ -158,10 +158,12 @@ def tolerance_figure(summary: Mapping[str, np.ndarray], study):
 
 def _legend(fig, ax, q_name: str, level: str, random: bool) -> None:
     """One legend below the panels: the series' colours, then what the line styles mean."""
+    from matplotlib.artist import Artist
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     handles, labels = ax.get_legend_handles_labels()
+    keys: list[Artist]
     if random:
         keys = [
             Line2D([], [], marker="o", ls="", color="0.3", label=f"median, {level} interval"),
