@@ -105,3 +105,13 @@ def test_random_design_reads_points_sorted_by_the_axis_as_approximate():
     before = answers(summarize(proportional_table(points, 0.008, 0.002, 3), study), study)[0]
     assert before.approximate and before.estimate.value == pytest.approx(1.25)
     assert before.tolerances(1.25) is None  # radius differs between the points
+
+
+def test_answer_text_is_one_line_with_the_tolerance_and_its_three_build_tolerances():
+    points = grid(robot="omni3\nsecond line", scales=SCALES, radius=0.004, hub=0.002, drive_deg=0.3)
+    study = make_study(points, trials=80)
+    before = answers(summarize(proportional_table(points, 0.008, 0.002, 80), study), study)[0]
+    assert before.text == (
+        "omni3 second line, before calibration: scale [-] 1.25 (crosses; radius 0.5 %, hub 2.5 mm, "
+        "drive 0.375 deg); conservative: 1.25"
+    )

@@ -15,11 +15,11 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ..evaluation.order_statistics import values_for_bound
-from ..evaluation.threshold import ABOVE, ABOVE_FIRST, BELOW, Crossing
+from ..evaluation.threshold import ABOVE, ABOVE_FIRST, Crossing
 from ..number_text import mm_text, ratio_text
 from ..viz.sweep import AXIS_UNITS
 from .study import Study
-from .summary import Answer, stat_column
+from .summary import Answer, axis_text, crossing_text, stat_column, tolerances_text
 
 MAX_ROWS = 200
 """The most rows of the per-point table and of the list of failures."""
@@ -36,29 +36,6 @@ def cell(text: object, limit: int = MAX_CELL) -> str:
     return line.replace("|", "\\|")
 
 
-def _axis_text(axis: str, value: float) -> str:
-    """An axis value in the unit shown: ``1.25`` (scale), ``0.5 %`` (radius), ``1 mm`` (hub)."""
-    label, factor = AXIS_UNITS[axis]
-    unit = label.split("[")[1].rstrip("]")
-    return f"{value * factor:.3g}" + ("" if unit == "-" else f" {unit}")
-
-
-def _tolerances_text(answer: Answer, value: float | None) -> str:
-    triple = answer.tolerances(value)
-    if triple is None:
-        return "-"
-    radius, hub, drive = triple
-    return f"radius {radius:.3g} %, hub {hub:.3g} mm, drive {drive:.3g} deg"
-
-
-def _crossing_text(answer: Answer, crossing: Crossing) -> str:
-    """A found tolerance in words: ``1.25``, ``at least 8 (below over the whole grid)``, ``none``."""
-    if crossing.value is None:
-        return "none"
-    text = _axis_text(answer.axis, crossing.value)
-    return f"at least {text}" if crossing.status == BELOW else text
-
-
 def _status_text(answer: Answer, crossing: Crossing, need: int) -> str:
     """The status of a crossing; above the target: where and how far (an unbounded interval end
     says how many trials per point would bound it)."""
@@ -66,7 +43,7 @@ def _status_text(answer: Answer, crossing: Crossing, need: int) -> str:
     if crossing.status in (ABOVE, ABOVE_FIRST) and math.isfinite(crossing.first[0]):
         q = crossing.first[1]
         shown = f"unbounded, needs {need} trials per point" if math.isinf(q) else f"{mm_text(q)} mm"
-        text += f" (at {_axis_text(answer.axis, crossing.first[0])}: {shown})"
+        text += f" (at {axis_text(answer.axis, crossing.first[0])}: {shown})"
     elif crossing.status not in (ABOVE, ABOVE_FIRST):
         text += f", {crossing.interpolation} interpolation" if crossing.interpolation != "none" else ""
     return text + (f"; {crossing.note}" if crossing.note else "")
@@ -115,7 +92,7 @@ def study_markdown(
         lines.append("")
     lines += _point_lines(study, summary, level, q_name, target)
     if failures:
-        lines += [f"## Failing points ({len(failures)})", ""]
+        lines += [f"## Failures ({len(failures)})", ""]
         lines += [f"- {cell(f, 300)}" for f in failures[:MAX_ROWS]]
         if len(failures) > MAX_ROWS:
             lines.append(f"- ... {len(failures) - MAX_ROWS} more left out (see the trial table's error column)")
@@ -143,10 +120,10 @@ def _answer_lines(study: Study, summary, answers: Sequence[Answer], level: str, 
                 [
                     cell(a.series.label),
                     "before calibration" if a.phase == "before" else "after calibration",
-                    _crossing_text(a, a.estimate),
-                    _tolerances_text(a, a.estimate.value),
+                    crossing_text(a, a.estimate),
+                    tolerances_text(a, a.estimate.value),
                     cell(_status_text(a, a.estimate, need), 300),
-                    _crossing_text(a, a.conservative),
+                    crossing_text(a, a.conservative),
                     cell(_status_text(a, a.conservative, need), 300),
                 ]
             )
@@ -192,7 +169,7 @@ def _point_lines(study: Study, summary, level: str, q_name: str, target: str) ->
         def stat(name: str, phase: str, i: int = i) -> float:
             return float(summary[stat_column(name, phase)][i])
 
-        cells = [cell(summary["series"][i]), _axis_text(study.axis, float(summary[study.axis][i]))]
+        cells = [cell(summary["series"][i]), axis_text(study.axis, float(summary[study.axis][i]))]
         cells += [str(int(summary["trials"][i])), str(int(summary["failed"][i]))]
         for phase in ("before", "after"):
             for name in ("median", "quantile"):

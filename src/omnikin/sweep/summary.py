@@ -33,7 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..evaluation.order_statistics import quantile_interval
-from ..evaluation.threshold import Crossing, threshold
+from ..evaluation.threshold import BELOW, Crossing, threshold
+from ..viz.sweep import AXIS_UNITS
 from .points import POINT_FIELDS, TOLERANCE_FACTORS, point_key
 from .study import TRIAL_COLUMNS, Study
 
@@ -182,6 +183,45 @@ class Answer:
             return None
         f = {**self.tolerances_at, self.axis: value}
         return (f["scale"] * f["radius"] * 100.0, f["scale"] * f["hub"] * 1000.0, f["scale"] * f["drive_deg"])
+
+    @property
+    def text(self) -> str:
+        """The answer in one line: ``omni3, before calibration: scale up to 1.25 (radius 0.625 %,
+        hub 1.25 mm, drive 0.625 deg; crosses); conservative: 1.1``."""
+        phase = "before calibration" if self.phase == "before" else "after calibration"
+        found = crossing_text(self, self.estimate)
+        triple = tolerances_text(self, self.estimate.value)
+        detail = self.estimate.status + ("" if triple == "-" else f"; {triple}")
+        return (
+            f"{' '.join(self.series.label.split())[:120]}, {phase}: {AXIS_UNITS[self.axis][0]} {found} ({detail}); "
+            f"conservative: {crossing_text(self, self.conservative)}" + (" (approximate)" if self.approximate else "")
+        )
+
+
+def axis_text(axis: str, value: float) -> str:
+    """A value of tolerance factor ``axis`` in the unit shown: ``1.25`` (scale), ``0.5 %``
+    (radius), ``1 mm`` (hub), ``0.5 deg`` (drive_deg)."""
+    label, factor = AXIS_UNITS[axis]
+    unit = label.split("[")[1].rstrip("]")
+    return f"{value * factor:.3g}" + ("" if unit == "-" else f" {unit}")
+
+
+def tolerances_text(answer: Answer, value: float | None) -> str:
+    """:meth:`Answer.tolerances` at ``value`` in words: ``radius 0.5 %, hub 1.25 mm, drive 0.375
+    deg``; ``-`` for none."""
+    triple = answer.tolerances(value)
+    if triple is None:
+        return "-"
+    radius, hub, drive = triple
+    return f"radius {radius:.3g} %, hub {hub:.3g} mm, drive {drive:.3g} deg"
+
+
+def crossing_text(answer: Answer, crossing: Crossing) -> str:
+    """A tolerance found in words: ``1.25``, ``at least 8`` (below over the whole grid), ``none``."""
+    if crossing.value is None:
+        return "none"
+    text = axis_text(answer.axis, crossing.value)
+    return f"at least {text}" if crossing.status == BELOW else text
 
 
 def answers(summary: Mapping[str, np.ndarray], study: Study) -> list[Answer]:
