@@ -11,6 +11,7 @@ import pytest
 
 pytest.importorskip("matplotlib")
 
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.collections import FillBetweenPolyCollection  # noqa: E402
 
 from omnikin.sweep.points import Point  # noqa: E402
@@ -98,3 +99,17 @@ def test_random_design_is_drawn_as_points_not_lines():
     median = next(line for line in fig.axes[0].lines if line.get_gid() == "median:before:0")
     assert median.get_linestyle() == "None" and median.get_marker() == "o"
     assert "random design" in fig.get_suptitle()
+
+
+def test_every_log_axis_has_labelled_ticks_even_over_many_decades():
+    # after calibration 0.001 mm, before 10 m: nine decades on the shared y axis
+    points = grid(scales=SCALES)
+    study = make_study(points, trials=5)
+    table = trial_table((p, k, 10.0 * p.scale, 1e-6 * p.scale, None) for p in points for k in range(5))
+    fig = tolerance_figure(summarize(table, study), study)
+    FigureCanvasAgg(fig).draw()
+    assert [ax.get_yscale() for ax in fig.axes] == ["log", "log"]
+    ax = fig.axes[0]  # the shared y axis is labelled on the first panel
+    low, high = ax.get_ylim()
+    shown = [t for t in ax.yaxis.get_majorticklabels() if t.get_text() and low <= t.get_position()[1] <= high]
+    assert len(shown) >= 3
