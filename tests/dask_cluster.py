@@ -52,18 +52,44 @@ def dask_cluster(tmp_path: Path, workers: int = 2) -> Iterator[DaskCluster]:
     started: list[subprocess.Popen] = []
     try:
         scheduler = subprocess.Popen(
-            _dask("scheduler", "--host", "127.0.0.1", "--port", "0", "--dashboard-address", "127.0.0.1:0",
-                  "--scheduler-file", str(file)),
-            stdout=log, stderr=log, env=env,
+            _dask(
+                "scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--dashboard-address",
+                "127.0.0.1:0",
+                "--scheduler-file",
+                str(file),
+            ),
+            stdout=log,
+            stderr=log,
+            env=env,
         )
         started.append(scheduler)
         info = _scheduler_info(file, scheduler)
         for k in range(workers):
             started.append(
                 subprocess.Popen(
-                    _dask("worker", "--scheduler-file", str(file), "--host", "127.0.0.1", "--nthreads", "1",
-                          "--no-nanny", "--no-dashboard", "--name", f"w{k}", "--death-timeout", "60"),
-                    stdout=log, stderr=log, env=env,
+                    _dask(
+                        "worker",
+                        "--scheduler-file",
+                        str(file),
+                        "--host",
+                        "127.0.0.1",
+                        "--nthreads",
+                        "1",
+                        "--no-nanny",
+                        "--no-dashboard",
+                        "--name",
+                        f"w{k}",
+                        "--death-timeout",
+                        "60",
+                    ),
+                    stdout=log,
+                    stderr=log,
+                    env=env,
                 )
             )
         with Client(info["address"], timeout="10s") as client:

@@ -12,6 +12,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from conftest import omnikin_env, run_entry_point
@@ -40,9 +41,18 @@ def write_study(tmp_path: Path, trials: int = 6, calibrate: str = "false") -> Pa
     return spec
 
 
-def table(folder: Path):
-    """The trial table without its one run-dependent column (computing time)."""
-    return pq.read_table(folder / "trials.parquet").drop_columns(["seconds"])
+def table(folder: Path) -> dict:
+    """The trial table without its one run-dependent column (computing time), as NumPy columns."""
+    read = pq.read_table(folder / "trials.parquet").drop_columns(["seconds"])
+    return {name: np.array(read.column(name).to_pylist(), dtype=object if read.column(name).type == pa.string()
+                           else None) for name in read.column_names}  # fmt: skip
+
+
+def assert_same_table(result: dict, reference: dict) -> None:
+    """Equal column by column, bit for bit (NaN where the other has NaN: a trial without calibration)."""
+    assert list(result) == list(reference)
+    for name in reference:
+        np.testing.assert_array_equal(result[name], reference[name], err_msg=name, strict=True)
 
 
 def no_traceback(stderr: str) -> None:
@@ -67,9 +77,9 @@ def test_a_study_on_an_external_cluster_gives_the_embedded_clusters_table(tmp_pa
             logs = client.run(lambda dask_worker: len(dask_worker.state.log))
         assert all(count > 0 for count in logs.values()), logs
     reference, result = table(tmp_path / "local"), table(tmp_path / "remote")
-    assert result.num_rows == 2 * 6
-    assert result.equals(reference)
-    assert result.column("error").null_count == result.num_rows
+    assert len(result["trial"]) == 2 * 6
+    assert_same_table(result, reference)
+    assert all(e is None for e in result["error"])
 
 
 def _task_running(client) -> str | None:
@@ -81,13 +91,13 @@ def _task_running(client) -> str | None:
 
 
 def test_a_worker_killed_mid_study_costs_a_retry_not_a_result(tmp_path):
-    spec = write_study(tmp_path, trials=8, calibrate="true")  # tasks of 4 trials: about a second each
-    reference = sweep(spec, "-o", tmp_path / "reference", "--workers", "2", "--task-trials", "4")
+    spec = write_study(tmp_path, trials=16, calibrate="true")  # tasks of 8 trials: about a second each
+    reference = sweep(spec, "-o", tmp_path / "reference", "--workers", "2", "--task-trials", "5")
     assert reference.returncode == 0, reference.stderr
     with dask_cluster(tmp_path) as cluster:
         study = subprocess.Popen(
             [sys.executable, "-m", "omnikin.cli.main", "sweep", str(spec), "-o", str(tmp_path / "out"),
-             "--scheduler", cluster.address, "--task-trials", "4"],
+             "--scheduler", cluster.address, "--task-trials", "8"],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=omnikin_env(),
         )  # fmt: skip
         with cluster.client() as client:
@@ -105,8 +115,8 @@ def test_a_worker_killed_mid_study_costs_a_retry_not_a_result(tmp_path):
     assert study.returncode == 0, err
     assert "failed" not in err
     result = table(tmp_path / "out")
-    assert result.column("error").null_count == result.num_rows  # no trial lost
-    assert result.equals(table(tmp_path / "reference"))
+    assert all(e is None for e in result["error"])  # no trial lost
+    assert_same_table(result, table(tmp_path / "reference"))
 
 
 def test_an_interrupted_study_resumes_and_computes_only_what_is_missing(tmp_path):
@@ -135,4 +145,4 @@ def test_an_interrupted_study_resumes_and_computes_only_what_is_missing(tmp_path
     assert again.returncode == 0, again.stderr
     assert f"{kept} of 24 trials already in the folder" in again.stderr
     assert f"({24 - kept} computed now, {kept} from the folder, 0 failed)" in again.stdout
-    assert table(out).equals(table(tmp_path / "reference"))
+    assert_same_table(table(out), table(tmp_path / "reference"))

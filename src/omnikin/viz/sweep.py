@@ -60,18 +60,18 @@ def _spans_decade(values: np.ndarray) -> bool:
 def _log_axis(axis, set_scale, values: np.ndarray, ticks: bool) -> None:
     """A log scale; over at most 3 decades with plain numbers at 1, 2 and 5 per decade (``0.5``,
     ``10``), wider with matplotlib's powers of ten. ``ticks`` puts the major ticks at the (at most
-    12) distinct ``values`` of a grid."""
+    6: more labels would run into each other) distinct ``values`` of a grid, to 3 digits."""
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
     set_scale("log")
     positive = np.unique(values[np.isfinite(values) & (values > 0)])
-    if ticks and len(positive) <= 12:
+    if ticks and len(positive) <= 6:
         axis.set_ticks(positive)
     elif len(positive) and positive[-1] / positive[0] <= 1e3:
         axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
     else:
         return
-    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
     axis.set_minor_formatter(NullFormatter())
 
 
