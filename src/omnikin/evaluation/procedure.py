@@ -94,17 +94,26 @@ def check_settings(*, runs, trials, side, rate) -> None:
     check_rate_range(rate, "rate (--rate)")
 
 
-def draw_as_built(robot: Robot, profile, seed) -> tuple[Robot, SystematicErrors]:
+AS_BUILT_FROM = (
+    "the errors profile (--errors) and seed (--seed)",
+    "choose errors none, another seed or a larger robot",
+)
+"""How :func:`draw_as_built` names the draw and the way out, by default (``omnikin umbmark``)."""
+
+
+def draw_as_built(robot: Robot, profile, seed, *, drawn_from: tuple[str, str] = AS_BUILT_FROM):
     """The robot as built: a draw of the error ``profile``
     (:class:`~omnikin.simulation.error_models.ErrorProfile`) from ``seed`` (a SeedSequence or
-    int) applied to ``robot``. Returns the true robot and the errors drawn."""
-    drawn = profile.sample(robot, np.random.default_rng(seed))
+    int) applied to ``robot``. Returns the true robot and the errors drawn. A draw that takes a
+    field out of its range is an InputError naming the robot, where the draw came from and the
+    way out (``drawn_from``: both as words)."""
     try:
+        drawn = profile.sample(robot, np.random.default_rng(seed))
         return drawn.apply(robot), drawn
     except InputError as exc:  # a drawn error took a field out of its range: say it is the draw's
         raise InputError(
-            f"robot {robot.name!r} as built (its systematic errors drawn from the errors profile (--errors) and "
-            f"seed (--seed)) is not a valid robot: {exc}; choose errors none, another seed or a larger robot"
+            f"robot {robot.name!r} as built (its systematic errors drawn from {drawn_from[0]}) is not a valid robot: "
+            f"{exc}; {drawn_from[1]}"
         ) from None
 
 

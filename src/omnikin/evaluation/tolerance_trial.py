@@ -37,6 +37,9 @@ from .physics_study import check_engine, physics_calibration_runs, physics_umbma
 from .procedure import check_settings, draw_as_built, simulate_calibration_runs
 from .umbmark import run_umbmark
 
+AS_BUILT = ("the tolerances and the trial's seed", "lower the tolerances")
+"""How a trial's invalid robot as built is named (:func:`~omnikin.evaluation.procedure.draw_as_built`)."""
+
 TRIAL_STREAMS = ("robot", "before", "calibration", "after")
 """The random streams of a trial, spawned in this order from its seed."""
 
@@ -94,7 +97,7 @@ def tolerance_trial(
 ) -> TrialResult:
     """One trial (module docstring) of ``robot`` built within ``tolerances``."""
     streams = trial_streams(seed)
-    true_robot, _ = draw_as_built(robot, tolerances, streams["robot"])
+    true_robot, _ = draw_as_built(robot, tolerances, streams["robot"], drawn_from=AS_BUILT)
     if settings.engine == "physics":
         return _physics_trial(robot, true_robot, settings, streams)
     opts: dict[str, Any] = dict(

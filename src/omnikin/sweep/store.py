@@ -112,6 +112,10 @@ class StudyFolder:
                 pass
             except OSError as exc:
                 raise OutputError(f"{path}: cannot create: {exc.strerror or exc}") from None
+        if not (path / MANIFEST).exists() and any(name != LOCK for name in os.listdir(path)):
+            raise OutputExistsError(
+                f"{path}: a non-empty folder omnikin did not write (no {MANIFEST}); choose a new folder"
+            )
         lock = _lock(path)
         try:
             folder = cls(path, study, lock)
