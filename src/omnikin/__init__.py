@@ -9,6 +9,7 @@ Entry points (the command-line tools as functions, with their defaults; imported
 use, so ``import omnikin`` loads neither SciPy nor matplotlib):
 
 - :func:`simulate` (``omnikin simulate``), :func:`run_umbmark` (``omnikin umbmark``),
+  :func:`run_sweep` (``omnikin sweep``),
   :func:`analyze_umbmark` (``omnikin umbmark analyze``), :func:`calibrate` and
   :func:`calibration_plan` (``omnikin calibrate``), :func:`plot_layout` (``omnikin show --plot``);
 - their results plot themselves: ``result.plot()`` returns a matplotlib ``Figure`` (extra ``viz``).
@@ -33,6 +34,7 @@ from .wheels import Encoder, Steer, Wheel
 _API = (
     "simulate",
     "run_umbmark",
+    "run_sweep",
     "analyze_umbmark",
     "calibrate",
     "calibration_plan",
@@ -95,6 +97,7 @@ __all__ = [
     "calibration_plan",
     "load_robot",
     "plot_layout",
+    "run_sweep",
     "run_umbmark",
     "simulate",
     "__version__",

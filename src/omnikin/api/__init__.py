@@ -13,6 +13,7 @@ is imported only then, with an error naming the ``viz`` extra when it is missing
     fit = omnikin.calibrate("tomasi-omni3", "runs.csv")                # omnikin calibrate
     res = omnikin.analyze_umbmark("measured.csv", robot="diff-drive")  # omnikin umbmark analyze
     omnikin.plot_layout("mecanum4").savefig("layout.pdf")              # omnikin show --plot
+    study = omnikin.run_sweep("examples/tolerance.yaml", "study")      # omnikin sweep (extra sweep)
 
 Lengths in metres, angles in radians, unless a name says otherwise (``_deg``, ``_mm``).
 """
@@ -34,6 +35,23 @@ def plot_layout(robot):
     return layout_figure(robot_of(robot))
 
 
+def run_sweep(spec, out, *, scheduler=None, workers=None, task_trials=None, force: bool = False):
+    """``omnikin sweep SPEC -o OUT``: the study of the study file ``spec`` (or a loaded
+    :class:`~omnikin.sweep.study.Study`) run on Dask into the folder ``out`` (resumed when it holds
+    the study); returns a :class:`~omnikin.sweep.run.SweepResult`. The embedded cluster starts
+    worker processes: call it under ``if __name__ == "__main__":`` (docs/sweeps.md)."""
+    from ..sweep.run import require_sweep
+    from ..sweep.run import run_sweep as run
+    from ..sweep.study import Study
+
+    require_sweep()
+    if not isinstance(spec, Study):
+        from ..sweep.spec import load_study
+
+        spec = load_study(spec)
+    return run(spec, out, scheduler=scheduler, workers=workers, task_trials=task_trials, force=force)
+
+
 __all__ = [
     "Calibration",
     "DEFAULT_PATH",
@@ -47,6 +65,7 @@ __all__ = [
     "dumps",
     "plot_layout",
     "robot_of",
+    "run_sweep",
     "run_umbmark",
     "simulate",
 ]
