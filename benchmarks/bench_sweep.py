@@ -22,8 +22,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _common import save
 
+from _common import save
 from omnikin.io.robot_file import load_robot
 from omnikin.sweep.points import Point, robot_hash
 from omnikin.sweep.study import Study
@@ -77,7 +77,8 @@ def _overhead() -> float:
     with dask_client(workers=1) as cluster:
         cluster.client.run(lambda: None)
         t0 = time.perf_counter()
-        run_tasks(cluster.client, _nothing, tasks, lambda t: (t.first,), lambda t: f"nothing-{t.first}", lambda *a: None)
+        keys = [f"nothing-{t.first}" for t in tasks]
+        run_tasks(cluster.client, _nothing, tasks, lambda t: (t.first,), lambda t: keys[t.first], lambda *a: None)
         return (time.perf_counter() - t0) / OVERHEAD_TASKS
 
 

@@ -99,10 +99,36 @@ def test_another_seed_is_refused_and_force_removes_only_the_studys_files(tmp_pat
     with pytest.raises(OutputExistsError, match="seed 5, this study has seed 6"):
         StudyFolder.open(tmp_path / "out", study(seed=6))
     assert (tmp_path / "out" / "parts" / KEY / part_name(0, 2)).exists()
+    (tmp_path / "out" / "parts" / KEY / "README").write_text("the user's too")
     with StudyFolder.open(tmp_path / "out", study(seed=6), force=True) as folder:
         assert not folder.coverage().done[KEY].any()
+        assert (tmp_path / "out" / "parts" / KEY / part_name(0, 2)).exists()  # nothing removed before the run
+        folder.start_over()
+    assert not (tmp_path / "out" / "parts" / KEY / part_name(0, 2)).exists()
     assert (tmp_path / "out" / "notes.txt").read_text() == "the user's"
-    assert (tmp_path / "out" / MANIFEST).exists()
+    assert (tmp_path / "out" / "parts" / KEY / "README").read_text() == "the user's too"
+    assert '"seed": 6' in (tmp_path / "out" / MANIFEST).read_text()
+
+
+def test_a_manifest_omnikin_did_not_write_is_refused_even_with_force(tmp_path):
+    (tmp_path / "app").mkdir()
+    (tmp_path / "app" / MANIFEST).write_text('{"name": "my web app"}')
+    (tmp_path / "app" / "report.md").write_text("mine")
+    for force in (False, True):
+        with pytest.raises(OutputExistsError, match="not an omnikin study's"):
+            StudyFolder.open(tmp_path / "app", study(), force=force)
+    assert (tmp_path / "app" / "report.md").read_text() == "mine"
+    assert (tmp_path / "app" / MANIFEST).read_text() == '{"name": "my web app"}'
+
+
+def test_results_of_another_omnikin_or_numpy_version_are_not_mixed_in(tmp_path):
+    with StudyFolder.open(tmp_path / "out", study()) as folder:
+        folder.coverage()
+        write(folder, 0, 2)
+    manifest = tmp_path / "out" / MANIFEST
+    manifest.write_text(manifest.read_text().replace(f'"numpy": "{np.__version__}"', '"numpy": "1.0"'))
+    with pytest.raises(OutputExistsError, match="NumPy '1.0'"):
+        StudyFolder.open(tmp_path / "out", study())
 
 
 def test_two_sweeps_never_write_one_folder_at_once(tmp_path):

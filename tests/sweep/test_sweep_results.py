@@ -97,3 +97,22 @@ def test_the_example_study_runs_and_answers_its_question(tmp_path):
     assert (out / "figures" / "tolerance.png").stat().st_size > 10_000
     report = (out / "report.md").read_text()
     assert "below 10 mm for 95 %" in report and "figures/tolerance.png" in report
+
+
+@pytest.mark.parametrize("option", [["--workers", "0"], ["--workers", "-1"], ["--task-trials", "-3"]])
+def test_a_worker_count_or_task_size_out_of_range_is_refused(tmp_path, option):
+    done, _ = run_study(tmp_path, "trials: 2\n", *option)
+    assert done.returncode == 2
+    assert done.stderr.startswith("omnikin: error: ") and "must be a whole number from 1" in done.stderr
+    assert len(done.stderr.splitlines()) == 1
+
+
+def test_force_with_a_scheduler_that_cannot_be_used_removes_nothing(tmp_path):
+    done, _ = run_study(tmp_path, "trials: 1\numbmark: {side: 1, runs: 1}\nfactors: {calibrate: false}\n")
+    assert done.returncode == 0, done.stderr
+    parts = sorted((tmp_path / "out" / "parts").rglob("*.parquet"))
+    spec = tmp_path / "study.yaml"
+    spec.write_text(spec.read_text().replace("seed: 3", "seed: 4"))
+    again = run_entry_point("sweep", spec, "-o", tmp_path / "out", "--force", "--scheduler", "foo")
+    assert again.returncode == 2 and "scheduler" in again.stderr, again.stderr
+    assert sorted((tmp_path / "out" / "parts").rglob("*.parquet")) == parts

@@ -7,7 +7,7 @@ import os
 import sys
 import time
 
-from ..errors import InputError, OutputExistsError
+from ..errors import InputError, LinkError, OutputExistsError
 from .common import console, whole
 
 EPILOG = """the study file (YAML; examples/tolerance.yaml is a commented example):
@@ -164,6 +164,9 @@ def cmd_sweep(args) -> int:
     except KeyboardInterrupt:
         progress.stop()
         raise KeyboardInterrupt(f"the finished tasks are in {args.out}: rerun the same command to resume") from None
+    except LinkError as exc:  # the cluster failed: what finished is kept
+        progress.stop()
+        raise LinkError(f"{exc}; the finished tasks are in {args.out}: rerun the same command to resume") from None
     finally:
         progress.stop()
     for line in result.removed:
@@ -173,6 +176,12 @@ def cmd_sweep(args) -> int:
         f"{study.name}: {len(study.points)} points x {study.trials} trials = {total} trials "
         f"({result.computed} computed now, {result.reused} from the folder, {result.failed} failed)"
     )
+    if result.failed:
+        print(
+            f"omnikin: warning: {result.failed} of {total} trials failed: their reasons are in the table's error "
+            f"column and in {os.path.join(args.out, 'report.md')}",
+            file=sys.stderr,
+        )
     if result.failed_tasks:
         print(
             f"omnikin: warning: {result.failed_tasks} tasks failed on their workers; their trials are marked "

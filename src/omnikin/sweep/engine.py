@@ -34,6 +34,7 @@ import logging
 import os
 import signal
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import CancelledError
 from dataclasses import dataclass
 from typing import Any
 
@@ -71,6 +72,34 @@ class IgnoreInterrupts(WorkerPlugin):
         pass
 
 
+@contextlib.contextmanager
+def _interrupts_ignored() -> Iterator[None]:
+    """Ignore SIGINT while the embedded cluster's processes start (an ignored signal stays ignored
+    in the processes started meanwhile); a Ctrl-C then is lost: the cluster starts in about a
+    second. Outside the main thread (where handlers cannot be set) it does nothing."""
+    try:
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
+def _quiet_client_logs() -> Iterator[None]:
+    """Dask's own log lines off in this process (a lost scheduler reaches the user as one line)."""
+    logger = logging.getLogger("distributed")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
 @dataclass(frozen=True)
 class Cluster:
     """A connected client; ``where`` says in words where the tasks run, ``dashboard`` the
@@ -106,30 +135,37 @@ def dask_client(scheduler: str | None = None, workers: int | None = None) -> Ite
     if scheduler is None:
         count = workers or os.cpu_count() or 1
         with dask.config.set(EMBEDDED_CONFIG):
-            cluster = LocalCluster(
-                n_workers=count,
-                threads_per_worker=1,
-                processes=True,
-                host="127.0.0.1",
-                dashboard_address="127.0.0.1:0",
-                silence_logs=logging.CRITICAL,
-            )
+            with _interrupts_ignored():  # the processes started now inherit it: a Ctrl-C while they start
+                cluster = LocalCluster(  # up (importing, before the plugin) would print their tracebacks
+                    n_workers=count,
+                    threads_per_worker=1,
+                    processes=True,
+                    host="127.0.0.1",
+                    dashboard_address="127.0.0.1:0",
+                    silence_logs=logging.CRITICAL,
+                )
             try:
                 client = Client(cluster)
                 try:
                     client.register_plugin(IgnoreInterrupts())
+                    try:
+                        client.wait_for_workers(count, timeout=WORKER_WAIT)
+                    except TimeoutError:
+                        raise LinkError(
+                            f"the local cluster: its {count} workers did not start within {WORKER_WAIT:g} s"
+                        ) from None
                     yield Cluster(client, f"a local cluster of {count} worker processes", _dashboard(client), count)
                 finally:
                     client.close()
             finally:
                 cluster.close()
         return
-    with dask.config.set({"distributed.logging.distributed": "critical"}):
+    with dask.config.set({"distributed.logging.distributed": "critical"}), _quiet_client_logs():
         try:
             client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s")
         except (OSError, TimeoutError) as exc:
             raise LinkError(f"scheduler {shorten(scheduler)}: cannot connect: {one_line(exc, 200)}") from None
-        except ValueError as exc:  # not an address Dask understands
+        except Exception as exc:  # noqa: BLE001 - not an address Dask can use (ValueError, a protocol not installed)
             raise InputError(
                 f"scheduler (--scheduler) {shorten(scheduler)}: not a scheduler address ({one_line(exc, 200)}); "
                 "give one like tcp://HOST:8786"
@@ -199,6 +235,10 @@ def run_tasks(
         _, task = futures.pop(future.key)
         try:
             result = future.result()
+        except CancelledError:  # the scheduler went away (or cancelled the task): not a result of the task
+            raise LinkError(
+                f"lost the Dask scheduler ({client.scheduler.address}) in the middle of the study"
+            ) from None
         except Exception as exc:  # noqa: BLE001 - a task's failure (any kind) is reported, the study goes on
             done(task, None, exc)
         else:

@@ -31,7 +31,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Protocol
 
-from ..errors import InputError, one_line
+from ..errors import InputError, one_line, shorten
 from ..evaluation.calibration import RECOMMENDED_REPEATS, recommended_runs
 from ..model import Robot
 from ..plans import umbmark_square
@@ -162,6 +162,7 @@ def run_sweep(
 ) -> SweepResult:
     """Run ``study`` into the folder ``out`` (module docstring) and return what was done."""
     require_sweep()
+    check_run_options(workers, task_trials)
     with StudyFolder.open(out, study, force=force) as folder:
         coverage = folder.coverage()
         result = SweepResult(study, folder.path, reused=coverage.trials, removed=coverage.removed)
@@ -170,8 +171,24 @@ def run_sweep(
         tasks = plan_tasks(study, coverage, count, task_trials)
         if tasks:
             _compute(study, folder, tasks, scheduler, workers, progress, result, failed_rows)
+        elif folder.stale:
+            folder.start_over()
         _finish(study, folder, failed_rows, result)
     return result
+
+
+MAX_WORKERS = 1024
+"""Most worker processes of the embedded cluster (one machine)."""
+
+
+def check_run_options(workers, task_trials) -> None:
+    """Refuse a worker count or task size that is not a whole number in range (one line)."""
+    for name, value, high in (("workers", workers, MAX_WORKERS), ("task_trials", task_trials, MAX_TRIALS_PER_TASK)):
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= high:
+            option = "--" + name.replace("_", "-")
+            raise InputError(f"{name} ({option}) must be a whole number from 1 to {high}, got {shorten(value)}")
 
 
 def _compute(study, folder, tasks, scheduler, workers, progress, result, failed_rows) -> None:
@@ -194,6 +211,8 @@ def _compute(study, folder, tasks, scheduler, workers, progress, result, failed_
             progress.advance(task.trials)
 
     with dask_client(scheduler, workers) as cluster:
+        if folder.stale:  # the cluster answers: now the study will run, the old one may go
+            folder.start_over()
         if progress is not None:
             total = study.trials * len(study.points)
             progress.start(total=total, done=result.reused, where=cluster.where, dashboard=cluster.dashboard)

@@ -14,11 +14,14 @@ same study reads which trials of which points are on disk (from the parts' conte
 names: a rerun with another task size still resumes) and computes only the others. A part that
 cannot be read, or whose rows are not the trials its name says, is removed and computed again.
 
-A folder holds one study *seed*: a results folder is reused by a study of the same seed (its
-points, trials per point or robots may differ: parts are kept by point key, and a point's trials
-``0..n-1`` are the same whatever ``n``); another seed is refused unless ``force`` (then the
-study's files are removed, and nothing else). A folder omnikin did not write (not empty, no
-manifest) is refused. Two sweeps never write one folder at once (a lock, ``.lock``).
+A folder holds one study *seed* computed by one omnikin and NumPy version: a results folder is
+reused by a study of the same seed (its points, trials per point or robots may differ: parts are
+kept by point key, and a point's trials ``0..n-1`` are the same whatever ``n``); another seed or
+other versions are refused unless ``force`` (then, once the study is sure to run, the parts,
+outputs and manifest are removed, files of other names never). A folder omnikin did not write (not
+empty and no omnikin manifest) is refused, ``force`` or not. The outputs of an earlier run are
+removed when a run starts (they would describe another study). Two sweeps never write one folder
+at once (a lock, ``.lock``).
 """
 
 from __future__ import annotations
@@ -27,7 +30,6 @@ import contextlib
 import json
 import os
 import re
-import shutil
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,8 +48,8 @@ PARTS = "parts"
 LOCK = ".lock"
 FORMAT = "omnikin sweep folder"
 FORMAT_VERSION = 1
-OUTPUTS = ("trials.parquet", "summary.parquet", "summary.csv", "report.md", "figures")
-"""The files the end of a study writes (removed with ``force``, with the parts and the manifest)."""
+OUTPUT_FILES = ("trials.parquet", "summary.parquet", "summary.csv", "report.md", "figures/tolerance.png")
+"""The files the end of a study writes (removed when a run starts: written again at its end)."""
 
 MAX_MANIFEST_BYTES = 1 << 26
 """Largest manifest read [bytes], 64 MiB: 100 000 points of about 400 bytes each fit."""
@@ -94,6 +96,7 @@ class StudyFolder:
         self.study = study
         self._lock = lock
         self._parts: dict[str, list[Path]] = {}
+        self.stale = False
 
     # --- opening ---------------------------------------------------------------------------
     @classmethod
@@ -120,30 +123,68 @@ class StudyFolder:
         try:
             folder = cls(path, study, lock)
             folder._adopt(force)
+            if not folder.stale:
+                folder._write_manifest()
         except BaseException:
             _unlock(lock)
             raise
         return folder
 
     def _adopt(self, force: bool) -> None:
+        """Take the folder over for this study, or refuse (module docstring). With ``force`` and a
+        study of another seed or other versions, nothing is removed yet: :attr:`stale` is set and
+        :meth:`start_over` removes that study's files once the study is sure to run."""
+        self.stale = False
         manifest = self.path / MANIFEST
         if manifest.exists() or manifest.is_symlink():
             old = self._read_manifest(manifest)
-            if old is not None and old.get("seed") == self.study.seed:
-                self._write_manifest()
-                return
-            if not force:
-                held = f"a study of seed {old.get('seed')}" if old is not None else "an unreadable manifest"
+            if old is None:  # a manifest.json of something else: never omnikin's to remove
                 raise OutputExistsError(
-                    f"{self.path}: holds {held}, this study has seed {self.study.seed}; choose another folder "
-                    "or pass --force to remove that study's results and start over"
+                    f"{self.path}: its {MANIFEST} is not an omnikin study's; omnikin did not write this folder: "
+                    "choose a new folder"
                 )
-            self._remove_study_files()
-        elif any(name != LOCK for name in os.listdir(self.path)):
-            raise OutputExistsError(
-                f"{self.path}: a non-empty folder omnikin did not write (no {MANIFEST}); choose a new folder"
-            )
+            mine = _versions()
+            theirs = {name: old.get("versions", {}).get(name) for name in ("omnikin", "numpy")}
+            if old.get("seed") != self.study.seed or theirs != {name: mine[name] for name in theirs}:
+                if not force:
+                    held = (
+                        f"a study of seed {shorten(old.get('seed'))}, this study has seed {self.study.seed}"
+                        if old.get("seed") != self.study.seed
+                        else f"results of omnikin {shorten(theirs['omnikin'])} with NumPy {shorten(theirs['numpy'])}, "
+                        f"this is omnikin {mine['omnikin']} with NumPy {mine['numpy']}"
+                    )
+                    raise OutputExistsError(
+                        f"{self.path}: holds {held}; choose another folder or pass --force to remove that study's "
+                        "results and start over"
+                    )
+                self.stale = True
+        self._remove_outputs()  # the tables and report of an earlier run: written again at the end
+
+    def start_over(self) -> None:
+        """Remove the results of the study the folder held (:attr:`stale`): its parts, outputs
+        and manifest, and nothing else (files of other names stay, folders emptied are removed)."""
+        parts = self.path / PARTS
+        if parts.is_dir() and not parts.is_symlink():
+            for folder in parts.iterdir():
+                if not folder.is_dir() or folder.is_symlink():
+                    continue
+                for entry in folder.iterdir():
+                    if _PART.fullmatch(entry.name) or (entry.name.startswith(".") and entry.name.endswith(".tmp")):
+                        entry.unlink(missing_ok=True)
+                with contextlib.suppress(OSError):
+                    folder.rmdir()
+            with contextlib.suppress(OSError):
+                parts.rmdir()
+        self.stale = False
         self._write_manifest()
+
+    def _remove_outputs(self) -> None:
+        for name in OUTPUT_FILES:
+            target = self.path / name
+            if target.is_file() or target.is_symlink():
+                target.unlink()
+        with contextlib.suppress(OSError):
+            (self.path / "figures").rmdir()
 
     def _read_manifest(self, manifest: Path) -> dict | None:
         try:
@@ -154,22 +195,8 @@ class StudyFolder:
             return None
         return doc
 
-    def _remove_study_files(self) -> None:
-        for name in (MANIFEST, PARTS, *OUTPUTS):
-            target = self.path / name
-            if target.is_dir() and not target.is_symlink():
-                shutil.rmtree(target)
-            elif target.exists() or target.is_symlink():
-                target.unlink()
-
     def _write_manifest(self) -> None:
-        import platform
-
-        versions = {"omnikin": __version__, "numpy": np.__version__, "python": platform.python_version()}
-        with contextlib.suppress(ImportError):
-            import dask
-
-            versions["dask"] = dask.__version__
+        versions = _versions()
         study = self.study
         doc = {
             "format": FORMAT,
@@ -198,7 +225,7 @@ class StudyFolder:
             done[key] = have
             self._parts[key] = []
             folder = self.path / PARTS / key
-            if not folder.is_dir():
+            if self.stale or not folder.is_dir():  # a stale folder's parts are another study's
                 continue
             seen = np.zeros(0, dtype=bool)
             for entry in sorted(folder.iterdir()):
@@ -275,6 +302,18 @@ class StudyFolder:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _versions() -> dict[str, str]:
+    """The versions that decide a trial's numbers (omnikin, NumPy) and the others recorded."""
+    import platform
+
+    versions = {"omnikin": __version__, "numpy": np.__version__, "python": platform.python_version()}
+    with contextlib.suppress(ImportError):
+        import dask
+
+        versions["dask"] = dask.__version__
+    return versions
 
 
 def _part_problem(pq, path: Path, schema, key: str, first: int, stop: int) -> str | None:
