@@ -28,6 +28,12 @@ if __name__ == "__main__":
     except ImportError as e:
         print(f"physics skipped: {e} (pip install -e '.[physics]')")
     try:
+        import bench_sweep  # needs the extra 'sweep'
+
+        modules.append(bench_sweep)
+    except ImportError as e:
+        print(f"sweep skipped: {e} (pip install -e '.[sweep]')")
+    try:
         import bench_viewer  # needs the extra 'viewer' and Debian's Chromium
 
         modules.append(bench_viewer)
