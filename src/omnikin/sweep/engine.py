@@ -33,6 +33,7 @@ import importlib.util
 import logging
 import os
 import signal
+import threading
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import CancelledError
 from dataclasses import dataclass
@@ -162,7 +163,7 @@ def dask_client(scheduler: str | None = None, workers: int | None = None) -> Ite
         return
     with dask.config.set({"distributed.logging.distributed": "critical"}), _quiet_client_logs():
         try:
-            client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s")
+            client = _connect(Client, scheduler)
         except (OSError, TimeoutError) as exc:
             raise LinkError(f"scheduler {shorten(scheduler)}: cannot connect: {one_line(exc, 200)}") from None
         except Exception as exc:  # noqa: BLE001 - not an address Dask can use (ValueError, a protocol not installed)
@@ -175,6 +176,32 @@ def dask_client(scheduler: str | None = None, workers: int | None = None) -> Ite
             yield Cluster(client, f"the cluster at {scheduler} ({count} workers)", _dashboard(client), count)
         finally:
             client.close()
+
+
+HANDSHAKE_TIMEOUT = 10.0
+"""How long a server that accepted the connection may take to answer as a Dask scheduler [s]."""
+
+
+def _connect(client_class, scheduler: str):
+    """A client of ``scheduler``, or TimeoutError: Dask's own timeout covers the connection, not the
+    handshake, so a server that accepts and never answers (an HTTP server on that port) would hold
+    the study forever; the client is made in a daemon thread that is abandoned past the deadline."""
+    box: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            box["client"] = client_class(scheduler, timeout=f"{CONNECT_TIMEOUT}s")
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
+            box["error"] = exc
+
+    thread = threading.Thread(target=connect, name="omnikin-sweep-connect", daemon=True)
+    thread.start()
+    thread.join(CONNECT_TIMEOUT + HANDSHAKE_TIMEOUT)
+    if thread.is_alive():
+        raise TimeoutError(f"no Dask scheduler answered within {CONNECT_TIMEOUT + HANDSHAKE_TIMEOUT:g} s")
+    if "error" in box:
+        raise box["error"]
+    return box["client"]
 
 
 def _check_workers(client, scheduler: str) -> int:
