@@ -40,11 +40,9 @@ def run_sweep(spec, out, *, scheduler=None, workers=None, task_trials=None, forc
     :class:`~omnikin.sweep.study.Study`) run on Dask into the folder ``out`` (resumed when it holds
     the study); returns a :class:`~omnikin.sweep.run.SweepResult`. The embedded cluster starts
     worker processes: call it under ``if __name__ == "__main__":`` (docs/sweeps.md)."""
-    from ..sweep.run import require_sweep
     from ..sweep.run import run_sweep as run
     from ..sweep.study import Study
 
-    require_sweep()
     if not isinstance(spec, Study):
         from ..sweep.spec import load_study
 

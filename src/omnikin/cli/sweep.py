@@ -189,6 +189,6 @@ def cmd_sweep(args) -> int:
             file=sys.stderr,
         )
     for answer in result.answers:
-        print(f"  {answer.text if hasattr(answer, 'text') else answer}")
+        print(f"  {answer.text}")
     print(f"report: {os.path.join(args.out, 'report.md')}")
     return 0

@@ -42,6 +42,7 @@ from typing import Any
 from distributed import WorkerPlugin
 
 from ..errors import InputError, LinkError, one_line, shorten
+from .points import result_versions
 
 RETRIES = 1
 """Reruns of a task that raised (Dask's ``retries``); worker deaths are counted apart."""
@@ -110,14 +111,6 @@ class Cluster:
     where: str
     dashboard: str
     workers: int
-
-
-def _versions() -> tuple[str, str]:
-    import numpy
-
-    from .._version import __version__
-
-    return __version__, numpy.__version__
 
 
 def _dashboard(client) -> str:
@@ -211,18 +204,19 @@ def _check_workers(client, scheduler: str) -> int:
     except TimeoutError:
         raise LinkError(f"scheduler {scheduler}: no worker joined within {WORKER_WAIT:g} s; start workers") from None
     try:
-        found = client.run(_versions)
+        found = client.run(result_versions)
     except Exception as exc:  # noqa: BLE001 - a worker without omnikin fails to unpickle the function
         raise LinkError(
             f"scheduler {scheduler}: its workers cannot run omnikin ({one_line(exc, 200)}); "
             "install omnikin[sweep] where the workers run"
         ) from None
-    mine = _versions()
+    mine = result_versions()
     for address, theirs in found.items():
-        if tuple(theirs) != mine:
+        if theirs != mine:
             raise LinkError(
-                f"scheduler {scheduler}: worker {address} runs omnikin {theirs[0]} with NumPy {theirs[1]}, this "
-                f"client omnikin {mine[0]} with NumPy {mine[1]}; results must come from the same code: "
+                f"scheduler {scheduler}: worker {address} runs omnikin {theirs.get('omnikin')} with NumPy "
+                f"{theirs.get('numpy')}, this client omnikin {mine['omnikin']} with NumPy {mine['numpy']}; "
+                "results must come from the same code: "
                 "install the same versions on the workers"
             )
     return len(found)

@@ -128,3 +128,11 @@ def trial_seed(seed: int, point: Point, trial: int) -> np.random.SeedSequence:
     docstring: common random numbers across the points of one robot)."""
     words = (int(point.robot_hash[:8], 16), int(point.robot_hash[8:16], 16))
     return np.random.SeedSequence(seed, spawn_key=(*words, trial))
+
+
+def result_versions() -> dict[str, str]:
+    """The versions a trial's numbers depend on besides its seed: omnikin's and NumPy's (a study
+    folder and a cluster's workers must agree on them)."""
+    from .._version import __version__
+
+    return {"omnikin": __version__, "numpy": np.__version__}

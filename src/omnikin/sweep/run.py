@@ -37,7 +37,7 @@ from ..model import Robot
 from ..plans import umbmark_square
 from ..simulation.motion import estimated_samples
 from .points import Point, point_key
-from .store import Coverage, StudyFolder
+from .store import Coverage, StudyFolder, arrow_schema
 from .study import Study
 from .trials import error_rows, run_trials
 
@@ -255,7 +255,7 @@ def _finish(study: Study, folder: StudyFolder, failed_rows: Sequence[dict], resu
     result.failed = int(sum(e is not None for e in columns["error"])) if table.num_rows else 0
     result.files.append(folder.write_table("trials.parquet", table))
     summary = summarize(columns, study)
-    schema = pa.schema([(name, pa.type_for_alias(kind)) for name, kind in SUMMARY_COLUMNS])
+    schema = arrow_schema(SUMMARY_COLUMNS)
     summary_table = pa.Table.from_pydict(
         {
             name: [None if isinstance(v, float) and np.isnan(v) and kind != "float64" else v for v in summary[name]]

@@ -30,17 +30,16 @@ import contextlib
 import json
 import os
 import re
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .._version import __version__
 from ..errors import InputError, OutputError, OutputExistsError, one_line, shorten
 from ..io.output import atomic_write, write_text
 from ..io.textfile import read_text
-from .points import point_key
+from .points import point_key, result_versions
 from .study import TRIAL_COLUMNS, Study
 
 MANIFEST = "manifest.json"
@@ -64,10 +63,15 @@ def _arrow():
     return pa, pq
 
 
+def arrow_schema(columns: Sequence[tuple[str, str]]):
+    """The Arrow schema of a table whose ``columns`` are (name, Arrow type name) pairs."""
+    pa, _ = _arrow()
+    return pa.schema([(name, pa.type_for_alias(kind)) for name, kind in columns])
+
+
 def trial_schema():
     """The Arrow schema of the trial table (:data:`~omnikin.sweep.study.TRIAL_COLUMNS`)."""
-    pa, _ = _arrow()
-    return pa.schema([(name, pa.type_for_alias(kind)) for name, kind in TRIAL_COLUMNS])
+    return arrow_schema(TRIAL_COLUMNS)
 
 
 def part_name(first: int, stop: int) -> str:
@@ -143,9 +147,9 @@ class StudyFolder:
                     f"{self.path}: its {MANIFEST} is not an omnikin study's; omnikin did not write this folder: "
                     "choose a new folder"
                 )
-            mine = _versions()
-            theirs = {name: old.get("versions", {}).get(name) for name in ("omnikin", "numpy")}
-            if old.get("seed") != self.study.seed or theirs != {name: mine[name] for name in theirs}:
+            mine = result_versions()
+            theirs = {name: old.get("versions", {}).get(name) for name in mine}
+            if old.get("seed") != self.study.seed or theirs != mine:
                 if not force:
                     held = (
                         f"a study of seed {shorten(old.get('seed'))}, this study has seed {self.study.seed}"
@@ -305,10 +309,11 @@ class StudyFolder:
 
 
 def _versions() -> dict[str, str]:
-    """The versions that decide a trial's numbers (omnikin, NumPy) and the others recorded."""
+    """The versions recorded in the manifest: those a trial's numbers depend on
+    (:func:`~omnikin.sweep.points.result_versions`), Python's and Dask's."""
     import platform
 
-    versions = {"omnikin": __version__, "numpy": np.__version__, "python": platform.python_version()}
+    versions = {**result_versions(), "python": platform.python_version()}
     with contextlib.suppress(ImportError):
         import dask
 
@@ -358,13 +363,3 @@ def _unlock(handle) -> None:
     if handle is not None:
         with contextlib.suppress(OSError):
             handle.close()
-
-
-@contextlib.contextmanager
-def opened(path, study: Study, *, force: bool = False) -> Iterator[StudyFolder]:
-    """:meth:`StudyFolder.open` as a context manager."""
-    folder = StudyFolder.open(path, study, force=force)
-    try:
-        yield folder
-    finally:
-        folder.close()
