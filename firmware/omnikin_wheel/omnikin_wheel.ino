@@ -1,9 +1,14 @@
-/* omnikin_wheel.ino: reference firmware of one omnikin wheel controller (Arduino Nano/Uno class).
+/* omnikin_wheel.ino: reference firmware of one omnikin wheel controller (Arduino Nano/Uno class,
+ * ATmega328P at 16 MHz; firmware/Makefile builds it, docs/firmware.md gives its sizes and timing).
  *
- * One wheel per board, as the seed robot's Arduino Nanos: a quadrature encoder on the interrupt
- * pins, a PWM + direction motor driver, a PI speed loop, and the omnikin wheel protocol
- * (docs/protocol.md; frame ids, sizes, scales and timing come from omnikin_protocol.h, which is
- * generated from src/omnikin/runtime/protocol.yaml: never write them here as numbers).
+ * One wheel per board, as the Arduino Nanos of Tomasi and Todt's robot: a quadrature encoder on the
+ * interrupt pins, a motor driver, and the omnikin wheel protocol (docs/protocol.md; frame ids,
+ * sizes, scales and timing come from omnikin_protocol.h, which is generated from
+ * src/omnikin/runtime/protocol.yaml: never write them here as numbers). Two motor variants, chosen
+ * at build time, speak the same protocol:
+ *  - MOTOR_STEPPER=1 (default, the paper's NEMA 17): a STEP/DIR driver, timer-generated steps with
+ *    an acceleration limit (motor_stepper.h);
+ *  - MOTOR_STEPPER=0: a DC motor on PWM + direction with a PI speed loop (motor_dc.h).
  *
  * Behaviour:
  *  - boot: ERROR_REPORT RESET (counter and sequence numbers start at 0); motor off until the host speaks;
@@ -13,15 +18,21 @@
  *  - link loss (no valid frame for OMNIKIN_LINK_TIMEOUT_MS): set-point 0, motor off at once,
  *    ERROR_REPORT LINK_LOST; the host must send a new SPEED_CMD to move again;
  *  - ENCODER_REPORT every OMNIKIN_REPORT_PERIOD_MS, HEARTBEAT every OMNIKIN_HEARTBEAT_PERIOD_MS;
- *    CRC and version errors seen on the input are reported at most once per heartbeat period.
+ *    CRC and version errors seen on the input are reported at most once per heartbeat period;
+ *  - the control step runs every CONTROL_PERIOD_US and holds PIN_PROBE high while it runs (a
+ *    scope, or the simulated board, measures the loop's period and load on that pin).
  *
- * Configuration: the #defines below (or -D flags); they must match the robot file
- * (docs/conventions.md): the count reported is the raw counter of this sketch, which the host
- * converts with the robot file's ticks_per_rev, gear_ratio and invert.
+ * Configuration: the #defines below (or -D flags, as firmware/Makefile passes them); they must
+ * match the robot file (docs/conventions.md): the count reported is the raw counter of this
+ * sketch, which the host converts with the robot file's ticks_per_rev, gear_ratio and invert.
  */
 #include "omnikin_protocol.h"
+#include "fast_pin.h"
 
 /* ---- configuration ------------------------------------------------------------------------ */
+#ifndef MOTOR_STEPPER
+#define MOTOR_STEPPER 1        /* 1: STEP/DIR stepper driver (motor_stepper.h); 0: DC motor (motor_dc.h) */
+#endif
 #ifndef WHEEL_INDEX
 #define WHEEL_INDEX 0          /* position of this wheel among the robot file's rolling wheels */
 #endif
@@ -46,25 +57,28 @@
 #ifndef PIN_ENC_A
 #define PIN_ENC_A 2            /* Nano/Uno: the two external interrupt pins */
 #define PIN_ENC_B 3
-#define PIN_PWM 9
+#endif
+#ifndef PIN_PWM
+#define PIN_PWM 9              /* DC variant: PWM (the stepper's STEP is OC1A, pin 9, too) */
+#endif
+#ifndef PIN_DIR
 #define PIN_DIR 8
+#endif
+#ifndef PIN_PROBE
+#define PIN_PROBE 14           /* A0: high during the control step */
 #endif
 #ifndef CONTROL_PERIOD_US
 #define CONTROL_PERIOD_US 10000UL  /* speed loop period (100 Hz) */
 #endif
-#ifndef KP
-#define KP 12.0f               /* PWM counts per rad/s of speed error */
-#endif
-#ifndef KI
-#define KI 120.0f              /* PWM counts per rad of integrated error */
-#endif
-#ifndef KFF
-#define KFF 6.0f               /* feed-forward PWM counts per rad/s of set-point */
-#endif
 #ifndef SPEED_FILTER
 #define SPEED_FILTER 0.3f      /* weight of the newest speed sample in the low-pass filter */
 #endif
-#define PWM_MAX 255
+
+#if MOTOR_STEPPER
+#include "motor_stepper.h"
+#else
+#include "motor_dc.h"
+#endif
 
 static const float RAD_PER_TICK =
     (ENCODER_INVERT ? -1.0f : 1.0f) * 6.2831853f / (TICKS_PER_REV * GEAR_RATIO);
@@ -72,12 +86,13 @@ static const float RAD_PER_TICK =
 /* ---- encoder (interrupts) ------------------------------------------------------------------ */
 static volatile uint32_t encoder_count = 0;   /* unsigned: wraps without undefined behaviour */
 static volatile uint16_t encoder_glitches = 0;
+static fast_pin_t enc_a, enc_b, probe;
 #if ENCODER_X4
 static volatile uint8_t encoder_state = 0;
 
 static void encoder_isr() {
     static const int8_t step[16] = {0, -1, 1, 0, 1, 0, 0, -1, -1, 0, 0, 1, 0, 1, -1, 0};   /* [previous << 2 | now] */
-    uint8_t now = (uint8_t)((digitalRead(PIN_ENC_A) ? 2 : 0) | (digitalRead(PIN_ENC_B) ? 1 : 0));
+    uint8_t now = (uint8_t)((fast_read(&enc_a) << 1) | fast_read(&enc_b));
     uint8_t idx = (uint8_t)((encoder_state << 2) | now);
     if ((encoder_state ^ now) == 3) encoder_glitches++;   /* both lines changed: an edge was missed */
     encoder_count += (uint32_t)(int32_t)step[idx];
@@ -85,7 +100,7 @@ static void encoder_isr() {
 }
 #else
 static void encoder_isr() {   /* rising edge of A: B low = forward */
-    if (digitalRead(PIN_ENC_B)) encoder_count -= 1u; else encoder_count += 1u;
+    if (fast_read(&enc_b)) encoder_count -= 1u; else encoder_count += 1u;
 }
 #endif
 
@@ -94,22 +109,6 @@ static void latch_encoder(uint32_t *count, uint32_t *time_us) {
     *count = encoder_count;
     *time_us = micros();
     interrupts();
-}
-
-/* ---- motor ----------------------------------------------------------------------------------- */
-static int16_t motor_output = 0;
-
-static void motor(float u) {
-    int16_t pwm;
-    uint8_t forward;
-    if (u > PWM_MAX) u = PWM_MAX;
-    if (u < -PWM_MAX) u = -PWM_MAX;
-    pwm = (int16_t)(u >= 0.0f ? u + 0.5f : u - 0.5f);
-    motor_output = pwm;
-    forward = (uint8_t)(pwm >= 0);
-    if (MOTOR_INVERT) forward = (uint8_t)!forward;
-    digitalWrite(PIN_DIR, forward ? HIGH : LOW);
-    analogWrite(PIN_PWM, pwm >= 0 ? pwm : -pwm);
 }
 
 /* ---- protocol state ------------------------------------------------------------------------- */
@@ -124,7 +123,6 @@ static uint16_t reported_crc_errors = 0, reported_bad_version = 0, reported_glit
 static uint8_t clamp_pending = 0;
 static float target = 0.0f;      /* rad/s */
 static float measured = 0.0f;    /* rad/s, filtered */
-static float integral = 0.0f;    /* PWM counts */
 
 static int32_t to_scaled(float value, float scale) {
     float x = value / scale;
@@ -168,7 +166,7 @@ static void send_heartbeat() {
     omnikin_heartbeat_t m;
     m.wheel = WHEEL_INDEX;
     m.status = (uint8_t)((link_ok ? OMNIKIN_STATUS_LINK_OK : 0) |
-                         (link_ok && !fault ? OMNIKIN_STATUS_MOTOR_ENABLED : 0) |
+                         (link_ok && !fault && drive_enabled() ? OMNIKIN_STATUS_MOTOR_ENABLED : 0) |
                          (fault ? OMNIKIN_STATUS_FAULT : 0));
     m.time_us = micros();
     Serial.write(frame, omnikin_encode_heartbeat(frame, tx_seq++, &m));
@@ -176,8 +174,7 @@ static void send_heartbeat() {
 
 static void stop_motor() {
     target = 0.0f;
-    integral = 0.0f;
-    motor(0.0f);
+    drive_off();
 }
 
 /* A frame with a valid CRC and version is in parser.buf. */
@@ -214,36 +211,30 @@ static void control(uint32_t now_us) {
     float dt = (float)(now_us - last_control_us) * 1e-6f;
     uint32_t count, time_us;
     int32_t delta;
+    fast_write(&probe, 1);
     last_control_us = now_us;
     latch_encoder(&count, &time_us);
     delta = (int32_t)(count - last_count);
     last_count = count;
-    if (dt <= 0.0f) return;
-    measured += SPEED_FILTER * ((float)delta * RAD_PER_TICK / dt - measured);
-    if (!link_ok || fault || target == 0.0f) {   /* zero set-point: motor off (no holding torque) */
-        integral = 0.0f;
-        motor(0.0f);
-        return;
+    if (dt > 0.0f) {
+        measured += SPEED_FILTER * ((float)delta * RAD_PER_TICK / dt - measured);
+        if (!link_ok || fault) drive_off();
+        else drive_control(target, measured, dt);
     }
-    {
-        float error = target - measured;
-        float u;
-        integral += KI * error * dt;
-        if (integral > PWM_MAX) integral = PWM_MAX;
-        if (integral < -PWM_MAX) integral = -PWM_MAX;
-        u = KFF * target + KP * error + integral;
-        motor(u);
-    }
+    fast_write(&probe, 0);
 }
 
 void setup() {
     pinMode(PIN_ENC_A, INPUT_PULLUP);
     pinMode(PIN_ENC_B, INPUT_PULLUP);
-    pinMode(PIN_PWM, OUTPUT);
-    pinMode(PIN_DIR, OUTPUT);
-    motor(0.0f);
+    pinMode(PIN_PROBE, OUTPUT);
+    enc_a = fast_pin(PIN_ENC_A);
+    enc_b = fast_pin(PIN_ENC_B);
+    probe = fast_pin(PIN_PROBE);
+    fast_write(&probe, 0);
+    drive_begin();
 #if ENCODER_X4
-    encoder_state = (uint8_t)((digitalRead(PIN_ENC_A) ? 2 : 0) | (digitalRead(PIN_ENC_B) ? 1 : 0));
+    encoder_state = (uint8_t)((fast_read(&enc_a) << 1) | fast_read(&enc_b));
     attachInterrupt(digitalPinToInterrupt(PIN_ENC_A), encoder_isr, CHANGE);
     attachInterrupt(digitalPinToInterrupt(PIN_ENC_B), encoder_isr, CHANGE);
 #else

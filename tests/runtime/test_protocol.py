@@ -883,8 +883,10 @@ def test_c_sequence_rules_match_python(host_test):
 
 
 def _build_sim(tmp_path, **defines):
+    """The sketch's DC variant on the host (the stepper variant drives the ATmega328P's Timer1:
+    tests/firmware runs it on the simulated chip)."""
     exe = tmp_path / "sim"
-    flags = [f"-D{k}={v}" for k, v in defines.items()]
+    flags = [f"-D{k}={v}" for k, v in {"MOTOR_STEPPER": 0, **defines}.items()]
     subprocess.run(
         [
             GXX,
