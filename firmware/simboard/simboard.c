@@ -416,12 +416,13 @@ static avr_cycle_count_t dc_update(avr_t *a, avr_cycle_count_t when, void *param
     return when + DC_UPDATE_CYCLES;
 }
 
-/* --shaft-speed: the next transition's exact cycle, rounded up to the first cycle at which the
- * angle W t has crossed the state boundary. */
+/* --shaft-speed: the next transition's exact cycle, the first cycle at which the angle W c / F
+ * has crossed the state boundary: forward q + 1 at c >= (q + 1) P, backward q - 1 at c > -q P,
+ * P = F 2 pi / (4 ppr |W|) cycles per state. */
 static avr_cycle_count_t shaft_next_cycle(void)
 {
     long double t = opt.shaft_speed > 0 ? (long double)(q + 1) * shaft_period
-                                        : (long double)q * shaft_period;
+                                        : (long double)(-q) * shaft_period;
     long double c = opt.shaft_speed > 0 ? ceill(t) : floorl(t) + 1;
     return c < 1 ? 1 : (avr_cycle_count_t)c;
 }
@@ -486,6 +487,8 @@ static void on_uart_output(avr_irq_t *irq, uint32_t value, void *param)
         tx_push(b);
 }
 
+static void rx_arm(void);
+
 static void on_xoff(avr_irq_t *irq, uint32_t value, void *param)
 {
     (void)irq;
@@ -497,21 +500,32 @@ static void on_xon(avr_irq_t *irq, uint32_t value, void *param)
 {
     (void)irq;
     (void)param;
-    if (value)
+    if (value) {
         xoff = false;
+        rx_arm(); /* the receive FIFO is empty: hand over the next host byte */
+    }
 }
+
+/* Host-to-board bytes. A byte whose frame starts at S is readable at S + frame (its stop bit),
+ * frames back to back: S = max(the byte reached the board, the previous byte's end). simavr 1.6
+ * makes a byte readable one byte time after it enters an empty receive FIFO, and lets the chip
+ * read a second queued byte at once; so a byte is handed over only into an empty FIFO, with
+ * simavr's byte time set for that hand-over to end exactly at the byte's stop bit. */
+static uint64_t rx_arrival, rx_line_free;
 
 static avr_cycle_count_t rx_inject(avr_t *a, avr_cycle_count_t when, void *param)
 {
-    (void)a;
+    (void)when;
     (void)param;
-    avr_cycle_count_t frame = 10ull * uart_bit_cycles();
-    if (!rx_len) {
-        rx_timer_armed = false;
+    if (!rx_len || !uart0 || xoff || uart0->input.read != uart0->input.write) {
+        rx_timer_armed = false; /* on_xon arms again when the chip has read its byte */
         return 0;
     }
-    if (xoff)
-        return when + frame;
+    uint64_t frame = 10ull * uart_bit_cycles();
+    uint64_t start = rx_arrival > rx_line_free ? rx_arrival : rx_line_free;
+    uint64_t ready = start + frame;
+    if (ready <= a->cycle)
+        ready = a->cycle + 1; /* the chip read late: the byte waited in the receive buffer */
     uint8_t b = rxbuf[rx_head];
     rx_head = (rx_head + 1) % RX_BUF;
     rx_len--;
@@ -521,8 +535,12 @@ static avr_cycle_count_t rx_inject(avr_t *a, avr_cycle_count_t when, void *param
         corrupted_rx++;
     }
     rx_bytes++;
-    avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT), b);
-    return when + frame;
+    avr_cycle_count_t byte_time = uart0->cycles_per_byte;
+    uart0->cycles_per_byte = ready - a->cycle;
+    avr_raise_irq(avr_io_getirq(a, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT), b);
+    uart0->cycles_per_byte = byte_time;
+    rx_line_free = ready;
+    return ready; /* try the next byte when this one is readable (if the chip dropped it) */
 }
 
 static void rx_arm(void)
@@ -557,6 +575,8 @@ static void pty_io(void)
         tx_len -= (size_t)w;
     }
     /* host to board */
+    if (!rx_len)
+        rx_arrival = avr->cycle;
     while (rx_len < RX_BUF) {
         size_t tail = (rx_head + rx_len) % RX_BUF;
         size_t room = tail >= rx_head ? RX_BUF - tail : rx_head - tail;
@@ -714,7 +734,7 @@ static void print_stats(const char *event)
 {
     double wall = now_s() - wall_start;
     unsigned bit = uart_bit_cycles();
-    printf("{\"event\": \"%s\", \"cycle\": %llu, \"time_s\": %.9f, \"wall_s\": %.6f, \"behind_s\": %.6f, "
+    printf("{\"event\": \"%s\", \"cycle\": %llu, \"time_s\": %.17g, \"wall_s\": %.6f, \"behind_s\": %.6f, "
            "\"sp_min\": %u, \"ramend\": %u, \"stack_bytes\": %u, \"window_cycles\": %llu, "
            "\"isr_cycles\": %llu, \"isr\": {",
            event, (unsigned long long)avr->cycle, (double)avr->cycle / F_CPU, wall, behind_s, sp_min,
@@ -747,7 +767,7 @@ static void print_stats(const char *event)
     if (opt.motor == MOTOR_DC)
         duty = (avr->data[REG_TCCR1A] & (1 << BIT_COM1A1)) ? avr->data[REG_OCR1AL] / 255.0
                                                            : (double)pb1_level;
-    printf(", \"q\": %lld, \"transitions\": %llu, \"angle\": %.9g, \"omega\": %.9g, \"duty\": %.6f, "
+    printf(", \"q\": %lld, \"transitions\": %llu, \"angle\": %.17g, \"omega\": %.17g, \"duty\": %.17g, "
            "\"enabled\": %s, \"dir\": %d",
            (long long)q, (unsigned long long)transitions, current_angle(), w, duty,
            (avr->data[REG_PORTD] & (1 << 7)) ? "false" : "true", avr->data[REG_PORTB] & 1);
@@ -923,6 +943,21 @@ static void stdin_io(void)
 
 /* ------------------------------------------------------------------ main loop */
 
+#define SP_TORN_MAX 4 /* instructions between the two halves (gcc: out SPH; out SREG; out SPL) */
+
+/* Whether the instruction at byte address pc is an OUT to SPL (0x3D) or SPH (0x3E):
+ * 1011 1AAr rrrr AAAA. */
+static int sp_half_written(avr_flashaddr_t pc)
+{
+    if (pc + 1 > avr->flashend)
+        return 0;
+    unsigned op = avr->flash[pc] | (avr->flash[pc + 1] << 8);
+    if ((op & 0xF800) != 0xB800)
+        return 0;
+    unsigned a = ((op >> 5) & 0x30) | (op & 0x0F);
+    return a == 0x3D || a == 0x3E;
+}
+
 static void no_sleep(avr_t *a, avr_cycle_count_t how_long)
 {
     (void)a;
@@ -1072,7 +1107,9 @@ int main(int argc, char **argv)
     fflush(stdout);
 
     bool halted_reported = false;
+    int sp_torn = 0;
     while (!quitting && !stop_signal && avr->cycle < end_cycle) {
+        int sp_half = sp_half_written(avr->pc);
         uint8_t before = avr->interrupts.running_ptr;
         avr_int_vector_t *vec = before ? avr->interrupts.running[before - 1] : NULL;
         uint64_t c0 = avr->cycle;
@@ -1092,8 +1129,14 @@ int main(int argc, char **argv)
             if (v < NVECTORS)
                 isr_vec[v].count++;
         }
+        /* SP is two 8-bit registers: between the writes of its two halves (a frame set up
+         * or taken down, alloca) it holds neither the old nor the new value; skip those */
+        if (sp_half)
+            sp_torn = sp_torn ? 0 : SP_TORN_MAX;
+        else if (sp_torn)
+            sp_torn--;
         uint16_t sp = (uint16_t)(avr->data[REG_SPL] | (avr->data[REG_SPH] << 8));
-        if (sp < sp_min)
+        if (!sp_torn && sp < sp_min)
             sp_min = sp;
         if (state == cpu_Done || state == cpu_Crashed) {
             if (!halted_reported) {
