@@ -119,6 +119,8 @@ class SimBoard:
     def commands(self, *lines: str, timeout: float = COMMAND_S) -> list[dict]:
         """Send several commands in one write, so the board answers them all at the same
         simulated instant (e.g. ``stats`` and a ``peek``), and return their answers in order."""
+        if any("\n" in line for line in lines):
+            raise ValueError("a command is one line: no newline inside")
         stdin = self.process.stdin
         assert stdin is not None
         stdin.write("".join(line + "\n" for line in lines).encode())

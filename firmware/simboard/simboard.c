@@ -805,7 +805,7 @@ static void start_models(void)
 static void reset_chip(void)
 {
     avr_reset(avr); /* also cancels every cycle timer: start the models again */
-    sp_min = 0xFFFF;
+    sp_min = (uint16_t)(avr->data[REG_SPL] | (avr->data[REG_SPH] << 8));
     xoff = false;
     start_models();
 }

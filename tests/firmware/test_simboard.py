@@ -5,9 +5,11 @@ models of ``simboard --help``."""
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import select
+import signal
 import subprocess
 import time
 import tty
@@ -59,9 +61,10 @@ def u16(data: bytes, i: int = 0) -> int:
     return int.from_bytes(data[2 * i : 2 * i + 2], "little")
 
 
-def run_for(exe: Path, elf: Path, seconds: float, *args: str) -> dict:
-    """Run the board for ``seconds`` simulated seconds as fast as it can; its final stats."""
-    with SimBoard(exe, elf, *args, "--duration", str(seconds), speed=0, pty=False) as board:
+def run_for(exe: Path, elf: Path, seconds: float, *args: str, speed: float = 0.0) -> dict:
+    """Run the board for ``seconds`` simulated seconds (as fast as it can unless ``speed``); its
+    final stats."""
+    with SimBoard(exe, elf, *args, "--duration", str(seconds), speed=speed, pty=False) as board:
         return board.wait_final(timeout=60)
 
 
@@ -179,7 +182,8 @@ def echo(exe, build):
             assert read_exactly(fd, 1) == b"B"  # the boot byte
             yield board, fd, elf
         finally:
-            os.close(fd)
+            with contextlib.suppress(OSError):  # a test may have closed it
+                os.close(fd)
 
 
 def test_uart_echo_comes_back_at_the_line_rate_of_115200_baud(echo):
@@ -249,6 +253,28 @@ def test_int0_counts_every_encoder_a_rising_edge_at_a_constant_shaft_speed(exe, 
     assert int.from_bytes(bytes.fromhex(b_high["hex"]), "little") == (0 if omega > 0 else count)
 
 
+def encoder_levels(q: int) -> tuple[int, int]:
+    """(A, B) of quadrature state q: A = [0,1,1,0][q mod 4], B = [0,0,1,1][q mod 4]."""
+    return (0, 1, 1, 0)[q % 4], (0, 0, 1, 1)[q % 4]
+
+
+def test_encoder_lines_keep_the_shaft_angle_across_a_chip_reset(exe, build):
+    elf = program(build, "int0_counter")
+    pind = 0x29  # PIND in data space
+    args = ("--motor", "none", "--shaft-speed", "3", "--ppr", "1000")
+    with SimBoard(exe, elf, *args, speed=0, pty=False) as board:
+        time.sleep(0.1)
+        for _ in range(2):
+            stats, pins = board.commands("stats", f"peek {pind} 1")
+            level = int(pins["hex"], 16)
+            assert ((level >> 2) & 1, (level >> 3) & 1) == encoder_levels(stats["q"])
+            reset, pins, stats = board.commands("reset", f"peek {pind} 1", "stats")
+            assert reset["ok"] == "reset" and stats["sp_min"] == RAMEND  # the program restarted
+            level = int(pins["hex"], 16)
+            assert ((level >> 2) & 1, (level >> 3) & 1) == encoder_levels(stats["q"])
+            assert stats["q"] == math.floor(3 * stats["cycle"] / F_CPU * 4000 / (2 * math.pi))
+
+
 def test_dc_motor_speed_follows_the_first_order_step_response(exe, build):
     top, tau, duty = 40.0, 0.05, 128 / 255
     final = run_for(exe, program(build, "dc_pwm"), tau, "--motor", "dc")
@@ -256,11 +282,54 @@ def test_dc_motor_speed_follows_the_first_order_step_response(exe, build):
     # starts a few microseconds after reset and the model updates every 10 us: 30 us of lag
     lag = 30e-6
     omega = top * duty * (1 - math.exp(-1))
-    assert final["time_s"] == tau and final["duty"] == pytest.approx(duty, abs=1e-6)
+    assert final["time_s"] == pytest.approx(tau, abs=4 / F_CPU) and final["duty"] == pytest.approx(duty, abs=1e-6)
     assert final["omega"] == pytest.approx(omega, abs=top * duty * lag / tau)
     angle = top * duty * (tau - tau * (1 - math.exp(-1)))
     assert final["angle"] == pytest.approx(angle, abs=top * duty * lag)
     assert abs(final["q"] - math.floor(final["angle"] * 4 * 600 / (2 * math.pi))) <= 1
+
+
+# --------------------------------------------------------------------------- pacing and ending
+
+
+@pytest.mark.parametrize("speed", [1.0, 2.0])
+def test_speed_paces_simulated_time_against_the_wall_clock(exe, build, speed):
+    seconds = 0.4
+    start = time.monotonic()
+    final = run_for(exe, program(build, "isr_load"), seconds, speed=speed)
+    wall = time.monotonic() - start
+    assert final["time_s"] == pytest.approx(seconds, abs=4 / F_CPU)  # ends after an instruction
+    assert seconds / speed - 0.02 <= final["wall_s"] <= wall
+    assert final["wall_s"] <= seconds / speed + 0.2 and final["behind_s"] == 0
+
+
+@pytest.mark.parametrize("how", ["eof", "sigterm", "sigint"])
+def test_end_of_input_and_signals_end_the_board_with_a_final_stats_line(exe, build, how):
+    board = SimBoard(exe, program(build, "step_toggle"), speed=0, pty=False)
+    try:
+        process = board.process
+        assert process.stdin is not None
+        if how == "eof":
+            process.stdin.close()
+        else:
+            process.send_signal(signal.SIGTERM if how == "sigterm" else signal.SIGINT)
+        final = board.wait_final(timeout=10)
+        assert final["event"] == "final" and process.returncode == 0
+    finally:
+        board.close()
+
+
+def test_a_host_may_close_and_reopen_the_pty(echo):
+    board, fd, _ = echo
+    os.close(fd)  # no host
+    time.sleep(0.1)
+    again = os.open(board.path, os.O_RDWR | os.O_NOCTTY)
+    try:
+        os.write(again, b"xy")
+        assert read_exactly(again, 2) == b"xy"
+    finally:
+        os.close(again)
+    assert board.stats()["rx_bytes"] == 2
 
 
 # --------------------------------------------------------------------------- usage and commands
