@@ -105,9 +105,7 @@ class SimBoard:
             if ready:
                 chunk = os.read(out.fileno(), 65536)
                 if not chunk:
-                    raise RuntimeError(
-                        f"simboard ended (status {self.process.poll()}); stderr: {self.stderr()!r}"
-                    )
+                    raise RuntimeError(f"simboard ended (status {self.process.poll()}); stderr: {self.stderr()!r}")
                 self._buffer += chunk
         line, self._buffer = self._buffer.split(b"\n", 1)
         return json.loads(line)

@@ -16,6 +16,7 @@ import tty
 from pathlib import Path
 
 import pytest
+
 from simboard import SIMAVR_MISSING, SimBoard, build_simboard
 
 pytestmark = [pytest.mark.compiler, pytest.mark.skipif(SIMAVR_MISSING is not None, reason=SIMAVR_MISSING or "")]
@@ -191,9 +192,7 @@ def test_uart_echo_comes_back_at_the_line_rate_of_115200_baud(echo):
     payload = bytes(range(100))
     os.write(fd, payload)
     assert read_exactly(fd, 100) == payload
-    count, first, last = (
-        u16(board.peek(symbol(elf, name), 2)) for name in ("received", "first_tick", "last_tick")
-    )
+    count, first, last = (u16(board.peek(symbol(elf, name), 2)) for name in ("received", "first_tick", "last_tick"))
     assert count == 100
     # 115200 baud with U2X: a bit is 8 (UBRR + 1) = 136 cycles, a byte 10 bits = 1360 cycles = 170
     # ticks of Timer1 at F_CPU / 8; the bytes were queued at once, so they arrive back to back
