@@ -13,9 +13,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from omnikin_paths import ROOT
+from firmware_build import make
 
-SOURCE = ROOT / "firmware" / "simboard" / "simboard.c"
 HEADER = Path("/usr/include/simavr/sim_avr.h")
 READY_S = 10.0
 """How long the board may take to load a firmware and report ``ready`` [s] (milliseconds here)."""
@@ -39,20 +38,12 @@ SIMAVR_MISSING: str | None = _missing()
 
 
 def build_simboard(build_dir: Path) -> Path:
-    """Compile the harness into ``build_dir/simboard`` (the command ``firmware/Makefile`` runs),
-    again only when the source is newer than the executable; returns the executable's path."""
-    build_dir.mkdir(parents=True, exist_ok=True)
-    exe = build_dir / "simboard"
-    if exe.exists() and exe.stat().st_mtime >= SOURCE.stat().st_mtime:
-        return exe
-    tmp = build_dir / f"simboard.{os.getpid()}.tmp"
-    cmd = ["cc", "-std=gnu11", "-O2", "-Wall", "-Wextra", "-Werror", "-I/usr/include/simavr"]
-    cmd += [str(SOURCE), "-o", str(tmp), "-lsimavr", "-lutil", "-lm"]
-    done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    """Build the harness as ``firmware/Makefile`` does (``make -C firmware BUILD=build_dir
+    simboard``; make rebuilds it only when the source changed); returns the executable's path."""
+    done = make("simboard", BUILD=str(build_dir))
     if done.returncode != 0:
-        raise RuntimeError(f"building the simulated board failed:\n{done.stderr}")
-    os.replace(tmp, exe)
-    return exe
+        raise RuntimeError(f"building the simulated board failed ({done.returncode}):\n{done.stdout}{done.stderr}")
+    return build_dir / "simboard"
 
 
 class SimBoard:

@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <termios.h>
 #include <time.h>
 #include <unistd.h>
@@ -1041,9 +1042,26 @@ int main(int argc, char **argv)
     avr_global_logger_set(quiet_logger);
     elf_firmware_t fw;
     memset(&fw, 0, sizeof fw);
-    hush(true);
-    int rc = elf_read_firmware(opt.elf, &fw);
-    hush(false);
+    /* libsimavr's ELF reader trusts the file's tables (a damaged ELF can crash it): read it
+     * once in a child process first */
+    fflush(stdout);
+    fflush(stderr);
+    pid_t child = fork();
+    if (child == 0) {
+        hush(true);
+        _exit(elf_read_firmware(opt.elf, &fw) == 0 ? 0 : 1);
+    }
+    int status = 0;
+    if (child < 0 || waitpid(child, &status, 0) != child)
+        die_usage("cannot check '%s': %s", shorten(opt.elf), strerror(errno));
+    if (WIFSIGNALED(status))
+        die_usage("%s: damaged ELF (libsimavr's reader crashed on it)", shorten(opt.elf));
+    int rc = WIFEXITED(status) && WEXITSTATUS(status) == 0 ? 0 : 1;
+    if (rc == 0) {
+        hush(true);
+        rc = elf_read_firmware(opt.elf, &fw);
+        hush(false);
+    }
     if (rc != 0)
         die_usage("%s: libsimavr cannot read this ELF", shorten(opt.elf));
     if (fw.flashsize == 0)
