@@ -349,6 +349,13 @@ static uint32_t uart_config = 0xFFFFFFFF;
 static volatile sig_atomic_t stop_signal;
 static bool quitting;
 
+/* Flush an answer; a host that closed our stdout ends the board (nobody hears it any more). */
+static void flush_out(void)
+{
+    if (fflush(stdout) != 0 || ferror(stdout))
+        quitting = true;
+}
+
 static double now_s(void)
 {
     struct timespec t;
@@ -777,7 +784,7 @@ static void print_stats(const char *event)
            (unsigned long long)rx_bytes, (unsigned long long)tx_bytes, (unsigned long long)tx_dropped,
            (unsigned long long)corrupted_tx, (unsigned long long)corrupted_rx, rx_backlog_max,
            F_CPU / bit, avr->state);
-    fflush(stdout);
+    flush_out();
 }
 
 /* ------------------------------------------------------------------ chip setup and reset */
@@ -816,7 +823,7 @@ static void reset_chip(void)
 static void reply_error(const char *what, const char *line)
 {
     printf("{\"error\": \"%s: '%s'\"}\n", what, shorten(line));
-    fflush(stdout);
+    flush_out();
 }
 
 static bool parse_uint(const char *s, unsigned long max, unsigned long *out)
@@ -896,7 +903,7 @@ static void command(char *line)
                     line);
         return;
     }
-    fflush(stdout);
+    flush_out();
 }
 
 static char cmdline[LINE_MAX_LEN + 1];
@@ -1122,7 +1129,7 @@ int main(int argc, char **argv)
         printf("{\"event\": \"ready\", \"pty\": \"%s\", \"pid\": %d}\n", pty_name, (int)getpid());
     else
         printf("{\"event\": \"ready\", \"pty\": null, \"pid\": %d}\n", (int)getpid());
-    fflush(stdout);
+    flush_out();
 
     bool halted_reported = false;
     int sp_torn = 0;
@@ -1161,7 +1168,7 @@ int main(int argc, char **argv)
                 printf("{\"event\": \"halted\", \"state\": \"%s\", \"cycle\": %llu, \"pc\": %u}\n",
                        state == cpu_Done ? "done" : "crashed", (unsigned long long)avr->cycle,
                        (unsigned)avr->pc);
-                fflush(stdout);
+                flush_out();
                 halted_reported = true;
             }
             avr->cycle += POLL_CYCLES; /* time goes on; the host may still reset the chip */
