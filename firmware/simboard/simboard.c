@@ -304,7 +304,12 @@ static avr_irq_t *irq_enc_a, *irq_enc_b;
 static int64_t q;                /* quadrature state */
 static uint64_t transitions;
 static double angle, omega;      /* [rad], [rad/s] (DC model) */
+#define STEP_MOVE_MAX_CYCLES 32000 /* 2 ms */
 static int64_t step_pos;         /* stepper: microsteps from the start */
+static int64_t step_q_target;    /* stepper: the quadrature state of step_pos */
+static uint64_t last_step_cycle; /* stepper: when the previous step came */
+static bool have_last_step;
+static avr_cycle_count_t step_spacing; /* stepper: cycles between the transitions of one move */
 static double shaft_period;      /* --shaft-speed: cycles per quadrature state */
 static int enc_a, enc_b;
 
@@ -648,6 +653,39 @@ static void remove_link(void)
 
 /* ------------------------------------------------------------------ pins */
 
+/* The stepper's rotor does not jump from one microstep to the next: at speed it turns smoothly at
+ * the step rate. The encoder transitions a step causes are spread evenly over the time since the
+ * previous step (at most STEP_MOVE_MAX_CYCLES, the longest a rotor takes to settle on a step), so
+ * the shaft runs one step behind the STEP edges at the step rate, and two transitions never come
+ * at the same cycle (an encoder whose A and B edges coincide cannot be decoded, on the chip as in
+ * any model). */
+static avr_cycle_count_t stepper_transition(avr_t *a, avr_cycle_count_t when, void *param)
+{
+    (void)a;
+    (void)param;
+    if (q != step_q_target)
+        encoder_to(q + (step_q_target > q ? 1 : -1));
+    return q == step_q_target ? 0 : when + step_spacing;
+}
+
+static void stepper_move(uint64_t now)
+{
+    uint64_t interval = have_last_step ? now - last_step_cycle : STEP_MOVE_MAX_CYCLES;
+    if (interval > STEP_MOVE_MAX_CYCLES)
+        interval = STEP_MOVE_MAX_CYCLES;
+    last_step_cycle = now;
+    have_last_step = true;
+    step_q_target = floor_div(step_pos * 4 * opt.ppr, (int64_t)opt.steps_per_rev * opt.microsteps);
+    avr_cycle_timer_cancel(avr, stepper_transition, NULL);
+    int64_t n = step_q_target > q ? step_q_target - q : q - step_q_target;
+    if (n == 0)
+        return;
+    step_spacing = (avr_cycle_count_t)(interval / (uint64_t)(n + 1));
+    if (step_spacing < 1)
+        step_spacing = 1;
+    avr_cycle_timer_register(avr, step_spacing, stepper_transition, NULL);
+}
+
 static void on_step_pin(avr_irq_t *irq, uint32_t value, void *param)
 {
     (void)irq;
@@ -684,7 +722,7 @@ static void on_step_pin(avr_irq_t *irq, uint32_t value, void *param)
     if (opt.shaft_given)
         return;
     step_pos += forward ? 1 : -1;
-    encoder_to(floor_div(step_pos * 4 * opt.ppr, (int64_t)opt.steps_per_rev * opt.microsteps));
+    stepper_move(now);
 }
 
 static void on_probe_pin(avr_irq_t *irq, uint32_t value, void *param)
@@ -798,6 +836,8 @@ static void start_models(void)
         }
     } else if (opt.motor == MOTOR_DC) {
         avr_cycle_timer_register(avr, DC_UPDATE_CYCLES, dc_update, NULL);
+    } else if (opt.motor == MOTOR_STEPPER && q != step_q_target) {
+        avr_cycle_timer_register(avr, step_spacing, stepper_transition, NULL); /* a move under way */
     }
     /* simavr 1.6 polls a low INT0/INT1 pin every cycle while ISCn = 00 (the reset value), one
      * more poller at every re-raise of a low level: model level mode as a falling edge */
