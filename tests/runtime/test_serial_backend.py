@@ -179,6 +179,23 @@ def test_controller_reset_keeps_the_angle(rig):
     assert s["out_of_order"] == 0 and state.positions[0] == pytest.approx(math.pi)
 
 
+def test_a_controller_restart_whose_reset_report_is_lost_does_not_move_the_angle(rig):
+    """Without its RESET the host sees the restart in the sequence numbers (resync_after frames
+    out of order, then adopted) and takes the next report's count as the new zero: the angle
+    stays where it was (on the old code it jumped back by the 150 counts the counter lost)."""
+    fake, backend = rig
+    fake.advance(0, 150)
+    poll(backend, lambda s: math.isclose(s.positions[0], math.pi / 2, abs_tol=1e-12))
+    resyncs = backend.stats()["resyncs"]
+    fake.simulate_reset(0, announce=False)
+    poll(backend, lambda s: backend.stats()["resyncs"] > resyncs, timeout=4.0)
+    reports = backend.stats()["reports"]
+    poll(backend, lambda s: backend.stats()["reports"] >= reports + 6, timeout=4.0)
+    fake.advance(0, 150)
+    state = poll(backend, lambda s: math.isclose(s.positions[0], math.pi, abs_tol=1e-12))
+    assert state.positions[0] == pytest.approx(math.pi)
+
+
 @pytest.mark.parametrize(
     "fault, n, counters, counted",
     [

@@ -235,14 +235,16 @@ class FakeController:
     def inject_unknown_type(self, n: int = 1) -> None:
         self._inject("unknown_type", n)
 
-    def simulate_reset(self, index: int) -> None:
+    def simulate_reset(self, index: int, announce: bool = True) -> None:
         """The controller of wheel ``index`` restarts: counter to 0, its sequence numbers from 0,
-        ERROR_REPORT RESET first (the wheel itself does not move)."""
+        ERROR_REPORT RESET first (the wheel itself does not move). ``announce=False``: the RESET
+        frame is lost on the wire."""
         with self._lock:
             w = self.wheels[index]
             w.offset -= w.ticks
             self._encoder.reset(index)
-            self._faults.appendleft(("error", index, "RESET", "restart"))
+            if announce:
+                self._faults.appendleft(("error", index, "RESET", "restart"))
 
     def send_error(self, index: int, code: str, text: str = "") -> None:
         """Send an ERROR_REPORT (code name) in the thread's next cycle."""

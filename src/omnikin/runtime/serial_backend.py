@@ -448,9 +448,14 @@ class SerialBackend:
             self.counters["misrouted"] += 1
             return
         self._last_rx[name] = t
+        if msg.restarted:  # the controller restarted and its RESET was lost: its counter is new
+            self._last_count[name] = None
         if msg.name == "ENCODER_REPORT":
             count = msg.raw["count"]
             last = self._last_count[name]
+            before = self._time_us[name]
+            if before is not None and (msg.raw["time_us"] - before) % 2**32 >= 2**31:
+                last = None  # the controller's clock went back: it restarted unannounced
             if last is not None:
                 self._ticks[name] += wrap_scalar(count - last, self.protocol.counter_bits)
             self._last_count[name] = count
@@ -467,7 +472,8 @@ class SerialBackend:
             self.counters["errors_rx"] += 1
             self.last_error = f"{name} on {port.url}: {self.protocol.error_name(code)}" + (f" ({text})" if text else "")
             if code == self.protocol.error_code("RESET"):
-                self._last_count[name] = None
+                self._last_count[name] = 0  # the counter restarts from 0 at boot, before it is announced
+                self._time_us[name] = None
                 self.counters["resets"] += 1
 
     def _check_link(self, t: float) -> None:

@@ -38,7 +38,9 @@ from .sequence import SEQ_DUPLICATE, SEQ_OUT_OF_ORDER, SEQ_RESYNC, SequenceTrack
 
 @dataclass(frozen=True)
 class Message:
-    """A decoded frame: ``fields`` physical (scaled) values, ``raw`` the wire integers."""
+    """A decoded frame: ``fields`` physical (scaled) values, ``raw`` the wire integers;
+    ``restarted``: its sequence number showed that the sender restarted (a resync, counted in
+    ``resyncs``; the sender's RESET announcement was lost)."""
 
     name: str
     type_id: int
@@ -47,6 +49,7 @@ class Message:
     fields: dict
     raw: dict
     frame: bytes = b""
+    restarted: bool = False
 
     def __getitem__(self, key):
         return self.fields[key]
@@ -257,12 +260,14 @@ class StreamDecoder:
         if wheel > p.wheel_index_max:
             st.bad_wheel += 1
             return None
+        restarted = False
         if self.check_sequence:
             tracker = self.streams.setdefault(wheel, SequenceTracker(p.resync_after))
             if ft.name == "ERROR_REPORT" and raw.get("code") == self._reset_code:
                 tracker.restart(seq)
             else:
                 verdict, lost = tracker.check(seq)
+                restarted = verdict == SEQ_RESYNC
                 if verdict == SEQ_DUPLICATE:
                     st.duplicates += 1
                     return None
@@ -274,4 +279,4 @@ class StreamDecoder:
                     st.resyncs += 1
                 st.lost += lost
         st.frames_ok += 1
-        return Message(ft.name, type_id, seq, wheel, phys, raw, frame)
+        return Message(ft.name, type_id, seq, wheel, phys, raw, frame, restarted)
