@@ -96,7 +96,7 @@ def firmware(motor: str = "stepper", wheel: int = 0, defines: str = "") -> Firmw
 
 def symbol(elf: Path, name: str) -> tuple[int, int]:
     """(SRAM address in the data space, size) of a variable of the firmware, from ``avr-nm``."""
-    out = subprocess.run(["avr-nm", "-S", str(elf)], capture_output=True, text=True, check=True).stdout
+    out = subprocess.run(["avr-nm", "-S", "-C", str(elf)], capture_output=True, text=True, check=True).stdout
     for line in out.splitlines():
         parts = line.split()
         if len(parts) == 4 and parts[3] == name and parts[2].lower() in "bd":
