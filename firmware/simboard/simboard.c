@@ -320,15 +320,19 @@ static int pb1_level, pc0_level;
 static uint64_t window_start;
 static uint64_t isr_cycles;
 static struct { uint64_t cycles, count; } isr_vec[NVECTORS];
+/* a series of durations [cycles]: count, extremes, exact mean (sum / n), spread (Welford) */
+struct durations {
+    uint64_t n, min, max, sum;
+    double mean, m2;
+};
 static struct {
-    uint64_t count, periods, highs, last_rise;
-    uint64_t period_min, period_max, period_sum, high_max, high_sum;
+    uint64_t count, last_rise;
+    struct durations period, high;
     bool rise_valid;
 } probe;
 static struct {
-    uint64_t count, forward, backward, ignored, intervals, last;
-    uint64_t imin, imax;
-    double mean, m2; /* Welford */
+    uint64_t count, forward, backward, ignored, last;
+    struct durations interval;
     bool last_valid;
 } steps;
 
@@ -372,6 +376,24 @@ static int64_t floor_div(int64_t a, int64_t b)
 {
     int64_t d = a / b;
     return (a % b != 0 && ((a < 0) != (b < 0))) ? d - 1 : d;
+}
+
+static void durations_add(struct durations *s, uint64_t d)
+{
+    if (!s->n || d < s->min)
+        s->min = d;
+    if (d > s->max)
+        s->max = d;
+    s->n++;
+    s->sum += d;
+    double delta = (double)d - s->mean;
+    s->mean += delta / (double)s->n;
+    s->m2 += delta * ((double)d - s->mean);
+}
+
+static double durations_mean(const struct durations *s)
+{
+    return s->n ? (double)s->sum / (double)s->n : 0.0;
 }
 
 /* ------------------------------------------------------------------ encoder */
@@ -697,17 +719,8 @@ static void on_step_pin(avr_irq_t *irq, uint32_t value, void *param)
         return;
     uint64_t now = avr->cycle;
     steps.count++;
-    if (steps.last_valid) {
-        uint64_t d = now - steps.last;
-        if (!steps.intervals || d < steps.imin)
-            steps.imin = d;
-        if (d > steps.imax)
-            steps.imax = d;
-        steps.intervals++;
-        double delta = (double)d - steps.mean;
-        steps.mean += delta / (double)steps.intervals;
-        steps.m2 += delta * ((double)d - steps.mean);
-    }
+    if (steps.last_valid)
+        durations_add(&steps.interval, now - steps.last);
     steps.last = now;
     steps.last_valid = true;
     if (avr->data[REG_PORTD] & (1 << 7)) {
@@ -736,23 +749,12 @@ static void on_probe_pin(avr_irq_t *irq, uint32_t value, void *param)
     uint64_t now = avr->cycle;
     if (level) {
         probe.count++;
-        if (probe.rise_valid) {
-            uint64_t d = now - probe.last_rise;
-            if (!probe.periods || d < probe.period_min)
-                probe.period_min = d;
-            if (d > probe.period_max)
-                probe.period_max = d;
-            probe.period_sum += d;
-            probe.periods++;
-        }
+        if (probe.rise_valid)
+            durations_add(&probe.period, now - probe.last_rise);
         probe.last_rise = now;
         probe.rise_valid = true;
     } else if (probe.rise_valid) {
-        uint64_t h = now - probe.last_rise;
-        if (h > probe.high_max)
-            probe.high_max = h;
-        probe.high_sum += h;
-        probe.highs++;
+        durations_add(&probe.high, now - probe.last_rise);
     }
 }
 
@@ -796,18 +798,17 @@ static void print_stats(const char *event)
     }
     printf("}, \"probe\": {\"count\": %llu, \"period_min\": %llu, \"period_max\": %llu, "
            "\"period_mean\": %.3f, \"high_max\": %llu, \"high_mean\": %.3f}",
-           (unsigned long long)probe.count, (unsigned long long)probe.period_min,
-           (unsigned long long)probe.period_max,
-           probe.periods ? (double)probe.period_sum / (double)probe.periods : 0.0,
-           (unsigned long long)probe.high_max,
-           probe.highs ? (double)probe.high_sum / (double)probe.highs : 0.0);
+           (unsigned long long)probe.count, (unsigned long long)probe.period.min,
+           (unsigned long long)probe.period.max, durations_mean(&probe.period),
+           (unsigned long long)probe.high.max, durations_mean(&probe.high));
     printf(", \"steps\": {\"count\": %llu, \"forward\": %llu, \"backward\": %llu, \"ignored\": %llu, "
            "\"interval_min\": %llu, \"interval_max\": %llu, \"interval_mean\": %.3f, "
            "\"interval_std\": %.3f}",
            (unsigned long long)steps.count, (unsigned long long)steps.forward,
            (unsigned long long)steps.backward, (unsigned long long)steps.ignored,
-           (unsigned long long)steps.imin, (unsigned long long)steps.imax, steps.mean,
-           steps.intervals > 1 ? sqrt(steps.m2 / (double)(steps.intervals - 1)) : 0.0);
+           (unsigned long long)steps.interval.min, (unsigned long long)steps.interval.max,
+           durations_mean(&steps.interval),
+           steps.interval.n > 1 ? sqrt(steps.interval.m2 / (double)(steps.interval.n - 1)) : 0.0);
     double w = opt.shaft_given ? opt.shaft_speed : opt.motor == MOTOR_DC ? omega : 0.0;
     double duty = 0.0;
     if (opt.motor == MOTOR_DC)
