@@ -46,7 +46,7 @@
 #define ENCODER_INVERT 0       /* robot file encoder.invert */
 #endif
 #ifndef ENCODER_X4
-#define ENCODER_X4 0           /* 1: count every edge of A and B (4 counts per pulse); 0: rising edges of A */
+#define ENCODER_X4 0           /* 1: count every edge of A and B (4 counts per pulse); 0: one count per pulse (A's edge where B is low) */
 #endif
 #ifndef MOTOR_INVERT
 #define MOTOR_INVERT 0         /* 1 if a positive output turns the wheel negatively */
@@ -99,8 +99,13 @@ static void encoder_isr() {
     encoder_state = now;
 }
 #else
-static void encoder_isr() {   /* rising edge of A: B low = forward */
-    if (fast_read(&enc_b)) encoder_count -= 1u; else encoder_count += 1u;
+/* One count per cycle, at one place of it: the edge of A where B is low (quadrature states 0 and 1
+ * of A = 0110, B = 0011). A rising there is a count forward, A falling there a count back, so a
+ * wheel shaking on that edge counts +1 -1 +1 ...; counting only rising edges (forward with B low,
+ * back with B high) counted every shake on the edge as a full turn of it forward. */
+static void encoder_isr() {
+    if (fast_read(&enc_b)) return;   /* the other edge of A */
+    if (fast_read(&enc_a)) encoder_count += 1u; else encoder_count -= 1u;
 }
 #endif
 
@@ -129,6 +134,13 @@ static int32_t to_scaled(float value, float scale) {
     return (int32_t)(x >= 0.0f ? x + 0.5f : x - 0.5f);
 }
 
+/* Never wait for the UART: a frame that does not fit in the transmit buffer (64 bytes) is dropped
+ * with its sequence number, so the host counts it as lost, and the control step keeps its period
+ * (a blocking write held it up by up to a buffer's worth of bytes, 5.6 ms at 115200 baud). */
+static void send(const uint8_t *frame, uint8_t n) {
+    if (Serial.availableForWrite() >= n) Serial.write(frame, n);
+}
+
 static uint8_t format_uint(char *out, uint16_t v) {   /* decimal, no printf on the AVR */
     char tmp[6];
     uint8_t n = 0, i;
@@ -146,7 +158,7 @@ static void send_error(uint8_t code, const char *text, uint16_t number) {
     while (text[n] && n < OMNIKIN_ERROR_REPORT_TEXT_MAX - 6) { m.text[n] = text[n]; n++; }
     if (number) n = (uint8_t)(n + format_uint(m.text + n, number));
     m.text_len = n;
-    Serial.write(frame, omnikin_encode_error_report(frame, tx_seq++, &m));
+    send(frame, omnikin_encode_error_report(frame, tx_seq++, &m));
 }
 
 static void send_report() {
@@ -158,7 +170,7 @@ static void send_report() {
     m.time_us = time_us;
     m.count = (int32_t)count;
     m.speed = to_scaled(measured, OMNIKIN_ENCODER_REPORT_SPEED_SCALE);
-    Serial.write(frame, omnikin_encode_encoder_report(frame, tx_seq++, &m));
+    send(frame, omnikin_encode_encoder_report(frame, tx_seq++, &m));
 }
 
 static void send_heartbeat() {
@@ -169,7 +181,7 @@ static void send_heartbeat() {
                          (link_ok && !fault && drive_enabled() ? OMNIKIN_STATUS_MOTOR_ENABLED : 0) |
                          (fault ? OMNIKIN_STATUS_FAULT : 0));
     m.time_us = micros();
-    Serial.write(frame, omnikin_encode_heartbeat(frame, tx_seq++, &m));
+    send(frame, omnikin_encode_heartbeat(frame, tx_seq++, &m));
 }
 
 static void stop_motor() {
@@ -238,7 +250,7 @@ void setup() {
     attachInterrupt(digitalPinToInterrupt(PIN_ENC_A), encoder_isr, CHANGE);
     attachInterrupt(digitalPinToInterrupt(PIN_ENC_B), encoder_isr, CHANGE);
 #else
-    attachInterrupt(digitalPinToInterrupt(PIN_ENC_A), encoder_isr, RISING);
+    attachInterrupt(digitalPinToInterrupt(PIN_ENC_A), encoder_isr, CHANGE);
 #endif
     Serial.begin(OMNIKIN_BAUD);
     omnikin_parser_init(&parser);

@@ -149,6 +149,8 @@ static const char HELP[] =
     "  reset               reset the chip (the shaft keeps its angle)\n"
     "  stats               measurements; clear: restart the measurement window\n"
     "  peek ADDR N         N (1..256) bytes of data memory from ADDR (decimal or 0x hex)\n"
+    "  nudge +1|-1         --motor none without --shaft-speed: the shaft moves by one quadrature\n"
+    "                      transition (a wheel at rest shaking on an encoder edge)\n"
     "  quit                final stats line and exit 0 (also on EOF, SIGTERM, SIGINT)\n"
     "\n"
     "Measurements (cycles are exact simulated cycles, 16 per us): cycle, time_s, wall_s,\n"
@@ -924,6 +926,12 @@ static void command(char *line)
             rx_seen = 0;
         }
         printf("{\"ok\": \"corrupt\", \"direction\": \"%s\", \"every\": %lu}\n", argv[1], n);
+    } else if (strcmp(c, "nudge") == 0 && argc == 2 && opt.motor == MOTOR_NONE && !opt.shaft_given &&
+               (strcmp(argv[1], "+1") == 0 || strcmp(argv[1], "-1") == 0)) {
+        int d = argv[1][0] == '+' ? 1 : -1; /* one quadrature transition, as a shaft at rest shaking */
+        angle += d * 2 * M_PI / (4.0 * (double)opt.ppr);
+        encoder_to(q + d);
+        printf("{\"ok\": \"nudge\", \"q\": %lld}\n", (long long)q);
     } else if (strcmp(c, "peek") == 0 && argc == 3) {
         unsigned long addr, n;
         if (!parse_uint(argv[1], RAMEND, &addr)) {
@@ -940,7 +948,7 @@ static void command(char *line)
         printf("\"}\n");
     } else {
         reply_error("unknown or malformed command (silence on|off, corrupt tx|rx N, reset, stats, "
-                    "clear, peek ADDR N, quit)",
+                    "clear, peek ADDR N, nudge +1|-1 with --motor none and no --shaft-speed, quit)",
                     line);
         return;
     }

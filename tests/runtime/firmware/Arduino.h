@@ -70,6 +70,7 @@ struct SerialPort {
         return n;
     }
     size_t write(uint8_t b) { return write(&b, 1); }
+    int availableForWrite() { return 63; }  /* the core's 64-byte ring buffer, empty */
 };
 SerialPort Serial;
 
