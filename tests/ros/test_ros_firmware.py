@@ -146,11 +146,11 @@ def test_a_silenced_board_stops_the_robot_and_the_node_reports_it(tmp_path, nano
         proc.close()
 
 
-def test_a_board_reset_while_driving_loses_at_most_one_report_period_of_its_wheel(tmp_path, nanos):
-    """A reset board restarts its counter at 0 and says RESET before its first report; the host
-    takes 0 as that counter's value then, so the turns after the boot all count. The turns
-    between the board's last report and the reset die with its counter: at most one report
-    period of them. The other wheels keep every count, and the odometry does not jump."""
+def test_a_board_reset_while_driving_loses_at_most_two_report_periods_of_its_wheel(tmp_path, nanos):
+    """A reset board restarts its counter and says RESET; the host takes its next report's count as
+    the new zero. The turns between the board's last report before the reset and its first after
+    it are lost: at most two report periods of that wheel's motion. The other wheels keep every
+    count, and the odometry does not jump."""
     proc, g = start(tmp_path, ["tomasi-omni3", "--backend", "serial", "--port", *(b.path for b in nanos)])
     try:
         start_angles = angles(nanos) - joint_positions(g)
@@ -167,7 +167,7 @@ def test_a_board_reset_while_driving_loses_at_most_one_report_period_of_its_whee
         shafts = angles(nanos) - start_angles
         counted = joint_positions(g)
         bound = np.full(3, RAD_PER_COUNT + 1e-9)
-        bound[2] += abs(INVERSE @ (0.2, 0.0, 0.0))[2] * REPORT_PERIOD
+        bound[2] += abs(INVERSE @ (0.2, 0.0, 0.0))[2] * 2 * REPORT_PERIOD
         assert np.all(np.abs(counted - shafts) <= bound), f"counts {counted} vs shafts {shafts}"
     finally:
         g.close()

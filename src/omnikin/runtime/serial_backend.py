@@ -472,7 +472,7 @@ class SerialBackend:
             self.counters["errors_rx"] += 1
             self.last_error = f"{name} on {port.url}: {self.protocol.error_name(code)}" + (f" ({text})" if text else "")
             if code == self.protocol.error_code("RESET"):
-                self._last_count[name] = 0  # the counter restarts from 0 at boot, before it is announced
+                self._last_count[name] = None  # the next report's count is the new zero
                 self._time_us[name] = None
                 self.counters["resets"] += 1
 
