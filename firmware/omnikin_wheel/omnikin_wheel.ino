@@ -17,10 +17,11 @@
  *    (several boards may share a bus); duplicate and out-of-order sequence numbers are dropped;
  *  - link loss (no valid frame for OMNIKIN_LINK_TIMEOUT_MS): set-point 0, motor off at once,
  *    ERROR_REPORT LINK_LOST; the host must send a new SPEED_CMD to move again;
- *  - ENCODER_REPORT every OMNIKIN_REPORT_PERIOD_MS, HEARTBEAT every OMNIKIN_HEARTBEAT_PERIOD_MS;
- *    CRC and version errors seen on the input are reported at most once per heartbeat period;
- *  - the control step runs every CONTROL_PERIOD_US and holds PIN_PROBE high while it runs (a
- *    scope, or the simulated board, measures the loop's period and load on that pin).
+ *  - the control step runs every CONTROL_PERIOD_US at a fixed rate and holds PIN_PROBE high while
+ *    it runs (a scope, or the simulated board, measures the loop's period and load on that pin);
+ *  - right after a control step, ENCODER_REPORT every OMNIKIN_REPORT_PERIOD_MS and HEARTBEAT every
+ *    OMNIKIN_HEARTBEAT_PERIOD_MS; CRC and version errors seen on the input are reported at most
+ *    once per heartbeat period.
  *
  * Configuration: the #defines below (or -D flags, as firmware/Makefile passes them); they must
  * match the robot file (docs/conventions.md): the count reported is the raw counter of this
@@ -122,7 +123,9 @@ static omnikin_seq_t host_seq;
 static uint8_t tx_seq = 0;
 static uint8_t link_ok = 0;
 static uint8_t fault = 0;
-static uint32_t last_rx_ms = 0, last_report_ms = 0, last_heartbeat_ms = 0, last_control_us = 0;
+static uint32_t last_rx_ms = 0;
+static uint32_t control_due_us = 0;    /* when the current control period began: steps every CONTROL_PERIOD_US */
+static uint32_t last_control_us = 0;   /* when the last control step ran (its dt) */
 static uint32_t last_count = 0;
 static uint16_t reported_crc_errors = 0, reported_bad_version = 0, reported_glitches = 0;
 static uint8_t clamp_pending = 0;
@@ -225,6 +228,8 @@ static void control(uint32_t now_us) {
     int32_t delta;
     fast_write(&probe, 1);
     last_control_us = now_us;
+    control_due_us += CONTROL_PERIOD_US;   /* a fixed rate: a late step does not shift the next ones */
+    if (now_us - control_due_us >= CONTROL_PERIOD_US) control_due_us = now_us;   /* fell behind */
     latch_encoder(&count, &time_us);
     delta = (int32_t)(count - last_count);
     last_count = count;
@@ -234,6 +239,44 @@ static void control(uint32_t now_us) {
         else drive_control(target, measured, dt);
     }
     fast_write(&probe, 0);
+}
+
+/* The periodic frames go out right after a control step, in the same loop pass: they never hold
+ * a control step back (sending a report, a heartbeat and error reports takes about 0.5 ms), and
+ * their periods are whole numbers of control periods. */
+#define REPORT_TICKS (OMNIKIN_REPORT_PERIOD_MS * 1000UL / CONTROL_PERIOD_US)
+#define HEARTBEAT_TICKS (OMNIKIN_HEARTBEAT_PERIOD_MS * 1000UL / CONTROL_PERIOD_US)
+#if REPORT_TICKS < 1 || HEARTBEAT_TICKS < 1 || (OMNIKIN_REPORT_PERIOD_MS * 1000UL) % CONTROL_PERIOD_US != 0 \
+    || (OMNIKIN_HEARTBEAT_PERIOD_MS * 1000UL) % CONTROL_PERIOD_US != 0
+#error "CONTROL_PERIOD_US must divide the protocol's report and heartbeat periods"
+#endif
+static uint16_t report_ticks = 0, heartbeat_ticks = 0;
+
+static void send_periodic() {
+    if (++report_ticks >= REPORT_TICKS) {
+        report_ticks = 0;
+        send_report();
+    }
+    if (++heartbeat_ticks < HEARTBEAT_TICKS) return;
+    heartbeat_ticks = 0;
+    send_heartbeat();
+    if (parser.crc_errors != reported_crc_errors) {
+        send_error(OMNIKIN_ERR_CRC, "frames: ", (uint16_t)(parser.crc_errors - reported_crc_errors));
+        reported_crc_errors = parser.crc_errors;
+    }
+    if (parser.bad_version != reported_bad_version) {
+        send_error(OMNIKIN_ERR_BAD_VERSION, "frames: ", (uint16_t)(parser.bad_version - reported_bad_version));
+        reported_bad_version = parser.bad_version;
+    }
+    if (encoder_glitches != reported_glitches) {
+        uint16_t g = encoder_glitches;
+        send_error(OMNIKIN_ERR_ENCODER_FAULT, "missed edges: ", (uint16_t)(g - reported_glitches));
+        reported_glitches = g;
+    }
+    if (clamp_pending) {
+        clamp_pending = 0;
+        send_error(OMNIKIN_ERR_SPEED_CLAMPED, "", 0);
+    }
 }
 
 void setup() {
@@ -255,8 +298,7 @@ void setup() {
     Serial.begin(OMNIKIN_BAUD);
     omnikin_parser_init(&parser);
     memset(&host_seq, 0, sizeof(host_seq));
-    last_control_us = micros();
-    last_report_ms = last_heartbeat_ms = millis();
+    last_control_us = control_due_us = micros();
     send_error(OMNIKIN_ERR_RESET, "boot", 0);
 }
 
@@ -273,31 +315,8 @@ void loop() {
         memset(&host_seq, 0, sizeof(host_seq));   /* a restarted host starts a new sequence */
         send_error(OMNIKIN_ERR_LINK_LOST, "host silent; motor off", 0);
     }
-    if (now_us - last_control_us >= CONTROL_PERIOD_US) control(now_us);
-    if (now_ms - last_report_ms >= OMNIKIN_REPORT_PERIOD_MS) {
-        last_report_ms += OMNIKIN_REPORT_PERIOD_MS;
-        if (now_ms - last_report_ms >= OMNIKIN_REPORT_PERIOD_MS) last_report_ms = now_ms;   /* fell behind */
-        send_report();
-    }
-    if (now_ms - last_heartbeat_ms >= OMNIKIN_HEARTBEAT_PERIOD_MS) {
-        last_heartbeat_ms = now_ms;
-        send_heartbeat();
-        if (parser.crc_errors != reported_crc_errors) {
-            send_error(OMNIKIN_ERR_CRC, "frames: ", (uint16_t)(parser.crc_errors - reported_crc_errors));
-            reported_crc_errors = parser.crc_errors;
-        }
-        if (parser.bad_version != reported_bad_version) {
-            send_error(OMNIKIN_ERR_BAD_VERSION, "frames: ", (uint16_t)(parser.bad_version - reported_bad_version));
-            reported_bad_version = parser.bad_version;
-        }
-        if (encoder_glitches != reported_glitches) {
-            uint16_t g = encoder_glitches;
-            send_error(OMNIKIN_ERR_ENCODER_FAULT, "missed edges: ", (uint16_t)(g - reported_glitches));
-            reported_glitches = g;
-        }
-        if (clamp_pending) {
-            clamp_pending = 0;
-            send_error(OMNIKIN_ERR_SPEED_CLAMPED, "", 0);
-        }
+    if (now_us - control_due_us >= CONTROL_PERIOD_US) {
+        control(now_us);
+        send_periodic();
     }
 }

@@ -151,7 +151,8 @@ static const char HELP[] =
     "  peek ADDR N         N (1..256) bytes of data memory from ADDR (decimal or 0x hex)\n"
     "  nudge +1|-1         --motor none without --shaft-speed: the shaft moves by one quadrature\n"
     "                      transition (a wheel at rest shaking on an encoder edge)\n"
-    "  quit                final stats line and exit 0 (also on EOF, SIGTERM, SIGINT)\n"
+    "  quit                final stats line and exit 0 (also on SIGTERM, SIGINT, and on EOF\n"
+    "                      unless --duration is given: then the board runs its duration)\n"
     "\n"
     "Measurements (cycles are exact simulated cycles, 16 per us): cycle, time_s, wall_s,\n"
     "  behind_s; sp_min, ramend, stack_bytes; window_cycles, isr_cycles, isr {vector: {cycles,\n"
@@ -970,9 +971,10 @@ static void stdin_io(void)
     ssize_t r = read(0, buf, sizeof buf);
     if (r < 0 && (errno == EAGAIN || errno == EINTR))
         return;
-    if (r <= 0) {
+    if (r <= 0) {   /* no more commands: the end, unless --duration says when */
         stdin_open = false;
-        quitting = true;
+        if (!opt.duration_given)
+            quitting = true;
         return;
     }
     for (ssize_t i = 0; i < r && !quitting; i++) {

@@ -6,6 +6,7 @@ models of ``simboard --help``."""
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import os
 import random
@@ -310,6 +311,21 @@ def test_end_of_input_and_signals_end_the_board_with_a_final_stats_line(exe, bui
         assert final["event"] == "final" and process.returncode == 0
     finally:
         board.close()
+
+
+def test_with_a_duration_the_board_runs_it_whatever_its_input(exe, build):
+    """``simboard --duration 0.2 ... < /dev/null`` (as from a script or the README): no commands
+    is not a request to stop before the duration ends."""
+    done = subprocess.run(
+        [str(exe), "--speed", "0", "--no-pty", "--duration", "0.2", str(program(build, "step_toggle"))],
+        stdin=subprocess.DEVNULL,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    final = json.loads(done.stdout.splitlines()[-1])
+    assert done.returncode == 0 and final["event"] == "final"
+    assert final["time_s"] == pytest.approx(0.2, abs=4 / F_CPU)
 
 
 def test_a_host_may_close_and_reopen_the_pty(echo):

@@ -862,6 +862,7 @@ def test_c_parser_accepts_what_python_accepts(host_test):
     assert reports == [[str(m.raw[k]) for k in ("wheel", "time_us", "count", "speed")] for m in msgs]
     stats = out.splitlines()[-1].split()
     assert stats[0] == "STATS" and int(stats[3]) == py.stats.bad_version
+    assert int(stats[4]) == py.stats.skipped_bytes  # bytes outside frames, counted the same way
 
 
 @pytest.mark.compiler

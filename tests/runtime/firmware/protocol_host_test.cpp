@@ -64,7 +64,7 @@ int main(int argc, char **argv) {
                 }
             }
         }
-        printf("STATS %u %u %u\n", p.frames_ok, p.crc_errors, p.bad_version);
+        printf("STATS %u %u %u %u\n", p.frames_ok, p.crc_errors, p.bad_version, p.skipped);
         return 0;
     }
     if (!strcmp(argv[1], "seq")) {

@@ -1,0 +1,199 @@
+"""The wheel-controller firmware on its simulated ATmega328P: the numbers of docs/firmware.md.
+
+Needs the AVR toolchain, Debian's Arduino core and libsimavr-dev (``.ci/run`` installs them); the
+firmware and the simulated board are built with ``make -C firmware`` into the tests' build folder.
+Every time is in simulated cycles (16 per us), so the figures do not depend on this machine. The
+references are the chip's budgets, stated by the firmware itself or the datasheet: 30720 B of
+flash, 2048 B of RAM, the 10 ms control period, the top wheel speed's 2865 encoder pulses/s. For
+each variant (stepper, DC):
+
+* sizes: flash and static RAM (``avr-size``), and the deepest stack seen under the damaged-bus load;
+* at the top speed (30 rad/s), commands for three wheels every 20 ms, over 1 s after 1 s of the
+  same: control period and step duration (the probe pin), interrupt load per vector, step
+  intervals, the speed held; then the same with one host byte in 50 damaged;
+* a bus carrying SPEED_CMD frames back to back at the full line rate: frames parsed of 1000;
+* bytes built to cost the parser the most (``costly_garbage``) between the commands: the longest
+  control period, and the commands parsed of those sent;
+* the highest encoder rate counted without a miss, by bisection (3 % steps) on a shaft turning at
+  a constant speed, with the chip only counting and with the host driving it at the top speed;
+* the simulation's own speed: simulated seconds per wall second of a board running flat out.
+
+    python3 benchmarks/bench_firmware.py
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from pathlib import Path
+
+from _common import save
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from firmware_build import AVR_MISSING, NANO_FLASH, NANO_RAM, build_dir, firmware  # noqa: E402
+from firmware_load import (  # noqa: E402
+    CONTROL_PERIOD,
+    F_CPU,
+    PPR,
+    TOP_SPEED,
+    HostLink,
+    control_lateness,
+    drive,
+    drive_through_garbage,
+    encoder_miscount,
+    parser_frames,
+)
+from simboard import SIMAVR_MISSING, SimBoard, build_simboard  # noqa: E402
+
+MOTORS = ("stepper", "dc")
+TOP_PULSES = TOP_SPEED * PPR / (2 * math.pi)  # [pulses/s] at the top wheel speed
+FLOOD_FRAMES = 1000
+VECTORS = {1: "INT0 (encoder)", 11: "TIMER1_COMPA (steps)", 16: "TIMER0_OVF (millis)", 18: "USART_RX", 19: "USART_UDRE"}
+"""ATmega328P interrupt vector numbers (datasheet table 12-6, reset = 0) of the firmware's handlers."""
+
+
+def _under_load(exe: Path, motor: str, damaged: int) -> dict:
+    """1 s at the top speed with a busy bus (one host byte in ``damaged`` flipped, 0: none),
+    measured over the second second; then, on the same board, the full-rate flood."""
+    fw = firmware(motor)
+    with SimBoard(exe, fw.elf, "--motor", motor) as board:
+        link = HostLink.open(board)
+        try:
+            board.corrupt("rx", damaged)
+            drive(board, link, TOP_SPEED, 1.0)
+            board.clear()
+            drive(board, link, TOP_SPEED, 1.0)
+            stats = board.stats()
+            board.corrupt("rx", 0)
+            before = parser_frames(board, fw)
+            link.send(*(link.speed(1, 1.0) for _ in range(FLOOD_FRAMES)))
+            parsed = 0
+            for _ in range(100):  # 13 bytes a frame at 117647 baud: 1.1 s of simulated time
+                time.sleep(0.05)
+                link.poll()
+                parsed = (parser_frames(board, fw) - before) % 2**16
+                if parsed >= FLOOD_FRAMES:
+                    break
+        finally:
+            link.close()
+    window = stats["window_cycles"]
+    probe, steps = stats["probe"], stats["steps"]
+    return {
+        "stack_bytes": stats["stack_bytes"],
+        "control_period_cycles": {k: probe[f"period_{k}"] for k in ("mean", "min", "max")},
+        "control_step_cycles": {k: probe[f"high_{k}"] for k in ("mean", "max")},
+        "control_step_late_max": control_lateness(probe) / CONTROL_PERIOD,
+        "isr_load": stats["isr_cycles"] / window,
+        "isr": {
+            VECTORS.get(int(name), name): {
+                "per_s": v["count"] * F_CPU / window,
+                "cycles_each": v["cycles"] / v["count"] if v["count"] else 0.0,
+                "load": v["cycles"] / window,
+            }
+            for name, v in stats["isr"].items()
+        },
+        "steps": {k: steps[k] for k in ("count", "interval_mean", "interval_min", "interval_max", "interval_std")}
+        if motor == "stepper"
+        else None,
+        "speed_held": stats["omega"] if motor == "dc" else F_CPU / steps["interval_mean"] / (1600 / (2 * math.pi)),
+        "flood_parsed": parsed,
+    }
+
+
+def _through_garbage(exe: Path, motor: str) -> dict:
+    fw = firmware(motor)
+    with SimBoard(exe, fw.elf, "--motor", motor) as board:
+        link = HostLink.open(board)
+        try:
+            drive(board, link, TOP_SPEED, 0.5, bus=False)
+            board.clear()
+            stats, sent, parsed = drive_through_garbage(board, link, fw, 1.0)
+        finally:
+            link.close()
+    return {
+        "control_step_late_max": control_lateness(stats["probe"]) / CONTROL_PERIOD,
+        "sent": sent,
+        "parsed": parsed,
+    }
+
+
+def _highest_encoder_rate(exe: Path, motor: str, bus: bool) -> float:
+    """The highest pulse rate counted without a miss (bisection in 3 % steps) [pulses/s]."""
+    fw = firmware(motor)
+    lo, hi = TOP_PULSES, 200_000.0
+    if abs(encoder_miscount(exe, fw, lo, 0.3, bus)) > 1:
+        return 0.0
+    while hi / lo > 1.03:
+        mid = math.sqrt(lo * hi)
+        if abs(encoder_miscount(exe, fw, mid, 0.3, bus)) <= 1:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def _simulation_speed(exe: Path) -> float:
+    """Simulated seconds per wall second of a stepper board running flat out with no host."""
+    fw = firmware("stepper")
+    t0 = time.perf_counter()
+    with SimBoard(exe, fw.elf, "--duration", "2", speed=0.0, pty=False) as board:
+        final = board.wait_final(120)
+    return final["time_s"] / (time.perf_counter() - t0)
+
+
+def main() -> dict:
+    missing = AVR_MISSING or SIMAVR_MISSING
+    if missing:
+        raise SystemExit(f"bench_firmware: {missing}")
+    exe = build_simboard(build_dir())
+    results: dict = {
+        "references": {
+            "flash": NANO_FLASH,
+            "ram": NANO_RAM,
+            "control_period_cycles": CONTROL_PERIOD,
+            "top_speed_pulses_per_s": TOP_PULSES,
+        }
+    }
+    for motor in MOTORS:
+        fw = firmware(motor)
+        clean = _under_load(exe, motor, 0)
+        damaged = _under_load(exe, motor, 50)
+        garbage = _through_garbage(exe, motor)
+        idle = _highest_encoder_rate(exe, motor, bus=False)
+        busy = _highest_encoder_rate(exe, motor, bus=True)
+        used = fw.static_ram + damaged["stack_bytes"]
+        results[motor] = {
+            "flash": fw.flash,
+            "static_ram": fw.static_ram,
+            "ram_used": used,
+            "ram_free": 1 - used / NANO_RAM,
+            "clean_bus": clean,
+            "damaged_bus": damaged,
+            "costly_garbage": garbage,
+            "encoder_max_pulses_per_s": {"idle": idle, "busy": busy, "busy_vs_top_speed": busy / TOP_PULSES},
+        }
+        r = results[motor]
+        print(
+            f"{motor}: flash {fw.flash} B ({fw.flash / NANO_FLASH:.1%}), RAM {fw.static_ram} + {damaged['stack_bytes']}"
+            f" = {used} B ({r['ram_free']:.0%} free); interrupt load {clean['isr_load']:.1%}"
+            f" ({damaged['isr_load']:.1%} damaged bus); control period"
+            f" {clean['control_period_cycles']['mean'] / F_CPU * 1e3:.3f} ms mean,"
+            f" late by at most {clean['control_step_late_max']:.1%} ({damaged['control_step_late_max']:.1%}"
+            f" damaged, {garbage['control_step_late_max']:.1%} costly garbage, {garbage['parsed']}/{garbage['sent']}"
+            f" commands parsed); flood {clean['flood_parsed']}/{FLOOD_FRAMES};"
+            f" encoder up to {idle:.0f} / {busy:.0f} pulses/s idle / busy ({busy / TOP_PULSES:.1f}x top speed)"
+        )
+        for name, v in clean["isr"].items():
+            print(f"  {name}: {v['per_s']:.0f}/s x {v['cycles_each']:.1f} cycles = {v['load']:.2%}")
+        if clean["steps"]:
+            s = clean["steps"]
+            spread = f"{s['interval_min']} - {s['interval_max']}"
+            print(f"  steps: interval {s['interval_mean']:.3f} cycles ({spread}), std {s['interval_std']:.1f}")
+    results["simulated_s_per_wall_s"] = _simulation_speed(exe)
+    print(f"simulation: {results['simulated_s_per_wall_s']:.1f} simulated s per wall s")
+    return results
+
+
+if __name__ == "__main__":
+    print(f"-> {save('firmware', main())}")
