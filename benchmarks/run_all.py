@@ -2,9 +2,11 @@
 
     python3 benchmarks/run_all.py
 
-Benchmarks are not part of the test run; their figures go into docs/performance.md.
+Benchmarks are not part of the test run; their figures go into docs/performance.md. Those that
+need an extra or system packages are skipped, with the reason, where these are missing.
 """
 
+import importlib
 import sys
 from pathlib import Path
 
@@ -18,27 +20,35 @@ import bench_streaming  # noqa: E402
 import bench_umbmark  # noqa: E402
 from _common import machine, save  # noqa: E402
 
+OPTIONAL = {
+    "physics": "pip install -e '.[physics]' (MuJoCo)",
+    "sweep": "pip install -e '.[sweep]' (Dask)",
+    "viewer": "pip install -e '.[viewer]' and Debian's chromium",
+    "firmware": "pip install -e '.[serial]' and the AVR packages of .ci/run",
+}
+"""Benchmarks that need more than the core, and what they need."""
+
+
+def _firmware_missing() -> str | None:
+    from firmware_build import AVR_MISSING
+    from simboard import SIMAVR_MISSING
+
+    return AVR_MISSING or SIMAVR_MISSING
+
+
 if __name__ == "__main__":
     print("machine:", machine())
     modules = [bench_streaming, bench_batch, bench_accuracy, bench_simulation, bench_umbmark, bench_runtime]
-    try:
-        import bench_physics  # needs the extra 'physics' (MuJoCo)
-
-        modules.append(bench_physics)
-    except ImportError as e:
-        print(f"physics skipped: {e} (pip install -e '.[physics]')")
-    try:
-        import bench_sweep  # needs the extra 'sweep'
-
-        modules.append(bench_sweep)
-    except ImportError as e:
-        print(f"sweep skipped: {e} (pip install -e '.[sweep]')")
-    try:
-        import bench_viewer  # needs the extra 'viewer' and Debian's Chromium
-
-        modules.append(bench_viewer)
-    except ImportError as e:
-        print(f"viewer skipped: {e} (pip install -e '.[viewer]')")
+    for name, needs in OPTIONAL.items():
+        try:
+            module = importlib.import_module(f"bench_{name}")
+            missing = _firmware_missing() if name == "firmware" else None
+        except ImportError as e:
+            missing = f"{e} ({needs})"
+        if missing:
+            print(f"{name} skipped: {missing}")
+        else:
+            modules.append(module)
     for module in modules:
         name = module.__name__.replace("bench_", "")
         path = save(name, module.main())

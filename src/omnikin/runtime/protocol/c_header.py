@@ -5,9 +5,9 @@ wheel controller, from the same ``protocol.yaml``: the constants (timing in ms, 
 sync bytes, sizes), frame type ids, error codes and status masks, the CRC (bitwise; on an AVR
 avr-libc's update step when the polynomial is 0x1021), one struct with pack / unpack / encode
 functions per frame type (fields as wire integers; a field's physical value [its unit] = raw x
-its ``*_SCALE``), the byte-by-byte frame parser and the sequence rules. Little-endian on the wire whatever the CPU. A test compiles it with gcc/g++ and
-compares it with Python frame by frame; another compares the committed header with
-:func:`generate_header`::
+its ``*_SCALE``), the byte-by-byte frame parser and the sequence rules. Little-endian on the
+wire whatever the CPU. A test compiles it with gcc/g++ and compares it with Python frame by
+frame; another compares the committed header with :func:`generate_header`::
 
     python -m omnikin.runtime.protocol --header > firmware/omnikin_wheel/omnikin_protocol.h
 """
