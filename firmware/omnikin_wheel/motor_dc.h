@@ -23,6 +23,7 @@
 #define KFF 6.0f               /* feed-forward PWM counts per rad/s of set-point */
 #endif
 #define PWM_MAX 255
+static_assert(KP >= 0.0f && KI >= 0.0f && KFF >= 0.0f, "KP, KI and KFF must be >= 0");
 
 static int16_t motor_output = 0;   /* signed PWM counts last written */
 static float integral = 0.0f;      /* PWM counts */

@@ -47,6 +47,8 @@
 #define PIN_STEP 9             /* OC1A: fixed by the timer that makes the edges */
 
 #define STEPS_PER_RAD ((float)STEPS_PER_REV * (float)MICROSTEPS * STEP_GEAR / 6.2831853f)
+static_assert(STEPS_PER_REV >= 1 && MICROSTEPS >= 1 && STEP_GEAR > 0.0f, "STEPS_PER_REV and MICROSTEPS must be >= 1, STEP_GEAR > 0");
+static_assert(STEP_ACCEL > 0.0f, "STEP_ACCEL must be > 0 rad/s^2");
 #define STEP_TICK_HZ_FAST (F_CPU / 8.0f)    /* clk/8 */
 #define STEP_TICK_HZ_SLOW (F_CPU / 64.0f)   /* clk/64 */
 #define STEP_CS_FAST (_BV(CS11))

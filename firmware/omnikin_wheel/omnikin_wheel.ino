@@ -20,8 +20,9 @@
  *  - the control step runs every CONTROL_PERIOD_US at a fixed rate and holds PIN_PROBE high while
  *    it runs (a scope, or the simulated board, measures the loop's period and load on that pin);
  *  - right after a control step, ENCODER_REPORT every OMNIKIN_REPORT_PERIOD_MS and HEARTBEAT every
- *    OMNIKIN_HEARTBEAT_PERIOD_MS; CRC and version errors seen on the input are reported at most
- *    once per heartbeat period.
+ *    OMNIKIN_HEARTBEAT_PERIOD_MS; errors seen on the input (CRC, version, frame types this
+ *    controller does not take) are counted and reported at most once per heartbeat period, so
+ *    that no input makes the controller send more than the periodic frames and a few reports.
  *
  * Configuration: the #defines below (or -D flags, as firmware/Makefile passes them); they must
  * match the robot file (docs/conventions.md): the count reported is the raw counter of this
@@ -73,6 +74,15 @@
 #endif
 #ifndef SPEED_FILTER
 #define SPEED_FILTER 0.3f      /* weight of the newest speed sample in the low-pass filter */
+#endif
+
+/* Settings that would build into a controller that moves wrongly are refused at build time. */
+static_assert(MAX_SPEED > 0.0f && MAX_SPEED <= 1000.0f, "MAX_SPEED must be in (0, 1000] rad/s");
+static_assert(TICKS_PER_REV >= 1.0f && GEAR_RATIO > 0.0f, "TICKS_PER_REV must be >= 1 and GEAR_RATIO > 0");
+static_assert(SPEED_FILTER > 0.0f && SPEED_FILTER <= 1.0f, "SPEED_FILTER must be in (0, 1]");
+#if (MOTOR_STEPPER != 0 && MOTOR_STEPPER != 1) || (ENCODER_INVERT != 0 && ENCODER_INVERT != 1) \
+    || (ENCODER_X4 != 0 && ENCODER_X4 != 1) || (MOTOR_INVERT != 0 && MOTOR_INVERT != 1)
+#error "MOTOR_STEPPER, ENCODER_INVERT, ENCODER_X4 and MOTOR_INVERT must be 0 or 1"
 #endif
 
 #if MOTOR_STEPPER
@@ -127,7 +137,8 @@ static uint32_t last_rx_ms = 0;
 static uint32_t control_due_us = 0;    /* when the current control period began: steps every CONTROL_PERIOD_US */
 static uint32_t last_control_us = 0;   /* when the last control step ran (its dt) */
 static uint32_t last_count = 0;
-static uint16_t reported_crc_errors = 0, reported_bad_version = 0, reported_glitches = 0;
+static uint16_t unknown_types = 0;   /* frames for this wheel of a type it does not take */
+static uint16_t reported_crc_errors = 0, reported_bad_version = 0, reported_glitches = 0, reported_unknown = 0;
 static uint8_t clamp_pending = 0;
 static float target = 0.0f;      /* rad/s */
 static float measured = 0.0f;    /* rad/s, filtered */
@@ -201,7 +212,7 @@ static void handle_frame() {
     uint8_t verdict;
     if (len < 1 || payload[0] != WHEEL_INDEX) return;   /* another wheel's frame */
     if (type != OMNIKIN_TYPE_SPEED_CMD && type != OMNIKIN_TYPE_HEARTBEAT) {
-        send_error(OMNIKIN_ERR_UNKNOWN_TYPE, "type ", type);
+        unknown_types++;   /* reported once per heartbeat period: an answer per frame would crowd out the reports */
         return;
     }
     verdict = omnikin_seq_check(&host_seq, seq);
@@ -263,6 +274,10 @@ static void send_periodic() {
     if (parser.crc_errors != reported_crc_errors) {
         send_error(OMNIKIN_ERR_CRC, "frames: ", (uint16_t)(parser.crc_errors - reported_crc_errors));
         reported_crc_errors = parser.crc_errors;
+    }
+    if (unknown_types != reported_unknown) {
+        send_error(OMNIKIN_ERR_UNKNOWN_TYPE, "frames: ", (uint16_t)(unknown_types - reported_unknown));
+        reported_unknown = unknown_types;
     }
     if (parser.bad_version != reported_bad_version) {
         send_error(OMNIKIN_ERR_BAD_VERSION, "frames: ", (uint16_t)(parser.bad_version - reported_bad_version));

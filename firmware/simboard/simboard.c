@@ -648,12 +648,20 @@ static void open_pty(void)
 
 static bool link_made;
 
+/* An existing path is replaced only when it is a board's link left behind: a symlink to a
+ * pseudo-terminal that is gone. Anything else (a file, a folder, a user's symlink, a live
+ * board's link) stays, and the board refuses to start. */
 static void make_link(void)
 {
     struct stat st;
     if (lstat(opt.link, &st) == 0) {
-        if (!S_ISLNK(st.st_mode))
-            die_usage("--link: '%s' exists and is not a symlink; not replacing it", shorten(opt.link));
+        char target[sizeof pty_name];
+        ssize_t n = S_ISLNK(st.st_mode) ? readlink(opt.link, target, sizeof target - 1) : -1;
+        if (n >= 0)
+            target[n] = 0;
+        if (n < 0 || strncmp(target, "/dev/pts/", 9) != 0 || stat(target, &st) == 0)
+            die_usage("--link: '%s' exists and is not a dead board's link to a pseudo-terminal; not replacing it",
+                      shorten(opt.link));
         if (unlink(opt.link) != 0)
             die_usage("--link: cannot replace '%s': %s", shorten(opt.link), strerror(errno));
     }

@@ -8,7 +8,7 @@ import subprocess
 
 import pytest
 
-from firmware_build import AVR_MISSING, NANO_FLASH, NANO_RAM, firmware, make
+from firmware_build import AVR_MISSING, FIRMWARE, NANO_FLASH, NANO_RAM, firmware, make
 
 pytestmark = [pytest.mark.compiler, pytest.mark.skipif(AVR_MISSING is not None, reason=str(AVR_MISSING))]
 
@@ -58,9 +58,53 @@ def test_the_variant_is_chosen_at_build_time():
         ({"WHEEL_INDEX": "255"}, "WHEEL_INDEX must be a whole number from 0 to 254"),
         ({"WHEEL_INDEX": "-1"}, "WHEEL_INDEX must be a whole number from 0 to 254"),
         ({"WHEEL_INDEX": "1; rm -rf x"}, "WHEEL_INDEX must be a whole number from 0 to 254"),
+        ({"WHEEL_INDEX": "0'; touch pwned; echo '"}, "WHEEL_INDEX must be a whole number from 0 to 254"),
+        ({"WHEEL_INDEX": "007"}, "WHEEL_INDEX must be a whole number from 0 to 254"),
+        ({"DEFINES": "-UWHEEL_INDEX"}, "DEFINES takes -DNAME or -DNAME=VALUE words"),
+        ({"DEFINES": "-DX='1'"}, "DEFINES takes -DNAME or -DNAME=VALUE words"),
+        ({"DEFINES": "-O0"}, "DEFINES takes -DNAME or -DNAME=VALUE words"),
+        ({"BUILD": ""}, "BUILD must be one word"),
+        ({"BUILD": "/tmp/a b"}, "BUILD must be one word"),
+        ({"BUILD": "."}, "BUILD must not be this folder or one that holds it"),
+        ({"BUILD": "/"}, "BUILD must not be this folder or one that holds it"),
+        ({"BUILD": "omnikin_wheel"}, "BUILD must not be inside the sources"),
+        ({"DEFINES": "-DMAX_SPEED=-5.0f"}, "MAX_SPEED must be in (0, 1000] rad/s"),
+        ({"DEFINES": "-DMAX_SPEED=NAN"}, "MAX_SPEED must be in (0, 1000] rad/s"),
+        ({"DEFINES": "-DSTEP_ACCEL=-60.0f"}, "STEP_ACCEL must be > 0"),
+        ({"DEFINES": "-DMICROSTEPS=0"}, "MICROSTEPS must be >= 1"),
+        ({"DEFINES": "-DTICKS_PER_REV=0.0f"}, "TICKS_PER_REV must be >= 1"),
+        ({"DEFINES": "-DSPEED_FILTER=2.0f"}, "SPEED_FILTER must be in (0, 1]"),
+        ({"DEFINES": "-DCONTROL_PERIOD_US=7000UL"}, "CONTROL_PERIOD_US must divide"),
     ],
 )
 def test_settings_that_cannot_be_built_are_refused_in_one_line(variables, expected):
+    """Refused before anything is built, by make, or by the compiler on the sketch's own checks
+    (settings that would build into a controller that moves wrongly: a negative MAX_SPEED turned
+    the wheel at a zero command, a negative STEP_ACCEL ran it away backwards)."""
     done = make("firmware", **variables)
     assert done.returncode != 0
     assert expected in done.stderr, done.stderr
+    assert not (FIRMWARE / "pwned").exists() and not (FIRMWARE / "omnikin_wheel" / "stepper-w0").exists()
+
+
+def test_clean_removes_what_the_build_made_and_nothing_else(tmp_path):
+    (tmp_path / "notes.txt").write_text("mine")
+    assert make("firmware", BUILD=str(tmp_path)).returncode == 0
+    assert (tmp_path / "stepper-w0" / "omnikin_wheel.hex").exists()
+    assert make("clean", BUILD=str(tmp_path)).returncode == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
+
+
+def test_two_makes_of_one_variant_into_one_folder_leave_the_hex_their_flags_name(tmp_path):
+    """Two makes with other DEFINES at once: one waits for the other (a lock on the folder), so the
+    HEX is the one a build with the DEFINES that flags.txt names makes on its own."""
+    build = tmp_path / "shared"
+    args = ["make", "--no-print-directory", "-C", str(FIRMWARE), "firmware", f"BUILD={build}"]
+    runs = [subprocess.Popen([*args, f"DEFINES=-DMAX_SPEED={v}.0f"], stdout=subprocess.DEVNULL) for v in (10, 20)]
+    assert [r.wait(600) for r in runs] == [0, 0]
+    flags = (build / "stepper-w0" / "flags.txt").read_text()
+    speed = "10" if "-DMAX_SPEED=10.0f" in flags else "20"
+    alone = tmp_path / "alone"
+    assert make("firmware", BUILD=str(alone), DEFINES=f"-DMAX_SPEED={speed}.0f").returncode == 0
+    hex_file = "stepper-w0/omnikin_wheel.hex"
+    assert (build / hex_file).read_bytes() == (alone / hex_file).read_bytes()

@@ -38,7 +38,7 @@ from firmware_load import (
     encoder_miscount,
     parser_frames,
 )
-from omnikin.runtime.protocol import load_protocol
+from omnikin.runtime.protocol import frame_bytes, load_protocol
 from simboard import SIMAVR_MISSING, SimBoard, build_simboard
 
 pytestmark = [
@@ -142,6 +142,41 @@ def test_costly_garbage_on_the_bus_neither_stalls_the_control_loop_nor_hides_fra
     assert control_lateness(probe) <= 0.25 * CONTROL_PERIOD, f"{motor}: {probe}"
     assert probe["count"] >= 99
     assert parsed == sent and stats["corrupted_rx"] == 0
+
+
+def test_frames_of_an_unknown_type_are_counted_not_answered_one_by_one():
+    """Valid frames for this wheel of a type it does not take, 8 per 20 ms beside its commands:
+    the firmware used to answer each with an ERROR_REPORT, which filled its transmit buffer and
+    crowded out the periodic frames (43 reports in 2 s instead of 100). Now they are counted and
+    reported once per heartbeat period, and every report and heartbeat goes out."""
+    protocol = load_protocol()
+    fw = firmware("stepper")
+    unknown = frame_bytes(protocol, 0x7E, 0, bytes([0, 1, 2, 3]))
+    with SimBoard(build_simboard(build_dir()), fw.elf, "--motor", "stepper") as board:
+        link = HostLink.open(board)
+        try:
+            drive(board, link, 1.0, 0.3, bus=False)
+            link.received.clear()
+            start, sent = board.stats()["time_s"], 0
+            end = time.monotonic() + 1.0
+            while time.monotonic() < end:
+                link.send(link.speed(0, 1.0), *[unknown] * 8)
+                sent += 8
+                link.poll()
+                time.sleep(0.02)
+            time.sleep(0.2)  # the last unknown frames are counted and reported (heartbeat: 0.1 s)
+            link.poll()
+            elapsed = board.stats()["time_s"] - start
+        finally:
+            link.close()
+    names = [m.name for m in link.received]
+    periods = elapsed / protocol.timing.report_period
+    assert names.count("ENCODER_REPORT") >= periods - 2
+    assert names.count("HEARTBEAT") >= elapsed / protocol.timing.heartbeat_period - 2
+    code = protocol.error_code("UNKNOWN_TYPE")
+    reports = [m for m in link.received if m.name == "ERROR_REPORT" and m["code"] == code]
+    assert len(reports) <= elapsed / protocol.timing.heartbeat_period + 1
+    assert sum(int(m["text"].split()[-1]) for m in reports) == sent
 
 
 @pytest.mark.parametrize("motor", ["stepper", "dc"])

@@ -412,6 +412,31 @@ def test_link_is_a_symlink_to_the_pty_removed_on_exit_and_never_replaces_a_file(
     assert done.returncode == 2 and "--link" in done.stderr and link.read_text() == "precious"
 
 
+def test_link_replaces_only_a_dead_boards_link(exe, build, tmp_path):
+    """A user's symlink, or a link to a pseudo-terminal that is in use, stays; a link to a
+    pseudo-terminal that is gone (a board killed before it could remove it) is replaced."""
+    elf = program(build, "step_toggle")
+    (tmp_path / "precious.txt").write_text("mine")
+    mine = tmp_path / "mine"
+    mine.symlink_to(tmp_path / "precious.txt")
+    live = tmp_path / "live"
+    master, slave = os.openpty()
+    try:
+        live.symlink_to(os.ttyname(slave))
+        for link in (mine, live):
+            target = os.readlink(link)
+            argv = [str(exe), "--link", str(link), str(elf)]
+            done = subprocess.run(argv, capture_output=True, text=True, timeout=10)
+            assert done.returncode == 2 and "not replacing it" in done.stderr and os.readlink(link) == target
+    finally:
+        os.close(master)
+        os.close(slave)
+    dead = tmp_path / "dead"
+    dead.symlink_to("/dev/pts/999999")
+    with SimBoard(exe, elf, "--link", str(dead), speed=0) as board:
+        assert os.readlink(dead) == board.path
+
+
 def test_malformed_commands_get_an_error_and_the_board_keeps_running(exe, build):
     with SimBoard(exe, program(build, "step_toggle"), speed=0, pty=False) as board:
         for line in ["", "  ", "warp 9", "peek 0x900 1", "peek 0x100 0", "peek 0x100 257", "peek 0x8ff 2",
