@@ -36,13 +36,14 @@ from firmware_load import (  # noqa: E402
     CONTROL_PERIOD,
     F_CPU,
     PPR,
+    STEPS_PER_RAD,
     TOP_SPEED,
     HostLink,
     control_lateness,
     drive,
     drive_through_garbage,
     encoder_miscount,
-    parser_frames,
+    flood,
 )
 from simboard import SIMAVR_MISSING, SimBoard, build_simboard  # noqa: E402
 
@@ -66,15 +67,7 @@ def _under_load(exe: Path, motor: str, damaged: int) -> dict:
             drive(board, link, TOP_SPEED, 1.0)
             stats = board.stats()
             board.corrupt("rx", 0)
-            before = parser_frames(board, fw)
-            link.send(*(link.speed(1, 1.0) for _ in range(FLOOD_FRAMES)))
-            parsed = 0
-            for _ in range(100):  # 13 bytes a frame at 117647 baud: 1.1 s of simulated time
-                time.sleep(0.05)
-                link.poll()
-                parsed = (parser_frames(board, fw) - before) % 2**16
-                if parsed >= FLOOD_FRAMES:
-                    break
+            parsed = flood(board, link, fw, FLOOD_FRAMES)
         finally:
             link.close()
     window = stats["window_cycles"]
@@ -96,26 +89,14 @@ def _under_load(exe: Path, motor: str, damaged: int) -> dict:
         "steps": {k: steps[k] for k in ("count", "interval_mean", "interval_min", "interval_max", "interval_std")}
         if motor == "stepper"
         else None,
-        "speed_held": stats["omega"] if motor == "dc" else F_CPU / steps["interval_mean"] / (1600 / (2 * math.pi)),
+        "speed_held": stats["omega"] if motor == "dc" else F_CPU / steps["interval_mean"] / STEPS_PER_RAD,
         "flood_parsed": parsed,
     }
 
 
 def _through_garbage(exe: Path, motor: str) -> dict:
-    fw = firmware(motor)
-    with SimBoard(exe, fw.elf, "--motor", motor) as board:
-        link = HostLink.open(board)
-        try:
-            drive(board, link, TOP_SPEED, 0.5, bus=False)
-            board.clear()
-            stats, sent, parsed = drive_through_garbage(board, link, fw, 1.0)
-        finally:
-            link.close()
-    return {
-        "control_step_late_max": control_lateness(stats["probe"]) / CONTROL_PERIOD,
-        "sent": sent,
-        "parsed": parsed,
-    }
+    stats, sent, parsed = drive_through_garbage(exe, firmware(motor), motor, 1.0)
+    return {"control_step_late_max": control_lateness(stats["probe"]) / CONTROL_PERIOD, "sent": sent, "parsed": parsed}
 
 
 def _highest_encoder_rate(exe: Path, motor: str, bus: bool) -> float:

@@ -23,6 +23,9 @@ TOP_SPEED = 30.0
 """The firmware's MAX_SPEED [rad/s] (omnikin_wheel.ino default)."""
 PPR = 600
 """Encoder pulses per wheel turn (the seed's encoders; simboard's default ``--ppr``)."""
+STEPS_PER_RAD = 200 * 8 / (2 * math.pi)
+"""Steps per wheel radian of the stepper variant (motor_stepper.h defaults: 200 steps x 8
+microsteps, the wheel on the motor shaft)."""
 
 
 @dataclass
@@ -80,19 +83,43 @@ def drive(board: SimBoard, link: HostLink, speed: float, seconds: float, wheel: 
         time.sleep(0.02)
 
 
-def drive_through_garbage(board: SimBoard, link: HostLink, fw: Firmware, seconds: float) -> tuple[dict, int, int]:
-    """Every 20 ms of wall time a SPEED_CMD of the top speed for wheel 0 and three buffers of
-    :func:`costly_garbage`, for ``seconds``; returns the board's stats, the frames sent and the
+def drive_through_garbage(exe: Path, fw: Firmware, motor: str, seconds: float) -> tuple[dict, int, int]:
+    """A board of ``motor`` driven at the top speed for 0.5 s, then, for ``seconds`` of wall time
+    with a fresh measurement window, every 20 ms a SPEED_CMD of the top speed for wheel 0 and
+    three buffers of :func:`costly_garbage`; returns the board's stats, the frames sent and the
     frames the firmware's parser accepted meanwhile."""
     garbage = costly_garbage()
-    before, sent = parser_frames(board, fw), 0
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        link.send(link.speed(0, TOP_SPEED), garbage, garbage, garbage)
-        sent += 1
-        time.sleep(0.02)
-    time.sleep(0.1)  # the last bytes are in (13 + 216 bytes take 20 ms on the line)
-    return board.stats(), sent, (parser_frames(board, fw) - before) % 2**16
+    with SimBoard(exe, fw.elf, "--motor", motor) as board:
+        link = HostLink.open(board)
+        try:
+            drive(board, link, TOP_SPEED, 0.5, bus=False)
+            board.clear()
+            before, sent = parser_frames(board, fw), 0
+            end = time.monotonic() + seconds
+            while time.monotonic() < end:
+                link.send(link.speed(0, TOP_SPEED), garbage, garbage, garbage)
+                sent += 1
+                time.sleep(0.02)
+            time.sleep(0.1)  # the last bytes are in (13 + 216 bytes take 20 ms on the line)
+            return board.stats(), sent, (parser_frames(board, fw) - before) % 2**16
+        finally:
+            link.close()
+
+
+def flood(board: SimBoard, link: HostLink, fw: Firmware, n: int) -> int:
+    """Send ``n`` SPEED_CMD frames for another wheel back to back (the line's full rate: 13 bytes a
+    frame at the chip's 117647 baud, UBRR 16 with U2X, take 1.1 ms each) and return how many the
+    firmware's parser accepted, waiting up to 5 s of wall time for them."""
+    before = parser_frames(board, fw)
+    link.send(*(link.speed(1, 1.0) for _ in range(n)))  # another wheel's: parsed, then ignored
+    parsed = 0
+    for _ in range(100):
+        time.sleep(0.05)
+        link.poll()
+        parsed = (parser_frames(board, fw) - before) % 2**16
+        if parsed >= n:
+            break
+    return parsed
 
 
 def parser_frames(board: SimBoard, fw: Firmware) -> int:

@@ -135,13 +135,17 @@ static inline void omnikin_parser_drop(omnikin_parser_t *p, uint8_t k) {
     p->n = (uint8_t)(p->n - k);
 }
 
-/* Drop the bytes before the next first sync byte at or after `from` (all, if there is none), in
- * one move: a rescan costs one pass over the buffer, not one per dropped byte. */
-static inline void omnikin_parser_skip(omnikin_parser_t *p, uint8_t from) {
-    const uint8_t *next = (const uint8_t *)memchr(p->buf + from, OMNIKIN_SYNC_0, (size_t)(p->n - from));
-    uint8_t k = next ? (uint8_t)(next - p->buf) : p->n;
+/* Drop k bytes that are not part of an accepted frame, and count them. */
+static inline void omnikin_parser_discard(omnikin_parser_t *p, uint8_t k) {
     omnikin_parser_drop(p, k);
     p->skipped = (uint16_t)(p->skipped + k);
+}
+
+/* Discard the bytes before the next first sync byte at or after `from` (all, if there is none),
+ * in one move: a rescan costs one pass over the buffer, not one per dropped byte. */
+static inline void omnikin_parser_skip(omnikin_parser_t *p, uint8_t from) {
+    const uint8_t *next = (const uint8_t *)memchr(p->buf + from, OMNIKIN_SYNC_0, (size_t)(p->n - from));
+    omnikin_parser_discard(p, next ? (uint8_t)(next - p->buf) : p->n);
 }
 
 static inline uint8_t omnikin_parser_scan(omnikin_parser_t *p) {
@@ -159,7 +163,7 @@ static inline uint8_t omnikin_parser_scan(omnikin_parser_t *p) {
             p->crc_errors++; omnikin_parser_skip(p, 1); continue;
         }
         if (p->buf[2] != OMNIKIN_PROTOCOL_VERSION) {
-            p->bad_version++; omnikin_parser_drop(p, size); p->skipped = (uint16_t)(p->skipped + size); continue;
+            p->bad_version++; omnikin_parser_discard(p, size); continue;
         }
         p->frames_ok++;
         p->frame_size = size;

@@ -263,6 +263,13 @@ static void control(uint32_t now_us) {
 #endif
 static uint16_t report_ticks = 0, heartbeat_ticks = 0;
 
+/* ERROR_REPORT `code` with the number of events counted since the last report, if any. */
+static void report_new(uint8_t code, const char *text, uint16_t count, uint16_t *reported) {
+    if (count == *reported) return;
+    send_error(code, text, (uint16_t)(count - *reported));
+    *reported = count;
+}
+
 static void send_periodic() {
     if (++report_ticks >= REPORT_TICKS) {
         report_ticks = 0;
@@ -271,23 +278,10 @@ static void send_periodic() {
     if (++heartbeat_ticks < HEARTBEAT_TICKS) return;
     heartbeat_ticks = 0;
     send_heartbeat();
-    if (parser.crc_errors != reported_crc_errors) {
-        send_error(OMNIKIN_ERR_CRC, "frames: ", (uint16_t)(parser.crc_errors - reported_crc_errors));
-        reported_crc_errors = parser.crc_errors;
-    }
-    if (unknown_types != reported_unknown) {
-        send_error(OMNIKIN_ERR_UNKNOWN_TYPE, "frames: ", (uint16_t)(unknown_types - reported_unknown));
-        reported_unknown = unknown_types;
-    }
-    if (parser.bad_version != reported_bad_version) {
-        send_error(OMNIKIN_ERR_BAD_VERSION, "frames: ", (uint16_t)(parser.bad_version - reported_bad_version));
-        reported_bad_version = parser.bad_version;
-    }
-    if (encoder_glitches != reported_glitches) {
-        uint16_t g = encoder_glitches;
-        send_error(OMNIKIN_ERR_ENCODER_FAULT, "missed edges: ", (uint16_t)(g - reported_glitches));
-        reported_glitches = g;
-    }
+    report_new(OMNIKIN_ERR_CRC, "frames: ", parser.crc_errors, &reported_crc_errors);
+    report_new(OMNIKIN_ERR_UNKNOWN_TYPE, "frames: ", unknown_types, &reported_unknown);
+    report_new(OMNIKIN_ERR_BAD_VERSION, "frames: ", parser.bad_version, &reported_bad_version);
+    report_new(OMNIKIN_ERR_ENCODER_FAULT, "missed edges: ", encoder_glitches, &reported_glitches);   /* read once */
     if (clamp_pending) {
         clamp_pending = 0;
         send_error(OMNIKIN_ERR_SPEED_CLAMPED, "", 0);

@@ -25,18 +25,20 @@ import time
 import numpy as np
 import pytest
 
-from firmware_build import AVR_MISSING, NANO_RAM, build_dir, firmware, symbol
+from firmware_build import AVR_MISSING, NANO_RAM, build_dir, firmware
 from firmware_load import (
     CONTROL_PERIOD,
     F_CPU,
     PPR,
+    STEPS_PER_RAD,
     TOP_SPEED,
     HostLink,
     control_lateness,
     drive,
     drive_through_garbage,
+    encoder_counts,
     encoder_miscount,
-    parser_frames,
+    flood,
 )
 from omnikin.runtime.protocol import frame_bytes, load_protocol
 from simboard import SIMAVR_MISSING, SimBoard, build_simboard
@@ -48,7 +50,6 @@ pytestmark = [
     pytest.mark.skipif(SIMAVR_MISSING is not None, reason=str(SIMAVR_MISSING)),
 ]
 
-STEPS_PER_RAD = 200 * 8 / (2 * math.pi)  # motor_stepper.h defaults
 STEP_ACCEL = 60.0  # [rad/s^2] motor_stepper.h default
 
 
@@ -108,18 +109,7 @@ def test_the_control_loop_keeps_its_period_under_load(at_top_speed):
 def test_a_bus_at_the_full_line_rate_is_parsed_frame_by_frame(at_top_speed):
     _, fw, board, link, _ = at_top_speed
     board.corrupt("rx", 0)
-    before = parser_frames(board, fw)
-    n = 1000
-    link.send(*(link.speed(1, 1.0) for _ in range(n)))  # another wheel's: parsed, then ignored
-    # 13 bytes a frame at the chip's 117647 baud (UBRR 16, U2X) take 1.1 s of simulated time
-    done = 0
-    for _ in range(100):
-        time.sleep(0.05)
-        link.poll()
-        done = (parser_frames(board, fw) - before) % 2**16
-        if done >= n:
-            break
-    assert done == n
+    assert flood(board, link, fw, 1000) == 1000
 
 
 @pytest.mark.parametrize("motor", ["stepper", "dc"])
@@ -128,16 +118,8 @@ def test_costly_garbage_on_the_bus_neither_stalls_the_control_loop_nor_hides_fra
     for one byte). The parser used to drop a rejected candidate byte by byte, a move of the whole
     buffer each, and computed CRCs bit by bit: such bytes held the control step back by a whole
     period (98 % late, 74 control steps in 1 s). Now the delay is one byte's rescan, up to about
-    1.7 ms (11 candidates: about 420 bytes through the CRC and 11 moves of the buffer)."""
-    fw = firmware(motor)
-    with SimBoard(build_simboard(build_dir()), fw.elf, "--motor", motor) as board:
-        link = HostLink.open(board)
-        try:
-            drive(board, link, TOP_SPEED, 0.5, bus=False)
-            board.clear()
-            stats, sent, parsed = drive_through_garbage(board, link, fw, 1.0)
-        finally:
-            link.close()
+    1.8 ms (11 candidates: about 420 bytes through the CRC and 11 moves of the buffer)."""
+    stats, sent, parsed = drive_through_garbage(build_simboard(build_dir()), firmware(motor), motor, 1.0)
     probe = stats["probe"]
     assert control_lateness(probe) <= 0.25 * CONTROL_PERIOD, f"{motor}: {probe}"
     assert probe["count"] >= 99
@@ -186,20 +168,17 @@ def test_a_wheel_shaking_on_an_encoder_edge_keeps_its_count(motor):
     there. A shaft shaking on that edge, or on A's other edge, moves the count by nothing; the old
     rising-edge decoder counted each shake as a pulse forward."""
     fw = firmware(motor)
-    addr, _ = symbol(fw.elf, "encoder_count")
     with SimBoard(build_simboard(build_dir()), fw.elf, "--motor", "none", speed=0.0, pty=False) as board:
         while board.stats()["time_s"] < 0.05:  # setup() has attached the interrupt
             time.sleep(0.01)
-
-        def count() -> int:
-            time.sleep(0.002)  # the interrupt has run (simulated time moves on)
-            return int.from_bytes(board.peek(addr, 4), "little", signed=True)
 
         q = 0
         for moves in ([+1, -1] * 50, [+1, +1], [+1, -1] * 50, [+1] * 8, [-1] * 13, [-1, +1] * 50):
             for d in moves:
                 q = board.command(f"nudge {d:+d}")["q"]
-            assert count() == (q + 3) // 4, f"q {q}"
+            time.sleep(0.002)  # the interrupt has run (simulated time moves on)
+            count, due = encoder_counts(board, fw)
+            assert count == due == (q + 3) // 4, f"q {q}"
 
 
 @pytest.mark.parametrize("motor", ["stepper", "dc"])
