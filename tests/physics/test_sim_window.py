@@ -1,5 +1,10 @@
 """``omnikin sim``: the robot in MuJoCo's viewer window on a virtual X display (Xvfb), driven by
-real key events (xdotool), its end state read from ``--report``, its window from a screenshot."""
+real key events (xdotool), its end state read from ``--report``, its window from a screenshot.
+
+The tests hold on a busy machine: they assert on simulated and recorded time (each key event's
+simulated time and wall arrival in the report), never on the pace of the machine. A screenshot
+that must show a state is taken after the simulator echoed (``--echo``) a later key event and
+the window stopped changing, not after a fixed sleep."""
 
 from __future__ import annotations
 
@@ -7,10 +12,12 @@ import contextlib
 import json
 import math
 import os
+import queue
 import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 
@@ -21,6 +28,8 @@ from conftest import omnikin_env, run_cli
 
 SPEED = 0.2  # m/s, --speed
 TURN = 0.5  # rad/s, --turn
+PERIOD = 0.02  # s, the simulator's control period: a key acts at the first control step after it
+WAIT = 240.0  # s, longest wait for the simulator on a loaded machine (it catches up at its pace)
 
 
 def _missing() -> str | None:
@@ -64,7 +73,7 @@ def _xdotool(display: str, *args: str) -> str:
 
 def _window(display: str, sim: subprocess.Popen) -> str:
     """The viewer's window id, once it is mapped (the model is built first)."""
-    deadline = time.monotonic() + 30.0
+    deadline = time.monotonic() + WAIT
     while time.monotonic() < deadline:
         assert sim.poll() is None, f"omnikin sim ended early: {sim.communicate()[1]}"
         found = _xdotool(display, "search", "--onlyvisible", "--name", "MuJoCo").split()
@@ -72,7 +81,7 @@ def _window(display: str, sim: subprocess.Popen) -> str:
             time.sleep(0.5)  # the first frames drawn
             return found[0]
         time.sleep(0.1)
-    raise AssertionError("no MuJoCo window appeared within 30 s")
+    raise AssertionError(f"no MuJoCo window appeared within {WAIT:g} s")
 
 
 @contextlib.contextmanager
@@ -91,6 +100,70 @@ def _running(display: str, *args: str, robot: str = "tomasi-omni3") -> Iterator[
         if sim.poll() is None:
             sim.kill()
             sim.wait()
+
+
+class Echo:
+    """The actions ``omnikin sim --echo`` prints on stdout as they act, read in a thread."""
+
+    def __init__(self, sim: subprocess.Popen):
+        self.lines: queue.SimpleQueue[str] = queue.SimpleQueue()
+        self.seen: list[str] = []
+        self.stdout: list[str] = []
+        threading.Thread(target=self._read, args=(sim.stdout,), daemon=True).start()
+
+    def _read(self, stream) -> None:
+        for line in stream:
+            self.stdout.append(line)
+            self.lines.put(line.split()[2] if len(line.split()) > 2 else "")
+
+    def wait(self, count: int) -> list[str]:
+        """The actions once ``count`` of them have acted (the simulator's pace, not the clock's)."""
+        deadline = time.monotonic() + WAIT
+        while len(self.seen) < count:
+            try:
+                self.seen.append(self.lines.get(timeout=max(0.0, deadline - time.monotonic())))
+            except queue.Empty:
+                raise AssertionError(f"the simulator did not act on the keys: {self.seen}") from None
+        return self.seen
+
+
+def _settled_shot(display: str, win: str) -> np.ndarray:
+    """A screenshot of the window once its scene is at rest: two screenshots 0.4 s apart whose
+    readout (top left: the simulated time) differs, so that they are two frames, and whose scene
+    (between the readout and the keys' help at the bottom) is alike."""
+    deadline = time.monotonic() + WAIT
+    last = _window_shot(display, win)
+    while time.monotonic() < deadline:
+        time.sleep(0.4)
+        shot = _window_shot(display, win)
+        if shot.shape == last.shape:
+            height = shot.shape[0]
+            readout, scene = slice(0, int(0.08 * height)), slice(int(0.4 * height), int(0.85 * height))
+            if np.any(shot[readout] != last[readout]) and np.abs(shot[scene] - last[scene]).max() <= 8:
+                return shot
+        last = shot
+    raise AssertionError("the window kept changing, or stopped drawing")
+
+
+PANEL = (slice(0.4, 0.95), slice(5, 240))
+"""Where the viewer's left panel (250 px wide, dark) shows: rows as fractions of the height, columns [px]."""
+
+
+def _panel(rgb: np.ndarray) -> np.ndarray:
+    rows, cols = PANEL
+    height = rgb.shape[0]
+    return rgb[int(rows.start * height) : int(rows.stop * height), cols]
+
+
+def _panel_shot(display: str, win: str) -> np.ndarray:
+    """A screenshot once the viewer's left panel is drawn (or the last one after a while: the
+    assertion says what it shows); the viewer acts on its keys in its own thread, at once."""
+    deadline = time.monotonic() + 30.0
+    shot = _window_shot(display, win)
+    while time.monotonic() < deadline and np.mean(_panel(shot).mean(axis=2) < 60) <= 0.5:
+        time.sleep(0.3)
+        shot = _window_shot(display, win)
+    return shot
 
 
 def _blue(rgb: np.ndarray) -> np.ndarray:
@@ -122,63 +195,134 @@ def _blue_centre(rgb: np.ndarray) -> np.ndarray:
     return np.array([cols.mean(), rows.mean()])
 
 
+def _orange(rgb: np.ndarray) -> np.ndarray:
+    """The pixels of the heading arrow's orange (red high, green half, blue low)."""
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    return (r > 150) & (g > 0.25 * r) & (g < 0.8 * r) & (b < 0.45 * r)
+
+
 def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_path):
-    from PIL import ImageGrab
+    """W held, Q held, camera top, W held with space pressed: each key acts at the simulated time
+    of its arrival, so the simulated time between a press and its release is their wall-clock
+    distance on arrival to one control period, and the robot moves ``speed`` times that, whatever
+    the machine's load (the report's recorded times; the simulation may lag the clock)."""
+    from PIL import Image
 
     report = tmp_path / "run.json"
     with _running(
-        display, "--duration", "10", "--speed", str(SPEED), "--turn", str(TURN), "--report", str(report)
+        display, "--duration", "16", "--speed", str(SPEED), "--turn", str(TURN), "--report", str(report), "--echo"
     ) as sim:
+        echo = Echo(sim)
         win = _window(display, sim)
         _xdotool(display, "windowfocus", win)
+        # the next press is sent once the release acted (echoed): the two reached the simulator at
+        # least the sleep apart, however late a busy machine's window hands it its key events
+        # the next key is sent once the last one acted (echoed): the two reached the simulator
+        # at least the sleep apart, however late a busy machine's window hands it its key events
         _xdotool(display, "keydown", "w")  # forward while held
-        time.sleep(1.5)
+        echo.wait(1)
+        time.sleep(1.0)
         _xdotool(display, "keyup", "w")
+        echo.wait(2)
         time.sleep(0.8)  # stops within the acceleration limit
         _xdotool(display, "keydown", "q")  # counter-clockwise while held
-        time.sleep(1.5)
+        echo.wait(3)
+        time.sleep(1.0)
         _xdotool(display, "keyup", "q")
+        echo.wait(4)
         time.sleep(0.8)
         _xdotool(display, "key", "2")  # camera looking down on the robot
-        time.sleep(0.5)
-        geometry = dict(line.split("=") for line in _xdotool(display, "getwindowgeometry", "--shell", win).split())
-        left, top, width, height = (int(geometry[k]) for k in ("X", "Y", "WIDTH", "HEIGHT"))
-        shot = ImageGrab.grab(xdisplay=display)
+        echo.wait(5)
+        top = _settled_shot(display, win)
+        Image.fromarray(top.astype(np.uint8)).save(tmp_path / "top.png")  # to look at when it fails
         _xdotool(display, "keydown", "w")
+        echo.wait(6)
         time.sleep(1.0)
         _xdotool(display, "key", "space")  # stops although W is still held
         time.sleep(1.2)
         _xdotool(display, "keyup", "w")
-        _, err = sim.communicate(timeout=30)
+        _, err = sim.communicate(timeout=WAIT)
     assert sim.returncode == 0, err
     run = json.loads(report.read_text())
     assert run["end"] == "duration" and run["releases"]
+    assert run["sim_time"] == pytest.approx(16.0, abs=PERIOD)
     events = run["events"]
     names = [e["key"] for e in events]
     assert names == ["forward", "release", "turn_left", "release", "camera_top", "forward", "stop"], names
+    # keys act in simulated time at their wall-clock arrival: while a key is held no time is
+    # skipped, so a press and its release (or space) are as far apart as on arrival, to one period
+    for press, release in ((0, 1), (2, 3), (5, 6)):
+        gap = events[release]["t"] - events[press]["t"]
+        assert gap == pytest.approx(events[release]["wall"] - events[press]["wall"], abs=PERIOD + 1e-6)
 
     # W: +x of the robot (heading 0 at the start) at --speed for the time held: the ramp up loses
     # what the ramp down after the release gains (the same acceleration limit both ways)
     held = events[1]["t"] - events[0]["t"]
     after_forward = events[2]["pose"]
-    assert held > 0.5  # simulated time: a loaded machine may run the simulation slower than the clock
+    assert held > 0.9  # held 1 s after its press acted
     assert after_forward[0] == pytest.approx(SPEED * held, rel=0.05, abs=0.005)
     assert abs(after_forward[1]) < 0.01 * after_forward[0] and abs(after_forward[2]) < 0.01
 
     # Q: counter-clockwise on the spot at --turn for the time held
+    assert events[2]["t"] - events[1]["t"] > 0.75  # at least the sleep (the robot stopped before Q)
     held = events[3]["t"] - events[2]["t"]
-    after_turn = events[5]["pose"]
+    after_turn = events[4]["pose"]
+    assert held > 0.9
     assert after_turn[2] == pytest.approx(TURN * held, rel=0.05, abs=0.01)
     assert math.hypot(after_turn[0] - after_forward[0], after_turn[1] - after_forward[1]) < 0.005
+    assert events[5]["pose"] == pytest.approx(after_turn, abs=1e-3)  # at rest until W
 
     # space: stopped, with W still held, within the stopping distance v^2 / (2 a) (a = 0.5 m/s^2)
     at_space, end = events[6]["pose"], run["pose"]
     assert math.hypot(end[0] - at_space[0], end[1] - at_space[1]) < SPEED**2 / (2 * 0.5) + 0.005
     assert math.hypot(*run["twist"][:2]) < 0.005
 
-    # the window shows the robot: its blue in the middle of the window, seen from above
-    middle = shot.crop((left + width // 3, top + height // 3, left + 2 * width // 3, top + 2 * height // 3))
-    assert _blue_fraction(middle) > 0.1
+    # the window shows the robot: its blue in the middle of the window, seen from above ...
+    height, width = top.shape[:2]
+    middle = top[height // 3 : 2 * height // 3, width // 3 : 2 * width // 3]
+    assert np.mean(_blue(middle)) > 0.1
+    # ... and the orange heading arrow from its centre along the heading (top camera: world +x to
+    # the right, +y up in the window)
+    rows, cols = np.nonzero(_orange(top))
+    assert len(rows) > 50, "no heading arrow in the window"
+    chassis = _blue_centre(top)
+    direction = math.atan2(-(rows.mean() - chassis[1]), cols.mean() - chassis[0])
+    print(f"heading {math.degrees(after_turn[2]):.1f} deg, arrow drawn at {math.degrees(direction):.1f} deg")
+    assert math.degrees(abs(direction - after_turn[2])) < 5.0
+
+
+def test_keys_a_layout_cannot_obey_are_marked_and_say_why_once(display, tmp_path):
+    """diff-drive: two fixed wheels on one axle cannot slide sideways (Campion et al.'s type (2,0)),
+    so A (vy) is dropped: the robot stays where it is, stderr says why once although A was
+    pressed twice, and W still drives (at the default --speed 0.2 m/s)."""
+    report = tmp_path / "run.json"
+    with _running(display, "--duration", "10", "--report", str(report), "--echo", robot="diff-drive") as sim:
+        echo = Echo(sim)
+        win = _window(display, sim)
+        _xdotool(display, "windowfocus", win)
+        for presses in (2, 4):
+            _xdotool(display, "keydown", "a")
+            echo.wait(presses - 1)
+            time.sleep(0.6)
+            _xdotool(display, "keyup", "a")
+            echo.wait(presses)
+        _xdotool(display, "keydown", "w")
+        echo.wait(5)
+        time.sleep(1.0)
+        _xdotool(display, "keyup", "w")
+        echo.wait(6)
+        _, err = sim.communicate(timeout=WAIT)
+    assert sim.returncode == 0, err
+    run = json.loads(report.read_text())
+    names = [e["key"] for e in run["events"]]
+    assert names == ["left", "release", "left", "release", "forward", "release"], names
+    notes = [line for line in err.splitlines() if "(left)" in line]
+    assert notes == ["omnikin: note: sim: A (left) on diff-drive: its fixed wheels forbid vy"], err
+    assert run["events"][4]["pose"] == pytest.approx([0.0, 0.0, 0.0], abs=1e-3)  # A moved nothing
+    held = run["events"][5]["t"] - run["events"][4]["t"]  # W: forward for the time held
+    assert held > 0.5 and run["pose"][0] == pytest.approx(0.2 * held, rel=0.05, abs=0.005)
+    assert abs(run["pose"][1]) < 1e-3
+    assert run["commands"]["projected"] == 2 and set(run["not_obeyed"]) == {"left", "right"}
 
 
 def test_a_termination_signal_closes_the_window_and_exits_like_every_command(display):
@@ -233,19 +377,32 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
     robot = load_robot("synchro")
     report = tmp_path / "run.json"
     with _running(
-        display, "--duration", "14", "--camera", "top", "--speed", str(SPEED), "--report", str(report), robot="synchro"
+        display,
+        "--duration",
+        "18",
+        "--camera",
+        "top",
+        "--speed",
+        str(SPEED),
+        "--report",
+        str(report),
+        "--echo",
+        robot="synchro",
     ) as sim:
+        echo = Echo(sim)
         win = _window(display, sim)
         _xdotool(display, "windowfocus", win)
-        for key in ("bracketright", "bracketright", "bracketleft"):
+        for count, key in enumerate(("bracketright", "bracketright", "bracketleft"), start=1):
             _xdotool(display, "key", key)
+            echo.wait(count)  # acted: the next key arrives at least 0.8 s later, the wheels steered
             time.sleep(0.8)
-        at_start = _window_shot(display, win)
+        at_start = _settled_shot(display, win)
         _xdotool(display, "keydown", "w")
+        echo.wait(4)
         time.sleep(1.5)
         _xdotool(display, "keyup", "w")
-        time.sleep(1.0)
-        top_after = _window_shot(display, win)
+        echo.wait(5)
+        top_after = _settled_shot(display, win)  # the robot at rest where it stopped
         _xdotool(display, "key", "3")
         time.sleep(0.5)
         _xdotool(display, "keydown", "w")
@@ -253,12 +410,11 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
         _xdotool(display, "key", "bracketright")  # while driving: ignored
         time.sleep(0.8)
         _xdotool(display, "keyup", "w")
-        time.sleep(1.0)
-        follow_after = _window_shot(display, win)
+        echo.wait(9)
+        follow_after = _settled_shot(display, win)
         _xdotool(display, "key", "Tab")  # not the simulator's: goes on to the viewer (its left panel)
-        time.sleep(0.7)
-        viewer_panel = _window_shot(display, win)
-        _, err = sim.communicate(timeout=30)
+        viewer_panel = _panel_shot(display, win)
+        _, err = sim.communicate(timeout=WAIT)
         shots = {"at_start": at_start, "top_after": top_after, "follow_after": follow_after, "panel": viewer_panel}
         for name, rgb in shots.items():
             Image.fromarray(rgb.astype(np.uint8)).save(tmp_path / f"{name}.png")  # to look at when it fails
@@ -285,9 +441,11 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
     assert math.hypot(*events[3]["pose"][:2]) < 1e-3 and abs(events[3]["pose"][2]) < 1e-3
 
     # W: every wheel steered back to 0 deg, the robot drove along +x at --speed for the time held
+    # (in simulated time: as far apart as the key's press and release arrived, to one period)
     held = events[4]["t"] - events[3]["t"]
     after = events[5]["pose"]
-    assert held > 0.5
+    assert held == pytest.approx(events[4]["wall"] - events[3]["wall"], abs=PERIOD + 1e-6)
+    assert held > 1.4
     assert events[4]["steer"] == pytest.approx([0.0] * 3, abs=math.radians(0.5))
     assert after[0] == pytest.approx(SPEED * held, rel=0.05, abs=0.005)
     assert abs(after[1]) < 0.01 * after[0] and abs(after[2]) < 0.01
@@ -320,6 +478,16 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
     # the simulator took the keys over (releases seen) and still hands the viewer the keys it does
     # not use: Tab opened the viewer's left panel (dark) where the grey floor was
     assert run["releases"]
-    strip = (slice(int(0.4 * height), int(0.95 * height)), slice(5, 240))  # the panel is 250 px wide
-    assert np.mean(follow_after[strip].mean(axis=2) < 60) < 0.05
-    assert np.mean(viewer_panel[strip].mean(axis=2) < 60) > 0.5
+    assert np.mean(_panel(follow_after).mean(axis=2) < 60) < 0.05
+    assert np.mean(_panel(viewer_panel).mean(axis=2) < 60) > 0.5
+
+
+def test_the_on_screen_help_marks_the_keys_a_layout_cannot_obey_and_says_why():
+    pytest.importorskip("mujoco")
+    from omnikin import load_robot
+    from omnikin.physics.interactive import InteractiveSim
+
+    lines = InteractiveSim(load_robot("diff-drive")).key_help()
+    assert lines[0].startswith("W/S, A/D*, Q/E move")
+    assert lines[1:] == ["* A/D on diff-drive: its fixed wheels forbid vy"]
+    assert InteractiveSim(load_robot("tomasi-omni3")).key_help()[0].startswith("W/S, A/D, Q/E move")

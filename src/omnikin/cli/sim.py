@@ -17,19 +17,30 @@ from .common import (
 
 EPILOG = """keys (the window must have the keyboard focus):
   W / S      drive forward / back at --speed (sets vx; the other components stay)
-  A / D      drive left / right at --speed (sets vy; dropped on robots with fixed wheels)
-  Q / E      turn counter-clockwise / clockwise at --turn (sets omega)
+  A / D *    drive left / right at --speed (sets vy)
+  Q / E *    turn counter-clockwise / clockwise at --turn (sets omega)
   space      stop (the target twist becomes zero)
   [ / ]      steer every steerable wheel 15 deg clockwise / counter-clockwise (robot at rest;
              the next move steers as the kinematics needs)
   1 / 2 / 3  camera: free (mouse: left drag rotates, right drag moves, wheel zooms) / top (down
              on where the robot stood) / follow (tracks the chassis from behind)
 
+* not obeyed by every layout (the window marks them and says why when one is pressed):
+  A / D      not on robots with fixed wheels, which cannot move sideways (presets: ackermann,
+             diff-drive): the command filter drops vy
+  Q / E      not alone on robots that cannot turn on the spot (presets: ackermann,
+             villasenor-omni3): refused; held with W or S they drive an arc
+
 A move key drives while it is held: letting it go sets its component back to zero, space
 stops everything. (Should the window report presses only, a press sets the target until
 another key changes it, or with --hold S for S seconds, when the command timeout stops the
 robot.) Every target passes the runtime's command filter: speed limits --max-speed and
---max-turn, acceleration limits. The window shows pose, twist, wheel speeds and steering.
+--max-turn, acceleration limits. The window shows the simulated time and the real-time factor,
+pose, twist, wheel speeds and steering, and an orange arrow along the robot's heading.
+
+Time: a key acts at the simulated time of its arrival; on a machine that cannot keep up the
+simulation falls behind the clock (the window says so) and catches up, so a key held for 2 s
+drives 2 s of simulated motion whatever the load. --duration counts simulated seconds.
 
 examples:
   omnikin sim tomasi-omni3
@@ -47,11 +58,21 @@ def add_parsers(sub, robot_help: str) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sp.add_argument("robot", metavar="ROBOT", help=robot_help)
-    sp.add_argument("--duration", type=number, metavar="S", help="close the window after S seconds (default: never)")
+    sp.add_argument(
+        "--duration",
+        type=number,
+        metavar="S",
+        help="close the window after S seconds of simulated time (default: never)",
+    )
     sp.add_argument("--camera", choices=("free", "top", "follow"), default="free", help="first camera (default free)")
     add_teleop_options(sp)
     sp.add_argument(
         "--hold", type=number, default=0.0, metavar="S", help="a press drives for S seconds (default 0: until changed)"
+    )
+    sp.add_argument(
+        "--echo",
+        action="store_true",
+        help="print each key's action on stdout as it acts: simulated time, action, true pose",
     )
     add_output(
         sp,
@@ -82,7 +103,15 @@ def cmd_sim(args) -> int:
     slow = real_time_shortfall(robot, "the simulation will run slower than the clock")
     if slow:
         print(f"omnikin: note: sim: {slow}", file=sys.stderr)
-    sim = InteractiveSim(robot, speed=args.speed, turn=args.turn, hold=args.hold, camera=args.camera, limits=limits)
+    sim = InteractiveSim(
+        robot,
+        speed=args.speed,
+        turn=args.turn,
+        hold=args.hold,
+        camera=args.camera,
+        limits=limits,
+        echo=sys.stdout if args.echo else None,
+    )
     reason = sim.run(args.duration)
     if args.report:
         write_text(args.report, to_json(sim.report(reason)) + "\n")

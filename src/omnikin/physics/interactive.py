@@ -25,20 +25,44 @@ by the filter.
 steerable wheel by ``-/+ STEER_STEP`` while the robot stands (target zero); the next motion
 steers as the kinematics needs.
 
+**Keys a layout cannot obey** (:func:`~omnikin.runtime.teleop.moves_not_obeyed`: A/D on a
+differential drive or a car, Q/E alone on a car) are marked in the on-screen help; pressing one
+shows a notice on screen and prints it once on stderr (``omnikin: note: sim: ...``), with the
+command filter's reason when it refused the command.
+
 **Camera** (:meth:`InteractiveSim._set_camera`), each from :data:`CAMERA_DISTANCE` times the
 robot's extent (the largest ``max(|x|, |y|) + r`` of its wheels) away: 1 free (mouse: left drag
 rotates, right drag moves, wheel zooms), 2 top (straight down on the pose where it was chosen,
 world +x to the right and +y up in the window; it stays there while the robot drives off),
 3 follow (MuJoCo's tracking camera: it keeps the chassis in the middle of the window, seen from
-behind at 30 deg elevation along the heading it had when chosen). The window shows pose, twist,
-target, wheel speeds and steering angles.
+behind at 30 deg elevation along the heading it had when chosen). An orange arrow on top of the
+chassis points along the robot's heading (body +x) in every camera (:meth:`InteractiveSim.
+_draw_heading`, a geom of the viewer's ``user_scn``, drawn only: the physics never sees it). The
+window shows time and real-time factor, pose, twist, target, wheel speeds and steering angles.
 
-Clock: the simulation runs in real time when the machine keeps up (else slower); control steps
-every :data:`CONTROL_PERIOD` simulated seconds. The run ends when the window is closed, after
-``duration`` seconds of wall-clock time, or on :class:`KeyboardInterrupt` (or any exception)
-raised in the caller's thread; in every case the viewer is closed and its render thread joined
-before returning, since a process that exits while the render thread still draws dies in an X
-error (``GLXBadDrawable``).
+**Clock: keys act at their simulated time.** Simulated time ``s`` follows the wall clock ``w``
+as ``s = w - w0``; every key event is stamped with the wall time it reached the program and
+applied at the first control step (every :data:`CONTROL_PERIOD` simulated seconds) at or after
+``w_key - w0``. The simulation runs in control steps until it reaches the clock, drawing a frame
+at least every :data:`CATCH_UP` simulated seconds. A machine that keeps up runs in real time; one
+that cannot falls behind the clock and catches up later, and the keys wait their turn: a key
+held for 2 s of wall time drives 2 s of *simulated* time, whatever the load (to one control
+period). Time is skipped (``w0`` moved forward) only while nothing can change by it: no move
+key held whose press has acted, the command filter's output zero and the robot at rest
+(:meth:`InteractiveSim._at_rest`); and only when the simulation is more than :data:`MAX_LAG`
+behind. The clock is then set back to the simulated time or, when key events wait, only so
+far that the first of them acts now; waiting events keep their distances. While the robot is driven the lag can grow
+without bound on a machine slower than real time; the window then shows how far behind it is.
+The real-time factor on screen is the simulated time advanced over the wall time passed in
+the last :data:`RTF_WINDOW` seconds; below :data:`SLOW_RTF` the window says the machine cannot
+keep up, and stderr says it once.
+
+The run ends when the window is closed, after ``duration`` seconds of *simulated* time (the
+clock on screen: a slow machine keeps the window open longer in wall time, and wall time
+skipped while nothing moved does not count), or on :class:`KeyboardInterrupt` (or any
+exception) raised in the caller's thread; in every case the viewer is closed and its render
+thread joined before returning, since a process that exits while the render thread still draws
+dies in an X error (``GLXBadDrawable``).
 """
 
 from __future__ import annotations
@@ -46,8 +70,11 @@ from __future__ import annotations
 import math
 import os
 import queue
+import signal
+import sys
 import threading
 import time
+from collections import deque
 
 import numpy as np
 
@@ -55,7 +82,7 @@ from ..errors import InputError
 from ..limits import MotionLimits
 from ..model import Robot
 from ..runtime.base import BaseRuntime, StepResult
-from ..runtime.teleop import Teleop
+from ..runtime.teleop import MOVES, Teleop, moves_not_obeyed
 from .backend import PhysicsBackend
 
 CONTROL_PERIOD = 0.02
@@ -63,11 +90,27 @@ CONTROL_PERIOD = 0.02
 STEER_STEP = math.radians(15.0)
 """Steering turned by one press of ``[`` or ``]`` [rad]."""
 CATCH_UP = 0.25
-"""Most simulated time [s] run between two frames when the simulation falls behind the clock:
-the window stays responsive (a frame at least every 0.25 s of simulated time; software OpenGL
-under load draws about 5-10 frames per second), and a machine too slow for real time runs it slower."""
-SHUTDOWN_WAIT = 5.0
-"""Longest wait [s] for the viewer's render thread to end after the window is closed."""
+"""Most simulated time [s] run between two frames when the simulation is behind the clock: the
+window stays responsive (a frame at least every 0.25 s of simulated time; software OpenGL under
+load draws about 5-10 frames per second)."""
+MAX_LAG = 0.5
+"""Lag [s] of the simulation behind the clock beyond which time is skipped while nothing is
+driven (module docstring, Clock)."""
+REST_SPEED = 1e-3
+"""Chassis speed [m/s, rad/s] below which the robot counts as standing still (time may be skipped)."""
+RTF_WINDOW = 1.0
+"""Wall time [s] over which the real-time factor on screen is measured."""
+SLOW_RTF = 0.9
+"""Real-time factor below which the window says the machine cannot keep up."""
+NOTICE_TIME = 4.0
+"""Wall time [s] a notice stays on screen."""
+HEADING_RGBA = (1.0, 0.5, 0.0, 1.0)
+"""Colour of the heading arrow (orange: apart from the blue chassis, grey floor and dark wheels)."""
+SHUTDOWN_WAIT = 60.0
+"""Longest wait [s] for the viewer's render thread to end after the window is closed (it ends
+within a frame; software OpenGL on a loaded machine may take seconds for one)."""
+STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+"""Signals held back while the viewer starts (:meth:`InteractiveSim.run`)."""
 CAMERAS = ("free", "top", "follow")
 CAMERA_DISTANCE = 8.0
 """Distance of every camera preset from its point of view, in units of the robot's extent."""
@@ -76,6 +119,7 @@ KEY_W, KEY_S, KEY_A, KEY_D, KEY_Q, KEY_E = (ord(c) for c in "WSADQE")
 KEY_SPACE = 32
 KEY_LEFT_BRACKET, KEY_RIGHT_BRACKET = ord("["), ord("]")
 KEY_1, KEY_2, KEY_3 = ord("1"), ord("2"), ord("3")
+KEY_NAMES = {ord(c): c for c in "WSADQE[]123"} | {32: "space"}
 """GLFW key codes as the viewer's ``key_callback`` receives them (letters upper case)."""
 GLFW_RELEASE, GLFW_PRESS, GLFW_REPEAT = 0, 1, 2
 
@@ -118,7 +162,9 @@ def _viewer_module():
 class InteractiveSim:
     """``robot`` in MuJoCo's viewer, driven by the keyboard through :class:`BaseRuntime`
     (module docstring). ``limits``: the runtime's motion limits; ``hold`` [s]: the command
-    timeout (0: a target holds until changed); ``camera``: the first camera preset."""
+    timeout (0: a target holds until changed); ``camera``: the first camera preset;
+    ``notices``: where the one-line notices go (default stderr); ``echo``: a text stream that gets
+    each entry of :attr:`events` as it happens, one line (:meth:`_record`)."""
 
     def __init__(
         self,
@@ -129,6 +175,8 @@ class InteractiveSim:
         hold: float = 0.0,
         camera: str = "free",
         limits: MotionLimits | None = None,
+        notices=None,
+        echo=None,
     ):
         if camera not in CAMERAS:
             raise InputError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
@@ -138,7 +186,15 @@ class InteractiveSim:
         self.runtime = BaseRuntime(robot, self.backend, limits=limits, cmd_vel_timeout=hold)
         self.camera = camera
         self.events: list[dict] = []
-        self._keys: queue.SimpleQueue[tuple[int, bool]] = queue.SimpleQueue()
+        self.not_obeyed = moves_not_obeyed(robot)
+        self._notices = notices
+        self._echo = echo
+        self.notes: list[str] = []  # every notice printed (once each)
+        self._notice = ("", -math.inf)  # the notice on screen and its wall time
+        # (key, pressed, wall time [s, time.monotonic()] at which the event reached the program)
+        self._keys: queue.SimpleQueue[tuple[int, bool, float]] = queue.SimpleQueue()
+        self._pending: deque[tuple[float, int, bool, float]] = deque()  # (sim time, key, pressed, wall)
+        self._held: set[int] = set()
         self._hooked = False
         self._redelivering = False
         self._viewer_keys = None
@@ -147,16 +203,24 @@ class InteractiveSim:
         self._steer = np.zeros(len(robot.steerable))
         self._last: StepResult | None = None
         self.t = 0.0
+        self._start = 0.0  # wall time [s] of the start
+        self._origin = 0.0  # wall time [s] of simulated time 0: s = w - origin (module docstring)
+        self.skipped = 0.0  # wall time [s] skipped while nothing was driven
+        self._pace: deque[tuple[float, float]] = deque()  # (wall, sim) of recent frames
+        self.rtf = 1.0
+        self.slowest = math.inf  # lowest real-time factor measured over RTF_WINDOW
+        self.wall = 0.0  # wall time [s] since the start
 
-    # --- keys (called in the viewer's thread: only queued) --------------------------------------
+    # --- keys (called in the viewer's thread: only queued, with their wall time) ----------------
     def _on_key(self, key: int) -> None:
         """The viewer's ``key_callback`` (presses only). The first press takes the window's keys
         over (:meth:`_take_keys`)."""
         if self._redelivering:
             return
+        now = time.monotonic()
         if not self._hooked:
             self._take_keys(key)
-        self._keys.put((int(key), True))
+        self._keys.put((int(key), True, now))
 
     def _take_keys(self, first_key: int) -> None:
         """Put :meth:`_on_glfw_key` in front of the viewer's own key handler of the window (this
@@ -194,40 +258,86 @@ class InteractiveSim:
     def _on_glfw_key(self, window, key, scancode, action, mods) -> None:
         if key in TELEOP_KEYS:
             if action != GLFW_REPEAT:
-                self._keys.put((int(key), action == GLFW_PRESS))
+                self._keys.put((int(key), action == GLFW_PRESS, time.monotonic()))
         elif self._viewer_keys:
             self._viewer_keys(window, key, scancode, action, mods)
 
-    def _apply_keys(self, viewer) -> None:
+    def _drain(self) -> None:
+        """Give each key event that arrived its simulated time ``w - w0`` (module docstring,
+        Clock), never before the present or an earlier event, and queue it."""
         while True:
             try:
-                key, pressed = self._keys.get_nowait()
+                key, pressed, wall = self._keys.get_nowait()
             except queue.Empty:
                 return
-            action = KEY_ACTIONS.get(key)
-            if action is None:
+            if key not in KEY_ACTIONS:
                 continue
-            if not pressed:
-                if self.teleop.release(action):
-                    self._record("release")
-                    self.runtime.command(self.teleop.target.copy(), self.t)
-                continue
-            self.teleop.press(action)
-            self._record(action)
-            if action.startswith("camera_"):
-                self.camera = action.removeprefix("camera_")
-                self._set_camera(viewer)
-            elif action.startswith("steer_"):
-                self._turn_steering(STEER_STEP if action == "steer_left" else -STEER_STEP)
-            else:
-                self.runtime.command(self.teleop.target.copy(), self.t)
+            at = max(wall - self._origin, self.t, self._pending[-1][0] if self._pending else 0.0)
+            self._pending.append((at, key, pressed, wall))
 
-    def _record(self, key: str) -> None:
-        """One entry of :attr:`events`: the action, simulated time [s], true pose and the
-        steering angles the joints had reached (:meth:`steer_reached`)."""
-        self.events.append(
-            {"t": self.t, "key": key, "pose": self.backend.truth.tolist(), "steer": self.steer_reached()}
-        )
+    def _apply_due(self, viewer) -> None:
+        """Apply the queued key events whose simulated time has come (at this control step)."""
+        while self._pending and self._pending[0][0] <= self.t + 1e-9:
+            _, key, pressed, wall = self._pending.popleft()
+            self._apply(viewer, key, pressed, wall)
+
+    def _apply(self, viewer, key: int, pressed: bool, wall: float) -> None:
+        action = KEY_ACTIONS[key]
+        if self.releases and action in MOVES:  # move keys held since their press acted
+            (self._held.add if pressed else self._held.discard)(key)
+        if not pressed:
+            if self.teleop.release(action):
+                self._record("release", wall)
+                if not self.runtime.command(self.teleop.target.copy(), self.t):
+                    # what the keys still hold is refused (a car's Q/E alone): stop rather than
+                    # keep driving what the released key asked for
+                    self._notify(f"{KEY_NAMES[key]} released: {self.runtime.filter.stats.last_reject_reason}; stopping")
+                    self.runtime.command(np.zeros(3), self.t)
+            return
+        self.teleop.press(action)
+        self._record(action, wall)
+        if action.startswith("camera_"):
+            self.camera = action.removeprefix("camera_")
+            self._set_camera(viewer)
+        elif action.startswith("steer_"):
+            self._turn_steering(STEER_STEP if action == "steer_left" else -STEER_STEP)
+        else:
+            stats = self.runtime.filter.stats
+            projected = stats.projected
+            if not self.runtime.command(self.teleop.target.copy(), self.t):
+                self._notify(f"{KEY_NAMES[key]} ({action}): {stats.last_reject_reason}; refused")
+            elif stats.projected > projected and action in self.not_obeyed:
+                self._notify(f"{KEY_NAMES[key]} ({action}) on {self.robot.name}: {self.not_obeyed[action]}")
+
+    def _notify(self, text: str) -> None:
+        """Show ``text`` on screen for :data:`NOTICE_TIME` s; print it on stderr the first time."""
+        self._notice = (text, time.monotonic())
+        self._note_once(text)
+
+    def _note_once(self, text: str) -> None:
+        """``omnikin: note: sim: text`` on stderr, the first time only (kept in :attr:`notes`)."""
+        if text not in self.notes:
+            self.notes.append(text)
+            print(f"omnikin: note: sim: {text}", file=self._notices or sys.stderr, flush=True)
+
+    def _record(self, key: str, wall: float) -> None:
+        """One entry of :attr:`events`: the action, simulated time [s] at which it acted, wall time
+        [s] since the start at which its key arrived, true pose and the steering angles the
+        joints had reached (:meth:`steer_reached`); echoed as one line ``T s  KEY  x X m  y Y m
+        theta TH rad`` when the simulator has an ``echo`` stream."""
+        event = {
+            "t": self.t,
+            "wall": wall - self._start,
+            "key": key,
+            "pose": self.backend.truth.tolist(),
+            "steer": self.steer_reached(),
+        }
+        self.events.append(event)
+        if self._echo is not None:
+            x, y, th = event["pose"]
+            print(
+                f"{self.t:.3f} s  {key}  x {x:+.4f} m  y {y:+.4f} m  theta {th:+.4f} rad", file=self._echo, flush=True
+            )
 
     def steer_reached(self) -> list[float]:
         """Steering angles [rad] of the steerable wheels (file order) at the last control step,
@@ -265,15 +375,74 @@ class InteractiveSim:
                 cam.elevation = -90.0 if self.camera == "top" else -30.0
                 cam.azimuth = 90.0 if self.camera == "top" else 135.0
 
+    # --- heading arrow --------------------------------------------------------------------------------
+    def _draw_heading(self, viewer) -> None:
+        """An arrow on top of the chassis from its centre along the heading (body +x), 1.2 times the
+        robot's extent long: a geom of the viewer's ``user_scn``, drawn in every camera."""
+        scn = viewer.user_scn
+        if scn is None:
+            return
+        mujoco = self.backend.sim._mj
+        model, data = self.backend.sim.model, self.backend.sim.data
+        geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "chassis")
+        half = np.abs(data.geom_xmat[geom].reshape(3, 3)) @ model.geom_aabb[geom][3:]
+        top = float(data.geom_xpos[geom][2] + half[2])
+        x, y, th = self.backend.truth
+        size = max(max(abs(w.x), abs(w.y)) + w.radius for w in self.robot.wheels)
+        start = np.array([x, y, top + 0.01 * size])
+        end = start + 1.2 * size * np.array([math.cos(th), math.sin(th), 0.0])
+        with viewer.lock():
+            scn.ngeom = 1
+            g = scn.geoms[0]
+            mujoco.mjv_initGeom(
+                g, mujoco.mjtGeom.mjGEOM_ARROW, np.zeros(3), np.zeros(3), np.eye(3).ravel(), np.array(HEADING_RGBA)
+            )
+            mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_ARROW, 0.08 * size, start, end)
+
     # --- readout -------------------------------------------------------------------------------------
+    def _pace_update(self, wall: float) -> None:
+        """Real-time factor over the last :data:`RTF_WINDOW` s of wall time (module docstring)."""
+        self._pace.append((wall, self.t))
+        while len(self._pace) > 2 and wall - self._pace[1][0] >= RTF_WINDOW:
+            self._pace.popleft()
+        w0, s0 = self._pace[0]
+        if wall - w0 >= RTF_WINDOW:
+            self.rtf = (self.t - s0) / (wall - w0)
+            self.slowest = min(self.slowest, self.rtf)
+            if self.rtf < SLOW_RTF:
+                self._notify_slow()
+
+    def _notify_slow(self) -> None:
+        self._note_once(
+            "this machine cannot keep up: the simulation runs slower than the clock (the window shows the "
+            "real-time factor); keys act at their simulated time"
+        )
+
+    @property
+    def lag(self) -> float:
+        """How far [s] the simulation is behind the clock."""
+        return max(0.0, self.wall - (self._origin - self._start) - self.t)
+
+    def key_help(self) -> list[str]:
+        """The keys, one line; a pair of move keys the robot cannot obey is marked ``*`` and
+        followed by a line saying why (:func:`~omnikin.runtime.teleop.moves_not_obeyed`)."""
+        pairs = {"W/S": ("forward", "back"), "A/D": ("left", "right"), "Q/E": ("turn_left", "turn_right")}
+        marked = {
+            keys: next((self.not_obeyed[a] for a in acts if a in self.not_obeyed), "") for keys, acts in pairs.items()
+        }
+        moves = ", ".join(keys + ("*" if why else "") for keys, why in marked.items())
+        return [f"{moves} move, space stop, [ ] steer, 1 2 3 camera"] + [
+            f"* {keys} on {self.robot.name}: {why}" for keys, why in marked.items() if why
+        ]
+
     def readout(self) -> str:
-        """Pose, twist and wheel speeds, one quantity a line (the window's overlay)."""
+        """Time, pose, twist and wheel speeds, one quantity a line (the window's top left overlay)."""
         x, y, th = self.backend.truth
         vx, vy, w = self.backend.sim.twist
         speeds = " ".join(f"{s:+.2f}" for s in self.backend.sim.wheel_speeds)
         target = self.teleop.target
         lines = [
-            f"t {self.t:7.2f} s   camera {self.camera}",
+            f"t {self.t:7.2f} s simulated   real-time factor {self.rtf:.2f}   camera {self.camera}",
             f"pose  x {x:+.3f} m  y {y:+.3f} m  theta {math.degrees(th):+.1f} deg",
             f"twist vx {vx:+.3f} m/s  vy {vy:+.3f} m/s  omega {w:+.3f} rad/s",
             f"target vx {target[0]:+.2f}  vy {target[1]:+.2f}  omega {target[2]:+.2f}",
@@ -282,56 +451,128 @@ class InteractiveSim:
         if len(self._steer):
             steer = " ".join(f"{math.degrees(a):+.0f}" for a in self.backend.sim.steer_angles)
             lines.append(f"steering [deg] {steer}")
-        lines.append("W/S A/D Q/E move, space stop, [ ] steer, 1 2 3 camera")
+        if self.rtf < SLOW_RTF or self.lag > CATCH_UP:
+            lines.append(f"SLOW: the machine cannot keep up, {self.lag:.1f} s behind the clock")
         return "\n".join(lines)
+
+    def help_text(self) -> str:
+        """The notice of the last few seconds (if any) and the keys (the bottom right overlay)."""
+        text, since = self._notice
+        lines = [text] if text and time.monotonic() - since < NOTICE_TIME else []
+        return "\n".join(lines + self.key_help())
 
     # --- the loop ------------------------------------------------------------------------------------
     def run(self, duration: float | None = None) -> str:
-        """Open the window and run until it is closed (``"closed"``) or ``duration`` [s] of wall
-        time have passed (``"duration"``); the window is closed and its thread ended either way,
-        also when an exception (Ctrl-C) leaves."""
+        """Open the window and run until it is closed (``"closed"``) or ``duration`` [s] of
+        simulated time have passed (``"duration"``); the window is closed and its thread ended
+        either way, also when an exception (Ctrl-C) leaves."""
         mujoco, viewer_module = _viewer_module()
         require_display()
         before = set(threading.enumerate())
         sim = self.backend.sim
-        viewer = viewer_module.launch_passive(
-            sim.model, sim.data, key_callback=self._on_key, show_left_ui=False, show_right_ui=False
-        )
+        # simulated time 0 is the window's opening: keys pressed while the loop gets ready keep
+        # their distances (the simulation starts behind and catches up)
+        self._start = self._origin = time.monotonic()
+        # Ctrl-C or SIGTERM while the viewer starts would leave its render thread drawing while
+        # the process exits (an X error, a segfault): their handlers wait until it can be closed.
+        # (Blocking the signals in this thread would not do: another thread, e.g. a BLAS
+        # worker's, would take them, and Python runs the handler here all the same.)
+        held: list[int] = []
+        previous = {}
+        if threading.current_thread() is threading.main_thread():
+            previous = {s: signal.signal(s, lambda signum, frame: held.append(signum)) for s in STOP_SIGNALS}
+
+        def restore() -> None:
+            for s, handler in previous.items():
+                signal.signal(s, handler)
+
+        try:
+            viewer = viewer_module.launch_passive(
+                sim.model, sim.data, key_callback=self._on_key, show_left_ui=False, show_right_ui=False
+            )
+        except BaseException:
+            restore()
+            raise
         render_threads = [t for t in threading.enumerate() if t not in before]
         try:
+            restore()
+            for s in held:  # a signal that came while the viewer started acts now, inside try
+                signal.raise_signal(s)
             self._set_camera(viewer)
             self._last = self.runtime.step(0.0)
+            self._draw_heading(viewer)
             viewer.sync()
-            start = time.monotonic()
-            reason = "closed"
+            end = math.inf if duration is None else duration
             while viewer.is_running():
-                wall = time.monotonic() - start
-                if duration is not None and wall >= duration:
-                    reason = "duration"
-                    break
-                self._apply_keys(viewer)
-                behind = min(wall, self.t + CATCH_UP)  # simulated time to reach before drawing
-                while self.t + CONTROL_PERIOD <= behind:
+                now = time.monotonic()
+                self.wall = now - self._start
+                self._drain()
+                # the simulated time the clock asks for, at most CATCH_UP before the next frame
+                reach = min(now - self._origin, end, self.t + CATCH_UP)
+                self._apply_due(viewer)
+                while self.t + CONTROL_PERIOD <= reach + 1e-9:
                     self.t += CONTROL_PERIOD
                     self._last = self.runtime.step(self.t)
-                viewer.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, self.readout(), None))
+                    self._apply_due(viewer)
+                if self.t + CONTROL_PERIOD > end + 1e-9:
+                    return "duration"
+                self._skip(now)
+                self._pace_update(self.wall)
+                self._draw_heading(viewer)
+                viewer.set_texts(
+                    [
+                        (None, mujoco.mjtGridPos.mjGRID_TOPLEFT, self.readout(), None),
+                        (None, mujoco.mjtGridPos.mjGRID_BOTTOMRIGHT, self.help_text(), None),
+                    ]
+                )
                 viewer.sync()
-                ahead = self.t + CONTROL_PERIOD - (time.monotonic() - start)
+                ahead = self.t + CONTROL_PERIOD - (time.monotonic() - self._origin)
                 if ahead > 0:
                     time.sleep(ahead)
-            return reason
+            return "closed"
         finally:
+            self.wall = time.monotonic() - self._start
             viewer.close()
             for t in render_threads:
                 t.join(SHUTDOWN_WAIT)
 
+    def _skip(self, now: float) -> None:
+        """Skip the time the simulation is behind the clock at ``now`` (time.monotonic() of this
+        frame's start) when it is more than :data:`MAX_LAG`, the robot is at rest and no key that
+        has acted is held (module docstring): the clock is set back to the simulated time, or,
+        when key events wait, only so far that the first of them acts now; the waiting events
+        keep their distances (a press and its release stay as far apart)."""
+        lag = now - self._origin - self.t
+        if lag <= MAX_LAG or self._held or not self._at_rest():
+            return
+        if self._pending:
+            lag = min(lag, self._pending[0][0] - self.t)
+            self._pending = deque((at - lag, key, pressed, wall) for at, key, pressed, wall in self._pending)
+        self._origin += lag
+        self.skipped += lag
+
+    def _at_rest(self) -> bool:
+        """Nothing driven and nothing moving: the command filter's output zero, the chassis still
+        (every component of its twist below :data:`REST_SPEED`) and every steering joint at the
+        angle last commanded (within 0.5 deg)."""
+        sim = self.backend.sim
+        if np.any(self.runtime.filter.current) or np.any(np.abs(sim.twist) > REST_SPEED):
+            return False
+        steer = self._last.steer if self._last is not None else None
+        return steer is None or not len(steer) or bool(np.all(np.abs(sim.steer_angles - steer) < math.radians(0.5)))
+
     def report(self, reason: str) -> dict:
         """What the run did, for ``--report``: final pose and twist (ground truth, odometry),
-        steering angles reached [rad], key presses with their simulated time, pose and steering."""
+        steering angles reached [rad], key presses with their simulated time, wall arrival time,
+        pose and steering; the clock: simulated and wall time [s], wall time skipped while
+        nothing was driven, lowest real-time factor measured (null: the run was too short)."""
         return {
             "robot": self.robot.name,
             "end": reason,
             "sim_time": self.t,
+            "wall_time": self.wall,
+            "skipped": self.skipped,
+            "slowest_real_time_factor": self.slowest if math.isfinite(self.slowest) else None,
             "pose": self.backend.truth.tolist(),
             "twist": self.backend.sim.twist.tolist(),
             "odometry_pose": list(self.runtime.pose),
@@ -339,10 +580,13 @@ class InteractiveSim:
             "target": self.teleop.target.tolist(),
             "presses": dict(self.teleop.presses),
             "releases": self.releases,
+            "not_obeyed": dict(self.not_obeyed),
+            "notes": list(self.notes),
             "events": self.events,
             "commands": {
                 "accepted": self.runtime.filter.stats.accepted,
                 "rejected": self.runtime.filter.stats.rejected,
+                "projected": self.runtime.filter.stats.projected,
                 "timeouts": self.runtime.filter.stats.timeouts,
             },
         }

@@ -10,6 +10,11 @@ turn_left together drive an arc. ``stop`` sets all three to zero. Front ends map
 these names (W/S, A/D, Q/E and space in both) and send the target through the runtime's
 :class:`~omnikin.runtime.command.CommandFilter`, whose limits and timeout act as on the real
 robot.
+
+A layout may not obey every move: a differential drive or a car cannot move sideways (the
+filter drops ``vy``), a car cannot turn on the spot (the filter refuses ``omega`` alone).
+:func:`moves_not_obeyed` asks the command filter itself which moves of a robot it drops or
+refuses, so that front ends mark those keys in their help and say why when one is pressed.
 """
 
 from __future__ import annotations
@@ -20,6 +25,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
+from ..model import Robot
+from .command import CommandFilter
 
 MOVES = {
     "forward": (0, 1.0),
@@ -81,3 +88,34 @@ class Teleop:
         changed = bool(np.any(self.target))
         self.target[:] = 0.0
         return changed
+
+
+COMPONENTS = ("vx", "vy", "omega")
+"""Names of the twist components, by index."""
+
+
+def moves_not_obeyed(robot: Robot) -> dict[str, str]:
+    """The move actions (:data:`MOVES`) that ``robot``'s command filter does not drive as asked,
+    each with a short reason (for a front end's help and notice; no key names), e.g.
+    ``{"left": "its fixed wheels forbid vy", ...}`` for a differential drive.
+
+    Each move alone, at 0.1 m/s or 0.1 rad/s, is offered to a fresh
+    :class:`~omnikin.runtime.command.CommandFilter` of the robot (no limits, no timeout): a
+    move whose twist it projects (fixed wheels: the part they cannot make is dropped) or
+    refuses (steering beyond its limits) is listed. The answer does not depend on the speed:
+    projection is linear and the steering a twist needs depends only on its direction."""
+    out = {}
+    for action, (axis, sign) in MOVES.items():
+        twist = np.zeros(3)
+        twist[axis] = 0.1 * sign
+        f = CommandFilter(robot, timeout=0.0)
+        name = COMPONENTS[axis]
+        if not f.command(twist, 0.0):
+            out[action] = f"{name} alone needs steering beyond its limits (refused; with another move, an arc)"
+        elif f.stats.projected:
+            out[action] = (
+                f"its fixed wheels forbid {name}"
+                if not np.any(f.target)
+                else f"its fixed wheels allow only part of {name}"
+            )
+    return out
