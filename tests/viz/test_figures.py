@@ -25,7 +25,7 @@ from omnikin import PRESET_NAMES, load_robot  # noqa: E402
 from omnikin.evaluation.umbmark import analyze  # noqa: E402
 from omnikin.viz import save_figure  # noqa: E402
 from omnikin.viz.layout import layout_figure  # noqa: E402
-from omnikin.viz.umbmark import euclidean_errors_figure, return_errors_figure  # noqa: E402
+from omnikin.viz.umbmark import euclidean_errors_figure, monte_carlo_figure, return_errors_figure  # noqa: E402
 
 PNG = b"\x89PNG\r\n\x1a\n"
 SVG = "{http://www.w3.org/2000/svg}"
@@ -221,6 +221,110 @@ def test_the_report_figures_of_omnikin_umbmark(tmp_path):
     assert (tmp_path / "p" / "return_errors.pdf").read_bytes()[:5] == b"%PDF-"
     assert main(["umbmark", "--dpi", "0", "-o", str(tmp_path / "q")]) == 2
     assert not (tmp_path / "q").exists()
+
+
+@pytest.fixture(scope="module")
+def small_study():
+    """A kinematic UMBmark study of diff-drive, 3 runs per direction, before and after calibration."""
+    import omnikin
+
+    return omnikin.run_umbmark("diff-drive", runs=3, rate=20, seed=7, noise="typical")
+
+
+def test_the_trajectories_figure_draws_every_run_ending_where_its_return_error_says(small_study):
+    """Every run of the first procedure: a true path, an odometry path and its end, per stage
+    and direction (3 runs x 2 directions x 2 stages); each run's true end minus its odometry end
+    is its return error (the measurement file's x_abs - x_calc), so the drawn ends reproduce the
+    return errors the analysis used."""
+    fig = small_study.figures()["trajectories"]
+    rendered(fig)
+    lines = [line for ax in fig.axes for line in ax.get_lines()]
+    by_kind: dict = {}
+    for line in lines:
+        kind, _, rest = str(line.get_gid()).partition(":")
+        by_kind.setdefault(kind, []).append(rest)
+    for kind in ("truth", "odometry", "end"):
+        assert len(by_kind[kind]) == 3 * 2 * 2, kind
+    stages = {"before": small_study.before[0], "after calibration": small_study.after[0]}
+    for stage, result in stages.items():
+        for direction in ("cw", "ccw"):
+            truth = {
+                line.get_gid().rsplit(":", 1)[1]: np.column_stack([line.get_xdata(), line.get_ydata()])[-1]
+                for line in lines
+                if str(line.get_gid()).startswith(f"truth:{stage}:{direction}:")
+            }
+            odometry = {
+                line.get_gid().rsplit(":", 1)[1]: np.column_stack([line.get_xdata(), line.get_ydata()])[-1]
+                for line in lines
+                if str(line.get_gid()).startswith(f"odometry:{stage}:{direction}:")
+            }
+            assert sorted(truth) == sorted(odometry) == ["1", "2", "3"]
+            drawn = np.array([truth[k] - odometry[k] for k in sorted(truth)])
+            # the measured return error carries the typical noise's 1 mm hand measurement error
+            np.testing.assert_allclose(drawn, getattr(result, direction).epsilon[:, :2], atol=0.004)
+    assert [ax.get_title() for ax in fig.axes] == ["before: all 6 runs", "after calibration: all 6 runs"]
+
+
+def decade_labels(axis) -> dict:
+    """Power of ten -> its tick label's text, for the major ticks of a drawn log ``axis``."""
+    out = {}
+    for tick in axis.get_major_ticks():
+        value = tick.get_loc()
+        k = math.log10(value)
+        lo, hi = sorted(axis.get_view_interval())
+        if abs(k - round(k)) < 1e-9 and lo * (1 - 1e-9) <= value <= hi * (1 + 1e-9):
+            out[round(k)] = tick.label1.get_text()
+    return out
+
+
+def test_every_decade_of_a_log_axis_is_labelled():
+    """Euclidean errors of 0.3 mm to 600 mm: a log axis over the data with a label at every
+    power of ten between (0.1 mm ... 1000 mm: the decades the data's ends lie in); a
+    Monte-Carlo spread inside one decade (2 to 6 mm) is shown from 1 to 10 mm, both labelled."""
+    rng = np.random.default_rng(3)
+    far = analyze(rng.normal((0.4, 0.4), 0.01, (5, 2)), rng.normal((-0.3, 0.2), 0.01, (5, 2)))
+    near = analyze(rng.normal((0.0, 0.0), 0.0004, (5, 2)), rng.normal((0.0, 0.0), 0.0004, (5, 2)))
+    fig = euclidean_errors_figure({"before": far, "after calibration": near})
+    rendered(fig)
+    ax = fig.axes[0]
+    assert ax.get_yscale() == "log"
+    errors = np.concatenate(
+        [np.hypot(*getattr(r, d).epsilon[:, :2].T) * 1000 for r in (far, near) for d in ("cw", "ccw")]
+    )
+    lo, hi = sorted(ax.get_ylim())
+    assert lo <= errors.min() and errors.max() <= hi  # every run inside the axis
+    expected = set(range(math.ceil(math.log10(lo)), math.floor(math.log10(hi)) + 1))
+    assert len(expected) >= 2
+    labels = decade_labels(ax.yaxis)
+    assert set(labels) == expected and all(labels.values()), labels
+
+    fig = monte_carlo_figure({"before": np.linspace(0.002, 0.006, 20)})
+    rendered(fig)
+    labels = decade_labels(fig.axes[0].xaxis)
+    assert set(labels) == {0, 1} and all(labels.values()), labels  # 1 mm and 10 mm
+
+
+def test_figures_say_what_they_show(small_study, tmp_path):
+    """The caption under each title names what was done: simulated with the kinematic engine,
+    its random errors and seed; an analysis of a real robot's runs says measured."""
+    for name, fig in small_study.figures().items():
+        text = fig.get_suptitle()
+        for part in ("simulated", "kinematic engine", "noise typical", "seed 7", "3 runs per direction"):
+            assert part in text, (name, text)
+    path = tmp_path / "measured.csv"
+    rows = ["direction,x_abs,y_abs,x_calc,y_calc"]
+    rows += [f"{d},{0.01 * k},{-0.02 * k},0,0" for d in ("cw", "ccw") for k in range(1, 5)]
+    path.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    analysis = omnikin_analyze(path)
+    for kind in ("return_errors", "euclidean_errors"):
+        text = analysis.plot(kind).get_suptitle()
+        assert "measured" in text and "4 cw and 4 ccw runs" in text and "simulated" not in text
+
+
+def omnikin_analyze(path):
+    import omnikin
+
+    return omnikin.analyze_umbmark(path, side=4.0)
 
 
 # --- layout drawings --------------------------------------------------------------------------------------

@@ -109,19 +109,19 @@ class UMBmarkReport(UMBmarkStudy):
     # -- figures -------------------------------------------------------------------------------
     def figures(self) -> dict:
         """The report's figures by file stem: ``return_errors``, ``euclidean_errors``,
-        ``trajectories`` and, with trials, ``monte_carlo`` (matplotlib ``Figure`` objects)."""
+        ``trajectories`` (every run of the first procedure) and, with trials, ``monte_carlo``
+        (matplotlib ``Figure`` objects), each captioned with :meth:`caption`."""
         require_viz()
         from ..viz import umbmark as fig
 
         title = f"UMBmark of {self.robot.name} as built ({self.mode} mode, {self.side:g} m square)"
+        caption = self.caption()
         out = {
             "return_errors": fig.return_errors_figure(
-                self.first(), title, floor=self.floor.limit, floor_label=self._floor_label
+                self.first(), title, floor=self.floor.limit, floor_label=self._floor_label, caption=caption
             ),
-            "euclidean_errors": fig.euclidean_errors_figure(self.first(), title),
-            "trajectories": fig.trajectories_figure(
-                {STAGES[k]: v for k, v in self.trajectories.items()}, self.side, title
-            ),
+            "euclidean_errors": fig.euclidean_errors_figure(self.first(), title, caption=caption),
+            "trajectories": fig.trajectories_figure(self._paths(), self.side, title, caption=caption),
         }
         if self.trials > 1:
             values: dict[str, Any] = {"before": [r.e_max_syst for r in self.before]}
@@ -131,7 +131,28 @@ class UMBmarkReport(UMBmarkStudy):
             values["floor (nominal robot in physics)" if physics else "perfectly calibrated (noise floor)"] = (
                 self.floor.values
             )
-            out["monte_carlo"] = fig.monte_carlo_figure(values, f"{fig.E_MAX} over {self.trials} procedures")
+            out["monte_carlo"] = fig.monte_carlo_figure(
+                values, f"{fig.E_MAX} over {self.trials} procedures of {self.robot.name}", caption=caption
+            )
+        return out
+
+    def caption(self) -> str:
+        """What the figures show, one line from the settings: simulated, the engine, the random
+        errors (kinematic engine) and the seed, the robot as built (profile or file), runs."""
+        s = self.settings
+        if self.engine == "physics":
+            how = "simulated in MuJoCo (physics engine: contacts, whole encoder ticks)"
+        else:
+            how = f"simulated (kinematic engine), noise {s.get('noise') or 'typical'}"
+        built = f"true robot {s['true_robot']}" if s.get("true_robot") else f"errors {s.get('errors') or 'typical'}"
+        return f"{how}, seed {s.get('seed')}, {built}; {self.runs} runs per direction"
+
+    def _paths(self) -> dict:
+        """Every run of the first procedure by stage and direction (:attr:`run_poses`), for
+        :func:`~omnikin.viz.umbmark.trajectories_figure`."""
+        out: dict = {}
+        for run in self.run_poses:
+            out.setdefault(STAGES[run.phase], {"cw": [], "ccw": []})[run.direction].append(run)
         return out
 
     @property
@@ -435,10 +456,14 @@ class UMBmarkAnalysis(UMBmarkResult):
         require_viz()
         from ..viz import umbmark as fig
 
-        makers = {"return_errors": fig.return_errors_figure, "euclidean_errors": fig.euclidean_errors_figure}
+        makers: dict[str, Callable[..., Any]] = {
+            "return_errors": fig.return_errors_figure,
+            "euclidean_errors": fig.euclidean_errors_figure,
+        }
         if kind not in makers:
             raise InputError(f"unknown figure {kind!r}; one of {sorted(makers)}")
-        return makers[kind]({"measured": self}, "UMBmark of measured runs")
+        runs = f"{len(self.cw.epsilon)} cw and {len(self.ccw.epsilon)} ccw runs"
+        return makers[kind]({"measured": self}, "UMBmark of measured runs", caption=f"measured on a real robot: {runs}")
 
     def as_dict(self, level: float = LEVEL) -> dict:
         """The ``omnikin umbmark analyze --json`` document (lengths in metres; ``units``)."""
