@@ -10,7 +10,6 @@ covers ``v T`` in all, ``T`` the time the page held the key.
 from __future__ import annotations
 
 import os
-import random
 import re
 import subprocess
 import sys
@@ -20,6 +19,7 @@ import pytest
 
 from browser import hold_key, record_keys, recorded_keys, wait_for
 from omnikin_paths import omnikin_env
+from ros_domain import fresh_domain
 
 pytestmark = pytest.mark.ros
 SPEED = 0.2
@@ -32,10 +32,10 @@ def readout(page) -> dict:
 
 @pytest.fixture
 def ros_env(tmp_path):
-    """A ROS domain of this test's own (101..200: tests/ros draw theirs from 1..100), discovery on
-    this host, logs in the test's folder."""
+    """A ROS domain of this test's own (:func:`ros_domain.fresh_domain`), discovery on this host,
+    logs in the test's folder."""
     env = omnikin_env(
-        ROS_DOMAIN_ID=str(random.SystemRandom().randint(101, 200)),
+        ROS_DOMAIN_ID=str(fresh_domain()),
         ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
         ROS_LOG_DIR=str(tmp_path / "ros_log"),
         PYTHONUNBUFFERED="1",
