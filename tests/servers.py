@@ -138,3 +138,24 @@ def stopped_normally(command: str, status: int, err: str, sig: int) -> None:
     assert "Traceback" not in err and "error:" not in err, err[-800:]
     if command != "ros":
         assert err.strip().splitlines()[-1:] == [f"omnikin {command}: stopped ({how})"], err[-800:]
+
+
+def wait_node(proc: subprocess.Popen, domain: int, name: str = "omnikin_base") -> None:
+    """Wait until the ROS 2 node ``name`` of ``proc`` is on the graph of ``domain`` (seen from an
+    rclpy context of the test's own, without signal handlers)."""
+    import rclpy
+    from rclpy.signals import SignalHandlerOptions
+
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
+    probe = rclpy.create_node("omnikin_test_probe", context=context)
+    try:
+        deadline = time.monotonic() + UP_TIMEOUT
+        while name not in probe.get_node_names():
+            if proc.poll() is not None:
+                raise AssertionError(f"omnikin ros ended before its node came up: {proc.communicate()[1][-800:]}")
+            assert time.monotonic() < deadline, f"no node {name} on ROS domain {domain} within {UP_TIMEOUT:g} s"
+            time.sleep(0.2)
+    finally:
+        probe.destroy_node()
+        rclpy.shutdown(context=context)

@@ -13,7 +13,6 @@ robot-file block loads.
 
 from __future__ import annotations
 
-import contextlib
 import re
 import shlex
 import shutil
@@ -117,10 +116,8 @@ def _serve_and_stop(cmd: str, workdir, env) -> None:
         try:
             if command == "view":
                 servers.page_address(proc)
-            else:  # the node announces nothing: it must keep running
-                with contextlib.suppress(subprocess.TimeoutExpired):
-                    proc.wait(8.0)
-                assert proc.poll() is None, f"{cmd}: exited early: {proc.communicate()[1][-500:]}"
+            else:  # its node on the graph
+                servers.wait_node(proc, int(env["ROS_DOMAIN_ID"]))
         finally:
             status, _, err = servers.stop(proc, signal.SIGINT)
     servers.stopped_normally(command, status, err, signal.SIGINT)

@@ -704,7 +704,9 @@ def main(argv=None) -> int:
 
 
 def _main(argv: list[str], fired: list[int]) -> int:
-    command: list[str] = []  # the command's name, once parsed
+    # the command's name: parsed, or before that the first argument naming a server (a server
+    # stopped while omnikin still starts is stopped all the same)
+    command: list[str] = [argv[0]] if argv and argv[0] in SERVERS else []
     try:
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning
@@ -775,7 +777,7 @@ def _run(argv: list[str], command: list[str]) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
-    command.append(args.command)
+    command[:] = [args.command]
     with running(args):  # every output of the command checked together before any work
         return args.func(args)
 
