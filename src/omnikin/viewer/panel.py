@@ -3,10 +3,12 @@
 - **Drive**: the keys (W/S A/D Q/E held, space stops, ``[``/``]`` steer, 1/2/3 cameras), sliders
   for a twist held until changed (Drive) and a Stop button; steering by hand for robots with
   steerable wheels (at rest).
-- **Camera**: presets *top* (straight down on the robot, world +x to the right and +y up),
-  *follow* (behind the robot along its heading, moving with it) and *free* (the mouse:
-  drag rotates, right-drag moves, wheel zooms), and the size of the view [m] the top and follow
-  cameras frame.
+- **Camera**: presets *top* (straight down on the robot, world +x to the right and +y up,
+  moving with it), *follow* (behind the robot along its heading, moving with it), *free* (the
+  mouse: drag rotates, right-drag moves, wheel zooms) and, on a replay, *run* (straight down on
+  the whole of the runs shown), and the size of the view [m] the top and follow cameras frame.
+  The first view (:func:`frame_robot`) looks at the robot from behind and above, from a distance
+  that frames :data:`VIEW_SIZE` robot reaches.
 - **Readouts**: pose (true and odometry), twist, command, forward-kinematics residual, every
   control step; a table of the joints like Villasenor et al.'s (their Fig. 9): per wheel its
   steering angle and wheel angle [deg], speed and its rollers' speed [rad/s] and the position of
@@ -137,17 +139,51 @@ class GoalMarker:
             self.status.content = text
 
 
+FIRST_VIEW_AZIMUTH = math.radians(-30.0)
+"""Where the first view looks from, about the vertical, from straight behind the robot [rad]."""
+FIRST_VIEW_ELEVATION = math.radians(35.0)
+"""Elevation of the first view above the floor [rad]."""
+
+
+def frame_robot(server: viser.ViserServer, pose, extent: float) -> None:
+    """The first view of every page that connects: looking at the robot's reference point at
+    ``pose`` ``(x, y, theta)`` [m, m, rad] from behind (:data:`FIRST_VIEW_AZIMUTH`) and above
+    (:data:`FIRST_VIEW_ELEVATION`), at the distance ``d = S / (2 tan(fov / 2))`` at which the
+    camera's vertical field of view spans ``S = VIEW_SIZE extent`` [m] (``extent``: the robot's
+    reach, :func:`robot_extent`)."""
+    x, y, theta = (float(v) for v in pose)
+    camera = server.initial_camera
+    distance = VIEW_SIZE * extent / (2 * math.tan(camera.fov / 2))
+    azimuth = theta + FIRST_VIEW_AZIMUTH
+    flat = distance * math.cos(FIRST_VIEW_ELEVATION)
+    camera.look_at = (x, y, 0.0)
+    camera.position = (
+        x - flat * math.cos(azimuth),
+        y - flat * math.sin(azimuth),
+        distance * math.sin(FIRST_VIEW_ELEVATION),
+    )
+
+
 class CameraControl:
     """The Camera folder: presets (module docstring) for every page, the view size, and the
-    trails' Clear button when ``clear_trails`` is given."""
+    trails' Clear button when ``clear_trails`` is given; ``fit``, a function returning the box
+    ``(x_min, y_min, x_max, y_max)`` [m] of the runs shown, adds the *run* preset."""
 
-    def __init__(self, server: viser.ViserServer, extent: float, clear_trails: Callable[[], None] | None = None):
+    def __init__(
+        self,
+        server: viser.ViserServer,
+        extent: float,
+        clear_trails: Callable[[], None] | None = None,
+        fit: Callable[[], tuple[float, float, float, float]] | None = None,
+    ):
         self.server = server
         self.camera = "free"
         self.pose: tuple[float, float, float] | None = None
+        self.extent = extent
+        self.fit = fit
         gui = server.gui
         with gui.add_folder("Camera"):
-            self.buttons = gui.add_button_group("preset", CAMERAS)
+            self.buttons = gui.add_button_group("preset", CAMERAS + (("run",) if fit is not None else ()))
             self.buttons.on_click(lambda e: self.set(e.target.value))
             self.view_size = gui.add_slider(
                 "view size [m]", extent, 40 * extent, extent / 10, round(VIEW_SIZE * extent, 3)
@@ -161,7 +197,7 @@ class CameraControl:
             self.set(action.removeprefix("camera_"))
 
     def set(self, preset: str) -> None:
-        if preset not in CAMERAS:
+        if preset not in CAMERAS and not (preset == "run" and self.fit is not None):
             return
         self.camera = preset
         if self.pose is not None:
@@ -170,17 +206,26 @@ class CameraControl:
     def follow(self, pose: tuple[float, float, float]) -> None:
         """The robot is at ``pose``: a following camera moves with it."""
         self.pose = pose
-        if self.camera == "follow":
+        if self.camera in ("follow", "top"):
             self._place(pose)
+
+    def refit(self) -> None:
+        """The runs shown changed: a *run* camera frames them again."""
+        if self.camera == "run" and self.pose is not None:
+            self._place(self.pose)
 
     def _place(self, pose: tuple[float, float, float]) -> None:
         if self.camera == "free":
             return
         x, y, theta = pose
         size = float(self.view_size.value)
+        if self.camera == "run" and self.fit is not None:
+            x0, y0, x1, y1 = self.fit()  # the box of the runs, a robot's reach round it
+            x, y = (x0 + x1) / 2, (y0 + y1) / 2
+            size = 1.1 * max(x1 - x0, y1 - y0) + 2 * self.extent
         for client in self.server.get_clients().values():
             camera = client.camera
-            if self.camera == "top":
+            if self.camera in ("top", "run"):
                 # looking down from a height that frames `size` metres; a hair south of the
                 # robot so that the view's up is +y (straight down has no up)
                 height = size / (2 * math.tan(camera.fov / 2))
@@ -241,7 +286,8 @@ class Readouts:
 
 
 def readout_html(s: Snapshot | None) -> str:
-    """Pose, twist, command and residual of ``s`` as the readout element (module docstring)."""
+    """Pose, twist, command and residual of ``s`` as the readout element (module docstring); a
+    readout in ``s.missing`` reads ``s.missing_why`` (and ``data-missing`` names them)."""
     if s is None:
         return '<div id="omnikin-readout">waiting for the first step</div>'
     x, y, th = s.truth
@@ -259,6 +305,8 @@ def readout_html(s: Snapshot | None) -> str:
         "omega": s.twist[2],
     }
     data = " ".join(f'data-{k}="{_f(v)}"' for k, v in attributes.items())
+    if s.missing:
+        data += f' data-missing="{html.escape(" ".join(s.missing), quote=True)}"'
     residual = math.sqrt(sum(r * r for r in s.residual)) if s.residual else 0.0
     rows = [
         ("t", f"{s.t:.2f} s"),
@@ -268,6 +316,10 @@ def readout_html(s: Snapshot | None) -> str:
         ("command", f"vx {s.command[0]:+.3f}, vy {s.command[1]:+.3f}, omega {s.command[2]:+.3f}"),
         ("FK residual", f"{residual:.2e} rad/s" if s.residual else "- (not measured)"),
     ]
+    stands_in = {"truth": " (drawn at the odometry)", "odometry": " (the truth stands in)"}
+    for key, row in (("truth", 1), ("odometry", 2), ("twist", 3), ("command", 4), ("residual", 5)):
+        if key in s.missing:  # no data: said, never shown as zeros
+            rows[row] = (rows[row][0], s.missing_why + stands_in.get(key, ""))
     body = "".join(f"<tr><td>{k}</td><td>{html.escape(v)}</td></tr>" for k, v in rows)
     return f'<div id="omnikin-readout" {data}><table style="font-size:0.8em">{body}</table></div>'
 
