@@ -181,6 +181,7 @@ class CameraControl:
         self.pose: tuple[float, float, float] | None = None
         self.extent = extent
         self.fit = fit
+        self._placed: tuple | None = None  # what a following camera was last placed for
         gui = server.gui
         with gui.add_folder("Camera"):
             self.buttons = gui.add_button_group("preset", CAMERAS + (("run",) if fit is not None else ()))
@@ -200,6 +201,7 @@ class CameraControl:
         if preset not in CAMERAS and not (preset == "run" and self.fit is not None):
             return
         self.camera = preset
+        self._placed = None
         if self.pose is not None:
             self._place(self.pose)
 
@@ -207,7 +209,10 @@ class CameraControl:
         """The robot is at ``pose``: a following camera moves with it."""
         self.pose = pose
         if self.camera in ("follow", "top"):
-            self._place(pose)
+            placed = (pose, float(self.view_size.value), tuple(self.server.get_clients()))
+            if placed != self._placed:  # (a camera message redraws every page: only when it moves)
+                self._place(pose)
+                self._placed = placed
 
     def refit(self) -> None:
         """The runs shown changed: a *run* camera frames them again."""

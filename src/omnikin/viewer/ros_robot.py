@@ -302,6 +302,8 @@ class RosRobot(PageRobot):
             residual=(),
             roller_angles=tuple(rollers),
             roller_speeds=tuple(roller_speeds),
+            missing=("residual",) + (("truth",) if not fresh else ()) + (("odometry", "twist") if odom is None else ()),
+            missing_why="not received",
         )
 
     def close(self) -> None:
