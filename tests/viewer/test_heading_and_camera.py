@@ -51,8 +51,8 @@ def reach(robot) -> float:
 def snapshot(truth, odometry, wheels: int) -> Snapshot:
     zeros = np.zeros(wheels)
     still = (0.0,) * 3
-    steer = np.full(wheels, np.nan)
-    return Snapshot(0.0, truth, odometry, still, still, still, zeros, zeros, steer, (), (None,) * wheels, (None,) * wheels)
+    steer, none = np.full(wheels, np.nan), (None,) * wheels
+    return Snapshot(0.0, truth, odometry, still, still, still, zeros, zeros, steer, (), none, none)
 
 
 @pytest.fixture
@@ -260,3 +260,18 @@ def test_the_live_page_frames_the_robot_and_shows_its_heading_in_every_camera(pa
             assert arrow_direction(truth) == pytest.approx(0.0, abs=0.05)
             assert arrow_direction(odometry) == pytest.approx(0.0, abs=0.05)
     assert page_log.external == [] and page_log.page_errors == []
+
+
+def test_a_run_without_ground_truth_says_so_instead_of_showing_zeros():
+    from omnikin.viewer.panel import readout_html
+    from omnikin.viewer.replay import TrackReplay
+
+    robot = load_robot("tomasi-omni3")
+    t = np.array([0.0, 1.0])
+    odometry = PoseSeries(t, [[0.0, 0.0, 0.0], [0.5, 0.0, 0.0]])
+    track = Track("odometry only", odometry, odometry, missing=("truth",))  # a bag's, without /ground_truth
+    shown = readout_html(TrackReplay(robot, describe(robot), track).snapshot(0.5))
+    assert "<td>pose</td><td>not recorded (drawn at the odometry)</td>" in shown
+    assert "<td>command</td><td>not recorded</td>" in shown and "<td>FK residual</td><td>not recorded</td>" in shown
+    assert "<td>odometry</td><td>x +0.250 m, y +0.000 m, theta +0.0 deg</td>" in shown  # recorded: shown
+    assert 'data-missing="command residual truth"' in shown

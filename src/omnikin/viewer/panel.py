@@ -7,7 +7,7 @@
   moving with it), *follow* (behind the robot along its heading, moving with it), *free* (the
   mouse: drag rotates, right-drag moves, wheel zooms) and, on a replay, *run* (straight down on
   the whole of the runs shown), and the size of the view [m] the top and follow cameras frame.
-  The first view (:func:`frame_robot`) looks at the robot from behind and above, from a distance
+  The first view (:class:`FirstView`) looks at the robot from behind and above, from a distance
   that frames :data:`VIEW_SIZE` robot reaches.
 - **Readouts**: pose (true and odometry), twist, command, forward-kinematics residual, every
   control step; a table of the joints like Villasenor et al.'s (their Fig. 9): per wheel its
@@ -145,23 +145,35 @@ FIRST_VIEW_ELEVATION = math.radians(35.0)
 """Elevation of the first view above the floor [rad]."""
 
 
-def frame_robot(server: viser.ViserServer, pose, extent: float) -> None:
-    """The first view of every page that connects: looking at the robot's reference point at
-    ``pose`` ``(x, y, theta)`` [m, m, rad] from behind (:data:`FIRST_VIEW_AZIMUTH`) and above
-    (:data:`FIRST_VIEW_ELEVATION`), at the distance ``d = S / (2 tan(fov / 2))`` at which the
-    camera's vertical field of view spans ``S = VIEW_SIZE extent`` [m] (``extent``: the robot's
-    reach, :func:`robot_extent`)."""
-    x, y, theta = (float(v) for v in pose)
-    camera = server.initial_camera
-    distance = VIEW_SIZE * extent / (2 * math.tan(camera.fov / 2))
-    azimuth = theta + FIRST_VIEW_AZIMUTH
-    flat = distance * math.cos(FIRST_VIEW_ELEVATION)
-    camera.look_at = (x, y, 0.0)
-    camera.position = (
-        x - flat * math.cos(azimuth),
-        y - flat * math.sin(azimuth),
-        distance * math.sin(FIRST_VIEW_ELEVATION),
-    )
+class FirstView:
+    """The first view of every page that connects (viser's initial camera), kept on the robot
+    of reach ``extent`` [m] (:func:`robot_extent`) by :meth:`frame`."""
+
+    def __init__(self, server: viser.ViserServer, extent: float):
+        self.server = server
+        self.extent = extent
+        self.at: tuple[float, float] | None = None  # where it looks [m]
+
+    def frame(self, pose) -> None:
+        """Look at the robot's reference point at ``pose`` ``(x, y, theta)`` [m, m, rad] from
+        behind (:data:`FIRST_VIEW_AZIMUTH`) and above (:data:`FIRST_VIEW_ELEVATION`), at the
+        distance ``d = S / (2 tan(fov / 2))`` at which the camera's vertical field of view spans
+        ``S = VIEW_SIZE extent`` [m]. Nothing is sent while the robot is within ``extent`` of
+        where it already looks (a message to every page spared)."""
+        x, y, theta = (float(v) for v in pose)
+        if self.at is not None and math.hypot(x - self.at[0], y - self.at[1]) < self.extent:
+            return
+        self.at = (x, y)
+        camera = self.server.initial_camera
+        distance = VIEW_SIZE * self.extent / (2 * math.tan(camera.fov / 2))
+        azimuth = theta + FIRST_VIEW_AZIMUTH
+        flat = distance * math.cos(FIRST_VIEW_ELEVATION)
+        camera.look_at = (x, y, 0.0)
+        camera.position = (
+            x - flat * math.cos(azimuth),
+            y - flat * math.sin(azimuth),
+            distance * math.sin(FIRST_VIEW_ELEVATION),
+        )
 
 
 class CameraControl:

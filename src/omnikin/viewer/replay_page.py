@@ -35,7 +35,7 @@ import time
 import numpy as np
 
 from .live import Snapshot
-from .panel import CameraControl, Readouts, frame_robot, robot_extent
+from .panel import CameraControl, FirstView, Readouts, robot_extent
 from .replay import Track, TrackReplay
 from .replay_sources import ReplaySource
 from .scene import RobotDrawing, RobotView, Trail, draw_world
@@ -134,6 +134,7 @@ class ReplayViewer:
                 box.on_update(lambda _, name=name: self._request(f"together {name}"))
             self.extent = robot_extent(self.description)
             self.camera = CameraControl(self.server, self.extent, fit=self.box)
+            self.first_view = FirstView(self.server, self.extent)
             self.readouts = Readouts(self.server, self.description)
             self.run_choice.on_update(lambda _: self._request("run"))
             self.slider.on_update(lambda e: self._request("seek") if e.client_id is not None else None)
@@ -212,7 +213,8 @@ class ReplayViewer:
             if box.value and other != name and other not in self.shown:
                 self._together(other)
         duration = self.duration
-        frame_robot(self.server, track.truth.poses[0], self.extent)
+        self.first_view.at = None  # another run: its robot
+        self.first_view.frame(track.truth.poses[0])
         with self.server.atomic():
             self.camera.refit()
             self.slider.max = max(duration, TIME_STEP)
@@ -295,7 +297,7 @@ class ReplayViewer:
             self.camera.follow(s.truth)
             if slow:
                 self.readouts.slow(s)
-                frame_robot(self.server, s.truth, self.extent)  # a page opened now sees the robot
+                self.first_view.frame(s.truth)  # a page opened now sees the robot
         self.server.flush()
 
     def close(self) -> None:
