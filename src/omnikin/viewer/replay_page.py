@@ -46,8 +46,8 @@ SPEEDS = ("0.25", "0.5", "1", "2", "4", "8", "16")
 TIME_STEP = 0.01
 """Resolution of the time slider [s]."""
 RUN_COLOURS = ((230, 120, 20), (40, 110, 230), (150, 90, 40), (0, 150, 150), (120, 60, 220), (200, 40, 90))
-"""Colours of the runs shown beside the selected one, in turn (the selected run keeps green for
-the truth and magenta for the odometry)."""
+"""Colours of the runs shown beside the selected one, the first one free in turn (the selected
+run keeps green for the truth and magenta for the odometry)."""
 GHOST_OPACITY = 0.4
 """Opacity of the robots of the runs shown beside the selected one."""
 
@@ -63,6 +63,7 @@ class ShownRun:
 
     def __init__(self, scene, index: int, replay: TrackReplay, description, colour):
         self.replay = replay
+        self.colour = colour
         root = f"/runs/{index}"
         self.root = scene.add_frame(root, show_axes=False)
         self.drawing = RobotDrawing(scene, description, f"{root}/robot", opacity=GHOST_OPACITY, heading_colour=colour)
@@ -193,7 +194,10 @@ class ReplayViewer:
         with self.server.atomic():
             if wanted and name not in self.shown:
                 index = [tr.name for tr in self.source.tracks].index(name)
-                colour = RUN_COLOURS[index % len(RUN_COLOURS)]
+                used = {run.colour for run in self.shown.values()}
+                colour = next(
+                    (c for c in RUN_COLOURS if c not in used), RUN_COLOURS[len(self.shown) % len(RUN_COLOURS)]
+                )
                 self.shown[name] = ShownRun(
                     self.server.scene, index, self._replay(self._track(name)), self.description, colour
                 )
