@@ -132,7 +132,7 @@ class ReplayViewer:
                 with gui.add_folder("shown together", expand_by_default=len(names) <= 8):
                     self.together = {name: gui.add_checkbox(name, False) for name in names}
             for name, box in self.together.items():
-                box.on_update(lambda _, name=name: self._request(f"together {name}"))
+                box.on_update(self._together_request(name))
             self.extent = robot_extent(self.description)
             self.camera = CameraControl(self.server, self.extent, fit=self.box)
             self.first_view = FirstView(self.server, self.extent)
@@ -160,6 +160,10 @@ class ReplayViewer:
             with self._lock:
                 self._actions.append(message["action"])
             self._wake.set()
+
+    def _together_request(self, name: str):
+        """The handler of run ``name``'s "shown together" checkbox."""
+        return lambda _: self._request(f"together {name}")
 
     def _request(self, what: str) -> None:
         with self._lock:
