@@ -157,16 +157,16 @@ def seek(page, t: float) -> None:
     field = page.get_by_role("textbox").nth(0)  # the time slider's number field comes first
     field.fill(str(t))
     field.press("Enter")
-    wait_for(page, f"Math.abs(Number(document.querySelector('#omnikin-readout').dataset.t) - {t}) < 1e-9")
+    wait_for(page, f"Math.abs(Number(document.querySelector('#omnikin-readout').dataset.t) - {t}) < 1e-9", timeout=30)
 
 
 def test_the_replay_page_shows_the_headings_runs_together_and_no_zeros_for_what_was_not_recorded(
     page, page_log, replay
 ):
     page.goto(replay.url)
-    wait_for_viser(page)
-    wait_for(page, "document.querySelector('#omnikin-readout[data-t]') !== null")
-    wait_for_colour(page, TRUTH_COLOUR)
+    wait_for_viser(page, timeout=30)
+    wait_for(page, "document.querySelector('#omnikin-readout[data-t]') !== null", timeout=30)  # (a loaded machine)
+    wait_for_colour(page, TRUTH_COLOUR, timeout=60)
     (client,) = replay.server.get_clients().values()
     # the page's own camera (reported by the browser) starts at the first run's robot
     wait_for(page, "true")
@@ -240,8 +240,8 @@ def live() -> Iterator[LiveViewer]:
 
 def test_the_live_page_frames_the_robot_and_shows_its_heading_in_every_camera(page, page_log, live):
     page.goto(live.url)
-    wait_for_viser(page)
-    wait_for_colour(page, TRUTH_COLOUR)
+    wait_for_viser(page, timeout=30)
+    wait_for_colour(page, TRUTH_COLOUR, timeout=60)
     (client,) = live.server.get_clients().values()
     check_first_view(live.server, client.camera, (0.0, 0.0, 0.0), load_robot("tomasi-omni3"))  # the browser's camera
     for preset in ("free", "top", "follow"):  # free: the first view, as the page opened
