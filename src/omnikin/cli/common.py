@@ -179,6 +179,7 @@ def command_inputs(args) -> list:
     """The input files and folders of the parsed command (:func:`declare_inputs`)."""
     files, robots = getattr(args, INPUTS, ((), ()))
     given = [getattr(args, dest, None) for dest in files]
+    given = [f for g in given for f in (g if isinstance(g, list) else [g])]  # (an option given again)
     return [f for f in given if f is not None] + robot_inputs(*(getattr(args, dest, None) for dest in robots))
 
 
