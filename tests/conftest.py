@@ -4,6 +4,7 @@ wheel layouts built from first principles."""
 from __future__ import annotations
 
 import math
+import os
 import subprocess
 import sys
 
@@ -14,6 +15,11 @@ from hypothesis import HealthCheck, settings
 from browser_fixtures import browser, page, page_log  # noqa: F401  (the viewer tests' fixtures)
 from omnikin import Encoder, Robot, Wheel
 from omnikin_paths import ROOT, SRC, omnikin_env  # noqa: F401  (re-exported: tests import them from here)
+from ros_domain import default_domain
+
+# the tests run in parallel (pytest-xdist): a ROS 2 graph of this worker's own, never the user's domain 0;
+# tests that start nodes take a domain of their own with ros_domain.fresh_domain()
+os.environ["ROS_DOMAIN_ID"] = str(default_domain())
 
 
 def run_entry_point(*argv, cwd=None, timeout: float = 120) -> subprocess.CompletedProcess:

@@ -257,7 +257,7 @@ def test_interrupted_simulation_leaves_no_bag_and_exits_130(tmp_path):
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err
-    assert err == "omnikin: error: interrupted\n" and out == ""
+    assert err == "omnikin: interrupted\n" and out == ""
     assert list(tmp_path.iterdir()) == []
 
 

@@ -1,5 +1,6 @@
 """A termination signal (``timeout``, ``kill``, systemd: SIGTERM) ends a command the way Ctrl-C
-does: every cleanup runs, nothing half written is left, exit status 143.
+does: every cleanup runs, nothing half written is left, exit status 143 and one line that is not
+an error. A server (view, sim, ros) the user stops ends normally: status 0.
 
 ``timeout 2.6 omnikin umbmark -o k`` once left ``.k.xxxx.tmp/`` with a 0-byte PNG and
 ``timeout 3 omnikin simulate --rate 2000 --bag big.bag`` 137 MB in ``.big.bag.xxxx.tmp/``.
@@ -9,6 +10,7 @@ Each test runs the real entry point in a subprocess, waits until the output is b
 
 from __future__ import annotations
 
+import json
 import signal
 import subprocess
 import sys
@@ -16,7 +18,9 @@ import time
 
 import pytest
 
+import servers
 from conftest import omnikin_env
+from ros_domain import fresh_domain
 
 
 def start(tmp_path, *argv):
@@ -46,7 +50,7 @@ def terminate_while_writing(proc, folder, prefix: str, timeout: float = 300.0) -
 def ended_by_sigterm(proc) -> None:
     out, err = proc.communicate(timeout=300)
     assert proc.returncode == 128 + signal.SIGTERM == 143, err
-    assert err.splitlines()[-1] == "omnikin: error: terminated (SIGTERM)", err
+    assert err.splitlines()[-1] == "omnikin: terminated (SIGTERM)", err
     assert "Traceback" not in err
 
 
@@ -123,6 +127,50 @@ def test_a_termination_a_library_turns_into_its_own_error_is_still_a_termination
     monkeypatch.setattr(cli, "cmd_presets", library_call)
     assert cli.main(["presets"]) == 143
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == ["omnikin: error: terminated (SIGTERM)"]
+    assert err == ["omnikin: terminated (SIGTERM)"]
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_IGN  # later ones ignored to the end
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+# --- servers: stopping them is their normal end ---------------------------------------------------------
+STOPS = [signal.SIGINT, signal.SIGTERM]
+
+
+@pytest.mark.parametrize("sig", STOPS, ids=lambda s: signal.Signals(s).name)
+def test_stopping_the_viewer_is_a_normal_end(tmp_path, sig):
+    pytest.importorskip("viser", reason="omnikin view needs the extra 'viewer'")
+    proc = servers.start(servers.omnikin("view", "tomasi-omni3", "--port", "0"), tmp_path)
+    try:
+        servers.page_address(proc)
+    finally:
+        status, _, err = servers.stop(proc, sig)
+    servers.stopped_normally("view", status, err, sig)
+
+
+@pytest.mark.parametrize("sig", STOPS, ids=lambda s: signal.Signals(s).name)
+def test_stopping_the_ros_node_is_a_normal_end(tmp_path, sig):
+    pytest.importorskip("rclpy", reason="omnikin ros needs the extra 'ros'")
+    domain = fresh_domain()
+    env = omnikin_env(ROS_DOMAIN_ID=str(domain), ROS_LOG_DIR=str(tmp_path / "ros_log"))
+    proc = servers.start(servers.omnikin("ros", "tomasi-omni3"), tmp_path, env)
+    try:
+        servers.wait_node(proc, domain)
+    finally:
+        status, _, err = servers.stop(proc, sig)
+    servers.stopped_normally("ros", status, err, sig)
+
+
+def test_stopping_the_window_writes_its_report_and_is_a_normal_end(tmp_path):
+    pytest.importorskip("mujoco", reason="omnikin sim needs the extra 'physics'")
+    if servers.DISPLAY_MISSING:
+        pytest.skip(servers.DISPLAY_MISSING)
+    with servers.virtual_display() as display:
+        proc = servers.start(
+            servers.omnikin("sim", "tomasi-omni3", "--report", "run.json"), tmp_path, omnikin_env(DISPLAY=display)
+        )
+        try:
+            servers.wait_window(display, proc)
+        finally:
+            status, _, err = servers.stop(proc, signal.SIGINT)
+    servers.stopped_normally("sim", status, err, signal.SIGINT)
+    assert json.loads((tmp_path / "run.json").read_text())["end"] == "stopped"

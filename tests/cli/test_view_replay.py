@@ -178,3 +178,41 @@ def test_a_damaged_report_is_one_line(report, tmp_path, damage):
     done = run_entry_point("view", "--replay", copy, "--port", "0", "--duration", "1")
     assert done.returncode != 0 and "Traceback" not in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1 and "run_poses.csv" in done.stderr, done.stderr
+
+
+def test_view_replays_two_reports_together(report, tmp_path):
+    import shutil
+
+    again = tmp_path / "again"
+    shutil.copytree(report, again)
+    code, out, err, status = serve("--replay", report, "--replay", again)
+    assert code == 0 and status == 200, err
+    assert "8 runs" in out and err == ""  # before and after, cw and ccw, of each
+
+
+def test_runs_of_two_robots_are_not_shown_together(report):
+    from omnikin.viewer.replay_sources import ReplayError, ReplaySource, combine
+
+    mine = load_report(report)
+    other = ReplaySource("mecanum-runs", load_robot("mecanum4"), mine.tracks)
+    with pytest.raises(ReplayError) as refused:
+        combine([mine, other])
+    message = str(refused.value)
+    assert "\n" not in message and "runs shown together must be of one robot" in message
+    assert "'mecanum4' with 4 wheels" in message and "3 wheels ['w1', 'w2', 'w3']" in message
+
+
+def test_runs_of_several_sources_keep_their_names_and_robots(report):
+    from dataclasses import replace
+
+    from omnikin.viewer.replay_sources import combine
+
+    first = load_report(report)
+    as_built = replace(first.robot, name="another build")  # same wheels, another robot file
+    second = replace(first, label="elsewhere/after", robot=as_built)
+    both = combine([first, second, second])
+    names = [t.name for t in first.tracks]
+    assert [t.name for t in both.tracks] == (
+        [f"report: {n}" for n in names] + [f"after: {n}" for n in names] + [f"after: {n} (2)" for n in names]
+    )
+    assert [t.robot for t in both.tracks] == [first.robot] * len(names) + [as_built] * (2 * len(names))

@@ -3,13 +3,16 @@
 The README's bash blocks are run line by line, in order, in one temporary folder that has
 ``examples/`` beside it as in the repository, and a copy of ``firmware/`` without its build
 folder (``make -C firmware`` builds from scratch there); the two set-up commands (``pip install
-...``) are what CI itself runs and are not repeated. ``omnikin ros`` runs until stopped: it must come
-up and stop cleanly on SIGINT. The Python block runs as a script; the robot-file block loads.
+...``) are what CI itself runs and are not repeated. The servers run until stopped, as a user runs
+them: each must come up and serve (``omnikin view``: its page answers on the address it printed, on
+a free port instead of the default 8080, so that no test depends on a fixed port; ``omnikin sim``:
+its window is up on a virtual display of its own; ``omnikin ros``: its node runs), then stop
+normally on Ctrl-C (SIGINT: status 0, no error). The Python block runs as a script; the
+robot-file block loads.
 """
 
 from __future__ import annotations
 
-import os
 import re
 import shlex
 import shutil
@@ -17,12 +20,13 @@ import signal
 import subprocess
 import sys
 import tempfile
-import time
 
 import pytest
 
+import servers
 from conftest import ROOT, omnikin_env
 from firmware_build import AVR_MISSING
+from ros_domain import fresh_domain
 from simboard import SIMAVR_MISSING
 
 README = (ROOT / "README.md").read_text(encoding="utf-8")
@@ -51,7 +55,7 @@ def workdir(tmp_path_factory):
 
 
 def _env():
-    return omnikin_env(ROS_DOMAIN_ID=str(100 + os.getpid() % 100), ROS_LOG_DIR=tempfile.mkdtemp())
+    return omnikin_env(ROS_DOMAIN_ID=str(fresh_domain()), ROS_LOG_DIR=tempfile.mkdtemp())
 
 
 def _argv(cmd: str) -> list[str]:
@@ -73,29 +77,50 @@ def test_readme_has_exactly_two_setup_commands():
     ]
 
 
+SERVERS = ("ros", "view", "sim")
+"""omnikin commands that serve until the user stops them."""
+
+
 @pytest.mark.slow
 def test_every_readme_command_runs_as_written(workdir):
     env = _env()
     for cmd in _commands():
-        if cmd.startswith("omnikin ros"):
-            pytest.importorskip("rclpy", reason="the ROS 2 wheels (extra ros) are not installed")
-            proc = subprocess.Popen(
-                _argv(cmd), cwd=workdir, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
-            )
-            time.sleep(8.0)
-            assert proc.poll() is None, f"{cmd}: exited early: {proc.communicate()[1][-500:]}"
-            proc.send_signal(signal.SIGINT)
-            _, err = proc.communicate(timeout=30)
-            assert proc.returncode == 0, f"{cmd}: exit {proc.returncode}: {err[-500:]}"
+        if cmd.split()[:1] == ["omnikin"] and cmd.split()[1] in SERVERS:
+            _serve_and_stop(cmd, workdir, env)
             continue
-        argv = _argv(cmd)
-        if cmd.startswith("omnikin sim"):  # a window: on a virtual screen of its own
-            if shutil.which("xvfb-run") is None:
-                pytest.skip("xvfb-run (Debian package xvfb) is not installed; .ci/run installs it")
-            argv = ["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", *argv]
-        res = subprocess.run(argv, cwd=workdir, env=env, capture_output=True, text=True, timeout=300)
+        res = subprocess.run(_argv(cmd), cwd=workdir, env=env, capture_output=True, text=True, timeout=300)
         assert res.returncode == 0, f"{cmd}: exit {res.returncode}: {res.stderr[-800:]}"
         assert "Traceback" not in res.stderr
+
+
+def _serve_and_stop(cmd: str, workdir, env) -> None:
+    """Start the server ``cmd``, check it is up and serving, stop it with Ctrl-C (SIGINT) and
+    check that this is its normal end."""
+    command = cmd.split()[1]
+    argv = _argv(cmd)
+    if command == "ros":
+        pytest.importorskip("rclpy", reason="the ROS 2 wheels (extra ros) are not installed")
+    if command == "view" and "--port" not in argv:
+        argv += ["--port", "0"]
+    if command == "sim":
+        if servers.DISPLAY_MISSING:
+            pytest.skip(f"{cmd}: {servers.DISPLAY_MISSING}; .ci/run installs it")
+        with servers.virtual_display() as display:
+            proc = servers.start(argv, workdir, dict(env, DISPLAY=display))
+            try:
+                servers.wait_window(display, proc)
+            finally:
+                status, _, err = servers.stop(proc, signal.SIGINT)
+    else:
+        proc = servers.start(argv, workdir, env)
+        try:
+            if command == "view":
+                servers.page_address(proc)
+            else:  # its node on the graph
+                servers.wait_node(proc, int(env["ROS_DOMAIN_ID"]))
+        finally:
+            status, _, err = servers.stop(proc, signal.SIGINT)
+    servers.stopped_normally(command, status, err, signal.SIGINT)
 
 
 def test_readme_python_block_runs(workdir):

@@ -5,6 +5,7 @@ that fit the Nano, and one-line refusals of settings that cannot be built."""
 from __future__ import annotations
 
 import subprocess
+from pathlib import Path
 
 import pytest
 
@@ -93,6 +94,41 @@ def test_clean_removes_what_the_build_made_and_nothing_else(tmp_path):
     assert (tmp_path / "stepper-w0" / "omnikin_wheel.hex").exists()
     assert make("clean", BUILD=str(tmp_path)).returncode == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
+
+
+# a user's files with the names and extensions of build products, beside them, inside their
+# folders and in folders named like theirs
+USER_FILES = (
+    "mynotes.hex",
+    "my.o",
+    "simboard.c",
+    "stepper-w0/mynotes.hex",
+    "stepper-w0/old.o",
+    "core-atmega328p/mine.o",
+    "core-atmega328p/core.a.bak",
+    "stepper-w0x/omnikin_wheel.hex",
+    "stepper-w12-old/omnikin_wheel.elf",
+    "dc-w1 copy/size.txt",
+    "core-notes/core.a",
+    "core-/flags.txt",
+)
+
+
+def test_clean_keeps_a_users_files_that_look_like_build_products(tmp_path):
+    build = tmp_path / "build"
+    assert make("firmware", BUILD=str(build)).returncode == 0
+    products = sorted(p.relative_to(build) for p in build.rglob("*") if p.is_file() and p.name != ".lock")
+    assert Path("stepper-w0/omnikin_wheel.hex") in products and Path("core-atmega328p/core.a") in products
+    for name in USER_FILES:
+        (build / name).parent.mkdir(parents=True, exist_ok=True)
+        (build / name).write_text(f"the user's {name}")
+    sketch = FIRMWARE / "omnikin_wheel"
+    before = {p.name: p.read_bytes() for p in sketch.iterdir()}
+    assert make("clean", BUILD=str(build)).returncode == 0
+    for name in USER_FILES:
+        assert (build / name).read_text() == f"the user's {name}", name
+    assert not any((build / p).exists() for p in products), [str(p) for p in products if (build / p).exists()]
+    assert {p.name: p.read_bytes() for p in sketch.iterdir()} == before  # the sources untouched
 
 
 def test_two_makes_of_one_variant_into_one_folder_leave_the_hex_their_flags_name(tmp_path):

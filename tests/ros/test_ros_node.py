@@ -1,6 +1,6 @@
 """``omnikin ros`` on a real ROS 2 graph: the node runs in its own process, the test drives it.
 
-Every node process gets a random ROS domain (1..100) of its own, discovery limited to this
+Every node process gets a ROS domain of its own (tests/ros_domain.py), discovery limited to this
 host (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``, ``ROS_LOCALHOST_ONLY`` unset) and a
 temporary ``ROS_LOG_DIR``; the test side joins that domain with an rclpy context of its
 own (no signal handlers), subscribes ``odom``, ``joint_states`` and ``/diagnostics`` and
@@ -19,7 +19,6 @@ from __future__ import annotations
 import importlib.util
 import math
 import os
-import random
 import signal
 import subprocess
 import sys
@@ -60,20 +59,15 @@ RELIABLE_ALL = QoSProfile(
 )  # the test's side never drops a message
 V, A_LIN = 0.2, 0.5  # commanded speed [m/s], linear.x.max_acceleration [m/s^2]
 from conftest import SRC  # noqa: E402  (the omnikin under test, for the node processes)
+from ros_domain import fresh_domain  # noqa: E402
 
 pytestmark = pytest.mark.ros
 
-_used_domains: set[int] = set()
-
 
 def _domain() -> int:
-    """A random ROS domain id in 1..100 not used yet by this module."""
-    rng = random.SystemRandom()
-    while True:
-        d = rng.randint(1, 100)
-        if d not in _used_domains:
-            _used_domains.add(d)
-            return d
+    """A ROS domain id of this test process's own (:func:`ros_domain.fresh_domain`: disjoint from
+    the other pytest-xdist workers')."""
+    return fresh_domain()
 
 
 @pytest.fixture(scope="module", autouse=True)

@@ -137,7 +137,7 @@ def test_an_interrupted_study_resumes_and_computes_only_what_is_missing(tmp_path
     _, err = study.communicate(timeout=60)
     assert study.returncode == 130, err
     no_traceback(err)
-    assert err.strip().splitlines()[-1].startswith("omnikin: error: interrupted; the finished tasks are in")
+    assert err.strip().splitlines()[-1].startswith("omnikin: interrupted; the finished tasks are in")
     assert not list(out.rglob("*.tmp")), "a part half written"
     kept = len(list(out.glob("parts/*/*.parquet")))
     assert 3 <= kept < 24

@@ -19,6 +19,7 @@ import argparse
 import contextlib
 import math
 import re
+import signal
 from collections.abc import Iterator
 
 from ..errors import InputError, shorten
@@ -178,6 +179,7 @@ def command_inputs(args) -> list:
     """The input files and folders of the parsed command (:func:`declare_inputs`)."""
     files, robots = getattr(args, INPUTS, ((), ()))
     given = [getattr(args, dest, None) for dest in files]
+    given = [f for g in given for f in (g if isinstance(g, list) else [g])]  # (an option given again)
     return [f for f in given if f is not None] + robot_inputs(*(getattr(args, dest, None) for dest in robots))
 
 
@@ -223,6 +225,41 @@ def robot_inputs(*specs) -> list:
     from ..io.robot_file import robot_file_of
 
     return [f for f in map(robot_file_of, specs) if f is not None]
+
+
+# --- stopping a command -----------------------------------------------------------------------------------
+class Terminated(BaseException):
+    """A termination signal arrived (SIGTERM, SIGHUP: ``timeout``, ``kill``, systemd, a closed
+    terminal). Raised by the signal handler ``omnikin.cli.main`` installs, it unwinds the command
+    like ``KeyboardInterrupt`` does, so every cleanup runs (a temporary file, a staging folder:
+    :mod:`omnikin.io.output`). Not an :class:`Exception`: no ``except Exception`` swallows it."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def stop_name(exc: BaseException) -> str:
+    """How the user stopped a command: ``Ctrl-C`` (:class:`KeyboardInterrupt`) or the signal's
+    name (:class:`Terminated`: ``SIGTERM``, ``SIGHUP``)."""
+    return signal.Signals(exc.signum).name if isinstance(exc, Terminated) else "Ctrl-C"
+
+
+STOPPED: list[str] = []
+"""How the running command was stopped inside :func:`until_stopped` (empty: it was not)."""
+
+
+@contextlib.contextmanager
+def until_stopped() -> Iterator[None]:
+    """Run the block of a command that serves until the user stops it (a page, a window, a node:
+    ``omnikin.cli.main.SERVERS``): Ctrl-C, SIGTERM or SIGHUP inside it end the block as a normal
+    end, and the command goes on after it (writes its report); ``omnikin.cli.main`` then prints
+    ``omnikin COMMAND: stopped (SIGTERM)`` on standard error and the exit status is 0. Without
+    this block a server stopped by the user ends the same way, with nothing done after."""
+    try:
+        yield
+    except (KeyboardInterrupt, Terminated) as exc:
+        STOPPED.append(stop_name(exc))
 
 
 # --- JSON ------------------------------------------------------------------------------------------------

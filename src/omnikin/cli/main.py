@@ -3,9 +3,13 @@
 Every sub-command takes ROBOT = a preset name (``omnikin presets``) or a robot file.
 Errors end with one line ``omnikin: error: ...`` on stderr, never a traceback: exit status 2
 for bad input or usage, 1 when something fails while running (an output cannot be written, a
-hardware link fails, an unexpected error), 130 on Ctrl-C, 143 on SIGTERM (129 on SIGHUP), 141
-when a reader closes the pipe. Ctrl-C and a termination signal end a command the same way:
-every temporary file and staging folder is removed, a previous output stays as it was.
+hardware link fails, an unexpected error), 141 when a reader closes the pipe. Stopping is not
+an error: a command that serves until the user stops it (:data:`SERVERS`: view, sim, ros) ends
+on Ctrl-C, SIGTERM or SIGHUP with ``omnikin view: stopped (SIGTERM)`` and status 0; any other
+command stopped before it finished says ``omnikin: interrupted`` (130, Ctrl-C) or ``omnikin:
+terminated (SIGTERM)`` (143; 129 on SIGHUP), so that a script knows the work is not done.
+Ctrl-C and a termination signal end a command the same way: every temporary file and staging
+folder is removed, a previous output stays as it was.
 """
 
 from __future__ import annotations
@@ -28,6 +32,8 @@ from .._version import __version__
 from ..errors import InfeasibleTwistError, InputError, OmnikinError, OutputError, one_line, shorten
 from ..presets import PRESET_NAMES
 from .common import (
+    STOPPED,
+    Terminated,
     add_method_option,
     add_output,
     add_output_options,
@@ -39,6 +45,7 @@ from .common import (
     number,
     print_json,
     running,
+    stop_name,
     whole,
 )
 from .parser import CommandParser, UsageError
@@ -77,9 +84,11 @@ limits: commands whose size you choose (umbmark --trials/--runs, simulate --rate
   trajectory files) are sized first and refused beyond --max-memory (default 2G) or --max-time
   (default 1h).
 errors: one line 'omnikin: error: ...' on stderr; exit status 2 for bad input or usage, 1 when
-  something fails while running (writing an output, a hardware link), 130 on Ctrl-C, 143 on
-  SIGTERM (timeout, kill); interrupted or terminated, a command leaves no partial output
-  (omnikin sweep keeps the tasks it finished, to resume from)."""
+  something fails while running (writing an output, a hardware link).
+stopping: view, sim and ros serve until stopped: Ctrl-C or SIGTERM ends them normally (status 0,
+  'omnikin view: stopped (Ctrl-C)'). Any other command stopped before it finished says
+  'omnikin: interrupted' (status 130, Ctrl-C) or 'omnikin: terminated (SIGTERM)' (143: timeout,
+  kill) and leaves no partial output (omnikin sweep keeps the tasks it finished, to resume from)."""
 
 MESSAGE_LIMIT = 800
 """Longest error or warning line printed [characters]."""
@@ -679,32 +688,45 @@ def main(argv=None) -> int:
 
     Every failure ends here as one line on stderr (:func:`_fail`), whatever raised it: usage
     and input errors (2), failures while running (1; writing an output: the one place an
-    :class:`OutputError` becomes a status), Ctrl-C (130), SIGTERM or SIGHUP (:class:`Terminated`,
-    128 + the signal), a closed pipe (141, quiet),
+    :class:`OutputError` becomes a status), a closed pipe (141, quiet),
     floating-point trouble in omnikin's own computations (2: an input out of range; NumPy's
     warnings are errors inside a command), anything unexpected (1, ``internal error``; set
     ``OMNIKIN_TRACEBACK=1`` to see where). Other libraries' warnings print as one line.
     Standard output and error may be closed or in an encoding without every character
-    (:func:`_standard_streams`).
+    (:func:`_standard_streams`). Ctrl-C, SIGTERM and SIGHUP (:class:`Terminated`) are not
+    failures: a server (:data:`SERVERS`) ends with status 0 (:func:`_stopped`), any other
+    command with 130 or 128 + the signal (:func:`_ended`).
     """
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
+    STOPPED.clear()
     with _standard_streams(), _termination_unwinds() as fired:
         return _main(argv, fired)
 
 
 def _main(argv: list[str], fired: list[int]) -> int:
+    # the command's name: parsed, or before that the first argument naming a server (a server
+    # stopped while omnikin still starts is stopped all the same)
+    command: list[str] = [argv[0]] if argv and argv[0] in SERVERS else []
     try:
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning
             warnings.filterwarnings("error", category=RuntimeWarning, module=r"omnikin(\.|$)")
             try:
-                status = _run(argv)
+                status = _run(argv, command)
             except Exception:
                 if fired:  # a library turned the termination into an error of its own (matplotlib's
                     raise Terminated(fired[0]) from None  # C code: 'initialization failed'): it is one
                 raise
+            if STOPPED and command and command[0] in SERVERS:  # stopped inside until_stopped()
+                _stopped(command[0], STOPPED[0])
             sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
             return status
+    except (KeyboardInterrupt, Terminated) as exc:
+        if command and command[0] in SERVERS:  # the user stops a server: its normal end
+            return _stopped(command[0], stop_name(exc))
+        if isinstance(exc, Terminated):
+            return _ended(f"terminated ({stop_name(exc)})", 128 + exc.signum)
+        return _ended(f"interrupted; {exc}" if str(exc) else "interrupted", 130)
     except UsageError as exc:
         return _fail(f"{exc.command + ': ' if exc.command else ''}{exc} (see {exc.help_hint})", 2)
     except OutputError as exc:  # the one place for write failures: the message names the path
@@ -717,10 +739,6 @@ def _main(argv: list[str], fired: list[int]) -> int:
         return _fail(exc, 1)
     except ImportError as exc:  # an optional extra is missing (the message names it)
         return _fail(exc, 2)
-    except KeyboardInterrupt as exc:  # a command may say what is kept (omnikin sweep: how to resume)
-        return _fail(f"interrupted; {exc}" if str(exc) else "interrupted", 130)
-    except Terminated as exc:
-        return _fail(f"terminated ({signal.Signals(exc.signum).name})", 128 + exc.signum)
     except BrokenPipeError:  # the reader of standard output went away: stop quietly
         _quiet_stdout()
         return 141
@@ -749,7 +767,8 @@ def _main(argv: list[str], fired: list[int]) -> int:
         )
 
 
-def _run(argv: list[str]) -> int:
+def _run(argv: list[str], command: list[str]) -> int:
+    """Parse and run; the command's name is appended to ``command`` once known."""
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -758,35 +777,45 @@ def _run(argv: list[str]) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    command[:] = [args.command]
     with running(args):  # every output of the command checked together before any work
         return args.func(args)
 
 
 def _fail(message, status: int) -> int:
     """Print ``omnikin: error: MESSAGE`` as one bounded line on stderr; return ``status``."""
+    return _say(f"omnikin: error: {one_line(message, MESSAGE_LIMIT)}", status)
+
+
+def _ended(message, status: int) -> int:
+    """A command the user interrupted or terminated before it finished: ``omnikin: MESSAGE`` (not
+    an error: the user asked for it; the status, 130 or 128 + the signal, tells a script that
+    the work is not done); return ``status``."""
+    return _say(f"omnikin: {one_line(message, MESSAGE_LIMIT)}", status)
+
+
+def _stopped(command: str, how: str) -> int:
+    """A server the user stopped (:data:`SERVERS`): ``omnikin COMMAND: stopped (HOW)``, status 0."""
+    return _say(f"omnikin {command}: stopped ({how})", 0)
+
+
+def _say(line: str, status: int) -> int:
     try:
-        print(f"omnikin: error: {one_line(message, MESSAGE_LIMIT)}", file=sys.stderr)
+        print(line, file=sys.stderr)
         sys.stderr.flush()
     except (OSError, ValueError):  # stderr itself is gone: nothing more to say
         pass
     return status
 
 
+SERVERS = frozenset({"view", "sim", "ros"})
+"""Commands that run until the user stops them (a page, a window, a ROS node): Ctrl-C, SIGTERM
+or SIGHUP is their normal end, status 0 (:func:`_stopped`)."""
+
+
 TERMINATION_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
 """Signals that end a command like Ctrl-C does (:class:`Terminated`): ``timeout``, ``kill``,
 systemd, a closed terminal."""
-
-
-class Terminated(BaseException):
-    """A termination signal arrived (:data:`TERMINATION_SIGNALS`). Raised by the signal handler
-    :func:`main` installs, it unwinds the command like ``KeyboardInterrupt`` does, so every
-    cleanup runs (a temporary file, a staging folder: :mod:`omnikin.io.output`); the exit
-    status is 128 + the signal number (143 for SIGTERM). Not an :class:`Exception`: no
-    ``except Exception`` swallows it."""
-
-    def __init__(self, signum: int):
-        super().__init__(signum)
-        self.signum = signum
 
 
 @contextlib.contextmanager

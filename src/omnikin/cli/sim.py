@@ -13,6 +13,7 @@ from .common import (
     load_robot,
     number,
     teleop_limits,
+    until_stopped,
 )
 
 EPILOG = """keys (the window must have the keyboard focus):
@@ -112,7 +113,9 @@ def cmd_sim(args) -> int:
         limits=limits,
         echo=sys.stdout if args.echo else None,
     )
-    reason = sim.run(args.duration)
+    reason = "stopped"  # Ctrl-C or SIGTERM: the normal end of a window (the report is still written)
+    with until_stopped():
+        reason = sim.run(args.duration)
     if args.report:
         write_text(args.report, to_json(sim.report(reason)) + "\n")
     return 0

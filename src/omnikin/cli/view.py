@@ -34,8 +34,12 @@ replay (--replay: no driving; keys 1/2/3 still move the camera):
       /odom), the wheel angles and steering of --joint-states-topic (default /joint_states; joint
       name = wheel name, W_steer for steering; without it, from the kinematics); the bags of
       'omnikin simulate ROBOT --path ... --bag OUT.bag' have all three
+  omnikin view --replay before-report --replay after-report
+      the runs of several reports (or several bags of ROBOT) on one page
 The Replay folder has the run selector, a time slider, Play/Pause and the playback speed; the
-whole true and odometry paths of the run are drawn, the robot at the slider's time.
+whole true and odometry paths of the run are drawn, the robot at the slider's time; "shown
+together" adds other runs (their paths, a see-through robot at the same time), and the camera
+preset "run" frames them all.
 
 live ROS (--ros): the page follows a running 'omnikin ros ROBOT' node in the same
 ROS_DOMAIN_ID: the robot at its ground_truth (else its odometry), its odom and joint_states;
@@ -99,7 +103,9 @@ def add_parsers(sub, robot_help: str) -> None:
     replay.add_argument(
         "--replay",
         metavar="REPORT_DIR|BAG",
-        help="play back the runs of an omnikin umbmark report folder, or a ROS 2 bag of ROBOT (see below)",
+        action="append",
+        help="play back the runs of an omnikin umbmark report folder, or a ROS 2 bag of ROBOT (see below); "
+        "again: the runs of several, shown together",
     )
     for role, default in (("ground-truth", "/ground_truth"), ("odom", "/odom"), ("joint-states", "/joint_states")):
         replay.add_argument(
@@ -244,7 +250,7 @@ def cmd_replay(args) -> int:
         raise InputError(f"{flag} does not apply to --replay (the runs are recorded, not simulated)")
     require_viser()
     from ..viewer.replay_page import ReplayViewer
-    from ..viewer.replay_sources import BAG_TOPICS, load_replay
+    from ..viewer.replay_sources import BAG_TOPICS, combine, load_replay
 
     topics = {
         role: check_topic(getattr(args, f"{role}_topic"), f"--{role.replace('_', '-')}-topic")
@@ -254,13 +260,19 @@ def cmd_replay(args) -> int:
 
     robot = load_robot(args.robot) if args.robot is not None else None
     budget = Budget.of(args)
-    source = load_replay(
-        args.replay,
-        robot,
-        topics,
-        required=named,
-        max_messages=budget.messages(POSE_BYTES),
-        max_message_bytes=int(budget.memory // LARGEST_MESSAGE_SHARE),
+    files = len(args.replay)  # --max-memory is shared by the files
+    source = combine(
+        [
+            load_replay(
+                path,
+                robot,
+                topics,
+                required=named,
+                max_messages=max(1, budget.messages(POSE_BYTES) // files),
+                max_message_bytes=int(budget.memory // (LARGEST_MESSAGE_SHARE * files)),
+            )
+            for path in args.replay
+        ]
     )
     for note in source.notes:
         print(f"omnikin view: {note}", file=sys.stderr)

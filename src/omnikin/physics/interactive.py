@@ -109,7 +109,7 @@ HEADING_RGBA = (1.0, 0.5, 0.0, 1.0)
 SHUTDOWN_WAIT = 60.0
 """Longest wait [s] for the viewer's render thread to end after the window is closed (it ends
 within a frame; software OpenGL on a loaded machine may take seconds for one)."""
-STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM} | ({signal.SIGHUP} if hasattr(signal, "SIGHUP") else set())
 """Signals held back while the viewer starts (:meth:`InteractiveSim.run`)."""
 CAMERAS = ("free", "top", "follow")
 CAMERA_DISTANCE = 8.0

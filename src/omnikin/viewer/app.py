@@ -16,7 +16,7 @@ import threading
 import time
 
 from .live import PageRobot, Snapshot
-from .panel import CameraControl, DriveControls, GoalMarker, Readouts, robot_extent
+from .panel import CameraControl, DriveControls, FirstView, GoalMarker, Readouts, robot_extent
 from .scene import RobotView, draw_world
 from .serving import CONTROL_PERIOD, SLOW_PERIOD, PageServers
 
@@ -42,6 +42,8 @@ class LiveViewer:
             self.drive = DriveControls(self.server, live)
             extent = robot_extent(live.description)
             self.camera = CameraControl(self.server, extent, clear_trails=self.robot.clear_trails)
+            self.first_view = FirstView(self.server, extent)
+            self.first_view.frame(live.pose)
             self.readouts = Readouts(self.server, live.description)
             self.goal = GoalMarker(self.server, live)
         except BaseException:
@@ -92,6 +94,7 @@ class LiveViewer:
                     for trail in self.trails.values():
                         trail.flush()
                     self.readouts.slow(snapshot)
+                    self.first_view.frame(snapshot.truth)  # a page opened now sees the robot
             self.server.flush()
             self._wake.wait(max(0.0, CONTROL_PERIOD - (self.clock() - now)))
             self._wake.clear()

@@ -97,7 +97,9 @@ class Snapshot:
     of the true wheels, ``steer`` [rad] relative to the mounting drive direction (NaN: not
     steered; a castor's swivel). ``residual``: the forward-kinematics residual of the odometry
     [rad/s]. ``roller_angles`` [rad] and ``roller_speeds`` [rad/s] per wheel (None: no rollers):
-    the roller in contact, as the body motion implies (:mod:`omnikin.physics.joint_motion`)."""
+    the roller in contact, as the body motion implies (:mod:`omnikin.physics.joint_motion`).
+    ``missing``: the readouts without data (``truth``, ``odometry``, ``twist``, ``command``,
+    ``residual``), which the page shows as ``missing_why`` ("not recorded"), never as zeros."""
 
     t: float
     truth: tuple[float, float, float]
@@ -111,6 +113,8 @@ class Snapshot:
     residual: tuple[float, ...]
     roller_angles: tuple[float | None, ...] = ()
     roller_speeds: tuple[float | None, ...] = ()
+    missing: tuple[str, ...] = ()
+    missing_why: str = "not recorded"
 
 
 class PageRobot:

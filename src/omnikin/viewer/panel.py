@@ -3,10 +3,12 @@
 - **Drive**: the keys (W/S A/D Q/E held, space stops, ``[``/``]`` steer, 1/2/3 cameras), sliders
   for a twist held until changed (Drive) and a Stop button; steering by hand for robots with
   steerable wheels (at rest).
-- **Camera**: presets *top* (straight down on the robot, world +x to the right and +y up),
-  *follow* (behind the robot along its heading, moving with it) and *free* (the mouse:
-  drag rotates, right-drag moves, wheel zooms), and the size of the view [m] the top and follow
-  cameras frame.
+- **Camera**: presets *top* (straight down on the robot, world +x to the right and +y up,
+  moving with it), *follow* (behind the robot along its heading, moving with it), *free* (the
+  mouse: drag rotates, right-drag moves, wheel zooms) and, on a replay, *run* (straight down on
+  the whole of the runs shown), and the size of the view [m] the top and follow cameras frame.
+  The first view (:class:`FirstView`) looks at the robot from behind and above, from a distance
+  that frames :data:`VIEW_SIZE` robot reaches.
 - **Readouts**: pose (true and odometry), twist, command, forward-kinematics residual, every
   control step; a table of the joints like Villasenor et al.'s (their Fig. 9): per wheel its
   steering angle and wheel angle [deg], speed and its rollers' speed [rad/s] and the position of
@@ -137,17 +139,64 @@ class GoalMarker:
             self.status.content = text
 
 
+FIRST_VIEW_AZIMUTH = math.radians(-30.0)
+"""Where the first view looks from, about the vertical, from straight behind the robot [rad]."""
+FIRST_VIEW_ELEVATION = math.radians(35.0)
+"""Elevation of the first view above the floor [rad]."""
+
+
+class FirstView:
+    """The first view of every page that connects (viser's initial camera), kept on the robot
+    of reach ``extent`` [m] (:func:`robot_extent`) by :meth:`frame`."""
+
+    def __init__(self, server: viser.ViserServer, extent: float):
+        self.server = server
+        self.extent = extent
+        self.at: tuple[float, float] | None = None  # where it looks [m]
+
+    def frame(self, pose) -> None:
+        """Look at the robot's reference point at ``pose`` ``(x, y, theta)`` [m, m, rad] from
+        behind (:data:`FIRST_VIEW_AZIMUTH`) and above (:data:`FIRST_VIEW_ELEVATION`), at the
+        distance ``d = S / (2 tan(fov / 2))`` at which the camera's vertical field of view spans
+        ``S = VIEW_SIZE extent`` [m]. Nothing is sent while the robot is within ``extent`` of
+        where it already looks (a message to every page spared)."""
+        x, y, theta = (float(v) for v in pose)
+        if self.at is not None and math.hypot(x - self.at[0], y - self.at[1]) < self.extent:
+            return
+        self.at = (x, y)
+        camera = self.server.initial_camera
+        distance = VIEW_SIZE * self.extent / (2 * math.tan(camera.fov / 2))
+        azimuth = theta + FIRST_VIEW_AZIMUTH
+        flat = distance * math.cos(FIRST_VIEW_ELEVATION)
+        camera.look_at = (x, y, 0.0)
+        camera.position = (
+            x - flat * math.cos(azimuth),
+            y - flat * math.sin(azimuth),
+            distance * math.sin(FIRST_VIEW_ELEVATION),
+        )
+
+
 class CameraControl:
     """The Camera folder: presets (module docstring) for every page, the view size, and the
-    trails' Clear button when ``clear_trails`` is given."""
+    trails' Clear button when ``clear_trails`` is given; ``fit``, a function returning the box
+    ``(x_min, y_min, x_max, y_max)`` [m] of the runs shown, adds the *run* preset."""
 
-    def __init__(self, server: viser.ViserServer, extent: float, clear_trails: Callable[[], None] | None = None):
+    def __init__(
+        self,
+        server: viser.ViserServer,
+        extent: float,
+        clear_trails: Callable[[], None] | None = None,
+        fit: Callable[[], tuple[float, float, float, float]] | None = None,
+    ):
         self.server = server
         self.camera = "free"
         self.pose: tuple[float, float, float] | None = None
+        self.extent = extent
+        self.fit = fit
+        self._placed: tuple | None = None  # what a following camera was last placed for
         gui = server.gui
         with gui.add_folder("Camera"):
-            self.buttons = gui.add_button_group("preset", CAMERAS)
+            self.buttons = gui.add_button_group("preset", CAMERAS + (("run",) if fit is not None else ()))
             self.buttons.on_click(lambda e: self.set(e.target.value))
             self.view_size = gui.add_slider(
                 "view size [m]", extent, 40 * extent, extent / 10, round(VIEW_SIZE * extent, 3)
@@ -161,26 +210,39 @@ class CameraControl:
             self.set(action.removeprefix("camera_"))
 
     def set(self, preset: str) -> None:
-        if preset not in CAMERAS:
+        if preset not in CAMERAS and not (preset == "run" and self.fit is not None):
             return
         self.camera = preset
+        self._placed = None
         if self.pose is not None:
             self._place(self.pose)
 
     def follow(self, pose: tuple[float, float, float]) -> None:
         """The robot is at ``pose``: a following camera moves with it."""
         self.pose = pose
-        if self.camera == "follow":
-            self._place(pose)
+        if self.camera in ("follow", "top"):
+            placed = (pose, float(self.view_size.value), tuple(self.server.get_clients()))
+            if placed != self._placed:  # (a camera message redraws every page: only when it moves)
+                self._place(pose)
+                self._placed = placed
+
+    def refit(self) -> None:
+        """The runs shown changed: a *run* camera frames them again."""
+        if self.camera == "run" and self.pose is not None:
+            self._place(self.pose)
 
     def _place(self, pose: tuple[float, float, float]) -> None:
         if self.camera == "free":
             return
         x, y, theta = pose
         size = float(self.view_size.value)
+        if self.camera == "run" and self.fit is not None:
+            x0, y0, x1, y1 = self.fit()  # the box of the runs, a robot's reach round it
+            x, y = (x0 + x1) / 2, (y0 + y1) / 2
+            size = 1.1 * max(x1 - x0, y1 - y0) + 2 * self.extent
         for client in self.server.get_clients().values():
             camera = client.camera
-            if self.camera == "top":
+            if self.camera in ("top", "run"):
                 # looking down from a height that frames `size` metres; a hair south of the
                 # robot so that the view's up is +y (straight down has no up)
                 height = size / (2 * math.tan(camera.fov / 2))
@@ -241,7 +303,8 @@ class Readouts:
 
 
 def readout_html(s: Snapshot | None) -> str:
-    """Pose, twist, command and residual of ``s`` as the readout element (module docstring)."""
+    """Pose, twist, command and residual of ``s`` as the readout element (module docstring); a
+    readout in ``s.missing`` reads ``s.missing_why`` (and ``data-missing`` names them)."""
     if s is None:
         return '<div id="omnikin-readout">waiting for the first step</div>'
     x, y, th = s.truth
@@ -259,6 +322,8 @@ def readout_html(s: Snapshot | None) -> str:
         "omega": s.twist[2],
     }
     data = " ".join(f'data-{k}="{_f(v)}"' for k, v in attributes.items())
+    if s.missing:
+        data += f' data-missing="{html.escape(" ".join(s.missing), quote=True)}"'
     residual = math.sqrt(sum(r * r for r in s.residual)) if s.residual else 0.0
     rows = [
         ("t", f"{s.t:.2f} s"),
@@ -268,6 +333,10 @@ def readout_html(s: Snapshot | None) -> str:
         ("command", f"vx {s.command[0]:+.3f}, vy {s.command[1]:+.3f}, omega {s.command[2]:+.3f}"),
         ("FK residual", f"{residual:.2e} rad/s" if s.residual else "- (not measured)"),
     ]
+    stands_in = {"truth": " (drawn at the odometry)", "odometry": " (the truth stands in)"}
+    for key, row in (("truth", 1), ("odometry", 2), ("twist", 3), ("command", 4), ("residual", 5)):
+        if key in s.missing:  # no data: said, never shown as zeros
+            rows[row] = (rows[row][0], s.missing_why + stands_in.get(key, ""))
     body = "".join(f"<tr><td>{k}</td><td>{html.escape(v)}</td></tr>" for k, v in rows)
     return f'<div id="omnikin-readout" {data}><table style="font-size:0.8em">{body}</table></div>'
 

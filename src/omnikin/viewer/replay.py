@@ -125,12 +125,16 @@ class JointSeries:
 
 @dataclass(frozen=True)
 class Track:
-    """One recorded run (module docstring); ``name`` is how the page lists it."""
+    """One recorded run (module docstring); ``name`` is how the page lists it; ``missing``: the
+    pose series the recording lacks (``"truth"``, ``"odometry"``: the other one stands in for
+    it); ``robot``: the robot that drove it (None: the replay source's)."""
 
     name: str
     truth: PoseSeries
     odometry: PoseSeries
     joints: JointSeries | None = None
+    missing: tuple[str, ...] = ()
+    robot: Robot | None = None
 
     @property
     def duration(self) -> float:
@@ -255,4 +259,5 @@ class TrackReplay:
             residual=(),
             roller_angles=rollers,
             roller_speeds=roller_speeds,
+            missing=("command", "residual", *self.track.missing),  # a recording has no command, no residual
         )

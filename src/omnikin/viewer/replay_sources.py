@@ -14,15 +14,17 @@
   played with that one for both (:attr:`ReplaySource.notes` says so); a bag with neither, or
   without a topic the user named, is refused, naming the topics it has.
 
-:func:`load_replay` tells the two apart. Every problem is one line naming the file (and the
-line or topic): :class:`ReplayError` or the reader's own error.
+:func:`load_replay` tells the two apart; :func:`combine` puts the runs of several (reports,
+bags) on one page. Every problem is one line naming the file (and the line or topic):
+:class:`ReplayError` or the reader's own error.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..errors import InputError, one_line, shorten
@@ -193,6 +195,7 @@ def load_bag(
         series(first_truth, first_truth.topic),
         series(first_odom, first_odom.topic),
         joint_series,
+        missing=tuple(role for role, got in (("truth", truth), ("odometry", odom)) if got is None),
     )
     return ReplaySource(str(bag), robot, [track], None, notes)
 
@@ -223,3 +226,51 @@ def load_replay(path, robot: Robot | None, topics: dict | None = None, **options
             f"{shown(path)}: a bag does not say which robot drove it: give ROBOT (omnikin view ROBOT --replay BAG)"
         )
     return load_bag(path, robot, topics, **options)
+
+
+def wheels_of(robot: Robot) -> list[tuple[str, str]]:
+    """The robot's wheels as ``(name, type)`` in file order: what must agree for runs of two
+    robots to be drawn by one drawing."""
+    return [(w.name, w.type) for w in robot.wheels]
+
+
+def combine(sources: Sequence[ReplaySource]) -> ReplaySource:
+    """The runs of ``sources`` (``omnikin view --replay A --replay B``: before and after, two
+    reports, two bags) as one :class:`ReplaySource`: every track keeps the robot that drove it
+    (:attr:`~omnikin.viewer.replay.Track.robot`), and with more than one source its name is
+    prefixed by its file's name (``after: before cw run 1``; a bag's track is named after its
+    file already), numbered when two are alike. The robots must have the same wheels (names
+    and types, in order; as-built sizes may differ): else one line names both. The UMBmark
+    square is the first report's."""
+    if len(sources) == 1:
+        return sources[0]
+    first = sources[0]
+    tracks: list[Track] = []
+    names: set[str] = set()
+    for source in sources:
+        if wheels_of(source.robot) != wheels_of(first.robot):
+
+            def listed(src: ReplaySource) -> str:
+                wheels = wheels_of(src.robot)
+                return f"{shorten(src.robot.name)} with {len(wheels)} wheels {shorten([n for n, _ in wheels])}"
+
+            raise ReplayError(
+                f"{shown(source.label)}: its runs are of {listed(source)}, those of {shown(first.label)} of "
+                f"{listed(first)}: runs shown together must be of one robot"
+            )
+        prefix = Path(source.label).name or source.label
+        for track in source.tracks:
+            name = track.name if track.name == prefix else f"{prefix}: {track.name}"
+            base, k = name, 2
+            while name in names:
+                name, k = f"{base} ({k})", k + 1
+            names.add(name)
+            tracks.append(replace(track, name=name, robot=track.robot or source.robot))
+    sides = [s.side for s in sources if s.side is not None]
+    return ReplaySource(
+        ", ".join(s.label for s in sources),
+        first.robot,
+        tracks,
+        sides[0] if sides else None,
+        [note for s in sources for note in s.notes],
+    )

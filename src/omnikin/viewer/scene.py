@@ -13,7 +13,13 @@ description the MuJoCo model is written from), a tree of scene nodes:
 - ``.../hub/spin`` turned about the axle (y) by the wheel angle [rad]: tyre or hub disc, a
   marker that shows the turning, and the rollers of a Swedish wheel as one batched mesh of
   ellipsoids (semi-axes ``a`` along the spin axis, ``b`` across), each turned about its own
-  spin axis by its roller angle.
+  spin axis by its roller angle;
+- ``/robot/heading``: the heading arrow (:func:`arrow_mesh`), from the reference point along the
+  body's +x, flat above everything else of the robot (:func:`robot_top`), so that every camera
+  (from above, from behind, the mouse's) sees which way the robot faces.
+
+:class:`RobotView` adds the odometry's pose beside it: ``/odometry`` with an arrow of its own
+(narrower, magenta, a little higher: where the two poses agree, the truth's green shows round it).
 
 Nodes are named by index, never by the file's wheel names (which may hold ``/``). The scene
 around the robot (:func:`draw_ground`, :func:`draw_umbmark_square`, :class:`Trail`) is in the
@@ -31,6 +37,7 @@ import viser.transforms as vtf
 
 from ..physics.description import PhysicalRobot, WheelBody
 from .live import Snapshot
+from .panel import robot_extent
 
 CHASSIS_COLOUR = (20, 160, 170)
 TYRE_COLOUR = (45, 45, 45)
@@ -103,12 +110,77 @@ def roller_base_rotations(wheel: WheelBody) -> np.ndarray:
     return ry @ rz
 
 
-class RobotDrawing:
-    """The robot's nodes in ``scene`` (module docstring); :meth:`update` moves them."""
+def robot_top(description: PhysicalRobot) -> float:
+    """Height [m] of the highest point of the robot as drawn: the chassis' top, the wheels'
+    tops (hub height plus radius)."""
+    chassis = description.chassis
+    return max([chassis.centre[2] + chassis.size[-1]] + [w.hub[2] + w.radius for w in description.wheels])
 
-    def __init__(self, scene: viser.SceneApi, description: PhysicalRobot, root: str = "/robot", opacity=None):
+
+def arrow_mesh(length: float, width: float, thickness: float) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and triangles of a flat arrow along +x from the origin: a shaft ``width`` [m]
+    wide and a head ``2.5 width`` wide and ``0.3 length`` long, ending at ``x = length``, a
+    slab ``thickness`` [m] thick from ``z = 0`` up. Two convex prisms (shaft, head)."""
+    head = 0.3 * length
+    shaft = [(0.0, -width / 2), (length - head, -width / 2), (length - head, width / 2), (0.0, width / 2)]
+    tip = [(length - head, -1.25 * width), (length, 0.0), (length - head, 1.25 * width)]
+    vertices: list[tuple[float, float, float]] = []
+    faces: list[tuple[int, int, int]] = []
+    for outline in (shaft, tip):  # counter-clockwise seen from above
+        n, base = len(outline), len(vertices)
+        vertices += [(x, y, 0.0) for x, y in outline] + [(x, y, thickness) for x, y in outline]
+        faces += [(base, base + k + 1, base + k) for k in range(1, n - 1)]  # bottom, facing down
+        faces += [(base + n, base + n + k, base + n + k + 1) for k in range(1, n - 1)]  # top, facing up
+        for k in range(n):
+            j = (k + 1) % n
+            faces += [(base + k, base + j, base + n + j), (base + k, base + n + j, base + n + k)]
+    return np.asarray(vertices, dtype=np.float32), np.asarray(faces, dtype=np.int32)
+
+
+HEADING_LENGTH = 1.3
+"""Length of the heading arrow in robot reaches (:func:`robot_extent`): its head shows beyond
+the wheels."""
+
+
+def add_heading_arrow(
+    scene: viser.SceneApi, name: str, description: PhysicalRobot, colour, *, narrow=False, opacity=None
+):
+    """The heading arrow of :func:`arrow_mesh` at ``name`` (a child of the pose's frame), sized
+    to the robot and lying just above :func:`robot_top`; ``narrow``: the odometry's, half as
+    wide and a slab higher."""
+    reach = robot_extent(description)
+    thickness = 0.04 * reach
+    width = 0.16 * reach * (0.5 if narrow else 1.0)
+    vertices, faces = arrow_mesh(HEADING_LENGTH * reach, width, thickness)
+    z = robot_top(description) + (2.5 if narrow else 1.0) * thickness
+    return scene.add_mesh_simple(
+        name, vertices, faces, color=colour, position=(0.0, 0.0, z), side="double", opacity=opacity, cast_shadow=False
+    )
+
+
+TRUTH_COLOUR = (30, 160, 60)
+"""The true pose: its trail and the robot's heading arrow."""
+ODOMETRY_COLOUR = (200, 60, 200)
+"""The odometry: its trail and its heading arrow."""
+
+
+class RobotDrawing:
+    """The robot's nodes in ``scene`` (module docstring); :meth:`update` moves them.
+    ``heading_colour``: the heading arrow's colour."""
+
+    def __init__(
+        self,
+        scene: viser.SceneApi,
+        description: PhysicalRobot,
+        root: str = "/robot",
+        opacity=None,
+        heading_colour=None,
+    ):
         self.description = description
         self.root = scene.add_frame(root, show_axes=False)
+        self.heading = add_heading_arrow(
+            scene, f"{root}/heading", description, heading_colour or TRUTH_COLOUR, opacity=opacity
+        )
         chassis = description.chassis
         if chassis.shape == "cylinder":
             radius, half_height = chassis.size
@@ -220,10 +292,6 @@ class RobotDrawing:
                 handle.batched_wxyzs = vtf.SO3.from_matrix(base @ turn).wxyz
 
 
-TRUTH_COLOUR = (30, 160, 60)
-ODOMETRY_COLOUR = (200, 60, 200)
-
-
 def draw_world(scene: viser.SceneApi, extent: float, umbmark_side: float) -> None:
     """Lights, a ground grid ``2 extent`` [m] wide (10 cm cells) and the UMBmark squares of side
     ``umbmark_side`` [m] from the origin (0: none)."""
@@ -234,12 +302,14 @@ def draw_world(scene: viser.SceneApi, extent: float, umbmark_side: float) -> Non
 
 
 class RobotView:
-    """The robot (:class:`RobotDrawing`), its odometry's frame and the trails of its true pose
+    """The robot (:class:`RobotDrawing`, its heading arrow green), its odometry's pose
+    (``/odometry``: a narrower magenta arrow, module docstring) and the trails of its true pose
     (green) and odometry (magenta); ``trail`` passes options to both :class:`Trail` s."""
 
     def __init__(self, scene: viser.SceneApi, description: PhysicalRobot, **trail):
         self.drawing = RobotDrawing(scene, description)
-        self.odometry_frame = scene.add_frame("/odometry", axes_length=0.1, axes_radius=0.004)
+        self.odometry_frame = scene.add_frame("/odometry", show_axes=False)
+        self.odometry_arrow = add_heading_arrow(scene, "/odometry/heading", description, ODOMETRY_COLOUR, narrow=True)
         self.trails = {
             "truth": Trail(scene, "/trails/truth", TRUTH_COLOUR, **trail),
             "odometry": Trail(scene, "/trails/odometry", ODOMETRY_COLOUR, **trail),
@@ -253,15 +323,18 @@ class RobotView:
         """The robot at ``s``'s true pose with its joints, the odometry's frame at its pose."""
         self.drawing.update(s.truth, s.wheel_angles, s.steer, s.roller_angles)
         x, y, theta = s.odometry
-        self.odometry_frame.position = (x, y, 0.005)
+        self.odometry_frame.position = (x, y, 0.0)
         self.odometry_frame.wxyz = (math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2))
 
 
 def plain_lights(scene: viser.SceneApi) -> None:
-    """An ambient light and a sun instead of viser's environment map: image-based lighting costs
-    a browser without a GPU seconds per page load; plain lights show the robot's colours as they
+    """An ambient light and a sun instead of viser's environment map and default lights:
+    image-based lighting costs a browser without a GPU seconds per page load, and the default
+    lights' shadows made every frame of software WebGL 4 to 8 times slower (2.4 s instead of
+    0.3 s a frame on this loaded 2-core machine); plain lights show the robot's colours as they
     are."""
     scene.configure_environment_map(hdri=None)
+    scene.configure_default_lights(enabled=False, cast_shadow=False)
     scene.add_light_ambient("/lights/ambient", intensity=0.6)
     scene.add_light_directional("/lights/sun", intensity=1.2, position=(2.0, -3.0, 5.0))
 
