@@ -215,7 +215,7 @@ class PageInputs:
         show = _messages.NotificationShowMessage(
             uuid=str(uuid.uuid4()),
             props=_messages.NotificationProps(
-                title=f"omnikin: refused an input from this page ({count} so far)",
+                title=f"omnikin refused an input from this page ({count} since the viewer started)",
                 body=reason,
                 loading=False,
                 with_close_button=True,
