@@ -23,7 +23,9 @@ def without_source(message: dict) -> dict:
 @pytest.fixture
 def front():
     received: queue.SimpleQueue = queue.SimpleQueue()
-    server = FrontServer("127.0.0.1", 0, inner="/nonexistent/viser.sock", on_key=lambda m: received.put(without_source(m)), inputs=None)
+    server = FrontServer(
+        "127.0.0.1", 0, inner="/nonexistent/viser.sock", on_key=lambda m: received.put(without_source(m)), inputs=None
+    )
     server.start()
     yield server, received
     server.stop()

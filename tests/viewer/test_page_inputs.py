@@ -74,8 +74,15 @@ def hostile_messages() -> list[dict | bytes | str]:
         {"type": "GuiUpdateMessage", "updates": {"value": 1}},
         {"type": "ShareUrlRequest"},  # viser would open a tunnel to the internet
         {"type": "ShareUrlDisconnect"},
-        {"type": "FileTransferStartUpload", "source_component_uuid": "x", "transfer_uuid": "y",
-         "filename": "a", "mime_type": "b", "part_count": 1, "size_bytes": 10**12},
+        {
+            "type": "FileTransferStartUpload",
+            "source_component_uuid": "x",
+            "transfer_uuid": "y",
+            "filename": "a",
+            "mime_type": "b",
+            "part_count": 1,
+            "size_bytes": 10**12,
+        },
         {"type": "RunJavascriptMessage", "source": "alert(1)"},
         {"type": "NoSuchMessage"},
         {"no": "type"},
@@ -139,7 +146,11 @@ def test_hostile_values_for_every_control_are_refused_counted_and_told_and_the_v
         assert proc.poll() is None
 
         # the viewer goes on: a valid value from the same socket is taken and reaches the other page
-        slider = next(k for k, c in controls.items() if c["type"] == "GuiSliderMessage" and c["props"]["label"].startswith("view size"))
+        slider = next(
+            k
+            for k, c in controls.items()
+            if c["type"] == "GuiSliderMessage" and c["props"]["label"].startswith("view size")
+        )
         value = controls[slider]["props"]["min"]
         attacker.send(update(slider, value=value))
         observer.read(lambda got: any(m.get("type") == "GuiUpdateMessage" and m.get("uuid") == slider for m in got))

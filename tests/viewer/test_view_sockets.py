@@ -125,3 +125,15 @@ def test_the_page_of_the_printed_address_still_drives_the_robot(viewer, page, pa
     hold_key(page, "w", 0.8)
     wait_for(page, "Number(document.querySelector('#omnikin-readout').dataset.x) > 0.05", timeout=20)
     assert page_log.page_errors == [] and page_log.external == []
+
+
+def test_the_page_says_plainly_when_the_viewer_has_stopped(viewer, page):
+    proc, url = viewer
+    page.goto(url)
+    page.wait_for_selector("#omnikin-readout[data-x]", timeout=30000)
+    wait_for(page, "document.documentElement.dataset.omnikinKeys === 'connected'")
+    assert page.locator("#omnikin-gone").count() == 0  # no banner while the viewer runs
+    stop_viewer(proc)
+    banner = page.wait_for_selector("#omnikin-gone", timeout=20000)
+    assert banner is not None
+    assert "omnikin viewer has stopped" in banner.inner_text()

@@ -192,7 +192,9 @@ def serve(viewer, args, what: str) -> int:
         viewer.close()
         inputs = viewer.servers.inputs
         if inputs.refused:  # what pages sent that was refused (each page was told at the time)
-            print(f"omnikin view: refused {inputs.refused} input(s) from pages; the last: {inputs.last}", file=sys.stderr)
+            print(
+                f"omnikin view: refused {inputs.refused} input(s) from pages; the last: {inputs.last}", file=sys.stderr
+            )
     sys.stdout.flush()
     return 0
 

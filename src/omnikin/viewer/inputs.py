@@ -68,6 +68,10 @@ def _vector(value, size: int, bound: float = MAX_COORDINATE) -> bool:
     )
 
 
+def _not_vector(value, size: int) -> str:
+    return f"not {size} finite numbers within {MAX_COORDINATE:g}: {shorten(value)}"
+
+
 def _fields(message: dict, required: tuple[str, ...], optional: tuple[str, ...] = ()) -> str | None:
     """Why ``message`` does not have exactly the ``required`` fields (and maybe ``optional``)."""
     keys = set(message) - {"type"}
@@ -128,7 +132,11 @@ class PageInputs:
             return self._camera(message)
         if kind == "GuiUpdateMessage":
             return self._gui(message)
-        if kind in ("TransformControlsUpdateMessage", "TransformControlsDragStartMessage", "TransformControlsDragEndMessage"):
+        if kind in (
+            "TransformControlsUpdateMessage",
+            "TransformControlsDragStartMessage",
+            "TransformControlsDragEndMessage",
+        ):
             return self._gizmo(kind, message)
         return f"a message of type {shorten(kind, 50)}, which this page does not take"
 
@@ -139,7 +147,7 @@ class PageInputs:
             return f"a camera message that {wrong}"
         for name, size in (("wxyz", 4), ("position", 3), ("look_at", 3), ("up_direction", 3)):
             if not _vector(message[name], size):
-                return f"a camera {name} that is not {size} finite numbers within {MAX_COORDINATE:g}: {shorten(message[name])}"
+                return f"a camera {name} that is {_not_vector(message[name], size)}"
         fov, near, far = message["fov"], message["near"], message["far"]
         if not (_is_number(fov) and 0.0 < fov < math.pi):
             return f"a camera fov that is not in (0, pi) rad: {shorten(fov)}"
@@ -187,7 +195,11 @@ class PageInputs:
             options = tuple(handle.options)
             return None if isinstance(value, str) and value in options else f"one of {shorten(options)}"
         if isinstance(handle, viser.GuiTextHandle):
-            return None if isinstance(value, str) and len(value) <= MAX_TEXT else f"a text of at most {MAX_TEXT} characters"
+            return (
+                None
+                if isinstance(value, str) and len(value) <= MAX_TEXT
+                else f"a text of at most {MAX_TEXT} characters"
+            )
         return "a value this page takes (omnikin takes none for this kind of control)"
 
     def _gizmo(self, kind: str, message: dict) -> str | None:
@@ -202,7 +214,7 @@ class PageInputs:
             return "a marker message whose owner is not a string"
         for field, size in (("wxyz", 4), ("position", 3)):
             if field in pose and not _vector(message[field], size):
-                return f"marker {field} that is not {size} finite numbers within {MAX_COORDINATE:g}: {shorten(message[field])}"
+                return f"a marker {field} that is {_not_vector(message[field], size)}"
         return None
 
     # --- the notice ----------------------------------------------------------------------------
@@ -224,7 +236,11 @@ class PageInputs:
             ),
         )
         inner = msgspec.msgpack.encode(
-            {"messages": (show.as_serializable_dict([]),), "timestampSec": time.perf_counter(), "binaryBufferLengths": ()}
+            {
+                "messages": (show.as_serializable_dict([]),),
+                "timestampSec": time.perf_counter(),
+                "binaryBufferLengths": (),
+            }
         )
         compressed = self._zstd.compress(inner)
         return len(inner).to_bytes(8, "little") + len(compressed).to_bytes(8, "little") + compressed
