@@ -8,6 +8,7 @@ goes on serving (a valid value after the attack is taken), and its terminal show
 from __future__ import annotations
 
 import math
+import shutil
 
 import msgspec
 import pytest
@@ -165,3 +166,28 @@ def test_hostile_values_for_every_control_are_refused_counted_and_told_and_the_v
         err = stop_viewer(proc)
     assert "Traceback" not in err, err[-3000:]
     assert f"omnikin view: refused {sent} input(s) from pages" in err
+
+
+def test_a_slider_end_rounded_by_the_page_is_taken_and_a_step_beyond_is_not():
+    """The page rounds a slider to its step in floating point: 50 steps of 0.006 are
+    0.30000000000000004 on a slider ending at 0.3 (a user dragging to the end); one more step is
+    past the end."""
+    from omnikin.viewer.inputs import PageInputs
+    from omnikin.viewer.serving import quiet, start_viser
+
+    server, folder = start_viser()
+    try:
+        slider = server.gui.add_slider("v", -0.3, 0.3, 0.006, 0.0)
+        inputs = PageInputs(server)
+        key = slider._impl.uuid
+        end = sum([0.006] * 50)
+        assert end > 0.3  # the rounding happens
+        assert inputs.check(msgspec.msgpack.encode(update(key, value=end))) is None
+        assert inputs.check(msgspec.msgpack.encode(update(key, value=-end))) is None
+        beyond = inputs.check(msgspec.msgpack.encode(update(key, value=0.306)))
+        assert beyond == "control 'v': 0.306 is not a number from -0.3 to 0.3"
+        assert inputs.refused == 1
+    finally:
+        with quiet():
+            server.stop()
+        shutil.rmtree(folder, ignore_errors=True)

@@ -10,8 +10,9 @@ viser's client sends each message as one binary WebSocket message, the msgpack o
   :data:`MAX_PIXELS`, positions within :data:`MAX_COORDINATE` m;
 - ``GuiUpdateMessage``: a new ``value``, and nothing else, of an enabled control of this page
   (``uuid``): a button ``true``; a checkbox a boolean; a slider or number field a finite number
-  within its bounds; a dropdown or a button group one of its options; a text field a string of
-  at most :data:`MAX_TEXT` characters. Every other property (``min``, ``options``, ``label``,
+  within its bounds (give or take :data:`BOUND_SLACK` of its range: the page's rounding); a
+  dropdown or a button group one of its options; a text field a string of at most
+  :data:`MAX_TEXT` characters. Every other property (``min``, ``options``, ``label``,
   ``disabled``, ...) belongs to the server;
 - ``TransformControlsUpdateMessage``, ``...DragStartMessage``, ``...DragEndMessage`` of a
   transform control of this page (the goal marker), with a finite pose within
@@ -52,6 +53,9 @@ MAX_PIXELS = 1 << 16
 """Largest image side a page may report [pixels]."""
 MAX_COORDINATE = 1e6
 """Largest coordinate a page may send [m] (camera, goal marker)."""
+BOUND_SLACK = 1e-9
+"""A slider's value may pass its bounds by this fraction of its range: the page rounds to the
+step in floating point (50 steps of 0.006 make 0.30000000000000004 on a slider ending at 0.3)."""
 NOTICE_SECONDS = 8.0
 """How long a refusal's notification stays on the page [s]."""
 
@@ -188,7 +192,8 @@ class PageInputs:
             low, high = handle.min, handle.max
             low = -math.inf if low is None else low
             high = math.inf if high is None else high
-            if _is_number(value) and low <= value <= high:
+            slack = BOUND_SLACK * (high - low) if math.isfinite(high - low) else 0.0
+            if _is_number(value) and low - slack <= value <= high + slack:
                 return None
             return f"a number from {low:g} to {high:g}"
         if isinstance(handle, (viser.GuiDropdownHandle, viser.GuiButtonGroupHandle)):
