@@ -23,7 +23,9 @@ def without_source(message: dict) -> dict:
 @pytest.fixture
 def front():
     received: queue.SimpleQueue = queue.SimpleQueue()
-    server = FrontServer("127.0.0.1", 0, inner_port=9, on_key=lambda m: received.put(without_source(m)))
+    server = FrontServer(
+        "127.0.0.1", 0, inner="/nonexistent/viser.sock", on_key=lambda m: received.put(without_source(m)), inputs=None
+    )
     server.start()
     yield server, received
     server.stop()
@@ -90,7 +92,7 @@ def test_messages_that_are_not_key_messages_are_not_taken(text):
 
 def test_a_port_in_use_is_one_line_naming_the_address(front):
     server, _ = front
-    other = FrontServer("127.0.0.1", server.port, inner_port=9, on_key=lambda m: None)
+    other = FrontServer("127.0.0.1", server.port, inner="/nonexistent/viser.sock", on_key=lambda m: None, inputs=None)
     with pytest.raises(
         InputError,
         match=rf"cannot listen on '127\.0\.0\.1':{server.port} \(address already in use\): choose another --port",
@@ -202,7 +204,7 @@ def upgrade(server, *, host, origin, extra="", keep=None):
 
 
 def test_a_peer_that_never_answers_the_close_does_not_hold_up_the_stop():
-    server = FrontServer("127.0.0.1", 0, inner_port=9, on_key=lambda m: None)
+    server = FrontServer("127.0.0.1", 0, inner="/nonexistent/viser.sock", on_key=lambda m: None, inputs=None)
     server.start()
     kept: list = []
     own = f"127.0.0.1:{server.port}"

@@ -196,6 +196,11 @@ def serve(viewer, args, what: str) -> int:
         viewer.run(args.duration)
     finally:
         viewer.close()
+        inputs = viewer.servers.inputs
+        if inputs.refused:  # what pages sent that was refused (each page was told at the time)
+            print(
+                f"omnikin view: refused {inputs.refused} input(s) from pages; the last: {inputs.last}", file=sys.stderr
+            )
     sys.stdout.flush()
     return 0
 

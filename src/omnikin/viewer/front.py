@@ -3,7 +3,8 @@
 viser serves its page and its scene over one port but passes no key events to Python (its
 client handles keys for its own shortcuts only), and it cannot serve a script of ours. The
 front server therefore stands on the user's address (``--host``, ``--port``) in front of a
-viser server that listens on loopback only:
+viser server that listens on a Unix socket only this user can open
+(:func:`omnikin.viewer.serving.start_viser`): the front is the only socket a browser can reach.
 
 - ``GET /`` (and ``/index.html``): viser's own client page (bundled in the viser wheel, no
   internet needed) with ``<script src="/omnikin/teleop.js">`` added to its head;
@@ -13,7 +14,9 @@ viser server that listens on loopback only:
   socket's identity as ``source`` (:func:`parse_key_message` checks them; anything else is counted
   in :attr:`FrontServer.rejected`);
 - any other WebSocket: relayed both ways, message by message, to the viser server (the
-  client connects to the page's own origin, so it lands here).
+  client connects to the page's own origin, so it lands here). Each message of the page is
+  first checked by ``inputs`` (:class:`omnikin.viewer.inputs.PageInputs`, the one boundary of
+  the page's values): a refused one is not relayed, and the page gets its notice instead.
 
 Nothing a peer sends prints a traceback: the WebSocket library's log (a request that is not a
 GET, a broken handshake, a peer gone mid-message) and any error left in the server's tasks are
@@ -43,9 +46,10 @@ import threading
 from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 from urllib.parse import urlsplit
 
-from websockets.asyncio.client import connect
+from websockets.asyncio.client import unix_connect
 from websockets.asyncio.server import ServerConnection, serve
 from websockets.datastructures import Headers
 from websockets.exceptions import ConnectionClosed
@@ -53,6 +57,9 @@ from websockets.http11 import Request, Response
 
 from ..errors import InputError, shorten
 from ..runtime.teleop import MOVES
+
+if TYPE_CHECKING:
+    from .inputs import PageInputs
 
 KEYS_PATH = "/omnikin/keys"
 SCRIPT_PATH = "/omnikin/teleop.js"
@@ -193,13 +200,15 @@ def _response(status: http.HTTPStatus, body: bytes, content_type: str, gzipped: 
 
 class FrontServer:
     """Serves the page and the keys on ``host:port`` and relays the scene to the viser server on
-    ``127.0.0.1:inner_port`` (module docstring). ``on_key`` is called in the server's thread."""
+    the Unix socket ``inner`` (module docstring), every message of a page checked by ``inputs``.
+    ``on_key`` is called in the server's thread."""
 
-    def __init__(self, host: str, port: int, inner_port: int, on_key: Callable[[dict], None]):
+    def __init__(self, host: str, port: int, inner: str, on_key: Callable[[dict], None], inputs: PageInputs):
         self.host = host
         self.port = port
-        self.inner_port = inner_port
+        self.inner = inner
         self.on_key = on_key
+        self.inputs = inputs
         self.rejected = 0
         self.key_messages = 0
         self.connections = 0  # WebSockets open now
@@ -292,8 +301,9 @@ class FrontServer:
     async def _relay(self, connection: ServerConnection) -> None:
         protocols = [connection.subprotocol] if connection.subprotocol else None
         try:
-            async with connect(
-                f"ws://127.0.0.1:{self.inner_port}",
+            async with unix_connect(
+                self.inner,
+                uri="ws://localhost/",
                 subprotocols=protocols,
                 max_size=None,  # viser's own scene messages (this computer's) may be large
                 compression=None,
@@ -301,14 +311,21 @@ class FrontServer:
                 logger=self._log,
             ) as inner:
 
-                async def pump(source, sink) -> None:
+                async def pump(source, sink, check: bool) -> None:
                     try:
                         async for message in source:
-                            await sink.send(message)
+                            reason = self.inputs.check(message) if check else None
+                            if reason is None:
+                                await sink.send(message)
+                            else:  # refused (counted by inputs): the page is told, viser sees nothing
+                                await connection.send(self.inputs.notice(reason))
                     except ConnectionClosed:
                         pass  # either side went away: the other is closed below
 
-                tasks = [asyncio.create_task(pump(connection, inner)), asyncio.create_task(pump(inner, connection))]
+                tasks = [
+                    asyncio.create_task(pump(connection, inner, check=True)),
+                    asyncio.create_task(pump(inner, connection, check=False)),
+                ]
                 _, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
                 for task in pending:
                     task.cancel()

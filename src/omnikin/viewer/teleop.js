@@ -7,6 +7,9 @@
 // while a key is held (the server releases every key when a held key falls silent: a closed
 // tab or a lost link stops the robot). Keys typed into a text field, and keys with Ctrl, Alt or
 // Meta, are left to the page.
+//
+// When the server is gone (the key socket closed and a new one cannot be opened), a banner across
+// the top of the page says so plainly (#omnikin-gone); it goes when the server answers again.
 (() => {
   "use strict";
   const ACTIONS = {
@@ -18,14 +21,39 @@
   let socket = null;
   let sent = 0;
 
+  let connected = false;  // the server answered at least once
+
+  function gone(shown) {
+    let banner = document.getElementById("omnikin-gone");
+    if (!shown) {
+      if (banner !== null) banner.remove();
+      return;
+    }
+    if (banner !== null || document.body === null) return;
+    banner = document.createElement("div");
+    banner.id = "omnikin-gone";
+    banner.setAttribute("role", "alert");
+    banner.textContent = "The omnikin viewer has stopped (or this computer lost the link to it): "
+      + "this page no longer shows or drives the robot. Start omnikin view again and reload the page.";
+    banner.style.cssText = "position:fixed;top:0;left:0;right:0;z-index:100000;padding:12px 16px;"
+      + "background:#b00020;color:#fff;font:bold 16px sans-serif;text-align:center";
+    document.body.appendChild(banner);
+  }
+
   function connect() {
     const url = new URL("/omnikin/keys", window.location.href);
     url.protocol = url.protocol === "https:" ? "wss:" : "ws:";
+    let opened = false;
     socket = new WebSocket(url.href);
-    socket.onopen = () => { document.documentElement.dataset.omnikinKeys = "connected"; };
+    socket.onopen = () => {
+      opened = connected = true;
+      document.documentElement.dataset.omnikinKeys = "connected";
+      gone(false);
+    };
     socket.onclose = () => {
       document.documentElement.dataset.omnikinKeys = "closed";
       socket = null;
+      if (connected && !opened) gone(true);  // closed, and no new socket: the server is gone
       window.setTimeout(connect, 500);
     };
   }

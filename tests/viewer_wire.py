@@ -1,0 +1,134 @@
+"""A real ``omnikin view`` process and a raw client of viser's protocol, for the tests that attack
+the viewer as another program would (no browser).
+
+viser's wire format (viser 1.1, read from ``viser/infra/_infra.py``, written here again
+independently): a page sends each message as one binary WebSocket message, the msgpack of a dict
+with a ``type``; the server sends frames of two little-endian uint64 (the msgpack's size, the
+compressed size), the zstd-compressed msgpack ``{"messages": [...], ...}``, then raw buffers.
+The WebSocket subprotocol names viser's version (``viser-v1.1.1``).
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import threading
+import time
+
+import msgspec
+import psutil
+import viser
+import zstandard
+from websockets.sync.client import ClientConnection, connect
+
+from omnikin_paths import omnikin_env
+
+SUBPROTOCOL = f"viser-v{viser.__version__}"
+INPUT_CONTROLS = (
+    "GuiSliderMessage",
+    "GuiNumberMessage",
+    "GuiButtonMessage",
+    "GuiButtonGroupMessage",
+    "GuiDropdownMessage",
+    "GuiCheckboxMessage",
+    "GuiTextMessage",
+)
+"""viser's messages that create a control a page can change."""
+
+
+def start_viewer(*args: str) -> tuple[subprocess.Popen, str]:
+    """``omnikin view ARGS --port 0 --duration 300`` in a new process; it and the page's URL."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "omnikin.cli.main", "view", *args, "--port", "0", "--duration", "300"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=omnikin_env(),
+    )
+    line = proc.stdout.readline() if proc.stdout else ""
+    found = re.search(r"http://\S+/", line)
+    if not found:
+        proc.kill()
+        raise AssertionError(f"no address printed: {line!r} {proc.communicate()[1][-2000:]}")
+    return proc, found.group(0)
+
+
+def stop_viewer(proc: subprocess.Popen) -> str:
+    """Stop the viewer (SIGTERM, a normal end) and return its standard error."""
+    proc.terminate()
+    try:
+        _, err = proc.communicate(timeout=20)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        _, err = proc.communicate()
+    return err
+
+
+def listening_sockets(pid: int) -> list[tuple[str, int]]:
+    """Every TCP address ``pid`` and its children listen on."""
+    process = psutil.Process(pid)
+    found = set()
+    for p in [process, *process.children(recursive=True)]:
+        for c in p.net_connections(kind="inet"):
+            if c.status == psutil.CONN_LISTEN:
+                found.add((c.laddr.ip, c.laddr.port))
+    return sorted(found)
+
+
+def decode_frame(frame: bytes) -> list[dict]:
+    """The messages of one frame the viser server sent."""
+    size = int.from_bytes(frame[:8], "little")
+    compressed = int.from_bytes(frame[8:16], "little")
+    inner = zstandard.ZstdDecompressor().decompress(frame[16 : 16 + compressed], max_output_size=size)
+    return list(msgspec.msgpack.decode(inner)["messages"])
+
+
+class ViserClient:
+    """A raw client of the page's scene socket, as a page of the front's own origin opens it; a
+    thread of its own reads every frame as it comes (a page that stops reading is dropped by the
+    server's keepalive, as it should be)."""
+
+    def __init__(self, url: str):
+        ws_url = url.replace("http://", "ws://")
+        self.ws: ClientConnection = connect(
+            ws_url, origin=url.rstrip("/"), subprotocols=[SUBPROTOCOL], max_size=None, open_timeout=20
+        )
+        self.received: list[dict] = []
+        self.closed: BaseException | None = None
+        self._reader = threading.Thread(target=self._read_all, daemon=True)
+        self._reader.start()
+
+    def _read_all(self) -> None:
+        try:
+            for frame in self.ws:
+                if isinstance(frame, bytes):
+                    self.received.extend(decode_frame(frame))
+        except Exception as e:  # noqa: BLE001 (the socket closed, or a frame not in viser's format: said by read())
+            self.closed = e
+
+    def send(self, message: dict | bytes | str) -> None:
+        self.ws.send(message if isinstance(message, (bytes, str)) else msgspec.msgpack.encode(message))
+
+    def read(self, until, timeout: float = 20.0) -> list[dict]:
+        """Wait until ``until(received)`` holds; every message received."""
+        end = time.monotonic() + timeout
+        while not until(list(self.received)):
+            if self.closed is not None or not self._reader.is_alive():
+                raise AssertionError(f"the socket stopped: {self.closed!r}, close code {self.ws.close_code}")
+            if time.monotonic() > end:
+                raise AssertionError(f"never satisfied within {timeout} s")
+            time.sleep(0.02)
+        return list(self.received)
+
+    def of_type(self, *kinds: str) -> list[dict]:
+        return [m for m in list(self.received) if m.get("type") in kinds]
+
+    def controls(self) -> dict[str, dict]:
+        """The page's input controls after the backlog: uuid -> creating message."""
+        self.read(lambda got: any(m.get("type") == "ReplayDoneMessage" for m in got))
+        return {m["uuid"]: m for m in self.of_type(*INPUT_CONTROLS)}
+
+    def close(self) -> None:
+        self.ws.close()
+        self._reader.join(timeout=10)
