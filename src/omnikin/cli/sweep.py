@@ -26,16 +26,19 @@ the folder OUT_DIR:
   figures/tolerance.png, report.md: the answer
 
 where it runs:
-  by default a local Dask cluster of one worker process per core (--workers N); with
-  --scheduler tcp://HOST:8786, an existing Dask cluster (start one with 'dask scheduler' and
-  'dask worker tcp://HOST:8786' where omnikin[sweep] of the same version is installed).
-  The same study gives the same table whatever the workers, the cluster and the order in
-  which tasks finish.
+  by default a local Dask cluster of one worker process per core (--workers N) that only this
+  run can reach (TLS with temporary credentials); with --scheduler tls://HOST:8786 and
+  --tls-ca-file/--tls-cert/--tls-key, an existing cluster secured with TLS (started with
+  'dask scheduler --protocol tls' and 'dask worker tls://HOST:8786' with their own --tls-*
+  options, where omnikin[sweep] of the same version is installed; docs/sweeps.md). Results of
+  a worker of another omnikin or NumPy version are refused, whenever it joins. The same study
+  gives the same table whatever the workers, the cluster and the order in which tasks finish.
 
 examples:
   omnikin sweep examples/tolerance.yaml -o study/
   omnikin sweep examples/tolerance.yaml -o study/ --workers 1
-  omnikin sweep examples/layouts.yaml -o layouts/ --scheduler tcp://127.0.0.1:8786"""
+  omnikin sweep examples/layouts.yaml -o layouts/ --scheduler tls://HOST:8786 \
+      --tls-ca-file ca.pem --tls-cert me.pem --tls-key me.key"""
 
 
 def add_parsers(sub, robot_help: str) -> None:
