@@ -121,3 +121,15 @@ def test_force_with_a_scheduler_that_cannot_be_used_removes_nothing(tmp_path):
     again = run_entry_point("sweep", spec, "-o", tmp_path / "out", "--force", "--scheduler", "foo")
     assert again.returncode == 2 and "scheduler" in again.stderr, again.stderr
     assert sorted((tmp_path / "out" / "parts").rglob("*.parquet")) == parts
+
+
+def test_standard_output_cannot_hold_a_study_folder(tmp_path):
+    spec = tmp_path / "study.yaml"
+    spec.write_text("omnikin_sweep: 1\nrobots: [tomasi-omni3]\nseed: 3\ntrials: 1\n")
+    done = run_entry_point("sweep", spec, "-o", "-", cwd=tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr == (
+        "omnikin: error: -o -: a sweep writes a folder; - (standard output) cannot hold it: "
+        "name a folder, e.g. -o study/\n"
+    )
+    assert done.stdout == "" and not (tmp_path / "-").exists()

@@ -281,12 +281,12 @@ class StudyFolder:
         keep = (rank >= 0) & (trial < self.study.trials)
         table = table.filter(pa.array(keep))
         if table.num_rows:
-            order = np.lexsort((trial[keep], rank[keep]))
-            ranks, trials = rank[keep][order], trial[keep][order]
+            rows = np.lexsort((trial[keep], rank[keep]))
+            ranks, trials = rank[keep][rows], trial[keep][rows]
             twice = (ranks[1:] == ranks[:-1]) & (trials[1:] == trials[:-1])
             if twice.any():  # coverage() reads each trial from one part: a row twice is a fault of omnikin
                 raise RuntimeError(f"the trial table holds {int(twice.sum())} trials twice; nothing was written")
-            table = table.take(pa.array(order))
+            table = table.take(pa.array(rows))
         return table
 
     # --- the end ---------------------------------------------------------------------------
