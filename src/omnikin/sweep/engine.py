@@ -103,16 +103,25 @@ def _interrupts_ignored() -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
 
 
+QUIET_LOGGERS = ("distributed", "tornado", "asyncio")
+"""Loggers silenced in the sweep's process while it runs a cluster: Dask's, and those of the
+libraries under it that log a peer's failed connection (a foreign client refused by TLS) with a
+traceback."""
+
+
 @contextlib.contextmanager
 def _quiet_client_logs() -> Iterator[None]:
-    """Dask's own log lines off in this process (a lost scheduler reaches the user as one line)."""
-    logger = logging.getLogger("distributed")
-    level = logger.level
-    logger.setLevel(logging.CRITICAL + 1)
+    """Dask's own log lines off in this process (a lost scheduler reaches the user as one line,
+    a client refused for lacking the credentials as nothing)."""
+    loggers = [logging.getLogger(name) for name in QUIET_LOGGERS]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL + 1)
     try:
         yield
     finally:
-        logger.setLevel(level)
+        for logger, level in zip(loggers, levels, strict=True):
+            logger.setLevel(level)
 
 
 @dataclass(frozen=True)
@@ -207,7 +216,7 @@ def dask_client(
     if scheduler is None:
         count = workers or os.cpu_count() or 1
         security = Security.temporary()  # this run's own credentials (module docstring)
-        with dask.config.set(EMBEDDED_CONFIG):
+        with dask.config.set(EMBEDDED_CONFIG), _quiet_client_logs():
             with _interrupts_ignored():  # the processes started now inherit it: a Ctrl-C while they start
                 cluster = LocalCluster(  # up (importing, before the plugin) would print their tracebacks
                     n_workers=count,
@@ -243,7 +252,7 @@ def dask_client(
         except Exception as exc:  # noqa: BLE001 - not an address Dask can use (ValueError, a protocol not installed)
             raise InputError(
                 f"scheduler (--scheduler) {shorten(scheduler)}: not a scheduler address ({one_line(exc, 200)}); "
-                "give one like tcp://HOST:8786"
+                "give one like tls://HOST:8786 (or tcp://HOST:8786)"
             ) from None
         try:
             count = _check_workers(client, scheduler)
