@@ -1,5 +1,9 @@
 """A real Dask cluster on loopback for the sweep tests: ``dask scheduler`` and ``dask worker``
-processes started as a user would start them, each importing this checkout's omnikin."""
+processes started as a user would start them, each importing this checkout's omnikin; over TLS
+with certificates made here (:func:`make_tls`); a worker that joins later, optionally reporting
+another omnikin version (:func:`start_worker`, ``fake_omnikin_version.py``); and the probes of
+the security tests: the listening sockets of a process tree (:func:`listening_ports`) and
+whether a Dask server answers a connection (:func:`dask_answers`)."""
 
 from __future__ import annotations
 
@@ -9,6 +13,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -20,19 +25,135 @@ READY_S = 60.0
 """How long a scheduler or its workers may take to come up [s] (about 1 s here; CI is slower)."""
 
 
+FAKE_VERSION = "OMNIKIN_TEST_FAKE_VERSION"
+"""The environment variable ``fake_omnikin_version.py`` reads: the omnikin version a worker reports."""
+
+PRELOAD = Path(__file__).with_name("fake_omnikin_version.py")
+
+
+@dataclass(frozen=True)
+class TLSFiles:
+    """PEM files made by :func:`make_tls`: a certificate authority, and a certificate and key it
+    signed (for the scheduler, the workers and the client alike); ``options`` gives them as the
+    ``--tls-ca-file/--tls-cert/--tls-key`` options of ``dask`` and ``omnikin sweep``."""
+
+    ca: Path
+    cert: Path
+    key: Path
+
+    @property
+    def options(self) -> list[str]:
+        return ["--tls-ca-file", str(self.ca), "--tls-cert", str(self.cert), "--tls-key", str(self.key)]
+
+    def security(self):
+        from distributed.security import Security
+
+        return Security(
+            tls_ca_file=str(self.ca),
+            tls_client_cert=str(self.cert),
+            tls_client_key=str(self.key),
+            require_encryption=True,
+        )
+
+
+def make_tls(folder: Path, name: str = "omnikin-test") -> TLSFiles:
+    """A new certificate authority and a certificate for 127.0.0.1 signed by it, in ``folder``
+    (``cryptography``: an RSA key each, valid for a day)."""
+    import datetime
+    import ipaddress
+
+    from cryptography import x509
+    from cryptography.hazmat.primitives import hashes, serialization
+    from cryptography.hazmat.primitives.asymmetric import rsa
+    from cryptography.x509.oid import NameOID
+
+    folder.mkdir(parents=True, exist_ok=True)
+    now = datetime.datetime.now(datetime.timezone.utc)
+
+    def build(subject: str, issuer: str, public, signer, ca: bool):
+        builder = (
+            x509.CertificateBuilder()
+            .subject_name(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, subject)]))
+            .issuer_name(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, issuer)]))
+            .public_key(public)
+            .serial_number(x509.random_serial_number())
+            .not_valid_before(now - datetime.timedelta(minutes=5))
+            .not_valid_after(now + datetime.timedelta(days=1))
+            .add_extension(x509.BasicConstraints(ca=ca, path_length=None), critical=True)
+        )
+        if not ca:
+            builder = builder.add_extension(
+                x509.SubjectAlternativeName(
+                    [x509.DNSName("localhost"), x509.IPAddress(ipaddress.ip_address("127.0.0.1"))]
+                ),
+                critical=False,
+            )
+        return builder.sign(signer, hashes.SHA256())
+
+    ca_key = rsa.generate_private_key(public_exponent=65537, key_size=2048)
+    ca_cert = build(f"{name} CA", f"{name} CA", ca_key.public_key(), ca_key, ca=True)
+    key = rsa.generate_private_key(public_exponent=65537, key_size=2048)
+    cert = build(name, f"{name} CA", key.public_key(), ca_key, ca=False)
+    files = TLSFiles(folder / "ca.pem", folder / "cert.pem", folder / "key.pem")
+    files.ca.write_bytes(ca_cert.public_bytes(serialization.Encoding.PEM))
+    files.cert.write_bytes(cert.public_bytes(serialization.Encoding.PEM))
+    files.key.write_bytes(
+        key.private_bytes(serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8, serialization.NoEncryption())
+    )
+    return files
+
+
 @dataclass
 class DaskCluster:
-    """A running scheduler at ``address`` and its worker processes (``workers``: pid by worker address)."""
+    """A running scheduler at ``address`` and its worker processes (``workers``: pid by worker
+    address); ``tls``: its credentials (None: an open tcp:// cluster)."""
 
     address: str
     scheduler: subprocess.Popen
     processes: list[subprocess.Popen]
     workers: dict[str, int] = field(default_factory=dict)
+    tls: TLSFiles | None = None
+    file: Path | None = None
+    log: object = None
 
     def client(self):
         from distributed import Client
 
-        return Client(self.address, timeout="10s")
+        return Client(self.address, timeout="10s", security=self.tls.security() if self.tls else None)
+
+    def start_worker(self, name: str, version: str | None = None) -> subprocess.Popen:
+        """Start one more ``dask worker`` (``version``: the omnikin version it reports, through the
+        test-only preload ``fake_omnikin_version.py``); stopped with the cluster."""
+        extra = {FAKE_VERSION: version} if version is not None else {}
+        argv = _worker_argv(self.file, name, self.tls)
+        if version is not None:
+            argv += ["--preload", str(PRELOAD)]
+        process = subprocess.Popen(argv, stdout=self.log, stderr=self.log, env=_env(**extra))
+        self.processes.append(process)
+        return process
+
+
+def _env(**extra: str) -> dict[str, str]:
+    return omnikin_env(DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED="False", **extra)
+
+
+def _worker_argv(file: Path | None, name: str, tls: TLSFiles | None) -> list[str]:
+    return _dask(
+        "worker",
+        "--scheduler-file",
+        str(file),
+        "--host",
+        "127.0.0.1",
+        "--nthreads",
+        "1",
+        "--no-nanny",
+        "--no-dashboard",
+        "--name",
+        name,
+        "--death-timeout",
+        "60",
+        *(tls.options if tls else []),
+    )
 
 
 def _dask(*argv: str) -> list[str]:
@@ -40,15 +161,14 @@ def _dask(*argv: str) -> list[str]:
 
 
 @contextlib.contextmanager
-def dask_cluster(tmp_path: Path, workers: int = 2) -> Iterator[DaskCluster]:
-    """Start ``dask scheduler`` on 127.0.0.1 (a free port, found through its scheduler file) and
-    ``workers`` ``dask worker`` processes without a nanny (a killed worker stays dead), one
-    thread each; stop them all at the end."""
+def dask_cluster(tmp_path: Path, workers: int = 2, tls: TLSFiles | None = None) -> Iterator[DaskCluster]:
+    """Start ``dask scheduler`` on 127.0.0.1 (a free port, found through its scheduler file; over
+    TLS with ``tls``'s credentials) and ``workers`` ``dask worker`` processes without a nanny (a
+    killed worker stays dead), one thread each; stop them all at the end."""
     from distributed import Client
 
     file = tmp_path / "scheduler.json"
     log = open(tmp_path / "dask.log", "wb")  # noqa: SIM115 - closed at the end
-    env = omnikin_env(DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED="False")
     started: list[subprocess.Popen] = []
     try:
         scheduler = subprocess.Popen(
@@ -62,40 +182,22 @@ def dask_cluster(tmp_path: Path, workers: int = 2) -> Iterator[DaskCluster]:
                 "127.0.0.1:0",
                 "--scheduler-file",
                 str(file),
+                *(["--protocol", "tls", *tls.options] if tls else []),
             ),
             stdout=log,
             stderr=log,
-            env=env,
+            env=_env(),
         )
         started.append(scheduler)
         info = _scheduler_info(file, scheduler)
         for k in range(workers):
-            started.append(
-                subprocess.Popen(
-                    _dask(
-                        "worker",
-                        "--scheduler-file",
-                        str(file),
-                        "--host",
-                        "127.0.0.1",
-                        "--nthreads",
-                        "1",
-                        "--no-nanny",
-                        "--no-dashboard",
-                        "--name",
-                        f"w{k}",
-                        "--death-timeout",
-                        "60",
-                    ),
-                    stdout=log,
-                    stderr=log,
-                    env=env,
-                )
-            )
-        with Client(info["address"], timeout="10s") as client:
+            started.append(subprocess.Popen(_worker_argv(file, f"w{k}", tls), stdout=log, stderr=log, env=_env()))
+        with Client(info["address"], timeout="10s", security=tls.security() if tls else None) as client:
             client.wait_for_workers(workers, timeout=READY_S)
             pids = client.run(os.getpid)
-        yield DaskCluster(info["address"], scheduler, started[1:], dict(pids))
+        cluster = DaskCluster(info["address"], scheduler, started[1:], dict(pids), tls, file, log)
+        yield cluster
+        started[1:] = cluster.processes
     finally:
         for process in reversed(started):
             with contextlib.suppress(OSError):
@@ -107,6 +209,63 @@ def dask_cluster(tmp_path: Path, workers: int = 2) -> Iterator[DaskCluster]:
                 process.kill()
                 process.wait(10)
         log.close()
+
+
+def listening_ports(pid: int) -> dict[int, str]:
+    """The TCP ports on which the process ``pid`` and all its descendants listen, with the
+    address each is bound to (psutil)."""
+    import psutil
+
+    root = psutil.Process(pid)
+    ports: dict[int, str] = {}
+    for process in [root, *root.children(recursive=True)]:
+        with contextlib.suppress(psutil.NoSuchProcess):
+            for conn in process.net_connections(kind="tcp"):
+                if conn.status == psutil.CONN_LISTEN:
+                    ports[conn.laddr.port] = conn.laddr.ip
+    return ports
+
+
+def speaks_http(port: int, timeout: float = 5.0) -> bool:
+    """Whether the server on 127.0.0.1:``port`` answers a plain HTTP request (Dask's dashboard,
+    health and metrics endpoints) rather than being a Dask connection."""
+    import socket
+
+    try:
+        with socket.create_connection(("127.0.0.1", port), timeout=timeout) as sock:
+            sock.sendall(b"GET /health HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n")
+            return sock.recv(5) == b"HTTP/"
+    except OSError:
+        return False
+
+
+def dask_answers(address: str, security=None, timeout: float = 10.0) -> bool:
+    """Whether the server at ``address`` (``tcp://`` or ``tls://``) completes Dask's handshake and
+    answers an ``identity`` request from a client holding ``security`` (None: no credentials)."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    args = security.get_connection_args("client") if security is not None else {}
+
+    async def ask() -> object:
+        comm = await connect(address, timeout=timeout, **args)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await asyncio.wait_for(comm.read(), timeout)
+        finally:
+            comm.abort()
+
+    box: list[object] = []
+
+    def probe() -> None:
+        with contextlib.suppress(Exception):  # refused, closed, timed out, TLS failure: no answer
+            box.append(asyncio.run(ask()))
+
+    thread = threading.Thread(target=probe, daemon=True)  # abandoned if Dask's client hangs
+    thread.start()
+    thread.join(3 * timeout)
+    return bool(box) and isinstance(box[0], dict) and "type" in box[0]
 
 
 def _scheduler_info(file: Path, scheduler: subprocess.Popen) -> dict:

@@ -8,8 +8,9 @@ point, an optional exponent (:data:`PLAIN_NUMBER`), and its value must be finite
 digits, blanks around the number); here those are refused, with the reason.
 
 The other way, numbers written for people in reports and summaries: :func:`mm_text` (metres as
-millimetres) and :func:`ratio_text` (a ratio such as a reduction factor), shared by every
-report (``omnikin umbmark``, ``omnikin sweep``).
+millimetres), :func:`ratio_text` (a ratio) and :func:`reduction_text` (a reduction factor of
+E_max,syst, a bound past what the data resolve), shared by every report (``omnikin umbmark``,
+``omnikin sweep``).
 """
 
 from __future__ import annotations
@@ -67,3 +68,38 @@ def ratio_text(x) -> str:
     if x is None:
         return "unbounded"
     return f"{x:.0f}" if x >= 100 else f"{x:.3g}"
+
+
+RESOLUTION = 1e-5
+"""The smallest E_max,syst the reports resolve [m]: 0.01 mm, the step of :func:`mm_text` (a value
+below it prints as 0.00 mm, and a ratio over it says nothing the report can show)."""
+
+
+def round_down(x: float, digits: int = 2) -> float:
+    """``x > 0`` rounded down to ``digits`` significant digits (a lower bound stays one)."""
+    step = 10.0 ** (math.floor(math.log10(x)) - digits + 1)
+    return math.floor(x / step * (1 + 1e-12)) * step
+
+
+def reduction_bounded(after: float, floor: float = 0.0) -> bool:
+    """Whether the after-value ``after`` [m] is past what the data resolve: at or below a noise
+    ``floor`` [m] (there it cannot be told from a perfect calibration), or below
+    :data:`RESOLUTION`. A reduction factor over such a value is only known from below."""
+    return (floor > 0 and after <= floor) or after < RESOLUTION
+
+
+def reduction_text(before: float, after: float, floor: float = 0.0) -> str:
+    """The reduction factor ``before / after`` of E_max,syst [m / m] for the text.
+
+    Rule: an ``after`` that the data resolve (:func:`reduction_bounded` false) gives the ratio
+    (:func:`ratio_text`); an ``after`` at or below the noise ``floor`` or below
+    :data:`RESOLUTION` gives the bound ``at least N``, ``N = before / max(floor, RESOLUTION)``
+    rounded down to two significant digits: the after-value may be anything from zero to that
+    limit, so the factor is anything from N up (e.g. ``at least 140000``, never ``78781730``).
+    ``-`` when ``before`` or ``after`` is not a finite number."""
+    if not (math.isfinite(before) and math.isfinite(after)):
+        return "-"
+    if not reduction_bounded(after, floor):
+        return ratio_text(before / after) if after > 0 else "-"
+    bound = before / max(floor, RESOLUTION)
+    return f"at least {ratio_text(round_down(bound))}" if bound > 0 else "-"

@@ -203,12 +203,11 @@ def test_the_digest_follows_the_content_of_a_robot_file(tmp_path):
 def test_the_example_tolerance_study_loads_as_described():
     study = load_study(ROOT / "examples" / "tolerance.yaml")
     assert set(study.robots) == {"tomasi-omni3"}
-    assert [p.noise for p in study.points[:2]] == ["typical", "none"]  # noise varies fastest
-    scales = [p.scale for p in study.points[::2]]
-    assert [p.scale for p in study.points[1::2]] == scales
-    assert len(scales) == 10 and scales == sorted(scales)
+    assert all(p.noise == "typical" and p.side == 2.0 and p.runs == 5 for p in study.points)
+    scales = [p.scale for p in study.points]
+    assert len(scales) == 7 and scales == sorted(scales)
     ratios = [b / a for a, b in itertools.pairwise(scales)]
-    assert ratios == pytest.approx([10 ** (1 / 3)] * 9, rel=1e-9)  # log-spaced over 3 decades
+    assert ratios == pytest.approx([10**0.5] * 6, rel=1e-9)  # two per decade over 3 decades
     assert scales[-1] == 1.0 and scales[0] == pytest.approx(0.001)
     assert all(p.calibrate and p.engine == "kinematic" for p in study.points)
     assert study.trials >= 72  # enough to bound the 95th percentile from above at 95 %

@@ -149,3 +149,53 @@ def test_a_point_no_longer_in_the_study_is_kept_on_disk_but_left_out_of_the_tabl
         folder.coverage()
         assert folder.trial_table().column("point").to_pylist() == [KEY]
     assert (tmp_path / "out" / "parts" / point_key(other) / part_name(0, 1)).exists()
+
+
+def _resume(out, s: Study) -> tuple[list[str], dict]:
+    """What a rerun of the sweep does without Dask: read the folder, compute the trials it lacks
+    (the tasks ``plan_tasks`` cuts, each by ``run_trials`` as a worker would), build the table."""
+    from omnikin.sweep.run import arrow_columns, plan_tasks
+
+    with StudyFolder.open(out, s) as folder:
+        coverage = folder.coverage()
+        for task in plan_tasks(s, coverage, workers=1):
+            point = s.points[task.index]
+            rows = run_trials(ROBOT, point, s.seed, task.first, task.stop)
+            folder.write_part(point_key(point), task.first, task.stop, rows)
+        columns = arrow_columns(folder.trial_table().drop_columns(["seconds"]))
+    return coverage.removed, columns
+
+
+@pytest.mark.parametrize(
+    "extra, removed",
+    [
+        ({"trials-0000000-0000002.parquet": (0, 2)}, 1),  # a copy of part 0-2 under another spelling
+        ({part_name(1, 3): (1, 3)}, 1),  # a part covering trials of both parts
+        ({part_name(0, 4): (0, 4)}, 1),  # a part covering all of them
+        ({part_name(1, 3): (1, 3), part_name(3, 4): (3, 4)}, 2),  # overlapping chains
+    ],
+)
+def test_overlapping_parts_are_read_once_and_give_the_clean_runs_table(tmp_path, extra, removed):
+    from omnikin.sweep.summary import summarize
+
+    other = replace(POINT, scale=0.5)
+    s = study(trials=4, points=(POINT, other))
+    _, clean = _resume(tmp_path / "clean", s)
+    out = tmp_path / "out"
+    _resume(out, s)  # parts 0-4 of both points
+    for name, (first, stop) in extra.items():  # rows that are right, in parts that overlap
+        for point in (POINT, other):
+            rows = run_trials(ROBOT, point, 5, first, stop)
+            with StudyFolder.open(tmp_path / "scratch", s) as scratch:
+                scratch.write_part(point_key(point), first, stop, rows)
+            source = tmp_path / "scratch" / "parts" / point_key(point) / part_name(first, stop)
+            os.replace(source, out / "parts" / point_key(point) / name)
+    gone, table = _resume(out, s)
+    assert len(gone) == 2 * removed and all("overlaps another part" in line for line in gone), gone
+    pairs = list(zip(table["point"].tolist(), table["trial"].tolist(), strict=True))
+    assert sorted(pairs) == sorted((point_key(p), k) for p in (POINT, other) for k in range(4))  # each once
+    for name in clean:
+        np.testing.assert_array_equal(table[name], clean[name], err_msg=name)
+    expected, got = summarize(clean, s), summarize(table, s)
+    for name in expected:
+        np.testing.assert_array_equal(got[name], expected[name], err_msg=name)

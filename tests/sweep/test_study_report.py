@@ -77,6 +77,34 @@ def test_method_names_trials_common_random_numbers_and_how_to_reproduce():
     assert "`omnikin sweep test.yaml -o DIR`" in method
 
 
-def test_series_without_calibration_has_no_after_row():
-    rows = table_rows(report_of(grid(scales=SCALES, calibrate=False)), "## Answer")
-    assert [r[1] for r in rows] == ["before calibration"]
+def test_a_study_without_calibration_describes_no_calibration():
+    points = grid(scales=SCALES, calibrate=False)
+    text = report_of(points)
+    rows = table_rows(text, "## Answer")
+    assert [r[1] for r in rows] == ["without calibration"]  # one row, no "before" of a calibration not done
+    said = text.replace("does not calibrate (calibrate: false)", "").replace("without calibration", "")
+    assert "calibrat" not in said and "reduction" not in said, said
+    assert len(table_rows(text, "## Points")[0]) == 7  # series, scale, trials, failed, median, percentile, below
+    study = make_study(points, trials=80, target=0.010, quantile=0.95, level=0.95)
+    summary = summarize(proportional_table(points, 0.008, 0.002, 80), study)
+    (answer,) = answers(summary, study)
+    assert "without calibration" in answer.text and "before calibration" not in answer.text
+
+
+def test_a_study_that_calibrates_some_points_says_which():
+    points = grid(scales=SCALES, calibrate=True) + grid(scales=SCALES, calibrate=False)
+    text = report_of(points)
+    assert "at the points with calibrate: true it then calibrates" in text.split("## Answer")[0]
+    phases = [r[1] for r in table_rows(text, "## Answer")]
+    assert phases == ["before calibration", "after calibration", "without calibration"]
+
+
+def test_the_figure_of_a_study_without_calibration_has_one_panel_without_calibration():
+    from omnikin.viz.sweep import tolerance_figure
+
+    points = grid(scales=SCALES, calibrate=False)
+    study = make_study(points, trials=80, target=0.010, quantile=0.95, level=0.95)
+    figure = tolerance_figure(summarize(proportional_table(points, 0.008, 0.002, 80), study), study)
+    titles = [ax.get_title() for ax in figure.axes]
+    assert titles == ["without calibration"]
+    assert "calibrat" not in figure._suptitle.get_text()

@@ -78,7 +78,8 @@ def test_summary_has_one_row_per_point_in_study_order_with_counts_and_nan_for_mi
     assert s["below_after"][0] == 1.0
     assert s["median_reduction"][0] == pytest.approx(10.0)
     statistics = [name for name, _ in SUMMARY_COLUMNS][[name for name, _ in SUMMARY_COLUMNS].index("failed") + 1 :]
-    assert all(math.isnan(s[name][1]) for name in statistics)
+    assert all(math.isnan(s[name][1]) for name in statistics if name != "reduction_bound")
+    assert not s["reduction_bound"].any()  # every after-value is 0.1 mm or more
     assert s["median_before"][2] == 0.02 and math.isnan(s["median_before_low"][2])
 
 
@@ -95,3 +96,22 @@ def test_empty_trial_table_gives_points_without_trials():
     s = summarize(trial_table([]), make_study(points))
     assert list(s["trials"]) == [0] * len(points)
     assert np.isnan(s["quantile_before"]).all()
+
+
+def test_a_reduction_past_the_reports_resolution_is_a_bound():
+    points = grid(scales=(1.0, 2.0))
+    study = make_study(points, target=0.010)
+    # point 0: after-values far below 0.01 mm (a noise-free calibration); point 1: 2 mm, resolved
+    rows = [(points[0], k, 1.4, 1.6e-8 * (k + 1), None) for k in range(3)]
+    rows += [(points[1], k, 0.02 * (k + 1), 0.002, None) for k in range(3)]
+    s = summarize(trial_table(rows), study)
+    assert s["median_reduction"][0] == pytest.approx(1.4 / 1e-5)  # each after counted as 0.01 mm
+    assert s["median_reduction"][1] == pytest.approx(20.0)  # 0.04 m / 2 mm
+    assert s["reduction_bound"].tolist() == [True, False]
+    from omnikin.sweep.report import study_markdown
+    from omnikin.sweep.summary import answers
+
+    text = study_markdown(study, s, answers(s, study), figures=[], failures=[])
+    rows = [line for line in text.split("## Points")[1].split("\n## ")[0].splitlines() if line.startswith("| omni3")]
+    cells = [row.split(" | ")[-1].rstrip(" |") for row in rows]
+    assert cells == ["at least 140000", "20"]

@@ -92,11 +92,16 @@ def test_the_example_study_runs_and_answers_its_question(tmp_path):
     out = tmp_path / "study"
     trials = pq.read_table(out / "trials.parquet")
     summary = pq.read_table(out / "summary.parquet")
-    assert trials.num_rows == 20 * 80 and summary.num_rows == 20
+    assert trials.num_rows == 7 * 80 and summary.num_rows == 7
     assert trials.column("error").null_count == trials.num_rows
     assert (out / "figures" / "tolerance.png").stat().st_size > 10_000
     report = (out / "report.md").read_text()
-    assert "below 10 mm for 95 %" in report and "figures/tolerance.png" in report
+    assert "figures/tolerance.png" in report
+    # the answer: a tolerance in each phase, said in a sentence; never "none"
+    before, after = [line for line in report.splitlines() if line.startswith("- tomasi-omni3, ")]
+    assert "before calibration: E_max,syst stays below 10 mm for 95 % of the robots up to scale " in before
+    assert "after calibration: E_max,syst stays below 10 mm for 95 % of the robots" in after
+    assert "none" not in done.stdout and " at none " not in report
 
 
 @pytest.mark.parametrize("option", [["--workers", "0"], ["--workers", "-1"], ["--task-trials", "-3"]])
@@ -116,3 +121,15 @@ def test_force_with_a_scheduler_that_cannot_be_used_removes_nothing(tmp_path):
     again = run_entry_point("sweep", spec, "-o", tmp_path / "out", "--force", "--scheduler", "foo")
     assert again.returncode == 2 and "scheduler" in again.stderr, again.stderr
     assert sorted((tmp_path / "out" / "parts").rglob("*.parquet")) == parts
+
+
+def test_standard_output_cannot_hold_a_study_folder(tmp_path):
+    spec = tmp_path / "study.yaml"
+    spec.write_text("omnikin_sweep: 1\nrobots: [tomasi-omni3]\nseed: 3\ntrials: 1\n")
+    done = run_entry_point("sweep", spec, "-o", "-", cwd=tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr == (
+        "omnikin: error: -o -: a sweep writes a folder; - (standard output) cannot hold it: "
+        "name a folder, e.g. -o study/\n"
+    )
+    assert done.stdout == "" and not (tmp_path / "-").exists()

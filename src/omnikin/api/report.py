@@ -2,13 +2,20 @@
 
 from __future__ import annotations
 
-from ..number_text import mm_text, ratio_text
+from ..number_text import RESOLUTION, mm_text, ratio_text, reduction_bounded, reduction_text
 
 
 def _interval_mm(interval) -> str:
     if not interval:
         return "n/a (needs 3 runs per direction)"
     return f"{mm_text(interval[0])} to {mm_text(interval[1])}"
+
+
+def floor_limit(doc: dict) -> float:
+    """The E_max,syst [m] at or below which a result of ``result.json`` ``doc`` is at its floor
+    (``at_noise_floor``): the physics floor's ``e_max_syst_limit``, the noise floor's 95th percentile."""
+    floor = doc["noise_floor"]
+    return float(floor.get("e_max_syst_limit", floor["e_max_syst_p95"]))
 
 
 def physics_floor_text(floor: dict, level: str) -> str:
@@ -134,17 +141,31 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
                 ),
             ]
     if "after" in doc:
-        r, ri = doc["reduction_factor"], doc["reduction_factor_interval"]
+        ri = doc["reduction_factor_interval"]
         ri_text = f"{ratio_text(ri[0])} to {ratio_text(ri[1])}" if ri else "n/a (needs 3 runs per direction)"
-        lines += [
-            "",
-            f"Reduction factor of E_max,syst: {ratio_text(r)} ({level} interval {ri_text})."
-            + (
-                " The upper end is unbounded because the value after calibration is consistent with zero."
-                if ri and ri[1] is None
-                else ""
-            ),
-        ]
+        limit = floor_limit(doc)
+        factor = reduction_text(doc["before"]["e_max_syst"], doc["after"]["e_max_syst"], limit)
+        if reduction_bounded(doc["after"]["e_max_syst"], limit):
+            below = (
+                f"at or below the {floor_name} ({mm_text(limit)} mm)"
+                if limit >= RESOLUTION
+                else f"below {mm_text(RESOLUTION)} mm, what this report resolves"
+            )
+            lines += [
+                "",
+                f"Reduction factor of E_max,syst: {factor}. A bound: after calibration E_max,syst is {below}, "
+                "so the factor is at least E_max,syst before over that limit (no interval: it has no upper end).",
+            ]
+        else:
+            lines += [
+                "",
+                f"Reduction factor of E_max,syst: {factor} ({level} interval {ri_text})."
+                + (
+                    " The upper end is unbounded because the value after calibration is consistent with zero."
+                    if ri and ri[1] is None
+                    else ""
+                ),
+            ]
     sysm = doc["systematic"]
     lines += [
         "",
@@ -152,7 +173,12 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         f"{mm_text(sysm['e_max_syst_before'])} mm before"
         + (
             f", {mm_text(sysm['e_max_syst_after'])} mm after calibration "
-            f"(reduction {ratio_text(sysm['reduction_factor'])})."
+            f"(reduction {reduction_text(sysm['e_max_syst_before'], sysm['e_max_syst_after'])}"
+            + (
+                f": below {mm_text(RESOLUTION)} mm after calibration is past what this report resolves)."
+                if reduction_bounded(sysm["e_max_syst_after"])
+                else ")."
+            )
             if "e_max_syst_after" in sysm
             else "."
         ),

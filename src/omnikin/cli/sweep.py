@@ -26,16 +26,19 @@ the folder OUT_DIR:
   figures/tolerance.png, report.md: the answer
 
 where it runs:
-  by default a local Dask cluster of one worker process per core (--workers N); with
-  --scheduler tcp://HOST:8786, an existing Dask cluster (start one with 'dask scheduler' and
-  'dask worker tcp://HOST:8786' where omnikin[sweep] of the same version is installed).
-  The same study gives the same table whatever the workers, the cluster and the order in
-  which tasks finish.
+  by default a local Dask cluster of one worker process per core (--workers N) that only this
+  run can reach (TLS with temporary credentials); with --scheduler tls://HOST:8786 and
+  --tls-ca-file/--tls-cert/--tls-key, an existing cluster secured with TLS (started with
+  'dask scheduler --protocol tls' and 'dask worker tls://HOST:8786' with their own --tls-*
+  options, where omnikin[sweep] of the same version is installed; docs/sweeps.md). Results of
+  a worker of another omnikin or NumPy version are refused, whenever it joins. The same study
+  gives the same table whatever the workers, the cluster and the order in which tasks finish.
 
 examples:
   omnikin sweep examples/tolerance.yaml -o study/
   omnikin sweep examples/tolerance.yaml -o study/ --workers 1
-  omnikin sweep examples/layouts.yaml -o layouts/ --scheduler tcp://127.0.0.1:8786"""
+  omnikin sweep examples/layouts.yaml -o layouts/ --scheduler tls://HOST:8786 \
+      --tls-ca-file ca.pem --tls-cert me.pem --tls-key me.key"""
 
 
 def add_parsers(sub, robot_help: str) -> None:
@@ -56,12 +59,28 @@ def add_parsers(sub, robot_help: str) -> None:
         "--out",
         metavar="OUT_DIR",
         required=True,
-        help="the study folder: created, or resumed when it holds this study (same seed)",
+        help="the study folder: created, or resumed when it holds this study (same seed); "
+        "not - (a folder cannot go to standard output)",
     )
     sp.add_argument(
         "--scheduler",
         metavar="ADDRESS",
-        help="run on the Dask cluster whose scheduler listens at ADDRESS (tcp://HOST:8786); default: a local cluster",
+        help="run on the Dask cluster whose scheduler listens at ADDRESS (tls://HOST:8786 with --tls-*, or an "
+        "unauthenticated tcp://HOST:8786); default: a local cluster only this run can reach "
+        "(temporary TLS credentials)",
+    )
+    sp.add_argument(
+        "--tls-ca-file",
+        metavar="PEM",
+        help="with --scheduler tls://...: the certificate authority that signed the cluster's certificates",
+    )
+    sp.add_argument(
+        "--tls-cert", metavar="PEM", help="with --scheduler tls://...: this client's certificate (signed by that CA)"
+    )
+    sp.add_argument(
+        "--tls-key",
+        metavar="PEM",
+        help="with --scheduler tls://...: this client's private key (default: in --tls-cert)",
     )
     sp.add_argument(
         "--workers",
@@ -134,7 +153,12 @@ class _Progress:
 
 
 def _check_paths(args) -> None:
-    """The study file must not lie inside the study folder (``--force`` removes what is in it)."""
+    """``-o -`` is refused (a study is a folder, standard output cannot hold it); the study file
+    must not lie inside the study folder (``--force`` removes what is in it)."""
+    if args.out == "-":
+        raise InputError(
+            "-o -: a sweep writes a folder; - (standard output) cannot hold it: name a folder, e.g. -o study/"
+        )
     spec = os.path.realpath(args.spec)
     out = os.path.realpath(args.out)
     if spec == out or spec.startswith(out.rstrip(os.sep) + os.sep):
@@ -149,6 +173,16 @@ def cmd_sweep(args) -> int:
 
     _check_paths(args)
     require_sweep()
+    from ..sweep.engine import TLSFiles
+
+    tls = TLSFiles(args.tls_ca_file, args.tls_cert, args.tls_key)
+    tls.check(args.scheduler)
+    if args.scheduler is not None and args.scheduler.startswith("tcp://"):
+        print(
+            f"omnikin: warning: {args.scheduler} is an unauthenticated (tcp://) cluster: whoever reaches it can run "
+            "code on its workers and send this study results; use tls:// (docs/sweeps.md)",
+            file=sys.stderr,
+        )
     study = load_study(args.spec)
     progress = _Progress()
     try:
@@ -160,6 +194,7 @@ def cmd_sweep(args) -> int:
             task_trials=args.task_trials,
             force=args.force,
             progress=progress,
+            tls=tls,
         )
     except KeyboardInterrupt:
         progress.stop()
@@ -169,6 +204,8 @@ def cmd_sweep(args) -> int:
         raise LinkError(f"{exc}; the finished tasks are in {args.out}: rerun the same command to resume") from None
     finally:
         progress.stop()
+    for line in result.refused:
+        print(f"omnikin: warning: {line}; its tasks are computed again on the next run", file=sys.stderr)
     for line in result.removed:
         print(f"omnikin: warning: {line}: removed, computed again", file=sys.stderr)
     total = study.trials * len(study.points)

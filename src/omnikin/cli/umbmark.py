@@ -18,7 +18,7 @@ from pathlib import Path
 from ..api.calibration import calibrate as api_calibrate
 from ..api.calibration import calibration_plan
 from ..api.common import dumps
-from ..api.report import physics_floor_text
+from ..api.report import floor_limit, physics_floor_text
 from ..api.umbmark import (
     DEFAULT_ROBOT,
     UMBmarkReport,
@@ -28,7 +28,7 @@ from ..api.umbmark import (
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
 from ..evaluation.physics_study import ENGINES
-from ..number_text import mm_text
+from ..number_text import mm_text, reduction_bounded, reduction_text
 from ..simulation.error_models import NOISE, PROFILES
 from ..simulation.motion import RATE_RANGE
 from ..viz import FIGURE_FORMATS, MAX_DPI, MIN_DPI, dpi_problem
@@ -413,11 +413,17 @@ def _print_summary(report: UMBmarkReport, doc: dict, out) -> None:
     if bor is not None:
         con.print(f"Borenstein (before): {bor.describe()}")
     if "after" in doc:
-        r, ri = doc["reduction_factor"], doc["reduction_factor_interval"]
+        ri = doc["reduction_factor_interval"]
         sysm = doc["systematic"]
         con.print(
-            f"calibration: E_max,syst reduced {_factor(r)}-fold"
-            + (f" (95 % interval {_factor(ri[0])} to {_factor(ri[1])})" if ri else "")
+            "calibration: E_max,syst reduced "
+            + reduction_text(doc["before"]["e_max_syst"], doc["after"]["e_max_syst"], floor_limit(doc))
+            + "-fold"
+            + (
+                f" (95 % interval {_factor(ri[0])} to {_factor(ri[1])})"
+                if ri and not reduction_bounded(doc["after"]["e_max_syst"], floor_limit(doc))
+                else ""
+            )
             + f"; systematic part alone (no random errors) {mm_text(sysm['e_max_syst_before'])} mm -> "
             f"{mm_text(sysm['e_max_syst_after'])} mm"
         )

@@ -4,13 +4,20 @@
 
 * **embedded** (the default): a ``LocalCluster`` of ``workers`` processes (all cores), one
   thread each (the trials hold the GIL: threads in one process would take turns), every
-  listener on loopback (``127.0.0.1``, the dashboard on a free port), the Dask logs silenced
+  listener on loopback (``127.0.0.1``, the dashboard on a free port) and every Dask connection
+  (client, scheduler, nannies, workers) over TLS with temporary credentials made for this run
+  (``Security.temporary()``: a key and self-signed certificate held in memory, never written,
+  that each end must present): another process or user of the machine cannot connect and run
+  code in the study's processes (a Dask scheduler runs what its clients send), the Dask logs silenced
   (what goes wrong reaches the user as omnikin's own one-line messages), and two Dask defaults
   switched off that cost a CPU-bound NumPy workload 20 to 30 % (measured, ``docs/sweeps.md``):
   the workers' statistical profiler and the ``MALLOC_TRIM_THRESHOLD_`` the nanny sets;
-* **a scheduler address** (``tcp://host:8786``): the client connects to it, waits for a
-  worker, and checks that the workers run the same omnikin and NumPy as the client (otherwise a
-  worker's result could differ, or it could not even import the task).
+* **a scheduler address** (``tls://host:8786``, or an unauthenticated ``tcp://``): the client
+  connects to it with the user's credentials (:class:`TLSFiles`, or Dask's own configuration
+  ``distributed.comm.tls.*`` when none are given), waits for a worker, and checks that the
+  workers run the same omnikin and NumPy as the client (otherwise a worker's result could
+  differ, or it could not even import the task); workers that join later are checked by their
+  results (:func:`run_tasks`).
 
 This module imports Dask: import it after :func:`omnikin.sweep.run.require_sweep`.
 
@@ -20,10 +27,16 @@ line, not a traceback from every worker.
 
 :func:`run_tasks` submits the tasks and hands each result to the caller as soon as it
 arrives (as completed, in any order), then releases it: a result held on a worker would be lost
-with the worker. A task that raises is retried once (Dask's ``retries``); a task whose workers
-die is rescheduled by Dask itself (``distributed.scheduler.allowed-failures``, 3 by default) and
-then fails with ``KilledWorker``; either way its failure is handed to the caller, the study
-goes on.
+with the worker. Every task returns, beside its result, the omnikin and NumPy versions of the
+worker that computed it (:func:`versioned_call`); a result whose versions differ from the
+client's, or that does not say (a worker of another omnikin), is refused: the task is handed to
+the caller as failed (not written, so the next run computes it again) and the worker is named in
+one line (:class:`WorkerMismatch`), whenever it joined the cluster. So a worker that joins after
+the start is held to the check the ones present at the start passed.
+
+A task that raises is retried once (Dask's ``retries``); a task whose workers die is
+rescheduled by Dask itself (``distributed.scheduler.allowed-failures``, 3 by default) and then
+fails with ``KilledWorker``; either way its failure is handed to the caller, the study goes on.
 """
 
 from __future__ import annotations
@@ -90,16 +103,25 @@ def _interrupts_ignored() -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
 
 
+QUIET_LOGGERS = ("distributed", "tornado", "asyncio")
+"""Loggers silenced in the sweep's process while it runs a cluster: Dask's, and those of the
+libraries under it that log a peer's failed connection (a foreign client refused by TLS) with a
+traceback."""
+
+
 @contextlib.contextmanager
 def _quiet_client_logs() -> Iterator[None]:
-    """Dask's own log lines off in this process (a lost scheduler reaches the user as one line)."""
-    logger = logging.getLogger("distributed")
-    level = logger.level
-    logger.setLevel(logging.CRITICAL + 1)
+    """Dask's own log lines off in this process (a lost scheduler reaches the user as one line,
+    a client refused for lacking the credentials as nothing)."""
+    loggers = [logging.getLogger(name) for name in QUIET_LOGGERS]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL + 1)
     try:
         yield
     finally:
-        logger.setLevel(level)
+        for logger, level in zip(loggers, levels, strict=True):
+            logger.setLevel(level)
 
 
 @dataclass(frozen=True)
@@ -119,27 +141,95 @@ def _dashboard(client) -> str:
     return str(client.dashboard_link)
 
 
+@dataclass(frozen=True)
+class TLSFiles:
+    """The credentials of a client of a TLS Dask cluster (``--tls-ca-file``, ``--tls-cert``,
+    ``--tls-key``; Dask's ``dask scheduler`` and ``dask worker`` take the same three options):
+    PEM files of the certificate authority that signed the cluster's certificates, the client's
+    certificate (signed by it) and its private key (None: in ``cert``). All None: Dask's
+    configuration (``distributed.comm.tls.ca-file``, ``.client.cert``, ``.client.key``, e.g.
+    ``DASK_DISTRIBUTED__COMM__TLS__CA_FILE``)."""
+
+    ca_file: str | None = None
+    cert: str | None = None
+    key: str | None = None
+
+    @property
+    def given(self) -> bool:
+        return any(v is not None for v in (self.ca_file, self.cert, self.key))
+
+    def check(self, scheduler: str | None) -> None:
+        """Refuse in one line credentials without a ``tls://`` scheduler, a key without a
+        certificate, a certificate without its authority, or a file that cannot be read."""
+        if not self.given:
+            if scheduler is not None and scheduler.startswith("tls://") and self.security().tls_client_cert is None:
+                raise InputError(
+                    f"scheduler {shorten(scheduler)}: a tls:// cluster needs this client's credentials: "
+                    "--tls-ca-file, --tls-cert and --tls-key (or Dask's DASK_DISTRIBUTED__COMM__TLS__* settings)"
+                )
+            return
+        if scheduler is None:
+            raise InputError(
+                "--tls-ca-file/--tls-cert/--tls-key are the credentials of a cluster given with --scheduler "
+                "tls://...; the local cluster makes its own"
+            )
+        if not scheduler.startswith("tls://"):
+            raise InputError(f"--tls-ca-file/--tls-cert/--tls-key need a tls:// scheduler, got {shorten(scheduler)}")
+        if self.cert is None or self.ca_file is None:
+            raise InputError("a TLS client needs --tls-ca-file and --tls-cert (and --tls-key unless the key is in it)")
+        for option, path in (("--tls-ca-file", self.ca_file), ("--tls-cert", self.cert), ("--tls-key", self.key)):
+            if path is None:
+                continue
+            if not os.path.isfile(path):
+                raise InputError(f"{option} {shorten(path)}: no such file")
+            if not os.access(path, os.R_OK):
+                raise InputError(f"{option} {shorten(path)}: cannot read it")
+
+    def security(self):
+        """A :class:`distributed.security.Security` of these files (every connection encrypted),
+        or Dask's configured one when none are given."""
+        from distributed.security import Security
+
+        if not self.given:
+            return Security()
+        return Security(
+            tls_ca_file=self.ca_file,
+            tls_client_cert=self.cert,
+            tls_client_key=self.key,
+            require_encryption=True,
+        )
+
+
 @contextlib.contextmanager
-def dask_client(scheduler: str | None = None, workers: int | None = None) -> Iterator[Cluster]:
+def dask_client(
+    scheduler: str | None = None, workers: int | None = None, tls: TLSFiles | None = None
+) -> Iterator[Cluster]:
     """A :class:`Cluster`: embedded with ``workers`` processes (default: every core), or the
-    cluster whose scheduler listens at ``scheduler`` (module docstring)."""
+    cluster whose scheduler listens at ``scheduler``, reached with the credentials ``tls``
+    (module docstring)."""
     import dask
     from distributed import Client, LocalCluster
+    from distributed.security import Security
 
+    tls = tls or TLSFiles()
+    tls.check(scheduler)
     if scheduler is None:
         count = workers or os.cpu_count() or 1
-        with dask.config.set(EMBEDDED_CONFIG):
+        security = Security.temporary()  # this run's own credentials (module docstring)
+        with dask.config.set(EMBEDDED_CONFIG), _quiet_client_logs():
             with _interrupts_ignored():  # the processes started now inherit it: a Ctrl-C while they start
                 cluster = LocalCluster(  # up (importing, before the plugin) would print their tracebacks
                     n_workers=count,
                     threads_per_worker=1,
                     processes=True,
                     host="127.0.0.1",
+                    protocol="tls",
+                    security=security,
                     dashboard_address="127.0.0.1:0",
                     silence_logs=logging.CRITICAL,
                 )
             try:
-                client = Client(cluster)
+                client = Client(cluster, security=security)
                 try:
                     client.register_plugin(IgnoreInterrupts())
                     try:
@@ -156,13 +246,13 @@ def dask_client(scheduler: str | None = None, workers: int | None = None) -> Ite
         return
     with dask.config.set({"distributed.logging.distributed": "critical"}), _quiet_client_logs():
         try:
-            client = _connect(Client, scheduler)
+            client = _connect(Client, scheduler, tls.security())
         except (OSError, TimeoutError) as exc:
             raise LinkError(f"scheduler {shorten(scheduler)}: cannot connect: {one_line(exc, 200)}") from None
         except Exception as exc:  # noqa: BLE001 - not an address Dask can use (ValueError, a protocol not installed)
             raise InputError(
                 f"scheduler (--scheduler) {shorten(scheduler)}: not a scheduler address ({one_line(exc, 200)}); "
-                "give one like tcp://HOST:8786"
+                "give one like tls://HOST:8786 (or tcp://HOST:8786)"
             ) from None
         try:
             count = _check_workers(client, scheduler)
@@ -175,7 +265,7 @@ HANDSHAKE_TIMEOUT = 10.0
 """How long a server that accepted the connection may take to answer as a Dask scheduler [s]."""
 
 
-def _connect(client_class, scheduler: str):
+def _connect(client_class, scheduler: str, security=None):
     """A client of ``scheduler``, or TimeoutError: Dask's own timeout covers the connection, not the
     handshake, so a server that accepts and never answers (an HTTP server on that port) would hold
     the study forever; the client is made in a daemon thread that is abandoned past the deadline."""
@@ -183,7 +273,7 @@ def _connect(client_class, scheduler: str):
 
     def connect() -> None:
         try:
-            box["client"] = client_class(scheduler, timeout=f"{CONNECT_TIMEOUT}s")
+            box["client"] = client_class(scheduler, timeout=f"{CONNECT_TIMEOUT}s", security=security)
         except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
             box["error"] = exc
 
@@ -222,6 +312,37 @@ def _check_workers(client, scheduler: str) -> int:
     return len(found)
 
 
+class WorkerMismatch(LinkError):
+    """A result computed by a worker whose omnikin or NumPy differ from the client's (refused)."""
+
+
+def versioned_call(function: Callable[..., Any], *arguments: Any) -> dict[str, Any]:
+    """What a worker runs for a task: ``function(*arguments)`` with the versions the result
+    depends on (:func:`~omnikin.sweep.points.result_versions`) and the worker's address."""
+    from distributed import get_worker
+
+    try:
+        where = str(get_worker().address)
+    except ValueError:  # not on a worker (called directly)
+        where = "this process"
+    return {"versions": result_versions(), "worker": where, "result": function(*arguments)}
+
+
+def check_versions(answer: Any, mine: dict[str, str]) -> Any:
+    """The result inside a :func:`versioned_call` ``answer``, or :class:`WorkerMismatch` naming
+    the worker and its versions when they are not ``mine``."""
+    if not isinstance(answer, dict) or not isinstance(answer.get("versions"), dict) or "result" not in answer:
+        raise WorkerMismatch("a worker returned a result without its versions (another omnikin): refused")
+    theirs = answer["versions"]
+    if theirs != mine:
+        raise WorkerMismatch(
+            f"worker {shorten(answer.get('worker'))} runs omnikin {shorten(theirs.get('omnikin'))} with NumPy "
+            f"{shorten(theirs.get('numpy'))}, this client omnikin {mine['omnikin']} with NumPy {mine['numpy']}: "
+            "its results are refused"
+        )
+    return answer["result"]
+
+
 @dataclass(frozen=True)
 class Task:
     """One task: trials ``first..stop-1`` of the point at ``index`` of the study."""
@@ -244,18 +365,20 @@ def run_tasks(
     done: Callable[[Task, Any, BaseException | None], None],
 ) -> None:
     """Run ``function(*arguments(task))`` for every task on ``client``; call ``done(task, result,
-    None)`` for each result, ``done(task, None, error)`` for each task that failed (module
-    docstring), as they arrive. ``names(task)`` is the task's key in Dask (shown on the dashboard)."""
+    None)`` for each result, ``done(task, None, error)`` for each task that failed or whose worker
+    runs other versions (:class:`WorkerMismatch`; module docstring), as they arrive.
+    ``names(task)`` is the task's key in Dask (shown on the dashboard)."""
     from distributed import as_completed
 
+    mine = result_versions()
     futures = {}
     for task in tasks:
-        future = client.submit(function, *arguments(task), key=names(task), retries=RETRIES, pure=False)
+        future = client.submit(versioned_call, function, *arguments(task), key=names(task), retries=RETRIES, pure=False)
         futures[future.key] = (future, task)
     for future in as_completed([f for f, _ in futures.values()]):
         _, task = futures.pop(future.key)
         try:
-            result = future.result()
+            result = check_versions(future.result(), mine)
         except CancelledError:  # the scheduler went away (or cancelled the task): not a result of the task
             raise LinkError(
                 f"lost the Dask scheduler ({client.scheduler.address}) in the middle of the study"

@@ -15,8 +15,8 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ..evaluation.order_statistics import values_for_bound
-from ..evaluation.threshold import ABOVE, ABOVE_FIRST, Crossing
-from ..number_text import mm_text, ratio_text
+from ..evaluation.threshold import ABOVE, ABOVE_FIRST, BELOW, Crossing
+from ..number_text import mm_text, ratio_text, round_down
 from ..viz.sweep import AXIS_UNITS
 from .study import Study
 from .summary import Answer, axis_text, crossing_text, stat_column, tolerances_text
@@ -57,6 +57,24 @@ def _interval_text(value: float, low: float, high: float) -> str:
     return f"{mm_text(value)} ({mm_text(ends[0])} to {mm_text(ends[1])})"
 
 
+def _calibration(study: Study) -> str:
+    """Whether the study's points calibrate: ``all``, ``none`` or ``some``."""
+    calibrates = {p.calibrate for p in study.points}
+    return "some" if len(calibrates) > 1 else ("none" if calibrates == {False} else "all")
+
+
+_QUESTION = {
+    "all": ", before and after calibration? Every trial builds a robot within the tolerances, runs UMBmark, "
+    "calibrates it and runs UMBmark again;",
+    "none": "? Every trial builds a robot within the tolerances and runs UMBmark; the study does not calibrate "
+    "(calibrate: false), so E_max,syst is that of the robots as built;",
+    "some": ", with and without calibration? Every trial builds a robot within the tolerances and runs UMBmark; "
+    "at the points with calibrate: true it then calibrates the robot and runs UMBmark again;",
+}
+"""The end of the question and what a trial does, by :func:`_calibration`: a study that does not
+calibrate describes no calibration."""
+
+
 def study_markdown(
     study: Study,
     summary: Mapping[str, np.ndarray],
@@ -77,10 +95,8 @@ def study_markdown(
         f"# Tolerance study: {cell(study.name)}",
         "",
         f"Which build tolerances keep E_max,syst (UMBmark, Borenstein and Feng) below {target} for "
-        f"{study.quantile * 100:g} % of robots (its {q_name} below the target), with and without "
-        "calibration? Every trial builds a robot within the tolerances, runs "
-        "UMBmark, calibrates it and runs UMBmark again; the tolerances are read along "
-        f"{axis_label} with {level} confidence intervals.",
+        f"{study.quantile * 100:g} % of robots (its {q_name} below the target){_QUESTION[_calibration(study)]} "
+        f"the tolerances are read along {axis_label} with {level} confidence intervals.",
         "",
     ]
     if note:
@@ -101,9 +117,39 @@ def study_markdown(
     return "\n".join(lines) + "\n"
 
 
+def conclusion(study: Study, answer: Answer) -> str:
+    """The answer of one series and phase in a plain sentence: which tolerance keeps the
+    study's quantile of E_max,syst below the target (``up to ...``, ``at every ... studied``, or
+    ``at none of the ... studied``), with the three build tolerances and the conservative value."""
+    share = f"{study.quantile * 100:g} % of the robots"
+    target = f"{study.target * 1000:g} mm"
+    axis = AXIS_UNITS[answer.axis][0].split(" [")[0]
+    head = f"{cell(answer.series.label)}, {answer.phase_text}: E_max,syst stays below {target} for {share}"
+    value = answer.estimate.value
+    triple = tolerances_text(answer, value)
+    built = "" if triple == "-" else f" ({triple})"
+    if value is None:
+        smallest = axis_text(answer.axis, answer.estimate.first[0])
+        return f"{head} at none of the {axis} values studied: not even at the smallest, {smallest}."
+    if answer.estimate.status == BELOW:
+        return (
+            f"{head} at every {axis} studied, up to {axis_text(answer.axis, value)}{built}; "
+            "larger tolerances were not studied."
+        )
+    conservative = answer.conservative.value
+    careful = (
+        f"; with {study.level * 100:g} % confidence up to {crossing_text(answer, answer.conservative)}"
+        if conservative is not None
+        else f"; too few trials to say it with {study.level * 100:g} % confidence"
+    )
+    return f"{head} up to {axis} {axis_text(answer.axis, value)}{built}{careful}."
+
+
 def _answer_lines(study: Study, summary, answers: Sequence[Answer], level: str, q_name: str) -> list[str]:
     lines = [
         "## Answer",
+        "",
+        *[f"- {conclusion(study, a)}" for a in answers],
         "",
         f"The largest {AXIS_UNITS[study.axis][0]} at which the {q_name} of E_max,syst stays below "
         f"{study.target * 1000:g} mm; conservative: the same from the upper end of its {level} interval.",
@@ -119,7 +165,7 @@ def _answer_lines(study: Study, summary, answers: Sequence[Answer], level: str, 
             + " | ".join(
                 [
                     cell(a.series.label),
-                    "before calibration" if a.phase == "before" else "after calibration",
+                    a.phase_text,
                     crossing_text(a, a.estimate),
                     tolerances_text(a, a.estimate.value),
                     cell(_status_text(a, a.estimate, need), 300),
@@ -154,15 +200,18 @@ def _answer_lines(study: Study, summary, answers: Sequence[Answer], level: str, 
 
 def _point_lines(study: Study, summary, level: str, q_name: str, target: str) -> list[str]:
     n = len(summary["point"])
+    calibrates = _calibration(study) != "none"
+    phases = ("before", "after") if calibrates else ("before",)
+    names = {"before": " before", "after": " after"} if calibrates else {"before": ""}
+    head = "".join(f" | median{names[p]} | {q_name}{names[p]} | below" for p in phases)
     lines = [
         f"## Points ({n})",
         "",
         f"E_max,syst [mm]: median and {q_name} with their {level} intervals (order statistics), share of "
-        f"trials below {target}, median reduction (before / after).",
+        f"trials below {target}" + (", median reduction (before / after)." if calibrates else "."),
         "",
-        f"| series | {AXIS_UNITS[study.axis][0]} | trials | failed | median before | {q_name} before | below "
-        f"| median after | {q_name} after | below | reduction |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        f"| series | {AXIS_UNITS[study.axis][0]} | trials | failed{head}" + (" | reduction |" if calibrates else " |"),
+        "|---" * (4 + 3 * len(phases) + calibrates) + "|",
     ]
     for i in range(min(n, MAX_ROWS)):
 
@@ -171,13 +220,13 @@ def _point_lines(study: Study, summary, level: str, q_name: str, target: str) ->
 
         cells = [cell(summary["series"][i]), axis_text(study.axis, float(summary[study.axis][i]))]
         cells += [str(int(summary["trials"][i])), str(int(summary["failed"][i]))]
-        for phase in ("before", "after"):
+        for phase in phases:
             for name in ("median", "quantile"):
                 cells.append(_interval_text(stat(name, phase), stat(f"{name}_low", phase), stat(f"{name}_high", phase)))
             below = stat("below", phase)
             cells.append(f"{below * 100:.0f} %" if math.isfinite(below) else "-")
-        reduction = float(summary["median_reduction"][i])
-        cells.append(ratio_text(reduction) if math.isfinite(reduction) else "-")
+        if calibrates:
+            cells.append(_reduction_text(summary, i))
         lines.append("| " + " | ".join(cells) + " |")
     if n > MAX_ROWS:
         lines.append(f"\n{n - MAX_ROWS} more points left out (see the summary table).")
@@ -185,13 +234,29 @@ def _point_lines(study: Study, summary, level: str, q_name: str, target: str) ->
     return lines
 
 
+def _reduction_text(summary, i: int) -> str:
+    """The median reduction of row ``i``: ``at least N`` when it is a bound (``reduction_bound``:
+    some trial's after-value is below the 0.01 mm the report resolves)."""
+    reduction = float(summary["median_reduction"][i])
+    if not math.isfinite(reduction):
+        return "-"
+    if bool(summary["reduction_bound"][i]):
+        return f"at least {ratio_text(round_down(reduction))}"
+    return ratio_text(reduction)
+
+
 def _method_lines(study: Study, q_name: str, level: str) -> list[str]:
     return [
         "## Method",
         "",
         f"- {study.trials} trials per point, {study.design} design, seed {study.seed}; a trial builds one robot "
-        "within the point's tolerances, runs the UMBmark procedure (Borenstein and Feng, \"UMBmark: a benchmark "
-        'test for measuring odometry errors in mobile robots"), calibrates and runs it again.',
+        "within the point's tolerances and runs the UMBmark procedure (Borenstein and Feng, \"UMBmark: a "
+        'benchmark test for measuring odometry errors in mobile robots")'
+        + {
+            "all": ", calibrates and runs it again.",
+            "none": ", without calibration.",
+            "some": "; at the points that calibrate it calibrates and runs it again.",
+        }[_calibration(study)],
         "- Common random numbers: trial k of every point of one robot draws the same random numbers, so it is "
         "the same build scaled by the point's tolerances; the curves along the tolerance are smooth and the "
         "differences between points sharp, while each point's statistics are those of independent trials.",
@@ -200,6 +265,15 @@ def _method_lines(study: Study, q_name: str, level: str) -> list[str]:
         'distribution-free, from order statistics with binomial ranks (David and Nagaraja, "Order '
         'Statistics"); an end the trials cannot reach is shown as unbounded. Failed trials are left out of '
         "the statistics and counted.",
+        *(
+            [
+                "- Reduction: the median over the trials of E_max,syst before / after calibration; an after-value "
+                "below 0.01 mm (the resolution of this report's millimetres) counts as 0.01 mm, and the factor "
+                "is then only a lower bound, printed as `at least N`."
+            ]
+            if _calibration(study) != "none"
+            else []
+        ),
         "- Tolerance found: the first crossing of the target from the small end of the axis, interpolated "
         "between the adjacent grid values in log-log (when the values are positive) or linearly.",
         f"- Reproduce: `omnikin sweep {cell(study.source)} -o DIR`"

@@ -12,8 +12,9 @@
 4. writes the trial table, the summary per point (:mod:`omnikin.sweep.summary`), the figure and
    ``report.md`` (:mod:`omnikin.sweep.report`) that answers the study's question.
 
-A task that failed on its workers (:func:`~omnikin.sweep.engine.run_tasks`) enters the tables as
-rows with its reason, but is not written as a part: the next run computes it again.
+A task that failed on its workers (:func:`~omnikin.sweep.engine.run_tasks`), or whose result was
+refused because its worker runs other omnikin or NumPy versions, enters the tables as rows with
+its reason, but is not written as a part: the next run computes it again.
 
 Called from Python, the embedded cluster starts worker *processes* (``spawn``): a script that
 calls :func:`run_sweep` must do so under ``if __name__ == "__main__":``, as every program
@@ -55,7 +56,7 @@ TASKS_PER_WORKER = 4
 
 def require_sweep() -> None:
     """Raise an error naming the extra when Dask or pyarrow is missing."""
-    missing = [name for name in ("distributed", "pyarrow") if importlib.util.find_spec(name) is None]
+    missing = [name for name in ("distributed", "pyarrow", "cryptography") if importlib.util.find_spec(name) is None]
     if missing:
         raise InputError(f"omnikin sweep needs {' and '.join(missing)}: pip install 'omnikin[sweep]'")
 
@@ -145,6 +146,8 @@ class SweepResult:
     reused: int = 0
     failed: int = 0
     failed_tasks: int = 0
+    refused: list[str] = field(default_factory=list)
+    """One line per worker whose results were refused (other omnikin or NumPy versions)."""
     removed: list[str] = field(default_factory=list)
     files: list[Path] = field(default_factory=list)
     answers: list = field(default_factory=list)
@@ -159,8 +162,11 @@ def run_sweep(
     task_trials: int | None = None,
     force: bool = False,
     progress: Progress | None = None,
+    tls=None,
 ) -> SweepResult:
-    """Run ``study`` into the folder ``out`` (module docstring) and return what was done."""
+    """Run ``study`` into the folder ``out`` (module docstring) and return what was done;
+    ``tls``: the credentials of a ``tls://`` ``scheduler``
+    (:class:`~omnikin.sweep.engine.TLSFiles`; default: Dask's configuration)."""
     require_sweep()
     check_run_options(workers, task_trials)
     with StudyFolder.open(out, study, force=force) as folder:
@@ -170,7 +176,7 @@ def run_sweep(
         count = workers or os.cpu_count() or 1
         tasks = plan_tasks(study, coverage, count, task_trials)
         if tasks:
-            _compute(study, folder, tasks, scheduler, workers, progress, result, failed_rows)
+            _compute(study, folder, tasks, scheduler, workers, progress, result, failed_rows, tls)
         elif folder.stale:
             folder.start_over()
         _finish(study, folder, failed_rows, result)
@@ -191,8 +197,8 @@ def check_run_options(workers, task_trials) -> None:
             raise InputError(f"{name} ({option}) must be a whole number from 1 to {high}, got {shorten(value)}")
 
 
-def _compute(study, folder, tasks, scheduler, workers, progress, result, failed_rows) -> None:
-    from .engine import dask_client, run_tasks
+def _compute(study, folder, tasks, scheduler, workers, progress, result, failed_rows, tls) -> None:
+    from .engine import WorkerMismatch, dask_client, run_tasks
 
     keys = [point_key(p) for p in study.points]
 
@@ -204,13 +210,15 @@ def _compute(study, folder, tasks, scheduler, workers, progress, result, failed_
             )
             failed_rows.append(error_rows(point, range(task.first, task.stop), reason))
             result.failed_tasks += 1
+            if isinstance(error, WorkerMismatch) and one_line(error) not in result.refused:
+                result.refused.append(one_line(error))
         else:
             folder.write_part(keys[task.index], task.first, task.stop, columns)
             result.computed += task.trials
         if progress is not None:
             progress.advance(task.trials)
 
-    with dask_client(scheduler, workers) as cluster:
+    with dask_client(scheduler, workers, tls) as cluster:
         if folder.stale:  # the cluster answers: now the study will run, the old one may go
             folder.start_over()
         if progress is not None:

@@ -12,7 +12,10 @@ Every file is written atomically (:func:`omnikin.io.output.atomic_write`: a temp
 it, renamed when complete), so an interrupted study leaves whole parts or none. A rerun of the
 same study reads which trials of which points are on disk (from the parts' contents, not their
 names: a rerun with another task size still resumes) and computes only the others. A part that
-cannot be read, or whose rows are not the trials its name says, is removed and computed again.
+cannot be read, or whose rows are not the trials its name says, is removed and computed again; so
+is a part that shares a trial with another (a copy under another spelling of the name, a part
+covering trials of another): parts are taken in the order of their first trial, and one that
+overlaps a part already taken is removed, so every trial is read from one part only.
 
 A folder holds one study *seed* computed by one omnikin and NumPy version: a results folder is
 reused by a study of the same seed (its points, trials per point or robots may differ: parts are
@@ -231,25 +234,24 @@ class StudyFolder:
             folder = self.path / PARTS / key
             if self.stale or not folder.is_dir():  # a stale folder's parts are another study's
                 continue
-            seen = np.zeros(0, dtype=bool)
-            for entry in sorted(folder.iterdir()):
+            candidates: list[tuple[int, int, Path]] = []
+            for entry in folder.iterdir():
                 if entry.name.startswith(".") and entry.name.endswith(".tmp"):
                     entry.unlink(missing_ok=True)  # a part whose writing was cut off
                     continue
                 match = _PART.fullmatch(entry.name)
-                if match is None or not entry.is_file():
-                    continue
-                first, stop = int(match.group(1)), int(match.group(2))
-                problem = _part_problem(pq, entry, schema, key, first, stop)
-                if problem is None and seen.size >= stop and seen[first:stop].any():
-                    problem = "overlaps another part"
+                if match is not None and entry.is_file():
+                    candidates.append((int(match.group(1)), int(match.group(2)), entry))
+            reach = 0  # the parts taken cover trials below reach, each once
+            for first, stop, entry in sorted(candidates, key=lambda c: (c[0], c[1], c[2].name)):
+                problem = "overlaps another part" if first < reach else None
+                if problem is None:
+                    problem = _part_problem(pq, entry, schema, key, first, stop)
                 if problem is not None:
                     removed.append(f"{entry}: {problem}")
                     entry.unlink(missing_ok=True)
                     continue
-                if seen.size < stop:
-                    seen = np.concatenate([seen, np.zeros(stop - seen.size, dtype=bool)])
-                seen[first:stop] = True
+                reach = stop
                 self._parts[key].append(entry)
                 have[first : min(stop, have.size)] = True
         return Coverage(done, removed)
@@ -279,7 +281,12 @@ class StudyFolder:
         keep = (rank >= 0) & (trial < self.study.trials)
         table = table.filter(pa.array(keep))
         if table.num_rows:
-            table = table.take(pa.array(np.lexsort((trial[keep], rank[keep]))))
+            rows = np.lexsort((trial[keep], rank[keep]))
+            ranks, trials = rank[keep][rows], trial[keep][rows]
+            twice = (ranks[1:] == ranks[:-1]) & (trials[1:] == trials[:-1])
+            if twice.any():  # coverage() reads each trial from one part: a row twice is a fault of omnikin
+                raise RuntimeError(f"the trial table holds {int(twice.sum())} trials twice; nothing was written")
+            table = table.take(pa.array(rows))
         return table
 
     # --- the end ---------------------------------------------------------------------------

@@ -15,7 +15,11 @@ counted in ``failed`` and left out):
   (:mod:`omnikin.evaluation.order_statistics`); an end the trials cannot reach is NaN: the upper
   end of the 95 % interval of the 95th percentile needs 72 trials per point, the median's 6;
 * ``below``: the share of the trials with ``E_max,syst < study.target``;
-* ``median_reduction``: the median of the trials' ``E_max,syst`` before / after calibration.
+* ``median_reduction``: the median of the trials' ``E_max,syst`` before / after calibration, an
+  after-value below :data:`~omnikin.number_text.RESOLUTION` (0.01 mm, what the report resolves)
+  counted as that resolution; ``reduction_bound`` says that some trial's was, so the median is
+  a lower bound (the report prints it as ``at least N``; the trial table keeps each trial's own
+  ratio).
 
 :func:`answers` reads the summary along the study's axis (:attr:`~omnikin.sweep.study.Study.axis`,
 e.g. ``scale``) per *series* (:func:`series_of`: a robot with one setting of every other factor)
@@ -34,6 +38,7 @@ import numpy as np
 
 from ..evaluation.order_statistics import quantile_interval
 from ..evaluation.threshold import BELOW, Crossing, threshold
+from ..number_text import RESOLUTION
 from ..viz.sweep import AXIS_UNITS
 from .points import POINT_FIELDS, TOLERANCE_FACTORS, point_key
 from .study import TRIAL_COLUMNS, Study
@@ -59,12 +64,13 @@ SUMMARY_COLUMNS: tuple[tuple[str, str], ...] = (
     ("failed", "int64"),
     *((stat_column(stat, phase), "float64") for phase in PHASES for stat in STATISTICS),
     ("median_reduction", "float64"),
+    ("reduction_bound", "bool"),
 )
 """Name and Arrow type of every column of the summary, in order (module docstring): the point's
 key and settings, its ``series`` (:attr:`Series.label`), ``trials`` (rows of the trial table),
 ``failed`` (rows with an error), per phase ``median_{phase}``, ``median_{phase}_low``/``_high``,
 ``quantile_{phase}``, ``quantile_{phase}_low``/``_high`` [m] and ``below_{phase}`` [share], then
-``median_reduction``. NaN stands for a statistic without data or an interval end the trials
+``median_reduction`` and ``reduction_bound``. NaN stands for a statistic without data or an interval end the trials
 cannot reach; ``noise`` and ``ticks_per_rev`` may be None."""
 
 
@@ -152,9 +158,13 @@ def summarize(trials: Mapping[str, np.ndarray], study: Study) -> dict[str, np.nd
             values = np.asarray(trials[f"e_max_syst_{phase}"], dtype=float)[ok]
             for stat, value in _statistics(values, study).items():
                 rows[stat_column(stat, phase)].append(value)
-        reduction = np.asarray(trials["reduction"], dtype=float)[ok]
-        reduction = reduction[np.isfinite(reduction)]
+        before = np.asarray(trials["e_max_syst_before"], dtype=float)[ok]
+        after = np.asarray(trials["e_max_syst_after"], dtype=float)[ok]
+        both = np.isfinite(before) & np.isfinite(after)
+        before, after = before[both], after[both]
+        reduction = before / np.maximum(after, RESOLUTION)
         rows["median_reduction"].append(float(np.median(reduction)) if len(reduction) else math.nan)
+        rows["reduction_bound"].append(bool(np.any(after < RESOLUTION)))
     return {name: _column(rows[name], kind) for name, kind in SUMMARY_COLUMNS}
 
 
@@ -185,10 +195,16 @@ class Answer:
         return (f["scale"] * f["radius"] * 100.0, f["scale"] * f["hub"] * 1000.0, f["scale"] * f["drive_deg"])
 
     @property
+    def phase_text(self) -> str:
+        """The phase in words: ``before calibration`` and ``after calibration`` for a series that
+        calibrates, ``without calibration`` for one that does not (it describes no calibration)."""
+        return phase_text(self.phase, self.series.calibrate)
+
+    @property
     def text(self) -> str:
         """The answer in one line: ``omni3, before calibration: scale up to 1.25 (radius 0.625 %,
         hub 1.25 mm, drive 0.625 deg; crosses); conservative: 1.1``."""
-        phase = "before calibration" if self.phase == "before" else "after calibration"
+        phase = self.phase_text
         found = crossing_text(self, self.estimate)
         triple = tolerances_text(self, self.estimate.value)
         detail = self.estimate.status + ("" if triple == "-" else f"; {triple}")
@@ -196,6 +212,14 @@ class Answer:
             f"{' '.join(self.series.label.split())[:120]}, {phase}: {AXIS_UNITS[self.axis][0]} {found} ({detail}); "
             f"conservative: {crossing_text(self, self.conservative)}" + (" (approximate)" if self.approximate else "")
         )
+
+
+def phase_text(phase: str, calibrates: bool) -> str:
+    """``before calibration``/``after calibration``, or ``without calibration`` for the one phase
+    of points that do not calibrate."""
+    if not calibrates:
+        return "without calibration"
+    return "before calibration" if phase == "before" else "after calibration"
 
 
 def axis_text(axis: str, value: float) -> str:

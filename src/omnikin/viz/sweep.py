@@ -2,7 +2,7 @@ r"""The figure of a tolerance study (``omnikin sweep``): ``E_max,syst`` against 
 
 :func:`tolerance_figure` draws a study's summary (one row per point,
 :data:`omnikin.sweep.summary.SUMMARY_COLUMNS`): one panel per phase (before and after
-calibration; before only when no point calibrates), the tolerance factor of the study's axis
+calibration; one panel "without calibration" when no point calibrates), the tolerance factor of the study's axis
 on x, ``E_max,syst`` [mm] on y, one colour per series (a robot with one setting of the other
 factors, the summary's ``series`` column). Each series shows its median (solid) and its
 ``study.quantile`` quantile (dashed), each with its confidence interval as a band (absent where
@@ -71,7 +71,7 @@ def _log_axis(axis, set_scale, values: np.ndarray, ticks: bool) -> None:
         axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
     else:
         return
-    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.0f}" if v >= 100 else f"{v:.3g}"))  # 1000, not 1e+03
     axis.set_minor_formatter(NullFormatter())
 
 
@@ -137,7 +137,7 @@ def tolerance_figure(summary: Mapping[str, np.ndarray], study):
                     gid=f"crossing:{phase}:{j}",
                 )
         ax.axhline(study.target * 1000, color="k", lw=1.0, ls=":", gid=f"target:{phase}")
-        ax.set_title(PHASE_TITLES[phase], fontsize=10)
+        ax.set_title(PHASE_TITLES[phase] if calibrates else "without calibration", fontsize=10)
         ax.set_xlabel(label)
         if _spans_decade(x_all):
             _log_axis(ax.xaxis, ax.set_xscale, x_all, ticks=not random)

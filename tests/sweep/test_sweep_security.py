@@ -1,0 +1,212 @@
+"""Who can reach a sweep's cluster, and whose results it takes.
+
+* The embedded cluster: every port the ``omnikin sweep`` process and its children listen on
+  (found with psutil, not from what the sweep prints) refuses a Dask client without the run's
+  temporary credentials, over tcp:// and over tls:// with other credentials; the same probe gets
+  an answer from an open scheduler and from a TLS one with its credentials (it can fail).
+* ``--scheduler tls://``: a real scheduler and workers started with certificates made here; the
+  sweep runs there with ``--tls-*`` and gives the embedded cluster's table, and without the
+  credentials (or with another authority's) it is refused in one line.
+* A worker that joins in the middle of a study and reports another omnikin version (a test-only
+  Dask preload) has its results refused, named in one line; the next run computes them.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import omnikin_env, run_entry_point
+from dask_cluster import dask_answers, dask_cluster, listening_ports, make_tls, speaks_http
+
+pa = pytest.importorskip("pyarrow", reason="omnikin[sweep] (pyarrow) is not installed")
+pq = pytest.importorskip("pyarrow.parquet", reason="omnikin[sweep] (pyarrow) is not installed")
+pytest.importorskip("distributed", reason="omnikin[sweep] (Dask distributed) is not installed")
+pytest.importorskip("cryptography", reason="omnikin[sweep] (cryptography) is not installed")
+pytest.importorskip("psutil", reason="psutil finds the listening sockets")
+
+STUDY = """\
+omnikin_sweep: 1
+name: security test
+robots: [tomasi-omni3]
+seed: 7
+trials: {trials}
+umbmark: {{side: 1, runs: 1}}
+factors:
+  scale: [0.1, 1]
+  calibrate: {calibrate}
+"""
+
+WAIT_S = 300.0
+"""Most time a study may take to come up or a condition to be reached on a loaded machine [s]."""
+
+
+def write_study(tmp_path: Path, trials: int, calibrate: str = "false") -> Path:
+    spec = tmp_path / "study.yaml"
+    spec.write_text(STUDY.format(trials=trials, calibrate=calibrate))
+    return spec
+
+
+def table(folder: Path) -> dict:
+    read = pq.read_table(folder / "trials.parquet").drop_columns(["seconds"])
+    return {name: read.column(name).to_pylist() for name in read.column_names}
+
+
+def assert_same(result: dict, expected: dict) -> None:
+    """Equal column by column (NaN equal to NaN: the after columns of a study without calibration)."""
+    assert list(result) == list(expected)
+    for name in expected:
+        np.testing.assert_array_equal(np.array(result[name]), np.array(expected[name]), err_msg=name)
+
+
+def sweep_process(*argv) -> subprocess.Popen:
+    return subprocess.Popen(
+        [sys.executable, "-m", "omnikin.cli.main", "sweep", *map(str, argv)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=omnikin_env(),
+        start_new_session=True,
+    )
+
+
+def wait_for(condition, what: str, process: subprocess.Popen | None = None) -> None:
+    deadline = time.monotonic() + WAIT_S
+    while not condition():
+        assert process is None or process.poll() is None, f"the study ended before {what}"
+        assert time.monotonic() < deadline, f"no {what} within {WAIT_S:g} s"
+        time.sleep(0.05)
+
+
+def test_no_port_of_the_embedded_cluster_answers_a_client_without_the_runs_credentials(tmp_path):
+    from distributed import Client
+    from distributed.security import Security
+
+    spec = write_study(tmp_path, trials=2000)
+    study = sweep_process(spec, "-o", tmp_path / "out", "--workers", "1", "--task-trials", "1")
+    try:
+        wait_for(lambda: list((tmp_path / "out").glob("parts/*/*.parquet")), "part written", study)
+        ports = listening_ports(study.pid)
+        assert set(ports.values()) == {"127.0.0.1"}, ports  # nothing beyond this machine
+        dask_ports = [port for port in sorted(ports) if not speaks_http(port)]  # HTTP: read-only pages
+        assert len(dask_ports) >= 3, ports  # the scheduler, the nanny and the worker at least
+        foreign = Security.temporary()  # credentials of another run: signed by another authority
+        for port in dask_ports:
+            for address, security in ((f"tcp://127.0.0.1:{port}", None), (f"tls://127.0.0.1:{port}", foreign)):
+                assert not dask_answers(address, security, timeout=5), f"{address} answered"
+        for port in dask_ports[:1]:
+            with pytest.raises((OSError, TimeoutError)):
+                Client(f"tcp://127.0.0.1:{port}", timeout="3s")
+        assert study.poll() is None  # the study went on
+    finally:
+        os.killpg(study.pid, signal.SIGINT)
+        _, err = study.communicate(timeout=WAIT_S)
+    assert study.returncode == 130, err
+    assert "Traceback" not in err, err
+
+
+def test_a_tls_cluster_runs_the_study_with_the_users_credentials_and_refuses_others(tmp_path):
+    spec = write_study(tmp_path, trials=4)
+    local = run_entry_point("sweep", spec, "-o", tmp_path / "local", "--workers", "1", timeout=WAIT_S)
+    assert local.returncode == 0, local.stderr
+    tls = make_tls(tmp_path / "tls")
+    other = make_tls(tmp_path / "other", name="another")
+    with dask_cluster(tmp_path, workers=1, tls=tls) as cluster:
+        assert cluster.address.startswith("tls://")
+        assert not dask_answers(cluster.address.replace("tls://", "tcp://"), timeout=5)
+        assert not dask_answers(cluster.address, other.security(), timeout=5)
+        assert dask_answers(cluster.address, tls.security())
+        remote = run_entry_point(
+            "sweep", spec, "-o", tmp_path / "remote", "--scheduler", cluster.address, *tls.options, timeout=WAIT_S
+        )
+        assert remote.returncode == 0, remote.stderr
+        assert "Traceback" not in remote.stderr and "warning" not in remote.stderr, remote.stderr
+        bare = run_entry_point("sweep", spec, "-o", tmp_path / "bare", "--scheduler", cluster.address)
+        assert bare.returncode == 2 and len(bare.stderr.splitlines()) == 1, bare.stderr
+        assert "needs this client's credentials: --tls-ca-file, --tls-cert and --tls-key" in bare.stderr
+        wrong = run_entry_point(
+            "sweep", spec, "-o", tmp_path / "wrong", "--scheduler", cluster.address, *other.options, timeout=WAIT_S
+        )
+        assert wrong.returncode != 0 and "cannot connect" in wrong.stderr, wrong.stderr
+        assert "Traceback" not in wrong.stderr and len(wrong.stderr.strip().splitlines()) == 1, wrong.stderr
+    assert_same(table(tmp_path / "remote"), table(tmp_path / "local"))
+
+
+@pytest.mark.parametrize(
+    "extra, words",
+    [
+        (["--tls-cert", "c.pem"], "the local cluster makes its own"),
+        (["--scheduler", "tcp://127.0.0.1:1", "--tls-cert", "c.pem"], "need a tls:// scheduler"),
+        (["--scheduler", "tls://127.0.0.1:1", "--tls-key", "k.pem"], "needs --tls-ca-file and --tls-cert"),
+        (["--scheduler", "tls://127.0.0.1:1", "--tls-ca-file", "no.pem", "--tls-cert", "no.pem"], "no such file"),
+    ],
+)
+def test_tls_options_that_cannot_work_are_refused_in_one_line(tmp_path, extra, words):
+    spec = write_study(tmp_path, trials=1)
+    done = run_entry_point("sweep", spec, "-o", tmp_path / "out", *extra)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("omnikin: error: ") and len(done.stderr.splitlines()) == 1, done.stderr
+    assert words in done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def _sweep_tasks_done(client, address: str) -> int:
+    """Sweep tasks whose result the worker at ``address`` holds or held (its state machine's
+    log: a ``put-in-memory`` entry per finished task)."""
+
+    def count(dask_worker) -> int:
+        return sum(1 for e in dask_worker.state.log if "omnikin-sweep" in str(e[0]) and e[1] == "put-in-memory")
+
+    return int(client.run(count, workers=[address]).get(address, 0))
+
+
+def test_a_worker_of_another_version_that_joins_mid_study_has_its_results_refused(tmp_path):
+    spec = write_study(tmp_path, trials=60)
+    reference = run_entry_point("sweep", spec, "-o", tmp_path / "reference", "--workers", "1", timeout=WAIT_S)
+    assert reference.returncode == 0, reference.stderr
+    out = tmp_path / "out"
+    with dask_cluster(tmp_path, workers=1) as cluster:
+        (good_pid,) = cluster.workers.values()
+        assert dask_answers(cluster.address)  # the probe of the embedded cluster's test gets answers
+        study = sweep_process(spec, "-o", out, "--scheduler", cluster.address, "--task-trials", "1")
+        with cluster.client() as client:
+            wait_for(lambda: list(out.glob("parts/*/*.parquet")), "part written", study)
+            os.kill(good_pid, signal.SIGSTOP)  # the good worker holds still: the late one takes tasks
+            try:
+                late = cluster.start_worker("late", version="0.0.0+other")
+                wait_for(lambda: len(client.scheduler_info()["workers"]) == 2, "late worker", study)
+                (address,) = [a for a in client.scheduler_info()["workers"] if a not in cluster.workers]
+                wait_for(lambda: _sweep_tasks_done(client, address) >= 2, "task on the late worker", study)
+            finally:
+                os.kill(good_pid, signal.SIGCONT)
+            out_text, err = study.communicate(timeout=WAIT_S)
+        late.terminate()
+    assert study.returncode == 0, err
+    assert "Traceback" not in err, err
+    refused = [line for line in err.splitlines() if "0.0.0+other" in line]
+    assert len(refused) == 1, err  # one line for the worker, whatever the number of its tasks
+    assert refused[0].startswith(f"omnikin: warning: worker '{address}' runs omnikin '0.0.0+other' with NumPy ")
+    assert "its results are refused" in refused[0]
+    result = table(out)
+    errors = [e for e in result["error"] if e is not None]
+    assert errors and all("refused" in e for e in errors)
+    # every trial written came from the good worker: the same numbers as the reference
+    expected = table(tmp_path / "reference")
+    rows = [k for k, e in enumerate(result["error"]) if e is None]
+    assert rows
+    for name in expected:
+        if name != "error":
+            got, want = [result[name][k] for k in rows], [expected[name][k] for k in rows]
+            np.testing.assert_array_equal(np.array(got), np.array(want), err_msg=name)
+    # the refused trials were not written: a rerun on the embedded cluster computes them
+    again = run_entry_point("sweep", spec, "-o", out, "--workers", "1", timeout=WAIT_S)
+    assert again.returncode == 0, again.stderr
+    assert f"({len(errors)} computed now, {len(rows)} from the folder, 0 failed)" in again.stdout
+    assert_same(table(out), expected)
