@@ -53,8 +53,8 @@ from ..presets import PRESET_NAMES, preset_path
 from ..wheels import (
     COUNTER_BITS_RANGE,
     GEAR_RATIO_RANGE,
-    MOTOR_TYPES,
     MAX_SPEED_RANGE,
+    MOTOR_TYPES,
     OFFSET_RANGE,
     POSITION_LIMIT,
     RADIUS_RANGE,
