@@ -23,9 +23,8 @@ def robot_yaml(w2_extra: str = "", w2_encoder: bool = True, castor: str = "") ->
         "  - {name: w3, type: omni, distance: 0.113, angle_deg: 240, radius: 0.04125, encoder: {ticks_per_rev: 600}}",
     ]
     if castor:
-        lines.append(
-            f"  - {{name: c, type: castor, x: -0.05, y: 0.0, drive_deg: 0, radius: 0.02, steer: {{offset: 0.02}}{castor}}}"
-        )
+        castor_wheel = "name: c, type: castor, x: -0.05, y: 0.0, drive_deg: 0, radius: 0.02, steer: {offset: 0.02}"
+        lines.append(f"  - {{{castor_wheel}{castor}}}")
     return "\n".join(lines) + "\n"
 
 
