@@ -283,6 +283,8 @@ class InteractiveSim:
             steer = " ".join(f"{math.degrees(a):+.0f}" for a in self.backend.sim.steer_angles)
             lines.append(f"steering [deg] {steer}")
         lines.append("W/S A/D Q/E move, space stop, [ ] steer, 1 2 3 camera")
+        if self.backend.fallen:  # the back-end stopped the wheels (docs/physics.md)
+            lines.insert(0, f"stopped: {self.backend.fallen}")
         return "\n".join(lines)
 
     # --- the loop ------------------------------------------------------------------------------------
@@ -337,6 +339,7 @@ class InteractiveSim:
             "odometry_pose": list(self.runtime.pose),
             "steer": self.steer_reached(),
             "target": self.teleop.target.tolist(),
+            "fallen": self.backend.fallen,
             "presses": dict(self.teleop.presses),
             "releases": self.releases,
             "events": self.events,
