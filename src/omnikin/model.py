@@ -111,6 +111,8 @@ def wheel_set_problem(robot: Robot, other: Robot) -> str | None:
         if (o.encoder is None) != (w.encoder is None):
             has, lacks = ("has no", "has one") if o.encoder is None else ("has an", "has none")
             return f"wheel {w.name!r} {has} encoder, but on {robot.name!r} it {lacks}"
+        if o.motor_kind != w.motor_kind and not w.is_castor:
+            return f"wheel {w.name!r} has a {o.motor_kind} motor, not a {w.motor_kind} motor as on {robot.name!r}"
         if w.is_steerable and o.is_centred_steerable != w.is_centred_steerable:
             centred = {True: "centred (steer.offset 0)", False: "off-centred (steer.offset > 0)"}
             return (
@@ -240,6 +242,13 @@ class Robot:
     physical: PhysicalBody | None = None
     """Physical fields of the chassis (mass, centre of mass, thickness) for physics engines;
     None: derived from the layout (:mod:`omnikin.physics.description`)."""
+    design: Robot | None = None
+    """For a robot as built (:meth:`omnikin.simulation.error_models.SystematicErrors.apply`), the
+    robot it was built to: the same wheel names in the same order, its own ``design`` None.
+    A physics description takes the body from it (chassis, masses, motors: the errors move only
+    what they name, :func:`omnikin.physics.description.describe`), and a wheel controller whose
+    speed loop closes on its encoder counts by its scale. None: this robot is its own design. A
+    robot file holds no design (what it describes is one)."""
 
     def __post_init__(self):
         problem = robot_name_problem(self.name)
@@ -257,6 +266,17 @@ class Robot:
         collisions = name_collisions([w.name for w in self.wheels])
         if collisions:
             raise InputError(f"robot {self.name!r}: {collisions[0][1]}")
+        if self.design is not None:
+            if not isinstance(self.design, Robot) or self.design.design is not None:
+                raise InputError(
+                    f"robot {self.name!r}: design must be a Robot that is its own design, or None, "
+                    f"got {shorten(self.design)}"
+                )
+            if self.design.wheel_names != self.wheel_names:
+                raise InputError(
+                    f"robot {self.name!r} was not built to its design {self.design.name!r}: wheels "
+                    f"{shorten(self.wheel_names)}, not {shorten(self.design.wheel_names)}"
+                )
         if not self.rolling:
             raise SingularLayoutError(
                 f"robot {self.name!r}: no rolling wheel (castors alone cannot move or measure it)"

@@ -71,6 +71,15 @@ GEAR_RATIO_RANGE = (1e-3, 1e4)
 """Encoder revolutions per wheel revolution: multi-stage gearboxes stay below 1e4."""
 MAX_SPEED_RANGE = (1e-3, 1e4)
 """Wheel speed limit [rad/s]: 1e4 rad/s is 95 000 rpm, beyond any wheel."""
+MOTOR_TYPES = ("stepper", "dc")
+"""What turns a driven wheel (docs/conventions.md, "Motors"): a ``stepper`` turns open loop, by
+the steps commanded (its encoder only measures: an encoder scale error changes what the counts
+say, not how the wheel turns); a ``dc`` motor's speed loop closes on the wheel's encoder (the
+wheel turns so that the *counts* follow the command: an encoder scale error changes how far the
+wheel turns)."""
+DEFAULT_MOTOR = "stepper"
+"""The motor of a wheel whose file says none: the seed robot's (Tomasi and Todt drive their
+three omni wheels with NEMA 17 stepper motors, Sec. 4 of their paper)."""
 
 
 def name_problem(name) -> str | None:
@@ -84,6 +93,21 @@ def name_problem(name) -> str | None:
         )
     if name in RESERVED_NAMES:
         return f"{name!r} is reserved (the time column of tick logs)"
+    return None
+
+
+def motor_problem(motor, kind: str, encoded: bool) -> str | None:
+    """None if ``motor`` (None or one of :data:`MOTOR_TYPES`) fits a wheel of type ``kind`` with
+    (``encoded``) or without an encoder, else why not: a castor is passive, a ``dc`` motor's
+    speed loop needs the wheel's encoder."""
+    if motor is None:
+        return None
+    if not isinstance(motor, str) or motor not in MOTOR_TYPES:
+        return f"must be one of {', '.join(MOTOR_TYPES)}, got {shorten(motor)}"
+    if kind == "castor":
+        return "a castor is passive: it has no motor"
+    if motor == "dc" and not encoded:
+        return "a dc motor's speed loop closes on the wheel's encoder: give the wheel an encoder, or use stepper"
     return None
 
 
@@ -163,6 +187,9 @@ class Wheel:
     physical: PhysicalWheel | None = None
     """Physical fields (width, mass, rollers, friction, motor torque) for physics engines; None:
     all derived from the layout (:mod:`omnikin.physics.description`)."""
+    motor: str | None = None
+    """The kind of motor that turns the wheel, one of :data:`MOTOR_TYPES` (None: :data:`DEFAULT_MOTOR`);
+    ``dc`` needs an encoder (its speed loop closes on it), a castor has none."""
 
     def __post_init__(self):
         """Check the name and every number against the ranges above (docs/conventions.md)."""
@@ -194,8 +221,20 @@ class Wheel:
                 raise InputError(f"{who} only Swedish wheels have rollers (physical.rollers, physical.rows)")
             if self.is_castor and self.physical.max_torque is not None:
                 raise InputError(f"{who} a castor is passive: it has no motor (physical.max_torque)")
+        _require(motor_problem(self.motor, self.type, self.encoder is not None), f"{who} motor")
 
     # --- classification ---------------------------------------------------
+    @property
+    def motor_kind(self) -> str:
+        """The wheel's motor, :attr:`motor` or :data:`DEFAULT_MOTOR` when the file gave none."""
+        return self.motor if self.motor is not None else DEFAULT_MOTOR
+
+    @property
+    def counts_close_loop(self) -> bool:
+        """True when the wheel's speed loop closes on its encoder's counts (a ``dc`` motor): an
+        encoder scale error then changes how far the wheel turns, not what the counts say."""
+        return self.motor_kind == "dc" and self.encoder is not None
+
     @property
     def is_swedish(self) -> bool:
         return self.type in SWEDISH_TYPES

@@ -280,3 +280,72 @@ def test_the_physics_node_with_errors_drifts_from_ground_truth_by_what_the_robot
         assert drift < 1e-9
     else:  # the drift the test finds is well beyond its tolerance: without the errors it fails
         assert drift > 3 * tol_xy and abs(expected[2] - odom[2]) > 3 * tol_th, (drift, expected, odom)
+
+
+# --- a robot that falls over: the node reports it and its wheels stay stopped ---------------------
+PUSHED_NODE = """\
+import pathlib
+import sys
+
+from omnikin import load_robot
+from omnikin.cli.ros import PHYSICS_MAX_LAG
+from omnikin.physics.backend import PhysicsBackend
+from omnikin.ros.node import run
+from omnikin.ros.params import load_params
+
+
+class PushedPhysics(PhysicsBackend):
+    \"\"\"The physics back-end of the node, its chassis pushed over (1.5 N m about world x) while
+    the file 'push' exists.\"\"\"
+
+    def read(self, t):
+        self.sim.data.xfrc_applied[self.sim._chassis, 3] = 1.5 if pathlib.Path("push").exists() else 0.0
+        return super().read(t)
+
+
+robot = load_robot("tomasi-omni3")
+sys.exit(run(robot, PushedPhysics(robot, max_lag=PHYSICS_MAX_LAG), load_params(None)))
+"""
+
+
+def test_a_physics_robot_that_falls_over_is_an_error_in_diagnostics_and_its_wheels_stay_stopped(tmp_path):
+    """Pushed over (1.5 N m about x on a robot whose weight holds it with at most 1.1 N m,
+    tests/physics/test_physics_robot_that_falls_is_reported.py), the simulated robot tips:
+    /diagnostics turns ERROR 'wheels stopped: robot ... tipped over at t = ... s' and stays so,
+    and a forward cmd_vel afterwards turns no wheel (joint_states speeds zero)."""
+    script = tmp_path / "pushed_node.py"
+    script.write_text(PUSHED_NODE)
+    proc, graph = start(tmp_path, [], script=script)
+    try:
+        _, _, values, status = graph.next_diag()
+        assert status.level != DiagnosticStatus.ERROR and values["link_fallen"] == "", status.message  # standing
+        (tmp_path / "push").write_text("")
+
+        def fallen():
+            last = graph.last_diag()
+            return last is not None and last[3].level == DiagnosticStatus.ERROR
+
+        assert wait_for(fallen, 10.0), graph.last_diag()[3].message
+        (tmp_path / "push").unlink()
+        message = graph.last_diag()[3].message
+        print(f"pushed over: {message!r}")
+        assert message.startswith("wheels stopped: robot 'tomasi-omni3' tipped over at t = ")
+        time.sleep(1.0)  # the push ended: let the robot come to rest on its back
+        t_drive = time.monotonic()
+        graph.drive(vx=V, duration=1.5)
+        wheels = ("w1", "w2", "w3")  # the measured joints (the others move as the odometry implies)
+        with graph.lock:
+            speeds = [[m.velocity[list(m.name).index(w)] for w in wheels] for t, m in graph.joints if t > t_drive + 0.5]
+        assert speeds, "no joint_states while commanded"
+        commanded = V / 0.04125  # [rad/s] the wheels would turn at (tomasi-omni3's radius)
+        print(f"largest wheel speed after the fall: {np.max(np.abs(speeds)):.3g} rad/s (commanded ~{commanded:.3g})")
+        assert np.max(np.abs(speeds)) < 0.05 * commanded
+        _, _, values, status = graph.next_diag()
+        assert status.level == DiagnosticStatus.ERROR and "tipped over" in status.message
+        assert "tipped over" in values["link_fallen"]
+        assert proc.stderr().count("tipped over") == 1  # logged once
+        assert "Traceback" not in proc.stderr()
+    finally:
+        graph.close()
+        rc, _ = proc.terminate()
+        assert rc == 0, proc.stderr()

@@ -150,8 +150,9 @@ def test_a_robot_as_built_or_calibrated_keeps_every_field_the_errors_do_not_chan
     """Every field of the Robot but its name and wheels, and of each Wheel but the six the errors
     move (x, y, drive, roller, radius, encoder), comes through SystematicErrors.apply, Borenstein's
     correction and the least-squares calibration as it was: the physical fields of a physics
-    engine (mass, centre of mass, wheel width), the description and references, max_speed. A
-    re-built Robot(name, wheels, description, references) dropped the body's physical fields."""
+    engine (mass, centre of mass, wheel width), the description and references, max_speed, the
+    motor. A re-built Robot(name, wheels, description, references) dropped the body's physical
+    fields. The robot as built remembers its design: the robot itself."""
     from dataclasses import fields, replace
 
     from omnikin.evaluation.calibration import borenstein_calibrate, calibrate
@@ -169,10 +170,11 @@ def test_a_robot_as_built_or_calibrated_keeps_every_field_the_errors_do_not_chan
     )
     moved = {"x", "y", "drive", "roller", "radius", "encoder"}
     true = SystematicErrors({"left": WheelErrors(radius=0.01, dy=0.002, ticks=0.001)}).apply(robot)
+    assert true.design is robot
     umb = run_umbmark(true, robot, side=1.0, mode="rotate", runs=1, noise=NoiseModel(quantise=False), rate=20.0)
     runs = [CalibrationRun(line(1.0), (1.001, 0.002, 0.0)), CalibrationRun(spin(3.0), (0.0, 0.0, 3.01))]
     for out, kept in (
-        (true, {f.name for f in fields(robot)} - {"name", "wheels"}),
+        (true, {f.name for f in fields(robot)} - {"name", "wheels", "design"}),
         (borenstein_calibrate(robot, umb[0]), {f.name for f in fields(robot)} - {"wheels"}),
         (calibrate(robot, runs).robot, {f.name for f in fields(robot)} - {"wheels", "description"}),
     ):

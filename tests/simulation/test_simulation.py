@@ -499,6 +499,12 @@ def test_perfect_knowledge_closes(robots, name, rate):
             plan = umbmark_square(direction, 4.0, mode)
             for noise in (NOISE["none"], NoiseModel(), EXACT):
                 sim = simulate(plan, robot, robot, rate=rate, noise=noise, trials=2, rng=0)
+                if noise.quantise and not robot.encoded[0].counts_close_loop:
+                    # steppers turn exactly as commanded; whole ticks only measure them: the truth
+                    # closes, the odometry within its quantisation (a few mm on the 16 m square)
+                    assert_pose(sim.truth[:, -1], np.zeros((2, 3)), 1e-9)
+                    assert np.max(np.abs(sim.epsilon)) < 0.01, (mode, direction, noise)
+                    continue
                 assert np.max(np.abs(sim.epsilon[:, :2])) < 1e-9, (mode, direction, noise)
                 assert np.max(np.abs(sim.epsilon[:, 2])) < 1e-9
                 if not noise.quantise:
@@ -507,12 +513,29 @@ def test_perfect_knowledge_closes(robots, name, rate):
 
 
 def test_perfect_knowledge_quantised_odometry_is_near_the_plan(robots):
-    """With whole ticks the odometry ends within a few ticks' worth of the plan end (not exactly)."""
+    """With whole ticks the odometry ends within a few ticks' worth of the plan end (not exactly).
+    tomasi-omni3's steppers turn the commanded angles, and the ticks are those angles over the
+    angle per tick, rounded: the truth is the plan, the odometry reads it to whole ticks. A dc
+    motor's loop holds the counts at the rounded command: the truth is what those counts say."""
     robot = robots["tomasi-omni3"]
-    sim = simulate(umbmark_square("cw"), robot, robot, noise=NoiseModel(), rng=0)
+    plan = umbmark_square("cw")
+    sim = simulate(plan, robot, robot, noise=NoiseModel(), rng=0)
+    exact = simulate(plan, robot, robot, noise=EXACT)
     assert np.issubdtype(sim.ticks.dtype, np.integer)
+    np.testing.assert_array_equal(sim.ticks, np.round(exact.ticks))
+    np.testing.assert_allclose(sim.truth[0], exact.truth[0], atol=1e-9)
     assert np.hypot(*sim.odometry[-1, :2]) < 0.01
+    assert 1e-6 < np.max(np.abs(sim.truth[0, :, :2] - sim.odometry[:, :2])) < 0.01
+    dc = with_motor(robot, "dc")
+    sim = simulate(plan, dc, dc, noise=NoiseModel(), rng=0)
     np.testing.assert_allclose(sim.truth[0], sim.odometry, atol=1e-9)
+
+
+def with_motor(robot, motor):
+    """``robot`` with every encoded wheel driven by ``motor``."""
+    from dataclasses import replace
+
+    return replace(robot, wheels=tuple(replace(w, motor=motor) if w.encoder else w for w in robot.wheels))
 
 
 def test_all_radii_one_percent_large_line_and_spin(robots):
@@ -546,12 +569,18 @@ def test_all_radii_one_percent_large_line_and_spin(robots):
     )
 
 
-def test_encoder_ticks_error(robots):
-    """ticks_per_rev (1 + e) on every wheel: each tick is 1/(1 + e) of the assumed angle -> 4/(1 + e) m."""
-    robot = robots["tomasi-omni3"]
+@pytest.mark.parametrize("motor", ["stepper", "dc"])
+def test_encoder_ticks_error(robots, motor):
+    """ticks_per_rev (1 + e) on every wheel: each tick is 1/(1 + e) of the assumed angle. A stepper
+    turns the commanded angle (truth 4 m) and its encoders count (1 + e) times the ticks the model
+    expects (odometry 4 (1 + e) m); a dc motor's loop holds the counts at the command (odometry
+    4 m), so the wheels turn 1/(1 + e) of it (truth 4/(1 + e) m)."""
+    robot = with_motor(robots["tomasi-omni3"], motor)
     true = SystematicErrors({n: WheelErrors(ticks=0.02) for n in ("w1", "w2", "w3")}).apply(robot)
     sim = simulate(line(4.0), true, robot, noise=EXACT)
-    assert_pose(sim.measured[0], [4.0 / 1.02, 0, 0], 1e-9)
+    truth, odometry = (4.0, 4.0 * 1.02) if motor == "stepper" else (4.0 / 1.02, 4.0)
+    assert_pose(sim.measured[0], [truth, 0, 0], 1e-9)
+    assert_pose(sim.odometry[-1], [odometry, 0, 0], 1e-9)
 
 
 @pytest.mark.parametrize("e", [0.001, 0.01, -0.005])

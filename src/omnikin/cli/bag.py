@@ -581,9 +581,12 @@ def _simulate_physics(args, plan, true, robot):
         if not bar:
             if time.monotonic() - started < PROGRESS_AFTER:
                 return
+            err = console(stderr=True)
+            if not err.is_terminal:  # rich would still end the bar with an empty line on a pipe
+                return
             from rich.progress import Progress
 
-            display = Progress(console=console(stderr=True), transient=True)
+            display = Progress(console=err, transient=True)
             display.start()
             bar.extend([display, display.add_task("simulating (physics)", total=total)])
         bar[0].update(bar[1], completed=done)

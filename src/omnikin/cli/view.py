@@ -171,6 +171,7 @@ def cmd_view(args) -> int:
         timeout=0.5 if args.timeout is None else args.timeout,
         step=args.step,
     )
+    live.tell = lambda line: print(f"omnikin view: {line}", file=sys.stderr, flush=True)  # a robot that fell
     return serve_live(live, args, f"{robot.name} ({engine})")
 
 

@@ -54,6 +54,7 @@ from ..wheels import (
     COUNTER_BITS_RANGE,
     GEAR_RATIO_RANGE,
     MAX_SPEED_RANGE,
+    MOTOR_TYPES,
     OFFSET_RANGE,
     POSITION_LIMIT,
     RADIUS_RANGE,
@@ -64,6 +65,7 @@ from ..wheels import (
     Encoder,
     Steer,
     Wheel,
+    motor_problem,
     name_problem,
 )
 from .textfile import read_text
@@ -91,6 +93,7 @@ WHEEL_KEYS = {
     "max_speed",
     "steer",
     "physical",
+    "motor",
 }
 ENCODER_KEYS = {"ticks_per_rev", "gear_ratio", "invert", "counter_bits"}
 STEER_KEYS = {"offset", "min_deg", "max_deg"}
@@ -370,8 +373,15 @@ def _wheel(where: _Where, data: Any, index: int) -> Wheel:
     encoder = _encoder(where, data["encoder"], label) if "encoder" in data else None
     max_speed = _number(where, data["max_speed"], label, "max_speed") if "max_speed" in data else None
     physical = _physical_wheel(where, data["physical"], label, kind) if "physical" in data else None
+    motor = data.get("motor")
+    if "motor" in data:
+        problem = motor_problem(motor, kind, encoder is not None)
+        if motor is None:
+            problem = f"must be one of {', '.join(MOTOR_TYPES)}, got null (leave 'motor' out for the default)"
+        if problem:
+            raise where.error(problem, label, "motor")
     try:
-        return Wheel(name, kind, x, y, drive, radius, roller, encoder, max_speed, steer, physical)
+        return Wheel(name, kind, x, y, drive, radius, roller, encoder, max_speed, steer, physical, motor)
     except OmnikinError as exc:  # a combination the file checks above do not see
         raise where.error(str(exc), label) from None
 
@@ -714,7 +724,9 @@ def _count(x) -> int | float:
 
 
 def robot_to_dict(robot: Robot) -> dict:
-    """Schema-1 mapping of ``robot`` (Cartesian placement, explicit drive_deg)."""
+    """Schema-1 mapping of ``robot`` (Cartesian placement, explicit drive_deg). A robot as built
+    is written as the robot it is: its design (:attr:`omnikin.model.Robot.design`) is not part
+    of a robot file."""
     wheels = []
     for w in robot.wheels:
         d: dict[str, Any] = {
@@ -745,6 +757,8 @@ def robot_to_dict(robot: Robot) -> dict:
             }
         if w.physical is not None and w.physical.given:
             d["physical"] = physical_to_dict(w.physical)
+        if w.motor is not None:
+            d["motor"] = w.motor
         wheels.append(d)
     out: dict[str, Any] = {
         "omnikin": SCHEMA_VERSION,

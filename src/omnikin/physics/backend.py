@@ -15,6 +15,14 @@ real driver makes when the file's ``ticks_per_rev`` or ``gear_ratio`` is wrong);
 joint speeds converted with the same ratio. The clock starts at the first call, as in
 ``SimBackend``; calls with a time not after the last one move nothing.
 
+Wheels turn by their motors (:attr:`omnikin.wheels.Wheel.motor`): a dc motor's speed loop counts
+by the nominal robot's encoder scale (``controller`` of :class:`~omnikin.physics.engine.PhysicsSim`).
+
+**A robot that tips over** (:meth:`~omnikin.physics.engine.PhysicsSim.fall`, checked at every
+call) is reported, never driven on: :attr:`PhysicsBackend.fallen` holds the one line (also in
+``stats()["fallen"]``, which the ROS node turns into an ERROR in ``/diagnostics`` and the viewer
+into a notice), and from then on every command is replaced by zero wheel speeds.
+
 **Real time** (``max_lag``, the ROS node's wall clock): each call steps the model up to the
 time it is asked for, so a late call catches up. Where the physics runs slower than real time,
 catching up fully would make every call later than the last; with ``max_lag`` [s] a call steps
@@ -60,7 +68,10 @@ class PhysicsBackend:
         self.encoded = robot.encoded_names
         if not self.encoded:
             raise InputError(f"robot {robot.name!r}: the physics back-end needs encoded (driven) wheels")
-        self.sim = PhysicsSim(self.true_robot, start=start, step=step)
+        self.sim = PhysicsSim(self.true_robot, start=start, step=step, controller=robot)
+        self.fallen = ""
+        """Empty while the robot stands; once it tipped over (:meth:`PhysicsSim.fall`), that one
+        line, and every later command is replaced by zero wheel speeds (module docstring)."""
         self.quantise = bool(quantise)
         if max_lag is not None and not (math.isfinite(max_lag) and max_lag > 0.0):
             raise InputError(f"physics back-end: max_lag must be a finite time > 0 s, got {shorten(max_lag)}")
@@ -101,6 +112,9 @@ class PhysicsBackend:
             self._steer = angles.copy()
         self._advance(t)
         steer_true = None if self._steer is None else self._steer[self._steer_order]
+        if self.fallen:  # a robot on its side does not drive on: its wheels are stopped
+            speeds = np.zeros_like(speeds)
+            steer_true = None
         self.sim.command(speeds[self._order], steer_true)
         self.writes += 1
 
@@ -130,6 +144,11 @@ class PhysicsBackend:
             self.time_dropped += dropped
             self.lag_events += 1
         self.sim.advance(float(t) - self._t0)
+        if not self.fallen:
+            fell = self.sim.fall()
+            if fell:
+                self.fallen = fell
+                self.sim.command(np.zeros(len(self.true_robot.rolling)), None)
 
     def stats(self) -> dict:
         return {
@@ -145,6 +164,7 @@ class PhysicsBackend:
             ),
             "time_dropped": self.time_dropped,
             "lag_events": self.lag_events,
+            "fallen": self.fallen,
         }
 
     def close(self) -> None:

@@ -195,6 +195,11 @@ inertia keeps ``k h_max^2 / I <= 1`` (:func:`steering_rotor_inertia`; presets 0.
 Without it synchro with a 1000 kg chassis (ratio 122) tipped over in ``line 1``, xr4000 with
 100 kg (8.1) ended it 86 mm off.
 
+*A robot as built* (:attr:`omnikin.model.Robot.design` set, as
+:meth:`~omnikin.simulation.error_models.SystematicErrors.apply` makes it) keeps the body of its
+design: the defaults above are taken from the design, and only what the errors name moves
+(each wheel's hub, drive direction, radius and roller angle; :func:`as_built`).
+
 A robot whose contact points do not surround its centre of mass cannot stand (two wheels on
 one axle and no castor): :attr:`PhysicalRobot.support_margin` is then not positive, and the
 engine refuses it.
@@ -745,9 +750,13 @@ def _wheel_mass_and_width(wheel: Wheel) -> tuple[float, float, RollerSet | None,
 
 
 def describe(robot: Robot) -> PhysicalRobot:
-    """The physical description of ``robot`` (module docstring for every default)."""
+    """The physical description of ``robot`` (module docstring for every default); a robot as
+    built (:attr:`omnikin.model.Robot.design` set) keeps the body of its design
+    (:func:`as_built`)."""
     if not isinstance(robot, Robot):
         raise InputError(f"describe: expected a Robot, got {type(robot).__name__}")
+    if robot.design is not None:
+        return as_built(robot, describe(robot.design))
     body = robot.physical
     rolling = robot.rolling
     mean_radius = float(np.mean([w.radius for w in rolling]))
@@ -868,6 +877,64 @@ def describe(robot: Robot) -> PhysicalRobot:
         mass=total,
         com=(float(robot_com[0]), float(robot_com[1]), float(robot_com[2])),
         support_margin=support_margin(contacts, robot_com[:2]),
+    )
+
+
+def as_built(robot: Robot, design: PhysicalRobot) -> PhysicalRobot:
+    """The physical description of ``robot``, a robot as built, from ``design``, the description
+    of the robot it was built to (:attr:`omnikin.model.Robot.design`): it differs only where the
+    errors say. Kept from the design: the chassis (shape, size, mass, centre of mass, inertia),
+    every wheel's mass, width, rollers per row and rows, friction, motor (torque, speed, ramp,
+    servo, rotor) and steering servo. Taken from ``robot``: each wheel's hub position, drive
+    direction, radius and roller angle (the rollers' shape follows them, their mass does not;
+    the hub's inertia follows its radius), the steering axis; then the robot's centre of mass
+    (the wheels moved with their masses) and its support margin. Why: the defaults derive the
+    chassis from the wheels' layout (module docstring), and hubs a millimetre off the circle of
+    tomasi-omni3 made its 1.655 kg cylinder a 1.381 kg box."""
+    wheels = []
+    chassis = design.chassis
+    moments = chassis.mass * np.asarray(chassis.com, dtype=float)
+    contacts = []
+    for w, body in zip(robot.wheels, design.wheels, strict=True):
+        delta = float(w.drive)
+        cd, sd = math.cos(delta), math.sin(delta)
+        trail = w.offset if (w.is_steerable or w.is_castor) else 0.0
+        rollers, hub_radius = body.rollers, w.radius
+        if rollers is not None:
+            width = body.width if "width" in body.fields else None
+            rollers = roller_set(w, rollers.rows, rollers.per_row, width, rollers.mass * len(rollers.rollers))
+            hub_radius = rollers.centre_radius
+        hub_inertia = (
+            body.hub_mass * hub_radius**2 / 2.0,
+            body.hub_mass * (3.0 * hub_radius**2 + body.width**2) / 12.0,
+        )
+        steering = body.steering
+        if steering is not None:
+            steering = replace(steering, pivot=(float(w.x), float(w.y)), trail=float(trail))
+        contact = (w.x - w.offset * cd, w.y - w.offset * sd)
+        contacts.append(contact)
+        fork_mass = steering.fork_mass if steering is not None else 0.0
+        moments = moments + body.mass * np.array([*contact, w.radius]) + fork_mass * np.array([w.x, w.y, w.radius])
+        wheels.append(
+            replace(
+                body,
+                type=w.type,
+                hub=(w.x - trail * cd, w.y - trail * sd, w.radius),
+                drive=delta,
+                axle=(-sd, cd, 0.0),
+                radius=w.radius,
+                hub_inertia=hub_inertia,
+                rollers=rollers,
+                steering=steering,
+            )
+        )
+    com = moments / design.mass
+    return replace(
+        design,
+        name=robot.name,
+        wheels=tuple(wheels),
+        com=(float(com[0]), float(com[1]), float(com[2])),
+        support_margin=support_margin(np.array(contacts, dtype=float), com[:2]),
     )
 
 

@@ -23,6 +23,13 @@ The model is the MJCF of :mod:`omnikin.physics.mjcf`. The simulation
   wheel (MuJoCo's ``velocity`` actuator, the proportional part, integrated implicitly) gets the
   set-point plus ``z``, ``dz/dt = (set-point - speed) / integral_time``, ``|z|`` at most the
   speed error at which the motor gives its full torque; the steering servos likewise on angles;
+- turns the driven wheels by their **motors** (:attr:`omnikin.wheels.Wheel.motor`,
+  docs/conventions.md, "Motors"): a stepper's joint follows the commanded speed; a dc motor's
+  speed loop closes on its encoder, so its joint follows the command times
+  ``rpt_true / rpt_controller`` (:attr:`PhysicsSim.loop_turn`): the counts of the encoder as
+  built (``rpt_true`` [rad/tick]) follow the command over the scale its controller was told
+  (``controller``, default the robot's design), as in the kinematic engine
+  (:func:`omnikin.simulation.simulate.wheel_motion`);
 - reads **encoders** from the wheel joint angles, quantised to whole ticks of each encoder
   (``ticks_per_rev`` and ``gear_ratio``, sign of ``invert``) and wrapped like the hardware
   counter when the encoder has ``counter_bits``
@@ -76,6 +83,27 @@ TRACK_ERROR = 0.02
 """Bound [m/s] on a driven wheel's root mean square rim speed error over :data:`TRACK_TIME`:
 beyond it the wheel does not follow its set-points (torque-limited, or oscillating); the presets'
 wheels stay below a fifth of it (docs/physics.md, "Runs that do not drive as commanded")."""
+
+
+TIPPED = 0.2
+"""Tilt [rad] of the chassis beyond which the robot has tipped over (it stands level within
+milliradians: the contacts sink 0.01-0.1 % of a wheel's radius)."""
+
+
+def _loop_turn(robot: Robot, controller: Robot | None, names: list[str]) -> np.ndarray:
+    """Per wheel of ``names``, the joint speed its motor turns per unit of commanded speed
+    (module docstring, "motors"): ``rpt_true / rpt_controller`` for a wheel whose speed loop closes
+    on its encoder (:attr:`omnikin.wheels.Wheel.counts_close_loop`), ``controller`` the robot
+    whose encoder scale its controller counts by (default ``robot.design``, else ``robot``); 1
+    otherwise."""
+    controller = controller if controller is not None else (robot.design or robot)
+    out = np.ones(len(names))
+    for i, name in enumerate(names):
+        wheel = robot.wheel(name)
+        told = controller.wheel(name).encoder if name in controller.wheel_names else None
+        if wheel.counts_close_loop and told is not None and wheel.encoder is not None:
+            out[i] = wheel.encoder.rad_per_tick / told.rad_per_tick
+    return out
 
 
 class PhysicsError(OmnikinError, RuntimeError):
@@ -196,7 +224,9 @@ class PhysicsSim:
     (default :func:`~omnikin.physics.description.describe`). ``roller_phase``: where in its
     roller period each wheel starts, a fraction in ``[0, 1)`` of it (:func:`roller_period`), one
     for every wheel or one per rolling wheel (file order); wheels without rollers ignore it
-    (:func:`roller_offsets`). The encoders start at zero whatever the phase."""
+    (:func:`roller_offsets`). The encoders start at zero whatever the phase. ``controller``: the
+    robot whose encoder scale the dc motors' speed loops count by (default ``robot.design``, else
+    ``robot``; module docstring, "motors")."""
 
     def __init__(
         self,
@@ -206,6 +236,7 @@ class PhysicsSim:
         step: float = DEFAULT_STEP,
         description: PhysicalRobot | None = None,
         roller_phase=0.0,
+        controller: Robot | None = None,
     ):
         mujoco = _mujoco()
         self._mj = mujoco
@@ -255,6 +286,9 @@ class PhysicsSim:
         self._integral_gain = np.array([self.step_size / mo.integral_time for mo in motors if mo is not None])
         self._windup = np.array([mo.max_torque / mo.gain for mo in motors if mo is not None])
         self._driven_radius = np.array([robot.wheel(rolling[i]).radius for i in driven])
+        self.loop_turn = _loop_turn(robot, controller, [rolling[i] for i in driven])
+        """Per driven wheel, the joint speed its motor turns per unit of commanded speed: 1 for a
+        stepper, ``rpt_true / rpt_controller`` for a dc motor (module docstring, "motors")."""
         self.driven_names = [rolling[i] for i in driven]
         """Names of the driven wheels (file order): the wheels of :attr:`lag_time` and friends."""
         self._track_alpha = min(1.0, UNWRAP_CHUNK * self.step_size / TRACK_TIME)
@@ -352,7 +386,7 @@ class PhysicsSim:
                 f"robot {self.robot.name!r}: expected {n} finite wheel speeds [rad/s] (rolling wheels "
                 f"{shorten(self.robot.rolling_names)}), got {shorten(wheel_speeds)}"
             )
-        wanted = speeds[self._driven]
+        wanted = speeds[self._driven] * self.loop_turn
         self._speed_target = np.clip(wanted, -self._max_speed, self._max_speed)
         clipped = not np.array_equal(self._speed_target, wanted)
         self._ramping = self.ramping
@@ -454,6 +488,18 @@ class PhysicsSim:
                 self._steer_integral + error * self._steer_gain, -self._steer_windup, self._steer_windup
             )
             d.ctrl[self._steer_ctrl] = self._steer_set + self._steer_integral
+
+    def fall(self) -> str | None:
+        """None while the robot stands, else one phrase saying that it tipped over: its chassis
+        tilted beyond :data:`TIPPED` (the test every physics user makes: ``simulate --engine
+        physics``, studies, the ROS node's and the viewer's back-end)."""
+        tilt = self.tilt
+        if tilt <= TIPPED:
+            return None
+        return (
+            f"robot {self.robot.name!r} tipped over at t = {self.time:.4g} s (chassis tilted {math.degrees(tilt):.3g} "
+            f"deg): its contacts left the support of its weight"
+        )
 
     def _track_heading(self) -> None:
         yaw = _yaw(self.data.xmat[self._chassis])

@@ -453,6 +453,8 @@ class InteractiveSim:
             lines.append(f"steering [deg] {steer}")
         if self.rtf < SLOW_RTF or self.lag > CATCH_UP:
             lines.append(f"SLOW: the machine cannot keep up, {self.lag:.1f} s behind the clock")
+        if self.backend.fallen:  # the back-end stopped the wheels (docs/physics.md)
+            lines.insert(0, f"stopped: {self.backend.fallen}")
         return "\n".join(lines)
 
     def help_text(self) -> str:
@@ -578,6 +580,7 @@ class InteractiveSim:
             "odometry_pose": list(self.runtime.pose),
             "steer": self.steer_reached(),
             "target": self.teleop.target.tolist(),
+            "fallen": self.backend.fallen,
             "presses": dict(self.teleop.presses),
             "releases": self.releases,
             "not_obeyed": dict(self.not_obeyed),

@@ -15,7 +15,8 @@ Steering first: a segment whose steering differs from the angles the steering jo
 steering, sampled on until the joints have reached it and the robot is at rest (at most
 :data:`ALIGN_MAX`), as a controller of steered wheels does: the kinematic plan turns the wheels
 at once, which off-centred legs swinging under a moving robot cannot (Villasenor's robot tips
-over). A robot that tips over anyway (:data:`TIPPED`) ends the run with
+over). A robot that tips over anyway (:data:`~omnikin.physics.engine.TIPPED`,
+:meth:`~omnikin.physics.engine.PhysicsSim.fall`) ends the run with
 :class:`~omnikin.physics.engine.PhysicsError` naming the time.
 
 After the plan the wheels are commanded to stop and the run goes on, sampled at the same rate,
@@ -72,9 +73,6 @@ STEER_ALIGNED = 0.01
 """Steering error [rad] below which a segment's steering counts as reached."""
 ALIGN_MAX = 5.0
 """Longest time [s] a segment waits for its steering before it drives."""
-TIPPED = 0.2
-"""Tilt [rad] of the chassis beyond which the robot has tipped over (it stands level within
-milliradians: the contacts sink 0.01-0.1 % of a wheel's radius)."""
 
 SLIP_TIME = 0.2
 """Window [s] of a wheel's slip: the root mean square over an exponential window of this length,
@@ -237,7 +235,7 @@ def _drive(
     angles, steer_cmd = commanded_angles(sampled, command_robot, command_robot.rolling)
     dt = np.diff(sampled.t)
     speeds = np.diff(angles, axis=0) / dt[:, None]
-    sim = PhysicsSim(true_robot, step=step, roller_phase=roller_phase)
+    sim = PhysicsSim(true_robot, step=step, roller_phase=roller_phase, controller=command_robot)
     steerable = bool(command_robot.steerable)
     samples = len(dt)
     duration = float(sampled.t[-1])
@@ -253,11 +251,9 @@ def _drive(
         sim.command(wheels, steer)
         sim.advance(t_next)
         slip.update()
-        if sim.tilt > TIPPED:
-            raise PhysicsError(
-                f"robot {true_robot.name!r} tipped over at t = {t_next:.4g} s (chassis tilted "
-                f"{math.degrees(sim.tilt):.3g} deg): its contacts left the support of its weight"
-            )
+        fell = sim.fall()
+        if fell:
+            raise PhysicsError(fell)
         times.append(t_next)
         poses.append(sim.pose)
         counts.append(sim.encoder_counts())
@@ -291,7 +287,7 @@ def _drive(
     at_rest = _at_rest(sim)
     driven = command_robot.rolling_index(sim.driven_names)
     radius = np.array([true_robot.wheel(n).radius for n in sim.driven_names])
-    commanded = (angles[-1] - angles[0])[driven] * radius
+    commanded = (angles[-1] - angles[0])[driven] * sim.loop_turn * radius  # as the motors turn a command
     turned = sim.wheel_angles[driven] * radius
     short = tuple(
         (name, float(commanded[i] - turned[i]), float(commanded[i]))

@@ -171,9 +171,12 @@ def diagnostic_status(
     step_error: str = "",
     overruns: int = 0,
     dropped: float = 0.0,
+    fallen: str = "",
 ) -> tuple:
     """``(level, message)`` of the ``omnikin base`` status, first rule that applies:
 
+    0. ERROR ``wheels stopped: <fallen>`` once the simulated robot tipped over (``fallen``, the
+       physics back-end's line: it stops the wheels and drives no more);
     1. ERROR ``wheels stopped: <error>`` while the link is lost (``link_error``);
     2. ERROR ``wheels stopped: control step failed: <error>`` when a control step failed since
        the previous status (``step_error``; a bug or a bad back-end, not a lost link);
@@ -184,6 +187,8 @@ def diagnostic_status(
        not keep up with), both since the previous status;
     5. OK ``running``.
     """
+    if fallen:
+        return ERROR, f"wheels stopped: {fallen}"
     if link_error:
         return ERROR, f"wheels stopped: {link_error}"
     if step_error:

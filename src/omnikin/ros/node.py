@@ -38,6 +38,11 @@ back-end or the runtime) is a bug, not a lost link: the node commands zero speed
 velocity command (the wheels stay stopped until a new ``cmd_vel``), publishes no odometry for
 that cycle, logs the error at most once a second and reports ERROR in ``/diagnostics``.
 
+A simulated robot that tips over (the physics back-end, ``--backend physics``:
+:attr:`omnikin.physics.backend.PhysicsBackend.fallen`) has its wheels stopped by the back-end,
+which drives it no more; the node logs it once and reports ERROR ``wheels stopped: robot ...
+tipped over at t = ... s`` in ``/diagnostics`` from then on.
+
 This module imports rclpy: import it only to run the node (``omnikin.ros.require_rclpy``
 first gives the one-line error naming the ``ros`` extra).
 """
@@ -174,6 +179,7 @@ class BaseNode(Node):
         self._first_loop: float | None = None
         self._window = (time.monotonic(), 0)  # (time, published) at the last diagnostics
         self.link_error = ""
+        self._fall_logged = False  # the physics back-end's robot tipped over, and the log said so
         self.stale_commands = 0  # TwistStamped older than cmd_vel_timeout, ignored
         self.step_errors = 0  # control steps failed on a non-link error
         self.last_step_error = ""
@@ -437,7 +443,11 @@ class BaseNode(Node):
             step_error=self._step_error_window,
             overruns=overruns_window,
             dropped=dropped_window,
+            fallen=str(link_stats.get("fallen", "")),
         )
+        if link_stats.get("fallen") and not self._fall_logged:
+            self._fall_logged = True
+            self.get_logger().error(f"wheels stopped: {link_stats['fallen']}")
         self._step_error_window = ""
         status = DiagnosticStatus(
             level=bytes([level]), name="omnikin base", message=message, hardware_id=self.robot.name

@@ -1,7 +1,10 @@
 """The simulated wheel back-end of the runtime: the robot as built (:class:`SimBackend`).
 
 It implements :class:`omnikin.runtime.backends.WheelBackend`: the driven (encoded) wheels
-turn at the commanded speeds (ideal speed control, zero-order hold between calls), each
+turn at the commanded speeds (ideal speed control, zero-order hold between calls) as their
+motors turn them (:func:`omnikin.simulation.simulate.wheel_motion`: a stepper the commanded
+angle, a dc motor so that the true encoder's counts follow the command over the nominal scale);
+the readings are the true encoders' counts converted with the nominal scale, as a driver does; each
 wheel's rolling distance slips as in :class:`omnikin.simulation.error_models.NoiseModel`,
 and the true robot's forward kinematics and exact SE(2) integration move the ground truth.
 Steering angles move linearly from one command to the next over the following interval,
@@ -42,7 +45,14 @@ class SimBackend:
             raise InputError(f"robot {robot.name!r}: the simulated back-end needs encoded (driven) wheels")
         self._index = robot.rolling_index(self.encoded)
         self._radius = np.array([self.true_robot.wheel(n).radius for n in self.encoded])
-        self._rpt = np.abs(robot.rad_per_tick(self.encoded))
+        # the motors (docs/conventions.md, "Motors"): a dc motor's loop holds the counts of the true
+        # encoder at the command over the nominal scale, so its wheel turns `turn` times the command
+        nominal_rpt = robot.rad_per_tick(self.encoded)
+        true_rpt = self.true_robot.rad_per_tick(self.encoded)
+        closed = np.array([self.true_robot.wheel(n).counts_close_loop for n in self.encoded], dtype=bool)
+        self._turn = np.where(closed, true_rpt / nominal_rpt, 1.0)
+        self._true_rpt = np.abs(true_rpt)
+        self._reading = nominal_rpt / true_rpt  # what the driver makes of the true wheel angle [rad/rad]
         self.truth = np.asarray(start, dtype=float).copy()
         self._angles = np.zeros(len(self.encoded))
         self._speeds = np.zeros(len(self.encoded))
@@ -70,9 +80,9 @@ class SimBackend:
         self.reads += 1
         positions = self._angles.copy()
         if self.noise.quantise:
-            positions = np.round(positions / self._rpt) * self._rpt
+            positions = np.round(positions / self._true_rpt) * self._true_rpt
         steer = None if self._steer is None else self._steer.copy()
-        return WheelState(float(t), positions, self._speeds.copy(), steer)
+        return WheelState(float(t), positions * self._reading, self._speeds * self._turn * self._reading, steer)
 
     def _advance(self, t: float) -> None:
         if self._t is None:  # the first call starts the clock
@@ -81,7 +91,7 @@ class SimBackend:
         dt = float(t) - self._t
         if dt <= 0:
             return
-        d = self._speeds * dt
+        d = self._speeds * self._turn * dt  # the true wheels' turn
         self._angles += d
         if self.noise.slip:
             sigma = self.noise.slip * np.sqrt(np.abs(d) * self._radius) / self._radius

@@ -68,7 +68,10 @@ class SystematicErrors:
     def apply(self, robot: Robot) -> Robot:
         """The true robot: ``robot`` with these errors built in. Everything the errors do not
         change is kept (each wheel's encoder ``gear_ratio``, ``invert``, ``counter_bits``, its
-        ``max_speed`` and ``steer``; the robot's description and references)."""
+        ``max_speed``, ``steer``, ``motor`` and physical fields; the robot's description,
+        references and physical fields), and the robot remembers its design
+        (:attr:`omnikin.model.Robot.design`: ``robot``, or ``robot``'s own design), from which a
+        physics description takes its body and a dc motor's controller its encoder scale."""
         unknown = sorted(set(self.wheels) - {w.name for w in robot.wheels})
         if unknown:
             raise InputError(f"errors name wheels {unknown} that robot {robot.name!r} does not have")
@@ -96,7 +99,8 @@ class SystematicErrors:
             )
         if all(not any(vars(e).values()) for e in self.wheels.values()):
             return robot  # built exactly as designed (--errors none): the robot itself, by its name
-        return replace(robot, name=f"{robot.name} (as built)", wheels=tuple(wheels))
+        design = robot.design if robot.design is not None else robot
+        return replace(robot, name=f"{robot.name} (as built)", wheels=tuple(wheels), design=design)
 
     def as_dict(self) -> dict:
         return {

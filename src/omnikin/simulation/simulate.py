@@ -4,14 +4,17 @@ One run, for every trial at once (leading trial axis):
 
 1. the plan is timed and sampled for the *command* robot (:func:`~.motion.sample_plan`);
    its inverse kinematics gives every encoded wheel's commanded angle at each sample;
-2. each wheel controller holds its encoder at the commanded count: the encoder ticks are
-   the commanded angle over the command model's angle per tick, rounded when quantised.
-   Its counter outputs them as such a counter does: a wheel whose ``encoder.counter_bits``
+2. each wheel turns by its motor (:func:`wheel_motion`): a stepper turns the commanded angle
+   and its encoder counts that angle over the *true* angle per tick; a dc motor's controller
+   holds its encoder at the commanded count, the commanded angle over the command model's angle
+   per tick; rounded when quantised.
+   Its counter outputs the counts as such a counter does: a wheel whose ``encoder.counter_bits``
    (of the command robot) is ``b`` reads ``ticks mod 2**b``, unsigned in ``[0, 2**b)`` like the
    count register of a quadrature decoder or the AS5600's 12-bit angle (:func:`counter_output`;
    unquantised counts, an idealisation, wrap to the signed range instead, exactly).
    They are the same in every trial, and so is the odometry computed from those readings;
-3. the true wheel angle is the ticks times the *true* angle per tick (encoder errors); in
+3. the true wheel angle is the commanded angle (stepper) or the ticks times the *true* angle
+   per tick (dc; encoder errors); in
    each sample each wheel's rolling distance gets its slip error and the true robot's
    forward kinematics (:meth:`omnikin.model.Robot.fk_matrix`) turns the wheel increments
    into a body increment; the floor adds its heading error; exact SE(2) integration gives
@@ -182,14 +185,10 @@ def simulate(
     if missing:
         raise InputError(f"true robot {true_robot.name!r}: wheels {missing} have no encoder")
     angles, steer = commanded_angles(sampled, command_robot, cmd_wheels)
-    cmd_rpt = command_robot.rad_per_tick(names)
-    ticks = angles / cmd_rpt
-    if noise.quantise:
-        ticks = np.round(ticks).astype(np.int64)
+    ticks, true_angles = wheel_motion(angles, true_robot, command_robot, names, noise.quantise)
     widths = [w.encoder.counter_bits for w in cmd_wheels]
     readings = counter_output(ticks, widths)
-    true_rpt = true_robot.rad_per_tick(names)
-    dtrue = np.diff(ticks, axis=0).T * true_rpt[:, None]  # (n, N) true wheel increments [rad]
+    dtrue = np.diff(true_angles, axis=0).T  # (n, N) true wheel increments [rad]
     # the plan's own speed steps are not checked: a plan timed without acceleration limits
     # changes speed at once (the readings still pass every counter and speed rule)
     odo_widths = [w.encoder.counter_bits for w in encoded_wheels(odometry_robot)]
@@ -200,6 +199,30 @@ def simulate(
     if z is not None:
         measured += z * np.array([noise.measurement, noise.measurement, noise.measurement_theta])
     return SimulatedRun(sampled, sampled.t, ticks, steer, odometry, truth, measured, readings)
+
+
+def wheel_motion(angles: np.ndarray, true_robot: Robot, command_robot: Robot, names, quantise: bool):
+    """What the encoded wheels ``names`` of ``true_robot`` do when commanded the angles
+    ``angles`` ``(N + 1, n)`` [rad] by ``command_robot``: their encoder counts ``(N + 1, n)``
+    (whole, int64, when ``quantise``) and true angles ``(N + 1, n)`` [rad], by each wheel's
+    motor (:attr:`omnikin.wheels.Wheel.motor`, docs/conventions.md, "Motors"):
+
+    * ``stepper`` (open loop): the wheel turns the commanded angle ``a``; its encoder, of scale
+      ``rpt_true`` [rad/tick], counts ``a / rpt_true``;
+    * ``dc`` (speed loop closed on the encoder): the controller holds the counts at the
+      commanded angle over the command model's scale, ``a / rpt_cmd``; the wheel turns
+      ``counts * rpt_true``.
+
+    An encoder scale error (``rpt_true != rpt_cmd``) thus moves the odometry of a stepper's wheel
+    and the truth of a dc motor's; the physics engine does the same
+    (:class:`omnikin.physics.engine.PhysicsSim`)."""
+    cmd_rpt = command_robot.rad_per_tick(names)
+    true_rpt = true_robot.rad_per_tick(names)
+    closed = np.array([true_robot.wheel(n).counts_close_loop for n in names], dtype=bool)
+    ticks = np.where(closed, angles / cmd_rpt, angles / true_rpt)
+    if quantise:
+        ticks = np.round(ticks).astype(np.int64)
+    return ticks, np.where(closed, ticks * true_rpt, angles)
 
 
 def counter_output(ticks: np.ndarray, bits) -> np.ndarray:

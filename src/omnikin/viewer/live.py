@@ -14,6 +14,10 @@ Inputs: key messages of :mod:`omnikin.viewer.front` (held keys through
 on the page's controls (held until changed or stopped), a stop, and steering by hand (robots
 with steerable wheels, at rest). While a target is non-zero it is offered to the runtime at
 every step, so the command timeout only acts when the inputs stop.
+
+A physics robot that tips over is stopped by its back-end
+(:attr:`omnikin.physics.backend.PhysicsBackend.fallen`); :attr:`PageRobot.fallen` then holds the
+one line the page shows and :attr:`PageRobot.tell` says once on the terminal.
 """
 
 from __future__ import annotations
@@ -135,6 +139,8 @@ class PageRobot:
         self._held: dict[object, set[str]] = {}  # per key channel ("source"): the move keys it holds
         self._heard: dict[object, float] = {}  # ... and when it last sent anything [s]
         self.notice = ""  # the last input refused, in one line (the page shows it)
+        self.fallen = ""  # once the simulated robot tipped over: that, in one line (page and terminal)
+        self.tell: Callable[[str], None] | None = None  # says a line on the terminal (omnikin view sets it)
         self.seeker: GoalSeeker | None = None
         self.arrived: tuple[float, float, float] | None = None  # the odometry's pose at the last goal reached
         self.arrived_heading = True  # whether the seeker steered the heading to the goal's
@@ -345,6 +351,15 @@ class LiveRobot(PageRobot):
         self.t = t
         result = self.runtime.step(t)
         self._last = result
+        fallen = getattr(self.backend, "fallen", "")
+        if fallen and not self.fallen:  # the back-end stopped the wheels: say so once, drop the targets
+            self.fallen = f"{fallen}; its wheels are stopped"
+            self.seeker = None
+            self.teleop.release_all()
+            self._set_twist[:] = 0.0
+            self.runtime.filter.halt()
+            if self.tell is not None:
+                self.tell(self.fallen)
         return self._snapshot(result, target, dt)
 
     def _snapshot(self, result: StepResult, target: np.ndarray, dt: float) -> Snapshot:

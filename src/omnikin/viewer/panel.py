@@ -124,7 +124,9 @@ class GoalMarker:
     def show(self, s: Snapshot) -> None:
         """The seeker's state in the folder (only when it changed)."""
         seeker = self.live.seeker
-        if self.live.notice:
+        if self.live.fallen:
+            text = f"stopped: {html.escape(self.live.fallen)}"
+        elif self.live.notice:
             text = f"refused: {html.escape(self.live.notice)}"
         elif seeker is not None:
             text = f"driving: {seeker.strategy}, {seeker.phase}"
