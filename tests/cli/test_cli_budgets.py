@@ -17,7 +17,6 @@ from omnikin.cli.budget import Budget, format_bytes, parse_duration, parse_size,
 from omnikin.cli.main import main
 from omnikin.errors import ResourceLimitError
 
-
 # The work a refusal must come before: each is replaced by a stand-in that fails the test if called.
 WORK = (
     ("omnikin.simulation.simulate", "simulate"),

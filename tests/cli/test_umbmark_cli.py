@@ -409,12 +409,9 @@ def test_an_interrupted_run_leaves_the_previous_report_intact(tmp_path):
     ],
 )
 def test_umbmark_refuses_studies_beyond_the_budget_at_once(capsys, tmp_path, monkeypatch, argv, contains):
-    import time
-
     monkeypatch.chdir(tmp_path)
-    start = time.monotonic()
+    _study_must_not_run(monkeypatch)
     assert_usage_error(capsys, "umbmark", *argv, contains=contains)
-    assert time.monotonic() - start < 10
     assert not (tmp_path / "umbmark-report").exists()
 
 
