@@ -12,7 +12,7 @@ import threading
 import numpy as np
 import pytest
 
-from conftest import circle_wheels
+from conftest import CountedName, circle_wheels
 from omnikin import OdometryInputError, Robot, load_robot
 from omnikin.cli.main import main
 from omnikin.io.csvfile import column_problems, iter_fields, number, read_rows
@@ -120,22 +120,6 @@ def test_empty_field_in_a_tick_log(tmp_path, capsys):
     rc, _, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", tmp_path / "out.csv")
     assert rc == 2 and f"{log}: line 3, column 'w2' (field 3): empty field" in err
     assert len(err.strip().splitlines()) == 1
-
-
-class CountedName(str):
-    """A column name that counts the comparisons made with it (``counts``: one list per test).
-    A search of the header per column compares about n^2 / 2 names; a dict or Counter about n."""
-
-    counts: list = []
-    budget = 0  # fail at once beyond it: a quadratic search would take minutes to finish
-
-    def __eq__(self, other):
-        CountedName.counts.append(1)
-        if len(CountedName.counts) > CountedName.budget:
-            pytest.fail(f"more than {CountedName.budget} name comparisons: a search of the header per column")
-        return str.__eq__(self, other)
-
-    __hash__ = str.__hash__
 
 
 def test_tick_log_of_many_wheels_is_read_in_linear_time(tmp_path, monkeypatch):
