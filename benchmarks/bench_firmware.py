@@ -123,6 +123,21 @@ def _simulation_speed(exe: Path) -> float:
     return final["time_s"] / (time.perf_counter() - t0)
 
 
+def _pacing(exe: Path) -> dict:
+    """How closely a paced board (``--speed``) keeps to the wall clock: the wall time of 1 s of
+    simulated time against the time the speed asks for (1.0: on time), and the most it fell behind."""
+    fw = firmware("stepper")
+    paced = {}
+    for speed in (1.0, 2.0):
+        with SimBoard(exe, fw.elf, "--duration", "1", speed=speed, pty=False) as board:
+            final = board.wait_final(120)
+        paced[f"speed_{speed:g}"] = {
+            "wall_vs_asked": final["wall_s"] / (final["time_s"] / speed),
+            "behind_s": final["behind_s"],
+        }
+    return paced
+
+
 def main() -> dict:
     missing = AVR_MISSING or SIMAVR_MISSING
     if missing:
@@ -173,6 +188,11 @@ def main() -> dict:
             print(f"  steps: interval {s['interval_mean']:.3f} cycles ({spread}), std {s['interval_std']:.1f}")
     results["simulated_s_per_wall_s"] = _simulation_speed(exe)
     print(f"simulation: {results['simulated_s_per_wall_s']:.1f} simulated s per wall s")
+    results["pacing"] = _pacing(exe)
+    for name, v in results["pacing"].items():
+        print(
+            f"pacing at {name}: wall time {v['wall_vs_asked']:.3f}x the asked, behind by at most {v['behind_s']:.3f} s"
+        )
     return results
 
 

@@ -7,7 +7,6 @@ import argparse
 import math
 import os
 import re
-import time
 from pathlib import Path
 
 import pytest
@@ -18,11 +17,49 @@ from omnikin.cli.budget import Budget, format_bytes, parse_duration, parse_size,
 from omnikin.cli.main import main
 from omnikin.errors import ResourceLimitError
 
+# The work a refusal must come before: each is replaced by a stand-in that fails the test if called.
+WORK = (
+    ("omnikin.simulation.simulate", "simulate"),
+    ("omnikin.cli.bag", "_simulate_physics"),
+    ("omnikin.io.bags", "record_run"),
+    ("omnikin.api.umbmark", "umbmark_study"),
+    ("omnikin.api.umbmark", "physics_umbmark_study"),
+)
+BAG_READERS = (("omnikin.io.bags", "bag_odometry"), ("omnikin.io.bags", "export_poses"))
+SAFETY_SECONDS = 120  # ends a hang (a pipe waited for, an endless device read); not a pace
 
-def refused_quickly(capsys, argv, *fragments, seconds=10.0):
-    start = time.monotonic()
-    rc, out, err = cli(capsys, *argv)
-    assert time.monotonic() - start < seconds
+
+def _never(module: str, name: str, ran: list):
+    def stand_in(*args, **kwargs):
+        ran.append(f"{module}.{name}")
+        raise AssertionError(f"{module}.{name} ran before the refusal")
+
+    return stand_in
+
+
+def _hung(signum, frame):
+    raise AssertionError(f"no answer within {SAFETY_SECONDS} s: the command hangs")
+
+
+def refused_at_once(capsys, argv, *fragments, never=()):
+    """Refused at once means before the work, whatever the pace of the machine: the simulation,
+    the bag recorder and the UMBmark study (and the bag readers named in ``never``) fail the test
+    if they start; a safety alarm turns a hang into a failure."""
+    import importlib
+    import signal
+
+    ran: list[str] = []  # main() reports what it catches, so the stand-ins also say they ran here
+    with pytest.MonkeyPatch.context() as mp:
+        for module, name in WORK + tuple(never):
+            mp.setattr(importlib.import_module(module), name, _never(module, name, ran))
+        previous = signal.signal(signal.SIGALRM, _hung)
+        signal.alarm(SAFETY_SECONDS)
+        try:
+            rc, out, err = cli(capsys, *argv)
+        finally:
+            signal.alarm(0)
+            signal.signal(signal.SIGALRM, previous)
+    assert ran == [], f"the work started before the refusal: {ran}"
     assert rc == 2 and out == ""
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("omnikin: error: ") and len(lines[0]) < 400, err
@@ -108,7 +145,7 @@ def test_the_help_names_the_units_of_sizes_and_durations(capsys):
 
 
 def test_a_blank_before_a_limit_is_a_usage_error_naming_the_option(capsys, tmp_path):
-    refused_quickly(
+    refused_at_once(
         capsys, ["umbmark", "diff-drive", "--max-memory", " 2G", "-o", tmp_path / "r"], "argument --max-memory", "' 2G'"
     )
     assert list(tmp_path.iterdir()) == []
@@ -141,7 +178,7 @@ def test_require_names_the_limit_and_the_way_out():
 def test_hostile_simulation_sizes_are_refused_at_once(capsys, tmp_path, extra):
     pytest.importorskip("rosbags")
     bag = tmp_path / "x.bag"
-    refused_quickly(capsys, ["simulate", "tomasi-omni3", *extra, "--bag", bag], "simulate", "--max-memory", "samples")
+    refused_at_once(capsys, ["simulate", "tomasi-omni3", *extra, "--bag", bag], "simulate", "--max-memory", "samples")
     assert not bag.exists() and list(tmp_path.iterdir()) == []
 
 
@@ -155,14 +192,14 @@ def test_hostile_simulation_sizes_are_refused_at_once(capsys, tmp_path, extra):
 def test_absurd_path_lengths_are_refused_by_the_plan(capsys, tmp_path, path, why):
     pytest.importorskip("rosbags")
     bag = tmp_path / "x.bag"
-    refused_quickly(capsys, ["simulate", "tomasi-omni3", "--path", path, "--bag", bag], "--path", why)
+    refused_at_once(capsys, ["simulate", "tomasi-omni3", "--path", path, "--bag", bag], "--path", why)
     assert list(tmp_path.iterdir()) == []
 
 
 def test_simulation_beyond_the_time_limit_is_refused(capsys, tmp_path):
     """640,000 samples of four messages each: far more than 1 s of writing on any machine."""
     pytest.importorskip("rosbags")
-    refused_quickly(
+    refused_at_once(
         capsys,
         ["simulate", "tomasi-omni3", "--rate", "1e4", "--max-time", "1s", "--bag", tmp_path / "x.bag"],
         "--max-time 1 s",
@@ -171,7 +208,7 @@ def test_simulation_beyond_the_time_limit_is_refused(capsys, tmp_path):
 
 
 def test_bad_limit_is_a_usage_error(capsys, tmp_path):
-    refused_quickly(
+    refused_at_once(
         capsys,
         ["simulate", "tomasi-omni3", "--max-memory", "lots", "--bag", tmp_path / "x.bag"],
         "--max-memory",
@@ -205,11 +242,15 @@ def copy_with_declared_count(bag: Path, dest: Path, topic: str, count: int) -> P
 
 def test_bag_declaring_a_trillion_messages_is_refused_before_reading(capsys, joint_bag, tmp_path):
     bag = copy_with_declared_count(joint_bag, tmp_path / "huge.bag", "/joint_states", 10**12)
-    refused_quickly(
-        capsys, ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag"], "1000000000000", "--max-memory"
+    refused_at_once(
+        capsys,
+        ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag"],
+        "1000000000000",
+        "--max-memory",
+        never=BAG_READERS,
     )
     assert not (tmp_path / "o.bag").exists()
-    refused_quickly(
+    refused_at_once(
         capsys,
         [
             "bag",
@@ -221,6 +262,7 @@ def test_bag_declaring_a_trillion_messages_is_refused_before_reading(capsys, joi
             "tum",
         ],
         "--max-memory",
+        never=BAG_READERS,
     )
 
 
@@ -228,7 +270,7 @@ def test_bag_understating_its_messages_is_stopped_while_reading(capsys, joint_ba
     """The metadata says one message; the limit (8K / 400 bytes = 20 messages) is enforced on the
     messages actually read."""
     bag = copy_with_declared_count(joint_bag, tmp_path / "liar.bag", "/joint_states", 1)
-    line = refused_quickly(
+    line = refused_at_once(
         capsys,
         ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag", "--max-memory", "8K"],
         "more than 20 messages",
@@ -242,7 +284,7 @@ def test_bag_understating_its_messages_is_stopped_while_reading(capsys, joint_ba
 def test_trajectory_file_too_large_for_the_budget_is_refused(capsys, tmp_path):
     est = tmp_path / "est.csv"
     est.write_text("t,x,y,theta\n" + "".join(f"{k},0,0,0\n" for k in range(2000)))
-    refused_quickly(capsys, ["metrics", est, est, "--max-memory", "64K"], str(est), "--max-memory 64K")
+    refused_at_once(capsys, ["metrics", est, est, "--max-memory", "64K"], str(est), "--max-memory 64K")
     rc, _, err = cli(capsys, "metrics", est, est, "--json")
     assert rc == 0, err
 
@@ -262,7 +304,7 @@ def test_endless_devices_are_refused_not_read(capsys, tmp_path, monkeypatch, arg
     if argv[0] in ("simulate", "bag"):
         pytest.importorskip("rosbags")
     monkeypatch.chdir(tmp_path)
-    refused_quickly(capsys, argv, "/dev/zero")
+    refused_at_once(capsys, argv, "/dev/zero")
 
 
 def test_bag_that_is_or_holds_a_pipe_is_refused_not_waited_for(capsys, joint_bag, tmp_path):
@@ -271,8 +313,8 @@ def test_bag_that_is_or_holds_a_pipe_is_refused_not_waited_for(capsys, joint_bag
 
     fifo = tmp_path / "run.mcap"
     os.mkfifo(fifo)
-    refused_quickly(capsys, ["bag", "export", fifo, "--topic", "/odom", "--format", "tum"], "pipe")
+    refused_at_once(capsys, ["bag", "export", fifo, "--topic", "/odom", "--format", "tum"], "pipe")
     bag = tmp_path / "copy.bag"
     shutil.copytree(joint_bag, bag)
     os.mkfifo(bag / "extra.mcap")
-    refused_quickly(capsys, ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag"], "extra.mcap", "pipe")
+    refused_at_once(capsys, ["bag", "odometry", "tomasi-omni3", bag, "-o", tmp_path / "o.bag"], "extra.mcap", "pipe")

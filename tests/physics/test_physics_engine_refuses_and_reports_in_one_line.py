@@ -10,7 +10,6 @@ import math
 import re
 import subprocess
 import sys
-import time
 
 import mujoco
 import numpy as np
@@ -106,13 +105,12 @@ def sim():
 
 
 def test_advance_to_an_unbounded_time_is_refused_at_once(sim):
-    started = time.monotonic()
     for t in (1e300, ADVANCE_MAX + 1.0):
         with pytest.raises(InputError, match=r"^advance: at most 3600 s of simulated time per call"):
             sim.advance(t)
     with pytest.raises(InputError, match=r"^step: the number of steps must be a whole number from 0 to 1800000"):
         sim.step(10**12)
-    assert time.monotonic() - started < 1.0 and sim.time == 0.0
+    assert sim.time == 0.0  # refused before any step, whatever the pace of the machine
 
 
 @pytest.mark.parametrize("value", ["abc", [1.0, "x"], None, [[1.0, 2.0]], [1e400, 0.0]])

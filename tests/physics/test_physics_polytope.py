@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import time
 
 import numpy as np
 import pytest
@@ -83,10 +82,21 @@ def ring_of_omni_wheels(count: int) -> Robot:
     return Robot(f"ring{count}", wheels)
 
 
-def test_describing_a_robot_of_many_wheels_takes_under_a_few_seconds():
-    # enumerating every choice of 3 of 256 wheels took minutes (128 wheels: 9 s)
+def test_describing_a_robot_of_many_wheels_does_not_enumerate_choices_of_wheels(monkeypatch):
+    # enumerating every choice of 3 of 256 wheels took minutes (128 wheels: 9 s): a determinant
+    # and a solve for each of the 2.7 million choices. Counted, not timed: the hull needs none.
     robot = ring_of_omni_wheels(256)
-    start = time.perf_counter()
+    calls = []
+    for name in ("det", "solve", "lstsq", "inv"):
+        original = getattr(np.linalg, name)
+
+        def counted(*args, _original=original, _name=name, **kwargs):
+            calls.append(_name)
+            if len(calls) > len(robot.wheels):
+                pytest.fail(f"describe() solves per choice of wheels: over {len(robot.wheels)} calls of {_name}")
+            return _original(*args, **kwargs)
+
+        monkeypatch.setattr(np.linalg, name, counted)
     described = describe(robot)
-    assert time.perf_counter() - start < 3.0
+    assert len(calls) <= len(robot.wheels)
     assert all(w.motor is not None and w.motor.max_accel > 0 for w in described.wheels)
