@@ -14,12 +14,21 @@ Inputs: key messages of :mod:`omnikin.viewer.front` (held keys through
 on the page's controls (held until changed or stopped), a stop, and steering by hand (robots
 with steerable wheels, at rest). While a target is non-zero it is offered to the runtime at
 every step, so the command timeout only acts when the inputs stop.
+
+Record (as ``omnikin sim --echo``): each key action that changed what the robot does is kept in
+:attr:`PageRobot.events` (the last :data:`MAX_EVENTS`) and, with an :attr:`PageRobot.echo` stream,
+printed as one line ``T s  ACTION  x X m  y Y m  theta TH rad``: ``T`` the simulated time [s] of
+the control step from which the action acts (the step made at the key's arrival; the command
+filter's acceleration ramp starts there), ``ACTION`` the key's action (``forward``, ``left``,
+``turn_left``, ``stop``, ``camera_top``, ...; ``release`` when a released key stops a motion), and
+the true pose at that step (world frame) [m, m, rad].
 """
 
 from __future__ import annotations
 
 import math
 import queue
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -45,6 +54,8 @@ MAX_SUBSTEPS = 8
 same step (a flood) are applied at the step's time, so the work per step stays bounded."""
 MIN_SUBSTEP = 0.001
 """Shortest interval [s] between two control steps made for arrivals."""
+MAX_EVENTS = 10000
+"""Key actions kept in :attr:`PageRobot.events` (older ones are dropped: a long session stays small)."""
 STEER_STEP = math.radians(15.0)
 """Steering turned by one press of ``[`` or ``]`` [rad]."""
 
@@ -139,6 +150,8 @@ class PageRobot:
         self.arrived: tuple[float, float, float] | None = None  # the odometry's pose at the last goal reached
         self.arrived_heading = True  # whether the seeker steered the heading to the goal's
         self.t = 0.0
+        self.echo = None  # a text stream that gets each key action as it acts (module docstring)
+        self.events: deque[dict] = deque(maxlen=MAX_EVENTS)
 
     can_steer = False
     """Whether the page's steering keys and buttons turn the wheels."""
@@ -154,6 +167,21 @@ class PageRobot:
 
     def _turn_steering(self, angle: float) -> None:
         """Turn the steerable wheels by ``angle`` [rad] (robots that steer by hand)."""
+
+    @property
+    def shown_pose(self) -> tuple[float, float, float]:
+        """The pose a key action is recorded with [m, m, rad] (the true pose where there is one)."""
+        return self.pose
+
+    def _record(self, action: str) -> None:
+        """One entry of :attr:`events`: ``action`` acts from the last control step (:attr:`t` [s]);
+        echoed as one line (module docstring) when there is an :attr:`echo` stream."""
+        x, y, th = self.shown_pose
+        self.events.append({"t": self.t, "key": action, "pose": [x, y, th]})
+        if self.echo is not None:
+            print(
+                f"{self.t:.3f} s  {action}  x {x:+.4f} m  y {y:+.4f} m  theta {th:+.4f} rad", file=self.echo, flush=True
+            )
 
     def close(self) -> None:
         """Release what the robot holds (engine, link)."""
@@ -208,9 +236,11 @@ class PageRobot:
                         held.add(action)
                 else:
                     actions.append(action)
+                self._record(action)
             elif kind_of == "release":
                 held.discard(value["action"])
-                self.teleop.release(value["action"])
+                if self.teleop.release(value["action"]):
+                    self._record("release")
             elif kind_of == "release_all":
                 self._release(source)
         elif kind == "twist":
@@ -282,9 +312,12 @@ class PageRobot:
 
     def _release(self, source) -> None:
         """Every key ``source`` (a page's key channel) holds, let go; the others' stay held."""
+        released = False
         for action in self._held.pop(source, set()):
-            self.teleop.release(action)
+            released = self.teleop.release(action) or released
         self._heard.pop(source, None)
+        if released:
+            self._record("release")
 
 
 class LiveRobot(PageRobot):
@@ -334,6 +367,10 @@ class LiveRobot(PageRobot):
         current = self._last.steer if self._last is not None and self._last.steer is not None else self._steer_hand
         self._steer_hand = np.asarray(current, dtype=float) + angle
         self.runtime.steer_to(self._steer_hand)
+
+    @property
+    def shown_pose(self) -> tuple[float, float, float]:
+        return triple(self.backend.truth)
 
     def _control(self, t: float) -> Snapshot:
         """One control step at ``t`` [s] with the targets as they are."""
