@@ -155,7 +155,7 @@ def test_a_held_key_drives_as_far_as_the_kinematics_say_and_its_release_stops(vi
     expected = rate * held_seconds(proc, ACTIONS[key])
     # the ramps are sampled at the control steps (every 20 ms, later on a loaded machine): 0.01 m
     # (0.025 rad) in all; a speed 5 % off over the 1.2 s hold is more than that
-    assert after[axis] - before[axis] == pytest.approx(expected, abs=abs(rate) * 0.05)
+    assert after[axis] - before[axis] == pytest.approx(expected, abs=abs(rate) * 0.05), proc.echoed
     for other in {"x", "y", "theta"} - {axis}:
         assert abs(after[other] - before[other]) < 1e-9
 

@@ -56,6 +56,13 @@ MIN_SUBSTEP = 0.001
 """Shortest interval [s] between two control steps made for arrivals."""
 MAX_EVENTS = 10000
 """Key actions kept in :attr:`PageRobot.events` (older ones are dropped: a long session stays small)."""
+CATCH_UP_STEP = 0.02
+"""Longest interval [s] of simulated time between two control steps of a simulated robot
+(:class:`LiveRobot`; the viewer's control period): a loop that runs late (a busy machine) makes
+the steps it missed, so the motion between two inputs does not depend on the wall clock's pace."""
+MAX_CATCH_UP = 100
+"""At most this many steps made up per call of :meth:`PageRobot.step` (2 s of simulated time);
+a longer stall is crossed in one step, so the work per step stays bounded."""
 STEER_STEP = math.radians(15.0)
 """Steering turned by one press of ``[`` or ``]`` [rad]."""
 
@@ -150,11 +157,14 @@ class PageRobot:
         self.arrived: tuple[float, float, float] | None = None  # the odometry's pose at the last goal reached
         self.arrived_heading = True  # whether the seeker steered the heading to the goal's
         self.t = 0.0
+        self._caught_up = 0  # steps made up in this step() call
         self.echo = None  # a text stream that gets each key action as it acts (module docstring)
         self.events: deque[dict] = deque(maxlen=MAX_EVENTS)
 
     can_steer = False
     """Whether the page's steering keys and buttons turn the wheels."""
+    catch_up = False
+    """Whether :meth:`step` makes the control steps a late loop missed (:data:`CATCH_UP_STEP`)."""
 
     @property
     def pose(self) -> tuple[float, float, float]:
@@ -291,15 +301,18 @@ class PageRobot:
         """Apply the inputs and run one control step at time ``t`` [s]; the snapshot and the page
         actions the caller handles (camera presets). An input that arrived between the last step
         and ``t`` (its :attr:`clock` time) gets a control step at its arrival first, so a loop that
-        runs late does not delay what the input does."""
+        runs late does not delay what the input does; a simulated robot (:attr:`catch_up`) also gets
+        the steps that a late loop missed, every :data:`CATCH_UP_STEP` s of simulated time."""
         actions: list[str] = []
         substeps = 0
+        self._caught_up = 0
         for _ in range(self._inputs.qsize()):  # what is queued now; later inputs wait for the next step
             try:
                 at, kind, value = self._inputs.get_nowait()
             except queue.Empty:
                 break
             if at is not None and self.t + MIN_SUBSTEP < at < t and substeps < MAX_SUBSTEPS:
+                self._catch_up(at)
                 self._control(at)
                 substeps += 1
             try:
@@ -308,7 +321,16 @@ class PageRobot:
                 self.notice = str(e)
         for source in [s for s, held in self._held.items() if held and t - self._heard[s] > KEY_SILENCE]:
             self._release(source)  # that page fell silent with a key held
+        self._catch_up(t)
         return self._control(t), actions
+
+    def _catch_up(self, until: float) -> None:
+        """Control steps every :data:`CATCH_UP_STEP` s from the last one while ``until`` [s] is
+        more than one and a half of them away (:attr:`catch_up` robots; at most :data:`MAX_CATCH_UP`
+        per :meth:`step`)."""
+        while self.catch_up and until - self.t > 1.5 * CATCH_UP_STEP and self._caught_up < MAX_CATCH_UP:
+            self._control(self.t + CATCH_UP_STEP)
+            self._caught_up += 1
 
     def _release(self, source) -> None:
         """Every key ``source`` (a page's key channel) holds, let go; the others' stay held."""
@@ -349,6 +371,7 @@ class LiveRobot(PageRobot):
             self.backend = SimBackend(robot)
         self.runtime = BaseRuntime(robot, self.backend, limits=self.limits, cmd_vel_timeout=timeout)
         self.can_steer = bool(robot.steerable)
+        self.catch_up = True
         self.joints = JointMotion(robot, robot.rolling_names, self.description)  # castors, rollers
         self.slots = WheelSlots.of(robot, self.description, self.joints)
         self._angles = np.zeros(self.slots.count)
