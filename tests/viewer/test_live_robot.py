@@ -203,3 +203,14 @@ def test_the_echo_records_each_key_action_at_the_control_step_of_its_arrival():
     assert tuple(float(v) for v in found.groups()) == pytest.approx((x, 0.0, 0.0), abs=1e-4)
     assert [e["key"] for e in live.events] == ["forward", "release"]
     assert [e["t"] for e in live.events] == [0.027, 0.051]
+
+
+def test_a_loop_that_runs_late_drives_as_one_that_steps_every_control_period():
+    """Steps every 0.02 s and one step over a 1 s stall give the same motion: the stall's steps are
+    made up in simulated time (the ramp of ``ramp_distance``, summed step by step)."""
+    live = LiveRobot(load_robot("tomasi-omni3"), speed=SPEED)
+    live.step(0.0)
+    live.key({"type": "press", "action": "forward"})
+    live.step(0.02)  # the ramp from step 0 (dt 0.02), as ramp_distance with the press at step 0
+    s, _ = live.step(1.02)  # a stall of 1 s (50 control periods)
+    assert s.truth[0] == pytest.approx(ramp_distance(SPEED, ACCEL, 0, 10**6, 51), abs=1e-9)
