@@ -31,6 +31,7 @@ import queue
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TextIO
 
 import numpy as np
 
@@ -158,7 +159,7 @@ class PageRobot:
         self.arrived_heading = True  # whether the seeker steered the heading to the goal's
         self.t = 0.0
         self._caught_up = 0  # steps made up in this step() call
-        self.echo = None  # a text stream that gets each key action as it acts (module docstring)
+        self.echo: TextIO | None = None  # gets each key action as it acts (module docstring)
         self.events: deque[dict] = deque(maxlen=MAX_EVENTS)
 
     can_steer = False
