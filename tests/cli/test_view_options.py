@@ -13,6 +13,8 @@ from conftest import run_cli
         (["tomasi-omni3", "--ros", "--timeout", "1"], "--timeout does not apply to --ros"),
         (["tomasi-omni3", "--ros", "--step", "0.001"], "--step does not apply to --ros"),
         (["tomasi-omni3", "--stamped"], "--stamped applies only to --ros"),
+        (["tomasi-omni3", "--ros", "--echo"], "--echo does not apply to --ros"),
+        (["--replay", "somewhere", "--echo"], "--echo does not apply to --replay"),
         (["tomasi-omni3", "--ros", "--replay", "somewhere"], "--ros and --replay are two different views"),
         (["tomasi-omni3", "--step", "0.001"], "--step applies only to --engine physics"),
         (["tomasi-omni3", "--speed", "0"], "--speed must be positive"),

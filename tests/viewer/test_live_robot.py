@@ -6,6 +6,7 @@ step until the next one), summed step by step, never from the code under test.
 """
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -173,3 +174,43 @@ def test_a_bad_goal_from_the_page_is_refused_in_one_line_and_the_robot_goes_on(g
     s, _ = live.step(DT)
     assert "a goal is three finite numbers" in live.notice and "\n" not in live.notice
     assert live.seeker is None and s.target == (0.1, 0.0, 0.0)
+
+
+def test_the_echo_records_each_key_action_at_the_control_step_of_its_arrival():
+    """A key arriving between two steps acts from a step at its arrival: the echo gives that time
+    and the pose there, and the next step's command is the ramp from it (accel * (t - arrival))."""
+    import io
+
+    live = LiveRobot(load_robot("tomasi-omni3"), speed=SPEED)
+    live.echo = io.StringIO()
+    arrival = {"t": 0.0}
+    live.clock = lambda: arrival["t"]
+    live.step(0.0)
+    live.step(0.02)
+    arrival["t"] = 0.027
+    live.key({"type": "press", "action": "forward"})
+    s, _ = live.step(0.04)
+    assert s.command[0] == pytest.approx(ACCEL * (0.04 - 0.027), abs=1e-12)
+    arrival["t"] = 0.051
+    live.key({"type": "release", "action": "forward"})
+    live.step(0.06)
+    lines = live.echo.getvalue().splitlines()
+    assert lines[0] == "0.027 s  forward  x +0.0000 m  y +0.0000 m  theta +0.0000 rad"
+    # from 0.027 to 0.04 at speed 0, then at accel * 0.013 until the release at 0.051
+    x = ACCEL * 0.013 * (0.051 - 0.04)
+    found = re.fullmatch(r"0\.051 s  release  x (\S+) m  y (\S+) m  theta (\S+) rad", lines[1])
+    assert found, lines[1]
+    assert tuple(float(v) for v in found.groups()) == pytest.approx((x, 0.0, 0.0), abs=1e-4)
+    assert [e["key"] for e in live.events] == ["forward", "release"]
+    assert [e["t"] for e in live.events] == [0.027, 0.051]
+
+
+def test_a_loop_that_runs_late_drives_as_one_that_steps_every_control_period():
+    """Steps every 0.02 s and one step over a 1 s stall give the same motion: the stall's steps are
+    made up in simulated time (the ramp of ``ramp_distance``, summed step by step)."""
+    live = LiveRobot(load_robot("tomasi-omni3"), speed=SPEED)
+    live.step(0.0)
+    live.key({"type": "press", "action": "forward"})
+    live.step(0.02)  # the ramp from step 0 (dt 0.02), as ramp_distance with the press at step 0
+    s, _ = live.step(1.02)  # a stall of 1 s (50 control periods)
+    assert s.truth[0] == pytest.approx(ramp_distance(SPEED, ACCEL, 0, 10**6, 51), abs=1e-9)

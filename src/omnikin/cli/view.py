@@ -18,7 +18,10 @@ EPILOG = """the page (open the printed address in a browser; click the scene so 
 The side panel has the same controls (a twist held until Stop), camera presets, the pose,
 twist and forward-kinematics residual, a table of the joints and a plot of the wheel speeds.
 Every command passes the runtime's command filter: --max-speed, --max-turn, and --timeout
-(a page that falls silent stops the robot).
+(a page that falls silent stops the robot). --echo prints a line per key action as it acts:
+  T s  ACTION  x X m  y Y m  theta TH rad
+(T: the simulated time of the control step it acts from, the step made at the key's arrival;
+the true pose then), as 'omnikin sim --echo' does.
 
 On a robot's own computer, serve to the network with --host 0.0.0.0 and open
 http://ROBOT-ADDRESS:PORT/ on a laptop (anyone who reaches the port can drive the robot).
@@ -98,6 +101,11 @@ def add_parsers(sub, robot_help: str) -> None:
         "--umbmark-side", type=number, default=4.0, metavar="M", help="side of the UMBmark squares drawn [m] (0: none)"
     )
     sp.add_argument("--duration", type=number, metavar="S", help="stop serving after S seconds (default: Ctrl-C)")
+    sp.add_argument(
+        "--echo",
+        action="store_true",
+        help="print each key's action on stdout as it acts: simulated time, action, true pose (as omnikin sim)",
+    )
     add_step_option(sp, "time step of the physics engine (--engine physics)")
     replay = sp.add_argument_group("replay")
     replay.add_argument(
@@ -144,12 +152,16 @@ def cmd_view(args) -> int:
     if args.replay is not None:
         if args.ros:
             raise InputError("--ros and --replay are two different views: give one of them")
+        if args.echo:
+            raise InputError("--echo does not apply to --replay (no keys drive a replay)")
         return cmd_replay(args)
     if args.robot is None:
         raise InputError("view: give ROBOT (a preset name or a robot file), or --replay REPORT_DIR")
     if args.stamped and not args.ros:
         raise InputError("--stamped applies only to --ros")
     if args.ros:
+        if args.echo:
+            raise InputError("--echo does not apply to --ros (the node keeps the time; see its topics)")
         return cmd_ros_view(args, limits)
     if args.step is not None and args.engine != "physics":
         raise InputError("--step applies only to --engine physics")
@@ -172,6 +184,7 @@ def cmd_view(args) -> int:
         step=args.step,
     )
     live.tell = lambda line: print(f"omnikin view: {line}", file=sys.stderr, flush=True)  # a robot that fell
+    live.echo = sys.stdout if args.echo else None
     return serve_live(live, args, f"{robot.name} ({engine})")
 
 

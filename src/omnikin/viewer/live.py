@@ -18,14 +18,24 @@ every step, so the command timeout only acts when the inputs stop.
 A physics robot that tips over is stopped by its back-end
 (:attr:`omnikin.physics.backend.PhysicsBackend.fallen`); :attr:`PageRobot.fallen` then holds the
 one line the page shows and :attr:`PageRobot.tell` says once on the terminal.
+
+Record (as ``omnikin sim --echo``): each key action that changed what the robot does is kept in
+:attr:`PageRobot.events` (the last :data:`MAX_EVENTS`) and, with an :attr:`PageRobot.echo` stream,
+printed as one line ``T s  ACTION  x X m  y Y m  theta TH rad``: ``T`` the simulated time [s] of
+the control step from which the action acts (the step made at the key's arrival; the command
+filter's acceleration ramp starts there), ``ACTION`` the key's action (``forward``, ``left``,
+``turn_left``, ``stop``, ``camera_top``, ...; ``release`` when a released key stops a motion), and
+the true pose at that step (world frame) [m, m, rad].
 """
 
 from __future__ import annotations
 
 import math
 import queue
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TextIO
 
 import numpy as np
 
@@ -49,6 +59,15 @@ MAX_SUBSTEPS = 8
 same step (a flood) are applied at the step's time, so the work per step stays bounded."""
 MIN_SUBSTEP = 0.001
 """Shortest interval [s] between two control steps made for arrivals."""
+MAX_EVENTS = 10000
+"""Key actions kept in :attr:`PageRobot.events` (older ones are dropped: a long session stays small)."""
+CATCH_UP_STEP = 0.02
+"""Longest interval [s] of simulated time between two control steps of a simulated robot
+(:class:`LiveRobot`; the viewer's control period): a loop that runs late (a busy machine) makes
+the steps it missed, so the motion between two inputs does not depend on the wall clock's pace."""
+MAX_CATCH_UP = 100
+"""At most this many steps made up per call of :meth:`PageRobot.step` (2 s of simulated time);
+a longer stall is crossed in one step, so the work per step stays bounded."""
 STEER_STEP = math.radians(15.0)
 """Steering turned by one press of ``[`` or ``]`` [rad]."""
 
@@ -145,9 +164,14 @@ class PageRobot:
         self.arrived: tuple[float, float, float] | None = None  # the odometry's pose at the last goal reached
         self.arrived_heading = True  # whether the seeker steered the heading to the goal's
         self.t = 0.0
+        self._caught_up = 0  # steps made up in this step() call
+        self.echo: TextIO | None = None  # gets each key action as it acts (module docstring)
+        self.events: deque[dict] = deque(maxlen=MAX_EVENTS)
 
     can_steer = False
     """Whether the page's steering keys and buttons turn the wheels."""
+    catch_up = False
+    """Whether :meth:`step` makes the control steps a late loop missed (:data:`CATCH_UP_STEP`)."""
 
     @property
     def pose(self) -> tuple[float, float, float]:
@@ -160,6 +184,21 @@ class PageRobot:
 
     def _turn_steering(self, angle: float) -> None:
         """Turn the steerable wheels by ``angle`` [rad] (robots that steer by hand)."""
+
+    @property
+    def shown_pose(self) -> tuple[float, float, float]:
+        """The pose a key action is recorded with [m, m, rad] (the true pose where there is one)."""
+        return self.pose
+
+    def _record(self, action: str) -> None:
+        """One entry of :attr:`events`: ``action`` acts from the last control step (:attr:`t` [s]);
+        echoed as one line (module docstring) when there is an :attr:`echo` stream."""
+        x, y, th = self.shown_pose
+        self.events.append({"t": self.t, "key": action, "pose": [x, y, th]})
+        if self.echo is not None:
+            print(
+                f"{self.t:.3f} s  {action}  x {x:+.4f} m  y {y:+.4f} m  theta {th:+.4f} rad", file=self.echo, flush=True
+            )
 
     def close(self) -> None:
         """Release what the robot holds (engine, link)."""
@@ -214,9 +253,11 @@ class PageRobot:
                         held.add(action)
                 else:
                     actions.append(action)
+                self._record(action)
             elif kind_of == "release":
                 held.discard(value["action"])
-                self.teleop.release(value["action"])
+                if self.teleop.release(value["action"]):
+                    self._record("release")
             elif kind_of == "release_all":
                 self._release(source)
         elif kind == "twist":
@@ -267,15 +308,18 @@ class PageRobot:
         """Apply the inputs and run one control step at time ``t`` [s]; the snapshot and the page
         actions the caller handles (camera presets). An input that arrived between the last step
         and ``t`` (its :attr:`clock` time) gets a control step at its arrival first, so a loop that
-        runs late does not delay what the input does."""
+        runs late does not delay what the input does; a simulated robot (:attr:`catch_up`) also gets
+        the steps that a late loop missed, every :data:`CATCH_UP_STEP` s of simulated time."""
         actions: list[str] = []
         substeps = 0
+        self._caught_up = 0
         for _ in range(self._inputs.qsize()):  # what is queued now; later inputs wait for the next step
             try:
                 at, kind, value = self._inputs.get_nowait()
             except queue.Empty:
                 break
             if at is not None and self.t + MIN_SUBSTEP < at < t and substeps < MAX_SUBSTEPS:
+                self._catch_up(at)
                 self._control(at)
                 substeps += 1
             try:
@@ -284,13 +328,25 @@ class PageRobot:
                 self.notice = str(e)
         for source in [s for s, held in self._held.items() if held and t - self._heard[s] > KEY_SILENCE]:
             self._release(source)  # that page fell silent with a key held
+        self._catch_up(t)
         return self._control(t), actions
+
+    def _catch_up(self, until: float) -> None:
+        """Control steps every :data:`CATCH_UP_STEP` s from the last one while ``until`` [s] is
+        more than one and a half of them away (:attr:`catch_up` robots; at most :data:`MAX_CATCH_UP`
+        per :meth:`step`)."""
+        while self.catch_up and until - self.t > 1.5 * CATCH_UP_STEP and self._caught_up < MAX_CATCH_UP:
+            self._control(self.t + CATCH_UP_STEP)
+            self._caught_up += 1
 
     def _release(self, source) -> None:
         """Every key ``source`` (a page's key channel) holds, let go; the others' stay held."""
+        released = False
         for action in self._held.pop(source, set()):
-            self.teleop.release(action)
+            released = self.teleop.release(action) or released
         self._heard.pop(source, None)
+        if released:
+            self._record("release")
 
 
 class LiveRobot(PageRobot):
@@ -322,6 +378,7 @@ class LiveRobot(PageRobot):
             self.backend = SimBackend(robot)
         self.runtime = BaseRuntime(robot, self.backend, limits=self.limits, cmd_vel_timeout=timeout)
         self.can_steer = bool(robot.steerable)
+        self.catch_up = True
         self.joints = JointMotion(robot, robot.rolling_names, self.description)  # castors, rollers
         self.slots = WheelSlots.of(robot, self.description, self.joints)
         self._angles = np.zeros(self.slots.count)
@@ -340,6 +397,10 @@ class LiveRobot(PageRobot):
         current = self._last.steer if self._last is not None and self._last.steer is not None else self._steer_hand
         self._steer_hand = np.asarray(current, dtype=float) + angle
         self.runtime.steer_to(self._steer_hand)
+
+    @property
+    def shown_pose(self) -> tuple[float, float, float]:
+        return triple(self.backend.truth)
 
     def _control(self, t: float) -> Snapshot:
         """One control step at ``t`` [s] with the targets as they are."""
