@@ -41,6 +41,7 @@ wheels:
     radius: 0.05
     encoder: {ticks_per_rev: 512, gear_ratio: 19.2, invert: true, counter_bits: 16}
     max_speed: 30.0
+    motor: dc
     physical: {width: 0.03, mass: 0.12, rollers: 12, rows: 2, friction: 0.8, max_torque: 0.4}
   - name: st
     type: steerable

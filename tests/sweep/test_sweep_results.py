@@ -129,7 +129,7 @@ def test_standard_output_cannot_hold_a_study_folder(tmp_path):
     done = run_entry_point("sweep", spec, "-o", "-", cwd=tmp_path)
     assert done.returncode == 2, done.stderr
     assert done.stderr == (
-        "omnikin: error: -o -: a sweep writes a folder; - (standard output) cannot hold it: "
+        "omnikin: error: -o '-': a sweep writes a folder; '-' (standard output) cannot hold it: "
         "name a folder, e.g. -o study/\n"
     )
     assert done.stdout == "" and not (tmp_path / "-").exists()

@@ -157,7 +157,7 @@ def _check_paths(args) -> None:
     must not lie inside the study folder (``--force`` removes what is in it)."""
     if args.out == "-":
         raise InputError(
-            "-o -: a sweep writes a folder; - (standard output) cannot hold it: name a folder, e.g. -o study/"
+            "-o '-': a sweep writes a folder; '-' (standard output) cannot hold it: name a folder, e.g. -o study/"
         )
     spec = os.path.realpath(args.spec)
     out = os.path.realpath(args.out)
