@@ -89,8 +89,10 @@ def test_kinematic_cost_keeps_its_samples_per_second():
 
 def test_physics_cost_is_wall_time_per_simulated_second():
     cost = umbmark_cost("tomasi-omni3", engine="physics", side=1.0, runs=1, rate=50.0)
-    # 56 runs of about 24 s simulated each (the squares; the calibration runs are of the same order)
-    assert 5.0 < cost.seconds < 60.0
+    # the estimate is the simulated samples times the step cost measured on this machine (how long
+    # that is depends on the machine and its load: its pace is benchmarks/bench_physics.py's)
+    assert cost.samples > 0 and cost.seconds_per_sample > 0
+    assert cost.seconds == pytest.approx(cost.samples * cost.seconds_per_sample)
     with pytest.raises(ResourceLimitError, match="max_time"):
         run_umbmark("tomasi-omni3", engine="physics", max_time=1.0, **SMALL)
 
