@@ -205,9 +205,9 @@ def test_the_example_tolerance_study_loads_as_described():
     assert set(study.robots) == {"tomasi-omni3"}
     assert all(p.noise == "typical" and p.side == 2.0 and p.runs == 5 for p in study.points)
     scales = [p.scale for p in study.points]
-    assert len(scales) == 7 and scales == sorted(scales)
+    assert len(scales) == 4 and scales == sorted(scales)
     ratios = [b / a for a, b in itertools.pairwise(scales)]
-    assert ratios == pytest.approx([10**0.5] * 6, rel=1e-9)  # two per decade over 3 decades
+    assert ratios == pytest.approx([10.0] * 3, rel=1e-9)  # one per decade over 3 decades
     assert scales[-1] == 1.0 and scales[0] == pytest.approx(0.001)
     assert all(p.calibrate and p.engine == "kinematic" for p in study.points)
     assert study.trials >= 72  # enough to bound the 95th percentile from above at 95 %

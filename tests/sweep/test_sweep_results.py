@@ -92,7 +92,7 @@ def test_the_example_study_runs_and_answers_its_question(tmp_path):
     out = tmp_path / "study"
     trials = pq.read_table(out / "trials.parquet")
     summary = pq.read_table(out / "summary.parquet")
-    assert trials.num_rows == 7 * 80 and summary.num_rows == 7
+    assert trials.num_rows == 4 * 80 and summary.num_rows == 4
     assert trials.column("error").null_count == trials.num_rows
     assert (out / "figures" / "tolerance.png").stat().st_size > 10_000
     report = (out / "report.md").read_text()
