@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 
 from conftest import omnikin_env, run_cli
+from servers import virtual_display
 
 SPEED = 0.2  # m/s, --speed
 TURN = 0.5  # rad/s, --turn
@@ -50,20 +51,8 @@ def display():
     reason = _missing()
     if reason:
         pytest.skip(reason)
-    read, write = os.pipe()
-    xvfb = subprocess.Popen(
-        ["Xvfb", "-displayfd", str(write), "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
-        pass_fds=(write,),
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    os.close(write)
-    with os.fdopen(read) as f:
-        number = f.readline().strip()
-    assert number.isdigit(), "Xvfb did not report its display"
-    yield f":{number}"
-    xvfb.terminate()
-    xvfb.wait(10)
+    with virtual_display() as name:
+        yield name
 
 
 def _xdotool(display: str, *args: str) -> str:
