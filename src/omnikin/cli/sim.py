@@ -79,8 +79,9 @@ def add_parsers(sub, robot_help: str) -> None:
         "--errors",
         default="none",
         metavar="PROFILE",
-        help=f"systematic errors of the robot as built that the window simulates, drawn with --seed "
-        f"(the odometry keeps the nominal robot): {', '.join(sorted(PROFILES))} (default none)",
+        help=f"systematic errors of the robot as built that the window simulates, drawn with --seed as "
+        f"omnikin simulate draws them (the odometry keeps the nominal robot): {', '.join(sorted(PROFILES))} "
+        "(default none)",
     )
     group.add_argument("--true-robot", metavar="FILE", help="the robot as built that the window simulates")
     sp.add_argument("--seed", type=whole, default=1, metavar="N", help="random seed of --errors (default 1)")
@@ -113,13 +114,18 @@ def cmd_sim(args) -> int:
         raise InputError(f"--duration must be positive [s], got {args.duration:g}")
     if args.hold < 0:
         raise InputError(f"--hold must be >= 0 [s], got {args.hold:g}")
+    if args.seed < 0:
+        raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
     limits = teleop_limits(args)
     from ..physics.cost import real_time_shortfall
     from ..physics.interactive import InteractiveSim, require_display
 
     require_display()  # before the model is built: the one line comes at once
     robot = load_robot(args.robot)
-    true_robot, _ = robot_as_built(robot, args.true_robot, args.errors, args.seed)
+    import numpy as np
+
+    # the robot as built that `omnikin simulate` and `omnikin ros` draw for the same --seed
+    true_robot, _ = robot_as_built(robot, args.true_robot, args.errors, np.random.SeedSequence(args.seed).spawn(2)[0])
     slow = real_time_shortfall(robot, "the simulation will run slower than the clock")
     if slow:
         print(f"omnikin: note: sim: {slow}", file=sys.stderr)

@@ -414,7 +414,8 @@ class InteractiveSim:
         """Two arrows on top of the chassis, :data:`ARROW_LENGTH` times the robot's extent long,
         geoms of the viewer's ``user_scn`` drawn in every camera (module docstring): the truth's
         (green, :data:`ARROW_WIDTH` wide) from the chassis' centre along its heading (body +x);
-        the odometry's (magenta, half as wide, a quarter width higher) from the odometry's
+        the odometry's (magenta, half as wide, 1.5 widths higher: clear of the truth's shaft,
+        which MuJoCo draws about 0.75 widths thick, and above its head) from the odometry's
         ``(x, y)`` along its ``theta``. What the scene then holds is kept in :attr:`markers`
         (:meth:`_read_markers`)."""
         scn = viewer.user_scn
@@ -429,7 +430,7 @@ class InteractiveSim:
         width = ARROW_WIDTH * size
         arrows = (
             (self.backend.truth, top + 0.01 * size, width, TRUTH_RGBA),
-            (self.runtime.pose, top + 0.01 * size + 0.25 * width, 0.5 * width, ODOMETRY_RGBA),
+            (self.runtime.pose, top + 0.01 * size + 1.5 * width, 0.5 * width, ODOMETRY_RGBA),
         )
         with viewer.lock():
             scn.ngeom = len(arrows)
@@ -488,7 +489,7 @@ class InteractiveSim:
             keys: next((self.not_obeyed[a] for a in acts if a in self.not_obeyed), "") for keys, acts in pairs.items()
         }
         moves = ", ".join(keys + ("*" if why else "") for keys, why in marked.items())
-        return [f"{moves} move, space stop, [ ] steer, 1 2 3 camera", LEGEND] + [
+        return [f"{moves} move, space stop, [ ] steer, 1 2 3 camera"] + [
             f"* {keys} on {self.robot.name}: {why}" for keys, why in marked.items() if why
         ]
 
@@ -518,10 +519,11 @@ class InteractiveSim:
         return "\n".join(lines)
 
     def help_text(self) -> str:
-        """The notice of the last few seconds (if any) and the keys (the bottom right overlay)."""
+        """The notice of the last few seconds (if any), the keys and the arrows' :data:`LEGEND`
+        (the bottom right overlay)."""
         text, since = self._notice
         lines = [text] if text and time.monotonic() - since < NOTICE_TIME else []
-        return "\n".join(lines + self.key_help())
+        return "\n".join(lines + self.key_help() + [LEGEND])
 
     # --- the loop ------------------------------------------------------------------------------------
     def run(self, duration: float | None = None) -> str:
