@@ -39,13 +39,14 @@ behind at 30 deg elevation along the heading it had when chosen).
 
 **Heading and odometry** (:meth:`InteractiveSim._draw_heading`, geoms of the viewer's
 ``user_scn``, drawn in every camera and never seen by the physics): a green arrow on top of the
-chassis from its centre along the true heading (body +x), and beside it a narrower magenta arrow
-a little higher at the pose the robot's own wheel odometry estimates (the runtime's
-:attr:`~omnikin.runtime.base.BaseRuntime.pose`, the exact odometry of its encoders): where the two
-agree the green shows on both sides of the magenta, where they part (an as-built robot,
-``true_robot``; slip) the magenta arrow drifts off the robot. The colours are the browser
-viewer's (``docs/viewer.md``). The window shows time and real-time factor, true pose, odometry
-pose, twist, target, wheel speeds and steering angles, and a legend of the two arrows.
+chassis from the robot's reference point (its body frame's origin) along the true heading (body
++x), and beside it a narrower magenta arrow a little higher at the pose the robot's own wheel
+odometry estimates (the runtime's :attr:`~omnikin.runtime.base.BaseRuntime.pose`, the exact
+odometry of its encoders): where the two agree the green shows on both sides of the magenta,
+where they part (an as-built robot, ``true_robot``; slip) the magenta arrow drifts off the
+robot. The colours are the browser viewer's (``docs/viewer.md``). The window shows time and
+real-time factor, true pose, odometry pose, twist, target, wheel speeds and steering angles, and
+a legend of the two arrows.
 
 **Clock: keys act at their simulated time.** Simulated time ``s`` follows the wall clock ``w``
 as ``s = w - w0``; every key event is stamped with the wall time it reached the program and
@@ -413,7 +414,7 @@ class InteractiveSim:
     def _draw_heading(self, viewer) -> None:
         """Two arrows on top of the chassis, :data:`ARROW_LENGTH` times the robot's extent long,
         geoms of the viewer's ``user_scn`` drawn in every camera (module docstring): the truth's
-        (green, :data:`ARROW_WIDTH` wide) from the chassis' centre along its heading (body +x);
+        (green, :data:`ARROW_WIDTH` wide) from the robot's reference point along its heading (body +x);
         the odometry's (magenta, half as wide, 1.5 widths higher: clear of the truth's shaft,
         which MuJoCo draws about 0.75 widths thick, and above its head) from the odometry's
         ``(x, y)`` along its ``theta``. What the scene then holds is kept in :attr:`markers`
