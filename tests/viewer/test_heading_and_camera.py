@@ -10,7 +10,6 @@ the viewer's code.
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Iterator
 
 import numpy as np
@@ -27,6 +26,7 @@ from omnikin.viewer.replay import PoseSeries, Track
 from omnikin.viewer.replay_page import ReplayViewer
 from omnikin.viewer.replay_sources import ReplaySource
 from omnikin.viewer.scene import ODOMETRY_COLOUR, TRUTH_COLOUR, RobotView
+from viewer_wire import served
 
 
 def world_transform(scene: viser.SceneApi, name: str) -> vtf.SE3:
@@ -135,14 +135,10 @@ def replay() -> Iterator[ReplayViewer]:
         Track("spin", PoseSeries(t, spin(t, W)), PoseSeries(t, spin(t, -W))),
         Track("circle", PoseSeries(t, circle(t, (2.0, -1.0))), PoseSeries(t, circle(t, (2.0, -1.0)))),
     ]
-    viewer = ReplayViewer(ReplaySource("two runs", load_robot("tomasi-omni3"), tracks, side=1.0), "127.0.0.1", 0)
-    thread = threading.Thread(target=viewer.run, daemon=True)
-    thread.start()
-    try:
+    with served(
+        ReplayViewer(ReplaySource("two runs", load_robot("tomasi-omni3"), tracks, side=1.0), "127.0.0.1", 0)
+    ) as viewer:
         yield viewer
-    finally:
-        viewer.close()
-        thread.join(timeout=10)
 
 
 def arrow_direction(mask: np.ndarray) -> float:
@@ -228,14 +224,8 @@ def test_the_replay_page_shows_the_headings_runs_together_and_no_zeros_for_what_
 @pytest.fixture
 def live() -> Iterator[LiveViewer]:
     """The live page of tomasi-omni3 (kinematic engine), served from this process."""
-    viewer = LiveViewer(LiveRobot(load_robot("tomasi-omni3")), "127.0.0.1", 0)
-    thread = threading.Thread(target=viewer.run, daemon=True)
-    thread.start()
-    try:
+    with served(LiveViewer(LiveRobot(load_robot("tomasi-omni3")), "127.0.0.1", 0)) as viewer:
         yield viewer
-    finally:
-        viewer.close()
-        thread.join(timeout=10)
 
 
 def test_the_live_page_frames_the_robot_and_shows_its_heading_in_every_camera(page, page_log, live):

@@ -21,9 +21,10 @@ import time
 import numpy as np
 import pytest
 
-from browser import colour_mask, hold_key, screenshot_rgb, wait_for
+from browser import colour_mask, hold_key, screenshot_rgb, wait_for, wait_until
 from omnikin.viewer.scene import CHASSIS_COLOUR
 from omnikin_paths import omnikin_env
+from viewer_wire import served
 
 ACTIONS = {"w": "forward", "s": "back", "a": "left", "d": "right", "q": "turn_left"}  # omnikin.runtime.teleop
 SPEED, TURN = 0.2, 0.5  # the keys' defaults [m/s, rad/s]
@@ -133,12 +134,16 @@ def held_seconds(proc, action, timeout=30.0):
 def test_the_page_comes_from_this_machine_and_shows_the_robot(view, page, page_log):
     view(page)
     page.keyboard.press("2")  # top camera: straight down on the robot
-    time.sleep(1.0)
-    mask = colour_mask(screenshot_rgb(page), CHASSIS_COLOUR)
-    assert mask.sum() > 2000, "the chassis is not on the page"
-    rows, cols = np.nonzero(mask)
-    height, width = mask.shape
-    assert abs(rows.mean() - height / 2) < 0.1 * height and abs(cols.mean() - width / 2) < 0.1 * width
+
+    def chassis_in_the_middle() -> bool:
+        mask = colour_mask(screenshot_rgb(page), CHASSIS_COLOUR)
+        if mask.sum() <= 2000:
+            return False
+        rows, cols = np.nonzero(mask)
+        height, width = mask.shape
+        return abs(rows.mean() - height / 2) < 0.1 * height and abs(cols.mean() - width / 2) < 0.1 * width
+
+    wait_until(chassis_in_the_middle, "chassis drawn in the middle of the top camera's view")
     assert page_log.external == [] and page_log.page_errors == []
     assert all(url.startswith("ws://127.0.0.1:") for url in page_log.websockets)
 
@@ -221,30 +226,20 @@ def test_a_key_press_acts_from_the_control_step_at_its_arrival_and_the_page_show
 
 def test_a_twist_set_on_the_page_stops_when_the_last_page_closes(browser):
     """The Drive button's twist holds until Stop: with no page left to press Stop, it stops."""
-    import threading
-
     from omnikin.io.robot_file import load_robot
     from omnikin.viewer.app import LiveViewer
     from omnikin.viewer.live import LiveRobot
 
     live = LiveRobot(load_robot("tomasi-omni3"))
-    viewer = LiveViewer(live, "127.0.0.1", 0)
-    loop = threading.Thread(target=viewer.run, args=(60,), daemon=True)
-    loop.start()
     context = browser.new_context()
     try:
-        page = context.new_page()
-        page.goto(viewer.url)
-        page.wait_for_selector(f"{READOUT}[data-x]", timeout=30000)
-        live.set_twist((0.2, 0.0, 0.0))  # as the Drive button does
-        time.sleep(1.0)
-        assert viewer.last.command[0] > 0.1
-        page.close()
-        deadline = time.monotonic() + 5.0
-        while time.monotonic() < deadline and viewer.last.command != (0.0, 0.0, 0.0):
-            time.sleep(0.05)
-        assert viewer.last.command == (0.0, 0.0, 0.0)
+        with served(LiveViewer(live, "127.0.0.1", 0)) as viewer:
+            page = context.new_page()
+            page.goto(viewer.url)
+            page.wait_for_selector(f"{READOUT}[data-x]", timeout=30000)
+            live.set_twist((0.2, 0.0, 0.0))  # as the Drive button does
+            wait_until(lambda: viewer.last is not None and viewer.last.command[0] > 0.1, "drive on the set twist")
+            page.close()
+            wait_until(lambda: viewer.last.command == (0.0, 0.0, 0.0), "stop once the last page closed")
     finally:
         context.close()
-        viewer.close()
-        loop.join(5)
