@@ -67,8 +67,17 @@ from .inputs import NoticeLimiter, PageInputs
 KEYS_PATH = "/omnikin/keys"
 SCRIPT_PATH = "/omnikin/teleop.js"
 KEY_MESSAGE_TYPES = ("press", "release", "release_all", "alive")
-KEY_ACTIONS = (*MOVES, "stop", "steer_left", "steer_right", "camera_free", "camera_top", "camera_follow")
-"""The actions :file:`teleop.js` sends (W S A D Q E, space, ] [, 1 2 3)."""
+KEY_ACTIONS = (
+    *MOVES,
+    "stop",
+    "steer_left",
+    "steer_right",
+    "camera_free",
+    "camera_top",
+    "camera_follow",
+    "camera_run",
+)
+"""The actions :file:`teleop.js` sends (W S A D Q E, space, ] [, 1 2 3 4)."""
 NOTICE_POLL = 0.25
 """Longest sleep [s] between two looks at a page's held refusals (:class:`NoticeLimiter`)."""
 MAX_KEY_MESSAGE = 256
