@@ -12,6 +12,7 @@ import ipaddress
 import shutil
 import socket
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -126,6 +127,17 @@ def wait_for(page: Page, js_expr: str, timeout: float = 10.0) -> Any:
         return page.wait_for_function(js_expr, timeout=timeout * 1000).json_value()
     except PlaywrightTimeout:
         raise AssertionError(f"the page never satisfied {js_expr!r} within {timeout} s") from None
+
+
+def wait_until(condition: Callable[[], Any], what: str, timeout: float = 30.0) -> None:
+    """Wait until ``condition()`` (a check in this process: a viewer's state, what a listener
+    recorded) is truthy, looking every 50 ms; ``timeout`` [s] guards against a hang, never a pace.
+    On timeout an ``AssertionError`` says ``what`` was awaited."""
+    end = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > end:
+            raise AssertionError(f"no {what} within {timeout} s")
+        time.sleep(0.05)
 
 
 VISER_CONNECTED = "document.querySelector('svg.tabler-icon-cloud-check') !== null"

@@ -36,6 +36,16 @@ def run_entry_point(*argv, cwd=None, timeout: float = 120) -> subprocess.Complet
     )
 
 
+@pytest.fixture(scope="module")
+def line_spin_bag(tmp_path_factory):
+    """A bag (``omnikin simulate tomasi-omni3 --path "line 0.5; spin 90" --bag``), one per test
+    module that asks for it."""
+    path = tmp_path_factory.mktemp("bag") / "run.bag"
+    done = run_entry_point("simulate", "tomasi-omni3", "--path", "line 0.5; spin 90", "--bag", path)
+    assert done.returncode == 0, done.stderr
+    return path
+
+
 # no wall-clock limits: a loaded CI machine must not fail a test for being slow
 settings.register_profile("ci", max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile("ci")

@@ -1,5 +1,6 @@
-"""A real ``omnikin view`` process and a raw client of viser's protocol, for the tests that attack
-the viewer as another program would (no browser).
+"""The viewers under test: a real ``omnikin view`` process, a viewer of this process served from a
+thread (:func:`served`), and a raw client of viser's protocol, for the tests that attack the
+viewer as another program would (no browser).
 
 viser's wire format (viser 1.1, read from ``viser/infra/_infra.py``, written here again
 independently): a page sends each message as one binary WebSocket message, the msgpack of a dict
@@ -15,6 +16,9 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Protocol, TypeVar
 
 import msgspec
 import psutil
@@ -35,6 +39,28 @@ INPUT_CONTROLS = (
     "GuiTextMessage",
 )
 """viser's messages that create a control a page can change."""
+
+
+class Served(Protocol):
+    def run(self, duration: float | None = None) -> str: ...
+
+    def close(self) -> None: ...
+
+
+V = TypeVar("V", bound=Served)
+
+
+@contextmanager
+def served(viewer: V) -> Iterator[V]:
+    """Serve ``viewer`` (a ``LiveViewer`` or ``ReplayViewer`` of this process) from a thread of its
+    own while the block runs; close it and wait for that thread (10 s at most) after."""
+    thread = threading.Thread(target=viewer.run, daemon=True)
+    thread.start()
+    try:
+        yield viewer
+    finally:
+        viewer.close()
+        thread.join(timeout=10)
 
 
 def start_viewer(*args: str) -> tuple[subprocess.Popen, str]:
@@ -82,6 +108,21 @@ def decode_frame(frame: bytes) -> list[dict]:
     compressed = int.from_bytes(frame[8:16], "little")
     inner = zstandard.ZstdDecompressor().decompress(frame[16 : 16 + compressed], max_output_size=size)
     return list(msgspec.msgpack.decode(inner)["messages"])
+
+
+NOTICE_TITLE = re.compile(r"omnikin refused (an input|(\d+) inputs) from this page \((\d+) since the viewer started\)")
+
+
+def notices(messages: list[dict]) -> list[tuple[int, int]]:
+    """The notices of refused inputs among ``messages``: per notice ``(refusals it tells, refusals
+    since the viewer started)``, read from its title."""
+    told = []
+    for m in messages:
+        if m.get("type") == "NotificationShowMessage":
+            found = NOTICE_TITLE.fullmatch(m["props"]["title"])
+            assert found, m["props"]["title"]
+            told.append((1 if found[2] is None else int(found[2]), int(found[3])))
+    return told
 
 
 class ViserClient:

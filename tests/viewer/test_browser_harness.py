@@ -127,7 +127,8 @@ def test_a_held_key_is_one_keydown_and_one_keyup_its_duration_apart_on_the_page_
     assert [(e["type"], e["key"], e["repeat"]) for e in events] == [("keydown", "x", False), ("keyup", "x", False)]
     down, up = events
     assert before <= down["t"] <= up["t"] <= after
-    assert 0.4 < up["t"] - down["t"] < 2.0  # 0.5 s held; the upper bound allows a loaded machine
+    # held at least the 0.5 s the test slept between the two; at most the page's time around them
+    assert 0.5 - 0.01 <= up["t"] - down["t"] <= after - before
 
 
 def test_a_held_key_with_auto_repeat_sends_repeated_keydowns(page, viser_box):
@@ -138,8 +139,8 @@ def test_a_held_key_with_auto_repeat_sends_repeated_keydowns(page, viser_box):
     downs = [e for e in events if e["type"] == "keydown"]
     assert downs[0]["repeat"] is False
     assert all(e["repeat"] for e in downs[1:])
-    # one repeat at each 0.1 s mark before the release at 0.6 s: 5 (fewer if the machine is slow)
-    assert 2 <= len(downs) - 1 <= 5
+    # one repeat at each 0.1 s mark before the release at 0.6 s, each sent however late: 5
+    assert len(downs) - 1 == 5
     assert [e["type"] for e in events][-1] == "keyup"
 
 

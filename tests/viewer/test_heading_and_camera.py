@@ -10,7 +10,6 @@ the viewer's code.
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Iterator
 
 import numpy as np
@@ -18,7 +17,7 @@ import pytest
 import viser
 import viser.transforms as vtf
 
-from browser import colour_mask, screenshot_rgb, wait_for, wait_for_colour, wait_for_viser
+from browser import colour_mask, screenshot_rgb, wait_for, wait_for_colour, wait_for_viser, wait_until
 from omnikin.io.robot_file import load_robot
 from omnikin.physics.description import describe
 from omnikin.viewer.app import LiveViewer
@@ -27,6 +26,7 @@ from omnikin.viewer.replay import PoseSeries, Track
 from omnikin.viewer.replay_page import ReplayViewer
 from omnikin.viewer.replay_sources import ReplaySource
 from omnikin.viewer.scene import ODOMETRY_COLOUR, TRUTH_COLOUR, RobotView
+from viewer_wire import served
 
 
 def world_transform(scene: viser.SceneApi, name: str) -> vtf.SE3:
@@ -135,14 +135,10 @@ def replay() -> Iterator[ReplayViewer]:
         Track("spin", PoseSeries(t, spin(t, W)), PoseSeries(t, spin(t, -W))),
         Track("circle", PoseSeries(t, circle(t, (2.0, -1.0))), PoseSeries(t, circle(t, (2.0, -1.0)))),
     ]
-    viewer = ReplayViewer(ReplaySource("two runs", load_robot("tomasi-omni3"), tracks, side=1.0), "127.0.0.1", 0)
-    thread = threading.Thread(target=viewer.run, daemon=True)
-    thread.start()
-    try:
+    with served(
+        ReplayViewer(ReplaySource("two runs", load_robot("tomasi-omni3"), tracks, side=1.0), "127.0.0.1", 0)
+    ) as viewer:
         yield viewer
-    finally:
-        viewer.close()
-        thread.join(timeout=10)
 
 
 def arrow_direction(mask: np.ndarray) -> float:
@@ -222,20 +218,25 @@ def test_the_replay_page_shows_the_headings_runs_together_and_no_zeros_for_what_
     assert position[2] > 0 and np.hypot(*(position[:2] - look[:2])) < 1e-2 * position[2]  # straight down
     half_height = position[2] * math.tan(client.camera.fov / 2)
     assert half_height >= max(x1 - x0, y1 - y0) / 2  # the whole box is in view
+
+    # key 2 (top) looks at the spinning robot, at the origin; key 4 frames both runs again
+    for key, centre in (("2", [0.0, 0.0]), ("4", [(x0 + x1) / 2, (y0 + y1) / 2])):
+        page.keyboard.press(key)
+        for _ in range(100):
+            if np.asarray(client.camera.look_at)[:2] == pytest.approx(centre, abs=1e-3):
+                break
+            page.wait_for_timeout(100)
+        assert np.asarray(client.camera.look_at)[:2] == pytest.approx(centre, abs=1e-3), key
+    assert replay.camera.camera == "run"
+    assert "1 2 3 4 camera free/top/follow/run" in " ".join(page.inner_text("body").split())  # the key help
     assert page_log.external == [] and page_log.page_errors == []
 
 
 @pytest.fixture
 def live() -> Iterator[LiveViewer]:
     """The live page of tomasi-omni3 (kinematic engine), served from this process."""
-    viewer = LiveViewer(LiveRobot(load_robot("tomasi-omni3")), "127.0.0.1", 0)
-    thread = threading.Thread(target=viewer.run, daemon=True)
-    thread.start()
-    try:
+    with served(LiveViewer(LiveRobot(load_robot("tomasi-omni3")), "127.0.0.1", 0)) as viewer:
         yield viewer
-    finally:
-        viewer.close()
-        thread.join(timeout=10)
 
 
 def test_the_live_page_frames_the_robot_and_shows_its_heading_in_every_camera(page, page_log, live):
@@ -275,3 +276,17 @@ def test_a_run_without_ground_truth_says_so_instead_of_showing_zeros():
     assert "<td>command</td><td>not recorded</td>" in shown and "<td>FK residual</td><td>not recorded</td>" in shown
     assert "<td>odometry</td><td>x +0.250 m, y +0.000 m, theta +0.0 deg</td>" in shown  # recorded: shown
     assert 'data-missing="command residual truth"' in shown
+
+
+def test_the_run_camera_s_key_on_a_live_page_says_it_has_no_runs(page, page_log, live):
+    page.goto(live.url)
+    page.wait_for_selector("#omnikin-readout[data-x]", timeout=30000)
+    wait_for(page, "document.documentElement.dataset.omnikinKeys === 'connected'")
+    page.keyboard.press("2")
+    wait_until(lambda: live.camera.camera == "top", "the top camera on key 2")
+    page.keyboard.press("4")
+    wait_until(lambda: live.live.notice != "", "a notice for key 4")
+    assert live.live.notice == "key 4 (camera run) frames the runs of a replay: a live page has none"
+    assert live.camera.camera == "top"  # unchanged
+    wait_for(page, "document.body.innerText.includes('key 4 (camera run) frames the runs of a replay')", timeout=30)
+    assert page_log.external == [] and page_log.page_errors == []

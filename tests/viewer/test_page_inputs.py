@@ -13,8 +13,8 @@ import shutil
 import msgspec
 import pytest
 
-from conftest import run_entry_point
-from viewer_wire import ViserClient, start_viewer, stop_viewer
+from browser import wait_until
+from viewer_wire import ViserClient, notices, start_viewer, stop_viewer
 
 CAMERA = {
     "type": "ViewerCameraMessage",
@@ -105,17 +105,9 @@ def hostile_messages() -> list[dict | bytes | str]:
     ]
 
 
-@pytest.fixture(scope="module")
-def bag(tmp_path_factory):
-    path = tmp_path_factory.mktemp("bag") / "run.bag"
-    done = run_entry_point("simulate", "tomasi-omni3", "--path", "line 0.5; spin 90", "--bag", path)
-    assert done.returncode == 0, done.stderr
-    return path
-
-
 @pytest.mark.parametrize("mode", ["live", "replay"])
-def test_hostile_values_for_every_control_are_refused_counted_and_told_and_the_viewer_goes_on(mode, bag):
-    proc, url = start_viewer("tomasi-omni3", *(["--replay", str(bag)] if mode == "replay" else []))
+def test_hostile_values_for_every_control_are_refused_counted_and_told_and_the_viewer_goes_on(mode, line_spin_bag):
+    proc, url = start_viewer("tomasi-omni3", *(["--replay", str(line_spin_bag)] if mode == "replay" else []))
     attacker = observer = None
     try:
         observer = ViserClient(url)
@@ -137,13 +129,14 @@ def test_hostile_values_for_every_control_are_refused_counted_and_told_and_the_v
             attacker.send(message if isinstance(message, (bytes, str)) else msgspec.msgpack.encode(message))
             sent += 1
 
-        def notices(got):
-            return [m for m in got if m.get("type") == "NotificationShowMessage"]
-
-        told = notices(attacker.read(lambda got: len(notices(got)) >= sent, timeout=60))
-        assert len(told) == sent
-        assert told[-1]["props"]["title"].endswith(f"({sent} since the viewer started)")
-        assert all("\n" not in m["props"]["body"] and len(m["props"]["body"]) < 300 for m in told)
+        # every refusal is counted and told, a second's refusals in one notice (the page's last
+        # ones once the second has passed)
+        got = attacker.read(lambda got: sum(n for n, _ in notices(got)) >= sent, timeout=60)
+        told = notices(got)
+        assert sum(n for n, _ in told) == sent and told[0][0] == 1
+        assert told[-1][1] == sent
+        bodies = [m["props"]["body"] for m in got if m.get("type") == "NotificationShowMessage"]
+        assert all("\n" not in body and len(body) < 300 for body in bodies)
         assert proc.poll() is None
 
         # the viewer goes on: a valid value from the same socket is taken and reaches the other page
@@ -158,7 +151,7 @@ def test_hostile_values_for_every_control_are_refused_counted_and_told_and_the_v
         since = list(observer.received)[backlog:]
         changed = [m for m in since if m.get("type") == "GuiUpdateMessage" and m["uuid"] in controls]
         assert changed == [{"type": "GuiUpdateMessage", "uuid": slider, "updates": {"value": value}}]
-        assert notices(list(observer.received)) == []  # the notice went to the sender only
+        assert notices(list(observer.received)) == []  # the notices went to the sender only
     finally:
         for client in (attacker, observer):
             if client is not None:
@@ -188,6 +181,88 @@ def test_a_slider_end_rounded_by_the_page_is_taken_and_a_step_beyond_is_not():
         assert beyond == "control 'v': 0.306 is not a number from -0.3 to 0.3"
         assert inputs.refused == 1
     finally:
+        with quiet():
+            server.stop()
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+class ManualClock:
+    """A clock the test sets [s]."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def test_a_flood_of_refusals_is_counted_one_by_one_and_told_at_most_once_an_interval():
+    from omnikin.viewer.inputs import NOTICE_INTERVAL, NoticeLimiter
+
+    clock = ManualClock()
+    limiter = NoticeLimiter(clock=clock)
+    told: list[tuple[float, int]] = []  # (time, refusals told)
+    # 10 000 refusals over 5 s of the clock, then nothing: one notice at the first, one per interval
+    for k in range(10_000):
+        clock.now = k * 5.0 / 10_000
+        n = limiter.refuse(f"refusal {k}")
+        if n is not None:
+            told.append((clock.now, n))
+    assert limiter.refused == 10_000
+    times = [t for t, _ in told]
+    assert told[0] == (0.0, 1)
+    assert all(b - a >= NOTICE_INTERVAL for a, b in zip(times, times[1:], strict=False))
+    assert len(told) == 5  # at 0, 1, 2, 3, 4 s: the clock stopped just short of 5 s
+    assert limiter.due() is None and limiter.wait() == pytest.approx(times[-1] + NOTICE_INTERVAL - clock.now)
+    clock.now = times[-1] + NOTICE_INTERVAL
+    held = limiter.held
+    assert limiter.wait() == 0.0 and limiter.due() == held and limiter.held == 0
+    assert sum(n for _, n in told) + held == 10_000  # every refusal told, once
+    assert limiter.last == "refusal 9999" and limiter.wait() == math.inf
+    # after a quiet interval the next refusal is told at once
+    clock.now += NOTICE_INTERVAL
+    assert limiter.refuse("one more") == 1
+
+
+def test_a_page_flooding_bad_messages_gets_a_notice_an_interval_with_every_refusal_counted():
+    """A real front server and viser behind it, the notices' interval on a clock the test sets:
+    the flood is told in one notice at its first message and one for the rest once the clock
+    has passed the interval, whatever the pace of this machine."""
+    from omnikin.viewer.front import FrontServer
+    from omnikin.viewer.inputs import NOTICE_INTERVAL, PageInputs
+    from omnikin.viewer.serving import quiet, start_viser
+
+    clock = ManualClock()
+    server, folder = start_viser()
+    inputs = PageInputs(server)
+    front = FrontServer("127.0.0.1", 0, str(folder / "viser.sock"), on_key=lambda m: None, inputs=inputs, clock=clock)
+    front.start()
+    client = None
+    try:
+        client = ViserClient(front.url)
+        flood = 500
+        for k in range(flood):
+            client.send(update("no such control", value=k))
+        client.read(lambda got: len(notices(got)) >= 1)
+        wait_until(lambda: inputs.refused == flood, "every message of the flood checked")
+        assert notices(client.received) == [(1, 1)]  # the rest held: the clock has not moved
+        clock.now = NOTICE_INTERVAL
+        client.read(lambda got: len(notices(got)) >= 2)
+        assert notices(client.received) == [(1, 1), (flood - 1, flood)]
+        # a second flood within the next interval is held whole, then told in one notice
+        for _ in range(flood):
+            client.send(b"not msgpack")
+        wait_until(lambda: inputs.refused == 2 * flood, "every message of the second flood checked")
+        assert len(notices(client.received)) == 2
+        clock.now = 2 * NOTICE_INTERVAL
+        client.read(lambda got: len(notices(got)) >= 3)
+        assert notices(client.received) == [(1, 1), (flood - 1, flood), (flood, 2 * flood)]
+        last = [m for m in client.received if m.get("type") == "NotificationShowMessage"][-1]
+        assert last["props"]["body"] == "the last: a message that is not msgpack"
+    finally:
+        if client is not None:
+            client.close()
+        front.stop()
         with quiet():
             server.stop()
         shutil.rmtree(folder, ignore_errors=True)

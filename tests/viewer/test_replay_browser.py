@@ -5,7 +5,6 @@ is checked against the closed form of the recorded motion (a circle at a constan
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Iterator
 
 import numpy as np
@@ -16,6 +15,7 @@ from omnikin.io.robot_file import load_robot
 from omnikin.viewer.replay import PoseSeries, Track
 from omnikin.viewer.replay_page import ReplayViewer
 from omnikin.viewer.replay_sources import ReplaySource
+from viewer_wire import served
 
 V, W = 0.3, 0.4  # the recorded twist [m/s, rad/s]: a circle of radius 0.75 m
 
@@ -36,14 +36,10 @@ def replay() -> Iterator[ReplayViewer]:
         Track("circle", PoseSeries(t, circle(t)), PoseSeries(t, circle(t) * 0.95)),
         Track("line", PoseSeries(line_t, line), PoseSeries(line_t, line)),
     ]
-    viewer = ReplayViewer(ReplaySource("a test", load_robot("tomasi-omni3"), tracks, side=1.0), "127.0.0.1", 0)
-    thread = threading.Thread(target=viewer.run, daemon=True)
-    thread.start()
-    try:
+    with served(
+        ReplayViewer(ReplaySource("a test", load_robot("tomasi-omni3"), tracks, side=1.0), "127.0.0.1", 0)
+    ) as viewer:
         yield viewer
-    finally:
-        viewer.close()
-        thread.join(timeout=10)
 
 
 SHOWN = """() => {

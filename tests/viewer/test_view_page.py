@@ -21,9 +21,10 @@ import time
 import numpy as np
 import pytest
 
-from browser import colour_mask, hold_key, screenshot_rgb, wait_for
+from browser import colour_mask, hold_key, screenshot_rgb, wait_for, wait_until
 from omnikin.viewer.scene import CHASSIS_COLOUR
 from omnikin_paths import omnikin_env
+from viewer_wire import served
 
 ACTIONS = {"w": "forward", "s": "back", "a": "left", "d": "right", "q": "turn_left"}  # omnikin.runtime.teleop
 SPEED, TURN = 0.2, 0.5  # the keys' defaults [m/s, rad/s]
@@ -90,13 +91,16 @@ def pose(page):
     return dict(zip(("t", "x", "y", "theta", "vx", "vy", "omega"), values, strict=True))
 
 
-def settle(page, seconds=None):
-    """Wait until the robot has stopped (twist zero on the page) and return its pose."""
-    time.sleep(seconds if seconds is not None else SPEED / ACCEL + 0.3)
+def settle(page, after: float = 0.0, seconds: float = SPEED / ACCEL + 0.3):
+    """Wait until the page's simulated time is ``seconds`` [s] past ``after`` [s] (a release's
+    step, as the echo records it: the ramp down is over by then) and the robot has stopped (twist
+    zero on the page); return its pose. Simulated time only: a busy machine makes it wait longer."""
     wait_for(
         page,
         f"(() => {{ const d = document.querySelector('{READOUT}').dataset;"
-        " return Number(d.vx) === 0 && Number(d.vy) === 0 && Number(d.omega) === 0; })()",
+        f" return Number(d.t) >= {after + seconds!r}"
+        " && Number(d.vx) === 0 && Number(d.vy) === 0 && Number(d.omega) === 0; })()",
+        timeout=60,
     )
     return pose(page)
 
@@ -116,16 +120,16 @@ def echoed(proc, count, timeout=30.0):
     return rows
 
 
-def held_seconds(proc, action, timeout=30.0):
-    """How long ``action``'s key was held in the robot's simulated time [s]: from the control step its
-    (last) press acted at to the one the release after it acted at (the viewer's echo)."""
+def held(proc, action, timeout=30.0) -> tuple[float, float]:
+    """The simulated times [s] of the control steps ``action``'s (last) press and the release
+    after it acted at (the viewer's echo), waiting for them."""
     end = time.monotonic() + timeout
     while True:
         rows = echoed(proc, len(proc.echoed))
         press = max((i for i, r in enumerate(rows) if r[1] == action), default=None)
         if press is not None and press + 1 < len(rows):
             assert rows[press + 1][1] == "release", rows
-            return rows[press + 1][0] - rows[press][0]
+            return rows[press][0], rows[press + 1][0]
         assert time.monotonic() < end, f"no press of {action} and its release echoed: {rows}"
         time.sleep(0.05)
 
@@ -133,12 +137,16 @@ def held_seconds(proc, action, timeout=30.0):
 def test_the_page_comes_from_this_machine_and_shows_the_robot(view, page, page_log):
     view(page)
     page.keyboard.press("2")  # top camera: straight down on the robot
-    time.sleep(1.0)
-    mask = colour_mask(screenshot_rgb(page), CHASSIS_COLOUR)
-    assert mask.sum() > 2000, "the chassis is not on the page"
-    rows, cols = np.nonzero(mask)
-    height, width = mask.shape
-    assert abs(rows.mean() - height / 2) < 0.1 * height and abs(cols.mean() - width / 2) < 0.1 * width
+
+    def chassis_in_the_middle() -> bool:
+        mask = colour_mask(screenshot_rgb(page), CHASSIS_COLOUR)
+        if mask.sum() <= 2000:
+            return False
+        rows, cols = np.nonzero(mask)
+        height, width = mask.shape
+        return abs(rows.mean() - height / 2) < 0.1 * height and abs(cols.mean() - width / 2) < 0.1 * width
+
+    wait_until(chassis_in_the_middle, "chassis drawn in the middle of the top camera's view")
     assert page_log.external == [] and page_log.page_errors == []
     assert all(url.startswith("ws://127.0.0.1:") for url in page_log.websockets)
 
@@ -151,8 +159,9 @@ def test_a_held_key_drives_as_far_as_the_kinematics_say_and_its_release_stops(vi
     proc = view(page)
     before = pose(page)
     hold_key(page, key, 1.2)
-    after = settle(page, (abs(rate) / (ACCEL if axis != "theta" else 2.0)) + 0.3)
-    expected = rate * held_seconds(proc, ACTIONS[key])
+    pressed, released = held(proc, ACTIONS[key])
+    after = settle(page, released, abs(rate) / (ACCEL if axis != "theta" else 2.0) + 0.3)
+    expected = rate * (released - pressed)
     # the ramps are sampled at the control steps (every 20 ms, later on a loaded machine): 0.01 m
     # (0.025 rad) in all; a speed 5 % off over the 1.2 s hold is more than that
     assert after[axis] - before[axis] == pytest.approx(expected, abs=abs(rate) * 0.05), proc.echoed
@@ -175,22 +184,23 @@ def test_a_differential_drive_does_not_strafe_on_a_but_turns_on_q(view, page):
     proc = view(page, "diff-drive")
     before = pose(page)
     hold_key(page, "a", 0.6)
-    after = settle(page)
+    after = settle(page, held(proc, "left")[1])
     assert (after["x"], after["y"], after["theta"]) == pytest.approx((before["x"], before["y"], before["theta"]))
     hold_key(page, "q", 0.8)
-    after = settle(page, 0.6)
-    assert after["theta"] == pytest.approx(TURN * held_seconds(proc, "turn_left"), abs=TURN * 0.05)
+    pressed, released = held(proc, "turn_left")
+    after = settle(page, released, TURN / 2.0 + 0.3)
+    assert after["theta"] == pytest.approx(TURN * (released - pressed), abs=TURN * 0.05)
 
 
 def test_the_go_button_drives_to_the_marker_and_stop_stops_a_set_twist(view, page):
     view(page)
     page.get_by_role("button", name="Go to the marker").click()  # the marker starts 1 m ahead
     wait_for(page, f"Math.abs(Number(document.querySelector('{READOUT}').dataset.x) - 1.0) < 0.002", timeout=20)
-    after = settle(page, 0.2)
+    after = settle(page, pose(page)["t"], 0.2)
     assert after["y"] == pytest.approx(0.0, abs=1e-3) and after["theta"] == pytest.approx(0.0, abs=0.01)
     page.get_by_role("button", name="Drive").click()  # sliders at zero: a zero twist
     page.get_by_role("button", name="Stop").click()
-    assert settle(page, 0.2)["x"] == pytest.approx(after["x"], abs=1e-9)
+    assert settle(page, after["t"], 0.2)["x"] == pytest.approx(after["x"], abs=1e-9)
 
 
 def test_a_key_press_acts_from_the_control_step_at_its_arrival_and_the_page_shows_it(view, page):
@@ -221,30 +231,20 @@ def test_a_key_press_acts_from_the_control_step_at_its_arrival_and_the_page_show
 
 def test_a_twist_set_on_the_page_stops_when_the_last_page_closes(browser):
     """The Drive button's twist holds until Stop: with no page left to press Stop, it stops."""
-    import threading
-
     from omnikin.io.robot_file import load_robot
     from omnikin.viewer.app import LiveViewer
     from omnikin.viewer.live import LiveRobot
 
     live = LiveRobot(load_robot("tomasi-omni3"))
-    viewer = LiveViewer(live, "127.0.0.1", 0)
-    loop = threading.Thread(target=viewer.run, args=(60,), daemon=True)
-    loop.start()
     context = browser.new_context()
     try:
-        page = context.new_page()
-        page.goto(viewer.url)
-        page.wait_for_selector(f"{READOUT}[data-x]", timeout=30000)
-        live.set_twist((0.2, 0.0, 0.0))  # as the Drive button does
-        time.sleep(1.0)
-        assert viewer.last.command[0] > 0.1
-        page.close()
-        deadline = time.monotonic() + 5.0
-        while time.monotonic() < deadline and viewer.last.command != (0.0, 0.0, 0.0):
-            time.sleep(0.05)
-        assert viewer.last.command == (0.0, 0.0, 0.0)
+        with served(LiveViewer(live, "127.0.0.1", 0)) as viewer:
+            page = context.new_page()
+            page.goto(viewer.url)
+            page.wait_for_selector(f"{READOUT}[data-x]", timeout=30000)
+            live.set_twist((0.2, 0.0, 0.0))  # as the Drive button does
+            wait_until(lambda: viewer.last is not None and viewer.last.command[0] > 0.1, "drive on the set twist")
+            page.close()
+            wait_until(lambda: viewer.last.command == (0.0, 0.0, 0.0), "stop once the last page closed")
     finally:
         context.close()
-        viewer.close()
-        loop.join(5)

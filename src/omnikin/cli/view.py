@@ -15,6 +15,7 @@ EPILOG = """the page (open the printed address in a browser; click the scene so 
   space      stop
   [ / ]      steer every steerable wheel 15 deg (robot at rest)
   1 / 2 / 3  camera free (mouse) / top / follow
+  4          camera run: straight down on all the runs shown (a replay's; a live page has none)
 The side panel has the same controls (a twist held until Stop), camera presets, the pose,
 twist and forward-kinematics residual, a table of the joints and a plot of the wheel speeds.
 Every command passes the runtime's command filter: --max-speed, --max-turn, and --timeout
@@ -26,7 +27,7 @@ the true pose then), as 'omnikin sim --echo' does.
 On a robot's own computer, serve to the network with --host 0.0.0.0 and open
 http://ROBOT-ADDRESS:PORT/ on a laptop (anyone who reaches the port can drive the robot).
 
-replay (--replay: no driving; keys 1/2/3 still move the camera):
+replay (--replay: no driving; keys 1/2/3/4 still move the camera, 4: all the runs shown):
   omnikin view --replay REPORT_DIR
       the runs of an 'omnikin umbmark' report folder (its run_poses.csv: before and after
       calibration, cw and ccw, every run of the first procedure); the report names its robot

@@ -83,7 +83,9 @@ class LiveViewer:
             self.last = snapshot
             self.steps += 1
             for action in actions:
-                self.camera.action(action)
+                told = self.camera.action(action)
+                if told is not None:
+                    self.live.notice = told
             with self.server.atomic():
                 self._draw(snapshot)
                 self.readouts.fast(snapshot)

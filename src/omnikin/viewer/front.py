@@ -16,7 +16,12 @@ viser server that listens on a Unix socket only this user can open
 - any other WebSocket: relayed both ways, message by message, to the viser server (the
   client connects to the page's own origin, so it lands here). Each message of the page is
   first checked by ``inputs`` (:class:`omnikin.viewer.inputs.PageInputs`, the one boundary of
-  the page's values): a refused one is not relayed, and the page gets its notice instead.
+  the page's values): a refused one is not relayed, and the page is told instead, at most once
+  a second (:class:`omnikin.viewer.inputs.NoticeLimiter`: a notice says how many it covers; the
+  held ones are told when the second has passed, even if nothing more comes).
+
+Time (the key messages' rate, the notices' interval) is ``clock``'s, the monotonic clock unless
+a test gives its own.
 
 Nothing a peer sends prints a traceback: the WebSocket library's log (a request that is not a
 GET, a broken handshake, a peer gone mid-message) and any error left in the server's tasks are
@@ -43,10 +48,10 @@ import logging
 import os
 import socket
 import threading
+import time
 from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING
 from urllib.parse import urlsplit
 
 from websockets.asyncio.client import unix_connect
@@ -57,15 +62,24 @@ from websockets.http11 import Request, Response
 
 from ..errors import InputError, shorten
 from ..runtime.teleop import MOVES
-
-if TYPE_CHECKING:
-    from .inputs import PageInputs
+from .inputs import NoticeLimiter, PageInputs
 
 KEYS_PATH = "/omnikin/keys"
 SCRIPT_PATH = "/omnikin/teleop.js"
 KEY_MESSAGE_TYPES = ("press", "release", "release_all", "alive")
-KEY_ACTIONS = (*MOVES, "stop", "steer_left", "steer_right", "camera_free", "camera_top", "camera_follow")
-"""The actions :file:`teleop.js` sends (W S A D Q E, space, ] [, 1 2 3)."""
+KEY_ACTIONS = (
+    *MOVES,
+    "stop",
+    "steer_left",
+    "steer_right",
+    "camera_free",
+    "camera_top",
+    "camera_follow",
+    "camera_run",
+)
+"""The actions :file:`teleop.js` sends (W S A D Q E, space, ] [, 1 2 3 4)."""
+NOTICE_POLL = 0.25
+"""Longest sleep [s] between two looks at a page's held refusals (:class:`NoticeLimiter`)."""
 MAX_KEY_MESSAGE = 256
 """Longest key message [bytes]; a longer one closes its socket."""
 KEY_RATE, KEY_BURST = 100.0, 50
@@ -203,8 +217,17 @@ class FrontServer:
     the Unix socket ``inner`` (module docstring), every message of a page checked by ``inputs``.
     ``on_key`` is called in the server's thread."""
 
-    def __init__(self, host: str, port: int, inner: str, on_key: Callable[[dict], None], inputs: PageInputs):
+    def __init__(
+        self,
+        host: str,
+        port: int,
+        inner: str,
+        on_key: Callable[[dict], None],
+        inputs: PageInputs,
+        clock: Callable[[], float] = time.monotonic,
+    ):
         self.host = host
+        self.clock = clock
         self.port = port
         self.inner = inner
         self.on_key = on_key
@@ -272,11 +295,10 @@ class FrontServer:
             self.connections -= 1
 
     async def _keys(self, connection: ServerConnection) -> None:
-        loop = asyncio.get_running_loop()
-        tokens, refilled = float(KEY_BURST), loop.time()
+        tokens, refilled = float(KEY_BURST), self.clock()
         try:
             async for text in connection:
-                now = loop.time()
+                now = self.clock()
                 tokens, refilled = min(float(KEY_BURST), tokens + (now - refilled) * KEY_RATE), now
                 if tokens < 1.0:
                     self.rejected += 1  # faster than any page types: dropped
@@ -310,6 +332,19 @@ class FrontServer:
                 close_timeout=CLOSE_TIMEOUT,
                 logger=self._log,
             ) as inner:
+                notices = NoticeLimiter(clock=self.clock)  # this page's
+                held: list[asyncio.Task] = []
+
+                async def tell_held() -> None:
+                    """Tell the refusals held back once the interval has passed."""
+                    try:
+                        while notices.held:
+                            await asyncio.sleep(min(max(notices.wait(), 0.01), NOTICE_POLL))
+                            told = notices.due()
+                            if told:
+                                await connection.send(self.inputs.notice(notices.last, told))
+                    except ConnectionClosed:
+                        pass
 
                 async def pump(source, sink, check: bool) -> None:
                     try:
@@ -317,8 +352,13 @@ class FrontServer:
                             reason = self.inputs.check(message) if check else None
                             if reason is None:
                                 await sink.send(message)
-                            else:  # refused (counted by inputs): the page is told, viser sees nothing
-                                await connection.send(self.inputs.notice(reason))
+                                continue
+                            # refused (counted by inputs): the page is told, viser sees nothing
+                            told = notices.refuse(reason)
+                            if told:
+                                await connection.send(self.inputs.notice(reason, told))
+                            elif not held or held[-1].done():
+                                held.append(asyncio.create_task(tell_held()))
                     except ConnectionClosed:
                         pass  # either side went away: the other is closed below
 
@@ -327,9 +367,9 @@ class FrontServer:
                     asyncio.create_task(pump(inner, connection, check=False)),
                 ]
                 _, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
-                for task in pending:
+                for task in [*pending, *held]:
                     task.cancel()
-                await asyncio.gather(*pending, return_exceptions=True)
+                await asyncio.gather(*pending, *held, return_exceptions=True)
         except (ConnectionClosed, OSError):
             pass
 

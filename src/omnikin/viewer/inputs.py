@@ -22,8 +22,15 @@ Anything else (a type viser would act on but omnikin does not serve, such as a s
 request that would open a tunnel to the internet, a file upload, a form; a message that is not
 msgpack; extra fields; wrong types; NaN or infinite numbers; huge strings) is refused: it is not
 relayed, it is counted (:attr:`PageInputs.refused`, :attr:`PageInputs.last`), and the page that
-sent it gets a one-line notification (:meth:`PageInputs.notice`, a viser notification in
+sent it is told in a one-line notification (:meth:`PageInputs.notice`, a viser notification in
 viser's own wire format). The server goes on serving and prints nothing.
+
+A flood of bad messages does not flood the page with notifications: each page has a
+:class:`NoticeLimiter` that lets at most one notification go every :data:`NOTICE_INTERVAL`
+seconds. The refusals between two notifications are held and counted; the next notification
+says how many it covers and gives the last reason ("omnikin refused 250 inputs from this page (N
+since the viewer started)"), and the front server sends it as soon as the interval has passed
+even if nothing more comes. Every refused message is still counted, one by one.
 
 The controls are looked up, at the time a message arrives, in viser's own tables of the
 server's GUI inputs and transform controls (``GuiApi._gui_input_handle_from_uuid``,
@@ -58,6 +65,8 @@ BOUND_SLACK = 1e-9
 step in floating point (50 steps of 0.006 make 0.30000000000000004 on a slider ending at 0.3)."""
 NOTICE_SECONDS = 8.0
 """How long a refusal's notification stays on the page [s]."""
+NOTICE_INTERVAL = 1.0
+"""Least time between two notifications of refusals to one page [s] (:class:`NoticeLimiter`)."""
 
 
 def _is_number(value) -> bool:
@@ -86,6 +95,47 @@ def _fields(message: dict, required: tuple[str, ...], optional: tuple[str, ...] 
     if extra:
         return f"has fields a page does not send: {shorten(', '.join(extra))}"
     return None
+
+
+class NoticeLimiter:
+    """The notifications of refusals to one page: at most one every ``interval`` [s] of
+    ``clock`` (a function returning seconds; the monotonic clock unless a test gives its own),
+    every refusal counted (module docstring). Not thread-safe: one page's relay uses it."""
+
+    def __init__(self, interval: float = NOTICE_INTERVAL, clock=time.monotonic):
+        self.interval = interval
+        self.clock = clock
+        self.refused = 0
+        """This page's refusals, all of them."""
+        self.held = 0
+        """Refusals not told yet (a notification went less than ``interval`` ago)."""
+        self.last = ""
+        """The last refusal's reason."""
+        self._next = -math.inf  # clock time from which the next notification may go
+
+    def refuse(self, reason: str) -> int | None:
+        """Count a refusal for ``reason``; :meth:`due`."""
+        self.refused += 1
+        self.held += 1
+        self.last = reason
+        return self.due()
+
+    def due(self) -> int | None:
+        """How many refusals a notification sent now tells (the held ones, this one included), and
+        from now on none are held; None when none are held or the last notification went less
+        than ``interval`` ago."""
+        now = self.clock()
+        if self.held == 0 or now < self._next:
+            return None
+        told, self.held = self.held, 0
+        self._next = now + self.interval
+        return told
+
+    def wait(self) -> float:
+        """Seconds until a held refusal may be told (0 when it may now; ``inf`` when none is held)."""
+        if self.held == 0:
+            return math.inf
+        return max(0.0, self._next - self.clock())
 
 
 class PageInputs:
@@ -223,17 +273,19 @@ class PageInputs:
         return None
 
     # --- the notice ----------------------------------------------------------------------------
-    def notice(self, reason: str) -> bytes:
+    def notice(self, reason: str, told: int = 1) -> bytes:
         """A viser notification (its server-to-client wire format, ``viser.infra._infra.
         _message_producer``: two little-endian sizes, then the zstd-compressed msgpack of the
-        messages) saying that a value was refused, with the count so far."""
+        messages) saying that ``told`` values were refused since the page's last notification,
+        the last one for ``reason``, with the count of all since the start."""
         with self._lock:
             count = self.refused
+        what = "an input" if told == 1 else f"{told} inputs"
         show = _messages.NotificationShowMessage(
             uuid=str(uuid.uuid4()),
             props=_messages.NotificationProps(
-                title=f"omnikin refused an input from this page ({count} since the viewer started)",
-                body=reason,
+                title=f"omnikin refused {what} from this page ({count} since the viewer started)",
+                body=reason if told == 1 else f"the last: {reason}",
                 loading=False,
                 with_close_button=True,
                 auto_close_seconds=NOTICE_SECONDS,

@@ -1,12 +1,14 @@
 """The viewer page's side panel: driving controls, camera presets, readouts and plots.
 
-- **Drive**: the keys (W/S A/D Q/E held, space stops, ``[``/``]`` steer, 1/2/3 cameras), sliders
+- **Drive**: the keys (W/S A/D Q/E held, space stops, ``[``/``]`` steer, 1/2/3 cameras; 4, the
+  *run* camera, is a replay's: a live page says it has none), sliders
   for a twist held until changed (Drive) and a Stop button; steering by hand for robots with
   steerable wheels (at rest).
 - **Camera**: presets *top* (straight down on the robot, world +x to the right and +y up,
   moving with it), *follow* (behind the robot along its heading, moving with it), *free* (the
   mouse: drag rotates, right-drag moves, wheel zooms) and, on a replay, *run* (straight down on
-  the whole of the runs shown), and the size of the view [m] the top and follow cameras frame.
+  the whole of the runs shown; keys 1 2 3 4 in that order), and the size of the view [m] the
+  top and follow cameras frame.
   The first view (:class:`FirstView`) looks at the robot from behind and above, from a distance
   that frames :data:`VIEW_SIZE` robot reaches.
 - **Readouts**: pose (true and odometry), twist, command, forward-kinematics residual, every
@@ -44,6 +46,8 @@ PLOT_COLOURS = ("#d62728", "#1f77b4", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b"
 KEY_HELP = """**Keys** (click the scene first): **W/S** forward/back, **A/D** left/right,
 **Q/E** turn left/right (held keys drive, release stops), **space** stop,
 **[ ]** steer, **1 2 3** camera free/top/follow."""
+REPLAY_KEY_HELP = """**Keys** (click the scene first): **1 2 3 4** camera free/top/follow/run (the driving
+keys do nothing on a replay)."""
 
 
 def _f(value: float) -> str:
@@ -206,10 +210,17 @@ class CameraControl:
             if clear_trails is not None:
                 gui.add_button("Clear trails").on_click(lambda _: clear_trails())
 
-    def action(self, action: str) -> None:
-        """A page action of the keys: ``camera_free``, ``camera_top``, ``camera_follow``."""
-        if action.startswith("camera_"):
-            self.set(action.removeprefix("camera_"))
+    def action(self, action: str) -> str | None:
+        """A page action of the keys: ``camera_free``, ``camera_top``, ``camera_follow``,
+        ``camera_run``; one line to tell the page when it asks for a preset this page does not
+        have (*run* on a live page), else None."""
+        if not action.startswith("camera_"):
+            return None
+        preset = action.removeprefix("camera_")
+        if preset == "run" and self.fit is None:
+            return "key 4 (camera run) frames the runs of a replay: a live page has none"
+        self.set(preset)
+        return None
 
     def set(self, preset: str) -> None:
         if preset not in CAMERAS and not (preset == "run" and self.fit is not None):

@@ -1,7 +1,7 @@
 """``omnikin view --replay``: recorded runs played back in the browser, with a timeline.
 
 :class:`ReplayViewer` serves, through the front server (:mod:`omnikin.viewer.front`: the
-camera keys 1/2/3 work, the driving keys do nothing), a page with the robot drawn from its
+camera keys 1/2/3/4 work, 4 the *run* camera, the driving keys do nothing), a page with the robot drawn from its
 physical description (:class:`~omnikin.viewer.scene.RobotDrawing`), the ground grid, the
 UMBmark square of the report's side, and a **Replay** folder: the run selector, the time
 slider [s], Play/Pause, the playback speed; the whole true and odometry paths of the selected
@@ -35,7 +35,7 @@ import time
 import numpy as np
 
 from .live import Snapshot
-from .panel import CameraControl, FirstView, Readouts, robot_extent
+from .panel import REPLAY_KEY_HELP, CameraControl, FirstView, Readouts, robot_extent
 from .replay import Track, TrackReplay
 from .replay_sources import ReplaySource
 from .scene import RobotDrawing, RobotView, Trail, draw_world
@@ -124,6 +124,7 @@ class ReplayViewer:
             names = [tr.name for tr in source.tracks]
             with gui.add_folder("Replay"):
                 gui.add_markdown(f"**{html.escape(source.label)}** (robot {html.escape(source.robot.name)})")
+                gui.add_markdown(REPLAY_KEY_HELP)
                 self.run_choice = gui.add_dropdown("run", names, initial_value=names[0])
                 self.slider = gui.add_slider("time [s]", 0.0, 1.0, TIME_STEP, 0.0)
                 self.play_button = gui.add_button("Play", hint="play from the slider's time; again: pause")

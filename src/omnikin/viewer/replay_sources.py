@@ -3,7 +3,12 @@
 - **A report folder** of ``omnikin umbmark`` (:func:`load_report`): the robot as built
   (``true_robot.yaml``: the robot that drove the runs), the square's side (``result.json``,
   ``settings.side``) and the runs of ``run_poses.csv`` (:mod:`omnikin.io.run_poses`), one
-  :class:`~omnikin.viewer.replay.Track` per run, named ``before cw run 1``.
+  :class:`~omnikin.viewer.replay.Track` per run, named ``before cw run 1``. The robot it was
+  built to (``result.json``'s ``robot``, same wheel names) is its design
+  (:attr:`omnikin.model.Robot.design`): the page draws the robot as built with the body of its
+  design (:func:`omnikin.physics.description.describe`), as the physics engine models it; a
+  robot file holds no design, so without it a few millimetres of hub errors would draw
+  another body.
 - **A bag** (:func:`load_bag`: a rosbag2 folder, a ``.db3`` or ``.mcap`` file, as
   :mod:`omnikin.io.bags` reads them) of a robot the caller names: one track from the
   ``nav_msgs/Odometry`` (or ``PoseStamped``) topics of the ground truth (default
@@ -100,10 +105,29 @@ def load_report(folder) -> ReplaySource:
         check_side(float(side))
     except InputError as exc:
         raise ReplayError(f"{result}: settings.side: {exc}") from None
+    robot = with_design(robot, doc.get("robot") if isinstance(doc, dict) else None, result)
     tracks = []
     for run in read_run_poses(base / "run_poses.csv"):
         tracks.append(Track(run.name, PoseSeries(run.t, run.truth), PoseSeries(run.t, run.odometry)))
     return ReplaySource(str(folder), robot, tracks, float(side))
+
+
+def with_design(robot: Robot, design, source: Path) -> Robot:
+    """``robot`` (as built) with ``design``, a robot document (``result.json``'s ``robot``), as
+    its design when that has the same wheel names (module docstring); ``robot`` as it is when
+    ``design`` is None (no such entry), names other wheels, or ``robot`` has a design already.
+    A document that is not a robot is one line naming ``source``."""
+    from ..io.robot_file import robot_from_dict
+
+    if design is None or robot.design is not None:
+        return robot
+    try:
+        nominal = robot_from_dict(design, f"{source}: robot")
+    except InputError as exc:
+        raise ReplayError(one_line(exc, 400)) from None
+    if nominal.design is not None or nominal.wheel_names != robot.wheel_names:
+        return robot
+    return replace(robot, design=nominal)
 
 
 def load_bag(

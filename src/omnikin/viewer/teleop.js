@@ -15,7 +15,7 @@
   const ACTIONS = {
     w: "forward", s: "back", a: "left", d: "right", q: "turn_left", e: "turn_right",
     " ": "stop", "[": "steer_right", "]": "steer_left",
-    "1": "camera_free", "2": "camera_top", "3": "camera_follow",
+    "1": "camera_free", "2": "camera_top", "3": "camera_follow", "4": "camera_run",
   };
   const held = new Set();
   let socket = null;
