@@ -12,6 +12,11 @@ of 1, then of 2 worker processes (``multiprocessing``, started and warmed up bef
 starts); throughput = simulated seconds of all runs per wall second, best of three with the two
 pool sizes taking turns, and the ratio of the two throughputs in the same run (2.0 would be
 perfect scaling on two free cores). Do not pin this part: it needs the cores it measures.
+
+Last, the estimate against the run (:func:`omnikin.physics.cost.physics_run_cost`, which
+``--max-time`` checks): for each of :data:`ESTIMATED` the estimate's computing time and the run's
+(this process's CPU time), and their ratio, above 1 on the safe side (docs/physics.md, "Computing
+time").
 """
 
 from __future__ import annotations
@@ -34,6 +39,15 @@ ROBOTS = {
     "ackermann": (0.5, 0.0, 0.4),
     "xr4000": (0.2, 0.1, 0.3),
 }
+ESTIMATED = [
+    # (robot, plan, rate [Hz], time step [s])
+    ("tomasi-omni3", "line 6", 50.0, 0.002),
+    ("tomasi-omni3", "line 1", 100.0, 0.0005),
+    ("tomasi-omni3", "square cw rotate 1", 50.0, 0.002),
+    ("mecanum4", "spin 360", 20.0, 0.002),
+    ("diff-drive", "line 3", 200.0, 0.001),
+    ("synchro", "square cw rotate 4", 50.0, 0.002),
+]
 SIM_SECONDS = 5.0
 PARALLEL_ROBOT = "tomasi-omni3"
 PARALLEL_RUNS = 16
@@ -108,6 +122,42 @@ def scaling() -> dict:
     }
 
 
+def estimate_against_run() -> list[dict]:
+    """The estimate of :data:`ESTIMATED`'s runs against their computing time (module docstring)."""
+    from omnikin.physics.cost import physics_run_cost
+    from omnikin.physics.run import simulate_physics
+    from omnikin.plans import parse_plan
+    from omnikin.simulation.motion import sample_plan
+
+    rows = []
+    print("  estimate against the run (CPU time of this process; est / run > 1 is on the safe side)")
+    print(f"    {'robot':<14s} {'plan':<20s} {'step [s]':>9s} {'estimate [s]':>13s} {'run [s]':>9s} {'est / run':>10s}")
+    for name, plan, rate, step in ESTIMATED:
+        robot = load_robot(name)
+        sampled = sample_plan(parse_plan(plan), robot, rate)
+        estimate = physics_run_cost(sampled, robot, robot, step)
+        cpu = time.process_time()
+        run = simulate_physics(sampled, robot, robot, rate=rate, step=step)
+        used = time.process_time() - cpu
+        ratio = estimate.seconds / used
+        rows.append(
+            {
+                "robot": name,
+                "plan": plan,
+                "rate_hz": rate,
+                "step_s": step,
+                "simulated_bound_s": estimate.simulated,
+                "simulated_s": float(run.t[-1]),
+                "step_us": estimate.step_seconds * 1e6,
+                "estimate_s": estimate.seconds,
+                "run_s": used,
+                "ratio": ratio,
+            }
+        )
+        print(f"    {name:<14s} {plan:<20s} {step:9g} {estimate.seconds:13.3f} {used:9.3f} {ratio:10.2f}")
+    return rows
+
+
 def main() -> dict:
     import mujoco
 
@@ -133,6 +183,7 @@ def main() -> dict:
         }
         print(f"  {name:<14s} {bodies:6d} {write * 1e3:10.2f} {compile_ * 1e3:12.2f} {settle * 1e3:12.1f} {rtf:12.1f}")
     out["parallel"] = scaling()
+    out["estimate"] = estimate_against_run()
     return out
 
 

@@ -2,7 +2,8 @@
 processes started as a user would start them, each importing this checkout's omnikin; over TLS
 with certificates made here (:func:`make_tls`); a worker that joins later, optionally reporting
 another omnikin version (:func:`start_worker`, ``fake_omnikin_version.py``); and the probes of
-the security tests: the listening sockets of a process tree (:func:`listening_ports`) and
+the security tests: the listening sockets of a process tree (:func:`listening_ports`), what a
+server sends back to raw bytes (:func:`wire_answer`: an HTTP request, a WebSocket upgrade) and
 whether a Dask server answers a connection (:func:`dask_answers`)."""
 
 from __future__ import annotations
@@ -148,6 +149,8 @@ def _worker_argv(file: Path | None, name: str, tls: TLSFiles | None) -> list[str
         "1",
         "--no-nanny",
         "--no-dashboard",
+        "--dashboard-address",  # its HTTP server listens even without a dashboard: on loopback
+        "127.0.0.1:0",
         "--name",
         name,
         "--death-timeout",
@@ -226,17 +229,32 @@ def listening_ports(pid: int) -> dict[int, str]:
     return ports
 
 
-def speaks_http(port: int, timeout: float = 5.0) -> bool:
-    """Whether the server on 127.0.0.1:``port`` answers a plain HTTP request (Dask's dashboard,
-    health and metrics endpoints) rather than being a Dask connection."""
+def wire_answer(port: int, request: bytes, *, tls: bool = False, timeout: float = 5.0) -> bytes:
+    """What the server on 127.0.0.1:``port`` sends back to ``request`` (with ``tls``: over TLS,
+    the server's certificate unchecked and no client certificate, as a stranger connects), read
+    until it closes the connection, is silent for ``timeout`` or has sent 64 KiB; b"" when it
+    refuses the connection or the TLS handshake."""
     import socket
+    import ssl
 
+    answer = b""
     try:
-        with socket.create_connection(("127.0.0.1", port), timeout=timeout) as sock:
-            sock.sendall(b"GET /health HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n")
-            return sock.recv(5) == b"HTTP/"
-    except OSError:
-        return False
+        with socket.create_connection(("127.0.0.1", port), timeout=timeout) as raw:
+            sock = raw
+            if tls:
+                context = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)
+                context.check_hostname = False
+                context.verify_mode = ssl.CERT_NONE
+                sock = context.wrap_socket(raw, server_hostname="127.0.0.1")
+            sock.sendall(request)
+            while len(answer) < 1 << 16:
+                chunk = sock.recv(1 << 16)
+                if not chunk:
+                    break
+                answer += chunk
+    except OSError:  # refused, reset, timed out, TLS handshake refused (ssl.SSLError): what came is the answer
+        pass
+    return answer
 
 
 def dask_answers(address: str, security=None, timeout: float = 10.0) -> bool:

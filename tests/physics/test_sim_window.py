@@ -191,10 +191,17 @@ def _blue_centre(rgb: np.ndarray) -> np.ndarray:
     return np.array([cols.mean(), rows.mean()])
 
 
-def _orange(rgb: np.ndarray) -> np.ndarray:
-    """The pixels of the heading arrow's orange (red high, green half, blue low)."""
+def _green(rgb: np.ndarray) -> np.ndarray:
+    """The pixels of the true heading arrow's green (green well above red and blue; the chassis
+    is blue, the floor grey, the wheels dark)."""
     r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
-    return (r > 150) & (g > 0.25 * r) & (g < 0.8 * r) & (b < 0.45 * r)
+    return (g > 90) & (g > r + 50) & (g > b + 40)
+
+
+def _magenta(rgb: np.ndarray) -> np.ndarray:
+    """The pixels of the odometry arrow's magenta (red and blue high, green well below both)."""
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    return (r > 100) & (b > 100) & (g < 0.6 * np.minimum(r, b)) & (np.abs(r - b) < 0.35 * np.maximum(r, b))
 
 
 def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_path):
@@ -277,9 +284,9 @@ def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_p
     height, width = top.shape[:2]
     middle = top[height // 3 : 2 * height // 3, width // 3 : 2 * width // 3]
     assert np.mean(_blue(middle)) > 0.1
-    # ... and the orange heading arrow from its centre along the heading (top camera: world +x to
+    # ... and the green heading arrow from its centre along the heading (top camera: world +x to
     # the right, +y up in the window)
-    rows, cols = np.nonzero(_orange(top))
+    rows, cols = np.nonzero(_green(top))
     assert len(rows) > 50, "no heading arrow in the window"
     chassis = _blue_centre(top)
     direction = math.atan2(-(rows.mean() - chassis[1]), cols.mean() - chassis[0])
@@ -487,3 +494,126 @@ def test_the_on_screen_help_marks_the_keys_a_layout_cannot_obey_and_says_why():
     assert lines[0].startswith("W/S, A/D*, Q/E move")
     assert lines[1:] == ["* A/D on diff-drive: its fixed wheels forbid vy"]
     assert InteractiveSim(load_robot("tomasi-omni3")).key_help()[0].startswith("W/S, A/D, Q/E move")
+
+
+AS_BUILT_DIFF_DRIVE = """omnikin: 1
+name: diff-drive
+wheels:
+  - {name: left, type: standard, x: 0.0, y: 0.20625, drive_deg: 0, radius: 0.0825,
+     encoder: {ticks_per_rev: 500, gear_ratio: 19.7}, motor: dc}
+  - {name: right, type: standard, x: 0.0, y: -0.20625, drive_deg: 0, radius: 0.086625,
+     encoder: {ticks_per_rev: 500, gear_ratio: 19.7}, motor: dc}
+  - {name: castor, type: castor, x: -0.2, y: 0.0, drive_deg: 0, radius: 0.03, steer: {offset: 0.03}}
+"""
+"""diff-drive as built: its wheels 25 % further apart (track 0.4125 m instead of 0.33 m) and its
+right wheel 5 % larger than the file says; the odometry keeps the file's."""
+TRACK, RADIUS = 0.33, 0.0825  # the nominal diff-drive's track [m] and wheel radius [m] (presets/diff-drive.yaml)
+
+
+def _diff_drive_odometry(segments) -> np.ndarray:
+    """Pose ``(x, y, theta)`` a differential drive's odometry gives for ``segments`` of wheel
+    angles ``(left, right)`` [rad], each driven at a constant ratio of the two wheels' speeds (a
+    straight line or a turn on the spot): each is an arc of length ``ds = r (dl + dr) / 2`` turning
+    by ``dtheta = r (dr - dl) / b`` (Siegwart and Nourbakhsh, Introduction to Autonomous Mobile
+    Robots, eq. 5.7), whose chord is ``ds sinc(dtheta / 2)`` along ``theta + dtheta / 2``."""
+    x = y = theta = 0.0
+    for (l0, r0), (l1, r1) in segments:
+        dl, dr = RADIUS * (l1 - l0), RADIUS * (r1 - r0)
+        ds, dtheta = (dl + dr) / 2, (dr - dl) / TRACK
+        chord = ds * np.sinc(dtheta / 2 / math.pi)
+        x += chord * math.cos(theta + dtheta / 2)
+        y += chord * math.sin(theta + dtheta / 2)
+        theta += dtheta
+    return np.array([x, y, theta])
+
+
+def _angle_error(a: float, b: float) -> float:
+    return abs(math.remainder(a - b, 2 * math.pi))
+
+
+def test_the_window_draws_the_odometry_beside_the_truth_where_the_wheels_say(display, tmp_path):
+    """diff-drive as built (``--true-robot``: track 25 % wider, right wheel 5 % larger) driven W,
+    Q, W: its odometry (the nominal robot's) parts from the truth. The window's two arrows, read
+    back from the scene (the report's ``markers``), stand at the true pose (green) and at the
+    odometry computed here from the recorded wheel angles with the closed-form arcs of a
+    differential drive (magenta, narrower, higher); a screenshot from the top camera shows the
+    magenta arrow there, at the pinhole scale ``(H / 2) / ((d - z) tan(fovy / 2))``."""
+    import mujoco
+    from PIL import Image
+
+    from omnikin import load_robot
+    from omnikin.physics.mjcf import mjcf
+
+    true_file = tmp_path / "as-built.yaml"
+    true_file.write_text(AS_BUILT_DIFF_DRIVE)
+    report = tmp_path / "run.json"
+    args = ("--duration", "30", "--true-robot", str(true_file), "--report", str(report), "--echo")
+    with _running(display, *args, robot="diff-drive") as sim:
+        echo = Echo(sim)
+        win = _window(display, sim)
+        _xdotool(display, "windowfocus", win)
+        for count, (key, held) in enumerate((("w", 1.2), ("q", 2.5), ("w", 1.2)), start=1):
+            _xdotool(display, "keydown", key)
+            echo.wait(2 * count - 1)
+            time.sleep(held)
+            _xdotool(display, "keyup", key)
+            echo.wait(2 * count)
+            time.sleep(0.8)  # stopped within the acceleration limits before the next key
+        _xdotool(display, "key", "2")  # the top camera, down on where the robot stands
+        echo.wait(7)
+        time.sleep(0.8)
+        # space (the robot stands already) acts in a later frame than 2: the window drew the top
+        # camera before it is echoed, however far the simulation lags the clock
+        _xdotool(display, "key", "space")
+        echo.wait(8)
+        top = _settled_shot(display, win)
+        Image.fromarray(top.astype(np.uint8)).save(tmp_path / "top.png")  # to look at when it fails
+        _, err = sim.communicate(timeout=WAIT)
+    assert sim.returncode == 0, err
+    run = json.loads(report.read_text())
+    events = run["events"]
+    names = [e["key"] for e in events]
+    assert names == ["forward", "release", "turn_left", "release", "forward", "release", "camera_top", "stop"], names
+
+    # the odometry from the wheel angles: straight until Q's press, on the spot until the second
+    # W's press, straight to the end (each segment also holds the stop after its release)
+    marks = [(0.0, 0.0), events[2]["wheels"], events[4]["wheels"], run["wheels"]]
+    odometry = _diff_drive_odometry(zip(marks, marks[1:], strict=False))
+    truth = np.array(run["pose"])
+    drawn_odometry, drawn_truth = np.array(run["markers"]["odometry"]), np.array(run["markers"]["truth"])
+    print(f"truth {truth}, odometry (closed form) {odometry}, drawn {drawn_truth[:3]} and {drawn_odometry[:3]}")
+    assert odometry[2] == pytest.approx(TURN * (events[3]["t"] - events[2]["t"]), rel=0.1)  # Q turned it
+    # the two poses part: the wider true track turns the robot less than its odometry says
+    assert math.degrees(_angle_error(truth[2], odometry[2])) > 8.0
+    assert math.hypot(*(truth[:2] - odometry[:2])) > 0.02
+    # the arrows stand where they should and point where they should
+    assert drawn_truth[:2] == pytest.approx(truth[:2], abs=1e-3)
+    assert math.degrees(_angle_error(drawn_truth[2], truth[2])) < 0.1
+    assert drawn_odometry[:2] == pytest.approx(odometry[:2], abs=0.005)
+    assert math.degrees(_angle_error(drawn_odometry[2], odometry[2])) < 0.5
+    # the odometry's arrow is narrower and above the truth's (seen where the two cross)
+    assert drawn_odometry[4] == pytest.approx(drawn_truth[4] / 2) and drawn_odometry[3] > drawn_truth[3]
+
+    # the top camera looks straight down on where the robot stood when 2 was pressed, from
+    # d = 8 e (e the robot's extent): a point (X, Y, z) shows (X - x0, Y - y0) (H / 2) / ((d - z)
+    # tan(fovy / 2)) pixels from the window's middle (+x right, +y up). Each arrow, 1.2 e long
+    # (docs/physics.md), shows in its colour from its pose along its heading: the middle of its
+    # pixels on that ray, between 0.4 and 0.75 of its length from the tail (a wider head ahead)
+    robot = load_robot("diff-drive")
+    extent = max(max(abs(w.x), abs(w.y)) + w.radius for w in robot.wheels)
+    fovy = math.radians(mujoco.MjModel.from_xml_string(mjcf(robot)).vis.global_.fovy)
+    height, width = top.shape[:2]
+    x0, y0, _ = events[6]["pose"]
+    for name, pose, z, colour in (
+        ("odometry", odometry, drawn_odometry[3], _magenta),
+        ("truth", truth, drawn_truth[3], _green),
+    ):
+        scale = (height / 2) / ((8 * extent - z) * math.tan(fovy / 2))
+        tail = np.array([width / 2 + (pose[0] - x0) * scale, height / 2 - (pose[1] - y0) * scale])
+        rows, cols = np.nonzero(colour(top))
+        assert len(rows) > 30, f"no {name} arrow in the window"
+        offset = np.array([cols.mean(), -rows.mean()]) - np.array([tail[0], -tail[1]])  # +y up
+        along = offset @ [math.cos(pose[2]), math.sin(pose[2])] / (1.2 * extent * scale)
+        across = abs(offset @ [-math.sin(pose[2]), math.cos(pose[2])])
+        print(f"{name} arrow: its middle {along:.2f} of its length ahead of its tail, {across:.1f} px aside")
+        assert 0.4 < along < 0.75 and across < 0.03 * height, name

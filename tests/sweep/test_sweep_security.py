@@ -1,9 +1,12 @@
 """Who can reach a sweep's cluster, and whose results it takes.
 
 * The embedded cluster: every port the ``omnikin sweep`` process and its children listen on
-  (found with psutil, not from what the sweep prints) refuses a Dask client without the run's
-  temporary credentials, over tcp:// and over tls:// with other credentials; the same probe gets
-  an answer from an open scheduler and from a TLS one with its credentials (it can fail).
+  (found with psutil, not from what the sweep prints) serves no page and no WebSocket (Dask's
+  own HTTP servers: plain and over TLS, from another web site's origin) and refuses a Dask
+  client without the run's temporary credentials, over tcp:// and over tls:// with other
+  credentials; the same probe gets an answer from an open scheduler and from a TLS one with its
+  credentials, and Dask's pages from a scheduler that serves them (it can fail). The Dask
+  settings that do it hold only while the embedded cluster runs.
 * ``--scheduler tls://``: a real scheduler and workers started with certificates made here; the
   sweep runs there with ``--tls-*`` and gives the embedded cluster's table, and without the
   credentials (or with another authority's) it is refused in one line.
@@ -23,7 +26,7 @@ import pytest
 
 from cluster_study import HANG_S, assert_same_table, start_sweep, table, write_study
 from conftest import run_entry_point
-from dask_cluster import dask_answers, dask_cluster, listening_ports, make_tls, speaks_http
+from dask_cluster import dask_answers, dask_cluster, listening_ports, make_tls, wire_answer
 
 pytest.importorskip("cryptography", reason="omnikin[sweep] (cryptography) is not installed")
 pytest.importorskip("psutil", reason="psutil finds the listening sockets")
@@ -43,7 +46,45 @@ def wait_for(condition, what: str, process: subprocess.Popen | None = None) -> N
         time.sleep(0.05)
 
 
-def test_no_port_of_the_embedded_cluster_answers_a_client_without_the_runs_credentials(tmp_path):
+HTTP_PATHS = ("/", "/info/main/workers.html", "/json/identity.json", "/health", "/metrics", "/status", "/sitemap.json")
+"""Pages a Dask scheduler or worker serves by default: its index, the workers with their logs and
+call stacks, the cluster's identity, health, Prometheus metrics, the Bokeh dashboard, every route."""
+
+WEBSOCKETS = ("/eventstream", "/status/ws")
+"""Dask's task event stream (it takes any origin) and a Bokeh dashboard's document socket."""
+
+
+def attacks(port: int) -> dict[str, bytes]:
+    """What the server on 127.0.0.1:``port`` answers a local program or a web page asking for
+    each of Dask's pages (with this port's own Host, which any Host check would pass) and opening
+    its WebSocket from another web site, each in plain TCP and over TLS without a certificate."""
+    host = f"127.0.0.1:{port}"
+    requests = {
+        f"GET {path}": f"GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n" for path in HTTP_PATHS
+    }
+    for path in WEBSOCKETS:
+        requests[f"WebSocket {path} from http://evil.example"] = (
+            f"GET {path} HTTP/1.1\r\nHost: {host}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+            "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
+            "Origin: http://evil.example\r\n\r\n"
+        )
+    return {
+        f"{what} ({'TLS' if tls else 'plain'})": wire_answer(port, request.encode(), tls=tls)
+        for what, request in requests.items()
+        for tls in (False, True)
+    }
+
+
+def serves(answer: bytes) -> bool:
+    """Whether ``answer`` gives anything away: an HTTP answer other than a bare refusal (403 or
+    404 naming nothing of the cluster). Nothing, a reset or a TLS alert gives nothing."""
+    if not answer.startswith(b"HTTP/"):
+        return False
+    status = answer.split(b" ", 2)[1]
+    return status not in (b"403", b"404") or any(word in answer.lower() for word in (b"tls://", b"omnikin", b"worker"))
+
+
+def test_no_port_of_the_embedded_cluster_serves_a_page_or_a_client_without_the_runs_credentials(tmp_path):
     from distributed import Client
     from distributed.security import Security
 
@@ -51,23 +92,48 @@ def test_no_port_of_the_embedded_cluster_answers_a_client_without_the_runs_crede
     study = start_sweep(spec, "-o", tmp_path / "out", "--workers", "1", "--task-trials", "1")
     try:
         wait_for(lambda: list((tmp_path / "out").glob("parts/*/*.parquet")), "part written", study)
-        ports = listening_ports(study.pid)
+        ports = listening_ports(study.pid)  # every TCP socket of the process and its children
         assert set(ports.values()) == {"127.0.0.1"}, ports  # nothing beyond this machine
-        dask_ports = [port for port in sorted(ports) if not speaks_http(port)]  # HTTP: read-only pages
-        assert len(dask_ports) >= 3, ports  # the scheduler, the nanny and the worker at least
+        assert len(ports) >= 3, ports  # the scheduler, the nanny and the worker at least
         foreign = Security.temporary()  # credentials of another run: signed by another authority
-        for port in dask_ports:
+        for port in sorted(ports):
+            served = {what: answer[:300] for what, answer in attacks(port).items() if serves(answer)}
+            assert not served, f"port {port} ({len(served)} answers): {served}"
             for address, security in ((f"tcp://127.0.0.1:{port}", None), (f"tls://127.0.0.1:{port}", foreign)):
                 assert not dask_answers(address, security, timeout=5), f"{address} answered"
-        for port in dask_ports[:1]:
+        for port in sorted(ports)[:1]:
             with pytest.raises((OSError, TimeoutError)):
                 Client(f"tcp://127.0.0.1:{port}", timeout="3s")
         assert study.poll() is None  # the study went on
     finally:
         os.killpg(study.pid, signal.SIGINT)
-        _, err = study.communicate(timeout=WAIT_S)
+        out, err = study.communicate(timeout=WAIT_S)
     assert study.returncode == 130, err
     assert "Traceback" not in err, err
+    assert "Dask dashboard: off" in err and "http" not in out + err, err  # no page is offered either
+
+
+ROUTES = ("distributed.scheduler.http.routes", "distributed.worker.http.routes")
+"""Dask's settings of the pages its schedulers and workers serve."""
+
+
+def test_the_embedded_clusters_dask_settings_hold_only_while_it_runs(tmp_path):
+    import dask
+
+    from omnikin.sweep.engine import dask_client
+
+    default = {key: dask.config.get(key) for key in ROUTES}
+    assert all(default.values()), default  # Dask's own: pages on every scheduler and worker
+    with dask_client(workers=1) as embedded:
+        assert {key: dask.config.get(key) for key in ROUTES} == dict.fromkeys(ROUTES, [])
+        assert embedded.dashboard.startswith("off")
+    assert {key: dask.config.get(key) for key in ROUTES} == default  # a client made now has Dask's pages
+    with dask_cluster(tmp_path, workers=1) as cluster, dask_client(cluster.address) as given:
+        assert {key: dask.config.get(key) for key in ROUTES} == default  # the user's cluster, the user's settings
+        assert not given.dashboard.startswith("off")
+        # the probe of the embedded cluster's test reads the pages of a scheduler that serves them
+        (page,) = set(listening_ports(cluster.scheduler.pid)) - {int(cluster.address.rsplit(":", 1)[1])}
+        assert serves(wire_answer(page, f"GET /json/identity.json HTTP/1.0\r\nHost: 127.0.0.1:{page}\r\n\r\n".encode()))
 
 
 def test_a_tls_cluster_runs_the_study_with_the_users_credentials_and_refuses_others(tmp_path):

@@ -9,11 +9,14 @@ from .common import (
     add_output,
     add_output_options,
     add_teleop_options,
+    as_built_group,
     declare_inputs,
     load_robot,
     number,
+    robot_as_built,
     teleop_limits,
     until_stopped,
+    whole,
 )
 
 EPILOG = """keys (the window must have the keyboard focus):
@@ -37,7 +40,9 @@ stops everything. (Should the window report presses only, a press sets the targe
 another key changes it, or with --hold S for S seconds, when the command timeout stops the
 robot.) Every target passes the runtime's command filter: speed limits --max-speed and
 --max-turn, acceleration limits. The window shows the simulated time and the real-time factor,
-pose, twist, wheel speeds and steering, and an orange arrow along the robot's heading.
+true pose, odometry pose, twist, wheel speeds and steering, a green arrow along the robot's true
+heading and a narrower magenta one at the pose its wheel odometry estimates (they part on a
+robot as built with errors, --errors or --true-robot, and where the wheels slip).
 
 Time: a key acts at the simulated time of its arrival; on a machine that cannot keep up the
 simulation falls behind the clock (the window says so) and catches up, so a key held for 2 s
@@ -46,6 +51,7 @@ drives 2 s of simulated motion whatever the load. --duration counts simulated se
 examples:
   omnikin sim tomasi-omni3
   omnikin sim villasenor-omni3 --camera follow
+  omnikin sim diff-drive --errors typical --seed 3      odometry (magenta) beside the truth (green)
   xvfb-run -a omnikin sim omni4 --duration 10 --report run.json     without a screen"""
 
 
@@ -66,6 +72,19 @@ def add_parsers(sub, robot_help: str) -> None:
         help="close the window after S seconds of simulated time (default: never)",
     )
     sp.add_argument("--camera", choices=("free", "top", "follow"), default="free", help="first camera (default free)")
+    from ..simulation.error_models import PROFILES
+
+    group = as_built_group(sp)
+    group.add_argument(
+        "--errors",
+        default="none",
+        metavar="PROFILE",
+        help=f"systematic errors of the robot as built that the window simulates, drawn with --seed as "
+        f"omnikin simulate draws them (the odometry keeps the nominal robot): {', '.join(sorted(PROFILES))} "
+        "(default none)",
+    )
+    group.add_argument("--true-robot", metavar="FILE", help="the robot as built that the window simulates")
+    sp.add_argument("--seed", type=whole, default=1, metavar="N", help="random seed of --errors (default 1)")
     add_teleop_options(sp)
     sp.add_argument(
         "--hold", type=number, default=0.0, metavar="S", help="a press drives for S seconds (default 0: until changed)"
@@ -82,7 +101,7 @@ def add_parsers(sub, robot_help: str) -> None:
         help="write what the run did as JSON (final pose and steering, keys pressed)",
     )
     add_output_options(sp)
-    declare_inputs(sp, robots=("robot",))
+    declare_inputs(sp, robots=("robot", "true_robot"))
     sp.set_defaults(func=cmd_sim)
 
 
@@ -95,17 +114,24 @@ def cmd_sim(args) -> int:
         raise InputError(f"--duration must be positive [s], got {args.duration:g}")
     if args.hold < 0:
         raise InputError(f"--hold must be >= 0 [s], got {args.hold:g}")
+    if args.seed < 0:
+        raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
     limits = teleop_limits(args)
     from ..physics.cost import real_time_shortfall
     from ..physics.interactive import InteractiveSim, require_display
 
     require_display()  # before the model is built: the one line comes at once
     robot = load_robot(args.robot)
+    import numpy as np
+
+    # the robot as built that `omnikin simulate` and `omnikin ros` draw for the same --seed
+    true_robot, _ = robot_as_built(robot, args.true_robot, args.errors, np.random.SeedSequence(args.seed).spawn(2)[0])
     slow = real_time_shortfall(robot, "the simulation will run slower than the clock")
     if slow:
         print(f"omnikin: note: sim: {slow}", file=sys.stderr)
     sim = InteractiveSim(
         robot,
+        true_robot=true_robot,
         speed=args.speed,
         turn=args.turn,
         hold=args.hold,

@@ -35,10 +35,18 @@ robot's extent (the largest ``max(|x|, |y|) + r`` of its wheels) away: 1 free (m
 rotates, right drag moves, wheel zooms), 2 top (straight down on the pose where it was chosen,
 world +x to the right and +y up in the window; it stays there while the robot drives off),
 3 follow (MuJoCo's tracking camera: it keeps the chassis in the middle of the window, seen from
-behind at 30 deg elevation along the heading it had when chosen). An orange arrow on top of the
-chassis points along the robot's heading (body +x) in every camera (:meth:`InteractiveSim.
-_draw_heading`, a geom of the viewer's ``user_scn``, drawn only: the physics never sees it). The
-window shows time and real-time factor, pose, twist, target, wheel speeds and steering angles.
+behind at 30 deg elevation along the heading it had when chosen).
+
+**Heading and odometry** (:meth:`InteractiveSim._draw_heading`, geoms of the viewer's
+``user_scn``, drawn in every camera and never seen by the physics): a green arrow on top of the
+chassis from the robot's reference point (its body frame's origin) along the true heading (body
++x), and beside it a narrower magenta arrow a little higher at the pose the robot's own wheel
+odometry estimates (the runtime's :attr:`~omnikin.runtime.base.BaseRuntime.pose`, the exact
+odometry of its encoders): where the two agree the green shows on both sides of the magenta,
+where they part (an as-built robot, ``true_robot``; slip) the magenta arrow drifts off the
+robot. The colours are the browser viewer's (``docs/viewer.md``). The window shows time and
+real-time factor, true pose, odometry pose, twist, target, wheel speeds and steering angles, and
+a legend of the two arrows.
 
 **Clock: keys act at their simulated time.** Simulated time ``s`` follows the wall clock ``w``
 as ``s = w - w0``; every key event is stamped with the wall time it reached the program and
@@ -104,13 +112,27 @@ SLOW_RTF = 0.9
 """Real-time factor below which the window says the machine cannot keep up."""
 NOTICE_TIME = 4.0
 """Wall time [s] a notice stays on screen."""
-HEADING_RGBA = (1.0, 0.5, 0.0, 1.0)
-"""Colour of the heading arrow (orange: apart from the blue chassis, grey floor and dark wheels)."""
+TRUTH_RGBA = (30 / 255, 160 / 255, 60 / 255, 1.0)
+"""Colour of the true heading arrow (green, the browser viewer's ``TRUTH_COLOUR``: apart from the
+blue chassis, grey floor and dark wheels)."""
+ODOMETRY_RGBA = (200 / 255, 60 / 255, 200 / 255, 1.0)
+"""Colour of the odometry's heading arrow (magenta, the browser viewer's ``ODOMETRY_COLOUR``)."""
+ARROW_LENGTH = 1.2
+"""Length of both heading arrows as drawn, in units of the robot's extent."""
+ARROW_DRAWN = 0.5
+"""Length MuJoCo draws an arrow geom (``mjGEOM_ARROW``) as a share of its connector's length
+(``size[2]``): measured 0.49 in MuJoCo 4.0.0 (a 0.8 m connector drawn 0.39 m long from above;
+a cylinder connector drawn its full length). The arrows' connectors are ``ARROW_LENGTH /
+ARROW_DRAWN`` extents long; a test measures the drawn length in a screenshot."""
+ARROW_WIDTH = 0.08
+"""Width of the true heading arrow in units of the robot's extent (the odometry's is half)."""
 SHUTDOWN_WAIT = 60.0
 """Longest wait [s] for the viewer's render thread to end after the window is closed (it ends
 within a frame; software OpenGL on a loaded machine may take seconds for one)."""
 STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM} | ({signal.SIGHUP} if hasattr(signal, "SIGHUP") else set())
 """Signals held back while the viewer starts (:meth:`InteractiveSim.run`)."""
+LEGEND = "green arrow: true pose, magenta arrow: odometry"
+"""The legend of the two heading arrows (a line of the keys' help, bottom right)."""
 CAMERAS = ("free", "top", "follow")
 CAMERA_DISTANCE = 8.0
 """Distance of every camera preset from its point of view, in units of the robot's extent."""
@@ -161,7 +183,9 @@ def _viewer_module():
 
 class InteractiveSim:
     """``robot`` in MuJoCo's viewer, driven by the keyboard through :class:`BaseRuntime`
-    (module docstring). ``limits``: the runtime's motion limits; ``hold`` [s]: the command
+    (module docstring). ``true_robot``: the robot as built that the physics simulates (default
+    ``robot``; the runtime's odometry keeps the nominal ``robot``, so the two arrows part as they
+    would on the real robot); ``limits``: the runtime's motion limits; ``hold`` [s]: the command
     timeout (0: a target holds until changed); ``camera``: the first camera preset;
     ``notices``: where the one-line notices go (default stderr); ``echo``: a text stream that gets
     each entry of :attr:`events` as it happens, one line (:meth:`_record`)."""
@@ -170,6 +194,7 @@ class InteractiveSim:
         self,
         robot: Robot,
         *,
+        true_robot: Robot | None = None,
         speed: float = 0.2,
         turn: float = 0.5,
         hold: float = 0.0,
@@ -182,7 +207,7 @@ class InteractiveSim:
             raise InputError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
         self.teleop = Teleop(speed, turn)
         self.robot = robot
-        self.backend = PhysicsBackend(robot)
+        self.backend = PhysicsBackend(robot, true_robot)
         self.runtime = BaseRuntime(robot, self.backend, limits=limits, cmd_vel_timeout=hold)
         self.camera = camera
         self.events: list[dict] = []
@@ -210,6 +235,7 @@ class InteractiveSim:
         self.rtf = 1.0
         self.slowest = math.inf  # lowest real-time factor measured over RTF_WINDOW
         self.wall = 0.0  # wall time [s] since the start
+        self.markers: dict[str, list[float]] = {}  # the arrows last drawn (:meth:`_draw_heading`)
 
     # --- keys (called in the viewer's thread: only queued, with their wall time) ----------------
     def _on_key(self, key: int) -> None:
@@ -322,14 +348,17 @@ class InteractiveSim:
 
     def _record(self, key: str, wall: float) -> None:
         """One entry of :attr:`events`: the action, simulated time [s] at which it acted, wall time
-        [s] since the start at which its key arrived, true pose and the steering angles the
-        joints had reached (:meth:`steer_reached`); echoed as one line ``T s  KEY  x X m  y Y m
+        [s] since the start at which its key arrived, true pose, odometry pose, the encoded
+        wheels' angles (:meth:`wheel_angles`) and the steering angles the joints had reached
+        (:meth:`steer_reached`); echoed as one line ``T s  KEY  x X m  y Y m
         theta TH rad`` when the simulator has an ``echo`` stream."""
         event = {
             "t": self.t,
             "wall": wall - self._start,
             "key": key,
             "pose": self.backend.truth.tolist(),
+            "odometry_pose": list(self.runtime.pose),
+            "wheels": self.wheel_angles(),
             "steer": self.steer_reached(),
         }
         self.events.append(event)
@@ -338,6 +367,12 @@ class InteractiveSim:
             print(
                 f"{self.t:.3f} s  {key}  x {x:+.4f} m  y {y:+.4f} m  theta {th:+.4f} rad", file=self._echo, flush=True
             )
+
+    def wheel_angles(self) -> list[float]:
+        """Angles [rad] of the encoded wheels (the runtime's order, ``robot.encoded_names``) as the
+        runtime last read them from the encoders (ticks times the nominal scale): what its
+        odometry integrated (empty before the first control step)."""
+        return [] if self._last is None else [float(a) for a in self._last.state.positions]
 
     def steer_reached(self) -> list[float]:
         """Steering angles [rad] of the steerable wheels (file order) at the last control step,
@@ -375,10 +410,15 @@ class InteractiveSim:
                 cam.elevation = -90.0 if self.camera == "top" else -30.0
                 cam.azimuth = 90.0 if self.camera == "top" else 135.0
 
-    # --- heading arrow --------------------------------------------------------------------------------
+    # --- heading arrows ------------------------------------------------------------------------------
     def _draw_heading(self, viewer) -> None:
-        """An arrow on top of the chassis from its centre along the heading (body +x), 1.2 times the
-        robot's extent long: a geom of the viewer's ``user_scn``, drawn in every camera."""
+        """Two arrows on top of the chassis, :data:`ARROW_LENGTH` times the robot's extent long,
+        geoms of the viewer's ``user_scn`` drawn in every camera (module docstring): the truth's
+        (green, :data:`ARROW_WIDTH` wide) from the robot's reference point along its heading (body +x);
+        the odometry's (magenta, half as wide, 1.5 widths higher: clear of the truth's shaft,
+        which MuJoCo draws about 0.75 widths thick, and above its head) from the odometry's
+        ``(x, y)`` along its ``theta``. What the scene then holds is kept in :attr:`markers`
+        (:meth:`_read_markers`)."""
         scn = viewer.user_scn
         if scn is None:
             return
@@ -387,17 +427,36 @@ class InteractiveSim:
         geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "chassis")
         half = np.abs(data.geom_xmat[geom].reshape(3, 3)) @ model.geom_aabb[geom][3:]
         top = float(data.geom_xpos[geom][2] + half[2])
-        x, y, th = self.backend.truth
         size = max(max(abs(w.x), abs(w.y)) + w.radius for w in self.robot.wheels)
-        start = np.array([x, y, top + 0.01 * size])
-        end = start + 1.2 * size * np.array([math.cos(th), math.sin(th), 0.0])
+        width = ARROW_WIDTH * size
+        arrows = (
+            (self.backend.truth, top + 0.01 * size, width, TRUTH_RGBA),
+            (self.runtime.pose, top + 0.01 * size + 1.5 * width, 0.5 * width, ODOMETRY_RGBA),
+        )
         with viewer.lock():
-            scn.ngeom = 1
-            g = scn.geoms[0]
-            mujoco.mjv_initGeom(
-                g, mujoco.mjtGeom.mjGEOM_ARROW, np.zeros(3), np.zeros(3), np.eye(3).ravel(), np.array(HEADING_RGBA)
-            )
-            mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_ARROW, 0.08 * size, start, end)
+            scn.ngeom = len(arrows)
+            for g, ((x, y, th), z, w, rgba) in zip(scn.geoms, arrows, strict=False):
+                start = np.array([x, y, z])
+                end = start + ARROW_LENGTH / ARROW_DRAWN * size * np.array([math.cos(th), math.sin(th), 0.0])
+                mujoco.mjv_initGeom(
+                    g, mujoco.mjtGeom.mjGEOM_ARROW, np.zeros(3), np.zeros(3), np.eye(3).ravel(), np.array(rgba)
+                )
+                mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_ARROW, w, start, end)
+            self.markers = self._read_markers(scn)
+
+    @staticmethod
+    def _read_markers(scn) -> dict[str, list[float]]:
+        """The arrows in ``scn`` as drawn: ``{"truth": [x, y, heading, z, width, length], "odometry":
+        [...]}`` [m, rad]: the arrow's tail, the direction of its axis (the third column of the
+        geom's rotation), its width and its drawn length (``size[2]`` times :data:`ARROW_DRAWN`),
+        read back from the geoms."""
+        out = {}
+        for name, g in zip(("truth", "odometry"), scn.geoms[: scn.ngeom], strict=False):
+            axis = np.asarray(g.mat).reshape(3, 3)[:, 2]
+            x, y, z = (float(v) for v in g.pos)
+            heading = math.atan2(float(axis[1]), float(axis[0]))
+            out[name] = [x, y, heading, z, float(g.size[0]), ARROW_DRAWN * float(g.size[2])]
+        return out
 
     # --- readout -------------------------------------------------------------------------------------
     def _pace_update(self, wall: float) -> None:
@@ -436,14 +495,17 @@ class InteractiveSim:
         ]
 
     def readout(self) -> str:
-        """Time, pose, twist and wheel speeds, one quantity a line (the window's top left overlay)."""
+        """Time, true pose, odometry pose, twist and wheel speeds, one quantity a line (the window's
+        top left overlay)."""
         x, y, th = self.backend.truth
+        ox, oy, oth = self.runtime.pose
         vx, vy, w = self.backend.sim.twist
         speeds = " ".join(f"{s:+.2f}" for s in self.backend.sim.wheel_speeds)
         target = self.teleop.target
         lines = [
             f"t {self.t:7.2f} s simulated   real-time factor {self.rtf:.2f}   camera {self.camera}",
-            f"pose  x {x:+.3f} m  y {y:+.3f} m  theta {math.degrees(th):+.1f} deg",
+            f"truth    x {x:+.3f} m  y {y:+.3f} m  theta {math.degrees(th):+.1f} deg",
+            f"odometry x {ox:+.3f} m  y {oy:+.3f} m  theta {math.degrees(oth):+.1f} deg",
             f"twist vx {vx:+.3f} m/s  vy {vy:+.3f} m/s  omega {w:+.3f} rad/s",
             f"target vx {target[0]:+.2f}  vy {target[1]:+.2f}  omega {target[2]:+.2f}",
             f"wheels [rad/s] {speeds}",
@@ -458,10 +520,11 @@ class InteractiveSim:
         return "\n".join(lines)
 
     def help_text(self) -> str:
-        """The notice of the last few seconds (if any) and the keys (the bottom right overlay)."""
+        """The notice of the last few seconds (if any), the keys and the arrows' :data:`LEGEND`
+        (the bottom right overlay)."""
         text, since = self._notice
         lines = [text] if text and time.monotonic() - since < NOTICE_TIME else []
-        return "\n".join(lines + self.key_help())
+        return "\n".join(lines + self.key_help() + [LEGEND])
 
     # --- the loop ------------------------------------------------------------------------------------
     def run(self, duration: float | None = None) -> str:
@@ -517,6 +580,8 @@ class InteractiveSim:
                     self._last = self.runtime.step(self.t)
                     self._apply_due(viewer)
                 if self.t + CONTROL_PERIOD > end + 1e-9:
+                    self._draw_heading(viewer)  # the arrows of the final state (the report's markers)
+                    viewer.sync()
                     return "duration"
                 self._skip(now)
                 self._pace_update(self.wall)
@@ -564,9 +629,11 @@ class InteractiveSim:
         return steer is None or not len(steer) or bool(np.all(np.abs(sim.steer_angles - steer) < math.radians(0.5)))
 
     def report(self, reason: str) -> dict:
-        """What the run did, for ``--report``: final pose and twist (ground truth, odometry),
-        steering angles reached [rad], key presses with their simulated time, wall arrival time,
-        pose and steering; the clock: simulated and wall time [s], wall time skipped while
+        """What the run did, for ``--report``: final pose and twist (ground truth, odometry), the
+        encoded wheels' angles the odometry integrated (:meth:`wheel_angles`), the two arrows as
+        the window last drew them (:attr:`markers`), steering angles reached [rad], key presses
+        with their simulated time, wall arrival time, true and odometry pose, wheel angles and
+        steering; the clock: simulated and wall time [s], wall time skipped while
         nothing was driven, lowest real-time factor measured (null: the run was too short)."""
         return {
             "robot": self.robot.name,
@@ -578,6 +645,8 @@ class InteractiveSim:
             "pose": self.backend.truth.tolist(),
             "twist": self.backend.sim.twist.tolist(),
             "odometry_pose": list(self.runtime.pose),
+            "wheels": self.wheel_angles(),
+            "markers": self.markers,
             "steer": self.steer_reached(),
             "target": self.teleop.target.tolist(),
             "fallen": self.backend.fallen,

@@ -4,11 +4,17 @@
 
 * **embedded** (the default): a ``LocalCluster`` of ``workers`` processes (all cores), one
   thread each (the trials hold the GIL: threads in one process would take turns), every
-  listener on loopback (``127.0.0.1``, the dashboard on a free port) and every Dask connection
-  (client, scheduler, nannies, workers) over TLS with temporary credentials made for this run
-  (``Security.temporary()``: a key and self-signed certificate held in memory, never written,
-  that each end must present): another process or user of the machine cannot connect and run
-  code in the study's processes (a Dask scheduler runs what its clients send), the Dask logs silenced
+  listener on loopback (``127.0.0.1``) and every Dask connection (client, scheduler, nannies,
+  workers) over TLS with temporary credentials made for this run (``Security.temporary()``: a
+  key and self-signed certificate held in memory, never written, that each end must present):
+  another process or user of the machine cannot connect and run code in the study's processes
+  (a Dask scheduler runs what its clients send); no HTTP served (:data:`NO_HTTP`,
+  :func:`_close_http`): Dask's scheduler and each worker always open an HTTP listener of their
+  own (the dashboard, worker logs and call stacks, a task event stream WebSocket that takes any
+  web site's origin, JSON, health, metrics) that checks neither Host nor Origin, so every other
+  user of the machine, and any web page in the user's browser through DNS rebinding, could read
+  it; here it has no route, no dashboard, and is closed as soon as the cluster is up (the
+  scheduler's) or the worker joins (:class:`CloseHttp`); the Dask logs silenced
   (what goes wrong reaches the user as omnikin's own one-line messages), and two Dask defaults
   switched off that cost a CPU-bound NumPy workload 20 to 30 % (measured, ``docs/sweeps.md``):
   the workers' statistical profiler and the ``MALLOC_TRIM_THRESHOLD_`` the nanny sets;
@@ -66,12 +72,51 @@ CONNECT_TIMEOUT = 10.0
 WORKER_WAIT = 60.0
 """How long a study waits for the first worker of a cluster [s]."""
 
+NO_HTTP: dict[str, list[str]] = {"distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}
+"""No route on the HTTP listeners Dask opens whatever it is told (module docstring): from their
+start until :func:`_close_http` closes them, every request is answered 404 (but Dask's own
+``/sitemap.json``, which lists no route)."""
+
 EMBEDDED_CONFIG = {
     "distributed.worker.profile.enabled": False,
     "distributed.nanny.pre-spawn-environ": {"OMP_NUM_THREADS": 1, "MKL_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1},
     "distributed.logging.distributed": "critical",
+    **NO_HTTP,
 }
-"""Dask configuration of the embedded cluster (module docstring)."""
+"""Dask configuration of the embedded cluster (module docstring), set only while it runs: the
+client of a cluster given with ``--scheduler``, or one of the caller's own, keeps its own."""
+
+DASHBOARD_OFF = (
+    "off in the local cluster (its pages would be open to every user of this machine); for one, "
+    "run a dask scheduler over TLS and give --scheduler"
+)
+"""What a study on the embedded cluster says of Dask's dashboard."""
+
+
+def _close_http(server) -> None:
+    """Close the HTTP listener of a Dask scheduler or worker ``server`` (run on its event loop):
+    no connection reaches it any more. Dask stops it again when it closes (a no-op)."""
+    http = getattr(server, "http_server", None)
+    if http is not None:
+        http.stop()
+
+
+def _close_scheduler_http(dask_scheduler) -> None:
+    """:func:`_close_http` of the scheduler, through ``Client.run_on_scheduler`` (which hands the
+    scheduler to a parameter of this name)."""
+    _close_http(dask_scheduler)
+
+
+class CloseHttp(WorkerPlugin):
+    """A Dask worker plugin: the worker's HTTP listener is closed when it joins (module docstring)."""
+
+    name = "omnikin-close-http"
+
+    def setup(self, worker) -> None:
+        _close_http(worker)
+
+    def teardown(self, worker) -> None:
+        pass
 
 
 class IgnoreInterrupts(WorkerPlugin):
@@ -136,6 +181,7 @@ class Cluster:
 
 
 def _dashboard(client) -> str:
+    """The dashboard of a cluster the user runs (``--scheduler``): its address, as its scheduler says."""
     if importlib.util.find_spec("bokeh") is None:
         return "none (pip install bokeh to get Dask's dashboard)"
     return str(client.dashboard_link)
@@ -225,12 +271,15 @@ def dask_client(
                     host="127.0.0.1",
                     protocol="tls",
                     security=security,
-                    dashboard_address="127.0.0.1:0",
+                    dashboard_address="127.0.0.1:0",  # a free port on loopback, closed at once (module docstring)
+                    scheduler_kwargs={"dashboard": False},  # no Bokeh dashboard even where bokeh is installed
                     silence_logs=logging.CRITICAL,
                 )
             try:
                 client = Client(cluster, security=security)
                 try:
+                    client.run_on_scheduler(_close_scheduler_http)
+                    client.register_plugin(CloseHttp())
                     client.register_plugin(IgnoreInterrupts())
                     try:
                         client.wait_for_workers(count, timeout=WORKER_WAIT)
@@ -238,7 +287,7 @@ def dask_client(
                         raise LinkError(
                             f"the local cluster: its {count} workers did not start within {WORKER_WAIT:g} s"
                         ) from None
-                    yield Cluster(client, f"a local cluster of {count} worker processes", _dashboard(client), count)
+                    yield Cluster(client, f"a local cluster of {count} worker processes", DASHBOARD_OFF, count)
                 finally:
                     client.close()
             finally:
