@@ -19,65 +19,23 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from conftest import omnikin_env, run_entry_point
+from cluster_study import HANG_S, assert_same_table, start_sweep, table, write_study
+from conftest import run_entry_point
 from dask_cluster import dask_answers, dask_cluster, listening_ports, make_tls, wire_answer
 
-pa = pytest.importorskip("pyarrow", reason="omnikin[sweep] (pyarrow) is not installed")
-pq = pytest.importorskip("pyarrow.parquet", reason="omnikin[sweep] (pyarrow) is not installed")
-pytest.importorskip("distributed", reason="omnikin[sweep] (Dask distributed) is not installed")
 pytest.importorskip("cryptography", reason="omnikin[sweep] (cryptography) is not installed")
 pytest.importorskip("psutil", reason="psutil finds the listening sockets")
 
-STUDY = """\
-omnikin_sweep: 1
-name: security test
-robots: [tomasi-omni3]
-seed: 7
-trials: {trials}
-umbmark: {{side: 1, runs: 1}}
-factors:
-  scale: [0.1, 1]
-  calibrate: {calibrate}
-"""
+SETTINGS = {"side": 1, "runs": 1, "name": "security test"}
+"""This file's study: named so, UMBmark on a 1 m square, 1 run per direction (the quickest trials)."""
 
-WAIT_S = 300.0
+WAIT_S = HANG_S
 """Most time a study may take to come up or a condition to be reached on a loaded machine [s]."""
-
-
-def write_study(tmp_path: Path, trials: int, calibrate: str = "false") -> Path:
-    spec = tmp_path / "study.yaml"
-    spec.write_text(STUDY.format(trials=trials, calibrate=calibrate))
-    return spec
-
-
-def table(folder: Path) -> dict:
-    read = pq.read_table(folder / "trials.parquet").drop_columns(["seconds"])
-    return {name: read.column(name).to_pylist() for name in read.column_names}
-
-
-def assert_same(result: dict, expected: dict) -> None:
-    """Equal column by column (NaN equal to NaN: the after columns of a study without calibration)."""
-    assert list(result) == list(expected)
-    for name in expected:
-        np.testing.assert_array_equal(np.array(result[name]), np.array(expected[name]), err_msg=name)
-
-
-def sweep_process(*argv) -> subprocess.Popen:
-    return subprocess.Popen(
-        [sys.executable, "-m", "omnikin.cli.main", "sweep", *map(str, argv)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=omnikin_env(),
-        start_new_session=True,
-    )
 
 
 def wait_for(condition, what: str, process: subprocess.Popen | None = None) -> None:
@@ -130,8 +88,8 @@ def test_no_port_of_the_embedded_cluster_serves_a_page_or_a_client_without_the_r
     from distributed import Client
     from distributed.security import Security
 
-    spec = write_study(tmp_path, trials=2000)
-    study = sweep_process(spec, "-o", tmp_path / "out", "--workers", "1", "--task-trials", "1")
+    spec = write_study(tmp_path, 2000, **SETTINGS)
+    study = start_sweep(spec, "-o", tmp_path / "out", "--workers", "1", "--task-trials", "1")
     try:
         wait_for(lambda: list((tmp_path / "out").glob("parts/*/*.parquet")), "part written", study)
         ports = listening_ports(study.pid)  # every TCP socket of the process and its children
@@ -179,7 +137,7 @@ def test_the_embedded_clusters_dask_settings_hold_only_while_it_runs(tmp_path):
 
 
 def test_a_tls_cluster_runs_the_study_with_the_users_credentials_and_refuses_others(tmp_path):
-    spec = write_study(tmp_path, trials=4)
+    spec = write_study(tmp_path, 4, **SETTINGS)
     local = run_entry_point("sweep", spec, "-o", tmp_path / "local", "--workers", "1", timeout=WAIT_S)
     assert local.returncode == 0, local.stderr
     tls = make_tls(tmp_path / "tls")
@@ -202,7 +160,7 @@ def test_a_tls_cluster_runs_the_study_with_the_users_credentials_and_refuses_oth
         )
         assert wrong.returncode != 0 and "cannot connect" in wrong.stderr, wrong.stderr
         assert "Traceback" not in wrong.stderr and len(wrong.stderr.strip().splitlines()) == 1, wrong.stderr
-    assert_same(table(tmp_path / "remote"), table(tmp_path / "local"))
+    assert_same_table(table(tmp_path / "remote"), table(tmp_path / "local"))
 
 
 @pytest.mark.parametrize(
@@ -215,7 +173,7 @@ def test_a_tls_cluster_runs_the_study_with_the_users_credentials_and_refuses_oth
     ],
 )
 def test_tls_options_that_cannot_work_are_refused_in_one_line(tmp_path, extra, words):
-    spec = write_study(tmp_path, trials=1)
+    spec = write_study(tmp_path, 1, **SETTINGS)
     done = run_entry_point("sweep", spec, "-o", tmp_path / "out", *extra)
     assert done.returncode == 2, done.stderr
     assert done.stderr.startswith("omnikin: error: ") and len(done.stderr.splitlines()) == 1, done.stderr
@@ -234,14 +192,14 @@ def _sweep_tasks_done(client, address: str) -> int:
 
 
 def test_a_worker_of_another_version_that_joins_mid_study_has_its_results_refused(tmp_path):
-    spec = write_study(tmp_path, trials=60)
+    spec = write_study(tmp_path, 60, **SETTINGS)
     reference = run_entry_point("sweep", spec, "-o", tmp_path / "reference", "--workers", "1", timeout=WAIT_S)
     assert reference.returncode == 0, reference.stderr
     out = tmp_path / "out"
     with dask_cluster(tmp_path, workers=1) as cluster:
         (good_pid,) = cluster.workers.values()
         assert dask_answers(cluster.address)  # the probe of the embedded cluster's test gets answers
-        study = sweep_process(spec, "-o", out, "--scheduler", cluster.address, "--task-trials", "1")
+        study = start_sweep(spec, "-o", out, "--scheduler", cluster.address, "--task-trials", "1")
         with cluster.client() as client:
             wait_for(lambda: list(out.glob("parts/*/*.parquet")), "part written", study)
             os.kill(good_pid, signal.SIGSTOP)  # the good worker holds still: the late one takes tasks
@@ -275,4 +233,4 @@ def test_a_worker_of_another_version_that_joins_mid_study_has_its_results_refuse
     again = run_entry_point("sweep", spec, "-o", out, "--workers", "1", timeout=WAIT_S)
     assert again.returncode == 0, again.stderr
     assert f"({len(errors)} computed now, {len(rows)} from the folder, 0 failed)" in again.stdout
-    assert_same(table(out), expected)
+    assert_same_table(table(out), expected)
