@@ -26,6 +26,8 @@ asserted here is the same on an idle and on a busy machine.
 from __future__ import annotations
 
 import math
+import random
+import time
 
 import numpy as np
 import pytest
@@ -141,6 +143,27 @@ def test_a_bus_at_the_full_line_rate_is_parsed_frame_by_frame(at_top_speed):
     _, fw, board, link, _ = at_top_speed
     board.corrupt("rx", 0)
     assert flood(link, fw, 1000) == 1000
+
+
+def test_what_the_chip_does_does_not_depend_on_the_host_pace():
+    """The same lockstep schedule twice, once with the host pausing at random between its commands
+    (as a busy machine makes it): every measurement the board reports is the same, to the cycle."""
+    fw = firmware("stepper")
+    rng = random.Random(7)
+    runs = []
+    for pauses in (False, True):
+        with SimBoard(build_simboard(build_dir()), fw.elf, "--motor", "stepper", lockstep=True) as board:
+            link = ChipLink.open(board)
+            board.corrupt("rx", 50)
+            for _ in range(15):
+                if pauses:
+                    time.sleep(rng.uniform(0.0, 0.05))
+                link.send(link.speed(0, TOP_SPEED), link.speed(1, 1.0))
+                link.run(REPORT_PERIOD)
+            stats = board.stats()
+        runs.append(({k: v for k, v in stats.items() if k not in ("wall_s", "behind_s")}, link.received))
+    assert runs[0] == runs[1]
+    assert runs[0][0]["steps"]["count"] > 100 and runs[0][0]["corrupted_rx"] > 3 and len(runs[0][1]) > 10
 
 
 @pytest.mark.parametrize("motor", ["stepper", "dc"])
