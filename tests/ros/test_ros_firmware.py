@@ -79,10 +79,14 @@ seconds is not taken for a lost one."""
 
 
 def start_node(tmp_path, boards):
-    """The node on the boards' pseudo-terminals, with the host's link timeout for simulated chips."""
+    """The node on the boards' pseudo-terminals, with the host's link timeout for simulated chips.
+    The test's ``cmd_vel`` comes from a thread of the test process on the host's clock; a busy
+    machine can hold that thread back for longer than the default cmd_vel_timeout (0.5 s), and the
+    node would brake, as it must when a real teleop stalls. The command is constant over each
+    measured window, so the node holds it as long as it holds a silent link."""
     ports = [b.path for b in boards]
     args = ["tomasi-omni3", "--backend", "serial", "--port", *ports, "--link-timeout", HOST_LINK_TIMEOUT]
-    return start(tmp_path, args)
+    return start(tmp_path, [*args, "--ros-args", "-p", f"cmd_vel_timeout:={HOST_LINK_TIMEOUT}"])
 
 
 def pose(msg) -> np.ndarray:
