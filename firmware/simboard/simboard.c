@@ -166,8 +166,9 @@ static const char HELP[] =
     "Measurements (cycles are exact simulated cycles, 16 per us): cycle, time_s, wall_s,\n"
     "  behind_s; sp_min, ramend, stack_bytes; window_cycles, isr_cycles, isr {vector: {cycles,\n"
     "  count}} (an instruction counts for the innermost running vector; simavr 1.6 enters a\n"
-    "  vector in 0 cycles, the real chip takes 4); probe {count, last_rise (cycle of the\n  latest rising edge, kept by clear), period_*, high_*}; steps\n"
-    "  {count, forward, backward, ignored, interval_*}; q, transitions, angle, omega; duty,\n"
+    "  vector in 0 cycles, the real chip takes 4); probe {count, last_rise (the cycle of the\n"
+    "  latest rising edge; clear keeps it), period_*, high_*}; steps {count, forward,\n"
+    "  backward, ignored, interval_*}; q, transitions, angle, omega; duty,\n"
     "  enabled, dir; rx_bytes, tx_bytes, tx_dropped, corrupted_tx, corrupted_rx,\n"
     "  rx_backlog_max, baud.\n";
 
