@@ -12,8 +12,8 @@ each variant (stepper, DC):
   same: control period and step duration (the probe pin), interrupt load per vector, step
   intervals, the speed held; then the same with one host byte in 50 damaged;
 * a bus carrying SPEED_CMD frames back to back at the full line rate: frames parsed of 1000;
-* the damaged bus again over 30 schedules whose commands arrive at pseudo-random places of the
-  control period: the longest delay of a control step seen;
+* the damaged bus again over 30 schedules whose commands go out at pseudo-random times of each
+  20 ms period: the longest delay of a control step seen;
 * bytes built to cost the parser the most (``costly_garbage``) between the commands: the longest
   control period, and the commands parsed of those sent;
 * the highest encoder rate counted without a miss, by bisection (3 % steps) on a shaft turning at
@@ -99,20 +99,25 @@ def _under_load(exe: Path, motor: str, damaged: int) -> dict:
 
 def _damaged_bus_worst(exe: Path, motor: str, schedules: int) -> float:
     """The longest delay of a control step [fraction of a period] over ``schedules`` runs of the
-    damaged bus (one byte in 50), each with its commands at pseudo-random places of the control
-    period (seeds 0, 1, ...): how late a step can be when a damaged header's rejection falls due
-    with it, which one schedule alone may not show."""
+    damaged bus (one byte in 50; 1 s, then 1 s measured), each period's commands sent a
+    pseudo-random time (0 to 19 ms, seeds 0, 1, ...) after its start: how late a step can be when a
+    damaged header's rejection falls due with it, which one schedule alone may not show."""
     fw = firmware(motor)
     worst = 0.0
     for seed in range(schedules):
         rng = random.Random(seed)
-        phases = [rng.random() for _ in range(50)]
         with SimBoard(exe, fw.elf, "--motor", motor, lockstep=True) as board:
             link = ChipLink.open(board)
             board.corrupt("rx", 50)
-            drive(link, TOP_SPEED, 1.0)
-            board.clear()
-            drive(link, TOP_SPEED, 1.0, after_step=phases.__getitem__)
+            for second in range(2):
+                if second:
+                    board.clear()
+                for _ in range(50):
+                    offset = round(rng.random() * 0.019, 5)
+                    if offset > 0:
+                        link.run(offset)
+                    link.send(link.speed(0, TOP_SPEED), link.speed(1, -TOP_SPEED), link.speed(2, TOP_SPEED))
+                    link.run(0.02 - offset)
             worst = max(worst, control_lateness(board.stats()["probe"]) / CONTROL_PERIOD)
     return worst
 
