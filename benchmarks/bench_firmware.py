@@ -12,6 +12,8 @@ each variant (stepper, DC):
   same: control period and step duration (the probe pin), interrupt load per vector, step
   intervals, the speed held; then the same with one host byte in 50 damaged;
 * a bus carrying SPEED_CMD frames back to back at the full line rate: frames parsed of 1000;
+* the damaged bus again over 30 schedules whose commands go out at pseudo-random times of each
+  20 ms period: the longest delay of a control step seen;
 * bytes built to cost the parser the most (``costly_garbage``) between the commands: the longest
   control period, and the commands parsed of those sent;
 * the highest encoder rate counted without a miss, by bisection (3 % steps) on a shaft turning at
@@ -24,6 +26,7 @@ each variant (stepper, DC):
 from __future__ import annotations
 
 import math
+import random
 import sys
 import time
 from pathlib import Path
@@ -38,11 +41,12 @@ from firmware_load import (  # noqa: E402
     PPR,
     STEPS_PER_RAD,
     TOP_SPEED,
-    HostLink,
+    ChipLink,
     control_lateness,
     drive,
     drive_through_garbage,
     encoder_miscount,
+    every_phase,
     flood,
 )
 from simboard import SIMAVR_MISSING, SimBoard, build_simboard  # noqa: E402
@@ -50,6 +54,8 @@ from simboard import SIMAVR_MISSING, SimBoard, build_simboard  # noqa: E402
 MOTORS = ("stepper", "dc")
 TOP_PULSES = TOP_SPEED * PPR / (2 * math.pi)  # [pulses/s] at the top wheel speed
 FLOOD_FRAMES = 1000
+SCHEDULES = 30
+"""Schedules of the damaged bus with the commands at scattered places of the control period."""
 VECTORS = {1: "INT0 (encoder)", 11: "TIMER1_COMPA (steps)", 16: "TIMER0_OVF (millis)", 18: "USART_RX", 19: "USART_UDRE"}
 """ATmega328P interrupt vector numbers (datasheet table 12-6, reset = 0) of the firmware's handlers."""
 
@@ -58,18 +64,15 @@ def _under_load(exe: Path, motor: str, damaged: int) -> dict:
     """1 s at the top speed with a busy bus (one host byte in ``damaged`` flipped, 0: none),
     measured over the second second; then, on the same board, the full-rate flood."""
     fw = firmware(motor)
-    with SimBoard(exe, fw.elf, "--motor", motor) as board:
-        link = HostLink.open(board)
-        try:
-            board.corrupt("rx", damaged)
-            drive(board, link, TOP_SPEED, 1.0)
-            board.clear()
-            drive(board, link, TOP_SPEED, 1.0)
-            stats = board.stats()
-            board.corrupt("rx", 0)
-            parsed = flood(board, link, fw, FLOOD_FRAMES)
-        finally:
-            link.close()
+    with SimBoard(exe, fw.elf, "--motor", motor, lockstep=True) as board:
+        link = ChipLink.open(board)
+        board.corrupt("rx", damaged)
+        drive(link, TOP_SPEED, 1.0)
+        board.clear()
+        drive(link, TOP_SPEED, 1.0, after_step=every_phase)
+        stats = board.stats()
+        board.corrupt("rx", 0)
+        parsed = flood(link, fw, FLOOD_FRAMES)
     window = stats["window_cycles"]
     probe, steps = stats["probe"], stats["steps"]
     return {
@@ -92,6 +95,31 @@ def _under_load(exe: Path, motor: str, damaged: int) -> dict:
         "speed_held": stats["omega"] if motor == "dc" else F_CPU / steps["interval_mean"] / STEPS_PER_RAD,
         "flood_parsed": parsed,
     }
+
+
+def _damaged_bus_worst(exe: Path, motor: str, schedules: int) -> float:
+    """The longest delay of a control step [fraction of a period] over ``schedules`` runs of the
+    damaged bus (one byte in 50; 1 s, then 1 s measured), each period's commands sent a
+    pseudo-random time (0 to 19 ms, seeds 0, 1, ...) after its start: how late a step can be when a
+    damaged header's rejection falls due with it, which one schedule alone may not show."""
+    fw = firmware(motor)
+    worst = 0.0
+    for seed in range(schedules):
+        rng = random.Random(seed)
+        with SimBoard(exe, fw.elf, "--motor", motor, lockstep=True) as board:
+            link = ChipLink.open(board)
+            board.corrupt("rx", 50)
+            for second in range(2):
+                if second:
+                    board.clear()
+                for _ in range(50):
+                    offset = round(rng.random() * 0.019, 5)
+                    if offset > 0:
+                        link.run(offset)
+                    link.send(link.speed(0, TOP_SPEED), link.speed(1, -TOP_SPEED), link.speed(2, TOP_SPEED))
+                    link.run(0.02 - offset)
+            worst = max(worst, control_lateness(board.stats()["probe"]) / CONTROL_PERIOD)
+    return worst
 
 
 def _through_garbage(exe: Path, motor: str) -> dict:
@@ -156,6 +184,7 @@ def main() -> dict:
         clean = _under_load(exe, motor, 0)
         damaged = _under_load(exe, motor, 50)
         garbage = _through_garbage(exe, motor)
+        scattered = _damaged_bus_worst(exe, motor, SCHEDULES)
         idle = _highest_encoder_rate(exe, motor, bus=False)
         busy = _highest_encoder_rate(exe, motor, bus=True)
         used = fw.static_ram + damaged["stack_bytes"]
@@ -166,6 +195,7 @@ def main() -> dict:
             "ram_free": 1 - used / NANO_RAM,
             "clean_bus": clean,
             "damaged_bus": damaged,
+            "damaged_bus_scattered_worst": scattered,
             "costly_garbage": garbage,
             "encoder_max_pulses_per_s": {"idle": idle, "busy": busy, "busy_vs_top_speed": busy / TOP_PULSES},
         }
@@ -176,7 +206,8 @@ def main() -> dict:
             f" ({damaged['isr_load']:.1%} damaged bus); control period"
             f" {clean['control_period_cycles']['mean'] / F_CPU * 1e3:.3f} ms mean,"
             f" late by at most {clean['control_step_late_max']:.1%} ({damaged['control_step_late_max']:.1%}"
-            f" damaged, {garbage['control_step_late_max']:.1%} costly garbage, {garbage['parsed']}/{garbage['sent']}"
+            f" damaged, {scattered:.1%} damaged over {SCHEDULES} scattered schedules,"
+            f" {garbage['control_step_late_max']:.1%} costly garbage, {garbage['parsed']}/{garbage['sent']}"
             f" commands parsed); flood {clean['flood_parsed']}/{FLOOD_FRAMES};"
             f" encoder up to {idle:.0f} / {busy:.0f} pulses/s idle / busy ({busy / TOP_PULSES:.1f}x top speed)"
         )

@@ -1,15 +1,20 @@
-"""Workloads for the firmware on its simulated chip (``simboard``): a host that drives one board over
-its pseudo-terminal as omnikin's serial back-end would, at the protocol's rates or flat out, and
-reads back what the board measured. Shared by tests/firmware and benchmarks/bench_firmware.py."""
+"""Workloads for the firmware on its simulated chip (``simboard``): a host that drives one board as
+omnikin's serial back-end would, at the protocol's rates or flat out, and reads back what the
+board measured. Shared by tests/firmware and benchmarks/bench_firmware.py.
+
+The board runs in lockstep (``simboard --lockstep``): the host puts its bytes on the chip's line
+at chosen simulated times and lets simulated time pass by the amount it says. A host writing to
+the board's pseudo-terminal on its own clock would hand the chip its bytes whenever the host's
+scheduler let it: on a busy machine, several periods' commands at once; then what the chip
+measured (how late a control step ran, how many steps it made in a second of the host's clock)
+would be a measurement of the machine, not of the firmware."""
 
 from __future__ import annotations
 
 import math
-import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-
-import serial
 
 from firmware_build import Firmware, symbol
 from omnikin.runtime.protocol import FrameEncoder, StreamDecoder, load_protocol
@@ -28,31 +33,45 @@ STEPS_PER_RAD = 200 * 8 / (2 * math.pi)
 microsteps, the wheel on the motor shaft)."""
 
 
-@dataclass
-class HostLink:
-    """The host side of one board's UART: frames out, decoded frames in."""
+REPORT_PERIOD = 0.02
+"""The host's command period [s]: one SPEED_CMD per wheel every report period, as omnikin's serial
+back-end sends them (the protocol's report_period)."""
 
-    port: serial.Serial
+
+@dataclass
+class ChipLink:
+    """The host side of one lockstep board's UART (``SimBoard(..., lockstep=True)``): frames go on
+    the chip's RX line at the cycle the board is paused at, and the frames the chip sends come
+    back decoded with every :meth:`run`. The host's bytes reach the chip at simulated times the
+    test chooses, never at the times the host's scheduler happened to pick, so what the chip does
+    with them is the same on an idle and on a busy machine."""
+
+    board: SimBoard
     encoder: FrameEncoder
     decoder: StreamDecoder
     received: list
 
     @classmethod
-    def open(cls, board: SimBoard) -> HostLink:
-        assert board.path is not None, "the board runs without a pty"
-        return cls(serial.Serial(board.path, 115200, timeout=0), FrameEncoder(), StreamDecoder(), [])
+    def open(cls, board: SimBoard) -> ChipLink:
+        assert board.lockstep, "a ChipLink drives a lockstep board"
+        return cls(board, FrameEncoder(), StreamDecoder(), [])
 
     def send(self, *frames: bytes) -> None:
-        self.port.write(b"".join(frames))
+        """Put ``frames`` on the chip's RX line now (back to back at the line rate)."""
+        self.board.rx(b"".join(frames))
 
     def speed(self, wheel: int, speed: float) -> bytes:
         return self.encoder.encode("SPEED_CMD", wheel=wheel, speed=speed)
 
-    def poll(self) -> None:
-        self.received += self.decoder.feed(self.port.read(65536))
+    def run(self, seconds: float) -> None:
+        """Let ``seconds`` of simulated time pass and decode what the chip sent meanwhile."""
+        self.received += self.decoder.feed(self.board.run(seconds))
 
-    def close(self) -> None:
-        self.port.close()
+
+def every_phase(k: int) -> float:
+    """Period ``k``'s place in the control schedule for :func:`drive` ``after_step``: 50 periods
+    put the input at 50 evenly spread places of a control period, in a scrambled order."""
+    return ((k * 37) % 50 + 0.5) / 50
 
 
 def costly_garbage() -> bytes:
@@ -69,57 +88,62 @@ def costly_garbage() -> bytes:
     return bytes(block)
 
 
-def drive(board: SimBoard, link: HostLink, speed: float, seconds: float, wheel: int = 0, bus: bool = True) -> None:
-    """Command ``speed`` [rad/s] to ``wheel`` every report period (20 ms) for ``seconds`` of wall
-    time, with the commands of two other wheels on the same bus (``bus``), as a host driving three
-    boards on one port would."""
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
+def drive(
+    link: ChipLink,
+    speed: float,
+    seconds: float,
+    wheel: int = 0,
+    bus: bool = True,
+    after_step: Callable[[int], float] | None = None,
+) -> None:
+    """Command ``speed`` [rad/s] to ``wheel`` once every report period (20 ms of simulated time)
+    for ``seconds`` of simulated time, with the commands of two other wheels on the same bus
+    (``bus``), as a host driving three boards on one port would. The commands of period ``k`` go
+    out at its start, or, with ``after_step``, ``after_step(k)`` control periods (0 to 1) after a
+    control step (the probe's rising edge): where in the control schedule the chip gets its input."""
+    for k in range(round(seconds / REPORT_PERIOD)):
+        wait = 0.0
+        if after_step is not None:
+            stats = link.board.stats()
+            step = stats["probe"]["last_rise"]  # the latest control step's cycle
+            assert step > 0, "no control step yet"
+            wait = ((step + after_step(k) * CONTROL_PERIOD - stats["cycle"]) % CONTROL_PERIOD) / F_CPU
+            if wait:
+                link.run(wait)
         frames = [link.speed(wheel, speed)]
         if bus:
             frames += [link.speed((wheel + 1) % 255, -speed), link.speed((wheel + 2) % 255, speed)]
         link.send(*frames)
-        link.poll()
-        time.sleep(0.02)
+        link.run(REPORT_PERIOD - wait)
 
 
 def drive_through_garbage(exe: Path, fw: Firmware, motor: str, seconds: float) -> tuple[dict, int, int]:
-    """A board of ``motor`` driven at the top speed for 0.5 s, then, for ``seconds`` of wall time
-    with a fresh measurement window, every 20 ms a SPEED_CMD of the top speed for wheel 0 and
+    """A board of ``motor`` driven at the top speed for 0.5 s, then, for ``seconds`` of simulated
+    time with a fresh measurement window, every 20 ms a SPEED_CMD of the top speed for wheel 0 and
     three buffers of :func:`costly_garbage`; returns the board's stats, the frames sent and the
     frames the firmware's parser accepted meanwhile."""
     garbage = costly_garbage()
-    with SimBoard(exe, fw.elf, "--motor", motor) as board:
-        link = HostLink.open(board)
-        try:
-            drive(board, link, TOP_SPEED, 0.5, bus=False)
-            board.clear()
-            before, sent = parser_frames(board, fw), 0
-            end = time.monotonic() + seconds
-            while time.monotonic() < end:
-                link.send(link.speed(0, TOP_SPEED), garbage, garbage, garbage)
-                sent += 1
-                time.sleep(0.02)
-            time.sleep(0.1)  # the last bytes are in (13 + 216 bytes take 20 ms on the line)
-            return board.stats(), sent, (parser_frames(board, fw) - before) % 2**16
-        finally:
-            link.close()
+    with SimBoard(exe, fw.elf, "--motor", motor, lockstep=True) as board:
+        link = ChipLink.open(board)
+        drive(link, TOP_SPEED, 0.5, bus=False)
+        board.clear()
+        before, sent = parser_frames(board, fw), 0
+        for _ in range(round(seconds / REPORT_PERIOD)):
+            link.send(link.speed(0, TOP_SPEED), garbage, garbage, garbage)
+            sent += 1
+            link.run(REPORT_PERIOD)  # 13 + 216 bytes take 19.5 ms on the line
+        return board.stats(), sent, (parser_frames(board, fw) - before) % 2**16
 
 
-def flood(board: SimBoard, link: HostLink, fw: Firmware, n: int) -> int:
+def flood(link: ChipLink, fw: Firmware, n: int) -> int:
     """Send ``n`` SPEED_CMD frames for another wheel back to back (the line's full rate: 13 bytes a
     frame at the chip's 117647 baud, UBRR 16 with U2X, take 1.1 ms each) and return how many the
-    firmware's parser accepted, waiting up to 5 s of wall time for them."""
+    firmware's parser accepted within the line time of the frames plus 50 ms of simulated time."""
+    board = link.board
     before = parser_frames(board, fw)
     link.send(*(link.speed(1, 1.0) for _ in range(n)))  # another wheel's: parsed, then ignored
-    parsed = 0
-    for _ in range(100):
-        time.sleep(0.05)
-        link.poll()
-        parsed = (parser_frames(board, fw) - before) % 2**16
-        if parsed >= n:
-            break
-    return parsed
+    link.run(n * 13 * 10 * 8 * 17 / F_CPU + 0.05)  # a byte: 10 bits of 8 x (UBRR 16 + 1) cycles
+    return (parser_frames(board, fw) - before) % 2**16
 
 
 def parser_frames(board: SimBoard, fw: Firmware) -> int:
@@ -148,28 +172,19 @@ def encoder_counts(board: SimBoard, fw: Firmware) -> tuple[int, int]:
 def encoder_miscount(exe: Path, fw: Firmware, pulses_per_s: float, seconds: float, bus: bool = True) -> int:
     """Counts the firmware gained (+) or lost (-) against the shaft over ``seconds`` of simulated
     time, the shaft turning at a constant ``pulses_per_s`` (simboard ``--motor none
-    --shaft-speed``). With ``bus``, the board runs in real time and a host drives this wheel at the
-    top speed (the stepper variant's step interrupt runs at 7639 steps/s) with the commands of two
-    other wheels on the bus, so the encoder interrupt waits behind the others; without, the chip
-    only counts (as fast as the simulation goes). Either end of the window may catch an edge whose
-    interrupt has not run yet: +-1 is that, not a miscount."""
+    --shaft-speed``). With ``bus``, a host drives this wheel at the top speed (the stepper
+    variant's step interrupt runs at 7639 steps/s) with the commands of two other wheels on the
+    bus every 20 ms, so the encoder interrupt waits behind the others; without, the chip only
+    counts. Either end of the window may catch an edge whose interrupt has not run yet: +-1 is
+    that, not a miscount."""
     omega = 2 * math.pi * pulses_per_s / PPR
-    with SimBoard(
-        exe, fw.elf, "--motor", "none", "--shaft-speed", repr(omega), speed=1.0 if bus else 0.0, pty=bus
-    ) as board:
-        link = HostLink.open(board) if bus else None
-        try:
-            while board.stats()["time_s"] < 0.1:  # setup() has attached the interrupt
-                time.sleep(0.01)
-            count0, due0 = encoder_counts(board, fw)
-            start = board.stats()["time_s"]
-            while board.stats()["time_s"] < start + seconds:
-                if link is not None:
-                    link.send(link.speed(0, TOP_SPEED), link.speed(1, 1.0), link.speed(2, 1.0))
-                    link.poll()
-                time.sleep(0.02)
-            count1, due1 = encoder_counts(board, fw)
-        finally:
-            if link is not None:
-                link.close()
+    with SimBoard(exe, fw.elf, "--motor", "none", "--shaft-speed", repr(omega), lockstep=True) as board:
+        link = ChipLink.open(board)
+        link.run(0.1)  # setup() has attached the interrupt
+        count0, due0 = encoder_counts(board, fw)
+        for _ in range(round(seconds / REPORT_PERIOD)):
+            if bus:
+                link.send(link.speed(0, TOP_SPEED), link.speed(1, 1.0), link.speed(2, 1.0))
+            link.run(REPORT_PERIOD)
+        count1, due1 = encoder_counts(board, fw)
     return (count1 - count0) - (due1 - due0)

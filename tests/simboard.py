@@ -22,6 +22,15 @@ COMMAND_S = 10.0
 """How long a command may wait for its answer [s] (the board polls stdin every 100 us simulated)."""
 QUIT_S = 10.0
 """How long ``quit`` may take before the process is killed [s]."""
+RUN_S = 120.0
+"""How long a lockstep ``run`` of one simulated second may take [s of wall time] before the test
+gives up: a hang guard only (the board runs about 7 simulated seconds per wall second when the
+machine is idle, and a busy machine only makes it later)."""
+F_CPU = 16_000_000
+"""The simulated ATmega328P's clock [Hz]: simulated cycles per second."""
+RX_CHUNK = 510
+"""The most bytes one ``rx`` command carries (``rx `` and two hex digits a byte: a command line
+is at most 1024 characters)."""
 
 
 def _missing() -> str | None:
@@ -50,12 +59,23 @@ class SimBoard:
     """A running simulated board: ``SimBoard(exe, elf, *args, speed=1.0, pty=True)`` starts
     ``exe [args] --speed SPEED [--no-pty] elf`` and waits for its ``ready`` line. Use it as a
     context manager: leaving the block (also on a failure) quits the process, and kills it if
-    it does not end, so no board outlives its test."""
+    it does not end, so no board outlives its test.
 
-    def __init__(self, exe: Path, elf: Path, *args: str, speed: float = 1.0, pty: bool = True):
-        argv = [str(exe), *[str(a) for a in args], "--speed", repr(float(speed))]
-        if not pty:
-            argv.append("--no-pty")
+    ``lockstep=True`` starts ``exe [args] --lockstep elf``: the board waits at cycle 0 and runs
+    only when told (:meth:`run`); the host's bytes reach its UART at the cycle the board is paused
+    at (:meth:`rx`) and its UART output comes back with each run. Everything the chip does is
+    then a function of the commands alone, whatever the pace of the machine: a test that drives
+    the chip this way asserts in simulated time only."""
+
+    def __init__(self, exe: Path, elf: Path, *args: str, speed: float = 1.0, pty: bool = True, lockstep: bool = False):
+        self.lockstep = lockstep
+        argv = [str(exe), *[str(a) for a in args]]
+        if lockstep:
+            argv.append("--lockstep")
+        else:
+            argv += ["--speed", repr(float(speed))]
+            if not pty:
+                argv.append("--no-pty")
         argv.append(str(elf))
         self._stderr = tempfile.TemporaryFile()
         self.process = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._stderr)
@@ -144,6 +164,23 @@ class SimBoard:
         if "error" in answer:
             raise ValueError(answer["error"])
         return bytes.fromhex(answer["hex"])
+
+    def run(self, seconds: float) -> bytes:
+        """Lockstep: run ``seconds`` of simulated time (rounded to whole cycles) and return the
+        bytes the chip's UART sent since the previous run."""
+        cycles = round(seconds * F_CPU)
+        answer = self.command(f"run {cycles}", timeout=RUN_S * max(seconds, 0.1))
+        if answer.get("ok") != "run":
+            raise RuntimeError(f"simboard: run {cycles}: {answer}")
+        return bytes.fromhex(answer["tx"])
+
+    def rx(self, data: bytes) -> None:
+        """Put ``data`` on the chip's RX line from the current cycle on (back to back at the line
+        rate, after any bytes still queued)."""
+        for i in range(0, len(data), RX_CHUNK):
+            answer = self.command(f"rx {data[i : i + RX_CHUNK].hex()}")
+            if answer.get("ok") != "rx":
+                raise RuntimeError(f"simboard: rx: {answer}")
 
     def reset(self) -> dict:
         """Reset the chip (the program restarts; the shaft keeps its angle)."""

@@ -78,9 +78,9 @@ static struct {
     bool shaft_given;
     double shaft_speed;
     double speed, duration;
-    bool duration_given, pty;
+    bool duration_given, pty, lockstep;
     const char *link, *elf;
-} opt = {MOTOR_STEPPER, 600, 200, 8, 40.0, 0.05, false, 0.0, 1.0, 0.0, false, true, NULL, NULL};
+} opt = {MOTOR_STEPPER, 600, 200, 8, 40.0, 0.05, false, 0.0, 1.0, 0.0, false, true, false, NULL, NULL};
 
 /* ------------------------------------------------------------------ usage and errors */
 
@@ -134,6 +134,10 @@ static const char HELP[] =
     "  --speed F                simulated seconds per wall second (1); 0 = as fast as possible\n"
     "  --duration S             stop after S simulated seconds (final stats line, exit 0)\n"
     "  --no-pty                 no pseudo-terminal: UART output counted and discarded\n"
+    "  --lockstep               the host steps simulated time: the board starts paused at cycle 0\n"
+    "                           and runs only on 'run N'; its UART is on the command channel\n"
+    "                           ('rx HEX' in, the bytes sent in each run's answer), no pty, no\n"
+    "                           pacing; what the chip does is then the same whatever the host's pace\n"
     "  --link PATH              also make PATH a symlink to the pty (removed on exit)\n"
     "  --help                   this text\n"
     "\n"
@@ -149,6 +153,11 @@ static const char HELP[] =
     "  reset               reset the chip (the shaft keeps its angle)\n"
     "  stats               measurements; clear: restart the measurement window\n"
     "  peek ADDR N         N (1..256) bytes of data memory from ADDR (decimal or 0x hex)\n"
+    "  rx HEX              bytes (2 hex digits each, at most 510) reach the RX pin from this\n"
+    "                      cycle on, back to back at the line rate, after any still queued\n"
+    "  run N               --lockstep: run N (1..16e12) cycles, then answer {ok: run, cycle,\n"
+    "                      tx: HEX of the bytes the chip sent since the previous run answer};\n"
+    "                      later commands wait until the run is over\n"
     "  nudge +1|-1         --motor none without --shaft-speed: the shaft moves by one quadrature\n"
     "                      transition (a wheel at rest shaking on an encoder edge)\n"
     "  quit                final stats line and exit 0 (also on SIGTERM, SIGINT, and on EOF\n"
@@ -157,8 +166,9 @@ static const char HELP[] =
     "Measurements (cycles are exact simulated cycles, 16 per us): cycle, time_s, wall_s,\n"
     "  behind_s; sp_min, ramend, stack_bytes; window_cycles, isr_cycles, isr {vector: {cycles,\n"
     "  count}} (an instruction counts for the innermost running vector; simavr 1.6 enters a\n"
-    "  vector in 0 cycles, the real chip takes 4); probe {count, period_*, high_*}; steps\n"
-    "  {count, forward, backward, ignored, interval_*}; q, transitions, angle, omega; duty,\n"
+    "  vector in 0 cycles, the real chip takes 4); probe {count, last_rise (the cycle of the\n"
+    "  latest rising edge; clear keeps it), period_*, high_*}; steps {count, forward,\n"
+    "  backward, ignored, interval_*}; q, transitions, angle, omega; duty,\n"
     "  enabled, dir; rx_bytes, tx_bytes, tx_dropped, corrupted_tx, corrupted_rx,\n"
     "  rx_backlog_max, baud.\n";
 
@@ -193,6 +203,10 @@ static void parse_args(int argc, char **argv)
         }
         if (strcmp(a, "--no-pty") == 0) {
             opt.pty = false;
+            continue;
+        }
+        if (strcmp(a, "--lockstep") == 0) {
+            opt.lockstep = true;
             continue;
         }
         if (strcmp(a, "--") == 0) {
@@ -275,8 +289,10 @@ static void parse_args(int argc, char **argv)
         die_usage("--shaft-speed: %g rad/s with --ppr %ld gives more than one encoder transition "
                   "per 4 cycles",
                   opt.shaft_speed, opt.ppr);
-    if (opt.link && !opt.pty)
-        die_usage("--link: needs the pty (drop --no-pty)");
+    if (opt.link && (!opt.pty || opt.lockstep))
+        die_usage("--link: needs the pty (drop --no-pty and --lockstep)");
+    if (opt.lockstep)
+        opt.pty = false; /* the UART is on the command channel */
 }
 
 /* Check the file is a 32-bit little-endian AVR ELF before libsimavr reads it. */
@@ -356,6 +372,9 @@ static uint64_t rx_bytes, tx_bytes, tx_dropped, corrupted_tx, corrupted_rx;
 static uint64_t tx_seen, rx_seen;
 static unsigned corrupt_tx_every, corrupt_rx_every, corrupt_tx_bit, corrupt_rx_bit;
 static bool silence, xoff, rx_timer_armed;
+/* --lockstep: the board runs until run_until, then waits for the host's next command */
+static uint64_t run_until;
+static bool run_pending;
 static uint32_t uart_config = 0xFFFFFFFF;
 
 static volatile sig_atomic_t stop_signal;
@@ -521,7 +540,7 @@ static void on_uart_output(avr_irq_t *irq, uint32_t value, void *param)
         b ^= (uint8_t)(1u << (corrupt_tx_bit++ & 7));
         corrupted_tx++;
     }
-    if (pty_master >= 0)
+    if (pty_master >= 0 || opt.lockstep)
         tx_push(b);
 }
 
@@ -587,6 +606,31 @@ static void rx_arm(void)
         return;
     rx_timer_armed = true;
     avr_cycle_timer_register(avr, 1, rx_inject, NULL);
+}
+
+/* Bytes from the command channel ('rx HEX'): on the wire from this cycle on, after any queued. */
+static bool rx_queue(const uint8_t *b, size_t n)
+{
+    if (n > RX_BUF - rx_len)
+        return false;
+    if (!rx_len)
+        rx_arrival = avr->cycle;
+    for (size_t i = 0; i < n; i++)
+        rxbuf[(rx_head + rx_len + i) % RX_BUF] = b[i];
+    rx_len += n;
+    if (rx_len > rx_backlog_max)
+        rx_backlog_max = rx_len;
+    rx_arm();
+    return true;
+}
+
+/* --lockstep: the answer to 'run N' when the run is over, with the bytes the chip sent. */
+static void answer_run(void)
+{
+    printf("{\"ok\": \"run\", \"cycle\": %llu, \"tx\": \"", (unsigned long long)avr->cycle);
+    for (; tx_len; tx_len--, tx_head = (tx_head + 1) % TX_BUF)
+        printf("%02x", txbuf[tx_head]);
+    printf("\"}\n");
 }
 
 static void uart_stdio_off(void)
@@ -776,7 +820,9 @@ static void clear_window(void)
     window_start = avr->cycle;
     isr_cycles = 0;
     memset(isr_vec, 0, sizeof isr_vec);
+    uint64_t last_rise = probe.last_rise; /* a fact of the chip's schedule, not of the window */
     memset(&probe, 0, sizeof probe);
+    probe.last_rise = last_rise;
     memset(&steps, 0, sizeof steps);
 }
 
@@ -807,9 +853,9 @@ static void print_stats(const char *event)
                (unsigned long long)isr_vec[v].cycles, (unsigned long long)isr_vec[v].count);
         first = false;
     }
-    printf("}, \"probe\": {\"count\": %llu, \"period_min\": %llu, \"period_max\": %llu, "
+    printf("}, \"probe\": {\"count\": %llu, \"last_rise\": %llu, \"period_min\": %llu, \"period_max\": %llu, "
            "\"period_mean\": %.3f, \"high_max\": %llu, \"high_mean\": %.3f}",
-           (unsigned long long)probe.count, (unsigned long long)probe.period.min,
+           (unsigned long long)probe.count, (unsigned long long)probe.last_rise, (unsigned long long)probe.period.min,
            (unsigned long long)probe.period.max, durations_mean(&probe.period),
            (unsigned long long)probe.high.max, durations_mean(&probe.high));
     printf(", \"steps\": {\"count\": %llu, \"forward\": %llu, \"backward\": %llu, \"ignored\": %llu, "
@@ -892,6 +938,11 @@ static bool parse_uint(const char *s, unsigned long max, unsigned long *out)
     return true;
 }
 
+static int hex_digit(char c)
+{
+    return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+}
+
 static void command(char *line)
 {
     char *argv[4] = {0};
@@ -941,6 +992,37 @@ static void command(char *line)
         angle += d * 2 * M_PI / (4.0 * (double)opt.ppr);
         encoder_to(q + d);
         printf("{\"ok\": \"nudge\", \"q\": %lld}\n", (long long)q);
+    } else if (strcmp(c, "rx") == 0 && argc == 2) {
+        static uint8_t bytes[LINE_MAX_LEN / 2];
+        size_t len = strlen(argv[1]), n = len / 2;
+        bool ok = len % 2 == 0 && n <= sizeof bytes;
+        for (size_t i = 0; ok && i < n; i++) {
+            int hi = hex_digit(argv[1][2 * i]), lo = hex_digit(argv[1][2 * i + 1]);
+            ok = hi >= 0 && lo >= 0;
+            bytes[i] = (uint8_t)(hi << 4 | lo);
+        }
+        if (!ok) {
+            reply_error("rx: expected bytes as pairs of hex digits", argv[1]);
+            return;
+        }
+        if (!rx_queue(bytes, n)) {
+            reply_error("rx: the board's receive queue is full", argv[1]);
+            return;
+        }
+        printf("{\"ok\": \"rx\", \"bytes\": %zu, \"cycle\": %llu}\n", n, (unsigned long long)avr->cycle);
+    } else if (strcmp(c, "run") == 0 && argc == 2) {
+        unsigned long n;
+        if (!opt.lockstep) {
+            reply_error("run: only with --lockstep (without it the board runs by itself)", line);
+            return;
+        }
+        if (!parse_uint(argv[1], 16000000000000ul, &n) || n == 0) {
+            reply_error("run: N must be an integer from 1 to 16000000000000 cycles", argv[1]);
+            return;
+        }
+        run_until = avr->cycle + n;
+        run_pending = true;
+        return; /* answered when the run is over */
     } else if (strcmp(c, "peek") == 0 && argc == 3) {
         unsigned long addr, n;
         if (!parse_uint(argv[1], RAMEND, &addr)) {
@@ -957,7 +1039,8 @@ static void command(char *line)
         printf("\"}\n");
     } else {
         reply_error("unknown or malformed command (silence on|off, corrupt tx|rx N, reset, stats, "
-                    "clear, peek ADDR N, nudge +1|-1 with --motor none and no --shaft-speed, quit)",
+                    "clear, peek ADDR N, rx HEX, run N with --lockstep, nudge +1|-1 with --motor none "
+                    "and no --shaft-speed, quit)",
                     line);
         return;
     }
@@ -967,26 +1050,36 @@ static void command(char *line)
 static char cmdline[LINE_MAX_LEN + 1];
 static size_t cmd_len;
 static bool cmd_overflow, stdin_open = true;
+static char inbuf[4096];
+static size_t in_len;
 
-static void stdin_io(void)
+static bool running(void)
 {
-    if (!stdin_open)
-        return;
-    struct pollfd p = {.fd = 0, .events = POLLIN};
-    if (poll(&p, 1, 0) <= 0 || !(p.revents & (POLLIN | POLLHUP | POLLERR)))
-        return;
-    char buf[4096];
-    ssize_t r = read(0, buf, sizeof buf);
-    if (r < 0 && (errno == EAGAIN || errno == EINTR))
-        return;
-    if (r <= 0) {   /* no more commands: the end, unless --duration says when */
-        stdin_open = false;
-        if (!opt.duration_given)
-            quitting = true;
-        return;
+    return opt.lockstep && avr->cycle < run_until;
+}
+
+/* Read what the host sent (waiting up to wait_ms for it) and carry out its commands; with
+ * --lockstep, the commands after a 'run' wait in inbuf until the run is over. */
+static void stdin_io(int wait_ms)
+{
+    if (stdin_open && !in_len) {
+        struct pollfd p = {.fd = 0, .events = POLLIN};
+        if (poll(&p, 1, wait_ms) <= 0 || !(p.revents & (POLLIN | POLLHUP | POLLERR)))
+            return;
+        ssize_t r = read(0, inbuf, sizeof inbuf);
+        if (r < 0 && (errno == EAGAIN || errno == EINTR))
+            return;
+        if (r <= 0) {   /* no more commands: the end, unless --duration says when */
+            stdin_open = false;
+            if (!opt.duration_given)
+                quitting = true;
+            return;
+        }
+        in_len = (size_t)r;
     }
-    for (ssize_t i = 0; i < r && !quitting; i++) {
-        char ch = buf[i];
+    size_t i = 0;
+    while (i < in_len && !quitting && !running()) {
+        char ch = inbuf[i++];
         if (ch == '\n') {
             if (cmd_overflow)
                 reply_error("command longer than 1024 characters", cmdline);
@@ -1006,6 +1099,8 @@ static void stdin_io(void)
             cmd_overflow = true;
         }
     }
+    memmove(inbuf, inbuf + i, in_len - i);
+    in_len -= i;
 }
 
 /* ------------------------------------------------------------------ main loop */
@@ -1038,7 +1133,7 @@ static void on_signal(int sig)
 
 static void pace(void)
 {
-    if (opt.speed <= 0)
+    if (opt.speed <= 0 || opt.lockstep)
         return;
     double target = pace_wall + (double)(avr->cycle - pace_cycle) / F_CPU / opt.speed;
     double now = now_s();
@@ -1064,7 +1159,8 @@ static void host_io(void)
         uart_fix_frame();
     }
     pty_io();
-    stdin_io();
+    if (!opt.lockstep)
+        stdin_io(0); /* with --lockstep, commands wait until the run is over */
 }
 
 static void quiet_logger(avr_t *a, const int level, const char *format, va_list ap)
@@ -1193,6 +1289,18 @@ int main(int argc, char **argv)
     bool halted_reported = false;
     int sp_torn = 0;
     while (!quitting && !stop_signal && avr->cycle < end_cycle) {
+        if (opt.lockstep && !running()) { /* paused: the host's turn */
+            if (run_pending) {
+                run_pending = false;
+                host_io(); /* the UART's configuration */
+                answer_run();
+                flush_out();
+            }
+            if (!stdin_open && !in_len)
+                break;
+            stdin_io(100);
+            continue;
+        }
         int sp_half = sp_half_written(avr->pc);
         uint8_t before = avr->interrupts.running_ptr;
         avr_int_vector_t *vec = before ? avr->interrupts.running[before - 1] : NULL;

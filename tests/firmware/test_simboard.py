@@ -118,9 +118,10 @@ def test_isr_load_and_count_of_a_timer_interrupt_are_its_instruction_cycles_at_i
 
 
 def test_window_restarts_on_clear_and_counts_only_what_follows(exe, build):
-    with SimBoard(exe, program(build, "isr_load"), speed=0, pty=False) as board:
-        time.sleep(0.2)
+    with SimBoard(exe, program(build, "isr_load"), lockstep=True) as board:
+        board.run(0.05)
         assert board.clear()["ok"] == "clear"
+        board.run(0.01)
         stats = board.stats()
         vec = stats["isr"].get(str(TIMER1_COMPA_VECTOR), {"count": 0, "cycles": 0})
         assert abs(vec["count"] - stats["window_cycles"] / 2000) <= 1
@@ -132,8 +133,8 @@ def test_window_restarts_on_clear_and_counts_only_what_follows(exe, build):
 
 def test_stack_bytes_is_the_lowest_stack_pointer_the_program_reached(exe, build):
     elf = program(build, "stack_depth")
-    with SimBoard(exe, elf, speed=0, pty=False) as board:
-        time.sleep(0.1)
+    with SimBoard(exe, elf, lockstep=True) as board:
+        board.run(0.01)
         stats, before, after, levels = board.commands(
             "stats",
             f"peek {symbol(elf, 'sp_before_alloca')[0]} 2",
@@ -232,8 +233,8 @@ def test_silence_drops_the_boards_output_and_reset_restarts_the_program(echo):
 def test_int0_counts_every_encoder_a_rising_edge_at_a_constant_shaft_speed(exe, build, omega):
     elf = program(build, "int0_counter")
     ppr = 600
-    with SimBoard(exe, elf, "--motor", "none", "--shaft-speed", str(omega), speed=0, pty=False) as board:
-        time.sleep(0.3)
+    with SimBoard(exe, elf, "--motor", "none", "--shaft-speed", str(omega), lockstep=True) as board:
+        board.run(0.1)
         stats, rising, b_high = board.commands(
             "stats", f"peek {symbol(elf, 'rising')[0]} 4", f"peek {symbol(elf, 'b_high')[0]} 4"
         )
@@ -256,9 +257,9 @@ def test_encoder_lines_keep_the_shaft_angle_across_a_chip_reset(exe, build):
     elf = program(build, "int0_counter")
     pind = 0x29  # PIND in data space
     args = ("--motor", "none", "--shaft-speed", "3", "--ppr", "1000")
-    with SimBoard(exe, elf, *args, speed=0, pty=False) as board:
-        time.sleep(0.1)
+    with SimBoard(exe, elf, *args, lockstep=True) as board:
         for _ in range(2):
+            board.run(0.05)
             stats, pins = board.commands("stats", f"peek {pind} 1")
             level = int(pins["hex"], 16)
             assert ((level >> 2) & 1, (level >> 3) & 1) == encoder_levels(stats["q"])
@@ -281,6 +282,54 @@ def test_dc_motor_speed_follows_the_first_order_step_response(exe, build):
     angle = top * duty * (tau - tau * (1 - math.exp(-1)))
     assert final["angle"] == pytest.approx(angle, abs=top * duty * lag)
     assert abs(final["q"] - math.floor(final["angle"] * 4 * 600 / (2 * math.pi))) <= 1
+
+
+# --------------------------------------------------------------------------- lockstep
+
+
+BYTE_CYCLES = 10 * 8 * (16 + 1)  # one 8N1 byte at UBRR 16 with U2X: 10 bits of 8 (UBRR + 1) cycles
+
+
+def test_a_lockstep_board_runs_only_when_told_and_its_uart_is_on_the_command_channel(exe, build):
+    """``--lockstep``: the board waits at cycle 0, a run of N cycles ends N cycles later (to within
+    one instruction), a paused board stays where it is however long the host takes, and a byte
+    given with ``rx`` at cycle C is readable at its stop bit, C + 10 bit times, and echoed in
+    the next run's answer."""
+    elf = program(build, "uart_echo")
+    with SimBoard(exe, elf, lockstep=True) as board:
+        assert board.stats()["cycle"] == 0
+        assert board.run(0.001) == b"B"  # the boot byte
+        paused = board.stats()["cycle"]
+        assert F_CPU // 1000 <= paused <= F_CPU // 1000 + 4
+        time.sleep(0.2)
+        assert board.stats()["cycle"] == paused  # the host's time is not the chip's
+        board.rx(b"xy")
+        assert board.run((BYTE_CYCLES - 10) / F_CPU) == b""  # the first byte is still on the line
+        assert board.run(3 * BYTE_CYCLES / F_CPU) == b"xy"
+        later = board.stats()["cycle"] + 12345
+        board.run(12345 / F_CPU)
+        board.rx(b"z")
+        assert board.run(3 * BYTE_CYCLES / F_CPU) == b"z"
+        first, last = (u16(board.peek(symbol(elf, name)[0], 2)) for name in ("first_tick", "last_tick"))
+        stats = board.stats()
+    # Timer1 counts at F_CPU / 8: 'x' and 'z' were put on the line ``later - paused`` cycles apart
+    # and become readable one byte time after that; the loop polls RXC0 every few cycles
+    assert abs((last - first) % 2**16 - (later - paused) / 8) <= 1
+    assert stats["rx_bytes"] == 3 and stats["tx_bytes"] == 4
+
+
+def test_lockstep_refuses_what_it_cannot_do(exe, build, tmp_path):
+    elf = program(build, "uart_echo")
+    with SimBoard(exe, elf, speed=0, pty=False) as board:
+        assert "only with --lockstep" in board.command("run 100")["error"]
+    with SimBoard(exe, elf, lockstep=True) as board:
+        for line in ("run 0", "run -5", "run x", "rx 1", "rx zz", "rx " + "00" * 511):
+            answer = board.command(line)
+            assert set(answer) == {"error"} and len(answer["error"]) < 200, line
+        assert board.run(0.001) == b"B"
+    link = tmp_path / "board"
+    done = subprocess.run([str(exe), "--lockstep", "--link", str(link), str(elf)], capture_output=True, text=True)
+    assert done.returncode == 2 and done.stderr.startswith("simboard: error: --link") and not link.exists()
 
 
 # --------------------------------------------------------------------------- pacing and ending

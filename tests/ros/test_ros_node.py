@@ -867,13 +867,16 @@ def test_unknown_ros_arguments_exit_2_with_one_line(tmp_path):
         proc.close()
 
 
-def test_serial_backend_refuses_a_publish_rate_slower_than_its_link_timeout(tmp_path):
+@pytest.mark.parametrize("host_timeout", [[], ["--link-timeout", "10"]])
+def test_serial_backend_refuses_a_publish_rate_slower_than_its_link_timeout(tmp_path, host_timeout):
+    """The controllers stop after their own link_timeout (0.5 s), whatever the host allows them."""
     from omnikin.runtime.fake_controller import FakeController
 
     fake = FakeController.for_robot(load_robot("tomasi-omni3")).start()
     try:
         proc = NodeProcess(
-            ["tomasi-omni3", "--backend", "serial", "--port", fake.path, "--ros-args", "-p", "publish_rate:=1.0"],
+            ["tomasi-omni3", "--backend", "serial", "--port", fake.path, *host_timeout]
+            + ["--ros-args", "-p", "publish_rate:=1.0"],
             tmp_path,
         )
         try:

@@ -88,6 +88,15 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument(
         "--baud", type=baud, metavar="N", help="serial back-end: baud rate of the ports (default from the protocol)"
     )
+    sp.add_argument(
+        "--link-timeout",
+        type=link_timeout,
+        metavar="S",
+        help="serial back-end: how long a controller may stay silent before this computer calls the "
+        "link lost [s of this computer's clock] (default: the protocol's link_timeout). The "
+        "controllers keep their own. Raise it only for controllers whose clock can run slower than "
+        "this computer's, such as simulated chips on a busy machine (docs/firmware.md)",
+    )
     sp.add_argument("--params", metavar="FILE", help="parameter file (YAML, flat or ros__parameters)")
     add_as_built_options(sp, defaults=False, scope="sim and physics back-ends: ")
     sp.add_argument("--noise", metavar="PROFILE", help="sim back-end: random errors (default typical)")
@@ -113,6 +122,17 @@ def baud(text: str) -> int:
         return check_baud(value)
     except InputError as exc:
         raise argparse.ArgumentTypeError(str(exc).removeprefix("baud: ")) from None
+
+
+def link_timeout(text: str) -> float:
+    """An argparse ``type``: ``--link-timeout``, a finite time > 0 [s]."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not np.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a time > 0 [s], got {text!r}")
+    return value
 
 
 def cmd_ros(args) -> int:
@@ -171,7 +191,13 @@ def cmd_ros(args) -> int:
 
         if not args.port:
             raise InputError("--backend serial needs --port DEV (one for all wheels, or one per driven wheel)")
-        backend = SerialBackend(robot, args.port[0] if len(args.port) == 1 else args.port, args.baud)
+        from ..runtime.protocol import load_protocol
+
+        timeouts = {}
+        if args.link_timeout is not None:  # and the first frame may take as long
+            connect = max(args.link_timeout, load_protocol().timing.connect_timeout)
+            timeouts = {"link_timeout": args.link_timeout, "connect_timeout": connect}
+        backend = SerialBackend(robot, args.port[0] if len(args.port) == 1 else args.port, args.baud, **timeouts)
         backend.wait_ready()
     elif args.backend == "physics":
         from ..physics.backend import PhysicsBackend

@@ -122,7 +122,9 @@ class BaseNode(Node):
                 self.declare_parameter(key, default, dynamic)
         check_names(self.list_parameters([], 0).names, "--ros-args", ros_own=True)
         p = validate({k: self.get_parameter(k).value for k in DEFAULTS}, "--ros-args / parameters")
-        link_timeout = getattr(backend, "link_timeout", None)
+        # the controllers' own link_timeout (the host may allow them longer: --link-timeout)
+        protocol = getattr(backend, "protocol", None)
+        link_timeout = protocol.timing.link_timeout if protocol is not None else None
         if link_timeout is not None and 1.0 / p["publish_rate"] > 0.5 * link_timeout:
             least = 2.0 / link_timeout
             digits = digits_apart(p["publish_rate"], least)
