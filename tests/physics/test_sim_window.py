@@ -3,8 +3,10 @@ real key events (xdotool), its end state read from ``--report``, its window from
 
 The tests hold on a busy machine: they assert on simulated and recorded time (each key event's
 simulated time and wall arrival in the report), never on the pace of the machine. A screenshot
-that must show a state is taken after the simulator echoed (``--echo``) a later key event and
-the window stopped changing, not after a fixed sleep."""
+that must show the state after a key acted is taken after the simulator echoed (``--echo``) a
+later key event and the window stopped changing (:func:`_shot_after`), not after a fixed sleep;
+a sleep between two keys only sets their least distance in simulated time, and every wait has a
+generous deadline that only guards against a hang."""
 
 from __future__ import annotations
 
@@ -136,6 +138,43 @@ def _settled_shot(display: str, win: str) -> np.ndarray:
     raise AssertionError("the window kept changing, or stopped drawing")
 
 
+STOPPING = 0.8
+"""Wall time [s] the tests leave a robot to stop after a release before the next key: at least
+that much simulated time passes before that key acts (keys keep their wall-clock distances), or
+the simulator skipped time, which it does only while the robot is at rest; stopping from 0.2 m/s
+at 0.5 m/s^2 takes 0.4 s."""
+
+
+def _space_after(display: str, echo: Echo, count: int) -> None:
+    """Press space once the ``count``-th key event acted and the robot had :data:`STOPPING` to
+    stop, and wait for its echo (event ``count + 1``, recorded with the robot's pose and twist at
+    rest). Space acts in a later frame of the simulator's loop than the key before it (the key
+    acted before its echo reached the test; space is read at the start of a later frame), so once
+    it is echoed the window has been handed every frame up to that key's."""
+    echo.wait(count)
+    time.sleep(STOPPING)
+    _xdotool(display, "key", "space")
+    echo.wait(count + 1)
+
+
+def _shot_after(display: str, win: str, echo: Echo, count: int) -> np.ndarray:
+    """A screenshot that shows the state after the ``count``-th key event acted, the robot at
+    rest: space pressed after it (:func:`_space_after`, event ``count + 1``), then a frame drawn
+    after space's echo once the scene stopped changing (:func:`_settled_shot`). Without the later
+    key a loaded machine could hand back a frame drawn before the key acted (the free camera after
+    2 had acted)."""
+    _space_after(display, echo, count)
+    return _settled_shot(display, win)
+
+
+def _stop(sim: subprocess.Popen) -> str:
+    """End ``omnikin sim`` as a user would (SIGTERM: a normal end, the report is written) once
+    the keys a test needs have acted, whatever the simulated time then; its stderr."""
+    sim.send_signal(signal.SIGTERM)
+    _, err = sim.communicate(timeout=WAIT)
+    return err
+
+
 PANEL = (slice(0.4, 0.95), slice(5, 240))
 """Where the viewer's left panel (250 px wide, dark) shows: rows as fractions of the height, columns [px]."""
 
@@ -149,7 +188,7 @@ def _panel(rgb: np.ndarray) -> np.ndarray:
 def _panel_shot(display: str, win: str) -> np.ndarray:
     """A screenshot once the viewer's left panel is drawn (or the last one after a while: the
     assertion says what it shows); the viewer acts on its keys in its own thread, at once."""
-    deadline = time.monotonic() + 30.0
+    deadline = time.monotonic() + WAIT
     shot = _window_shot(display, win)
     while time.monotonic() < deadline and np.mean(_panel(shot).mean(axis=2) < 60) <= 0.5:
         time.sleep(0.3)
@@ -208,7 +247,10 @@ def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_p
     """W held, Q held, camera top, W held with space pressed: each key acts at the simulated time
     of its arrival, so the simulated time between a press and its release is their wall-clock
     distance on arrival to one control period, and the robot moves ``speed`` times that, whatever
-    the machine's load (the report's recorded times; the simulation may lag the clock)."""
+    the machine's load (the report's recorded times; the simulation may lag the clock). Q is
+    pressed once the robot stopped, as the twist recorded at Q's press shows (a loaded machine may
+    skip the simulated time the robot stood still: the gap between W's release and Q is then
+    shorter than the test's sleep, but never shorter than the stop)."""
     from PIL import Image
 
     report = tmp_path / "run.json"
@@ -218,8 +260,6 @@ def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_p
         echo = Echo(sim)
         win = _window(display, sim)
         _xdotool(display, "windowfocus", win)
-        # the next press is sent once the release acted (echoed): the two reached the simulator at
-        # least the sleep apart, however late a busy machine's window hands it its key events
         # the next key is sent once the last one acted (echoed): the two reached the simulator
         # at least the sleep apart, however late a busy machine's window hands it its key events
         _xdotool(display, "keydown", "w")  # forward while held
@@ -227,19 +267,18 @@ def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_p
         time.sleep(1.0)
         _xdotool(display, "keyup", "w")
         echo.wait(2)
-        time.sleep(0.8)  # stops within the acceleration limit
+        time.sleep(STOPPING)  # stops within the acceleration limit
         _xdotool(display, "keydown", "q")  # counter-clockwise while held
         echo.wait(3)
         time.sleep(1.0)
         _xdotool(display, "keyup", "q")
         echo.wait(4)
-        time.sleep(0.8)
+        time.sleep(STOPPING)
         _xdotool(display, "key", "2")  # camera looking down on the robot
-        echo.wait(5)
-        top = _settled_shot(display, win)
+        top = _shot_after(display, win, echo, 5)
         Image.fromarray(top.astype(np.uint8)).save(tmp_path / "top.png")  # to look at when it fails
         _xdotool(display, "keydown", "w")
-        echo.wait(6)
+        echo.wait(7)
         time.sleep(1.0)
         _xdotool(display, "key", "space")  # stops although W is still held
         time.sleep(1.2)
@@ -251,10 +290,10 @@ def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_p
     assert run["sim_time"] == pytest.approx(40.0, abs=PERIOD)
     events = run["events"]
     names = [e["key"] for e in events]
-    assert names == ["forward", "release", "turn_left", "release", "camera_top", "forward", "stop"], names
+    assert names == ["forward", "release", "turn_left", "release", "camera_top", "stop", "forward", "stop"], names
     # keys act in simulated time at their wall-clock arrival: while a key is held no time is
     # skipped, so a press and its release (or space) are as far apart as on arrival, to one period
-    for press, release in ((0, 1), (2, 3), (5, 6)):
+    for press, release in ((0, 1), (2, 3), (6, 7)):
         gap = events[release]["t"] - events[press]["t"]
         assert gap == pytest.approx(events[release]["wall"] - events[press]["wall"], abs=PERIOD + 1e-6)
 
@@ -266,17 +305,18 @@ def test_held_keys_drive_turn_and_stop_the_robot_in_a_real_window(display, tmp_p
     assert after_forward[0] == pytest.approx(SPEED * held, rel=0.05, abs=0.005)
     assert abs(after_forward[1]) < 0.01 * after_forward[0] and abs(after_forward[2]) < 0.01
 
-    # Q: counter-clockwise on the spot at --turn for the time held
-    assert events[2]["t"] - events[1]["t"] > 0.75  # at least the sleep (the robot stopped before Q)
+    # Q: pressed with the robot at rest (the twist when it acted), then counter-clockwise on the
+    # spot at --turn for the time held
+    assert math.hypot(*events[2]["twist"][:2]) < 0.005 and abs(events[2]["twist"][2]) < 0.01, events[2]["twist"]
     held = events[3]["t"] - events[2]["t"]
     after_turn = events[4]["pose"]
     assert held > 0.9
     assert after_turn[2] == pytest.approx(TURN * held, rel=0.05, abs=0.01)
     assert math.hypot(after_turn[0] - after_forward[0], after_turn[1] - after_forward[1]) < 0.005
-    assert events[5]["pose"] == pytest.approx(after_turn, abs=1e-3)  # at rest until W
+    assert events[6]["pose"] == pytest.approx(after_turn, abs=1e-3)  # at rest until W
 
     # space: stopped, with W still held, within the stopping distance v^2 / (2 a) (a = 0.5 m/s^2)
-    at_space, end = events[6]["pose"], run["pose"]
+    at_space, end = events[7]["pose"], run["pose"]
     assert math.hypot(end[0] - at_space[0], end[1] - at_space[1]) < SPEED**2 / (2 * 0.5) + 0.005
     assert math.hypot(*run["twist"][:2]) < 0.005
 
@@ -299,7 +339,7 @@ def test_keys_a_layout_cannot_obey_are_marked_and_say_why_once(display, tmp_path
     so A (vy) is dropped: the robot stays where it is, stderr says why once although A was
     pressed twice, and W still drives (at the default --speed 0.2 m/s)."""
     report = tmp_path / "run.json"
-    with _running(display, "--duration", "10", "--report", str(report), "--echo", robot="diff-drive") as sim:
+    with _running(display, "--report", str(report), "--echo", robot="diff-drive") as sim:
         echo = Echo(sim)
         win = _window(display, sim)
         _xdotool(display, "windowfocus", win)
@@ -313,18 +353,20 @@ def test_keys_a_layout_cannot_obey_are_marked_and_say_why_once(display, tmp_path
         echo.wait(5)
         time.sleep(1.0)
         _xdotool(display, "keyup", "w")
-        echo.wait(6)
-        _, err = sim.communicate(timeout=WAIT)
+        _space_after(display, echo, 6)  # the robot stopped: its pose at space is where W took it
+        err = _stop(sim)
     assert sim.returncode == 0, err
     run = json.loads(report.read_text())
     names = [e["key"] for e in run["events"]]
-    assert names == ["left", "release", "left", "release", "forward", "release"], names
+    assert names == ["left", "release", "left", "release", "forward", "release", "stop"], names
     notes = [line for line in err.splitlines() if "(left)" in line]
     assert notes == ["omnikin: note: sim: A (left) on diff-drive: its fixed wheels forbid vy"], err
     assert run["events"][4]["pose"] == pytest.approx([0.0, 0.0, 0.0], abs=1e-3)  # A moved nothing
     held = run["events"][5]["t"] - run["events"][4]["t"]  # W: forward for the time held
-    assert held > 0.5 and run["pose"][0] == pytest.approx(0.2 * held, rel=0.05, abs=0.005)
-    assert abs(run["pose"][1]) < 1e-3
+    stopped = run["events"][6]
+    assert math.hypot(*stopped["twist"][:2]) < 0.005, stopped["twist"]
+    assert held > 0.5 and stopped["pose"][0] == pytest.approx(0.2 * held, rel=0.05, abs=0.005)
+    assert abs(stopped["pose"][1]) < 1e-3
     assert run["commands"]["projected"] == 2 and set(run["not_obeyed"]) == {"left", "right"}
 
 
@@ -348,6 +390,10 @@ def test_without_a_display_the_simulator_says_how_to_get_one(capsys, monkeypatch
 
 
 STEP = math.radians(15.0)  # one press of [ or ]
+SLOW = 0.1
+"""--speed [m/s] of the camera test: the top camera sees about 1.06 m either side of its middle
+(a 694 px wide window at 321 px/m), so the chassis (0.25 m extent) stays in view for 8 s of W
+held, five times the 1.5 s the test holds it (a loaded machine hands the window its release late)."""
 
 
 def _readout_shown(rgb: np.ndarray) -> bool:
@@ -364,7 +410,8 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
 
     ``]`` ``]`` ``[`` steer every wheel to +15, +30, +15 deg; then W: the kinematics of
     ``vx`` on a synchro drive is every wheel at 0 deg rolling at ``v / r``, so the wheels steer
-    back and the robot drives along its +x axis (heading kept) at ``--speed`` for the time held.
+    back and the robot drives along its +x axis (heading kept) at ``--speed`` for the time held
+    (slow: the chassis stays in the top camera's view however late the release arrives).
     ``]`` pressed while driving does nothing (steering by hand only at rest).
 
     The top camera looks straight down from ``d = 8 e`` (``e`` the robot's extent, 0.25 m) onto
@@ -381,12 +428,10 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
     report = tmp_path / "run.json"
     with _running(
         display,
-        "--duration",
-        "18",
         "--camera",
         "top",
         "--speed",
-        str(SPEED),
+        str(SLOW),
         "--report",
         str(report),
         "--echo",
@@ -399,13 +444,12 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
             _xdotool(display, "key", key)
             echo.wait(count)  # acted: the next key arrives at least 0.8 s later, the wheels steered
             time.sleep(0.8)
-        at_start = _settled_shot(display, win)
+        at_start = _settled_shot(display, win)  # the robot where it started (steering moves nothing)
         _xdotool(display, "keydown", "w")
         echo.wait(4)
         time.sleep(1.5)
         _xdotool(display, "keyup", "w")
-        echo.wait(5)
-        top_after = _settled_shot(display, win)  # the robot at rest where it stopped
+        top_after = _shot_after(display, win, echo, 5)  # the robot at rest where it stopped
         _xdotool(display, "key", "3")
         time.sleep(0.5)
         _xdotool(display, "keydown", "w")
@@ -413,11 +457,10 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
         _xdotool(display, "key", "bracketright")  # while driving: ignored
         time.sleep(0.8)
         _xdotool(display, "keyup", "w")
-        echo.wait(9)
-        follow_after = _settled_shot(display, win)
+        follow_after = _shot_after(display, win, echo, 10)
         _xdotool(display, "key", "Tab")  # not the simulator's: goes on to the viewer (its left panel)
         viewer_panel = _panel_shot(display, win)
-        _, err = sim.communicate(timeout=WAIT)
+        err = _stop(sim)
         shots = {"at_start": at_start, "top_after": top_after, "follow_after": follow_after, "panel": viewer_panel}
         for name, rgb in shots.items():
             Image.fromarray(rgb.astype(np.uint8)).save(tmp_path / f"{name}.png")  # to look at when it fails
@@ -431,10 +474,12 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
         "steer_right",
         "forward",
         "release",
+        "stop",
         "camera_follow",
         "forward",
         "steer_left",
         "release",
+        "stop",
     ], names
 
     # each event records the steering reached before it: 0, +15, +30, then +15 when W is pressed
@@ -445,16 +490,20 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
 
     # W: every wheel steered back to 0 deg, the robot drove along +x at --speed for the time held
     # (in simulated time: as far apart as the key's press and release arrived, to one period)
+    # (space after it found the robot at rest, where the screenshot shows it)
     held = events[4]["t"] - events[3]["t"]
     after = events[5]["pose"]
     assert held == pytest.approx(events[4]["wall"] - events[3]["wall"], abs=PERIOD + 1e-6)
     assert held > 1.4
+    assert math.hypot(*events[5]["twist"][:2]) < 0.005, events[5]["twist"]
     assert events[4]["steer"] == pytest.approx([0.0] * 3, abs=math.radians(0.5))
-    assert after[0] == pytest.approx(SPEED * held, rel=0.05, abs=0.005)
+    assert after[0] == pytest.approx(SLOW * held, rel=0.05, abs=0.005)
     assert abs(after[1]) < 0.01 * after[0] and abs(after[2]) < 0.01
-    # ] while driving left the steering where the kinematics put it
-    assert events[8]["steer"] == pytest.approx([0.0] * 3, abs=math.radians(0.5))
-    assert run["pose"][0] > after[0] + 0.1 and run["steer"] == pytest.approx([0.0] * 3, abs=math.radians(0.5))
+    # ] while driving left the steering where the kinematics put it; W drove on for the time held
+    assert events[9]["steer"] == pytest.approx([0.0] * 3, abs=math.radians(0.5))
+    held_again, end = events[9]["t"] - events[7]["t"], events[10]["pose"]
+    assert end[0] - after[0] == pytest.approx(SLOW * held_again, rel=0.05, abs=0.005)
+    assert run["steer"] == pytest.approx([0.0] * 3, abs=math.radians(0.5))
 
     # the top camera did not move: the chassis' top face (z = 1.5 r: thickness r centred at hub
     # height r) moved to the right by the distance driven, at the pinhole camera's scale
@@ -466,13 +515,14 @@ def test_steering_keys_turn_the_wheels_at_rest_and_the_cameras_show_the_chassis_
     start_px, moved_px = _blue_centre(at_start), _blue_centre(top_after)
     centre = np.array([at_start.shape[1], height]) / 2
     print(f"top camera: chassis at {start_px} px, after {after[0]:.3f} m at {moved_px} px ({px_per_m:.1f} px/m)")
+    assert (after[0] + extent) * px_per_m < at_start.shape[1] / 2, f"W held {held:.1f} s: the chassis left the view"
     assert np.hypot(*(start_px - centre)) < 0.02 * height
     assert moved_px[0] - start_px[0] == pytest.approx(after[0] * px_per_m, rel=0.1)
     assert abs(moved_px[1] - start_px[1]) < 0.02 * height
 
     # the follow camera: the chassis in the middle of the window, although it drove on
     follow_px = _blue_centre(follow_after)
-    print(f"follow camera: chassis at {follow_px} px after driving to x = {run['pose'][0]:.3f} m")
+    print(f"follow camera: chassis at {follow_px} px after driving to x = {end[0]:.3f} m")
     assert np.hypot(*(follow_px - centre)) < 0.05 * height
 
     # the readout is drawn (seen from the top camera, over the light floor)
@@ -558,15 +608,9 @@ def test_the_window_draws_the_odometry_beside_the_truth_where_the_wheels_say(dis
             time.sleep(held)
             _xdotool(display, "keyup", key)
             echo.wait(2 * count)
-            time.sleep(0.8)  # stopped within the acceleration limits before the next key
+            time.sleep(STOPPING)  # stopped within the acceleration limits before the next key
         _xdotool(display, "key", "2")  # the top camera, down on where the robot stands
-        echo.wait(7)
-        time.sleep(0.8)
-        # space (the robot stands already) acts in a later frame than 2: the window drew the top
-        # camera before it is echoed, however far the simulation lags the clock
-        _xdotool(display, "key", "space")
-        echo.wait(8)
-        top = _settled_shot(display, win)
+        top = _shot_after(display, win, echo, 7)
         Image.fromarray(top.astype(np.uint8)).save(tmp_path / "top.png")  # to look at when it fails
         _, err = sim.communicate(timeout=WAIT)
     assert sim.returncode == 0, err

@@ -348,8 +348,10 @@ class InteractiveSim:
 
     def _record(self, key: str, wall: float) -> None:
         """One entry of :attr:`events`: the action, simulated time [s] at which it acted, wall time
-        [s] since the start at which its key arrived, true pose, odometry pose, the encoded
-        wheels' angles (:meth:`wheel_angles`) and the steering angles the joints had reached
+        [s] since the start at which its key arrived, true pose, true twist (body frame: ``vx``,
+        ``vy`` [m/s], ``omega`` [rad/s]; whether the robot was still moving when the key acted),
+        odometry pose, the encoded wheels' angles (:meth:`wheel_angles`) and the steering angles
+        the joints had reached
         (:meth:`steer_reached`); echoed as one line ``T s  KEY  x X m  y Y m
         theta TH rad`` when the simulator has an ``echo`` stream."""
         event = {
@@ -357,6 +359,7 @@ class InteractiveSim:
             "wall": wall - self._start,
             "key": key,
             "pose": self.backend.truth.tolist(),
+            "twist": self.backend.sim.twist.tolist(),
             "odometry_pose": list(self.runtime.pose),
             "wheels": self.wheel_angles(),
             "steer": self.steer_reached(),
@@ -632,8 +635,8 @@ class InteractiveSim:
         """What the run did, for ``--report``: final pose and twist (ground truth, odometry), the
         encoded wheels' angles the odometry integrated (:meth:`wheel_angles`), the two arrows as
         the window last drew them (:attr:`markers`), steering angles reached [rad], key presses
-        with their simulated time, wall arrival time, true and odometry pose, wheel angles and
-        steering; the clock: simulated and wall time [s], wall time skipped while
+        with their simulated time, wall arrival time, true pose and twist, odometry pose, wheel
+        angles and steering; the clock: simulated and wall time [s], wall time skipped while
         nothing was driven, lowest real-time factor measured (null: the run was too short)."""
         return {
             "robot": self.robot.name,
