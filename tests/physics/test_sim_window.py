@@ -19,6 +19,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Iterator
@@ -77,20 +78,24 @@ def _window(display: str, sim: subprocess.Popen) -> str:
 
 @contextlib.contextmanager
 def _running(display: str, *args: str, robot: str = "tomasi-omni3") -> Iterator[subprocess.Popen]:
-    """``omnikin sim ROBOT ARGS`` on ``display``, killed on the way out if it still runs."""
-    sim = subprocess.Popen(
-        [sys.executable, "-m", "omnikin.cli.main", "sim", robot, *args],
-        env=omnikin_env(DISPLAY=display),
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    try:
-        yield sim
-    finally:
-        if sim.poll() is None:
-            sim.kill()
-            sim.wait()
+    """``omnikin sim ROBOT ARGS`` on ``display``, killed on the way out if it still runs; run in a
+    folder of its own (MuJoCo writes ``MUJOCO_LOG.TXT`` into the working folder when its window
+    fails)."""
+    with tempfile.TemporaryDirectory(prefix="omnikin-sim-") as folder:
+        sim = subprocess.Popen(
+            [sys.executable, "-m", "omnikin.cli.main", "sim", robot, *args],
+            env=omnikin_env(DISPLAY=display),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=folder,
+        )
+        try:
+            yield sim
+        finally:
+            if sim.poll() is None:
+                sim.kill()
+                sim.wait()
 
 
 class Echo:
