@@ -25,6 +25,7 @@ asserted here is the same on an idle and on a busy machine.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import random
 import time
@@ -69,14 +70,24 @@ def at_top_speed(request):
     ERROR_REPORT CRC), then measured over 1 s of the same, the commands arriving at every place of
     the control period in turn (:func:`firmware_load.every_phase`); and the board, still running."""
     motor = request.param
+    with damaged_bus_at_top_speed(motor, 1.0, every_phase) as (fw, board, link):
+        yield motor, fw, board, link, board.stats()
+
+
+@contextlib.contextmanager
+def damaged_bus_at_top_speed(motor: str, warm_up: float, after_step):
+    """A lockstep board of variant ``motor`` driven at the top wheel speed with one byte in 50
+    from the host damaged: ``warm_up`` [s] of chip time, the probe cleared, then 1 s measured
+    with the host's bytes placed in each period by ``after_step`` (:func:`firmware_load.drive`).
+    Yields the firmware, the board and its link."""
     fw = firmware(motor)
     with SimBoard(build_simboard(build_dir()), fw.elf, "--motor", motor, lockstep=True) as board:
         link = ChipLink.open(board)
         board.corrupt("rx", 50)
-        drive(link, TOP_SPEED, 1.0)
+        drive(link, TOP_SPEED, warm_up)
         board.clear()
-        drive(link, TOP_SPEED, 1.0, after_step=every_phase)
-        yield motor, fw, board, link, board.stats()
+        drive(link, TOP_SPEED, 1.0, after_step=after_step)
+        yield fw, board, link
 
 
 def test_ram_leaves_a_quarter_free_at_top_speed_with_a_damaged_bus(at_top_speed):
@@ -125,13 +136,7 @@ def test_frames_go_out_after_a_control_step_and_never_hold_one_back(motor):
     a step back is then only the interrupts (step, encoder, UART, millis: about 500 cycles if all
     fall together), far under 0.5 % of a period. The loop that sent a report, a heartbeat and an
     error report before a step falling due held it back by up to 0.7 ms (7 %)."""
-    fw = firmware(motor)
-    with SimBoard(build_simboard(build_dir()), fw.elf, "--motor", motor, lockstep=True) as board:
-        link = ChipLink.open(board)
-        board.corrupt("rx", 50)
-        drive(link, TOP_SPEED, 0.5)
-        board.clear()
-        drive(link, TOP_SPEED, 1.0, after_step=lambda k: 0.05)
+    with damaged_bus_at_top_speed(motor, 0.5, lambda k: 0.05) as (_, board, link):
         stats = board.stats()
     assert stats["corrupted_rx"] > 10 and stats["probe"]["count"] >= 99
     names = {m.name for m in link.received[-100:]}
