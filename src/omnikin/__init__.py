@@ -13,6 +13,9 @@ use, so ``import omnikin`` loads neither SciPy nor matplotlib):
   :func:`analyze_umbmark` (``omnikin umbmark analyze``), :func:`calibrate` and
   :func:`calibration_plan` (``omnikin calibrate``), :func:`plot_layout` (``omnikin show --plot``);
 - their results plot themselves: ``result.plot()`` returns a matplotlib ``Figure`` (extra ``viz``).
+
+Errors: every exception and warning omnikin raises on purpose is exported here and defined in
+:mod:`omnikin.errors`, whose docstring draws their tree (``except omnikin.InputError``: bad input).
 """
 
 from ._version import __version__
