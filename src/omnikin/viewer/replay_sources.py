@@ -32,7 +32,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..errors import InputError, ReplayError
+from ..errors import BagError, InputError, ReplayError
 from ..messages import one_line, shorten
 from ..model import Robot
 from .replay import JointSeries, PoseSeries, Track
@@ -140,7 +140,6 @@ def load_bag(
     docstring); ``topics`` renames the roles of :data:`BAG_TOPICS`; a role in ``required``
     (a topic the user named) must be in the bag; ``max_messages`` and ``max_message_bytes``
     bound what is read per topic (:mod:`omnikin.io.bags`)."""
-    from ..errors import BagError
     from ..io.bags import read_joint_states, read_poses, topic_types
 
     names = dict(BAG_TOPICS, **(topics or {}))
