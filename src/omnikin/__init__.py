@@ -13,17 +13,43 @@ use, so ``import omnikin`` loads neither SciPy nor matplotlib):
   :func:`analyze_umbmark` (``omnikin umbmark analyze``), :func:`calibrate` and
   :func:`calibration_plan` (``omnikin calibrate``), :func:`plot_layout` (``omnikin show --plot``);
 - their results plot themselves: ``result.plot()`` returns a matplotlib ``Figure`` (extra ``viz``).
+
+Errors: every exception and warning omnikin raises on purpose is exported here and defined in
+:mod:`omnikin.errors`, whose docstring draws their tree (``except omnikin.InputError``: bad input).
 """
 
 from ._version import __version__
 from .errors import (
+    BagError,
+    CalibrationFitError,
+    CliError,
+    DivergedError,
+    InfeasibleRunError,
     InfeasibleTwistError,
     InputError,
     LinkError,
+    LinkLostError,
+    MetricsInputError,
+    NonFiniteValueError,
     OdometryInputError,
     OmnikinError,
+    OutputError,
+    OutputExistsError,
+    PhysicsError,
+    PresetShadowWarning,
+    ProtocolError,
+    ReplayError,
+    ResourceLimitError,
     RobotFileError,
+    RobotMismatch,
+    RunPosesFileError,
+    RunsFileError,
     SingularLayoutError,
+    StudyFileError,
+    Terminated,
+    TrajectoryFileError,
+    UsageError,
+    WorkerMismatch,
 )
 from .model import FKResult, IKResult, Robot
 from .odometry import OdometryResult, batch_odometry, batch_odometry_from_angles
@@ -70,26 +96,49 @@ def __dir__():
 
 
 __all__ = [
+    "BagError",
     "Calibration",
+    "CalibrationFitError",
+    "CliError",
+    "DivergedError",
     "Encoder",
     "FKResult",
     "IKResult",
+    "InfeasibleRunError",
     "InfeasibleTwistError",
     "InputError",
     "LinkError",
+    "LinkLostError",
+    "MetricsInputError",
+    "NonFiniteValueError",
     "Odometry",
     "OdometryInputError",
     "OdometryResult",
     "OmnikinError",
+    "OutputError",
+    "OutputExistsError",
     "PRESET_NAMES",
+    "PhysicsError",
+    "PresetShadowWarning",
+    "ProtocolError",
+    "ReplayError",
+    "ResourceLimitError",
     "Robot",
     "RobotFileError",
+    "RobotMismatch",
+    "RunPosesFileError",
+    "RunsFileError",
     "Simulation",
     "SingularLayoutError",
     "Steer",
+    "StudyFileError",
+    "Terminated",
+    "TrajectoryFileError",
     "UMBmarkAnalysis",
     "UMBmarkReport",
+    "UsageError",
     "Wheel",
+    "WorkerMismatch",
     "analyze_umbmark",
     "batch_odometry",
     "batch_odometry_from_angles",

@@ -60,8 +60,9 @@ from functools import partial
 import numpy as np
 
 from ._arrays import TEXT_TYPES, container_problem, range_problem, whole_problem
-from .errors import InputError, OdometryInputError, shorten
+from .errors import InputError, OdometryInputError
 from .geometry import MAX_ANGLE
+from .messages import shorten
 from .wheels import COUNTER_BITS_RANGE, MAX_SPEED_RANGE
 
 JUMP_MARGIN = 1.5

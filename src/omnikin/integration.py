@@ -21,8 +21,9 @@ import numpy as np
 
 from ._arrays import as_real_array
 from .encoders import container_problem
-from .errors import InputError, digits_apart
+from .errors import InputError
 from .geometry import MAX_ANGLE, sinc, wrap_angle
+from .messages import digits_apart
 
 METHODS = ("exact", "midpoint", "euler")
 

@@ -39,9 +39,10 @@ from functools import cached_property
 import numpy as np
 
 from ._arrays import as_components, as_real_array, frozen, require_finite
-from .errors import InfeasibleTwistError, InputError, SingularLayoutError, digits_apart, shorten
+from .errors import InfeasibleTwistError, InputError, SingularLayoutError
 from .geometry import MAX_ANGLE
 from .linalg import RANK_TOL, null_space, rank
+from .messages import digits_apart, shorten
 from .mobility import Configuration, Mobility, analyse, generic_configuration
 from .physical import PhysicalBody
 from .wheels import DERIVED_SUFFIXES, Wheel
@@ -214,7 +215,7 @@ class FKResult:
 def steering_beyond(wheel: str, value: float, lower: float, upper: float) -> str:
     """``wheel 'w' steered to V rad (D deg), outside its limits [lo, hi] deg`` (or ``beyond
     +-MAX_ANGLE rad`` for a wheel that turns all the way round), printed with the digits that
-    tell ``value`` from the limit it passes (:func:`~omnikin.errors.digits_apart`)."""
+    tell ``value`` from the limit it passes (:func:`~omnikin.messages.digits_apart`)."""
     if math.isinf(lower) or upper >= MAX_ANGLE:
         p = digits_apart(abs(value), MAX_ANGLE)
         limits = f"beyond +-{MAX_ANGLE:g} rad"

@@ -18,7 +18,8 @@ from __future__ import annotations
 import math
 import re
 
-from .errors import InputError, shorten
+from .errors import InputError
+from .messages import shorten
 
 PLAIN_NUMBER = re.compile(r"[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?")
 """A number as the project's tables spell it: optional sign, ASCII digits with an optional

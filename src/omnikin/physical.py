@@ -15,7 +15,8 @@ import itertools
 from dataclasses import dataclass, fields
 
 from ._arrays import container_problem, range_problem, whole_problem
-from .errors import InputError, shorten
+from .errors import InputError
+from .messages import shorten
 
 # --- ranges (docs/conventions.md, "Physical fields") --------------------------------------------
 MASS_RANGE = (1e-4, 1e5)

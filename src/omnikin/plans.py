@@ -36,8 +36,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._arrays import range_problem
-from .errors import InputError, shorten
+from .errors import InputError
 from .geometry import MAX_DIRECTION_DEG, wrap_angle
+from .messages import shorten
 from .number_text import plain_number
 
 MAX_SEGMENT = 1e5

@@ -21,7 +21,8 @@ import math
 import numbers
 from dataclasses import dataclass
 
-from .errors import InputError, ResourceLimitError, shorten
+from .errors import InputError, ResourceLimitError
+from .messages import shorten
 
 DEFAULT_MEMORY = 2 * 1024**3
 """Default memory limit of a job [bytes]: 2 GiB."""

@@ -48,10 +48,11 @@ from .encoders import (
     show_number,
     timestamp_problem,
 )
-from .errors import InputError, OdometryInputError, shorten
+from .errors import InputError, OdometryInputError
 from .geometry import wrap_angle
 from .integration import check_method, check_start, step_problem
 from .linalg import rank
+from .messages import shorten
 from .model import Robot
 from .odometry import encoded_wheels, fk_coefficients, mid_steer, steer_problem, steered_steps
 

@@ -36,8 +36,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._arrays import range_problem, whole_problem
-from .errors import InfeasibleTwistError, InputError, digits_apart, shorten
+from .errors import InfeasibleTwistError, InputError
 from .geometry import wrap_angle
+from .messages import digits_apart, shorten
 from .physical import PhysicalWheel
 
 WHEEL_TYPES = ("omni", "mecanum", "swedish", "standard", "steerable", "castor")

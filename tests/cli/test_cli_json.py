@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from omnikin.cli.main import main
-from omnikin.io.jsonfile import NonFiniteValueError, to_json, write_json
+from omnikin.errors import NonFiniteValueError
+from omnikin.io.jsonfile import to_json, write_json
 
 
 def strict(text: str):

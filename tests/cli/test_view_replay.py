@@ -228,7 +228,8 @@ def test_view_replays_two_reports_together(report, tmp_path):
 
 
 def test_runs_of_two_robots_are_not_shown_together(report):
-    from omnikin.viewer.replay_sources import ReplayError, ReplaySource, combine
+    from omnikin.errors import ReplayError
+    from omnikin.viewer.replay_sources import ReplaySource, combine
 
     mine = load_report(report)
     other = ReplaySource("mecanum-runs", load_robot("mecanum4"), mine.tracks)

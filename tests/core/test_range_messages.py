@@ -18,10 +18,10 @@ from hypothesis import strategies as st
 
 import omnikin
 from omnikin import InputError, RobotFileError, load_robot
-from omnikin.errors import digits_apart
 from omnikin.geometry import MAX_ANGLE
 from omnikin.integration import check_start
 from omnikin.limits import MotionLimits
+from omnikin.messages import digits_apart
 from omnikin.model import heading_array
 from omnikin.physical import PhysicalBody, PhysicalWheel
 from omnikin.runtime.command import CommandFilter

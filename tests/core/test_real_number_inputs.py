@@ -14,7 +14,8 @@ import pytest
 
 from omnikin import InputError, geometry, load_robot
 from omnikin._arrays import as_components, as_real_array
-from omnikin.evaluation.metrics import MetricsInputError, ate, check_trajectory
+from omnikin.errors import MetricsInputError
+from omnikin.evaluation.metrics import ate, check_trajectory
 from omnikin.limits import MotionLimits, saturate
 from omnikin.streaming import Odometry
 

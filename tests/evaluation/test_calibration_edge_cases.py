@@ -67,7 +67,8 @@ def test_runs_no_robot_of_the_layout_can_explain_are_refused_in_one_line():
     only wheels of vanishing radius explain that; the fit leaves the file's ranges on the way and
     says so instead of an internal error about a trial wheel."""
     from omnikin import load_robot
-    from omnikin.evaluation.calibration import CalibrationFitError, calibrate, recommended_runs
+    from omnikin.errors import CalibrationFitError
+    from omnikin.evaluation.calibration import calibrate, recommended_runs
     from omnikin.plans import CalibrationRun
 
     robot = load_robot("tomasi-omni3")

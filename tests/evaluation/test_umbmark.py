@@ -414,7 +414,7 @@ def simulate_refusal(plan, robot):
     ],
 )
 def test_calibrate_refuses_a_run_the_robot_cannot_drive_naming_it(robot_name, path, wheel):
-    from omnikin.evaluation.calibration import InfeasibleRunError
+    from omnikin.errors import InfeasibleRunError
     from omnikin.plans import parse_plan
 
     robot = load_robot(robot_name)
@@ -431,7 +431,7 @@ def test_calibrate_refuses_a_run_the_robot_cannot_drive_naming_it(robot_name, pa
 
 
 def test_calibrate_names_the_file_line_of_an_infeasible_run(tmp_path):
-    from omnikin.evaluation.calibration import InfeasibleRunError
+    from omnikin.errors import InfeasibleRunError
     from omnikin.io.runs import read_calibration_runs
 
     f = tmp_path / "runs.csv"

@@ -22,7 +22,7 @@ from rosbags.rosbag2 import Reader, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from omnikin import load_robot
-from omnikin.errors import InputError, OmnikinError, OutputExistsError
+from omnikin.errors import BagError, InputError, OmnikinError, OutputExistsError
 from omnikin.io import bags
 from omnikin.io.trajectories import read_trajectory
 
@@ -289,7 +289,7 @@ def test_bag_odometry_falls_back_to_bag_time(tmp_path):
     res = bags.bag_odometry(load_robot("tomasi-omni3"), path, tmp_path / "o")
     assert res.joint_states.stamp_source == "bag"
     np.testing.assert_allclose(odom_arrays(tmp_path / "o")[1], circle(twist, t), atol=1e-9)
-    with pytest.raises(bags.BagError, match="header stamps must increase strictly.*all header stamps are zero"):
+    with pytest.raises(BagError, match="header stamps must increase strictly.*all header stamps are zero"):
         bags.bag_odometry(load_robot("tomasi-omni3"), path, tmp_path / "o2", stamp="header")
     assert not (tmp_path / "o2").exists()
 
@@ -349,7 +349,7 @@ def test_steerable_robot_reads_steer_joints(tmp_path):
     _, odom, _, _ = odom_arrays(out)
     np.testing.assert_allclose(odom, odom_arrays(sim)[1], atol=1e-9)
     np.testing.assert_allclose(odom[-1], [math.cos(math.radians(30)), 0.5, 0], atol=1e-9)
-    with pytest.raises(bags.BagError, match=r"no joint\(s\) \['w1_swivel', 'w2_swivel', 'w3_swivel'\]"):
+    with pytest.raises(BagError, match=r"no joint\(s\) \['w1_swivel', 'w2_swivel', 'w3_swivel'\]"):
         bags.read_joint_states(sim, load_robot("synchro"), steer_suffix="_swivel")
 
 
@@ -492,20 +492,20 @@ def test_export_pose_stamped(tmp_path):
 # --- bad inputs -----------------------------------------------------------------------------------------
 def test_missing_bag_and_broken_bags(tmp_path):
     robot = load_robot("tomasi-omni3")
-    with pytest.raises(bags.BagError, match="nope.bag: no such bag"):
+    with pytest.raises(BagError, match="nope.bag: no such bag"):
         bags.read_joint_states(tmp_path / "nope.bag", robot)
     broken = tmp_path / "broken.bag"
     broken.mkdir()
     (broken / "metadata.yaml").write_text("rosbag2_bagfile_information: {version: 5}\n")
-    with pytest.raises(bags.BagError, match="broken.bag: cannot read the bag"):
+    with pytest.raises(BagError, match="broken.bag: cannot read the bag"):
         bags.read_joint_states(broken, robot)
     junk = tmp_path / "junk.db3"
     junk.write_bytes(b"this is not sqlite" * 10)
-    with pytest.raises(bags.BagError, match="junk.db3: cannot read the bag"):
+    with pytest.raises(BagError, match="junk.db3: cannot read the bag"):
         bags.read_poses(junk, "/odom")
     empty_dir = tmp_path / "empty"
     empty_dir.mkdir()
-    with pytest.raises(bags.BagError, match="empty: cannot read the bag"):
+    with pytest.raises(BagError, match="empty: cannot read the bag"):
         bags.read_poses(empty_dir, "/odom")
 
 
@@ -523,13 +523,13 @@ def test_missing_topic_lists_the_topics(circle_bag, tmp_path):
 def test_wrong_message_type(circle_bag, tmp_path):
     path = circle_bag[0]
     with pytest.raises(
-        bags.BagError,
+        BagError,
         match=r"in.bag: topic '/joint_states' carries sensor_msgs/msg/JointState; "
         r"expected nav_msgs/msg/Odometry or geometry_msgs/msg/PoseStamped",
     ):
         run_cli(["bag", "export", path, "--topic", "/joint_states", "--format", "tum"])
     with pytest.raises(
-        bags.BagError, match="topic '/chatter' carries std_msgs/msg/String; expected sensor_msgs/msg/JointState"
+        BagError, match="topic '/chatter' carries std_msgs/msg/String; expected sensor_msgs/msg/JointState"
     ):
         run_cli(["bag", "odometry", "tomasi-omni3", path, "-o", tmp_path / "o", "--joint-states-topic", "/chatter"])
 
@@ -537,7 +537,7 @@ def test_wrong_message_type(circle_bag, tmp_path):
 def test_wrong_joint_names(circle_bag, tmp_path):
     path = circle_bag[0]
     with pytest.raises(
-        bags.BagError,
+        BagError,
         match=r"in.bag: topic '/joint_states': no JointState message names the wheel "
         r"joints \['left', 'right'\] of robot 'diff-drive'.*\['lift', 'w1', 'w2', "
         r"'w3'\]",
@@ -545,7 +545,7 @@ def test_wrong_joint_names(circle_bag, tmp_path):
         run_cli(["bag", "odometry", "diff-drive", path, "-o", tmp_path / "o"])
     partial = tmp_path / "partial"
     write_joint_states(partial, ["w1", "w2"], [[0, 0], [1, 1]], [T0, T0 + DT])
-    with pytest.raises(bags.BagError, match=r"partial: topic '/joint_states', message 0: no joint\(s\) \['w3'\]"):
+    with pytest.raises(BagError, match=r"partial: topic '/joint_states', message 0: no joint\(s\) \['w3'\]"):
         bags.read_joint_states(partial, load_robot("tomasi-omni3"))
 
 
@@ -553,11 +553,11 @@ def test_nan_positions_and_too_few_samples(tmp_path):
     robot = load_robot("tomasi-omni3")
     nan = tmp_path / "nan"
     write_joint_states(nan, ["w1", "w2", "w3"], [[0, 0, 0], [0, math.nan, 0]], [T0, T0 + DT])
-    with pytest.raises(bags.BagError, match=r"message 1: non-finite position of joint\(s\) \['w2'\]"):
+    with pytest.raises(BagError, match=r"message 1: non-finite position of joint\(s\) \['w2'\]"):
         bags.read_joint_states(nan, robot)
     one = tmp_path / "one"
     write_joint_states(one, ["w1", "w2", "w3"], [[0, 0, 0]], [T0])
-    with pytest.raises(bags.BagError, match="at least two distinct wheel samples, got 1"):
+    with pytest.raises(BagError, match="at least two distinct wheel samples, got 1"):
         bags.read_joint_states(one, robot)
 
 
@@ -636,7 +636,7 @@ def test_stamp_going_back_names_the_bags_message(tmp_path):
     robot = load_robot("tomasi-omni3")
     # wheel sample 9 is topic message 2 * 9 + 1 = 19; it follows message 17
     with pytest.raises(
-        bags.BagError,
+        BagError,
         match=r"message 19: header stamps must increase strictly.*of message 17; "
         r"--stamp bag",
     ) as info:
@@ -673,7 +673,7 @@ def test_taken_output_fails_before_reading_or_simulating(tmp_path):
 def test_frame_ids_follow_ros_naming_rules(circle_bag, tmp_path, frames, match):
     """'' and 'a b' were written into the bag's Odometry headers, and a child frame equal to its parent."""
     out = tmp_path / "odom.bag"
-    with pytest.raises(bags.BagError, match=match):
+    with pytest.raises(BagError, match=match):
         run_cli(["bag", "odometry", "tomasi-omni3", circle_bag[0], "-o", out, *frames])
     assert not out.exists()
 
@@ -681,7 +681,7 @@ def test_frame_ids_follow_ros_naming_rules(circle_bag, tmp_path, frames, match):
 def test_library_writers_check_frame_ids_too(tmp_path):
     stamps, poses = np.array([0, 10**8]), np.zeros((2, 3))
     for frame, child in (("odom", "odom"), ("", "base_link"), ("odom", "base link")):
-        with pytest.raises(bags.BagError, match="frame"):
+        with pytest.raises(BagError, match="frame"):
             bags.write_odometry(tmp_path / "o.bag", stamps, poses, poses, frame_id=frame, child_frame_id=child)
     bags.write_odometry(tmp_path / "o.bag", stamps, poses, poses, frame_id="robot1/odom", child_frame_id="robot1/base")
     assert bags.read_poses(tmp_path / "o.bag", "/odom").child_frame_id == "robot1/base"

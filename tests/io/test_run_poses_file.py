@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from omnikin.errors import InputError, ResourceLimitError
+from omnikin.errors import InputError, ResourceLimitError, RunPosesFileError
 from omnikin.evaluation.run_poses import MAX_ROWS, RunPoses, decimated, stride
-from omnikin.io.run_poses import COLUMNS, MAX_READ_BYTES, RunPosesFileError, read_run_poses, run_poses_text
+from omnikin.io.run_poses import COLUMNS, MAX_READ_BYTES, read_run_poses, run_poses_text
 
 HEADER = ",".join(COLUMNS)
 

@@ -15,10 +15,11 @@ import pytest
 from conftest import CountedName, circle_wheels
 from omnikin import OdometryInputError, Robot, load_robot
 from omnikin.cli.main import main
+from omnikin.errors import RunsFileError, TrajectoryFileError
 from omnikin.io.csvfile import column_problems, iter_fields, number, read_rows
 from omnikin.io.logs import read_tick_log
-from omnikin.io.runs import RunsFileError, read_calibration_runs, read_umbmark_measurements
-from omnikin.io.trajectories import TrajectoryFileError, read_trajectory
+from omnikin.io.runs import read_calibration_runs, read_umbmark_measurements
+from omnikin.io.trajectories import read_trajectory
 
 
 def cli(capsys, *argv):

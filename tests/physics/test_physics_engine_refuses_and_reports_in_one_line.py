@@ -17,8 +17,8 @@ import pytest
 
 from conftest import omnikin_env, run_cli, run_entry_point
 from omnikin import load_robot
-from omnikin.errors import InputError
-from omnikin.physics.engine import ADVANCE_MAX, DivergedError, PhysicsSim
+from omnikin.errors import DivergedError, InputError
+from omnikin.physics.engine import ADVANCE_MAX, PhysicsSim
 from omnikin.physics.mjcf import time_step
 from omnikin.physics.run import check_rate_steps, simulate_physics
 from omnikin.plans import parse_plan

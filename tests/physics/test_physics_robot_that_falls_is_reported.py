@@ -22,10 +22,10 @@ import pytest
 pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (extra 'physics')")
 
 from omnikin import load_robot  # noqa: E402
-from omnikin.errors import OmnikinError  # noqa: E402
+from omnikin.errors import OmnikinError, PhysicsError  # noqa: E402
 from omnikin.physical import PhysicalBody  # noqa: E402
 from omnikin.physics.backend import PhysicsBackend  # noqa: E402
-from omnikin.physics.engine import TIPPED, PhysicsError  # noqa: E402
+from omnikin.physics.engine import TIPPED  # noqa: E402
 
 DT = 0.02
 PUSH = 1.5  # [N m] about world x

@@ -16,11 +16,10 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from conftest import ROOT  # noqa: E402
-from omnikin.errors import InputError
+from omnikin.errors import InputError, ProtocolError
 from omnikin.runtime import protocol as P
 from omnikin.runtime.protocol import (
     FrameEncoder,
-    ProtocolError,
     SequenceTracker,
     StreamDecoder,
     crc16_ccitt_false,
@@ -1002,7 +1001,8 @@ def test_a_user_protocol_file_is_plain_yaml_data_or_one_line_error(tmp_path, ext
     names the file, never a bare ValueError."""
     from importlib import resources
 
-    from omnikin.runtime.protocol import ProtocolError, load_protocol
+    from omnikin.errors import ProtocolError
+    from omnikin.runtime.protocol import load_protocol
 
     good = resources.files("omnikin.runtime").joinpath("protocol.yaml").read_text(encoding="utf-8")
     path = tmp_path / "p.yaml"
@@ -1013,7 +1013,8 @@ def test_a_user_protocol_file_is_plain_yaml_data_or_one_line_error(tmp_path, ext
 
 
 def test_a_protocol_file_is_size_bounded_and_regular(tmp_path):
-    from omnikin.runtime.protocol import ProtocolError, load_protocol
+    from omnikin.errors import ProtocolError
+    from omnikin.runtime.protocol import load_protocol
     from omnikin.runtime.protocol.schema import MAX_PROTOCOL_BYTES
 
     big = tmp_path / "big.yaml"

@@ -15,12 +15,12 @@ import pytest
 pytest.importorskip("serial")
 
 from omnikin import load_robot
-from omnikin.errors import OmnikinError
+from omnikin.errors import LinkLostError, OmnikinError
 from omnikin.io.robot_file import robot_from_dict
 from omnikin.runtime.base import BaseRuntime
 from omnikin.runtime.fake_controller import FakeController, FakeWheel
 from omnikin.runtime.protocol import load_protocol
-from omnikin.runtime.serial_backend import LinkLostError, SerialBackend
+from omnikin.runtime.serial_backend import SerialBackend
 
 pytestmark = pytest.mark.serial
 

@@ -15,8 +15,9 @@ import sys
 
 import numpy as np
 
-from ..errors import InfeasibleTwistError, InputError, OmnikinError, shorten
+from ..errors import InfeasibleTwistError, InputError, OmnikinError
 from ..geometry import wrap_angle
+from ..messages import shorten
 from .budget import Budget, add_budget_options, explained, require
 from .common import (
     add_as_built_options,

@@ -29,7 +29,8 @@ import re
 import sys
 from dataclasses import dataclass
 
-from ..errors import ResourceLimitError, shorten
+from ..errors import ResourceLimitError
+from ..messages import shorten
 from ..number_text import PLAIN_NUMBER
 from ..resource_limits import (
     DEFAULT_MEMORY,

@@ -22,8 +22,9 @@ import re
 import signal
 from collections.abc import Iterator
 
-from ..errors import InputError, shorten
+from ..errors import InputError, Terminated
 from ..io.output import Output, check_outputs, is_stdout
+from ..messages import shorten
 from ..number_text import number_problem
 
 FORCE_HELP = "replace existing output files (never an input; a folder only if omnikin wrote it)"
@@ -228,17 +229,6 @@ def robot_inputs(*specs) -> list:
 
 
 # --- stopping a command -----------------------------------------------------------------------------------
-class Terminated(BaseException):
-    """A termination signal arrived (SIGTERM, SIGHUP: ``timeout``, ``kill``, systemd, a closed
-    terminal). Raised by the signal handler ``omnikin.cli.main`` installs, it unwinds the command
-    like ``KeyboardInterrupt`` does, so every cleanup runs (a temporary file, a staging folder:
-    :mod:`omnikin.io.output`). Not an :class:`Exception`: no ``except Exception`` swallows it."""
-
-    def __init__(self, signum: int):
-        super().__init__(signum)
-        self.signum = signum
-
-
 def stop_name(exc: BaseException) -> str:
     """How the user stopped a command: ``Ctrl-C`` (:class:`KeyboardInterrupt`) or the signal's
     name (:class:`Terminated`: ``SIGTERM``, ``SIGHUP``)."""

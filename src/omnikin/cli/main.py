@@ -29,11 +29,11 @@ from collections.abc import Iterator
 import numpy as np
 
 from .._version import __version__
-from ..errors import InfeasibleTwistError, InputError, OmnikinError, OutputError, one_line, shorten
+from ..errors import CliError, InfeasibleTwistError, InputError, OmnikinError, OutputError, Terminated, UsageError
+from ..messages import one_line, shorten
 from ..presets import PRESET_NAMES
 from .common import (
     STOPPED,
-    Terminated,
     add_method_option,
     add_output,
     add_output_options,
@@ -48,7 +48,7 @@ from .common import (
     stop_name,
     whole,
 )
-from .parser import CommandParser, UsageError
+from .parser import CommandParser
 
 EPILOG = """examples:
   omnikin presets                          list the robots shipped with omnikin
@@ -105,10 +105,6 @@ WRITE_ERRORS = {
     errno.EPIPE,
 }
 """Operating-system errors that mean an output could not be written."""
-
-
-class CliError(InputError):
-    """A usage problem found after argument parsing (exit status 2)."""
 
 
 def _fmt(x: float) -> str:

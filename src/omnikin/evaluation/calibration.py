@@ -38,8 +38,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..errors import InfeasibleTwistError, InputError, shorten
+from ..errors import CalibrationFitError, InfeasibleRunError, InfeasibleTwistError, InputError
 from ..geometry import compose, exp, wrap_angle
+from ..messages import shorten
 from ..model import Robot
 from ..odometry import encoded_wheels
 from ..plans import CalibrationRun, Plan, parse_plan
@@ -70,14 +71,6 @@ or errors the parameters do not cover); the calibrated robot should not be used.
 
 RECOMMENDED_REPEATS = 5
 """How often to drive each recommended calibration run (:func:`recommended_runs`)."""
-
-
-class InfeasibleRunError(InputError):
-    """A calibration run the robot cannot drive; ``run`` is its index (0-based) in the runs given."""
-
-    def __init__(self, message: str, *, run: int):
-        super().__init__(message)
-        self.run = run
 
 
 class PlanSet:
@@ -271,11 +264,6 @@ def _residuals(
     res = (ends - meas) / sigma
     res[:, 2] = wrap_angle(ends[:, 2] - meas[:, 2]) / sigma[:, 2]
     return res[np.isfinite(res)]
-
-
-class CalibrationFitError(InputError):
-    """The least-squares fit of :func:`calibrate` left the ranges a robot file allows: the runs
-    are not explained by the robot's radii, hub positions and drive directions."""
 
 
 def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Robot | None = None) -> CalibrationResult:

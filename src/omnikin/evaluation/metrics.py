@@ -55,12 +55,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._arrays import as_real_array, as_real_scalar
-from ..errors import InputError
+from ..errors import MetricsInputError
 from ..geometry import between, compose, wrap_angle
-
-
-class MetricsInputError(InputError):
-    """Trajectories that the metrics cannot be computed on (empty, mismatched, NaN, unsorted)."""
 
 
 # --- input checks ------------------------------------------------------------------------------------

@@ -40,13 +40,14 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, shorten
+from ..errors import CalibrationFitError, InputError
+from ..messages import shorten
 from ..model import Robot
 from ..odometry import encoded_wheels
 from ..physics.mjcf import DEFAULT_STEP, time_step
 from ..plans import CalibrationRun, Plan, umbmark_square
 from ..simulation.error_models import NOISE, SystematicErrors
-from .calibration import RECOMMENDED_REPEATS, CalibrationFitError, CalibrationResult, recommended_runs
+from .calibration import RECOMMENDED_REPEATS, CalibrationResult, recommended_runs
 from .calibration import calibrate as least_squares_calibration
 from .procedure import Cost, UMBmarkStudy, check_settings, streams
 from .run_poses import RunPoses, kept_run, stride

@@ -33,7 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, shorten
+from ..errors import InputError
+from ..messages import shorten
 from ..model import Robot
 from ..odometry import encoded_wheels
 from ..plans import CalibrationRun, umbmark_square

@@ -54,8 +54,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, OmnikinError, ResourceLimitError, one_line, shorten
+from ..errors import BagError, OmnikinError, ResourceLimitError
 from ..geometry import between, log
+from ..messages import one_line, shorten
 from ..model import Robot
 from ..simulation.motion import check_start
 from .output import check_output, data_folder
@@ -111,10 +112,6 @@ def check_frame_ids(frame_id: str, child_frame_id: str, what: tuple[str, str] = 
             )
     if frame_id == child_frame_id:
         raise BagError(f"{what[1]} {child_frame_id!r} is the same frame as {what[0]}; the child frame is the robot's")
-
-
-class BagError(InputError):
-    """A bag that cannot be read or written as asked; the message names the bag and topic."""
 
 
 # --- rosbags, lazily ---------------------------------------------------------------------------------------

@@ -21,7 +21,7 @@ import re
 from collections import Counter
 from collections.abc import Iterator
 
-from ..errors import shorten
+from ..messages import shorten
 from ..number_text import number_problem
 from .textfile import read_lines
 

@@ -20,15 +20,7 @@ from collections.abc import Iterable, Mapping
 
 import numpy as np
 
-from ..errors import InputError
-
-
-class NonFiniteValueError(InputError):
-    """A result to be written as JSON holds NaN or an infinity; ``field`` names where."""
-
-    def __init__(self, message: str, *, field: str):
-        super().__init__(message)
-        self.field = field
+from ..errors import NonFiniteValueError
 
 
 def to_json(data, *, nullable: Iterable[str] = (), indent: int | None = 2) -> str:

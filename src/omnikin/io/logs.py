@@ -28,7 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from ..encoders import INT64_MIN, UINT64_END, counter_readings
-from ..errors import InputError, OdometryInputError, shorten
+from ..errors import InputError, OdometryInputError
+from ..messages import shorten
 from ..model import Robot
 from ..odometry import encoded_wheels
 from .csvfile import column_problems, number, read_rows

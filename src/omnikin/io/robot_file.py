@@ -2,7 +2,7 @@
 
 Every problem is reported as :class:`~omnikin.errors.RobotFileError` naming the
 file, the wheel and the field, in one line, quoting user values through
-:func:`~omnikin.errors.shorten`, e.g.
+:func:`~omnikin.messages.shorten`, e.g.
 ``robot.yaml: wheel 'w2' (#2): field 'radius': must lie in [0.0001, 10] m, got -0.04``.
 Degrees appear only in fields ending in ``_deg``; the loaded
 :class:`~omnikin.model.Robot` holds radians.
@@ -32,8 +32,9 @@ from pathlib import Path
 from typing import Any
 
 from .._arrays import range_problem, whole_problem
-from ..errors import OmnikinError, RobotFileError, did_you_mean, digits_apart, shorten
+from ..errors import OmnikinError, PresetShadowWarning, RobotFileError
 from ..geometry import MAX_DIRECTION_DEG
+from ..messages import did_you_mean, digits_apart, shorten
 from ..model import Robot, name_collisions, robot_name_problem
 from ..number_text import PLAIN_NUMBER, PLAIN_NUMBER_HELP, number_problem
 from ..physical import (
@@ -650,11 +651,6 @@ def parse_robot_text(text: str, source: str) -> Robot:
 
 ROBOT_FILE_SUFFIXES = (".yaml", ".yml", ".json")
 """Endings of robot file names (any other name is read as a robot file too when it is not a preset)."""
-
-
-class PresetShadowWarning(UserWarning):
-    """A preset name given as ROBOT is also the name of a file or folder in the current folder:
-    the preset is used (:func:`load_robot`), and the warning says how to name the file."""
 
 
 def is_preset_spec(spec) -> bool:

@@ -32,8 +32,9 @@ from array import array
 
 import numpy as np
 
-from ..errors import InputError, ResourceLimitError, shorten
+from ..errors import ResourceLimitError, RunPosesFileError
 from ..evaluation.run_poses import DIRECTIONS, MAX_RATE, MAX_ROWS, PHASES, RunPoses
+from ..messages import shorten
 from .csvfile import column_problems, iter_rows, number
 from .textfile import read_lines
 
@@ -48,10 +49,6 @@ MAX_READ_BYTES = 128 * 1024**2
 
 ANNOUNCED = re.compile(rf"# {re.escape(FORMAT)}: (\d{{1,12}}) rows\b")
 """The format line: the first line of a file omnikin wrote, with its count of data rows."""
-
-
-class RunPosesFileError(InputError):
-    """A run-poses file that cannot be read; the message names the file and the line."""
 
 
 def run_poses_text(runs, comment: str | None = None) -> str:

@@ -27,14 +27,11 @@ import math
 
 import numpy as np
 
-from ..errors import InputError, OmnikinError, shorten
+from ..errors import InputError, OmnikinError, RunsFileError
 from ..geometry import wrap_angle
+from ..messages import shorten
 from ..plans import CalibrationRun, Plan, parse_plan
 from .csvfile import column_problems, number, read_rows
-
-
-class RunsFileError(InputError):
-    """A measurement file that cannot be read; the message names file, line and column."""
 
 
 def _rows(path) -> tuple[list[str], list[tuple[int, dict]]]:

@@ -21,16 +21,13 @@ import math
 
 import numpy as np
 
-from ..errors import InputError, shorten
+from ..errors import TrajectoryFileError
 from ..geometry import wrap_angle
+from ..messages import shorten
 from .csvfile import iter_fields, number, read_rows
 from .output import STDOUT, check_output, write_text
 
 FORMATS = ("tum", "kitti", "csv")
-
-
-class TrajectoryFileError(InputError):
-    """A trajectory file that cannot be read or written; the message names the file (and line)."""
 
 
 def format_times(t) -> list[str]:

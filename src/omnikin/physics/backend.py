@@ -39,8 +39,9 @@ import math
 
 import numpy as np
 
-from ..errors import InputError, shorten
+from ..errors import InputError
 from ..geometry import wrap_angle
+from ..messages import shorten
 from ..model import Robot, require_same_wheels
 from ..runtime.backends import WheelState
 from .engine import PhysicsSim

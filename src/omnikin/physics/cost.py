@@ -45,12 +45,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import DivergedError
 from ..geometry import wrap_angle
 from ..model import Robot
 from ..simulation.motion import SampledPlan
 from ..simulation.simulate import segment_rates
 from .description import describe
-from .engine import DivergedError, PhysicsSim
+from .engine import PhysicsSim
 from .mjcf import DEFAULT_STEP
 from .run import ALIGN_MAX, STEER_ALIGNED, TAIL_MAX
 
@@ -120,7 +121,7 @@ def measure_step_seconds(robot: Robot, step: float, *, step_option: bool = False
     Computing time is this process's CPU time (``time.process_time``): other work on the
     machine slows the clock, not the count, so the estimate does not depend on the moment it
     was measured. A model that diverges while measured is refused as the run would be
-    (:class:`~omnikin.physics.engine.DivergedError`, saying when; with the ``--step`` advice for
+    (:class:`~omnikin.errors.DivergedError`, saying when; with the ``--step`` advice for
     callers that have the option, ``step_option``)."""
     try:
         return _measure(robot, step)

@@ -49,8 +49,9 @@ import numbers
 
 import numpy as np
 
-from ..errors import InputError, OmnikinError, shorten
+from ..errors import DivergedError, InputError, PhysicsError
 from ..geometry import wrap_angle
+from ..messages import shorten
 from ..model import Robot
 from ..simulation.simulate import counter_output
 from .description import PhysicalRobot, describe
@@ -104,30 +105,6 @@ def _loop_turn(robot: Robot, controller: Robot | None, names: list[str]) -> np.n
         if wheel.counts_close_loop and told is not None and wheel.encoder is not None:
             out[i] = wheel.encoder.rad_per_tick / told.rad_per_tick
     return out
-
-
-class PhysicsError(OmnikinError, RuntimeError):
-    """The physics simulation failed while running (it diverged, or the robot cannot stand)."""
-
-
-class DivergedError(PhysicsError):
-    """MuJoCo found the state not finite (or huge) and reset it: ``time`` [s] the simulated time
-    at which it did (counted from the start of settling when ``settling``), ``step`` [s] the time
-    step. The message gives no advice about an option: the caller that has a ``--step`` adds it."""
-
-    def __init__(self, message: str, *, time: float, settling: bool, step: float):
-        super().__init__(message)
-        self.time = time
-        self.settling = settling
-        self.step = step
-
-    def explained(self, note: str = "", *, step_option: bool = False) -> DivergedError:
-        """This error with ``note`` appended and, for callers that have a ``--step`` option
-        (``step_option``), the advice to try a smaller time step while one is accepted."""
-        text = str(self) + note
-        if step_option and self.step > STEP_RANGE[0] * 1.0001:
-            text += f"; or try a smaller time step (--step, now {self.step:g} s)"
-        return DivergedError(text, time=self.time, settling=self.settling, step=self.step)
 
 
 def _ignore_warning(message: str) -> None:
@@ -535,6 +512,7 @@ class PhysicsSim:
             time=t,
             settling=settling,
             step=self.step_size,
+            min_step=STEP_RANGE[0],
         )
 
     # --- readings ------------------------------------------------------------------------------------

@@ -44,7 +44,8 @@ from __future__ import annotations
 import numbers
 import xml.etree.ElementTree as ET
 
-from ..errors import InputError, shorten
+from ..errors import SMALLEST_STEP, InputError
+from ..messages import shorten
 from ..model import Robot
 from .description import MAX_STEP, PhysicalRobot, WheelBody, describe
 from .validity import check_resolvable
@@ -54,7 +55,7 @@ DEFAULT_STEP = 0.002
 CONTACT_SOLREF = (2.0 * MAX_STEP, 1.0)
 """Contact time constant [s] and damping ratio: critically damped, and no shorter than twice
 the default time step, below which MuJoCo's soft contacts lose their meaning."""
-STEP_RANGE = (1e-5, MAX_STEP)
+STEP_RANGE = (SMALLEST_STEP, MAX_STEP)
 """Time steps [s] :func:`mjcf` accepts: at most half the contacts' time constant
 (:data:`CONTACT_SOLREF`). MuJoCo raises a time constant below twice the step to twice the step
 (its ``refsafe`` flag), so a longer step would silently simulate softer contacts: at 4 ms the

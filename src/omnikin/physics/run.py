@@ -17,7 +17,7 @@ steering, sampled on until the joints have reached it and the robot is at rest (
 at once, which off-centred legs swinging under a moving robot cannot (Villasenor's robot tips
 over). A robot that tips over anyway (:data:`~omnikin.physics.engine.TIPPED`,
 :meth:`~omnikin.physics.engine.PhysicsSim.fall`) ends the run with
-:class:`~omnikin.physics.engine.PhysicsError` naming the time.
+:class:`~omnikin.errors.PhysicsError` naming the time.
 
 After the plan the wheels are commanded to stop and the run goes on, sampled at the same rate,
 until the robot is at rest (:data:`REST_SPEED`, :data:`REST_TURN`) or :data:`TAIL_MAX` has
@@ -51,7 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..encoders import QUANTISATION_SLACK, counter_rules
-from ..errors import InputError, OdometryInputError
+from ..errors import DivergedError, InputError, OdometryInputError, PhysicsError
 from ..geometry import wrap_angle
 from ..limits import MotionLimits
 from ..model import Robot, require_same_wheels
@@ -60,7 +60,7 @@ from ..plans import Plan
 from ..simulation.motion import SampledPlan, check_rate_range, require_motion, sample_plan
 from ..simulation.simulate import SimulatedRun, commanded_angles, counter_output
 from .description import steered_support_margin
-from .engine import TRACK_ERROR, TRACK_TIME, DivergedError, PhysicsError, PhysicsSim
+from .engine import TRACK_ERROR, TRACK_TIME, PhysicsSim
 from .mjcf import DEFAULT_STEP, time_step
 
 REST_SPEED = 1e-4
@@ -336,7 +336,7 @@ def _drive(
 
 
 def _require_plausible_wheels(robot: Robot, true_robot: Robot, t: np.ndarray, ticks: np.ndarray) -> None:
-    """Refuse (:class:`~omnikin.physics.engine.PhysicsError`, one line naming the wheel and the
+    """Refuse (:class:`~omnikin.errors.PhysicsError`, one line naming the wheel and the
     time) simulated encoders of ``true_robot`` that turned faster than the odometry of ``robot``
     accepts (:func:`~omnikin.encoders.counter_rules`, the speed bound of each encoded wheel): the
     wheel spun in the simulation (the model was unstable or it lost its grip), where the odometry
@@ -416,7 +416,7 @@ class _SlipWatch:
 def _require_support(sim: PhysicsSim, steer: np.ndarray, segment: int) -> None:
     """Refuse, before steering, a segment whose steering puts the contacts of the robot's wheels
     (off-centred wheels swing theirs round the steering axes) where they do not surround its
-    centre of mass: it would tip over (:class:`~omnikin.physics.engine.PhysicsError`)."""
+    centre of mass: it would tip over (:class:`~omnikin.errors.PhysicsError`)."""
     margin = steered_support_margin(sim.robot, sim.description.com, steer)
     if margin <= 0.0:
         degrees = ", ".join(f"{math.degrees(a):.4g}" for a in steer)

@@ -42,7 +42,8 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 
-from ..errors import InputError, shorten
+from ..errors import InputError
+from ..messages import shorten
 from ..model import Robot
 from .description import PhysicalRobot, WheelBody, describe
 

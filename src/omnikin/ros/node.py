@@ -56,9 +56,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, LinkError, OmnikinError, digits_apart
+from ..errors import InputError, LinkError, OmnikinError
 from ..geometry import between, log
 from ..limits import MotionLimits
+from ..messages import digits_apart
 from ..physics.description import describe
 from ..physics.joint_motion import JointMotion
 from ..physics.urdf import BASE_LINK, urdf

@@ -25,8 +25,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError, digits_apart
+from ..errors import InputError
 from ..limits import MotionLimits, saturate
+from ..messages import digits_apart
 from ..model import Robot
 
 

@@ -32,8 +32,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError, shorten
+from ..errors import InputError
 from ..geometry import wrap_angle
+from ..messages import shorten
 from ..model import Robot
 
 STRATEGIES = ("straight", "turn-drive-turn", "arc-line")

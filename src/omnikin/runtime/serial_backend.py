@@ -50,29 +50,11 @@ import numpy as np
 
 from .._arrays import whole_problem
 from ..encoders import wrap_scalar
-from ..errors import InputError, LinkError, OmnikinError, digits_apart
+from ..errors import InputError, LinkError, LinkLostError, OmnikinError, ProtocolError
+from ..messages import digits_apart
 from ..model import Robot
 from .backends import WheelState
-from .protocol import (
-    FrameEncoder,
-    Protocol,
-    ProtocolError,
-    StreamDecoder,
-    load_protocol,
-)
-
-
-class LinkLostError(LinkError):
-    """A wheel controller went silent or its port failed; the wheels were commanded to zero.
-
-    ``wheel`` and ``port`` name the first wheel found silent and its port.
-    """
-
-    def __init__(self, message: str, wheel: str | None = None, port: str | None = None):
-        super().__init__(message)
-        self.wheel = wheel
-        self.port = port
-
+from .protocol import FrameEncoder, Protocol, StreamDecoder, load_protocol
 
 BAUD_RANGE = (50, 12_000_000)
 """Baud rates of a serial link [bit/s]: from 50, the slowest rate of POSIX terminals (``B50``),

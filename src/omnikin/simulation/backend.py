@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError, shorten
+from ..errors import InputError
 from ..geometry import compose, exp
+from ..messages import shorten
 from ..model import Robot, require_same_wheels
 from ..odometry import mid_steer
 from ..rng import make_rng

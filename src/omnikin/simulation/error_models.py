@@ -32,7 +32,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import InputError, did_you_mean, shorten
+from ..errors import InputError
+from ..messages import did_you_mean, shorten
 from ..model import Robot
 
 

@@ -15,8 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, digits_apart, shorten
+from ..errors import InputError
 from ..limits import MotionLimits, speed_scale
+from ..messages import digits_apart, shorten
 from ..plans import Plan
 from ..wheels import range_problem
 

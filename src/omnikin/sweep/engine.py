@@ -60,7 +60,8 @@ from typing import Any
 
 from distributed import WorkerPlugin
 
-from ..errors import InputError, LinkError, one_line, shorten
+from ..errors import InputError, LinkError, WorkerMismatch
+from ..messages import one_line, shorten
 from .points import result_versions
 
 RETRIES = 1
@@ -359,10 +360,6 @@ def _check_workers(client, scheduler: str) -> int:
                 "install the same versions on the workers"
             )
     return len(found)
-
-
-class WorkerMismatch(LinkError):
-    """A result computed by a worker whose omnikin or NumPy differ from the client's (refused)."""
 
 
 def versioned_call(function: Callable[..., Any], *arguments: Any) -> dict[str, Any]:

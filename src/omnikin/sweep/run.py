@@ -32,8 +32,9 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Protocol
 
-from ..errors import InputError, one_line, shorten
+from ..errors import InputError, WorkerMismatch
 from ..evaluation.calibration import RECOMMENDED_REPEATS, recommended_runs
+from ..messages import one_line, shorten
 from ..model import Robot
 from ..plans import umbmark_square
 from ..simulation.motion import estimated_samples
@@ -198,7 +199,7 @@ def check_run_options(workers, task_trials) -> None:
 
 
 def _compute(study, folder, tasks, scheduler, workers, progress, result, failed_rows, tls) -> None:
-    from .engine import WorkerMismatch, dask_client, run_tasks
+    from .engine import dask_client, run_tasks
 
     keys = [point_key(p) for p in study.points]
 

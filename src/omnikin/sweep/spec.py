@@ -74,7 +74,7 @@ points, or of more than :data:`MAX_TRIALS` trials in all, is refused before a po
 
 Every problem raises :class:`~omnikin.errors.StudyFileError` in one line naming the file, the
 line and the field (``study.yaml: line 12: factors.scale.count: must be a whole number from 1
-to 1000, got 0``); values are quoted through :func:`~omnikin.errors.shorten`. The lines come from
+to 1000, got 0``); values are quoted through :func:`~omnikin.messages.shorten`. The lines come from
 the YAML node tree composed by the same strict loader.
 """
 
@@ -91,10 +91,11 @@ from typing import Any
 import numpy as np
 
 from .._arrays import range_problem, whole_problem
-from ..errors import InputError, RobotFileError, StudyFileError, did_you_mean, shorten
+from ..errors import InputError, RobotFileError, StudyFileError
 from ..evaluation.umbmark import check_side, square_refusal
 from ..io.robot_file import is_preset_spec, load_robot, parse_yaml, strict_yaml_loader
 from ..io.textfile import read_text
+from ..messages import did_you_mean, shorten
 from ..model import Robot, robot_name_problem
 from ..odometry import encoded_wheels
 from ..plans import check_mode

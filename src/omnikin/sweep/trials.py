@@ -18,8 +18,9 @@ import math
 import time
 from collections.abc import Mapping, Sequence
 
-from ..errors import OmnikinError, one_line
+from ..errors import OmnikinError
 from ..evaluation.tolerance_trial import tolerance_trial
+from ..messages import one_line
 from ..model import Robot
 from .points import POINT_FIELDS, Point, point_key, trial_seed
 from .study import RESULT_COLUMNS, TRIAL_COLUMNS

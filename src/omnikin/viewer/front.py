@@ -60,7 +60,8 @@ from websockets.datastructures import Headers
 from websockets.exceptions import ConnectionClosed
 from websockets.http11 import Request, Response
 
-from ..errors import InputError, shorten
+from ..errors import InputError
+from ..messages import shorten
 from ..runtime.teleop import MOVES
 from .inputs import NoticeLimiter, PageInputs
 

@@ -32,7 +32,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..errors import InputError, one_line, shorten
+from ..errors import BagError, InputError, ReplayError
+from ..messages import one_line, shorten
 from ..model import Robot
 from .replay import JointSeries, PoseSeries, Track
 
@@ -46,10 +47,6 @@ MAX_RESULT_BYTES = 1 << 22
 def shown(path) -> str:
     """A path as an error message names it: on one line, at most 200 characters."""
     return one_line(path, 200)
-
-
-class ReplayError(InputError):
-    """Something to replay that cannot be: the message names the file or topic."""
 
 
 @dataclass(frozen=True)
@@ -143,7 +140,7 @@ def load_bag(
     docstring); ``topics`` renames the roles of :data:`BAG_TOPICS`; a role in ``required``
     (a topic the user named) must be in the bag; ``max_messages`` and ``max_message_bytes``
     bound what is read per topic (:mod:`omnikin.io.bags`)."""
-    from ..io.bags import BagError, read_joint_states, read_poses, topic_types
+    from ..io.bags import read_joint_states, read_poses, topic_types
 
     names = dict(BAG_TOPICS, **(topics or {}))
     unknown = sorted(set(names) - set(BAG_TOPICS))

@@ -39,9 +39,10 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from ..errors import InputError, one_line, shorten
+from ..errors import InputError, RobotMismatch
 from ..io.bags import yaw_of
 from ..limits import MotionLimits
+from ..messages import one_line, shorten
 from ..model import Robot
 from .live import PageRobot, Snapshot, triple
 
@@ -68,10 +69,6 @@ def require_ros():
         raise InputError(
             f'omnikin view --ros needs rclpy and the ROS 2 messages: pip install "omnikin[ros]" ({e})'
         ) from None
-
-
-class RobotMismatch(InputError):
-    """The node drives another robot than the one given to the viewer (module docstring)."""
 
 
 def movable_joints(urdf_text: str) -> set[str]:

@@ -27,6 +27,7 @@ Modules:
 Every error raised on purpose is a :class:`ProtocolError`, an :class:`omnikin.errors.InputError`.
 """
 
+from ...errors import ProtocolError
 from .c_header import HEADER_COMMAND, generate_header
 from .cli import main
 from .codec import FrameEncoder, encode, frame_bytes, pack_payload, round_half_away, to_raw, unpack_payload
@@ -42,7 +43,6 @@ from .schema import (
     Field,
     FrameType,
     Protocol,
-    ProtocolError,
     Timing,
     load_protocol,
     parse_protocol,

@@ -15,9 +15,9 @@ import argparse
 import sys
 from pathlib import Path
 
+from ...errors import ProtocolError
 from .c_header import HEADER_COMMAND, generate_header
 from .markdown import DOC_COMMAND, update_doc
-from .schema import ProtocolError
 
 
 def main(argv=None) -> int:

@@ -11,7 +11,7 @@ divided by its ``scale`` and rounded half away from zero, as C's ``lround``; fie
 refuse values outside it. ``seq`` numbers the frames of one stream (one direction of one
 wheel) modulo 256: :class:`FrameEncoder` keeps that numbering for one sender.
 
-Values that cannot be encoded raise :class:`~.schema.ProtocolError` (an InputError).
+Values that cannot be encoded raise :class:`~omnikin.errors.ProtocolError` (an InputError).
 """
 
 from __future__ import annotations
@@ -19,8 +19,9 @@ from __future__ import annotations
 import math
 import struct
 
-from ...errors import shorten
-from .schema import INT_TYPES, Field, FrameType, Protocol, ProtocolError, load_protocol
+from ...errors import ProtocolError
+from ...messages import shorten
+from .schema import INT_TYPES, Field, FrameType, Protocol, load_protocol
 
 
 def round_half_away(x: float) -> int:

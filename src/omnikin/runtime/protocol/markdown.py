@@ -15,9 +15,10 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from ...errors import shorten
+from ...errors import ProtocolError
+from ...messages import shorten
 from .codec import encode
-from .schema import CRC_BYTES, FrameType, Protocol, ProtocolError, load_protocol
+from .schema import CRC_BYTES, FrameType, Protocol, load_protocol
 
 DOC_COMMAND = "python -m omnikin.runtime.protocol --update-doc docs/protocol.md"
 

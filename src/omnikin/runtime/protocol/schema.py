@@ -23,7 +23,8 @@ from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
-from ...errors import InputError, shorten
+from ...errors import ProtocolError
+from ...messages import shorten
 from .crc import Crc
 
 DIRECTIONS = ("host_to_controller", "controller_to_host", "both")
@@ -37,10 +38,6 @@ INT_TYPES = {  # name: (struct code, size, C type, min, max)
 }
 HEADER_BYTES = 4  # version, type, seq, length (after the sync bytes)
 CRC_BYTES = 2
-
-
-class ProtocolError(InputError):
-    """A protocol description that breaks the rules, or a frame that cannot be encoded."""
 
 
 # --- description -------------------------------------------------------------------------
