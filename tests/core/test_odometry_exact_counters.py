@@ -27,7 +27,7 @@ from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry
 from omnikin.errors import InputError, RobotFileError
 from omnikin.io.logs import read_tick_log, write_tick_log
 from omnikin.io.robot_file import robot_to_dict
-from tomasi_helpers import (
+from support.tomasi import (
     TOMASI_RPT,
     assert_poses_close,
     cli,

@@ -25,7 +25,7 @@ from omnikin import (
     batch_odometry_from_angles,
     load_robot,
 )
-from tomasi_helpers import assert_poses_close, tomasi_poses
+from support.tomasi import assert_poses_close, tomasi_poses
 
 
 def stream(robot, t, ticks, steer=None, **kw):

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
-from tomasi_helpers import TOMASI_L, TOMASI_R, TOMASI_RPT
+from support.tomasi import TOMASI_L, TOMASI_R, TOMASI_RPT
 
 
 def spin_ticks(phi: float) -> int:

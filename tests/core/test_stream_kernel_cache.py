@@ -9,7 +9,7 @@ import linecache
 
 from omnikin import Odometry
 from omnikin import _stream_kernel as kernel
-from tomasi_helpers import assert_poses_close, tomasi_poses
+from support.tomasi import assert_poses_close, tomasi_poses
 
 
 def kernel_lines() -> int:

@@ -18,7 +18,7 @@ firmware's own constants (never against a number this code printed).
 - Stepper: the step rate ramps at STEP_ACCEL; a lost link stops the steps and lets the driver go
   within the protocol's link_timeout.
 
-Every board runs in lockstep (``tests/firmware_load.py``): the host's bytes reach the chip at
+Every board runs in lockstep (``tests/support/firmware_load.py``): the host's bytes reach the chip at
 simulated times the test sets, and simulated time passes only as the test says, so every number
 asserted here is the same on an idle and on a busy machine.
 """
@@ -32,8 +32,9 @@ import time
 import numpy as np
 import pytest
 
-from firmware_build import AVR_MISSING, NANO_RAM, build_dir, firmware
-from firmware_load import (
+from omnikin.runtime.protocol import frame_bytes, load_protocol
+from support.firmware_build import AVR_MISSING, NANO_RAM, build_dir, firmware
+from support.firmware_load import (
     CONTROL_PERIOD,
     F_CPU,
     PPR,
@@ -49,8 +50,7 @@ from firmware_load import (
     every_phase,
     flood,
 )
-from omnikin.runtime.protocol import frame_bytes, load_protocol
-from simboard import SIMAVR_MISSING, SimBoard, build_simboard
+from support.simboard import SIMAVR_MISSING, SimBoard, build_simboard
 
 pytestmark = [
     pytest.mark.compiler,

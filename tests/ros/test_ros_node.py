@@ -1,6 +1,6 @@
 """``omnikin ros`` on a real ROS 2 graph: the node runs in its own process, the test drives it.
 
-Every node process gets a ROS domain of its own (tests/ros_domain.py), discovery limited to this
+Every node process gets a ROS domain of its own (tests/support/ros_domain.py), discovery limited to this
 host (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``, ``ROS_LOCALHOST_ONLY`` unset) and a
 temporary ``ROS_LOG_DIR``; the test side joins that domain with an rclpy context of its
 own (no signal handlers), subscribes ``odom``, ``joint_states`` and ``/diagnostics`` and
@@ -59,13 +59,13 @@ RELIABLE_ALL = QoSProfile(
 )  # the test's side never drops a message
 V, A_LIN = 0.2, 0.5  # commanded speed [m/s], linear.x.max_acceleration [m/s^2]
 from conftest import SRC  # noqa: E402  (the omnikin under test, for the node processes)
-from ros_domain import fresh_domain  # noqa: E402
+from support.ros_domain import fresh_domain  # noqa: E402
 
 pytestmark = pytest.mark.ros
 
 
 def _domain() -> int:
-    """A ROS domain id of this test process's own (:func:`ros_domain.fresh_domain`: disjoint from
+    """A ROS domain id of this test process's own (:func:`support.ros_domain.fresh_domain`: disjoint from
     the other pytest-xdist workers')."""
     return fresh_domain()
 

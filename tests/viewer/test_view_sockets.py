@@ -21,8 +21,8 @@ import pytest
 from websockets.exceptions import InvalidHandshake, InvalidStatus
 from websockets.sync.client import connect
 
-from browser import hold_key, wait_for
-from viewer_wire import SUBPROTOCOL, listening_sockets, start_viewer, stop_viewer
+from support.browser import hold_key, wait_for
+from support.viewer_wire import SUBPROTOCOL, listening_sockets, start_viewer, stop_viewer
 
 PATHS = ("/", "/omnikin/keys")
 """viser's scene socket (the page connects to its own origin) and the key channel."""
