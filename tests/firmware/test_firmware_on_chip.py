@@ -169,9 +169,9 @@ def test_what_the_chip_does_does_not_depend_on_the_host_pace():
 @pytest.mark.parametrize("motor", ["stepper", "dc"])
 def test_costly_garbage_on_the_bus_neither_stalls_the_control_loop_nor_hides_frames(motor):
     """Every 20 ms a SPEED_CMD and three buffers of :func:`costly_garbage` (a dozen failing CRCs
-    for one byte). The parser used to drop a rejected candidate byte by byte, a move of the whole
-    buffer each, and computed CRCs bit by bit: such bytes held the control step back by a whole
-    period (98 % late, 74 control steps in 1 s). Now the delay is one byte's rescan, up to about
+    for one byte). A parser that dropped a rejected candidate byte by byte, a move of the whole
+    buffer each, and computed CRCs bit by bit would hold the control step back by a whole
+    period (98 % late, 74 control steps in 1 s). The delay is one byte's rescan, up to about
     1.8 ms (11 candidates: about 420 bytes through the CRC and 11 moves of the buffer)."""
     stats, sent, parsed = drive_through_garbage(build_simboard(build_dir()), firmware(motor), motor, 1.0)
     probe = stats["probe"]
@@ -182,9 +182,9 @@ def test_costly_garbage_on_the_bus_neither_stalls_the_control_loop_nor_hides_fra
 
 def test_frames_of_an_unknown_type_are_counted_not_answered_one_by_one():
     """Valid frames for this wheel of a type it does not take, 8 per 20 ms beside its commands:
-    the firmware used to answer each with an ERROR_REPORT, which filled its transmit buffer and
-    crowded out the periodic frames (43 reports in 2 s instead of 100). Now they are counted and
-    reported once per heartbeat period, and every report and heartbeat goes out."""
+    answering each with an ERROR_REPORT would fill the transmit buffer and crowd out the
+    periodic frames (43 reports in 2 s instead of 100). They are counted and reported once per
+    heartbeat period, and every report and heartbeat goes out."""
     protocol = load_protocol()
     fw = firmware("stepper")
     unknown = frame_bytes(protocol, 0x7E, 0, bytes([0, 1, 2, 3]))

@@ -531,12 +531,11 @@ def test_stamped_commands_and_flat_params(tmp_path):
 
 
 def test_a_stamped_command_counts_from_its_stamp_not_its_arrival(tmp_path):
-    """Delivery latency must not extend a command. The node used to time a TwistStamped from its
-    arrival, so a last command delivered late (a reliable DDS reader holds the samples after a
-    lost one until the repair, an executor or a process runs late) moved the robot for longer
-    than its sender meant, up to a whole further timeout when it came after the robot had
-    stopped: test_stamped_commands_and_flat_params once measured 0.26 s (about the 0.3 s
-    timeout less a tick) of extra travel. Here the latency is made on purpose: a command stamped
+    """Delivery latency must not extend a command. A node that timed a TwistStamped from its
+    arrival would move the robot for longer than its sender meant when a last command is
+    delivered late (a reliable DDS reader holds the samples after a lost one until the repair,
+    an executor or a process runs late), up to a whole further timeout when it comes after the
+    robot has stopped: about 0.26 s (the 0.3 s timeout less a tick) of extra travel. Here the latency is made on purpose: a command stamped
     and then held back before publishing."""
     (tmp_path / "flat.yaml").write_text(FLAT)
     proc, g = start(

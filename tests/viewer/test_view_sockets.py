@@ -4,8 +4,8 @@ drives the robot.
 
 The sockets are enumerated from the operating system (psutil: every TCP socket in LISTEN of the
 process and its children), not from what the viewer prints: a server it starts and does not
-mention (viser's own, formerly on a loopback port that took a WebSocket from anyone) is attacked
-too.
+mention (such as viser's own, which on a loopback port would take a WebSocket from anyone) is
+attacked too.
 """
 
 from __future__ import annotations

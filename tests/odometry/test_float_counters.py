@@ -3,8 +3,8 @@
 The expected increments are computed here with Python integers (or fractions) from the very
 floats fed to the odometry: ``(b - a + half) % full - half``, exact by construction, then
 rounded once to a float; the poses are the closed form of tomasi-omni3
-(``support.tomasi.tomasi_poses``). Before the fix, ``(delta + half) % full - half`` in floats
-lost every increment of a 64-bit counter (``delta + 2**63`` has no bits left for a few ticks).
+(``support.tomasi.tomasi_poses``). The same wrap taken in floats, ``(delta + half) % full - half``,
+would lose every increment of a 64-bit counter (``delta + 2**63`` has no bits left for a few ticks).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 misread, estimators that copy and pickle, tick logs written and read back, CLI output policy.
 
 Expected poses come from the closed form of tomasi-omni3 typed in from its geometry
-(``test_review_regressions.tomasi_poses``: forward kinematics of the per-interval tick increments,
+(``support.tomasi.tomasi_poses``: forward kinematics of the per-interval tick increments,
 then the SE(2) exponential), never from the code under test.
 """
 
