@@ -3,8 +3,9 @@ the exact difference of the two readings rounded once, in the streaming estimato
 generated kernel subtracts the kept previous reading) and in batch odometry alike.
 
 A float reading kept as a float would make the kernel compute ``int - float``, which rounds the
-integer to a float first: 2**53 + 5 minus 2**53 + 2 would give 2 instead of 3. Expected poses come from the closed form of tomasi-omni3
-(``support.tomasi.tomasi_poses``); expected increments are worked out by hand.
+integer to a float first: 2**53 + 5 minus 2**53 + 2 would give 2 instead of 3. Expected poses
+come from the closed form of tomasi-omni3 (``support.tomasi.tomasi_poses``); expected
+increments are worked out by hand.
 """
 
 from __future__ import annotations

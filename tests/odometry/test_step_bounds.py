@@ -4,9 +4,9 @@ physical rules off: batch and streaming odometry refuse the same sample with one
 A rotation of 1e15 rad in one interval has no digit left modulo 2 pi (integrated, it gives a
 heading of noise, different noise in batch and streaming); a displacement of 1e14 m swallows
 every later increment; ``max_wheel_speed=1e300`` would let any jump through; integers beyond the
-float range must give one line, not a raw OverflowError. Expected values come from the closed form of tomasi-omni3 (equal
-wheel angles ``w`` turn it by ``R w / L`` on the spot; wheel angles ``(0, -sin 120, -sin 240) a / R``
-move it by ``a`` along its x axis), typed in from its geometry.
+float range must give one line, not a raw OverflowError. Expected values come from the closed
+form of tomasi-omni3 (equal wheel angles ``w`` turn it by ``R w / L`` on the spot; wheel angles
+``(0, -sin 120, -sin 240) a / R`` move it by ``a`` along its x axis), typed in from its geometry.
 """
 
 from __future__ import annotations

@@ -535,8 +535,8 @@ def test_a_stamped_command_counts_from_its_stamp_not_its_arrival(tmp_path):
     arrival would move the robot for longer than its sender meant when a last command is
     delivered late (a reliable DDS reader holds the samples after a lost one until the repair,
     an executor or a process runs late), up to a whole further timeout when it comes after the
-    robot has stopped: about 0.26 s (the 0.3 s timeout less a tick) of extra travel. Here the latency is made on purpose: a command stamped
-    and then held back before publishing."""
+    robot has stopped: about 0.26 s (the 0.3 s timeout less a tick) of extra travel. Here the
+    latency is made on purpose: a command stamped and then held back before publishing."""
     (tmp_path / "flat.yaml").write_text(FLAT)
     proc, g = start(
         tmp_path,
