@@ -27,15 +27,12 @@ from __future__ import annotations
 
 import math
 import random
-import sys
 import time
 from pathlib import Path
 
 from _common import save
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from firmware_build import AVR_MISSING, NANO_FLASH, NANO_RAM, build_dir, firmware  # noqa: E402
-from firmware_load import (  # noqa: E402
+from support.firmware_build import AVR_MISSING, NANO_FLASH, NANO_RAM, build_dir, firmware
+from support.firmware_load import (
     CONTROL_PERIOD,
     F_CPU,
     PPR,
@@ -49,7 +46,7 @@ from firmware_load import (  # noqa: E402
     every_phase,
     flood,
 )
-from simboard import SIMAVR_MISSING, SimBoard, build_simboard  # noqa: E402
+from support.simboard import SIMAVR_MISSING, SimBoard, build_simboard
 
 MOTORS = ("stepper", "dc")
 TOP_PULSES = TOP_SPEED * PPR / (2 * math.pi)  # [pulses/s] at the top wheel speed

@@ -1,7 +1,7 @@
 """The viewer (extra ``viewer``): latency from a key press to the pose on the page.
 
 ``omnikin view tomasi-omni3`` (kinematic engine) is served on a free port and opened in Debian's
-headless Chromium (Playwright, the flags of ``tests/browser.py``; software WebGL, no GPU). Then
+headless Chromium (Playwright, the flags of ``tests/support/browser.py``; software WebGL, no GPU). Then
 ``PRESSES`` times: the robot at rest, W is pressed and held, and the page records, on its own
 clock, the key event's time stamp (when the key went down), when the page's handlers ran (the
 teleop script sends then), and when the pose in the readout first changed (a MutationObserver on
@@ -18,12 +18,9 @@ import statistics
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 from _common import save
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from browser import CHROMIUM_FLAGS, VIEWPORT, find_chromium  # noqa: E402
+from support.browser import CHROMIUM_FLAGS, VIEWPORT, find_chromium
 
 PRESSES = 20
 HOLD = 0.25  # [s] each press

@@ -7,18 +7,14 @@ need an extra or system packages are skipped, with the reason, where these are m
 """
 
 import importlib
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-import bench_accuracy  # noqa: E402
-import bench_batch  # noqa: E402
-import bench_runtime  # noqa: E402
-import bench_simulation  # noqa: E402
-import bench_streaming  # noqa: E402
-import bench_umbmark  # noqa: E402
-from _common import machine, save  # noqa: E402
+import bench_accuracy
+import bench_batch
+import bench_runtime
+import bench_simulation
+import bench_streaming
+import bench_umbmark
+from _common import machine, save
 
 OPTIONAL = {
     "physics": "pip install -e '.[physics]' (MuJoCo)",
@@ -30,8 +26,8 @@ OPTIONAL = {
 
 
 def _firmware_missing() -> str | None:
-    from firmware_build import AVR_MISSING
-    from simboard import SIMAVR_MISSING
+    from support.firmware_build import AVR_MISSING
+    from support.simboard import SIMAVR_MISSING
 
     return AVR_MISSING or SIMAVR_MISSING
 

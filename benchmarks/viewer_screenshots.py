@@ -3,7 +3,7 @@
     python3 benchmarks/viewer_screenshots.py [FOLDER]
 
 writes ``viewer-live.png`` and ``viewer-replay.png`` (1280 x 800) into ``FOLDER`` (default
-``docs/img``), with Debian's headless Chromium (Playwright, the flags of ``tests/browser.py``):
+``docs/img``), with Debian's headless Chromium (Playwright, the flags of ``tests/support/browser.py``):
 
 - live: ``omnikin view tomasi-omni3 --engine physics``; W and Q held together for 4 s (an arc),
   then the follow camera (key 3): the green heading arrow of the truth, the narrower magenta one
@@ -27,9 +27,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from support.browser import CHROMIUM_FLAGS, find_chromium
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-from browser import CHROMIUM_FLAGS, find_chromium  # noqa: E402
 
 SIZE = {"width": 1280, "height": 800}
 """The screenshots' size [CSS px, device scale 1]."""

@@ -5,35 +5,20 @@ from __future__ import annotations
 
 import math
 import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, settings
 
-from browser_fixtures import browser, page, page_log  # noqa: F401  (the viewer tests' fixtures)
 from omnikin import Encoder, Robot, Wheel
-from omnikin_paths import ROOT, SRC, omnikin_env  # noqa: F401  (re-exported: tests import them from here)
-from ros_domain import default_domain
+from support.browser_fixtures import browser, page, page_log  # noqa: F401  (the viewer tests' fixtures)
+from support.cli import run_cli, run_entry_point  # noqa: F401  (re-exported: tests import them from here)
+from support.paths import ROOT, SRC, omnikin_env  # noqa: F401  (re-exported: tests import them from here)
+from support.ros_domain import default_domain
 
 # the tests run in parallel (pytest-xdist): a ROS 2 graph of this worker's own, never the user's domain 0;
-# tests that start nodes take a domain of their own with ros_domain.fresh_domain()
+# tests that start nodes take a domain of their own with support.ros_domain.fresh_domain()
 os.environ["ROS_DOMAIN_ID"] = str(default_domain())
-
-
-def run_entry_point(*argv, cwd=None, timeout: float = 120) -> subprocess.CompletedProcess:
-    """Run ``omnikin ARGV`` as a user does, in a fresh process importing this checkout's omnikin
-    (:func:`omnikin_env`) from any working folder ``cwd``; text output captured; ``timeout`` [s]
-    guards against a hang."""
-    return subprocess.run(
-        [sys.executable, "-m", "omnikin.cli.main", *[str(a) for a in argv]],
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        env=omnikin_env(),
-        timeout=timeout,
-    )
 
 
 @pytest.fixture(scope="module")
@@ -61,16 +46,6 @@ def omni_robot(angles_deg, distance=0.113, radius=0.04125, drive_offsets_deg=Non
             Wheel(f"w{i + 1}", "omni", distance * math.cos(b), distance * math.sin(b), b + math.pi / 2 + off, radius)
         )
     return Robot(name, tuple(wheels))
-
-
-def run_cli(capsys, *argv):
-    """Run ``omnikin`` in this process: ``(exit status, stdout, stderr)``. ``main`` returns a
-    status for everything, usage errors and ``--help`` included: anything it raises fails the test."""
-    from omnikin.cli.main import main
-
-    rc = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 def circle_wheels(n, distance=0.2, radius=0.05, ticks_per_rev=100):

@@ -1,9 +1,9 @@
 """Command-line edge cases: infeasible twists reported, Ackermann spins, file lines named after
 duplicates, extreme robot files, absurd simulation plans, bag topic names.
 
-Regression tests of the review findings, grouped here by module. Expected values are derived
-independently of the code under test (closed forms typed in from the geometry, least squares
-computed with NumPy, or the batch odometry as reference for the streaming estimator).
+Expected values are derived independently of the code under test (closed forms typed in from
+the geometry, least squares computed with NumPy, or the batch odometry as reference for the
+streaming estimator).
 """
 
 from __future__ import annotations

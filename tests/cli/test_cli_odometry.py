@@ -17,7 +17,7 @@ import sys
 import numpy as np
 import pytest
 
-from tomasi_helpers import (
+from support.tomasi import (
     TOMASI_F,
     TOMASI_J,
     TOMASI_RPT,

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from tomasi_helpers import cli, one_line_error, write_log
+from support.tomasi import cli, one_line_error, write_log
 
 
 def test_a_log_line_of_a_1e17_s_interval_turning_the_robot_1e15_rad_is_refused(capsys, tmp_path):

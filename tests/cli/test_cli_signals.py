@@ -18,9 +18,9 @@ import time
 
 import pytest
 
-import servers
 from conftest import omnikin_env
-from ros_domain import fresh_domain
+from support import servers
+from support.ros_domain import fresh_domain
 
 
 def start(tmp_path, *argv):

@@ -17,10 +17,10 @@ import subprocess
 
 import pytest
 
-import servers
 from conftest import ROOT, omnikin_env
 from omnikin.cli.common import OUTPUTS
 from omnikin.cli.main import build_parser
+from support import servers
 
 EXAMPLES = ROOT / "examples"
 

@@ -1,10 +1,8 @@
 """The one check that refuses a job before it starts (omnikin.resource_limits): the command line
 (--max-memory, --max-time) and the Python entry points (max_memory, max_time) refuse the same
-job with the same line, sizes in the same unit style, only the names of the limits differ.
-
-Before, omnikin umbmark said '... more than --max-memory 2G' and omnikin.run_umbmark '... more
-than max_memory 2 GiB' from a second copy of the check, and a limit that was no number
-(max_memory='2G') ended in a TypeError."""
+job with the same line, sizes in the same unit style, only the names of the limits differ (not
+'... more than --max-memory 2G' from one and '... more than max_memory 2 GiB' from the other),
+and a limit that is no number (max_memory='2G') is refused in one line, not with a TypeError."""
 
 from __future__ import annotations
 

@@ -23,11 +23,11 @@ import tempfile
 
 import pytest
 
-import servers
 from conftest import ROOT, omnikin_env
-from firmware_build import AVR_MISSING
-from ros_domain import fresh_domain
-from simboard import SIMAVR_MISSING
+from support import servers
+from support.firmware_build import AVR_MISSING
+from support.ros_domain import fresh_domain
+from support.simboard import SIMAVR_MISSING
 
 README = (ROOT / "README.md").read_text(encoding="utf-8")
 

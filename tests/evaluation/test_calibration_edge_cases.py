@@ -1,8 +1,8 @@
 """Borenstein's correction on degenerate input; the lever parameter's sign.
 
-Regression tests of the review findings, grouped here by module. Expected values are derived
-independently of the code under test (closed forms typed in from the geometry, least squares
-computed with NumPy, or the batch odometry as reference for the streaming estimator).
+Expected values are derived independently of the code under test (closed forms typed in from
+the geometry, least squares computed with NumPy, or the batch odometry as reference for the
+streaming estimator).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ def test_borenstein_degenerate_input_is_an_error():
 
 def test_lever_is_the_displacement_component_along_its_direction():
     """The lever is the hub displacement along (-sin a, cos a), a = drive + roller; the calibrate
-    table shows that component (it used to show a magnitude with the sign of dx)."""
+    table shows that component (not a magnitude with the sign of dx)."""
     import math as _m
 
     from omnikin.evaluation.calibration import errors_from_vector, parameter_names

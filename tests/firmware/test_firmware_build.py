@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from firmware_build import AVR_MISSING, FIRMWARE, NANO_FLASH, NANO_RAM, firmware, make
+from support.firmware_build import AVR_MISSING, FIRMWARE, NANO_FLASH, NANO_RAM, firmware, make
 
 pytestmark = [pytest.mark.compiler, pytest.mark.skipif(AVR_MISSING is not None, reason=str(AVR_MISSING))]
 

@@ -18,7 +18,7 @@ firmware's own constants (never against a number this code printed).
 - Stepper: the step rate ramps at STEP_ACCEL; a lost link stops the steps and lets the driver go
   within the protocol's link_timeout.
 
-Every board runs in lockstep (``tests/firmware_load.py``): the host's bytes reach the chip at
+Every board runs in lockstep (``tests/support/firmware_load.py``): the host's bytes reach the chip at
 simulated times the test sets, and simulated time passes only as the test says, so every number
 asserted here is the same on an idle and on a busy machine.
 """
@@ -33,8 +33,9 @@ import time
 import numpy as np
 import pytest
 
-from firmware_build import AVR_MISSING, NANO_RAM, build_dir, firmware
-from firmware_load import (
+from omnikin.runtime.protocol import frame_bytes, load_protocol
+from support.firmware_build import AVR_MISSING, NANO_RAM, build_dir, firmware
+from support.firmware_load import (
     CONTROL_PERIOD,
     F_CPU,
     PPR,
@@ -50,8 +51,7 @@ from firmware_load import (
     every_phase,
     flood,
 )
-from omnikin.runtime.protocol import frame_bytes, load_protocol
-from simboard import SIMAVR_MISSING, SimBoard, build_simboard
+from support.simboard import SIMAVR_MISSING, SimBoard, build_simboard
 
 pytestmark = [
     pytest.mark.compiler,
@@ -174,9 +174,9 @@ def test_what_the_chip_does_does_not_depend_on_the_host_pace():
 @pytest.mark.parametrize("motor", ["stepper", "dc"])
 def test_costly_garbage_on_the_bus_neither_stalls_the_control_loop_nor_hides_frames(motor):
     """Every 20 ms a SPEED_CMD and three buffers of :func:`costly_garbage` (a dozen failing CRCs
-    for one byte). The parser used to drop a rejected candidate byte by byte, a move of the whole
-    buffer each, and computed CRCs bit by bit: such bytes held the control step back by a whole
-    period (98 % late, 74 control steps in 1 s). Now the delay is one byte's rescan, up to about
+    for one byte). A parser that dropped a rejected candidate byte by byte, a move of the whole
+    buffer each, and computed CRCs bit by bit would hold the control step back by a whole
+    period (98 % late, 74 control steps in 1 s). The delay is one byte's rescan, up to about
     1.8 ms (11 candidates: about 420 bytes through the CRC and 11 moves of the buffer)."""
     stats, sent, parsed = drive_through_garbage(build_simboard(build_dir()), firmware(motor), motor, 1.0)
     probe = stats["probe"]
@@ -187,9 +187,9 @@ def test_costly_garbage_on_the_bus_neither_stalls_the_control_loop_nor_hides_fra
 
 def test_frames_of_an_unknown_type_are_counted_not_answered_one_by_one():
     """Valid frames for this wheel of a type it does not take, 8 per 20 ms beside its commands:
-    the firmware used to answer each with an ERROR_REPORT, which filled its transmit buffer and
-    crowded out the periodic frames (43 reports in 2 s instead of 100). Now they are counted and
-    reported once per heartbeat period, and every report and heartbeat goes out."""
+    answering each with an ERROR_REPORT would fill the transmit buffer and crowd out the
+    periodic frames (43 reports in 2 s instead of 100). They are counted and reported once per
+    heartbeat period, and every report and heartbeat goes out."""
     protocol = load_protocol()
     fw = firmware("stepper")
     unknown = frame_bytes(protocol, 0x7E, 0, bytes([0, 1, 2, 3]))

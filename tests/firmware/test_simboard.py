@@ -19,8 +19,8 @@ from pathlib import Path
 
 import pytest
 
-from firmware_build import symbol
-from simboard import SIMAVR_MISSING, SimBoard, build_simboard
+from support.firmware_build import symbol
+from support.simboard import SIMAVR_MISSING, SimBoard, build_simboard
 
 pytestmark = [pytest.mark.compiler, pytest.mark.skipif(SIMAVR_MISSING is not None, reason=SIMAVR_MISSING or "")]
 

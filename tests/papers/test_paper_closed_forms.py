@@ -1,6 +1,6 @@
 """omnikin's presets against the (corrected) closed forms of the seed papers.
 
-Companion of ``tests/test_errata.py`` and ``docs/errata.md`` (entry ids in the test names).
+Companion of ``tests/papers/test_errata.py`` and ``docs/errata.md`` (entry ids in the test names).
 Every expected value is produced here by a SymPy derivation from first principles -- the
 rigid-body velocity of the wheel hub, and the 3-D no-slip condition at the wheel / roller
 contact -- which is first checked to reproduce the paper's (corrected) closed form and then

@@ -1,7 +1,7 @@
 """A robot as built keeps the body of its design: the physical description differs from the
-nominal one only where the errors say. Before, the chassis was derived from the as-built hub
-positions: 1 mm off the circle, tomasi-omni3's wheels no longer stood evenly on a circle and its
-1.655 kg cylinder became a 1.381 kg box.
+nominal one only where the errors say. A chassis derived from the as-built hub positions would
+not: 1 mm off the circle, tomasi-omni3's wheels no longer stand evenly on a circle and its
+1.655 kg cylinder becomes a 1.381 kg box.
 
 Expected values from the errors alone: each hub moved by exactly its ``(dx, dy)``, each radius
 ``r (1 + e)``, each drive direction ``delta + d``; chassis (shape, size, mass, centre of mass,

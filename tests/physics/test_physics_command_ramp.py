@@ -16,9 +16,9 @@ Expected values from closed forms, not from the code under test:
 - slip: a wheel's rim speed ``r_i omega_i`` against the speed its contact would have rolling on
   the true body motion, ``r_i J_i . xi_true`` (the chassis' ground-truth twist).
 
-The bug this guards: the old ramp ``tau / (2 I_eff)`` let the rims accelerate at ``mu g / 2``;
+Why the ramp matters: a ramp of ``tau / (2 I_eff)`` lets the rims accelerate at ``mu g / 2``;
 omni4's body then accelerates ``sqrt(2)`` times as fast and needs every wheel's full friction
-``mu N``, so a 0.5 m/s step slipped all four wheels (residual 1.2 rad/s, ten times the bound).
+``mu N``, so a 0.5 m/s step slips all four wheels (residual 1.2 rad/s, ten times the bound).
 """
 
 from __future__ import annotations

@@ -67,7 +67,7 @@ def estimated_and_run(robot, path: str, rate: float, step: float, taken: list[in
 def test_the_estimate_counts_every_time_step_and_sample_the_run_takes(
     tmp_path, monkeypatch, preset, physical, path, rate, step
 ):
-    # the old estimate, 5 ms per simulated second whatever the model and step, ignored both: the
+    # a flat 5 ms per simulated second, whatever the model and step, would ignore both: the
     # estimate's counts must bound what the run does, step for step (how the measured seconds per
     # step compare with a run's computing time is a matter of the machine's pace:
     # benchmarks/bench_physics.py, "estimate against the run")

@@ -28,7 +28,7 @@ import numpy as np
 import pytest
 
 from conftest import omnikin_env, run_cli
-from servers import virtual_display
+from support.servers import virtual_display
 
 SPEED = 0.2  # m/s, --speed
 TURN = 0.5  # rad/s, --turn

@@ -53,8 +53,8 @@ from test_ros_node import (  # noqa: E402 (after the importorskips there)
 )
 
 from conftest import constant_twist_pose
-from firmware_build import AVR_MISSING, build_dir, firmware
-from simboard import SIMAVR_MISSING, SimBoard, build_simboard
+from support.firmware_build import AVR_MISSING, build_dir, firmware
+from support.simboard import SIMAVR_MISSING, SimBoard, build_simboard
 
 pytestmark = [
     pytest.mark.ros,

@@ -1,6 +1,6 @@
 """``omnikin ros`` on a real ROS 2 graph: the node runs in its own process, the test drives it.
 
-Every node process gets a ROS domain of its own (tests/ros_domain.py), discovery limited to this
+Every node process gets a ROS domain of its own (tests/support/ros_domain.py), discovery limited to this
 host (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``, ``ROS_LOCALHOST_ONLY`` unset) and a
 temporary ``ROS_LOG_DIR``; the test side joins that domain with an rclpy context of its
 own (no signal handlers), subscribes ``odom``, ``joint_states`` and ``/diagnostics`` and
@@ -59,13 +59,13 @@ RELIABLE_ALL = QoSProfile(
 )  # the test's side never drops a message
 V, A_LIN = 0.2, 0.5  # commanded speed [m/s], linear.x.max_acceleration [m/s^2]
 from conftest import SRC  # noqa: E402  (the omnikin under test, for the node processes)
-from ros_domain import fresh_domain  # noqa: E402
+from support.ros_domain import fresh_domain  # noqa: E402
 
 pytestmark = pytest.mark.ros
 
 
 def _domain() -> int:
-    """A ROS domain id of this test process's own (:func:`ros_domain.fresh_domain`: disjoint from
+    """A ROS domain id of this test process's own (:func:`support.ros_domain.fresh_domain`: disjoint from
     the other pytest-xdist workers')."""
     return fresh_domain()
 
@@ -531,13 +531,12 @@ def test_stamped_commands_and_flat_params(tmp_path):
 
 
 def test_a_stamped_command_counts_from_its_stamp_not_its_arrival(tmp_path):
-    """Delivery latency must not extend a command. The node used to time a TwistStamped from its
-    arrival, so a last command delivered late (a reliable DDS reader holds the samples after a
-    lost one until the repair, an executor or a process runs late) moved the robot for longer
-    than its sender meant, up to a whole further timeout when it came after the robot had
-    stopped: test_stamped_commands_and_flat_params once measured 0.26 s (about the 0.3 s
-    timeout less a tick) of extra travel. Here the latency is made on purpose: a command stamped
-    and then held back before publishing."""
+    """Delivery latency must not extend a command. A node that timed a TwistStamped from its
+    arrival would move the robot for longer than its sender meant when a last command is
+    delivered late (a reliable DDS reader holds the samples after a lost one until the repair,
+    an executor or a process runs late), up to a whole further timeout when it comes after the
+    robot has stopped: about 0.26 s (the 0.3 s timeout less a tick) of extra travel. Here the
+    latency is made on purpose: a command stamped and then held back before publishing."""
     (tmp_path / "flat.yaml").write_text(FLAT)
     proc, g = start(
         tmp_path,

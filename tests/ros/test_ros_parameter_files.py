@@ -1,9 +1,9 @@
 """ROS parameter files and options: bad files refused with one line, exponent floats, serial-only
 options with the simulated back-end.
 
-Regression tests of the review findings, grouped here by module. Expected values are derived
-independently of the code under test (closed forms typed in from the geometry, least squares
-computed with NumPy, or the batch odometry as reference for the streaming estimator).
+Expected values are derived independently of the code under test (closed forms typed in from
+the geometry, least squares computed with NumPy, or the batch odometry as reference for the
+streaming estimator).
 """
 
 from __future__ import annotations

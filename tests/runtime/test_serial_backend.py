@@ -182,7 +182,7 @@ def test_controller_reset_keeps_the_angle(rig):
 def test_a_controller_restart_whose_reset_report_is_lost_does_not_move_the_angle(rig):
     """Without its RESET the host sees the restart in the sequence numbers (resync_after frames
     out of order, then adopted) and takes the next report's count as the new zero: the angle
-    stays where it was (on the old code it jumped back by the 150 counts the counter lost)."""
+    stays where it was (it does not jump back by the 150 counts the counter lost)."""
     fake, backend = rig
     fake.advance(0, 150)
     poll(backend, lambda s: math.isclose(s.positions[0], math.pi / 2, abs_tol=1e-12))

@@ -1,8 +1,8 @@
 """Serial back-end lifecycle: a closed back-end refuses to reconnect.
 
-Regression tests of the review findings, grouped here by module. Expected values are derived
-independently of the code under test (closed forms typed in from the geometry, least squares
-computed with NumPy, or the batch odometry as reference for the streaming estimator).
+Expected values are derived independently of the code under test (closed forms typed in from
+the geometry, least squares computed with NumPy, or the batch odometry as reference for the
+streaming estimator).
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ output (wrapped, unsigned), and everything downstream reads them back.
 Before the fix a 12-bit robot could not be simulated once a count left 0 .. 4095 ("tick
 reading -2051 outside the range of a 12-bit counter"), neither by ``omnikin simulate --log``
 nor by ``omnikin umbmark``. Expected values: the readings are the counts modulo 2**12 (NumPy
-here), the poses the closed form of the true increments (``tomasi_helpers.tomasi_poses``), and
+here), the poses the closed form of the true increments (``support.tomasi.tomasi_poses``), and
 a 12-bit robot must give exactly what the same robot without a counter width gives.
 """
 
@@ -21,7 +21,7 @@ from omnikin.io.logs import read_tick_log
 from omnikin.plans import umbmark_square
 from omnikin.simulation.error_models import NoiseModel
 from omnikin.simulation.simulate import counter_output, simulate
-from tomasi_helpers import assert_poses_close, read_csv_traj, tomasi_file, tomasi_poses
+from support.tomasi import assert_poses_close, read_csv_traj, tomasi_file, tomasi_poses
 
 
 def counter_robot_file(path, bits):

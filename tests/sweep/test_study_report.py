@@ -6,7 +6,7 @@ from __future__ import annotations
 from omnikin.sweep.points import Point
 from omnikin.sweep.report import MAX_ROWS, study_markdown
 from omnikin.sweep.summary import answers, summarize
-from sweep_tables import grid, make_study, proportional_table
+from support.sweep_tables import grid, make_study, proportional_table
 
 SCALES = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 

@@ -11,7 +11,7 @@ import pytest
 
 from omnikin.evaluation.order_statistics import order_statistic_ranks, quantile_interval, values_for_bound
 from omnikin.sweep.summary import SUMMARY_COLUMNS, summarize
-from sweep_tables import grid, make_study, trial_table
+from support.sweep_tables import grid, make_study, trial_table
 
 
 def brute_force_ranks(n, q, level):

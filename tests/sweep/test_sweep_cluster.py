@@ -9,8 +9,8 @@ import os
 import signal
 import time
 
-from cluster_study import HANG_S, assert_same_table, no_traceback, start_sweep, sweep, table, write_study
-from dask_cluster import dask_cluster
+from support.cluster_study import HANG_S, assert_same_table, no_traceback, start_sweep, sweep, table, write_study
+from support.dask_cluster import dask_cluster
 
 SQUARE = {"side": 2, "runs": 2}
 """The UMBmark square of this file's study: 2 m, 2 runs per direction."""

@@ -24,9 +24,9 @@ import time
 import numpy as np
 import pytest
 
-from cluster_study import HANG_S, assert_same_table, start_sweep, table, write_study
 from conftest import run_entry_point
-from dask_cluster import dask_answers, dask_cluster, listening_ports, make_tls, wire_answer
+from support.cluster_study import HANG_S, assert_same_table, start_sweep, table, write_study
+from support.dask_cluster import dask_answers, dask_cluster, listening_ports, make_tls, wire_answer
 
 pytest.importorskip("cryptography", reason="omnikin[sweep] (cryptography) is not installed")
 pytest.importorskip("psutil", reason="psutil finds the listening sockets")

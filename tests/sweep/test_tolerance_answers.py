@@ -11,7 +11,7 @@ import pytest
 from omnikin.evaluation.threshold import ABOVE, ABOVE_FIRST, BELOW, CROSSES, threshold
 from omnikin.sweep.points import Point
 from omnikin.sweep.summary import answers, series_of, summarize
-from sweep_tables import grid, make_study, proportional_table, trial_table
+from support.sweep_tables import grid, make_study, proportional_table, trial_table
 
 SCALES = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 

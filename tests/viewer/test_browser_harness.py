@@ -10,7 +10,7 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from browser import (
+from support.browser import (
     VIEWPORT,
     VISER_CONNECTED,
     colour_mask,

@@ -10,9 +10,9 @@ import pytest
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import connect
 
-from browser import wait_until
 from omnikin.errors import InputError
 from omnikin.viewer.front import KEYS_PATH, SCRIPT_PATH, FrontServer, parse_key_message
+from support.browser import wait_until
 
 
 def without_source(message: dict) -> dict:

@@ -17,7 +17,6 @@ import pytest
 import viser
 import viser.transforms as vtf
 
-from browser import colour_mask, screenshot_rgb, wait_for, wait_for_colour, wait_for_viser, wait_until
 from omnikin.io.robot_file import load_robot
 from omnikin.physics.description import describe
 from omnikin.viewer.app import LiveViewer
@@ -26,7 +25,8 @@ from omnikin.viewer.replay import PoseSeries, Track
 from omnikin.viewer.replay_page import ReplayViewer
 from omnikin.viewer.replay_sources import ReplaySource
 from omnikin.viewer.scene import ODOMETRY_COLOUR, TRUTH_COLOUR, RobotView
-from viewer_wire import served
+from support.browser import colour_mask, screenshot_rgb, wait_for, wait_for_colour, wait_for_viser, wait_until
+from support.viewer_wire import served
 
 
 def world_transform(scene: viser.SceneApi, name: str) -> vtf.SE3:

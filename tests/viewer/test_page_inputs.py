@@ -13,8 +13,8 @@ import shutil
 import msgspec
 import pytest
 
-from browser import wait_until
-from viewer_wire import ViserClient, notices, start_viewer, stop_viewer
+from support.browser import wait_until
+from support.viewer_wire import ViserClient, notices, start_viewer, stop_viewer
 
 CAMERA = {
     "type": "ViewerCameraMessage",

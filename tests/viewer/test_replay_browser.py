@@ -10,12 +10,12 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from browser import wait_for, wait_for_viser
 from omnikin.io.robot_file import load_robot
 from omnikin.viewer.replay import PoseSeries, Track
 from omnikin.viewer.replay_page import ReplayViewer
 from omnikin.viewer.replay_sources import ReplaySource
-from viewer_wire import served
+from support.browser import wait_for, wait_for_viser
+from support.viewer_wire import served
 
 V, W = 0.3, 0.4  # the recorded twist [m/s, rad/s]: a circle of radius 0.75 m
 

@@ -21,10 +21,10 @@ import time
 import numpy as np
 import pytest
 
-from browser import colour_mask, hold_key, screenshot_rgb, wait_for, wait_until
 from omnikin.viewer.scene import CHASSIS_COLOUR
-from omnikin_paths import omnikin_env
-from viewer_wire import served
+from support.browser import colour_mask, hold_key, screenshot_rgb, wait_for, wait_until
+from support.paths import omnikin_env
+from support.viewer_wire import served
 
 ACTIONS = {"w": "forward", "s": "back", "a": "left", "d": "right", "q": "turn_left"}  # omnikin.runtime.teleop
 SPEED, TURN = 0.2, 0.5  # the keys' defaults [m/s, rad/s]

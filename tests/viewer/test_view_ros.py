@@ -22,9 +22,9 @@ import time
 
 import pytest
 
-from browser import hold_key, wait_for, wait_until
-from omnikin_paths import omnikin_env
-from ros_domain import fresh_domain
+from support.browser import hold_key, wait_for, wait_until
+from support.paths import omnikin_env
+from support.ros_domain import fresh_domain
 
 pytestmark = pytest.mark.ros
 SPEED = 0.2
@@ -61,7 +61,7 @@ def motion_distance(duration: float, speed: float, accel: float) -> float:
 
 @pytest.fixture
 def ros_env(tmp_path):
-    """A ROS domain of this test's own (:func:`ros_domain.fresh_domain`), discovery on this host,
+    """A ROS domain of this test's own (:func:`support.ros_domain.fresh_domain`), discovery on this host,
     logs in the test's folder."""
     env = omnikin_env(
         ROS_DOMAIN_ID=str(fresh_domain()),

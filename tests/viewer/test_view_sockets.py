@@ -4,8 +4,8 @@ drives the robot.
 
 The sockets are enumerated from the operating system (psutil: every TCP socket in LISTEN of the
 process and its children), not from what the viewer prints: a server it starts and does not
-mention (viser's own, formerly on a loopback port that took a WebSocket from anyone) is attacked
-too.
+mention (such as viser's own, which on a loopback port would take a WebSocket from anyone) is
+attacked too.
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ import pytest
 from websockets.exceptions import InvalidHandshake, InvalidStatus
 from websockets.sync.client import connect
 
-from browser import hold_key, wait_for
-from viewer_wire import SUBPROTOCOL, listening_sockets, start_viewer, stop_viewer
+from support.browser import hold_key, wait_for
+from support.viewer_wire import SUBPROTOCOL, listening_sockets, start_viewer, stop_viewer
 
 PATHS = ("/", "/omnikin/keys")
 """viser's scene socket (the page connects to its own origin) and the key channel."""

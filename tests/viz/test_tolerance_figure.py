@@ -18,7 +18,7 @@ from omnikin.sweep.points import Point  # noqa: E402
 from omnikin.sweep.summary import summarize  # noqa: E402
 from omnikin.viz import save_figure  # noqa: E402
 from omnikin.viz.sweep import MAX_SERIES, tolerance_figure  # noqa: E402
-from sweep_tables import grid, make_study, proportional_table, trial_table  # noqa: E402
+from support.sweep_tables import grid, make_study, proportional_table, trial_table  # noqa: E402
 
 SCALES = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 

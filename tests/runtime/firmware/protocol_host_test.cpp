@@ -1,5 +1,5 @@
 /* Host test of the generated header firmware/omnikin_wheel/omnikin_protocol.h (built by
- * tests/test_protocol.py with g++ -Wall -Wextra -Werror, output compared with Python):
+ * tests/runtime/test_protocol.py with g++ -Wall -Wextra -Werror, output compared with Python):
  *
  *   protocol_host_test crc          CRC of "123456789" and the header's check value
  *   protocol_host_test encode       one frame of each type, fixed field values, as hex

@@ -1,5 +1,5 @@
 /* Runs firmware/omnikin_wheel/omnikin_wheel.ino on the host against a simulated DC motor and
- * quadrature encoder (tests/test_protocol.py builds and drives it).
+ * quadrature encoder (tests/runtime/test_protocol.py builds and drives it).
  *
  *   sim_main SCHEDULE DURATION_US [STEP_US]
  *

@@ -1,7 +1,7 @@
 """The compiled streaming kernels are kept in a bounded cache: a program that builds estimators
-for ever new configurations (a calibration sweep, a fuzzer) does not grow without bound (the
-old cache kept every kernel and its linecache source: 2000 slightly different robots held
-64 MB). An estimator keeps working after its kernels left the cache."""
+for ever new configurations (a calibration sweep, a fuzzer) does not grow without bound (a
+cache that kept every kernel and its linecache source would hold 64 MB for 2000 slightly
+different robots). An estimator keeps working after its kernels left the cache."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import linecache
 
 from omnikin import Odometry
 from omnikin import _stream_kernel as kernel
-from tomasi_helpers import assert_poses_close, tomasi_poses
+from support.tomasi import assert_poses_close, tomasi_poses
 
 
 def kernel_lines() -> int:

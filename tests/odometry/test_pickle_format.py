@@ -11,7 +11,7 @@ import pytest
 
 from omnikin import InputError, Odometry
 from omnikin.streaming import STATE_FORMAT
-from tomasi_helpers import assert_poses_close, tomasi_poses
+from support.tomasi import assert_poses_close, tomasi_poses
 
 
 class PickledOdometry:

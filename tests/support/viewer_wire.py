@@ -26,7 +26,7 @@ import viser
 import zstandard
 from websockets.sync.client import ClientConnection, connect
 
-from omnikin_paths import omnikin_env
+from support.paths import omnikin_env
 
 SUBPROTOCOL = f"viser-v{viser.__version__}"
 INPUT_CONTROLS = (

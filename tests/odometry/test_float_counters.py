@@ -3,8 +3,8 @@
 The expected increments are computed here with Python integers (or fractions) from the very
 floats fed to the odometry: ``(b - a + half) % full - half``, exact by construction, then
 rounded once to a float; the poses are the closed form of tomasi-omni3
-(``tomasi_helpers.tomasi_poses``). Before the fix, ``(delta + half) % full - half`` in floats
-lost every increment of a 64-bit counter (``delta + 2**63`` has no bits left for a few ticks).
+(``support.tomasi.tomasi_poses``). The same wrap taken in floats, ``(delta + half) % full - half``,
+would lose every increment of a 64-bit counter (``delta + 2**63`` has no bits left for a few ticks).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import pytest
 
 from omnikin import Odometry, batch_odometry, load_robot
 from omnikin.encoders import wrap_scalar
-from tomasi_helpers import assert_poses_close, tomasi_poses
+from support.tomasi import assert_poses_close, tomasi_poses
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
 """A Dask preload for the sweep tests only: the worker process that loads it (``dask worker
 --preload``) reports the omnikin version in ``OMNIKIN_TEST_FAKE_VERSION`` instead of its own, as a
-worker with another omnikin installed would (tests/dask_cluster.py, ``start_worker``)."""
+worker with another omnikin installed would (``dask_cluster.start_worker``)."""
 
 from __future__ import annotations
 

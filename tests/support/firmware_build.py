@@ -11,7 +11,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from omnikin_paths import ROOT
+from support.paths import ROOT
 
 FIRMWARE = ROOT / "firmware"
 ARDUINO_CORE = Path("/usr/share/arduino/hardware/arduino/avr/cores/arduino/Arduino.h")

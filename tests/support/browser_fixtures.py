@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from browser import CHROMIUM_FLAGS, VIEWPORT, PageLog, find_chromium
+from support.browser import CHROMIUM_FLAGS, VIEWPORT, PageLog, find_chromium
 
 if TYPE_CHECKING:
     from playwright.sync_api import Browser, Page

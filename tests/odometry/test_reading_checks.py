@@ -1,9 +1,9 @@
 """Streaming and batch odometry: narrow and unsigned readings, half-range jumps, non-finite times,
 steering shapes, bools and strings, residual parity, one-ulp heading wrap.
 
-Regression tests of the review findings, grouped here by module. Expected values are derived
-independently of the code under test (closed forms typed in from the geometry, least squares
-computed with NumPy, or the batch odometry as reference for the streaming estimator).
+Expected values are derived independently of the code under test (closed forms typed in from
+the geometry, least squares computed with NumPy, or the batch odometry as reference for the
+streaming estimator).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from omnikin import (
     batch_odometry_from_angles,
     load_robot,
 )
-from tomasi_helpers import assert_poses_close, tomasi_poses
+from support.tomasi import assert_poses_close, tomasi_poses
 
 
 def stream(robot, t, ticks, steer=None, **kw):
@@ -128,7 +128,7 @@ def test_uint32_readings_same_as_signed_stream(tom, bits):
     _, ps = stream(tom, T3, list(SIGNED), counter_bits=bits)
     assert_poses_close(ps, expected)
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # numpy overflow warnings of the open bug
+        warnings.simplefilter("ignore", RuntimeWarning)  # numpy overflow warnings of the uint32 wrap
         _, ps = stream(tom, T3, list(SIGNED.astype(np.uint32)), counter_bits=bits)
     assert_poses_close(ps, expected)
 

@@ -5,7 +5,7 @@ rule (50 m/s at the rim) and the change-of-speed rule (30 m/s^2 at the rim, ``A 
 ticks between equal intervals ``dt``) of ``docs/conventions.md`` refuse that; the guarantee
 (tomasi-omni3: 8 bits from 24 Hz, 12 bits from 6 Hz, 16 bits from 1.5 Hz) is checked at its
 boundary with the worst motion the rules allow. Expected poses are the closed form of the
-true tick increments (``tomasi_helpers.tomasi_poses``); the logs come from ``omnikin simulate
+true tick increments (``support.tomasi.tomasi_poses``); the logs come from ``omnikin simulate
 --log`` and from ``examples/tick_log.csv``.
 """
 
@@ -27,7 +27,7 @@ from omnikin.limits import MotionLimits
 from omnikin.plans import line, spin
 from omnikin.simulation.error_models import NoiseModel
 from omnikin.simulation.simulate import simulate
-from tomasi_helpers import TOMASI_R, TOMASI_RPT, assert_poses_close, cli, one_line_error, read_csv_traj, tomasi_poses
+from support.tomasi import TOMASI_R, TOMASI_RPT, assert_poses_close, cli, one_line_error, read_csv_traj, tomasi_poses
 
 TICKS_PER_M = 1 / (TOMASI_R * TOMASI_RPT)  # 2315 ticks per metre at the rim
 ACCEL_TICKS = 30.0 * TICKS_PER_M  # the default change-of-speed bound, ticks/s^2

@@ -1,5 +1,5 @@
 """Batch odometry names the sample of a timestamp that is no number or has no float, as the
-streaming estimator does (the old batch errors had ``.sample = None``), and reports the same
+streaming estimator does (the error's ``.sample`` is set, never ``None``), and reports the same
 first problem when an earlier sample has another one."""
 
 from __future__ import annotations

@@ -1,9 +1,9 @@
 """Robot model edge cases: infeasible pure rotation, wheel validation, cached matrices that copies
 cannot corrupt, FK of any iterable of names, zero wheel limits.
 
-Regression tests of the review findings, grouped here by module. Expected values are derived
-independently of the code under test (closed forms typed in from the geometry, least squares
-computed with NumPy, or the batch odometry as reference for the streaming estimator).
+Expected values are derived independently of the code under test (closed forms typed in from
+the geometry, least squares computed with NumPy, or the batch odometry as reference for the
+streaming estimator).
 """
 
 from __future__ import annotations

@@ -20,7 +20,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from omnikin_paths import omnikin_env
+from support.paths import omnikin_env
 
 READY_S = 60.0
 """How long a scheduler or its workers may take to come up [s] (about 1 s here; CI is slower)."""

@@ -16,9 +16,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from firmware_build import Firmware, symbol
 from omnikin.runtime.protocol import FrameEncoder, StreamDecoder, load_protocol
-from simboard import SimBoard
+from support.firmware_build import Firmware, symbol
+from support.simboard import SimBoard
 
 F_CPU = 16_000_000
 """The Nano's clock [Hz]: simulated cycles per second."""

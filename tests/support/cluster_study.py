@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import run_entry_point
-from omnikin_paths import omnikin_env
+from support.cli import run_entry_point
+from support.paths import omnikin_env
 
 pa = pytest.importorskip("pyarrow", reason="omnikin[sweep] (pyarrow) is not installed")
 pq = pytest.importorskip("pyarrow.parquet", reason="omnikin[sweep] (pyarrow) is not installed")

@@ -1,12 +1,12 @@
 """No interval may move the robot beyond the bounds of a pose, and no option may switch the
 physical rules off: batch and streaming odometry refuse the same sample with one line.
 
-A rotation of 1e15 rad in one interval has no digit left modulo 2 pi (the old estimators gave
-headings of noise, batch and streaming different noise); a displacement of 1e14 m swallows every
-later increment; ``max_wheel_speed=1e300`` let any jump through; integers beyond the float range
-raised a raw OverflowError. Expected values come from the closed form of tomasi-omni3 (equal
-wheel angles ``w`` turn it by ``R w / L`` on the spot; wheel angles ``(0, -sin 120, -sin 240) a / R``
-move it by ``a`` along its x axis), typed in from its geometry.
+A rotation of 1e15 rad in one interval has no digit left modulo 2 pi (integrated, it gives a
+heading of noise, different noise in batch and streaming); a displacement of 1e14 m swallows
+every later increment; ``max_wheel_speed=1e300`` would let any jump through; integers beyond the
+float range must give one line, not a raw OverflowError. Expected values come from the closed
+form of tomasi-omni3 (equal wheel angles ``w`` turn it by ``R w / L`` on the spot; wheel angles
+``(0, -sin 120, -sin 240) a / R`` move it by ``a`` along its x axis), typed in from its geometry.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
-from tomasi_helpers import TOMASI_L, TOMASI_R, TOMASI_RPT
+from support.tomasi import TOMASI_L, TOMASI_R, TOMASI_RPT
 
 
 def spin_ticks(phi: float) -> int:
@@ -75,8 +75,8 @@ def test_a_displacement_beyond_the_position_bound_in_one_interval_is_refused(tom
 
 
 def test_the_attack_log_of_a_1e17_s_interval_is_refused(tmp_path):
-    """diff-drive, t = 0, 1e17, 2e17 s, left = 0, 9e18, 1.8e19 ticks: the old estimators
-    returned headings of noise."""
+    """diff-drive, t = 0, 1e17, 2e17 s, left = 0, 9e18, 1.8e19 ticks: integrated, these give
+    headings of noise."""
     robot = load_robot("diff-drive")
     t, rows = [0.0, 1e17, 2e17], [[0, 0], [9 * 10**18, 0], [18 * 10**18, 0]]
     stream, batch = run_both(robot, t, rows)
@@ -111,9 +111,9 @@ def test_a_jump_bound_that_lets_a_wheel_turn_beyond_the_angle_bound_is_refused(t
 
 
 def test_integer_readings_beyond_the_float_range_are_refused_at_their_sample():
-    """10**400 has no float: the old code raised OverflowError (batch: converting the increments
-    before the exact jump test; angles: converting the readings; streaming: float(d) after a
-    speed rule that a 1e305 s interval passes)."""
+    """10**400 has no float: refused in one line, never a raw OverflowError (batch: from converting
+    the increments before the exact jump test; angles: from converting the readings; streaming:
+    from float(d) after a speed rule that a 1e305 s interval passes)."""
     robot = load_robot("diff-drive")
     rows = [[0, 0], [10**400, 0]]
     for t in ([0.0, 1.0], [0.0, 1e305]):

@@ -13,7 +13,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from firmware_build import make
+from support.firmware_build import make
 
 HEADER = Path("/usr/include/simavr/sim_avr.h")
 READY_S = 10.0

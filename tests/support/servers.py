@@ -19,7 +19,7 @@ import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
 
-from omnikin_paths import omnikin_env
+from support.paths import omnikin_env
 
 UP_TIMEOUT = 300.0
 """Safety timeout for a server to come up [s] (a model built, a page served, on a busy machine)."""

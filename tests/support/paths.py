@@ -1,5 +1,4 @@
-"""The repository's paths and the environment for omnikin subprocesses, importable by name from
-every test folder (a folder with a conftest.py of its own shadows the name ``conftest``)."""
+"""The repository's paths and the environment for omnikin subprocesses."""
 
 from __future__ import annotations
 
@@ -8,7 +7,7 @@ from pathlib import Path
 
 import omnikin
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 """The repository (docs/, examples/, firmware/)."""
 
 SRC = str(Path(omnikin.__file__).resolve().parents[1])

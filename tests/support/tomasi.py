@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from conftest import run_cli as cli  # noqa: F401  (re-exported for the odometry tests)
+from support.cli import run_cli as cli  # noqa: F401  (re-exported for the odometry tests)
 
 TOMASI_L, TOMASI_R = 0.113, 0.04125
 TOMASI_RPT = 2 * math.pi / 600  # rad per tick (600 ticks/rev, no gearbox)

@@ -2,10 +2,10 @@
 the exact difference of the two readings rounded once, in the streaming estimator (whose
 generated kernel subtracts the kept previous reading) and in batch odometry alike.
 
-The old streaming estimator kept a float reading as a float; the kernel then computed
-``int - float``, which rounds the integer to a float first: 2**53 + 5 minus 2**53 + 2 gave 2
-instead of 3. Expected poses come from the closed form of tomasi-omni3
-(``tomasi_helpers.tomasi_poses``); expected increments are worked out by hand.
+A float reading kept as a float would make the kernel compute ``int - float``, which rounds the
+integer to a float first: 2**53 + 5 minus 2**53 + 2 would give 2 instead of 3. Expected poses
+come from the closed form of tomasi-omni3 (``support.tomasi.tomasi_poses``); expected
+increments are worked out by hand.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from omnikin import Encoder, Odometry, OdometryInputError, Robot, Wheel, batch_odometry
-from tomasi_helpers import TOMASI_L, TOMASI_R, assert_poses_close, tomasi_poses
+from support.tomasi import TOMASI_L, TOMASI_R, assert_poses_close, tomasi_poses
 
 B = 2**53
 

@@ -2,7 +2,7 @@
 misread, estimators that copy and pickle, tick logs written and read back, CLI output policy.
 
 Expected poses come from the closed form of tomasi-omni3 typed in from its geometry
-(``test_review_regressions.tomasi_poses``: forward kinematics of the per-interval tick increments,
+(``support.tomasi.tomasi_poses``: forward kinematics of the per-interval tick increments,
 then the SE(2) exponential), never from the code under test.
 """
 
@@ -27,7 +27,7 @@ from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry
 from omnikin.errors import InputError, RobotFileError
 from omnikin.io.logs import read_tick_log, write_tick_log
 from omnikin.io.robot_file import robot_to_dict
-from tomasi_helpers import (
+from support.tomasi import (
     TOMASI_RPT,
     assert_poses_close,
     cli,

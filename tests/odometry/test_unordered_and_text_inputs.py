@@ -4,7 +4,7 @@ tick-log times and angles that only Python's float() would read.
 
 Each refusal is one line naming the sample (or file line and column) and leaves a streaming
 estimator as it was; what is accepted gives the closed form of tomasi-omni3
-(``tomasi_helpers.tomasi_poses``).
+(``support.tomasi.tomasi_poses``).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import pytest
 
 from omnikin import InputError, Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
 from omnikin.integration import integrate
-from tomasi_helpers import assert_poses_close, cli, one_line_error, tomasi_poses
+from support.tomasi import assert_poses_close, cli, one_line_error, tomasi_poses
 
 
 @pytest.fixture(scope="module")
