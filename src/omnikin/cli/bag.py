@@ -26,6 +26,7 @@ from .common import (
     add_output_options,
     add_step_option,
     add_wheel_bound_options,
+    check_seed,
     console,
     declare_inputs,
     load_robot,
@@ -441,8 +442,7 @@ def cmd_simulate(args) -> int:
     robot = load_robot(args.robot)
     if args.log is not None and not physics:
         _check_tick_log(args, robot)
-    if args.seed < 0:
-        raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
+    check_seed(args.seed)
     check_rate_range(args.rate, "--rate")
     plan = parse_paths(args.path)
     noise = None if physics else noise_profile(args.noise)

@@ -39,6 +39,13 @@ def robot_as_built(robot, true_robot: str | None, errors: str, seed):
     return as_built(robot, true_robot or None, errors, seed)
 
 
+def check_seed(seed: int | None) -> None:
+    """Refuse a negative ``--seed`` (NumPy's seed sequences take whole numbers >= 0) in one line;
+    None (not given) passes."""
+    if seed is not None and seed < 0:
+        raise InputError(f"--seed must be a whole number >= 0, got {seed}")
+
+
 def as_built_group(parser):
     """The group ``--errors`` and ``--true-robot`` belong to: both give the robot as built, so the
     parser refuses the two together in one line ("argument --true-robot: not allowed with
@@ -46,20 +53,22 @@ def as_built_group(parser):
     return parser.add_mutually_exclusive_group()
 
 
-def add_as_built_options(parser, *, defaults: bool = True, scope: str = "") -> None:
+def add_as_built_options(parser, *, defaults: bool = True, scope: str = "", default_errors: str = "typical") -> None:
     """``--errors PROFILE``, ``--true-robot FILE`` and ``--seed N``: the robot as built
     (:func:`robot_as_built`: a seeded draw of the error profile, or a file replacing it).
-    ``defaults``: typical and 1 filled in by the parser; else ``None`` (the command tells given
-    options from absent ones, and fills in the same defaults). ``scope``: prefix of the help
-    naming where the options apply (``"simulated back-ends: "``)."""
+    ``defaults``: ``default_errors`` and 1 filled in by the parser; else ``None`` (the command
+    tells given options from absent ones, and fills in the same defaults). ``scope``: prefix of
+    the help naming where the options apply (``"simulated back-ends: "``). The command refuses a
+    negative seed with :func:`check_seed`."""
     from ..simulation.error_models import PROFILES
 
     group = as_built_group(parser)
     group.add_argument(
         "--errors",
-        default="typical" if defaults else None,
+        default=default_errors if defaults else None,
         metavar="PROFILE",
-        help=f"{scope}systematic error profile of the robot as built: {', '.join(sorted(PROFILES))} (default typical)",
+        help=f"{scope}systematic error profile of the robot as built: {', '.join(sorted(PROFILES))} "
+        f"(default {default_errors})",
     )
     group.add_argument("--true-robot", metavar="FILE", help=f"{scope}the robot as built (replaces --errors)")
     parser.add_argument(

@@ -9,7 +9,7 @@ import textwrap
 import numpy as np
 
 from ..ros.params import DEFAULTS
-from .common import add_as_built_options, whole
+from .common import add_as_built_options, check_seed, whole
 
 EPILOG = (
     """examples:
@@ -178,8 +178,7 @@ def cmd_ros(args) -> int:
             raise InputError(f"{', '.join(given(options))} apply only to --backend {' or '.join(owners)}")
     if args.errors is not None and args.true_robot is not None:
         raise InputError("--errors and --true-robot both give the robot as built: give one of them")
-    if args.seed is not None and args.seed < 0:
-        raise InputError(f"--seed must be >= 0, got {args.seed}")
+    check_seed(args.seed)
     true = None
     if args.backend in ("sim", "physics"):
         # the robot as built, drawn as omnikin simulate draws it: the same robot for the same --seed

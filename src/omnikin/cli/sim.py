@@ -6,17 +6,17 @@ import argparse
 import sys
 
 from .common import (
+    add_as_built_options,
     add_output,
     add_output_options,
     add_teleop_options,
-    as_built_group,
+    check_seed,
     declare_inputs,
     load_robot,
     number,
     robot_as_built,
     teleop_limits,
     until_stopped,
-    whole,
 )
 
 EPILOG = """keys (the window must have the keyboard focus):
@@ -72,19 +72,7 @@ def add_parsers(sub, robot_help: str) -> None:
         help="close the window after S seconds of simulated time (default: never)",
     )
     sp.add_argument("--camera", choices=("free", "top", "follow"), default="free", help="first camera (default free)")
-    from ..simulation.error_models import PROFILES
-
-    group = as_built_group(sp)
-    group.add_argument(
-        "--errors",
-        default="none",
-        metavar="PROFILE",
-        help=f"systematic errors of the robot as built that the window simulates, drawn with --seed as "
-        f"omnikin simulate draws them (the odometry keeps the nominal robot): {', '.join(sorted(PROFILES))} "
-        "(default none)",
-    )
-    group.add_argument("--true-robot", metavar="FILE", help="the robot as built that the window simulates")
-    sp.add_argument("--seed", type=whole, default=1, metavar="N", help="random seed of --errors (default 1)")
+    add_as_built_options(sp, default_errors="none")
     add_teleop_options(sp)
     sp.add_argument(
         "--hold", type=number, default=0.0, metavar="S", help="a press drives for S seconds (default 0: until changed)"
@@ -114,8 +102,7 @@ def cmd_sim(args) -> int:
         raise InputError(f"--duration must be positive [s], got {args.duration:g}")
     if args.hold < 0:
         raise InputError(f"--hold must be >= 0 [s], got {args.hold:g}")
-    if args.seed < 0:
-        raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
+    check_seed(args.seed)
     limits = teleop_limits(args)
     from ..physics.cost import real_time_shortfall
     from ..physics.interactive import InteractiveSim, require_display
