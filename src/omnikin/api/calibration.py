@@ -54,7 +54,7 @@ def calibrate(robot, runs) -> Calibration:
     """Least-squares calibration of ``robot`` from measured runs (``omnikin calibrate``).
 
     ``runs``: a runs file (columns ``path, x_abs, y_abs[, theta_abs_deg]``; :mod:`omnikin.io.runs`)
-    or a sequence of :class:`~omnikin.plans.CalibrationRun`. A run the robot cannot drive is
+    or a sequence of :class:`~omnikin.motion.plans.CalibrationRun`. A run the robot cannot drive is
     refused, naming it (the check ``simulate`` makes).
     """
     from ..evaluation.calibration import calibrate as fit

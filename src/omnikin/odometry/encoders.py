@@ -45,7 +45,7 @@ order of :data:`RANKS`, so both report the same first problem.
 This module is the single source of those rules: batch odometry uses :func:`block_increments`,
 the streaming estimator :class:`CounterRule`, :func:`exact_increment` and
 :func:`in_counter_range`, and the generated streaming kernel the same expressions
-(:mod:`omnikin._stream_kernel`).
+(:mod:`omnikin.odometry._stream_kernel`).
 """
 
 from __future__ import annotations
@@ -59,11 +59,11 @@ from functools import partial
 
 import numpy as np
 
-from ._arrays import TEXT_TYPES, container_problem, range_problem, whole_problem
-from .errors import InputError, OdometryInputError
-from .geometry import MAX_ANGLE
-from .messages import shorten
-from .wheels import COUNTER_BITS_RANGE, MAX_SPEED_RANGE
+from ..common.arrays import TEXT_TYPES, container_problem, range_problem, whole_problem
+from ..common.messages import shorten
+from ..errors import InputError, OdometryInputError
+from ..kinematics.se2 import MAX_ANGLE
+from ..kinematics.wheels import COUNTER_BITS_RANGE, MAX_SPEED_RANGE
 
 JUMP_MARGIN = 1.5
 """A wheel may turn (or change its speed) this much faster than its stated limit before a
@@ -119,7 +119,7 @@ def check_bits(bits, what: str = "counter_bits") -> int | None:
 MAX_JUMP_TEXT = "a finite number of ticks > 0"
 MAX_WHEEL_SPEED_TEXT = f"a wheel speed in [{MAX_SPEED_RANGE[0]:g}, {MAX_SPEED_RANGE[1]:g}] rad/s"
 """What ``max_wheel_speed`` must be: the range of a wheel's ``max_speed`` in a robot file
-(:data:`omnikin.wheels.MAX_SPEED_RANGE`; 1e4 rad/s is 95 000 rpm, beyond any wheel)."""
+(:data:`omnikin.kinematics.wheels.MAX_SPEED_RANGE`; 1e4 rad/s is 95 000 rpm, beyond any wheel)."""
 MAX_WHEEL_ACCEL_TEXT = "a wheel acceleration > 0 [rad/s^2] (or inf: no bound)"
 
 
@@ -129,7 +129,7 @@ def check_max_jump(max_jump) -> float | None:
 
 
 def check_max_wheel_speed(speed) -> float | None:
-    """``max_wheel_speed`` [rad/s] within :data:`omnikin.wheels.MAX_SPEED_RANGE`."""
+    """``max_wheel_speed`` [rad/s] within :data:`omnikin.kinematics.wheels.MAX_SPEED_RANGE`."""
     if speed is None:
         return None
     problem = range_problem(speed, *MAX_SPEED_RANGE, "rad/s")
@@ -322,9 +322,9 @@ def counter_rules(
     ``encoder.counter_bits`` is an error (neither is guessed to win). Without it each wheel
     uses its own ``encoder.counter_bits`` (or none). ``max_wheel_speed`` lies in the range of a
     robot file's ``max_speed``, and ``max_jump`` may not let a wheel turn more than
-    :data:`~omnikin.geometry.MAX_ANGLE` in one interval: physical bounds, so that no option
+    :data:`~omnikin.kinematics.se2.MAX_ANGLE` in one interval: physical bounds, so that no option
     lets a corrupt sample through (the body increment of an interval has its own bounds,
-    :func:`omnikin.integration.step_problem`).
+    :func:`omnikin.odometry.integration.step_problem`).
     """
     bits = check_bits(counter_bits)
     max_jump = check_max_jump(max_jump)
@@ -382,7 +382,7 @@ def show_number(value) -> str:
     return shorten(value)
 
 
-# --- containers of readings (whether one has an order: omnikin._arrays.container_problem) -----
+# --- containers of readings (whether one has an order: omnikin.common.arrays.container_problem) -----
 def _is_number(value) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 

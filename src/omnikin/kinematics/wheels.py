@@ -35,11 +35,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._arrays import range_problem, whole_problem
-from .errors import InfeasibleTwistError, InputError
-from .geometry import wrap_angle
-from .messages import digits_apart, shorten
+from ..common.arrays import range_problem, whole_problem
+from ..common.messages import digits_apart, shorten
+from ..errors import InfeasibleTwistError, InputError
 from .physical import PhysicalWheel
+from .se2 import wrap_angle
 
 WHEEL_TYPES = ("omni", "mecanum", "swedish", "standard", "steerable", "castor")
 SWEDISH_TYPES = ("omni", "mecanum", "swedish")
@@ -122,7 +122,7 @@ class Encoder:
     """Incremental encoder on a wheel: ``angle = 2 pi ticks / (ticks_per_rev gear_ratio)``.
 
     ``counter_bits``: width of the hardware counter whose readings are logged (2..64); its
-    readings wrap modulo ``2**counter_bits`` (:mod:`omnikin.encoders`). None: they never wrap.
+    readings wrap modulo ``2**counter_bits`` (:mod:`omnikin.odometry.encoders`). None: they never wrap.
     """
 
     ticks_per_rev: float
