@@ -54,8 +54,9 @@ from .errors import (
     WorkerMismatch,
 )
 from .kinematics import se2
+from .kinematics.encoder import Encoder
 from .kinematics.robot import FKResult, IKResult, Robot
-from .kinematics.wheels import Encoder, Steer, Wheel
+from .kinematics.wheels import Steer, Wheel
 from .odometry.batch import OdometryResult, batch_odometry, batch_odometry_from_angles
 from .odometry.streaming import Odometry
 from .presets import PRESET_NAMES

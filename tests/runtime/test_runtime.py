@@ -18,9 +18,9 @@ import pytest
 
 from omnikin import load_robot
 from omnikin.errors import OmnikinError
+from omnikin.kinematics.encoder import Encoder
 from omnikin.kinematics.se2 import compose, exp, wrap_angle
 from omnikin.kinematics.se2 import compose_exp_jacobians as _jacobians
-from omnikin.kinematics.wheels import Encoder
 from omnikin.motion.limits import MotionLimits
 from omnikin.runtime.base import BaseRuntime
 from omnikin.runtime.command import CommandFilter

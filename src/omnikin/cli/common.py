@@ -315,7 +315,7 @@ def whole(text: str) -> int:
 
 # --- odometry bounds --------------------------------------------------------------------------------
 def _bound(check, what: str):
-    """An argparse ``type``: a plain number or ``inf`` that ``check`` (an :mod:`omnikin.odometry.encoders`
+    """An argparse ``type``: a plain number or ``inf`` that ``check`` (an :mod:`omnikin.odometry.plausibility`
     option check) takes, else a usage error quoting the text as typed."""
 
     def parse(text: str) -> float:
@@ -335,11 +335,11 @@ def _bound(check, what: str):
 
 def add_wheel_bound_options(parser, *, angles: bool = False) -> None:
     """``--max-wheel-speed RAD_S`` and ``--max-wheel-accel RAD_S2``: the speed and change-of-speed
-    rules of the odometry commands (:mod:`omnikin.odometry.encoders`, ``docs/conventions.md``), passed to
+    rules of the odometry commands (:mod:`omnikin.odometry.plausibility`, ``docs/conventions.md``), passed to
     the estimator as ``max_wheel_speed`` and ``max_wheel_accel`` (None when not given: each
     wheel's own bound). ``angles``: the command reads wheel angles (joint states), which have the
     change-of-speed rule only when ``--max-wheel-accel`` is given; else encoder ticks."""
-    from ..odometry.encoders import (
+    from ..odometry.plausibility import (
         DEFAULT_RIM_ACCEL,
         DEFAULT_RIM_SPEED,
         JUMP_MARGIN,

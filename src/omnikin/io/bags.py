@@ -742,7 +742,7 @@ def bag_odometry(
     (:func:`omnikin.odometry.batch.batch_odometry_from_angles`; checked before the bag is read).
     """
     from ..odometry.batch import batch_odometry_from_angles
-    from ..odometry.encoders import check_max_wheel_accel, check_max_wheel_speed
+    from ..odometry.plausibility import check_max_wheel_accel, check_max_wheel_speed
 
     check_max_wheel_speed(max_wheel_speed)
     check_max_wheel_accel(max_wheel_accel)

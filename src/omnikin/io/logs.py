@@ -31,7 +31,7 @@ from ..common.messages import shorten
 from ..errors import InputError, OdometryInputError
 from ..kinematics.robot import Robot
 from ..odometry.batch import encoded_wheels
-from ..odometry.encoders import INT64_MIN, UINT64_END, counter_readings
+from ..odometry.counters import INT64_MIN, UINT64_END, counter_readings
 from .csvfile import column_problems, number, read_rows
 from .output import write_text
 from .trajectories import format_times

@@ -35,6 +35,7 @@ from ..common.arrays import range_problem, whole_problem
 from ..common.messages import did_you_mean, digits_apart, shorten
 from ..common.number_text import PLAIN_NUMBER, PLAIN_NUMBER_HELP, number_problem
 from ..errors import OmnikinError, PresetShadowWarning, RobotFileError
+from ..kinematics.encoder import COUNTER_BITS_RANGE, GEAR_RATIO_RANGE, TICKS_PER_REV_RANGE, Encoder
 from ..kinematics.physical import (
     COM_LIMIT,
     COM_Z_MIN,
@@ -51,8 +52,6 @@ from ..kinematics.physical import (
 from ..kinematics.robot import Robot, name_collisions, robot_name_problem
 from ..kinematics.se2 import MAX_DIRECTION_DEG
 from ..kinematics.wheels import (
-    COUNTER_BITS_RANGE,
-    GEAR_RATIO_RANGE,
     MAX_SPEED_RANGE,
     MOTOR_TYPES,
     OFFSET_RANGE,
@@ -60,9 +59,7 @@ from ..kinematics.wheels import (
     RADIUS_RANGE,
     ROLLER_LIMIT_DEG,
     SWEDISH_TYPES,
-    TICKS_PER_REV_RANGE,
     WHEEL_TYPES,
-    Encoder,
     Steer,
     Wheel,
     motor_problem,

@@ -4,6 +4,7 @@
 - :mod:`~omnikin.kinematics.linalg`: rank and null space with one tolerance.
 - :mod:`~omnikin.kinematics.physical`: the physical fields of a robot as built (masses, sizes)
   that a physics engine needs.
+- :mod:`~omnikin.kinematics.encoder`: the incremental encoder a wheel carries.
 - :mod:`~omnikin.kinematics.wheels`: one wheel (type, position, radius, rollers, steering,
   encoder, motor) and its rolling constraints.
 - :mod:`~omnikin.kinematics.mobility`: Campion's degrees of mobility and steerability, and the

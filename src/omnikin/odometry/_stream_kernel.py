@@ -22,7 +22,7 @@ as plain data. Per sample, ``step_ticks`` does (conventions, Odometry):
    counter's range), rounded once to floats: the state keeps the previous readings as exact
    numbers (ints, or the Fraction a float reading holds), never as floats, so ``ticks_j -
    prev_j`` is exact (``int - float`` rounds the int first beyond 2**53);
-3. every wheel's jump rule (:mod:`omnikin.odometry.encoders`) ``|d_j| <= limit_j(dt)`` and, from the
+3. every wheel's jump rule (:mod:`omnikin.odometry.plausibility`) ``|d_j| <= limit_j(dt)`` and, from the
    third sample on, a sufficient form of its change-of-speed rule ``|d_j - q_j| <= A_j dt
    dt_prev / 2 + 2 slack`` (``q_j`` the previous increment; :func:`_change_lines`), with the
    limits shrunk by :data:`SAFETY` so that float rounding never accepts what the exact rule
@@ -50,8 +50,8 @@ from math import cos, floor, pi, sin
 import numpy as np
 
 from ..kinematics.se2 import SCALAR_TAYLOR_LIMIT, TWO_PI
-from .encoders import QUANTISATION_SLACK, SAFETY
 from .integration import STEP_BOUNDS
+from .plausibility import QUANTISATION_SLACK, SAFETY
 
 # --- state layout ------------------------------------------------------------------------------
 S_POSE, S_TIME_TICKS, S_TIME_ANGLES, S_COUNT, S_DT, S_READ = 0, 1, 2, 3, 4, 5
@@ -158,7 +158,7 @@ class WheelBound:
 
 @dataclass(frozen=True)
 class ChangeBound:
-    """The change-of-speed rule of one wheel (:func:`omnikin.odometry.encoders.change_limit`) as the
+    """The change-of-speed rule of one wheel (:func:`omnikin.odometry.plausibility.change_limit`) as the
     kernel tests it (:func:`_change_lines`): ``half_accel`` is half the acceleration bound
     (inf: no rule) and ``slack`` the quantisation slack of one increment [ticks or rad]."""
 
@@ -214,7 +214,7 @@ def _check_lines(d: list[str], bounds: list[WheelBound]) -> list[str]:
 
 def _change_lines(d: list[str], bounds: list[ChangeBound]) -> list[str]:
     """The change-of-speed test of every wheel with a bound, in its cheap sufficient form:
-    :func:`omnikin.odometry.encoders.change_limit` is at least ``a min(dt, dtp) (dt + dtp) / 2 + 2 slack``
+    :func:`omnikin.odometry.plausibility.change_limit` is at least ``a min(dt, dtp) (dt + dtp) / 2 + 2 slack``
     (both of its terms are), and ``min(dt, dtp) (dt + dtp) >= dt dtp``, so an increment within
     ``a dt dtp / 2 + 2 slack`` (times :data:`SAFETY`) of the previous one passes; anything else
     (a wrap, a hard stop, very uneven intervals with a change of speed) goes to the general
@@ -432,14 +432,14 @@ def build(
 
 
 def tick_bounds(rules) -> list[WheelBound]:
-    """The jump rule of each wheel in ticks (:meth:`omnikin.odometry.encoders.CounterRule.limit`)."""
+    """The jump rule of each wheel in ticks (:meth:`omnikin.odometry.plausibility.CounterRule.limit`)."""
     if rules and rules[0].max_jump is not None:
         return [WheelBound(0.0, r.max_jump, r.half_limit) for r in rules]
     return [WheelBound(r.rate, QUANTISATION_SLACK, r.half_limit) for r in rules]
 
 
 def angle_bounds(rules) -> list[WheelBound]:
-    """The jump rule of each wheel in radians (:meth:`omnikin.odometry.encoders.CounterRule.angle_limit`)."""
+    """The jump rule of each wheel in radians (:meth:`omnikin.odometry.plausibility.CounterRule.angle_limit`)."""
     if rules and rules[0].max_jump is not None:
         return [WheelBound(0.0, r.max_jump * abs(r.rad_per_tick)) for r in rules]
     return [WheelBound(r.speed, QUANTISATION_SLACK * abs(r.rad_per_tick)) for r in rules]
@@ -447,7 +447,7 @@ def angle_bounds(rules) -> list[WheelBound]:
 
 def change_bounds(rules, unit: str) -> list[ChangeBound]:
     """The change-of-speed rule of each wheel in ``unit`` (ticks or rad;
-    :meth:`omnikin.odometry.encoders.CounterRule.change_bounds`)."""
+    :meth:`omnikin.odometry.plausibility.CounterRule.change_bounds`)."""
     out = []
     for r in rules:
         a, slack = r.change_bounds(unit)

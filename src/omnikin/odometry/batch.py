@@ -1,7 +1,7 @@
 """Wheel odometry: a streaming estimator and batch odometry over arrays.
 
 Per sample (``docs/conventions.md``): encoder ticks -> wheel angle increments
-(:mod:`omnikin.odometry.encoders`) -> body increment by forward kinematics
+(:mod:`omnikin.odometry.increments`) -> body increment by forward kinematics
 (:meth:`omnikin.kinematics.robot.Robot.fk`, constant over the sample) -> pose update by the
 SE(2) exponential (:mod:`omnikin.odometry.integration`; ``euler`` and ``midpoint`` are there
 for comparison only). Odometry uses the rolling wheels that have an ``encoder``
@@ -19,26 +19,15 @@ from typing import overload
 
 import numpy as np
 
-from ..common.arrays import as_real_array
+from ..common.arrays import as_real_array, container_problem
 from ..errors import InputError, OdometryInputError
 from ..kinematics.robot import STEER_LIMIT_SLACK, Robot, steering_beyond
 from ..kinematics.se2 import MAX_ANGLE, wrap_angle
-from .encoders import (
-    SAFETY,
-    Carry,
-    Problem,
-    as_float,
-    as_floats,
-    as_reading_array,
-    block_increments,
-    container_problem,
-    counter_readings,
-    counter_rules,
-    problem_at,
-    timestamp_problem,
-    wheel_increments,
-)
+from .counters import as_float, as_floats, as_reading_array, counter_readings
+from .increments import Carry, block_increments, wheel_increments
 from .integration import STEP_BOUNDS, check_method, check_start, integrate_components, step_problem
+from .plausibility import SAFETY, counter_rules
+from .samples import Problem, problem_at, timestamp_problem
 
 
 def encoded_wheels(robot: Robot):
@@ -162,7 +151,7 @@ def steered_steps(f: np.ndarray, angles: np.ndarray) -> np.ndarray:
 def step_problem_at(steps: np.ndarray, dt: np.ndarray, offset: int) -> Problem | None:
     """The first interval (row ``r`` is sample ``offset + 1 + r``) whose body increment in
     ``steps`` ``(..., m, 3)`` over ``dt`` ``(..., m)`` [s] is refused by
-    :func:`omnikin.odometry.integration.step_problem`, as a :class:`~omnikin.odometry.encoders.Problem`."""
+    :func:`omnikin.odometry.integration.step_problem`, as a :class:`~omnikin.odometry.samples.Problem`."""
     with np.errstate(invalid="ignore"):
         beyond = np.any(~(np.abs(steps) <= STEP_BOUNDS), axis=-1)
 
@@ -178,7 +167,7 @@ def step_problem_at(steps: np.ndarray, dt: np.ndarray, offset: int) -> Problem |
 
 
 class StepCheck:
-    """The ``motion`` check of :func:`omnikin.odometry.encoders.block_increments` for robots without
+    """The ``motion`` check of :func:`omnikin.odometry.increments.block_increments` for robots without
     steerable wheels: the first interval whose body increment (:func:`body_steps`) is beyond
     the bounds of one step. A block whose longest interval lets no wheel reach them (every
     increment is within its jump limit there) is passed without computing them."""
@@ -199,7 +188,7 @@ class StepCheck:
 
 
 class SteeredSteps:
-    """The ``motion`` check of :func:`omnikin.odometry.encoders.block_increments` for robots with steerable
+    """The ``motion`` check of :func:`omnikin.odometry.increments.block_increments` for robots with steerable
     wheels: the operator of each interval at its mean steering, the body increments
     (:func:`steered_steps`), kept block by block for the integration, and the first beyond the
     bounds of one step."""
@@ -246,10 +235,10 @@ def batch_odometry(
     Leading axes (trials) broadcast. ``steer`` ``(..., N, n_steer)`` [rad] is needed
     for robots with steerable wheels. The first sample is the zero of the ticks and
     sits at ``start`` (default origin; :func:`omnikin.odometry.integration.check_start`). Readings of
-    any integer type are exact (see :func:`omnikin.odometry.encoders.counter_readings`);
+    any integer type are exact (see :func:`omnikin.odometry.counters.counter_readings`);
     ``counter_bits`` (else each wheel's ``encoder.counter_bits``), ``max_jump`` [ticks],
     ``max_wheel_speed`` [rad/s] and ``max_wheel_accel`` [rad/s^2] are the counter, jump and
-    change-of-speed rules of :mod:`omnikin.odometry.encoders`; the body increment of an interval must lie
+    change-of-speed rules of :mod:`omnikin.odometry.plausibility`; the body increment of an interval must lie
     within :func:`omnikin.odometry.integration.step_problem`. The earliest bad sample raises
     :class:`OdometryInputError` with its index in ``.sample`` (the same sample the streaming
     estimator refuses). The increments and twists are the streaming estimator's (to the bit
@@ -359,7 +348,7 @@ def _angle_array(angles, names) -> np.ndarray:
 
 def _timestamps(t, readings: np.ndarray, what: str, names) -> tuple[np.ndarray, Problem | None]:
     """Timestamps as float64 ``(..., N)`` after checking the shapes of ``readings`` ``(..., N, n)``,
-    and the first timestamp that is no number as a pending :class:`~omnikin.odometry.encoders.Problem`
+    and the first timestamp that is no number as a pending :class:`~omnikin.odometry.samples.Problem`
     (it reads as 0 here; refused at its sample, as the streaming estimator refuses it). Integers
     beyond the float range read as +-inf (refused at their sample as non-finite)."""
     n = len(names)
@@ -391,7 +380,7 @@ def _timestamps(t, readings: np.ndarray, what: str, names) -> tuple[np.ndarray, 
 
 def _located_times(t) -> tuple[np.ndarray, Problem | None] | None:
     """Timestamps that are not all floats: as float64 (beyond the float range +-inf, no number 0)
-    and the first that is no number (:func:`omnikin.odometry.encoders.timestamp_problem`), or None if
+    and the first that is no number (:func:`omnikin.odometry.samples.timestamp_problem`), or None if
     ``t`` is not a rectangular array of scalars (the caller's message stands)."""
     try:
         obj = np.array(t, dtype=object)
@@ -448,7 +437,7 @@ def steer_problem(robot: Robot, k: int, value: float) -> str | None:
 
 def _steering(robot, steer, lead: tuple, n: int) -> tuple[np.ndarray, Problem | None]:
     """Steering angles ``(..., N, n_steer)`` [rad] of steerable robots, checked for shape, and
-    the first sample with a bad angle as a pending :class:`~omnikin.odometry.encoders.Problem`."""
+    the first sample with a bad angle as a pending :class:`~omnikin.odometry.samples.Problem`."""
     names = robot.steer_names
     if steer is None:
         raise InputError(

@@ -19,11 +19,10 @@ import math
 
 import numpy as np
 
-from ..common.arrays import as_real_array
+from ..common.arrays import as_real_array, container_problem
 from ..common.messages import digits_apart
 from ..errors import InputError
 from ..kinematics.se2 import MAX_ANGLE, sinc, wrap_angle
-from .encoders import container_problem
 
 METHODS = ("exact", "midpoint", "euler")
 

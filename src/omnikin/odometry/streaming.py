@@ -1,7 +1,7 @@
 """Streaming odometry: :class:`Odometry`, fed one sample at a time (the core's only mutable state).
 
-Per sample (``docs/conventions.md``): counter increments (:mod:`omnikin.odometry.encoders`, which
-holds every rule on readings, wrap-around and jumps), forward kinematics with the robot's
+Per sample (``docs/conventions.md``): counter increments (:mod:`omnikin.odometry.counters` for readings and
+wrap-around, :mod:`omnikin.odometry.plausibility` for jumps), forward kinematics with the robot's
 constant (or, with steerable wheels, per-interval) operator, and the pose update of
 :mod:`omnikin.odometry.integration`. Without steerable wheels a generated kernel
 (:mod:`omnikin.odometry._stream_kernel`), a pure function of the state, takes every sample it has no
@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ..common.arrays import as_real_array
+from ..common.arrays import as_real_array, container_problem
 from ..common.messages import shorten
 from ..errors import InputError, OdometryInputError
 from ..kinematics.linalg import rank
@@ -44,17 +44,10 @@ from ._stream_kernel import (
     state_time,
 )
 from .batch import encoded_wheels, fk_coefficients, mid_steer, steer_problem, steered_steps
-from .encoders import (
-    as_float,
-    container_problem,
-    counter_rules,
-    exact_increment,
-    exact_value,
-    in_counter_range,
-    show_number,
-    timestamp_problem,
-)
+from .counters import as_float, exact_increment, exact_value, in_counter_range, show_number
 from .integration import check_method, check_start, step_problem
+from .plausibility import counter_rules
+from .samples import timestamp_problem
 
 _WHAT = {KIND_TICKS: "tick reading", KIND_ANGLES: "wheel angle"}
 
@@ -72,7 +65,7 @@ def _times(t: float, kind: int) -> tuple[float, float]:
 
 def _kept(values: tuple, kind: int) -> tuple:
     """Readings as the state keeps them: tick readings as exact numbers (ints, or the Fraction
-    a non-integral float holds: :func:`omnikin.odometry.encoders.exact_value`), so that the kernel's
+    a non-integral float holds: :func:`omnikin.odometry.counters.exact_value`), so that the kernel's
     ``v - p`` of the next integer reading is exact; wheel angles as floats."""
     return tuple(exact_value(v) for v in values) if kind == KIND_TICKS else values
 
@@ -94,11 +87,11 @@ class Odometry:
     that cannot be integrated raises :class:`OdometryInputError` and changes nothing.
 
     Readings, in the order of the encoded wheels: a list, tuple, NumPy row, array-like or
-    iterator (never a set, dict or text: :func:`omnikin.odometry.encoders.container_problem`) of Python
+    iterator (never a set, dict or text: :func:`omnikin.common.arrays.container_problem`) of Python
     ints of any size, NumPy integer scalars (exact), or floats. ``counter_bits`` (else each
     wheel's ``encoder.counter_bits``), ``max_jump`` [ticks], ``max_wheel_speed`` [rad/s] and
     ``max_wheel_accel`` [rad/s^2]: the counter, jump and change-of-speed rules of
-    :mod:`omnikin.odometry.encoders`, applied exactly as batch odometry applies them; a step beyond the
+    :mod:`omnikin.odometry.plausibility`, applied exactly as batch odometry applies them; a step beyond the
     bounds of :func:`omnikin.odometry.integration.step_problem` is refused too. ``start``: the pose of
     the first sample (:func:`omnikin.odometry.integration.check_start`).
 
@@ -424,7 +417,7 @@ class Odometry:
 
     def _check_changes(self, exact, deltas, before, dt_before: float, dt: float, kind: int, values, previous) -> None:
         """Raise if a wheel's increment changes faster than its change-of-speed rule allows
-        (:func:`omnikin.odometry.encoders.change_limit`, the expression batch odometry evaluates)."""
+        (:func:`omnikin.odometry.plausibility.change_limit`, the expression batch odometry evaluates)."""
         unit = "ticks" if kind == KIND_TICKS else "rad"
         for e, d, b, r, v, p in zip(exact, deltas, before, self.rules, values, previous, strict=True):
             if not abs(d - b) <= r.change_limit(b, d, dt_before, dt, unit):

@@ -57,7 +57,7 @@ from ..motion.limits import MotionLimits
 from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range, require_motion, sample_plan
 from ..odometry.batch import batch_odometry, encoded_wheels
-from ..odometry.encoders import QUANTISATION_SLACK, counter_rules
+from ..odometry.plausibility import QUANTISATION_SLACK, counter_rules
 from ..simulation.simulate import SimulatedRun, commanded_angles, counter_output
 from .description import steered_support_margin
 from .engine import TRACK_ERROR, TRACK_TIME, PhysicsSim
@@ -338,7 +338,7 @@ def _drive(
 def _require_plausible_wheels(robot: Robot, true_robot: Robot, t: np.ndarray, ticks: np.ndarray) -> None:
     """Refuse (:class:`~omnikin.errors.PhysicsError`, one line naming the wheel and the
     time) simulated encoders of ``true_robot`` that turned faster than the odometry of ``robot``
-    accepts (:func:`~omnikin.odometry.encoders.counter_rules`, the speed bound of each encoded wheel): the
+    accepts (:func:`~omnikin.odometry.plausibility.counter_rules`, the speed bound of each encoded wheel): the
     wheel spun in the simulation (the model was unstable or it lost its grip), where the odometry
     would blame the input and suggest a counter width. ``ticks``: never wrapped, one column per
     encoded wheel, at the times ``t`` [s]."""

@@ -96,8 +96,8 @@ from ..errors import InputError, RobotFileError, StudyFileError
 from ..evaluation.umbmark import check_side, square_refusal
 from ..io.robot_file import is_preset_spec, load_robot, parse_yaml, strict_yaml_loader
 from ..io.textfile import read_text
+from ..kinematics.encoder import TICKS_PER_REV_RANGE
 from ..kinematics.robot import Robot, robot_name_problem
-from ..kinematics.wheels import TICKS_PER_REV_RANGE
 from ..motion.plans import check_mode
 from ..motion.timing import RATE_RANGE, check_rate_range
 from ..odometry.batch import encoded_wheels
@@ -149,7 +149,7 @@ itself to 0 for a perfect build in that respect."""
 WHOLE_FACTORS: dict[str, tuple[int, int]] = {
     "ticks_per_rev": (int(TICKS_PER_REV_RANGE[0]), int(TICKS_PER_REV_RANGE[1])),
 }
-"""Range of each whole-number factor (:data:`~omnikin.kinematics.wheels.TICKS_PER_REV_RANGE`)."""
+"""Range of each whole-number factor (:data:`~omnikin.kinematics.encoder.TICKS_PER_REV_RANGE`)."""
 
 CHOICE_FACTORS: dict[str, tuple[str, ...]] = {"noise": tuple(NOISE), "engine": ENGINES}
 BOOL_FACTORS = ("calibrate",)
