@@ -26,11 +26,6 @@ DIFF_TRACK = 0.33
 
 
 @pytest.fixture(scope="module")
-def tomasi():
-    return load_robot("tomasi-omni3")
-
-
-@pytest.fixture(scope="module")
 def diff():
     return load_robot("diff-drive")
 

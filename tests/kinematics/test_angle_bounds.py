@@ -23,11 +23,6 @@ def ackermann():
     return load_robot("ackermann")
 
 
-@pytest.fixture(scope="module")
-def tomasi():
-    return load_robot("tomasi-omni3")
-
-
 @pytest.mark.parametrize("heading", [1e308, -1e308, MAX_ANGLE * (1 + 1e-12), 1e20])
 def test_absurd_headings_are_refused(tomasi, heading):
     for call in (

@@ -38,11 +38,6 @@ PITCH = 2.0 * math.pi / (2 * 6)
 """Wheel angle [rad] between two hand-overs of tomasi-omni3's default rollers (2 rows of 6)."""
 
 
-@pytest.fixture(scope="module")
-def tomasi():
-    return load_robot("tomasi-omni3")
-
-
 def joint_angles(sim: PhysicsSim) -> np.ndarray:
     """The wheel joints' angles [rad] in MuJoCo (not zeroed at the start as ``wheel_angles``)."""
     ids = [sim.model.joint(name).qposadr[0] for name in sim.robot.rolling_names]
