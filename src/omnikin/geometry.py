@@ -54,8 +54,8 @@ def wrap_angle(angle):
     if isinstance(angle, (int, float)):
         a = float(angle)
         return a - TWO_PI * math.floor((a + math.pi) / TWO_PI)
-    a = np.asarray(angle, dtype=float)
-    return a - TWO_PI * np.floor((a + np.pi) * (0.5 / np.pi))
+    arr = np.asarray(angle, dtype=float)
+    return arr - TWO_PI * np.floor((arr + np.pi) * (0.5 / np.pi))
 
 
 def sinc(x):
