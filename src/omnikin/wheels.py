@@ -121,8 +121,24 @@ def _require(problem: str | None, what: str) -> None:
 class Encoder:
     """Incremental encoder on a wheel: ``angle = 2 pi ticks / (ticks_per_rev gear_ratio)``.
 
-    ``counter_bits``: width of the hardware counter whose readings are logged (2..64); its
-    readings wrap modulo ``2**counter_bits`` (:mod:`omnikin.encoders`). None: they never wrap.
+    Parameters
+    ----------
+    ticks_per_rev : float
+        Ticks per encoder revolution, 1 .. 2**32 (the robot file's ``encoder.ticks_per_rev``).
+    gear_ratio : float, default 1.0
+        Encoder turns per wheel turn, 0.001 .. 10000.
+    invert : bool, default False
+        True when the counts run against the wheel's positive spin (then :attr:`rad_per_tick`
+        is negative).
+    counter_bits : int or None, default None
+        Width of the hardware counter whose readings are logged (2 .. 64): its readings wrap
+        modulo ``2**counter_bits`` (:mod:`omnikin.encoders`). None: they never wrap.
+
+    Raises
+    ------
+    InputError
+        A value outside its range (docs/conventions.md, "Ranges"), not a number, or ``invert``
+        not a bool; the message names the field.
     """
 
     ticks_per_rev: float
@@ -149,9 +165,19 @@ class Encoder:
 class Steer:
     """Steering of a steerable wheel or castor.
 
-    ``offset`` [m]: distance by which the contact trails the steering axis against
-    the drive direction (0: centred). ``lower``/``upper`` [rad]: steering limits
-    relative to the mounting drive direction.
+    Parameters
+    ----------
+    offset : float, default 0.0
+        Distance [m] by which the contact trails the steering axis against the drive direction,
+        0 .. 10 (0: a centred wheel).
+    lower, upper : float, default -pi, pi
+        Steering limits [rad] relative to the mounting drive direction, each in ``[-pi, pi]``,
+        ``lower < upper``.
+
+    Raises
+    ------
+    InputError
+        A value outside its range or ``lower >= upper``; the message names the field.
     """
 
     offset: float = 0.0
@@ -171,8 +197,42 @@ class Steer:
 class Wheel:
     """A wheel mounted on the body (SI units, radians).
 
-    ``drive`` is the drive direction ``delta`` at zero steering; ``roller`` is the
-    roller angle ``gamma`` of Swedish wheels (0 otherwise).
+    The robot file's wheel (docs/conventions.md, "Wheels"), its degrees converted to radians.
+
+    Parameters
+    ----------
+    name : str
+        Wheel name, ``[A-Za-z][A-Za-z0-9_]{0,63}``, not ``t`` (docs/conventions.md, "Names").
+    type : str
+        One of :data:`WHEEL_TYPES`: ``omni``, ``mecanum``, ``swedish``, ``standard``,
+        ``steerable``, ``castor``.
+    x, y : float
+        Hub contact point ``p`` [m] in the body frame (``base_link``: x forward, y left), each
+        within +-1000 m (for a steerable wheel or castor: where the steering axis meets the floor).
+    drive : float
+        Drive direction ``delta`` [rad] at zero steering, counter-clockwise from body +x.
+    radius : float
+        Rolling radius [m], 0.0001 .. 10.
+    roller : float, default 0.0
+        Roller angle ``gamma`` [rad] of a Swedish wheel, within +-80 deg (a robot file's mecanum
+        wheel: +-45 deg); 0 for every other type.
+    encoder : Encoder or None, default None
+        The wheel's encoder; None: odometry does not read this wheel.
+    max_speed : float or None, default None
+        Largest wheel speed [rad/s], 0 .. 10000 (0: a locked wheel); None: unbounded.
+    steer : Steer or None, default None
+        Offset and steering limits of a steerable wheel or castor.
+    physical : PhysicalWheel or None, default None
+        Physical fields for physics engines (see the attribute below).
+    motor : str or None, default None
+        ``stepper`` or ``dc`` (see the attribute below).
+
+    Raises
+    ------
+    InputError
+        A bad name or type, a number outside its range, a roller angle on a wheel that is not
+        Swedish, a part of the wrong class, or a motor the wheel cannot have; the message names
+        the wheel and the field.
     """
 
     name: str
