@@ -367,7 +367,23 @@ class Robot:
 
     def rad_per_tick(self, names=None) -> np.ndarray:
         """Encoder scale [rad per tick, signed by ``invert``] of the encoded wheels ``names``
-        (default: all of them, file order); a wheel without an encoder is an error."""
+        (default: all of them, file order); a wheel without an encoder is an error.
+
+        Parameters
+        ----------
+        names : sequence of str, optional
+            Wheels with an encoder; default all encoded wheels, file order.
+
+        Returns
+        -------
+        ndarray, shape (len(names),)
+            Wheel angle per tick [rad], negative for an inverted encoder.
+
+        Raises
+        ------
+        InputError
+            An unknown wheel, or one without an encoder.
+        """
         wheels = self.encoded if names is None else [self.wheel(n) for n in names]
         out = []
         for w in wheels:
@@ -378,7 +394,23 @@ class Robot:
 
     def rolling_index(self, names) -> list[int]:
         """Positions of the rolling wheels ``names`` in a wheel-speed array (one dictionary
-        look-up each); a castor or unknown name is an error."""
+        look-up each); a castor or unknown name is an error.
+
+        Parameters
+        ----------
+        names : sequence of str
+            Rolling wheel names.
+
+        Returns
+        -------
+        list of int
+            Index of each along the last axis of :meth:`wheel_speeds` (``n``).
+
+        Raises
+        ------
+        InputError
+            A castor, an unknown name or one that is not text.
+        """
         index = self._rolling_index
         try:
             return [index[n] for n in names]
@@ -398,7 +430,21 @@ class Robot:
         return {w.name: w for w in self.wheels}
 
     def wheel(self, name: str) -> Wheel:
-        """The wheel called ``name`` (a dictionary look-up)."""
+        """The wheel called ``name`` (a dictionary look-up).
+
+        Parameters
+        ----------
+        name : str
+
+        Returns
+        -------
+        Wheel
+
+        Raises
+        ------
+        InputError
+            No wheel of that name (the message lists the wheels).
+        """
         try:
             return self._by_name[name]
         except (KeyError, TypeError):
@@ -523,6 +569,24 @@ class Robot:
 
         ``J``: rolling rows of the chosen wheels; ``S/r``: sliding rows of the chosen steerable
         wheels over their radii (:meth:`omnikin.wheels.Wheel.swivel_row`). ``steer`` ``(..., n_steer)`` [rad].
+
+        Parameters
+        ----------
+        steer : array_like, shape (..., n_steer), optional
+            Steering angles [rad] relative to each wheel's drive direction; default zero.
+        wheels : sequence of str, optional
+            Rolling wheels read, in that order; default all, file order.
+
+        Returns
+        -------
+        ndarray, shape (..., n_rows, 3)
+            ``n_rows = len(wheels)`` rolling rows [rad/s per twist], then one sliding row per
+            chosen steerable wheel [rad/s per twist].
+
+        Raises
+        ------
+        InputError
+            Bad steering angles (as :meth:`jacobian`) or an unknown wheel name.
         """
         return self._fk_rows(self._steer_array(steer), wheels)
 
@@ -544,6 +608,24 @@ class Robot:
         Without steerable wheels the operator is constant: it is computed once per wheel
         subset and returned read-only for good (:func:`~omnikin._arrays.frozen`; copy it to
         modify it).
+
+        Parameters
+        ----------
+        steer : array_like, shape (..., n_steer), optional
+            Steering angles [rad] relative to each wheel's drive direction; default zero.
+        wheels : sequence of str, optional
+            Rolling wheels read, in that order; default all, file order.
+
+        Returns
+        -------
+        ndarray, shape (..., 3, n_rows)
+            ``F = N pinv(A N)`` (:meth:`fk_rows` ``A``, :attr:`admissible_basis` ``N``): body
+            twist [m/s, m/s, rad/s] per wheel speed [rad/s], the sliding rows' inputs zero.
+
+        Raises
+        ------
+        InputError
+            Bad steering angles (as :meth:`jacobian`) or an unknown wheel name.
         """
         constant = self._constant_at(steer)
         key = wheels = None if wheels is None else tuple(wheels)
@@ -580,7 +662,20 @@ class Robot:
         return n @ np.linalg.pinv(a @ n, rcond=RANK_TOL)
 
     def fk_rank(self, steer=None, wheels: Sequence[str] | None = None) -> int:
-        """How many independent motion components the wheels determine at ``steer``."""
+        """How many independent motion components the wheels determine at ``steer``.
+
+        Parameters
+        ----------
+        steer : array_like, shape (n_steer,), optional
+            Steering angles [rad]; default zero.
+        wheels : sequence of str, optional
+            Rolling wheels read; default all.
+
+        Returns
+        -------
+        int
+            Rank (0 .. 3) of the fitted rows over the admissible motions.
+        """
         a = self._fk_rows(self._steer_array(steer), wheels)
         return rank(a @ self.admissible_basis)
 
@@ -641,7 +736,19 @@ class Robot:
         )
 
     def check_observable(self, wheels: Sequence[str]) -> None:
-        """Raise unless the wheels ``wheels`` (e.g. the encoded ones) observe every motion."""
+        """Raise unless the wheels ``wheels`` (e.g. the encoded ones) observe every motion.
+
+        Parameters
+        ----------
+        wheels : sequence of str
+            Rolling wheel names.
+
+        Raises
+        ------
+        SingularLayoutError
+            An admissible motion turns none of ``wheels`` (the message names it: a rotation
+            about a point [m] or a translation direction, body frame).
+        """
         self._check_observable(list(wheels), self.generic_configuration)
 
     # --- kinematics ------------------------------------------------------------------

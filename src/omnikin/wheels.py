@@ -326,11 +326,33 @@ class Wheel:
 
     # --- geometry -----------------------------------------------------------
     def direction(self, steer=0.0):
-        """Drive direction ``delta`` [rad] at steering angle ``steer`` [rad]."""
+        """Drive direction ``delta`` [rad] at steering angle ``steer`` [rad].
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (...)
+            ``drive + steer`` [rad], counter-clockwise from body +x.
+        """
         return self.drive + np.asarray(steer, dtype=float)
 
     def contact_point(self, steer=0.0) -> np.ndarray:
-        """Floor contact ``(..., 2)`` [m, body frame]: ``p - offset u(delta)``."""
+        """Floor contact ``(..., 2)`` [m, body frame]: ``p - offset u(delta)``.
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (..., 2)
+            Contact point ``(x, y)`` [m] in the body frame.
+        """
         delta = self.direction(steer)
         out = np.empty(np.shape(delta) + (2,))
         out[..., 0] = self.x - self.offset * np.cos(delta)
@@ -338,7 +360,21 @@ class Wheel:
         return out
 
     def rolling_row(self, steer=0.0) -> np.ndarray:
-        """Row ``(..., 3)`` mapping the body twist to this wheel's speed [rad/s]."""
+        """Row ``(..., 3)`` mapping the body twist to this wheel's speed [rad/s].
+
+        ``[cos a, sin a, x sin a - y cos a] / (r cos gamma)``, ``a = delta + gamma`` (module
+        docstring; docs/conventions.md, "Wheels").
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Wheel speed [rad/s] per body twist component ``(vx, vy, omega)`` [m/s, m/s, rad/s].
+        """
         a = self.direction(steer) + self.roller
         ca, sa = np.cos(a), np.sin(a)
         out = np.empty(np.shape(a) + (3,))
@@ -349,7 +385,21 @@ class Wheel:
         return out
 
     def sliding_row(self, steer=0.0) -> np.ndarray:
-        """No-side-slip row ``(..., 3)`` [m/s per twist] of standard/steerable wheels."""
+        """No-side-slip row ``(..., 3)`` [m/s per twist] of standard/steerable wheels.
+
+        ``[-sin delta, cos delta, x cos delta + y sin delta]``: the hub's side speed, zero for an
+        admissible twist.
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Side speed [m/s] per body twist component ``(vx, vy, omega)`` [m/s, m/s, rad/s].
+        """
         delta = self.direction(steer)
         cd, sd = np.cos(delta), np.sin(delta)
         out = np.empty(np.shape(delta) + (3,))
@@ -363,7 +413,18 @@ class Wheel:
         ``n . v_p - offset * omega`` (``n = (-sin delta, cos delta)``), which equals
         ``offset * beta'`` at steering rate ``beta'`` (the contact, trailing ``p`` by ``offset``
         along ``-u``, does not slide sideways); for a centred wheel the plain
-        :meth:`sliding_row` (= 0)."""
+        :meth:`sliding_row` (= 0).
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Side speed [m/s] per body twist component ``(vx, vy, omega)`` [m/s, m/s, rad/s].
+        """
         out = self.sliding_row(steer)
         out[..., 2] -= self.offset
         return out
@@ -380,7 +441,20 @@ class Wheel:
         return n + self.radius * np.sin(self.roller) * self.rolling_row()
 
     def hub_velocity(self, twist) -> np.ndarray:
-        """Velocity ``(..., 2)`` [m/s, body axes] of the floor point under ``p``."""
+        """Velocity ``(..., 2)`` [m/s, body axes] of the floor point under ``p``.
+
+        ``v_p = (vx - omega y, vy + omega x)``.
+
+        Parameters
+        ----------
+        twist : array_like, shape (..., 3)
+            Body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] in body axes.
+
+        Returns
+        -------
+        ndarray, shape (..., 2)
+            ``v_p`` [m/s] in body axes.
+        """
         t = np.asarray(twist, dtype=float)
         out = np.empty(t.shape[:-1] + (2,))
         out[..., 0] = t[..., 0] - t[..., 2] * self.y
@@ -400,6 +474,29 @@ class Wheel:
         off-centred wheel whose axis moves slower than ``offset * |omega|`` has no steady
         angle: ``strict`` raises :class:`InfeasibleTwistError`, otherwise it is flagged
         in ``limited`` and left at ``hint``.
+
+        Parameters
+        ----------
+        twist : array_like, shape (..., 3)
+            Body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] in body axes.
+        hint : array_like, shape (...), default 0.0
+            Preferred steering angle [rad] relative to :attr:`drive`.
+        strict : bool, default True
+            Raise for a twist without a steady steering angle, instead of flagging it.
+
+        Returns
+        -------
+        angle : ndarray, shape (...)
+            Steering angle [rad] relative to :attr:`drive`, in ``[-pi, pi)`` (``hint`` where the
+            hub is still or no steady angle exists).
+        limited : ndarray of bool, shape (...)
+            True where no branch lies within the steering limits, or no steady angle exists.
+
+        Raises
+        ------
+        InfeasibleTwistError
+            With ``strict``: an off-centred wheel whose axis moves slower than
+            ``offset * |omega|``.
         """
         t = np.asarray(twist, dtype=float)
         hint = np.broadcast_to(np.asarray(hint, dtype=float), t.shape[:-1])

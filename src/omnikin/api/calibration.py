@@ -73,7 +73,26 @@ class Calibration(CalibrationResult):
     def write_robot(self, path, *, force: bool = False, inputs=()) -> None:
         """Write the calibrated robot file (JSON for ``.json``, else YAML) by the output policy
         (:func:`omnikin.io.output.check_output`: never an input, ``force`` to replace a file;
-        ``-`` for standard output, YAML)."""
+        ``-`` for standard output, YAML).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The robot file to write (``.json``: JSON, else YAML), or ``-``.
+        force : bool, default False
+            Replace an existing file.
+        inputs : sequence of path, default ()
+            Files read, which ``path`` may not be.
+
+        Raises
+        ------
+        OutputExistsError
+            ``path`` exists (without ``force``) or is an input.
+        InputError
+            An empty path, one naming a folder, or a missing parent folder.
+        OutputError
+            Writing failed.
+        """
         from ..io.output import check_output, write_text
         from ..io.robot_file import robot_text
 

@@ -96,7 +96,19 @@ class UMBmarkReport(UMBmarkStudy):
 
     def as_dict(self, files: list | None = None) -> dict:
         """The ``result.json`` document (also what ``omnikin umbmark --json`` prints); lengths
-        in metres (``units`` gives every key's unit); ``null`` for an unbounded interval end."""
+        in metres (``units`` gives every key's unit); ``null`` for an unbounded interval end.
+
+        Parameters
+        ----------
+        files : list of str, optional
+            The files of the report folder, recorded under ``files``.
+
+        Returns
+        -------
+        dict
+            The document (:data:`RESULT_FORMAT`; its ``units`` and ``methods`` say what each key
+            holds).
+        """
         from ..io.robot_file import robot_to_dict
 
         doc: dict[str, Any] = {
@@ -244,7 +256,7 @@ class UMBmarkReport(UMBmarkStudy):
         Raises
         ------
         InputError
-            A bad ``figure_format`` or ``dpi``.
+            A bad ``figure_format`` or ``dpi``, or a missing parent folder.
         OutputExistsError
             A folder omnikin did not write, or one that is an input.
         OutputError
@@ -633,7 +645,18 @@ class UMBmarkAnalysis(UMBmarkResult):
         return makers[kind]({"measured": self}, "UMBmark of measured runs", caption=f"measured on a real robot: {runs}")
 
     def as_dict(self, level: float = LEVEL) -> dict:
-        """The ``omnikin umbmark analyze --json`` document (lengths in metres; ``units``)."""
+        """The ``omnikin umbmark analyze --json`` document (lengths in metres; ``units``).
+
+        Parameters
+        ----------
+        level : float, default LEVEL
+            Confidence level (0 .. 1, exclusive) of the E_max,syst interval.
+
+        Returns
+        -------
+        dict
+            Side, mode, the return errors per direction, ``e_max_syst`` and its interval [m].
+        """
         return {**UMBmarkResult.as_dict(self, level), "confidence_level": level, "units": UNITS}
 
 
