@@ -1,9 +1,11 @@
 """omnikin: kinematics, exact odometry and UMBmark for wheeled mobile robots.
 
-Layers (each imports only those below it; ``pyproject.toml``, ``[tool.importlinter]``): the
-core ``geometry`` -> ``wheels`` -> ``model`` (with ``mobility``) -> ``presets``/``plans`` ->
-``odometry`` -> ``simulation`` -> ``evaluation``; the edges ``io``, ``viz``; the Python API
-``api``; the command line ``cli``.
+Packages (each imports only those below it; ``pyproject.toml``, ``[tool.importlinter]``;
+``docs/architecture.md``): the core ``errors`` -> ``common`` -> ``kinematics`` (SE(2), wheels,
+robot) -> ``motion`` (plans, limits) -> ``odometry``; the runtime and the engines
+(``simulation``, ``physics``) above it; the studies (``evaluation``); the edges (``io``,
+``viz``, ``ros``, ``viewer``, ``sweep``); the Python API ``api``; the command line ``cli``.
+:mod:`omnikin.se2` is the SE(2) module (:mod:`omnikin.kinematics.se2`).
 
 Entry points (the command-line tools as functions, with their defaults; imported on first
 use, so ``import omnikin`` loads neither SciPy nor matplotlib):
@@ -51,15 +53,18 @@ from .errors import (
     UsageError,
     WorkerMismatch,
 )
-from .model import FKResult, IKResult, Robot
-from .odometry import OdometryResult, batch_odometry, batch_odometry_from_angles
+from .kinematics import se2
+from .kinematics.encoder import Encoder
+from .kinematics.robot import FKResult, IKResult, Robot
+from .kinematics.wheels import Steer, Wheel
+from .odometry.batch import OdometryResult, batch_odometry, batch_odometry_from_angles
+from .odometry.streaming import Odometry
 from .presets import PRESET_NAMES
-from .streaming import Odometry
-from .wheels import Encoder, Steer, Wheel
 
 _API = (
     "simulate",
     "run_umbmark",
+    "se2",
     "run_sweep",
     "analyze_umbmark",
     "calibrate",
@@ -173,6 +178,7 @@ __all__ = [
     "plot_layout",
     "run_sweep",
     "run_umbmark",
+    "se2",
     "simulate",
     "__version__",
 ]

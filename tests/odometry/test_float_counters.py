@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from omnikin import Odometry, batch_odometry, load_robot
-from omnikin.encoders import wrap_scalar
+from omnikin.odometry.counters import wrap_scalar
 from support.tomasi import assert_poses_close, tomasi_poses
 
 

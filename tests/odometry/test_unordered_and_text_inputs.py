@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from omnikin import InputError, Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
-from omnikin.integration import integrate
+from omnikin.odometry.integration import integrate
 from support.tomasi import assert_poses_close, cli, one_line_error, tomasi_poses
 
 

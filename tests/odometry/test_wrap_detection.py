@@ -23,8 +23,8 @@ from hypothesis import strategies as st
 from conftest import ROOT, omnikin_env
 from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
 from omnikin.io.logs import read_tick_log, write_tick_log
-from omnikin.limits import MotionLimits
-from omnikin.plans import line, spin
+from omnikin.motion.limits import MotionLimits
+from omnikin.motion.plans import line, spin
 from omnikin.simulation.error_models import NoiseModel
 from omnikin.simulation.simulate import simulate
 from support.tomasi import TOMASI_R, TOMASI_RPT, assert_poses_close, cli, one_line_error, read_csv_traj, tomasi_poses
@@ -305,7 +305,7 @@ def test_wheel_angles_have_the_change_rule_only_when_asked(tom):
 def test_batch_blocks_link_the_change_rule(tom, monkeypatch):
     """Batch odometry checks in blocks; a wrap right after a block boundary is still compared
     with the last increment of the previous block."""
-    import omnikin.odometry as odometry
+    import omnikin.odometry.batch as odometry
 
     monkeypatch.setattr(odometry, "CHUNK", 16)
     n = 64

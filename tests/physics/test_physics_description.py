@@ -1,6 +1,6 @@
 """The physical description of a robot (omnikin.physics.description) and its MJCF text: pure
 data, checked against independent geometry (generic ellipsoid support functions, the kinematic
-rolling rows of omnikin.wheels, static force balance). No MuJoCo needed."""
+rolling rows of omnikin.kinematics.wheels, static force balance). No MuJoCo needed."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import pytest
 
 from conftest import omnikin_env
 from omnikin import Encoder, Robot, Wheel, load_robot
-from omnikin.physical import PhysicalBody, PhysicalWheel
+from omnikin.kinematics.physical import PhysicalBody, PhysicalWheel
 from omnikin.physics.description import describe, wheel_loads
 from omnikin.physics.mjcf import mjcf
 from omnikin.presets import PRESET_NAMES

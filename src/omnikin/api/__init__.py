@@ -1,7 +1,7 @@
 """The Python API: the command-line tools as functions, with the command line's defaults.
 
 Each function takes what its command takes (a robot as a preset name, a robot file or a
-:class:`~omnikin.model.Robot`; error and noise profiles by name or as objects) and returns a
+:class:`~omnikin.kinematics.robot.Robot`; error and noise profiles by name or as objects) and returns a
 result object that plots itself (``result.plot()`` returns a matplotlib ``Figure``; matplotlib
 is imported only then, with an error naming the ``viz`` extra when it is missing)::
 
@@ -32,7 +32,7 @@ def plot_layout(robot):
     Parameters
     ----------
     robot : str, os.PathLike or Robot
-        A preset name, a robot file or a :class:`~omnikin.model.Robot`.
+        A preset name, a robot file or a :class:`~omnikin.kinematics.robot.Robot`.
 
     Returns
     -------

@@ -104,13 +104,13 @@ def calibrate(robot, runs) -> Calibration:
     """Least-squares calibration of ``robot`` from measured runs (``omnikin calibrate``).
 
     ``runs``: a runs file (columns ``path, x_abs, y_abs[, theta_abs_deg]``; :mod:`omnikin.io.runs`)
-    or a sequence of :class:`~omnikin.plans.CalibrationRun`. A run the robot cannot drive is
+    or a sequence of :class:`~omnikin.motion.plans.CalibrationRun`. A run the robot cannot drive is
     refused, naming it (the check ``simulate`` makes).
 
     Parameters
     ----------
     robot : str, os.PathLike or Robot
-        The nominal robot: a preset name, a robot file or a :class:`~omnikin.model.Robot`.
+        The nominal robot: a preset name, a robot file or a :class:`~omnikin.kinematics.robot.Robot`.
     runs : str, os.PathLike or sequence of CalibrationRun
         The runs driven by the nominal model, each with its measured end pose ``(x, y, theta)``
         [m, m, rad] in the world frame of its start (``theta`` NaN when not measured; a file
@@ -151,7 +151,7 @@ def calibration_plan(robot, side: float = 4.0) -> list[str]:
     Parameters
     ----------
     robot : str, os.PathLike or Robot
-        A preset name, a robot file or a :class:`~omnikin.model.Robot`.
+        A preset name, a robot file or a :class:`~omnikin.kinematics.robot.Robot`.
     side : float, default 4.0
         Side [m] of the UMBmark squares and length of the straight runs; the half circles
         have radius ``side / 2`` (:func:`~omnikin.evaluation.calibration.recommended_runs`).
@@ -159,7 +159,7 @@ def calibration_plan(robot, side: float = 4.0) -> list[str]:
     Returns
     -------
     list of str
-        The paths the robot can drive, in the runs-file grammar (:func:`omnikin.plans.parse_plan`,
+        The paths the robot can drive, in the runs-file grammar (:func:`omnikin.motion.plans.parse_plan`,
         e.g. ``"square cw rotate 4"``, ``"spin 180"``); measure x, y and the heading at the end
         of each.
     """

@@ -5,14 +5,14 @@ from __future__ import annotations
 import math
 import os
 
-from ..model import Robot, require_same_wheels
+from ..kinematics.robot import Robot, require_same_wheels
 from ..simulation.error_models import ErrorProfile, NoiseModel
 from ..simulation.error_models import noise as noise_profile
 from ..simulation.error_models import profile as error_profile
 
 
 def robot_of(spec) -> Robot:
-    """A :class:`~omnikin.model.Robot`, or one loaded from a preset name or robot file.
+    """A :class:`~omnikin.kinematics.robot.Robot`, or one loaded from a preset name or robot file.
 
     Parameters
     ----------
@@ -58,7 +58,7 @@ def setting_name(spec) -> str | None:
 def as_built(robot: Robot, true_robot, errors, seed_sequence):
     """The robot as built and the errors drawn (None for a given ``true_robot``). A given
     ``true_robot`` must have the wheels of ``robot`` (names, types, encoders:
-    :func:`~omnikin.model.wheel_set_problem`), else an InputError names the difference."""
+    :func:`~omnikin.kinematics.robot.wheel_set_problem`), else an InputError names the difference."""
     from ..evaluation.procedure import draw_as_built
 
     if true_robot is not None:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..number_text import RESOLUTION, mm_text, ratio_text, reduction_bounded, reduction_text
+from ..common.number_text import RESOLUTION, mm_text, ratio_text, reduction_bounded, reduction_text
 
 
 def _interval_mm(interval) -> str:

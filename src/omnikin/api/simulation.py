@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import Robot
-from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
+from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
+from ..kinematics.robot import Robot
 from ..simulation.simulate import SimulatedRun
 from .common import as_built, noise_of, require_viz, robot_of
 
@@ -51,7 +51,7 @@ class Simulation:
     @property
     def end_error(self) -> np.ndarray:
         """True end pose minus odometry end pose ``(x [m], y [m], theta [rad])``."""
-        from ..geometry import wrap_angle
+        from ..kinematics.se2 import wrap_angle
 
         d = self.run.truth[0, -1] - self.run.odometry[-1]
         d[2] = wrap_angle(d[2])
@@ -82,12 +82,12 @@ def simulate(
     """Simulate ``robot`` as built driving ``path`` commanded by its nominal model
     (``omnikin simulate``, without the bag).
 
-    ``path``: a :class:`~omnikin.plans.Plan` (plans add: ``line(4) + spin(math.pi)``) or a path
-    in the runs-file grammar (:func:`omnikin.plans.parse_plan`); ``true_robot`` (robot file or
+    ``path``: a :class:`~omnikin.motion.plans.Plan` (plans add: ``line(4) + spin(math.pi)``) or a path
+    in the runs-file grammar (:func:`omnikin.motion.plans.parse_plan`); ``true_robot`` (robot file or
     Robot) replaces the seeded draw of the
     ``errors`` profile; ``noise``: random errors (profile name or
     :class:`~omnikin.simulation.error_models.NoiseModel`; default ``"typical"``); ``rate`` [Hz], within
-    :data:`~omnikin.simulation.motion.RATE_RANGE` as for ``omnikin simulate``. The seed's first
+    :data:`~omnikin.motion.timing.RATE_RANGE` as for ``omnikin simulate``. The seed's first
     stream draws the robot as built (the same robot as ``omnikin umbmark --seed``), its second
     the run, as ``omnikin simulate`` does. A run estimated to need more than ``max_memory``
     [bytes] or ``max_time`` [s] is refused before it starts
@@ -102,7 +102,7 @@ def simulate(
     Parameters
     ----------
     robot : str, os.PathLike or Robot
-        The nominal robot: a preset name, a robot file or a :class:`~omnikin.model.Robot`.
+        The nominal robot: a preset name, a robot file or a :class:`~omnikin.kinematics.robot.Robot`.
     path : str or Plan, default "square cw rotate 4"
         What to drive, from the origin along body +x.
     true_robot : str, os.PathLike or Robot, optional
@@ -143,11 +143,11 @@ def simulate(
     PhysicsError
         The physics engine failed (:class:`DivergedError`: MuJoCo's state diverged).
     """
+    from ..common.resource_limits import require_within
     from ..evaluation.physics_study import engine_options
     from ..evaluation.procedure import ARGUMENTS, streams
-    from ..plans import Plan, parse_plan
-    from ..resource_limits import require_within
-    from ..simulation.motion import check_rate_range
+    from ..motion.plans import Plan, parse_plan
+    from ..motion.timing import check_rate_range
     from ..simulation.simulate import run_cost
     from ..simulation.simulate import simulate as simulate_run
 
@@ -164,9 +164,9 @@ def simulate(
         require_within("simulate", max_memory=max_memory, max_time=max_time, names=ARGUMENTS, size=size, **estimate)
 
     if engine == "physics":
+        from ..motion.timing import sample_plan
         from ..physics.cost import physics_run_cost
         from ..physics.run import TAIL_MAX, simulate_physics
-        from ..simulation.motion import sample_plan
 
         assert step is not None
         tail = cost.bytes / max(cost.samples, 1.0) * TAIL_MAX * rate

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT, RECOMMENDED_REPEATS
 from ..evaluation.physics_study import engine_options, physics_cost, physics_umbmark_study
@@ -29,9 +30,8 @@ from ..evaluation.procedure import (
     umbmark_study,
 )
 from ..evaluation.umbmark import LEVEL, UNITS, UMBmarkResult, analyze, require_square
-from ..odometry import encoded_wheels
+from ..odometry.batch import encoded_wheels
 from ..physics.mjcf import DEFAULT_STEP
-from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..viz import DPI
 from .common import as_built, dumps, finite_or_none, noise_of, require_viz, robot_of, setting_name
 

@@ -15,9 +15,9 @@ import sys
 
 import numpy as np
 
+from ..common.messages import shorten
 from ..errors import InfeasibleTwistError, InputError, OmnikinError
-from ..geometry import wrap_angle
-from ..messages import shorten
+from ..kinematics.se2 import wrap_angle
 from .budget import Budget, add_budget_options, explained, require
 from .common import (
     add_as_built_options,
@@ -190,8 +190,8 @@ def add_parsers(sub, robot_help: str) -> None:
     declare_inputs(sp, "bag")
     sp.set_defaults(func=cmd_bag_export)
 
+    from ..motion.timing import RATE_RANGE
     from ..simulation.error_models import NOISE
-    from ..simulation.motion import RATE_RANGE
 
     sp = sub.add_parser(
         "simulate",
@@ -401,7 +401,7 @@ def parse_paths(text: str):
     """A plan from one or more ``;``-separated paths of the runs-file grammar
     (:func:`omnikin.io.runs.path_plan`: plain numbers)."""
     from ..io.runs import path_plan
-    from ..plans import PATH_BLANKS
+    from ..motion.plans import PATH_BLANKS
 
     parts = [p.strip(PATH_BLANKS) for p in text.split(";")]
     if not any(parts):
@@ -430,8 +430,8 @@ def _drivable(args):
 
 def cmd_simulate(args) -> int:
     from ..io.bags import record_run, require_rosbags
+    from ..motion.timing import check_rate_range
     from ..simulation.error_models import noise as noise_profile
-    from ..simulation.motion import check_rate_range
     from ..simulation.simulate import run_cost, simulate
 
     if args.bag is None and args.log is None:
@@ -453,9 +453,9 @@ def cmd_simulate(args) -> int:
     true, errors = robot_as_built(robot, args.true_robot, args.errors, seeds[0])
     sampled = None
     if physics:
+        from ..motion.timing import sample_plan
         from ..physics.cost import physics_run_cost
         from ..physics.run import TAIL_MAX
-        from ..simulation.motion import sample_plan
 
         # the samples' memory first (the run can only add its tail), then the plan sampled
         tail = cost.bytes / max(cost.samples, 1.0) * TAIL_MAX * args.rate
@@ -600,11 +600,11 @@ def _simulate_physics(args, plan, true, robot):
 
 
 def _check_stamps(args, duration: float) -> None:
-    """Refuse a --start whose stamps an output cannot hold (:func:`~omnikin.simulation.motion.check_start`),
+    """Refuse a --start whose stamps an output cannot hold (:func:`~omnikin.motion.timing.check_start`),
     before simulating: a bag's ROS 2 times (integer nanoseconds from 0 to 2**31 - 1 s), a tick
     log's times (read back as floats). ``duration`` [s]: at least the run's."""
     from ..io.bags import NS, ROS_TIME_SPAN
-    from ..simulation.motion import check_start
+    from ..motion.timing import check_start
 
     if args.bag is not None:
         check_start(args.start, duration, args.rate, "--start", output="a ROS 2 bag", span=ROS_TIME_SPAN, step=1 / NS)

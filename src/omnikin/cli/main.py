@@ -29,8 +29,8 @@ from collections.abc import Iterator
 import numpy as np
 
 from .._version import __version__
+from ..common.messages import one_line, shorten
 from ..errors import CliError, InfeasibleTwistError, InputError, OmnikinError, OutputError, Terminated, UsageError
-from ..messages import one_line, shorten
 from ..presets import PRESET_NAMES
 from .common import (
     STOPPED,
@@ -451,7 +451,7 @@ def cmd_odometry(args) -> int:
     from ..io.logs import read_tick_log
     from ..io.output import is_stdout
     from ..io.trajectories import write_trajectory
-    from ..odometry import batch_odometry
+    from ..odometry.batch import batch_odometry
 
     to_stdout = is_stdout(args.output)
     robot = load_robot(args.robot)

@@ -25,12 +25,12 @@ from ..api.umbmark import (
     analyze_umbmark,
     run_umbmark,
 )
+from ..common.number_text import mm_text, reduction_bounded, reduction_text
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
 from ..evaluation.physics_study import ENGINES
-from ..number_text import mm_text, reduction_bounded, reduction_text
+from ..motion.timing import RATE_RANGE
 from ..simulation.error_models import NOISE, PROFILES
-from ..simulation.motion import RATE_RANGE
 from ..viz import FIGURE_FORMATS, MAX_DPI, MIN_DPI, dpi_problem
 from .budget import add_budget_options, require
 from .common import (

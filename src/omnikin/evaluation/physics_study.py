@@ -40,12 +40,12 @@ from typing import Any
 
 import numpy as np
 
+from ..common.messages import shorten
 from ..errors import CalibrationFitError, InputError
-from ..messages import shorten
-from ..model import Robot
-from ..odometry import encoded_wheels
+from ..kinematics.robot import Robot
+from ..motion.plans import CalibrationRun, Plan, umbmark_square
+from ..odometry.batch import encoded_wheels
 from ..physics.mjcf import DEFAULT_STEP, time_step
-from ..plans import CalibrationRun, Plan, umbmark_square
 from ..simulation.error_models import NOISE, SystematicErrors
 from .calibration import RECOMMENDED_REPEATS, CalibrationResult, recommended_runs
 from .calibration import calibrate as least_squares_calibration
@@ -117,8 +117,8 @@ def physics_cost(
     once on ``robot``'s model at time step ``step`` [s], the model's construction counted for
     every run). With ``budget`` [s], a model whose size alone says the study takes longer is not
     built (:func:`omnikin.physics.cost.size_lower_bound`: that bound is the estimate)."""
+    from ..motion.timing import sample_plan
     from ..physics.cost import measure_step_seconds, physics_run_cost, simulated_bound, size_lower_bound
-    from ..simulation.motion import sample_plan
 
     squares = runs * trials * (3 if calibrate else 2)  # per direction: before, after, the floor
     driven = [(umbmark_square(direction, side, mode), squares) for direction in ("cw", "ccw")]
@@ -271,7 +271,7 @@ def physics_calibration_runs(
     ``true_robot`` commanded by ``robot`` at time step ``step`` [s], roller phases drawn from
     ``seed``; the measured end
     pose is the true one (the default measurement sigma of
-    :class:`~omnikin.plans.CalibrationRun`, as a runs file is read)."""
+    :class:`~omnikin.motion.plans.CalibrationRun`, as a runs file is read)."""
     rng = np.random.default_rng(seed)
     plans = recommended_runs(robot, side)
     total = len(plans) * RECOMMENDED_REPEATS

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ..model import Robot
+from ..kinematics.robot import Robot
 from ..simulation.error_models import NOISE, ErrorProfile, NoiseModel
 from .calibration import calibrate as least_squares_calibration
 from .physics_study import check_engine, physics_calibration_runs, physics_umbmark

@@ -1,11 +1,11 @@
 """A robot as a physical body: chassis, wheels, rollers, joints and motors, derived from any
-:class:`~omnikin.model.Robot` (pure data and NumPy; no physics engine needed).
+:class:`~omnikin.kinematics.robot.Robot` (pure data and NumPy; no physics engine needed).
 
 :func:`describe` turns the kinematic robot (wheel positions, drive directions, radii, roller
 angles, steering) into the frozen :class:`PhysicalRobot` that :mod:`omnikin.physics.mjcf`
 writes as a MuJoCo model and a viewer can draw. Every quantity the robot file does not give
 has a default below, with its reasoning; the optional ``physical:`` fields of the file
-(:class:`~omnikin.physical.PhysicalBody` on the robot, :class:`~omnikin.physical.PhysicalWheel`
+(:class:`~omnikin.kinematics.physical.PhysicalBody` on the robot, :class:`~omnikin.kinematics.physical.PhysicalWheel`
 on each wheel) override them. ``docs/physics.md`` repeats the table.
 
 Frames and units: SI, radians. The **body frame** is that of ``docs/conventions.md``
@@ -38,7 +38,7 @@ spin never lifts the wheel) with semi-axis ``a`` along its spin axis and ``b`` a
 centre at distance ``c`` from the axle. The roller at angle ``psi`` about the axle (0 at the
 bottom) has its centre at ``R_y(psi) (0, y_j, -c)`` and its spin axis
 ``e = R_y(psi) (cos gamma, sin gamma, 0)``: at the bottom it lies along ``delta + gamma`` in
-the floor plane, the direction along which the contact cannot slip (``omnikin.wheels``).
+the floor plane, the direction along which the contact cannot slip (``omnikin.kinematics.wheels``).
 
 *Envelope.* With the roller at angle ``phi`` from the bottom, the height of the axle above the
 floor is the roller's support function in the vertical direction (``e.z = -cos(gamma)
@@ -154,7 +154,7 @@ steering                    PI position servo with full torque at 0.05 rad of er
 the body's: on omni4 the wheels stand at 45 deg to a forward motion, so the body accelerates
 ``sqrt(2)`` times as fast as the rims and needs ``sqrt(2)`` times the traction a rim
 acceleration would suggest. The ramp is therefore derived from the body dynamics. With ``J``
-the driven wheels' rows (``omega = J xi``, :meth:`~omnikin.model.Robot.jacobian` at zero
+the driven wheels' rows (``omega = J xi``, :meth:`~omnikin.kinematics.robot.Robot.jacobian` at zero
 steering, twist ``xi = (vx, vy, omega)`` of the body frame) the set-points move along a straight
 line in wheel-speed space (the engine's ramp), so the body accelerations the wheels can produce
 at rim acceleration ``a`` are ``P(a) = {xi' in the row space of J : |r_i J_i xi'| <= a}``. The
@@ -195,7 +195,7 @@ inertia keeps ``k h_max^2 / I <= 1`` (:func:`steering_rotor_inertia`; presets 0.
 Without it synchro with a 1000 kg chassis (ratio 122) tipped over in ``line 1``, xr4000 with
 100 kg (8.1) ended it 86 mm off.
 
-*A robot as built* (:attr:`omnikin.model.Robot.design` set, as
+*A robot as built* (:attr:`omnikin.kinematics.robot.Robot.design` set, as
 :meth:`~omnikin.simulation.error_models.SystematicErrors.apply` makes it) keeps the body of its
 design: the defaults above are taken from the design, and only what the errors name moves
 (each wheel's hub, drive direction, radius and roller angle; :func:`as_built`).
@@ -214,9 +214,9 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from ..errors import InputError
-from ..model import Robot
-from ..physical import PhysicalWheel
-from ..wheels import Wheel
+from ..kinematics.physical import PhysicalWheel
+from ..kinematics.robot import Robot
+from ..kinematics.wheels import Wheel
 
 GRAVITY = 9.81
 """Standard gravity [m/s^2]."""
@@ -615,7 +615,7 @@ def steered_support_margin(robot: Robot, com, steer) -> float:
     """:func:`support_margin` of the centre of mass ``com`` (x, y) [m] among the contacts of
     ``robot``'s wheels with its steerable wheels at ``steer`` [rad] (file order): an off-centred
     wheel's contact trails its steering axis and swings round it as it steers
-    (:meth:`omnikin.wheels.Wheel.contact_point`); castors and fixed wheels at their mounting."""
+    (:meth:`omnikin.kinematics.wheels.Wheel.contact_point`); castors and fixed wheels at their mounting."""
     angles = dict(zip(robot.steer_names, np.atleast_1d(np.asarray(steer, dtype=float)), strict=True))
     contacts = np.array([w.contact_point(angles.get(w.name, 0.0)) for w in robot.wheels])
     return support_margin(contacts, np.asarray(com, dtype=float)[:2])
@@ -751,7 +751,7 @@ def _wheel_mass_and_width(wheel: Wheel) -> tuple[float, float, RollerSet | None,
 
 def describe(robot: Robot) -> PhysicalRobot:
     """The physical description of ``robot`` (module docstring for every default); a robot as
-    built (:attr:`omnikin.model.Robot.design` set) keeps the body of its design
+    built (:attr:`omnikin.kinematics.robot.Robot.design` set) keeps the body of its design
     (:func:`as_built`)."""
     if not isinstance(robot, Robot):
         raise InputError(f"describe: expected a Robot, got {type(robot).__name__}")
@@ -882,7 +882,7 @@ def describe(robot: Robot) -> PhysicalRobot:
 
 def as_built(robot: Robot, design: PhysicalRobot) -> PhysicalRobot:
     """The physical description of ``robot``, a robot as built, from ``design``, the description
-    of the robot it was built to (:attr:`omnikin.model.Robot.design`): it differs only where the
+    of the robot it was built to (:attr:`omnikin.kinematics.robot.Robot.design`): it differs only where the
     errors say. Kept from the design: the chassis (shape, size, mass, centre of mass, inertia),
     every wheel's mass, width, rollers per row and rows, friction, motor (torque, speed, ramp,
     servo, rotor) and steering servo. Taken from ``robot``: each wheel's hub position, drive

@@ -56,10 +56,10 @@ from typing import Any
 
 import numpy as np
 
+from ..common.messages import digits_apart
 from ..errors import InputError, LinkError, OmnikinError
-from ..geometry import between, log
-from ..limits import MotionLimits
-from ..messages import digits_apart
+from ..kinematics.se2 import between, log
+from ..motion.limits import MotionLimits
 from ..physics.description import describe
 from ..physics.joint_motion import JointMotion
 from ..physics.urdf import BASE_LINK, urdf

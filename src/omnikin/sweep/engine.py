@@ -60,8 +60,8 @@ from typing import Any
 
 from distributed import WorkerPlugin
 
+from ..common.messages import one_line, shorten
 from ..errors import InputError, LinkError, WorkerMismatch
-from ..messages import one_line, shorten
 from .points import result_versions
 
 RETRIES = 1

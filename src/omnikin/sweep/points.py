@@ -30,7 +30,7 @@ from dataclasses import asdict, dataclass, fields, replace
 import numpy as np
 
 from ..evaluation.tolerance_trial import TrialSettings
-from ..model import Robot
+from ..kinematics.robot import Robot
 from ..simulation.error_models import NOISE, ErrorProfile
 
 TOLERANCE_FACTORS = ("scale", "radius", "hub", "drive_deg")

@@ -32,12 +32,12 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Protocol
 
+from ..common.messages import one_line, shorten
 from ..errors import InputError, WorkerMismatch
 from ..evaluation.calibration import RECOMMENDED_REPEATS, recommended_runs
-from ..messages import one_line, shorten
-from ..model import Robot
-from ..plans import umbmark_square
-from ..simulation.motion import estimated_samples
+from ..kinematics.robot import Robot
+from ..motion.plans import umbmark_square
+from ..motion.timing import estimated_samples
 from .points import Point, point_key
 from .store import Coverage, StudyFolder, arrow_schema
 from .study import Study

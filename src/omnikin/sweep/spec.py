@@ -68,13 +68,13 @@ repeat are dropped, the first kept).
 
 Every robot is loaded when the file is (:func:`~omnikin.io.robot_file.load_robot`; a file
 relative to the study file's folder), must have encoders that observe its motion
-(:func:`~omnikin.odometry.encoded_wheels`) and must be able to drive the study's UMBmark square
+(:func:`~omnikin.odometry.batch.encoded_wheels`) and must be able to drive the study's UMBmark square
 (:func:`~omnikin.evaluation.umbmark.square_refusal`). A study of more than :data:`MAX_POINTS`
 points, or of more than :data:`MAX_TRIALS` trials in all, is refused before a point is built.
 
 Every problem raises :class:`~omnikin.errors.StudyFileError` in one line naming the file, the
 line and the field (``study.yaml: line 12: factors.scale.count: must be a whole number from 1
-to 1000, got 0``); values are quoted through :func:`~omnikin.messages.shorten`. The lines come from
+to 1000, got 0``); values are quoted through :func:`~omnikin.common.messages.shorten`. The lines come from
 the YAML node tree composed by the same strict loader.
 """
 
@@ -90,19 +90,19 @@ from typing import Any
 
 import numpy as np
 
-from .._arrays import range_problem, whole_problem
+from ..common.arrays import range_problem, whole_problem
+from ..common.messages import did_you_mean, shorten
 from ..errors import InputError, RobotFileError, StudyFileError
 from ..evaluation.umbmark import check_side, square_refusal
 from ..io.robot_file import is_preset_spec, load_robot, parse_yaml, strict_yaml_loader
 from ..io.textfile import read_text
-from ..messages import did_you_mean, shorten
-from ..model import Robot, robot_name_problem
-from ..odometry import encoded_wheels
-from ..plans import check_mode
+from ..kinematics.encoder import TICKS_PER_REV_RANGE
+from ..kinematics.robot import Robot, robot_name_problem
+from ..motion.plans import check_mode
+from ..motion.timing import RATE_RANGE, check_rate_range
+from ..odometry.batch import encoded_wheels
 from ..presets import PRESET_NAMES
 from ..simulation.error_models import NOISE
-from ..simulation.motion import RATE_RANGE, check_rate_range
-from ..wheels import TICKS_PER_REV_RANGE
 from .points import ENGINES, POINT_FIELDS, Point, _digest, canonical_json, robot_hash
 from .study import DESIGNS, Study
 
@@ -142,14 +142,14 @@ FACTOR_RANGES: dict[str, tuple[float, float, str, bool]] = {
     "rate": (*RATE_RANGE, "Hz", False),
 }
 """``(low, high, unit, low excluded)`` of each real factor (module docstring gives the reasons;
-``rate``: :data:`~omnikin.simulation.motion.RATE_RANGE`, checked by
-:func:`~omnikin.simulation.motion.check_rate_range`). ``scale`` excludes 0: set a tolerance
+``rate``: :data:`~omnikin.motion.timing.RATE_RANGE`, checked by
+:func:`~omnikin.motion.timing.check_rate_range`). ``scale`` excludes 0: set a tolerance
 itself to 0 for a perfect build in that respect."""
 
 WHOLE_FACTORS: dict[str, tuple[int, int]] = {
     "ticks_per_rev": (int(TICKS_PER_REV_RANGE[0]), int(TICKS_PER_REV_RANGE[1])),
 }
-"""Range of each whole-number factor (:data:`~omnikin.wheels.TICKS_PER_REV_RANGE`)."""
+"""Range of each whole-number factor (:data:`~omnikin.kinematics.encoder.TICKS_PER_REV_RANGE`)."""
 
 CHOICE_FACTORS: dict[str, tuple[str, ...]] = {"noise": tuple(NOISE), "engine": ENGINES}
 BOOL_FACTORS = ("calibrate",)

@@ -40,8 +40,8 @@ from typing import TextIO
 import numpy as np
 
 from ..errors import InputError
-from ..limits import MotionLimits
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..motion.limits import MotionLimits
 from ..physics.description import PhysicalRobot, describe
 from ..physics.joint_motion import JointMotion
 from ..runtime.base import BaseRuntime, StepResult

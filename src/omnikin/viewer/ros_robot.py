@@ -39,11 +39,11 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from ..common.messages import one_line, shorten
 from ..errors import InputError, RobotMismatch
 from ..io.bags import yaw_of
-from ..limits import MotionLimits
-from ..messages import one_line, shorten
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..motion.limits import MotionLimits
 from .live import PageRobot, Snapshot, triple
 
 NODE_NAME = "omnikin_view"

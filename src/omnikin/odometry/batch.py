@@ -1,14 +1,14 @@
 """Wheel odometry: a streaming estimator and batch odometry over arrays.
 
 Per sample (``docs/conventions.md``): encoder ticks -> wheel angle increments
-(:mod:`omnikin.encoders`) -> body increment by forward kinematics
-(:meth:`omnikin.model.Robot.fk`, constant over the sample) -> pose update by the
-SE(2) exponential (:mod:`omnikin.integration`; ``euler`` and ``midpoint`` are there
+(:mod:`omnikin.odometry.increments`) -> body increment by forward kinematics
+(:meth:`omnikin.kinematics.robot.Robot.fk`, constant over the sample) -> pose update by the
+SE(2) exponential (:mod:`omnikin.odometry.integration`; ``euler`` and ``midpoint`` are there
 for comparison only). Odometry uses the rolling wheels that have an ``encoder``
 in the robot file; with steerable wheels the steering angles of each sample are
 needed too, and each interval uses the mean of its two end angles.
 
-The streaming estimator lives in :mod:`omnikin.streaming`.
+The streaming estimator lives in :mod:`omnikin.odometry.streaming`.
 """
 
 from __future__ import annotations
@@ -19,26 +19,15 @@ from typing import overload
 
 import numpy as np
 
-from ._arrays import as_real_array
-from .encoders import (
-    SAFETY,
-    Carry,
-    Problem,
-    as_float,
-    as_floats,
-    as_reading_array,
-    block_increments,
-    container_problem,
-    counter_readings,
-    counter_rules,
-    problem_at,
-    timestamp_problem,
-    wheel_increments,
-)
-from .errors import InputError, OdometryInputError
-from .geometry import MAX_ANGLE, wrap_angle
+from ..common.arrays import as_real_array, container_problem
+from ..errors import InputError, OdometryInputError
+from ..kinematics.robot import STEER_LIMIT_SLACK, Robot, steering_beyond
+from ..kinematics.se2 import MAX_ANGLE, wrap_angle
+from .counters import as_float, as_floats, as_reading_array, counter_readings
+from .increments import Carry, block_increments, wheel_increments
 from .integration import STEP_BOUNDS, check_method, check_start, integrate_components, step_problem
-from .model import STEER_LIMIT_SLACK, Robot, steering_beyond
+from .plausibility import SAFETY, counter_rules
+from .samples import Problem, problem_at, timestamp_problem
 
 
 def encoded_wheels(robot: Robot):
@@ -118,7 +107,7 @@ def _residual(angles: np.ndarray, rows: np.ndarray, increments: np.ndarray, dt: 
 
 def _redundant(robot: Robot, rows: np.ndarray) -> bool:
     """More fitted rows than the motions they observe: the residual can be non-zero."""
-    from .linalg import rank
+    from ..kinematics.linalg import rank
 
     return rows.shape[-2] > rank(rows @ robot.admissible_basis)
 
@@ -144,8 +133,8 @@ def body_components(coefficients: list[list[float]], delta: np.ndarray) -> list[
     """Body increments ``a``, ``b``, ``phi`` ``(..., m)`` [m, m, rad] of wheel increments ``delta``
     ``(..., m, n)`` with the constant :func:`fk_coefficients`, each summed over the wheels in their
     order and without the terms of zero coefficient: the arithmetic of the streaming kernel
-    (``omnikin._stream_kernel._fk_lines``), so that batch and streaming odometry compute the same
-    body increments to the bit (and refuse the same steps, :func:`omnikin.integration.step_problem`)."""
+    (``omnikin.odometry._stream_kernel._fk_lines``), so that batch and streaming odometry compute the same
+    body increments to the bit (and refuse the same steps, :func:`omnikin.odometry.integration.step_problem`)."""
     columns = [delta[..., j] for j in range(delta.shape[-1])]
     out = []
     for row in coefficients:
@@ -178,7 +167,7 @@ def steered_steps(f: np.ndarray, angles: np.ndarray) -> np.ndarray:
 def step_problem_at(steps: np.ndarray, dt: np.ndarray, offset: int) -> Problem | None:
     """The first interval (row ``r`` is sample ``offset + 1 + r``) whose body increment in
     ``steps`` ``(..., m, 3)`` over ``dt`` ``(..., m)`` [s] is refused by
-    :func:`omnikin.integration.step_problem`, as a :class:`~omnikin.encoders.Problem`."""
+    :func:`omnikin.odometry.integration.step_problem`, as a :class:`~omnikin.odometry.samples.Problem`."""
     with np.errstate(invalid="ignore"):
         beyond = np.any(~(np.abs(steps) <= STEP_BOUNDS), axis=-1)
 
@@ -194,7 +183,7 @@ def step_problem_at(steps: np.ndarray, dt: np.ndarray, offset: int) -> Problem |
 
 
 class StepCheck:
-    """The ``motion`` check of :func:`omnikin.encoders.block_increments` for robots without
+    """The ``motion`` check of :func:`omnikin.odometry.increments.block_increments` for robots without
     steerable wheels: the first interval whose body increment (:func:`body_steps`) is beyond
     the bounds of one step. A block whose longest interval lets no wheel reach them (every
     increment is within its jump limit there) is passed without computing them."""
@@ -215,7 +204,7 @@ class StepCheck:
 
 
 class SteeredSteps:
-    """The ``motion`` check of :func:`omnikin.encoders.block_increments` for robots with steerable
+    """The ``motion`` check of :func:`omnikin.odometry.increments.block_increments` for robots with steerable
     wheels: the operator of each interval at its mean steering, the body increments
     (:func:`steered_steps`), kept block by block for the integration, and the first beyond the
     bounds of one step."""
@@ -261,12 +250,12 @@ def batch_odometry(
 
     Leading axes (trials) broadcast. ``steer`` ``(..., N, n_steer)`` [rad] is needed
     for robots with steerable wheels. The first sample is the zero of the ticks and
-    sits at ``start`` (default origin; :func:`omnikin.integration.check_start`). Readings of
-    any integer type are exact (see :func:`omnikin.encoders.counter_readings`);
+    sits at ``start`` (default origin; :func:`omnikin.odometry.integration.check_start`). Readings of
+    any integer type are exact (see :func:`omnikin.odometry.counters.counter_readings`);
     ``counter_bits`` (else each wheel's ``encoder.counter_bits``), ``max_jump`` [ticks],
     ``max_wheel_speed`` [rad/s] and ``max_wheel_accel`` [rad/s^2] are the counter, jump and
-    change-of-speed rules of :mod:`omnikin.encoders`; the body increment of an interval must lie
-    within :func:`omnikin.integration.step_problem`. The earliest bad sample raises
+    change-of-speed rules of :mod:`omnikin.odometry.plausibility`; the body increment of an interval must lie
+    within :func:`omnikin.odometry.integration.step_problem`. The earliest bad sample raises
     :class:`OdometryInputError` with its index in ``.sample`` (the same sample the streaming
     estimator refuses). The increments and twists are the streaming estimator's (to the bit
     without steerable wheels: :func:`body_components`), the poses agree with its poses to
@@ -274,8 +263,8 @@ def batch_odometry(
     and streaming odometry agree").
 
     Per interval: wheel angle increments -> body increment by forward kinematics, constant over
-    the interval (:meth:`omnikin.model.Robot.fk`; with steerable wheels at the mean of the two end
-    steering angles) -> pose update by the SE(2) exponential (:mod:`omnikin.integration`).
+    the interval (:meth:`omnikin.kinematics.robot.Robot.fk`; with steerable wheels at the mean of the two end
+    steering angles) -> pose update by the SE(2) exponential (:mod:`omnikin.odometry.integration`).
 
     Parameters
     ----------
@@ -300,12 +289,12 @@ def batch_odometry(
         Largest change [ticks] of a wheel between two samples; replaces the bound from the
         wheel speed.
     max_wheel_speed : float, optional
-        Wheel speed [rad/s] that, with the margin :data:`~omnikin.encoders.JUMP_MARGIN`, bounds
+        Wheel speed [rad/s] that, with the margin :data:`~omnikin.odometry.plausibility.JUMP_MARGIN`, bounds
         each wheel's change between two samples; default each wheel's ``max_speed``, else
-        :data:`~omnikin.encoders.DEFAULT_RIM_SPEED` at its rim.
+        :data:`~omnikin.odometry.plausibility.DEFAULT_RIM_SPEED` at its rim.
     max_wheel_accel : float, optional
         Wheel acceleration [rad/s^2] that, with the same margin, bounds each wheel's change of
-        speed between two intervals; default :data:`~omnikin.encoders.DEFAULT_RIM_ACCEL` at its
+        speed between two intervals; default :data:`~omnikin.odometry.plausibility.DEFAULT_RIM_ACCEL` at its
         rim.
 
     Returns
@@ -455,7 +444,7 @@ def _angle_array(angles, names) -> np.ndarray:
 
 def _timestamps(t, readings: np.ndarray, what: str, names) -> tuple[np.ndarray, Problem | None]:
     """Timestamps as float64 ``(..., N)`` after checking the shapes of ``readings`` ``(..., N, n)``,
-    and the first timestamp that is no number as a pending :class:`~omnikin.encoders.Problem`
+    and the first timestamp that is no number as a pending :class:`~omnikin.odometry.samples.Problem`
     (it reads as 0 here; refused at its sample, as the streaming estimator refuses it). Integers
     beyond the float range read as +-inf (refused at their sample as non-finite)."""
     n = len(names)
@@ -487,7 +476,7 @@ def _timestamps(t, readings: np.ndarray, what: str, names) -> tuple[np.ndarray, 
 
 def _located_times(t) -> tuple[np.ndarray, Problem | None] | None:
     """Timestamps that are not all floats: as float64 (beyond the float range +-inf, no number 0)
-    and the first that is no number (:func:`omnikin.encoders.timestamp_problem`), or None if
+    and the first that is no number (:func:`omnikin.odometry.samples.timestamp_problem`), or None if
     ``t`` is not a rectangular array of scalars (the caller's message stands)."""
     try:
         obj = np.array(t, dtype=object)
@@ -522,8 +511,8 @@ def _pose_array(lead_a, lead_b, n: int, start: np.ndarray | None) -> np.ndarray:
 
 def steer_bounds(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     """Lowest and highest steering angle ``(n_steer,)`` [rad] of a sample: what the model takes
-    (:meth:`omnikin.model.Robot.fk_matrix`: :attr:`~omnikin.model.Robot.steer_limits` with
-    their round-off slack, or +-:data:`~omnikin.geometry.MAX_ANGLE` for a wheel that turns all
+    (:meth:`omnikin.kinematics.robot.Robot.fk_matrix`: :attr:`~omnikin.kinematics.robot.Robot.steer_limits` with
+    their round-off slack, or +-:data:`~omnikin.kinematics.se2.MAX_ANGLE` for a wheel that turns all
     the way round), so that odometry refuses a bad angle at its sample rather than deep in the
     kinematics."""
     lower, upper = robot.steer_limits
@@ -544,7 +533,7 @@ def steer_problem(robot: Robot, k: int, value: float) -> str | None:
 
 def _steering(robot, steer, lead: tuple, n: int) -> tuple[np.ndarray, Problem | None]:
     """Steering angles ``(..., N, n_steer)`` [rad] of steerable robots, checked for shape, and
-    the first sample with a bad angle as a pending :class:`~omnikin.encoders.Problem`."""
+    the first sample with a bad angle as a pending :class:`~omnikin.odometry.samples.Problem`."""
     names = robot.steer_names
     if steer is None:
         raise InputError(

@@ -7,7 +7,7 @@ unmeasured); steering angles ``(..., n_steer)`` [rad] over the steerable wheels 
 file order, relative to each wheel's mounting drive direction.
 
 Inverse kinematics stacks the wheels' rolling rows into the ``n x 3`` wheel
-Jacobian ``J`` (``omega = J twist``, :mod:`omnikin.wheels`). Fixed standard wheels
+Jacobian ``J`` (``omega = J twist``, :mod:`omnikin.kinematics.wheels`). Fixed standard wheels
 add no-side-slip rows ``C_f twist = 0``: a twist that violates them is refused
 (or its violation returned on request).
 
@@ -17,7 +17,7 @@ rad/s, with rank tolerance) with the fixed wheels' constraints imposed exactly::
     twist = N pinv(A N) b,   A = [J; S / r],   b = [omega; 0]
 
 where ``N`` spans the null space of ``C_f`` and ``S`` holds the sliding rows of
-steerable wheels at their measured steering angles (:meth:`omnikin.wheels.Wheel.swivel_row`),
+steerable wheels at their measured steering angles (:meth:`omnikin.kinematics.wheels.Wheel.swivel_row`),
 each divided by its radius so that it weighs like a wheel-speed reading of zero: a measured
 steering angle says that the contact does not slide sideways. For an off-centred wheel the row
 reads ``offset * beta' / r`` at steering rate ``beta'``; forward kinematics and odometry take
@@ -38,13 +38,13 @@ from functools import cached_property
 
 import numpy as np
 
-from ._arrays import as_components, as_real_array, frozen, require_finite
-from .errors import InfeasibleTwistError, InputError, SingularLayoutError
-from .geometry import MAX_ANGLE
+from ..common.arrays import as_components, as_real_array, frozen, require_finite
+from ..common.messages import digits_apart, shorten
+from ..errors import InfeasibleTwistError, InputError, SingularLayoutError
 from .linalg import RANK_TOL, null_space, rank
-from .messages import digits_apart, shorten
 from .mobility import Configuration, Mobility, analyse, generic_configuration
 from .physical import PhysicalBody
+from .se2 import MAX_ANGLE
 from .wheels import DERIVED_SUFFIXES, Wheel
 
 STEER_LIMIT_SLACK = 1e-9
@@ -70,7 +70,7 @@ def robot_name_problem(name) -> str | None:
 def name_collisions(names: Sequence[str]) -> list[tuple[int, str]]:
     """``(index, problem)`` for each wheel name that clashes (empty if none): a repeated name, or
     a name equal to one derived from another wheel's (``w`` and ``w_steer_deg``, see
-    :data:`omnikin.wheels.DERIVED_SUFFIXES`). ``index`` is 0-based. Linear in the number of wheels."""
+    :data:`omnikin.kinematics.wheels.DERIVED_SUFFIXES`). ``index`` is 0-based. Linear in the number of wheels."""
     first: dict[str, int] = {}
     problems = []
     for i, n in enumerate(names):
@@ -135,7 +135,7 @@ def require_same_wheels(robot: Robot, true_robot: Robot) -> None:
 
 def heading_array(heading, name: str = "heading") -> np.ndarray:
     """``heading`` [rad] as a float array: real, finite and ``|heading| <=``
-    :data:`~omnikin.geometry.MAX_ANGLE`, else an InputError naming ``name``."""
+    :data:`~omnikin.kinematics.se2.MAX_ANGLE`, else an InputError naming ``name``."""
     th = as_real_array(heading, name)
     require_finite(th, name)
     big = np.abs(th) > MAX_ANGLE
@@ -231,7 +231,7 @@ class FKResult:
 def steering_beyond(wheel: str, value: float, lower: float, upper: float) -> str:
     """``wheel 'w' steered to V rad (D deg), outside its limits [lo, hi] deg`` (or ``beyond
     +-MAX_ANGLE rad`` for a wheel that turns all the way round), printed with the digits that
-    tell ``value`` from the limit it passes (:func:`~omnikin.messages.digits_apart`)."""
+    tell ``value`` from the limit it passes (:func:`~omnikin.common.messages.digits_apart`)."""
     if math.isinf(lower) or upper >= MAX_ANGLE:
         p = digits_apart(abs(value), MAX_ANGLE)
         limits = f"beyond +-{MAX_ANGLE:g} rad"
@@ -244,7 +244,7 @@ def steering_beyond(wheel: str, value: float, lower: float, upper: float) -> str
 
 @dataclass(frozen=True)
 class Robot:
-    """A wheeled mobile robot: a name and its wheels (see :mod:`omnikin.wheels`).
+    """A wheeled mobile robot: a name and its wheels (see :mod:`omnikin.kinematics.wheels`).
 
     Construction validates the layout: unique wheel names, at least one rolling
     wheel, some motion left by the fixed wheels, and every admissible motion
@@ -273,7 +273,7 @@ class Robot:
     Raises
     ------
     InputError
-        A bad name, a wheel that is not a :class:`~omnikin.wheels.Wheel`, colliding wheel names,
+        A bad name, a wheel that is not a :class:`~omnikin.kinematics.wheels.Wheel`, colliding wheel names,
         or a ``design`` with other wheels.
     SingularLayoutError
         No rolling wheel, an immobile layout, or a motion that turns no wheel.
@@ -457,7 +457,7 @@ class Robot:
         """Steering angles ``(..., n_steer)`` [rad], checked (docs/conventions.md, "Angles"): real
         and finite; a wheel with steering limits within them (:data:`STEER_LIMIT_SLACK`), a wheel
         that turns all the way round (limits -180 .. 180 deg) any angle up to
-        :data:`~omnikin.geometry.MAX_ANGLE` in size (an orientation; the interval steering of
+        :data:`~omnikin.kinematics.se2.MAX_ANGLE` in size (an orientation; the interval steering of
         odometry may cross +-180 deg). Else an InputError naming ``name``, the wheel and the angle.
         ``within_limits=False``: a preference, not a steering (the hint of :meth:`ik`, zero by
         default even for a wheel whose limits exclude zero), checked for its size only."""
@@ -489,9 +489,9 @@ class Robot:
         drive direction], over the steerable wheels in file order: each wheel's ``steer.lower``
         and ``steer.upper``, or ``-inf`` and ``+inf`` for a wheel that turns all the way round
         (no ``steer``, or limits -180 .. 180 deg: any orientation, up to
-        :data:`~omnikin.geometry.MAX_ANGLE` in size). The model accepts an angle up to
+        :data:`~omnikin.kinematics.se2.MAX_ANGLE` in size). The model accepts an angle up to
         :data:`STEER_LIMIT_SLACK` beyond a finite limit (round-off of a conversion from degrees).
-        Read-only arrays, for good (:func:`~omnikin._arrays.frozen`: the robot keeps them)."""
+        Read-only arrays, for good (:func:`~omnikin.common.arrays.frozen`: the robot keeps them)."""
         lims = [(w.steer.lower, w.steer.upper) if w.steer is not None else (-np.pi, np.pi) for w in self.steerable]
         full = [hi - lo >= 2 * np.pi - 1e-9 for lo, hi in lims]
         lower = np.array([-np.inf if f else lo for (lo, _), f in zip(lims, full, strict=True)])
@@ -505,7 +505,7 @@ class Robot:
         """Wheel Jacobian ``(..., n, 3)``: ``omega = J twist`` [rad/s per twist].
 
         Without steerable wheels the matrix is constant: it is built once and returned
-        read-only for good (:func:`~omnikin._arrays.frozen`; copy it to modify it).
+        read-only for good (:func:`~omnikin.common.arrays.frozen`; copy it to modify it).
 
         Parameters
         ----------
@@ -568,7 +568,8 @@ class Robot:
         """Rows ``A = [J; S/r]`` ``(..., n_rows, 3)`` that forward kinematics fits (module docstring).
 
         ``J``: rolling rows of the chosen wheels; ``S/r``: sliding rows of the chosen steerable
-        wheels over their radii (:meth:`omnikin.wheels.Wheel.swivel_row`). ``steer`` ``(..., n_steer)`` [rad].
+        wheels over their radii (:meth:`omnikin.kinematics.wheels.Wheel.swivel_row`). ``steer``
+        ``(..., n_steer)`` [rad].
 
         Parameters
         ----------
@@ -606,7 +607,7 @@ class Robot:
         """Forward-kinematics operator ``(..., 3, n_rows)``: ``twist = F [omega; 0]``.
 
         Without steerable wheels the operator is constant: it is computed once per wheel
-        subset and returned read-only for good (:func:`~omnikin._arrays.frozen`; copy it to
+        subset and returned read-only for good (:func:`~omnikin.common.arrays.frozen`; copy it to
         modify it).
 
         Parameters
@@ -682,14 +683,14 @@ class Robot:
     # --- analysis ------------------------------------------------------------------
     @cached_property
     def generic_configuration(self) -> Configuration:
-        """A generic admissible configuration (:func:`omnikin.mobility.generic_configuration`),
+        """A generic admissible configuration (:func:`omnikin.kinematics.mobility.generic_configuration`),
         its arrays read-only for good (the robot's mobility is computed from it)."""
         config = generic_configuration(self.wheels)
         return Configuration(*(frozen(getattr(config, f.name)) for f in fields(config)))
 
     @cached_property
     def mobility(self) -> Mobility:
-        """Rank, Campion type, holonomy and conditioning (:mod:`omnikin.mobility`)."""
+        """Rank, Campion type, holonomy and conditioning (:mod:`omnikin.kinematics.mobility`)."""
         return analyse(self.wheels, self.generic_configuration)
 
     def _check_layout(self) -> None:
@@ -764,7 +765,7 @@ class Robot:
             World-frame (``odom``) rates ``(xdot, ydot, thetadot)`` [m/s, m/s, rad/s].
         heading : array_like, shape (...)
             Heading ``theta`` [rad] of the body in the world frame: real, finite, at most
-            :data:`~omnikin.geometry.MAX_ANGLE` in size; broadcasts with ``velocity``'s leading
+            :data:`~omnikin.kinematics.se2.MAX_ANGLE` in size; broadcasts with ``velocity``'s leading
             axes.
 
         Returns

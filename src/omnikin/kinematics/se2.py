@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from ._arrays import as_components, as_real_array
+from ..common.arrays import as_components, as_real_array
 
 TWO_PI = 2.0 * math.pi
 
@@ -35,7 +35,7 @@ to 1e-10 rad; beyond it a value like 1e308 is a typo whose sine and cosine mean 
 
 MAX_DIRECTION_DEG = 720.0
 """Largest ``|direction|`` [deg] a person writes: a wheel's ``angle_deg`` and ``drive_deg`` in a
-robot file, the ``HEADING_DEG`` of a path (:func:`omnikin.plans.parse_plan`). Directions count
+robot file, the ``HEADING_DEG`` of a path (:func:`omnikin.motion.plans.parse_plan`). Directions count
 modulo 360; two turns leave room for computed layouts (``30 + k 120``), while ``1e300`` has no
 digit left modulo 360 (its direction would be the rounding of the conversion to radians)."""
 
