@@ -12,7 +12,7 @@ gets it), ``/diagnostics`` (command and link statistics, the forward-kinematics 
 the last cycle, in the frames of ``odom``; only with a simulated back-end, one that has a
 ``truth`` pose) and, when ``tf2_msgs`` is importable, ``/tf``: odom -> base_link and, at most
 ``link_tf_rate`` times a second, every URDF link in its parent link
-(:mod:`omnikin.ros.link_frames`), and ``/tf_static`` (transient local): ``base_frame_id`` ->
+(:mod:`omnikin.physics.link_frames`), and ``/tf_static`` (transient local): ``base_frame_id`` ->
 the URDF's ``base_link`` when the two names differ, and the URDF's fixed joints if any.
 ``tf2_msgs`` is not among the ROS 2 wheels on PyPI: with the PyPI install the node says so
 once and publishes no ``/tf``; run it from a ROS 2 install (``source /opt/ros/<distro>/
@@ -62,10 +62,10 @@ from ..kinematics.se2 import between, log
 from ..motion.limits import MotionLimits
 from ..physics.description import describe
 from ..physics.joint_motion import JointMotion
+from ..physics.link_frames import LinkFrames, urdf_joints
 from ..physics.urdf import BASE_LINK, urdf
 from ..runtime.base import BaseRuntime
 from . import messages, require_rclpy
-from .link_frames import LinkFrames, urdf_joints
 from .params import DEFAULTS, check_names, validate
 
 try:

@@ -73,7 +73,7 @@ def require_ros():
 
 def movable_joints(urdf_text: str) -> set[str]:
     """The names of the joints of URDF ``urdf_text`` that move (every type but ``fixed``)."""
-    from ..ros.link_frames import urdf_joints
+    from ..physics.link_frames import urdf_joints
 
     return {j.name for j in urdf_joints(urdf_text) if j.movable}
 
