@@ -1,10 +1,11 @@
 """The public names document their arguments in numpydoc sections that match their signatures.
 
 Public: every function and class in ``omnikin.__all__`` or ``omnikin.api.__all__`` (exceptions
-aside: their tree is documented in :mod:`omnikin.errors`), and the public methods that such a
-class defines itself. A numpydoc section is a title underlined by as many dashes
-(``Parameters`` / ``----------``); in ``Parameters`` and ``Attributes`` an entry starts at the
-section's indentation as ``name : type`` (``x, y : float`` documents two).
+aside: their tree is documented in :mod:`omnikin.errors`), the public functions of a module
+exported there (``omnikin.se2``), and the public methods that such a class defines itself. A
+numpydoc section is a title underlined by as many dashes (``Parameters`` / ``----------``); in
+``Parameters`` and ``Attributes`` an entry starts at the section's indentation as
+``name : type`` (``x, y : float`` documents two).
 
 - a function or method with arguments has a ``Parameters`` section that names exactly its
   arguments, in the order of its signature;
@@ -64,6 +65,10 @@ def public_objects() -> list[tuple[str, object]]:
                 continue
             if inspect.isfunction(obj) or inspect.isclass(obj):
                 found[name] = obj
+            elif inspect.ismodule(obj):
+                for attr, member in vars(obj).items():
+                    if not attr.startswith("_") and inspect.isfunction(member) and member.__module__ == obj.__name__:
+                        found[f"{name}.{attr}"] = member
     return sorted(found.items())
 
 
@@ -89,6 +94,7 @@ def test_the_checked_names_cover_the_exports():
     """The walk finds the entry points and the core classes (it cannot pass on an empty list)."""
     names = {name for name, _ in public_objects()}
     assert {"simulate", "run_umbmark", "batch_odometry", "load_robot", "Robot", "Wheel", "Odometry"} <= names
+    assert {"se2.exp", "se2.log", "se2.compose"} <= names
     methods = {name for name, _ in callables()}
     assert {"Robot.ik", "Robot.fk", "Odometry.update", "UMBmarkReport.write"} <= methods
 
