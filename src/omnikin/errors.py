@@ -286,7 +286,7 @@ class LinkLostError(LinkError):
 
 class WorkerMismatch(LinkError):
     """A sweep result computed by a Dask worker whose omnikin or NumPy version differs from the
-    client's (or that gave no versions): refused by :mod:`omnikin.sweep.engine`."""
+    client's (or that gave no versions): refused by :mod:`omnikin.sweep.cluster`."""
 
 
 class PhysicsError(OmnikinError, RuntimeError):

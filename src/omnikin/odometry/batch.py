@@ -319,11 +319,7 @@ def batch_odometry(
     check_method(method)
     start_pose = None if start is None else check_start(start)
     if robot.steerable:
-        lead = np.broadcast_shapes(tk.shape[:-2], tt.shape[:-1])
-        s, steering = _steering(robot, steer, lead, tk.shape[-2])
-        steps = SteeredSteps(robot, names, s, scale)
-        wheel_increments(rules, tt, tk, CHUNK, "ticks", _earliest(pending, steering), steps)
-        return _integrate_steered(robot, names, tt, steps, lead, method, start_pose)
+        return _steered_odometry(robot, names, rules, tt, tk, "ticks", scale, pending, steer, method, start_pose)
     _no_steer(robot, steer)
     f = robot.fk_matrix(None, names)
     rows = robot.fk_rows(None, names)
@@ -407,11 +403,7 @@ def batch_odometry_from_angles(
     start_pose = None if start is None else check_start(start)
     ones = np.ones(len(wheels))
     if robot.steerable:
-        lead = np.broadcast_shapes(a.shape[:-2], tt.shape[:-1])
-        s, steering = _steering(robot, steer, lead, a.shape[-2])
-        steps = SteeredSteps(robot, names, s, ones)
-        wheel_increments(rules, tt, a, CHUNK, "rad", _earliest(pending, steering), steps)
-        return _integrate_steered(robot, names, tt, steps, lead, method, start_pose)
+        return _steered_odometry(robot, names, rules, tt, a, "rad", ones, pending, steer, method, start_pose)
     _no_steer(robot, steer)
     f = robot.fk_matrix(None, names)
     check = StepCheck(fk_coefficients(f, ones), rules, "rad")
@@ -422,6 +414,18 @@ def batch_odometry_from_angles(
     inc = np.stack(comps, axis=-1)
     rows = robot.fk_rows(None, names)
     return OdometryResult(tt, out, inc, _residual(_fk_input(d, ones, f), rows, inc, np.diff(tt, axis=-1)))
+
+
+def _steered_odometry(robot, names, rules, t, values, unit: str, scale, pending, steer, method, start):
+    """Batch odometry of a robot with steerable wheels: readings ``values`` ``(..., N, n_enc)``
+    [``unit``: ticks or rad, times ``scale`` rad per unit] at times ``t`` ``(..., N)``, steering
+    ``steer`` ``(..., N, n_steer)`` [rad]; the first problem (timestamps, steering, readings,
+    steps) raised at its sample."""
+    lead = np.broadcast_shapes(values.shape[:-2], t.shape[:-1])
+    s, steering = _steering(robot, steer, lead, values.shape[-2])
+    steps = SteeredSteps(robot, names, s, scale)
+    wheel_increments(rules, t, values, CHUNK, unit, _earliest(pending, steering), steps)
+    return _integrate_steered(robot, names, t, steps, lead, method, start)
 
 
 def _earliest(*problems: Problem | None) -> Problem | None:

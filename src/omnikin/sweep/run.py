@@ -7,12 +7,12 @@
 2. cuts the missing trials of each point into tasks of about :data:`TASK_SECONDS` of work
    (:func:`plan_tasks`: long enough that Dask's few milliseconds per task do not count, short
    enough that a lost worker costs little and the last tasks end together);
-3. runs them (:mod:`omnikin.sweep.engine`: the embedded cluster or ``scheduler``) and writes each
+3. runs them (:mod:`omnikin.sweep.cluster`: the embedded cluster or ``scheduler``) and writes each
    task's trials as a part of the folder the moment it arrives;
 4. writes the trial table, the summary per point (:mod:`omnikin.sweep.summary`), the figure and
    ``report.md`` (:mod:`omnikin.sweep.report`) that answers the study's question.
 
-A task that failed on its workers (:func:`~omnikin.sweep.engine.run_tasks`), or whose result was
+A task that failed on its workers (:func:`~omnikin.sweep.cluster.run_tasks`), or whose result was
 refused because its worker runs other omnikin or NumPy versions, enters the tables as rows with
 its reason, but is not written as a part: the next run computes it again.
 
@@ -91,7 +91,7 @@ def plan_tasks(study: Study, coverage: Coverage, workers: int, task_trials: int 
     """The tasks of the trials not on disk (module docstring): runs of missing trials of each
     point cut into tasks of ``task_trials`` trials (default: about :data:`TASK_SECONDS` of work,
     fewer when the study has under :data:`TASKS_PER_WORKER` tasks per worker)."""
-    from .engine import Task
+    from .cluster import Task
 
     missing: list[tuple[int, int, int]] = []
     for index, point in enumerate(study.points):
@@ -167,7 +167,7 @@ def run_sweep(
 ) -> SweepResult:
     """Run ``study`` into the folder ``out`` (module docstring) and return what was done;
     ``tls``: the credentials of a ``tls://`` ``scheduler``
-    (:class:`~omnikin.sweep.engine.TLSFiles`; default: Dask's configuration)."""
+    (:class:`~omnikin.sweep.cluster.TLSFiles`; default: Dask's configuration)."""
     require_sweep()
     check_run_options(workers, task_trials)
     with StudyFolder.open(out, study, force=force) as folder:
@@ -199,7 +199,7 @@ def check_run_options(workers, task_trials) -> None:
 
 
 def _compute(study, folder, tasks, scheduler, workers, progress, result, failed_rows, tls) -> None:
-    from .engine import dask_client, run_tasks
+    from .cluster import dask_client, run_tasks
 
     keys = [point_key(p) for p in study.points]
 
