@@ -79,7 +79,32 @@ _API = (
 
 
 def load_robot(spec):
-    """Load a robot from a preset name or a robot file (YAML or JSON)."""
+    """Load a robot from a preset name or a robot file (YAML or JSON).
+
+    Parameters
+    ----------
+    spec : str or os.PathLike
+        A preset name given as a string (:data:`PRESET_NAMES`; always the shipped preset), or
+        the path of a robot file (docs/conventions.md, "Naming a robot: preset or file").
+
+    Returns
+    -------
+    Robot
+        The robot, its lengths in metres and angles in radians (the file's ``_deg`` fields
+        converted).
+
+    Raises
+    ------
+    RobotFileError
+        No such preset or file, a file that cannot be read, one that breaks the schema, or a
+        layout that cannot realise or measure its motion (the message names the file, the wheel
+        and the field).
+
+    Warns
+    -----
+    PresetShadowWarning
+        A preset name that is also a file or folder in the current folder.
+    """
     from .io.robot_file import load_robot as _load
 
     return _load(spec)

@@ -12,7 +12,23 @@ from ..simulation.error_models import profile as error_profile
 
 
 def robot_of(spec) -> Robot:
-    """A :class:`~omnikin.kinematics.robot.Robot`, or one loaded from a preset name or robot file."""
+    """A :class:`~omnikin.kinematics.robot.Robot`, or one loaded from a preset name or robot file.
+
+    Parameters
+    ----------
+    spec : str, os.PathLike or Robot
+        A robot (returned as it is), a preset name or the path of a robot file
+        (:func:`omnikin.load_robot`).
+
+    Returns
+    -------
+    Robot
+
+    Raises
+    ------
+    RobotFileError
+        As :func:`omnikin.load_robot`.
+    """
     if isinstance(spec, Robot):
         return spec
     from ..io.robot_file import load_robot
@@ -61,7 +77,23 @@ def finite_or_none(x):
 
 def dumps(document: dict) -> str:
     """The JSON text of a result document: strict JSON (:func:`omnikin.io.jsonfile.to_json`; a
-    NaN or infinity left in it is an error naming its field), with a final newline."""
+    NaN or infinity left in it is an error naming its field), with a final newline.
+
+    Parameters
+    ----------
+    document : dict
+        A result document (e.g. :meth:`UMBmarkReport.as_dict`): numbers, text, lists and dicts.
+
+    Returns
+    -------
+    str
+        The JSON text, ending in a newline.
+
+    Raises
+    ------
+    NonFiniteValueError
+        A NaN or infinity in ``document`` (the message names its field).
+    """
     from ..io.jsonfile import to_json
 
     return to_json(document) + "\n"

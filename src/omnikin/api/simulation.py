@@ -19,7 +19,28 @@ DEFAULT_PATH = "square cw rotate 4"
 class Simulation:
     """A simulated run (:func:`simulate`): ``run`` holds the times [s], encoder ticks, odometry,
     ground truth and measured end pose (:class:`~omnikin.simulation.simulate.SimulatedRun`);
-    ``injected`` the systematic errors drawn (None for a given true robot)."""
+    ``injected`` the systematic errors drawn (None for a given true robot).
+
+    Attributes
+    ----------
+    robot : Robot
+        The nominal robot: the model that commands the run and reads its encoders.
+    true_robot : Robot
+        The robot as built that drove it.
+    injected : SystematicErrors or None
+        The systematic errors drawn from the ``errors`` profile; None for a given ``true_robot``.
+    path : str
+        The path driven, in the runs-file grammar (or the plan's name).
+    run : SimulatedRun
+        Times ``t`` ``(N + 1,)`` [s]; encoder ``ticks`` and counter ``readings``
+        ``(N + 1, n_enc)``; ``steer`` ``(N + 1, n_steer)`` [rad] or None; ``odometry``
+        ``(N + 1, 3)`` and ground truth ``truth`` ``(1, N + 1, 3)`` poses ``(x, y, theta)``
+        [m, m, rad] in the world frame (``odom``), starting at the origin; ``measured``
+        ``(1, 3)`` the true end pose.
+    end_error : ndarray, shape (3,)
+        True end pose minus odometry end pose ``(x [m], y [m], theta [rad])``, world frame,
+        ``theta`` wrapped to ``[-pi, pi)``.
+    """
 
     robot: Robot
     true_robot: Robot
@@ -77,6 +98,50 @@ def simulate(
     (:func:`omnikin.physics.run.simulate_physics`, ``omnikin simulate --engine physics``) at
     time step ``step`` [s] (default 2 ms): the same plan, rate and robot as built; ``noise``
     must then be left out (the physics has no random error model).
+
+    Parameters
+    ----------
+    robot : str, os.PathLike or Robot
+        The nominal robot: a preset name, a robot file or a :class:`~omnikin.kinematics.robot.Robot`.
+    path : str or Plan, default "square cw rotate 4"
+        What to drive, from the origin along body +x.
+    true_robot : str, os.PathLike or Robot, optional
+        The robot as built, with the wheels of ``robot``; replaces the draw from ``errors``.
+    errors : str or ErrorProfile, default "typical"
+        Systematic-error profile the robot as built is drawn from (unused with ``true_robot``).
+    noise : str or NoiseModel, optional
+        Random errors of the kinematic engine; default ``"typical"``. Refused by the physics
+        engine.
+    seed : int, default 1
+        Seed (>= 0) of the robot as built and the run.
+    rate : float, default 100.0
+        Sample rate [Hz] of encoders, odometry and ground truth, within
+        :data:`~omnikin.simulation.motion.RATE_RANGE`.
+    engine : {"kinematic", "physics"}, default "kinematic"
+        The kinematic simulation or MuJoCo.
+    step : float, optional
+        Physics time step [s]; default 2 ms. Physics only.
+    max_memory : float, default DEFAULT_MEMORY
+        Largest memory [bytes] the run may be estimated to need.
+    max_time : float, default DEFAULT_TIME
+        Largest run time [s] the run may be estimated to need.
+
+    Returns
+    -------
+    Simulation
+        The robots, the errors drawn, the path and the run.
+
+    Raises
+    ------
+    InputError
+        A bad path, rate, seed, profile or step, ``noise`` with the physics engine, or a
+        ``true_robot`` with other wheels than ``robot``.
+    InfeasibleTwistError
+        A path the nominal robot cannot drive (e.g. a sideways leg for a differential drive).
+    ResourceLimitError
+        A run estimated to need more than ``max_memory`` or ``max_time``.
+    PhysicsError
+        The physics engine failed (:class:`DivergedError`: MuJoCo's state diverged).
     """
     from ..common.resource_limits import require_within
     from ..evaluation.physics_study import engine_options

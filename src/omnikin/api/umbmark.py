@@ -49,13 +49,46 @@ DEFAULT_ROBOT = "tomasi-omni3"
 class UMBmarkReport(UMBmarkStudy):
     """The result of :func:`run_umbmark` (the study of :mod:`omnikin.evaluation.procedure`)
     with the settings it ran with; :meth:`as_dict` is ``result.json``, :meth:`plot` draws it,
-    :meth:`write` writes the report folder."""
+    :meth:`write` writes the report folder.
+
+    Lengths in metres, angles in radians; poses in the world frame of each run's start.
+
+    Attributes
+    ----------
+    robot, true_robot : Robot
+        The nominal robot and the robot as built that drove the runs.
+    injected : SystematicErrors or None
+        The systematic errors drawn; None for a given ``true_robot``.
+    before, after : list of UMBmarkResult
+        One UMBmark procedure per trial, before and after calibration (``after`` None without
+        calibration); each has ``e_max_syst`` [m].
+    calibration : CalibrationResult or None
+        The calibration between them.
+    floor : NoiseFloor
+        What E_max,syst a perfectly calibrated robot reaches (:meth:`at_noise_floor`).
+    reduction_factor : float or None
+        E_max,syst before over after, first procedure.
+    settings : dict
+        The arguments of :func:`run_umbmark`, as ``result.json`` records them (robots and
+        profiles by name).
+    """
 
     settings: dict = field(default_factory=dict)
 
     # -- numbers ------------------------------------------------------------------------------
     def at_noise_floor(self, result: UMBmarkResult) -> bool:
-        """Whether ``result``'s E_max,syst cannot be told from a perfectly calibrated robot's."""
+        """Whether ``result``'s E_max,syst cannot be told from a perfectly calibrated robot's.
+
+        Parameters
+        ----------
+        result : UMBmarkResult
+            One procedure of :attr:`before` or :attr:`after`.
+
+        Returns
+        -------
+        bool
+            True when its E_max,syst [m] is at or below the floor's limit.
+        """
         return self.floor.reaches(result.e_max_syst)
 
     def _stage(self, result: UMBmarkResult) -> dict:
@@ -63,7 +96,19 @@ class UMBmarkReport(UMBmarkStudy):
 
     def as_dict(self, files: list | None = None) -> dict:
         """The ``result.json`` document (also what ``omnikin umbmark --json`` prints); lengths
-        in metres (``units`` gives every key's unit); ``null`` for an unbounded interval end."""
+        in metres (``units`` gives every key's unit); ``null`` for an unbounded interval end.
+
+        Parameters
+        ----------
+        files : list of str, optional
+            The files of the report folder, recorded under ``files``.
+
+        Returns
+        -------
+        dict
+            The document (:data:`RESULT_FORMAT`; its ``units`` and ``methods`` say what each key
+            holds).
+        """
         from ..io.robot_file import robot_to_dict
 
         doc: dict[str, Any] = {
@@ -162,7 +207,24 @@ class UMBmarkReport(UMBmarkStudy):
         return "noise floor (95th percentile)"
 
     def plot(self, kind: str = "return_errors"):
-        """One figure of :meth:`figures` (default: the return positions, before and after)."""
+        """One figure of :meth:`figures` (default: the return positions, before and after).
+
+        Parameters
+        ----------
+        kind : {"return_errors", "euclidean_errors", "trajectories", "monte_carlo"}
+            The figure; ``monte_carlo`` only with more than one trial.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        Raises
+        ------
+        InputError
+            An unknown ``kind``.
+        ImportError
+            matplotlib is missing (the message names the ``viz`` extra).
+        """
         figures = self.figures()
         if kind not in figures:
             raise InputError(f"unknown figure {kind!r}; one of {sorted(figures)}")
@@ -172,7 +234,34 @@ class UMBmarkReport(UMBmarkStudy):
     def write(self, folder, *, figure_format: str = "png", dpi: float = DPI, inputs=()) -> dict:
         """Write the report folder (replaced as a whole if omnikin wrote it; a foreign non-empty
         folder is refused; nothing changes if writing fails: :mod:`omnikin.io.output`).
-        Returns the ``result.json`` document written."""
+        Returns the ``result.json`` document written.
+
+        Parameters
+        ----------
+        folder : str or os.PathLike
+            The report folder: ``report.md``, ``result.json``, the measurement, calibration and
+            robot files, and the figures (none without matplotlib).
+        figure_format : str, default "png"
+            File format of the figures (a matplotlib format).
+        dpi : float, default DPI
+            Resolution of raster figures [dots per inch].
+        inputs : sequence of path, default ()
+            Files the study read, which the folder may not replace.
+
+        Returns
+        -------
+        dict
+            The ``result.json`` document (:meth:`as_dict`).
+
+        Raises
+        ------
+        InputError
+            A bad ``figure_format`` or ``dpi``, or a missing parent folder.
+        OutputExistsError
+            A folder omnikin did not write, or one that is an input.
+        OutputError
+            Writing failed (the folder is left as it was).
+        """
         from ..io.output import check_output, report_folder
         from ..io.robot_file import robot_text
         from ..io.run_poses import run_poses_text
@@ -359,6 +448,65 @@ def run_umbmark(
     (:func:`~omnikin.evaluation.procedure.check_cost`), after every setting has been checked;
     ``on_cost``, if given, is called with that estimate first (``omnikin umbmark`` checks it
     against its options and says when the study will take long).
+
+    Each run starts at the origin of the world frame (``odom``) heading along +x and drives a
+    ``side`` square (Borenstein and Feng 1996; docs/conventions.md); its return error is the true
+    end pose minus the odometry end pose.
+
+    Parameters
+    ----------
+    robot : str, os.PathLike or Robot, default "tomasi-omni3"
+        The nominal robot (preset name, robot file or Robot); it needs encoders.
+    true_robot : str, os.PathLike or Robot, optional
+        The robot as built, with the wheels of ``robot``; replaces the draw from ``errors``.
+    errors : str or ErrorProfile, default "typical"
+        Systematic-error profile the robot as built is drawn from.
+    mode : {"rotate", "translate"}, default "rotate"
+        Turn in place at the corners, or translate along the sides (holonomic robots).
+    runs : int, default 5
+        Runs per direction (cw and ccw) of each procedure.
+    side : float, default 4.0
+        Side of the square [m].
+    noise : str or NoiseModel, optional
+        Random errors of the kinematic engine; default ``"typical"``. Refused by the physics
+        engine.
+    rate : float, default 100.0
+        Sample rate [Hz] of encoders and odometry.
+    seed : int, default 1
+        Seed (>= 0) of the robot as built, the runs and the floor.
+    trials : int, default 1
+        UMBmark procedures (Monte Carlo over the noise).
+    calibrate : bool, default True
+        Calibrate and run UMBmark again.
+    engine : {"kinematic", "physics"}, default "kinematic"
+        The kinematic simulation or MuJoCo.
+    step : float, optional
+        Physics time step [s]; default 2 ms. Physics only.
+    max_memory : float, default DEFAULT_MEMORY
+        Largest memory [bytes] the study may be estimated to need.
+    max_time : float, default DEFAULT_TIME
+        Largest run time [s] the study may be estimated to need.
+    progress : callable, optional
+        Called with the name of each step.
+    on_cost : callable, optional
+        Called with the :class:`~omnikin.evaluation.procedure.Cost` estimate before the study.
+
+    Returns
+    -------
+    UMBmarkReport
+        The study and its settings.
+
+    Raises
+    ------
+    InputError
+        A bad setting (the message names its option), a robot without encoders, or a square
+        the robot cannot drive in ``mode``.
+    ResourceLimitError
+        A study estimated to need more than ``max_memory`` or ``max_time``.
+    CalibrationFitError
+        No robot of the layout explains the calibration runs.
+    PhysicsError
+        The physics engine failed.
     """
     noise, step = engine_options(engine, noise, step)
     nominal = robot_of(robot)
@@ -449,10 +597,41 @@ def umbmark_cost(
 # --- analyze ---------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class UMBmarkAnalysis(UMBmarkResult):
-    """UMBmark of measured runs (:func:`analyze_umbmark`) that plots itself."""
+    """UMBmark of measured runs (:func:`analyze_umbmark`) that plots itself.
+
+    Attributes
+    ----------
+    cw, ccw : DirectionResult
+        The runs of each direction: return errors ``epsilon`` ``(n, 3)`` [m, m, rad] (true minus
+        calculated end pose, world frame) and their centre of gravity at distance ``r_cg`` [m].
+    side : float
+        Side of the square [m].
+    mode : str
+        ``rotate`` or ``translate``.
+    borenstein : Borenstein or None
+        Borenstein's correction (None unless a differential-drive ``robot`` was given).
+    e_max_syst : float
+        ``max(r_cg_cw, r_cg_ccw)`` [m] (Borenstein and Feng 1996).
+    """
 
     def plot(self, kind: str = "return_errors"):
-        """``return_errors`` (return positions and centres of gravity) or ``euclidean_errors``."""
+        """``return_errors`` (return positions and centres of gravity) or ``euclidean_errors``.
+
+        Parameters
+        ----------
+        kind : {"return_errors", "euclidean_errors"}
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        Raises
+        ------
+        InputError
+            An unknown ``kind``.
+        ImportError
+            matplotlib is missing (the message names the ``viz`` extra).
+        """
         require_viz()
         from ..viz import umbmark as fig
 
@@ -466,7 +645,18 @@ class UMBmarkAnalysis(UMBmarkResult):
         return makers[kind]({"measured": self}, "UMBmark of measured runs", caption=f"measured on a real robot: {runs}")
 
     def as_dict(self, level: float = LEVEL) -> dict:
-        """The ``omnikin umbmark analyze --json`` document (lengths in metres; ``units``)."""
+        """The ``omnikin umbmark analyze --json`` document (lengths in metres; ``units``).
+
+        Parameters
+        ----------
+        level : float, default LEVEL
+            Confidence level (0 .. 1, exclusive) of the E_max,syst interval.
+
+        Returns
+        -------
+        dict
+            Side, mode, the return errors per direction, ``e_max_syst`` and its interval [m].
+        """
         return {**UMBmarkResult.as_dict(self, level), "confidence_level": level, "units": UNITS}
 
 
@@ -477,6 +667,29 @@ def analyze_umbmark(measurements, *, robot=None, side: float = 4.0) -> UMBmarkAn
     [m], optional headings; :mod:`omnikin.io.runs`) or ``{"cw": eps, "ccw": eps}`` return
     errors ``(n, 2)`` or ``(n, 3)`` [m, m, rad]; ``robot``: a differential drive also gets
     Borenstein's correction; ``side`` [m] of the square.
+
+    Parameters
+    ----------
+    measurements : str, os.PathLike or dict
+        A measurements file, or ``{"cw": eps, "ccw": eps}`` with ``eps`` array_like of shape
+        ``(n, 2)`` or ``(n, 3)``: the return errors ``(x, y[, theta])`` [m, m, rad] of each run,
+        true (measured) minus calculated (odometry) end pose, world frame.
+    robot : str, os.PathLike or Robot, optional
+        The robot measured; a differential drive also gets Borenstein's correction.
+    side : float, default 4.0
+        Side of the square [m].
+
+    Returns
+    -------
+    UMBmarkAnalysis
+        Centres of gravity per direction and E_max,syst [m].
+
+    Raises
+    ------
+    RunsFileError
+        A measurements file that cannot be read, or runs missing in one direction.
+    InputError
+        Return errors of a bad shape or not finite, or a bad ``side``.
     """
     if isinstance(measurements, dict):
         eps = measurements

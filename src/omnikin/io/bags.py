@@ -584,7 +584,7 @@ def _write_bag(
     import inspect
 
     params = inspect.signature(rb.Writer).parameters
-    kwargs = {}
+    kwargs: dict[str, Any] = {}
     if "version" in params:
         kwargs["version"] = 8
     if storage != "sqlite3":

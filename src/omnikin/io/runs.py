@@ -97,7 +97,7 @@ def read_umbmark_measurements(path):
         ("direction", "x_abs", "y_abs", "x_calc", "y_calc"),
         ("theta_abs", "theta_calc", "theta_abs_deg", "theta_calc_deg"),
     )
-    eps = {"cw": [], "ccw": []}
+    eps: dict[str, list[tuple[float, float, float]]] = {"cw": [], "ccw": []}
     for line_no, row in rows:
         d = row["direction"].lower()
         if d not in eps:

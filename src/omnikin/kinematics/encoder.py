@@ -34,8 +34,24 @@ def _require(problem: str | None, what: str) -> None:
 class Encoder:
     """Incremental encoder on a wheel: ``angle = 2 pi ticks / (ticks_per_rev gear_ratio)``.
 
-    ``counter_bits``: width of the hardware counter whose readings are logged (2..64); its
-    readings wrap modulo ``2**counter_bits`` (:mod:`omnikin.odometry.counters`). None: they never wrap.
+    Parameters
+    ----------
+    ticks_per_rev : float
+        Ticks per encoder revolution, 1 .. 2**32 (the robot file's ``encoder.ticks_per_rev``).
+    gear_ratio : float, default 1.0
+        Encoder turns per wheel turn, 0.001 .. 10000.
+    invert : bool, default False
+        True when the counts run against the wheel's positive spin (then :attr:`rad_per_tick`
+        is negative).
+    counter_bits : int or None, default None
+        Width of the hardware counter whose readings are logged (2 .. 64): its readings wrap
+        modulo ``2**counter_bits`` (:mod:`omnikin.odometry.counters`). None: they never wrap.
+
+    Raises
+    ------
+    InputError
+        A value outside its range (docs/conventions.md, "Ranges"), not a number, or ``invert``
+        not a bool; the message names the field.
     """
 
     ticks_per_rev: float

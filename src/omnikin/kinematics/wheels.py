@@ -115,9 +115,19 @@ def _require(problem: str | None, what: str) -> None:
 class Steer:
     """Steering of a steerable wheel or castor.
 
-    ``offset`` [m]: distance by which the contact trails the steering axis against
-    the drive direction (0: centred). ``lower``/``upper`` [rad]: steering limits
-    relative to the mounting drive direction.
+    Parameters
+    ----------
+    offset : float, default 0.0
+        Distance [m] by which the contact trails the steering axis against the drive direction,
+        0 .. 10 (0: a centred wheel).
+    lower, upper : float, default -pi, pi
+        Steering limits [rad] relative to the mounting drive direction, each in ``[-pi, pi]``,
+        ``lower < upper``.
+
+    Raises
+    ------
+    InputError
+        A value outside its range or ``lower >= upper``; the message names the field.
     """
 
     offset: float = 0.0
@@ -137,8 +147,42 @@ class Steer:
 class Wheel:
     """A wheel mounted on the body (SI units, radians).
 
-    ``drive`` is the drive direction ``delta`` at zero steering; ``roller`` is the
-    roller angle ``gamma`` of Swedish wheels (0 otherwise).
+    The robot file's wheel (docs/conventions.md, "Wheels"), its degrees converted to radians.
+
+    Parameters
+    ----------
+    name : str
+        Wheel name, ``[A-Za-z][A-Za-z0-9_]{0,63}``, not ``t`` (docs/conventions.md, "Names").
+    type : str
+        One of :data:`WHEEL_TYPES`: ``omni``, ``mecanum``, ``swedish``, ``standard``,
+        ``steerable``, ``castor``.
+    x, y : float
+        Hub contact point ``p`` [m] in the body frame (``base_link``: x forward, y left), each
+        within +-1000 m (for a steerable wheel or castor: where the steering axis meets the floor).
+    drive : float
+        Drive direction ``delta`` [rad] at zero steering, counter-clockwise from body +x.
+    radius : float
+        Rolling radius [m], 0.0001 .. 10.
+    roller : float, default 0.0
+        Roller angle ``gamma`` [rad] of a Swedish wheel, within +-80 deg (a robot file's mecanum
+        wheel: +-45 deg); 0 for every other type.
+    encoder : Encoder or None, default None
+        The wheel's encoder; None: odometry does not read this wheel.
+    max_speed : float or None, default None
+        Largest wheel speed [rad/s], 0 .. 10000 (0: a locked wheel); None: unbounded.
+    steer : Steer or None, default None
+        Offset and steering limits of a steerable wheel or castor.
+    physical : PhysicalWheel or None, default None
+        Physical fields for physics engines (see the attribute below).
+    motor : str or None, default None
+        ``stepper`` or ``dc`` (see the attribute below).
+
+    Raises
+    ------
+    InputError
+        A bad name or type, a number outside its range, a roller angle on a wheel that is not
+        Swedish, a part of the wrong class, or a motor the wheel cannot have; the message names
+        the wheel and the field.
     """
 
     name: str
@@ -232,11 +276,33 @@ class Wheel:
 
     # --- geometry -----------------------------------------------------------
     def direction(self, steer=0.0):
-        """Drive direction ``delta`` [rad] at steering angle ``steer`` [rad]."""
+        """Drive direction ``delta`` [rad] at steering angle ``steer`` [rad].
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (...)
+            ``drive + steer`` [rad], counter-clockwise from body +x.
+        """
         return self.drive + np.asarray(steer, dtype=float)
 
     def contact_point(self, steer=0.0) -> np.ndarray:
-        """Floor contact ``(..., 2)`` [m, body frame]: ``p - offset u(delta)``."""
+        """Floor contact ``(..., 2)`` [m, body frame]: ``p - offset u(delta)``.
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (..., 2)
+            Contact point ``(x, y)`` [m] in the body frame.
+        """
         delta = self.direction(steer)
         out = np.empty(np.shape(delta) + (2,))
         out[..., 0] = self.x - self.offset * np.cos(delta)
@@ -244,7 +310,21 @@ class Wheel:
         return out
 
     def rolling_row(self, steer=0.0) -> np.ndarray:
-        """Row ``(..., 3)`` mapping the body twist to this wheel's speed [rad/s]."""
+        """Row ``(..., 3)`` mapping the body twist to this wheel's speed [rad/s].
+
+        ``[cos a, sin a, x sin a - y cos a] / (r cos gamma)``, ``a = delta + gamma`` (module
+        docstring; docs/conventions.md, "Wheels").
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Wheel speed [rad/s] per body twist component ``(vx, vy, omega)`` [m/s, m/s, rad/s].
+        """
         a = self.direction(steer) + self.roller
         ca, sa = np.cos(a), np.sin(a)
         out = np.empty(np.shape(a) + (3,))
@@ -255,7 +335,21 @@ class Wheel:
         return out
 
     def sliding_row(self, steer=0.0) -> np.ndarray:
-        """No-side-slip row ``(..., 3)`` [m/s per twist] of standard/steerable wheels."""
+        """No-side-slip row ``(..., 3)`` [m/s per twist] of standard/steerable wheels.
+
+        ``[-sin delta, cos delta, x cos delta + y sin delta]``: the hub's side speed, zero for an
+        admissible twist.
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Side speed [m/s] per body twist component ``(vx, vy, omega)`` [m/s, m/s, rad/s].
+        """
         delta = self.direction(steer)
         cd, sd = np.cos(delta), np.sin(delta)
         out = np.empty(np.shape(delta) + (3,))
@@ -269,7 +363,18 @@ class Wheel:
         ``n . v_p - offset * omega`` (``n = (-sin delta, cos delta)``), which equals
         ``offset * beta'`` at steering rate ``beta'`` (the contact, trailing ``p`` by ``offset``
         along ``-u``, does not slide sideways); for a centred wheel the plain
-        :meth:`sliding_row` (= 0)."""
+        :meth:`sliding_row` (= 0).
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Side speed [m/s] per body twist component ``(vx, vy, omega)`` [m/s, m/s, rad/s].
+        """
         out = self.sliding_row(steer)
         out[..., 2] -= self.offset
         return out
@@ -286,7 +391,20 @@ class Wheel:
         return n + self.radius * np.sin(self.roller) * self.rolling_row()
 
     def hub_velocity(self, twist) -> np.ndarray:
-        """Velocity ``(..., 2)`` [m/s, body axes] of the floor point under ``p``."""
+        """Velocity ``(..., 2)`` [m/s, body axes] of the floor point under ``p``.
+
+        ``v_p = (vx - omega y, vy + omega x)``.
+
+        Parameters
+        ----------
+        twist : array_like, shape (..., 3)
+            Body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] in body axes.
+
+        Returns
+        -------
+        ndarray, shape (..., 2)
+            ``v_p`` [m/s] in body axes.
+        """
         t = np.asarray(twist, dtype=float)
         out = np.empty(t.shape[:-1] + (2,))
         out[..., 0] = t[..., 0] - t[..., 2] * self.y
@@ -306,6 +424,29 @@ class Wheel:
         off-centred wheel whose axis moves slower than ``offset * |omega|`` has no steady
         angle: ``strict`` raises :class:`InfeasibleTwistError`, otherwise it is flagged
         in ``limited`` and left at ``hint``.
+
+        Parameters
+        ----------
+        twist : array_like, shape (..., 3)
+            Body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] in body axes.
+        hint : array_like, shape (...), default 0.0
+            Preferred steering angle [rad] relative to :attr:`drive`.
+        strict : bool, default True
+            Raise for a twist without a steady steering angle, instead of flagging it.
+
+        Returns
+        -------
+        angle : ndarray, shape (...)
+            Steering angle [rad] relative to :attr:`drive`, in ``[-pi, pi)`` (``hint`` where the
+            hub is still or no steady angle exists).
+        limited : ndarray of bool, shape (...)
+            True where no branch lies within the steering limits, or no steady angle exists.
+
+        Raises
+        ------
+        InfeasibleTwistError
+            With ``strict``: an off-centred wheel whose axis moves slower than
+            ``offset * |omega|``.
         """
         t = np.asarray(twist, dtype=float)
         hint = np.broadcast_to(np.asarray(hint, dtype=float), t.shape[:-1])

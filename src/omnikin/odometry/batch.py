@@ -71,6 +71,22 @@ class OdometryResult:
     forward kinematics residual [rad/s] (zero for a square, full-rank layout: then a
     read-only array of zeros that takes no memory). All are computed with the poses, from
     the readings as they were at the call: changing the input array afterwards changes nothing.
+
+    Attributes
+    ----------
+    t : ndarray, shape (..., N)
+        Sample times [s].
+    poses : ndarray, shape (..., N, 3)
+        Poses ``(x, y, theta)`` [m, m, rad] of the body frame in the world frame (``odom``),
+        the first at the start pose.
+    increments : ndarray, shape (..., N-1, 3)
+        Body displacement ``(a, b, phi)`` [m, m, rad] of each interval, in the body axes at
+        its start.
+    residual : ndarray, shape (..., N-1, n_rows)
+        Forward-kinematics residual [rad/s] of each interval: one row per encoded wheel, then
+        one per steerable wheel.
+    twists : ndarray, shape (..., N-1, 3)
+        Mean body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] of each interval.
     """
 
     t: np.ndarray
@@ -245,6 +261,54 @@ def batch_odometry(
     without steerable wheels: :func:`body_components`), the poses agree with its poses to
     rounding (cumulative sums here, one step at a time there; ``docs/conventions.md``, "Batch
     and streaming odometry agree").
+
+    Per interval: wheel angle increments -> body increment by forward kinematics, constant over
+    the interval (:meth:`omnikin.kinematics.robot.Robot.fk`; with steerable wheels at the mean of the two end
+    steering angles) -> pose update by the SE(2) exponential (:mod:`omnikin.odometry.integration`).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot; odometry reads its rolling wheels that have an ``encoder``, in file order
+        (``n_enc`` of them), which must observe every motion.
+    t : array_like, shape (..., N)
+        Sample times [s], strictly increasing along the last axis.
+    ticks : array_like, shape (..., N, n_enc)
+        Raw counter readings of the encoded wheels (integers of any type, exact; or floats).
+    steer : array_like, shape (..., N, n_steer), optional
+        Steering angles [rad] of the steerable wheels at each sample; required when the robot
+        has any, refused otherwise.
+    method : {"exact", "midpoint", "euler"}, default "exact"
+        Pose integration; ``midpoint`` and ``euler`` are for comparison only.
+    counter_bits : int, optional
+        Counter width (2 .. 64) for every wheel; default each wheel's ``encoder.counter_bits``.
+    start : array_like, shape (..., 3), optional
+        Pose ``(x, y, theta)`` [m, m, rad] of the first sample in the world frame; default the
+        origin.
+    max_jump : float, optional
+        Largest change [ticks] of a wheel between two samples; replaces the bound from the
+        wheel speed.
+    max_wheel_speed : float, optional
+        Wheel speed [rad/s] that, with the margin :data:`~omnikin.odometry.plausibility.JUMP_MARGIN`, bounds
+        each wheel's change between two samples; default each wheel's ``max_speed``, else
+        :data:`~omnikin.odometry.plausibility.DEFAULT_RIM_SPEED` at its rim.
+    max_wheel_accel : float, optional
+        Wheel acceleration [rad/s^2] that, with the same margin, bounds each wheel's change of
+        speed between two intervals; default :data:`~omnikin.odometry.plausibility.DEFAULT_RIM_ACCEL` at its
+        rim.
+
+    Returns
+    -------
+    OdometryResult
+        Times ``(..., N)``, poses ``(..., N, 3)``, increments and residuals ``(..., N-1, ...)``.
+
+    Raises
+    ------
+    OdometryInputError
+        The earliest sample that cannot be integrated (its index in ``.sample``).
+    InputError
+        A robot without encoders or whose encoders do not observe every motion, an unknown
+        ``method``, a bad ``start`` or rule value.
     """
     wheels = encoded_wheels(robot)
     rules = counter_rules(wheels, counter_bits, max_jump, max_wheel_speed, max_wheel_accel)
@@ -297,7 +361,39 @@ def batch_odometry_from_angles(
     max_wheel_accel=None,
 ) -> OdometryResult:
     """Like :func:`batch_odometry` but from wheel angles ``(..., N, n_enc)`` [rad] (no counters;
-    the same physical rules on speed and its changes)."""
+    the same physical rules on speed and its changes).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot; odometry reads its rolling wheels that have an ``encoder``, in file order.
+    t : array_like, shape (..., N)
+        Sample times [s], strictly increasing along the last axis.
+    angles : array_like, shape (..., N, n_enc)
+        Wheel angles [rad] of the encoded wheels (they do not wrap), positive when the wheel
+        drives its hub along its drive direction.
+    steer : array_like, shape (..., N, n_steer), optional
+        Steering angles [rad]; required when the robot has steerable wheels.
+    method : {"exact", "midpoint", "euler"}, default "exact"
+        Pose integration.
+    start : array_like, shape (..., 3), optional
+        Pose ``(x, y, theta)`` [m, m, rad] of the first sample; default the origin.
+    max_jump, max_wheel_speed, max_wheel_accel : float, optional
+        The rules of :func:`batch_odometry` (``max_jump`` in ticks of each wheel's encoder; the
+        change-of-speed rule applies only with an explicit ``max_wheel_accel``).
+
+    Returns
+    -------
+    OdometryResult
+        As :func:`batch_odometry`.
+
+    Raises
+    ------
+    OdometryInputError
+        The earliest sample that cannot be integrated (its index in ``.sample``).
+    InputError
+        As :func:`batch_odometry`.
+    """
     wheels = encoded_wheels(robot)
     rules = counter_rules(wheels, None, max_jump, max_wheel_speed, max_wheel_accel)
     names = [w.name for w in wheels]

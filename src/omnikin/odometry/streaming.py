@@ -105,6 +105,51 @@ class Odometry:
     (mean body twist over the last interval), ``residual`` (forward-kinematics residual
     [rad/s], one entry per fitted row: the wheels, then steerable wheels), ``t``,
     ``samples``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot; the estimator reads its rolling wheels that have an ``encoder``, in file
+        order (``n_enc`` of them), which must observe every motion.
+    method : {"exact", "midpoint", "euler"}, default "exact"
+        Pose integration (:mod:`omnikin.odometry.integration`); ``midpoint`` and ``euler`` are for
+        comparison only.
+    counter_bits : int, optional
+        Counter width (2 .. 64) for every wheel; default each wheel's ``encoder.counter_bits``.
+    start : array_like, shape (3,), default (0, 0, 0)
+        Pose ``(x, y, theta)`` [m, m, rad] of the first sample in the world frame (``odom``).
+    max_jump : float, optional
+        Largest change [ticks] of a wheel between two samples.
+    max_wheel_speed : float, optional
+        Wheel speed [rad/s] bounding each wheel's change between two samples (with the margin
+        :data:`~omnikin.odometry.plausibility.JUMP_MARGIN`); default each wheel's ``max_speed``, else
+        :data:`~omnikin.odometry.plausibility.DEFAULT_RIM_SPEED` at its rim.
+    max_wheel_accel : float, optional
+        Wheel acceleration [rad/s^2] bounding each wheel's change of speed between two
+        intervals; default :data:`~omnikin.odometry.plausibility.DEFAULT_RIM_ACCEL` at its rim.
+
+    Attributes
+    ----------
+    pose : tuple of float
+        ``(x, y, theta)`` [m, m, rad] in the world frame, ``theta`` in ``[-pi, pi)``.
+    twist : tuple of float
+        Mean body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] over the last interval.
+    residual : list of float
+        Forward-kinematics residual [rad/s] of the last interval, one per fitted row.
+    t : float or None
+        Time [s] of the last accepted sample; None before the first.
+    samples : int
+        Samples accepted since the last reset (duplicates not counted).
+    duplicates : int
+        Repeated samples skipped since the last reset.
+    wheel_names : list of str
+        The encoded wheels, in the order readings are given.
+
+    Raises
+    ------
+    InputError
+        A robot without encoders or whose encoders do not observe every motion, an unknown
+        ``method``, a bad ``start`` or rule value.
     """
 
     def __init__(
@@ -178,7 +223,18 @@ class Odometry:
 
     def reset(self, pose=(0.0, 0.0, 0.0)) -> None:
         """Forget the previous sample; the next one is the new zero, at ``pose``
-        (:func:`omnikin.odometry.integration.check_start`)."""
+        (:func:`omnikin.odometry.integration.check_start`).
+
+        Parameters
+        ----------
+        pose : array_like, shape (3,), default (0, 0, 0)
+            Pose ``(x, y, theta)`` [m, m, rad] of the next sample in the world frame.
+
+        Raises
+        ------
+        InputError
+            Not three finite numbers within the bounds of a start pose.
+        """
         self._start(pose, "pose")
 
     def _start(self, pose, what: str) -> None:
@@ -250,7 +306,29 @@ class Odometry:
     # --- feeding it -------------------------------------------------------------------------------
     def update(self, t: float, ticks, steer=None) -> tuple[float, float, float]:
         """Feed one sample: time [s], raw counter readings of the encoded wheels in file
-        order, and (steerable robots) their steering angles [rad]. Returns the pose."""
+        order, and (steerable robots) their steering angles [rad]. Returns the pose.
+
+        Parameters
+        ----------
+        t : float
+            Sample time [s], later than the previous sample's.
+        ticks : sequence of int or float, length n_enc
+            Raw counter readings of the encoded wheels, file order (Python or NumPy integers
+            are exact).
+        steer : sequence of float, length n_steer, optional
+            Steering angles [rad] of the steerable wheels; required when the robot has any.
+
+        Returns
+        -------
+        tuple of float
+            The pose ``(x, y, theta)`` [m, m, rad] after this sample, in the world frame.
+
+        Raises
+        ------
+        OdometryInputError
+            A sample that cannot be integrated (its index in ``.sample``); the estimator is left
+            unchanged.
+        """
         if steer is None:
             new = self._step_ticks(self._state, t, ticks)
             if new is not None:
@@ -259,7 +337,28 @@ class Odometry:
         return self._update_general(t, ticks, steer, KIND_TICKS)
 
     def update_angles(self, t: float, angles, steer=None) -> tuple[float, float, float]:
-        """Feed one sample of wheel angles [rad] (encoded wheels, file order; they do not wrap)."""
+        """Feed one sample of wheel angles [rad] (encoded wheels, file order; they do not wrap).
+
+        Parameters
+        ----------
+        t : float
+            Sample time [s], later than the previous sample's.
+        angles : sequence of float, length n_enc
+            Wheel angles [rad] of the encoded wheels, file order.
+        steer : sequence of float, length n_steer, optional
+            Steering angles [rad] of the steerable wheels; required when the robot has any.
+
+        Returns
+        -------
+        tuple of float
+            The pose ``(x, y, theta)`` [m, m, rad] after this sample, in the world frame.
+
+        Raises
+        ------
+        OdometryInputError
+            A sample that cannot be integrated (its index in ``.sample``); the estimator is left
+            unchanged.
+        """
         if steer is None:
             new = self._step_angles(self._state, t, angles)
             if new is not None:

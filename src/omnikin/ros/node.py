@@ -172,7 +172,7 @@ class BaseNode(Node):
                 self._publish_static_tf()
         self.published = 0
         self.link_rearms = 0  # lost links re-armed (serial back-end)
-        self._next_retry = None
+        self._next_retry: float | None = None  # node time [s] of the next link reopen
         self.period = 1.0 / p["publish_rate"]
         self.loops = 0  # control cycles run
         self.overruns = 0  # control cycles that took longer than the period
