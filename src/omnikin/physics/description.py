@@ -616,7 +616,9 @@ def describe(robot: Robot) -> PhysicalRobot:
     driven_load = sum(n for w, n in zip(robot.wheels, loads, strict=True) if w.name in driven_names)
     wheels = []
     ramp_inputs: list[tuple[Wheel, float, float]] = []  # driven wheel, mu N [N], axle inertia [kg m^2]
-    for w, (mass, width, rollers, hub_radius), load in zip(robot.wheels, parts, loads, strict=True):
+    for w, (mass, width, rollers, hub_radius), fork_mass, load in zip(
+        robot.wheels, parts, fork_masses, loads, strict=True
+    ):
         given = _given(w)
         friction = given.friction if given.friction is not None else FRICTION
         delta = float(w.drive)
