@@ -38,7 +38,9 @@ built, the command ramp) and "What the engine accepts" (the rotor inertias).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
@@ -560,6 +562,58 @@ def _given(wheel: Wheel) -> PhysicalWheel:
     return wheel.physical if wheel.physical is not None else PhysicalWheel()
 
 
+class _Placement(NamedTuple):
+    """Where a wheel sits at zero steering (body frame): ``drive`` ``delta`` [rad], ``trail`` [m]
+    of the hub behind the steering axis (0 for fixed wheels), ``hub`` centre [m] at height ``r``,
+    unit ``axle`` ``(-sin delta, cos delta, 0)`` and floor ``contact`` (x, y) [m]."""
+
+    drive: float
+    trail: float
+    hub: tuple[float, float, float]
+    axle: tuple[float, float, float]
+    contact: tuple[float, float]
+
+
+def _placement(wheel: Wheel) -> _Placement:
+    """:class:`_Placement` of ``wheel``: the hub of a steered wheel or castor trails its steering
+    axis ``(x, y)`` by ``offset`` against the drive direction, and so does the floor contact."""
+    delta = float(wheel.drive)
+    cd, sd = math.cos(delta), math.sin(delta)
+    trail = wheel.offset if (wheel.is_steerable or wheel.is_castor) else 0.0
+    return _Placement(
+        drive=delta,
+        trail=trail,
+        hub=(wheel.x - trail * cd, wheel.y - trail * sd, wheel.radius),
+        axle=(-sd, cd, 0.0),
+        contact=(wheel.x - wheel.offset * cd, wheel.y - wheel.offset * sd),
+    )
+
+
+def _hub_inertia(mass: float, radius: float, width: float) -> tuple[float, float]:
+    """Principal moments [kg m^2] of a hub as a uniform cylinder of ``mass`` [kg], ``radius`` and
+    ``width`` [m]: about the axle, across it."""
+    return mass * radius**2 / 2.0, mass * (3.0 * radius**2 + width**2) / 12.0
+
+
+def _robot_com(
+    chassis_mass: float,
+    chassis_com,
+    wheels: Sequence[Wheel],
+    masses: Sequence[float],
+    fork_masses: Sequence[float],
+    contacts: np.ndarray,
+    total: float,
+) -> np.ndarray:
+    """Centre of mass ``(x, y, z)`` [m, body frame] of the robot of ``total`` mass [kg]: the chassis
+    of ``chassis_mass`` [kg] at ``chassis_com`` (x, y, z), each of ``wheels`` of its ``masses`` [kg]
+    at its ``contacts`` ``(n, 2)`` point at hub height, its fork of its ``fork_masses`` [kg] at its
+    mounting point at hub height."""
+    moments = chassis_mass * np.asarray(chassis_com, dtype=float)
+    for w, mass, fork_mass, (cx, cy) in zip(wheels, masses, fork_masses, contacts, strict=True):
+        moments = moments + mass * np.array([cx, cy, w.radius]) + fork_mass * np.array([w.x, w.y, w.radius])
+    return moments / total
+
+
 def _wheel_mass_and_width(wheel: Wheel) -> tuple[float, float, RollerSet | None, float]:
     """Mass [kg], width [m], rollers and hub radius [m] of ``wheel`` (rollers weigh their share)."""
     given = _given(wheel)
@@ -592,9 +646,8 @@ def describe(robot: Robot) -> PhysicalRobot:
     volume, _ = shape_volume_inertia(shape, size, 1.0)
     chassis_mass = body.mass if body is not None and body.mass is not None else CHASSIS_DENSITY * volume
     _, chassis_inertia = shape_volume_inertia(shape, size, chassis_mass)
-    contacts = np.array(
-        [[w.x - w.offset * math.cos(w.drive), w.y - w.offset * math.sin(w.drive)] for w in robot.wheels]
-    )
+    placements = [_placement(w) for w in robot.wheels]
+    contacts = np.array([place.contact for place in placements])
     balanced = (*(float(v) for v in contacts.mean(axis=0)), centre[2])
     com = body.com if body is not None and body.com is not None else balanced
 
@@ -607,26 +660,20 @@ def describe(robot: Robot) -> PhysicalRobot:
 
     explicit = [w for w in rolling if w.encoder is not None or _given(w).max_torque is not None]
     driven_names = {w.name for w in (explicit or rolling)}
-    moments = chassis_mass * np.asarray(com, dtype=float)
-    for w, (mass, *_), fork_mass, (cx, cy) in zip(robot.wheels, parts, fork_masses, contacts, strict=True):
-        moments = moments + mass * np.array([cx, cy, w.radius]) + fork_mass * np.array([w.x, w.y, w.radius])
-    robot_com = moments / total
+    robot_com = _robot_com(chassis_mass, com, robot.wheels, [p[0] for p in parts], fork_masses, contacts, total)
     loads = wheel_loads(contacts, robot_com[:2], total * GRAVITY)
 
     driven_load = sum(n for w, n in zip(robot.wheels, loads, strict=True) if w.name in driven_names)
     wheels = []
     ramp_inputs: list[tuple[Wheel, float, float]] = []  # driven wheel, mu N [N], axle inertia [kg m^2]
-    for w, (mass, width, rollers, hub_radius), fork_mass, load in zip(
-        robot.wheels, parts, fork_masses, loads, strict=True
+    for w, place, (mass, width, rollers, hub_radius), fork_mass, load in zip(
+        robot.wheels, placements, parts, fork_masses, loads, strict=True
     ):
         given = _given(w)
         friction = given.friction if given.friction is not None else FRICTION
-        delta = float(w.drive)
-        cd, sd = math.cos(delta), math.sin(delta)
-        trail = w.offset if (w.is_steerable or w.is_castor) else 0.0
-        hub = (w.x - trail * cd, w.y - trail * sd, w.radius)
+        trail = place.trail
         hub_mass = mass - (rollers.mass * len(rollers.rollers) if rollers is not None else 0.0)
-        hub_inertia = (hub_mass * hub_radius**2 / 2.0, hub_mass * (3.0 * hub_radius**2 + width**2) / 12.0)
+        hub_inertia = _hub_inertia(hub_mass, hub_radius, width)
         torque = given.max_torque
         if torque is None:
             torque = friction * load * w.radius
@@ -673,9 +720,9 @@ def describe(robot: Robot) -> PhysicalRobot:
             WheelBody(
                 name=w.name,
                 type=w.type,
-                hub=hub,
-                drive=delta,
-                axle=(-sd, cd, 0.0),
+                hub=place.hub,
+                drive=place.drive,
+                axle=place.axle,
                 radius=w.radius,
                 width=width,
                 mass=mass,
@@ -721,49 +768,39 @@ def as_built(robot: Robot, design: PhysicalRobot) -> PhysicalRobot:
     chassis from the wheels' layout (docs/physics.md, "Defaults", "The robot as built keeps its
     body")."""
     wheels = []
-    chassis = design.chassis
-    moments = chassis.mass * np.asarray(chassis.com, dtype=float)
-    contacts = []
-    for w, body in zip(robot.wheels, design.wheels, strict=True):
-        delta = float(w.drive)
-        cd, sd = math.cos(delta), math.sin(delta)
-        trail = w.offset if (w.is_steerable or w.is_castor) else 0.0
+    placements = [_placement(w) for w in robot.wheels]
+    for w, place, body in zip(robot.wheels, placements, design.wheels, strict=True):
         rollers, hub_radius = body.rollers, w.radius
         if rollers is not None:
             width = body.width if "width" in body.fields else None
             rollers = roller_set(w, rollers.rows, rollers.per_row, width, rollers.mass * len(rollers.rollers))
             hub_radius = rollers.centre_radius
-        hub_inertia = (
-            body.hub_mass * hub_radius**2 / 2.0,
-            body.hub_mass * (3.0 * hub_radius**2 + body.width**2) / 12.0,
-        )
         steering = body.steering
         if steering is not None:
-            steering = replace(steering, pivot=(float(w.x), float(w.y)), trail=float(trail))
-        contact = (w.x - w.offset * cd, w.y - w.offset * sd)
-        contacts.append(contact)
-        fork_mass = steering.fork_mass if steering is not None else 0.0
-        moments = moments + body.mass * np.array([*contact, w.radius]) + fork_mass * np.array([w.x, w.y, w.radius])
+            steering = replace(steering, pivot=(float(w.x), float(w.y)), trail=float(place.trail))
         wheels.append(
             replace(
                 body,
                 type=w.type,
-                hub=(w.x - trail * cd, w.y - trail * sd, w.radius),
-                drive=delta,
-                axle=(-sd, cd, 0.0),
+                hub=place.hub,
+                drive=place.drive,
+                axle=place.axle,
                 radius=w.radius,
-                hub_inertia=hub_inertia,
+                hub_inertia=_hub_inertia(body.hub_mass, hub_radius, body.width),
                 rollers=rollers,
                 steering=steering,
             )
         )
-    com = moments / design.mass
+    contacts = np.array([place.contact for place in placements], dtype=float)
+    fork_masses = [b.steering.fork_mass if b.steering is not None else 0.0 for b in wheels]
+    masses = [b.mass for b in wheels]
+    com = _robot_com(design.chassis.mass, design.chassis.com, robot.wheels, masses, fork_masses, contacts, design.mass)
     return replace(
         design,
         name=robot.name,
         wheels=tuple(wheels),
         com=(float(com[0]), float(com[1]), float(com[2])),
-        support_margin=support_margin(np.array(contacts, dtype=float), com[:2]),
+        support_margin=support_margin(contacts, com[:2]),
     )
 
 
