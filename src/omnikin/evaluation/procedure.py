@@ -39,6 +39,7 @@ from ..model import Robot
 from ..odometry import encoded_wheels
 from ..plans import CalibrationRun, umbmark_square
 from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME, LimitNames, require_within
+from ..simulation.engine import Engine, KinematicEngine
 from ..simulation.error_models import NOISE, NoiseModel, SystematicErrors
 from ..simulation.motion import check_rate_range, estimated_samples
 from ..simulation.simulate import simulate
@@ -180,7 +181,8 @@ class UMBmarkStudy:
     ``borenstein``: E_max,syst [m] after each iteration of Borenstein's correction (or
     None); ``systematic``: E_max,syst [m] without random errors, ``{"before", "after"}``;
     ``trajectories``: ``{"before"|"after": {"cw"|"ccw": SimulatedRun}}``, the first run of
-    each direction with its ground truth; ``engine``: ``kinematic`` (this module) or ``physics``
+    each direction with its ground truth; ``engine``: the engine every run was driven by, the
+    :class:`~omnikin.simulation.engine.KinematicEngine` (this module) or the physics engine
     (:mod:`omnikin.evaluation.physics_study`, whose ``floor`` is the nominal robot's UMBmark).
     """
 
@@ -202,7 +204,7 @@ class UMBmarkStudy:
     floor: NoiseFloor
     trajectories: dict
     level: float = LEVEL
-    engine: str = "kinematic"
+    engine: Engine = KinematicEngine()
     problems: tuple[str, ...] = ()
     """Physics engine: one line per run that did not drive as commanded, naming the run
     (:meth:`omnikin.physics.run.PhysicsRun.problems`); its end pose is in the statistics."""

@@ -24,8 +24,7 @@ from ..messages import shorten
 from ..model import Robot
 from ..plans import Plan
 from ..rng import make_rng
-from ..runtime.backends import WheelBackend
-from ..simulation.engine import Engine, KinematicEngine, Progress
+from ..simulation.engine import Engine, KinematicEngine, Progress, SimulatedBackend
 from ..simulation.error_models import NoiseModel
 from ..simulation.motion import SampledPlan, check_rate_range
 from ..simulation.simulate import RunCost, SimulatedRun, run_cost
@@ -61,6 +60,8 @@ class PhysicsEngine:
     name: ClassVar[str] = "physics"
     has_noise_model: ClassVar[bool] = False
     measured_cost: ClassVar[bool] = True
+    drives_as_commanded: ClassVar[bool] = False
+    default_noise: ClassVar[str | None] = None
 
     def __post_init__(self):
         object.__setattr__(self, "step", time_step(self.step, "step (--step)"))
@@ -127,7 +128,7 @@ class PhysicsEngine:
         noise: NoiseModel | None = None,
         rng=None,
         max_lag: float | None = None,
-    ) -> WheelBackend:
+    ) -> SimulatedBackend:
         """:meth:`Engine.backend`: :class:`~omnikin.physics.backend.PhysicsBackend` at this
         engine's time step (``rng`` does not apply: the physics is deterministic)."""
         from .backend import PhysicsBackend
@@ -219,13 +220,14 @@ def engine_named(name, *, noise=None, step: float | None = None) -> Engine:
 
 def as_engine(engine, *, noise=None, step: float | None = None) -> Engine:
     """``engine`` as an engine object: an :class:`~omnikin.simulation.engine.Engine` as it is
-    (``step`` must then be left out: the object carries its own; ``noise`` is checked against
-    it), a name through :func:`engine_named`. The API's entry points accept either."""
+    (``step`` must then be left out: the object carries its own; ``noise`` is checked where a
+    run takes it, :meth:`~omnikin.simulation.engine.Engine.noise_model`), a name through
+    :func:`engine_named` (which refuses the other engine's options). The API's entry points
+    accept either."""
     if isinstance(engine, str):
         return engine_named(engine, noise=noise, step=step)
     if not isinstance(engine, Engine):
         raise InputError(f"engine must be one of {', '.join(ENGINE_NAMES)} or an Engine object, got {shorten(engine)}")
     if step is not None:
         raise InputError(f"step: give the time step to the engine object ({engine!r}), not beside it")
-    engine.noise_model(noise)  # the physics engine refuses a noise model in one line
     return engine

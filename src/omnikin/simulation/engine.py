@@ -32,17 +32,31 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
+import numpy as np
+
 from ..limits import MotionLimits
 from ..model import Robot
 from ..plans import Plan
 from ..runtime.backends import WheelBackend
+from . import simulate as kinematic
 from .error_models import NoiseModel
 from .error_models import noise as noise_profile
 from .motion import SampledPlan, check_rate_range
-from .simulate import RunCost, SimulatedRun, run_cost, simulate
+from .simulate import RunCost, SimulatedRun
 
 Progress = Callable[[float, float], None]
 """Called now and then with the simulated time and the plan's duration [s]."""
+
+
+class SimulatedBackend(WheelBackend, Protocol):
+    """A runtime wheel back-end on a simulated robot (:meth:`Engine.backend`): a
+    :class:`~omnikin.runtime.backends.WheelBackend` that also knows where the robot truly is."""
+
+    @property
+    def truth(self) -> np.ndarray:
+        """True pose ``(x [m], y [m], theta [rad])`` of the robot as built (world frame, heading
+        wrapped to ``[-pi, pi)``)."""
+        ...
 
 
 @runtime_checkable
@@ -59,13 +73,21 @@ class Engine(Protocol):
         :class:`~omnikin.simulation.error_models.NoiseModel` (``--noise``); False when they come
         from the simulation itself (physics: the wheels' contacts, whole encoder ticks).
     measured_cost : bool
-        True when :meth:`cost` builds and times the robot's model (seconds, not microseconds):
-        a caller sizing many small jobs treats a run of it as expensive.
+        True when :meth:`cost` builds and times the robot's model (seconds, not microseconds;
+        its time steps dominate, a coarser step makes it cheaper): a caller sizing many small
+        jobs treats a run of it as expensive.
+    drives_as_commanded : bool
+        True when every run drives as commanded by construction (kinematic); False when a run
+        may not, and :meth:`problems` says how (physics: wheels lagging or slipping).
+    default_noise : str or None
+        The noise profile a run takes when none is given (None: no noise model).
     """
 
     name: ClassVar[str]
     has_noise_model: ClassVar[bool]
     measured_cost: ClassVar[bool]
+    drives_as_commanded: ClassVar[bool]
+    default_noise: ClassVar[str | None]
 
     @property
     def options(self) -> dict[str, Any]:
@@ -126,7 +148,8 @@ class Engine(Protocol):
             fresh entropy); physics, each rolling wheel's starting roller phase, drawn uniformly
             from ``[0, 1)`` of its roller period (None: every wheel at phase 0).
         progress : callable, optional
-            Called with the simulated time and the plan's duration [s] (physics: now and then).
+            Called with the simulated time and the plan's duration [s] now and then (physics;
+            the kinematic engine's run is one vectorised computation and does not call it).
 
         Returns
         -------
@@ -145,7 +168,7 @@ class Engine(Protocol):
         noise: NoiseModel | None = None,
         rng=None,
         max_lag: float | None = None,
-    ) -> WheelBackend:
+    ) -> SimulatedBackend:
         """The runtime's wheel back-end: ``true_robot`` (default ``robot``) simulated in real time,
         commanded and read with ``robot``'s wheels.
 
@@ -164,8 +187,8 @@ class Engine(Protocol):
 
         Returns
         -------
-        WheelBackend
-            Its ``truth`` attribute is the true pose ``(x [m], y [m], theta [rad])``.
+        SimulatedBackend
+            A wheel back-end whose ``truth`` is the true pose ``(x [m], y [m], theta [rad])``.
         """
         ...
 
@@ -228,6 +251,8 @@ class KinematicEngine:
     name: ClassVar[str] = "kinematic"
     has_noise_model: ClassVar[bool] = True
     measured_cost: ClassVar[bool] = False
+    drives_as_commanded: ClassVar[bool] = True
+    default_noise: ClassVar[str | None] = "typical"
 
     @classmethod
     def made_with(cls, *, noise=None, step: float | None = None) -> KinematicEngine:
@@ -250,7 +275,7 @@ class KinematicEngine:
     def noise_model(self, noise) -> NoiseModel:
         if isinstance(noise, NoiseModel):
             return noise
-        return noise_profile("typical" if noise is None else noise)
+        return noise_profile(str(self.default_noise) if noise is None else noise)
 
     def check_rate(self, rate, name: str = "rate") -> float:
         return check_rate_range(rate, name)
@@ -269,12 +294,11 @@ class KinematicEngine:
         trials: int = 1,
     ) -> SimulatedRun:
         """:meth:`Engine.drive` by :func:`~omnikin.simulation.simulate.simulate` (``trials`` runs
-        at once on a leading trial axis of ``truth`` and ``measured``; ``progress`` is called
-        once, at the end)."""
-        run = simulate(plan, true_robot, command_robot, rate=rate, limits=limits, noise=noise, trials=trials, rng=rng)
-        if progress is not None:
-            progress(float(run.t[-1]), float(run.t[-1]))
-        return run
+        at once on a leading trial axis of ``truth`` and ``measured``; ``progress`` is not
+        called: the run is one vectorised computation)."""
+        return kinematic.simulate(  # looked up in its module when called, as a stand-in there is
+            plan, true_robot, command_robot, rate=rate, limits=limits, noise=noise, trials=trials, rng=rng
+        )
 
     def backend(
         self,
@@ -284,7 +308,7 @@ class KinematicEngine:
         noise: NoiseModel | None = None,
         rng=None,
         max_lag: float | None = None,
-    ) -> WheelBackend:
+    ) -> SimulatedBackend:
         """:meth:`Engine.backend`: :class:`~omnikin.simulation.backend.SimBackend` (``max_lag``
         does not apply: it never lags)."""
         from .backend import SimBackend
@@ -303,7 +327,7 @@ class KinematicEngine:
     ) -> RunCost:
         """:meth:`Engine.cost`: :func:`~omnikin.simulation.simulate.run_cost` (computed without
         sampling the plan, so ``timed`` changes nothing)."""
-        return run_cost(plan, command_robot, rate)
+        return kinematic.run_cost(plan, command_robot, rate)
 
     def problems(self, run: SimulatedRun) -> list[str]:
         return []

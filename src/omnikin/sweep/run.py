@@ -36,6 +36,7 @@ from ..errors import InputError, WorkerMismatch
 from ..evaluation.calibration import RECOMMENDED_REPEATS, recommended_runs
 from ..messages import one_line, shorten
 from ..model import Robot
+from ..physics.engines import engine_class
 from ..plans import umbmark_square
 from ..simulation.motion import estimated_samples
 from .points import Point, point_key
@@ -76,7 +77,7 @@ def _trial_samples(robot: Robot, side: float, mode: str, runs: int, rate: float,
 def trial_seconds(point: Point, robot: Robot) -> float:
     """Estimated computing time of one trial of ``point`` on one core [s] (kinematic engine:
     its samples at :data:`TRIAL_SAMPLES_PER_SECOND`; the physics engine: one trial is a task)."""
-    if point.engine == "physics":
+    if engine_class(point.engine).measured_cost:  # a trial is a task of its own
         return math.inf
     try:
         samples = _trial_samples(
