@@ -448,7 +448,9 @@ def cmd_simulate(args) -> int:
     seeds = np.random.SeedSequence(args.seed).spawn(2)
     true, errors = robot_as_built(robot, args.true_robot, args.errors, seeds[0])
     # the samples' memory first (physics: the run can only add its tail), then the plan sampled
-    require(args, "simulate", memory=cost.bytes, hint="lower --rate or shorten --path")
+    require(
+        args, "simulate", memory=cost.bytes, size=f"{cost.samples:.3g} samples", hint="lower --rate or shorten --path"
+    )
     with _drivable(args):
         estimate = engine.cost(plan, true, robot, rate=args.rate, budget=Budget.of(args).seconds)
     duration, seconds = estimate.simulated, estimate.seconds  # physics: the waits and the tail at their limits
