@@ -16,6 +16,10 @@ use, so ``import omnikin`` loads neither SciPy nor matplotlib):
   :func:`calibration_plan` (``omnikin calibrate``), :func:`plot_layout` (``omnikin show --plot``);
 - their results plot themselves: ``result.plot()`` returns a matplotlib ``Figure`` (extra ``viz``).
 
+Engines (what simulates a robot as built): :class:`Engine`, the interface; :class:`KinematicEngine`
+and :class:`PhysicsEngine` (MuJoCo, extra ``physics``); :func:`engine_named` makes one from a name
+of :data:`ENGINE_NAMES`. ``simulate`` and ``run_umbmark`` take an engine or its name.
+
 Errors: every exception and warning omnikin raises on purpose is exported here and defined in
 :mod:`omnikin.errors`, whose docstring draws their tree (``except omnikin.InputError``: bad input).
 """
@@ -77,6 +81,17 @@ _API = (
 )
 """Names served lazily from :mod:`omnikin.api`."""
 
+_ENGINES = {
+    "Engine": "simulation.engine",
+    "KinematicEngine": "simulation.engine",
+    "PhysicsEngine": "physics.engines",
+    "ENGINE_NAMES": "physics.engines",
+    "engine_named": "physics.engines",
+}
+"""The engine interface, its two engines and the factory by name, served lazily from their
+modules (:mod:`omnikin.simulation.engine`, :mod:`omnikin.physics.engines`; neither imports
+``mujoco``: a physics run does, when it builds its model)."""
+
 
 def load_robot(spec):
     """Load a robot from a preset name or a robot file (YAML or JSON).
@@ -111,7 +126,14 @@ def load_robot(spec):
 
 
 def __getattr__(name: str):
-    """The API's entry points (:data:`_API`), imported on first use (PEP 562)."""
+    """The API's entry points (:data:`_API`) and the engines (:data:`_ENGINES`), imported on
+    first use (PEP 562)."""
+    if name in _ENGINES:
+        import importlib
+
+        value = getattr(importlib.import_module(f".{_ENGINES[name]}", __name__), name)
+        globals()[name] = value
+        return value
     if name in _API:
         from . import api
 
@@ -122,7 +144,7 @@ def __getattr__(name: str):
 
 
 def __dir__():
-    return sorted(set(globals()) | set(_API))
+    return sorted(set(globals()) | set(_API) | set(_ENGINES))
 
 
 __all__ = [
@@ -131,12 +153,15 @@ __all__ = [
     "CalibrationFitError",
     "CliError",
     "DivergedError",
+    "ENGINE_NAMES",
     "Encoder",
+    "Engine",
     "FKResult",
     "IKResult",
     "InfeasibleRunError",
     "InfeasibleTwistError",
     "InputError",
+    "KinematicEngine",
     "LinkError",
     "LinkLostError",
     "MetricsInputError",
@@ -148,6 +173,7 @@ __all__ = [
     "OutputError",
     "OutputExistsError",
     "PRESET_NAMES",
+    "PhysicsEngine",
     "PhysicsError",
     "PresetShadowWarning",
     "ProtocolError",
@@ -174,6 +200,7 @@ __all__ = [
     "batch_odometry_from_angles",
     "calibrate",
     "calibration_plan",
+    "engine_named",
     "load_robot",
     "plot_layout",
     "run_sweep",

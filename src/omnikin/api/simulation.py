@@ -9,7 +9,7 @@ import numpy as np
 from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..kinematics.robot import Robot
 from ..simulation.simulate import SimulatedRun
-from .common import as_built, noise_of, require_viz, robot_of
+from .common import as_built, require_viz, robot_of
 
 DEFAULT_PATH = "square cw rotate 4"
 """The path of ``omnikin simulate`` without ``--path``."""
@@ -74,7 +74,7 @@ def simulate(
     noise=None,
     seed: int = 1,
     rate: float = 100.0,
-    engine: str = "kinematic",
+    engine="kinematic",
     step: float | None = None,
     max_memory: float = DEFAULT_MEMORY,
     max_time: float = DEFAULT_TIME,
@@ -94,10 +94,12 @@ def simulate(
     (:func:`~omnikin.simulation.simulate.run_cost`, the estimate ``omnikin simulate`` checks
     against ``--max-memory`` and ``--max-time``).
 
-    ``engine="physics"`` drives the robot as built in MuJoCo instead
-    (:func:`omnikin.physics.run.simulate_physics`, ``omnikin simulate --engine physics``) at
-    time step ``step`` [s] (default 2 ms): the same plan, rate and robot as built; ``noise``
-    must then be left out (the physics has no random error model).
+    ``engine``: what drives the run, an :class:`~omnikin.simulation.engine.Engine` or its name
+    (:func:`~omnikin.physics.engines.engine_named`, with ``step``). ``"physics"`` drives the
+    robot as built in MuJoCo instead (:class:`~omnikin.physics.engines.PhysicsEngine`,
+    ``omnikin simulate --engine physics``) at time step ``step`` [s] (default 2 ms): the same
+    plan, rate and robot as built; ``noise`` must then be left out (the physics has no random
+    error model).
 
     Parameters
     ----------
@@ -116,9 +118,10 @@ def simulate(
         Seed (>= 0) of the robot as built and the run.
     rate : float, default 100.0
         Sample rate [Hz] of encoders, odometry and ground truth, within
-        :data:`~omnikin.simulation.motion.RATE_RANGE`.
-    engine : {"kinematic", "physics"}, default "kinematic"
-        The kinematic simulation or MuJoCo.
+        :data:`~omnikin.motion.timing.RATE_RANGE`.
+    engine : str or Engine, default "kinematic"
+        What drives the run: an :class:`~omnikin.simulation.engine.Engine` or its name
+        (``"kinematic"``, ``"physics"``).
     step : float, optional
         Physics time step [s]; default 2 ms. Physics only.
     max_memory : float, default DEFAULT_MEMORY
@@ -144,38 +147,28 @@ def simulate(
         The physics engine failed (:class:`DivergedError`: MuJoCo's state diverged).
     """
     from ..common.resource_limits import require_within
-    from ..evaluation.physics_study import engine_options
     from ..evaluation.procedure import ARGUMENTS, streams
     from ..motion.plans import Plan, parse_plan
     from ..motion.timing import check_rate_range
-    from ..simulation.simulate import run_cost
-    from ..simulation.simulate import simulate as simulate_run
+    from ..physics.engines import as_engine
 
     check_rate_range(rate, "rate")
-    noise, step = engine_options(engine, noise, step)
+    engine = as_engine(engine, noise=noise, step=step)
+    noise_model = engine.noise_model(noise)
     nominal = robot_of(robot)
     plan = path if isinstance(path, Plan) else parse_plan(str(path))
-    cost = run_cost(plan, nominal, rate)
+    size = engine.cost(plan, nominal, nominal, rate=rate, timed=False)  # the plan's samples and memory
     seeds = list(streams(seed).values())
     true, injected = as_built(nominal, true_robot, errors, seeds[0])
 
     def within(**estimate) -> None:  # memory, seconds and what to change: refused beyond the limits
-        size = f"{cost.samples:.3g} samples"
-        require_within("simulate", max_memory=max_memory, max_time=max_time, names=ARGUMENTS, size=size, **estimate)
+        samples = f"{size.samples:.3g} samples"
+        require_within("simulate", max_memory=max_memory, max_time=max_time, names=ARGUMENTS, size=samples, **estimate)
 
-    if engine == "physics":
-        from ..motion.timing import sample_plan
-        from ..physics.cost import physics_run_cost
-        from ..physics.run import TAIL_MAX, simulate_physics
-
-        assert step is not None
-        tail = cost.bytes / max(cost.samples, 1.0) * TAIL_MAX * rate
-        within(memory=cost.bytes + tail, hint="lower rate or shorten path")
-        sampled = sample_plan(plan, nominal, rate)
-        estimate = physics_run_cost(sampled, true, nominal, step, budget=max_time)
-        within(seconds=estimate.seconds, hint="shorten path or raise step")
-        run: SimulatedRun = simulate_physics(sampled, true, nominal, rate=rate, step=step)
-    else:
-        within(memory=cost.bytes, seconds=cost.seconds, hint="lower rate or shorten path")
-        run = simulate_run(plan, true, nominal, rate=rate, noise=noise_of(noise), trials=1, rng=seeds[1])
+    within(memory=size.bytes, hint="lower rate or shorten path")  # before any of the run is made
+    estimate = engine.cost(plan, true, nominal, rate=rate, budget=max_time)
+    cheaper = "shorten path or raise step" if engine.measured_cost else "lower rate or shorten path"
+    within(seconds=estimate.seconds, hint=cheaper)
+    # the seed's second stream draws the run's random errors, for an engine with a model of them
+    run = engine.drive(plan, true, nominal, rate=rate, noise=noise_model, rng=seeds[1] if noise_model else None)
     return Simulation(nominal, true, injected, path.name if isinstance(path, Plan) else str(path), run)

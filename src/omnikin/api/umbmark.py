@@ -18,7 +18,7 @@ import numpy as np
 from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT, RECOMMENDED_REPEATS
-from ..evaluation.physics_study import engine_options, physics_cost, physics_umbmark_study
+from ..evaluation.physics_study import physics_cost, physics_umbmark_study
 from ..evaluation.procedure import (
     FLOOR_PROCEDURES,
     Cost,
@@ -31,9 +31,10 @@ from ..evaluation.procedure import (
 )
 from ..evaluation.umbmark import LEVEL, UNITS, UMBmarkResult, analyze, require_square
 from ..odometry.batch import encoded_wheels
+from ..physics.engines import PhysicsEngine, as_engine
 from ..physics.mjcf import DEFAULT_STEP
 from ..viz import DPI
-from .common import as_built, dumps, finite_or_none, noise_of, require_viz, robot_of, setting_name
+from .common import as_built, dumps, finite_or_none, require_viz, robot_of, setting_name
 
 RESULT_FORMAT = "omnikin-umbmark-result/1"
 """Name and version of the ``result.json`` document (:meth:`UMBmarkReport.as_dict`)."""
@@ -114,9 +115,9 @@ class UMBmarkReport(UMBmarkStudy):
         doc: dict[str, Any] = {
             "format": RESULT_FORMAT,
             "units": RESULT_UNITS,
-            "methods": PHYSICS_METHODS if self.engine == "physics" else METHODS,
+            "methods": METHODS if self.engine.has_noise_model else PHYSICS_METHODS,
             "settings": {**self.settings, "confidence_level": self.level},
-            "engine": self.engine,
+            "engine": self.engine.name,
             "robot": robot_to_dict(self.robot),
             "true_robot": robot_to_dict(self.true_robot),
         }
@@ -146,7 +147,7 @@ class UMBmarkReport(UMBmarkStudy):
             doc["monte_carlo"] = {"before": _stats(self.before)}
             if self.after is not None:
                 doc["monte_carlo"]["after calibration"] = _stats(self.after)
-        if self.engine == "physics":
+        if not self.engine.drives_as_commanded:
             doc["physics_problems"] = list(self.problems)  # runs that did not drive as commanded
         doc["files"] = list(files or [])
         return doc
@@ -172,8 +173,8 @@ class UMBmarkReport(UMBmarkStudy):
             values: dict[str, Any] = {"before": [r.e_max_syst for r in self.before]}
             if self.after is not None:
                 values["after calibration"] = [r.e_max_syst for r in self.after]
-            physics = self.engine == "physics"
-            values["floor (nominal robot in physics)" if physics else "perfectly calibrated (noise floor)"] = (
+            noise_floor = self.engine.has_noise_model  # else the floor is the nominal robot's
+            values["perfectly calibrated (noise floor)" if noise_floor else "floor (nominal robot in physics)"] = (
                 self.floor.values
             )
             out["monte_carlo"] = fig.monte_carlo_figure(
@@ -185,10 +186,10 @@ class UMBmarkReport(UMBmarkStudy):
         """What the figures show, one line from the settings: simulated, the engine, the random
         errors (kinematic engine) and the seed, the robot as built (profile or file), runs."""
         s = self.settings
-        if self.engine == "physics":
-            how = "simulated in MuJoCo (physics engine: contacts, whole encoder ticks)"
+        if self.engine.has_noise_model:
+            how = f"simulated ({self.engine.name} engine), noise {s.get('noise') or 'typical'}"
         else:
-            how = f"simulated (kinematic engine), noise {s.get('noise') or 'typical'}"
+            how = "simulated in MuJoCo (physics engine: contacts, whole encoder ticks)"
         built = f"true robot {s['true_robot']}" if s.get("true_robot") else f"errors {s.get('errors') or 'typical'}"
         return f"{how}, seed {s.get('seed')}, {built}; {self.runs} runs per direction"
 
@@ -202,9 +203,9 @@ class UMBmarkReport(UMBmarkStudy):
 
     @property
     def _floor_label(self) -> str:
-        if self.engine == "physics":
-            return "floor (nominal robot in physics)"
-        return "noise floor (95th percentile)"
+        if self.engine.has_noise_model:
+            return "noise floor (95th percentile)"
+        return "floor (nominal robot in physics)"
 
     def plot(self, kind: str = "return_errors"):
         """One figure of :meth:`figures` (default: the return positions, before and after).
@@ -306,15 +307,17 @@ class UMBmarkReport(UMBmarkStudy):
         return (
             f"omnikin umbmark {robot} --mode {self.mode} --runs {self.runs} --side {self.side:g} "
             f"--rate {self.rate:g} --seed {s.get('seed')}"
-            + (self._physics_options() if self.engine == "physics" else f" --noise {s.get('noise')}")
+            + (f" --noise {s.get('noise')}" if self.engine.has_noise_model else self._physics_options())
             + (f" --true-robot {s['true_robot']}" if s.get("true_robot") else f" --errors {s.get('errors')}")
             + (f" --trials {self.trials}" if self.trials > 1 else "")
             + ("" if s.get("calibrate", True) else " --no-calibrate")
         )
 
     def _physics_options(self) -> str:
-        step = self.settings.get("step")
-        return " --engine physics" + (f" --step {step:g}" if step is not None and step != DEFAULT_STEP else "")
+        step = self.engine.options.get("step")
+        return f" --engine {self.engine.name}" + (
+            f" --step {step:g}" if step is not None and step != DEFAULT_STEP else ""
+        )
 
     def _measurement_note(self, stage: str) -> str:
         robot = self.settings.get("robot") or self.robot.name
@@ -425,7 +428,7 @@ def run_umbmark(
     seed: int = 1,
     trials: int = 1,
     calibrate: bool = True,
-    engine: str = "kinematic",
+    engine="kinematic",
     step: float | None = None,
     max_memory: float = DEFAULT_MEMORY,
     max_time: float = DEFAULT_TIME,
@@ -440,9 +443,10 @@ def run_umbmark(
     engine, whose random errors are its contacts'); ``rate`` [Hz]; ``trials``: repeated
     UMBmark procedures (Monte Carlo over the noise; the robot as built and its calibration
     stay the same); ``calibrate``: run the calibration step (:mod:`omnikin.evaluation.procedure`);
-    ``engine``: ``kinematic`` or ``physics`` (every run in MuJoCo, and the floor of the nominal
-    robot: :mod:`omnikin.evaluation.physics_study`) at time step ``step`` [s] (default 2 ms;
-    physics only). ``progress`` is called with the name of each
+    ``engine``: an :class:`~omnikin.simulation.engine.Engine` or its name, ``kinematic`` or
+    ``physics`` (every run in MuJoCo, and the floor of the nominal robot:
+    :mod:`omnikin.evaluation.physics_study`) at time step ``step`` [s] (default 2 ms; physics
+    only; :func:`~omnikin.physics.engines.engine_named`). ``progress`` is called with the name of each
     step (of each run, in physics). A study estimated to need more than
     ``max_memory`` [bytes] or ``max_time`` [s] is refused up front
     (:func:`~omnikin.evaluation.procedure.check_cost`), after every setting has been checked;
@@ -508,15 +512,13 @@ def run_umbmark(
     PhysicsError
         The physics engine failed.
     """
-    noise, step = engine_options(engine, noise, step)
+    engine = as_engine(engine, noise=noise, step=step)
     nominal = robot_of(robot)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
-    if step is not None:
-        from ..physics.run import check_rate_steps
-
-        check_rate_steps(rate, step)  # the encoders read at whole steps
+    engine.check_rate(rate)  # physics: the encoders read at whole steps
     seeds = streams(seed)
-    noise_model = None if noise is None else noise_of(noise)
+    noise_model = engine.noise_model(noise)
+    noise = engine.default_noise if noise is None else noise  # as the settings record it
     encoded_wheels(nominal)  # UMBmark measures with the encoders
     require_square(nominal, side, mode)
     true, injected = as_built(nominal, true_robot, errors, seeds["robot"])
@@ -530,7 +532,6 @@ def run_umbmark(
         trials=trials,
         calibrate=calibrate,
         engine=engine,
-        step=step,
         max_time=max_time,
     )
     if on_cost is not None:
@@ -546,9 +547,8 @@ def run_umbmark(
         calibrate=calibrate,
         progress=progress,
     )
-    if noise_model is None:
-        assert step is not None
-        study = physics_umbmark_study(nominal, true, seed=seed, step=step, **common)
+    if noise_model is None:  # no random error model: the physics study, its floor the nominal robot's
+        study = physics_umbmark_study(nominal, true, seed=seed, engine=engine, **common)
     else:
         study = umbmark_study(nominal, true, noise=noise_model, seed=seed, **common)
     settings = {
@@ -556,8 +556,8 @@ def run_umbmark(
         "true_robot": setting_name(true_robot),
         "errors": None if true_robot is not None else setting_name(errors),
         "noise": setting_name(noise),
-        "engine": engine,
-        "step": step,
+        "engine": engine.name,
+        "step": engine.options.get("step"),
         "mode": mode,
         "runs": int(runs),
         "side": float(side),
@@ -578,19 +578,20 @@ def umbmark_cost(
     rate: float = 100.0,
     trials: int = 1,
     calibrate: bool = True,
-    engine: str = "kinematic",
+    engine="kinematic",
     step: float | None = None,
     max_time: float | None = None,
 ) -> Cost:
     """What :func:`run_umbmark` with these settings will take (robot-samples, memory, time):
     :func:`~omnikin.evaluation.procedure.estimate_cost`, or
     :func:`~omnikin.evaluation.physics_study.physics_cost` for the physics engine (which
-    does not build a model whose size alone says it takes longer than ``max_time`` [s])."""
-    _, step = engine_options(engine, None, step)
+    does not build a model whose size alone says it takes longer than ``max_time`` [s]).
+    ``engine``: an :class:`~omnikin.simulation.engine.Engine` or its name (with ``step``)."""
+    engine = as_engine(engine, step=step)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
     settings: dict[str, Any] = dict(side=side, mode=mode, runs=runs, rate=rate, trials=trials, calibrate=calibrate)
-    if step is not None:
-        return physics_cost(robot_of(robot), step=step, budget=max_time, **settings)
+    if isinstance(engine, PhysicsEngine):
+        return physics_cost(robot_of(robot), engine=engine, budget=max_time, **settings)
     return estimate_cost(robot_of(robot), **settings)
 
 

@@ -18,6 +18,7 @@ import numpy as np
 from ..common.messages import shorten
 from ..errors import InfeasibleTwistError, InputError, OmnikinError
 from ..kinematics.se2 import wrap_angle
+from ..physics.engines import ENGINE_NAMES
 from .budget import Budget, add_budget_options, explained, require
 from .common import (
     add_as_built_options,
@@ -29,6 +30,7 @@ from .common import (
     check_seed,
     console,
     declare_inputs,
+    engine_of,
     load_robot,
     number,
     physics_hint,
@@ -51,8 +53,6 @@ SIM_SAMPLE_SECONDS = 4 * MESSAGE_SECONDS
 memory of it all: :func:`omnikin.simulation.simulate.run_cost`)."""
 LOG_ROW_SECONDS = 5e-6
 """simulate --log: per sample, its row of the tick log made and written (measured 19 us)."""
-ENGINES = ("kinematic", "physics")
-"""simulate --engine: the kinematic simulation (omnikin.simulation) or MuJoCo (omnikin.physics)."""
 PROGRESS_AFTER = 3.0
 """simulate --engine physics shows its progress once a run has taken this long [s]."""
 LARGEST_MESSAGE_SHARE = 64
@@ -217,7 +217,7 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     sp.add_argument(
         "--engine",
-        choices=ENGINES,
+        choices=ENGINE_NAMES,
         default="kinematic",
         help="kinematic: wheel motion and error models; physics: MuJoCo with rollers and motors "
         "(extra physics; see below) (default kinematic)",
@@ -431,39 +431,29 @@ def _drivable(args):
 def cmd_simulate(args) -> int:
     from ..io.bags import record_run, require_rosbags
     from ..motion.timing import check_rate_range
-    from ..simulation.error_models import noise as noise_profile
-    from ..simulation.simulate import run_cost, simulate
 
     if args.bag is None and args.log is None:
         raise InputError("simulate: give --bag OUT.bag and/or --log LOG.csv")
-    physics = _engine_options(args)
+    engine = _engine_options(args)
     if args.bag is not None:
         require_rosbags()
     robot = load_robot(args.robot)
-    if args.log is not None and not physics:
+    if args.log is not None and engine.has_noise_model:
         _check_tick_log(args, robot)
     check_seed(args.seed)
     check_rate_range(args.rate, "--rate")
     plan = parse_paths(args.path)
-    noise = None if physics else noise_profile(args.noise)
-    cost = run_cost(plan, robot, args.rate)
-    duration = cost.samples / args.rate
-    seconds = cost.seconds
+    noise = engine.noise_model(args.noise)
+    cost = engine.cost(plan, robot, robot, rate=args.rate, timed=False)  # the plan's samples and memory
     seeds = np.random.SeedSequence(args.seed).spawn(2)
     true, errors = robot_as_built(robot, args.true_robot, args.errors, seeds[0])
-    sampled = None
-    if physics:
-        from ..motion.timing import sample_plan
-        from ..physics.cost import physics_run_cost
-        from ..physics.run import TAIL_MAX
-
-        # the samples' memory first (the run can only add its tail), then the plan sampled
-        tail = cost.bytes / max(cost.samples, 1.0) * TAIL_MAX * args.rate
-        require(args, "simulate", memory=cost.bytes + tail, hint="lower --rate or shorten --path")
-        with _drivable(args):
-            sampled = sample_plan(plan, robot, args.rate)
-            physics_cost = physics_run_cost(sampled, true, robot, args.step, budget=Budget.of(args).seconds)
-        duration, seconds = physics_cost.simulated, physics_cost.seconds  # the waits and the tail at their limits
+    # the samples' memory first (physics: the run can only add its tail), then the plan sampled
+    require(
+        args, "simulate", memory=cost.bytes, size=f"{cost.samples:.3g} samples", hint="lower --rate or shorten --path"
+    )
+    with _drivable(args):
+        estimate = engine.cost(plan, true, robot, rate=args.rate, budget=Budget.of(args).seconds)
+    duration, seconds = estimate.simulated, estimate.seconds  # physics: the waits and the tail at their limits
     samples = duration * args.rate
     _check_stamps(args, duration=duration)
     writing = (SIM_SAMPLE_SECONDS if args.bag is not None else 0.0) + (LOG_ROW_SECONDS if args.log else 0.0)
@@ -473,22 +463,20 @@ def cmd_simulate(args) -> int:
         memory=cost.bytes * samples / max(cost.samples, 1.0),
         seconds=seconds + samples * writing,
         size=f"{cost.samples:.3g} samples",
-        hint=physics_hint(args.step, "shorten --path") if physics else "lower --rate or shorten --path",
+        hint=physics_hint(args.step, "shorten --path") if engine.measured_cost else "lower --rate or shorten --path",
     )
     with _drivable(args):
-        if sampled is not None:
-            run = _simulate_physics(args, sampled, true, robot)
-        else:
-            run = simulate(plan, true, robot, rate=args.rate, noise=noise, trials=1, rng=seeds[1])
+        # the seed's second stream draws the run's random errors, for an engine with a model of them
+        run = _simulate_physics(args, engine, plan, true, robot, noise, seeds[1] if noise else None)
     custom = {
         "omnikin.robot": robot.name,
         "omnikin.path": args.path,
         "omnikin.seed": str(args.seed),
         "omnikin.errors": "file " + args.true_robot if args.true_robot else args.errors,
         "omnikin.rate": f"{args.rate:g}",
-        "omnikin.engine": args.engine,
+        "omnikin.engine": engine.name,
     }
-    if not physics:
+    if engine.has_noise_model:
         custom["omnikin.noise"] = args.noise
     counts = (
         record_run(args.bag, run, robot, start=args.start, storage=args.storage, custom=custom, force=args.force)
@@ -496,7 +484,7 @@ def cmd_simulate(args) -> int:
         else {}
     )
     if args.log is not None:
-        _write_tick_log(args, robot, run)
+        _write_tick_log(args, engine, robot, run)
     truth_end = run.truth[0, -1]
     odom_end = run.odometry[-1]
     diff = truth_end - odom_end
@@ -507,7 +495,7 @@ def cmd_simulate(args) -> int:
         "errors": None if args.true_robot else args.errors,
         "true_robot": args.true_robot,
         "noise": args.noise,
-        "engine": args.engine,
+        "engine": engine.name,
         "step": args.step,
         "seed": args.seed,
         "rate": args.rate,
@@ -524,10 +512,9 @@ def cmd_simulate(args) -> int:
     if errors is not None:
         summary["injected_errors"] = errors.as_dict()
     saturated = getattr(run, "saturated", 0)
-    if physics:
-        summary.update(run.summary())
-        for problem in run.problems():  # the run did not drive as commanded: one line each
-            print(f"omnikin: warning: {robot.name}: {problem}", file=sys.stderr)
+    summary.update(engine.summary(run))
+    for problem in engine.problems(run):  # the run did not drive as commanded: one line each
+        print(f"omnikin: warning: {robot.name}: {problem}", file=sys.stderr)
     if saturated:
         print(
             f"omnikin: warning: {robot.name}: {saturated} of {len(run.t) - 1} commands asked a motor beyond its "
@@ -539,7 +526,7 @@ def cmd_simulate(args) -> int:
         return 0
     noise_text = args.noise or "from the contacts"
     console(120).print(
-        f"{robot.name}: '{args.path}' at {args.rate:g} Hz ({args.engine} engine), {summary['samples']} samples over "
+        f"{robot.name}: '{args.path}' at {args.rate:g} Hz ({engine.name} engine), {summary['samples']} samples over "
         f"{summary['duration']:.6g} s (errors {summary['errors'] or 'from ' + args.true_robot}, noise {noise_text}, "
         f"seed {args.seed})\n"
         f"end pose: truth x={truth_end[0]:.6g} m, y={truth_end[1]:.6g} m, theta={truth_end[2]:.6g} rad; odometry "
@@ -556,24 +543,24 @@ def cmd_simulate(args) -> int:
     return 0
 
 
-def _engine_options(args) -> bool:
-    """Check the options against ``--engine`` and fill in the engine's defaults (``--noise``
-    typical for the kinematic engine; ``--step`` 2 ms for physics); True for physics.
-    The physics engine maps ``--errors``, ``--true-robot`` and ``--seed`` (the robot as built is
-    the physical model), has no random errors (a ``--noise`` other than none is refused: slip
-    comes from the contacts, the encoders count whole ticks); ``--step`` is the physics engine's alone."""
-    from ..evaluation.physics_study import engine_options
+def _engine_options(args):
+    """The engine of ``--engine`` (:func:`~omnikin.cli.common.engine_of`), the options checked
+    against it and its defaults filled in (``--noise`` typical for the kinematic engine;
+    ``--step`` 2 ms for physics). The physics engine maps ``--errors``, ``--true-robot`` and
+    ``--seed`` (the robot as built is the physical model), has no random errors (any ``--noise``
+    is refused: slip comes from the contacts, the encoders count whole ticks); ``--step`` is the
+    physics engine's alone."""
+    engine = engine_of(args)
+    args.noise = engine.default_noise if args.noise is None else args.noise
+    args.step = engine.options.get("step")
+    return engine
 
-    args.noise, args.step = engine_options(args.engine, args.noise, args.step)
-    return args.engine == "physics"
 
-
-def _simulate_physics(args, plan, true, robot):
-    """:func:`omnikin.physics.run.simulate_physics` with a progress bar on standard error once the
-    run has taken :data:`PROGRESS_AFTER` seconds (shown on a terminal only)."""
+def _simulate_physics(args, engine, plan, true, robot, noise, rng):
+    """The run, ``engine.drive``, with a progress bar on standard error once it has taken
+    :data:`PROGRESS_AFTER` seconds (shown on a terminal only; the physics engine reports its
+    progress, the kinematic engine's runs take a moment)."""
     import time
-
-    from ..physics.run import simulate_physics
 
     started = time.monotonic()
     bar: list = []
@@ -593,7 +580,7 @@ def _simulate_physics(args, plan, true, robot):
         bar[0].update(bar[1], completed=done)
 
     try:
-        return simulate_physics(plan, true, robot, rate=args.rate, step=args.step, progress=progress)
+        return engine.drive(plan, true, robot, rate=args.rate, noise=noise, rng=rng, progress=progress)
     finally:
         if bar:
             bar[0].stop()
@@ -623,7 +610,7 @@ def _check_tick_log(args, robot) -> None:
         )
 
 
-def _write_tick_log(args, robot, run) -> None:
+def _write_tick_log(args, engine, robot, run) -> None:
     import shlex
 
     from ..io.logs import write_tick_log
@@ -631,7 +618,7 @@ def _write_tick_log(args, robot, run) -> None:
     command = " ".join(
         ["omnikin simulate", shlex.quote(args.robot), "--path", shlex.quote(args.path)]
         + (["--true-robot", shlex.quote(args.true_robot)] if args.true_robot else ["--errors", args.errors])
-        + (["--engine", "physics", "--step", f"{args.step:g}"] if args.engine == "physics" else ["--noise", args.noise])
+        + (["--noise", args.noise] if engine.has_noise_model else ["--engine", engine.name, "--step", f"{args.step:g}"])
         + ["--seed", str(args.seed), "--rate", f"{args.rate:g}"]
         + ["--log", shlex.quote(args.log)]
     )

@@ -93,6 +93,19 @@ def add_step_option(parser, what: str = "time step of the physics engine") -> No
     )
 
 
+def engine_of(args, name: str | None = None):
+    """The :class:`~omnikin.simulation.engine.Engine` the parsed options choose: ``--engine``
+    (or ``name``, for a command that names it otherwise) made with ``--noise`` and ``--step``
+    where the command has them (:func:`omnikin.physics.engines.engine_named`: each engine
+    refuses the other's option in one line). The one place a command turns the name into an
+    engine; everything after holds the object."""
+    from ..physics.engines import engine_named
+
+    return engine_named(
+        args.engine if name is None else name, noise=getattr(args, "noise", None), step=getattr(args, "step", None)
+    )
+
+
 def add_teleop_options(parser) -> None:
     """``--speed``, ``--turn`` (what a held key sets) and ``--max-speed``, ``--max-turn`` (the
     runtime's limits) of the commands driven from the keyboard (``sim``, ``view``)."""

@@ -40,6 +40,7 @@ from ..kinematics.robot import Robot
 from ..motion.plans import CalibrationRun, umbmark_square
 from ..motion.timing import check_rate_range, estimated_samples
 from ..odometry.batch import encoded_wheels
+from ..simulation.engine import Engine, KinematicEngine
 from ..simulation.error_models import NOISE, NoiseModel, SystematicErrors
 from ..simulation.simulate import simulate
 from .calibration import RECOMMENDED_REPEATS, CalibrationResult, borenstein_calibrate, recommended_runs
@@ -180,7 +181,8 @@ class UMBmarkStudy:
     ``borenstein``: E_max,syst [m] after each iteration of Borenstein's correction (or
     None); ``systematic``: E_max,syst [m] without random errors, ``{"before", "after"}``;
     ``trajectories``: ``{"before"|"after": {"cw"|"ccw": SimulatedRun}}``, the first run of
-    each direction with its ground truth; ``engine``: ``kinematic`` (this module) or ``physics``
+    each direction with its ground truth; ``engine``: the engine every run was driven by, the
+    :class:`~omnikin.simulation.engine.KinematicEngine` (this module) or the physics engine
     (:mod:`omnikin.evaluation.physics_study`, whose ``floor`` is the nominal robot's UMBmark).
     """
 
@@ -202,7 +204,7 @@ class UMBmarkStudy:
     floor: NoiseFloor
     trajectories: dict
     level: float = LEVEL
-    engine: str = "kinematic"
+    engine: Engine = KinematicEngine()
     problems: tuple[str, ...] = ()
     """Physics engine: one line per run that did not drive as commanded, naming the run
     (:meth:`omnikin.physics.run.PhysicsRun.problems`); its end pose is in the statistics."""

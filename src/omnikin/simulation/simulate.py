@@ -126,11 +126,13 @@ def commanded_angles(sampled: SampledPlan, robot: Robot, wheels) -> tuple[np.nda
 @dataclass(frozen=True)
 class RunCost:
     """What one simulated run (:func:`simulate`, one trial) will take: ``samples``, ``bytes`` of
-    memory at its peak, ``seconds`` of computing (:func:`run_cost`)."""
+    memory at its peak, ``seconds`` of computing (:func:`run_cost`); ``simulated`` [s] the
+    simulated time (the physics engine: its upper bound, :meth:`omnikin.physics.engines.PhysicsEngine.cost`)."""
 
     samples: float
     bytes: float
     seconds: float
+    simulated: float = math.nan
 
 
 def run_cost(plan: Plan, robot: Robot, rate: float = 100.0, limits: MotionLimits | None = None) -> RunCost:
@@ -141,7 +143,7 @@ def run_cost(plan: Plan, robot: Robot, rate: float = 100.0, limits: MotionLimits
     (:func:`omnikin.common.resource_limits.require_within`)."""
     samples = estimated_samples(plan, robot, rate, limits)
     per_sample = SAMPLE_BYTES + WHEEL_SAMPLE_BYTES * len(robot.wheels)
-    return RunCost(samples, samples * per_sample, samples * SAMPLE_SECONDS)
+    return RunCost(samples, samples * per_sample, samples * SAMPLE_SECONDS, samples / rate)
 
 
 def simulate(

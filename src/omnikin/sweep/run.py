@@ -38,6 +38,7 @@ from ..evaluation.calibration import RECOMMENDED_REPEATS, recommended_runs
 from ..kinematics.robot import Robot
 from ..motion.plans import umbmark_square
 from ..motion.timing import estimated_samples
+from ..physics.engines import engine_class
 from .points import Point, point_key
 from .store import Coverage, StudyFolder, arrow_schema
 from .study import Study
@@ -76,7 +77,7 @@ def _trial_samples(robot: Robot, side: float, mode: str, runs: int, rate: float,
 def trial_seconds(point: Point, robot: Robot) -> float:
     """Estimated computing time of one trial of ``point`` on one core [s] (kinematic engine:
     its samples at :data:`TRIAL_SAMPLES_PER_SECOND`; the physics engine: one trial is a task)."""
-    if point.engine == "physics":
+    if engine_class(point.engine).measured_cost:  # a trial is a task of its own
         return math.inf
     try:
         samples = _trial_samples(

@@ -61,7 +61,7 @@ settings of a smaller one. A setting equal to an earlier one is dropped (a point
 settings), so a random design of lists only may give fewer points than asked.
 
 The physics engine has no noise model
-(:func:`~omnikin.evaluation.physics_study.check_physics_noise`): its points get ``noise`` None; a
+(:func:`~omnikin.physics.engines.check_physics_noise`): its points get ``noise`` None; a
 ``noise`` factor in a study whose every point runs the physics engine is an error, and with
 both engines the noise values apply to the kinematic points (the physics points they would
 repeat are dropped, the first kept).
@@ -96,14 +96,15 @@ from ..errors import InputError, RobotFileError, StudyFileError
 from ..evaluation.umbmark import check_side, square_refusal
 from ..io.robot_file import is_preset_spec, load_robot, parse_yaml, strict_yaml_loader
 from ..io.textfile import read_text
-from ..kinematics.encoder import TICKS_PER_REV_RANGE
 from ..kinematics.robot import Robot, robot_name_problem
+from ..kinematics.encoder import TICKS_PER_REV_RANGE
 from ..motion.plans import check_mode
 from ..motion.timing import RATE_RANGE, check_rate_range
 from ..odometry.batch import encoded_wheels
+from ..physics.engines import ENGINE_NAMES, engine_class
 from ..presets import PRESET_NAMES
 from ..simulation.error_models import NOISE
-from .points import ENGINES, POINT_FIELDS, Point, _digest, canonical_json, robot_hash
+from .points import POINT_FIELDS, Point, _digest, canonical_json, robot_hash
 from .study import DESIGNS, Study
 
 SCHEMA_VERSION = 1
@@ -151,7 +152,7 @@ WHOLE_FACTORS: dict[str, tuple[int, int]] = {
 }
 """Range of each whole-number factor (:data:`~omnikin.kinematics.encoder.TICKS_PER_REV_RANGE`)."""
 
-CHOICE_FACTORS: dict[str, tuple[str, ...]] = {"noise": tuple(NOISE), "engine": ENGINES}
+CHOICE_FACTORS: dict[str, tuple[str, ...]] = {"noise": tuple(NOISE), "engine": ENGINE_NAMES}
 BOOL_FACTORS = ("calibrate",)
 
 SEED_RANGE = (0, 2**64 - 1)
@@ -469,7 +470,7 @@ def _check_size(where: _Where, path: tuple, points: int, how: str, trials: int) 
 
 def _point(robot: str, hashes: Mapping[str, str], setting: Mapping[str, Any], square: Mapping[str, Any]) -> Point:
     values = dict(setting)
-    if values["engine"] == "physics":
+    if not engine_class(values["engine"]).has_noise_model:
         values["noise"] = None
     return Point(robot=robot, robot_hash=hashes[robot], **values, **square)
 
@@ -544,7 +545,7 @@ def parse_study(text: str, source: str, base: Path) -> Study:
         name: _factor(where, name, given[name], design) if name in given else [DEFAULTS[name]] for name in FACTORS
     }
     engines = factors["engine"]
-    if "noise" in given and isinstance(engines, list) and set(engines) == {"physics"}:
+    if "noise" in given and isinstance(engines, list) and not any(engine_class(e).has_noise_model for e in engines):
         raise where.error(
             ("factors", "noise"),
             "every point runs the physics engine, which has no random error model (slip comes from the "
