@@ -7,14 +7,18 @@ numpydoc section is a title underlined by as many dashes (``Parameters`` / ``---
 ``Parameters`` and ``Attributes`` an entry starts at the section's indentation as
 ``name : type`` (``x, y : float`` documents two).
 
+- a method is documented by its own docstring or, when it has none, by that of the method it
+  implements (``inspect.getdoc``: ``KinematicEngine.problems`` by ``Engine.problems``), so an
+  implementation that adds nothing to its interface is documented once, by the interface;
 - a function or method with arguments has a ``Parameters`` section that names exactly its
   arguments, in the order of its signature;
 - a function or method with arguments that returns something (its annotation is not ``None``)
   has ``Returns`` (one without arguments says what it gives in its summary line);
 - a class has ``Parameters`` naming exactly the arguments of its constructor (one a caller builds:
   ``Robot``, ``Wheel``, ``Odometry``), or ``Attributes`` (a result the library builds); every
-  entry of ``Attributes`` is an attribute of the class, a field, or set as ``self.NAME = ...`` in
-  the class's source (a renamed field leaves no stale entry behind).
+  entry of ``Attributes`` is an attribute of the class, a field, declared by an annotation in the
+  class's body (an interface's ``name: ClassVar[str]``), or set as ``self.NAME = ...`` in the
+  class's source (a renamed field leaves no stale entry behind).
 """
 
 from __future__ import annotations
@@ -102,7 +106,7 @@ def test_the_checked_names_cover_the_exports():
 @pytest.mark.parametrize("name, function", callables(), ids=lambda v: v if isinstance(v, str) else "")
 def test_parameters_section_names_the_signature(name, function):
     args = arguments(function)
-    found = sections(function.__doc__)
+    found = sections(inspect.getdoc(function))
     if not args:
         assert "Parameters" not in found, f"{name} takes no arguments but documents some"
         return
@@ -114,7 +118,7 @@ def test_parameters_section_names_the_signature(name, function):
 def test_a_result_is_documented_in_returns(name, function):
     if inspect.signature(function).return_annotation in (None, "None") or not arguments(function):
         return  # a method without arguments says what it returns in its summary line (``figures``)
-    assert "Returns" in sections(function.__doc__), f"{name} returns a value but has no Returns section"
+    assert "Returns" in sections(inspect.getdoc(function)), f"{name} returns a value but has no Returns section"
 
 
 @pytest.mark.parametrize(
@@ -133,5 +137,6 @@ def test_class_documents_its_constructor_or_its_attributes(name, cls):
         fields = {f.name for f in dataclasses.fields(cls)} if dataclasses.is_dataclass(cls) else set()
         assigned = set(re.findall(r"self\.([A-Za-z]\w*)\s*(?::[^=\n]*)?=[^=]", inspect.getsource(cls)))
         for attribute in entry_names(found["Attributes"]):
-            known = attribute in fields or attribute in assigned or hasattr(cls, attribute)
+            declared = attribute in inspect.get_annotations(cls)
+            known = attribute in fields or attribute in assigned or declared or hasattr(cls, attribute)
             assert known, f"{name} documents no attribute {attribute!r}"

@@ -32,8 +32,19 @@ from .mjcf import DEFAULT_STEP, time_step
 
 
 def check_physics_noise(noise) -> None:
-    """Refuse a noise model for the physics engine (one line): it has none of its own, its
-    random errors are those of the roller contact; ``None`` (not given) passes."""
+    """Refuse a noise model for the physics engine: it has none of its own, its random errors
+    are those of the roller contact.
+
+    Parameters
+    ----------
+    noise : str, NoiseModel or None
+        The noise a user gave; None (not given) passes.
+
+    Raises
+    ------
+    InputError
+        In one line, for any ``noise`` but None.
+    """
     if noise is not None:
         raise InputError(
             f"noise (--noise) {shorten(noise if isinstance(noise, str) else type(noise).__name__)}: the physics "
@@ -43,16 +54,42 @@ def check_physics_noise(noise) -> None:
 
 
 @dataclass(frozen=True)
-class PhysicsEngine:
+class PhysicsEngine(Engine):
     """MuJoCo (:mod:`omnikin.physics`): the robot as built as a body with wheels, rollers,
     ramped PI servos and encoders, stepped at ``step`` [s]. It implements
-    :class:`~omnikin.simulation.engine.Engine`.
+    :class:`~omnikin.simulation.engine.Engine` (the methods without a docstring of their own are
+    documented there).
+
+    It refuses any noise (:func:`check_physics_noise`). :meth:`backend` is a
+    :class:`~omnikin.physics.backend.PhysicsBackend` at ``step`` (``rng`` does not apply: the
+    physics is deterministic); :meth:`problems` and :meth:`summary` are those of the run,
+    :meth:`~omnikin.physics.run.PhysicsRun.problems` and
+    :meth:`~omnikin.physics.run.PhysicsRun.summary` (none for a run of another engine).
+    :meth:`cost`: the memory is the kinematic engine's per sample
+    (:func:`~omnikin.simulation.simulate.run_cost`) over the plan and the tail after it
+    (:data:`~omnikin.physics.run.TAIL_MAX`; ``timed`` False), or over the samples of the
+    simulated time's upper bound; the time is :func:`~omnikin.physics.cost.physics_run_cost` (the
+    plan sampled, the step's cost measured on ``true_robot``'s model unless its size alone
+    exceeds ``budget`` [s]).
 
     Parameters
     ----------
     step : float
         The time step [s] of the simulation, within :data:`~omnikin.physics.mjcf.STEP_RANGE`
         (default :data:`~omnikin.physics.mjcf.DEFAULT_STEP`, 2 ms).
+
+    Attributes
+    ----------
+    name : str
+        ``"physics"``.
+    has_noise_model : bool
+        False: the random errors come from the wheels' contacts and whole encoder ticks.
+    measured_cost : bool
+        True: :meth:`cost` builds the model and times its steps (seconds).
+    drives_as_commanded : bool
+        False: :meth:`problems` says how a run did not.
+    default_noise : None
+        No noise model.
     """
 
     step: float = field(default=DEFAULT_STEP)
@@ -68,8 +105,25 @@ class PhysicsEngine:
 
     @classmethod
     def made_with(cls, *, noise=None, step: float | None = None) -> PhysicsEngine:
-        """The engine for the options a user gave (:func:`engine_named`): a ``noise`` model is
-        refused in one line (:func:`check_physics_noise`), ``step`` [s] checked (None: 2 ms)."""
+        """The engine for the options a user gave (:func:`engine_named`).
+
+        Parameters
+        ----------
+        noise : str, NoiseModel or None
+            Must be None (:func:`check_physics_noise`).
+        step : float, optional
+            The time step [s], within :data:`~omnikin.physics.mjcf.STEP_RANGE` (None: 2 ms).
+
+        Returns
+        -------
+        PhysicsEngine
+            The engine at ``step``.
+
+        Raises
+        ------
+        InputError
+            In one line: a ``noise`` given, a ``step`` out of range.
+        """
         check_physics_noise(noise)
         return cls(time_step(step, "step (--step)"))
 
@@ -82,8 +136,30 @@ class PhysicsEngine:
         return None
 
     def check_rate(self, rate, name: str = "rate") -> float:
-        """:meth:`Engine.check_rate`: within the range, and a period of whole time steps
-        (:func:`~omnikin.physics.run.check_rate_steps`: the encoders are read after whole steps)."""
+        """:meth:`Engine.check_rate`: within the range, and a period of whole time steps (the
+        encoders are read after whole steps, :func:`~omnikin.physics.run.check_rate_steps`).
+
+        Parameters
+        ----------
+        rate : float
+            Sample rate [Hz], within :data:`~omnikin.motion.timing.RATE_RANGE`, whose period
+            ``1 / rate`` is a whole number ``n >= 1`` of time steps: ``rate = 1 / (n step)``
+            (500, 250, 166.67, ... Hz at 2 ms).
+        name : str
+            What the rate is called in the error (``--rate``; the whole-step error names
+            ``--rate`` itself).
+
+        Returns
+        -------
+        float
+            ``rate`` [Hz] as a float.
+
+        Raises
+        ------
+        InputError
+            In one line: a rate outside the range (naming ``name``), or a period of no whole
+            number of steps (naming the nearest rates that are).
+        """
         from .run import check_rate_steps
 
         rate = check_rate_range(rate, name)
@@ -102,9 +178,44 @@ class PhysicsEngine:
         rng=None,
         progress: Progress | None = None,
     ) -> SimulatedRun:
-        """:meth:`Engine.drive` by :func:`~omnikin.physics.run.simulate_physics`: a
-        :class:`~omnikin.physics.run.PhysicsRun`; ``rng`` draws each rolling wheel's starting
-        roller phase uniformly from ``[0, 1)`` (None: phase 0)."""
+        """:meth:`Engine.drive` by :func:`~omnikin.physics.run.simulate_physics` at this engine's
+        time step; the random stream only sets where each wheel's rollers start.
+
+        Parameters
+        ----------
+        plan : Plan or SampledPlan
+            The path; a :class:`~omnikin.motion.plans.Plan` is timed and sampled for ``command_robot``
+            at ``rate`` within ``limits`` (:func:`~omnikin.motion.timing.sample_plan`).
+        true_robot, command_robot : Robot
+            The robot as built (simulated in MuJoCo) and the model that commands it (the same
+            wheels).
+        rate : float
+            Sample rate [Hz] of the encoders; it is not checked against whole time steps here
+            (:meth:`check_rate` does that).
+        limits : MotionLimits, optional
+            Speed and acceleration limits the plan is timed with.
+        noise : NoiseModel, optional
+            Must be None (:func:`check_physics_noise`).
+        rng : numpy.random.Generator, int or None
+            Draws each rolling wheel's starting roller phase uniformly from ``[0, 1)`` of its
+            roller period (None: every wheel at phase 0, the run is deterministic).
+        progress : callable, optional
+            Called with the simulated time and the plan's duration [s] now and then.
+
+        Returns
+        -------
+        SimulatedRun
+            A :class:`~omnikin.physics.run.PhysicsRun`: ``t`` ``(N + 1,)`` [s], ``ticks`` and
+            ``readings`` ``(N + 1, n_enc)`` (whole ticks), ``odometry`` ``(N + 1, 3)`` [m, m, rad],
+            ``truth`` ``(1, N + 1, 3)``, ``measured`` ``(1, 3)`` (world frame, starting at the
+            origin), and what did not go as commanded (:meth:`problems`).
+
+        Raises
+        ------
+        InputError
+            In one line: a ``noise`` given, a rate outside the range, robots or a plan the
+            engine cannot drive or resolve.
+        """
         from .run import simulate_physics
 
         check_physics_noise(noise)
@@ -129,8 +240,6 @@ class PhysicsEngine:
         rng=None,
         max_lag: float | None = None,
     ) -> SimulatedBackend:
-        """:meth:`Engine.backend`: :class:`~omnikin.physics.backend.PhysicsBackend` at this
-        engine's time step (``rng`` does not apply: the physics is deterministic)."""
         from .backend import PhysicsBackend
 
         check_physics_noise(noise)
@@ -146,12 +255,6 @@ class PhysicsEngine:
         budget: float | None = None,
         timed: bool = True,
     ) -> RunCost:
-        """:meth:`Engine.cost`. Memory: the kinematic engine's per sample
-        (:func:`~omnikin.simulation.simulate.run_cost`) over the plan and the tail after it
-        (:data:`~omnikin.physics.run.TAIL_MAX`; ``timed`` False), or over the samples of the
-        simulated time's upper bound. Time: :func:`~omnikin.physics.cost.physics_run_cost` (the
-        plan sampled, the step's cost measured on ``true_robot``'s model unless its size alone
-        exceeds ``budget`` [s])."""
         from ..motion.timing import sample_plan
         from .cost import physics_run_cost
         from .run import TAIL_MAX
@@ -166,13 +269,11 @@ class PhysicsEngine:
         return RunCost(samples, per_sample * samples, estimate.seconds, estimate.simulated)
 
     def problems(self, run: SimulatedRun) -> list[str]:
-        """:meth:`~omnikin.physics.run.PhysicsRun.problems` of ``run``."""
         from .run import PhysicsRun
 
         return run.problems() if isinstance(run, PhysicsRun) else []
 
     def summary(self, run: SimulatedRun) -> dict[str, Any]:
-        """:meth:`~omnikin.physics.run.PhysicsRun.summary` of ``run``."""
         from .run import PhysicsRun
 
         return run.summary() if isinstance(run, PhysicsRun) else {}
@@ -189,9 +290,24 @@ ENGINE_NAMES: tuple[str, ...] = tuple(ENGINES)
 
 
 def engine_class(name) -> type[KinematicEngine] | type[PhysicsEngine]:
-    """The class of the engine called ``name`` (for its class attributes, e.g. what a report
-    document's ``engine`` field says about the run), or a one-line
-    :class:`~omnikin.errors.InputError` naming the choices."""
+    """The class of the engine called ``name``, for its class attributes (e.g. what a report
+    document's ``engine`` field says about the run) without making an engine.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`ENGINE_NAMES`.
+
+    Returns
+    -------
+    type
+        :class:`~omnikin.simulation.engine.KinematicEngine` or :class:`PhysicsEngine`.
+
+    Raises
+    ------
+    InputError
+        In one line naming the choices, for any other ``name``.
+    """
     if not isinstance(name, str) or name not in ENGINES:
         raise InputError(f"engine (--engine) must be one of {', '.join(ENGINE_NAMES)}, got {shorten(name)}")
     return ENGINES[name]
@@ -214,16 +330,43 @@ def engine_named(name, *, noise=None, step: float | None = None) -> Engine:
     -------
     Engine
         :class:`~omnikin.simulation.engine.KinematicEngine` or :class:`PhysicsEngine`.
+
+    Raises
+    ------
+    InputError
+        In one line: an unknown ``name``, an option of the other engine, a ``step`` out of
+        range.
     """
     return engine_class(name).made_with(noise=noise, step=step)
 
 
 def as_engine(engine, *, noise=None, step: float | None = None) -> Engine:
-    """``engine`` as an engine object: an :class:`~omnikin.simulation.engine.Engine` as it is
-    (``step`` must then be left out: the object carries its own; ``noise`` is checked where a
-    run takes it, :meth:`~omnikin.simulation.engine.Engine.noise_model`), a name through
-    :func:`engine_named` (which refuses the other engine's options). The API's entry points
-    accept either."""
+    """``engine`` as an engine object; the API's entry points accept an engine or its name.
+
+    Parameters
+    ----------
+    engine : str or Engine
+        A name of :data:`ENGINE_NAMES`, made through :func:`engine_named` (which refuses the
+        other engine's options), or an :class:`~omnikin.simulation.engine.Engine`, taken as it
+        is.
+    noise : str, NoiseModel or None
+        With a name: as for :func:`engine_named`. With an engine object: not checked here, but
+        where a run takes it (:meth:`~omnikin.simulation.engine.Engine.noise_model`).
+    step : float, optional
+        With a name: the physics engine's time step [s]. With an engine object: must be None
+        (the object carries its own).
+
+    Returns
+    -------
+    Engine
+        The engine.
+
+    Raises
+    ------
+    InputError
+        In one line: neither a name nor an engine, an unknown name or an option it refuses, a
+        ``step`` beside an engine object.
+    """
     if isinstance(engine, str):
         return engine_named(engine, noise=noise, step=step)
     if not isinstance(engine, Engine):

@@ -106,14 +106,40 @@ class Engine(Protocol):
         Returns
         -------
         NoiseModel or None
-            Kinematic: the model (None: ``typical``). Physics: None (a given noise is refused in
-            one line, :class:`~omnikin.errors.InputError`).
+            Kinematic: the model (a name looked up in
+            :data:`~omnikin.simulation.error_models.NOISE`; None: :attr:`default_noise`,
+            ``typical``). Physics: None.
+
+        Raises
+        ------
+        InputError
+            In one line: kinematic, an unknown profile name; physics, any ``noise`` but None (it
+            has no random error model).
         """
         ...
 
     def check_rate(self, rate, name: str = "rate") -> float:
-        """``rate`` [Hz] if the engine can sample a run at it, else a one-line
-        :class:`~omnikin.errors.InputError` naming ``name`` (the option: ``--rate``)."""
+        """``rate`` checked as a sample rate the engine can read the encoders at.
+
+        Parameters
+        ----------
+        rate : float
+            Sample rate [Hz]; it must lie in :data:`~omnikin.motion.timing.RATE_RANGE` (5 Hz to
+            10 kHz; physics: also a period of whole time steps, :meth:`PhysicsEngine.check_rate
+            <omnikin.physics.engines.PhysicsEngine.check_rate>`).
+        name : str
+            What the rate is called in the error (the option or argument: ``--rate``).
+
+        Returns
+        -------
+        float
+            ``rate`` [Hz] as a float.
+
+        Raises
+        ------
+        InputError
+            In one line naming ``name``, when the engine cannot sample a run at ``rate``.
+        """
         ...
 
     def drive(
@@ -157,6 +183,12 @@ class Engine(Protocol):
             One trial: ``t`` ``(N + 1,)`` [s], ``ticks`` and ``readings`` ``(N + 1, n_enc)``,
             ``odometry`` ``(N + 1, 3)`` [m, m, rad], ``truth`` ``(1, N + 1, 3)``, ``measured``
             ``(1, 3)`` (world frame, starting at the origin).
+
+        Raises
+        ------
+        InputError
+            In one line: a rate the engine cannot sample at (:meth:`check_rate`), robots or a plan
+            it cannot drive, a ``noise`` it does not take.
         """
         ...
 
@@ -178,12 +210,12 @@ class Engine(Protocol):
             The nominal model (wheel order, encoder scale of the readings) and the robot as built.
         noise : NoiseModel, optional
             Kinematic: the slip of the wheels (None: none, the robot moves exactly as its wheels
-            turn). Physics: None.
+            turn). Physics: None (any other is refused in one line).
         rng : numpy.random.Generator, int or None
-            Kinematic: the stream of the slip.
+            Kinematic: the stream of the slip. Physics: not used (its back-end is deterministic).
         max_lag : float, optional
             Physics: the most simulated time [s] the back-end may lag the caller's clock before it
-            drops time (None: never drops).
+            drops time (None: never drops). Kinematic: not used (its back-end never lags).
 
         Returns
         -------
@@ -214,11 +246,12 @@ class Engine(Protocol):
             Sample rate [Hz].
         budget : float, optional
             Physics: computing time [s] beyond which a model whose size alone says so is not
-            built (its size bound is the estimate).
+            built (its size bound is the estimate). Kinematic: not used.
         timed : bool
             False: only what is known without sampling the plan or building a model (the
             samples and memory of the plan; physics: ``seconds`` NaN), to refuse a run too
-            large for memory before any of it is made.
+            large for memory before any of it is made. Kinematic: the same either way (its
+            estimate never samples the plan).
 
         Returns
         -------
@@ -229,23 +262,67 @@ class Engine(Protocol):
         ...
 
     def problems(self, run: SimulatedRun) -> list[str]:
-        """One phrase per way ``run`` did not drive as commanded (physics: wheels lagging or
-        slipping, steering or rest not reached; kinematic: none, it drives as commanded by
-        construction)."""
+        """The ways ``run`` did not drive as commanded.
+
+        Parameters
+        ----------
+        run : SimulatedRun
+            A run of this engine's :meth:`drive`.
+
+        Returns
+        -------
+        list of str
+            One phrase per problem (physics: wheels lagging or slipping, steering or rest not
+            reached, :meth:`~omnikin.physics.run.PhysicsRun.problems`); empty when it drove as
+            commanded (kinematic: always, it drives as commanded by construction).
+        """
         ...
 
     def summary(self, run: SimulatedRun) -> dict[str, Any]:
-        """The counts of :meth:`problems` for a JSON summary (empty for the kinematic engine)."""
+        """The counts behind :meth:`problems`, for a JSON summary.
+
+        Parameters
+        ----------
+        run : SimulatedRun
+            A run of this engine's :meth:`drive`.
+
+        Returns
+        -------
+        dict
+            JSON-ready values by name (physics: :meth:`~omnikin.physics.run.PhysicsRun.summary`:
+            saturated commands, the seconds each wheel lagged or slipped, the rim [m] each wheel
+            fell short of its command, steering not reached, at rest); empty for the kinematic
+            engine.
+        """
         ...
 
 
 @dataclass(frozen=True)
-class KinematicEngine:
+class KinematicEngine(Engine):
     """The kinematic simulation (:mod:`omnikin.simulation.simulate`): each wheel turns as its motor
     turns it when commanded, slip and floor errors from a noise model, the true robot's forward
-    kinematics and exact SE(2) integration give the ground truth. It implements :class:`Engine`.
+    kinematics and exact SE(2) integration give the ground truth. It implements :class:`Engine`
+    (the methods without a docstring of their own are documented there).
 
     It has no options; the random errors are given to each run (:meth:`drive`'s ``noise``).
+    :meth:`drive` is :func:`~omnikin.simulation.simulate.simulate`, :meth:`backend` a
+    :class:`~omnikin.simulation.backend.SimBackend` (it never lags: ``max_lag`` does not apply),
+    :meth:`cost` :func:`~omnikin.simulation.simulate.run_cost` (computed without sampling the
+    plan, so ``timed`` changes nothing and ``budget`` is not used).
+
+    Attributes
+    ----------
+    name : str
+        ``"kinematic"``.
+    has_noise_model : bool
+        True: the random errors come from a
+        :class:`~omnikin.simulation.error_models.NoiseModel` (:meth:`noise_model`).
+    measured_cost : bool
+        False: :meth:`cost` is computed from the plan alone (microseconds).
+    drives_as_commanded : bool
+        True: :meth:`problems` is always empty.
+    default_noise : str
+        ``"typical"``, the profile of a run given no noise.
     """
 
     name: ClassVar[str] = "kinematic"
@@ -256,9 +333,25 @@ class KinematicEngine:
 
     @classmethod
     def made_with(cls, *, noise=None, step: float | None = None) -> KinematicEngine:
-        """The engine for the options a user gave (:func:`omnikin.physics.engines.engine_named`):
-        a time ``step`` is refused in one line (it belongs to the physics engine); ``noise`` is
-        checked by :meth:`noise_model` where a run takes it."""
+        """The engine for the options a user gave (:func:`omnikin.physics.engines.engine_named`).
+
+        Parameters
+        ----------
+        noise : str, NoiseModel or None
+            Not checked here: :meth:`noise_model` checks it where a run takes it.
+        step : float, optional
+            Must be None: a time step [s] belongs to the physics engine.
+
+        Returns
+        -------
+        KinematicEngine
+            The engine (it has no options).
+
+        Raises
+        ------
+        InputError
+            In one line, when a ``step`` is given.
+        """
         from ..errors import InputError
 
         if step is not None:
@@ -293,9 +386,44 @@ class KinematicEngine:
         progress: Progress | None = None,
         trials: int = 1,
     ) -> SimulatedRun:
-        """:meth:`Engine.drive` by :func:`~omnikin.simulation.simulate.simulate` (``trials`` runs
-        at once on a leading trial axis of ``truth`` and ``measured``; ``progress`` is not
-        called: the run is one vectorised computation)."""
+        """:meth:`Engine.drive` by :func:`~omnikin.simulation.simulate.simulate`, ``trials`` runs at
+        once (each its own draw of the noise).
+
+        Parameters
+        ----------
+        plan : Plan or SampledPlan
+            The path; a :class:`~omnikin.motion.plans.Plan` is timed and sampled for ``command_robot``
+            at ``rate`` within ``limits`` (:func:`~omnikin.motion.timing.sample_plan`).
+        true_robot, command_robot : Robot
+            The robot as built and the model that commands it (the same wheels).
+        rate : float
+            Sample rate [Hz] of the encoders, within :data:`~omnikin.motion.timing.RATE_RANGE`.
+        limits : MotionLimits, optional
+            Speed and acceleration limits the plan is timed with.
+        noise : NoiseModel, optional
+            Slip, floor and end-pose measurement errors (None: none; the encoders still count
+            whole ticks).
+        rng : numpy.random.Generator, int, sequence of them, or None
+            The stream of the noise (None: fresh entropy), or one per trial.
+        progress : callable, optional
+            Not called: the run is one vectorised computation.
+        trials : int
+            Number of runs of the plan, each with its own draw of the noise.
+
+        Returns
+        -------
+        SimulatedRun
+            ``t`` ``(N + 1,)`` [s], ``ticks`` and ``readings`` ``(N + 1, n_enc)`` and ``odometry``
+            ``(N + 1, 3)`` [m, m, rad], the same for every trial (the encoders count the
+            commanded turn; slip moves only the truth); ``truth`` ``(trials, N + 1, 3)`` and
+            ``measured`` ``(trials, 3)`` of each trial (world frame, starting at the origin).
+
+        Raises
+        ------
+        InputError
+            In one line: a rate outside the range, ``trials`` not a whole number >= 1, robots
+            whose wheels differ or a true wheel without encoder, a plan without motion.
+        """
         return kinematic.simulate(  # looked up in its module when called, as a stand-in there is
             plan, true_robot, command_robot, rate=rate, limits=limits, noise=noise, trials=trials, rng=rng
         )
@@ -309,8 +437,6 @@ class KinematicEngine:
         rng=None,
         max_lag: float | None = None,
     ) -> SimulatedBackend:
-        """:meth:`Engine.backend`: :class:`~omnikin.simulation.backend.SimBackend` (``max_lag``
-        does not apply: it never lags)."""
         from .backend import SimBackend
 
         return SimBackend(robot, true_robot, noise, rng=rng)
@@ -325,8 +451,6 @@ class KinematicEngine:
         budget: float | None = None,
         timed: bool = True,
     ) -> RunCost:
-        """:meth:`Engine.cost`: :func:`~omnikin.simulation.simulate.run_cost` (computed without
-        sampling the plan, so ``timed`` changes nothing)."""
         return kinematic.run_cost(plan, command_robot, rate)
 
     def problems(self, run: SimulatedRun) -> list[str]:
