@@ -96,8 +96,8 @@ from ..errors import InputError, RobotFileError, StudyFileError
 from ..evaluation.umbmark import check_side, square_refusal
 from ..io.robot_file import is_preset_spec, load_robot, parse_yaml, strict_yaml_loader
 from ..io.textfile import read_text
-from ..kinematics.robot import Robot, robot_name_problem
 from ..kinematics.encoder import TICKS_PER_REV_RANGE
+from ..kinematics.robot import Robot, robot_name_problem
 from ..motion.plans import check_mode
 from ..motion.timing import RATE_RANGE, check_rate_range
 from ..odometry.batch import encoded_wheels
