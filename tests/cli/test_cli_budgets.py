@@ -22,8 +22,7 @@ WORK = (
     ("omnikin.simulation.simulate", "simulate"),
     ("omnikin.cli.bag", "_simulate_physics"),
     ("omnikin.io.bags", "record_run"),
-    ("omnikin.api.umbmark", "umbmark_study"),
-    ("omnikin.api.umbmark", "physics_umbmark_study"),
+    ("omnikin.api.umbmark", "umbmark_study"),  # the one study of both engines
 )
 BAG_READERS = (("omnikin.io.bags", "bag_odometry"), ("omnikin.io.bags", "export_poses"))
 SAFETY_SECONDS = 120  # ends a hang (a pipe waited for, an endless device read); not a pace

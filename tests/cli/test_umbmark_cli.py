@@ -424,8 +424,7 @@ def _study_must_not_run(monkeypatch) -> None:
         raise AssertionError("the study ran before the refusal")
 
     # the trials themselves: run_umbmark checks its cost before it calls them
-    monkeypatch.setattr(api, "umbmark_study", study)
-    monkeypatch.setattr(api, "physics_umbmark_study", study)
+    monkeypatch.setattr(api, "umbmark_study", study)  # the one study of both engines
 
 
 # =====================================================================================================

@@ -18,7 +18,7 @@ import numpy as np
 from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT, RECOMMENDED_REPEATS
-from ..evaluation.physics_study import physics_cost, physics_umbmark_study
+from ..evaluation.physics_study import physics_cost
 from ..evaluation.procedure import (
     FLOOR_PROCEDURES,
     Cost,
@@ -547,10 +547,7 @@ def run_umbmark(
         calibrate=calibrate,
         progress=progress,
     )
-    if noise_model is None:  # no random error model: the physics study, its floor the nominal robot's
-        study = physics_umbmark_study(nominal, true, seed=seed, engine=engine, **common)
-    else:
-        study = umbmark_study(nominal, true, noise=noise_model, seed=seed, **common)
+    study = umbmark_study(nominal, true, noise=noise_model, seed=seed, engine=engine, **common)
     settings = {
         "robot": setting_name(robot),
         "true_robot": setting_name(true_robot),

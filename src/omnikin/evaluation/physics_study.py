@@ -1,8 +1,8 @@
 """The UMBmark study in the physics engine (``omnikin umbmark --engine physics``).
 
-The steps of :func:`~omnikin.evaluation.procedure.umbmark_study`, every run driven by
-:func:`~omnikin.physics.run.simulate_physics` (MuJoCo, rollers and motors) on the robot as
-built, one run at a time (the physics has no trial axis: ``trials`` procedures are
+The study pipeline (:mod:`omnikin.evaluation.pipeline`) with the physics engine: every run
+driven by :func:`~omnikin.physics.run.simulate_physics` (MuJoCo, rollers and motors) on the
+robot as built, one run at a time (the physics has no trial axis: ``trials`` procedures are
 ``trials * runs`` runs per direction, each simulated on its own):
 
 1. UMBmark before calibration, the robot as built commanded by its nominal model
@@ -14,11 +14,14 @@ built, one run at a time (the physics has no trial axis: ``trials`` procedures a
    measurement, and the least-squares calibration
    (:func:`~omnikin.evaluation.calibration.calibrate`);
 3. UMBmark after calibration, the robot commanded by its calibrated model;
-4. the floor (:class:`PhysicsFloor`): UMBmark of the *nominal* robot (no systematic errors)
-   commanded by its own model, ``trials`` procedures of ``runs`` runs per direction: what the
-   roller contact alone gives, the least E_max,syst a calibration of the kinematic model can
-   reach in this engine. It takes the place of the kinematic study's noise floor
-   (:class:`~omnikin.evaluation.umbmark.NoiseFloor` of these procedures).
+4. the floor (:class:`~omnikin.evaluation.umbmark.PhysicsFloor`): UMBmark of the *nominal*
+   robot (no systematic errors) commanded by its own model, ``trials`` procedures of ``runs``
+   runs per direction: what the roller contact alone gives, the least E_max,syst a calibration
+   of the kinematic model can reach in this engine. It takes the place of the kinematic
+   study's noise floor (:class:`~omnikin.evaluation.umbmark.NoiseFloor` of these procedures).
+
+This module keeps the physics study's cost estimate (:func:`physics_cost`) and its entry point
+(:func:`physics_umbmark_study`).
 
 The physics engine has no random error model: slip comes from the wheels' contacts and the
 encoders count whole ticks, so a noise model is refused
@@ -35,29 +38,20 @@ differential drives) is not run.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any
-
-import numpy as np
-
-from ..errors import CalibrationFitError
 from ..kinematics.robot import Robot
-from ..motion.plans import CalibrationRun, Plan, umbmark_square
-from ..odometry.batch import encoded_wheels
+from ..motion.plans import umbmark_square
 from ..physics.engines import PhysicsEngine
 from ..simulation.engine import Engine
-from ..simulation.error_models import NOISE, SystematicErrors
-from .calibration import RECOMMENDED_REPEATS, CalibrationResult, recommended_runs
-from .calibration import calibrate as least_squares_calibration
-from .procedure import Cost, UMBmarkStudy, check_settings, streams
-from .run_poses import RunPoses, kept_run, stride
-from .umbmark import LEVEL, NoiseFloor, UMBmarkResult, analyze, require_square
+from ..simulation.error_models import SystematicErrors
+from .calibration import RECOMMENDED_REPEATS, recommended_runs
+from .pipeline import Progress
+from .procedure import Cost, UMBmarkStudy, umbmark_study
+from .umbmark import LEVEL, PhysicsFloor
+
+__all__ = ["BYTES", "PHYSICS", "PhysicsFloor", "physics_cost", "physics_umbmark_study"]
 
 BYTES = 256 * 1024**2
 """Memory of a physics study [bytes]: MuJoCo's model and data and the kept runs, generous."""
-
-Progress = Callable[[str], None]
 
 PHYSICS = PhysicsEngine()
 """The physics engine at its default time step (2 ms), the default of this module's functions."""
@@ -105,149 +99,6 @@ def physics_cost(
     return Cost(samples, float(BYTES), seconds_per_sample=seconds / max(samples, 1.0))
 
 
-@dataclass(frozen=True)
-class PhysicsFloor(NoiseFloor):
-    """The floor of the physics study: ``values`` E_max,syst [m] of the nominal robot's
-    procedures (module docstring) and ``interval`` the confidence interval [m] of the first
-    one's E_max,syst from the spread of its runs over roller phases
-    (:meth:`~omnikin.evaluation.umbmark.UMBmarkResult.e_max_interval`; None with fewer than 3
-    runs per direction). :attr:`limit`, the largest E_max,syst that cannot be told from the
-    nominal robot's, is the larger of the 95th percentile of ``values`` and the interval's upper
-    end."""
-
-    interval: tuple[float, float] | None = None
-
-    @property
-    def p95(self) -> float:
-        """95th percentile of ``values`` [m]."""
-        return float(np.percentile(self.values, 95))
-
-    @property
-    def limit(self) -> float:
-        """The larger of :attr:`p95` and the interval's upper end [m]."""
-        return max(self.p95, self.interval[1]) if self.interval is not None else self.p95
-
-    def as_dict(self) -> dict:
-        return {
-            **NoiseFloor.as_dict(self),
-            "e_max_syst_p95": self.p95,
-            "e_max_syst_limit": self.limit,
-            "e_max_syst_interval": list(self.interval) if self.interval is not None else None,
-        }
-
-
-def _drive(
-    plan: Plan,
-    true_robot: Robot,
-    command: Robot,
-    rate: float,
-    engine: Engine,
-    rng: np.random.Generator,
-    name: str,
-    problems: list[str] | None,
-):
-    """``plan`` driven by ``engine``, each wheel of ``true_robot`` started at a roller phase
-    drawn uniformly from ``[0, 1)`` by ``rng`` (module docstring; :meth:`PhysicsEngine.drive`).
-    A run that did not drive as commanded (:meth:`~omnikin.physics.run.PhysicsRun.problems`: a
-    wheel lagging, slipping or off its commanded turn, steering or rest not reached) is added to
-    ``problems`` as one line naming it as ``name``: its end pose enters the statistics as an
-    odometry error, and the report must say which runs it should not trust."""
-    run = engine.drive(plan, true_robot, command, rate=rate, rng=rng)
-    found = engine.problems(run)
-    if found and problems is not None:
-        more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
-        problems.append(f"{name}: {found[0]}{more}")
-    return run
-
-
-def physics_umbmark(
-    true_robot: Robot,
-    command: Robot,
-    *,
-    side: float,
-    mode: str,
-    runs: int,
-    rate: float,
-    seed: np.random.SeedSequence,
-    trials: int = 1,
-    engine: Engine = PHYSICS,
-    progress: Progress | None = None,
-    label: str = "UMBmark",
-    problems: list[str] | None = None,
-    poses: list[RunPoses] | None = None,
-    phase: str = "before",
-) -> tuple[list[UMBmarkResult], dict]:
-    """``trials`` UMBmark procedures of ``runs`` runs per direction in the physics engine,
-    ``true_robot`` commanded by ``command``, the roller phases of each direction's runs drawn
-    from its own child of ``seed`` (module docstring), driven by ``engine``. Returns one
-    :class:`~omnikin.evaluation.umbmark.UMBmarkResult` per procedure and the first run of each
-    direction (``{"cw"|"ccw": PhysicsRun}``, with its ground truth). ``progress`` is called with
-    ``label`` and the run's number before each run; runs that did not drive as commanded are
-    added to ``problems`` (:func:`_drive`); the runs of the first procedure are added to
-    ``poses`` as :class:`~omnikin.evaluation.run_poses.RunPoses` of ``phase``."""
-    require_square(command, side, mode)
-    total = 2 * trials * runs
-    eps: dict[str, list] = {"cw": [], "ccw": []}
-    first: dict = {}
-    for direction, child in zip(("cw", "ccw"), seed.spawn(2), strict=True):
-        plan = umbmark_square(direction, side, mode)
-        rng = np.random.default_rng(child)
-        k = 0
-        for index in range(trials * runs):
-            if progress is not None:
-                progress(f"{label}: run {len(eps['cw']) + len(eps['ccw']) + 1} of {total}")
-            number = len(eps["cw"]) + len(eps["ccw"]) + 1
-            name = f"{label}, run {number} of {total} ({direction})"
-            run = _drive(plan, true_robot, command, rate, engine, rng, name, problems)
-            first.setdefault(direction, run)
-            eps[direction].append(run.epsilon[0])
-            if poses is not None and index < runs:
-                k = k or stride(len(run.t), rate, runs)
-                poses.append(kept_run(phase, direction, index + 1, run.t, run.truth[0], run.odometry, k))
-    results = [
-        analyze(
-            np.array(eps["cw"][k * runs : (k + 1) * runs]),
-            np.array(eps["ccw"][k * runs : (k + 1) * runs]),
-            side,
-            command,
-            mode,
-        )
-        for k in range(trials)
-    ]
-    return results, first
-
-
-def physics_calibration_runs(
-    true_robot: Robot,
-    robot: Robot,
-    *,
-    side: float,
-    rate: float,
-    seed: np.random.SeedSequence,
-    engine: Engine = PHYSICS,
-    progress: Progress | None = None,
-    problems: list[str] | None = None,
-) -> list[CalibrationRun]:
-    """The recommended calibration runs of ``robot``, each driven
-    :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times in the physics engine by
-    ``true_robot`` commanded by ``robot`` driven by ``engine``, roller phases drawn from
-    ``seed``; the measured end
-    pose is the true one (the default measurement sigma of
-    :class:`~omnikin.motion.plans.CalibrationRun`, as a runs file is read)."""
-    rng = np.random.default_rng(seed)
-    plans = recommended_runs(robot, side)
-    total = len(plans) * RECOMMENDED_REPEATS
-    out: list[CalibrationRun] = []
-    for text, plan in plans:
-        for _ in range(RECOMMENDED_REPEATS):
-            if progress is not None:
-                progress(f"calibration runs: run {len(out) + 1} of {total}")
-            name = f"calibration run {len(out) + 1} of {total} ({text})"
-            run = _drive(plan, true_robot, robot, rate, engine, rng, name, problems)
-            out.append(CalibrationRun(plan, tuple(run.measured[0]), text))
-    return out
-
-
 def physics_umbmark_study(
     robot: Robot,
     true_robot: Robot,
@@ -264,77 +115,24 @@ def physics_umbmark_study(
     progress: Progress | None = None,
     level: float = LEVEL,
 ) -> UMBmarkStudy:
-    """The study of the module docstring, as a :class:`~omnikin.evaluation.procedure.UMBmarkStudy`
-    (``engine`` the physics engine, ``noise`` none, ``floor`` the nominal robot's :class:`PhysicsFloor`
-    with its interval at ``level``, ``systematic`` the first procedures, no Borenstein
-    comparison); roller phases from ``seed``, every run driven by ``engine``."""
-    check_settings(runs=runs, trials=trials, side=side, rate=rate)
-    engine.check_rate(rate)
-    encoded_wheels(robot)
-    rng = streams(seed)
-    problems: list[str] = []
-    poses: list[RunPoses] = []
-    opts: dict[str, Any] = dict(
-        side=side, mode=mode, runs=runs, rate=rate, trials=trials, engine=engine, progress=progress, problems=problems
-    )
-    before, first = physics_umbmark(
-        true_robot, robot, seed=rng["before"], label="UMBmark before calibration", poses=poses, **opts
-    )
-    trajectories = {"before": first}
-    systematic = {"before": before[0].e_max_syst}
-    after: list | None = None
-    cal: CalibrationResult | None = None
-    cal_runs: list[CalibrationRun] = []
-    if calibrate:
-        cal_runs = physics_calibration_runs(
-            true_robot,
-            robot,
-            side=side,
-            rate=rate,
-            seed=rng["calibration"],
-            engine=engine,
-            progress=progress,
-            problems=problems,
-        )
-        if progress is not None:
-            progress("least-squares calibration")
-        try:
-            cal = least_squares_calibration(robot, cal_runs)
-        except CalibrationFitError as e:  # runs that did not drive as commanded: no after, the report says why
-            problems.append(str(e))
-        if cal is not None:
-            after, trajectories["after"] = physics_umbmark(
-                true_robot,
-                cal.robot,
-                seed=rng["after"],
-                label="UMBmark after calibration",
-                poses=poses,
-                phase="after",
-                **opts,
-            )
-            systematic["after"] = after[0].e_max_syst
-    nominal, _ = physics_umbmark(robot, robot, seed=rng["floor"], label="floor (nominal robot)", **opts)
-    floor = PhysicsFloor(np.array([r.e_max_syst for r in nominal]), nominal[0].e_max_interval(level))
-    return UMBmarkStudy(
+    """The study of the module docstring: :func:`~omnikin.evaluation.procedure.umbmark_study`
+    with ``engine`` (the physics engine) and no noise model, as a
+    :class:`~omnikin.evaluation.procedure.UMBmarkStudy` (``noise`` none, ``floor`` the nominal
+    robot's :class:`~omnikin.evaluation.umbmark.PhysicsFloor` with its interval at ``level``,
+    ``systematic`` the first procedures, no Borenstein comparison); roller phases from
+    ``seed``."""
+    return umbmark_study(
         robot,
         true_robot,
-        injected,
-        side,
-        mode,
-        runs,
-        rate,
-        trials,
-        NOISE["none"],
-        before,
-        after,
-        cal,
-        cal_runs,
-        None,
-        systematic,
-        floor,
-        trajectories,
-        level=level,
+        injected=injected,
+        side=side,
+        mode=mode,
+        runs=runs,
+        rate=rate,
+        trials=trials,
+        calibrate=calibrate,
+        seed=seed,
         engine=engine,
-        problems=tuple(problems),
-        run_poses=tuple(poses),
+        progress=progress,
+        level=level,
     )

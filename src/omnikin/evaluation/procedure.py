@@ -1,35 +1,28 @@
 """The UMBmark study of ``omnikin umbmark``: UMBmark, calibration, UMBmark again.
 
-One procedure for every robot (:func:`umbmark_study`):
+:func:`umbmark_study` is the report's use of the one study pipeline
+(:mod:`omnikin.evaluation.pipeline`, which defines the stages, the floor and the seed layout):
+of the robot as built (a seeded draw of an error profile applied to the nominal robot, or a
+given true robot, :func:`draw_as_built`) it keeps every UMBmark procedure before and after the
+calibration, the calibration runs and fit, the runs of the first procedures
+(:mod:`omnikin.evaluation.run_poses`), the first run of each direction for the figures, the
+floor, Borenstein's correction (differential drives in ``rotate`` mode, kinematic engine) and
+the systematic part; with any engine (:class:`~omnikin.simulation.engine.Engine`: the
+kinematic engine with its noise model, or the physics engine,
+:mod:`omnikin.evaluation.physics_study`).
 
-1. the robot as built: a seeded draw of an error profile applied to the nominal robot
-   (or a given true robot);
-2. UMBmark before calibration: ``trials`` procedures of ``runs`` runs per direction, the
-   robot commanded by its nominal model (Borenstein and Feng, "Measurement and correction
-   of systematic odometry errors in mobile robots", 1996);
-3. calibration (unless switched off): every run of
-   :func:`~omnikin.evaluation.calibration.recommended_runs` driven
-   :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times by the nominal model, its
-   end pose "measured" with the noise model's measurement error, and the least-squares
-   calibration (:func:`~omnikin.evaluation.calibration.calibrate`) weighted exactly as
-   ``omnikin calibrate`` weights the same runs read from a file; for a differential drive
-   in ``rotate`` mode Borenstein's iterated correction too, for comparison;
-4. UMBmark after calibration, the robot commanded by its calibrated model;
-5. the noise floor (:class:`~omnikin.evaluation.umbmark.NoiseFloor`): the same UMBmark of
-   the robot as built commanded by its own exact model, :data:`FLOOR_PROCEDURES` times;
-6. the systematic part alone: UMBmark without random errors, before and after.
-
-Every step draws its random numbers from its own stream of ``numpy.random.SeedSequence(seed)``
-(:data:`STREAMS`), so the robot as built, the calibration runs and the first procedure do
-not depend on ``trials``; the robot stream is the first child, as for ``omnikin simulate``,
-so the same seed builds the same robot there.
+This module also checks a study's settings (:func:`check_settings`) and estimates what it will
+take (:func:`estimate_cost`, :func:`check_cost`). Every stage draws its random numbers from its
+own stream of ``numpy.random.SeedSequence(seed)`` (:func:`streams`, the layout
+:data:`~omnikin.evaluation.pipeline.REPORT_STREAMS`), so the robot as built, the calibration
+runs and the first procedure do not depend on ``trials``; the robot stream is the first child,
+as for ``omnikin simulate``, so the same seed builds the same robot there.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -37,35 +30,50 @@ from ..common.messages import shorten
 from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME, LimitNames, require_within
 from ..errors import InputError
 from ..kinematics.robot import Robot
-from ..motion.plans import CalibrationRun, umbmark_square
+from ..motion.plans import umbmark_square
 from ..motion.timing import check_rate_range, estimated_samples
 from ..odometry.batch import encoded_wheels
 from ..simulation.engine import Engine, KinematicEngine
 from ..simulation.error_models import NOISE, NoiseModel, SystematicErrors
-from ..simulation.simulate import simulate
-from .calibration import RECOMMENDED_REPEATS, CalibrationResult, borenstein_calibrate, recommended_runs
-from .calibration import calibrate as least_squares_calibration
-from .run_poses import DIRECTIONS, RunPoses, kept_run, stride
-from .umbmark import (
-    LEVEL,
-    NoiseFloor,
-    UMBmarkResult,
-    check_side,
-    differential_pair,
-    noise_floor,
-    procedure_generators,
-    reduction_interval,
-    run_umbmark,
+from .calibration import RECOMMENDED_REPEATS, CalibrationResult, recommended_runs
+from .pipeline import (
+    BORENSTEIN_ITERATIONS,
+    FLOOR_PROCEDURES,
+    REPORT,
+    REPORT_STREAMS,
+    Square,
+    first_procedure_poses,
+    run_pipeline,
+    seed_streams,
+    simulate_calibration_runs,
 )
+from .run_poses import RunPoses
+from .umbmark import LEVEL, NoiseFloor, check_side, differential_pair, reduction_interval
 
-STREAMS = ("robot", "before", "trajectories", "calibration", "borenstein", "after", "floor")
-"""Random streams, in the order of the children of ``SeedSequence(seed)``."""
+__all__ = [  # the study's names, and the pipeline's that its users import from here
+    "ARGUMENTS",
+    "AS_BUILT_FROM",
+    "BORENSTEIN_ITERATIONS",
+    "FLOOR_PROCEDURES",
+    "STREAMS",
+    "Cost",
+    "UMBmarkStudy",
+    "check_cost",
+    "check_settings",
+    "draw_as_built",
+    "estimate_cost",
+    "first_procedure_poses",
+    "simulate_calibration_runs",
+    "streams",
+    "umbmark_study",
+]
 
-FLOOR_PROCEDURES = 400
-"""UMBmark procedures of the perfectly calibrated robot that make the noise floor."""
+KINEMATIC = KinematicEngine()
+"""The kinematic engine, the default engine of a study."""
 
-BORENSTEIN_ITERATIONS = 3
-"""Iterations of Borenstein's correction in the comparison (differential drives)."""
+STREAMS = REPORT_STREAMS
+"""Random streams, in the order of the children of ``SeedSequence(seed)``
+(:data:`~omnikin.evaluation.pipeline.REPORT_STREAMS`)."""
 
 ARGUMENTS = LimitNames("max_memory", "max_time")
 """The limits of a study as the Python entry points name them (:func:`check_cost`)."""
@@ -81,7 +89,7 @@ def streams(seed: int) -> dict:
     """The random stream of each step (:data:`STREAMS`) for ``seed``."""
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise InputError(f"seed (--seed) must be a whole number >= 0, got {seed!r}")
-    return dict(zip(STREAMS, np.random.SeedSequence(int(seed)).spawn(len(STREAMS)), strict=True))
+    return seed_streams(np.random.SeedSequence(int(seed)), STREAMS)
 
 
 def check_settings(*, runs, trials, side, rate) -> None:
@@ -171,7 +179,7 @@ def check_cost(cost: Cost, *, max_memory=DEFAULT_MEMORY, max_time=DEFAULT_TIME) 
     )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class UMBmarkStudy:
     """Everything :func:`umbmark_study` found (module docstring); lengths in metres.
 
@@ -179,7 +187,9 @@ class UMBmarkStudy:
     (``after`` None without calibration); ``calibration_runs``: the simulated runs with
     their measured end poses (``label`` = the path in the runs-file grammar);
     ``borenstein``: E_max,syst [m] after each iteration of Borenstein's correction (or
-    None); ``systematic``: E_max,syst [m] without random errors, ``{"before", "after"}``;
+    None where it was not run); ``calibration`` None without calibration (or, physics, when the
+    runs made the fit impossible: ``problems`` says why); ``systematic``: E_max,syst [m]
+    without random errors, ``{"before", "after"}`` (physics: the first procedures');
     ``trajectories``: ``{"before"|"after": {"cw"|"ccw": SimulatedRun}}``, the first run of
     each direction with its ground truth; ``engine``: the engine every run was driven by, the
     :class:`~omnikin.simulation.engine.KinematicEngine` (this module) or the physics engine
@@ -246,119 +256,58 @@ def umbmark_study(
     runs: int,
     rate: float,
     trials: int,
-    noise: NoiseModel,
+    noise: NoiseModel | None = None,
     seed: int,
     calibrate: bool,
+    engine: Engine = KINEMATIC,
     progress=None,
+    level: float = LEVEL,
 ) -> UMBmarkStudy:
-    """Run the study of the module docstring. ``true_robot``: the robot as built
-    (:func:`draw_as_built`); ``progress``: called with the name of each step as it starts.
-    The settings are checked first (:func:`check_settings`)."""
+    """Run the study of the module docstring: the pipeline
+    (:func:`~omnikin.evaluation.pipeline.run_pipeline`) keeping what the report shows
+    (:data:`~omnikin.evaluation.pipeline.REPORT`).
+
+    ``true_robot``: the robot as built (:func:`draw_as_built`); ``noise``: the random errors of
+    an engine with a noise model (:meth:`~omnikin.simulation.engine.Engine.noise_model`; None
+    for the physics engine, whose study then records no noise); ``engine``: drives every run;
+    ``level``: the confidence level of the intervals; ``progress``: called with the name of each
+    step as it starts (physics: of each run). The settings are checked first
+    (:func:`check_settings`, the engine's :meth:`~omnikin.simulation.engine.Engine.check_rate`)."""
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
+    engine.check_rate(rate)
     encoded_wheels(robot)  # UMBmark measures with the encoders: refuse a robot without them now
-    rng = streams(seed)
-    step = progress or (lambda name: None)
-    opts: dict[str, Any] = dict(side=side, mode=mode, runs=runs, noise=noise, rate=rate)
-    step("UMBmark before calibration")
-    before = run_umbmark(true_robot, robot, trials=trials, rng=rng["before"], **opts)
-    poses = first_procedure_poses("before", true_robot, robot, rng=rng["before"], **opts)
-    step("trajectories for the figures")
-    traj_rng = np.random.default_rng(rng["trajectories"])
-    trajectories = {"before": _trajectories(true_robot, robot, traj_rng, **opts)}
-    after: list | None = None
-    cal: CalibrationResult | None = None
-    bor: list | None = None
-    cal_runs: list[CalibrationRun] = []
-    quiet: dict[str, Any] = dict(opts, runs=1, noise=NOISE["none"])
-    systematic = {"before": run_umbmark(true_robot, robot, **quiet)[0].e_max_syst}
-    if calibrate:
-        step("calibration runs")
-        cal_runs = simulate_calibration_runs(
-            true_robot, robot, side=side, noise=noise, rate=rate, rng=rng["calibration"]
-        )
-        step("least-squares calibration")
-        cal = least_squares_calibration(robot, cal_runs)
-        if differential_pair(robot) is not None and mode == "rotate":
-            step("Borenstein's correction (comparison)")
-            bor = _borenstein(true_robot, robot, before[0], np.random.default_rng(rng["borenstein"]), opts)
-        step("UMBmark after calibration")
-        after = run_umbmark(true_robot, cal.robot, trials=trials, rng=rng["after"], **opts)
-        poses += first_procedure_poses("after", true_robot, cal.robot, rng=rng["after"], **opts)
-        trajectories["after"] = _trajectories(true_robot, cal.robot, traj_rng, **opts)
-        systematic["after"] = run_umbmark(true_robot, cal.robot, **quiet)[0].e_max_syst
-    step("noise floor")
-    floor = noise_floor(true_robot, procedures=FLOOR_PROCEDURES, rng=rng["floor"], **opts)
-    return UMBmarkStudy(
+    square = Square(side=side, mode=mode, runs=runs, rate=rate, noise=noise, trials=trials, level=level)
+    found = run_pipeline(
         robot,
         true_robot,
-        injected,
-        side,
-        mode,
-        runs,
-        rate,
-        trials,
-        noise,
-        before,
-        after,
-        cal,
-        cal_runs,
-        bor,
-        systematic,
-        floor,
-        trajectories,
-        run_poses=tuple(poses),
+        engine=engine,
+        square=square,
+        streams=streams(seed),
+        calibrate=calibrate,
+        keep=REPORT,
+        progress=progress,
     )
-
-
-def first_procedure_poses(
-    phase: str, true_robot: Robot, command: Robot, *, rng, side, mode, runs, noise, rate
-) -> list[RunPoses]:
-    """The runs of the first procedure of :func:`~omnikin.evaluation.umbmark.run_umbmark` with
-    ``rng`` (the same draws: procedure 0's generator, cw runs then ccw runs, one run after the
-    other), each kept at a bounded rate (:mod:`omnikin.evaluation.run_poses`); simulated one
-    run at a time, so the memory is that of one run's ground truth."""
-    generator = procedure_generators(rng, 1)[0]
-    out = []
-    for direction in DIRECTIONS:
-        plan = umbmark_square(direction, side, mode)
-        k = 0
-        for run in range(1, runs + 1):
-            sim = simulate(plan, true_robot, command, rate=rate, noise=noise, trials=1, rng=generator)
-            k = k or stride(len(sim.t), rate, runs)
-            out.append(kept_run(phase, direction, run, sim.t, sim.truth[0], sim.odometry, k))
-    return out
-
-
-def simulate_calibration_runs(
-    true_robot: Robot, robot: Robot, *, side: float, noise: NoiseModel, rate: float, rng
-) -> list[CalibrationRun]:
-    """The recommended calibration runs of ``robot``, each driven
-    :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times by ``true_robot``
-    commanded by ``robot``, with their measured end poses and the default measurement sigma
-    of :class:`~omnikin.motion.plans.CalibrationRun` (as a runs file is read)."""
-    rng = np.random.default_rng(rng)
-    out = []
-    for text, plan in recommended_runs(robot, side):
-        sim = simulate(
-            plan, true_robot, robot, rate=rate, noise=noise, trials=RECOMMENDED_REPEATS, rng=rng, keep_truth=False
-        )
-        out += [CalibrationRun(plan, tuple(m), text) for m in sim.measured]
-    return out
-
-
-def _trajectories(true_robot: Robot, command: Robot, rng, *, side, mode, runs, noise, rate) -> dict:
-    """The first run of each direction with its ground truth, for the figures."""
-    return {
-        d: simulate(umbmark_square(d, side, mode), true_robot, command, rate=rate, noise=noise, trials=1, rng=rng)
-        for d in ("cw", "ccw")
-    }
-
-
-def _borenstein(true_robot: Robot, robot: Robot, first: UMBmarkResult, rng, opts) -> list:
-    """Borenstein's iterated correction: E_max,syst [m] after each iteration."""
-    out, model, res = [], robot, first
-    for _ in range(BORENSTEIN_ITERATIONS):
-        model = borenstein_calibrate(model, res)
-        res = run_umbmark(true_robot, model, rng=rng, **opts)[0]
-        out.append(res.e_max_syst)
-    return out
+    assert found.floor is not None  # the report keeps it
+    return UMBmarkStudy(
+        robot=robot,
+        true_robot=true_robot,
+        injected=injected,
+        side=side,
+        mode=mode,
+        runs=runs,
+        rate=rate,
+        trials=trials,
+        noise=NOISE["none"] if noise is None else noise,
+        before=found.before,
+        after=found.after,
+        calibration=found.calibration,
+        calibration_runs=found.calibration_runs,
+        borenstein=found.borenstein,
+        systematic=found.systematic,
+        floor=found.floor,
+        trajectories=found.trajectories,
+        level=level,
+        engine=engine,
+        problems=found.problems,
+        run_poses=found.poses,
+    )

@@ -10,24 +10,23 @@ and, with ``calibrate``, the recommended calibration runs, the least-squares cal
 calibrated robot. Beside the measured ``E_max,syst`` it reports the systematic part alone: the
 same procedures without random errors (one run per direction), before and after.
 
+A trial is the study pipeline (:mod:`omnikin.evaluation.pipeline`) keeping only these numbers.
 With an engine without a noise model (the physics engine,
-:class:`~omnikin.physics.engines.PhysicsEngine`) every run is driven in MuJoCo
-(:func:`~omnikin.evaluation.physics_study.physics_umbmark`, rollers and motors; the runs'
-randomness is the wheels' roller phases, no noise model): the systematic parts are then NaN
-(the physics has no noise to leave out).
+:class:`~omnikin.physics.engines.PhysicsEngine`) every run is driven in MuJoCo (rollers and
+motors; the runs' randomness is the wheels' roller phases, no noise model): the systematic
+parts are then NaN (the physics has no noise to leave out).
 
 Unlike :func:`~omnikin.evaluation.procedure.umbmark_study` (one robot as built, its report with
 figures and a noise floor), a trial is cheap (about 0.15 s for tomasi-omni3 at the defaults, one
 core) and its randomness comes from one :class:`numpy.random.SeedSequence`, split into the
-streams :data:`TRIAL_STREAMS` in a fixed order: the same seed gives the same trial on any
-machine, in any order of trials.
+streams :data:`~omnikin.evaluation.pipeline.TRIAL_STREAMS` in a fixed order: the same seed gives
+the same trial on any machine, in any order of trials.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -35,16 +34,11 @@ from ..kinematics.robot import Robot
 from ..physics.engines import as_engine
 from ..simulation.engine import Engine, KinematicEngine
 from ..simulation.error_models import NOISE, ErrorProfile, NoiseModel
-from .calibration import calibrate as least_squares_calibration
-from .physics_study import physics_calibration_runs, physics_umbmark
-from .procedure import check_settings, draw_as_built, simulate_calibration_runs
-from .umbmark import run_umbmark
+from .pipeline import TRIAL, TRIAL_STREAMS, Square, run_pipeline, seed_streams
+from .procedure import check_settings, draw_as_built
 
 AS_BUILT = ("the tolerances and the trial's seed", "lower the tolerances")
 """How a trial's invalid robot as built is named (:func:`~omnikin.evaluation.procedure.draw_as_built`)."""
-
-TRIAL_STREAMS = ("robot", "before", "calibration", "after")
-"""The random streams of a trial, spawned in this order from its seed."""
 
 
 @dataclass(frozen=True)
@@ -67,7 +61,7 @@ class TrialSettings:
         object.__setattr__(self, "engine", as_engine(self.engine))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TrialResult:
     """What one trial measured [m]: ``e_max_syst_before``/``after`` (UMBmark's measure of the
     procedure, with the random errors), ``systematic_before``/``after`` (the same without
@@ -93,48 +87,33 @@ class TrialResult:
 
 
 def trial_streams(seed: np.random.SeedSequence) -> dict[str, np.random.SeedSequence]:
-    """The streams of :data:`TRIAL_STREAMS` spawned from ``seed``."""
-    return dict(zip(TRIAL_STREAMS, seed.spawn(len(TRIAL_STREAMS)), strict=True))
+    """The streams of :data:`TRIAL_STREAMS` spawned from ``seed``
+    (:func:`~omnikin.evaluation.pipeline.seed_streams`)."""
+    return seed_streams(seed, TRIAL_STREAMS)
 
 
 def tolerance_trial(
     robot: Robot, tolerances: ErrorProfile, settings: TrialSettings, seed: np.random.SeedSequence
 ) -> TrialResult:
-    """One trial (module docstring) of ``robot`` built within ``tolerances``."""
+    """One trial (module docstring) of ``robot`` built within ``tolerances``: the study pipeline
+    (:func:`~omnikin.evaluation.pipeline.run_pipeline`) keeping E_max,syst of the first procedure
+    before and after, and the systematic part (:data:`~omnikin.evaluation.pipeline.TRIAL`)."""
     streams = trial_streams(seed)
     true_robot, _ = draw_as_built(robot, tolerances, streams["robot"], drawn_from=AS_BUILT)
-    if not settings.engine.has_noise_model:  # the systematic part cannot be told apart
-        return _physics_trial(robot, true_robot, settings, streams)
-    opts: dict[str, Any] = dict(
-        side=settings.side, mode=settings.mode, runs=settings.runs, noise=settings.noise, rate=settings.rate
+    engine = settings.engine
+    square = Square(
+        side=settings.side,
+        mode=settings.mode,
+        runs=settings.runs,
+        rate=settings.rate,
+        noise=settings.noise,  # the physics engine's runs take none (its randomness: roller phases)
     )
-    quiet: dict[str, Any] = dict(opts, runs=1, noise=NOISE["none"])
-    before = run_umbmark(true_robot, robot, rng=streams["before"], **opts)[0].e_max_syst
-    systematic_before = run_umbmark(true_robot, robot, **quiet)[0].e_max_syst
-    if not settings.calibrate:
-        return TrialResult(before, math.nan, systematic_before, math.nan)
-    runs = simulate_calibration_runs(
-        true_robot, robot, side=settings.side, noise=settings.noise, rate=settings.rate, rng=streams["calibration"]
+    found = run_pipeline(
+        robot, true_robot, engine=engine, square=square, streams=streams, calibrate=settings.calibrate, keep=TRIAL
     )
-    calibrated = least_squares_calibration(robot, runs).robot
-    after = run_umbmark(true_robot, calibrated, rng=streams["after"], **opts)[0].e_max_syst
-    systematic_after = run_umbmark(true_robot, calibrated, **quiet)[0].e_max_syst
-    return TrialResult(before, after, systematic_before, systematic_after)
-
-
-def _physics_trial(
-    robot: Robot, true_robot: Robot, settings: TrialSettings, streams: dict[str, np.random.SeedSequence]
-) -> TrialResult:
-    """The trial in the physics engine (module docstring), roller phases from ``streams``."""
-    opts: dict[str, Any] = dict(
-        side=settings.side, mode=settings.mode, runs=settings.runs, rate=settings.rate, engine=settings.engine
+    return TrialResult(
+        e_max_syst_before=found.before[0].e_max_syst,
+        e_max_syst_after=found.after[0].e_max_syst if found.after is not None else math.nan,
+        systematic_before=found.systematic["before"],
+        systematic_after=found.systematic.get("after", math.nan),
     )
-    before = physics_umbmark(true_robot, robot, seed=streams["before"], **opts)[0][0].e_max_syst
-    if not settings.calibrate:
-        return TrialResult(before, math.nan, math.nan, math.nan)
-    runs = physics_calibration_runs(
-        true_robot, robot, side=settings.side, rate=settings.rate, seed=streams["calibration"], engine=settings.engine
-    )
-    calibrated = least_squares_calibration(robot, runs).robot
-    after = physics_umbmark(true_robot, calibrated, seed=streams["after"], **opts)[0][0].e_max_syst
-    return TrialResult(before, after, math.nan, math.nan)

@@ -249,7 +249,7 @@ def reduction_interval(before: UMBmarkResult, after: UMBmarkResult, level: float
     return low, high
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class NoiseFloor:
     """What UMBmark shows of a perfectly calibrated robot: ``E_max,syst`` [m] of ``values``
     procedures in which the robot as built is commanded by its own exact model, under the
@@ -275,11 +275,43 @@ class NoiseFloor:
         return {"procedures": int(len(self.values)), "e_max_syst_median": self.median, "e_max_syst_p95": self.limit}
 
 
+@dataclass(frozen=True, kw_only=True)
+class PhysicsFloor(NoiseFloor):
+    """The floor of the physics study: ``values`` E_max,syst [m] of the nominal robot's
+    procedures (the physics engine: UMBmark of the robot without systematic errors commanded by
+    itself, :mod:`omnikin.evaluation.pipeline`) and ``interval`` the confidence interval [m] of the first
+    one's E_max,syst from the spread of its runs over roller phases
+    (:meth:`~omnikin.evaluation.umbmark.UMBmarkResult.e_max_interval`; None with fewer than 3
+    runs per direction). :attr:`limit`, the largest E_max,syst that cannot be told from the
+    nominal robot's, is the larger of the 95th percentile of ``values`` and the interval's upper
+    end."""
+
+    interval: tuple[float, float] | None = None
+
+    @property
+    def p95(self) -> float:
+        """95th percentile of ``values`` [m]."""
+        return float(np.percentile(self.values, 95))
+
+    @property
+    def limit(self) -> float:
+        """The larger of :attr:`p95` and the interval's upper end [m]."""
+        return max(self.p95, self.interval[1]) if self.interval is not None else self.p95
+
+    def as_dict(self) -> dict:
+        return {
+            **NoiseFloor.as_dict(self),
+            "e_max_syst_p95": self.p95,
+            "e_max_syst_limit": self.limit,
+            "e_max_syst_interval": list(self.interval) if self.interval is not None else None,
+        }
+
+
 def noise_floor(robot: Robot, *, procedures: int, rng=None, **options) -> NoiseFloor:
     """The :class:`NoiseFloor` of ``robot`` (the robot as built): ``procedures`` UMBmark
     procedures of ``robot`` commanded by itself; ``options`` as :func:`run_umbmark`."""
     results = run_umbmark(robot, robot, trials=procedures, rng=rng, **options)
-    return NoiseFloor(np.array([r.e_max_syst for r in results]))
+    return NoiseFloor(values=np.array([r.e_max_syst for r in results]))
 
 
 def differential_pair(robot: Robot):
