@@ -1,7 +1,7 @@
 """Monte Carlo of full UMBmark procedures: target >= 10 million simulated robot-samples/s.
 
 1000 procedures (5 cw + 5 ccw runs each) of tomasi-omni3 as built ('typical' errors and
-noise) at 100 Hz by ``omnikin.evaluation.umbmark.run_umbmark``, against a reference measured
+noise) at 100 Hz by ``omnikin.evaluation.umbmark.simulate_umbmark``, against a reference measured
 in the same run: the straightforward vectorised NumPy simulation of one run at a time
 (wheel increments with slip noise, forward kinematics, the SE(2) exponential of every
 sample, rotation into the world and cumulative sums), timed on 100 runs.
@@ -15,7 +15,7 @@ import numpy as np
 
 from _common import save
 from omnikin import load_robot
-from omnikin.evaluation.umbmark import run_umbmark
+from omnikin.evaluation.umbmark import simulate_umbmark
 from omnikin.motion.plans import umbmark_square
 from omnikin.motion.timing import sample_plan
 from omnikin.simulation.error_models import NOISE, PROFILES
@@ -48,7 +48,7 @@ def main(procedures: int = 1000) -> dict:
     noise = NOISE["typical"]
     samples_per_run = len(sample_plan(umbmark_square("cw"), nominal, 100.0).progress)
     t0 = time.perf_counter()
-    results = run_umbmark(true, nominal, noise=noise, trials=procedures, rng=2)
+    results = simulate_umbmark(true, nominal, noise=noise, trials=procedures, rng=2)
     elapsed = time.perf_counter() - t0
     total = procedures * 10 * samples_per_run
     sampled = sample_plan(umbmark_square("cw"), nominal, 100.0)

@@ -26,8 +26,8 @@ import numpy as np
 
 from _common import save
 from omnikin import load_robot
-from omnikin.evaluation.calibration import borenstein_calibrate, calibrate, recommended_runs
-from omnikin.evaluation.umbmark import run_umbmark
+from omnikin.evaluation.calibration import borenstein_calibrate, least_squares_calibration, recommended_runs
+from omnikin.evaluation.umbmark import simulate_umbmark
 from omnikin.motion.plans import CalibrationRun, umbmark_square
 from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel
 from omnikin.simulation.simulate import simulate
@@ -47,20 +47,20 @@ def calibration_bar(name: str, seeds=range(1, 21)) -> dict:
         for label, plan in recommended_runs(nominal):
             sim = simulate(plan, true, nominal, noise=noisy, trials=REPEATS, rng=rng, keep_truth=False)
             runs += [CalibrationRun(plan, tuple(m), label) for m in sim.measured]
-        cal = calibrate(nominal, runs)
-        before = run_umbmark(true, nominal, noise=quiet, runs=1)[0].e_max_syst
-        after = run_umbmark(true, cal.robot, noise=quiet, runs=1)[0].e_max_syst
+        cal = least_squares_calibration(nominal, runs)
+        before = simulate_umbmark(true, nominal, noise=quiet, runs=1)[0].e_max_syst
+        after = simulate_umbmark(true, cal.robot, noise=quiet, runs=1)[0].e_max_syst
         factors.append(before / after)
         befores.append(before)
         afters.append(after)
-        nb = run_umbmark(true, nominal, noise=noisy, rng=rng)[0]
-        na = run_umbmark(true, cal.robot, noise=noisy, rng=rng)[0]
+        nb = simulate_umbmark(true, nominal, noise=noisy, rng=rng)[0]
+        na = simulate_umbmark(true, cal.robot, noise=noisy, rng=rng)[0]
         factors_noisy.append(nb.e_max_syst / na.e_max_syst)
         if nb.borenstein is not None:
             model, res = nominal, nb
             for _ in range(3):
                 model = borenstein_calibrate(model, res)
-                res = run_umbmark(true, model, noise=noisy, rng=rng)[0]
+                res = simulate_umbmark(true, model, noise=noisy, rng=rng)[0]
             borenstein.append(nb.e_max_syst / res.e_max_syst)
     out = {
         "robots": len(factors),

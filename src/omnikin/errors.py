@@ -152,7 +152,7 @@ class InfeasibleTwistError(InputError):
 
 class InfeasibleRunError(InputError):
     """A calibration run the robot cannot drive (its path needs a motion the layout does not
-    allow): raised by :func:`omnikin.evaluation.calibration.calibrate` (``omnikin calibrate``).
+    allow): raised by :func:`omnikin.evaluation.calibration.least_squares_calibration` (``omnikin calibrate``).
 
     ``run``: the index (0-based) of the run in the runs given.
     """
@@ -163,7 +163,7 @@ class InfeasibleRunError(InputError):
 
 
 class CalibrationFitError(InputError):
-    """The least-squares fit of :func:`omnikin.evaluation.calibration.calibrate` left the ranges
+    """The least-squares fit of :func:`omnikin.evaluation.calibration.least_squares_calibration` left the ranges
     a robot file allows: the runs are not explained by the robot's radii [m], hub positions [m]
     and drive directions (bad measurements, or the robot did not drive as commanded)."""
 

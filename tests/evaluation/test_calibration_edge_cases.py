@@ -55,7 +55,10 @@ def test_a_robot_without_encoders_is_refused_by_every_measuring_command(tmp_path
         encoding="utf-8",
     )
     monkeypatch.chdir(tmp_path)
-    for argv in (["calibrate", str(robot), "--plan"], ["umbmark", str(robot), "-o", "r", "--runs", "3"]):
+    for argv in (
+        ["calibrate", str(robot), "--plan"],
+        ["umbmark", str(robot), "-o", "r", "--runs", "3"],
+    ):
         assert main(argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and "no wheel has an 'encoder' entry" in err[0], err
@@ -68,12 +71,12 @@ def test_runs_no_robot_of_the_layout_can_explain_are_refused_in_one_line():
     says so instead of an internal error about a trial wheel."""
     from omnikin import load_robot
     from omnikin.errors import CalibrationFitError
-    from omnikin.evaluation.calibration import calibrate, recommended_runs
+    from omnikin.evaluation.calibration import least_squares_calibration, recommended_runs
     from omnikin.motion.plans import CalibrationRun
 
     robot = load_robot("tomasi-omni3")
     plans = recommended_runs(robot, 1.0)
     runs = [CalibrationRun(plan, (0.0, 0.0, 0.0), text) for text, plan in plans for _ in range(3)]
     with pytest.raises(CalibrationFitError, match=r"^calibration: no robot of this layout explains the runs") as info:
-        calibrate(robot, runs)
+        least_squares_calibration(robot, runs)
     assert "\n" not in str(info.value) and "radius must lie in" in str(info.value)

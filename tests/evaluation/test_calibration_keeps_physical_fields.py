@@ -8,8 +8,8 @@ import math
 from dataclasses import replace
 
 from omnikin import load_robot
-from omnikin.evaluation.calibration import borenstein_calibrate, calibrate, recommended_runs
-from omnikin.evaluation.umbmark import run_umbmark
+from omnikin.evaluation.calibration import borenstein_calibrate, least_squares_calibration, recommended_runs
+from omnikin.evaluation.umbmark import simulate_umbmark
 from omnikin.io.robot_file import parse_robot_text, robot_text
 from omnikin.kinematics.physical import PhysicalBody, PhysicalWheel
 from omnikin.motion.plans import CalibrationRun
@@ -38,7 +38,7 @@ def test_least_squares_calibration_keeps_physical_fields():
     for label, plan in recommended_runs(nominal):
         sim = simulate(plan, true, nominal, noise=NoiseModel(quantise=False), trials=1, rng=0, keep_truth=False)
         runs += [CalibrationRun(plan, tuple(m), label, (0.001, math.radians(0.2))) for m in sim.measured]
-    result = calibrate(nominal, runs)
+    result = least_squares_calibration(nominal, runs)
     assert result.robot.wheel("w1").radius != nominal.wheel("w1").radius  # it did calibrate
     assert_kept(result.robot, nominal)
 
@@ -46,7 +46,7 @@ def test_least_squares_calibration_keeps_physical_fields():
 def test_borenstein_correction_keeps_physical_fields():
     nominal = with_physical(load_robot("diff-drive"), PhysicalWheel(width=0.02, friction=0.9))
     true = SystematicErrors({"left": WheelErrors(radius=-0.002)}).apply(nominal)
-    result = run_umbmark(true, nominal, noise=NOISE["none"], runs=1)[0]
+    result = simulate_umbmark(true, nominal, noise=NOISE["none"], runs=1)[0]
     corrected = borenstein_calibrate(nominal, result)
     assert corrected.wheels != nominal.wheels  # it did correct
     assert_kept(corrected, nominal)

@@ -9,7 +9,7 @@ import pytest
 
 import omnikin
 from omnikin import load_robot
-from omnikin.evaluation.umbmark import procedure_generators, run_umbmark
+from omnikin.evaluation.umbmark import procedure_generators, simulate_umbmark
 from omnikin.motion.plans import umbmark_square
 from omnikin.simulation.error_models import NOISE, NoiseModel
 from omnikin.simulation.simulate import simulate
@@ -69,8 +69,8 @@ def test_procedure_streams_depend_only_on_the_seed_and_the_index():
 def test_run_umbmark_trials_are_prefixes_of_each_other():
     robot = load_robot("diff-drive")
     opts = dict(runs=2, noise=NOISE["typical"], rng=5, rate=20.0)
-    three = run_umbmark(robot, robot, trials=3, **opts)
-    one = run_umbmark(robot, robot, trials=1, **opts)
+    three = simulate_umbmark(robot, robot, trials=3, **opts)
+    one = simulate_umbmark(robot, robot, trials=1, **opts)
     np.testing.assert_array_equal(epsilons(one[0]), epsilons(three[0]))
 
 

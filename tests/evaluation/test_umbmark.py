@@ -14,8 +14,13 @@ import numpy as np
 import pytest
 
 from omnikin import OmnikinError, load_robot
-from omnikin.evaluation.calibration import borenstein_calibrate, calibrate, predicted_end, recommended_runs
-from omnikin.evaluation.umbmark import analyze, borenstein, differential_pair, run_umbmark
+from omnikin.evaluation.calibration import (
+    borenstein_calibrate,
+    least_squares_calibration,
+    predicted_end,
+    recommended_runs,
+)
+from omnikin.evaluation.umbmark import analyze, borenstein, differential_pair, simulate_umbmark
 from omnikin.motion.plans import CalibrationRun, line, spin, umbmark_square
 from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel, SystematicErrors, WheelErrors
 from omnikin.simulation.simulate import simulate
@@ -32,7 +37,7 @@ def diff():
 
 def e_max_syst(true, model):
     """E_max,syst without random errors (one run per direction suffices)."""
-    return run_umbmark(true, model, noise=NOISE["none"], runs=1)[0].e_max_syst
+    return simulate_umbmark(true, model, noise=NOISE["none"], runs=1)[0].e_max_syst
 
 
 # =====================================================================================================
@@ -151,7 +156,7 @@ def test_borenstein_by_simulation_track_error(diff):
     d = 0.005 * DIFF_TRACK
     true = SystematicErrors({"left": WheelErrors(dy=d), "right": WheelErrors(dy=-d)}).apply(diff)
     assert differential_pair(true)[2] == pytest.approx(1.01 * DIFF_TRACK, rel=1e-14)
-    res = run_umbmark(true, diff, noise=NOISE["none"], runs=1)[0]
+    res = simulate_umbmark(true, diff, noise=NOISE["none"], runs=1)[0]
     b = res.borenstein
     assert b.alpha > 0
     assert b.E_b == pytest.approx(1.01, rel=0.002)
@@ -165,13 +170,13 @@ def test_borenstein_by_simulation_track_error(diff):
 def test_borenstein_by_simulation_wheel_diameter_error(diff):
     """Right wheel 0.1 % larger: straight legs curve left (beta > 0), E_d = D_R / D_L = 1.001."""
     true = SystematicErrors({"right": WheelErrors(radius=0.001)}).apply(diff)
-    b = run_umbmark(true, diff, noise=NOISE["none"], runs=1)[0].borenstein
+    b = simulate_umbmark(true, diff, noise=NOISE["none"], runs=1)[0].borenstein
     assert b.beta > 0
     assert b.E_d == pytest.approx(1.001, abs=2e-4)
     assert b.c_R > 1 > b.c_L
     # and the mirror image
     true = SystematicErrors({"left": WheelErrors(radius=0.001)}).apply(diff)
-    b = run_umbmark(true, diff, noise=NOISE["none"], runs=1)[0].borenstein
+    b = simulate_umbmark(true, diff, noise=NOISE["none"], runs=1)[0].borenstein
     assert b.beta < 0
     assert b.E_d == pytest.approx(1 / 1.001, abs=2e-4)
 
@@ -181,12 +186,12 @@ def test_borenstein_calibrate_iterated(diff):
         {"left": WheelErrors(radius=-0.002, dy=0.002), "right": WheelErrors(radius=0.003, dy=-0.001)}
     ).apply(diff)
     model = diff
-    res = run_umbmark(true, model, noise=NOISE["none"], runs=1)[0]
+    res = simulate_umbmark(true, model, noise=NOISE["none"], runs=1)[0]
     before = res.e_max_syst
     assert before > 0.1
     for _ in range(3):
         model = borenstein_calibrate(model, res)
-        res = run_umbmark(true, model, noise=NOISE["none"], runs=1)[0]
+        res = simulate_umbmark(true, model, noise=NOISE["none"], runs=1)[0]
     assert res.e_max_syst <= before / 10
     # the corrected model keeps the axle midpoint and the wheel names
     left, right, track = differential_pair(model)
@@ -195,31 +200,31 @@ def test_borenstein_calibrate_iterated(diff):
 
 
 def test_borenstein_calibrate_refuses_other_robots(tomasi):
-    res = run_umbmark(tomasi, tomasi, noise=NOISE["none"], runs=1)[0]
+    res = simulate_umbmark(tomasi, tomasi, noise=NOISE["none"], runs=1)[0]
     with pytest.raises(OmnikinError, match="differential"):
         borenstein_calibrate(tomasi, res)
 
 
 # =====================================================================================================
-# run_umbmark
+# simulate_umbmark
 # =====================================================================================================
 def test_run_umbmark_translate_on_non_holonomic_robot(diff):
     with pytest.raises(OmnikinError, match="translate"):
-        run_umbmark(diff, diff, mode="translate")
+        simulate_umbmark(diff, diff, mode="translate")
 
 
 def test_run_umbmark_shapes_and_bad_runs(tomasi):
-    results = run_umbmark(tomasi, tomasi, runs=3, trials=2, noise=NOISE["typical"], rng=1, rate=20.0)
+    results = simulate_umbmark(tomasi, tomasi, runs=3, trials=2, noise=NOISE["typical"], rng=1, rate=20.0)
     assert len(results) == 2
     for r in results:
         assert r.cw.epsilon.shape == (3, 3) and r.ccw.epsilon.shape == (3, 3)
-    again = run_umbmark(tomasi, tomasi, runs=3, trials=2, noise=NOISE["typical"], rng=1, rate=20.0)
+    again = simulate_umbmark(tomasi, tomasi, runs=3, trials=2, noise=NOISE["typical"], rng=1, rate=20.0)
     assert [r.e_max_syst for r in again] == [r.e_max_syst for r in results]
-    results, sims = run_umbmark(tomasi, tomasi, runs=2, trials=1, rng=1, rate=20.0, keep_runs=True)
+    results, sims = simulate_umbmark(tomasi, tomasi, runs=2, trials=1, rng=1, rate=20.0, keep_runs=True)
     assert set(sims) == {"cw", "ccw"} and sims["cw"].truth.shape[0] == 2
     for bad in (0, -1, 1.5):
         with pytest.raises(OmnikinError):
-            run_umbmark(tomasi, tomasi, runs=bad)
+            simulate_umbmark(tomasi, tomasi, runs=bad)
 
 
 # =====================================================================================================
@@ -248,7 +253,7 @@ def test_calibration_round_trip_known_errors(name):
     robot = load_robot(name)
     injected = SystematicErrors(INJECTED[name])
     true = injected.apply(robot)
-    cal = calibrate(robot, calibration_runs(true, robot, EXACT, 0))
+    cal = least_squares_calibration(robot, calibration_runs(true, robot, EXACT, 0))
     for wheel, e in INJECTED[name].items():
         est = cal.errors.wheels[wheel].radius
         assert abs(est - e.radius) <= 1e-3 * abs(e.radius), (wheel, est, e.radius)
@@ -270,7 +275,7 @@ def test_calibration_round_trip_with_measurement_noise(name):
     robot = load_robot(name)
     true = SystematicErrors(INJECTED[name]).apply(robot)
     noise = NoiseModel(quantise=False, measurement=SIGMA[0], measurement_theta=SIGMA[1])
-    cal = calibrate(robot, calibration_runs(true, robot, noise, np.random.default_rng(0), repeats=3))
+    cal = least_squares_calibration(robot, calibration_runs(true, robot, noise, np.random.default_rng(0), repeats=3))
     for wheel, e in INJECTED[name].items():
         sigma = cal.identifiability.sigma[f"{wheel}.radius"]
         assert 5e-5 < sigma < 1e-3
@@ -284,7 +289,7 @@ def test_calibration_typical_profile_and_noise(name, seed):
     robot = load_robot(name)
     true = PROFILES["typical"].sample(robot, seed).apply(robot)
     runs = calibration_runs(true, robot, NOISE["typical"], np.random.default_rng(1000 + seed), repeats=3)
-    cal = calibrate(robot, runs)
+    cal = least_squares_calibration(robot, runs)
     before, after = e_max_syst(true, robot), e_max_syst(true, cal.robot)
     assert after <= before / 20, (before, after)
 
@@ -308,7 +313,7 @@ def test_identifiability_translate_squares_blind_to_radius_scale(tomasi):
     runs = calibration_runs(true, tomasi, EXACT, 0, plans=plans)
     for run in runs:
         np.testing.assert_allclose(run.measured, 0.0, atol=1e-9)
-    cal = calibrate(tomasi, runs)
+    cal = least_squares_calibration(tomasi, runs)
     ident = cal.identifiability
     assert ident.blind, "the common radius scale must be reported as not observable"
     names = ident.parameters
@@ -336,7 +341,7 @@ def test_identifiability_matches_independent_jacobian(tomasi):
     base = {n: {"radius": 0.01} for n in ("w1", "w2", "w3")}
     true = SystematicErrors({n: WheelErrors(**e) for n, e in base.items()}).apply(tomasi)
     protocol = recommended_runs(tomasi)
-    cal = calibrate(tomasi, calibration_runs(true, tomasi, EXACT, 0, plans=protocol))
+    cal = least_squares_calibration(tomasi, calibration_runs(true, tomasi, EXACT, 0, plans=protocol))
     prior = {"radius": 0.05, "lever": 0.01, "drive": math.radians(5.0)}
     cols, h = [], 1e-5
     for w, b in zip(("w1", "w2", "w3"), np.radians([0.0, 120.0, 240.0]), strict=True):
@@ -369,7 +374,7 @@ def test_identifiability_matches_independent_jacobian(tomasi):
 def test_identifiability_full_runs_no_blind_direction(name):
     robot = load_robot(name)
     true = SystematicErrors({w.name: WheelErrors(radius=0.01) for w in robot.rolling if w.encoder}).apply(robot)
-    cal = calibrate(robot, calibration_runs(true, robot, EXACT, 0))
+    cal = least_squares_calibration(robot, calibration_runs(true, robot, EXACT, 0))
     assert cal.identifiability.blind == []
     for w in robot.rolling:
         if w.encoder is not None:
@@ -381,7 +386,7 @@ def test_recommended_runs_and_calibrate_errors(tomasi, diff):
     assert "square cw translate 4" in labels and "square ccw rotate 4" in labels
     assert all("translate" not in lbl for lbl, _ in recommended_runs(diff))
     with pytest.raises(OmnikinError):
-        calibrate(tomasi, [])
+        least_squares_calibration(tomasi, [])
     with pytest.raises(OmnikinError):
         CalibrationRun(line(1.0), (float("nan"), 0.0, 0.0))
     # heading not measured is allowed
@@ -416,7 +421,7 @@ def test_calibrate_refuses_a_run_the_robot_cannot_drive_naming_it(robot_name, pa
     good = CalibrationRun(line(4.0), (4.0, 0.0, 0.0), "line 4")
     bad = CalibrationRun(parse_plan(path), (0.0, 1.0, 0.0), path)
     with pytest.raises(InfeasibleRunError) as info:
-        calibrate(robot, [good, good, bad])
+        least_squares_calibration(robot, [good, good, bad])
     message = str(info.value)
     assert info.value.run == 2
     assert message.startswith(f"run 3 ('{path}'): robot '{robot_name}' cannot drive this path: "), message
@@ -432,7 +437,7 @@ def test_calibrate_names_the_file_line_of_an_infeasible_run(tmp_path):
     f = tmp_path / "runs.csv"
     f.write_text("path,x_abs,y_abs\n# sideways below\nline 4,4.0,0\n\nline 1 90,0,1\n", encoding="utf-8")
     with pytest.raises(InfeasibleRunError, match=r"runs\.csv: line 5 \('line 1 90'\): robot 'diff-drive' cannot drive"):
-        calibrate(load_robot("diff-drive"), read_calibration_runs(f))
+        least_squares_calibration(load_robot("diff-drive"), read_calibration_runs(f))
 
 
 @pytest.mark.parametrize(
@@ -477,7 +482,7 @@ def test_steering_offsets_of_steerable_wheels_are_calibrated():
         "w3": WheelErrors(dx=0.001, drive=0.004),
     }
     true = SystematicErrors(injected).apply(robot)
-    cal = calibrate(robot, calibration_runs(true, robot, EXACT, 0))
+    cal = least_squares_calibration(robot, calibration_runs(true, robot, EXACT, 0))
     assert {"w1.drive", "w2.drive", "w3.drive"} <= set(cal.values)
     assert cal.fits and cal.residual_after < 0.1  # noise-free runs: the model explains them
     assert e_max_syst(true, cal.robot) <= e_max_syst(true, robot) / 100
@@ -489,14 +494,14 @@ def test_a_calibration_that_cannot_explain_its_runs_says_so(tomasi):
 
     runs = calibration_runs(tomasi, tomasi, EXACT, 0)
     runs[3] = CalibrationRun(runs[3].plan, (4.0, 0.0, 0.0), runs[3].label, SIGMA)
-    cal = calibrate(tomasi, runs)
+    cal = least_squares_calibration(tomasi, runs)
     assert cal.residual_after > FIT_LIMIT and not cal.fits
     assert cal.as_dict()["fits"] is False
 
 
 def test_fitted_parameters_carry_their_units(tomasi):
     true = SystematicErrors(INJECTED["tomasi-omni3"]).apply(tomasi)
-    cal = calibrate(tomasi, calibration_runs(true, tomasi, EXACT, 0))
+    cal = least_squares_calibration(tomasi, calibration_runs(true, tomasi, EXACT, 0))
     units = {p["name"]: p["unit"] for p in cal.parameters()}
     assert units == {
         f"{w}.{k}": u for w in ("w1", "w2", "w3") for k, u in (("radius", "relative"), ("lever", "m"), ("drive", "rad"))

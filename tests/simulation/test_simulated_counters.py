@@ -155,8 +155,8 @@ def test_a_robot_as_built_or_calibrated_keeps_every_field_the_errors_do_not_chan
     fields. The robot as built remembers its design: the robot itself."""
     from dataclasses import fields, replace
 
-    from omnikin.evaluation.calibration import borenstein_calibrate, calibrate
-    from omnikin.evaluation.umbmark import run_umbmark
+    from omnikin.evaluation.calibration import borenstein_calibrate, least_squares_calibration
+    from omnikin.evaluation.umbmark import simulate_umbmark
     from omnikin.kinematics.physical import PhysicalBody, PhysicalWheel
     from omnikin.motion.plans import CalibrationRun, line, spin
     from omnikin.simulation.error_models import SystematicErrors, WheelErrors
@@ -171,12 +171,12 @@ def test_a_robot_as_built_or_calibrated_keeps_every_field_the_errors_do_not_chan
     moved = {"x", "y", "drive", "roller", "radius", "encoder"}
     true = SystematicErrors({"left": WheelErrors(radius=0.01, dy=0.002, ticks=0.001)}).apply(robot)
     assert true.design is robot
-    umb = run_umbmark(true, robot, side=1.0, mode="rotate", runs=1, noise=NoiseModel(quantise=False), rate=20.0)
+    umb = simulate_umbmark(true, robot, side=1.0, mode="rotate", runs=1, noise=NoiseModel(quantise=False), rate=20.0)
     runs = [CalibrationRun(line(1.0), (1.001, 0.002, 0.0)), CalibrationRun(spin(3.0), (0.0, 0.0, 3.01))]
     for out, kept in (
         (true, {f.name for f in fields(robot)} - {"name", "wheels", "design"}),
         (borenstein_calibrate(robot, umb[0]), {f.name for f in fields(robot)} - {"wheels"}),
-        (calibrate(robot, runs).robot, {f.name for f in fields(robot)} - {"wheels", "description"}),
+        (least_squares_calibration(robot, runs).robot, {f.name for f in fields(robot)} - {"wheels", "description"}),
     ):
         for name in kept:
             assert getattr(out, name) == getattr(robot, name), name

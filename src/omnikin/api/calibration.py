@@ -132,7 +132,7 @@ def calibrate(robot, runs) -> Calibration:
     CalibrationFitError
         No robot of this layout, within the robot file's ranges, explains the runs.
     """
-    from ..evaluation.calibration import calibrate as fit
+    from ..evaluation.calibration import least_squares_calibration as fit
 
     nominal = robot_of(robot)
     if isinstance(runs, (str, os.PathLike)):

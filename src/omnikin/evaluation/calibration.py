@@ -266,7 +266,9 @@ def _residuals(
     return res[np.isfinite(res)]
 
 
-def calibrate(nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Robot | None = None) -> CalibrationResult:
+def least_squares_calibration(
+    nominal: Robot, runs: Sequence[CalibrationRun], command_robot: Robot | None = None
+) -> CalibrationResult:
     """Least-squares calibration of ``nominal`` from ``runs`` (module docstring).
 
     ``command_robot``: the model the runs were driven by (default ``nominal``). A run it

@@ -12,7 +12,7 @@ robot as built, one run at a time (the physics has no trial axis: ``trials`` pro
    :func:`~omnikin.evaluation.calibration.recommended_runs` driven
    :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times, its true end pose the
    measurement, and the least-squares calibration
-   (:func:`~omnikin.evaluation.calibration.calibrate`);
+   (:func:`~omnikin.evaluation.calibration.least_squares_calibration`);
 3. UMBmark after calibration, the robot commanded by its calibrated model;
 4. the floor (:class:`~omnikin.evaluation.umbmark.PhysicsFloor`): UMBmark of the *nominal*
    robot (no systematic errors) commanded by its own model, ``trials`` procedures of ``runs``

@@ -13,7 +13,7 @@ systematic part. The stages, in order:
 2. **calibration**: every run of :func:`~omnikin.evaluation.calibration.recommended_runs` driven
    :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times by the nominal model, its
    end pose measured, and the least-squares calibration
-   (:func:`~omnikin.evaluation.calibration.calibrate`); for a differential drive in ``rotate``
+   (:func:`~omnikin.evaluation.calibration.least_squares_calibration`); for a differential drive in ``rotate``
    mode with an engine that has a noise model, Borenstein's iterated correction too
    (:data:`BORENSTEIN_ITERATIONS`), for comparison;
 3. **after**: UMBmark again, the robot commanded by its calibrated model;
@@ -28,7 +28,7 @@ systematic part. The stages, in order:
 The engine (an :class:`~omnikin.simulation.engine.Engine` object, never a name) drives every
 run. How its runs make a stage is the engine's (:func:`stage_runs`): the kinematic engine,
 whose runs are one vectorised computation with a noise model, runs all of a stage's trials at
-once (:func:`~omnikin.evaluation.umbmark.run_umbmark`); the physics engine drives one run at a
+once (:func:`~omnikin.evaluation.umbmark.simulate_umbmark`); the physics engine drives one run at a
 time, each wheel starting at a roller phase drawn from the stage's stream, and names the runs
 that did not drive as commanded.
 
@@ -65,8 +65,13 @@ from ..motion.plans import CalibrationRun, Plan, umbmark_square
 from ..simulation.engine import Engine
 from ..simulation.error_models import NOISE, NoiseModel
 from ..simulation.simulate import simulate
-from .calibration import RECOMMENDED_REPEATS, CalibrationResult, borenstein_calibrate, recommended_runs
-from .calibration import calibrate as least_squares_calibration
+from .calibration import (
+    RECOMMENDED_REPEATS,
+    CalibrationResult,
+    borenstein_calibrate,
+    least_squares_calibration,
+    recommended_runs,
+)
 from .run_poses import DIRECTIONS, RunPoses, kept_run, stride
 from .umbmark import (
     LEVEL,
@@ -78,7 +83,7 @@ from .umbmark import (
     noise_floor,
     procedure_generators,
     require_square,
-    run_umbmark,
+    simulate_umbmark,
 )
 
 REPORT_STREAMS = ("robot", "before", "trajectories", "calibration", "borenstein", "after", "floor")
@@ -210,7 +215,7 @@ class _Out:
 class _VectorisedRuns:
     """The stages of an engine with a noise model whose runs are one vectorised computation
     (the kinematic engine): all of a stage's trials at once
-    (:func:`~omnikin.evaluation.umbmark.run_umbmark`), the run poses simulated again from the
+    (:func:`~omnikin.evaluation.umbmark.simulate_umbmark`), the run poses simulated again from the
     first procedure's stream one run at a time (:func:`first_procedure_poses`), the
     trajectories from their own stream, the measured end poses with the noise model's
     measurement error."""
@@ -224,7 +229,7 @@ class _VectorisedRuns:
 
     def umbmark(self, true_robot, command, seed, *, trials, label, phase, keep, out):
         out.progress(label)
-        results = run_umbmark(true_robot, command, trials=trials, rng=seed, **self._opts())
+        results = simulate_umbmark(true_robot, command, trials=trials, rng=seed, **self._opts())
         if keep.poses:
             out.poses += first_procedure_poses(phase, true_robot, command, rng=seed, **self._opts())
         return results, None
@@ -251,7 +256,7 @@ class _VectorisedRuns:
 
     def systematic(self, true_robot, command, first, keep):
         quiet = dict(self._opts(), runs=1, noise=NOISE["none"])
-        return run_umbmark(true_robot, command, **quiet)[0].e_max_syst
+        return simulate_umbmark(true_robot, command, **quiet)[0].e_max_syst
 
     def borenstein(self, true_robot, robot, first, seed, out):
         if differential_pair(robot) is None or self.square.mode != "rotate":
@@ -452,7 +457,7 @@ def run_pipeline(
 def first_procedure_poses(
     phase: str, true_robot: Robot, command: Robot, *, rng, side, mode, runs, noise, rate
 ) -> list[RunPoses]:
-    """The runs of the first procedure of :func:`~omnikin.evaluation.umbmark.run_umbmark` with
+    """The runs of the first procedure of :func:`~omnikin.evaluation.umbmark.simulate_umbmark` with
     ``rng`` (the same draws: procedure 0's generator, cw runs then ccw runs, one run after the
     other), each kept at a bounded rate (:mod:`omnikin.evaluation.run_poses`); simulated one
     run at a time, so the memory is that of one run's ground truth."""
@@ -493,6 +498,6 @@ def borenstein_iterations(true_robot: Robot, robot: Robot, first: UMBmarkResult,
     out, model, res = [], robot, first
     for _ in range(BORENSTEIN_ITERATIONS):
         model = borenstein_calibrate(model, res)
-        res = run_umbmark(true_robot, model, rng=rng, **opts)[0]
+        res = simulate_umbmark(true_robot, model, rng=rng, **opts)[0]
         out.append(res.e_max_syst)
     return out

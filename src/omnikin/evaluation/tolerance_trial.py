@@ -4,9 +4,9 @@ calibration and its UMBmark again (the unit of work of ``omnikin sweep``).
 A trial draws one robot as built from the tolerance profile (standard deviations of the
 systematic errors, :class:`~omnikin.simulation.error_models.ErrorProfile`: wheel radius,
 radial and tangential hub position, drive direction, ...), runs one UMBmark procedure
-(Borenstein and Feng's square, ``runs`` runs per direction, :func:`~omnikin.evaluation.umbmark.run_umbmark`),
+(Borenstein and Feng's square, ``runs`` runs per direction, :func:`~omnikin.evaluation.umbmark.simulate_umbmark`),
 and, with ``calibrate``, the recommended calibration runs, the least-squares calibration
-(:func:`~omnikin.evaluation.calibration.calibrate`) and the UMBmark procedure again with the
+(:func:`~omnikin.evaluation.calibration.least_squares_calibration`) and the UMBmark procedure again with the
 calibrated robot. Beside the measured ``E_max,syst`` it reports the systematic part alone: the
 same procedures without random errors (one run per direction), before and after.
 

@@ -310,7 +310,7 @@ class PhysicsFloor(NoiseFloor):
 def noise_floor(robot: Robot, *, procedures: int, rng=None, **options) -> NoiseFloor:
     """The :class:`NoiseFloor` of ``robot`` (the robot as built): ``procedures`` UMBmark
     procedures of ``robot`` commanded by itself; ``options`` as :func:`run_umbmark`."""
-    results = run_umbmark(robot, robot, trials=procedures, rng=rng, **options)
+    results = simulate_umbmark(robot, robot, trials=procedures, rng=rng, **options)
     return NoiseFloor(values=np.array([r.e_max_syst for r in results]))
 
 
@@ -423,7 +423,7 @@ def require_square(robot: Robot, side: float, mode: str) -> None:
         raise InputError(f"robot {robot.name!r} cannot drive the UMBmark square in {mode!r} mode ({refusal}); {hint}")
 
 
-def run_umbmark(
+def simulate_umbmark(
     true_robot: Robot,
     command_robot: Robot,
     *,
