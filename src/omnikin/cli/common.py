@@ -3,8 +3,8 @@
 Outputs (the policy is :mod:`omnikin.io.output`): a command declares each option naming an
 output with :func:`add_output` (a file, a report folder or a data folder) and the arguments
 naming its inputs with :func:`declare_inputs`; :func:`add_output_options` adds ``--force``.
-``omnikin.cli.main`` runs the command in :func:`running`, which checks its declared outputs together
-(:func:`check_command_outputs`) before the command runs: never an input, never two outputs on
+:mod:`omnikin.cli.process` runs the command in :func:`running`, which checks its declared
+outputs together (:func:`check_command_outputs`) before the command runs: never an input, never two outputs on
 the same path or one inside another, at most one thing on standard output (``--json``
 counts), an existing file only with ``--force``. The command then writes through the writers
 of :mod:`omnikin.io` (atomic, checked again) and prints its messages with
@@ -195,9 +195,9 @@ def command_inputs(args) -> list:
 
 def check_command_outputs(args) -> None:
     """Check every output the parsed command declared (:func:`add_output`), together and against
-        its inputs (:func:`omnikin.io.output.check_outputs`); ``--json`` counts as a use of standard
-        output. Called by ``omnikin.cli.main`` before the command runs, so no command can skip it; with
-    an output ``-``, the command's messages go to standard error (:func:`console`)."""
+    its inputs (:func:`omnikin.io.output.check_outputs`); ``--json`` counts as a use of standard
+    output. Called by :mod:`omnikin.cli.process` before the command runs, so no command can skip
+    it; with an output ``-``, the command's messages go to standard error (:func:`console`)."""
     declared = getattr(args, OUTPUTS, ())
     outputs = []
     for dest, label, folder, stdout in declared:
@@ -215,7 +215,7 @@ def check_command_outputs(args) -> None:
 
 @contextlib.contextmanager
 def running(args) -> Iterator[None]:
-    """The frame ``omnikin.cli.main`` runs every parsed command in: its outputs are checked
+    """The frame ``omnikin.cli.process`` runs every parsed command in: its outputs are checked
     first (:func:`check_command_outputs`), and while it runs, its messages go to standard error
     if one of its outputs is ``-`` (:func:`console`)."""
     check_command_outputs(args)
@@ -251,8 +251,8 @@ STOPPED: list[str] = []
 @contextlib.contextmanager
 def until_stopped() -> Iterator[None]:
     """Run the block of a command that serves until the user stops it (a page, a window, a node:
-    ``omnikin.cli.main.SERVERS``): Ctrl-C, SIGTERM or SIGHUP inside it end the block as a normal
-    end, and the command goes on after it (writes its report); ``omnikin.cli.main`` then prints
+    :data:`omnikin.cli.process.SERVERS`): Ctrl-C, SIGTERM or SIGHUP inside it end the block as a
+    normal end, and the command goes on after it (writes its report); :mod:`omnikin.cli.process` then prints
     ``omnikin COMMAND: stopped (SIGTERM)`` on standard error and the exit status is 0. Without
     this block a server stopped by the user ends the same way, with nothing done after."""
     try:
