@@ -22,6 +22,8 @@ import re
 import signal
 from collections.abc import Iterator
 
+import numpy as np
+
 from ..errors import InputError, Terminated
 from ..io.output import Output, check_outputs, is_stdout
 from ..messages import shorten
@@ -261,7 +263,7 @@ def until_stopped() -> Iterator[None]:
         STOPPED.append(stop_name(exc))
 
 
-# --- JSON ------------------------------------------------------------------------------------------------
+# --- JSON and tables -------------------------------------------------------------------------------------
 def print_json(data, *, nullable=()) -> None:
     """Print ``data`` as strict JSON on standard output (:func:`omnikin.io.jsonfile.to_json`;
     ``nullable``: fields whose non-finite values print as null)."""
@@ -271,6 +273,30 @@ def print_json(data, *, nullable=()) -> None:
     print(text)
 
 
+def cell(x: float) -> str:
+    """A number as a table cell prints it: six significant digits, ``inf`` and ``nan`` as such."""
+    return f"{x:.6g}" if np.isfinite(x) else str(x)
+
+
+def denoised(matrix, scale: float | None = None) -> np.ndarray:
+    """A matrix or vector for display (text output only; ``--json`` keeps the numbers): entries
+    below 1e-12 of ``scale`` (default: its largest entry) set to 0 (rounding noise such as
+    cos(pi/2) = 6e-17)."""
+    m = np.array(matrix, dtype=float)
+    largest = np.max(np.abs(m), initial=0.0) if scale is None else abs(scale)
+    m[np.abs(m) < 1e-12 * max(largest, 1e-300)] = 0.0
+    return m
+
+
+def json_checked(data) -> str:
+    """The ``--json`` text of a result, made in text mode too: a non-finite number in a result
+    is an error naming its field either way (never a silent ``inf`` in a table)."""
+    from ..io.jsonfile import to_json
+
+    return to_json(data)
+
+
+# --- options of several commands ------------------------------------------------------------------
 def add_method_option(parser) -> None:
     """``--method exact|midpoint|euler``: the pose integration of the odometry commands."""
     parser.add_argument(
