@@ -13,7 +13,22 @@ import sys
 
 from .._version import __version__
 from ..presets import PRESET_NAMES
-from . import bag, export, fk, ik, odometry, presets, process, ros, show, sim, sweep, umbmark, view
+from . import (
+    bag,
+    calibrate,
+    export,
+    fk,
+    ik,
+    odometry,
+    presets,
+    process,
+    ros,
+    show,
+    sim,
+    sweep,
+    umbmark,
+    view,
+)
 from .parser import CommandParser
 
 EPILOG = """examples:
@@ -57,7 +72,7 @@ stopping: view, sim and ros serve until stopped: Ctrl-C or SIGTERM ends them nor
   kill) and leaves no partial output (omnikin sweep keeps the tasks it finished, to resume from)."""
 
 
-COMMANDS = (presets, show, ik, fk, odometry)
+COMMANDS = (presets, show, ik, fk, odometry, umbmark, calibrate)
 """The command modules, each adding its command(s) with ``add_parser(sub, robot_help)``."""
 
 
@@ -78,8 +93,6 @@ def build_parser() -> CommandParser:
 
     for command in COMMANDS:
         command.add_parser(sub, robot_help)
-    umbmark.add_parsers(sub, robot_help)
-    _add_umbmark_analyze(sub.choices["umbmark"])
     bag.add_parsers(sub, robot_help)
     ros.add_parsers(sub, robot_help)
     sim.add_parsers(sub, robot_help)
@@ -87,23 +100,6 @@ def build_parser() -> CommandParser:
     sweep.add_parsers(sub, robot_help)
     export.add_parsers(sub, robot_help)
     return p
-
-
-def _add_umbmark_analyze(umbmark_parser: CommandParser) -> None:
-    """``omnikin umbmark analyze``: the options and behaviour of :func:`omnikin.cli.umbmark.analyze_parser`,
-    as a command of ``umbmark`` beside its optional ROBOT (:meth:`CommandParser.add_command`)."""
-    from .umbmark import analyze_parser
-
-    spec = analyze_parser()
-    analyze = CommandParser(
-        prog="omnikin umbmark analyze",
-        parents=[spec],
-        add_help=False,
-        description=spec.description,
-        epilog=spec.epilog,
-        formatter_class=spec.formatter_class,
-    )
-    umbmark_parser.add_command("analyze", analyze)
 
 
 def main(argv=None) -> int:
