@@ -19,12 +19,14 @@ from . import (
     export,
     fk,
     ik,
+    metrics,
     odometry,
     presets,
     process,
     ros,
     show,
     sim,
+    simulate,
     sweep,
     umbmark,
     view,
@@ -72,7 +74,7 @@ stopping: view, sim and ros serve until stopped: Ctrl-C or SIGTERM ends them nor
   kill) and leaves no partial output (omnikin sweep keeps the tasks it finished, to resume from)."""
 
 
-COMMANDS = (presets, show, ik, fk, odometry, umbmark, calibrate)
+COMMANDS = (presets, show, ik, fk, odometry, umbmark, calibrate, bag, simulate, metrics)
 """The command modules, each adding its command(s) with ``add_parser(sub, robot_help)``."""
 
 
@@ -93,7 +95,6 @@ def build_parser() -> CommandParser:
 
     for command in COMMANDS:
         command.add_parser(sub, robot_help)
-    bag.add_parsers(sub, robot_help)
     ros.add_parsers(sub, robot_help)
     sim.add_parsers(sub, robot_help)
     view.add_parsers(sub, robot_help)
