@@ -296,6 +296,18 @@ def json_checked(data) -> str:
     return to_json(data)
 
 
+def write_model(args, text: str, what: str) -> int:
+    """Write ``text`` (a robot model: ``omnikin mjcf``, ``omnikin urdf``) to ``args.output``
+    through the output policy and say so (unless it went to standard output); status 0.
+    ``what``: the model as the message names it (``"URDF of tomasi-omni3"``)."""
+    from ..io.output import write_text
+
+    write_text(args.output, text)
+    if not is_stdout(args.output):
+        console().print(f"{what} written to {args.output}")
+    return 0
+
+
 # --- options of several commands ------------------------------------------------------------------
 def add_method_option(parser) -> None:
     """``--method exact|midpoint|euler``: the pose integration of the odometry commands."""

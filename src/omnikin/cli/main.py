@@ -16,10 +16,10 @@ from ..presets import PRESET_NAMES
 from . import (
     bag,
     calibrate,
-    export,
     fk,
     ik,
     metrics,
+    mjcf,
     odometry,
     presets,
     process,
@@ -29,6 +29,7 @@ from . import (
     simulate,
     sweep,
     umbmark,
+    urdf,
     view,
 )
 from .parser import CommandParser
@@ -74,7 +75,24 @@ stopping: view, sim and ros serve until stopped: Ctrl-C or SIGTERM ends them nor
   kill) and leaves no partial output (omnikin sweep keeps the tasks it finished, to resume from)."""
 
 
-COMMANDS = (presets, show, ik, fk, odometry, umbmark, calibrate, bag, simulate, metrics)
+COMMANDS = (
+    presets,
+    show,
+    ik,
+    fk,
+    odometry,
+    umbmark,
+    calibrate,
+    bag,
+    simulate,
+    metrics,
+    ros,
+    sim,
+    view,
+    sweep,
+    mjcf,
+    urdf,
+)
 """The command modules, each adding its command(s) with ``add_parser(sub, robot_help)``."""
 
 
@@ -92,14 +110,8 @@ def build_parser() -> CommandParser:
         f"preset name ({', '.join(PRESET_NAMES)}) or robot file path (YAML/JSON, schema 1); a preset "
         "name always means the preset: write ./NAME for a file of the current folder named like one"
     )
-
     for command in COMMANDS:
         command.add_parser(sub, robot_help)
-    ros.add_parsers(sub, robot_help)
-    sim.add_parsers(sub, robot_help)
-    view.add_parsers(sub, robot_help)
-    sweep.add_parsers(sub, robot_help)
-    export.add_parsers(sub, robot_help)
     return p
 
 

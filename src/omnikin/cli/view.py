@@ -58,7 +58,8 @@ examples:
   omnikin view tomasi-omni3 --replay run.bag"""
 
 
-def add_parsers(sub, robot_help: str) -> None:
+def add_parser(sub, robot_help: str) -> None:
+    """Add ``view`` to ``sub``."""
     sp = sub.add_parser(
         "view",
         help="3D viewer in the browser: drive the robot with the keyboard, see its wheels and odometry",
@@ -122,7 +123,7 @@ def add_parsers(sub, robot_help: str) -> None:
         )
     add_budget_options(sp, time=False)
     declare_inputs(sp, "replay", robots=("robot",))
-    sp.set_defaults(func=cmd_view)
+    sp.set_defaults(func=run)
 
 
 def require_viser():
@@ -136,7 +137,8 @@ def require_viser():
     return viser
 
 
-def cmd_view(args) -> int:
+def run(args) -> int:
+    """Serve the page (live, ``--ros`` or ``--replay``) until the user stops it; status 0."""
     from ..errors import InputError
 
     limits = teleop_limits(args)
