@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from .calibration import Calibration, calibrate, calibration_plan
 from .common import dumps, robot_of
-from .simulation import DEFAULT_PATH, Simulation, simulate
+from .simulation import DEFAULT_PATH, Simulation, SimulationCost, simulate
 from .umbmark import DEFAULT_ROBOT, UMBmarkAnalysis, UMBmarkReport, analyze_umbmark, run_umbmark
 
 
@@ -55,6 +55,7 @@ __all__ = [
     "DEFAULT_PATH",
     "DEFAULT_ROBOT",
     "Simulation",
+    "SimulationCost",
     "UMBmarkAnalysis",
     "UMBmarkReport",
     "analyze_umbmark",

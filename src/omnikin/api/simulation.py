@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..model import Robot
 from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
+from ..simulation.error_models import SystematicErrors
 from ..simulation.simulate import SimulatedRun
 from .common import as_built, noise_of, require_viz, robot_of
 
@@ -23,7 +25,7 @@ class Simulation:
 
     robot: Robot
     true_robot: Robot
-    injected: object
+    injected: SystematicErrors | None
     path: str
     run: SimulatedRun
 
@@ -44,6 +46,25 @@ class Simulation:
         return run_figure(self.run, f"{self.robot.name}: {self.path}")
 
 
+@dataclass(frozen=True)
+class SimulationCost:
+    """What a run of :func:`simulate` is estimated to cost, before it starts (its ``on_cost``).
+
+    ``samples``: samples of the plan at the rate (an upper bound,
+    :func:`~omnikin.simulation.simulate.run_cost`); ``memory`` [bytes]: the run's arrays for those
+    samples; ``duration`` [s]: the simulated time; ``seconds`` [s]: the wall time. The physics
+    engine is estimated in two steps: first before the plan is sampled (``memory`` with room for
+    the longest tail the run may add after the plan, ``duration`` and ``seconds`` None), then
+    with its model built and timed (``duration``: the run's, its steering waits and its tail at
+    their limits; ``memory``: the plan's samples alone).
+    """
+
+    samples: float
+    memory: float
+    duration: float | None
+    seconds: float | None
+
+
 def simulate(
     robot,
     path=DEFAULT_PATH,
@@ -57,6 +78,8 @@ def simulate(
     step: float | None = None,
     max_memory: float = DEFAULT_MEMORY,
     max_time: float = DEFAULT_TIME,
+    progress: Callable[[float, float], None] | None = None,
+    on_cost: Callable[[SimulationCost], None] | None = None,
 ) -> Simulation:
     """Simulate ``robot`` as built driving ``path`` commanded by its nominal model
     (``omnikin simulate``, without the bag).
@@ -76,7 +99,13 @@ def simulate(
     ``engine="physics"`` drives the robot as built in MuJoCo instead
     (:func:`omnikin.physics.run.simulate_physics`, ``omnikin simulate --engine physics``) at
     time step ``step`` [s] (default 2 ms): the same plan, rate and robot as built; ``noise``
-    must then be left out (the physics has no random error model).
+    must then be left out (the physics has no random error model). ``progress``, if given, is
+    called now and then with the simulated time and the plan's duration [s] (physics only).
+
+    ``on_cost``, if given, is called with each estimate (:class:`SimulationCost`) before this
+    function checks it against ``max_memory`` and ``max_time`` (``omnikin simulate`` checks it
+    against its options, with the time of writing its outputs, and the stamps its outputs can
+    hold); it may raise to refuse the run.
     """
     from ..evaluation.physics_study import engine_options
     from ..evaluation.procedure import ARGUMENTS, streams
@@ -98,6 +127,10 @@ def simulate(
         size = f"{cost.samples:.3g} samples"
         require_within("simulate", max_memory=max_memory, max_time=max_time, names=ARGUMENTS, size=size, **estimate)
 
+    def told(estimate: SimulationCost) -> None:
+        if on_cost is not None:
+            on_cost(estimate)
+
     if engine == "physics":
         from ..physics.cost import physics_run_cost
         from ..physics.run import TAIL_MAX, simulate_physics
@@ -105,12 +138,15 @@ def simulate(
 
         assert step is not None
         tail = cost.bytes / max(cost.samples, 1.0) * TAIL_MAX * rate
+        told(SimulationCost(cost.samples, cost.bytes + tail, None, None))
         within(memory=cost.bytes + tail, hint="lower rate or shorten path")
         sampled = sample_plan(plan, nominal, rate)
         estimate = physics_run_cost(sampled, true, nominal, step, budget=max_time)
+        told(SimulationCost(cost.samples, cost.bytes, estimate.simulated, estimate.seconds))
         within(seconds=estimate.seconds, hint="shorten path or raise step")
-        run: SimulatedRun = simulate_physics(sampled, true, nominal, rate=rate, step=step)
+        run: SimulatedRun = simulate_physics(sampled, true, nominal, rate=rate, step=step, progress=progress)
     else:
+        told(SimulationCost(cost.samples, cost.bytes, cost.samples / rate, cost.seconds))
         within(memory=cost.bytes, seconds=cost.seconds, hint="lower rate or shorten path")
         run = simulate_run(plan, true, nominal, rate=rate, noise=noise_of(noise), trials=1, rng=seeds[1])
     return Simulation(nominal, true, injected, path.name if isinstance(path, Plan) else str(path), run)

@@ -8,10 +8,7 @@ import contextlib
 import math
 import sys
 
-import numpy as np
-
 from ..errors import InfeasibleTwistError, InputError, OmnikinError
-from ..geometry import wrap_angle
 from ..messages import shorten
 from .bag import MESSAGE_SECONDS
 from .budget import Budget, add_budget_options, require
@@ -27,7 +24,6 @@ from .common import (
     number,
     physics_hint,
     print_json,
-    robot_as_built,
 )
 
 SIM_SAMPLE_SECONDS = 4 * MESSAGE_SECONDS
@@ -163,10 +159,10 @@ def _drivable(args):
 
 def run(args) -> int:
     """Simulate the run, write ``--bag`` and/or ``--log``, print a summary (or ``--json``); status 0."""
+    from ..api.simulation import simulate
     from ..io.bags import record_run, require_rosbags
     from ..simulation.error_models import noise as noise_profile
     from ..simulation.motion import check_rate_range
-    from ..simulation.simulate import run_cost, simulate
 
     if args.bag is None and args.log is None:
         raise InputError("simulate: give --bag OUT.bag and/or --log LOG.csv")
@@ -180,40 +176,24 @@ def run(args) -> int:
     check_rate_range(args.rate, "--rate")
     plan = parse_paths(args.path)
     noise = None if physics else noise_profile(args.noise)
-    cost = run_cost(plan, robot, args.rate)
-    duration = cost.samples / args.rate
-    seconds = cost.seconds
-    seeds = np.random.SeedSequence(args.seed).spawn(2)
-    true, errors = robot_as_built(robot, args.true_robot, args.errors, seeds[0])
-    sampled = None
-    if physics:
-        from ..physics.cost import physics_run_cost
-        from ..physics.run import TAIL_MAX
-        from ..simulation.motion import sample_plan
-
-        # the samples' memory first (the run can only add its tail), then the plan sampled
-        tail = cost.bytes / max(cost.samples, 1.0) * TAIL_MAX * args.rate
-        require(args, "simulate", memory=cost.bytes + tail, hint="lower --rate or shorten --path")
-        with _drivable(args):
-            sampled = sample_plan(plan, robot, args.rate)
-            physics_cost = physics_run_cost(sampled, true, robot, args.step, budget=Budget.of(args).seconds)
-        duration, seconds = physics_cost.simulated, physics_cost.seconds  # the waits and the tail at their limits
-    samples = duration * args.rate
-    _check_stamps(args, duration=duration)
-    writing = (SIM_SAMPLE_SECONDS if args.bag is not None else 0.0) + (LOG_ROW_SECONDS if args.log else 0.0)
-    require(
-        args,
-        "simulate",
-        memory=cost.bytes * samples / max(cost.samples, 1.0),
-        seconds=seconds + samples * writing,
-        size=f"{cost.samples:.3g} samples",
-        hint=physics_hint(args.step, "shorten --path") if physics else "lower --rate or shorten --path",
-    )
-    with _drivable(args):
-        if sampled is not None:
-            run = _simulate_physics(args, sampled, true, robot)
-        else:
-            run = simulate(plan, true, robot, rate=args.rate, noise=noise, trials=1, rng=seeds[1])
+    budget = Budget.of(args)
+    with _drivable(args), _progress_bar() as progress:
+        simulation = simulate(
+            robot,
+            plan,
+            true_robot=args.true_robot or None,
+            errors=args.errors,
+            noise=noise,
+            seed=args.seed,
+            rate=args.rate,
+            engine=args.engine,
+            step=args.step,
+            max_memory=budget.memory,
+            max_time=budget.seconds,
+            progress=progress,
+            on_cost=lambda cost: _within_budget(args, cost, physics),
+        )
+    run = simulation.run
     custom = {
         "omnikin.robot": robot.name,
         "omnikin.path": args.path,
@@ -233,8 +213,7 @@ def run(args) -> int:
         _write_tick_log(args, robot, run)
     truth_end = run.truth[0, -1]
     odom_end = run.odometry[-1]
-    diff = truth_end - odom_end
-    diff[2] = wrap_angle(diff[2])
+    diff = simulation.end_error
     summary = {
         "robot": robot.name,
         "path": args.path,
@@ -255,10 +234,13 @@ def run(args) -> int:
         "end_error": diff.tolist(),
         "end_error_distance": float(math.hypot(diff[0], diff[1])),
     }
-    if errors is not None:
-        summary["injected_errors"] = errors.as_dict()
+    if simulation.injected is not None:
+        summary["injected_errors"] = simulation.injected.as_dict()
     saturated = getattr(run, "saturated", 0)
     if physics:
+        from ..physics.run import PhysicsRun
+
+        assert isinstance(run, PhysicsRun)  # what the physics engine returns
         summary.update(run.summary())
         for problem in run.problems():  # the run did not drive as commanded: one line each
             print(f"omnikin: warning: {robot.name}: {problem}", file=sys.stderr)
@@ -302,19 +284,42 @@ def _engine_options(args) -> bool:
     return args.engine == "physics"
 
 
-def _simulate_physics(args, plan, true, robot):
-    """:func:`omnikin.physics.run.simulate_physics` with a progress bar on standard error once the
-    run has taken :data:`PROGRESS_AFTER` seconds (shown on a terminal only)."""
+def _within_budget(args, cost, physics: bool) -> None:
+    """Check an estimate of :func:`omnikin.simulate` (:class:`~omnikin.api.SimulationCost`) against
+    ``--max-memory`` and ``--max-time``, with the time of writing ``--bag`` and ``--log``, once the
+    run's duration is known after the stamps its outputs can hold (:func:`_check_stamps`); the
+    physics engine's first estimate (before the plan is sampled) for its memory alone."""
+    if cost.seconds is None:  # the samples' memory first (the run can only add its tail), then the plan sampled
+        require(args, "simulate", memory=cost.memory, hint="lower --rate or shorten --path")
+        return
+    samples = cost.duration * args.rate  # in physics, the waits and the tail at their limits
+    _check_stamps(args, duration=cost.duration)
+    writing = (SIM_SAMPLE_SECONDS if args.bag is not None else 0.0) + (LOG_ROW_SECONDS if args.log else 0.0)
+    require(
+        args,
+        "simulate",
+        memory=cost.memory * samples / max(cost.samples, 1.0),
+        seconds=cost.seconds + samples * writing,
+        size=f"{cost.samples:.3g} samples",
+        hint=physics_hint(args.step, "shorten --path") if physics else "lower --rate or shorten --path",
+    )
+
+
+@contextlib.contextmanager
+def _progress_bar():
+    """A ``progress(done, total)`` for :func:`omnikin.simulate` (the physics engine's simulated time
+    [s]) that shows a bar on standard error once the run has taken :data:`PROGRESS_AFTER` seconds
+    (on a terminal only); the bar is removed at the end."""
     import time
 
-    from ..physics.run import simulate_physics
-
-    started = time.monotonic()
+    started: list[float] = []
     bar: list = []
 
     def progress(done: float, total: float) -> None:
+        if not started:
+            started.append(time.monotonic())
         if not bar:
-            if time.monotonic() - started < PROGRESS_AFTER:
+            if time.monotonic() - started[0] < PROGRESS_AFTER:
                 return
             err = console(stderr=True)
             if not err.is_terminal:  # rich would still end the bar with an empty line on a pipe
@@ -327,7 +332,7 @@ def _simulate_physics(args, plan, true, robot):
         bar[0].update(bar[1], completed=done)
 
     try:
-        return simulate_physics(plan, true, robot, rate=args.rate, step=args.step, progress=progress)
+        yield progress
     finally:
         if bar:
             bar[0].stop()
