@@ -35,11 +35,18 @@ def plot_layout(robot):
     return layout_figure(robot_of(robot))
 
 
-def run_sweep(spec, out, *, scheduler=None, workers=None, task_trials=None, force: bool = False):
+def run_sweep(
+    spec, out, *, scheduler=None, workers=None, task_trials=None, force: bool = False, progress=None, tls=None
+):
     """``omnikin sweep SPEC -o OUT``: the study of the study file ``spec`` (or a loaded
     :class:`~omnikin.sweep.study.Study`) run on Dask into the folder ``out`` (resumed when it holds
     the study); returns a :class:`~omnikin.sweep.run.SweepResult`. The embedded cluster starts
-    worker processes: call it under ``if __name__ == "__main__":`` (docs/sweeps.md)."""
+    worker processes: call it under ``if __name__ == "__main__":`` (docs/sweeps.md).
+
+    ``progress``: told where the study runs and of each task finished
+    (:class:`~omnikin.sweep.run.Progress`: ``start``, ``advance``); ``tls``: the credentials of a
+    ``tls://`` ``scheduler`` (:class:`~omnikin.sweep.engine.TLSFiles`; default: Dask's
+    configuration)."""
     from ..sweep.run import run_sweep as run
     from ..sweep.study import Study
 
@@ -47,7 +54,16 @@ def run_sweep(spec, out, *, scheduler=None, workers=None, task_trials=None, forc
         from ..sweep.spec import load_study
 
         spec = load_study(spec)
-    return run(spec, out, scheduler=scheduler, workers=workers, task_trials=task_trials, force=force)
+    return run(
+        spec,
+        out,
+        scheduler=scheduler,
+        workers=workers,
+        task_trials=task_trials,
+        force=force,
+        progress=progress,
+        tls=tls,
+    )
 
 
 __all__ = [

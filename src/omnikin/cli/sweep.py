@@ -1,4 +1,4 @@
-"""``omnikin sweep``: a tolerance or design study on Dask (extra ``sweep``)."""
+"""``omnikin sweep``: a tolerance or design study on Dask (:func:`omnikin.run_sweep`; extra ``sweep``)."""
 
 from __future__ import annotations
 
@@ -170,7 +170,8 @@ def _check_paths(args) -> None:
 
 def run(args) -> int:
     """Run the study into its folder, print the answers; status 0."""
-    from ..sweep.run import require_sweep, run_sweep
+    from ..api import run_sweep
+    from ..sweep.run import require_sweep
     from ..sweep.spec import load_study
 
     _check_paths(args)
