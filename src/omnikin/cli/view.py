@@ -157,7 +157,7 @@ def run(args) -> int:
             raise InputError("--ros and --replay are two different views: give one of them")
         if args.echo:
             raise InputError("--echo does not apply to --replay (no keys drive a replay)")
-        return cmd_replay(args)
+        return _run_replay(args)
     if args.robot is None:
         raise InputError("view: give ROBOT (a preset name or a robot file), or --replay REPORT_DIR")
     if args.stamped and not args.ros:
@@ -165,7 +165,7 @@ def run(args) -> int:
     if args.ros:
         if args.echo:
             raise InputError("--echo does not apply to --ros (the node keeps the time; see its topics)")
-        return cmd_ros_view(args, limits)
+        return _run_ros_view(args, limits)
     if args.step is not None and args.engine != "physics":
         raise InputError("--step applies only to --engine physics")
     require_viser()
@@ -232,7 +232,7 @@ def wildcard_note(host: str, port: int) -> None:
         )
 
 
-def cmd_ros_view(args, limits) -> int:
+def _run_ros_view(args, limits) -> int:
     """``--ros``: the page follows and drives a running node (:mod:`omnikin.viewer.ros_robot`)."""
     import os
 
@@ -263,7 +263,7 @@ LARGEST_MESSAGE_SHARE = 64
 """--replay BAG: one message may use at most 1/64 of --max-memory (as omnikin bag)."""
 
 
-def cmd_replay(args) -> int:
+def _run_replay(args) -> int:
     from ..errors import InputError
     from ..io.bags import check_topic
 
