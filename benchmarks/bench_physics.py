@@ -124,10 +124,10 @@ def scaling() -> dict:
 
 def estimate_against_run() -> list[dict]:
     """The estimate of :data:`ESTIMATED`'s runs against their computing time (module docstring)."""
+    from omnikin.motion.plans import parse_plan
+    from omnikin.motion.timing import sample_plan
     from omnikin.physics.cost import physics_run_cost
     from omnikin.physics.run import simulate_physics
-    from omnikin.plans import parse_plan
-    from omnikin.simulation.motion import sample_plan
 
     rows = []
     print("  estimate against the run (CPU time of this process; est / run > 1 is on the safe side)")

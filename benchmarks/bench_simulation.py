@@ -16,9 +16,9 @@ import numpy as np
 from _common import save
 from omnikin import load_robot
 from omnikin.evaluation.umbmark import run_umbmark
-from omnikin.plans import umbmark_square
+from omnikin.motion.plans import umbmark_square
+from omnikin.motion.timing import sample_plan
 from omnikin.simulation.error_models import NOISE, PROFILES
-from omnikin.simulation.motion import sample_plan
 from omnikin.simulation.simulate import commanded_angles
 
 

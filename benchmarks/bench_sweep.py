@@ -71,7 +71,7 @@ def _swept(study: Study, workers: int, folder: Path) -> dict:
 
 
 def _overhead() -> float:
-    from omnikin.sweep.engine import Task, dask_client, run_tasks
+    from omnikin.sweep.cluster import Task, dask_client, run_tasks
 
     tasks = [Task(0, k, k + 1) for k in range(OVERHEAD_TASKS)]
     with dask_client(workers=1) as cluster:

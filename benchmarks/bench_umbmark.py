@@ -28,7 +28,7 @@ from _common import save
 from omnikin import load_robot
 from omnikin.evaluation.calibration import borenstein_calibrate, calibrate, recommended_runs
 from omnikin.evaluation.umbmark import run_umbmark
-from omnikin.plans import CalibrationRun, umbmark_square
+from omnikin.motion.plans import CalibrationRun, umbmark_square
 from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel
 from omnikin.simulation.simulate import simulate
 

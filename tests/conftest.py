@@ -66,11 +66,20 @@ def circle_wheels(n, distance=0.2, radius=0.05, ticks_per_rev=100):
     )
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def tomasi():
+    """tomasi-omni3 (a Robot is immutable: one for the session)."""
     from omnikin import load_robot
 
     return load_robot("tomasi-omni3")
+
+
+@pytest.fixture(scope="session")
+def synchro():
+    """The synchro preset (immutable, one for the session)."""
+    from omnikin import load_robot
+
+    return load_robot("synchro")
 
 
 def constant_twist_pose(twist, t):

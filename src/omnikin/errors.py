@@ -3,7 +3,7 @@
 Each branch also derives from the built-in exception that says what kind of failure it is
 (``also`` below), so that a caller can catch what it means: ``except ValueError`` takes every
 bad input, ``except omnikin.InputError`` only omnikin's. Every class is exported from the
-package (``omnikin.BagError``); the messages' text helpers are in :mod:`omnikin.messages`.
+package (``omnikin.BagError``); the messages' text helpers are in :mod:`omnikin.common.messages`.
 
 The tree (checked by ``tests/core/test_error_tree.py``; a class's first base is its parent)::
 
@@ -42,11 +42,11 @@ The tree (checked by ``tests/core/test_error_tree.py``; a class's first base is 
     └── PresetShadowWarning: a preset name is also a local file's name
 
 Messages are one line: they name what is wrong and where (file, line, wheel, field, sample
-index) and never quote an unbounded value (:func:`omnikin.messages.shorten`). Errors may carry
+index) and never quote an unbounded value (:func:`omnikin.common.messages.shorten`). Errors may carry
 where they happened as attributes (``sample``, ``line``, ``wheel``, ...), so that an edge (the
 command line) can add its own context without parsing the message.
 
-This module imports nothing of omnikin: it is the bottom layer, with :mod:`omnikin.messages`.
+This module imports nothing of omnikin: it is the bottom layer, with :mod:`omnikin.common.messages`.
 """
 
 from __future__ import annotations
@@ -216,7 +216,7 @@ class OutputExistsError(InputError):
 
 class ResourceLimitError(InputError):
     """A job would need more memory or time than allowed (a simulation too long, a bag too
-    large): raised by :mod:`omnikin.resource_limits` and the readers that check it; the message
+    large): raised by :mod:`omnikin.common.resource_limits` and the readers that check it; the message
     names the limit and the way to change it.
 
     ``needed`` and ``limit``: what the job needs and what is allowed, in the unit named by
@@ -286,7 +286,7 @@ class LinkLostError(LinkError):
 
 class WorkerMismatch(LinkError):
     """A sweep result computed by a Dask worker whose omnikin or NumPy version differs from the
-    client's (or that gave no versions): refused by :mod:`omnikin.sweep.engine`."""
+    client's (or that gave no versions): refused by :mod:`omnikin.sweep.cluster`."""
 
 
 class PhysicsError(OmnikinError, RuntimeError):

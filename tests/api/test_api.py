@@ -182,7 +182,7 @@ def test_the_memory_estimate_of_a_simulation_bounds_what_it_takes(wheels):
     """The estimate the check compares with the limit is at least the peak tracemalloc measures."""
     import tracemalloc
 
-    from omnikin.plans import parse_plan
+    from omnikin.motion.plans import parse_plan
     from omnikin.simulation.simulate import run_cost
 
     robot = omni_robot([360 * k / wheels for k in range(wheels)], name=f"omni{wheels}")
@@ -205,7 +205,7 @@ def test_results_plot_themselves(tmp_path):
     pytest.importorskip("matplotlib")
     from matplotlib.figure import Figure
 
-    from omnikin.plans import CalibrationRun, line, spin
+    from omnikin.motion.plans import CalibrationRun, line, spin
 
     robot = omnikin.load_robot("diff-drive")
     report = omnikin.run_umbmark(robot, runs=3, rate=20.0)

@@ -13,7 +13,7 @@ import pytest
 import omnikin
 from conftest import run_entry_point
 from omnikin import InputError, load_robot
-from omnikin.plans import line
+from omnikin.motion.plans import line
 from omnikin.presets import preset_path
 from omnikin.simulation.backend import SimBackend
 from omnikin.simulation.simulate import simulate

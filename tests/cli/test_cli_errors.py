@@ -341,7 +341,7 @@ def test_simulate_takes_the_ends_of_the_rate_range(capsys, rate):
 )
 def test_number_options_take_plain_finite_decimals_only(capsys, argv, text):
     """Every number on the command line follows the one grammar of numbers read from text
-    (omnikin.number_text): Python's float() would read 1_0, non-ASCII digits, blanks, nan, inf."""
+    (omnikin.common.number_text): Python's float() would read 1_0, non-ASCII digits, blanks, nan, inf."""
     rc, _, err = cli(capsys, *[a.format(text) for a in argv])
     assert rc == 2, err
     lines = err.strip().splitlines()

@@ -25,6 +25,7 @@ from support.tomasi import (
     closed_form_pose,
     one_line_error,
     read_csv_traj,
+    tomasi_file,
     wrap,
     write_log,
 )
@@ -330,16 +331,7 @@ def test_synchro_nan_steering_cell(capsys, tmp_path):
 
 def test_max_speed_jump_detected(capsys, tmp_path):
     """With max_speed in the robot file a reading that would need a far faster wheel is refused."""
-    robot = tmp_path / "fast.yaml"
-    robot.write_text(
-        "omnikin: 1\nname: capped\nwheels:\n"
-        + "".join(
-            f"  - {{name: w{i + 1}, type: omni, distance: 0.113, angle_deg: {b}, radius: 0.04125, "
-            f"max_speed: 30.0, encoder: {{ticks_per_rev: 600}}}}\n"
-            for i, b in enumerate((0, 120, 240))
-        ),
-        encoding="utf-8",
-    )
+    robot = tomasi_file(tmp_path, wheel_extra=", max_speed: 30.0", name="fast.yaml")
     # 30 rad/s for 0.01 s is ~29 ticks; 5000 ticks is impossible
     log = write_log(
         tmp_path / "log.csv",

@@ -552,7 +552,7 @@ def test_analyze_theta_columns(capsys, tmp_path):
 # omnikin calibrate on a runs file written from simulate()
 # =====================================================================================================
 def test_calibrate_own_runs_file(capsys, tmp_path):
-    from omnikin.plans import line, spin, umbmark_square
+    from omnikin.motion.plans import line, spin, umbmark_square
     from omnikin.simulation.error_models import NoiseModel, SystematicErrors, WheelErrors
     from omnikin.simulation.simulate import simulate
 
@@ -702,7 +702,7 @@ def write_runs(path, robot, true, plans):
         w = csv.writer(handle)
         w.writerow(["path", "x_abs", "y_abs", "theta_abs_deg"])
         for text in plans:
-            from omnikin.plans import parse_plan
+            from omnikin.motion.plans import parse_plan
 
             m = simulate(parse_plan(text), true, robot, noise=NoiseModel(quantise=False), rate=50.0).measured[0]
             w.writerow([text, f"{m[0]:.7f}", f"{m[1]:.7f}", f"{math.degrees(m[2]):.6f}"])

@@ -1,4 +1,4 @@
-"""Motion plans (omnikin.plans): bounds on what a plan may ask for."""
+"""Motion plans (omnikin.motion.plans): bounds on what a plan may ask for."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ def test_absurd_plan_lengths_are_refused_before_sampling(text):
     """A path no robot drives (a typo such as ``line 1e308``) is refused when the plan is made,
     naming the limit, instead of being fitted or sampled."""
     from omnikin.errors import InputError
-    from omnikin.plans import MAX_SEGMENT, parse_plan
+    from omnikin.motion.plans import MAX_SEGMENT, parse_plan
 
     with pytest.raises(InputError, match="length must be from 0 to 100000"):
         parse_plan(text)
@@ -33,7 +33,7 @@ def test_a_path_from_python_takes_plain_numbers_only(template, word):
     'line 1_0' was a 10 m line, Arabic-Indic digits were numbers. It now reads them as files and
     --path do: one line naming the path and what is wrong with the word."""
     from omnikin.errors import InputError
-    from omnikin.plans import parse_plan
+    from omnikin.motion.plans import parse_plan
 
     text = template.format(word)
     with pytest.raises(InputError) as info:
@@ -52,7 +52,7 @@ def test_python_entry_points_refuse_a_hostile_path():
 
 def test_plain_spellings_of_a_path_are_read_exactly():
     """'+.5' is 0.5 m; '-2.5E+1' is -25 deg: the unit direction (cos, sin) of -25 deg."""
-    from omnikin.plans import parse_plan
+    from omnikin.motion.plans import parse_plan
 
     (seg,) = parse_plan("LINE +.5 -2.5E+1").segments
     h = math.radians(-25.0)
@@ -74,7 +74,7 @@ def test_plain_spellings_of_a_path_are_read_exactly():
 )
 def test_bad_paths_are_named_in_one_bounded_line(text, contains):
     from omnikin.errors import InputError
-    from omnikin.plans import parse_plan
+    from omnikin.motion.plans import parse_plan
 
     with pytest.raises(InputError) as info:
         parse_plan(text)
@@ -88,7 +88,7 @@ def test_a_heading_is_a_direction_within_two_turns_like_a_robot_files(text):
     heading is a direction: within +-720 deg, the bound of a robot file's angle_deg/drive_deg."""
     from omnikin.errors import InputError
     from omnikin.io.robot_file import FIELD_RANGES
-    from omnikin.plans import parse_plan
+    from omnikin.motion.plans import parse_plan
 
     assert FIELD_RANGES["angle_deg"][:2] == FIELD_RANGES["drive_deg"][:2] == (-720.0, 720.0)
     with pytest.raises(InputError, match=rf"^path {text!r}: heading must lie in \[-720, 720\] deg, got "):
@@ -97,7 +97,7 @@ def test_a_heading_is_a_direction_within_two_turns_like_a_robot_files(text):
 
 def test_headings_of_two_turns_either_way_are_directions():
     """720 deg and -630 deg are the directions 0 and 90 deg."""
-    from omnikin.plans import parse_plan
+    from omnikin.motion.plans import parse_plan
 
     for text, deg in (("line 4 720", 0.0), ("line 4 -630", 90.0), ("line 4 -720", 0.0)):
         (seg,) = parse_plan(text).segments
@@ -109,7 +109,7 @@ def test_a_turn_is_refused_in_the_degrees_it_was_written_in(text):
     """'spin 1e9' said 'length must be from 0 to 100000 [m or rad], got 1.7e7' (radians, while
     the path is in degrees). The longest turn is 1e5 rad = 5729577.95 deg."""
     from omnikin.errors import InputError
-    from omnikin.plans import parse_plan
+    from omnikin.motion.plans import parse_plan
 
     pattern = rf"^path {text!r}: angle must lie in \[-5729577.95\d*, 5729577.95\d*\] deg, got \S+ \(the longest"
     with pytest.raises(InputError, match=pattern) as info:
@@ -123,7 +123,7 @@ def test_an_arc_without_a_finite_curvature_names_the_path(radius):
     """'arc 1e-320 90' failed with 'segment: xi must be a finite non-zero twist' (1/1e-320 is
     inf), without the path."""
     from omnikin.errors import InputError
-    from omnikin.plans import parse_plan
+    from omnikin.motion.plans import parse_plan
 
     text = f"arc {radius} 90"
     with pytest.raises(InputError, match=rf"^path {text!r}: arc radius must be > 0 with a finite curvature"):
@@ -136,7 +136,7 @@ def test_words_of_a_path_are_separated_by_ascii_blanks_only(blank):
     path was read as if spaced. Words are separated by spaces and tabs; any other white space is
     refused, naming its code point."""
     from omnikin.errors import InputError
-    from omnikin.plans import parse_plan
+    from omnikin.motion.plans import parse_plan
 
     text = f"line{blank}4"
     with pytest.raises(InputError, match=rf"^path .*: white space U\+{ord(blank):04X}\b.*separate the words"):
@@ -146,7 +146,7 @@ def test_words_of_a_path_are_separated_by_ascii_blanks_only(blank):
 
 def test_python_builders_bound_their_angles_in_radians():
     from omnikin.errors import InputError
-    from omnikin.plans import arc, line
+    from omnikin.motion.plans import arc, line
 
     with pytest.raises(InputError, match=r"line heading must lie in \[-12.566\d*, 12.566\d*\] rad"):
         line(1.0, 1e300)

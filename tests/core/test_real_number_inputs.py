@@ -12,12 +12,12 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from omnikin import InputError, geometry, load_robot
-from omnikin._arrays import as_components, as_real_array
+from omnikin import InputError, load_robot, se2
+from omnikin.common.arrays import as_components, as_real_array
 from omnikin.errors import MetricsInputError
 from omnikin.evaluation.metrics import ate, check_trajectory
-from omnikin.limits import MotionLimits, saturate
-from omnikin.streaming import Odometry
+from omnikin.motion.limits import MotionLimits, saturate
+from omnikin.odometry.streaming import Odometry
 
 HOSTILE = {
     "complex": (np.array([0.2, 0.0, 0.5 + 3j]), "complex numbers (complex128)"),
@@ -54,12 +54,12 @@ def calls(tomasi, ackermann):
         ("wheel_speeds", lambda v: tomasi.fk(v)),
         ("velocity", lambda v: tomasi.body_twist(v, 0.0)),
         ("twist", lambda v: saturate(tomasi, v, MotionLimits())),
-        ("tangent", geometry.exp),
-        ("pose", geometry.log),
-        ("a", lambda v: geometry.compose(v, twist)),
-        ("b", lambda v: geometry.compose(twist, v)),
-        ("pose", geometry.inverse),
-        ("pose", lambda v: geometry.apply(v, [1.0, 0.0])),
+        ("tangent", se2.exp),
+        ("pose", se2.log),
+        ("a", lambda v: se2.compose(v, twist)),
+        ("b", lambda v: se2.compose(twist, v)),
+        ("pose", se2.inverse),
+        ("pose", lambda v: se2.apply(v, [1.0, 0.0])),
         ("pose", lambda v: Odometry(tomasi).reset(v)),
         ("trajectory: poses", lambda v: check_trajectory([0.0], [v])),
     ]
@@ -87,7 +87,7 @@ def test_angles_and_times_refuse_what_is_not_real(tomasi, ackermann, kind):
         ("steer", lambda: ackermann.fk([1.0, 1.0, 1.0, 1.0], steer=[bad, 0.0])),
         ("steer", lambda: ackermann.jacobian([0.0, bad])),
         ("steer_hint", lambda: ackermann.ik([0.2, 0.0, 0.1], steer_hint=[bad, 0.0])),
-        ("angle", lambda: geometry.rotate(bad, [1.0, 0.0])),
+        ("angle", lambda: se2.rotate(bad, [1.0, 0.0])),
         ("trajectory: timestamps", lambda: check_trajectory([bad], [[0.0, 0.0, 0.0]])),
         ("reference: timestamps", lambda: ate([bad], [[0.0, 0.0, 0.0]], [0.0], [[0.0, 0.0, 0.0]])),
     ]

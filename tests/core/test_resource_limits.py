@@ -1,4 +1,4 @@
-"""The one check that refuses a job before it starts (omnikin.resource_limits): the command line
+"""The one check that refuses a job before it starts (omnikin.common.resource_limits): the command line
 (--max-memory, --max-time) and the Python entry points (max_memory, max_time) refuse the same
 job with the same line, sizes in the same unit style, only the names of the limits differ (not
 '... more than --max-memory 2G' from one and '... more than max_memory 2 GiB' from the other),
@@ -12,8 +12,8 @@ import re
 import pytest
 
 from conftest import run_cli
+from omnikin.common.resource_limits import LimitNames, format_bytes, format_seconds, require_within
 from omnikin.errors import InputError, ResourceLimitError
-from omnikin.resource_limits import LimitNames, format_bytes, format_seconds, require_within
 
 OPTIONS = LimitNames("--max-memory", "--max-time")
 ARGUMENTS = LimitNames("max_memory", "max_time")

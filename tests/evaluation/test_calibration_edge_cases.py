@@ -69,7 +69,7 @@ def test_runs_no_robot_of_the_layout_can_explain_are_refused_in_one_line():
     from omnikin import load_robot
     from omnikin.errors import CalibrationFitError
     from omnikin.evaluation.calibration import calibrate, recommended_runs
-    from omnikin.plans import CalibrationRun
+    from omnikin.motion.plans import CalibrationRun
 
     robot = load_robot("tomasi-omni3")
     plans = recommended_runs(robot, 1.0)

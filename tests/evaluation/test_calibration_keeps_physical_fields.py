@@ -11,8 +11,8 @@ from omnikin import load_robot
 from omnikin.evaluation.calibration import borenstein_calibrate, calibrate, recommended_runs
 from omnikin.evaluation.umbmark import run_umbmark
 from omnikin.io.robot_file import parse_robot_text, robot_text
-from omnikin.physical import PhysicalBody, PhysicalWheel
-from omnikin.plans import CalibrationRun
+from omnikin.kinematics.physical import PhysicalBody, PhysicalWheel
+from omnikin.motion.plans import CalibrationRun
 from omnikin.simulation.error_models import NOISE, NoiseModel, SystematicErrors, WheelErrors
 from omnikin.simulation.simulate import simulate
 

@@ -10,7 +10,7 @@ import pytest
 import omnikin
 from omnikin import load_robot
 from omnikin.evaluation.umbmark import procedure_generators, run_umbmark
-from omnikin.plans import umbmark_square
+from omnikin.motion.plans import umbmark_square
 from omnikin.simulation.error_models import NOISE, NoiseModel
 from omnikin.simulation.simulate import simulate
 

@@ -16,18 +16,13 @@ import pytest
 from omnikin import OmnikinError, load_robot
 from omnikin.evaluation.calibration import borenstein_calibrate, calibrate, predicted_end, recommended_runs
 from omnikin.evaluation.umbmark import analyze, borenstein, differential_pair, run_umbmark
-from omnikin.plans import CalibrationRun, line, spin, umbmark_square
+from omnikin.motion.plans import CalibrationRun, line, spin, umbmark_square
 from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel, SystematicErrors, WheelErrors
 from omnikin.simulation.simulate import simulate
 
 EXACT = NoiseModel(quantise=False)
 SIGMA = (0.001, math.radians(0.2))
 DIFF_TRACK = 0.33
-
-
-@pytest.fixture(scope="module")
-def tomasi():
-    return load_robot("tomasi-omni3")
 
 
 @pytest.fixture(scope="module")
@@ -415,7 +410,7 @@ def simulate_refusal(plan, robot):
 )
 def test_calibrate_refuses_a_run_the_robot_cannot_drive_naming_it(robot_name, path, wheel):
     from omnikin.errors import InfeasibleRunError
-    from omnikin.plans import parse_plan
+    from omnikin.motion.plans import parse_plan
 
     robot = load_robot(robot_name)
     good = CalibrationRun(line(4.0), (4.0, 0.0, 0.0), "line 4")
@@ -455,7 +450,7 @@ def test_calibrate_names_the_file_line_of_an_infeasible_run(tmp_path):
     ],
 )
 def test_recommended_runs_are_drivable_and_read_back_from_their_text(name):
-    from omnikin.plans import parse_plan
+    from omnikin.motion.plans import parse_plan
 
     robot = load_robot(name)
     runs = recommended_runs(robot, 2.5)
@@ -519,7 +514,7 @@ def test_budget_estimate_counts_what_a_trial_really_simulates():
     estimate grows by at least that many sampled steps (from the sampler itself) and by little
     more (the estimator bounds each segment from above by at most one sample)."""
     from omnikin.evaluation.procedure import estimate_cost
-    from omnikin.simulation.motion import sample_plan
+    from omnikin.motion.timing import sample_plan
 
     robot = load_robot("tomasi-omni3")
     for rate, runs in ((20.0, 3), (100.0, 5)):

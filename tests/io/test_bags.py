@@ -359,8 +359,8 @@ def test_steerable_robot_reads_steer_joints(tmp_path):
 def test_simulate_records_four_topics(tmp_path, capsys):
     """An arc without errors or noise: ground truth and odometry are the plan's closed form
     exp(s_k xi); joint states are the IK of it; cmd_vel the commanded twists."""
-    from omnikin.plans import arc
-    from omnikin.simulation.motion import sample_plan
+    from omnikin.motion.plans import arc
+    from omnikin.motion.timing import sample_plan
 
     out = tmp_path / "sim.bag"
     assert (

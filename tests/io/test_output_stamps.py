@@ -1,5 +1,5 @@
 """Outputs refuse stamps they cannot hold, whoever writes them: a simulated run recorded to a bag
-(ROS 2 times from 0 to 2**31 - 1 s, omnikin.simulation.motion.check_start) and a tick log
+(ROS 2 times from 0 to 2**31 - 1 s, omnikin.motion.timing.check_start) and a tick log
 whose times, as written and read back, must increase (the odometry refuses any other log)."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import pytest
 from omnikin import load_robot
 from omnikin.errors import InputError
 from omnikin.io.logs import write_tick_log
-from omnikin.plans import line
+from omnikin.motion.plans import line
 from omnikin.simulation.error_models import NoiseModel
 from omnikin.simulation.simulate import simulate
 

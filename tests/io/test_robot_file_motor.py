@@ -9,7 +9,7 @@ import pytest
 
 from omnikin.errors import InputError, RobotFileError
 from omnikin.io.robot_file import load_robot, robot_to_dict, save_robot
-from omnikin.model import wheel_set_problem
+from omnikin.kinematics.robot import wheel_set_problem
 
 
 def robot_yaml(w2_extra: str = "", w2_encoder: bool = True, castor: str = "") -> str:

@@ -16,7 +16,7 @@ import pytest
 from omnikin import PRESET_NAMES
 from omnikin.errors import RobotFileError
 from omnikin.io.robot_file import load_robot, robot_to_dict, save_robot
-from omnikin.physical import PhysicalBody, PhysicalWheel
+from omnikin.kinematics.physical import PhysicalBody, PhysicalWheel
 
 WHEEL_KEYS = "['friction', 'mass', 'max_torque', 'rollers', 'rows', 'width']"
 BODY_KEYS = "['com', 'height', 'mass']"

@@ -16,7 +16,7 @@ from omnikin.io.runs import (
     read_umbmark_measurements,
     umbmark_measurements_text,
 )
-from omnikin.plans import CalibrationRun, parse_plan
+from omnikin.motion.plans import CalibrationRun, parse_plan
 
 
 def runs_with(headings):

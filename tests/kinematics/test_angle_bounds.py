@@ -13,7 +13,7 @@ import pytest
 
 from conftest import run_entry_point
 from omnikin import InputError, load_robot
-from omnikin.geometry import MAX_ANGLE
+from omnikin.kinematics.se2 import MAX_ANGLE
 
 LIMIT = math.radians(35.0)  # ackermann: both front wheels steer within -35 .. 35 deg
 
@@ -21,11 +21,6 @@ LIMIT = math.radians(35.0)  # ackermann: both front wheels steer within -35 .. 3
 @pytest.fixture(scope="module")
 def ackermann():
     return load_robot("ackermann")
-
-
-@pytest.fixture(scope="module")
-def tomasi():
-    return load_robot("tomasi-omni3")
 
 
 @pytest.mark.parametrize("heading", [1e308, -1e308, MAX_ANGLE * (1 + 1e-12), 1e20])
@@ -152,13 +147,13 @@ def test_steering_limits_are_public_in_radians_and_read_only(ackermann):
 
 def test_no_module_reaches_into_the_private_members_of_a_robot():
     """Other modules use Robot's public interface: no ``robot._steer_limits`` (whose caching or
-    meaning may change with the model) outside omnikin/model.py."""
+    meaning may change with the model) outside omnikin/kinematics/robot.py."""
     import ast
 
     from conftest import SRC
 
     package = Path(SRC) / "omnikin"
-    model = ast.parse((package / "model.py").read_text(encoding="utf-8"))
+    model = ast.parse((package / "kinematics" / "robot.py").read_text(encoding="utf-8"))
     robot = next(n for n in model.body if isinstance(n, ast.ClassDef) and n.name == "Robot")
     private = {
         name
@@ -176,7 +171,7 @@ def test_no_module_reaches_into_the_private_members_of_a_robot():
     reached = [
         f"{path.relative_to(package)}:{n.lineno}: {ast.unparse(n)}"
         for path in sorted(package.rglob("*.py"))
-        if path != package / "model.py"
+        if path != package / "kinematics" / "robot.py"
         for n in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
         if isinstance(n, ast.Attribute)
         and n.attr in private

@@ -1,4 +1,4 @@
-"""SE(2) group axioms and closed forms for omnikin.geometry (property tests)."""
+"""SE(2) group axioms and closed forms for omnikin.kinematics.se2 (property tests)."""
 
 import math
 
@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from omnikin import geometry as g
 from omnikin.errors import OmnikinError
+from omnikin.kinematics import se2 as g
 
 coord = st.floats(-50, 50, allow_nan=False)
 angle = st.floats(-math.pi, math.pi, exclude_max=True, allow_nan=False)

@@ -8,7 +8,7 @@ import pytest
 
 from conftest import omni_robot
 from omnikin import PRESET_NAMES, Robot, SingularLayoutError, Steer, Wheel, load_robot
-from omnikin.mobility import CONDITION_WARNING
+from omnikin.kinematics.mobility import CONDITION_WARNING
 
 CASTOR = dict(steer=Steer(offset=0.03))
 
@@ -154,7 +154,7 @@ SKEWED = (
 
 def skewed_condition_by_hand() -> float:
     """Rows (cos d, sin d, x sin d - y cos d) / r typed in; not isotropic (J^T J has unequal translational
-    diagonal), so the rotation is scaled by the RMS wheel distance L (omnikin.mobility docstring)."""
+    diagonal), so the rotation is scaled by the RMS wheel distance L (omnikin.kinematics.mobility docstring)."""
     r = 0.05
     d = math.radians(10)
     jac = np.array([[1, 0, -0.1], [1, 0, 0.1], [math.cos(d), math.sin(d), -0.2 * math.sin(d)]]) / r

@@ -71,7 +71,7 @@ def test_fk_matrix_accepts_any_iterable_of_wheel_names():
 
 
 def test_zero_wheel_limit_with_zero_twist_is_not_nan():
-    from omnikin.limits import MotionLimits, saturate, speed_scale
+    from omnikin.motion.limits import MotionLimits, saturate, speed_scale
 
     wheels = tuple(
         Wheel(

@@ -1,7 +1,7 @@
-"""Physical fields of the core types (omnikin.physical, Wheel.physical, Robot.physical).
+"""Physical fields of the core types (omnikin.kinematics.physical, Wheel.physical, Robot.physical).
 
 The ranges are those of docs/conventions.md, "Physical fields", typed in here; the range checks
-are one helper (omnikin._arrays.range_problem / whole_problem) shared with every other parameter,
+are one helper (omnikin.common.arrays.range_problem / whole_problem) shared with every other parameter,
 so a wheel's radius and a wheel's width refuse the same kinds of value in the same words.
 """
 
@@ -15,7 +15,7 @@ import pytest
 
 from omnikin import Encoder, Robot, Wheel
 from omnikin.errors import InputError
-from omnikin.physical import PhysicalBody, PhysicalWheel
+from omnikin.kinematics.physical import PhysicalBody, PhysicalWheel
 
 
 def omni(name, angle_deg, physical=None, kind="omni", **extra):
@@ -135,7 +135,7 @@ def test_a_centre_of_mass_from_any_ordered_container_is_kept_in_order():
 
 @pytest.mark.parametrize("kind", ["standard", "steerable", "castor"])
 def test_rollers_only_on_swedish_wheels(kind):
-    from omnikin.wheels import Steer
+    from omnikin.kinematics.wheels import Steer
 
     steer = Steer(offset=0.02) if kind == "castor" else None
     for field in ("rollers", "rows"):
@@ -147,7 +147,7 @@ def test_rollers_only_on_swedish_wheels(kind):
 
 
 def test_a_castor_has_no_motor_torque():
-    from omnikin.wheels import Steer
+    from omnikin.kinematics.wheels import Steer
 
     with pytest.raises(InputError, match=r"^wheel 'c': a castor is passive: it has no motor \(physical\.max_torque\)$"):
         Wheel("c", "castor", -0.2, 0.0, 0.0, 0.03, steer=Steer(offset=0.02), physical=PhysicalWheel(max_torque=1.0))

@@ -18,14 +18,14 @@ from hypothesis import strategies as st
 
 import omnikin
 from omnikin import InputError, RobotFileError, load_robot
-from omnikin.geometry import MAX_ANGLE
-from omnikin.integration import check_start
-from omnikin.limits import MotionLimits
-from omnikin.messages import digits_apart
-from omnikin.model import heading_array
-from omnikin.physical import PhysicalBody, PhysicalWheel
+from omnikin.common.messages import digits_apart
+from omnikin.kinematics.physical import PhysicalBody, PhysicalWheel
+from omnikin.kinematics.robot import heading_array
+from omnikin.kinematics.se2 import MAX_ANGLE
+from omnikin.kinematics.wheels import Steer
+from omnikin.motion.limits import MotionLimits
+from omnikin.odometry.integration import check_start
 from omnikin.runtime.command import CommandFilter
-from omnikin.wheels import Steer
 
 RANGE = re.compile(r"must lie in \[(\S+), (\S+)\](?: [^,]*)?, got (\S+)$")
 

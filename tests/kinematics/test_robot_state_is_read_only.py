@@ -3,7 +3,7 @@
 Robot.steer_limits, jacobian() and fk_matrix() returned arrays that owned their data, flagged
 read-only: ``setflags(write=True)`` made them writeable again, and writing one changed every
 later result of the robot. They are now read-only for good (their data in immutable bytes:
-omnikin._arrays.frozen), or fresh copies where a robot computes them anew (steered robots).
+omnikin.common.arrays.frozen), or fresh copies where a robot computes them anew (steered robots).
 Expected results come from a second robot loaded from the same file, which nothing touched.
 """
 

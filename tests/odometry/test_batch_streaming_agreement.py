@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from omnikin import Odometry, batch_odometry, batch_odometry_from_angles, load_robot
-from omnikin.streaming import _decline
+from omnikin.odometry.streaming import _decline
 
 PLAIN = ["tomasi-omni3", "diff-drive", "mecanum4", "omni4"]
 STEERED = ["ackermann", "xr4000", "synchro"]

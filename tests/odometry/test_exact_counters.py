@@ -43,11 +43,6 @@ TOMASI_R = 0.04125
 RIM_RATE = 50.0 / TOMASI_R / TOMASI_RPT  # ticks/s at the default 50 m/s rim-speed bound
 
 
-@pytest.fixture(scope="module")
-def tom():
-    return load_robot("tomasi-omni3")
-
-
 def stream(robot, t, rows, **kw):
     o = Odometry(robot, **kw)
     return o, np.array([o.update(t[k], rows[k]) for k in range(len(t))], dtype=float)
@@ -78,10 +73,10 @@ def test_readings_beyond_2_53_are_not_rounded(capsys, tmp_path):
     assert parsed.ticks.dtype == np.int64 and int(parsed.ticks[1, 0]) == base + 11
 
 
-def test_uint64_log_is_kept_unsigned_and_exact(tom, tmp_path):
+def test_uint64_log_is_kept_unsigned_and_exact(tomasi, tmp_path):
     top = 2**64 - 1
     log = write_log(tmp_path / "log.csv", H, [[0.0, top - 3, 0, 0], [0.1, top, 0, 0]])
-    parsed = read_tick_log(log, tom)
+    parsed = read_tick_log(log, tomasi)
     assert parsed.ticks.dtype == np.uint64 and int(parsed.ticks[1, 0]) == top
 
 
@@ -123,14 +118,14 @@ INT_DTYPES = [np.int8, np.int16, np.int32, np.int64, np.uint8, np.uint16, np.uin
 
 
 @pytest.mark.parametrize("dtype", INT_DTYPES)
-def test_counter_range_checked_for_every_integer_dtype(tom, dtype):
+def test_counter_range_checked_for_every_integer_dtype(tomasi, dtype):
     """A reading of 20 does not fit a 4-bit counter (-8 .. 15), whatever the array's type."""
     tk = np.array([[0, 0, 0], [5, 0, 0], [10, 0, 0], [20, 0, 0]], dtype=dtype)
     t = [0.0, 1.0, 2.0, 3.0]
     with pytest.raises(OdometryInputError, match="4-bit counter") as batch_err:
-        batch_odometry(tom, t, tk, counter_bits=4)
+        batch_odometry(tomasi, t, tk, counter_bits=4)
     assert batch_err.value.sample == 3
-    o = Odometry(tom, counter_bits=4)
+    o = Odometry(tomasi, counter_bits=4)
     for k in range(3):
         o.update(t[k], tk[k])
     before = o.pose
@@ -140,16 +135,16 @@ def test_counter_range_checked_for_every_integer_dtype(tom, dtype):
 
 
 @pytest.mark.parametrize("dtype", INT_DTYPES)
-def test_every_integer_dtype_integrates_like_python_ints(tom, dtype):
+def test_every_integer_dtype_integrates_like_python_ints(tomasi, dtype):
     start = 60 if np.dtype(dtype).kind == "u" else -60
     tk = np.array([[start, 5, 9], [start + 40, 20, 9], [start + 50, 30, 2]], dtype=dtype)
     expected = tomasi_poses([[40, 15, 0], [10, 10, -7]])
     t = [0.0, 0.1, 0.2]
-    assert_poses_close(batch_odometry(tom, t, tk).poses, expected)
+    assert_poses_close(batch_odometry(tomasi, t, tk).poses, expected)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no overflow warning from NumPy scalar arithmetic
-        assert_poses_close(stream(tom, t, list(tk))[1], expected)  # NumPy rows
-        assert_poses_close(stream(tom, t, [list(r) for r in tk])[1], expected)  # lists of NumPy scalars
+        assert_poses_close(stream(tomasi, t, list(tk))[1], expected)  # NumPy rows
+        assert_poses_close(stream(tomasi, t, [list(r) for r in tk])[1], expected)  # lists of NumPy scalars
 
 
 @given(
@@ -164,7 +159,7 @@ def test_any_counter_representation_integrates_the_true_increments(increments, b
     streaming both give the closed form of the true increments. Samples 0.1 s apart: arbitrary
     increments of up to 100 ticks change the speed by less than the default change-of-speed bound
     (30 m/s^2 at the rim: 694 ticks between two 0.1 s intervals)."""
-    tom = load_robot("tomasi-omni3")
+    tomasi = load_robot("tomasi-omni3")
     true = np.cumsum([[0, 0, 0]] + increments, axis=0, dtype=object) + offset
     readings = true % (1 << bits) if bits else true
     rows = [[int(v) for v in r] for r in readings]
@@ -172,59 +167,59 @@ def test_any_counter_representation_integrates_the_true_increments(increments, b
         rows = np.array(rows, dtype=np.uint64)
     t = [0.1 * k for k in range(len(rows))]
     expected = tomasi_poses(increments)
-    assert_poses_close(batch_odometry(tom, t, rows, counter_bits=bits).poses, expected, atol=1e-9)
-    assert_poses_close(stream(tom, t, list(rows), counter_bits=bits)[1], expected, atol=1e-9)
+    assert_poses_close(batch_odometry(tomasi, t, rows, counter_bits=bits).poses, expected, atol=1e-9)
+    assert_poses_close(stream(tomasi, t, list(rows), counter_bits=bits)[1], expected, atol=1e-9)
 
 
-def test_uint64_beyond_int64_does_not_wrap_through_int64(tom):
+def test_uint64_beyond_int64_does_not_wrap_through_int64(tomasi):
     """Without a counter width, 0 -> 2**64 - 1 is a jump of 2**64 - 1 ticks (refused), not -1."""
     tk = np.array([[0, 0, 0], [2**64 - 1, 0, 0]], dtype=np.uint64)
     with pytest.raises(OdometryInputError, match="impossible jump of 18446744073709551615 ticks"):
-        batch_odometry(tom, [0.0, 0.1], tk)
-    o = Odometry(tom)
+        batch_odometry(tomasi, [0.0, 0.1], tk)
+    o = Odometry(tomasi)
     o.update(0.0, tk[0])
     with pytest.raises(OdometryInputError, match="impossible jump of 18446744073709551615 ticks"):
         o.update(0.1, tk[1])
     # on a 64-bit counter the same readings are -1 tick
     expected = tomasi_poses([[-1, 0, 0]])
-    assert_poses_close(batch_odometry(tom, [0.0, 0.1], tk, counter_bits=64).poses, expected)
-    assert_poses_close(stream(tom, [0.0, 0.1], list(tk), counter_bits=64)[1], expected)
+    assert_poses_close(batch_odometry(tomasi, [0.0, 0.1], tk, counter_bits=64).poses, expected)
+    assert_poses_close(stream(tomasi, [0.0, 0.1], list(tk), counter_bits=64)[1], expected)
 
 
-def test_int64_extremes_without_width_are_a_jump_not_a_wrap(tom):
+def test_int64_extremes_without_width_are_a_jump_not_a_wrap(tomasi):
     tk = np.array([[-(2**63), 0, 0], [2**63 - 1, 0, 0]], dtype=np.int64)
     with pytest.raises(OdometryInputError, match="impossible jump of 18446744073709551615 ticks"):
-        batch_odometry(tom, [0.0, 0.1], tk)
+        batch_odometry(tomasi, [0.0, 0.1], tk)
 
 
-def test_python_lists_of_huge_ints_stay_exact(tom):
+def test_python_lists_of_huge_ints_stay_exact(tomasi):
     """np.asarray would make these float64 (rounded); the increments must stay +11 and -4."""
     rows = [[18446744073709551610, 2**63 + 3, 1], [18446744073709551610 + 5, 2**63 - 1, 1]]
     expected = tomasi_poses([[5, -4, 0]])
-    assert_poses_close(batch_odometry(tom, [0.0, 0.1], rows).poses, expected)
+    assert_poses_close(batch_odometry(tomasi, [0.0, 0.1], rows).poses, expected)
     big = [[10**30, -(10**30), 0], [10**30 + 5, -(10**30) - 4, 0]]  # beyond 64 bits
-    assert_poses_close(batch_odometry(tom, [0.0, 0.1], big).poses, expected)
-    assert_poses_close(stream(tom, [0.0, 0.1], big)[1], expected)
+    assert_poses_close(batch_odometry(tomasi, [0.0, 0.1], big).poses, expected)
+    assert_poses_close(stream(tomasi, [0.0, 0.1], big)[1], expected)
     # floats among integers beyond 2**53: every reading as the exact number it is (+3, +1.5, 0)
     mixed = [[2**60, 0.5, 0], [2**60 + 3, 2.0, 0]]
-    assert_poses_close(batch_odometry(tom, [0.0, 0.1], mixed).poses, tomasi_poses([[3, 1.5, 0]]))
+    assert_poses_close(batch_odometry(tomasi, [0.0, 0.1], mixed).poses, tomasi_poses([[3, 1.5, 0]]))
 
 
-def test_streaming_python_and_numpy_scalars_of_64_bit_counter(tom):
+def test_streaming_python_and_numpy_scalars_of_64_bit_counter(tomasi):
     expected = tomasi_poses([[11, 0, 0]])
     for first, second in (
         (18446744073709551610, 5),
         (np.uint64(18446744073709551610), np.uint64(5)),
         (-6, np.int64(5)),
     ):
-        assert_poses_close(stream(tom, [0.0, 0.1], [[first, 0, 0], [second, 0, 0]], counter_bits=64)[1], expected)
+        assert_poses_close(stream(tomasi, [0.0, 0.1], [[first, 0, 0], [second, 0, 0]], counter_bits=64)[1], expected)
 
 
-def test_numpy_inputs_take_the_generated_kernel(tom):
+def test_numpy_inputs_take_the_generated_kernel(tomasi):
     """NumPy rows, NumPy scalars, np.float64 times and wheel angles are handled by the kernel itself,
     not the (slow) general path: calling it directly gives a new state (from the third sample on:
     the second has no previous speed for the change-of-speed test and takes the general path)."""
-    o = Odometry(tom)
+    o = Odometry(tomasi)
     o.update(0.0, [0, 0, 0])
     o.update(0.1, [3, 4, 5])
     for t, row in (
@@ -234,21 +229,21 @@ def test_numpy_inputs_take_the_generated_kernel(tom):
         (1, np.array([6, 8, 10], dtype=np.uint16)),
     ):
         assert o._step_ticks(o._state, t, row) is not None, (t, row)
-    a = Odometry(tom)
+    a = Odometry(tomasi)
     a.update_angles(0.0, [0.0, 0.0, 0.0])
     for row in ([0.1, 0.2, 0.3], np.array([0.1, 0.2, 0.3]), [np.float32(0.1), 0, np.float64(0.3)]):
         assert a._step_angles(a._state, 0.1, row) is not None
 
 
-def test_readings_from_an_iterator_are_read_once(tom):
-    o = Odometry(tom)
+def test_readings_from_an_iterator_are_read_once(tomasi):
+    o = Odometry(tomasi)
     o.update(0.0, iter([0, 0, 0]))
     pose = o.update(0.1, (v for v in [11, -5, 3]))
     assert_poses_close([pose], tomasi_poses([[11, -5, 3]])[1:])
 
 
-def test_bools_and_floats_in_numpy_rows_are_not_ticks(tom):
-    o = Odometry(tom, counter_bits=16)
+def test_bools_and_floats_in_numpy_rows_are_not_ticks(tomasi):
+    o = Odometry(tomasi, counter_bits=16)
     o.update(0.0, [0, 0, 0])
     with pytest.raises(OdometryInputError, match="bool"):
         o.update(0.1, np.array([True, False, True]))
@@ -266,12 +261,12 @@ def wrapped_16_bit(n=30, per_sample=(3000, -2000, 1000)):
     return np.arange(n + 1) * 0.1, true % 65536, [per_sample] * n
 
 
-def test_wrapped_log_without_width_refused_with_hint(tom):
+def test_wrapped_log_without_width_refused_with_hint(tomasi):
     t, wrapped, _ = wrapped_16_bit()
     with pytest.raises(OdometryInputError, match=r"counter_bits, --counter-bits or encoder\.counter_bits") as exc:
-        batch_odometry(tom, t, wrapped)
+        batch_odometry(tomasi, t, wrapped)
     assert "\n" not in str(exc.value)
-    o = Odometry(tom)
+    o = Odometry(tomasi)
     with pytest.raises(OdometryInputError, match="counter width"):
         for k in range(len(t)):
             o.update(t[k], [int(v) for v in wrapped[k]])
@@ -333,49 +328,49 @@ def test_robot_file_counter_bits_round_trip(tmp_path):
     assert "counter_bits" not in robot_to_dict(load_robot("tomasi-omni3"))["wheels"][0]["encoder"]
 
 
-def test_default_bound_is_50_m_s_at_the_rim(tom):
+def test_default_bound_is_50_m_s_at_the_rim(tomasi):
     """Largest accepted jump over dt: 50 m/s / r / rad_per_tick * dt + 2 ticks, in batch and
     streaming alike (the streaming kernel leaves a sample that close to the limit to the exact rule)."""
     dt = 0.01
     limit = RIM_RATE * dt + 2.0
     ok, bad = math.floor(limit), math.floor(limit) + 1
     assert ok <= limit < bad
-    assert_poses_close(batch_odometry(tom, [0.0, dt], [[0, 0, 0], [ok, 0, 0]]).poses, tomasi_poses([[ok, 0, 0]]))
-    assert_poses_close(stream(tom, [0.0, dt], [[0, 0, 0], [0, -ok, 0]])[1], tomasi_poses([[0, -ok, 0]]))
+    assert_poses_close(batch_odometry(tomasi, [0.0, dt], [[0, 0, 0], [ok, 0, 0]]).poses, tomasi_poses([[ok, 0, 0]]))
+    assert_poses_close(stream(tomasi, [0.0, dt], [[0, 0, 0], [0, -ok, 0]])[1], tomasi_poses([[0, -ok, 0]]))
     with pytest.raises(OdometryInputError, match=f"impossible jump of {bad} ticks"):
-        batch_odometry(tom, [0.0, dt], [[0, 0, 0], [bad, 0, 0]])
+        batch_odometry(tomasi, [0.0, dt], [[0, 0, 0], [bad, 0, 0]])
     with pytest.raises(OdometryInputError, match=f"impossible jump of -{bad} ticks"):
-        stream(tom, [0.0, dt], [[0, 0, 0], [0, 0, -bad]])
+        stream(tomasi, [0.0, dt], [[0, 0, 0], [0, 0, -bad]])
 
 
-def test_max_wheel_speed_sets_the_bound(tom, tmp_path, capsys):
+def test_max_wheel_speed_sets_the_bound(tomasi, tmp_path, capsys):
     """max_wheel_speed 10 rad/s: 1.5 x 10 / rad_per_tick x 0.1 s + 2 = 145.2 ticks in 0.1 s."""
     limit = 1.5 * 10.0 / TOMASI_RPT * 0.1 + 2.0
     assert 145 < limit < 146
     rows, t = [[0, 0, 0], [146, 0, 0]], [0.0, 0.1]
     for run in (
-        lambda: batch_odometry(tom, t, rows, max_wheel_speed=10.0),
-        lambda: stream(tom, t, rows, max_wheel_speed=10.0),
+        lambda: batch_odometry(tomasi, t, rows, max_wheel_speed=10.0),
+        lambda: stream(tomasi, t, rows, max_wheel_speed=10.0),
     ):
         with pytest.raises(OdometryInputError, match="max_wheel_speed"):
             run()
     assert_poses_close(
-        batch_odometry(tom, t, [[0, 0, 0], [145, 0, 0]], max_wheel_speed=10.0).poses, tomasi_poses([[145, 0, 0]])
+        batch_odometry(tomasi, t, [[0, 0, 0], [145, 0, 0]], max_wheel_speed=10.0).poses, tomasi_poses([[145, 0, 0]])
     )
     log = write_log(tmp_path / "log.csv", H, [[0.0, 0, 0, 0], [0.1, 146, 0, 0]])
     rc, _, err = cli(capsys, "odometry", "tomasi-omni3", log, "-o", tmp_path / "o.csv", "--max-wheel-speed", 10)
     assert "line 3" in one_line_error(rc, err)
     for bad in (0.0, -1.0, math.inf, math.nan):
         with pytest.raises(OdometryInputError, match="max_wheel_speed"):
-            Odometry(tom, max_wheel_speed=bad)
+            Odometry(tomasi, max_wheel_speed=bad)
 
 
-def test_wheel_angles_have_the_same_physical_bound(tom):
+def test_wheel_angles_have_the_same_physical_bound(tomasi):
     bound_rad = 50.0 / TOMASI_R * 0.1 + 2.0 * TOMASI_RPT  # 0.1 s
     rows = [[0.0, 0.0, 0.0], [bound_rad * 1.01, 0.0, 0.0]]
     with pytest.raises(OdometryInputError, match="impossible jump .* rad"):
-        batch_odometry_from_angles(tom, [0.0, 0.1], rows)
-    o = Odometry(tom)
+        batch_odometry_from_angles(tomasi, [0.0, 0.1], rows)
+    o = Odometry(tomasi)
     o.update_angles(0.0, rows[0])
     with pytest.raises(OdometryInputError, match="impossible jump .* rad"):
         o.update_angles(0.1, rows[1])
@@ -396,9 +391,9 @@ def drive(o, ks, bits=None):
 
 
 @pytest.mark.parametrize("kw", [{}, {"counter_bits": 8}, {"method": "euler"}], ids=["plain", "8-bit", "euler"])
-def test_deepcopy_gives_an_independent_estimator(tom, kw):
+def test_deepcopy_gives_an_independent_estimator(tomasi, kw):
     bits = kw.get("counter_bits")
-    o = Odometry(tom, **kw)
+    o = Odometry(tomasi, **kw)
     drive(o, range(20), bits)
     pose = o.pose
     c = copy.deepcopy(o)
@@ -406,12 +401,12 @@ def test_deepcopy_gives_an_independent_estimator(tom, kw):
     assert o.pose == pose and o.samples == 20  # the copy moved, the original did not
     drive(o, range(20, 40), bits)
     assert o.pose == c.pose and o.samples == c.samples == 40  # and both continue identically
-    ref = Odometry(tom, **kw)
+    ref = Odometry(tomasi, **kw)
     assert drive(ref, range(40), bits) == o.pose
 
 
-def test_pickle_round_trip_continues_identically(tom):
-    o = Odometry(tom, counter_bits=16)
+def test_pickle_round_trip_continues_identically(tomasi):
+    o = Odometry(tomasi, counter_bits=16)
     drive(o, range(25), 16)
     p = pickle.loads(pickle.dumps(o))
     assert p.pose == o.pose and p.t == o.t and p.samples == o.samples
@@ -429,14 +424,14 @@ def test_pickle_of_a_steerable_estimator(tmp_path):
     assert p.residual == o.residual
 
 
-def test_update_is_a_method_not_an_instance_closure(tom):
-    o = Odometry(tom)
+def test_update_is_a_method_not_an_instance_closure(tomasi):
+    o = Odometry(tomasi)
     assert "update" not in vars(o) and "update_angles" not in vars(o)
     assert Odometry.update.__qualname__ == "Odometry.update"
 
 
-def test_generated_kernel_lines_appear_in_tracebacks(tom):
-    step = Odometry(tom)._step_ticks
+def test_generated_kernel_lines_appear_in_tracebacks(tomasi):
+    step = Odometry(tomasi)._step_ticks
     filename = step.__code__.co_filename
     assert linecache.getline(filename, step.__code__.co_firstlineno).startswith("def step_ticks(")
     try:
@@ -466,8 +461,8 @@ def bad_samples():
 
 
 @pytest.mark.parametrize("bits", [None, 16])
-def test_a_failed_update_changes_nothing(tom, bits):
-    o = Odometry(tom, counter_bits=bits)
+def test_a_failed_update_changes_nothing(tomasi, bits):
+    o = Odometry(tomasi, counter_bits=bits)
     drive(o, range(31), bits)
     before = pickle.dumps(o.__getstate__())
     for t, row in bad_samples():
@@ -478,8 +473,8 @@ def test_a_failed_update_changes_nothing(tom, bits):
         assert pickle.dumps(o.__getstate__()) == before, (t, row)
 
 
-def test_ticks_and_angles_are_not_mixed(tom):
-    o = Odometry(tom)
+def test_ticks_and_angles_are_not_mixed(tomasi):
+    o = Odometry(tomasi)
     o.update(0.0, [0, 0, 0])
     with pytest.raises(InputError, match="reset"):
         o.update_angles(0.1, [0.0, 0.0, 0.0])
@@ -498,18 +493,18 @@ def test_update_angles_works_with_counter_widths(tmp_path):
     assert_poses_close([pose], tomasi_poses([[11, 0, 0]])[1:])
 
 
-def test_errors_carry_the_sample(tom):
+def test_errors_carry_the_sample(tomasi):
     with pytest.raises(OdometryInputError) as exc:
-        batch_odometry(tom, [0.0, 0.1, 0.05], np.zeros((3, 3), int))
+        batch_odometry(tomasi, [0.0, 0.1, 0.05], np.zeros((3, 3), int))
     assert exc.value.sample == 2 and "sample" not in exc.value.detail
-    o = Odometry(tom)
+    o = Odometry(tomasi)
     o.update(0.0, [0, 0, 0])
     with pytest.raises(OdometryInputError) as exc:
         o.update(0.1, [10**6, 0, 0])
     assert exc.value.sample == 1 and exc.value.detail.startswith("impossible jump")
 
 
-def test_batch_does_not_copy_int64_ticks(tom):
+def test_batch_does_not_copy_int64_ticks(tomasi):
     """Peak memory of batch odometry on int64 ticks stays below the arrays it returns (poses,
     increments; the residual of a square layout takes none) plus a fraction of its input: no
     full-size copy or temporary of the readings."""
@@ -517,9 +512,9 @@ def test_batch_does_not_copy_int64_ticks(tom):
     ticks = np.zeros((n, 3), dtype=np.int64)
     ticks[:, 0] = np.arange(n)
     t = np.arange(n) * 0.01
-    batch_odometry(tom, t[:10], ticks[:10])  # imports and caches outside the measurement
+    batch_odometry(tomasi, t[:10], ticks[:10])  # imports and caches outside the measurement
     tracemalloc.start()
-    res = batch_odometry(tom, t, ticks)
+    res = batch_odometry(tomasi, t, ticks)
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     returned = res.poses.nbytes + res.increments.nbytes
@@ -530,14 +525,14 @@ def test_batch_does_not_copy_int64_ticks(tom):
 # =====================================================================================================
 # 5. tick logs out: write_tick_log, simulate --log, the shipped example
 # =====================================================================================================
-def test_write_tick_log_round_trip_is_exact(tom, tmp_path):
+def test_write_tick_log_round_trip_is_exact(tomasi, tmp_path):
     t = np.array([0.0, 0.01, 0.02])
     ticks = np.array([[2**64 - 2, 5, 0], [1, 6, 0], [4, 7, 1]], dtype=np.uint64)
     path = tmp_path / "log.csv"
-    write_tick_log(path, t, ticks, tom.encoded_names, comment="made by a test")
+    write_tick_log(path, t, ticks, tomasi.encoded_names, comment="made by a test")
     text = path.read_text(encoding="utf-8").splitlines()
     assert text[0] == "# made by a test" and text[1] == "t,w1,w2,w3" and text[2].endswith(",18446744073709551614,5,0")
-    log = read_tick_log(path, tom)
+    log = read_tick_log(path, tomasi)
     assert log.ticks.tolist() == ticks.tolist() and log.t.tolist() == t.tolist()
 
 
@@ -550,9 +545,9 @@ def test_write_tick_log_with_steering(tmp_path):
     np.testing.assert_allclose(log.steer, steer, atol=1e-12)
 
 
-def test_write_tick_log_refuses_fractional_ticks(tom, tmp_path):
+def test_write_tick_log_refuses_fractional_ticks(tomasi, tmp_path):
     with pytest.raises(InputError, match="whole-number"):
-        write_tick_log(tmp_path / "x.csv", [0.0, 0.1], [[0.5, 0, 0], [1, 0, 0]], tom.encoded_names)
+        write_tick_log(tmp_path / "x.csv", [0.0, 0.1], [[0.5, 0, 0], [1, 0, 0]], tomasi.encoded_names)
     assert not (tmp_path / "x.csv").exists()
 
 
@@ -652,12 +647,12 @@ def test_cli_names_the_file_line_of_a_bad_sample(capsys, tmp_path):
     assert f"{log}: line 8: impossible jump of 8995 ticks" in line and "sample" not in line
 
 
-def test_batch_results_do_not_change_when_the_input_changes_afterwards(tom):
+def test_batch_results_do_not_change_when_the_input_changes_afterwards(tomasi):
     """The result is computed at the call: mutating the caller's ticks later changes nothing
     (the readings are not copied, so nothing may be read from them lazily)."""
     t = np.arange(50) * 0.01
     ticks = np.cumsum(np.tile(np.array([4, -2, -2], dtype=np.int64), (50, 1)), axis=0)
-    res = batch_odometry(tom, t, ticks)
+    res = batch_odometry(tomasi, t, ticks)
     before = (res.increments.copy(), res.twists.copy(), np.array(res.residual))
     ticks[:] = 0
     np.testing.assert_array_equal(res.increments, before[0])

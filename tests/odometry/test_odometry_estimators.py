@@ -9,9 +9,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from conftest import constant_twist_pose
-from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, geometry, load_robot
+from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot, se2
 from omnikin.errors import OmnikinError
-from omnikin.integration import integrate
+from omnikin.odometry.integration import integrate
 
 RAD_PER_TICK = 2 * math.pi / 600  # tomasi-omni3 encoders
 
@@ -28,9 +28,9 @@ def tomasi_angles(twist, t):
 def test_exact_integration_composes_for_constant_twist(xi, n):
     """n equal increments reach exp(n xi): the group property exp(a) exp(a) = exp(2a)."""
     poses = integrate(np.tile(xi, (n, 1)))
-    expected = geometry.exp(n * np.array(xi))
+    expected = se2.exp(n * np.array(xi))
     np.testing.assert_allclose(poses[-1, :2], expected[:2], atol=1e-9 * n)
-    assert geometry.wrap_angle(poses[-1, 2] - expected[2]) == pytest.approx(0.0, abs=1e-9 * n)
+    assert se2.wrap_angle(poses[-1, 2] - expected[2]) == pytest.approx(0.0, abs=1e-9 * n)
 
 
 @pytest.mark.parametrize("rate", [1.0, 10.0, 100.0])

@@ -10,7 +10,7 @@ import pickle
 import pytest
 
 from omnikin import InputError, Odometry
-from omnikin.streaming import STATE_FORMAT
+from omnikin.odometry.streaming import STATE_FORMAT
 from support.tomasi import assert_poses_close, tomasi_poses
 
 

@@ -34,16 +34,6 @@ def stream(robot, t, ticks, steer=None, **kw):
     return o, np.array(poses, dtype=float)
 
 
-@pytest.fixture(scope="module")
-def tom():
-    return load_robot("tomasi-omni3")
-
-
-@pytest.fixture(scope="module")
-def syn():
-    return load_robot("synchro")
-
-
 T3 = [0.0, 0.01, 0.02]
 
 
@@ -96,59 +86,59 @@ def dd_side_robot():
 
 
 @pytest.mark.parametrize("dtype, bits", [(np.int32, 32), (np.int16, 16), (np.int64, 32), (np.int64, None)])
-def test_narrow_int_readings_batch_and_stream(tom, dtype, bits):
+def test_narrow_int_readings_batch_and_stream(tomasi, dtype, bits):
     expected = tomasi_poses(INC)
     tk = np.array([[0, 0, 0], [10, -5, 3], [20, -10, 6]], dtype=dtype)
-    assert_poses_close(batch_odometry(tom, T3, tk, counter_bits=bits).poses, expected)
-    _, ps = stream(tom, T3, list(tk), counter_bits=bits)  # rows of numpy integer scalars
+    assert_poses_close(batch_odometry(tomasi, T3, tk, counter_bits=bits).poses, expected)
+    _, ps = stream(tomasi, T3, list(tk), counter_bits=bits)  # rows of numpy integer scalars
     assert_poses_close(ps, expected)
 
 
 @pytest.mark.parametrize("dtype, bits", [(np.int32, 32), (np.int16, 16)])
-def test_narrow_int_readings_wrap_at_type_limit(tom, dtype, bits):
+def test_narrow_int_readings_wrap_at_type_limit(tomasi, dtype, bits):
     """Counters stored in their own width wrap from the largest to the smallest value."""
     top = 2 ** (bits - 1) - 1
     tk = np.array([[top - 4, 0, 0], [-top + 4, -5, 3]], dtype=dtype)  # +10 ticks through the wrap
     expected = tomasi_poses([[10, -5, 3]])
-    assert_poses_close(batch_odometry(tom, T3[:2], tk, counter_bits=bits).poses, expected)
-    _, ps = stream(tom, T3[:2], list(tk), counter_bits=bits)
+    assert_poses_close(batch_odometry(tomasi, T3[:2], tk, counter_bits=bits).poses, expected)
+    _, ps = stream(tomasi, T3[:2], list(tk), counter_bits=bits)
     assert_poses_close(ps, expected)
 
 
 @pytest.mark.parametrize("bits", [None, 32])
-def test_uint32_readings_same_as_signed_batch(tom, bits):
+def test_uint32_readings_same_as_signed_batch(tomasi, bits):
     expected = tomasi_poses([[-2] * 3, [-2] * 3])
-    assert_poses_close(batch_odometry(tom, T3, SIGNED, counter_bits=bits).poses, expected)
-    assert_poses_close(batch_odometry(tom, T3, SIGNED.astype(np.uint32), counter_bits=bits).poses, expected)
+    assert_poses_close(batch_odometry(tomasi, T3, SIGNED, counter_bits=bits).poses, expected)
+    assert_poses_close(batch_odometry(tomasi, T3, SIGNED.astype(np.uint32), counter_bits=bits).poses, expected)
 
 
 @pytest.mark.parametrize("bits", [None, 32])
-def test_uint32_readings_same_as_signed_stream(tom, bits):
+def test_uint32_readings_same_as_signed_stream(tomasi, bits):
     expected = tomasi_poses([[-2] * 3, [-2] * 3])
-    _, ps = stream(tom, T3, list(SIGNED), counter_bits=bits)
+    _, ps = stream(tomasi, T3, list(SIGNED), counter_bits=bits)
     assert_poses_close(ps, expected)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # numpy overflow warnings of the uint32 wrap
-        _, ps = stream(tom, T3, list(SIGNED.astype(np.uint32)), counter_bits=bits)
+        _, ps = stream(tomasi, T3, list(SIGNED.astype(np.uint32)), counter_bits=bits)
     assert_poses_close(ps, expected)
 
 
-def test_stream_int16_scalars_without_bits_large_span(tom):
+def test_stream_int16_scalars_without_bits_large_span(tomasi):
     """Without counter_bits readings are plain integers: -30000 -> 30000 is +60000 ticks (over 10 s:
     100 rev in 0.01 s would be an impossible jump)."""
     tk = np.array([[-30000, 0, 0], [30000, 0, 0]], dtype=np.int16)
     expected = tomasi_poses([[60000, 0, 0]])
-    assert_poses_close(batch_odometry(tom, [0.0, 10.0], tk).poses, expected, atol=1e-9)
+    assert_poses_close(batch_odometry(tomasi, [0.0, 10.0], tk).poses, expected, atol=1e-9)
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)  # no overflow in int16 arithmetic
-        _, ps = stream(tom, [0.0, 10.0], list(tk))
+        _, ps = stream(tomasi, [0.0, 10.0], list(tk))
     assert_poses_close(ps, expected, atol=1e-9)
 
 
 @pytest.mark.parametrize("which", ["preset", "max_speed"])
 @pytest.mark.parametrize("dt", [0.01, 10.0])
-def test_half_range_increment_refused(tom, maxspeed_robot, which, dt):
-    robot = tom if which == "preset" else maxspeed_robot
+def test_half_range_increment_refused(tomasi, maxspeed_robot, which, dt):
+    robot = tomasi if which == "preset" else maxspeed_robot
     t, tk = [0.0, dt], [[0, 0, 0], [128, 0, 0]]
     with pytest.raises(OdometryInputError):
         batch_odometry(robot, t, tk, counter_bits=8)
@@ -169,8 +159,8 @@ def test_just_below_half_range_accepted(maxspeed_robot):
 
 
 @pytest.mark.parametrize("bad", [math.inf, -math.inf, math.nan, np.float64("inf")])
-def test_stream_nonfinite_time_refused_and_estimator_usable(tom, bad):
-    o = Odometry(tom)
+def test_stream_nonfinite_time_refused_and_estimator_usable(tomasi, bad):
+    o = Odometry(tomasi)
     o.update(0.0, [0, 0, 0])
     o.update(0.1, [1, 1, 1])
     before = (o.pose, o.t, o.samples)
@@ -178,37 +168,37 @@ def test_stream_nonfinite_time_refused_and_estimator_usable(tom, bad):
         o.update(bad, [2, 2, 2])
     assert (o.pose, o.t, o.samples) == before
     p = o.update(0.2, [2, 2, 2])
-    ref = batch_odometry(tom, [0.0, 0.1, 0.2], [[0, 0, 0], [1, 1, 1], [2, 2, 2]]).poses[-1]
+    ref = batch_odometry(tomasi, [0.0, 0.1, 0.2], [[0, 0, 0], [1, 1, 1], [2, 2, 2]]).poses[-1]
     assert_poses_close(p, ref)
 
 
-def test_stream_steer_extra_axes_refused_state_unchanged(syn):
-    o = Odometry(syn)
+def test_stream_steer_extra_axes_refused_state_unchanged(synchro):
+    o = Odometry(synchro)
     o.update(0.0, [0, 0, 0], [0, 0, 0])
     with pytest.raises(OdometryInputError):
         o.update(0.1, [10, 10, 10], [[0, 0, 0], [0.1, 0.1, 0.1]])
     assert o.samples == 1 and o.t == 0.0 and o.pose == (0.0, 0.0, 0.0)
     p = o.update(0.2, [20, 20, 20], [0, 0, 0])
-    fresh = Odometry(syn)
+    fresh = Odometry(synchro)
     fresh.update(0.0, [0, 0, 0], [0, 0, 0])
     assert p == fresh.update(0.2, [20, 20, 20], [0, 0, 0])
     assert o.residual == fresh.residual
 
 
-def test_stream_steer_extra_axes_refused_at_first_sample(syn):
-    o = Odometry(syn)
+def test_stream_steer_extra_axes_refused_at_first_sample(synchro):
+    o = Odometry(synchro)
     with pytest.raises(OdometryInputError):
         o.update(0.0, [0, 0, 0], [[0, 0, 0], [0, 0, 0]])
     assert o.samples == 0 and o.t is None
     o.update(0.0, [0, 0, 0], [0.1, 0.1, 0.1])
     p = o.update(0.1, [10, 10, 10], [0.1, 0.1, 0.1])
-    fresh = Odometry(syn)
+    fresh = Odometry(synchro)
     fresh.update(0.0, [0, 0, 0], [0.1, 0.1, 0.1])
     assert p == fresh.update(0.1, [10, 10, 10], [0.1, 0.1, 0.1])
 
 
-def test_stream_same_t_ticks_different_steer_is_error(syn):
-    o = Odometry(syn)
+def test_stream_same_t_ticks_different_steer_is_error(synchro):
+    o = Odometry(synchro)
     o.update(0.0, [0, 0, 0], [0, 0, 0])
     o.update(0.1, [10, 10, 10], [0, 0, 0])
     pose = o.pose
@@ -221,8 +211,8 @@ def test_stream_same_t_ticks_different_steer_is_error(syn):
 
 
 @pytest.mark.parametrize("bits", [None, 16])
-def test_string_readings_at_first_sample_refused(tom, bits):
-    o = Odometry(tom, counter_bits=bits)
+def test_string_readings_at_first_sample_refused(tomasi, bits):
+    o = Odometry(tomasi, counter_bits=bits)
     with pytest.raises(OdometryInputError):
         o.update(0.0, ["1", "2", "3"])
     assert o.samples == 0 and o.t is None
@@ -232,8 +222,8 @@ def test_string_readings_at_first_sample_refused(tom, bits):
 
 @pytest.mark.parametrize("bits", [None, 16])
 @pytest.mark.parametrize("true", [True, np.bool_(True)], ids=["bool", "np.bool_"])
-def test_bool_readings_refused_at_first_sample(tom, bits, true):
-    o = Odometry(tom, counter_bits=bits)
+def test_bool_readings_refused_at_first_sample(tomasi, bits, true):
+    o = Odometry(tomasi, counter_bits=bits)
     with pytest.raises(OdometryInputError):
         o.update(0.0, [true, 0, 0])
     assert o.samples == 0
@@ -241,29 +231,29 @@ def test_bool_readings_refused_at_first_sample(tom, bits, true):
 
 @pytest.mark.parametrize("bits", [None, 16])
 @pytest.mark.parametrize("true", [True, np.bool_(True)], ids=["bool", "np.bool_"])
-def test_bool_readings_refused_after_first_sample(tom, bits, true):
-    o = Odometry(tom, counter_bits=bits)
+def test_bool_readings_refused_after_first_sample(tomasi, bits, true):
+    o = Odometry(tomasi, counter_bits=bits)
     o.update(0.0, [0, 0, 0])
     with pytest.raises(OdometryInputError):
         o.update(0.1, [true, 1, 1])
     assert o.samples == 1 and o.pose == (0.0, 0.0, 0.0)
 
 
-def test_batch_bool_readings_refused(tom):
+def test_batch_bool_readings_refused(tomasi):
     with pytest.raises(OdometryInputError):
-        batch_odometry(tom, [0.0, 0.1], np.array([[False] * 3, [True] * 3]))
+        batch_odometry(tomasi, [0.0, 0.1], np.array([[False] * 3, [True] * 3]))
 
 
 @pytest.mark.parametrize("bad", [math.inf, math.nan, -1, 0, 0.0, True])
-def test_bad_max_jump_refused_at_construction(tom, bad):
+def test_bad_max_jump_refused_at_construction(tomasi, bad):
     with pytest.raises(OmnikinError):
-        Odometry(tom, max_jump=bad)
+        Odometry(tomasi, max_jump=bad)
 
 
 @pytest.mark.parametrize("bad", [math.inf, math.nan, -1, 0])
-def test_batch_bad_max_jump_refused(tom, bad):
+def test_batch_bad_max_jump_refused(tomasi, bad):
     with pytest.raises(OmnikinError):
-        batch_odometry(tom, [0, 0.1], [[0, 0, 0], [10**9, 1, 1]], max_jump=bad)
+        batch_odometry(tomasi, [0, 0.1], [[0, 0, 0], [10**9, 1, 1]], max_jump=bad)
 
 
 def test_omni4_float_ticks_counter_bits_residual_parity():
@@ -295,31 +285,31 @@ def test_diff_drive_plus_side_omni_residual_parity(ticks):
     assert_poses_close(ps, b.poses)
 
 
-def test_batch_1d_steer_refused_with_shape_message(syn):
+def test_batch_1d_steer_refused_with_shape_message(synchro):
     with pytest.raises(OdometryInputError, match=r"steer.*shape"):
-        batch_odometry(syn, [0, 0.1], [[0, 0, 0], [1, 1, 1]], steer=[0, 0, 0])
+        batch_odometry(synchro, [0, 0.1], [[0, 0, 0], [1, 1, 1]], steer=[0, 0, 0])
 
 
-def test_steer_on_non_steerable_robot_refused(tom):
+def test_steer_on_non_steerable_robot_refused(tomasi):
     with pytest.raises(OmnikinError):
-        batch_odometry(tom, [0, 0.1], [[0, 0, 0], [1, 1, 1]], steer=[[0.0], [0.0]])
+        batch_odometry(tomasi, [0, 0.1], [[0, 0, 0], [1, 1, 1]], steer=[[0.0], [0.0]])
     with pytest.raises(OmnikinError):
-        batch_odometry(tom, [0, 0.1], [[0, 0, 0], [1, 1, 1]], steer=[[np.nan]])
+        batch_odometry(tomasi, [0, 0.1], [[0, 0, 0], [1, 1, 1]], steer=[[np.nan]])
     with pytest.raises(OmnikinError):
-        tom.fk([1, 2, 3], steer=[0.0, 1.0])
+        tomasi.fk([1, 2, 3], steer=[0.0, 1.0])
     with pytest.raises(OmnikinError):
-        tom.ik([1, 0, 0], steer_hint=[0.0])
+        tomasi.ik([1, 0, 0], steer_hint=[0.0])
     with pytest.raises(OmnikinError):
-        tom.ik([1, 0, 0], steer_hint=[np.nan] * 7)
+        tomasi.ik([1, 0, 0], steer_hint=[np.nan] * 7)
 
 
-def test_batch_from_angles_timestamps_must_match(tom):
+def test_batch_from_angles_timestamps_must_match(tomasi):
     with pytest.raises(OdometryInputError):
-        batch_odometry_from_angles(tom, [0, 0.1, 0.2, 0.3, 0.4], [[0, 0, 0], [1, 1, 1], [2, 2, 2]])
+        batch_odometry_from_angles(tomasi, [0, 0.1, 0.2, 0.3, 0.4], [[0, 0, 0], [1, 1, 1], [2, 2, 2]])
 
 
-def test_update_angles_wrong_count(tom):
-    o = Odometry(tom)
+def test_update_angles_wrong_count(tomasi):
+    o = Odometry(tomasi)
     with pytest.raises(OdometryInputError):
         o.update_angles(0.0, [0, 0, 0, 99])
     assert o.samples == 0
@@ -330,21 +320,21 @@ def test_update_angles_wrong_count(tom):
 
 
 @pytest.mark.parametrize("before, after", [(2**60, 2**60 + 1), (2**63 - 1, -(2**63))])
-def test_counter_bits_64_single_tick(tom, before, after):
+def test_counter_bits_64_single_tick(tomasi, before, after):
     expected = tomasi_poses([[1, 0, 0]])
     tk = np.array([[before, 7, -7], [after, 7, -7]], dtype=np.int64)
-    assert_poses_close(batch_odometry(tom, T3[:2], tk, counter_bits=64).poses, expected)
-    _, ps = stream(tom, T3[:2], [[before, 7, -7], [after, 7, -7]], counter_bits=64)  # Python ints
+    assert_poses_close(batch_odometry(tomasi, T3[:2], tk, counter_bits=64).poses, expected)
+    _, ps = stream(tomasi, T3[:2], [[before, 7, -7], [after, 7, -7]], counter_bits=64)  # Python ints
     assert_poses_close(ps, expected)
-    _, ps = stream(tom, T3[:2], list(tk), counter_bits=64)  # numpy int64 scalars
+    _, ps = stream(tomasi, T3[:2], list(tk), counter_bits=64)  # numpy int64 scalars
     assert_poses_close(ps, expected)
 
 
 @pytest.mark.parametrize("bits", [None, 16], ids=["fast-path", "general-path"])
-def test_stream_heading_one_ulp_below_minus_pi_wraps_into_range(tom, bits):
+def test_stream_heading_one_ulp_below_minus_pi_wraps_into_range(tomasi, bits):
     target = np.nextafter(-math.pi, -math.inf)  # -pi - 1 ulp
     tk = [[0.0, 0.0, 0.0], [-0.3, -0.3, -0.3]]  # pure rotation, phi ~ -1e-3 rad (float ticks)
-    probe = Odometry(tom, counter_bits=bits)  # the exact float phi this estimator computes
+    probe = Odometry(tomasi, counter_bits=bits)  # the exact float phi this estimator computes
     probe.update(0.0, tk[0])
     phi = probe.update(0.1, tk[1])[2]
     assert -0.01 < phi < 0.0
@@ -355,7 +345,7 @@ def test_stream_heading_one_ulp_below_minus_pi_wraps_into_range(tom, bits):
         th0 = np.nextafter(th0, -math.inf) if th0 + phi > target else np.nextafter(th0, math.inf)
     if th0 + phi != target:
         pytest.skip("no start heading lands exactly on -pi - 1 ulp")
-    o = Odometry(tom, counter_bits=bits, start=(0.0, 0.0, float(th0)))
+    o = Odometry(tomasi, counter_bits=bits, start=(0.0, 0.0, float(th0)))
     assert o.pose[2] == th0
     o.update(0.0, tk[0])
     th = o.update(0.1, tk[1])[2]

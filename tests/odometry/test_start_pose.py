@@ -10,7 +10,7 @@ from omnikin.errors import InputError
 def test_a_start_pose_given_as_a_set_names_the_pose_order_not_wheels():
     """A set iterates in hash order: refused, and the message says what order would be lost."""
     from omnikin import load_robot
-    from omnikin.streaming import Odometry
+    from omnikin.odometry.streaming import Odometry
 
     with pytest.raises(InputError, match="x, y, theta") as info:
         Odometry(load_robot("diff-drive"), start={0.0, 1.0, 2.0})

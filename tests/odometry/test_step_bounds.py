@@ -158,7 +158,7 @@ def test_the_kernel_and_the_general_path_take_the_same_steps_around_the_bounds(t
     """Each wheel at nearly its top speed for intervals from 100 s to 1e5 s: a rotation from about
     4e4 rad to 4e7 rad. The generated kernel hands the long intervals to the general path; both
     accept and refuse the same samples, and what they accept is the same to the bit."""
-    from omnikin.streaming import _decline
+    from omnikin.odometry.streaming import _decline
 
     outcomes = set()
     for dt in np.geomspace(100.0, 1e5, 60):

@@ -8,7 +8,7 @@ from __future__ import annotations
 import linecache
 
 from omnikin import Odometry
-from omnikin import _stream_kernel as kernel
+from omnikin.odometry import _stream_kernel as kernel
 from support.tomasi import assert_poses_close, tomasi_poses
 
 

@@ -15,18 +15,8 @@ import numpy as np
 import pytest
 
 from omnikin import InputError, Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
-from omnikin.integration import integrate
+from omnikin.odometry.integration import integrate
 from support.tomasi import assert_poses_close, cli, one_line_error, tomasi_poses
-
-
-@pytest.fixture(scope="module")
-def tom():
-    return load_robot("tomasi-omni3")
-
-
-@pytest.fixture(scope="module")
-def syn():
-    return load_robot("synchro")
 
 
 class Readings:
@@ -51,9 +41,9 @@ UNORDERED = {
 
 
 @pytest.mark.parametrize("name", list(UNORDERED))
-def test_streaming_refuses_readings_without_the_wheels_order(tom, name):
+def test_streaming_refuses_readings_without_the_wheels_order(tomasi, name):
     """{100, -8, 33} iterates as 33, 100, -8 (wrong wheels); b'\\x05\\x07\\x09' iterates as 5, 7, 9."""
-    o = Odometry(tom)
+    o = Odometry(tomasi)
     o.update(0.0, [0, 0, 0])
     before = (o.pose, o.samples)
     for feed in (o.update, o.update_angles):
@@ -62,15 +52,15 @@ def test_streaming_refuses_readings_without_the_wheels_order(tom, name):
         assert exc.value.sample == 1 and "\n" not in str(exc.value)
         assert str(exc.value).startswith("sample 1: ")
     assert (o.pose, o.samples) == before
-    fresh = Odometry(tom)
+    fresh = Odometry(tomasi)
     with pytest.raises(OdometryInputError, match="sample 0: "):
         fresh.update(0.0, UNORDERED[name])
 
 
-def test_streaming_takes_ordered_containers(tom):
+def test_streaming_takes_ordered_containers(tomasi):
     expected = tomasi_poses([[100, -8, 33]])[1]
     for row in ([100, -8, 33], (100, -8, 33), np.array([100, -8, 33]), Readings([100, -8, 33]), iter([100, -8, 33])):
-        o = Odometry(tom)
+        o = Odometry(tomasi)
         o.update(0.0, (0, 0, 0))
         assert_poses_close([o.update(0.05, row)], [expected])
 
@@ -88,12 +78,12 @@ def test_streaming_takes_ordered_containers(tom):
     ],
     ids=["set-row", "bytes-row", "str-row", "dict-row", "set-reading", "ragged", "generator-row"],
 )
-def test_batch_refuses_rows_without_the_wheels_order(tom, rows, sample):
+def test_batch_refuses_rows_without_the_wheels_order(tomasi, rows, sample):
     """Before: a set row silently took NumPy's object path or a ValueError traceback."""
     t = [0.1 * k for k in range(len(rows))]
     for run in (
-        lambda: batch_odometry(tom, t, rows),
-        lambda: batch_odometry_from_angles(tom, t, rows),
+        lambda: batch_odometry(tomasi, t, rows),
+        lambda: batch_odometry_from_angles(tomasi, t, rows),
     ):
         with pytest.raises(OdometryInputError) as exc:
             run()
@@ -101,27 +91,27 @@ def test_batch_refuses_rows_without_the_wheels_order(tom, rows, sample):
 
 
 @pytest.mark.parametrize("ticks", [{(0, 0, 0), (1, 2, 3)}, {0: [0, 0, 0], 1: [1, 2, 3]}, b"abc", iter([[0, 0, 0]])])
-def test_batch_refuses_whole_inputs_without_order(tom, ticks):
+def test_batch_refuses_whole_inputs_without_order(tomasi, ticks):
     with pytest.raises(OdometryInputError, match="ticks: "):
-        batch_odometry(tom, [0.0, 0.1], ticks)
+        batch_odometry(tomasi, [0.0, 0.1], ticks)
 
 
-def test_batch_takes_array_likes(tom):
+def test_batch_takes_array_likes(tomasi):
     rows = [[0, 0, 0], [100, -8, 33]]
     expected = tomasi_poses([[100, -8, 33]])
-    assert_poses_close(batch_odometry(tom, [0.0, 0.1], Readings(rows)).poses, expected)
-    assert_poses_close(batch_odometry(tom, (0.0, 0.1), tuple(map(tuple, rows))).poses, expected)
+    assert_poses_close(batch_odometry(tomasi, [0.0, 0.1], Readings(rows)).poses, expected)
+    assert_poses_close(batch_odometry(tomasi, (0.0, 0.1), tuple(map(tuple, rows))).poses, expected)
 
 
-def test_steering_and_times_without_order_are_refused(syn, tom):
-    o = Odometry(syn)
+def test_steering_and_times_without_order_are_refused(synchro, tomasi):
+    o = Odometry(synchro)
     o.update(0.0, [0, 0, 0], [0.1, 0.1, 0.1])
     with pytest.raises(OdometryInputError, match="sample 1: steer: a set"):
         o.update(0.1, [1, 1, 1], {0.1, 0.2, 0.3})
     with pytest.raises(OdometryInputError, match="sample 1: steer"):
-        batch_odometry(syn, [0.0, 0.1], [[0] * 3, [1] * 3], steer=[[0.1] * 3, {0.1, 0.2, 0.3}])
+        batch_odometry(synchro, [0.0, 0.1], [[0] * 3, [1] * 3], steer=[[0.1] * 3, {0.1, 0.2, 0.3}])
     with pytest.raises(OdometryInputError, match="t: a set"):
-        batch_odometry(tom, {0.0, 0.1}, [[0, 0, 0], [1, 1, 1]])
+        batch_odometry(tomasi, {0.0, 0.1}, [[0, 0, 0], [1, 1, 1]])
 
 
 # --- start poses ------------------------------------------------------------------------------------------
@@ -129,26 +119,26 @@ def test_steering_and_times_without_order_are_refused(syn, tom):
     "pose",
     [[0, 0, 1e308], [0, 0, 1.0e7], [1e300, 0, 0], [0, -1e9, 0], [0, 0, math.nan], {0.0, 1.0, 2.0}, [True, 0, 0]],
 )
-def test_absurd_start_poses_are_refused_everywhere(tom, pose):
+def test_absurd_start_poses_are_refused_everywhere(tomasi, pose):
     """1e308 rad has no digit left modulo 2 pi (the estimator started at theta 0); 1e300 m
     swallows every increment. Headings are bounded like every heading the core takes (1e6 rad)."""
-    o = Odometry(tom)
+    o = Odometry(tomasi)
     with pytest.raises(InputError, match="pose"):
         o.reset(pose)
     with pytest.raises(InputError, match="start"):
-        Odometry(tom, start=pose)
+        Odometry(tomasi, start=pose)
     with pytest.raises(InputError, match="start"):
-        batch_odometry(tom, [0.0, 0.1], [[0, 0, 0], [1, 1, 1]], start=pose)
+        batch_odometry(tomasi, [0.0, 0.1], [[0, 0, 0], [1, 1, 1]], start=pose)
     with pytest.raises(InputError, match="start"):
         integrate(np.zeros((2, 3)), start=pose)
 
 
-def test_large_but_real_start_poses_are_kept(tom):
+def test_large_but_real_start_poses_are_kept(tomasi):
     """A UTM northing (5.8e6 m) and a heading of two turns are fine; the heading is wrapped."""
     start = (431_000.25, 5_800_000.5, 4 * math.pi - 0.5)
-    o = Odometry(tom, start=start)
+    o = Odometry(tomasi, start=start)
     assert o.pose == (431_000.25, 5_800_000.5, pytest.approx(-0.5, abs=1e-12))
-    res = batch_odometry(tom, [0.0, 0.1], [[0, 0, 0], [0, 0, 0]], start=start)
+    res = batch_odometry(tomasi, [0.0, 0.1], [[0, 0, 0], [0, 0, 0]], start=start)
     assert res.poses[-1, :2].tolist() == [431_000.25, 5_800_000.5]
 
 

@@ -23,8 +23,8 @@ from hypothesis import strategies as st
 from conftest import ROOT, omnikin_env
 from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
 from omnikin.io.logs import read_tick_log, write_tick_log
-from omnikin.limits import MotionLimits
-from omnikin.plans import line, spin
+from omnikin.motion.limits import MotionLimits
+from omnikin.motion.plans import line, spin
 from omnikin.simulation.error_models import NoiseModel
 from omnikin.simulation.simulate import simulate
 from support.tomasi import TOMASI_R, TOMASI_RPT, assert_poses_close, cli, one_line_error, read_csv_traj, tomasi_poses
@@ -32,11 +32,6 @@ from support.tomasi import TOMASI_R, TOMASI_RPT, assert_poses_close, cli, one_li
 TICKS_PER_M = 1 / (TOMASI_R * TOMASI_RPT)  # 2315 ticks per metre at the rim
 ACCEL_TICKS = 30.0 * TICKS_PER_M  # the default change-of-speed bound, ticks/s^2
 EXAMPLE = ROOT / "examples" / "tick_log.csv"
-
-
-@pytest.fixture(scope="module")
-def tom():
-    return load_robot("tomasi-omni3")
 
 
 def wrap(ticks, bits, offset=0, signed=False):
@@ -100,7 +95,7 @@ CASES = [(8, 50), (8, 100), (12, 20), (12, 50), (16, 5), (16, 20)]
 @pytest.mark.parametrize(("bits", "rate"), CASES)
 @pytest.mark.parametrize("signed", [False, True])
 def test_wrapped_simulated_log_refused_without_width_and_exact_with_it(
-    tom, simulated_logs, tmp_path, capsys, bits, rate, signed
+    tomasi, simulated_logs, tmp_path, capsys, bits, rate, signed
 ):
     log = simulated_logs[rate]
     true = log.ticks
@@ -118,7 +113,7 @@ def test_wrapped_simulated_log_refused_without_width_and_exact_with_it(
     assert "wheel 'w" in line and "--counter-bits" in line and f"read as a {bits}-bit counter" in line
     assert not (tmp_path / "out.csv").exists()
     # batch and streaming refuse the same sample
-    b, s = batch_error(tom, log.t, readings), stream_error(tom, log.t, readings)
+    b, s = batch_error(tomasi, log.t, readings), stream_error(tomasi, log.t, readings)
     assert b is not None and s is not None and b.sample == s.sample and b.detail == s.detail
     # with the width: the closed form of the true increments
     rc, _, err = cli(
@@ -126,27 +121,27 @@ def test_wrapped_simulated_log_refused_without_width_and_exact_with_it(
     )
     assert rc == 0, err
     assert_poses_close(read_csv_traj(tmp_path / "out.csv")[:, 1:], expected, atol=1e-8)
-    o = Odometry(tom, counter_bits=bits)
+    o = Odometry(tomasi, counter_bits=bits)
     poses = [o.update(float(log.t[k]), [int(v) for v in readings[k]]) for k in range(len(log.t))]
     assert_poses_close(poses, expected, atol=1e-8)
 
 
 @pytest.mark.parametrize("bits", range(8, 33))
-def test_every_wrap_of_the_shipped_example_is_refused(tom, bits):
+def test_every_wrap_of_the_shipped_example_is_refused(tomasi, bits):
     """The tester's reproduction: examples/tick_log.csv (20 Hz) with every reading taken modulo
     2**bits (and at other offsets, signed too) is refused without a width, at the same sample in
     batch and streaming, and exact with it."""
-    log = read_tick_log(EXAMPLE, tom)
+    log = read_tick_log(EXAMPLE, tomasi)
     expected = tomasi_poses(np.diff(log.ticks, axis=0))
     rng = np.random.default_rng(bits)
     for offset, signed in [(0, False), (int(rng.integers(1 << bits)), True), (int(rng.integers(1 << bits)), False)]:
         readings = wrap(log.ticks, bits, offset, signed)
         if np.array_equal(np.diff(readings, axis=0), np.diff(log.ticks, axis=0)):
             continue  # this offset never reaches the end of the counter
-        b, s = batch_error(tom, log.t, readings), stream_error(tom, log.t, readings)
+        b, s = batch_error(tomasi, log.t, readings), stream_error(tomasi, log.t, readings)
         assert b is not None, (bits, offset, signed)
         assert s is not None and s.sample == b.sample
-        assert_poses_close(batch_odometry(tom, log.t, readings, counter_bits=bits).poses, expected, atol=1e-9)
+        assert_poses_close(batch_odometry(tomasi, log.t, readings, counter_bits=bits).poses, expected, atol=1e-9)
 
 
 def test_example_wrapped_to_12_bits_cli(tmp_path, capsys):
@@ -174,7 +169,7 @@ def guaranteed_dt(bits):
 
 @pytest.mark.parametrize("bits", [8, 12, 16])
 @pytest.mark.parametrize("direction", [1, -1])
-def test_guarantee_holds_for_the_worst_motion_the_rules_allow(tom, bits, direction):
+def test_guarantee_holds_for_the_worst_motion_the_rules_allow(tomasi, bits, direction):
     """Just inside the guarantee, the wheel changes its speed by the most the rule allows, in
     the direction that hides the wrap best, while its counter wraps: refused without the width,
     exact with it. The same motion unwrapped is accepted (it is within the rules)."""
@@ -189,13 +184,13 @@ def test_guarantee_holds_for_the_worst_motion_the_rules_allow(tom, bits, directi
     raw = np.diff(readings, axis=0)[:, 0]
     assert raw[0] == increments[0][0] and raw[1] == increments[1][0] - direction * full
     t = [0.0, dt, 2 * dt]
-    assert batch_error(tom, t, true) is None and stream_error(tom, t, true) is None
-    b, s = batch_error(tom, t, readings), stream_error(tom, t, readings)
+    assert batch_error(tomasi, t, true) is None and stream_error(tomasi, t, true) is None
+    b, s = batch_error(tomasi, t, readings), stream_error(tomasi, t, readings)
     assert b is not None and s is not None and b.sample == s.sample == 2 and "impossible change" in b.detail
-    assert_poses_close(batch_odometry(tom, t, readings, counter_bits=bits).poses, tomasi_poses(increments))
+    assert_poses_close(batch_odometry(tomasi, t, readings, counter_bits=bits).poses, tomasi_poses(increments))
 
 
-def test_a_wrap_beyond_the_guarantee_can_pass(tom):
+def test_a_wrap_beyond_the_guarantee_can_pass(tomasi):
     """The honest limit (docs/conventions.md): an 8-bit counter sampled at 7 Hz, far below the
     24 Hz of the guarantee, moves 100 then -56 ticks; read without its width that is -156 then
     +200 ticks, a plausible motion at 7 Hz. No rule can tell this wrap from motion."""
@@ -203,17 +198,17 @@ def test_a_wrap_beyond_the_guarantee_can_pass(tom):
     true = np.cumsum([[200, 0, 0], [100, 0, 0], [-56, 0, 0]], axis=0)
     readings = true % 256
     assert np.diff(readings, axis=0)[:, 0].tolist() == [-156, 200]
-    misread = batch_odometry(tom, [0.0, dt, 2 * dt], readings).poses
+    misread = batch_odometry(tomasi, [0.0, dt, 2 * dt], readings).poses
     assert not np.allclose(misread, tomasi_poses([[100, 0, 0], [-56, 0, 0]]))
     assert_poses_close(misread, tomasi_poses([[-156, 0, 0], [200, 0, 0]]))
 
 
 # --- no false alarms --------------------------------------------------------------------------------------
-def test_shipped_example_and_simulated_logs_are_accepted(tom, simulated_logs):
-    for log in [read_tick_log(EXAMPLE, tom), *simulated_logs.values()]:
+def test_shipped_example_and_simulated_logs_are_accepted(tomasi, simulated_logs):
+    for log in [read_tick_log(EXAMPLE, tomasi), *simulated_logs.values()]:
         expected = tomasi_poses(np.diff(log.ticks, axis=0))
-        assert_poses_close(batch_odometry(tom, log.t, log.ticks).poses, expected, atol=1e-9)
-        assert stream_error(tom, log.t, log.ticks) is None
+        assert_poses_close(batch_odometry(tomasi, log.t, log.ticks).poses, expected, atol=1e-9)
+        assert stream_error(tomasi, log.t, log.ticks) is None
 
 
 @pytest.mark.parametrize("rate", [20.0, 100.0, 1000.0])
@@ -241,7 +236,7 @@ def _tomasi_with_max_speed(max_speed):
     return Robot(r.name, tuple(replace(w, max_speed=max_speed) for w in r.wheels))
 
 
-def test_jittery_timestamps_and_missed_samples_are_accepted(tom):
+def test_jittery_timestamps_and_missed_samples_are_accepted(tomasi):
     """Timestamps 20 ms apart with +-3 ms of jitter on the stamps and every tenth sample
     missing, at 1 m/s: the change-of-speed rule takes differing intervals into account."""
     rng = np.random.default_rng(5)
@@ -252,23 +247,23 @@ def test_jittery_timestamps_and_missed_samples_are_accepted(tom):
     stamps = t_true + rng.uniform(-0.003, 0.003, k.size)
     t, rows = stamps[keep], ticks[keep].astype(np.int64)
     expected = tomasi_poses(np.diff(rows, axis=0))
-    assert_poses_close(batch_odometry(tom, t, rows).poses, expected, atol=1e-8)
-    assert stream_error(tom, t, rows) is None
+    assert_poses_close(batch_odometry(tomasi, t, rows).poses, expected, atol=1e-8)
+    assert stream_error(tomasi, t, rows) is None
 
 
 # --- the option -------------------------------------------------------------------------------------------
-def test_max_wheel_accel_sets_the_change_bound(tom, tmp_path, capsys):
+def test_max_wheel_accel_sets_the_change_bound(tomasi, tmp_path, capsys):
     """An instantaneous stop from 1 m/s at 100 Hz (23 ticks to 0: more than 30 m/s^2 x (10 ms)^2
     + 4 = 10.9 ticks) is refused by default at the same sample in batch and streaming, and
     accepted with max_wheel_accel 1e4 rad/s^2 (--max-wheel-accel) or inf."""
     rows = [[0, 0, 0], [23, 0, 0], [46, 0, 0], [46, 0, 0]]
     t = [0.0, 0.01, 0.02, 0.03]
-    b, s = batch_error(tom, t, rows), stream_error(tom, t, rows)
+    b, s = batch_error(tomasi, t, rows), stream_error(tomasi, t, rows)
     assert b is not None and b.sample == s.sample == 3 and "max_wheel_accel" in b.detail
     expected = tomasi_poses(np.diff(rows, axis=0))
     for accel in (1e4, math.inf):
-        assert_poses_close(batch_odometry(tom, t, rows, max_wheel_accel=accel).poses, expected)
-        assert stream_error(tom, t, rows, max_wheel_accel=accel) is None
+        assert_poses_close(batch_odometry(tomasi, t, rows, max_wheel_accel=accel).poses, expected)
+        assert stream_error(tomasi, t, rows, max_wheel_accel=accel) is None
     path = tmp_path / "stop.csv"
     write_tick_log(path, np.array(t), np.array(rows), ["w1", "w2", "w3"])
     rc, _, err = cli(capsys, "odometry", "tomasi-omni3", path, "-o", tmp_path / "o.csv")
@@ -277,42 +272,42 @@ def test_max_wheel_accel_sets_the_change_bound(tom, tmp_path, capsys):
     assert rc == 0, err
     for bad in (0.0, -1.0, math.nan, "fast", True):
         with pytest.raises(OdometryInputError, match="max_wheel_accel"):
-            Odometry(tom, max_wheel_accel=bad)
+            Odometry(tomasi, max_wheel_accel=bad)
         with pytest.raises(OdometryInputError, match="max_wheel_accel"):
-            batch_odometry(tom, t, rows, max_wheel_accel=bad)
+            batch_odometry(tomasi, t, rows, max_wheel_accel=bad)
 
 
-def test_wheel_angles_have_the_change_rule_only_when_asked(tom):
+def test_wheel_angles_have_the_change_rule_only_when_asked(tomasi):
     """Wheel angles come unwrapped from drivers: by default only the speed rule applies (a live
     controller must not stop at an impact); with max_wheel_accel batch and streaming refuse
     the same sample."""
     a = [[0.0, 0.0, 0.0], [0.25, 0.0, 0.0], [0.5, 0.0, 0.0], [0.5, 0.0, 0.0]]
     t = [0.0, 0.01, 0.02, 0.03]
-    batch_odometry_from_angles(tom, t, a)
-    o = Odometry(tom)
+    batch_odometry_from_angles(tomasi, t, a)
+    o = Odometry(tomasi)
     for k in range(4):
         o.update_angles(t[k], a[k])
     with pytest.raises(OdometryInputError, match="impossible change of speed") as exc:
-        batch_odometry_from_angles(tom, t, a, max_wheel_accel=100.0)
+        batch_odometry_from_angles(tomasi, t, a, max_wheel_accel=100.0)
     assert exc.value.sample == 3
-    o = Odometry(tom, max_wheel_accel=100.0)
+    o = Odometry(tomasi, max_wheel_accel=100.0)
     with pytest.raises(OdometryInputError) as exc2:
         for k in range(4):
             o.update_angles(t[k], a[k])
     assert exc2.value.sample == 3 and exc2.value.detail == exc.value.detail
 
 
-def test_batch_blocks_link_the_change_rule(tom, monkeypatch):
+def test_batch_blocks_link_the_change_rule(tomasi, monkeypatch):
     """Batch odometry checks in blocks; a wrap right after a block boundary is still compared
     with the last increment of the previous block."""
-    import omnikin.odometry as odometry
+    import omnikin.odometry.batch as odometry
 
     monkeypatch.setattr(odometry, "CHUNK", 16)
     n = 64
     true = np.cumsum(np.tile([5, -3, -2], (n, 1)), axis=0)
     readings = wrap(true, 8, offset=168)  # w1: 5 (k + 1) + 168 passes 256 from sample 16 to 17
     assert first_wrapped_sample(true, readings) == 17  # the first interval of the second block
-    b, s = batch_error(tom, np.arange(n) * 0.01, readings), stream_error(tom, np.arange(n) * 0.01, readings)
+    b, s = batch_error(tomasi, np.arange(n) * 0.01, readings), stream_error(tomasi, np.arange(n) * 0.01, readings)
     assert b is not None and s is not None and b.sample == s.sample == 17
 
 
@@ -358,7 +353,7 @@ def test_batch_and_streaming_refuse_the_same_sample(steps, bits, floats):
     """Random logs with wraps, jumps, stops, repeated and backward times: batch and streaming
     accept the same logs (with the same poses) and refuse the same first sample, with the same
     message for the counter rules."""
-    tom = load_robot("tomasi-omni3")
+    tomasi = load_robot("tomasi-omni3")
     t, rows = [0.0], [[100, 200, 300]]
     for dt, inc, jump, wheel in steps:
         row = [r + d for r, d in zip(rows[-1], inc, strict=True)]
@@ -370,8 +365,8 @@ def test_batch_and_streaming_refuse_the_same_sample(steps, bits, floats):
     if bits:
         rows = [[v % (1 << bits) for v in r] for r in rows]
     feed = [[float(v) for v in r] for r in rows] if floats else rows
-    b = batch_error(tom, t, np.array(feed), counter_bits=bits)
-    o = Odometry(tom, counter_bits=bits)
+    b = batch_error(tomasi, t, np.array(feed), counter_bits=bits)
+    o = Odometry(tomasi, counter_bits=bits)
     s, poses = None, []
     try:
         for k in range(len(t)):
@@ -380,7 +375,7 @@ def test_batch_and_streaming_refuse_the_same_sample(steps, bits, floats):
         s = exc
     assert (b is None) == (s is None), (b, s)
     if b is None:
-        assert_poses_close(poses, batch_odometry(tom, t, np.array(feed), counter_bits=bits).poses, atol=1e-12)
+        assert_poses_close(poses, batch_odometry(tomasi, t, np.array(feed), counter_bits=bits).poses, atol=1e-12)
         return
     assert b.sample == s.sample, (b, s)
     if b.detail.startswith(("impossible", "tick reading")):
@@ -388,14 +383,14 @@ def test_batch_and_streaming_refuse_the_same_sample(steps, bits, floats):
 
 
 @pytest.mark.parametrize("kw", [{"max_wheel_speed": 1e4}, {"max_wheel_accel": 1e308}, {"max_wheel_accel": math.inf}])
-def test_huge_bounds_are_bounds_not_crashes(tom, kw):
+def test_huge_bounds_are_bounds_not_crashes(tomasi, kw):
     """A bound that overflows to infinity in ticks (1.5e308 rad/s^2 over 0.0105 rad per tick) was
     written into the generated kernel as 'inf', a NameError on the first update (a wheel speed
     is bounded like a robot file's max_speed, at most 1e4 rad/s)."""
     rows, t = [[0, 0, 0], [1, 1, 1], [5, 1, 1], [6, 1, 1]], [0.0, 0.1, 0.2, 0.3]
     expected = tomasi_poses(np.diff(rows, axis=0))
-    o = Odometry(tom, **kw)
+    o = Odometry(tomasi, **kw)
     assert_poses_close([o.update(t[k], rows[k]) for k in range(4)], expected)
-    a = Odometry(tom, **kw)
+    a = Odometry(tomasi, **kw)
     assert_poses_close([a.update_angles(t[k], [v * TOMASI_RPT for v in rows[k]]) for k in range(4)], expected)
-    assert_poses_close(batch_odometry(tom, t, rows, **kw).poses, expected)
+    assert_poses_close(batch_odometry(tomasi, t, rows, **kw).poses, expected)

@@ -16,8 +16,8 @@ import sympy as sp
 from sympy import cos, pi, sin, sqrt
 
 from omnikin import Wheel, load_robot
-from omnikin.geometry import compose, exp
-from omnikin.integration import integrate
+from omnikin.kinematics.se2 import compose, exp
+from omnikin.odometry.integration import integrate
 
 t = sp.Symbol("t", real=True)
 vx, vy, w = sp.symbols("v_x v_y omega", real=True)

@@ -32,9 +32,9 @@ pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (extra 'ph
 
 from conftest import constant_twist_pose  # noqa: E402
 from omnikin import load_robot  # noqa: E402
-from omnikin.geometry import wrap_angle  # noqa: E402
+from omnikin.kinematics.se2 import wrap_angle  # noqa: E402
+from omnikin.motion.plans import line  # noqa: E402
 from omnikin.physics.run import simulate_physics  # noqa: E402
-from omnikin.plans import line  # noqa: E402
 from omnikin.simulation.error_models import NoiseModel, SystematicErrors, WheelErrors  # noqa: E402
 from omnikin.simulation.simulate import simulate  # noqa: E402
 

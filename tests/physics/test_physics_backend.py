@@ -13,7 +13,7 @@ pytest.importorskip("mujoco", reason="the physics back-end needs MuJoCo (extra '
 
 from omnikin import Encoder, load_robot  # noqa: E402
 from omnikin.errors import InputError  # noqa: E402
-from omnikin.geometry import wrap_angle  # noqa: E402
+from omnikin.kinematics.se2 import wrap_angle  # noqa: E402
 from omnikin.physics.backend import PhysicsBackend  # noqa: E402
 from omnikin.runtime.base import BaseRuntime  # noqa: E402
 

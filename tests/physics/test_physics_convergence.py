@@ -24,9 +24,9 @@ mujoco = pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (
 
 from omnikin import load_robot  # noqa: E402
 from omnikin.io.robot_file import robot_from_dict, robot_to_dict  # noqa: E402
+from omnikin.motion.plans import umbmark_square  # noqa: E402
 from omnikin.physics.mjcf import CONTACT_SOLREF, DEFAULT_STEP, mjcf  # noqa: E402
 from omnikin.physics.run import simulate_physics  # noqa: E402
-from omnikin.plans import umbmark_square  # noqa: E402
 
 DRAWS = 5
 """Draws of roller phases per direction."""

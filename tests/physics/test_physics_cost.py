@@ -18,12 +18,12 @@ import omnikin
 from conftest import run_cli
 from omnikin import load_robot
 from omnikin.errors import ResourceLimitError
+from omnikin.motion.plans import parse_plan
+from omnikin.motion.timing import sample_plan
 from omnikin.physics.cost import physics_run_cost, real_time_shortfall, simulated_bound
 from omnikin.physics.engine import PhysicsSim
 from omnikin.physics.run import simulate_physics
-from omnikin.plans import parse_plan
 from omnikin.presets import preset_path
-from omnikin.simulation.motion import sample_plan
 
 pytest.importorskip("mujoco")
 

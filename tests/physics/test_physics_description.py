@@ -1,6 +1,6 @@
 """The physical description of a robot (omnikin.physics.description) and its MJCF text: pure
 data, checked against independent geometry (generic ellipsoid support functions, the kinematic
-rolling rows of omnikin.wheels, static force balance). No MuJoCo needed."""
+rolling rows of omnikin.kinematics.wheels, static force balance). No MuJoCo needed."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import pytest
 
 from conftest import omnikin_env
 from omnikin import Encoder, Robot, Wheel, load_robot
-from omnikin.physical import PhysicalBody, PhysicalWheel
+from omnikin.kinematics.physical import PhysicalBody, PhysicalWheel
 from omnikin.physics.description import describe, wheel_loads
 from omnikin.physics.mjcf import mjcf
 from omnikin.presets import PRESET_NAMES
@@ -179,6 +179,27 @@ def test_driven_wheels_are_the_encoded_ones_and_castors_are_passive():
     assert [w.name for w in d.steered] == ["front_left", "front_right"]
     castor = describe(load_robot("diff-drive")).wheel("castor")
     assert castor.motor is None and not castor.steering.actuated and castor.steering.trail == 0.03
+
+
+@pytest.mark.parametrize("name", ["diff-drive", "ackermann", "xr4000"])
+def test_the_description_does_not_depend_on_the_order_of_the_wheels_in_the_file(name):
+    """The file lists wheels in any order: the same robot with its wheels reversed (a castor or
+    a steered wheel before a fixed one) has the same bodies, each fork a quarter of its wheel's
+    mass (docs/physics.md, "Defaults"), and a total mass that is the sum of its parts."""
+    robot = load_robot(name)
+    reordered = replace(robot, wheels=tuple(reversed(robot.wheels)))
+    ours, theirs = describe(robot), describe(reordered)
+    assert theirs.mass == pytest.approx(ours.mass, rel=1e-12)
+    forks = [w.steering.fork_mass for w in theirs.wheels if w.steering is not None]
+    assert theirs.mass == pytest.approx(theirs.chassis.mass + sum(w.mass for w in theirs.wheels) + sum(forks))
+    for body in theirs.wheels:
+        mine = ours.wheel(body.name)
+        assert body.mass == pytest.approx(mine.mass, rel=1e-12)
+        if body.steering is not None:
+            assert body.steering.fork_mass == pytest.approx(0.25 * body.mass, rel=1e-12)
+            assert body.steering.inertia == pytest.approx(mine.steering.inertia, rel=1e-9)
+            assert body.steering.damping == pytest.approx(mine.steering.damping, rel=1e-9)
+    assert "<mujoco" in mjcf(reordered)
 
 
 @pytest.mark.parametrize("name", PRESET_NAMES)

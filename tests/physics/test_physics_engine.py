@@ -18,7 +18,7 @@ mujoco = pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (
 
 from omnikin import Encoder, Robot, Wheel, load_robot  # noqa: E402
 from omnikin.errors import InputError  # noqa: E402
-from omnikin.geometry import wrap_angle  # noqa: E402
+from omnikin.kinematics.se2 import wrap_angle  # noqa: E402
 from omnikin.physics.description import describe, steered_support_margin  # noqa: E402
 from omnikin.physics.engine import TIPPED, PhysicsSim  # noqa: E402
 from omnikin.presets import PRESET_NAMES  # noqa: E402

@@ -18,10 +18,10 @@ import pytest
 from conftest import omnikin_env, run_cli, run_entry_point
 from omnikin import load_robot
 from omnikin.errors import DivergedError, InputError
+from omnikin.motion.plans import parse_plan
 from omnikin.physics.engine import ADVANCE_MAX, PhysicsSim
 from omnikin.physics.mjcf import time_step
 from omnikin.physics.run import check_rate_steps, simulate_physics
-from omnikin.plans import parse_plan
 
 KICK = """
 import sys

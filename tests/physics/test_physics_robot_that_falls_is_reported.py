@@ -23,7 +23,7 @@ pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (extra 'ph
 
 from omnikin import load_robot  # noqa: E402
 from omnikin.errors import OmnikinError, PhysicsError  # noqa: E402
-from omnikin.physical import PhysicalBody  # noqa: E402
+from omnikin.kinematics.physical import PhysicalBody  # noqa: E402
 from omnikin.physics.backend import PhysicsBackend  # noqa: E402
 from omnikin.physics.engine import TIPPED  # noqa: E402
 
@@ -92,8 +92,8 @@ def test_the_viewers_live_physics_robot_says_once_that_it_fell_and_stops():
 
 
 def test_a_tall_robot_falls_over_in_simulate_physics():
+    from omnikin.motion.plans import line
     from omnikin.physics.run import simulate_physics
-    from omnikin.plans import line
 
     robot = tall_robot()
     with pytest.raises(PhysicsError, match="tipped over at t = "):

@@ -36,11 +36,11 @@ import pytest
 pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (extra 'physics')")
 
 from omnikin import load_robot  # noqa: E402
-from omnikin.geometry import between, log  # noqa: E402
-from omnikin.physical import PhysicalWheel  # noqa: E402
+from omnikin.kinematics.physical import PhysicalWheel  # noqa: E402
+from omnikin.kinematics.se2 import between, log  # noqa: E402
+from omnikin.odometry.streaming import Odometry  # noqa: E402
 from omnikin.physics.description import describe  # noqa: E402
 from omnikin.physics.engine import PhysicsSim  # noqa: E402
-from omnikin.streaming import Odometry  # noqa: E402
 
 DT = 0.05  # encoder sampling interval [s]
 ACCEL, SPEED = 1.0, 0.5  # commanded ramp [m/s^2] and cruise [m/s], forward

@@ -17,7 +17,7 @@ from omnikin import (
 def test_halt_then_command_keeps_the_acceleration_limit():
     """After halt() (link re-armed after an outage) a command must ramp up from rest at the
     acceleration limit, not jump across the outage as one long time step."""
-    from omnikin.limits import MotionLimits
+    from omnikin.motion.limits import MotionLimits
     from omnikin.runtime.command import CommandFilter
 
     f = CommandFilter(load_robot("tomasi-omni3"), MotionLimits(linear=1.0, linear_accel=0.5), timeout=0.0)
@@ -35,7 +35,7 @@ def test_halt_then_command_keeps_the_acceleration_limit():
 def test_replaced_limits_apply_to_the_current_command():
     from dataclasses import replace
 
-    from omnikin.limits import MotionLimits
+    from omnikin.motion.limits import MotionLimits
     from omnikin.runtime.command import CommandFilter
 
     f = CommandFilter(load_robot("tomasi-omni3"), MotionLimits(linear=1.0, linear_accel=None), timeout=0.0)

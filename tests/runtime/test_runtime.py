@@ -18,14 +18,14 @@ import pytest
 
 from omnikin import load_robot
 from omnikin.errors import OmnikinError
-from omnikin.geometry import compose, exp, wrap_angle
-from omnikin.geometry import compose_exp_jacobians as _jacobians
-from omnikin.limits import MotionLimits
+from omnikin.kinematics.encoder import Encoder
+from omnikin.kinematics.se2 import compose, exp, wrap_angle
+from omnikin.kinematics.se2 import compose_exp_jacobians as _jacobians
+from omnikin.motion.limits import MotionLimits
 from omnikin.runtime.base import BaseRuntime
 from omnikin.runtime.command import CommandFilter
 from omnikin.simulation.backend import SimBackend
 from omnikin.simulation.error_models import PROFILES, NoiseModel
-from omnikin.wheels import Encoder
 
 DT = 1.0 / 128.0  # a power of two: the time grid is exact in binary floating point
 

@@ -89,11 +89,6 @@ def wait_for(cond, timeout=2.0):
 
 
 @pytest.fixture
-def tomasi():
-    return load_robot("tomasi-omni3")
-
-
-@pytest.fixture
 def rig(tomasi):
     fake = FakeController.for_robot(tomasi, report_period=REPORT, link_timeout=1.0).start()
     backend = SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT, connect_timeout=1.0)

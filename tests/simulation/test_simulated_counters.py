@@ -18,7 +18,7 @@ import pytest
 from conftest import run_entry_point
 from omnikin import batch_odometry, load_robot
 from omnikin.io.logs import read_tick_log
-from omnikin.plans import umbmark_square
+from omnikin.motion.plans import umbmark_square
 from omnikin.simulation.error_models import NoiseModel
 from omnikin.simulation.simulate import counter_output, simulate
 from support.tomasi import assert_poses_close, read_csv_traj, tomasi_file, tomasi_poses
@@ -157,8 +157,8 @@ def test_a_robot_as_built_or_calibrated_keeps_every_field_the_errors_do_not_chan
 
     from omnikin.evaluation.calibration import borenstein_calibrate, calibrate
     from omnikin.evaluation.umbmark import run_umbmark
-    from omnikin.physical import PhysicalBody, PhysicalWheel
-    from omnikin.plans import CalibrationRun, line, spin
+    from omnikin.kinematics.physical import PhysicalBody, PhysicalWheel
+    from omnikin.motion.plans import CalibrationRun, line, spin
     from omnikin.simulation.error_models import SystematicErrors, WheelErrors
 
     diff = load_robot("diff-drive")

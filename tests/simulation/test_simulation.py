@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from omnikin import OmnikinError, load_robot
-from omnikin.limits import MotionLimits, saturate
-from omnikin.plans import arc, line, polyline, spin, umbmark_square
+from omnikin.motion.limits import MotionLimits, saturate
+from omnikin.motion.plans import arc, line, polyline, spin, umbmark_square
+from omnikin.motion.timing import sample_plan
 from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel, SystematicErrors, WheelErrors
-from omnikin.simulation.motion import sample_plan
 from omnikin.simulation.simulate import simulate
 
 TOMASI_L, TOMASI_R = 0.113, 0.04125

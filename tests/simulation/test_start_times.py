@@ -1,5 +1,5 @@
 """The start time of a simulated run, checked against every output that stamps its samples
-(omnikin.simulation.motion.check_start): the stamps must fit what the output holds and stay
+(omnikin.motion.timing.check_start): the stamps must fit what the output holds and stay
 distinct at the sample rate.
 
 'omnikin simulate --start 1e16 --log a.csv' exited 0 with every row at 1e16 or 1e16 + 2 (the
@@ -17,7 +17,7 @@ import pytest
 
 from conftest import run_cli
 from omnikin.errors import InputError
-from omnikin.simulation.motion import STAMP_RESOLUTION, check_start
+from omnikin.motion.timing import STAMP_RESOLUTION, check_start
 
 
 def test_the_resolution_is_a_thousandth_of_the_sample_interval():

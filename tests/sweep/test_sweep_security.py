@@ -120,7 +120,7 @@ ROUTES = ("distributed.scheduler.http.routes", "distributed.worker.http.routes")
 def test_the_embedded_clusters_dask_settings_hold_only_while_it_runs(tmp_path):
     import dask
 
-    from omnikin.sweep.engine import dask_client
+    from omnikin.sweep.cluster import dask_client
 
     default = {key: dask.config.get(key) for key in ROUTES}
     assert all(default.values()), default  # Dask's own: pages on every scheduler and worker

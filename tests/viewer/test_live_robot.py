@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from omnikin.io.robot_file import load_robot
-from omnikin.limits import MotionLimits
+from omnikin.motion.limits import MotionLimits
 from omnikin.viewer.live import KEY_SILENCE, LiveRobot
 
 DT = 0.02

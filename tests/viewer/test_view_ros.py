@@ -264,7 +264,7 @@ def published_joints(env: dict, timeout: float = 60.0) -> set[str]:
     from rclpy.signals import SignalHandlerOptions
     from std_msgs.msg import String
 
-    from omnikin.ros.link_frames import urdf_joints
+    from omnikin.physics.link_frames import urdf_joints
 
     heard: list[str] = []
     context = rclpy.Context()

@@ -1,7 +1,7 @@
 """The Python API: the command-line tools as functions, with the command line's defaults.
 
 Each function takes what its command takes (a robot as a preset name, a robot file or a
-:class:`~omnikin.model.Robot`; error and noise profiles by name or as objects) and returns a
+:class:`~omnikin.kinematics.robot.Robot`; error and noise profiles by name or as objects) and returns a
 result object that plots itself (``result.plot()`` returns a matplotlib ``Figure``; matplotlib
 is imported only then, with an error naming the ``viz`` extra when it is missing)::
 
@@ -27,7 +27,26 @@ from .umbmark import DEFAULT_ROBOT, UMBmarkAnalysis, UMBmarkReport, analyze_umbm
 
 
 def plot_layout(robot):
-    """The wheel layout of ``robot`` (a matplotlib ``Figure``; ``omnikin show --plot``)."""
+    """The wheel layout of ``robot`` (a matplotlib ``Figure``; ``omnikin show --plot``).
+
+    Parameters
+    ----------
+    robot : str, os.PathLike or Robot
+        A preset name, a robot file or a :class:`~omnikin.kinematics.robot.Robot`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The wheels at zero steering in the body frame (x forward, y left) [m], each with its
+        drive direction and, for Swedish wheels, its roller axis.
+
+    Raises
+    ------
+    ImportError
+        matplotlib is missing (the message names the ``viz`` extra).
+    RobotFileError
+        As :func:`omnikin.load_robot`.
+    """
     from ..viz.layout import layout_figure
     from .common import require_viz
 
@@ -43,10 +62,47 @@ def run_sweep(
     the study); returns a :class:`~omnikin.sweep.run.SweepResult`. The embedded cluster starts
     worker processes: call it under ``if __name__ == "__main__":`` (docs/sweeps.md).
 
-    ``progress``: told where the study runs and of each task finished
-    (:class:`~omnikin.sweep.run.Progress`: ``start``, ``advance``); ``tls``: the credentials of a
-    ``tls://`` ``scheduler`` (:class:`~omnikin.sweep.engine.TLSFiles`; default: Dask's
-    configuration)."""
+    Parameters
+    ----------
+    spec : str, os.PathLike or Study
+        A study file (YAML; docs/sweeps.md) or a loaded study.
+    out : str or os.PathLike
+        The study folder: created, or resumed when it holds this study (only missing trials are
+        computed).
+    scheduler : str, optional
+        Address of a running Dask scheduler (``tls://HOST:8786``); default an embedded cluster on
+        this machine.
+    workers : int, optional
+        Worker processes of the embedded cluster (1 .. 1024); default one per core.
+    task_trials : int, optional
+        Trials per task (1 .. 1000); default sized to about
+        :data:`~omnikin.sweep.run.TASK_SECONDS` of work.
+    force : bool, default False
+        Start over in a folder that holds a study of another seed or other omnikin or NumPy
+        versions (a folder omnikin did not write is refused even so).
+    progress : Progress, optional
+        Told where the study runs and of each task finished (:class:`~omnikin.sweep.run.Progress`:
+        ``start``, ``advance``); default none.
+    tls : TLSFiles, optional
+        The credentials of a ``tls://`` ``scheduler`` (:class:`~omnikin.sweep.cluster.TLSFiles`);
+        default Dask's configuration.
+
+    Returns
+    -------
+    SweepResult
+        The study, its folder, the trials computed now, found on disk and failed, and the files
+        written.
+
+    Raises
+    ------
+    StudyFileError
+        A study file that cannot be read or breaks its schema.
+    InputError
+        A bad ``workers`` or ``task_trials``; Dask or pyarrow missing (the message names the
+        ``sweep`` extra).
+    OutputExistsError
+        A folder omnikin did not write, or (without ``force``) one that holds another study.
+    """
     from ..sweep.run import run_sweep as run
     from ..sweep.study import Study
 

@@ -14,13 +14,44 @@ from .common import require_viz, robot_of
 @dataclass(frozen=True)
 class Calibration(CalibrationResult):
     """A calibration (:func:`calibrate`) with the runs it fitted: ``robot`` is the calibrated
-    robot, :meth:`parameters` the fitted values with units; plots the end-position residuals."""
+    robot, :meth:`parameters` the fitted values with units; plots the end-position residuals.
+
+    Attributes
+    ----------
+    nominal : Robot
+        The robot calibrated, as given.
+    robot : Robot
+        The calibrated robot: ``nominal`` with the fitted errors applied.
+    errors : SystematicErrors
+        The fitted systematic errors per wheel
+        (:data:`~omnikin.evaluation.calibration.ERROR_UNITS`).
+    values : dict of str to float
+        The fitted parameters by name (``"w1.radius"``), in the units of
+        :data:`~omnikin.evaluation.calibration.PARAMETER_UNITS`.
+    residual_before, residual_after : float
+        RMS of the weighted end-pose residuals [measurement sigmas] of the nominal and the
+        calibrated model.
+    identifiability : Identifiability
+        Which parameters the runs determine, and their standard deviations.
+    fits : bool
+        Whether ``residual_after`` is at most :data:`~omnikin.evaluation.calibration.FIT_LIMIT`.
+    runs : tuple of CalibrationRun
+        The runs fitted, each a plan with its measured end pose ``(x, y, theta)``
+        [m, m, rad] in the world frame of its start.
+    """
 
     runs: tuple = ()
 
     def residuals(self) -> dict:
         """Measured minus predicted end position ``(n_runs, 2)`` [m] of every run, predicted by
-        the nominal model (``"nominal"``) and by the calibrated one (``"calibrated"``)."""
+        the nominal model (``"nominal"``) and by the calibrated one (``"calibrated"``).
+
+        Returns
+        -------
+        dict of str to ndarray, shape (n_runs, 2)
+            ``{"nominal": ..., "calibrated": ...}``: end-position residual ``(x, y)`` [m] of each
+            run, in the world frame of its start, runs in the order of :attr:`runs`.
+        """
         out = {}
         for label, model in (("nominal", self.nominal), ("calibrated", self.robot)):
             plans = dict.fromkeys(r.plan for r in self.runs)
@@ -42,7 +73,26 @@ class Calibration(CalibrationResult):
     def write_robot(self, path, *, force: bool = False, inputs=()) -> None:
         """Write the calibrated robot file (JSON for ``.json``, else YAML) by the output policy
         (:func:`omnikin.io.output.check_output`: never an input, ``force`` to replace a file;
-        ``-`` for standard output, YAML)."""
+        ``-`` for standard output, YAML).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The robot file to write (``.json``: JSON, else YAML), or ``-``.
+        force : bool, default False
+            Replace an existing file.
+        inputs : sequence of path, default ()
+            Files read, which ``path`` may not be.
+
+        Raises
+        ------
+        OutputExistsError
+            ``path`` exists (without ``force``) or is an input.
+        InputError
+            An empty path, one naming a folder, or a missing parent folder.
+        OutputError
+            Writing failed.
+        """
         from ..io.output import check_output, write_text
         from ..io.robot_file import robot_text
 
@@ -54,8 +104,33 @@ def calibrate(robot, runs) -> Calibration:
     """Least-squares calibration of ``robot`` from measured runs (``omnikin calibrate``).
 
     ``runs``: a runs file (columns ``path, x_abs, y_abs[, theta_abs_deg]``; :mod:`omnikin.io.runs`)
-    or a sequence of :class:`~omnikin.plans.CalibrationRun`. A run the robot cannot drive is
+    or a sequence of :class:`~omnikin.motion.plans.CalibrationRun`. A run the robot cannot drive is
     refused, naming it (the check ``simulate`` makes).
+
+    Parameters
+    ----------
+    robot : str, os.PathLike or Robot
+        The nominal robot: a preset name, a robot file or a :class:`~omnikin.kinematics.robot.Robot`.
+    runs : str, os.PathLike or sequence of CalibrationRun
+        The runs driven by the nominal model, each with its measured end pose ``(x, y, theta)``
+        [m, m, rad] in the world frame of its start (``theta`` NaN when not measured; a file
+        gives the heading in degrees).
+
+    Returns
+    -------
+    Calibration
+        The calibrated robot, the fitted errors, the residuals and the runs.
+
+    Raises
+    ------
+    InputError
+        No run with a measured end pose.
+    RunsFileError
+        A runs file that cannot be read (the message names the line and column).
+    InfeasibleRunError
+        A run the robot cannot drive (the first one is named).
+    CalibrationFitError
+        No robot of this layout, within the robot file's ranges, explains the runs.
     """
     from ..evaluation.calibration import calibrate as fit
 
@@ -71,5 +146,21 @@ def calibrate(robot, runs) -> Calibration:
 
 def calibration_plan(robot, side: float = 4.0) -> list[str]:
     """The runs to drive to calibrate ``robot``: paths in the runs-file grammar, each to be driven
-    :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times (``omnikin calibrate --plan``)."""
+    :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times (``omnikin calibrate --plan``).
+
+    Parameters
+    ----------
+    robot : str, os.PathLike or Robot
+        A preset name, a robot file or a :class:`~omnikin.kinematics.robot.Robot`.
+    side : float, default 4.0
+        Side [m] of the UMBmark squares and length of the straight runs; the half circles
+        have radius ``side / 2`` (:func:`~omnikin.evaluation.calibration.recommended_runs`).
+
+    Returns
+    -------
+    list of str
+        The paths the robot can drive, in the runs-file grammar (:func:`omnikin.motion.plans.parse_plan`,
+        e.g. ``"square cw rotate 4"``, ``"spin 180"``); measure x, y and the heading at the end
+        of each.
+    """
     return [text for text, _ in recommended_runs(robot_of(robot), side)]

@@ -5,14 +5,30 @@ from __future__ import annotations
 import math
 import os
 
-from ..model import Robot, require_same_wheels
+from ..kinematics.robot import Robot, require_same_wheels
 from ..simulation.error_models import ErrorProfile, NoiseModel
 from ..simulation.error_models import noise as noise_profile
 from ..simulation.error_models import profile as error_profile
 
 
 def robot_of(spec) -> Robot:
-    """A :class:`~omnikin.model.Robot`, or one loaded from a preset name or robot file."""
+    """A :class:`~omnikin.kinematics.robot.Robot`, or one loaded from a preset name or robot file.
+
+    Parameters
+    ----------
+    spec : str, os.PathLike or Robot
+        A robot (returned as it is), a preset name or the path of a robot file
+        (:func:`omnikin.load_robot`).
+
+    Returns
+    -------
+    Robot
+
+    Raises
+    ------
+    RobotFileError
+        As :func:`omnikin.load_robot`.
+    """
     if isinstance(spec, Robot):
         return spec
     from ..io.robot_file import load_robot
@@ -42,7 +58,7 @@ def setting_name(spec) -> str | None:
 def as_built(robot: Robot, true_robot, errors, seed_sequence):
     """The robot as built and the errors drawn (None for a given ``true_robot``). A given
     ``true_robot`` must have the wheels of ``robot`` (names, types, encoders:
-    :func:`~omnikin.model.wheel_set_problem`), else an InputError names the difference."""
+    :func:`~omnikin.kinematics.robot.wheel_set_problem`), else an InputError names the difference."""
     from ..evaluation.procedure import draw_as_built
 
     if true_robot is not None:
@@ -61,7 +77,23 @@ def finite_or_none(x):
 
 def dumps(document: dict) -> str:
     """The JSON text of a result document: strict JSON (:func:`omnikin.io.jsonfile.to_json`; a
-    NaN or infinity left in it is an error naming its field), with a final newline."""
+    NaN or infinity left in it is an error naming its field), with a final newline.
+
+    Parameters
+    ----------
+    document : dict
+        A result document (e.g. :meth:`UMBmarkReport.as_dict`): numbers, text, lists and dicts.
+
+    Returns
+    -------
+    str
+        The JSON text, ending in a newline.
+
+    Raises
+    ------
+    NonFiniteValueError
+        A NaN or infinity in ``document`` (the message names its field).
+    """
     from ..io.jsonfile import to_json
 
     return to_json(document) + "\n"

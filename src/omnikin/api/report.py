@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..number_text import RESOLUTION, mm_text, ratio_text, reduction_bounded, reduction_text
+from ..common.number_text import RESOLUTION, mm_text, ratio_text, reduction_bounded, reduction_text
 
 
 def _interval_mm(interval) -> str:
@@ -39,6 +39,7 @@ def physics_floor_text(floor: dict, level: str) -> str:
 def umbmark_markdown(report, doc: dict, figures: list) -> str:
     """The report of a :class:`~omnikin.api.umbmark.UMBmarkReport` whose ``result.json`` is ``doc``."""
     s = doc["settings"]
+    noise_floor = report.engine.has_noise_model  # else the floor is the nominal robot's in physics
     level = f"{s['confidence_level'] * 100:g} %"
     built = (
         f"the robot file {s['true_robot']}"
@@ -52,7 +53,7 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         + (
             f"Engine: physics (MuJoCo at a {s['step'] * 1e3:g} ms time step, rollers and motors; no random error "
             "model: slip comes from the contacts)."
-            if doc["engine"] == "physics"
+            if not noise_floor
             else f"Random errors: {s['noise']!r} profile."
         )
         + f" {s['runs']} runs per direction on a "
@@ -84,7 +85,7 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
         ]
     else:
         lines += ["2. No calibration (`--no-calibrate`)."]
-    floor_name = "floor" if doc["engine"] == "physics" else "noise floor"
+    floor_name = "noise floor" if noise_floor else "floor"
     lines += [
         f"{'4' if s['calibrate'] else '3'}. The {floor_name}: {doc['methods']['noise_floor']}.",
         "",
@@ -112,7 +113,7 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
                 f"{_interval_mm(d['e_max_syst_interval'])} | {'yes' if d['at_noise_floor'] else 'no'} |"
             )
     floor = doc["noise_floor"]
-    if doc["engine"] == "physics":
+    if not noise_floor:
         lines += [
             "",
             "Floor: the nominal robot (no systematic errors) driven by its own model in the physics engine shows "
@@ -135,7 +136,7 @@ def umbmark_markdown(report, doc: dict, figures: list) -> str:
                 (
                     f"**{label}, E_max,syst ({mm_text(doc[key]['e_max_syst'])} mm) is at or below the floor**: "
                     "no larger than the roller contact alone gives the nominal robot."
-                    if doc["engine"] == "physics"
+                    if not noise_floor
                     else f"**{label}, E_max,syst ({mm_text(doc[key]['e_max_syst'])} mm) is at the noise floor**: "
                     "the systematic error left is below what UMBmark with this many runs can detect."
                 ),

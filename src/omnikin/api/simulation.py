@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import Robot
-from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
+from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
+from ..kinematics.robot import Robot
 from ..simulation.error_models import SystematicErrors
-from ..simulation.simulate import SimulatedRun
-from .common import as_built, noise_of, require_viz, robot_of
+from ..simulation.simulate import RunCost, SimulatedRun
+from .common import as_built, require_viz, robot_of
 
 DEFAULT_PATH = "square cw rotate 4"
 """The path of ``omnikin simulate`` without ``--path``."""
@@ -21,7 +22,28 @@ DEFAULT_PATH = "square cw rotate 4"
 class Simulation:
     """A simulated run (:func:`simulate`): ``run`` holds the times [s], encoder ticks, odometry,
     ground truth and measured end pose (:class:`~omnikin.simulation.simulate.SimulatedRun`);
-    ``injected`` the systematic errors drawn (None for a given true robot)."""
+    ``injected`` the systematic errors drawn (None for a given true robot).
+
+    Attributes
+    ----------
+    robot : Robot
+        The nominal robot: the model that commands the run and reads its encoders.
+    true_robot : Robot
+        The robot as built that drove it.
+    injected : SystematicErrors or None
+        The systematic errors drawn from the ``errors`` profile; None for a given ``true_robot``.
+    path : str
+        The path driven, in the runs-file grammar (or the plan's name).
+    run : SimulatedRun
+        Times ``t`` ``(N + 1,)`` [s]; encoder ``ticks`` and counter ``readings``
+        ``(N + 1, n_enc)``; ``steer`` ``(N + 1, n_steer)`` [rad] or None; ``odometry``
+        ``(N + 1, 3)`` and ground truth ``truth`` ``(1, N + 1, 3)`` poses ``(x, y, theta)``
+        [m, m, rad] in the world frame (``odom``), starting at the origin; ``measured``
+        ``(1, 3)`` the true end pose.
+    end_error : ndarray, shape (3,)
+        True end pose minus odometry end pose ``(x [m], y [m], theta [rad])``, world frame,
+        ``theta`` wrapped to ``[-pi, pi)``.
+    """
 
     robot: Robot
     true_robot: Robot
@@ -32,7 +54,7 @@ class Simulation:
     @property
     def end_error(self) -> np.ndarray:
         """True end pose minus odometry end pose ``(x [m], y [m], theta [rad])``."""
-        from ..geometry import wrap_angle
+        from ..kinematics.se2 import wrap_angle
 
         d = self.run.truth[0, -1] - self.run.odometry[-1]
         d[2] = wrap_angle(d[2])
@@ -50,19 +72,35 @@ class Simulation:
 class SimulationCost:
     """What a run of :func:`simulate` is estimated to cost, before it starts (its ``on_cost``).
 
-    ``samples``: samples of the plan at the rate (an upper bound,
-    :func:`~omnikin.simulation.simulate.run_cost`); ``memory`` [bytes]: the run's arrays for those
-    samples; ``duration`` [s]: the simulated time; ``seconds`` [s]: the wall time. The physics
-    engine is estimated in two steps: first before the plan is sampled (``memory`` with room for
-    the longest tail the run may add after the plan, ``duration`` and ``seconds`` None), then
-    with its model built and timed (``duration``: the run's, its steering waits and its tail at
-    their limits; ``memory``: the plan's samples alone).
+    The physics engine is estimated in two steps: first before the plan is sampled
+    (``duration`` and ``seconds`` None), then with its model built and timed (the same
+    ``samples`` and ``memory``); the kinematic engine once, with everything.
+
+    Attributes
+    ----------
+    samples : float
+        Samples of the plan at the rate (an upper bound,
+        :func:`~omnikin.simulation.simulate.run_cost`).
+    memory : float
+        The run's arrays for those samples [bytes] (physics: with room for the longest tail the
+        run may add after the plan).
+    duration : float or None
+        The simulated time [s] (physics: the run's, its steering waits and its tail at their
+        limits); None before the physics engine is timed.
+    seconds : float or None
+        The wall time [s] of the run; None before the physics engine is timed.
     """
 
     samples: float
     memory: float
     duration: float | None
     seconds: float | None
+
+
+def _cost_of(size: RunCost, estimate: RunCost) -> SimulationCost:
+    """The :class:`SimulationCost` of an engine's estimates: ``size`` (untimed: the plan's samples
+    and memory) and ``estimate`` (timed: the simulated duration [s] and the wall time [s])."""
+    return SimulationCost(size.samples, size.bytes, estimate.simulated, estimate.seconds)
 
 
 def simulate(
@@ -74,7 +112,7 @@ def simulate(
     noise=None,
     seed: int = 1,
     rate: float = 100.0,
-    engine: str = "kinematic",
+    engine="kinematic",
     step: float | None = None,
     max_memory: float = DEFAULT_MEMORY,
     max_time: float = DEFAULT_TIME,
@@ -84,69 +122,116 @@ def simulate(
     """Simulate ``robot`` as built driving ``path`` commanded by its nominal model
     (``omnikin simulate``, without the bag).
 
-    ``path``: a :class:`~omnikin.plans.Plan` (plans add: ``line(4) + spin(math.pi)``) or a path
-    in the runs-file grammar (:func:`omnikin.plans.parse_plan`); ``true_robot`` (robot file or
+    ``path``: a :class:`~omnikin.motion.plans.Plan` (plans add: ``line(4) + spin(math.pi)``) or a path
+    in the runs-file grammar (:func:`omnikin.motion.plans.parse_plan`); ``true_robot`` (robot file or
     Robot) replaces the seeded draw of the
     ``errors`` profile; ``noise``: random errors (profile name or
     :class:`~omnikin.simulation.error_models.NoiseModel`; default ``"typical"``); ``rate`` [Hz], within
-    :data:`~omnikin.simulation.motion.RATE_RANGE` as for ``omnikin simulate``. The seed's first
+    :data:`~omnikin.motion.timing.RATE_RANGE` as for ``omnikin simulate``. The seed's first
     stream draws the robot as built (the same robot as ``omnikin umbmark --seed``), its second
     the run, as ``omnikin simulate`` does. A run estimated to need more than ``max_memory``
     [bytes] or ``max_time`` [s] is refused before it starts
     (:func:`~omnikin.simulation.simulate.run_cost`, the estimate ``omnikin simulate`` checks
     against ``--max-memory`` and ``--max-time``).
 
-    ``engine="physics"`` drives the robot as built in MuJoCo instead
-    (:func:`omnikin.physics.run.simulate_physics`, ``omnikin simulate --engine physics``) at
-    time step ``step`` [s] (default 2 ms): the same plan, rate and robot as built; ``noise``
-    must then be left out (the physics has no random error model). ``progress``, if given, is
-    called now and then with the simulated time and the plan's duration [s] (physics only).
+    ``engine``: what drives the run, an :class:`~omnikin.simulation.engine.Engine` or its name
+    (:func:`~omnikin.physics.engines.engine_named`, with ``step``). ``"physics"`` drives the
+    robot as built in MuJoCo instead (:class:`~omnikin.physics.engines.PhysicsEngine`,
+    ``omnikin simulate --engine physics``) at time step ``step`` [s] (default 2 ms): the same
+    plan, rate and robot as built; ``noise`` must then be left out (the physics has no random
+    error model).
 
-    ``on_cost``, if given, is called with each estimate (:class:`SimulationCost`) before this
-    function checks it against ``max_memory`` and ``max_time`` (``omnikin simulate`` checks it
-    against its options, with the time of writing its outputs, and the stamps its outputs can
-    hold); it may raise to refuse the run.
+    Parameters
+    ----------
+    robot : str, os.PathLike or Robot
+        The nominal robot: a preset name, a robot file or a :class:`~omnikin.kinematics.robot.Robot`.
+    path : str or Plan, default "square cw rotate 4"
+        What to drive, from the origin along body +x.
+    true_robot : str, os.PathLike or Robot, optional
+        The robot as built, with the wheels of ``robot``; replaces the draw from ``errors``.
+    errors : str or ErrorProfile, default "typical"
+        Systematic-error profile the robot as built is drawn from (unused with ``true_robot``).
+    noise : str or NoiseModel, optional
+        Random errors of the kinematic engine; default ``"typical"``. Refused by the physics
+        engine.
+    seed : int, default 1
+        Seed (>= 0) of the robot as built and the run.
+    rate : float, default 100.0
+        Sample rate [Hz] of encoders, odometry and ground truth, within
+        :data:`~omnikin.motion.timing.RATE_RANGE`.
+    engine : str or Engine, default "kinematic"
+        What drives the run: an :class:`~omnikin.simulation.engine.Engine` or its name
+        (``"kinematic"``, ``"physics"``).
+    step : float, optional
+        Physics time step [s]; default 2 ms. Physics only.
+    max_memory : float, default DEFAULT_MEMORY
+        Largest memory [bytes] the run may be estimated to need.
+    max_time : float, default DEFAULT_TIME
+        Largest run time [s] the run may be estimated to need.
+    progress : callable, optional
+        Called now and then with the simulated time and the plan's duration [s] (the engine's
+        :meth:`~omnikin.simulation.engine.Engine.drive`: physics only; the kinematic run is one
+        vectorised computation).
+    on_cost : callable, optional
+        Called with each estimate (:class:`SimulationCost`) before this function checks it
+        against ``max_memory`` and ``max_time``; it may raise to refuse the run (``omnikin
+        simulate`` checks it against its options, with the time of writing its outputs and the
+        stamps its outputs can hold). An engine that knows the run's time without being timed
+        (kinematic) is estimated once; one that must build its model first (physics) twice:
+        its memory before the plan is sampled, then its duration and time.
+
+    Returns
+    -------
+    Simulation
+        The robots, the errors drawn, the path and the run.
+
+    Raises
+    ------
+    InputError
+        A bad path, rate, seed, profile or step, ``noise`` with the physics engine, or a
+        ``true_robot`` with other wheels than ``robot``.
+    InfeasibleTwistError
+        A path the nominal robot cannot drive (e.g. a sideways leg for a differential drive).
+    ResourceLimitError
+        A run estimated to need more than ``max_memory`` or ``max_time``.
+    PhysicsError
+        The physics engine failed (:class:`DivergedError`: MuJoCo's state diverged).
     """
-    from ..evaluation.physics_study import engine_options
+    from ..common.resource_limits import require_within
     from ..evaluation.procedure import ARGUMENTS, streams
-    from ..plans import Plan, parse_plan
-    from ..resource_limits import require_within
-    from ..simulation.motion import check_rate_range
-    from ..simulation.simulate import run_cost
-    from ..simulation.simulate import simulate as simulate_run
+    from ..motion.plans import Plan, parse_plan
+    from ..motion.timing import check_rate_range
+    from ..physics.engines import as_engine
 
     check_rate_range(rate, "rate")
-    noise, step = engine_options(engine, noise, step)
+    engine = as_engine(engine, noise=noise, step=step)
+    noise_model = engine.noise_model(noise)
     nominal = robot_of(robot)
     plan = path if isinstance(path, Plan) else parse_plan(str(path))
-    cost = run_cost(plan, nominal, rate)
+    size = engine.cost(plan, nominal, nominal, rate=rate, timed=False)  # the plan's samples and memory
     seeds = list(streams(seed).values())
     true, injected = as_built(nominal, true_robot, errors, seeds[0])
 
     def within(**estimate) -> None:  # memory, seconds and what to change: refused beyond the limits
-        size = f"{cost.samples:.3g} samples"
-        require_within("simulate", max_memory=max_memory, max_time=max_time, names=ARGUMENTS, size=size, **estimate)
+        samples = f"{size.samples:.3g} samples"
+        require_within("simulate", max_memory=max_memory, max_time=max_time, names=ARGUMENTS, size=samples, **estimate)
 
     def told(estimate: SimulationCost) -> None:
         if on_cost is not None:
             on_cost(estimate)
 
-    if engine == "physics":
-        from ..physics.cost import physics_run_cost
-        from ..physics.run import TAIL_MAX, simulate_physics
-        from ..simulation.motion import sample_plan
-
-        assert step is not None
-        tail = cost.bytes / max(cost.samples, 1.0) * TAIL_MAX * rate
-        told(SimulationCost(cost.samples, cost.bytes + tail, None, None))
-        within(memory=cost.bytes + tail, hint="lower rate or shorten path")
-        sampled = sample_plan(plan, nominal, rate)
-        estimate = physics_run_cost(sampled, true, nominal, step, budget=max_time)
-        told(SimulationCost(cost.samples, cost.bytes, estimate.simulated, estimate.seconds))
-        within(seconds=estimate.seconds, hint="shorten path or raise step")
-        run: SimulatedRun = simulate_physics(sampled, true, nominal, rate=rate, step=step, progress=progress)
-    else:
-        told(SimulationCost(cost.samples, cost.bytes, cost.samples / rate, cost.seconds))
-        within(memory=cost.bytes, seconds=cost.seconds, hint="lower rate or shorten path")
-        run = simulate_run(plan, true, nominal, rate=rate, noise=noise_of(noise), trials=1, rng=seeds[1])
+    # an engine that must be timed to know the run's time (physics: its model built) is told of
+    # the memory alone first, then of the duration and time once timed
+    untimed = math.isnan(size.seconds)
+    told(SimulationCost(size.samples, size.bytes, None, None) if untimed else _cost_of(size, size))
+    within(memory=size.bytes, hint="lower rate or shorten path")  # before any of the run is made
+    estimate = engine.cost(plan, true, nominal, rate=rate, budget=max_time)
+    if untimed:
+        told(_cost_of(size, estimate))
+    cheaper = "shorten path or raise step" if engine.measured_cost else "lower rate or shorten path"
+    within(seconds=estimate.seconds, hint=cheaper)
+    # the seed's second stream draws the run's random errors, for an engine with a model of them
+    run = engine.drive(
+        plan, true, nominal, rate=rate, noise=noise_model, rng=seeds[1] if noise_model else None, progress=progress
+    )
     return Simulation(nominal, true, injected, path.name if isinstance(path, Plan) else str(path), run)

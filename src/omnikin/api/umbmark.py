@@ -15,9 +15,10 @@ from typing import Any
 
 import numpy as np
 
+from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT, RECOMMENDED_REPEATS
-from ..evaluation.physics_study import engine_options, physics_cost, physics_umbmark_study
+from ..evaluation.physics_study import physics_cost, physics_umbmark_study
 from ..evaluation.procedure import (
     FLOOR_PROCEDURES,
     Cost,
@@ -29,11 +30,11 @@ from ..evaluation.procedure import (
     umbmark_study,
 )
 from ..evaluation.umbmark import LEVEL, UNITS, UMBmarkResult, analyze, require_square
-from ..odometry import encoded_wheels
+from ..odometry.batch import encoded_wheels
+from ..physics.engines import PhysicsEngine, as_engine
 from ..physics.mjcf import DEFAULT_STEP
-from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..viz import DPI
-from .common import as_built, dumps, finite_or_none, noise_of, require_viz, robot_of, setting_name
+from .common import as_built, dumps, finite_or_none, require_viz, robot_of, setting_name
 
 RESULT_FORMAT = "omnikin-umbmark-result/1"
 """Name and version of the ``result.json`` document (:meth:`UMBmarkReport.as_dict`)."""
@@ -49,13 +50,46 @@ DEFAULT_ROBOT = "tomasi-omni3"
 class UMBmarkReport(UMBmarkStudy):
     """The result of :func:`run_umbmark` (the study of :mod:`omnikin.evaluation.procedure`)
     with the settings it ran with; :meth:`as_dict` is ``result.json``, :meth:`plot` draws it,
-    :meth:`write` writes the report folder."""
+    :meth:`write` writes the report folder.
+
+    Lengths in metres, angles in radians; poses in the world frame of each run's start.
+
+    Attributes
+    ----------
+    robot, true_robot : Robot
+        The nominal robot and the robot as built that drove the runs.
+    injected : SystematicErrors or None
+        The systematic errors drawn; None for a given ``true_robot``.
+    before, after : list of UMBmarkResult
+        One UMBmark procedure per trial, before and after calibration (``after`` None without
+        calibration); each has ``e_max_syst`` [m].
+    calibration : CalibrationResult or None
+        The calibration between them.
+    floor : NoiseFloor
+        What E_max,syst a perfectly calibrated robot reaches (:meth:`at_noise_floor`).
+    reduction_factor : float or None
+        E_max,syst before over after, first procedure.
+    settings : dict
+        The arguments of :func:`run_umbmark`, as ``result.json`` records them (robots and
+        profiles by name).
+    """
 
     settings: dict = field(default_factory=dict)
 
     # -- numbers ------------------------------------------------------------------------------
     def at_noise_floor(self, result: UMBmarkResult) -> bool:
-        """Whether ``result``'s E_max,syst cannot be told from a perfectly calibrated robot's."""
+        """Whether ``result``'s E_max,syst cannot be told from a perfectly calibrated robot's.
+
+        Parameters
+        ----------
+        result : UMBmarkResult
+            One procedure of :attr:`before` or :attr:`after`.
+
+        Returns
+        -------
+        bool
+            True when its E_max,syst [m] is at or below the floor's limit.
+        """
         return self.floor.reaches(result.e_max_syst)
 
     def _stage(self, result: UMBmarkResult) -> dict:
@@ -63,15 +97,27 @@ class UMBmarkReport(UMBmarkStudy):
 
     def as_dict(self, files: list | None = None) -> dict:
         """The ``result.json`` document (also what ``omnikin umbmark --json`` prints); lengths
-        in metres (``units`` gives every key's unit); ``null`` for an unbounded interval end."""
+        in metres (``units`` gives every key's unit); ``null`` for an unbounded interval end.
+
+        Parameters
+        ----------
+        files : list of str, optional
+            The files of the report folder, recorded under ``files``.
+
+        Returns
+        -------
+        dict
+            The document (:data:`RESULT_FORMAT`; its ``units`` and ``methods`` say what each key
+            holds).
+        """
         from ..io.robot_file import robot_to_dict
 
         doc: dict[str, Any] = {
             "format": RESULT_FORMAT,
             "units": RESULT_UNITS,
-            "methods": PHYSICS_METHODS if self.engine == "physics" else METHODS,
+            "methods": METHODS if self.engine.has_noise_model else PHYSICS_METHODS,
             "settings": {**self.settings, "confidence_level": self.level},
-            "engine": self.engine,
+            "engine": self.engine.name,
             "robot": robot_to_dict(self.robot),
             "true_robot": robot_to_dict(self.true_robot),
         }
@@ -101,7 +147,7 @@ class UMBmarkReport(UMBmarkStudy):
             doc["monte_carlo"] = {"before": _stats(self.before)}
             if self.after is not None:
                 doc["monte_carlo"]["after calibration"] = _stats(self.after)
-        if self.engine == "physics":
+        if not self.engine.drives_as_commanded:
             doc["physics_problems"] = list(self.problems)  # runs that did not drive as commanded
         doc["files"] = list(files or [])
         return doc
@@ -127,8 +173,8 @@ class UMBmarkReport(UMBmarkStudy):
             values: dict[str, Any] = {"before": [r.e_max_syst for r in self.before]}
             if self.after is not None:
                 values["after calibration"] = [r.e_max_syst for r in self.after]
-            physics = self.engine == "physics"
-            values["floor (nominal robot in physics)" if physics else "perfectly calibrated (noise floor)"] = (
+            noise_floor = self.engine.has_noise_model  # else the floor is the nominal robot's
+            values["perfectly calibrated (noise floor)" if noise_floor else "floor (nominal robot in physics)"] = (
                 self.floor.values
             )
             out["monte_carlo"] = fig.monte_carlo_figure(
@@ -140,10 +186,10 @@ class UMBmarkReport(UMBmarkStudy):
         """What the figures show, one line from the settings: simulated, the engine, the random
         errors (kinematic engine) and the seed, the robot as built (profile or file), runs."""
         s = self.settings
-        if self.engine == "physics":
-            how = "simulated in MuJoCo (physics engine: contacts, whole encoder ticks)"
+        if self.engine.has_noise_model:
+            how = f"simulated ({self.engine.name} engine), noise {s.get('noise') or 'typical'}"
         else:
-            how = f"simulated (kinematic engine), noise {s.get('noise') or 'typical'}"
+            how = "simulated in MuJoCo (physics engine: contacts, whole encoder ticks)"
         built = f"true robot {s['true_robot']}" if s.get("true_robot") else f"errors {s.get('errors') or 'typical'}"
         return f"{how}, seed {s.get('seed')}, {built}; {self.runs} runs per direction"
 
@@ -157,12 +203,29 @@ class UMBmarkReport(UMBmarkStudy):
 
     @property
     def _floor_label(self) -> str:
-        if self.engine == "physics":
-            return "floor (nominal robot in physics)"
-        return "noise floor (95th percentile)"
+        if self.engine.has_noise_model:
+            return "noise floor (95th percentile)"
+        return "floor (nominal robot in physics)"
 
     def plot(self, kind: str = "return_errors"):
-        """One figure of :meth:`figures` (default: the return positions, before and after)."""
+        """One figure of :meth:`figures` (default: the return positions, before and after).
+
+        Parameters
+        ----------
+        kind : {"return_errors", "euclidean_errors", "trajectories", "monte_carlo"}
+            The figure; ``monte_carlo`` only with more than one trial.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        Raises
+        ------
+        InputError
+            An unknown ``kind``.
+        ImportError
+            matplotlib is missing (the message names the ``viz`` extra).
+        """
         figures = self.figures()
         if kind not in figures:
             raise InputError(f"unknown figure {kind!r}; one of {sorted(figures)}")
@@ -172,7 +235,34 @@ class UMBmarkReport(UMBmarkStudy):
     def write(self, folder, *, figure_format: str = "png", dpi: float = DPI, inputs=()) -> dict:
         """Write the report folder (replaced as a whole if omnikin wrote it; a foreign non-empty
         folder is refused; nothing changes if writing fails: :mod:`omnikin.io.output`).
-        Returns the ``result.json`` document written."""
+        Returns the ``result.json`` document written.
+
+        Parameters
+        ----------
+        folder : str or os.PathLike
+            The report folder: ``report.md``, ``result.json``, the measurement, calibration and
+            robot files, and the figures (none without matplotlib).
+        figure_format : str, default "png"
+            File format of the figures (a matplotlib format).
+        dpi : float, default DPI
+            Resolution of raster figures [dots per inch].
+        inputs : sequence of path, default ()
+            Files the study read, which the folder may not replace.
+
+        Returns
+        -------
+        dict
+            The ``result.json`` document (:meth:`as_dict`).
+
+        Raises
+        ------
+        InputError
+            A bad ``figure_format`` or ``dpi``, or a missing parent folder.
+        OutputExistsError
+            A folder omnikin did not write, or one that is an input.
+        OutputError
+            Writing failed (the folder is left as it was).
+        """
         from ..io.output import check_output, report_folder
         from ..io.robot_file import robot_text
         from ..io.run_poses import run_poses_text
@@ -217,15 +307,17 @@ class UMBmarkReport(UMBmarkStudy):
         return (
             f"omnikin umbmark {robot} --mode {self.mode} --runs {self.runs} --side {self.side:g} "
             f"--rate {self.rate:g} --seed {s.get('seed')}"
-            + (self._physics_options() if self.engine == "physics" else f" --noise {s.get('noise')}")
+            + (f" --noise {s.get('noise')}" if self.engine.has_noise_model else self._physics_options())
             + (f" --true-robot {s['true_robot']}" if s.get("true_robot") else f" --errors {s.get('errors')}")
             + (f" --trials {self.trials}" if self.trials > 1 else "")
             + ("" if s.get("calibrate", True) else " --no-calibrate")
         )
 
     def _physics_options(self) -> str:
-        step = self.settings.get("step")
-        return " --engine physics" + (f" --step {step:g}" if step is not None and step != DEFAULT_STEP else "")
+        step = self.engine.options.get("step")
+        return f" --engine {self.engine.name}" + (
+            f" --step {step:g}" if step is not None and step != DEFAULT_STEP else ""
+        )
 
     def _measurement_note(self, stage: str) -> str:
         robot = self.settings.get("robot") or self.robot.name
@@ -336,7 +428,7 @@ def run_umbmark(
     seed: int = 1,
     trials: int = 1,
     calibrate: bool = True,
-    engine: str = "kinematic",
+    engine="kinematic",
     step: float | None = None,
     max_memory: float = DEFAULT_MEMORY,
     max_time: float = DEFAULT_TIME,
@@ -351,24 +443,82 @@ def run_umbmark(
     engine, whose random errors are its contacts'); ``rate`` [Hz]; ``trials``: repeated
     UMBmark procedures (Monte Carlo over the noise; the robot as built and its calibration
     stay the same); ``calibrate``: run the calibration step (:mod:`omnikin.evaluation.procedure`);
-    ``engine``: ``kinematic`` or ``physics`` (every run in MuJoCo, and the floor of the nominal
-    robot: :mod:`omnikin.evaluation.physics_study`) at time step ``step`` [s] (default 2 ms;
-    physics only). ``progress`` is called with the name of each
+    ``engine``: an :class:`~omnikin.simulation.engine.Engine` or its name, ``kinematic`` or
+    ``physics`` (every run in MuJoCo, and the floor of the nominal robot:
+    :mod:`omnikin.evaluation.physics_study`) at time step ``step`` [s] (default 2 ms; physics
+    only; :func:`~omnikin.physics.engines.engine_named`). ``progress`` is called with the name of each
     step (of each run, in physics). A study estimated to need more than
     ``max_memory`` [bytes] or ``max_time`` [s] is refused up front
     (:func:`~omnikin.evaluation.procedure.check_cost`), after every setting has been checked;
     ``on_cost``, if given, is called with that estimate first (``omnikin umbmark`` checks it
     against its options and says when the study will take long).
+
+    Each run starts at the origin of the world frame (``odom``) heading along +x and drives a
+    ``side`` square (Borenstein and Feng 1996; docs/conventions.md); its return error is the true
+    end pose minus the odometry end pose.
+
+    Parameters
+    ----------
+    robot : str, os.PathLike or Robot, default "tomasi-omni3"
+        The nominal robot (preset name, robot file or Robot); it needs encoders.
+    true_robot : str, os.PathLike or Robot, optional
+        The robot as built, with the wheels of ``robot``; replaces the draw from ``errors``.
+    errors : str or ErrorProfile, default "typical"
+        Systematic-error profile the robot as built is drawn from.
+    mode : {"rotate", "translate"}, default "rotate"
+        Turn in place at the corners, or translate along the sides (holonomic robots).
+    runs : int, default 5
+        Runs per direction (cw and ccw) of each procedure.
+    side : float, default 4.0
+        Side of the square [m].
+    noise : str or NoiseModel, optional
+        Random errors of the kinematic engine; default ``"typical"``. Refused by the physics
+        engine.
+    rate : float, default 100.0
+        Sample rate [Hz] of encoders and odometry.
+    seed : int, default 1
+        Seed (>= 0) of the robot as built, the runs and the floor.
+    trials : int, default 1
+        UMBmark procedures (Monte Carlo over the noise).
+    calibrate : bool, default True
+        Calibrate and run UMBmark again.
+    engine : {"kinematic", "physics"}, default "kinematic"
+        The kinematic simulation or MuJoCo.
+    step : float, optional
+        Physics time step [s]; default 2 ms. Physics only.
+    max_memory : float, default DEFAULT_MEMORY
+        Largest memory [bytes] the study may be estimated to need.
+    max_time : float, default DEFAULT_TIME
+        Largest run time [s] the study may be estimated to need.
+    progress : callable, optional
+        Called with the name of each step.
+    on_cost : callable, optional
+        Called with the :class:`~omnikin.evaluation.procedure.Cost` estimate before the study.
+
+    Returns
+    -------
+    UMBmarkReport
+        The study and its settings.
+
+    Raises
+    ------
+    InputError
+        A bad setting (the message names its option), a robot without encoders, or a square
+        the robot cannot drive in ``mode``.
+    ResourceLimitError
+        A study estimated to need more than ``max_memory`` or ``max_time``.
+    CalibrationFitError
+        No robot of the layout explains the calibration runs.
+    PhysicsError
+        The physics engine failed.
     """
-    noise, step = engine_options(engine, noise, step)
+    engine = as_engine(engine, noise=noise, step=step)
     nominal = robot_of(robot)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
-    if step is not None:
-        from ..physics.run import check_rate_steps
-
-        check_rate_steps(rate, step)  # the encoders read at whole steps
+    engine.check_rate(rate)  # physics: the encoders read at whole steps
     seeds = streams(seed)
-    noise_model = None if noise is None else noise_of(noise)
+    noise_model = engine.noise_model(noise)
+    noise = engine.default_noise if noise is None else noise  # as the settings record it
     encoded_wheels(nominal)  # UMBmark measures with the encoders
     require_square(nominal, side, mode)
     true, injected = as_built(nominal, true_robot, errors, seeds["robot"])
@@ -382,7 +532,6 @@ def run_umbmark(
         trials=trials,
         calibrate=calibrate,
         engine=engine,
-        step=step,
         max_time=max_time,
     )
     if on_cost is not None:
@@ -398,9 +547,8 @@ def run_umbmark(
         calibrate=calibrate,
         progress=progress,
     )
-    if noise_model is None:
-        assert step is not None
-        study = physics_umbmark_study(nominal, true, seed=seed, step=step, **common)
+    if noise_model is None:  # no random error model: the physics study, its floor the nominal robot's
+        study = physics_umbmark_study(nominal, true, seed=seed, engine=engine, **common)
     else:
         study = umbmark_study(nominal, true, noise=noise_model, seed=seed, **common)
     settings = {
@@ -408,8 +556,8 @@ def run_umbmark(
         "true_robot": setting_name(true_robot),
         "errors": None if true_robot is not None else setting_name(errors),
         "noise": setting_name(noise),
-        "engine": engine,
-        "step": step,
+        "engine": engine.name,
+        "step": engine.options.get("step"),
         "mode": mode,
         "runs": int(runs),
         "side": float(side),
@@ -430,29 +578,61 @@ def umbmark_cost(
     rate: float = 100.0,
     trials: int = 1,
     calibrate: bool = True,
-    engine: str = "kinematic",
+    engine="kinematic",
     step: float | None = None,
     max_time: float | None = None,
 ) -> Cost:
     """What :func:`run_umbmark` with these settings will take (robot-samples, memory, time):
     :func:`~omnikin.evaluation.procedure.estimate_cost`, or
     :func:`~omnikin.evaluation.physics_study.physics_cost` for the physics engine (which
-    does not build a model whose size alone says it takes longer than ``max_time`` [s])."""
-    _, step = engine_options(engine, None, step)
+    does not build a model whose size alone says it takes longer than ``max_time`` [s]).
+    ``engine``: an :class:`~omnikin.simulation.engine.Engine` or its name (with ``step``)."""
+    engine = as_engine(engine, step=step)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
     settings: dict[str, Any] = dict(side=side, mode=mode, runs=runs, rate=rate, trials=trials, calibrate=calibrate)
-    if step is not None:
-        return physics_cost(robot_of(robot), step=step, budget=max_time, **settings)
+    if isinstance(engine, PhysicsEngine):
+        return physics_cost(robot_of(robot), engine=engine, budget=max_time, **settings)
     return estimate_cost(robot_of(robot), **settings)
 
 
 # --- analyze ---------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class UMBmarkAnalysis(UMBmarkResult):
-    """UMBmark of measured runs (:func:`analyze_umbmark`) that plots itself."""
+    """UMBmark of measured runs (:func:`analyze_umbmark`) that plots itself.
+
+    Attributes
+    ----------
+    cw, ccw : DirectionResult
+        The runs of each direction: return errors ``epsilon`` ``(n, 3)`` [m, m, rad] (true minus
+        calculated end pose, world frame) and their centre of gravity at distance ``r_cg`` [m].
+    side : float
+        Side of the square [m].
+    mode : str
+        ``rotate`` or ``translate``.
+    borenstein : Borenstein or None
+        Borenstein's correction (None unless a differential-drive ``robot`` was given).
+    e_max_syst : float
+        ``max(r_cg_cw, r_cg_ccw)`` [m] (Borenstein and Feng 1996).
+    """
 
     def plot(self, kind: str = "return_errors"):
-        """``return_errors`` (return positions and centres of gravity) or ``euclidean_errors``."""
+        """``return_errors`` (return positions and centres of gravity) or ``euclidean_errors``.
+
+        Parameters
+        ----------
+        kind : {"return_errors", "euclidean_errors"}
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        Raises
+        ------
+        InputError
+            An unknown ``kind``.
+        ImportError
+            matplotlib is missing (the message names the ``viz`` extra).
+        """
         require_viz()
         from ..viz import umbmark as fig
 
@@ -466,7 +646,18 @@ class UMBmarkAnalysis(UMBmarkResult):
         return makers[kind]({"measured": self}, "UMBmark of measured runs", caption=f"measured on a real robot: {runs}")
 
     def as_dict(self, level: float = LEVEL) -> dict:
-        """The ``omnikin umbmark analyze --json`` document (lengths in metres; ``units``)."""
+        """The ``omnikin umbmark analyze --json`` document (lengths in metres; ``units``).
+
+        Parameters
+        ----------
+        level : float, default LEVEL
+            Confidence level (0 .. 1, exclusive) of the E_max,syst interval.
+
+        Returns
+        -------
+        dict
+            Side, mode, the return errors per direction, ``e_max_syst`` and its interval [m].
+        """
         return {**UMBmarkResult.as_dict(self, level), "confidence_level": level, "units": UNITS}
 
 
@@ -477,6 +668,29 @@ def analyze_umbmark(measurements, *, robot=None, side: float = 4.0) -> UMBmarkAn
     [m], optional headings; :mod:`omnikin.io.runs`) or ``{"cw": eps, "ccw": eps}`` return
     errors ``(n, 2)`` or ``(n, 3)`` [m, m, rad]; ``robot``: a differential drive also gets
     Borenstein's correction; ``side`` [m] of the square.
+
+    Parameters
+    ----------
+    measurements : str, os.PathLike or dict
+        A measurements file, or ``{"cw": eps, "ccw": eps}`` with ``eps`` array_like of shape
+        ``(n, 2)`` or ``(n, 3)``: the return errors ``(x, y[, theta])`` [m, m, rad] of each run,
+        true (measured) minus calculated (odometry) end pose, world frame.
+    robot : str, os.PathLike or Robot, optional
+        The robot measured; a differential drive also gets Borenstein's correction.
+    side : float, default 4.0
+        Side of the square [m].
+
+    Returns
+    -------
+    UMBmarkAnalysis
+        Centres of gravity per direction and E_max,syst [m].
+
+    Raises
+    ------
+    RunsFileError
+        A measurements file that cannot be read, or runs missing in one direction.
+    InputError
+        Return errors of a bad shape or not finite, or a bad ``side``.
     """
     if isinstance(measurements, dict):
         eps = measurements

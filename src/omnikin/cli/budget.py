@@ -5,7 +5,7 @@ number of Monte Carlo trials: omnikin cannot bound these itself, and a hostile o
 value (``--rate 1e4 --path 'line 1e4'``) would end in a ``MemoryError`` traceback, or a machine
 swapping for an hour. A command estimates what the job needs from the sizes it is given and
 calls :func:`require` before the work; a job over budget is refused with one line naming the
-estimate, the limit, and what to change (the check of :mod:`omnikin.resource_limits`, which
+estimate, the limit, and what to change (the check of :mod:`omnikin.common.resource_limits`, which
 the Python entry points make too, with the limits named as options here)::
 
     omnikin: error: simulate: about 6.1G of memory for 2.2e+07 samples, more than
@@ -29,10 +29,9 @@ import re
 import sys
 from dataclasses import dataclass
 
-from ..errors import ResourceLimitError
-from ..messages import shorten
-from ..number_text import PLAIN_NUMBER
-from ..resource_limits import (
+from ..common.messages import shorten
+from ..common.number_text import PLAIN_NUMBER
+from ..common.resource_limits import (
     DEFAULT_MEMORY,
     DEFAULT_TIME,
     LimitNames,
@@ -40,6 +39,7 @@ from ..resource_limits import (
     format_seconds,
     require_within,
 )
+from ..errors import ResourceLimitError
 
 OPTIONS = LimitNames("--max-memory", "--max-time")
 """The limits as the command line names them."""
@@ -93,7 +93,7 @@ class Budget:
 # --- options ---------------------------------------------------------------------------------------------
 def quantity(text: str, units: dict, what: str, spelling: str) -> float:
     """The value of ``text``, a number in the one grammar of numbers
-    (:data:`omnikin.number_text.PLAIN_NUMBER`: no blanks, ``_``, other scripts' digits, ``inf``)
+    (:data:`omnikin.common.number_text.PLAIN_NUMBER`: no blanks, ``_``, other scripts' digits, ``inf``)
     followed at once by one of ``units`` (suffix -> scale), times the unit's scale; else an
     argparse usage error naming ``what`` (``"size"``) and how it is written (``spelling``)."""
     found = _UNIT.search(text) if isinstance(text, str) else None

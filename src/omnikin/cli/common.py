@@ -24,10 +24,10 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from ..common.messages import shorten
+from ..common.number_text import number_problem
 from ..errors import InputError, Terminated
 from ..io.output import Output, check_outputs, is_stdout
-from ..messages import shorten
-from ..number_text import number_problem
 
 FORCE_HELP = "replace existing output files (never an input; a folder only if omnikin wrote it)"
 
@@ -95,6 +95,19 @@ def add_step_option(parser, what: str = "time step of the physics engine") -> No
     )
 
 
+def engine_of(args, name: str | None = None):
+    """The :class:`~omnikin.simulation.engine.Engine` the parsed options choose: ``--engine``
+    (or ``name``, for a command that names it otherwise) made with ``--noise`` and ``--step``
+    where the command has them (:func:`omnikin.physics.engines.engine_named`: each engine
+    refuses the other's option in one line). The one place a command turns the name into an
+    engine; everything after holds the object."""
+    from ..physics.engines import engine_named
+
+    return engine_named(
+        args.engine if name is None else name, noise=getattr(args, "noise", None), step=getattr(args, "step", None)
+    )
+
+
 def add_teleop_options(parser) -> None:
     """``--speed``, ``--turn`` (what a held key sets) and ``--max-speed``, ``--max-turn`` (the
     runtime's limits) of the commands driven from the keyboard (``sim``, ``view``)."""
@@ -105,9 +118,9 @@ def add_teleop_options(parser) -> None:
 
 
 def teleop_limits(args):
-    """The :class:`~omnikin.limits.MotionLimits` of :func:`add_teleop_options`, every one of the
+    """The :class:`~omnikin.motion.limits.MotionLimits` of :func:`add_teleop_options`, every one of the
     four options checked positive first (one line naming the option as typed)."""
-    from ..limits import MotionLimits
+    from ..motion.limits import MotionLimits
 
     for flag, value in (
         ("--speed", args.speed),
@@ -330,7 +343,7 @@ rate needs (and :class:`int` refuses text of more than 4300 digits with a messag
 
 
 def number(text: str) -> float:
-    """An argparse ``type``: a finite plain number (:mod:`omnikin.number_text`, the grammar of
+    """An argparse ``type``: a finite plain number (:mod:`omnikin.common.number_text`, the grammar of
     every number omnikin reads from text), else a usage error naming what is wrong."""
     problem = number_problem(text)
     if problem:
@@ -353,7 +366,7 @@ def whole(text: str) -> int:
 
 # --- odometry bounds --------------------------------------------------------------------------------
 def _bound(check, what: str):
-    """An argparse ``type``: a plain number or ``inf`` that ``check`` (an :mod:`omnikin.encoders`
+    """An argparse ``type``: a plain number or ``inf`` that ``check`` (an :mod:`omnikin.odometry.plausibility`
     option check) takes, else a usage error quoting the text as typed."""
 
     def parse(text: str) -> float:
@@ -373,11 +386,11 @@ def _bound(check, what: str):
 
 def add_wheel_bound_options(parser, *, angles: bool = False) -> None:
     """``--max-wheel-speed RAD_S`` and ``--max-wheel-accel RAD_S2``: the speed and change-of-speed
-    rules of the odometry commands (:mod:`omnikin.encoders`, ``docs/conventions.md``), passed to
+    rules of the odometry commands (:mod:`omnikin.odometry.plausibility`, ``docs/conventions.md``), passed to
     the estimator as ``max_wheel_speed`` and ``max_wheel_accel`` (None when not given: each
     wheel's own bound). ``angles``: the command reads wheel angles (joint states), which have the
     change-of-speed rule only when ``--max-wheel-accel`` is given; else encoder ticks."""
-    from ..encoders import (
+    from ..odometry.plausibility import (
         DEFAULT_RIM_ACCEL,
         DEFAULT_RIM_SPEED,
         JUMP_MARGIN,

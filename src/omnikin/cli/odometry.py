@@ -1,5 +1,5 @@
 """``omnikin odometry``: an encoder tick log integrated into a trajectory
-(:func:`omnikin.odometry.batch_odometry`), written as CSV, TUM or KITTI."""
+(:func:`omnikin.odometry.batch.batch_odometry`), written as CSV, TUM or KITTI."""
 
 from __future__ import annotations
 
@@ -78,7 +78,7 @@ def run(args) -> int:
     from ..io.logs import read_tick_log
     from ..io.output import is_stdout
     from ..io.trajectories import write_trajectory
-    from ..odometry import batch_odometry
+    from ..odometry.batch import batch_odometry
 
     to_stdout = is_stdout(args.output)
     robot = load_robot(args.robot)

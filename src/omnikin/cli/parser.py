@@ -4,7 +4,7 @@
   prints it as ``omnikin: error: ik: ...; see 'omnikin ik --help'`` and exits 2) instead of
   argparse's usage block followed by the message.
 * **Did you mean.** An unknown sub-command (``omnikin shwo``) or option (``omnikin ik --jsn``)
-  names the closest known ones (:func:`omnikin.messages.did_you_mean`; argparse before Python
+  names the closest known ones (:func:`omnikin.common.messages.did_you_mean`; argparse before Python
   3.14 has no suggestions).
 * **Negative numbers are values.** ``omnikin ik tomasi-omni3 -2.5e-3 0 0``: argparse takes any
   argument that starts with ``-`` for an option unless it looks like ``-2`` or ``-2.5`` (it does
@@ -14,7 +14,7 @@
   ``" -1"`` is refused like ``" 1"``. (``--`` before the values, or ``--option=-1e3``, work too.)
 * **Typed text is quoted shortened.** Every message that quotes an argument (an unknown command
   or option, an unexpected argument, an invalid choice, argparse's own messages) quotes at most
-  :func:`omnikin.messages.shorten` of it, so that the reason after it survives the bounded error
+  :func:`omnikin.common.messages.shorten` of it, so that the reason after it survives the bounded error
   line of ``omnikin.cli.process``.
 * **Options and positionals mix freely.** ``omnikin calibrate ROBOT --side 3 RUNS -o out.yaml``:
   a command without sub-commands is parsed like :meth:`argparse.ArgumentParser.parse_intermixed_args`
@@ -34,8 +34,8 @@ import argparse
 import re
 import sys
 
+from ..common.messages import did_you_mean, shorten
 from ..errors import UsageError
-from ..messages import did_you_mean, shorten
 
 NEGATIVE_NUMBER = re.compile(r"-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?[a-z]*|-(inf|infinity|nan)", re.IGNORECASE)
 """A negative number in Python's float syntax, or with a unit (matched in full): ``-2``,
@@ -50,7 +50,7 @@ _PARSER = "_omnikin_parser"
 
 
 QUOTE_LIMIT = 60
-"""Longest argument a message quotes in full [characters] (:func:`omnikin.messages.shorten`'s cut)."""
+"""Longest argument a message quotes in full [characters] (:func:`omnikin.common.messages.shorten`'s cut)."""
 
 
 class CommandParser(argparse.ArgumentParser):

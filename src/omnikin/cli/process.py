@@ -24,8 +24,8 @@ import threading
 import warnings
 from collections.abc import Callable, Iterator
 
+from ..common.messages import one_line
 from ..errors import InfeasibleTwistError, InputError, OmnikinError, OutputError, Terminated, UsageError
-from ..messages import one_line
 from .common import STOPPED, running, stop_name
 from .parser import CommandParser
 

@@ -50,6 +50,9 @@ the same draw for the same seed as ``omnikin simulate``); only the kinematic one
 RVIZ_ALONE = ("params", "port", "baud", "errors", "true_robot", "seed", "noise", "ros_args")
 """Options that ``--rviz-config`` (print a path, start nothing) refuses to be given with."""
 
+ENGINE_OF_BACKEND = {"sim": "kinematic", "physics": "physics"}
+"""The simulated back-ends by the engine that simulates them (:func:`~omnikin.cli.common.engine_of`)."""
+
 PHYSICS_MAX_LAG = 0.25
 """[s] of simulated time one control cycle may catch up on the physics back-end; beyond it the
 simulation drops wall-clock time, counted in ``/diagnostics`` (``PhysicsBackend``'s ``max_lag``)."""
@@ -142,9 +145,7 @@ def run(args) -> int:
     from ..ros import require_rclpy
     from ..ros.params import check_names, load_params, ros_args_names
     from ..runtime.backends import WheelBackend
-    from ..simulation.backend import SimBackend
-    from ..simulation.error_models import noise as noise_profile
-    from .common import load_robot, robot_as_built
+    from .common import engine_of, load_robot, robot_as_built
 
     if args.rviz_config:
         from ..ros import RVIZ_CONFIG
@@ -171,10 +172,8 @@ def run(args) -> int:
     def given(names):
         return [f"--{n.replace('_', '-')}" for n in names if getattr(args, n) is not None]
 
-    if args.backend == "physics":
-        from ..evaluation.physics_study import check_physics_noise
-
-        check_physics_noise(args.noise)
+    # a simulated back-end's engine (the physics engine refuses --noise in one line)
+    engine = engine_of(args, ENGINE_OF_BACKEND[args.backend]) if args.backend in ENGINE_OF_BACKEND else None
     for owners, options in OPTIONS_OF.items():
         if args.backend not in owners and given(options):
             raise InputError(f"{', '.join(given(options))} apply only to --backend {' or '.join(owners)}")
@@ -182,7 +181,7 @@ def run(args) -> int:
         raise InputError("--errors and --true-robot both give the robot as built: give one of them")
     check_seed(args.seed)
     true = None
-    if args.backend in ("sim", "physics"):
+    if engine is not None:
         # the robot as built, drawn as omnikin simulate draws it: the same robot for the same --seed
         seeds = np.random.SeedSequence(1 if args.seed is None else args.seed).spawn(2)
         true, _ = robot_as_built(robot, args.true_robot, args.errors or "typical", seeds[0])
@@ -200,16 +199,16 @@ def run(args) -> int:
             timeouts = {"link_timeout": args.link_timeout, "connect_timeout": connect}
         backend = SerialBackend(robot, args.port[0] if len(args.port) == 1 else args.port, args.baud, **timeouts)
         backend.wait_ready()
-    elif args.backend == "physics":
-        from ..physics.backend import PhysicsBackend
-        from ..physics.cost import real_time_shortfall
-
-        backend = PhysicsBackend(robot, true, max_lag=PHYSICS_MAX_LAG)
-        slow = real_time_shortfall(true or robot, "the back-end will drop simulated time (counted in /diagnostics)")
-        if slow:
-            print(f"omnikin: note: ros: {slow}", file=sys.stderr)
     else:
-        backend = SimBackend(robot, true, noise_profile(args.noise or "typical"), rng=seeds[1])
+        assert engine is not None
+        noise = engine.noise_model(args.noise)
+        backend = engine.backend(robot, true, noise=noise, rng=seeds[1], max_lag=PHYSICS_MAX_LAG)
+        if engine.measured_cost:  # a model stepped in real time: can this machine keep up?
+            from ..physics.cost import real_time_shortfall
+
+            slow = real_time_shortfall(true or robot, "the back-end will drop simulated time (counted in /diagnostics)")
+            if slow:
+                print(f"omnikin: note: ros: {slow}", file=sys.stderr)
     from ..ros.node import run as run_node
 
     return run_node(robot, backend, values, args.ros_args)

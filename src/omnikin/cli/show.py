@@ -10,8 +10,8 @@ import sys
 
 import numpy as np
 
+from ..common.messages import shorten
 from ..errors import CliError
-from ..messages import shorten
 from .common import (
     add_output,
     add_output_options,

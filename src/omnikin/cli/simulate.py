@@ -8,8 +8,9 @@ import contextlib
 import math
 import sys
 
+from ..common.messages import shorten
 from ..errors import InfeasibleTwistError, InputError, OmnikinError
-from ..messages import shorten
+from ..physics.engines import ENGINE_NAMES
 from .bag import MESSAGE_SECONDS
 from .budget import Budget, add_budget_options, require
 from .common import (
@@ -20,6 +21,7 @@ from .common import (
     check_seed,
     console,
     declare_inputs,
+    engine_of,
     load_robot,
     number,
     physics_hint,
@@ -31,8 +33,6 @@ SIM_SAMPLE_SECONDS = 4 * MESSAGE_SECONDS
 memory of it all: :func:`omnikin.simulation.simulate.run_cost`)."""
 LOG_ROW_SECONDS = 5e-6
 """simulate --log: per sample, its row of the tick log made and written (measured 19 us)."""
-ENGINES = ("kinematic", "physics")
-"""simulate --engine: the kinematic simulation (omnikin.simulation) or MuJoCo (omnikin.physics)."""
 PROGRESS_AFTER = 3.0
 """simulate --engine physics shows its progress once a run has taken this long [s]."""
 
@@ -57,8 +57,8 @@ paths (';' chains several): 'square cw|ccw rotate|translate [SIDE]', 'line LENGT
 
 def add_parser(sub, robot_help: str) -> None:
     """Add ``simulate`` to ``sub``."""
+    from ..motion.timing import RATE_RANGE
     from ..simulation.error_models import NOISE
-    from ..simulation.motion import RATE_RANGE
 
     sp = sub.add_parser(
         "simulate",
@@ -84,7 +84,7 @@ def add_parser(sub, robot_help: str) -> None:
     )
     sp.add_argument(
         "--engine",
-        choices=ENGINES,
+        choices=ENGINE_NAMES,
         default="kinematic",
         help="kinematic: wheel motion and error models; physics: MuJoCo with rollers and motors "
         "(extra physics; see below) (default kinematic)",
@@ -130,7 +130,7 @@ def parse_paths(text: str):
     """A plan from one or more ``;``-separated paths of the runs-file grammar
     (:func:`omnikin.io.runs.path_plan`: plain numbers)."""
     from ..io.runs import path_plan
-    from ..plans import PATH_BLANKS
+    from ..motion.plans import PATH_BLANKS
 
     parts = [p.strip(PATH_BLANKS) for p in text.split(";")]
     if not any(parts):
@@ -161,21 +161,20 @@ def run(args) -> int:
     """Simulate the run, write ``--bag`` and/or ``--log``, print a summary (or ``--json``); status 0."""
     from ..api.simulation import simulate
     from ..io.bags import record_run, require_rosbags
-    from ..simulation.error_models import noise as noise_profile
-    from ..simulation.motion import check_rate_range
+    from ..motion.timing import check_rate_range
 
     if args.bag is None and args.log is None:
         raise InputError("simulate: give --bag OUT.bag and/or --log LOG.csv")
-    physics = _engine_options(args)
+    engine = _engine_options(args)
     if args.bag is not None:
         require_rosbags()
     robot = load_robot(args.robot)
-    if args.log is not None and not physics:
+    if args.log is not None and engine.has_noise_model:
         _check_tick_log(args, robot)
     check_seed(args.seed)
     check_rate_range(args.rate, "--rate")
     plan = parse_paths(args.path)
-    noise = None if physics else noise_profile(args.noise)
+    noise = engine.noise_model(args.noise)
     budget = Budget.of(args)
     with _drivable(args), _progress_bar() as progress:
         simulation = simulate(
@@ -186,12 +185,11 @@ def run(args) -> int:
             noise=noise,
             seed=args.seed,
             rate=args.rate,
-            engine=args.engine,
-            step=args.step,
+            engine=engine,
             max_memory=budget.memory,
             max_time=budget.seconds,
             progress=progress,
-            on_cost=lambda cost: _within_budget(args, cost, physics),
+            on_cost=lambda cost: _within_budget(args, engine, cost),
         )
     run = simulation.run
     custom = {
@@ -200,9 +198,9 @@ def run(args) -> int:
         "omnikin.seed": str(args.seed),
         "omnikin.errors": "file " + args.true_robot if args.true_robot else args.errors,
         "omnikin.rate": f"{args.rate:g}",
-        "omnikin.engine": args.engine,
+        "omnikin.engine": engine.name,
     }
-    if not physics:
+    if engine.has_noise_model:
         custom["omnikin.noise"] = args.noise
     counts = (
         record_run(args.bag, run, robot, start=args.start, storage=args.storage, custom=custom, force=args.force)
@@ -210,7 +208,7 @@ def run(args) -> int:
         else {}
     )
     if args.log is not None:
-        _write_tick_log(args, robot, run)
+        _write_tick_log(args, engine, robot, run)
     truth_end = run.truth[0, -1]
     odom_end = run.odometry[-1]
     diff = simulation.end_error
@@ -220,7 +218,7 @@ def run(args) -> int:
         "errors": None if args.true_robot else args.errors,
         "true_robot": args.true_robot,
         "noise": args.noise,
-        "engine": args.engine,
+        "engine": engine.name,
         "step": args.step,
         "seed": args.seed,
         "rate": args.rate,
@@ -237,13 +235,9 @@ def run(args) -> int:
     if simulation.injected is not None:
         summary["injected_errors"] = simulation.injected.as_dict()
     saturated = getattr(run, "saturated", 0)
-    if physics:
-        from ..physics.run import PhysicsRun
-
-        assert isinstance(run, PhysicsRun)  # what the physics engine returns
-        summary.update(run.summary())
-        for problem in run.problems():  # the run did not drive as commanded: one line each
-            print(f"omnikin: warning: {robot.name}: {problem}", file=sys.stderr)
+    summary.update(engine.summary(run))
+    for problem in engine.problems(run):  # the run did not drive as commanded: one line each
+        print(f"omnikin: warning: {robot.name}: {problem}", file=sys.stderr)
     if saturated:
         print(
             f"omnikin: warning: {robot.name}: {saturated} of {len(run.t) - 1} commands asked a motor beyond its "
@@ -255,7 +249,7 @@ def run(args) -> int:
         return 0
     noise_text = args.noise or "from the contacts"
     console(120).print(
-        f"{robot.name}: '{args.path}' at {args.rate:g} Hz ({args.engine} engine), {summary['samples']} samples over "
+        f"{robot.name}: '{args.path}' at {args.rate:g} Hz ({engine.name} engine), {summary['samples']} samples over "
         f"{summary['duration']:.6g} s (errors {summary['errors'] or 'from ' + args.true_robot}, noise {noise_text}, "
         f"seed {args.seed})\n"
         f"end pose: truth x={truth_end[0]:.6g} m, y={truth_end[1]:.6g} m, theta={truth_end[2]:.6g} rad; odometry "
@@ -272,25 +266,29 @@ def run(args) -> int:
     return 0
 
 
-def _engine_options(args) -> bool:
-    """Check the options against ``--engine`` and fill in the engine's defaults (``--noise``
-    typical for the kinematic engine; ``--step`` 2 ms for physics); True for physics.
-    The physics engine maps ``--errors``, ``--true-robot`` and ``--seed`` (the robot as built is
-    the physical model), has no random errors (a ``--noise`` other than none is refused: slip
-    comes from the contacts, the encoders count whole ticks); ``--step`` is the physics engine's alone."""
-    from ..evaluation.physics_study import engine_options
+def _engine_options(args):
+    """The engine of ``--engine`` (:func:`~omnikin.cli.common.engine_of`), the options checked
+    against it and its defaults filled in (``--noise`` typical for the kinematic engine;
+    ``--step`` 2 ms for physics). The physics engine maps ``--errors``, ``--true-robot`` and
+    ``--seed`` (the robot as built is the physical model), has no random errors (any ``--noise``
+    is refused: slip comes from the contacts, the encoders count whole ticks); ``--step`` is the
+    physics engine's alone."""
+    engine = engine_of(args)
+    args.noise = engine.default_noise if args.noise is None else args.noise
+    args.step = engine.options.get("step")
+    return engine
 
-    args.noise, args.step = engine_options(args.engine, args.noise, args.step)
-    return args.engine == "physics"
 
-
-def _within_budget(args, cost, physics: bool) -> None:
+def _within_budget(args, engine, cost) -> None:
     """Check an estimate of :func:`omnikin.simulate` (:class:`~omnikin.api.SimulationCost`) against
-    ``--max-memory`` and ``--max-time``, with the time of writing ``--bag`` and ``--log``, once the
-    run's duration is known after the stamps its outputs can hold (:func:`_check_stamps`); the
-    physics engine's first estimate (before the plan is sampled) for its memory alone."""
-    if cost.seconds is None:  # the samples' memory first (the run can only add its tail), then the plan sampled
-        require(args, "simulate", memory=cost.memory, hint="lower --rate or shorten --path")
+    ``--max-memory`` and ``--max-time``: the samples' memory first (physics: the run can only add
+    its tail), then, once the run's duration is known, after the stamps its outputs can hold
+    (:func:`_check_stamps`), its memory and time with the time of writing ``--bag`` and ``--log``
+    (the physics engine's first estimate, before the plan is sampled, has its memory alone)."""
+    require(
+        args, "simulate", memory=cost.memory, size=f"{cost.samples:.3g} samples", hint="lower --rate or shorten --path"
+    )
+    if cost.seconds is None:
         return
     samples = cost.duration * args.rate  # in physics, the waits and the tail at their limits
     _check_stamps(args, duration=cost.duration)
@@ -301,7 +299,7 @@ def _within_budget(args, cost, physics: bool) -> None:
         memory=cost.memory * samples / max(cost.samples, 1.0),
         seconds=cost.seconds + samples * writing,
         size=f"{cost.samples:.3g} samples",
-        hint=physics_hint(args.step, "shorten --path") if physics else "lower --rate or shorten --path",
+        hint=physics_hint(args.step, "shorten --path") if engine.measured_cost else "lower --rate or shorten --path",
     )
 
 
@@ -339,11 +337,11 @@ def _progress_bar():
 
 
 def _check_stamps(args, duration: float) -> None:
-    """Refuse a --start whose stamps an output cannot hold (:func:`~omnikin.simulation.motion.check_start`),
+    """Refuse a --start whose stamps an output cannot hold (:func:`~omnikin.motion.timing.check_start`),
     before simulating: a bag's ROS 2 times (integer nanoseconds from 0 to 2**31 - 1 s), a tick
     log's times (read back as floats). ``duration`` [s]: at least the run's."""
     from ..io.bags import NS, ROS_TIME_SPAN
-    from ..simulation.motion import check_start
+    from ..motion.timing import check_start
 
     if args.bag is not None:
         check_start(args.start, duration, args.rate, "--start", output="a ROS 2 bag", span=ROS_TIME_SPAN, step=1 / NS)
@@ -362,7 +360,7 @@ def _check_tick_log(args, robot) -> None:
         )
 
 
-def _write_tick_log(args, robot, run) -> None:
+def _write_tick_log(args, engine, robot, run) -> None:
     import shlex
 
     from ..io.logs import write_tick_log
@@ -370,7 +368,7 @@ def _write_tick_log(args, robot, run) -> None:
     command = " ".join(
         ["omnikin simulate", shlex.quote(args.robot), "--path", shlex.quote(args.path)]
         + (["--true-robot", shlex.quote(args.true_robot)] if args.true_robot else ["--errors", args.errors])
-        + (["--engine", "physics", "--step", f"{args.step:g}"] if args.engine == "physics" else ["--noise", args.noise])
+        + (["--noise", args.noise] if engine.has_noise_model else ["--engine", engine.name, "--step", f"{args.step:g}"])
         + ["--seed", str(args.seed), "--rate", f"{args.rate:g}"]
         + ["--log", shlex.quote(args.log)]
     )

@@ -176,7 +176,7 @@ def run(args) -> int:
 
     _check_paths(args)
     require_sweep()
-    from ..sweep.engine import TLSFiles
+    from ..sweep.cluster import TLSFiles
 
     tls = TLSFiles(args.tls_ca_file, args.tls_cert, args.tls_key)
     tls.check(args.scheduler)

@@ -24,10 +24,10 @@ from ..api.umbmark import (
     analyze_umbmark,
     run_umbmark,
 )
-from ..evaluation.physics_study import ENGINES
-from ..number_text import mm_text, reduction_bounded, reduction_text
+from ..common.number_text import mm_text, reduction_bounded, reduction_text
+from ..motion.timing import RATE_RANGE
+from ..physics.engines import ENGINE_NAMES
 from ..simulation.error_models import NOISE, PROFILES
-from ..simulation.motion import RATE_RANGE
 from ..viz import FIGURE_FORMATS, MAX_DPI, MIN_DPI, dpi_problem
 from .budget import add_budget_options, require
 from .common import (
@@ -37,6 +37,7 @@ from .common import (
     command_inputs,
     console,
     declare_inputs,
+    engine_of,
     number,
     physics_hint,
     whole,
@@ -126,7 +127,7 @@ def add_parser(sub, robot_help: str) -> None:
     )
     sp.add_argument(
         "--engine",
-        choices=ENGINES,
+        choices=ENGINE_NAMES,
         default=d["engine"],
         help="kinematic: wheel motion with the --errors and --noise models; physics: every run in MuJoCo "
         "(rollers, motors; extra physics) on the robot as built, each run at roller phases drawn from --seed, "
@@ -297,10 +298,9 @@ def run(args) -> int:
     """Run the study (:func:`omnikin.run_umbmark`), write the report folder, print a summary (or
     ``result.json``); status 0."""
     inputs = command_inputs(args)
+    engine = engine_of(args)
 
     def within_budget(cost) -> None:  # every setting checked by now: refuse, or say it will take long
-        from ..physics.mjcf import time_step
-
         require(
             args,
             "umbmark",
@@ -308,11 +308,11 @@ def run(args) -> int:
             seconds=cost.seconds,
             size=f"{cost.samples:.3g} robot-samples",
             hint=physics_hint(
-                time_step(args.step),
+                engine.options["step"],
                 *[f"lower {option}" for option in ("--trials", "--runs") if getattr(args, option[2:]) > 1],
                 "shorten --side",
             )
-            if args.engine == "physics"
+            if engine.measured_cost
             else "lower --trials, --runs or --rate",
         )
 
@@ -329,8 +329,7 @@ def run(args) -> int:
             seed=args.seed,
             trials=args.trials,
             calibrate=args.calibrate,
-            engine=args.engine,
-            step=args.step,
+            engine=engine,
             max_memory=args.max_memory,
             max_time=args.max_time,
             progress=status.step,
@@ -347,12 +346,12 @@ def run(args) -> int:
     return 0
 
 
-def _umbmark_table(doc: dict):
+def _umbmark_table(report: UMBmarkReport, doc: dict):
     from rich.table import Table
 
     level = f"{doc['settings']['confidence_level'] * 100:g} %"
     t = Table()
-    floor = "floor" if doc["engine"] == "physics" else "noise floor"
+    floor = "noise floor" if report.engine.has_noise_model else "floor"
     for col in ("", "r_cg cw [mm]", "r_cg ccw [mm]", "E_max,syst [mm]", f"{level} interval [mm]", floor):
         t.add_column(col, justify="right" if col else "left")
     for key, label in (("before", "before"), ("after", "after calibration")):
@@ -377,9 +376,9 @@ def _print_summary(report: UMBmarkReport, doc: dict, out) -> None:
         f"UMBmark: {report.robot.name} as built, {s['runs']} runs per direction, {s['side']:g} m square, "
         f"{s['mode']} mode, {doc['engine']} engine"
     )
-    con.print(_umbmark_table(doc))
+    con.print(_umbmark_table(report, doc))
     floor = doc["noise_floor"]
-    if doc["engine"] == "physics":
+    if not report.engine.has_noise_model:  # the floor is the nominal robot's
         level = f"{s['confidence_level'] * 100:g} %"
         con.print(f"floor (nominal robot in physics, roller contact alone): {physics_floor_text(floor, level)}")
     else:

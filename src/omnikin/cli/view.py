@@ -5,8 +5,18 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..physics.engines import ENGINE_NAMES
 from .budget import Budget, add_budget_options
-from .common import add_step_option, add_teleop_options, declare_inputs, load_robot, number, teleop_limits, whole
+from .common import (
+    add_step_option,
+    add_teleop_options,
+    declare_inputs,
+    engine_of,
+    load_robot,
+    number,
+    teleop_limits,
+    whole,
+)
 
 EPILOG = """the page (open the printed address in a browser; click the scene so that it has the keys):
   W / S      drive forward / back at --speed while held
@@ -76,7 +86,7 @@ def add_parser(sub, robot_help: str) -> None:
     )
     sp.add_argument(
         "--engine",
-        choices=("kinematic", "physics"),
+        choices=ENGINE_NAMES,
         help="kinematic (default): moved exactly by its wheels; physics: MuJoCo with rollers (extra physics)",
     )
     sp.add_argument(
@@ -170,13 +180,9 @@ def run(args) -> int:
         raise InputError("--step applies only to --engine physics")
     require_viser()
     robot = load_robot(args.robot)
-    if args.step is not None:
-        from ..physics.mjcf import time_step
-
-        time_step(args.step)
+    engine = engine_of(args, args.engine or "kinematic")  # --step checked
     from ..viewer.live import LiveRobot
 
-    engine = args.engine or "kinematic"
     live = LiveRobot(
         robot,
         engine,
@@ -184,11 +190,10 @@ def run(args) -> int:
         turn=args.turn,
         limits=limits,
         timeout=0.5 if args.timeout is None else args.timeout,
-        step=args.step,
     )
     live.tell = lambda line: print(f"omnikin view: {line}", file=sys.stderr, flush=True)  # a robot that fell
     live.echo = sys.stdout if args.echo else None
-    return serve_live(live, args, f"{robot.name} ({engine})")
+    return serve_live(live, args, f"{robot.name} ({engine.name})")
 
 
 def serve_live(live, args, what: str) -> int:

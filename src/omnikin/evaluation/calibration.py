@@ -16,7 +16,7 @@ Two methods:
   [rad] (the angle the steering reads when the wheel rolls along body x). For a candidate the
   true end pose of a plan is predicted in closed form: within a segment the commanded
   wheel angles grow in fixed proportion, so the true robot moves along
-  ``exp(s * F_true J_cmd xi)`` (:mod:`omnikin.simulation.motion`). SciPy's
+  ``exp(s * F_true J_cmd xi)`` (:mod:`omnikin.motion.timing`). SciPy's
   ``least_squares`` fits the predicted to the measured end poses (x, y in metres over the
   measurement sigma; heading, where measured, in radians over its sigma), with a weak
   Gaussian prior (``PRIOR``) that keeps combinations the runs cannot see at zero. The
@@ -38,12 +38,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..common.messages import shorten
 from ..errors import CalibrationFitError, InfeasibleRunError, InfeasibleTwistError, InputError
-from ..geometry import compose, exp, wrap_angle
-from ..messages import shorten
-from ..model import Robot
-from ..odometry import encoded_wheels
-from ..plans import CalibrationRun, Plan, parse_plan
+from ..kinematics.robot import Robot
+from ..kinematics.se2 import compose, exp, wrap_angle
+from ..motion.plans import CalibrationRun, Plan, parse_plan
+from ..odometry.batch import encoded_wheels
 from ..simulation.error_models import SystematicErrors, WheelErrors
 from ..simulation.simulate import segment_rates
 from .umbmark import UMBmarkResult, check_side, differential_pair
@@ -374,7 +374,7 @@ def _identifiability(names, jac_data, jac_full, scale) -> Identifiability:
 def recommended_runs(robot: Robot, side: float = 4.0) -> list[tuple[str, Plan]]:
     """A calibration protocol that sees every parameter it can for this layout.
 
-    ``[(path, plan), ...]``, ``path`` in the runs-file grammar (:func:`omnikin.plans.parse_plan`)
+    ``[(path, plan), ...]``, ``path`` in the runs-file grammar (:func:`omnikin.motion.plans.parse_plan`)
     and ``plan`` parsed from it; drive each :data:`RECOMMENDED_REPEATS` times and measure x,
     y and the heading at the end. The candidates, one rule for every robot: both UMBmark
     squares in ``rotate`` mode and in ``translate`` mode, straight lines of ``side`` along body

@@ -54,9 +54,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._arrays import as_real_array, as_real_scalar
+from ..common.arrays import as_real_array, as_real_scalar
 from ..errors import MetricsInputError
-from ..geometry import between, compose, wrap_angle
+from ..kinematics.se2 import between, compose, wrap_angle
 
 
 # --- input checks ------------------------------------------------------------------------------------

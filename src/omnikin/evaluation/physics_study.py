@@ -21,7 +21,8 @@ built, one run at a time (the physics has no trial axis: ``trials`` procedures a
    (:class:`~omnikin.evaluation.umbmark.NoiseFloor` of these procedures).
 
 The physics engine has no random error model: slip comes from the wheels' contacts and the
-encoders count whole ticks, so a noise model is refused (:func:`check_physics_noise`). The
+encoders count whole ticks, so a noise model is refused
+(:func:`~omnikin.physics.engines.check_physics_noise`). The
 engine is deterministic; what differs from run to run, as on a built robot, is where in their
 roller period the wheels start: every run starts each wheel at a **roller phase** drawn
 uniformly from ``[0, 1)`` of its period (:func:`~omnikin.physics.engine.roller_period`), from
@@ -40,12 +41,12 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import CalibrationFitError, InputError
-from ..messages import shorten
-from ..model import Robot
-from ..odometry import encoded_wheels
-from ..physics.mjcf import DEFAULT_STEP, time_step
-from ..plans import CalibrationRun, Plan, umbmark_square
+from ..errors import CalibrationFitError
+from ..kinematics.robot import Robot
+from ..motion.plans import CalibrationRun, Plan, umbmark_square
+from ..odometry.batch import encoded_wheels
+from ..physics.engines import PhysicsEngine
+from ..simulation.engine import Engine
 from ..simulation.error_models import NOISE, SystematicErrors
 from .calibration import RECOMMENDED_REPEATS, CalibrationResult, recommended_runs
 from .calibration import calibrate as least_squares_calibration
@@ -53,50 +54,13 @@ from .procedure import Cost, UMBmarkStudy, check_settings, streams
 from .run_poses import RunPoses, kept_run, stride
 from .umbmark import LEVEL, NoiseFloor, UMBmarkResult, analyze, require_square
 
-ENGINES = ("kinematic", "physics")
-"""The engines of the UMBmark study: the kinematic simulation or MuJoCo (:mod:`omnikin.physics`)."""
-
 BYTES = 256 * 1024**2
 """Memory of a physics study [bytes]: MuJoCo's model and data and the kept runs, generous."""
 
 Progress = Callable[[str], None]
 
-
-def check_engine(engine) -> str:
-    """``engine`` if it is one of :data:`ENGINES`, else :class:`~omnikin.errors.InputError`."""
-    if engine not in ENGINES:
-        raise InputError(f"engine (--engine) must be one of {', '.join(ENGINES)}, got {shorten(engine)}")
-    return engine
-
-
-def check_physics_noise(noise) -> None:
-    """Refuse a noise model for the physics engine (one line): it has none of its own, its
-    random errors are those of the roller contact; ``None`` (not given) passes."""
-    if noise is not None:
-        raise InputError(
-            f"noise (--noise) {shorten(noise if isinstance(noise, str) else type(noise).__name__)}: the physics "
-            "engine has no random error model (slip comes from the wheels' roller contact, its encoders count "
-            "whole ticks); drop --noise"
-        )
-
-
-def engine_options(engine, noise, step) -> tuple[str | None, float | None]:
-    """The noise model and the time step ``engine`` runs with, checked in one place for every
-    command and entry point that offers an engine choice: the kinematic engine takes ``noise``
-    (default ``typical``) and refuses a time step; the physics engine refuses a noise model
-    (:func:`check_physics_noise`) and takes ``step`` [s]
-    (:func:`omnikin.physics.mjcf.time_step`, default 2 ms). Returns ``(noise, step)``, the
-    other one None."""
-    check_engine(engine)
-    if engine == "physics":
-        check_physics_noise(noise)
-        return None, time_step(step, "step (--step)")
-    if step is not None:
-        raise InputError(
-            "step (--step) is the time step of the physics engine: choose the physics engine (--engine physics) "
-            "or leave the step out"
-        )
-    return ("typical" if noise is None else noise), None
+PHYSICS = PhysicsEngine()
+"""The physics engine at its default time step (2 ms), the default of this module's functions."""
 
 
 def physics_cost(
@@ -108,18 +72,19 @@ def physics_cost(
     rate: float,
     trials: int,
     calibrate: bool,
-    step: float = DEFAULT_STEP,
+    engine: PhysicsEngine = PHYSICS,
     budget: float | None = None,
 ) -> Cost:
     """Samples, memory and computing time of :func:`physics_umbmark_study`: every run's
     estimate (:func:`omnikin.physics.cost.physics_run_cost`: its simulated time bounded, the
     waits for the steering and the tail at their limits, at the cost of a time step measured
-    once on ``robot``'s model at time step ``step`` [s], the model's construction counted for
+    once on ``robot``'s model at ``engine``'s time step, the model's construction counted for
     every run). With ``budget`` [s], a model whose size alone says the study takes longer is not
     built (:func:`omnikin.physics.cost.size_lower_bound`: that bound is the estimate)."""
+    from ..motion.timing import sample_plan
     from ..physics.cost import measure_step_seconds, physics_run_cost, simulated_bound, size_lower_bound
-    from ..simulation.motion import sample_plan
 
+    step = engine.step
     squares = runs * trials * (3 if calibrate else 2)  # per direction: before, after, the floor
     driven = [(umbmark_square(direction, side, mode), squares) for direction in ("cw", "ccw")]
     if calibrate:
@@ -176,22 +141,19 @@ def _drive(
     true_robot: Robot,
     command: Robot,
     rate: float,
-    step: float,
+    engine: Engine,
     rng: np.random.Generator,
     name: str,
     problems: list[str] | None,
 ):
-    """``plan`` driven in physics at time step ``step`` [s], each wheel of ``true_robot``
-    started at a roller phase drawn uniformly from ``[0, 1)`` by ``rng`` (module docstring).
+    """``plan`` driven by ``engine``, each wheel of ``true_robot`` started at a roller phase
+    drawn uniformly from ``[0, 1)`` by ``rng`` (module docstring; :meth:`PhysicsEngine.drive`).
     A run that did not drive as commanded (:meth:`~omnikin.physics.run.PhysicsRun.problems`: a
     wheel lagging, slipping or off its commanded turn, steering or rest not reached) is added to
     ``problems`` as one line naming it as ``name``: its end pose enters the statistics as an
     odometry error, and the report must say which runs it should not trust."""
-    from ..physics.run import simulate_physics
-
-    phase = rng.random(len(true_robot.rolling))
-    run = simulate_physics(plan, true_robot, command, rate=rate, step=step, roller_phase=phase)
-    found = run.problems()
+    run = engine.drive(plan, true_robot, command, rate=rate, rng=rng)
+    found = engine.problems(run)
     if found and problems is not None:
         more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
         problems.append(f"{name}: {found[0]}{more}")
@@ -208,7 +170,7 @@ def physics_umbmark(
     rate: float,
     seed: np.random.SeedSequence,
     trials: int = 1,
-    step: float = DEFAULT_STEP,
+    engine: Engine = PHYSICS,
     progress: Progress | None = None,
     label: str = "UMBmark",
     problems: list[str] | None = None,
@@ -217,7 +179,7 @@ def physics_umbmark(
 ) -> tuple[list[UMBmarkResult], dict]:
     """``trials`` UMBmark procedures of ``runs`` runs per direction in the physics engine,
     ``true_robot`` commanded by ``command``, the roller phases of each direction's runs drawn
-    from its own child of ``seed`` (module docstring), at time step ``step`` [s]. Returns one
+    from its own child of ``seed`` (module docstring), driven by ``engine``. Returns one
     :class:`~omnikin.evaluation.umbmark.UMBmarkResult` per procedure and the first run of each
     direction (``{"cw"|"ccw": PhysicsRun}``, with its ground truth). ``progress`` is called with
     ``label`` and the run's number before each run; runs that did not drive as commanded are
@@ -236,7 +198,7 @@ def physics_umbmark(
                 progress(f"{label}: run {len(eps['cw']) + len(eps['ccw']) + 1} of {total}")
             number = len(eps["cw"]) + len(eps["ccw"]) + 1
             name = f"{label}, run {number} of {total} ({direction})"
-            run = _drive(plan, true_robot, command, rate, step, rng, name, problems)
+            run = _drive(plan, true_robot, command, rate, engine, rng, name, problems)
             first.setdefault(direction, run)
             eps[direction].append(run.epsilon[0])
             if poses is not None and index < runs:
@@ -262,16 +224,16 @@ def physics_calibration_runs(
     side: float,
     rate: float,
     seed: np.random.SeedSequence,
-    step: float = DEFAULT_STEP,
+    engine: Engine = PHYSICS,
     progress: Progress | None = None,
     problems: list[str] | None = None,
 ) -> list[CalibrationRun]:
     """The recommended calibration runs of ``robot``, each driven
     :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times in the physics engine by
-    ``true_robot`` commanded by ``robot`` at time step ``step`` [s], roller phases drawn from
+    ``true_robot`` commanded by ``robot`` driven by ``engine``, roller phases drawn from
     ``seed``; the measured end
     pose is the true one (the default measurement sigma of
-    :class:`~omnikin.plans.CalibrationRun`, as a runs file is read)."""
+    :class:`~omnikin.motion.plans.CalibrationRun`, as a runs file is read)."""
     rng = np.random.default_rng(seed)
     plans = recommended_runs(robot, side)
     total = len(plans) * RECOMMENDED_REPEATS
@@ -281,7 +243,7 @@ def physics_calibration_runs(
             if progress is not None:
                 progress(f"calibration runs: run {len(out) + 1} of {total}")
             name = f"calibration run {len(out) + 1} of {total} ({text})"
-            run = _drive(plan, true_robot, robot, rate, step, rng, name, problems)
+            run = _drive(plan, true_robot, robot, rate, engine, rng, name, problems)
             out.append(CalibrationRun(plan, tuple(run.measured[0]), text))
     return out
 
@@ -298,24 +260,22 @@ def physics_umbmark_study(
     trials: int,
     calibrate: bool,
     seed: int,
-    step: float = DEFAULT_STEP,
+    engine: Engine = PHYSICS,
     progress: Progress | None = None,
     level: float = LEVEL,
 ) -> UMBmarkStudy:
     """The study of the module docstring, as a :class:`~omnikin.evaluation.procedure.UMBmarkStudy`
-    (``engine`` "physics", ``noise`` none, ``floor`` the nominal robot's :class:`PhysicsFloor`
+    (``engine`` the physics engine, ``noise`` none, ``floor`` the nominal robot's :class:`PhysicsFloor`
     with its interval at ``level``, ``systematic`` the first procedures, no Borenstein
-    comparison); roller phases from ``seed``, time step ``step`` [s]."""
-    from ..physics.run import check_rate_steps
-
+    comparison); roller phases from ``seed``, every run driven by ``engine``."""
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
-    check_rate_steps(rate, step)
+    engine.check_rate(rate)
     encoded_wheels(robot)
     rng = streams(seed)
     problems: list[str] = []
     poses: list[RunPoses] = []
     opts: dict[str, Any] = dict(
-        side=side, mode=mode, runs=runs, rate=rate, trials=trials, step=step, progress=progress, problems=problems
+        side=side, mode=mode, runs=runs, rate=rate, trials=trials, engine=engine, progress=progress, problems=problems
     )
     before, first = physics_umbmark(
         true_robot, robot, seed=rng["before"], label="UMBmark before calibration", poses=poses, **opts
@@ -332,7 +292,7 @@ def physics_umbmark_study(
             side=side,
             rate=rate,
             seed=rng["calibration"],
-            step=step,
+            engine=engine,
             progress=progress,
             problems=problems,
         )
@@ -374,7 +334,7 @@ def physics_umbmark_study(
         floor,
         trajectories,
         level=level,
-        engine="physics",
+        engine=engine,
         problems=tuple(problems),
         run_poses=tuple(poses),
     )

@@ -33,14 +33,15 @@ from typing import Any
 
 import numpy as np
 
+from ..common.messages import shorten
+from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME, LimitNames, require_within
 from ..errors import InputError
-from ..messages import shorten
-from ..model import Robot
-from ..odometry import encoded_wheels
-from ..plans import CalibrationRun, umbmark_square
-from ..resource_limits import DEFAULT_MEMORY, DEFAULT_TIME, LimitNames, require_within
+from ..kinematics.robot import Robot
+from ..motion.plans import CalibrationRun, umbmark_square
+from ..motion.timing import check_rate_range, estimated_samples
+from ..odometry.batch import encoded_wheels
+from ..simulation.engine import Engine, KinematicEngine
 from ..simulation.error_models import NOISE, NoiseModel, SystematicErrors
-from ..simulation.motion import check_rate_range, estimated_samples
 from ..simulation.simulate import simulate
 from .calibration import RECOMMENDED_REPEATS, CalibrationResult, borenstein_calibrate, recommended_runs
 from .calibration import calibrate as least_squares_calibration
@@ -87,7 +88,7 @@ def check_settings(*, runs, trials, side, rate) -> None:
     """Refuse the first bad setting of a study with one line naming it and its command-line
     option: ``runs`` and ``trials`` whole numbers >= 1, ``side`` within
     :data:`~omnikin.evaluation.umbmark.SIDE_RANGE`, ``rate`` within
-    :data:`~omnikin.simulation.motion.RATE_RANGE` (that of every simulated run)."""
+    :data:`~omnikin.motion.timing.RATE_RANGE` (that of every simulated run)."""
     for name, value in (("runs", runs), ("trials", trials)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
             raise InputError(f"{name} (--{name}) must be a whole number >= 1, got {shorten(value)}")
@@ -138,7 +139,7 @@ def estimate_cost(
     robot: Robot, *, side: float, mode: str, runs: int, rate: float, trials: int, calibrate: bool
 ) -> Cost:
     """Samples and memory of :func:`umbmark_study` with these settings, from the lengths of the
-    square and of the calibration runs (:func:`~omnikin.simulation.motion.estimated_samples`, an
+    square and of the calibration runs (:func:`~omnikin.motion.timing.estimated_samples`, an
     upper bound computed without sampling)."""
     square = estimated_samples(umbmark_square("cw", side, mode), robot, rate)
     procedures = trials * (2 if calibrate else 1) + FLOOR_PROCEDURES + (2 if calibrate else 1)  # + the run poses
@@ -156,7 +157,7 @@ def estimate_cost(
 def check_cost(cost: Cost, *, max_memory=DEFAULT_MEMORY, max_time=DEFAULT_TIME) -> None:
     """Refuse (:class:`~omnikin.errors.ResourceLimitError`, one line naming the limit as the
     argument ``max_memory`` or ``max_time``) a study estimated to need more than ``max_memory``
-    [bytes] or ``max_time`` [s]: the check of :func:`omnikin.resource_limits.require_within`,
+    [bytes] or ``max_time`` [s]: the check of :func:`omnikin.common.resource_limits.require_within`,
     which ``omnikin umbmark`` makes too (naming its options)."""
     require_within(
         "UMBmark study",
@@ -180,7 +181,8 @@ class UMBmarkStudy:
     ``borenstein``: E_max,syst [m] after each iteration of Borenstein's correction (or
     None); ``systematic``: E_max,syst [m] without random errors, ``{"before", "after"}``;
     ``trajectories``: ``{"before"|"after": {"cw"|"ccw": SimulatedRun}}``, the first run of
-    each direction with its ground truth; ``engine``: ``kinematic`` (this module) or ``physics``
+    each direction with its ground truth; ``engine``: the engine every run was driven by, the
+    :class:`~omnikin.simulation.engine.KinematicEngine` (this module) or the physics engine
     (:mod:`omnikin.evaluation.physics_study`, whose ``floor`` is the nominal robot's UMBmark).
     """
 
@@ -202,7 +204,7 @@ class UMBmarkStudy:
     floor: NoiseFloor
     trajectories: dict
     level: float = LEVEL
-    engine: str = "kinematic"
+    engine: Engine = KinematicEngine()
     problems: tuple[str, ...] = ()
     """Physics engine: one line per run that did not drive as commanded, naming the run
     (:meth:`omnikin.physics.run.PhysicsRun.problems`); its end pose is in the statistics."""
@@ -333,7 +335,7 @@ def simulate_calibration_runs(
     """The recommended calibration runs of ``robot``, each driven
     :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times by ``true_robot``
     commanded by ``robot``, with their measured end poses and the default measurement sigma
-    of :class:`~omnikin.plans.CalibrationRun` (as a runs file is read)."""
+    of :class:`~omnikin.motion.plans.CalibrationRun` (as a runs file is read)."""
     rng = np.random.default_rng(rng)
     out = []
     for text, plan in recommended_runs(robot, side):

@@ -10,7 +10,8 @@ and, with ``calibrate``, the recommended calibration runs, the least-squares cal
 calibrated robot. Beside the measured ``E_max,syst`` it reports the systematic part alone: the
 same procedures without random errors (one run per direction), before and after.
 
-With ``engine="physics"`` every run is driven in MuJoCo
+With an engine without a noise model (the physics engine,
+:class:`~omnikin.physics.engines.PhysicsEngine`) every run is driven in MuJoCo
 (:func:`~omnikin.evaluation.physics_study.physics_umbmark`, rollers and motors; the runs'
 randomness is the wheels' roller phases, no noise model): the systematic parts are then NaN
 (the physics has no noise to leave out).
@@ -30,10 +31,12 @@ from typing import Any
 
 import numpy as np
 
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..physics.engines import as_engine
+from ..simulation.engine import Engine, KinematicEngine
 from ..simulation.error_models import NOISE, ErrorProfile, NoiseModel
 from .calibration import calibrate as least_squares_calibration
-from .physics_study import check_engine, physics_calibration_runs, physics_umbmark
+from .physics_study import physics_calibration_runs, physics_umbmark
 from .procedure import check_settings, draw_as_built, simulate_calibration_runs
 from .umbmark import run_umbmark
 
@@ -47,7 +50,9 @@ TRIAL_STREAMS = ("robot", "before", "calibration", "after")
 @dataclass(frozen=True)
 class TrialSettings:
     """How a trial runs UMBmark: square ``side`` [m], ``mode`` (rotate or translate), ``runs``
-    per direction, sample ``rate`` [Hz], random errors ``noise``, and whether it calibrates."""
+    per direction, sample ``rate`` [Hz], random errors ``noise``, whether it calibrates, and the
+    ``engine`` its runs are driven by (an :class:`~omnikin.simulation.engine.Engine`; a name of
+    :data:`~omnikin.physics.engines.ENGINE_NAMES` is made one)."""
 
     side: float = 4.0
     mode: str = "rotate"
@@ -55,11 +60,11 @@ class TrialSettings:
     rate: float = 100.0
     noise: NoiseModel = field(default_factory=lambda: NOISE["typical"])
     calibrate: bool = True
-    engine: str = "kinematic"
+    engine: Engine = KinematicEngine()
 
     def __post_init__(self):
         check_settings(runs=self.runs, trials=1, side=self.side, rate=self.rate)
-        check_engine(self.engine)
+        object.__setattr__(self, "engine", as_engine(self.engine))
 
 
 @dataclass(frozen=True)
@@ -98,7 +103,7 @@ def tolerance_trial(
     """One trial (module docstring) of ``robot`` built within ``tolerances``."""
     streams = trial_streams(seed)
     true_robot, _ = draw_as_built(robot, tolerances, streams["robot"], drawn_from=AS_BUILT)
-    if settings.engine == "physics":
+    if not settings.engine.has_noise_model:  # the systematic part cannot be told apart
         return _physics_trial(robot, true_robot, settings, streams)
     opts: dict[str, Any] = dict(
         side=settings.side, mode=settings.mode, runs=settings.runs, noise=settings.noise, rate=settings.rate
@@ -121,12 +126,14 @@ def _physics_trial(
     robot: Robot, true_robot: Robot, settings: TrialSettings, streams: dict[str, np.random.SeedSequence]
 ) -> TrialResult:
     """The trial in the physics engine (module docstring), roller phases from ``streams``."""
-    opts: dict[str, Any] = dict(side=settings.side, mode=settings.mode, runs=settings.runs, rate=settings.rate)
+    opts: dict[str, Any] = dict(
+        side=settings.side, mode=settings.mode, runs=settings.runs, rate=settings.rate, engine=settings.engine
+    )
     before = physics_umbmark(true_robot, robot, seed=streams["before"], **opts)[0][0].e_max_syst
     if not settings.calibrate:
         return TrialResult(before, math.nan, math.nan, math.nan)
     runs = physics_calibration_runs(
-        true_robot, robot, side=settings.side, rate=settings.rate, seed=streams["calibration"]
+        true_robot, robot, side=settings.side, rate=settings.rate, seed=streams["calibration"], engine=settings.engine
     )
     calibrated = least_squares_calibration(robot, runs).robot
     after = physics_umbmark(true_robot, calibrated, seed=streams["after"], **opts)[0][0].e_max_syst

@@ -36,15 +36,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._arrays import as_real_array
+from ..common.arrays import as_real_array
+from ..common.rng import make_rng
 from ..errors import InfeasibleTwistError, InputError
-from ..limits import MotionLimits
-from ..model import Robot
-from ..plans import check_mode, umbmark_square
-from ..rng import make_rng
+from ..kinematics.robot import Robot
+from ..kinematics.wheels import range_problem
+from ..motion.limits import MotionLimits
+from ..motion.plans import check_mode, umbmark_square
 from ..simulation.error_models import NoiseModel
 from ..simulation.simulate import segment_rates, simulate
-from ..wheels import range_problem
 
 UNITS = {
     "side": "m",

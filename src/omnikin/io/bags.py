@@ -54,11 +54,11 @@ from typing import Any
 
 import numpy as np
 
+from ..common.messages import one_line, shorten
 from ..errors import BagError, OmnikinError, ResourceLimitError
-from ..geometry import between, log
-from ..messages import one_line, shorten
-from ..model import Robot
-from ..simulation.motion import check_start
+from ..kinematics.robot import Robot
+from ..kinematics.se2 import between, log
+from ..motion.timing import check_start
 from .output import check_output, data_folder
 
 BAGS_EXTRA = 'pip install "omnikin[bags]"'
@@ -302,7 +302,7 @@ class JointStates:
 
 
 def _encoded_names(robot: Robot) -> list[str]:
-    from ..odometry import encoded_wheels
+    from ..odometry.batch import encoded_wheels
 
     return [w.name for w in encoded_wheels(robot)]
 
@@ -584,7 +584,7 @@ def _write_bag(
     import inspect
 
     params = inspect.signature(rb.Writer).parameters
-    kwargs = {}
+    kwargs: dict[str, Any] = {}
     if "version" in params:
         kwargs["version"] = 8
     if storage != "sqlite3":
@@ -739,10 +739,10 @@ def bag_odometry(
     Each output message has the stamp and the bag record time of the input sample it comes
     from; the pose starts at the origin at the first sample. ``max_wheel_speed`` [rad/s] and
     ``max_wheel_accel`` [rad/s^2]: the speed and change-of-speed rules of the wheel angles
-    (:func:`omnikin.odometry.batch_odometry_from_angles`; checked before the bag is read).
+    (:func:`omnikin.odometry.batch.batch_odometry_from_angles`; checked before the bag is read).
     """
-    from ..encoders import check_max_wheel_accel, check_max_wheel_speed
-    from ..odometry import batch_odometry_from_angles
+    from ..odometry.batch import batch_odometry_from_angles
+    from ..odometry.plausibility import check_max_wheel_accel, check_max_wheel_speed
 
     check_max_wheel_speed(max_wheel_speed)
     check_max_wheel_accel(max_wheel_accel)

@@ -21,8 +21,8 @@ import re
 from collections import Counter
 from collections.abc import Iterator
 
-from ..messages import shorten
-from ..number_text import number_problem
+from ..common.messages import shorten
+from ..common.number_text import number_problem
 from .textfile import read_lines
 
 _SEPARATOR = re.compile(r"\s*,\s*|\s+")
@@ -103,9 +103,9 @@ def _names(names: list[str], limit: int = 8) -> str:
 
 
 def number(text: str, source: str, line: int, column: str | int, error: type[Exception]) -> float:
-    """The finite number ``text`` spells (:data:`omnikin.number_text.PLAIN_NUMBER`), or
+    """The finite number ``text`` spells (:data:`omnikin.common.number_text.PLAIN_NUMBER`), or
     ``error`` naming file, line and column (a name, or a 1-based field number) and what is wrong
-    (:func:`omnikin.number_text.number_problem`). Every number field of every table goes through
+    (:func:`omnikin.common.number_text.number_problem`). Every number field of every table goes through
     here: tick-log times, runs and measurements, trajectories."""
     where = f"field {column}" if isinstance(column, int) else f"column {shorten(column, 40)}"
     if not text:

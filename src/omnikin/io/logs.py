@@ -8,7 +8,7 @@ Blank lines and lines starting with ``#`` are skipped.
 Times [s] and steering angles [deg] are plain ASCII decimal numbers
 (:func:`omnikin.io.csvfile.number`: ``0_1``, digits of other scripts, ``inf`` and ``nan``
 are refused); the odometry refuses a steering angle outside its wheel's limits at its sample
-(:func:`omnikin.odometry.steer_bounds`).
+(:func:`omnikin.odometry.batch.steer_bounds`).
 
 Tick readings are exact integers: plain ASCII decimal digits with an optional leading
 ``-`` (``0x10``, ``1e3``, ``5.0``, ``1_0``, digits of other scripts and inner spaces are
@@ -27,11 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..encoders import INT64_MIN, UINT64_END, counter_readings
+from ..common.messages import shorten
 from ..errors import InputError, OdometryInputError
-from ..messages import shorten
-from ..model import Robot
-from ..odometry import encoded_wheels
+from ..kinematics.robot import Robot
+from ..odometry.batch import encoded_wheels
+from ..odometry.counters import INT64_MIN, UINT64_END, counter_readings
 from .csvfile import column_problems, number, read_rows
 from .output import write_text
 from .trajectories import format_times

@@ -2,10 +2,10 @@
 
 Every problem is reported as :class:`~omnikin.errors.RobotFileError` naming the
 file, the wheel and the field, in one line, quoting user values through
-:func:`~omnikin.messages.shorten`, e.g.
+:func:`~omnikin.common.messages.shorten`, e.g.
 ``robot.yaml: wheel 'w2' (#2): field 'radius': must lie in [0.0001, 10] m, got -0.04``.
 Degrees appear only in fields ending in ``_deg``; the loaded
-:class:`~omnikin.model.Robot` holds radians.
+:class:`~omnikin.kinematics.robot.Robot` holds radians.
 
 Hostile files are refused before they cost time or memory (docs/conventions.md, "Robot
 file"): only regular files up to 256 KiB are read (:mod:`omnikin.io.textfile`); the YAML
@@ -16,7 +16,7 @@ deeper than :data:`MAX_DEPTH`, duplicate keys, over-long integer literals, and n
 YAML readers read differently (YAML 1.1, which PyYAML follows, reads ``0120`` as the octal 80,
 ``2:00`` as 120 and ``0x1``, ``0b1``, ``1_000`` as numbers; YAML 1.2 reads ``0120`` as 120 and
 ``2:00`` as text): a number in an omnikin file is a plain decimal as
-:mod:`omnikin.number_text` spells it (ASCII digits), ``120`` not ``0120``. JSON
+:mod:`omnikin.common.number_text` spells it (ASCII digits), ``120`` not ``0120``. JSON
 gets the same depth, key and integer checks (it has no other number forms).
 """
 
@@ -31,13 +31,12 @@ from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
-from .._arrays import range_problem, whole_problem
+from ..common.arrays import range_problem, whole_problem
+from ..common.messages import did_you_mean, digits_apart, shorten
+from ..common.number_text import PLAIN_NUMBER, PLAIN_NUMBER_HELP, number_problem
 from ..errors import OmnikinError, PresetShadowWarning, RobotFileError
-from ..geometry import MAX_DIRECTION_DEG
-from ..messages import did_you_mean, digits_apart, shorten
-from ..model import Robot, name_collisions, robot_name_problem
-from ..number_text import PLAIN_NUMBER, PLAIN_NUMBER_HELP, number_problem
-from ..physical import (
+from ..kinematics.encoder import COUNTER_BITS_RANGE, GEAR_RATIO_RANGE, TICKS_PER_REV_RANGE, Encoder
+from ..kinematics.physical import (
     COM_LIMIT,
     COM_Z_MIN,
     FRICTION_RANGE,
@@ -50,10 +49,9 @@ from ..physical import (
     PhysicalBody,
     PhysicalWheel,
 )
-from ..presets import PRESET_NAMES, preset_path
-from ..wheels import (
-    COUNTER_BITS_RANGE,
-    GEAR_RATIO_RANGE,
+from ..kinematics.robot import Robot, name_collisions, robot_name_problem
+from ..kinematics.se2 import MAX_DIRECTION_DEG
+from ..kinematics.wheels import (
     MAX_SPEED_RANGE,
     MOTOR_TYPES,
     OFFSET_RANGE,
@@ -61,14 +59,13 @@ from ..wheels import (
     RADIUS_RANGE,
     ROLLER_LIMIT_DEG,
     SWEDISH_TYPES,
-    TICKS_PER_REV_RANGE,
     WHEEL_TYPES,
-    Encoder,
     Steer,
     Wheel,
     motor_problem,
     name_problem,
 )
+from ..presets import PRESET_NAMES, preset_path
 from .textfile import read_text
 
 SCHEMA_VERSION = 1
@@ -444,7 +441,7 @@ def strict_yaml_loader():
     scalars, duplicate keys, and the YAML 1.1 number forms other readers read differently (octal
     ``0120``, base-60 ``2:00`` and ``1:30.5``, hexadecimal ``0x1``, binary ``0b1``, digit
     separators ``1_000``; the message gives the plain decimal to write). A number is accepted
-    only as the one number grammar spells it (:data:`omnikin.number_text.PLAIN_NUMBER`; a whole
+    only as the one number grammar spells it (:data:`omnikin.common.number_text.PLAIN_NUMBER`; a whole
     number as a plain decimal without leading zeros), besides YAML's ``.inf`` and ``.nan``, which
     the range of their field refuses by name. Reads ``5e-2`` as a float (YAML 1.2); a plain
     decimal integer of more than :data:`MAX_INT_CHARS` digits as a float (refused by the range of
@@ -721,7 +718,7 @@ def _count(x) -> int | float:
 
 def robot_to_dict(robot: Robot) -> dict:
     """Schema-1 mapping of ``robot`` (Cartesian placement, explicit drive_deg). A robot as built
-    is written as the robot it is: its design (:attr:`omnikin.model.Robot.design`) is not part
+    is written as the robot it is: its design (:attr:`omnikin.kinematics.robot.Robot.design`) is not part
     of a robot file."""
     wheels = []
     for w in robot.wheels:

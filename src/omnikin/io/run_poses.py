@@ -32,9 +32,9 @@ from array import array
 
 import numpy as np
 
+from ..common.messages import shorten
 from ..errors import ResourceLimitError, RunPosesFileError
 from ..evaluation.run_poses import DIRECTIONS, MAX_RATE, MAX_ROWS, PHASES, RunPoses
-from ..messages import shorten
 from .csvfile import column_problems, iter_rows, number
 from .textfile import read_lines
 

@@ -27,10 +27,10 @@ import math
 
 import numpy as np
 
+from ..common.messages import shorten
 from ..errors import InputError, OmnikinError, RunsFileError
-from ..geometry import wrap_angle
-from ..messages import shorten
-from ..plans import CalibrationRun, Plan, parse_plan
+from ..kinematics.se2 import wrap_angle
+from ..motion.plans import CalibrationRun, Plan, parse_plan
 from .csvfile import column_problems, number, read_rows
 
 
@@ -75,7 +75,7 @@ def _theta(source, header, line_no, row, which) -> float:
 
 def path_plan(text: str) -> Plan:
     """The plan of one path of the grammar in the module docstring
-    (:func:`omnikin.plans.parse_plan`: plain numbers, as in every table). One run drives one
+    (:func:`omnikin.motion.plans.parse_plan`: plain numbers, as in every table). One run drives one
     path: ``;`` (which chains paths in ``omnikin simulate --path``) is refused here. Raises
     :class:`InputError`.
     """
@@ -97,7 +97,7 @@ def read_umbmark_measurements(path):
         ("direction", "x_abs", "y_abs", "x_calc", "y_calc"),
         ("theta_abs", "theta_calc", "theta_abs_deg", "theta_calc_deg"),
     )
-    eps = {"cw": [], "ccw": []}
+    eps: dict[str, list[tuple[float, float, float]]] = {"cw": [], "ccw": []}
     for line_no, row in rows:
         d = row["direction"].lower()
         if d not in eps:
@@ -116,7 +116,7 @@ def read_umbmark_measurements(path):
 
 DEFAULT_SIGMA = CalibrationRun.sigma
 """Default measurement standard deviations of a calibration run: position [m], heading [rad]
-(:class:`omnikin.plans.CalibrationRun`'s)."""
+(:class:`omnikin.motion.plans.CalibrationRun`'s)."""
 
 
 def read_calibration_runs(path, sigma=DEFAULT_SIGMA) -> list[CalibrationRun]:
@@ -168,7 +168,7 @@ def _with_heading(headings, what: str) -> bool:
 
 
 def calibration_runs_text(runs, comment: str | None = None) -> str:
-    """A runs file (``omnikin calibrate``): one row per :class:`~omnikin.plans.CalibrationRun`
+    """A runs file (``omnikin calibrate``): one row per :class:`~omnikin.motion.plans.CalibrationRun`
     (its ``label`` is the path in the runs-file grammar), x and y in metres to 1 um, the
     heading in degrees to 1e-5 deg (no heading column when no heading was measured);
     ``comment`` becomes ``#`` lines at the top."""

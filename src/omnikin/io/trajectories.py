@@ -21,9 +21,9 @@ import math
 
 import numpy as np
 
+from ..common.messages import shorten
 from ..errors import TrajectoryFileError
-from ..geometry import wrap_angle
-from ..messages import shorten
+from ..kinematics.se2 import wrap_angle
 from .csvfile import iter_fields, number, read_rows
 from .output import STDOUT, check_output, write_text
 

@@ -8,6 +8,9 @@
 - :mod:`~omnikin.physics.backend`: :class:`~omnikin.physics.backend.PhysicsBackend`, the
   runtime's wheel back-end on top of it (a drop-in for the kinematic
   :class:`~omnikin.simulation.backend.SimBackend`).
+- :mod:`~omnikin.physics.engines`: :class:`~omnikin.physics.engines.PhysicsEngine`, all of it as
+  an :class:`~omnikin.simulation.engine.Engine`, and :func:`~omnikin.physics.engines.engine_named`,
+  the one factory of engines by name.
 
 Only the engine and the back-end import ``mujoco``; the description and the MJCF text work
 without it.

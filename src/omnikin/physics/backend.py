@@ -15,7 +15,7 @@ real driver makes when the file's ``ticks_per_rev`` or ``gear_ratio`` is wrong);
 joint speeds converted with the same ratio. The clock starts at the first call, as in
 ``SimBackend``; calls with a time not after the last one move nothing.
 
-Wheels turn by their motors (:attr:`omnikin.wheels.Wheel.motor`): a dc motor's speed loop counts
+Wheels turn by their motors (:attr:`omnikin.kinematics.wheels.Wheel.motor`): a dc motor's speed loop counts
 by the nominal robot's encoder scale (``controller`` of :class:`~omnikin.physics.engine.PhysicsSim`).
 
 **A robot that tips over** (:meth:`~omnikin.physics.engine.PhysicsSim.fall`, checked at every
@@ -39,10 +39,10 @@ import math
 
 import numpy as np
 
+from ..common.messages import shorten
 from ..errors import InputError
-from ..geometry import wrap_angle
-from ..messages import shorten
-from ..model import Robot, require_same_wheels
+from ..kinematics.robot import Robot, require_same_wheels
+from ..kinematics.se2 import wrap_angle
 from ..runtime.backends import WheelState
 from .engine import PhysicsSim
 from .mjcf import DEFAULT_STEP

@@ -46,9 +46,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DivergedError
-from ..geometry import wrap_angle
-from ..model import Robot
-from ..simulation.motion import SampledPlan
+from ..kinematics.robot import Robot
+from ..kinematics.se2 import wrap_angle
+from ..motion.timing import SampledPlan
 from ..simulation.simulate import segment_rates
 from .description import describe
 from .engine import PhysicsSim

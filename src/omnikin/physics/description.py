@@ -1,227 +1,59 @@
 """A robot as a physical body: chassis, wheels, rollers, joints and motors, derived from any
-:class:`~omnikin.model.Robot` (pure data and NumPy; no physics engine needed).
+:class:`~omnikin.kinematics.robot.Robot` (pure data and NumPy; no physics engine needed).
 
 :func:`describe` turns the kinematic robot (wheel positions, drive directions, radii, roller
 angles, steering) into the frozen :class:`PhysicalRobot` that :mod:`omnikin.physics.mjcf`
-writes as a MuJoCo model and a viewer can draw. Every quantity the robot file does not give
-has a default below, with its reasoning; the optional ``physical:`` fields of the file
-(:class:`~omnikin.physical.PhysicalBody` on the robot, :class:`~omnikin.physical.PhysicalWheel`
-on each wheel) override them. ``docs/physics.md`` repeats the table.
+writes as a MuJoCo model, :mod:`omnikin.physics.urdf` as URDF, and a viewer draws; a robot as
+built keeps the body of its design (:func:`as_built`). Every quantity the robot file does not
+give has a default (the constants below); the optional ``physical:`` fields of the file
+(:class:`~omnikin.kinematics.physical.PhysicalBody` on the robot,
+:class:`~omnikin.kinematics.physical.PhysicalWheel` on each wheel) override them.
 
-Frames and units: SI, radians. The **body frame** is that of ``docs/conventions.md``
-(``base_link``: x forward, y left, z up) with its origin **on the floor** under the
-kinematic reference point, so that the pose of the chassis body is the robot's pose
-``(x, y, theta)``. A wheel's frame has its origin at the hub centre, x along the drive
-direction ``u = (cos delta, sin delta, 0)``, y along the axle ``a = z x u =
-(-sin delta, cos delta, 0)`` and z up: a positive rotation about +y is a positive wheel speed
-(it drives the hub along +u). The hub of wheel ``i`` sits at height ``r_i``: every wheel
-touches the floor with the chassis level, whatever the radii.
+Frames and units: SI, radians. The **body frame** is ``base_link`` of ``docs/conventions.md``
+(x forward, y left, z up) with its origin on the floor under the kinematic reference point: the
+chassis pose is the robot's pose ``(x, y, theta)``. A **wheel's frame** has its origin at the
+hub centre, at height ``r_i`` (the chassis stands level whatever the radii), x along the drive
+direction ``u = (cos delta, sin delta, 0)``, y along the axle ``a = z x u``, z up; a positive
+rotation about +y is a positive wheel speed.
 
-Rollers of Swedish wheels (omni: roller angle ``gamma = 0``, mecanum: +-45 deg, any angle up
-to the schema's 80 deg). ``R`` rows of ``n`` rollers each; row ``j`` is turned about the axle
-by ``j 2 pi / (n R)`` against row 0 (staggered evenly) and sits at ``y_j`` along the axle:
-by default every row in the wheel's mid-plane (``y_j = 0``; the rollers of different rows
-overlap, which the simulation allows), with ``physical.width`` ``w`` the rows spread evenly over
-it, ``y_j = (j - (R - 1) / 2) w / R``, as on a built wheel. Why the default: the contact then
-stays on the wheel's mid-plane, where the kinematics puts it. Rows side by side put it ``d``
-off that plane on alternate rollers: each wheel's lever about the robot centre alternates
-between ``l + d`` and ``l - d``, and the body rolls on whichever rows carry its wheels, about a
-shifted instantaneous centre. For three wheels 120 deg apart it turns at ``(r omega / l) /
-(1 + S d / (3 l))``, ``S`` the sum over the wheels of +1 (outer row) or -1 (inner row);
-averaged over the rollers' period the excess over the kinematics depends on the wheels'
-relative roller phases: ``d^2 / (l^2 - d^2)`` all in phase (0.57 % for tomasi-omni3 with rows
-17 mm apart), ``d^2 / (9 l^2)`` with one half a period off (0.063 %), ``d^2 / (3 l^2)`` on
-average over random phases (docs/physics.md, "Rows side by side", with the measurements).
-That is how a built double-row wheel drives; give its width to see it.
-Each roller is an **ellipsoid of revolution** (exactly round cross-section, so a roller's own
-spin never lifts the wheel) with semi-axis ``a`` along its spin axis and ``b`` across it, its
-centre at distance ``c`` from the axle. The roller at angle ``psi`` about the axle (0 at the
-bottom) has its centre at ``R_y(psi) (0, y_j, -c)`` and its spin axis
-``e = R_y(psi) (cos gamma, sin gamma, 0)``: at the bottom it lies along ``delta + gamma`` in
-the floor plane, the direction along which the contact cannot slip (``omnikin.wheels``).
+Key equations (Swedish wheel of roller angle ``gamma``, ``R`` rows of ``n`` rollers):
 
-*Envelope.* With the roller at angle ``phi`` from the bottom, the height of the axle above the
-floor is the roller's support function in the vertical direction (``e.z = -cos(gamma)
-sin(phi)``)::
+- roller: ellipsoid of revolution, semi-axes ``a`` along its spin axis and ``b`` across, centre
+  at ``c`` from the axle; at angle ``psi`` about the axle its centre is ``R_y(psi) (0, y_j, -c)``
+  and its axis ``R_y(psi) (cos gamma, sin gamma, 0)``, row ``j`` turned by ``j 2 pi / (n R)``;
+- envelope, the axle height with the roller at ``phi`` from the bottom:
+  ``h(phi) = c cos(phi) + sqrt(b^2 + (a^2 - b^2) cos^2(gamma) sin^2(phi))``;
+- osculation ``h''(0) = 0``: ``(a^2 - b^2) cos^2(gamma) = b c``; a row's rollers end to end in
+  the side view: ``tan(pi / n) = a cos(gamma) / c`` (:func:`roller_shape`);
+- scale: the mean of ``h`` over ``|phi| <= pi / (n R)`` is the file's radius (:func:`roller_geometry`);
+- command ramp: the largest rim acceleration at which every driven wheel needs at most half its
+  friction ``mu_i N_i`` and half its motor torque (:func:`ramp_rim_acceleration`).
 
-    h(phi) = c cos(phi) + sqrt(b^2 + (a^2 - b^2) cos^2(gamma) sin^2(phi)).
-
-The envelope follows the wheel's circle to fourth order when ``h''(0) = 0``, the
-**osculation condition** ``(a^2 - b^2) cos^2(gamma) = b c``; then
-``h(phi) = c cos(phi) + sqrt(b^2 + b c sin^2(phi)) = (b + c) - c (b + c) phi^4 / (8 b) + ...``
-(for gamma = 0 it says ``a^2 = b (b + c)``: the curvature ``b / a^2`` of the ellipse's crest
-equals that of the wheel's circle). A roller spans the angle ``+-alpha`` about the axle seen
-from the side, ``tan(alpha) = a cos(gamma) / c``; the rollers of one row meet end to end in
-that view: ``alpha = pi / n``. With ``T = tan(alpha)`` and crest radius ``b + c = 1`` the two
-conditions give ``b^2 (T^2 + sin^2 gamma) - b (2 T^2 + 1) + T^2 = 0``, whose small root is
-``b = 2 T^2 / (2 T^2 + 1 + sqrt(1 + 4 T^2 cos^2 gamma))`` (``T^2 / (1 + 2 T^2)`` to first
-order), then ``c = 1 - b`` and ``a = c T / cos(gamma)``. The wheel rests on the roller nearest
-the bottom, so each roller carries it over ``|phi| <= phi_h = pi / (n R)``, where ``h`` falls
-by the **height ripple** ``h(0) - h(phi_h)``. On a convex profile rolling without slip the
-hub advances by ``h(phi) d(phi)``: the effective rolling radius is the *mean* of ``h`` over
-``[-phi_h, phi_h]``, not its crest. All lengths are therefore scaled so that this mean is the
-file's radius ``r``: the crest lies half the ripple or so above ``r`` and the rollers roll
-exactly ``r`` per radian on average (:class:`RollerSet`).
-
-*Inclined rollers* (gamma != 0) tilt out of the floor plane away from the bottom: at ``phi``
-the contact cannot slip along ``e``, whose floor projection makes ``tan(gamma') =
-tan(gamma) / cos(phi)`` with the drive direction. Averaged over ``|phi| <= phi_h`` the wheel acts
-like one of roller angle ``atan(k tan(gamma))``, ``k = ln(sec(phi_h) + tan(phi_h)) / phi_h``
-(1.012 for 12 rollers, 1.003 for 24): a mecanum base strafes about ``1 / k`` as fast as the
-kinematics says (1.2 % slower with the default rollers), as built mecanum wheels do; more
-rollers per row bring it closer.
-
-Defaults (each overridden by the field named in brackets):
-
-==========================  ===============================================================
-chassis shape               a cylinder when the mounting points ``(x, y)`` of the wheels
-                            (steering axes for steered wheels and castors) are three or more
-                            evenly spaced on a circle (a rotationally symmetric base: omni3,
-                            omni4, synchro, XR4000), radius that circle, centred at their
-                            centroid; else a box over those points (its extent at least one
-                            mean wheel diameter in each direction)
-chassis thickness           the mean rolling radius ``r_m`` (``physical.height``); centred at
-                            the mean hub height ``r_m``, so its bottom clears the floor by
-                            ``r_m / 2``
-chassis mass                ``1000 kg/m^3`` times the chassis volume (``physical.mass``): a
-                            robot is batteries (2000-2500 kg/m^3), electronics and an aluminium
-                            frame with air in between, on average about the density of water
-chassis centre of mass      over the centroid of the wheels' contact points, at the height of
-                            the chassis centre (``physical.com``): a builder balances a robot over
-                            its wheels, and so every layout that can stand does (for symmetric
-                            layouts this is the centre of the chassis shape; the trailing legs
-                            of Villasenor's robot put it well away from their steering axes).
-                            The inertia is that of the uniform shape about its own centre
-wheel width                 standard wheels and castors ``0.4 r`` (tyres are 0.3-0.5 of their
-                            radius wide); Swedish wheels a roller's extent along the axle,
-                            ``2 sqrt(b^2 + (a^2 - b^2) sin^2 gamma)``, their rows in the
-                            mid-plane (``physical.width``; then the rows share it evenly,
-                            "Rollers" above)
-wheel mass                  a solid cylinder of ``1000 kg/m^3`` (plastic hub with lightening
-                            holes, rubber tyre or rollers) (``physical.mass``); Swedish wheels
-                            put half of it in their rollers, steered wheels and castors carry a
-                            fork of a quarter of the wheel's mass
-rows of rollers             2 for omni wheels (gamma = 0): one row leaves gaps between its
-                            rollers, two staggered rows give the continuous contact of built
-                            omni wheels; 1 for inclined rollers (mecanum), which overlap in
-                            the side view (``physical.rows``)
-rollers per row             ``ceil(12 / R)``: 12 rollers around the wheel, each carrying it
-                            over 30 deg (+-15 deg about the bottom), for a height ripple below
-                            0.5 % (omni, 2 x 6) and 1 % (mecanum, 1 x 12) of the radius, zero
-                            on average (``physical.rollers``)
-friction                    1.0, rubber on concrete (``physical.friction``)
-driven wheels               those with an encoder or a ``physical.max_torque``; if none has
-                            either, every rolling wheel (castors are always passive)
-motor torque                the torque at which the wheel slips under its static load
-                            ``N_i``, ``mu N_i r`` (:func:`wheel_loads`; ``m g / n`` for
-                            symmetric layouts; the static loads decide where a robot with its
-                            weight off-centre slips first): a stronger motor only spins its wheel
-                            (``physical.max_torque``)
-steering torque             ``mu N_i (trail + r)``: enough to drag the contact
-                            sideways on the lever of the trail, or to twist it on the spot
-                            (``physical.max_torque``, the same limit as the wheel motor's)
-motor speed                 the wheel's ``max_speed``, else a rim speed of 3 m/s (indoor and
-                            service robots drive below 3 m/s)
-command ramp                every driven wheel's rim accelerates at most at ``a`` [m/s^2]
-                            (``alpha_i = a / r_i`` [rad/s^2]), the largest ``a`` at which, for
-                            the worst body acceleration the wheels can then produce, each
-                            wheel's traction stays within half its friction limit
-                            ``mu_i N_i`` and its motor within half its torque ("Command
-                            ramp" below). A step command would saturate the motors and spin
-                            the wheels
-speed servo                 a PI controller as in built wheel controllers: gain
-                            ``I_eff / 5 ms`` [N m s/rad], ``I_eff = I_wheel + m (N_i / sum N_j)
-                            r^2`` the wheel's inertia plus its share of the robot's mass seen
-                            through the radius, shared among the driven wheels ``j`` as they
-                            carry the weight (``m / n_driven`` when they carry it evenly; a
-                            nearly unloaded wheel would otherwise be asked for a quarter of
-                            the traction, and the command ramp would wait for it: mecanum4
-                            with its centre of mass 19 mm inside one corner, ``line 1``
-                            ended at 0.665 m, now 0.9993 m) (the wheel speed follows the ramp with
-                            a time constant of 5 ms; the implicit integrator keeps it stable at
-                            any step) and integral time 50 ms, so that a steady load (the
-                            centripetal force on a curve) leaves no speed error; the integral
-                            is held within one full torque (anti-windup); a motor rotor
-                            inertia where the wheel alone is too light for the gain ("Rotor
-                            inertia" below)
-steering                    PI position servo with full torque at 0.05 rad of error, damped
-                            critically on the steered parts' inertia, integral time 50 ms,
-                            ramped at pi rad/s (half a turn per second: hobby servos turn
-                            60 deg in 0.1-0.2 s, cars lock to lock in about a second)
-==========================  ===============================================================
-
-*Command ramp* (:func:`ramp_rim_acceleration`). The ramp bounds each wheel's acceleration, not
-the body's: on omni4 the wheels stand at 45 deg to a forward motion, so the body accelerates
-``sqrt(2)`` times as fast as the rims and needs ``sqrt(2)`` times the traction a rim
-acceleration would suggest. The ramp is therefore derived from the body dynamics. With ``J``
-the driven wheels' rows (``omega = J xi``, :meth:`~omnikin.model.Robot.jacobian` at zero
-steering, twist ``xi = (vx, vy, omega)`` of the body frame) the set-points move along a straight
-line in wheel-speed space (the engine's ramp), so the body accelerations the wheels can produce
-at rim acceleration ``a`` are ``P(a) = {xi' in the row space of J : |r_i J_i xi'| <= a}``. The
-body (planar mass matrix about the body origin, ``M = [[m, 0, -m c_y], [0, m, m c_x], [-m c_y,
-m c_x, I_z]]``, ``c`` the centre of mass, ``I_z`` the yaw inertia about the origin) then needs
-the generalised force ``M xi'``, which the wheels' axle torques ``t`` give as ``J^T t``. PI servos
-of gains ``K`` tracking consistent set-points on rigid contacts give ``t = K (s - J xi)``, a
-vector in the column space of ``J``; the one solution there is ``t = K J (J^T K J)^+ M xi'`` (for
-a layout without redundancy, the only solution). Wheel ``i`` transmits it as a contact force
-``F_i = |t_i| |J_i,xy|`` along its non-slip direction (virtual work: ``F_i e_i . v_c =
-t_i J_i . xi``), and its motor gives ``|t_i| + I_i alpha_i`` (``I_i`` its own axle inertia).
-All of this is linear in ``a``, so the largest ``a`` with ``F_i <= f mu_i N_i`` and motor torque
-``<= f tau_i`` for every wheel and every ``xi'`` in ``P(a)`` (the maximum of ``|c . xi'|`` over a
-polytope lies at a vertex) is found in closed form; ``f = 1/2`` (:data:`RAMP_SHARE`): the other
-half is for uneven loads, the servo's tracking error and the contacts' compliance. Not counted:
-the sideways forces of fixed standard wheels (constraint forces, not the motors'), Coriolis
-terms while turning, and steering (the rows at the mounting angles). Body motions the rims
-barely drive (parallel drive directions off by a robot's mounting errors) are left out of
-``P(a)`` (:func:`drivable_rows`).
-
-*Rotor inertia* (:func:`rotor_inertia`, MuJoCo's joint ``armature``). MuJoCo integrates the
-speed servo implicitly (``implicitfast``): over a step ``h`` the wheel's own axle inertia
-``I`` responds to a torque as ``I + kv h`` would, while the contact solver predicts the
-wheel's response from ``I`` alone; the gain ``kv = I_eff / 5 ms`` grows with the robot's mass
-through ``I_eff``, ``I`` does not. Measured on tomasi-omni3 (``line 1``, 2 ms): ``kv h / I`` up
-to 17 (5 kg chassis) tracks the wheel speeds within 1 %; 63 (20 kg) falls into a limit cycle
-(wheel speeds -5.1 to -3.4 rad/s about -4.2, the robot 3 % too far), as do a wheel of
-``physical.mass`` 1 g and 64 rollers in one row. Built wheels do not have that problem: a
-geared motor's rotor, seen through the gear (its inertia times the ratio squared), usually
-outweighs the wheel. Every driven wheel therefore gets the rotor inertia that keeps
-``kv h_max / (I + rotor) <= 15`` (:data:`SERVO_STEP_RATIO`) at the longest accepted step
-``h_max = 2 ms`` (so the model is the same at every step): with it all three track within 1 %.
-It lengthens the servo's time constant by at most ``h_max / 15 = 0.13 ms`` and counts in the
-command ramp as axle inertia; the presets (ratios 3.4 to 13.9) get none. The steering servo's
-stiffness (full torque at 0.05 rad) grows with the load as well; its spring acts explicitly, so
-its natural frequency ``sqrt(k / I)`` must stay within one radian per step: a steering rotor
-inertia keeps ``k h_max^2 / I <= 1`` (:func:`steering_rotor_inertia`; presets 0.01 to 0.86).
-Without it synchro with a 1000 kg chassis (ratio 122) tipped over in ``line 1``, xr4000 with
-100 kg (8.1) ended it 86 mm off.
-
-*A robot as built* (:attr:`omnikin.model.Robot.design` set, as
-:meth:`~omnikin.simulation.error_models.SystematicErrors.apply` makes it) keeps the body of its
-design: the defaults above are taken from the design, and only what the errors name moves
-(each wheel's hub, drive direction, radius and roller angle; :func:`as_built`).
-
-A robot whose contact points do not surround its centre of mass cannot stand (two wheels on
-one axle and no castor): :attr:`PhysicalRobot.support_margin` is then not positive, and the
-engine refuses it.
+``docs/physics.md`` is the full account, with the derivations, every default with its reason and
+the measurements: "The model" (frames, tyres, rollers, motors), "Rollers: the osculating
+ellipsoid" (the shape, rows side by side, inclined rollers), "Defaults" (the table, the robot as
+built, the command ramp) and "What the engine accepts" (the rotor inertias).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from ..errors import InputError
-from ..model import Robot
-from ..physical import PhysicalWheel
-from ..wheels import Wheel
+from ..kinematics.physical import PhysicalWheel
+from ..kinematics.robot import Robot
+from ..kinematics.wheels import Wheel
 
 GRAVITY = 9.81
 """Standard gravity [m/s^2]."""
 CHASSIS_DENSITY = 1000.0
-"""Mean density of a chassis [kg/m^3] (module docstring)."""
+"""Mean density of a chassis [kg/m^3] (docs/physics.md, "Defaults")."""
 WHEEL_DENSITY = 1000.0
 """Mean density of a wheel taken as a solid cylinder [kg/m^3]."""
 TYRE_WIDTH_PER_RADIUS = 0.4
@@ -241,19 +73,17 @@ SERVO_TIME_CONSTANT = 0.005
 MAX_STEP = 0.002
 """Longest time step [s] the engine accepts (:data:`omnikin.physics.mjcf.STEP_RANGE`)."""
 SERVO_STEP_RATIO = 15.0
-"""Largest ``gain * MAX_STEP / I_axle`` of a wheel's speed servo (module docstring, "Rotor
-inertia"): beyond it a wheel whose own axle inertia is small against the robot's mass it drives
-falls into a limit cycle (tomasi-omni3 with a 20 kg chassis: ratio 63, wheel speeds -5.1 to
--3.4 rad/s about -4.2); the presets lie at 3.4 to 13.9."""
+"""Largest ``gain * MAX_STEP / I_axle`` of a wheel's speed servo: beyond it a wheel whose own
+axle inertia is small against the robot's mass it drives falls into a limit cycle (docs/physics.md,
+"What the engine accepts")."""
 INTEGRAL_TIME = 0.05
 """Integral time [s] of the wheel speed servo."""
 RAMP_SHARE = 0.5
 """Part of each wheel's friction limit ``mu N`` and of its motor torque the command ramp may ask
-for (module docstring, "Command ramp")."""
+for (docs/physics.md, "Defaults", "The command ramp")."""
 DRIVABLE = 0.05
 """Relative singular value of the rim rows below which a body motion counts as not driven by the
-rims (:func:`drivable_rows`): about 3 deg between drive directions, six times the mounting
-error of the ``typical`` profile, a seventh of the smallest of a layout that drives it."""
+rims (:func:`drivable_rows`; docs/physics.md, "The command ramp", for the number)."""
 STEER_RATE = math.pi
 """Default steering rate limit [rad/s]."""
 STEER_FULL_TORQUE_ANGLE = 0.05
@@ -289,7 +119,7 @@ class Roller:
 
 @dataclass(frozen=True)
 class RollerSet:
-    """The rollers of a Swedish wheel (module docstring, "Rollers").
+    """The rollers of a Swedish wheel (docs/physics.md, "Rollers: the osculating ellipsoid").
 
     ``rows`` x ``per_row`` ellipsoids of semi-axes ``half_length`` (``a``, along the spin axis)
     and ``radius`` (``b``, across), centres at ``centre_radius`` (``c``) from the axle and
@@ -423,8 +253,10 @@ class PhysicalRobot:
 
 # --- rollers -----------------------------------------------------------------------------------
 def roller_shape(gamma: float, per_row: int) -> tuple[float, float, float]:
-    """``(a, b, c)`` of an osculating roller of a wheel with crest radius 1 (module docstring):
-    roller angle ``gamma`` [rad], ``per_row`` rollers meeting end to end in the side view."""
+    """``(a, b, c)`` of an osculating roller of a wheel with crest radius ``b + c = 1`` (module
+    docstring): roller angle ``gamma`` [rad], ``per_row`` rollers meeting end to end in the side
+    view; ``b`` the small root of ``b^2 (T^2 + sin^2 gamma) - b (2 T^2 + 1) + T^2 = 0``,
+    ``T = tan(pi / per_row)``, ``a = c T / cos(gamma)``."""
     t2 = math.tan(math.pi / per_row) ** 2
     cg = math.cos(gamma)
     b = 2.0 * t2 / (2.0 * t2 + 1.0 + math.sqrt(1.0 + 4.0 * t2 * cg * cg))
@@ -458,9 +290,10 @@ def roller_geometry(wheel: Wheel, rows: int, per_row: int) -> tuple[float, float
 
 
 def roller_set(wheel: Wheel, rows: int, per_row: int, width: float | None, mass: float) -> RollerSet:
-    """The rollers of Swedish ``wheel`` (module docstring): :func:`roller_geometry`, the rows
-    staggered evenly about the axle, spread evenly over ``width`` [m] (None: all in the wheel's
-    mid-plane); ``mass`` [kg] of all rollers."""
+    """The rollers of Swedish ``wheel`` in its frame (module docstring): :func:`roller_geometry`,
+    the rows staggered evenly about the axle, spread evenly over ``width`` ``w`` [m] at
+    ``y_j = (j - (rows - 1) / 2) w / rows`` (None: all in the wheel's mid-plane, ``y_j = 0``);
+    ``mass`` [kg] of all rollers."""
     gamma = wheel.roller
     a, b, c, ripple, _ = roller_geometry(wheel, rows, per_row)
     spread = 0.0 if width is None else width / rows
@@ -490,7 +323,7 @@ def roller_set(wheel: Wheel, rows: int, per_row: int, width: float | None, mass:
 
 
 def default_rows(wheel: Wheel) -> int:
-    """2 staggered rows for omni rollers (gamma = 0), 1 for inclined ones (module docstring)."""
+    """2 staggered rows for omni rollers (gamma = 0), 1 for inclined ones (docs/physics.md, "Defaults")."""
     return 2 if wheel.roller == 0.0 else 1
 
 
@@ -525,7 +358,8 @@ def regular_circle(points: np.ndarray) -> tuple[np.ndarray, float] | None:
 
 
 def chassis_shape(robot: Robot, mean_radius: float, height: float) -> tuple[str, tuple, tuple]:
-    """``(shape, centre, size)`` of the chassis (module docstring, "chassis shape")."""
+    """``(shape, centre, size)`` [m, body frame] of the chassis (docs/physics.md, "Defaults", "chassis
+    shape"): ``"cylinder"`` with ``size = (radius, half height)`` or ``"box"`` with its half extents."""
     points = mounting_points(robot)
     circle = regular_circle(points)
     if circle is not None:
@@ -615,7 +449,7 @@ def steered_support_margin(robot: Robot, com, steer) -> float:
     """:func:`support_margin` of the centre of mass ``com`` (x, y) [m] among the contacts of
     ``robot``'s wheels with its steerable wheels at ``steer`` [rad] (file order): an off-centred
     wheel's contact trails its steering axis and swings round it as it steers
-    (:meth:`omnikin.wheels.Wheel.contact_point`); castors and fixed wheels at their mounting."""
+    (:meth:`omnikin.kinematics.wheels.Wheel.contact_point`); castors and fixed wheels at their mounting."""
     angles = dict(zip(robot.steer_names, np.atleast_1d(np.asarray(steer, dtype=float)), strict=True))
     contacts = np.array([w.contact_point(angles.get(w.name, 0.0)) for w in robot.wheels])
     return support_margin(contacts, np.asarray(com, dtype=float)[:2])
@@ -641,7 +475,7 @@ def polytope_max(rows: np.ndarray, costs: np.ndarray) -> np.ndarray:
     vertex ``y = h`` of the polytope. The hull of ``2 n`` points in the rank (at most 3)
     dimensions costs ``O(n log n)`` (Qhull, Barber, Dobkin and Huhdanpaa, "The Quickhull
     algorithm for convex hulls"), where enumerating every choice of ``rank`` active constraints
-    cost ``O(n^rank)``: 512 wheels took minutes, now about a millisecond."""
+    costs ``O(n^rank)``."""
     _, sv, vt = np.linalg.svd(rows, full_matrices=False)
     rank = int(np.sum(sv > sv[0] * 1e-9)) if len(sv) else 0
     if rank == 0:
@@ -665,15 +499,8 @@ def drivable_rows(rows: np.ndarray, radii: np.ndarray, lever: float) -> np.ndarr
     """``rows`` ``(n, 3)`` [rad/s per twist] without the body motions the rims barely drive: with
     the rim rows ``r_i J_i`` on the scaled twist ``(vx, vy, lever omega)``, singular directions
     below :data:`DRIVABLE` of the largest are dropped (truncated singular value decomposition).
-
-    Why: wheels whose drive directions are parallel (a synchronous drive or XR4000 at their
-    mounting steering) produce no acceleration across them; the robot *as built*, its drive
-    directions off by its mounting errors (0.5 deg sigma in the ``typical`` profile), formally
-    does, with singular values of about 0.001 of the largest. Taken as real, such a direction
-    turns rim accelerations into body accelerations a thousand times larger and the ramp into
-    6e-5 m/s^2 (the synchronous drive as built could not start in a UMBmark run); the motion is
-    the tyres' sideways grip's, not the motors'. Layouts that drive every direction have ratios
-    of 0.38 (ackermann's rear axle) to 1."""
+    Parallel drive directions off by a robot's mounting errors formally drive the motion across
+    them; the tyres' sideways grip does, not the motors (docs/physics.md, "The command ramp")."""
     scale = np.array([1.0, 1.0, float(lever)])
     rim = radii[:, None] * rows / scale
     u, sv, vt = np.linalg.svd(rim, full_matrices=False)
@@ -692,7 +519,7 @@ def ramp_rim_acceleration(
     lever: float = 1.0,
     share: float = RAMP_SHARE,
 ) -> float:
-    """The command ramp's rim acceleration ``a`` [m/s^2] (module docstring, "Command ramp"):
+    """The command ramp's rim acceleration ``a`` [m/s^2] (docs/physics.md, "The command ramp"):
     the largest at which no driven wheel needs more than ``share`` of its friction limit
     ``traction_limits`` (``mu_i N_i`` [N]) or of its ``torque_limits`` [N m] for any body
     acceleration the wheels can produce. ``rows`` ``(n, 3)`` the driven wheels' rows [rad/s per
@@ -700,7 +527,9 @@ def ramp_rim_acceleration(
     each wheel's own inertia about its axle, ``gains`` the speed servos' gains [N m s/rad].
     ``lever`` [m]: the length that makes a turn rate comparable with a speed (the largest wheel
     distance from the body origin); the rows are first cut to their well-conditioned part
-    (:func:`drivable_rows`)."""
+    (:func:`drivable_rows`). Axle torques ``t = K J (J^T K J)^+ M xi'`` (``K`` the gains, ``J``
+    the rows, ``M`` the mass matrix), contact forces ``|t_i| |J_i,xy|``, maximised over the
+    vertices of the body accelerations ``{xi' : |r_i J_i xi'| <= a}`` (:func:`polytope_max`)."""
     rows = drivable_rows(rows, radii, lever)
     k = np.diag(gains)
     distribution = k @ rows @ np.linalg.pinv(rows.T @ k @ rows) @ mass_matrix  # axle torque per xi'
@@ -715,7 +544,7 @@ def rotor_inertia(gain: float, axle_inertia: float, step: float = MAX_STEP) -> f
     """The motor rotor's inertia [kg m^2] seen at the axle of a wheel whose speed servo has
     ``gain`` [N m s/rad] and whose own inertia about its axle is ``axle_inertia`` [kg m^2]: the
     least that keeps ``gain step / (axle_inertia + rotor) <= SERVO_STEP_RATIO`` at the longest
-    ``step`` [s] (module docstring, "Rotor inertia"); 0 when the wheel alone suffices."""
+    ``step`` [s] (docs/physics.md, "What the engine accepts"); 0 when the wheel alone suffices."""
     return max(0.0, gain * step / SERVO_STEP_RATIO - axle_inertia)
 
 
@@ -723,14 +552,66 @@ def steering_rotor_inertia(stiffness: float, inertia: float, step: float = MAX_S
     """The steering motor rotor's inertia [kg m^2] seen at the steering axis of a position servo
     of ``stiffness`` [N m/rad] turning ``inertia`` [kg m^2]: the least that keeps
     ``stiffness step^2 / (inertia + rotor) <= 1`` at the longest ``step`` [s], i.e. the servo's
-    natural frequency at most one radian per step (its stiffness acts explicitly; module
-    docstring, "Rotor inertia"); 0 when the steered parts alone suffice."""
+    natural frequency at most one radian per step (its stiffness acts explicitly; docs/physics.md,
+    "What the engine accepts"); 0 when the steered parts alone suffice."""
     return max(0.0, stiffness * step * step - inertia)
 
 
 # --- wheels ---------------------------------------------------------------------------------
 def _given(wheel: Wheel) -> PhysicalWheel:
     return wheel.physical if wheel.physical is not None else PhysicalWheel()
+
+
+class _Placement(NamedTuple):
+    """Where a wheel sits at zero steering (body frame): ``drive`` ``delta`` [rad], ``trail`` [m]
+    of the hub behind the steering axis (0 for fixed wheels), ``hub`` centre [m] at height ``r``,
+    unit ``axle`` ``(-sin delta, cos delta, 0)`` and floor ``contact`` (x, y) [m]."""
+
+    drive: float
+    trail: float
+    hub: tuple[float, float, float]
+    axle: tuple[float, float, float]
+    contact: tuple[float, float]
+
+
+def _placement(wheel: Wheel) -> _Placement:
+    """:class:`_Placement` of ``wheel``: the hub of a steered wheel or castor trails its steering
+    axis ``(x, y)`` by ``offset`` against the drive direction, and so does the floor contact."""
+    delta = float(wheel.drive)
+    cd, sd = math.cos(delta), math.sin(delta)
+    trail = wheel.offset if (wheel.is_steerable or wheel.is_castor) else 0.0
+    return _Placement(
+        drive=delta,
+        trail=trail,
+        hub=(wheel.x - trail * cd, wheel.y - trail * sd, wheel.radius),
+        axle=(-sd, cd, 0.0),
+        contact=(wheel.x - wheel.offset * cd, wheel.y - wheel.offset * sd),
+    )
+
+
+def _hub_inertia(mass: float, radius: float, width: float) -> tuple[float, float]:
+    """Principal moments [kg m^2] of a hub as a uniform cylinder of ``mass`` [kg], ``radius`` and
+    ``width`` [m]: about the axle, across it."""
+    return mass * radius**2 / 2.0, mass * (3.0 * radius**2 + width**2) / 12.0
+
+
+def _robot_com(
+    chassis_mass: float,
+    chassis_com,
+    wheels: Sequence[Wheel],
+    masses: Sequence[float],
+    fork_masses: Sequence[float],
+    contacts: np.ndarray,
+    total: float,
+) -> np.ndarray:
+    """Centre of mass ``(x, y, z)`` [m, body frame] of the robot of ``total`` mass [kg]: the chassis
+    of ``chassis_mass`` [kg] at ``chassis_com`` (x, y, z), each of ``wheels`` of its ``masses`` [kg]
+    at its ``contacts`` ``(n, 2)`` point at hub height, its fork of its ``fork_masses`` [kg] at its
+    mounting point at hub height."""
+    moments = chassis_mass * np.asarray(chassis_com, dtype=float)
+    for w, mass, fork_mass, (cx, cy) in zip(wheels, masses, fork_masses, contacts, strict=True):
+        moments = moments + mass * np.array([cx, cy, w.radius]) + fork_mass * np.array([w.x, w.y, w.radius])
+    return moments / total
 
 
 def _wheel_mass_and_width(wheel: Wheel) -> tuple[float, float, RollerSet | None, float]:
@@ -750,8 +631,8 @@ def _wheel_mass_and_width(wheel: Wheel) -> tuple[float, float, RollerSet | None,
 
 
 def describe(robot: Robot) -> PhysicalRobot:
-    """The physical description of ``robot`` (module docstring for every default); a robot as
-    built (:attr:`omnikin.model.Robot.design` set) keeps the body of its design
+    """The physical description of ``robot`` (docs/physics.md, "Defaults", for every default); a
+    robot as built (:attr:`omnikin.kinematics.robot.Robot.design` set) keeps the body of its design
     (:func:`as_built`)."""
     if not isinstance(robot, Robot):
         raise InputError(f"describe: expected a Robot, got {type(robot).__name__}")
@@ -765,9 +646,8 @@ def describe(robot: Robot) -> PhysicalRobot:
     volume, _ = shape_volume_inertia(shape, size, 1.0)
     chassis_mass = body.mass if body is not None and body.mass is not None else CHASSIS_DENSITY * volume
     _, chassis_inertia = shape_volume_inertia(shape, size, chassis_mass)
-    contacts = np.array(
-        [[w.x - w.offset * math.cos(w.drive), w.y - w.offset * math.sin(w.drive)] for w in robot.wheels]
-    )
+    placements = [_placement(w) for w in robot.wheels]
+    contacts = np.array([place.contact for place in placements])
     balanced = (*(float(v) for v in contacts.mean(axis=0)), centre[2])
     com = body.com if body is not None and body.com is not None else balanced
 
@@ -780,24 +660,20 @@ def describe(robot: Robot) -> PhysicalRobot:
 
     explicit = [w for w in rolling if w.encoder is not None or _given(w).max_torque is not None]
     driven_names = {w.name for w in (explicit or rolling)}
-    moments = chassis_mass * np.asarray(com, dtype=float)
-    for w, (mass, *_), fork_mass, (cx, cy) in zip(robot.wheels, parts, fork_masses, contacts, strict=True):
-        moments = moments + mass * np.array([cx, cy, w.radius]) + fork_mass * np.array([w.x, w.y, w.radius])
-    robot_com = moments / total
+    robot_com = _robot_com(chassis_mass, com, robot.wheels, [p[0] for p in parts], fork_masses, contacts, total)
     loads = wheel_loads(contacts, robot_com[:2], total * GRAVITY)
 
     driven_load = sum(n for w, n in zip(robot.wheels, loads, strict=True) if w.name in driven_names)
     wheels = []
     ramp_inputs: list[tuple[Wheel, float, float]] = []  # driven wheel, mu N [N], axle inertia [kg m^2]
-    for w, (mass, width, rollers, hub_radius), load in zip(robot.wheels, parts, loads, strict=True):
+    for w, place, (mass, width, rollers, hub_radius), fork_mass, load in zip(
+        robot.wheels, placements, parts, fork_masses, loads, strict=True
+    ):
         given = _given(w)
         friction = given.friction if given.friction is not None else FRICTION
-        delta = float(w.drive)
-        cd, sd = math.cos(delta), math.sin(delta)
-        trail = w.offset if (w.is_steerable or w.is_castor) else 0.0
-        hub = (w.x - trail * cd, w.y - trail * sd, w.radius)
+        trail = place.trail
         hub_mass = mass - (rollers.mass * len(rollers.rollers) if rollers is not None else 0.0)
-        hub_inertia = (hub_mass * hub_radius**2 / 2.0, hub_mass * (3.0 * hub_radius**2 + width**2) / 12.0)
+        hub_inertia = _hub_inertia(hub_mass, hub_radius, width)
         torque = given.max_torque
         if torque is None:
             torque = friction * load * w.radius
@@ -844,9 +720,9 @@ def describe(robot: Robot) -> PhysicalRobot:
             WheelBody(
                 name=w.name,
                 type=w.type,
-                hub=hub,
-                drive=delta,
-                axle=(-sd, cd, 0.0),
+                hub=place.hub,
+                drive=place.drive,
+                axle=place.axle,
                 radius=w.radius,
                 width=width,
                 mass=mass,
@@ -882,59 +758,49 @@ def describe(robot: Robot) -> PhysicalRobot:
 
 def as_built(robot: Robot, design: PhysicalRobot) -> PhysicalRobot:
     """The physical description of ``robot``, a robot as built, from ``design``, the description
-    of the robot it was built to (:attr:`omnikin.model.Robot.design`): it differs only where the
+    of the robot it was built to (:attr:`omnikin.kinematics.robot.Robot.design`): it differs only where the
     errors say. Kept from the design: the chassis (shape, size, mass, centre of mass, inertia),
     every wheel's mass, width, rollers per row and rows, friction, motor (torque, speed, ramp,
     servo, rotor) and steering servo. Taken from ``robot``: each wheel's hub position, drive
     direction, radius and roller angle (the rollers' shape follows them, their mass does not;
     the hub's inertia follows its radius), the steering axis; then the robot's centre of mass
     (the wheels moved with their masses) and its support margin. Why: the defaults derive the
-    chassis from the wheels' layout (module docstring), and hubs a millimetre off the circle of
-    tomasi-omni3 made its 1.655 kg cylinder a 1.381 kg box."""
+    chassis from the wheels' layout (docs/physics.md, "Defaults", "The robot as built keeps its
+    body")."""
     wheels = []
-    chassis = design.chassis
-    moments = chassis.mass * np.asarray(chassis.com, dtype=float)
-    contacts = []
-    for w, body in zip(robot.wheels, design.wheels, strict=True):
-        delta = float(w.drive)
-        cd, sd = math.cos(delta), math.sin(delta)
-        trail = w.offset if (w.is_steerable or w.is_castor) else 0.0
+    placements = [_placement(w) for w in robot.wheels]
+    for w, place, body in zip(robot.wheels, placements, design.wheels, strict=True):
         rollers, hub_radius = body.rollers, w.radius
         if rollers is not None:
             width = body.width if "width" in body.fields else None
             rollers = roller_set(w, rollers.rows, rollers.per_row, width, rollers.mass * len(rollers.rollers))
             hub_radius = rollers.centre_radius
-        hub_inertia = (
-            body.hub_mass * hub_radius**2 / 2.0,
-            body.hub_mass * (3.0 * hub_radius**2 + body.width**2) / 12.0,
-        )
         steering = body.steering
         if steering is not None:
-            steering = replace(steering, pivot=(float(w.x), float(w.y)), trail=float(trail))
-        contact = (w.x - w.offset * cd, w.y - w.offset * sd)
-        contacts.append(contact)
-        fork_mass = steering.fork_mass if steering is not None else 0.0
-        moments = moments + body.mass * np.array([*contact, w.radius]) + fork_mass * np.array([w.x, w.y, w.radius])
+            steering = replace(steering, pivot=(float(w.x), float(w.y)), trail=float(place.trail))
         wheels.append(
             replace(
                 body,
                 type=w.type,
-                hub=(w.x - trail * cd, w.y - trail * sd, w.radius),
-                drive=delta,
-                axle=(-sd, cd, 0.0),
+                hub=place.hub,
+                drive=place.drive,
+                axle=place.axle,
                 radius=w.radius,
-                hub_inertia=hub_inertia,
+                hub_inertia=_hub_inertia(body.hub_mass, hub_radius, body.width),
                 rollers=rollers,
                 steering=steering,
             )
         )
-    com = moments / design.mass
+    contacts = np.array([place.contact for place in placements], dtype=float)
+    fork_masses = [b.steering.fork_mass if b.steering is not None else 0.0 for b in wheels]
+    masses = [b.mass for b in wheels]
+    com = _robot_com(design.chassis.mass, design.chassis.com, robot.wheels, masses, fork_masses, contacts, design.mass)
     return replace(
         design,
         name=robot.name,
         wheels=tuple(wheels),
         com=(float(com[0]), float(com[1]), float(com[2])),
-        support_margin=support_margin(np.array(contacts, dtype=float), com[:2]),
+        support_margin=support_margin(contacts, com[:2]),
     )
 
 

@@ -10,7 +10,7 @@ The model is the MJCF of :mod:`omnikin.physics.mjcf`. The simulation
   the start pose with zero velocity, so the run
   starts at rest without a bounce; the clock and the encoders start there at zero;
 - takes **wheel commands** (:meth:`PhysicsSim.command`): speeds [rad/s] of the rolling wheels in
-  file order (as :meth:`omnikin.model.Robot.ik` returns them; entries of passive wheels are
+  file order (as :meth:`omnikin.kinematics.robot.Robot.ik` returns them; entries of passive wheels are
   ignored) and steering angles [rad] of the steerable wheels. A command is reached through a
   **ramp**: each step the wheels' set-points move together along the straight line towards
   it, each by at most its motor's acceleration limit times the step
@@ -23,7 +23,7 @@ The model is the MJCF of :mod:`omnikin.physics.mjcf`. The simulation
   wheel (MuJoCo's ``velocity`` actuator, the proportional part, integrated implicitly) gets the
   set-point plus ``z``, ``dz/dt = (set-point - speed) / integral_time``, ``|z|`` at most the
   speed error at which the motor gives its full torque; the steering servos likewise on angles;
-- turns the driven wheels by their **motors** (:attr:`omnikin.wheels.Wheel.motor`,
+- turns the driven wheels by their **motors** (:attr:`omnikin.kinematics.wheels.Wheel.motor`,
   docs/conventions.md, "Motors"): a stepper's joint follows the commanded speed; a dc motor's
   speed loop closes on its encoder, so its joint follows the command times
   ``rpt_true / rpt_controller`` (:attr:`PhysicsSim.loop_turn`): the counts of the encoder as
@@ -49,10 +49,10 @@ import numbers
 
 import numpy as np
 
+from ..common.messages import shorten
 from ..errors import DivergedError, InputError, PhysicsError
-from ..geometry import wrap_angle
-from ..messages import shorten
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..kinematics.se2 import wrap_angle
 from ..simulation.simulate import counter_output
 from .description import PhysicalRobot, describe
 from .mjcf import DEFAULT_STEP, STEP_RANGE, mjcf
@@ -94,7 +94,7 @@ milliradians: the contacts sink 0.01-0.1 % of a wheel's radius)."""
 def _loop_turn(robot: Robot, controller: Robot | None, names: list[str]) -> np.ndarray:
     """Per wheel of ``names``, the joint speed its motor turns per unit of commanded speed
     (module docstring, "motors"): ``rpt_true / rpt_controller`` for a wheel whose speed loop closes
-    on its encoder (:attr:`omnikin.wheels.Wheel.counts_close_loop`), ``controller`` the robot
+    on its encoder (:attr:`omnikin.kinematics.wheels.Wheel.counts_close_loop`), ``controller`` the robot
     whose encoder scale its controller counts by (default ``robot.design``, else ``robot``); 1
     otherwise."""
     controller = controller if controller is not None else (robot.design or robot)

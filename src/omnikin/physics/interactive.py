@@ -6,7 +6,7 @@ steerable legs; here the window is MuJoCo's passive viewer and the robot the phy
 :class:`~omnikin.physics.backend.PhysicsBackend`, driven by
 :class:`~omnikin.runtime.base.BaseRuntime`: every key becomes a velocity command of the
 runtime's :class:`~omnikin.runtime.command.CommandFilter`, so the speed and acceleration limits
-(:class:`~omnikin.limits.MotionLimits`) and the command timeout act as on the real robot.
+(:class:`~omnikin.motion.limits.MotionLimits`) and the command timeout act as on the real robot.
 
 **Teleop: held keys drive.** A move key *sets* one component of the target twist (body frame,
 ``docs/conventions.md``) while it is held: W/S ``vx = +/-speed``, A/D ``vy = +/-speed``, Q/E
@@ -87,8 +87,8 @@ from collections import deque
 import numpy as np
 
 from ..errors import InputError
-from ..limits import MotionLimits
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..motion.limits import MotionLimits
 from ..runtime.base import BaseRuntime, StepResult
 from ..runtime.teleop import MOVES, Teleop, moves_not_obeyed
 from .backend import PhysicsBackend

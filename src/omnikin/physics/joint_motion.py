@@ -4,19 +4,19 @@
 viewer (rviz2) turns every wheel and roller. The encoded wheels' angles and the steering angles
 are measured (the back-end's reading); the rest follows from the odometry's body increment
 ``xi = (dx, dy, dtheta)`` over each control interval (its twist times the interval, body axes
-[m, m, rad]; the kinematic rows of :mod:`omnikin.wheels`):
+[m, m, rad]; the kinematic rows of :mod:`omnikin.kinematics.wheels`):
 
 * a rolling wheel without encoder (an Ackermann car's front wheels, a passive wheel) turns by
   its rolling row: ``dphi = [cos(a) dx + sin(a) dy + (x sin(a) - y cos(a)) dtheta] / (r cos
   gamma)``, ``a`` its drive direction at its measured steering angle;
 * a castor (joints ``NAME_steer``, ``NAME``) swivels as its trailing contact does not slide
   sideways, ``d beta' = n . v_p - d omega`` (``d`` the trail, ``n = (-sin a, cos a)``, ``v_p``
-  the velocity of the floor point under the swivel axis; :meth:`~omnikin.wheels.Wheel.swivel_row`),
+  the velocity of the floor point under the swivel axis; :meth:`~omnikin.kinematics.wheels.Wheel.swivel_row`),
   integrated with one Euler step per interval while the axis moves less than ``d`` in it (the
   step is then stable and does not overshoot: the swivel's rate changes by at most ``|v_p| / d``
   per radian), else set to the trailing steady angle ``atan2(v_p) - asin(d omega / |v_p|)`` (the
   swivel settles within the interval; the contact trails the axis); a castor without trail
-  points along ``v_p`` (:meth:`~omnikin.wheels.Wheel.align`, the way round nearer its angle).
+  points along ``v_p`` (:meth:`~omnikin.kinematics.wheels.Wheel.align`, the way round nearer its angle).
   It rolls by its rolling row at that swivel angle;
 * each roller ``NAME_roller_ROW_K`` of a Swedish wheel spins about its own axis ``e`` (the
   URDF joint axis; at the bottom of the wheel ``e`` lies on the floor along ``a = delta +
@@ -28,7 +28,7 @@ are measured (the back-end's reading); the rest follows from the odometry's body
 
       w = -s / b,  s = n . v_p + r omega_i sin(gamma)
 
-  with ``s`` the roller surface speed of :meth:`~omnikin.wheels.Wheel.roller_row` [m/s] and
+  with ``s`` the roller surface speed of :meth:`~omnikin.kinematics.wheels.Wheel.roller_row` [m/s] and
   ``b`` the roller's radius at its middle, where it touches the floor
   (:class:`omnikin.physics.description.RollerSet` ``radius``). The angle turned over an
   interval is ``-(roller_row . xi) / b`` [rad]. Every roller of a wheel is given that angle (a
@@ -44,8 +44,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..geometry import wrap_angle
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..kinematics.se2 import wrap_angle
 from .description import PhysicalRobot, describe
 
 

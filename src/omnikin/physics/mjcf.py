@@ -32,7 +32,7 @@ names and numbers are escaped by the writer, never pasted into markup); it does 
   wheel's friction coefficient (MuJoCo takes the larger of two geoms' coefficients: the floor's
   is 0) and a contact softness of :data:`CONTACT_SOLREF` and :data:`CONTACT_SOLIMP`.
 
-Names: wheel names are letters, digits and underscores (``omnikin.wheels.NAME_PATTERN``); the
+Names: wheel names are letters, digits and underscores (``omnikin.kinematics.wheels.NAME_PATTERN``); the
 names MuJoCo needs to be unique get a suffix with ``:``, which no wheel name holds, so a wheel
 called ``chassis`` or ``w1_roller`` cannot collide with anything generated. Joint and actuator
 names of the wheels and steering joints are those of ROS ``joint_states`` (``NAME``,
@@ -44,9 +44,9 @@ from __future__ import annotations
 import numbers
 import xml.etree.ElementTree as ET
 
+from ..common.messages import shorten
 from ..errors import SMALLEST_STEP, InputError
-from ..messages import shorten
-from ..model import Robot
+from ..kinematics.robot import Robot
 from .description import MAX_STEP, PhysicalRobot, WheelBody, describe
 from .validity import check_resolvable
 

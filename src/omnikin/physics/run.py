@@ -2,7 +2,7 @@
 :func:`omnikin.simulation.simulate.simulate` (``omnikin simulate --engine physics``).
 
 The plan is timed and sampled for the commanding (nominal) robot exactly as the kinematic
-engine does it (:func:`~omnikin.simulation.motion.sample_plan`, the same limits), and the
+engine does it (:func:`~omnikin.motion.timing.sample_plan`, the same limits), and the
 commanded wheel angles of every rolling wheel at the samples are those of
 :func:`~omnikin.simulation.simulate.commanded_angles`. Sample ``k`` commands each wheel the
 mean speed ``(angle_{k+1} - angle_k) / dt`` [rad/s] of its interval (and the interval's
@@ -50,14 +50,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..encoders import QUANTISATION_SLACK, counter_rules
 from ..errors import DivergedError, InputError, OdometryInputError, PhysicsError
-from ..geometry import wrap_angle
-from ..limits import MotionLimits
-from ..model import Robot, require_same_wheels
-from ..odometry import batch_odometry, encoded_wheels
-from ..plans import Plan
-from ..simulation.motion import SampledPlan, check_rate_range, require_motion, sample_plan
+from ..kinematics.robot import Robot, require_same_wheels
+from ..kinematics.se2 import wrap_angle
+from ..motion.limits import MotionLimits
+from ..motion.plans import Plan
+from ..motion.timing import SampledPlan, check_rate_range, require_motion, sample_plan
+from ..odometry.batch import batch_odometry, encoded_wheels
+from ..odometry.plausibility import QUANTISATION_SLACK, counter_rules
 from ..simulation.simulate import SimulatedRun, commanded_angles, counter_output
 from .description import steered_support_margin
 from .engine import TRACK_ERROR, TRACK_TIME, PhysicsSim
@@ -338,7 +338,7 @@ def _drive(
 def _require_plausible_wheels(robot: Robot, true_robot: Robot, t: np.ndarray, ticks: np.ndarray) -> None:
     """Refuse (:class:`~omnikin.errors.PhysicsError`, one line naming the wheel and the
     time) simulated encoders of ``true_robot`` that turned faster than the odometry of ``robot``
-    accepts (:func:`~omnikin.encoders.counter_rules`, the speed bound of each encoded wheel): the
+    accepts (:func:`~omnikin.odometry.plausibility.counter_rules`, the speed bound of each encoded wheel): the
     wheel spun in the simulation (the model was unstable or it lost its grip), where the odometry
     would blame the input and suggest a counter width. ``ticks``: never wrapped, one column per
     encoded wheel, at the times ``t`` [s]."""

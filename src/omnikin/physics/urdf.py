@@ -42,9 +42,9 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 
+from ..common.messages import shorten
 from ..errors import InputError
-from ..messages import shorten
-from ..model import Robot
+from ..kinematics.robot import Robot
 from .description import PhysicalRobot, WheelBody, describe
 
 BASE_LINK = "base_link"

@@ -15,7 +15,7 @@ The conditions (SI units):
   :data:`MIN_RADIUS` the shortfall approaches the validation tolerance of 0.5 %.
 - **Derived defaults in the file's ranges.** A chassis mass, a wheel mass or a motor torque the
   description derives from the layout (docs/physics.md, "Defaults") must lie within the range
-  the robot file could give it (:mod:`omnikin.physical`): a 1000 m robot would otherwise weigh
+  the robot file could give it (:mod:`omnikin.kinematics.physical`): a 1000 m robot would otherwise weigh
   3e10 kg and get 1e12 N m motors that no file could state.
 - **Rows on the wheel's side.** With ``physical.width`` the rows of a Swedish wheel spread
   over it (docs/physics.md, "Rows side by side"); a row further along the axle than the hub's
@@ -45,7 +45,7 @@ from __future__ import annotations
 import math
 
 from ..errors import InputError
-from ..physical import MASS_RANGE, TORQUE_RANGE
+from ..kinematics.physical import MASS_RANGE, TORQUE_RANGE
 from .description import PhysicalRobot, WheelBody, roller_shape
 
 MIN_RADIUS = 0.01

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..common.messages import did_you_mean
 from ..errors import InputError
-from ..messages import did_you_mean
 
 PRESET_DIR = Path(__file__).resolve().parent
 

@@ -12,7 +12,7 @@ gets it), ``/diagnostics`` (command and link statistics, the forward-kinematics 
 the last cycle, in the frames of ``odom``; only with a simulated back-end, one that has a
 ``truth`` pose) and, when ``tf2_msgs`` is importable, ``/tf``: odom -> base_link and, at most
 ``link_tf_rate`` times a second, every URDF link in its parent link
-(:mod:`omnikin.ros.link_frames`), and ``/tf_static`` (transient local): ``base_frame_id`` ->
+(:mod:`omnikin.physics.link_frames`), and ``/tf_static`` (transient local): ``base_frame_id`` ->
 the URDF's ``base_link`` when the two names differ, and the URDF's fixed joints if any.
 ``tf2_msgs`` is not among the ROS 2 wheels on PyPI: with the PyPI install the node says so
 once and publishes no ``/tf``; run it from a ROS 2 install (``source /opt/ros/<distro>/
@@ -56,16 +56,16 @@ from typing import Any
 
 import numpy as np
 
+from ..common.messages import digits_apart
 from ..errors import InputError, LinkError, OmnikinError
-from ..geometry import between, log
-from ..limits import MotionLimits
-from ..messages import digits_apart
+from ..kinematics.se2 import between, log
+from ..motion.limits import MotionLimits
 from ..physics.description import describe
 from ..physics.joint_motion import JointMotion
+from ..physics.link_frames import LinkFrames, urdf_joints
 from ..physics.urdf import BASE_LINK, urdf
 from ..runtime.base import BaseRuntime
 from . import messages, require_rclpy
-from .link_frames import LinkFrames, urdf_joints
 from .params import DEFAULTS, check_names, validate
 
 try:
@@ -172,7 +172,7 @@ class BaseNode(Node):
                 self._publish_static_tf()
         self.published = 0
         self.link_rearms = 0  # lost links re-armed (serial back-end)
-        self._next_retry = None
+        self._next_retry: float | None = None  # node time [s] of the next link reopen
         self.period = 1.0 / p["publish_rate"]
         self.loops = 0  # control cycles run
         self.overruns = 0  # control cycles that took longer than the period

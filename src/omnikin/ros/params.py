@@ -34,8 +34,8 @@ import itertools
 import math
 from pathlib import Path
 
+from ..common.messages import shorten
 from ..errors import InputError
-from ..messages import shorten
 
 DEFAULTS = {
     "cmd_vel_timeout": 0.5,

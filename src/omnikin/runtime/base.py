@@ -16,7 +16,7 @@ errors of successive increments telescope to that of the last reading, a bounded
 ``q / sqrt(12)`` per wheel, negligible against slip after a few centimetres; the body increment's
 covariance is ``Sigma_xi = F diag(.) F^T`` (``F`` forward kinematics) and the pose covariance is
 propagated through the exact SE(2) update ``x' = x + sinc(phi/2) R(theta + phi/2) (a, b)``,
-``theta' = theta + phi`` with its Jacobians (:func:`omnikin.geometry.compose_exp_jacobians`):
+``theta' = theta + phi`` with its Jacobians (:func:`omnikin.kinematics.se2.compose_exp_jacobians`):
 ``P' = J_out_pose P J_out_pose^T + J_out_tangent Sigma_xi J_out_tangent^T``. The twist
 covariance is ``Sigma_xi / dt^2``. The forward-kinematics residual (redundant layouts) is
 reported as a slip indicator.
@@ -30,11 +30,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..geometry import compose_exp_jacobians
-from ..limits import MotionLimits
-from ..model import Robot
-from ..odometry import mid_steer
-from ..streaming import Odometry
+from ..kinematics.robot import Robot
+from ..kinematics.se2 import compose_exp_jacobians
+from ..motion.limits import MotionLimits
+from ..odometry.batch import mid_steer
+from ..odometry.streaming import Odometry
 from .backends import WheelBackend, WheelState
 from .command import CommandFilter
 

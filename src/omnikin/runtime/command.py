@@ -9,7 +9,7 @@ One meaning everywhere (ros2_controllers' controllers disagree on it):
   angular parts stay within ``linear_accel * dt`` and ``angular_accel * dt``; the step is
   scaled as a whole, so the change keeps its direction.
 * Speed: the whole twist is scaled by one factor so that the body and every wheel stay
-  within their limits (:func:`omnikin.limits.saturate`): direction and curvature
+  within their limits (:func:`omnikin.motion.limits.saturate`): direction and curvature
   are kept.
 * A command with NaN, infinity or a component beyond ``reject_above`` times its limit is
   rejected and counted; the previous target stays. On a robot with fixed wheels the part of
@@ -25,10 +25,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..common.messages import digits_apart
 from ..errors import InputError
-from ..limits import MotionLimits, saturate
-from ..messages import digits_apart
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..motion.limits import MotionLimits, saturate
 
 
 @dataclass

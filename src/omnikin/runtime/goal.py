@@ -2,7 +2,7 @@
 wheels can make.
 
 :class:`GoalSeeker` looks at what the layout can do (its inverse kinematics' feasibility,
-:meth:`omnikin.model.Robot.ik`) and picks one of three paths (world frame, ``docs/conventions.md``):
+:meth:`omnikin.kinematics.robot.Robot.ik`) and picks one of three paths (world frame, ``docs/conventions.md``):
 
 - ``straight`` (the robot translates in any direction: omni, mecanum, steered legs, synchro):
   along the segment to the goal, turning to the goal's heading on the way when the robot can
@@ -32,10 +32,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..common.messages import shorten
 from ..errors import InputError
-from ..geometry import wrap_angle
-from ..messages import shorten
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..kinematics.se2 import wrap_angle
 
 STRATEGIES = ("straight", "turn-drive-turn", "arc-line")
 PROBE = 0.1

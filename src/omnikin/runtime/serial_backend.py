@@ -21,7 +21,7 @@ A frame from a wheel that does not belong to the port it arrived on is counted a
 Time. As everywhere in the runtime, every call carries the caller's time [s]; the link
 timeout and the heartbeat period are measured on it, and ``WheelState.t`` is the time of the
 ``read`` call. Positions are the latest reported counts, unwrapped (counter of
-``counter_bits`` bits, :func:`omnikin.encoders.wrap_scalar`) and converted with each wheel's
+``counter_bits`` bits, :func:`omnikin.odometry.counters.wrap_scalar`) and converted with each wheel's
 encoder (``ticks_per_rev``, ``gear_ratio``, ``invert``); the first report of a wheel is its
 zero, and an ERROR_REPORT ``RESET`` (the controller restarted, its counter from 0) re-zeroes
 the counter without moving the angle. Velocities are the controllers' measured speeds.
@@ -48,11 +48,11 @@ import time
 
 import numpy as np
 
-from .._arrays import whole_problem
-from ..encoders import wrap_scalar
+from ..common.arrays import whole_problem
+from ..common.messages import digits_apart
 from ..errors import InputError, LinkError, LinkLostError, OmnikinError, ProtocolError
-from ..messages import digits_apart
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..odometry.counters import wrap_scalar
 from .backends import WheelState
 from .protocol import FrameEncoder, Protocol, StreamDecoder, load_protocol
 

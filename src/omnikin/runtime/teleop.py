@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
-from ..model import Robot
+from ..kinematics.robot import Robot
 from .command import CommandFilter
 
 MOVES = {

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..common.messages import shorten
+from ..common.rng import make_rng
 from ..errors import InputError
-from ..geometry import compose, exp
-from ..messages import shorten
-from ..model import Robot, require_same_wheels
-from ..odometry import mid_steer
-from ..rng import make_rng
+from ..kinematics.robot import Robot, require_same_wheels
+from ..kinematics.se2 import compose, exp
+from ..odometry.batch import mid_steer
 from ..runtime.backends import WheelState
 from .error_models import NoiseModel
 

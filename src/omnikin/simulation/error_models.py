@@ -32,9 +32,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..common.messages import did_you_mean, shorten
 from ..errors import InputError
-from ..messages import did_you_mean, shorten
-from ..model import Robot
+from ..kinematics.robot import Robot
 
 
 @dataclass(frozen=True)
@@ -71,7 +71,7 @@ class SystematicErrors:
         change is kept (each wheel's encoder ``gear_ratio``, ``invert``, ``counter_bits``, its
         ``max_speed``, ``steer``, ``motor`` and physical fields; the robot's description,
         references and physical fields), and the robot remembers its design
-        (:attr:`omnikin.model.Robot.design`: ``robot``, or ``robot``'s own design), from which a
+        (:attr:`omnikin.kinematics.robot.Robot.design`: ``robot``, or ``robot``'s own design), from which a
         physics description takes its body and a dc motor's controller its encoder scale."""
         unknown = sorted(set(self.wheels) - {w.name for w in robot.wheels})
         if unknown:

@@ -16,7 +16,7 @@ One run, for every trial at once (leading trial axis):
 3. the true wheel angle is the commanded angle (stepper) or the ticks times the *true* angle
    per tick (dc; encoder errors); in
    each sample each wheel's rolling distance gets its slip error and the true robot's
-   forward kinematics (:meth:`omnikin.model.Robot.fk_matrix`) turns the wheel increments
+   forward kinematics (:meth:`omnikin.kinematics.robot.Robot.fk_matrix`) turns the wheel increments
    into a body increment; the floor adds its heading error; exact SE(2) integration gives
    the ground truth;
 4. the end pose is "measured" with the measurement noise.
@@ -32,16 +32,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..common.rng import make_rng
 from ..errors import InputError
-from ..geometry import TAYLOR_LIMIT, wrap_angle
-from ..integration import integrate_components, integrate_end
-from ..limits import MotionLimits
-from ..model import Robot, require_same_wheels
-from ..odometry import batch_odometry, encoded_wheels
-from ..plans import Plan
-from ..rng import make_rng
+from ..kinematics.robot import Robot, require_same_wheels
+from ..kinematics.se2 import TAYLOR_LIMIT, wrap_angle
+from ..motion.limits import MotionLimits
+from ..motion.plans import Plan
+from ..motion.timing import SampledPlan, check_rate_range, estimated_samples, require_motion, sample_plan
+from ..odometry.batch import batch_odometry, encoded_wheels
+from ..odometry.integration import integrate_components, integrate_end
 from .error_models import NoiseModel
-from .motion import SampledPlan, check_rate_range, estimated_samples, require_motion, sample_plan
 
 # Measured cost of one simulated run (one trial, ground truth kept): tracemalloc peaks of
 # omnikin.simulate over 3e5-7e5 samples (CPython 3.11, NumPy 1.26) were 472, 504, 536, 792 and 1696
@@ -95,7 +95,7 @@ def segment_rates(xi, robot: Robot, names) -> tuple[np.ndarray, np.ndarray]:
     alignment nearest the previous one). This is the one check of whether a robot can
     drive a plan: a twist its fixed wheels cannot roll along, or its steerable wheels
     cannot follow within their limits, raises :class:`~omnikin.errors.InfeasibleTwistError`
-    naming the wheel (:meth:`omnikin.model.Robot.ik`).
+    naming the wheel (:meth:`omnikin.kinematics.robot.Robot.ik`).
     """
     xi = np.asarray(xi, dtype=float).reshape(-1, 3)
     per_segment = np.zeros((len(xi), len(names)))
@@ -126,22 +126,24 @@ def commanded_angles(sampled: SampledPlan, robot: Robot, wheels) -> tuple[np.nda
 @dataclass(frozen=True)
 class RunCost:
     """What one simulated run (:func:`simulate`, one trial) will take: ``samples``, ``bytes`` of
-    memory at its peak, ``seconds`` of computing (:func:`run_cost`)."""
+    memory at its peak, ``seconds`` of computing (:func:`run_cost`); ``simulated`` [s] the
+    simulated time (the physics engine: its upper bound, :meth:`omnikin.physics.engines.PhysicsEngine.cost`)."""
 
     samples: float
     bytes: float
     seconds: float
+    simulated: float = math.nan
 
 
 def run_cost(plan: Plan, robot: Robot, rate: float = 100.0, limits: MotionLimits | None = None) -> RunCost:
     """The cost of simulating ``plan`` commanded by ``robot`` at ``rate`` [Hz], from the number
-    of samples (:func:`~omnikin.simulation.motion.estimated_samples`, computed without sampling)
+    of samples (:func:`~omnikin.motion.timing.estimated_samples`, computed without sampling)
     and the measured costs per sample (:data:`SAMPLE_BYTES`, :data:`WHEEL_SAMPLE_BYTES`,
     :data:`SAMPLE_SECONDS`): for sizing a job before starting it
-    (:func:`omnikin.resource_limits.require_within`)."""
+    (:func:`omnikin.common.resource_limits.require_within`)."""
     samples = estimated_samples(plan, robot, rate, limits)
     per_sample = SAMPLE_BYTES + WHEEL_SAMPLE_BYTES * len(robot.wheels)
-    return RunCost(samples, samples * per_sample, samples * SAMPLE_SECONDS)
+    return RunCost(samples, samples * per_sample, samples * SAMPLE_SECONDS, samples / rate)
 
 
 def simulate(
@@ -164,10 +166,10 @@ def simulate(
     measurement of its end pose) from its own entry, in trial order, so that trial ``k``
     does not depend on how many trials follow it; trials that share a generator draw from
     it one after the other. ``true_robot`` must have the wheels of ``command_robot``
-    (:func:`~omnikin.model.require_same_wheels`). ``odometry_robot`` defaults to
+    (:func:`~omnikin.kinematics.robot.require_same_wheels`). ``odometry_robot`` defaults to
     ``command_robot`` (the robot executes the path by its own model); it reads the counts as
     its own encoders' counters output them (their ``counter_bits``). ``rate`` [Hz] (or the
-    rate ``plan`` was sampled at) must lie in :data:`~omnikin.simulation.motion.RATE_RANGE`.
+    rate ``plan`` was sampled at) must lie in :data:`~omnikin.motion.timing.RATE_RANGE`.
     """
     check_rate_range(plan.rate if isinstance(plan, SampledPlan) else rate, "rate")
     noise = noise or NoiseModel()
@@ -205,7 +207,7 @@ def wheel_motion(angles: np.ndarray, true_robot: Robot, command_robot: Robot, na
     """What the encoded wheels ``names`` of ``true_robot`` do when commanded the angles
     ``angles`` ``(N + 1, n)`` [rad] by ``command_robot``: their encoder counts ``(N + 1, n)``
     (whole, int64, when ``quantise``) and true angles ``(N + 1, n)`` [rad], by each wheel's
-    motor (:attr:`omnikin.wheels.Wheel.motor`, docs/conventions.md, "Motors"):
+    motor (:attr:`omnikin.kinematics.wheels.Wheel.motor`, docs/conventions.md, "Motors"):
 
     * ``stepper`` (open loop): the wheel turns the commanded angle ``a``; its encoder, of scale
       ``rpt_true`` [rad/tick], counts ``a / rpt_true``;
@@ -262,7 +264,7 @@ def counter_output(ticks: np.ndarray, bits) -> np.ndarray:
 
 def trial_generators(rng, trials: int) -> list[np.random.Generator]:
     """One Generator per trial (:func:`simulate`'s ``rng``): a sequence of ``trials`` entries,
-    each made a Generator (:func:`omnikin.rng.make_rng`; a Generator given twice stays one
+    each made a Generator (:func:`omnikin.common.rng.make_rng`; a Generator given twice stays one
     generator), or one generator shared by every trial."""
     if isinstance(rng, (list, tuple)):
         if len(rng) != trials:
@@ -374,7 +376,7 @@ class _Work:
 def _ends_near(comps: np.ndarray, base_mid, cb, sb, w: dict) -> np.ndarray:
     """End poses ``(r, 3)`` of exact integration of ``comps`` ``(r, 3, N)`` from the origin.
 
-    Same result as :func:`omnikin.integration.integrate_end` (to about 1e-14); faster for
+    Same result as :func:`omnikin.odometry.integration.integrate_end` (to about 1e-14); faster for
     runs close to the noise-free one (heading ``base_mid``, with ``cb, sb`` its cosine and
     sine): the mid-sample heading is ``base_mid + d`` with a small ``d``, and
     ``cos(base + d) = cb cos d - sb sin d`` with the Taylor series of ``cos d`` and

@@ -30,13 +30,12 @@ from dataclasses import asdict, dataclass, fields, replace
 import numpy as np
 
 from ..evaluation.tolerance_trial import TrialSettings
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..physics.engines import engine_named
 from ..simulation.error_models import NOISE, ErrorProfile
 
 TOLERANCE_FACTORS = ("scale", "radius", "hub", "drive_deg")
 """The factors that set a point's build tolerances (their product with ``scale``)."""
-
-ENGINES = ("kinematic", "physics")
 
 
 @dataclass(frozen=True)
@@ -79,7 +78,7 @@ class Point:
             rate=self.rate,
             noise=NOISE[self.noise] if self.noise is not None else NOISE["none"],
             calibrate=self.calibrate,
-            engine=self.engine,
+            engine=engine_named(self.engine),  # the point stores the name (a table column)
         )
 
     def robot_for(self, robot: Robot) -> Robot:

@@ -14,9 +14,9 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from ..common.number_text import mm_text, ratio_text, round_down
 from ..evaluation.order_statistics import values_for_bound
 from ..evaluation.threshold import ABOVE, ABOVE_FIRST, BELOW, Crossing
-from ..number_text import mm_text, ratio_text, round_down
 from ..viz.sweep import AXIS_UNITS
 from .study import Study
 from .summary import Answer, axis_text, crossing_text, stat_column, tolerances_text

@@ -7,12 +7,12 @@
 2. cuts the missing trials of each point into tasks of about :data:`TASK_SECONDS` of work
    (:func:`plan_tasks`: long enough that Dask's few milliseconds per task do not count, short
    enough that a lost worker costs little and the last tasks end together);
-3. runs them (:mod:`omnikin.sweep.engine`: the embedded cluster or ``scheduler``) and writes each
+3. runs them (:mod:`omnikin.sweep.cluster`: the embedded cluster or ``scheduler``) and writes each
    task's trials as a part of the folder the moment it arrives;
 4. writes the trial table, the summary per point (:mod:`omnikin.sweep.summary`), the figure and
    ``report.md`` (:mod:`omnikin.sweep.report`) that answers the study's question.
 
-A task that failed on its workers (:func:`~omnikin.sweep.engine.run_tasks`), or whose result was
+A task that failed on its workers (:func:`~omnikin.sweep.cluster.run_tasks`), or whose result was
 refused because its worker runs other omnikin or NumPy versions, enters the tables as rows with
 its reason, but is not written as a part: the next run computes it again.
 
@@ -32,12 +32,13 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Protocol
 
+from ..common.messages import one_line, shorten
 from ..errors import InputError, WorkerMismatch
 from ..evaluation.calibration import RECOMMENDED_REPEATS, recommended_runs
-from ..messages import one_line, shorten
-from ..model import Robot
-from ..plans import umbmark_square
-from ..simulation.motion import estimated_samples
+from ..kinematics.robot import Robot
+from ..motion.plans import umbmark_square
+from ..motion.timing import estimated_samples
+from ..physics.engines import engine_class
 from .points import Point, point_key
 from .store import Coverage, StudyFolder, arrow_schema
 from .study import Study
@@ -76,7 +77,7 @@ def _trial_samples(robot: Robot, side: float, mode: str, runs: int, rate: float,
 def trial_seconds(point: Point, robot: Robot) -> float:
     """Estimated computing time of one trial of ``point`` on one core [s] (kinematic engine:
     its samples at :data:`TRIAL_SAMPLES_PER_SECOND`; the physics engine: one trial is a task)."""
-    if point.engine == "physics":
+    if engine_class(point.engine).measured_cost:  # a trial is a task of its own
         return math.inf
     try:
         samples = _trial_samples(
@@ -91,7 +92,7 @@ def plan_tasks(study: Study, coverage: Coverage, workers: int, task_trials: int 
     """The tasks of the trials not on disk (module docstring): runs of missing trials of each
     point cut into tasks of ``task_trials`` trials (default: about :data:`TASK_SECONDS` of work,
     fewer when the study has under :data:`TASKS_PER_WORKER` tasks per worker)."""
-    from .engine import Task
+    from .cluster import Task
 
     missing: list[tuple[int, int, int]] = []
     for index, point in enumerate(study.points):
@@ -167,7 +168,7 @@ def run_sweep(
 ) -> SweepResult:
     """Run ``study`` into the folder ``out`` (module docstring) and return what was done;
     ``tls``: the credentials of a ``tls://`` ``scheduler``
-    (:class:`~omnikin.sweep.engine.TLSFiles`; default: Dask's configuration)."""
+    (:class:`~omnikin.sweep.cluster.TLSFiles`; default: Dask's configuration)."""
     require_sweep()
     check_run_options(workers, task_trials)
     with StudyFolder.open(out, study, force=force) as folder:
@@ -199,7 +200,7 @@ def check_run_options(workers, task_trials) -> None:
 
 
 def _compute(study, folder, tasks, scheduler, workers, progress, result, failed_rows, tls) -> None:
-    from .engine import dask_client, run_tasks
+    from .cluster import dask_client, run_tasks
 
     keys = [point_key(p) for p in study.points]
 

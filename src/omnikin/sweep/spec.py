@@ -61,20 +61,20 @@ settings of a smaller one. A setting equal to an earlier one is dropped (a point
 settings), so a random design of lists only may give fewer points than asked.
 
 The physics engine has no noise model
-(:func:`~omnikin.evaluation.physics_study.check_physics_noise`): its points get ``noise`` None; a
+(:func:`~omnikin.physics.engines.check_physics_noise`): its points get ``noise`` None; a
 ``noise`` factor in a study whose every point runs the physics engine is an error, and with
 both engines the noise values apply to the kinematic points (the physics points they would
 repeat are dropped, the first kept).
 
 Every robot is loaded when the file is (:func:`~omnikin.io.robot_file.load_robot`; a file
 relative to the study file's folder), must have encoders that observe its motion
-(:func:`~omnikin.odometry.encoded_wheels`) and must be able to drive the study's UMBmark square
+(:func:`~omnikin.odometry.batch.encoded_wheels`) and must be able to drive the study's UMBmark square
 (:func:`~omnikin.evaluation.umbmark.square_refusal`). A study of more than :data:`MAX_POINTS`
 points, or of more than :data:`MAX_TRIALS` trials in all, is refused before a point is built.
 
 Every problem raises :class:`~omnikin.errors.StudyFileError` in one line naming the file, the
 line and the field (``study.yaml: line 12: factors.scale.count: must be a whole number from 1
-to 1000, got 0``); values are quoted through :func:`~omnikin.messages.shorten`. The lines come from
+to 1000, got 0``); values are quoted through :func:`~omnikin.common.messages.shorten`. The lines come from
 the YAML node tree composed by the same strict loader.
 """
 
@@ -90,20 +90,21 @@ from typing import Any
 
 import numpy as np
 
-from .._arrays import range_problem, whole_problem
+from ..common.arrays import range_problem, whole_problem
+from ..common.messages import did_you_mean, shorten
 from ..errors import InputError, RobotFileError, StudyFileError
 from ..evaluation.umbmark import check_side, square_refusal
 from ..io.robot_file import is_preset_spec, load_robot, parse_yaml, strict_yaml_loader
 from ..io.textfile import read_text
-from ..messages import did_you_mean, shorten
-from ..model import Robot, robot_name_problem
-from ..odometry import encoded_wheels
-from ..plans import check_mode
+from ..kinematics.encoder import TICKS_PER_REV_RANGE
+from ..kinematics.robot import Robot, robot_name_problem
+from ..motion.plans import check_mode
+from ..motion.timing import RATE_RANGE, check_rate_range
+from ..odometry.batch import encoded_wheels
+from ..physics.engines import ENGINE_NAMES, engine_class
 from ..presets import PRESET_NAMES
 from ..simulation.error_models import NOISE
-from ..simulation.motion import RATE_RANGE, check_rate_range
-from ..wheels import TICKS_PER_REV_RANGE
-from .points import ENGINES, POINT_FIELDS, Point, _digest, canonical_json, robot_hash
+from .points import POINT_FIELDS, Point, _digest, canonical_json, robot_hash
 from .study import DESIGNS, Study
 
 SCHEMA_VERSION = 1
@@ -142,16 +143,16 @@ FACTOR_RANGES: dict[str, tuple[float, float, str, bool]] = {
     "rate": (*RATE_RANGE, "Hz", False),
 }
 """``(low, high, unit, low excluded)`` of each real factor (module docstring gives the reasons;
-``rate``: :data:`~omnikin.simulation.motion.RATE_RANGE`, checked by
-:func:`~omnikin.simulation.motion.check_rate_range`). ``scale`` excludes 0: set a tolerance
+``rate``: :data:`~omnikin.motion.timing.RATE_RANGE`, checked by
+:func:`~omnikin.motion.timing.check_rate_range`). ``scale`` excludes 0: set a tolerance
 itself to 0 for a perfect build in that respect."""
 
 WHOLE_FACTORS: dict[str, tuple[int, int]] = {
     "ticks_per_rev": (int(TICKS_PER_REV_RANGE[0]), int(TICKS_PER_REV_RANGE[1])),
 }
-"""Range of each whole-number factor (:data:`~omnikin.wheels.TICKS_PER_REV_RANGE`)."""
+"""Range of each whole-number factor (:data:`~omnikin.kinematics.encoder.TICKS_PER_REV_RANGE`)."""
 
-CHOICE_FACTORS: dict[str, tuple[str, ...]] = {"noise": tuple(NOISE), "engine": ENGINES}
+CHOICE_FACTORS: dict[str, tuple[str, ...]] = {"noise": tuple(NOISE), "engine": ENGINE_NAMES}
 BOOL_FACTORS = ("calibrate",)
 
 SEED_RANGE = (0, 2**64 - 1)
@@ -469,7 +470,7 @@ def _check_size(where: _Where, path: tuple, points: int, how: str, trials: int) 
 
 def _point(robot: str, hashes: Mapping[str, str], setting: Mapping[str, Any], square: Mapping[str, Any]) -> Point:
     values = dict(setting)
-    if values["engine"] == "physics":
+    if not engine_class(values["engine"]).has_noise_model:
         values["noise"] = None
     return Point(robot=robot, robot_hash=hashes[robot], **values, **square)
 
@@ -544,7 +545,7 @@ def parse_study(text: str, source: str, base: Path) -> Study:
         name: _factor(where, name, given[name], design) if name in given else [DEFAULTS[name]] for name in FACTORS
     }
     engines = factors["engine"]
-    if "noise" in given and isinstance(engines, list) and set(engines) == {"physics"}:
+    if "noise" in given and isinstance(engines, list) and not any(engine_class(e).has_noise_model for e in engines):
         raise where.error(
             ("factors", "noise"),
             "every point runs the physics engine, which has no random error model (slip comes from the "

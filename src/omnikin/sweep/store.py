@@ -39,10 +39,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..common.messages import one_line, shorten
 from ..errors import InputError, OutputError, OutputExistsError
 from ..io.output import atomic_write, write_text
 from ..io.textfile import read_text
-from ..messages import one_line, shorten
 from .points import point_key, result_versions
 from .study import TRIAL_COLUMNS, Study
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from ..model import Robot
+from ..kinematics.robot import Robot
 from .points import POINT_FIELDS, TOLERANCE_FACTORS, Point
 
 DESIGNS = ("grid", "random")

@@ -16,7 +16,7 @@ counted in ``failed`` and left out):
   end of the 95 % interval of the 95th percentile needs 72 trials per point, the median's 6;
 * ``below``: the share of the trials with ``E_max,syst < study.target``;
 * ``median_reduction``: the median of the trials' ``E_max,syst`` before / after calibration, an
-  after-value below :data:`~omnikin.number_text.RESOLUTION` (0.01 mm, what the report resolves)
+  after-value below :data:`~omnikin.common.number_text.RESOLUTION` (0.01 mm, what the report resolves)
   counted as that resolution; ``reduction_bound`` says that some trial's was, so the median is
   a lower bound (the report prints it as ``at least N``; the trial table keeps each trial's own
   ratio).
@@ -36,9 +36,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..common.number_text import RESOLUTION
 from ..evaluation.order_statistics import quantile_interval
 from ..evaluation.threshold import BELOW, Crossing, threshold
-from ..number_text import RESOLUTION
 from ..viz.sweep import AXIS_UNITS
 from .points import POINT_FIELDS, TOLERANCE_FACTORS, point_key
 from .study import TRIAL_COLUMNS, Study

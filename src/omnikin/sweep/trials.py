@@ -18,10 +18,10 @@ import math
 import time
 from collections.abc import Mapping, Sequence
 
+from ..common.messages import one_line
 from ..errors import OmnikinError
 from ..evaluation.tolerance_trial import tolerance_trial
-from ..messages import one_line
-from ..model import Robot
+from ..kinematics.robot import Robot
 from .points import POINT_FIELDS, Point, point_key, trial_seed
 from .study import RESULT_COLUMNS, TRIAL_COLUMNS
 

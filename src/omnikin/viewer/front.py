@@ -60,8 +60,8 @@ from websockets.datastructures import Headers
 from websockets.exceptions import ConnectionClosed
 from websockets.http11 import Request, Response
 
+from ..common.messages import shorten
 from ..errors import InputError
-from ..messages import shorten
 from ..runtime.teleop import MOVES
 from .inputs import NoticeLimiter, PageInputs
 

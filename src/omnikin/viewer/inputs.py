@@ -52,8 +52,8 @@ import viser
 import zstandard
 from viser import _messages
 
+from ..common.messages import shorten
 from ..errors import InputError
-from ..messages import shorten
 
 MAX_TEXT = 256
 """Longest text a page may put in a text field [characters]."""

@@ -40,16 +40,17 @@ from typing import TextIO
 import numpy as np
 
 from ..errors import InputError
-from ..limits import MotionLimits
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..motion.limits import MotionLimits
+from ..physics.backend import PhysicsBackend
 from ..physics.description import PhysicalRobot, describe
+from ..physics.engines import as_engine
 from ..physics.joint_motion import JointMotion
 from ..runtime.base import BaseRuntime, StepResult
 from ..runtime.goal import GoalSeeker
 from ..runtime.teleop import MOVES, Teleop
-from ..simulation.backend import SimBackend
+from ..simulation.engine import Engine
 
-ENGINES = ("kinematic", "physics")
 KEY_SILENCE = 1.0
 """Time [s] after which a held key whose page sent nothing (no ``alive``, sent every 0.1 s while a
 key is down) is released: ten heartbeats, so that a page whose thread is busy drawing a frame in
@@ -350,14 +351,16 @@ class PageRobot:
 
 
 class LiveRobot(PageRobot):
-    """``robot`` simulated behind the page (module docstring): ``engine`` kinematic or physics,
-    ``limits`` and ``timeout`` [s] the runtime's command filter; ``step`` [s]: the physics
-    engine's time step (None: its default)."""
+    """``robot`` simulated behind the page (module docstring): ``engine`` the
+    :class:`~omnikin.simulation.engine.Engine` whose back-end moves it (or its name, with
+    ``step`` [s] the physics engine's time step, None: its default; the kinematic engine without
+    noise: the robot moves exactly as its wheels turn), ``limits`` and ``timeout`` [s] the
+    runtime's command filter."""
 
     def __init__(
         self,
         robot: Robot,
-        engine: str = "kinematic",
+        engine: Engine | str = "kinematic",
         *,
         speed: float = 0.2,
         turn: float = 0.5,
@@ -365,17 +368,12 @@ class LiveRobot(PageRobot):
         timeout: float = 0.5,
         step: float | None = None,
     ):
-        if engine not in ENGINES:
-            raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
+        engine = as_engine(engine, step=step)
         super().__init__(robot, speed=speed, turn=turn, limits=limits)
         self.engine = engine
-        if engine == "physics":
-            from ..physics.backend import PhysicsBackend
-            from ..physics.mjcf import DEFAULT_STEP
-
-            self.backend: SimBackend | PhysicsBackend = PhysicsBackend(robot, step=step or DEFAULT_STEP)
-        else:
-            self.backend = SimBackend(robot)
+        self.backend = engine.backend(robot)
+        # the physics back-end's joints are simulated and read; the kinematic ones follow the commands
+        self._sim = self.backend.sim if isinstance(self.backend, PhysicsBackend) else None
         self.runtime = BaseRuntime(robot, self.backend, limits=self.limits, cmd_vel_timeout=timeout)
         self.can_steer = bool(robot.steerable)
         self.catch_up = True
@@ -427,8 +425,8 @@ class LiveRobot(PageRobot):
         slots = self.slots
         speeds = np.zeros(slots.count)
         steer = np.full(slots.count, np.nan)
-        if self.engine == "physics":
-            sim = self.backend.sim  # type: ignore[union-attr]
+        sim = self._sim
+        if sim is not None:
             self._angles[slots.rolling] = sim.wheel_angles
             speeds[slots.rolling] = sim.wheel_speeds
             if len(slots.steered):

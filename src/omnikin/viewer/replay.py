@@ -8,14 +8,14 @@ topics need not), and optionally the measured joints (:class:`JointSeries`: a ba
 Between two samples ``k`` and ``k + 1`` of a pose series the robot moves with the constant
 body twist ``xi_k = log(P_k^-1 P_{k+1}) / (t_{k+1} - t_k)`` (the finite difference on SE(2),
 the motion of one sample of the simulation), so the pose at ``t`` is the closed form
-``P(t) = P_k exp((t - t_k) xi_k)`` (:func:`omnikin.geometry.exp`: a straight line for
+``P(t) = P_k exp((t - t_k) xi_k)`` (:func:`omnikin.kinematics.se2.exp`: a straight line for
 ``omega = 0``, an arc otherwise); at a sample time it is the sample. Before the first sample
 the pose is the first, after the last the last (the robot at rest).
 
 :class:`TrackReplay` turns a track into the :class:`~omnikin.viewer.live.Snapshot` the page
 shows at time ``t``: the interpolated poses, the true twist ``xi_k`` of the interval holding
 ``t`` (the interval that starts at ``t`` at a sample time; zero outside the run), and the
-wheels: per interval the robot's inverse kinematics of ``xi_k`` (:meth:`omnikin.model.Robot.ik`,
+wheels: per interval the robot's inverse kinematics of ``xi_k`` (:meth:`omnikin.kinematics.robot.Robot.ik`,
 wheel speeds and steering angles; steering held through an interval at rest), the wheel angles
 their integral from 0; castors (swivel and roll) and the rollers of Swedish wheels as the body's
 motion moves them (:class:`~omnikin.physics.joint_motion.JointMotion`, as on the live page),
@@ -33,8 +33,8 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InputError
-from ..geometry import between, compose, exp, log
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..kinematics.se2 import between, compose, exp, log
 from ..physics.description import PhysicalRobot
 from ..physics.joint_motion import JointMotion
 from .live import Snapshot, WheelSlots, triple

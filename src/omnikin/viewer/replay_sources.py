@@ -5,7 +5,7 @@
   ``settings.side``) and the runs of ``run_poses.csv`` (:mod:`omnikin.io.run_poses`), one
   :class:`~omnikin.viewer.replay.Track` per run, named ``before cw run 1``. The robot it was
   built to (``result.json``'s ``robot``, same wheel names) is its design
-  (:attr:`omnikin.model.Robot.design`): the page draws the robot as built with the body of its
+  (:attr:`omnikin.kinematics.robot.Robot.design`): the page draws the robot as built with the body of its
   design (:func:`omnikin.physics.description.describe`), as the physics engine models it; a
   robot file holds no design, so without it a few millimetres of hub errors would draw
   another body.
@@ -32,9 +32,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from ..common.messages import one_line, shorten
 from ..errors import BagError, InputError, ReplayError
-from ..messages import one_line, shorten
-from ..model import Robot
+from ..kinematics.robot import Robot
 from .replay import JointSeries, PoseSeries, Track
 
 REPORT_FILES = ("true_robot.yaml", "result.json", "run_poses.csv")

@@ -39,11 +39,11 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from ..common.messages import one_line, shorten
 from ..errors import InputError, RobotMismatch
 from ..io.bags import yaw_of
-from ..limits import MotionLimits
-from ..messages import one_line, shorten
-from ..model import Robot
+from ..kinematics.robot import Robot
+from ..motion.limits import MotionLimits
 from .live import PageRobot, Snapshot, triple
 
 NODE_NAME = "omnikin_view"
@@ -73,7 +73,7 @@ def require_ros():
 
 def movable_joints(urdf_text: str) -> set[str]:
     """The names of the joints of URDF ``urdf_text`` that move (every type but ``fixed``)."""
-    from ..ros.link_frames import urdf_joints
+    from ..physics.link_frames import urdf_joints
 
     return {j.name for j in urdf_joints(urdf_text) if j.movable}
 

@@ -45,7 +45,7 @@ def new_figure(**kwargs):
 def dpi_problem(dpi) -> str | None:
     """None if ``dpi`` [dots per inch] is a real number in ``[MIN_DPI, MAX_DPI]`` (the range of
     screens and print), else what is wrong with it (``must lie in [50, 1200] dpi, got 1 ...``)."""
-    from .._arrays import range_problem
+    from ..common.arrays import range_problem
 
     problem = range_problem(dpi, MIN_DPI, MAX_DPI, "dpi")
     return None if problem is None else f"{problem} (screens to print)"

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from ..model import Robot
+from ..kinematics.robot import Robot
 from . import DPI, require_matplotlib, save_figure
 
 COLORS = {

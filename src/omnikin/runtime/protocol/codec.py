@@ -19,8 +19,8 @@ from __future__ import annotations
 import math
 import struct
 
+from ...common.messages import shorten
 from ...errors import ProtocolError
-from ...messages import shorten
 from .schema import INT_TYPES, Field, FrameType, Protocol, load_protocol
 
 

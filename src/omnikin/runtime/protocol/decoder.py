@@ -30,8 +30,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from dataclasses import fields as dc_fields
 
+from ...common.messages import shorten
 from ...errors import ProtocolError
-from ...messages import shorten
 from .codec import unpack_payload
 from .schema import CRC_BYTES, DIRECTIONS, Protocol, load_protocol
 from .sequence import SEQ_DUPLICATE, SEQ_OUT_OF_ORDER, SEQ_RESYNC, SequenceTracker

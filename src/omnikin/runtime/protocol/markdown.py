@@ -15,8 +15,8 @@ from __future__ import annotations
 import re
 from typing import Any
 
+from ...common.messages import shorten
 from ...errors import ProtocolError
-from ...messages import shorten
 from .codec import encode
 from .schema import CRC_BYTES, FrameType, Protocol, load_protocol
 

@@ -23,8 +23,8 @@ from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
+from ...common.messages import shorten
 from ...errors import ProtocolError
-from ...messages import shorten
 from .crc import Crc
 
 DIRECTIONS = ("host_to_controller", "controller_to_host", "both")

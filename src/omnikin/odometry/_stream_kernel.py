@@ -1,4 +1,4 @@
-"""Generated kernels of the streaming odometry (:class:`omnikin.streaming.Odometry`).
+"""Generated kernels of the streaming odometry (:class:`omnikin.odometry.streaming.Odometry`).
 
 Why generated: a CPython update that loops over wheels or calls NumPy costs 3-10 us; the
 same arithmetic unrolled for the robot's own wheel count, with its constants written in,
@@ -16,19 +16,19 @@ as plain data. Per sample, ``step_ticks`` does (conventions, Odometry):
 1. accept lists and tuples of Python ints or NumPy integer scalars, and NumPy rows (converted
    exactly; bools, floats, iterators and anything else are left to the general path), the
    timestamp as a float; an interval longer than :func:`longest_interval` goes to the general
-   path (its step might leave the bounds of :func:`omnikin.integration.step_problem`);
+   path (its step might leave the bounds of :func:`omnikin.odometry.integration.step_problem`);
 2. counter increments ``d_j = ticks_j - prev_j`` in exact arithmetic (wrapped modulo
    ``2**bits`` for counters of a known width, after checking the reading lies in the
    counter's range), rounded once to floats: the state keeps the previous readings as exact
    numbers (ints, or the Fraction a float reading holds), never as floats, so ``ticks_j -
    prev_j`` is exact (``int - float`` rounds the int first beyond 2**53);
-3. every wheel's jump rule (:mod:`omnikin.encoders`) ``|d_j| <= limit_j(dt)`` and, from the
+3. every wheel's jump rule (:mod:`omnikin.odometry.plausibility`) ``|d_j| <= limit_j(dt)`` and, from the
    third sample on, a sufficient form of its change-of-speed rule ``|d_j - q_j| <= A_j dt
    dt_prev / 2 + 2 slack`` (``q_j`` the previous increment; :func:`_change_lines`), with the
    limits shrunk by :data:`SAFETY` so that float rounding never accepts what the exact rule
    refuses; a sample beyond them goes to the general path, which decides exactly;
 4. body increment ``(a, b, phi) = F d`` (``F`` = forward kinematics per tick);
-5. the pose update of :mod:`omnikin.integration` (:data:`ADVANCE`).
+5. the pose update of :mod:`omnikin.odometry.integration` (:data:`ADVANCE`).
 
 ``step_angles`` is the same for wheel angles [rad] (floats, no counter). ``fk`` and
 ``move`` are steps 4 and 5 alone, compiled from the same lines, for the general path: both
@@ -49,9 +49,9 @@ from math import cos, floor, pi, sin
 
 import numpy as np
 
-from .encoders import QUANTISATION_SLACK, SAFETY
-from .geometry import SCALAR_TAYLOR_LIMIT, TWO_PI
+from ..kinematics.se2 import SCALAR_TAYLOR_LIMIT, TWO_PI
 from .integration import STEP_BOUNDS
+from .plausibility import QUANTISATION_SLACK, SAFETY
 
 # --- state layout ------------------------------------------------------------------------------
 S_POSE, S_TIME_TICKS, S_TIME_ANGLES, S_COUNT, S_DT, S_READ = 0, 1, 2, 3, 4, 5
@@ -65,7 +65,7 @@ readings of the last sample (tick readings as exact numbers: Python ints, or Fra
 wheel angles as floats) and the wheel increments over the last interval [ticks or rad,
 floats]. The body increment of the last interval is not kept: it is ``fk(delta)``, recomputed
 bit for bit when asked for. Pickles carry the version of this layout
-(:data:`omnikin.streaming.STATE_FORMAT`)."""
+(:data:`omnikin.odometry.streaming.STATE_FORMAT`)."""
 KIND_NONE, KIND_TICKS, KIND_ANGLES = 0, 1, 2
 
 
@@ -158,7 +158,7 @@ class WheelBound:
 
 @dataclass(frozen=True)
 class ChangeBound:
-    """The change-of-speed rule of one wheel (:func:`omnikin.encoders.change_limit`) as the
+    """The change-of-speed rule of one wheel (:func:`omnikin.odometry.plausibility.change_limit`) as the
     kernel tests it (:func:`_change_lines`): ``half_accel`` is half the acceleration bound
     (inf: no rule) and ``slack`` the quantisation slack of one increment [ticks or rad]."""
 
@@ -214,7 +214,7 @@ def _check_lines(d: list[str], bounds: list[WheelBound]) -> list[str]:
 
 def _change_lines(d: list[str], bounds: list[ChangeBound]) -> list[str]:
     """The change-of-speed test of every wheel with a bound, in its cheap sufficient form:
-    :func:`omnikin.encoders.change_limit` is at least ``a min(dt, dtp) (dt + dtp) / 2 + 2 slack``
+    :func:`omnikin.odometry.plausibility.change_limit` is at least ``a min(dt, dtp) (dt + dtp) / 2 + 2 slack``
     (both of its terms are), and ``min(dt, dtp) (dt + dtp) >= dt dtp``, so an increment within
     ``a dt dtp / 2 + 2 slack`` (times :data:`SAFETY`) of the previous one passes; anything else
     (a wrap, a hard stop, very uneven intervals with a change of speed) goes to the general
@@ -333,9 +333,9 @@ def _step_source(
 def longest_interval(fk_rows, bounds: list[WheelBound]) -> float:
     """Longest interval [s] (0: none, inf: any) over which every wheel increment the kernel's jump
     test passes (``|d_j| <= min(slope_j dt + offset_j, cap_j) SAFETY``) gives a body increment
-    ``F d`` within the bounds of one step (:data:`omnikin.integration.STEP_BOUNDS`, shrunk by
+    ``F d`` within the bounds of one step (:data:`omnikin.odometry.integration.STEP_BOUNDS`, shrunk by
     :data:`SAFETY`): ``|(F d)_r| <= sum_j |F_rj| |d_j|``. A longer interval goes to the general
-    path, which applies :func:`omnikin.integration.step_problem` to the increment it computes,
+    path, which applies :func:`omnikin.odometry.integration.step_problem` to the increment it computes,
     so the kernel never passes a step the general path refuses."""
     longest = math.inf
     for row, limit in zip(fk_rows, STEP_BOUNDS, strict=True):
@@ -432,14 +432,14 @@ def build(
 
 
 def tick_bounds(rules) -> list[WheelBound]:
-    """The jump rule of each wheel in ticks (:meth:`omnikin.encoders.CounterRule.limit`)."""
+    """The jump rule of each wheel in ticks (:meth:`omnikin.odometry.plausibility.CounterRule.limit`)."""
     if rules and rules[0].max_jump is not None:
         return [WheelBound(0.0, r.max_jump, r.half_limit) for r in rules]
     return [WheelBound(r.rate, QUANTISATION_SLACK, r.half_limit) for r in rules]
 
 
 def angle_bounds(rules) -> list[WheelBound]:
-    """The jump rule of each wheel in radians (:meth:`omnikin.encoders.CounterRule.angle_limit`)."""
+    """The jump rule of each wheel in radians (:meth:`omnikin.odometry.plausibility.CounterRule.angle_limit`)."""
     if rules and rules[0].max_jump is not None:
         return [WheelBound(0.0, r.max_jump * abs(r.rad_per_tick)) for r in rules]
     return [WheelBound(r.speed, QUANTISATION_SLACK * abs(r.rad_per_tick)) for r in rules]
@@ -447,7 +447,7 @@ def angle_bounds(rules) -> list[WheelBound]:
 
 def change_bounds(rules, unit: str) -> list[ChangeBound]:
     """The change-of-speed rule of each wheel in ``unit`` (ticks or rad;
-    :meth:`omnikin.encoders.CounterRule.change_bounds`)."""
+    :meth:`omnikin.odometry.plausibility.CounterRule.change_bounds`)."""
     out = []
     for r in rules:
         a, slack = r.change_bounds(unit)

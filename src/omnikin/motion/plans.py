@@ -5,7 +5,7 @@ SE(2): ``xi`` is the body twist per unit of progress ``s`` (for a straight leg a
 direction, s in metres; for a spin ``(0, 0, +-1)``, s in radians; for an arc
 ``(1, 0, 1/R)``, s the arc length) and the segment ends at ``s = length``. Any speed
 profile ``s(t)`` then traces exactly the same path; timing and sampling under limits are
-:mod:`omnikin.simulation.motion`.
+:mod:`omnikin.motion.timing`.
 
 UMBmark squares follow ``docs/conventions.md`` (Borenstein and Feng, "Measurement and
 correction of systematic odometry errors in mobile robots", IEEE Trans. Robotics and
@@ -35,11 +35,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._arrays import range_problem
-from .errors import InputError
-from .geometry import MAX_DIRECTION_DEG, wrap_angle
-from .messages import shorten
-from .number_text import plain_number
+from ..common.arrays import range_problem
+from ..common.messages import shorten
+from ..common.number_text import plain_number
+from ..errors import InputError
+from ..kinematics.se2 import MAX_DIRECTION_DEG, wrap_angle
 
 MAX_SEGMENT = 1e5
 """Longest segment [m or rad]: 100 km of travel, or about 16,000 turns in place. Beyond it a
@@ -47,7 +47,7 @@ plan is a typo (``line 1e308``), not a robot's path: refused before anything is 
 
 MAX_HEADING = math.radians(MAX_DIRECTION_DEG)
 """Largest ``|heading|`` [rad] of a :func:`line`: a direction, bounded like every direction a
-person writes (:data:`omnikin.geometry.MAX_DIRECTION_DEG`, two turns)."""
+person writes (:data:`omnikin.kinematics.se2.MAX_DIRECTION_DEG`, two turns)."""
 
 MAX_TURN_DEG = math.degrees(MAX_SEGMENT)
 """Largest ``|ANGLE_DEG|`` [deg] of a ``spin`` or an ``arc`` in the text form: the longest
@@ -94,7 +94,7 @@ class Plan:
 
     def end_pose(self) -> np.ndarray:
         """Pose reached when every segment is driven exactly (from the origin)."""
-        from .geometry import compose, exp
+        from ..kinematics.se2 import compose, exp
 
         pose = np.zeros(3)
         for seg in self.segments:
@@ -205,9 +205,9 @@ def parse_plan(text: str) -> Plan:
     ``line LENGTH [HEADING_DEG]``, ``spin ANGLE_DEG`` or ``arc RADIUS ANGLE_DEG``.
 
     Its words are separated by ASCII blanks (:data:`PATH_BLANKS`); its numbers are plain
-    decimals, as in every table (:data:`omnikin.number_text.PLAIN_NUMBER`: not ``nan``, ``inf``,
+    decimals, as in every table (:data:`omnikin.common.number_text.PLAIN_NUMBER`: not ``nan``, ``inf``,
     ``1_0``, non-ASCII digits), whether the path comes from a runs file, ``--path`` or Python.
-    ``HEADING_DEG`` is a direction within +-:data:`~omnikin.geometry.MAX_DIRECTION_DEG`,
+    ``HEADING_DEG`` is a direction within +-:data:`~omnikin.kinematics.se2.MAX_DIRECTION_DEG`,
     ``ANGLE_DEG`` a turn within +-:data:`MAX_TURN_DEG`. Anything else is an
     :class:`~omnikin.errors.InputError` in one line naming the path and what is wrong, in the
     units it was written in."""
@@ -267,7 +267,7 @@ def _require_degrees(value: float, limit: float, what: str, why: str) -> None:
 
 
 def _path_numbers(words: list[str], where: str) -> list[float]:
-    """The numbers of a path (:func:`omnikin.number_text.plain_number`); the first bad one is
+    """The numbers of a path (:func:`omnikin.common.number_text.plain_number`); the first bad one is
     an InputError naming the path."""
     return [plain_number(w, where) for w in words]
 

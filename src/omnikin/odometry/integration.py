@@ -5,7 +5,7 @@ An increment ``(a, b, phi)`` is the body twist times the sample interval
 pose moves in the world by
 
 * ``exact``:    ``sinc(phi/2) R(theta_k + phi/2) (a, b)``: the SE(2) exponential
-  (:func:`omnikin.geometry.exp`), exact for constant twist;
+  (:func:`omnikin.kinematics.se2.exp`), exact for constant twist;
 * ``midpoint``: ``R(theta_k + phi/2) (a, b)``: second order, drops the chord factor;
 * ``euler``:    ``R(theta_k) (a, b)``: first order, what most tools call odometry.
 
@@ -19,11 +19,10 @@ import math
 
 import numpy as np
 
-from ._arrays import as_real_array
-from .encoders import container_problem
-from .errors import InputError
-from .geometry import MAX_ANGLE, sinc, wrap_angle
-from .messages import digits_apart
+from ..common.arrays import as_real_array, container_problem
+from ..common.messages import digits_apart
+from ..errors import InputError
+from ..kinematics.se2 import MAX_ANGLE, sinc, wrap_angle
 
 METHODS = ("exact", "midpoint", "euler")
 
@@ -31,7 +30,7 @@ POSITION_LIMIT = 1.0e8
 """Largest ``|x|``, ``|y|`` [m] of a start pose: 100 000 km, beyond any terrestrial coordinate
 (UTM northings stay below 1e7 m); there a float still resolves 15 nm, so no increment of a
 wheel is lost, while ``1e300`` would swallow every one. The heading is bounded like every heading
-the core takes (:data:`omnikin.geometry.MAX_ANGLE`)."""
+the core takes (:data:`omnikin.kinematics.se2.MAX_ANGLE`)."""
 
 
 def check_method(method: str) -> str:
@@ -76,7 +75,7 @@ def step_problem(a: float, b: float, phi: float, dt: float) -> str | None:
 def check_start(start, what: str = "start") -> np.ndarray:
     """A start pose ``(..., 3)`` (x, y, theta) [m, m, rad] as a float array, or
     :class:`InputError`: a list, tuple or array of finite numbers with ``|x|, |y| <=``
-    :data:`POSITION_LIMIT` and ``|theta| <=`` :data:`~omnikin.geometry.MAX_ANGLE` (``1e308`` rad
+    :data:`POSITION_LIMIT` and ``|theta| <=`` :data:`~omnikin.kinematics.se2.MAX_ANGLE` (``1e308`` rad
     has no digit left modulo 2 pi: it silently became heading 0)."""
     why = container_problem(start, order="the order x, y, theta")
     if why is not None:

@@ -60,8 +60,8 @@ from typing import Any
 
 from distributed import WorkerPlugin
 
+from ..common.messages import one_line, shorten
 from ..errors import InputError, LinkError, WorkerMismatch
-from ..messages import one_line, shorten
 from .points import result_versions
 
 RETRIES = 1
@@ -116,9 +116,6 @@ class CloseHttp(WorkerPlugin):
     def setup(self, worker) -> None:
         _close_http(worker)
 
-    def teardown(self, worker) -> None:
-        pass
-
 
 class IgnoreInterrupts(WorkerPlugin):
     """A Dask worker plugin: the worker process ignores SIGINT (module docstring)."""
@@ -128,9 +125,6 @@ class IgnoreInterrupts(WorkerPlugin):
     def setup(self, worker) -> None:
         with contextlib.suppress(ValueError):  # not the main thread of the worker: nothing to do
             signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-    def teardown(self, worker) -> None:
-        pass
 
 
 @contextlib.contextmanager

@@ -1,10 +1,10 @@
 """Streaming odometry: :class:`Odometry`, fed one sample at a time (the core's only mutable state).
 
-Per sample (``docs/conventions.md``): counter increments (:mod:`omnikin.encoders`, which
-holds every rule on readings, wrap-around and jumps), forward kinematics with the robot's
+Per sample (``docs/conventions.md``): counter increments (:mod:`omnikin.odometry.counters` for readings and
+wrap-around, :mod:`omnikin.odometry.plausibility` for jumps), forward kinematics with the robot's
 constant (or, with steerable wheels, per-interval) operator, and the pose update of
-:mod:`omnikin.integration`. Without steerable wheels a generated kernel
-(:mod:`omnikin._stream_kernel`), a pure function of the state, takes every sample it has no
+:mod:`omnikin.odometry.integration`. Without steerable wheels a generated kernel
+(:mod:`omnikin.odometry._stream_kernel`), a pure function of the state, takes every sample it has no
 doubt about; the general path here takes the rest and either integrates it as the kernel
 would, to the bit (the kernel's forward kinematics and pose update are its own), or raises.
 
@@ -25,8 +25,13 @@ from typing import Any
 
 import numpy as np
 
+from ..common.arrays import as_real_array, container_problem
+from ..common.messages import shorten
+from ..errors import InputError, OdometryInputError
+from ..kinematics.linalg import rank
+from ..kinematics.robot import Robot
+from ..kinematics.se2 import wrap_angle
 from . import _stream_kernel as kernel
-from ._arrays import as_real_array
 from ._stream_kernel import (
     KIND_ANGLES,
     KIND_NONE,
@@ -38,41 +43,29 @@ from ._stream_kernel import (
     state_kind,
     state_time,
 )
-from .encoders import (
-    as_float,
-    container_problem,
-    counter_rules,
-    exact_increment,
-    exact_value,
-    in_counter_range,
-    show_number,
-    timestamp_problem,
-)
-from .errors import InputError, OdometryInputError
-from .geometry import wrap_angle
+from .batch import encoded_wheels, fk_coefficients, mid_steer, steer_problem, steered_steps
+from .counters import as_float, exact_increment, exact_value, in_counter_range, show_number
 from .integration import check_method, check_start, step_problem
-from .linalg import rank
-from .messages import shorten
-from .model import Robot
-from .odometry import encoded_wheels, fk_coefficients, mid_steer, steer_problem, steered_steps
+from .plausibility import counter_rules
+from .samples import timestamp_problem
 
 _WHAT = {KIND_TICKS: "tick reading", KIND_ANGLES: "wheel angle"}
 
 STATE_FORMAT = 2
 """Version of the pickled state of :class:`Odometry` (its attributes and the layout of the state
-tuple, :data:`omnikin._stream_kernel.S_POSE`); a pickle of another version is refused on load
+tuple, :data:`omnikin.odometry._stream_kernel.S_POSE`); a pickle of another version is refused on load
 rather than failing later or integrating wrongly. Pickles without it are format 1 (tick readings
 kept as floats). Raise it whenever the state changes."""
 
 
 def _times(t: float, kind: int) -> tuple[float, float]:
-    """The two time slots of the state (see :data:`omnikin._stream_kernel.S_POSE`)."""
+    """The two time slots of the state (see :data:`omnikin.odometry._stream_kernel.S_POSE`)."""
     return (t, math.nan) if kind == KIND_TICKS else (math.nan, t)
 
 
 def _kept(values: tuple, kind: int) -> tuple:
     """Readings as the state keeps them: tick readings as exact numbers (ints, or the Fraction
-    a non-integral float holds: :func:`omnikin.encoders.exact_value`), so that the kernel's
+    a non-integral float holds: :func:`omnikin.odometry.counters.exact_value`), so that the kernel's
     ``v - p`` of the next integer reading is exact; wheel angles as floats."""
     return tuple(exact_value(v) for v in values) if kind == KIND_TICKS else values
 
@@ -94,15 +87,15 @@ class Odometry:
     that cannot be integrated raises :class:`OdometryInputError` and changes nothing.
 
     Readings, in the order of the encoded wheels: a list, tuple, NumPy row, array-like or
-    iterator (never a set, dict or text: :func:`omnikin.encoders.container_problem`) of Python
+    iterator (never a set, dict or text: :func:`omnikin.common.arrays.container_problem`) of Python
     ints of any size, NumPy integer scalars (exact), or floats. ``counter_bits`` (else each
     wheel's ``encoder.counter_bits``), ``max_jump`` [ticks], ``max_wheel_speed`` [rad/s] and
     ``max_wheel_accel`` [rad/s^2]: the counter, jump and change-of-speed rules of
-    :mod:`omnikin.encoders`, applied exactly as batch odometry applies them; a step beyond the
-    bounds of :func:`omnikin.integration.step_problem` is refused too. ``start``: the pose of
-    the first sample (:func:`omnikin.integration.check_start`).
+    :mod:`omnikin.odometry.plausibility`, applied exactly as batch odometry applies them; a step beyond the
+    bounds of :func:`omnikin.odometry.integration.step_problem` is refused too. ``start``: the pose of
+    the first sample (:func:`omnikin.odometry.integration.check_start`).
 
-    Against :func:`omnikin.odometry.batch_odometry` on the same samples: the same refused sample,
+    Against :func:`omnikin.odometry.batch.batch_odometry` on the same samples: the same refused sample,
     the same wheel increments, body increments and twists (to the bit without steerable wheels),
     poses that agree to rounding; a repeated sample is skipped here, refused there
     (``docs/conventions.md``, "Batch and streaming odometry agree"). Copies and pickles carry
@@ -112,6 +105,51 @@ class Odometry:
     (mean body twist over the last interval), ``residual`` (forward-kinematics residual
     [rad/s], one entry per fitted row: the wheels, then steerable wheels), ``t``,
     ``samples``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot; the estimator reads its rolling wheels that have an ``encoder``, in file
+        order (``n_enc`` of them), which must observe every motion.
+    method : {"exact", "midpoint", "euler"}, default "exact"
+        Pose integration (:mod:`omnikin.odometry.integration`); ``midpoint`` and ``euler`` are for
+        comparison only.
+    counter_bits : int, optional
+        Counter width (2 .. 64) for every wheel; default each wheel's ``encoder.counter_bits``.
+    start : array_like, shape (3,), default (0, 0, 0)
+        Pose ``(x, y, theta)`` [m, m, rad] of the first sample in the world frame (``odom``).
+    max_jump : float, optional
+        Largest change [ticks] of a wheel between two samples.
+    max_wheel_speed : float, optional
+        Wheel speed [rad/s] bounding each wheel's change between two samples (with the margin
+        :data:`~omnikin.odometry.plausibility.JUMP_MARGIN`); default each wheel's ``max_speed``, else
+        :data:`~omnikin.odometry.plausibility.DEFAULT_RIM_SPEED` at its rim.
+    max_wheel_accel : float, optional
+        Wheel acceleration [rad/s^2] bounding each wheel's change of speed between two
+        intervals; default :data:`~omnikin.odometry.plausibility.DEFAULT_RIM_ACCEL` at its rim.
+
+    Attributes
+    ----------
+    pose : tuple of float
+        ``(x, y, theta)`` [m, m, rad] in the world frame, ``theta`` in ``[-pi, pi)``.
+    twist : tuple of float
+        Mean body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] over the last interval.
+    residual : list of float
+        Forward-kinematics residual [rad/s] of the last interval, one per fitted row.
+    t : float or None
+        Time [s] of the last accepted sample; None before the first.
+    samples : int
+        Samples accepted since the last reset (duplicates not counted).
+    duplicates : int
+        Repeated samples skipped since the last reset.
+    wheel_names : list of str
+        The encoded wheels, in the order readings are given.
+
+    Raises
+    ------
+    InputError
+        A robot without encoders or whose encoders do not observe every motion, an unknown
+        ``method``, a bad ``start`` or rule value.
     """
 
     def __init__(
@@ -185,7 +223,18 @@ class Odometry:
 
     def reset(self, pose=(0.0, 0.0, 0.0)) -> None:
         """Forget the previous sample; the next one is the new zero, at ``pose``
-        (:func:`omnikin.integration.check_start`)."""
+        (:func:`omnikin.odometry.integration.check_start`).
+
+        Parameters
+        ----------
+        pose : array_like, shape (3,), default (0, 0, 0)
+            Pose ``(x, y, theta)`` [m, m, rad] of the next sample in the world frame.
+
+        Raises
+        ------
+        InputError
+            Not three finite numbers within the bounds of a start pose.
+        """
         self._start(pose, "pose")
 
     def _start(self, pose, what: str) -> None:
@@ -257,7 +306,29 @@ class Odometry:
     # --- feeding it -------------------------------------------------------------------------------
     def update(self, t: float, ticks, steer=None) -> tuple[float, float, float]:
         """Feed one sample: time [s], raw counter readings of the encoded wheels in file
-        order, and (steerable robots) their steering angles [rad]. Returns the pose."""
+        order, and (steerable robots) their steering angles [rad]. Returns the pose.
+
+        Parameters
+        ----------
+        t : float
+            Sample time [s], later than the previous sample's.
+        ticks : sequence of int or float, length n_enc
+            Raw counter readings of the encoded wheels, file order (Python or NumPy integers
+            are exact).
+        steer : sequence of float, length n_steer, optional
+            Steering angles [rad] of the steerable wheels; required when the robot has any.
+
+        Returns
+        -------
+        tuple of float
+            The pose ``(x, y, theta)`` [m, m, rad] after this sample, in the world frame.
+
+        Raises
+        ------
+        OdometryInputError
+            A sample that cannot be integrated (its index in ``.sample``); the estimator is left
+            unchanged.
+        """
         if steer is None:
             new = self._step_ticks(self._state, t, ticks)
             if new is not None:
@@ -266,7 +337,28 @@ class Odometry:
         return self._update_general(t, ticks, steer, KIND_TICKS)
 
     def update_angles(self, t: float, angles, steer=None) -> tuple[float, float, float]:
-        """Feed one sample of wheel angles [rad] (encoded wheels, file order; they do not wrap)."""
+        """Feed one sample of wheel angles [rad] (encoded wheels, file order; they do not wrap).
+
+        Parameters
+        ----------
+        t : float
+            Sample time [s], later than the previous sample's.
+        angles : sequence of float, length n_enc
+            Wheel angles [rad] of the encoded wheels, file order.
+        steer : sequence of float, length n_steer, optional
+            Steering angles [rad] of the steerable wheels; required when the robot has any.
+
+        Returns
+        -------
+        tuple of float
+            The pose ``(x, y, theta)`` [m, m, rad] after this sample, in the world frame.
+
+        Raises
+        ------
+        OdometryInputError
+            A sample that cannot be integrated (its index in ``.sample``); the estimator is left
+            unchanged.
+        """
         if steer is None:
             new = self._step_angles(self._state, t, angles)
             if new is not None:
@@ -385,7 +477,7 @@ class Odometry:
     def _steered_increment(self, deltas, steer, dt: float, kind: int):
         """Body increment (a, b, phi) [m, m, rad] of wheel increments ``deltas`` [ticks or rad]
         at the mean steering of the interval, and the residual [rad/s]: the operator and the
-        arithmetic of batch odometry (:class:`omnikin.odometry.SteeredSteps`) on one interval."""
+        arithmetic of batch odometry (:class:`omnikin.odometry.batch.SteeredSteps`) on one interval."""
         assert self._steer is not None  # the steering of the previous sample
         scale = self._scale if kind == KIND_TICKS else [1.0] * self._n
         mid = mid_steer(np.stack([self._steer, steer]))
@@ -424,7 +516,7 @@ class Odometry:
 
     def _check_changes(self, exact, deltas, before, dt_before: float, dt: float, kind: int, values, previous) -> None:
         """Raise if a wheel's increment changes faster than its change-of-speed rule allows
-        (:func:`omnikin.encoders.change_limit`, the expression batch odometry evaluates)."""
+        (:func:`omnikin.odometry.plausibility.change_limit`, the expression batch odometry evaluates)."""
         unit = "ticks" if kind == KIND_TICKS else "rad"
         for e, d, b, r, v, p in zip(exact, deltas, before, self.rules, values, previous, strict=True):
             if not abs(d - b) <= r.change_limit(b, d, dt_before, dt, unit):

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._arrays import as_components, require_finite
-from .errors import InputError
+from ..common.arrays import as_components, require_finite
+from ..errors import InputError
 
 
 @dataclass(frozen=True)

@@ -35,11 +35,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._arrays import range_problem, whole_problem
-from .errors import InfeasibleTwistError, InputError
-from .geometry import wrap_angle
-from .messages import digits_apart, shorten
+from ..common.arrays import range_problem
+from ..common.messages import digits_apart, shorten
+from ..errors import InfeasibleTwistError, InputError
+from .encoder import Encoder
 from .physical import PhysicalWheel
+from .se2 import wrap_angle
 
 WHEEL_TYPES = ("omni", "mecanum", "swedish", "standard", "steerable", "castor")
 SWEDISH_TYPES = ("omni", "mecanum", "swedish")
@@ -63,13 +64,6 @@ OFFSET_RANGE = (0.0, 10.0)
 ROLLER_LIMIT_DEG = 80.0
 """Largest ``|roller angle|`` [deg]: a Swedish wheel's speed is scaled by ``1/cos(gamma)``
 (5.8 at 80 deg, infinite at 90 deg where the wheel cannot drive); built wheels use 0 and 45."""
-TICKS_PER_REV_RANGE = (1.0, 2.0**32)
-"""Encoder ticks per revolution of the encoder shaft: from a single index pulse to a 32-bit
-absolute encoder."""
-COUNTER_BITS_RANGE = (2, 64)
-"""Width of an encoder's hardware counter [bits]: from a 2-bit quadrature state to a 64-bit count."""
-GEAR_RATIO_RANGE = (1e-3, 1e4)
-"""Encoder revolutions per wheel revolution: multi-stage gearboxes stay below 1e4."""
 MAX_SPEED_RANGE = (1e-3, 1e4)
 """Wheel speed limit [rad/s]: 1e4 rad/s is 95 000 rpm, beyond any wheel."""
 MOTOR_TYPES = ("stepper", "dc")
@@ -118,40 +112,22 @@ def _require(problem: str | None, what: str) -> None:
 
 
 @dataclass(frozen=True)
-class Encoder:
-    """Incremental encoder on a wheel: ``angle = 2 pi ticks / (ticks_per_rev gear_ratio)``.
-
-    ``counter_bits``: width of the hardware counter whose readings are logged (2..64); its
-    readings wrap modulo ``2**counter_bits`` (:mod:`omnikin.encoders`). None: they never wrap.
-    """
-
-    ticks_per_rev: float
-    gear_ratio: float = 1.0
-    invert: bool = False
-    counter_bits: int | None = None
-
-    def __post_init__(self):
-        if self.counter_bits is not None:
-            _require(whole_problem(self.counter_bits, *COUNTER_BITS_RANGE), "encoder: counter_bits")
-        _require(range_problem(self.ticks_per_rev, *TICKS_PER_REV_RANGE), "encoder: ticks_per_rev")
-        _require(range_problem(self.gear_ratio, *GEAR_RATIO_RANGE), "encoder: gear_ratio")
-        if not isinstance(self.invert, (bool, np.bool_)):
-            raise InputError(f"encoder: invert must be True or False, got {shorten(self.invert)}")
-
-    @property
-    def rad_per_tick(self) -> float:
-        """Wheel angle per tick [rad], negative when ``invert``."""
-        sign = -1.0 if self.invert else 1.0
-        return sign * 2.0 * np.pi / (self.ticks_per_rev * self.gear_ratio)
-
-
-@dataclass(frozen=True)
 class Steer:
     """Steering of a steerable wheel or castor.
 
-    ``offset`` [m]: distance by which the contact trails the steering axis against
-    the drive direction (0: centred). ``lower``/``upper`` [rad]: steering limits
-    relative to the mounting drive direction.
+    Parameters
+    ----------
+    offset : float, default 0.0
+        Distance [m] by which the contact trails the steering axis against the drive direction,
+        0 .. 10 (0: a centred wheel).
+    lower, upper : float, default -pi, pi
+        Steering limits [rad] relative to the mounting drive direction, each in ``[-pi, pi]``,
+        ``lower < upper``.
+
+    Raises
+    ------
+    InputError
+        A value outside its range or ``lower >= upper``; the message names the field.
     """
 
     offset: float = 0.0
@@ -171,8 +147,42 @@ class Steer:
 class Wheel:
     """A wheel mounted on the body (SI units, radians).
 
-    ``drive`` is the drive direction ``delta`` at zero steering; ``roller`` is the
-    roller angle ``gamma`` of Swedish wheels (0 otherwise).
+    The robot file's wheel (docs/conventions.md, "Wheels"), its degrees converted to radians.
+
+    Parameters
+    ----------
+    name : str
+        Wheel name, ``[A-Za-z][A-Za-z0-9_]{0,63}``, not ``t`` (docs/conventions.md, "Names").
+    type : str
+        One of :data:`WHEEL_TYPES`: ``omni``, ``mecanum``, ``swedish``, ``standard``,
+        ``steerable``, ``castor``.
+    x, y : float
+        Hub contact point ``p`` [m] in the body frame (``base_link``: x forward, y left), each
+        within +-1000 m (for a steerable wheel or castor: where the steering axis meets the floor).
+    drive : float
+        Drive direction ``delta`` [rad] at zero steering, counter-clockwise from body +x.
+    radius : float
+        Rolling radius [m], 0.0001 .. 10.
+    roller : float, default 0.0
+        Roller angle ``gamma`` [rad] of a Swedish wheel, within +-80 deg (a robot file's mecanum
+        wheel: +-45 deg); 0 for every other type.
+    encoder : Encoder or None, default None
+        The wheel's encoder; None: odometry does not read this wheel.
+    max_speed : float or None, default None
+        Largest wheel speed [rad/s], 0 .. 10000 (0: a locked wheel); None: unbounded.
+    steer : Steer or None, default None
+        Offset and steering limits of a steerable wheel or castor.
+    physical : PhysicalWheel or None, default None
+        Physical fields for physics engines (see the attribute below).
+    motor : str or None, default None
+        ``stepper`` or ``dc`` (see the attribute below).
+
+    Raises
+    ------
+    InputError
+        A bad name or type, a number outside its range, a roller angle on a wheel that is not
+        Swedish, a part of the wrong class, or a motor the wheel cannot have; the message names
+        the wheel and the field.
     """
 
     name: str
@@ -266,11 +276,33 @@ class Wheel:
 
     # --- geometry -----------------------------------------------------------
     def direction(self, steer=0.0):
-        """Drive direction ``delta`` [rad] at steering angle ``steer`` [rad]."""
+        """Drive direction ``delta`` [rad] at steering angle ``steer`` [rad].
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (...)
+            ``drive + steer`` [rad], counter-clockwise from body +x.
+        """
         return self.drive + np.asarray(steer, dtype=float)
 
     def contact_point(self, steer=0.0) -> np.ndarray:
-        """Floor contact ``(..., 2)`` [m, body frame]: ``p - offset u(delta)``."""
+        """Floor contact ``(..., 2)`` [m, body frame]: ``p - offset u(delta)``.
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (..., 2)
+            Contact point ``(x, y)`` [m] in the body frame.
+        """
         delta = self.direction(steer)
         out = np.empty(np.shape(delta) + (2,))
         out[..., 0] = self.x - self.offset * np.cos(delta)
@@ -278,7 +310,21 @@ class Wheel:
         return out
 
     def rolling_row(self, steer=0.0) -> np.ndarray:
-        """Row ``(..., 3)`` mapping the body twist to this wheel's speed [rad/s]."""
+        """Row ``(..., 3)`` mapping the body twist to this wheel's speed [rad/s].
+
+        ``[cos a, sin a, x sin a - y cos a] / (r cos gamma)``, ``a = delta + gamma`` (module
+        docstring; docs/conventions.md, "Wheels").
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Wheel speed [rad/s] per body twist component ``(vx, vy, omega)`` [m/s, m/s, rad/s].
+        """
         a = self.direction(steer) + self.roller
         ca, sa = np.cos(a), np.sin(a)
         out = np.empty(np.shape(a) + (3,))
@@ -289,7 +335,21 @@ class Wheel:
         return out
 
     def sliding_row(self, steer=0.0) -> np.ndarray:
-        """No-side-slip row ``(..., 3)`` [m/s per twist] of standard/steerable wheels."""
+        """No-side-slip row ``(..., 3)`` [m/s per twist] of standard/steerable wheels.
+
+        ``[-sin delta, cos delta, x cos delta + y sin delta]``: the hub's side speed, zero for an
+        admissible twist.
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Side speed [m/s] per body twist component ``(vx, vy, omega)`` [m/s, m/s, rad/s].
+        """
         delta = self.direction(steer)
         cd, sd = np.cos(delta), np.sin(delta)
         out = np.empty(np.shape(delta) + (3,))
@@ -303,7 +363,18 @@ class Wheel:
         ``n . v_p - offset * omega`` (``n = (-sin delta, cos delta)``), which equals
         ``offset * beta'`` at steering rate ``beta'`` (the contact, trailing ``p`` by ``offset``
         along ``-u``, does not slide sideways); for a centred wheel the plain
-        :meth:`sliding_row` (= 0)."""
+        :meth:`sliding_row` (= 0).
+
+        Parameters
+        ----------
+        steer : array_like, shape (...), default 0.0
+            Steering angle [rad] relative to :attr:`drive` (0 for a wheel that is not steered).
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Side speed [m/s] per body twist component ``(vx, vy, omega)`` [m/s, m/s, rad/s].
+        """
         out = self.sliding_row(steer)
         out[..., 2] -= self.offset
         return out
@@ -320,7 +391,20 @@ class Wheel:
         return n + self.radius * np.sin(self.roller) * self.rolling_row()
 
     def hub_velocity(self, twist) -> np.ndarray:
-        """Velocity ``(..., 2)`` [m/s, body axes] of the floor point under ``p``."""
+        """Velocity ``(..., 2)`` [m/s, body axes] of the floor point under ``p``.
+
+        ``v_p = (vx - omega y, vy + omega x)``.
+
+        Parameters
+        ----------
+        twist : array_like, shape (..., 3)
+            Body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] in body axes.
+
+        Returns
+        -------
+        ndarray, shape (..., 2)
+            ``v_p`` [m/s] in body axes.
+        """
         t = np.asarray(twist, dtype=float)
         out = np.empty(t.shape[:-1] + (2,))
         out[..., 0] = t[..., 0] - t[..., 2] * self.y
@@ -340,6 +424,29 @@ class Wheel:
         off-centred wheel whose axis moves slower than ``offset * |omega|`` has no steady
         angle: ``strict`` raises :class:`InfeasibleTwistError`, otherwise it is flagged
         in ``limited`` and left at ``hint``.
+
+        Parameters
+        ----------
+        twist : array_like, shape (..., 3)
+            Body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] in body axes.
+        hint : array_like, shape (...), default 0.0
+            Preferred steering angle [rad] relative to :attr:`drive`.
+        strict : bool, default True
+            Raise for a twist without a steady steering angle, instead of flagging it.
+
+        Returns
+        -------
+        angle : ndarray, shape (...)
+            Steering angle [rad] relative to :attr:`drive`, in ``[-pi, pi)`` (``hint`` where the
+            hub is still or no steady angle exists).
+        limited : ndarray of bool, shape (...)
+            True where no branch lies within the steering limits, or no steady angle exists.
+
+        Raises
+        ------
+        InfeasibleTwistError
+            With ``strict``: an off-centred wheel whose axis moves slower than
+            ``offset * |omega|``.
         """
         t = np.asarray(twist, dtype=float)
         hint = np.broadcast_to(np.asarray(hint, dtype=float), t.shape[:-1])

@@ -1,4 +1,4 @@
-"""The URDF's kinematics for /tf (omnikin.ros.link_frames), checked against independent sources:
+"""The URDF's kinematics for /tf (omnikin.physics.link_frames), checked against independent sources:
 urdf_parser_py's parse of the same text, SciPy's rotations, and a wheel's pose written out by
 hand from the robot file (hub at ``(x, y, r)``, turned by the drive direction, then spun about
 its axle)."""
@@ -15,9 +15,9 @@ from urdf_parser_py.urdf import URDF
 from omnikin import load_robot
 from omnikin.errors import InputError
 from omnikin.physics.joint_motion import JointMotion
+from omnikin.physics.link_frames import LinkFrames, urdf_joints
 from omnikin.physics.urdf import urdf
 from omnikin.presets import PRESET_NAMES
-from omnikin.ros.link_frames import LinkFrames, urdf_joints
 
 
 def matrix(q) -> np.ndarray:

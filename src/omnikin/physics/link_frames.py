@@ -30,8 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..common.messages import shorten
 from ..errors import InputError
-from ..messages import shorten
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
 """Joint types :class:`LinkFrames` moves (floating and planar joints have no single position)."""

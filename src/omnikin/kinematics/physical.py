@@ -14,9 +14,9 @@ from __future__ import annotations
 import itertools
 from dataclasses import dataclass, fields
 
-from ._arrays import container_problem, range_problem, whole_problem
-from .errors import InputError
-from .messages import shorten
+from ..common.arrays import container_problem, range_problem, whole_problem
+from ..common.messages import shorten
+from ..errors import InputError
 
 # --- ranges (docs/conventions.md, "Physical fields") --------------------------------------------
 MASS_RANGE = (1e-4, 1e5)
@@ -42,14 +42,14 @@ ROWS_RANGE = (1, 4)
 
 def _number(owner: str, name: str, value, low: float, high: float, unit: str) -> None:
     """Raise :class:`InputError` naming ``owner`` and ``physical.<name>`` unless ``value`` is None
-    or a finite number in ``[low, high]`` (:func:`omnikin._arrays.range_problem`)."""
+    or a finite number in ``[low, high]`` (:func:`omnikin.common.arrays.range_problem`)."""
     problem = None if value is None else range_problem(value, low, high, unit)
     if problem:
         raise InputError(f"{owner}: physical.{name} {problem}")
 
 
 def _whole(owner: str, name: str, value, low: int, high: int) -> None:
-    """As :func:`_number` for a whole number (:func:`omnikin._arrays.whole_problem`)."""
+    """As :func:`_number` for a whole number (:func:`omnikin.common.arrays.whole_problem`)."""
     problem = None if value is None else whole_problem(value, low, high)
     if problem:
         raise InputError(f"{owner}: physical.{name} {problem}")

@@ -18,7 +18,7 @@ from collections.abc import Set as AbstractSet
 
 import numpy as np
 
-from .errors import InputError
+from ..errors import InputError
 from .messages import digits_apart, one_line, shorten
 
 REAL_KINDS = frozenset("iuf")
@@ -113,7 +113,7 @@ def range_problem(value, low: float, high: float, unit: str = "") -> str | None:
     sides, rates): Python or NumPy ``int`` and ``float`` only (not ``bool``, not ``"0.5"``).
     The text starts with ``must`` so that the caller prefixes what it checks:
     ``f"wheel 'w1': radius {problem}"``. A value outside the range is printed with the digits
-    that tell it from the bound (:func:`~omnikin.messages.digits_apart`), the bounds with as many
+    that tell it from the bound (:func:`~omnikin.common.messages.digits_apart`), the bounds with as many
     or 10.
     """
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):

@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from ._arrays import as_components, as_real_array
+from ..common.arrays import as_components, as_real_array
 
 TWO_PI = 2.0 * math.pi
 
@@ -35,7 +35,7 @@ to 1e-10 rad; beyond it a value like 1e308 is a typo whose sine and cosine mean 
 
 MAX_DIRECTION_DEG = 720.0
 """Largest ``|direction|`` [deg] a person writes: a wheel's ``angle_deg`` and ``drive_deg`` in a
-robot file, the ``HEADING_DEG`` of a path (:func:`omnikin.plans.parse_plan`). Directions count
+robot file, the ``HEADING_DEG`` of a path (:func:`omnikin.motion.plans.parse_plan`). Directions count
 modulo 360; two turns leave room for computed layouts (``30 + k 120``), while ``1e300`` has no
 digit left modulo 360 (its direction would be the rounding of the conversion to radians)."""
 
@@ -49,13 +49,25 @@ TAYLOR_LIMIT = 0.1
 def wrap_angle(angle):
     """Wrap angles [rad] to ``[-pi, pi)``: a Python float for a Python number, else an array.
 
-    The one angle wrap of omnikin (the streaming kernel inlines the same expression).
+    The one angle wrap of omnikin (the streaming kernel inlines the same expression):
+    ``angle - 2 pi floor((angle + pi) / (2 pi))``.
+
+    Parameters
+    ----------
+    angle : float or array_like
+        Angles [rad].
+
+    Returns
+    -------
+    float or ndarray
+        The angles in ``[-pi, pi)`` [rad]: a float for a Python ``int`` or ``float``, else an
+        array of the shape of ``angle``.
     """
     if isinstance(angle, (int, float)):
         a = float(angle)
         return a - TWO_PI * math.floor((a + math.pi) / TWO_PI)
-    a = np.asarray(angle, dtype=float)
-    return a - TWO_PI * np.floor((a + np.pi) * (0.5 / np.pi))
+    arr = np.asarray(angle, dtype=float)
+    return arr - TWO_PI * np.floor((arr + np.pi) * (0.5 / np.pi))
 
 
 def sinc(x):
@@ -64,6 +76,16 @@ def sinc(x):
     The polynomial ``1 - x^2/6 + x^4/120 - x^6/5040 + x^8/362880`` is accurate to
     below 3e-18 there, avoids the division, and is what makes batch odometry fast:
     per-sample rotations are almost always small.
+
+    Parameters
+    ----------
+    x : array_like
+        Arguments [rad].
+
+    Returns
+    -------
+    float or ndarray
+        ``sin(x) / x``, of the shape of ``x`` (a NumPy scalar for a scalar ``x``).
     """
     x = np.asarray(x, dtype=float)
     scalar = x.ndim == 0
@@ -85,12 +107,32 @@ def sinc(x):
 
 
 def sinc_scalar(x: float) -> float:
-    """``sin(x) / x`` of one Python float (the scalar twin of :func:`sinc`)."""
+    """``sin(x) / x`` of one Python float (the scalar twin of :func:`sinc`).
+
+    Parameters
+    ----------
+    x : float
+        Argument [rad]; ``1 - x^2/6`` below :data:`SCALAR_TAYLOR_LIMIT` in size.
+
+    Returns
+    -------
+    float
+    """
     return 1.0 - x * x / 6.0 if -SCALAR_TAYLOR_LIMIT < x < SCALAR_TAYLOR_LIMIT else math.sin(x) / x
 
 
 def dsinc_scalar(x: float) -> float:
-    """``d sinc(x) / dx = (x cos x - sin x) / x^2`` of one Python float (``-x/3`` near 0)."""
+    """``d sinc(x) / dx = (x cos x - sin x) / x^2`` of one Python float (``-x/3`` near 0).
+
+    Parameters
+    ----------
+    x : float
+        Argument [rad]; ``-x/3`` below :data:`SCALAR_TAYLOR_LIMIT` in size.
+
+    Returns
+    -------
+    float
+    """
     if -SCALAR_TAYLOR_LIMIT < x < SCALAR_TAYLOR_LIMIT:
         return -x / 3.0
     return (math.cos(x) * x - math.sin(x)) / (x * x)
@@ -100,7 +142,24 @@ def exp(tangent) -> np.ndarray:
     """Exponential map: tangent ``(a, b, phi)`` -> pose ``(x, y, theta)``.
 
     The pose reached from the identity by moving with the constant body twist
-    ``(a, b, phi)`` for unit time.
+    ``(a, b, phi)`` for unit time: ``(x, y) = sinc(phi/2) R(phi/2) (a, b)``, ``theta = phi``
+    wrapped (module docstring).
+
+    Parameters
+    ----------
+    tangent : array_like, shape (..., 3)
+        Body displacement ``(a, b, phi)`` [m, m, rad]: twist times duration, in body axes.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Pose ``(x, y, theta)`` [m, m, rad] of the moved body frame in its start frame,
+        ``theta`` in ``[-pi, pi)``.
+
+    Raises
+    ------
+    InputError
+        Not three real components.
     """
     xi = as_components(tangent, 3, "tangent")
     half = 0.5 * xi[..., 2]
@@ -117,6 +176,21 @@ def log(pose) -> np.ndarray:
     """Logarithm: pose -> tangent ``(a, b, phi)`` with ``phi`` in ``[-pi, pi)``.
 
     Inverse of :func:`exp` on that principal branch.
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 3)
+        Pose ``(x, y, theta)`` [m, m, rad] of a body frame in a parent frame.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Tangent ``(a, b, phi)`` [m, m, rad] in body axes, ``phi`` in ``[-pi, pi)``.
+
+    Raises
+    ------
+    InputError
+        Not three real components.
     """
     p = as_components(pose, 3, "pose")
     phi = wrap_angle(p[..., 2])
@@ -131,7 +205,27 @@ def log(pose) -> np.ndarray:
 
 
 def compose(a, b) -> np.ndarray:
-    """``a (+) b``: pose ``b`` given in frame ``a``, expressed in ``a``'s parent."""
+    """``a (+) b``: pose ``b`` given in frame ``a``, expressed in ``a``'s parent.
+
+    ``(x, y) = (x_a, y_a) + R(theta_a) (x_b, y_b)``, ``theta = theta_a + theta_b`` wrapped.
+
+    Parameters
+    ----------
+    a : array_like, shape (..., 3)
+        Pose ``(x, y, theta)`` [m, m, rad] of frame ``a`` in its parent frame.
+    b : array_like, shape (..., 3)
+        Pose [m, m, rad] of frame ``b`` in frame ``a``; broadcasts with ``a``.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Pose [m, m, rad] of frame ``b`` in ``a``'s parent, ``theta`` in ``[-pi, pi)``.
+
+    Raises
+    ------
+    InputError
+        Not three real components.
+    """
     a = as_components(a, 3, "a")
     b = as_components(b, 3, "b")
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
@@ -144,7 +238,24 @@ def compose(a, b) -> np.ndarray:
 
 
 def inverse(pose) -> np.ndarray:
-    """Inverse pose: the parent frame expressed in the body frame."""
+    """Inverse pose: the parent frame expressed in the body frame.
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 3)
+        Pose ``(x, y, theta)`` [m, m, rad] of a body frame in its parent frame.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Pose [m, m, rad] of the parent frame in the body frame: ``(-R(-theta) (x, y), -theta)``,
+        ``theta`` wrapped to ``[-pi, pi)``.
+
+    Raises
+    ------
+    InputError
+        Not three real components.
+    """
     p = as_components(pose, 3, "pose")
     c, s = np.cos(p[..., 2]), np.sin(p[..., 2])
     out = np.empty(p.shape, dtype=float)
@@ -155,12 +266,46 @@ def inverse(pose) -> np.ndarray:
 
 
 def between(a, b) -> np.ndarray:
-    """Relative pose ``a^-1 (+) b``: frame ``b`` seen from frame ``a``."""
+    """Relative pose ``a^-1 (+) b``: frame ``b`` seen from frame ``a``.
+
+    Parameters
+    ----------
+    a, b : array_like, shape (..., 3)
+        Poses ``(x, y, theta)`` [m, m, rad] of two frames in one parent frame; they broadcast.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Pose [m, m, rad] of frame ``b`` in frame ``a``, ``theta`` in ``[-pi, pi)``.
+
+    Raises
+    ------
+    InputError
+        Not three real components.
+    """
     return compose(inverse(a), b)
 
 
 def apply(pose, points) -> np.ndarray:
-    """Map body-frame points ``(..., 2)`` into the parent frame of ``pose``."""
+    """Map body-frame points ``(..., 2)`` into the parent frame of ``pose``.
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 3)
+        Pose ``(x, y, theta)`` [m, m, rad] of the body frame in its parent frame.
+    points : array_like, shape (..., 2)
+        Points ``(x, y)`` [m] in the body frame; broadcast with ``pose``'s leading axes.
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        The points [m] in the parent frame: ``(x, y)_pose + R(theta) points``.
+
+    Raises
+    ------
+    InputError
+        A pose without three, or points without two, real components.
+    """
     p = as_components(pose, 3, "pose")
     q = as_components(points, 2, "points")
     c, s = np.cos(p[..., 2]), np.sin(p[..., 2])
@@ -172,7 +317,25 @@ def apply(pose, points) -> np.ndarray:
 
 
 def rotate(angle, vectors) -> np.ndarray:
-    """Rotate 2-vectors ``(..., 2)`` counter-clockwise by ``angle`` [rad]."""
+    """Rotate 2-vectors ``(..., 2)`` counter-clockwise by ``angle`` [rad].
+
+    Parameters
+    ----------
+    angle : array_like, shape (...)
+        Rotation angles [rad], counter-clockwise.
+    vectors : array_like, shape (..., 2)
+        Vectors; broadcast with ``angle``.
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        ``R(angle) vectors``, in the units of ``vectors``.
+
+    Raises
+    ------
+    InputError
+        Vectors without two real components, or an angle that is not real.
+    """
     v = as_components(vectors, 2, "vectors")
     angle = as_real_array(angle, "angle")
     c, s = np.cos(angle), np.sin(angle)
@@ -194,6 +357,20 @@ def compose_exp_jacobians(theta: float, tangent) -> tuple[np.ndarray, np.ndarray
     2018, eqs. 170-171): ``J_out_pose = d out / d pose`` (3x3; it does not depend on x, y),
     ``J_out_tangent = d out / d tangent`` (3x3). Used to propagate the odometry covariance
     ``P' = J_out_pose P J_out_pose^T + J_out_tangent Sigma J_out_tangent^T``.
+
+    Parameters
+    ----------
+    theta : float
+        Heading [rad] of the pose composed onto.
+    tangent : sequence of float, length 3
+        Tangent ``(a, b, phi)`` [m, m, rad] in body axes.
+
+    Returns
+    -------
+    j_pose : ndarray, shape (3, 3)
+        ``d out / d (x, y, theta)``.
+    j_tangent : ndarray, shape (3, 3)
+        ``d out / d (a, b, phi)``.
     """
     a, b, phi = (float(v) for v in tangent)
     h = 0.5 * phi

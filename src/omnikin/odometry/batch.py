@@ -1,14 +1,14 @@
 """Wheel odometry: a streaming estimator and batch odometry over arrays.
 
 Per sample (``docs/conventions.md``): encoder ticks -> wheel angle increments
-(:mod:`omnikin.encoders`) -> body increment by forward kinematics
-(:meth:`omnikin.model.Robot.fk`, constant over the sample) -> pose update by the
-SE(2) exponential (:mod:`omnikin.integration`; ``euler`` and ``midpoint`` are there
+(:mod:`omnikin.odometry.increments`) -> body increment by forward kinematics
+(:meth:`omnikin.kinematics.robot.Robot.fk`, constant over the sample) -> pose update by the
+SE(2) exponential (:mod:`omnikin.odometry.integration`; ``euler`` and ``midpoint`` are there
 for comparison only). Odometry uses the rolling wheels that have an ``encoder``
 in the robot file; with steerable wheels the steering angles of each sample are
 needed too, and each interval uses the mean of its two end angles.
 
-The streaming estimator lives in :mod:`omnikin.streaming`.
+The streaming estimator lives in :mod:`omnikin.odometry.streaming`.
 """
 
 from __future__ import annotations
@@ -19,26 +19,15 @@ from typing import overload
 
 import numpy as np
 
-from ._arrays import as_real_array
-from .encoders import (
-    SAFETY,
-    Carry,
-    Problem,
-    as_float,
-    as_floats,
-    as_reading_array,
-    block_increments,
-    container_problem,
-    counter_readings,
-    counter_rules,
-    problem_at,
-    timestamp_problem,
-    wheel_increments,
-)
-from .errors import InputError, OdometryInputError
-from .geometry import MAX_ANGLE, wrap_angle
+from ..common.arrays import as_real_array, container_problem
+from ..errors import InputError, OdometryInputError
+from ..kinematics.robot import STEER_LIMIT_SLACK, Robot, steering_beyond
+from ..kinematics.se2 import MAX_ANGLE, wrap_angle
+from .counters import as_float, as_floats, as_reading_array, counter_readings
+from .increments import Carry, block_increments, wheel_increments
 from .integration import STEP_BOUNDS, check_method, check_start, integrate_components, step_problem
-from .model import STEER_LIMIT_SLACK, Robot, steering_beyond
+from .plausibility import SAFETY, counter_rules
+from .samples import Problem, problem_at, timestamp_problem
 
 
 def encoded_wheels(robot: Robot):
@@ -82,6 +71,22 @@ class OdometryResult:
     forward kinematics residual [rad/s] (zero for a square, full-rank layout: then a
     read-only array of zeros that takes no memory). All are computed with the poses, from
     the readings as they were at the call: changing the input array afterwards changes nothing.
+
+    Attributes
+    ----------
+    t : ndarray, shape (..., N)
+        Sample times [s].
+    poses : ndarray, shape (..., N, 3)
+        Poses ``(x, y, theta)`` [m, m, rad] of the body frame in the world frame (``odom``),
+        the first at the start pose.
+    increments : ndarray, shape (..., N-1, 3)
+        Body displacement ``(a, b, phi)`` [m, m, rad] of each interval, in the body axes at
+        its start.
+    residual : ndarray, shape (..., N-1, n_rows)
+        Forward-kinematics residual [rad/s] of each interval: one row per encoded wheel, then
+        one per steerable wheel.
+    twists : ndarray, shape (..., N-1, 3)
+        Mean body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] of each interval.
     """
 
     t: np.ndarray
@@ -102,7 +107,7 @@ def _residual(angles: np.ndarray, rows: np.ndarray, increments: np.ndarray, dt: 
 
 def _redundant(robot: Robot, rows: np.ndarray) -> bool:
     """More fitted rows than the motions they observe: the residual can be non-zero."""
-    from .linalg import rank
+    from ..kinematics.linalg import rank
 
     return rows.shape[-2] > rank(rows @ robot.admissible_basis)
 
@@ -128,8 +133,8 @@ def body_components(coefficients: list[list[float]], delta: np.ndarray) -> list[
     """Body increments ``a``, ``b``, ``phi`` ``(..., m)`` [m, m, rad] of wheel increments ``delta``
     ``(..., m, n)`` with the constant :func:`fk_coefficients`, each summed over the wheels in their
     order and without the terms of zero coefficient: the arithmetic of the streaming kernel
-    (``omnikin._stream_kernel._fk_lines``), so that batch and streaming odometry compute the same
-    body increments to the bit (and refuse the same steps, :func:`omnikin.integration.step_problem`)."""
+    (``omnikin.odometry._stream_kernel._fk_lines``), so that batch and streaming odometry compute the same
+    body increments to the bit (and refuse the same steps, :func:`omnikin.odometry.integration.step_problem`)."""
     columns = [delta[..., j] for j in range(delta.shape[-1])]
     out = []
     for row in coefficients:
@@ -162,7 +167,7 @@ def steered_steps(f: np.ndarray, angles: np.ndarray) -> np.ndarray:
 def step_problem_at(steps: np.ndarray, dt: np.ndarray, offset: int) -> Problem | None:
     """The first interval (row ``r`` is sample ``offset + 1 + r``) whose body increment in
     ``steps`` ``(..., m, 3)`` over ``dt`` ``(..., m)`` [s] is refused by
-    :func:`omnikin.integration.step_problem`, as a :class:`~omnikin.encoders.Problem`."""
+    :func:`omnikin.odometry.integration.step_problem`, as a :class:`~omnikin.odometry.samples.Problem`."""
     with np.errstate(invalid="ignore"):
         beyond = np.any(~(np.abs(steps) <= STEP_BOUNDS), axis=-1)
 
@@ -178,7 +183,7 @@ def step_problem_at(steps: np.ndarray, dt: np.ndarray, offset: int) -> Problem |
 
 
 class StepCheck:
-    """The ``motion`` check of :func:`omnikin.encoders.block_increments` for robots without
+    """The ``motion`` check of :func:`omnikin.odometry.increments.block_increments` for robots without
     steerable wheels: the first interval whose body increment (:func:`body_steps`) is beyond
     the bounds of one step. A block whose longest interval lets no wheel reach them (every
     increment is within its jump limit there) is passed without computing them."""
@@ -199,7 +204,7 @@ class StepCheck:
 
 
 class SteeredSteps:
-    """The ``motion`` check of :func:`omnikin.encoders.block_increments` for robots with steerable
+    """The ``motion`` check of :func:`omnikin.odometry.increments.block_increments` for robots with steerable
     wheels: the operator of each interval at its mean steering, the body increments
     (:func:`steered_steps`), kept block by block for the integration, and the first beyond the
     bounds of one step."""
@@ -245,17 +250,65 @@ def batch_odometry(
 
     Leading axes (trials) broadcast. ``steer`` ``(..., N, n_steer)`` [rad] is needed
     for robots with steerable wheels. The first sample is the zero of the ticks and
-    sits at ``start`` (default origin; :func:`omnikin.integration.check_start`). Readings of
-    any integer type are exact (see :func:`omnikin.encoders.counter_readings`);
+    sits at ``start`` (default origin; :func:`omnikin.odometry.integration.check_start`). Readings of
+    any integer type are exact (see :func:`omnikin.odometry.counters.counter_readings`);
     ``counter_bits`` (else each wheel's ``encoder.counter_bits``), ``max_jump`` [ticks],
     ``max_wheel_speed`` [rad/s] and ``max_wheel_accel`` [rad/s^2] are the counter, jump and
-    change-of-speed rules of :mod:`omnikin.encoders`; the body increment of an interval must lie
-    within :func:`omnikin.integration.step_problem`. The earliest bad sample raises
+    change-of-speed rules of :mod:`omnikin.odometry.plausibility`; the body increment of an interval must lie
+    within :func:`omnikin.odometry.integration.step_problem`. The earliest bad sample raises
     :class:`OdometryInputError` with its index in ``.sample`` (the same sample the streaming
     estimator refuses). The increments and twists are the streaming estimator's (to the bit
     without steerable wheels: :func:`body_components`), the poses agree with its poses to
     rounding (cumulative sums here, one step at a time there; ``docs/conventions.md``, "Batch
     and streaming odometry agree").
+
+    Per interval: wheel angle increments -> body increment by forward kinematics, constant over
+    the interval (:meth:`omnikin.kinematics.robot.Robot.fk`; with steerable wheels at the mean of the two end
+    steering angles) -> pose update by the SE(2) exponential (:mod:`omnikin.odometry.integration`).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot; odometry reads its rolling wheels that have an ``encoder``, in file order
+        (``n_enc`` of them), which must observe every motion.
+    t : array_like, shape (..., N)
+        Sample times [s], strictly increasing along the last axis.
+    ticks : array_like, shape (..., N, n_enc)
+        Raw counter readings of the encoded wheels (integers of any type, exact; or floats).
+    steer : array_like, shape (..., N, n_steer), optional
+        Steering angles [rad] of the steerable wheels at each sample; required when the robot
+        has any, refused otherwise.
+    method : {"exact", "midpoint", "euler"}, default "exact"
+        Pose integration; ``midpoint`` and ``euler`` are for comparison only.
+    counter_bits : int, optional
+        Counter width (2 .. 64) for every wheel; default each wheel's ``encoder.counter_bits``.
+    start : array_like, shape (..., 3), optional
+        Pose ``(x, y, theta)`` [m, m, rad] of the first sample in the world frame; default the
+        origin.
+    max_jump : float, optional
+        Largest change [ticks] of a wheel between two samples; replaces the bound from the
+        wheel speed.
+    max_wheel_speed : float, optional
+        Wheel speed [rad/s] that, with the margin :data:`~omnikin.odometry.plausibility.JUMP_MARGIN`, bounds
+        each wheel's change between two samples; default each wheel's ``max_speed``, else
+        :data:`~omnikin.odometry.plausibility.DEFAULT_RIM_SPEED` at its rim.
+    max_wheel_accel : float, optional
+        Wheel acceleration [rad/s^2] that, with the same margin, bounds each wheel's change of
+        speed between two intervals; default :data:`~omnikin.odometry.plausibility.DEFAULT_RIM_ACCEL` at its
+        rim.
+
+    Returns
+    -------
+    OdometryResult
+        Times ``(..., N)``, poses ``(..., N, 3)``, increments and residuals ``(..., N-1, ...)``.
+
+    Raises
+    ------
+    OdometryInputError
+        The earliest sample that cannot be integrated (its index in ``.sample``).
+    InputError
+        A robot without encoders or whose encoders do not observe every motion, an unknown
+        ``method``, a bad ``start`` or rule value.
     """
     wheels = encoded_wheels(robot)
     rules = counter_rules(wheels, counter_bits, max_jump, max_wheel_speed, max_wheel_accel)
@@ -266,11 +319,7 @@ def batch_odometry(
     check_method(method)
     start_pose = None if start is None else check_start(start)
     if robot.steerable:
-        lead = np.broadcast_shapes(tk.shape[:-2], tt.shape[:-1])
-        s, steering = _steering(robot, steer, lead, tk.shape[-2])
-        steps = SteeredSteps(robot, names, s, scale)
-        wheel_increments(rules, tt, tk, CHUNK, "ticks", _earliest(pending, steering), steps)
-        return _integrate_steered(robot, names, tt, steps, lead, method, start_pose)
+        return _steered_odometry(robot, names, rules, tt, tk, "ticks", scale, pending, steer, method, start_pose)
     _no_steer(robot, steer)
     f = robot.fk_matrix(None, names)
     rows = robot.fk_rows(None, names)
@@ -312,7 +361,39 @@ def batch_odometry_from_angles(
     max_wheel_accel=None,
 ) -> OdometryResult:
     """Like :func:`batch_odometry` but from wheel angles ``(..., N, n_enc)`` [rad] (no counters;
-    the same physical rules on speed and its changes)."""
+    the same physical rules on speed and its changes).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot; odometry reads its rolling wheels that have an ``encoder``, in file order.
+    t : array_like, shape (..., N)
+        Sample times [s], strictly increasing along the last axis.
+    angles : array_like, shape (..., N, n_enc)
+        Wheel angles [rad] of the encoded wheels (they do not wrap), positive when the wheel
+        drives its hub along its drive direction.
+    steer : array_like, shape (..., N, n_steer), optional
+        Steering angles [rad]; required when the robot has steerable wheels.
+    method : {"exact", "midpoint", "euler"}, default "exact"
+        Pose integration.
+    start : array_like, shape (..., 3), optional
+        Pose ``(x, y, theta)`` [m, m, rad] of the first sample; default the origin.
+    max_jump, max_wheel_speed, max_wheel_accel : float, optional
+        The rules of :func:`batch_odometry` (``max_jump`` in ticks of each wheel's encoder; the
+        change-of-speed rule applies only with an explicit ``max_wheel_accel``).
+
+    Returns
+    -------
+    OdometryResult
+        As :func:`batch_odometry`.
+
+    Raises
+    ------
+    OdometryInputError
+        The earliest sample that cannot be integrated (its index in ``.sample``).
+    InputError
+        As :func:`batch_odometry`.
+    """
     wheels = encoded_wheels(robot)
     rules = counter_rules(wheels, None, max_jump, max_wheel_speed, max_wheel_accel)
     names = [w.name for w in wheels]
@@ -322,11 +403,7 @@ def batch_odometry_from_angles(
     start_pose = None if start is None else check_start(start)
     ones = np.ones(len(wheels))
     if robot.steerable:
-        lead = np.broadcast_shapes(a.shape[:-2], tt.shape[:-1])
-        s, steering = _steering(robot, steer, lead, a.shape[-2])
-        steps = SteeredSteps(robot, names, s, ones)
-        wheel_increments(rules, tt, a, CHUNK, "rad", _earliest(pending, steering), steps)
-        return _integrate_steered(robot, names, tt, steps, lead, method, start_pose)
+        return _steered_odometry(robot, names, rules, tt, a, "rad", ones, pending, steer, method, start_pose)
     _no_steer(robot, steer)
     f = robot.fk_matrix(None, names)
     check = StepCheck(fk_coefficients(f, ones), rules, "rad")
@@ -337,6 +414,18 @@ def batch_odometry_from_angles(
     inc = np.stack(comps, axis=-1)
     rows = robot.fk_rows(None, names)
     return OdometryResult(tt, out, inc, _residual(_fk_input(d, ones, f), rows, inc, np.diff(tt, axis=-1)))
+
+
+def _steered_odometry(robot, names, rules, t, values, unit: str, scale, pending, steer, method, start):
+    """Batch odometry of a robot with steerable wheels: readings ``values`` ``(..., N, n_enc)``
+    [``unit``: ticks or rad, times ``scale`` rad per unit] at times ``t`` ``(..., N)``, steering
+    ``steer`` ``(..., N, n_steer)`` [rad]; the first problem (timestamps, steering, readings,
+    steps) raised at its sample."""
+    lead = np.broadcast_shapes(values.shape[:-2], t.shape[:-1])
+    s, steering = _steering(robot, steer, lead, values.shape[-2])
+    steps = SteeredSteps(robot, names, s, scale)
+    wheel_increments(rules, t, values, CHUNK, unit, _earliest(pending, steering), steps)
+    return _integrate_steered(robot, names, t, steps, lead, method, start)
 
 
 def _earliest(*problems: Problem | None) -> Problem | None:
@@ -359,7 +448,7 @@ def _angle_array(angles, names) -> np.ndarray:
 
 def _timestamps(t, readings: np.ndarray, what: str, names) -> tuple[np.ndarray, Problem | None]:
     """Timestamps as float64 ``(..., N)`` after checking the shapes of ``readings`` ``(..., N, n)``,
-    and the first timestamp that is no number as a pending :class:`~omnikin.encoders.Problem`
+    and the first timestamp that is no number as a pending :class:`~omnikin.odometry.samples.Problem`
     (it reads as 0 here; refused at its sample, as the streaming estimator refuses it). Integers
     beyond the float range read as +-inf (refused at their sample as non-finite)."""
     n = len(names)
@@ -391,7 +480,7 @@ def _timestamps(t, readings: np.ndarray, what: str, names) -> tuple[np.ndarray, 
 
 def _located_times(t) -> tuple[np.ndarray, Problem | None] | None:
     """Timestamps that are not all floats: as float64 (beyond the float range +-inf, no number 0)
-    and the first that is no number (:func:`omnikin.encoders.timestamp_problem`), or None if
+    and the first that is no number (:func:`omnikin.odometry.samples.timestamp_problem`), or None if
     ``t`` is not a rectangular array of scalars (the caller's message stands)."""
     try:
         obj = np.array(t, dtype=object)
@@ -426,8 +515,8 @@ def _pose_array(lead_a, lead_b, n: int, start: np.ndarray | None) -> np.ndarray:
 
 def steer_bounds(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     """Lowest and highest steering angle ``(n_steer,)`` [rad] of a sample: what the model takes
-    (:meth:`omnikin.model.Robot.fk_matrix`: :attr:`~omnikin.model.Robot.steer_limits` with
-    their round-off slack, or +-:data:`~omnikin.geometry.MAX_ANGLE` for a wheel that turns all
+    (:meth:`omnikin.kinematics.robot.Robot.fk_matrix`: :attr:`~omnikin.kinematics.robot.Robot.steer_limits` with
+    their round-off slack, or +-:data:`~omnikin.kinematics.se2.MAX_ANGLE` for a wheel that turns all
     the way round), so that odometry refuses a bad angle at its sample rather than deep in the
     kinematics."""
     lower, upper = robot.steer_limits
@@ -448,7 +537,7 @@ def steer_problem(robot: Robot, k: int, value: float) -> str | None:
 
 def _steering(robot, steer, lead: tuple, n: int) -> tuple[np.ndarray, Problem | None]:
     """Steering angles ``(..., N, n_steer)`` [rad] of steerable robots, checked for shape, and
-    the first sample with a bad angle as a pending :class:`~omnikin.encoders.Problem`."""
+    the first sample with a bad angle as a pending :class:`~omnikin.odometry.samples.Problem`."""
     names = robot.steer_names
     if steer is None:
         raise InputError(

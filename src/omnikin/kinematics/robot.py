@@ -7,7 +7,7 @@ unmeasured); steering angles ``(..., n_steer)`` [rad] over the steerable wheels 
 file order, relative to each wheel's mounting drive direction.
 
 Inverse kinematics stacks the wheels' rolling rows into the ``n x 3`` wheel
-Jacobian ``J`` (``omega = J twist``, :mod:`omnikin.wheels`). Fixed standard wheels
+Jacobian ``J`` (``omega = J twist``, :mod:`omnikin.kinematics.wheels`). Fixed standard wheels
 add no-side-slip rows ``C_f twist = 0``: a twist that violates them is refused
 (or its violation returned on request).
 
@@ -17,7 +17,7 @@ rad/s, with rank tolerance) with the fixed wheels' constraints imposed exactly::
     twist = N pinv(A N) b,   A = [J; S / r],   b = [omega; 0]
 
 where ``N`` spans the null space of ``C_f`` and ``S`` holds the sliding rows of
-steerable wheels at their measured steering angles (:meth:`omnikin.wheels.Wheel.swivel_row`),
+steerable wheels at their measured steering angles (:meth:`omnikin.kinematics.wheels.Wheel.swivel_row`),
 each divided by its radius so that it weighs like a wheel-speed reading of zero: a measured
 steering angle says that the contact does not slide sideways. For an off-centred wheel the row
 reads ``offset * beta' / r`` at steering rate ``beta'``; forward kinematics and odometry take
@@ -38,13 +38,13 @@ from functools import cached_property
 
 import numpy as np
 
-from ._arrays import as_components, as_real_array, frozen, require_finite
-from .errors import InfeasibleTwistError, InputError, SingularLayoutError
-from .geometry import MAX_ANGLE
+from ..common.arrays import as_components, as_real_array, frozen, require_finite
+from ..common.messages import digits_apart, shorten
+from ..errors import InfeasibleTwistError, InputError, SingularLayoutError
 from .linalg import RANK_TOL, null_space, rank
-from .messages import digits_apart, shorten
 from .mobility import Configuration, Mobility, analyse, generic_configuration
 from .physical import PhysicalBody
+from .se2 import MAX_ANGLE
 from .wheels import DERIVED_SUFFIXES, Wheel
 
 STEER_LIMIT_SLACK = 1e-9
@@ -70,7 +70,7 @@ def robot_name_problem(name) -> str | None:
 def name_collisions(names: Sequence[str]) -> list[tuple[int, str]]:
     """``(index, problem)`` for each wheel name that clashes (empty if none): a repeated name, or
     a name equal to one derived from another wheel's (``w`` and ``w_steer_deg``, see
-    :data:`omnikin.wheels.DERIVED_SUFFIXES`). ``index`` is 0-based. Linear in the number of wheels."""
+    :data:`omnikin.kinematics.wheels.DERIVED_SUFFIXES`). ``index`` is 0-based. Linear in the number of wheels."""
     first: dict[str, int] = {}
     problems = []
     for i, n in enumerate(names):
@@ -135,7 +135,7 @@ def require_same_wheels(robot: Robot, true_robot: Robot) -> None:
 
 def heading_array(heading, name: str = "heading") -> np.ndarray:
     """``heading`` [rad] as a float array: real, finite and ``|heading| <=``
-    :data:`~omnikin.geometry.MAX_ANGLE`, else an InputError naming ``name``."""
+    :data:`~omnikin.kinematics.se2.MAX_ANGLE`, else an InputError naming ``name``."""
     th = as_real_array(heading, name)
     require_finite(th, name)
     big = np.abs(th) > MAX_ANGLE
@@ -172,13 +172,21 @@ def _refuse_overflow(result: np.ndarray, what: str, name: str, given: np.ndarray
 
 @dataclass(frozen=True)
 class IKResult:
-    """Inverse kinematics of one twist or a stack of twists.
+    """Inverse kinematics of one twist or a stack of twists (:meth:`Robot.ik`).
 
-    ``wheel_speeds`` ``(..., n)`` [rad/s] over the rolling wheels;
-    ``steer_angles`` ``(..., n_steer)`` [rad]; ``violation`` ``(..., n_fixed)``
-    [m/s]: side-slip speed each fixed wheel would need; ``steer_limited``
-    ``(..., n_steer)`` bool: no alignment within the steering limits (or, for an
-    off-centred wheel, no steady alignment at all).
+    Attributes
+    ----------
+    wheel_speeds : ndarray, shape (..., n)
+        Speeds [rad/s] of the rolling wheels (all but castors), in file order.
+    steer_angles : ndarray, shape (..., n_steer)
+        Steering angles [rad] of the steerable wheels, relative to their ``drive`` direction.
+    violation : ndarray, shape (..., n_fixed)
+        Side-slip speed [m/s] each fixed (standard) wheel would need.
+    steer_limited : ndarray of bool, shape (..., n_steer)
+        True where no alignment lies within the steering limits (or, for an off-centred
+        wheel, no steady alignment exists at all).
+    feasible : ndarray of bool, shape (...)
+        True where no fixed wheel slides and every steering is within limits.
     """
 
     wheel_speeds: np.ndarray
@@ -195,10 +203,18 @@ class IKResult:
 
 @dataclass(frozen=True)
 class FKResult:
-    """Forward kinematics: ``twist`` ``(..., 3)``, ``residual`` ``(..., n_rows)``.
+    """Forward kinematics of wheel speeds (:meth:`Robot.fk`).
 
-    The residual rows are the wheel readings [rad/s] followed by one row per
-    steerable wheel (its side slip over its radius [rad/s]).
+    Attributes
+    ----------
+    twist : ndarray, shape (..., 3)
+        Body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s], velocity of the body origin in body
+        axes: the least-squares fit over the admissible motions.
+    residual : ndarray, shape (..., n_rows)
+        Readings minus the fit's prediction [rad/s]: one row per wheel read, then one row per
+        steerable wheel (its side slip over its radius).
+    residual_norm : ndarray, shape (...)
+        Euclidean norm of ``residual`` [rad/s].
     """
 
     twist: np.ndarray
@@ -215,7 +231,7 @@ class FKResult:
 def steering_beyond(wheel: str, value: float, lower: float, upper: float) -> str:
     """``wheel 'w' steered to V rad (D deg), outside its limits [lo, hi] deg`` (or ``beyond
     +-MAX_ANGLE rad`` for a wheel that turns all the way round), printed with the digits that
-    tell ``value`` from the limit it passes (:func:`~omnikin.messages.digits_apart`)."""
+    tell ``value`` from the limit it passes (:func:`~omnikin.common.messages.digits_apart`)."""
     if math.isinf(lower) or upper >= MAX_ANGLE:
         p = digits_apart(abs(value), MAX_ANGLE)
         limits = f"beyond +-{MAX_ANGLE:g} rad"
@@ -228,12 +244,39 @@ def steering_beyond(wheel: str, value: float, lower: float, upper: float) -> str
 
 @dataclass(frozen=True)
 class Robot:
-    """A wheeled mobile robot: a name and its wheels (see :mod:`omnikin.wheels`).
+    """A wheeled mobile robot: a name and its wheels (see :mod:`omnikin.kinematics.wheels`).
 
     Construction validates the layout: unique wheel names, at least one rolling
     wheel, some motion left by the fixed wheels, and every admissible motion
     turning at least one wheel. A singular layout raises
     :class:`~omnikin.errors.SingularLayoutError` saying why.
+
+    Arrays of wheel quantities follow the order of ``wheels`` (docs/conventions.md): ``n`` the
+    rolling wheels (all but castors), ``n_steer`` the steerable ones, ``n_fixed`` the standard ones.
+
+    Parameters
+    ----------
+    name : str
+        1 to 128 printable characters, no blank at either end.
+    wheels : sequence of Wheel
+        The wheels, in file order; names unique and none derived from another's
+        (docs/conventions.md, "Names").
+    description : str, default ""
+        Free text.
+    references : sequence of str, default ()
+        Literature describing the robot.
+    physical : PhysicalBody or None, default None
+        Physical fields of the chassis (see the attribute below).
+    design : Robot or None, default None
+        For a robot as built, the robot it was built to (see the attribute below).
+
+    Raises
+    ------
+    InputError
+        A bad name, a wheel that is not a :class:`~omnikin.kinematics.wheels.Wheel`, colliding wheel names,
+        or a ``design`` with other wheels.
+    SingularLayoutError
+        No rolling wheel, an immobile layout, or a motion that turns no wheel.
     """
 
     name: str
@@ -324,7 +367,23 @@ class Robot:
 
     def rad_per_tick(self, names=None) -> np.ndarray:
         """Encoder scale [rad per tick, signed by ``invert``] of the encoded wheels ``names``
-        (default: all of them, file order); a wheel without an encoder is an error."""
+        (default: all of them, file order); a wheel without an encoder is an error.
+
+        Parameters
+        ----------
+        names : sequence of str, optional
+            Wheels with an encoder; default all encoded wheels, file order.
+
+        Returns
+        -------
+        ndarray, shape (len(names),)
+            Wheel angle per tick [rad], negative for an inverted encoder.
+
+        Raises
+        ------
+        InputError
+            An unknown wheel, or one without an encoder.
+        """
         wheels = self.encoded if names is None else [self.wheel(n) for n in names]
         out = []
         for w in wheels:
@@ -335,7 +394,23 @@ class Robot:
 
     def rolling_index(self, names) -> list[int]:
         """Positions of the rolling wheels ``names`` in a wheel-speed array (one dictionary
-        look-up each); a castor or unknown name is an error."""
+        look-up each); a castor or unknown name is an error.
+
+        Parameters
+        ----------
+        names : sequence of str
+            Rolling wheel names.
+
+        Returns
+        -------
+        list of int
+            Index of each along the last axis of :meth:`wheel_speeds` (``n``).
+
+        Raises
+        ------
+        InputError
+            A castor, an unknown name or one that is not text.
+        """
         index = self._rolling_index
         try:
             return [index[n] for n in names]
@@ -355,7 +430,21 @@ class Robot:
         return {w.name: w for w in self.wheels}
 
     def wheel(self, name: str) -> Wheel:
-        """The wheel called ``name`` (a dictionary look-up)."""
+        """The wheel called ``name`` (a dictionary look-up).
+
+        Parameters
+        ----------
+        name : str
+
+        Returns
+        -------
+        Wheel
+
+        Raises
+        ------
+        InputError
+            No wheel of that name (the message lists the wheels).
+        """
         try:
             return self._by_name[name]
         except (KeyError, TypeError):
@@ -368,7 +457,7 @@ class Robot:
         """Steering angles ``(..., n_steer)`` [rad], checked (docs/conventions.md, "Angles"): real
         and finite; a wheel with steering limits within them (:data:`STEER_LIMIT_SLACK`), a wheel
         that turns all the way round (limits -180 .. 180 deg) any angle up to
-        :data:`~omnikin.geometry.MAX_ANGLE` in size (an orientation; the interval steering of
+        :data:`~omnikin.kinematics.se2.MAX_ANGLE` in size (an orientation; the interval steering of
         odometry may cross +-180 deg). Else an InputError naming ``name``, the wheel and the angle.
         ``within_limits=False``: a preference, not a steering (the hint of :meth:`ik`, zero by
         default even for a wheel whose limits exclude zero), checked for its size only."""
@@ -400,9 +489,9 @@ class Robot:
         drive direction], over the steerable wheels in file order: each wheel's ``steer.lower``
         and ``steer.upper``, or ``-inf`` and ``+inf`` for a wheel that turns all the way round
         (no ``steer``, or limits -180 .. 180 deg: any orientation, up to
-        :data:`~omnikin.geometry.MAX_ANGLE` in size). The model accepts an angle up to
+        :data:`~omnikin.kinematics.se2.MAX_ANGLE` in size). The model accepts an angle up to
         :data:`STEER_LIMIT_SLACK` beyond a finite limit (round-off of a conversion from degrees).
-        Read-only arrays, for good (:func:`~omnikin._arrays.frozen`: the robot keeps them)."""
+        Read-only arrays, for good (:func:`~omnikin.common.arrays.frozen`: the robot keeps them)."""
         lims = [(w.steer.lower, w.steer.upper) if w.steer is not None else (-np.pi, np.pi) for w in self.steerable]
         full = [hi - lo >= 2 * np.pi - 1e-9 for lo, hi in lims]
         lower = np.array([-np.inf if f else lo for (lo, _), f in zip(lims, full, strict=True)])
@@ -416,7 +505,27 @@ class Robot:
         """Wheel Jacobian ``(..., n, 3)``: ``omega = J twist`` [rad/s per twist].
 
         Without steerable wheels the matrix is constant: it is built once and returned
-        read-only for good (:func:`~omnikin._arrays.frozen`; copy it to modify it).
+        read-only for good (:func:`~omnikin.common.arrays.frozen`; copy it to modify it).
+
+        Parameters
+        ----------
+        steer : array_like, shape (..., n_steer), optional
+            Steering angles [rad] relative to each wheel's drive direction; default zero.
+        wheels : sequence of str, optional
+            Rolling wheels whose rows to give, in that order; default all, file order.
+
+        Returns
+        -------
+        ndarray, shape (..., len(wheels), 3)
+            Rolling rows ``[cos a, sin a, x sin a - y cos a] / (r cos gamma)``,
+            ``a = delta + gamma`` (docs/conventions.md, "Wheels"), in [rad/s] per
+            ``(m/s, m/s, rad/s)``.
+
+        Raises
+        ------
+        InputError
+            Steering angles of the wrong shape, not finite or outside the wheels' limits; an
+            unknown wheel name.
         """
         if wheels is None and self._constant_at(steer):
             return self._jacobian_constant
@@ -459,7 +568,26 @@ class Robot:
         """Rows ``A = [J; S/r]`` ``(..., n_rows, 3)`` that forward kinematics fits (module docstring).
 
         ``J``: rolling rows of the chosen wheels; ``S/r``: sliding rows of the chosen steerable
-        wheels over their radii (:meth:`omnikin.wheels.Wheel.swivel_row`). ``steer`` ``(..., n_steer)`` [rad].
+        wheels over their radii (:meth:`omnikin.kinematics.wheels.Wheel.swivel_row`). ``steer``
+        ``(..., n_steer)`` [rad].
+
+        Parameters
+        ----------
+        steer : array_like, shape (..., n_steer), optional
+            Steering angles [rad] relative to each wheel's drive direction; default zero.
+        wheels : sequence of str, optional
+            Rolling wheels read, in that order; default all, file order.
+
+        Returns
+        -------
+        ndarray, shape (..., n_rows, 3)
+            ``n_rows = len(wheels)`` rolling rows [rad/s per twist], then one sliding row per
+            chosen steerable wheel [rad/s per twist].
+
+        Raises
+        ------
+        InputError
+            Bad steering angles (as :meth:`jacobian`) or an unknown wheel name.
         """
         return self._fk_rows(self._steer_array(steer), wheels)
 
@@ -479,8 +607,26 @@ class Robot:
         """Forward-kinematics operator ``(..., 3, n_rows)``: ``twist = F [omega; 0]``.
 
         Without steerable wheels the operator is constant: it is computed once per wheel
-        subset and returned read-only for good (:func:`~omnikin._arrays.frozen`; copy it to
+        subset and returned read-only for good (:func:`~omnikin.common.arrays.frozen`; copy it to
         modify it).
+
+        Parameters
+        ----------
+        steer : array_like, shape (..., n_steer), optional
+            Steering angles [rad] relative to each wheel's drive direction; default zero.
+        wheels : sequence of str, optional
+            Rolling wheels read, in that order; default all, file order.
+
+        Returns
+        -------
+        ndarray, shape (..., 3, n_rows)
+            ``F = N pinv(A N)`` (:meth:`fk_rows` ``A``, :attr:`admissible_basis` ``N``): body
+            twist [m/s, m/s, rad/s] per wheel speed [rad/s], the sliding rows' inputs zero.
+
+        Raises
+        ------
+        InputError
+            Bad steering angles (as :meth:`jacobian`) or an unknown wheel name.
         """
         constant = self._constant_at(steer)
         key = wheels = None if wheels is None else tuple(wheels)
@@ -517,21 +663,34 @@ class Robot:
         return n @ np.linalg.pinv(a @ n, rcond=RANK_TOL)
 
     def fk_rank(self, steer=None, wheels: Sequence[str] | None = None) -> int:
-        """How many independent motion components the wheels determine at ``steer``."""
+        """How many independent motion components the wheels determine at ``steer``.
+
+        Parameters
+        ----------
+        steer : array_like, shape (n_steer,), optional
+            Steering angles [rad]; default zero.
+        wheels : sequence of str, optional
+            Rolling wheels read; default all.
+
+        Returns
+        -------
+        int
+            Rank (0 .. 3) of the fitted rows over the admissible motions.
+        """
         a = self._fk_rows(self._steer_array(steer), wheels)
         return rank(a @ self.admissible_basis)
 
     # --- analysis ------------------------------------------------------------------
     @cached_property
     def generic_configuration(self) -> Configuration:
-        """A generic admissible configuration (:func:`omnikin.mobility.generic_configuration`),
+        """A generic admissible configuration (:func:`omnikin.kinematics.mobility.generic_configuration`),
         its arrays read-only for good (the robot's mobility is computed from it)."""
         config = generic_configuration(self.wheels)
         return Configuration(*(frozen(getattr(config, f.name)) for f in fields(config)))
 
     @cached_property
     def mobility(self) -> Mobility:
-        """Rank, Campion type, holonomy and conditioning (:mod:`omnikin.mobility`)."""
+        """Rank, Campion type, holonomy and conditioning (:mod:`omnikin.kinematics.mobility`)."""
         return analyse(self.wheels, self.generic_configuration)
 
     def _check_layout(self) -> None:
@@ -578,14 +737,47 @@ class Robot:
         )
 
     def check_observable(self, wheels: Sequence[str]) -> None:
-        """Raise unless the wheels ``wheels`` (e.g. the encoded ones) observe every motion."""
+        """Raise unless the wheels ``wheels`` (e.g. the encoded ones) observe every motion.
+
+        Parameters
+        ----------
+        wheels : sequence of str
+            Rolling wheel names.
+
+        Raises
+        ------
+        SingularLayoutError
+            An admissible motion turns none of ``wheels`` (the message names it: a rotation
+            about a point [m] or a translation direction, body frame).
+        """
         self._check_observable(list(wheels), self.generic_configuration)
 
     # --- kinematics ------------------------------------------------------------------
     def body_twist(self, velocity, heading) -> np.ndarray:
         """World-frame rates ``(xdot, ydot, thetadot)`` at ``heading`` [rad] -> body twist.
 
-        ``heading``: real, finite, at most :data:`~omnikin.geometry.MAX_ANGLE` in size."""
+        ``(vx, vy) = R(theta)^T (xdot, ydot)``, ``omega = thetadot`` (docs/conventions.md,
+        "Frames and units").
+
+        Parameters
+        ----------
+        velocity : array_like, shape (..., 3)
+            World-frame (``odom``) rates ``(xdot, ydot, thetadot)`` [m/s, m/s, rad/s].
+        heading : array_like, shape (...)
+            Heading ``theta`` [rad] of the body in the world frame: real, finite, at most
+            :data:`~omnikin.kinematics.se2.MAX_ANGLE` in size; broadcasts with ``velocity``'s leading
+            axes.
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] in body axes.
+
+        Raises
+        ------
+        InputError
+            Not three components, a bad heading, or a result that overflows.
+        """
         v = as_components(velocity, 3, "velocity")
         th = heading_array(heading)
         c, s = np.cos(th), np.sin(th)
@@ -607,6 +799,33 @@ class Robot:
         closest to ``steer_hint`` (default: zero). ``on_infeasible``: ``"raise"``
         (default) raises :class:`InfeasibleTwistError` naming the wheel and the
         side-slip speed; ``"return"`` reports it in ``IKResult.violation``.
+
+        Parameters
+        ----------
+        twist : array_like, shape (..., 3)
+            Body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] in body axes, or with ``heading``
+            the world-frame rates ``(xdot, ydot, thetadot)``.
+        heading : array_like, shape (...), optional
+            Heading [rad] at which ``twist`` is a world-frame velocity (:meth:`body_twist`).
+        steer_hint : array_like, shape (..., n_steer), optional
+            Preferred steering angles [rad] for choosing between the two alignments of each
+            steerable wheel; default zero.
+        on_infeasible : {"raise", "return"}, default "raise"
+            What a twist the wheels cannot make does.
+
+        Returns
+        -------
+        IKResult
+            Wheel speeds ``(..., n)`` [rad/s], steering angles ``(..., n_steer)`` [rad], side-slip
+            speeds ``(..., n_fixed)`` [m/s] and the steering-limit flags.
+
+        Raises
+        ------
+        InfeasibleTwistError
+            With ``on_infeasible="raise"``: a fixed wheel would slide or a steering would leave
+            its limits (the first such wheel is named).
+        InputError
+            A twist or hint of the wrong shape, not finite, or overflowing.
         """
         if on_infeasible not in ("raise", "return"):
             raise InputError(f"on_infeasible must be 'raise' or 'return', got {shorten(on_infeasible)}")
@@ -661,7 +880,25 @@ class Robot:
         return steer, limited
 
     def wheel_speeds(self, twist) -> np.ndarray:
-        """Fast inverse kinematics ``(..., n)`` [rad/s] for layouts without steering."""
+        """Fast inverse kinematics ``(..., n)`` [rad/s] for layouts without steering.
+
+        Parameters
+        ----------
+        twist : array_like, shape (..., 3)
+            Body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] in body axes.
+
+        Returns
+        -------
+        ndarray, shape (..., n)
+            Speeds [rad/s] of the rolling wheels, file order: ``J twist`` (:meth:`jacobian`).
+            With steerable wheels the same as ``ik(twist).wheel_speeds``.
+
+        Raises
+        ------
+        InputError
+            Not three components or an overflowing result (with steerable wheels: as :meth:`ik`,
+            which also raises :class:`InfeasibleTwistError`).
+        """
         if self.steerable:
             return self.ik(twist).wheel_speeds
         t = as_components(twist, 3, "twist")
@@ -676,6 +913,30 @@ class Robot:
         ``steer`` ``(..., n_steer)`` [rad] is required when the robot has steerable
         wheels. ``wheels`` names a subset of rolling wheels (e.g. the encoded ones)
         that ``wheel_speeds`` refers to; default all rolling wheels.
+
+        The twist is the unweighted least-squares fit over the admissible motions,
+        ``twist = N pinv(A N) [omega; 0]`` with ``A`` the rows of :meth:`fk_rows` and ``N`` the
+        :attr:`admissible_basis` (docs/conventions.md, "Forward kinematics").
+
+        Parameters
+        ----------
+        wheel_speeds : array_like, shape (..., len(wheels))
+            Wheel speeds [rad/s] of ``wheels`` in that order.
+        steer : array_like, shape (..., n_steer), optional
+            Steering angles [rad] of the steerable wheels; required when the robot has any.
+        wheels : sequence of str, optional
+            The rolling wheels ``wheel_speeds`` refers to; default all, file order.
+
+        Returns
+        -------
+        FKResult
+            Body twist ``(..., 3)`` [m/s, m/s, rad/s] and residual ``(..., n_rows)`` [rad/s].
+
+        Raises
+        ------
+        InputError
+            Speeds or steering angles of the wrong shape, not finite or overflowing; missing
+            steering angles; an unknown wheel name.
         """
         names = self.rolling_names if wheels is None else list(wheels)
         w = as_components(wheel_speeds, len(names), "wheel_speeds")
@@ -702,6 +963,21 @@ class Robot:
 
         Positive along ``n = (-sin(delta+gamma), cos(delta+gamma))``; divide by the
         roller radius for its spin rate [rad/s].
+
+        Parameters
+        ----------
+        twist : array_like, shape (..., 3)
+            Body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] in body axes.
+
+        Returns
+        -------
+        ndarray, shape (..., n_swedish)
+            Roller surface speed [m/s] of each Swedish wheel (:attr:`swedish_names`), file order.
+
+        Raises
+        ------
+        InputError
+            Not three components or an overflowing result.
         """
         t = as_components(twist, 3, "twist")
         rows = np.array([w.roller_row() for w in self.wheels if w.is_swedish]).reshape(-1, 3)

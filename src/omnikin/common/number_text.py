@@ -1,7 +1,7 @@
 """Numbers written as text: the one grammar of every number omnikin reads from text.
 
 Tables (tick logs, runs and measurement files, trajectories: :mod:`omnikin.io.csvfile`) and
-the paths of plans (:func:`omnikin.plans.parse_plan`, whether from a runs file, ``--path`` or
+the paths of plans (:func:`omnikin.motion.plans.parse_plan`, whether from a runs file, ``--path`` or
 Python) spell a number the same way: an optional sign, ASCII digits with an optional decimal
 point, an optional exponent (:data:`PLAIN_NUMBER`), and its value must be finite. Python's
 :class:`float` reads much more (``nan``, ``inf``, ``1_000``, Arabic-Indic or full-width
@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 import re
 
-from .errors import InputError
+from ..errors import InputError
 from .messages import shorten
 
 PLAIN_NUMBER = re.compile(r"[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?")

@@ -21,7 +21,7 @@ import math
 import numbers
 from dataclasses import dataclass
 
-from .errors import InputError, ResourceLimitError
+from ..errors import InputError, ResourceLimitError
 from .messages import shorten
 
 DEFAULT_MEMORY = 2 * 1024**3

@@ -1,11 +1,11 @@
-"""Timing and sampling of motion plans (:mod:`omnikin.plans`) under motion limits.
+"""Timing and sampling of motion plans (:mod:`omnikin.motion.plans`) under motion limits.
 
 Each segment starts and ends at rest with a trapezoidal (or triangular) progress profile
 under the limits, and is padded with a dwell to a whole number of samples, so that no
 sample interval spans two segments: the twist is constant in direction within every
 sample, and exact integration of each sample is exact for the plan. Speed and
 acceleration limits, and wheel-speed saturation, change only the timing
-(:mod:`omnikin.limits`).
+(:mod:`omnikin.motion.limits`).
 """
 
 from __future__ import annotations
@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..common.messages import digits_apart, shorten
 from ..errors import InputError
-from ..limits import MotionLimits, speed_scale
-from ..messages import digits_apart, shorten
-from ..plans import Plan
-from ..wheels import range_problem
+from ..kinematics.wheels import range_problem
+from .limits import MotionLimits, speed_scale
+from .plans import Plan
 
 # --- timing ----------------------------------------------------------------------------------------
 MAX_SAMPLES = 50_000_000

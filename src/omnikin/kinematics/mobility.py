@@ -30,8 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..common.messages import digits_apart
 from .linalg import null_space, rank
-from .messages import digits_apart
 from .wheels import Wheel
 
 CAMPION_NAMES = {

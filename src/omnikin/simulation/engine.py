@@ -1,0 +1,460 @@
+"""The engine interface: what simulates a robot as built, whichever way it is simulated.
+
+:class:`Engine` states what every user of a simulation (``omnikin simulate``, the UMBmark study,
+a sweep's trials, the viewer's live robot, ``omnikin ros --backend``) asks of it, so that each
+holds one engine object and none asks which engine it holds:
+
+- :meth:`Engine.drive`: a plan driven by the robot as built, commanded by its (nominal) model,
+  gives a :class:`~omnikin.simulation.simulate.SimulatedRun` (times [s], encoder counts and the
+  counters' readings, steering [rad], the odometry of the readings, ground truth, the measured
+  end pose);
+- :meth:`Engine.backend`: the runtime's wheel back-end on the robot as built, for a stream of
+  wheel commands (:class:`omnikin.runtime.backends.WheelBackend`);
+- :meth:`Engine.cost`: what a run will take (samples, memory [bytes], computing time [s]), for
+  the budget checks (:func:`omnikin.common.resource_limits.require_within`);
+- its validity checks: :meth:`Engine.check_rate` (a sample rate it can read the encoders at),
+  :meth:`Engine.noise_model` (the random errors it takes), :meth:`Engine.problems` (the ways a
+  run did not drive as commanded);
+- :attr:`Engine.name` (written in reports, bags, tick-log comments and study tables) and
+  :attr:`Engine.options` (what it was made with).
+
+Two engines implement it: :class:`KinematicEngine` (here: the wheels turn as commanded, slip
+and floor errors from a :class:`~omnikin.simulation.error_models.NoiseModel`) and
+:class:`omnikin.physics.engines.PhysicsEngine` (MuJoCo: rollers, motors, contacts; extra
+``physics``). A name becomes an engine in one place, :func:`omnikin.physics.engines.engine_named`
+(the lowest layer that sees both engines); only the argument parsers and the readers of files
+that store the name call it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, ClassVar, Protocol, runtime_checkable
+
+import numpy as np
+
+from ..kinematics.robot import Robot
+from ..motion.limits import MotionLimits
+from ..motion.plans import Plan
+from ..motion.timing import SampledPlan, check_rate_range
+from ..runtime.backends import WheelBackend
+from . import simulate as kinematic
+from .error_models import NoiseModel
+from .error_models import noise as noise_profile
+from .simulate import RunCost, SimulatedRun
+
+Progress = Callable[[float, float], None]
+"""Called now and then with the simulated time and the plan's duration [s]."""
+
+
+class SimulatedBackend(WheelBackend, Protocol):
+    """A runtime wheel back-end on a simulated robot (:meth:`Engine.backend`): a
+    :class:`~omnikin.runtime.backends.WheelBackend` that also knows where the robot truly is."""
+
+    @property
+    def truth(self) -> np.ndarray:
+        """True pose ``(x [m], y [m], theta [rad])`` of the robot as built (world frame, heading
+        wrapped to ``[-pi, pi)``)."""
+        ...
+
+
+@runtime_checkable
+class Engine(Protocol):
+    """What simulates a robot as built (module docstring).
+
+    Attributes
+    ----------
+    name : str
+        The engine's name (``"kinematic"``, ``"physics"``): what reports, bags, tick logs and
+        study tables store, and what :func:`omnikin.physics.engines.engine_named` reads.
+    has_noise_model : bool
+        True when the engine draws its random errors from a
+        :class:`~omnikin.simulation.error_models.NoiseModel` (``--noise``); False when they come
+        from the simulation itself (physics: the wheels' contacts, whole encoder ticks).
+    measured_cost : bool
+        True when :meth:`cost` builds and times the robot's model (seconds, not microseconds;
+        its time steps dominate, a coarser step makes it cheaper): a caller sizing many small
+        jobs treats a run of it as expensive.
+    drives_as_commanded : bool
+        True when every run drives as commanded by construction (kinematic); False when a run
+        may not, and :meth:`problems` says how (physics: wheels lagging or slipping).
+    default_noise : str or None
+        The noise profile a run takes when none is given (None: no noise model).
+    """
+
+    name: ClassVar[str]
+    has_noise_model: ClassVar[bool]
+    measured_cost: ClassVar[bool]
+    drives_as_commanded: ClassVar[bool]
+    default_noise: ClassVar[str | None]
+
+    @property
+    def options(self) -> dict[str, Any]:
+        """The options the engine was made with, by name (physics: ``step`` [s])."""
+        ...
+
+    def noise_model(self, noise) -> NoiseModel | None:
+        """The random error model a run of this engine takes for the ``noise`` a user gave.
+
+        Parameters
+        ----------
+        noise : str, NoiseModel or None
+            A profile name of :data:`~omnikin.simulation.error_models.NOISE`, a model, or None
+            (not given).
+
+        Returns
+        -------
+        NoiseModel or None
+            Kinematic: the model (a name looked up in
+            :data:`~omnikin.simulation.error_models.NOISE`; None: :attr:`default_noise`,
+            ``typical``). Physics: None.
+
+        Raises
+        ------
+        InputError
+            In one line: kinematic, an unknown profile name; physics, any ``noise`` but None (it
+            has no random error model).
+        """
+        ...
+
+    def check_rate(self, rate, name: str = "rate") -> float:
+        """``rate`` checked as a sample rate the engine can read the encoders at.
+
+        Parameters
+        ----------
+        rate : float
+            Sample rate [Hz]; it must lie in :data:`~omnikin.motion.timing.RATE_RANGE` (5 Hz to
+            10 kHz; physics: also a period of whole time steps, :meth:`PhysicsEngine.check_rate
+            <omnikin.physics.engines.PhysicsEngine.check_rate>`).
+        name : str
+            What the rate is called in the error (the option or argument: ``--rate``).
+
+        Returns
+        -------
+        float
+            ``rate`` [Hz] as a float.
+
+        Raises
+        ------
+        InputError
+            In one line naming ``name``, when the engine cannot sample a run at ``rate``.
+        """
+        ...
+
+    def drive(
+        self,
+        plan: Plan | SampledPlan,
+        true_robot: Robot,
+        command_robot: Robot,
+        *,
+        rate: float = 100.0,
+        limits: MotionLimits | None = None,
+        noise: NoiseModel | None = None,
+        rng=None,
+        progress: Progress | None = None,
+    ) -> SimulatedRun:
+        """One run of ``plan`` by ``true_robot`` (the robot as built) commanded by ``command_robot``.
+
+        Parameters
+        ----------
+        plan : Plan or SampledPlan
+            The path; a :class:`~omnikin.motion.plans.Plan` is timed and sampled for ``command_robot``
+            at ``rate`` within ``limits`` (:func:`~omnikin.motion.timing.sample_plan`).
+        true_robot, command_robot : Robot
+            The robot as built and the model that commands it (the same wheels).
+        rate : float
+            Sample rate [Hz] of the encoders (:meth:`check_rate`).
+        limits : MotionLimits, optional
+            Speed and acceleration limits the plan is timed with.
+        noise : NoiseModel, optional
+            Random errors (:meth:`noise_model`; physics: None).
+        rng : numpy.random.Generator, int or None
+            The run's random stream: kinematic, its slip, floor and measurement noise (None:
+            fresh entropy); physics, each rolling wheel's starting roller phase, drawn uniformly
+            from ``[0, 1)`` of its roller period (None: every wheel at phase 0).
+        progress : callable, optional
+            Called with the simulated time and the plan's duration [s] now and then (physics;
+            the kinematic engine's run is one vectorised computation and does not call it).
+
+        Returns
+        -------
+        SimulatedRun
+            One trial: ``t`` ``(N + 1,)`` [s], ``ticks`` and ``readings`` ``(N + 1, n_enc)``,
+            ``odometry`` ``(N + 1, 3)`` [m, m, rad], ``truth`` ``(1, N + 1, 3)``, ``measured``
+            ``(1, 3)`` (world frame, starting at the origin).
+
+        Raises
+        ------
+        InputError
+            In one line: a rate the engine cannot sample at (:meth:`check_rate`), robots or a plan
+            it cannot drive, a ``noise`` it does not take.
+        """
+        ...
+
+    def backend(
+        self,
+        robot: Robot,
+        true_robot: Robot | None = None,
+        *,
+        noise: NoiseModel | None = None,
+        rng=None,
+        max_lag: float | None = None,
+    ) -> SimulatedBackend:
+        """The runtime's wheel back-end: ``true_robot`` (default ``robot``) simulated in real time,
+        commanded and read with ``robot``'s wheels.
+
+        Parameters
+        ----------
+        robot, true_robot : Robot
+            The nominal model (wheel order, encoder scale of the readings) and the robot as built.
+        noise : NoiseModel, optional
+            Kinematic: the slip of the wheels (None: none, the robot moves exactly as its wheels
+            turn). Physics: None (any other is refused in one line).
+        rng : numpy.random.Generator, int or None
+            Kinematic: the stream of the slip. Physics: not used (its back-end is deterministic).
+        max_lag : float, optional
+            Physics: the most simulated time [s] the back-end may lag the caller's clock before it
+            drops time (None: never drops). Kinematic: not used (its back-end never lags).
+
+        Returns
+        -------
+        SimulatedBackend
+            A wheel back-end whose ``truth`` is the true pose ``(x [m], y [m], theta [rad])``.
+        """
+        ...
+
+    def cost(
+        self,
+        plan: Plan,
+        true_robot: Robot,
+        command_robot: Robot,
+        *,
+        rate: float = 100.0,
+        budget: float | None = None,
+        timed: bool = True,
+    ) -> RunCost:
+        """What one run of :meth:`drive` will take.
+
+        Parameters
+        ----------
+        plan : Plan
+            The path.
+        true_robot, command_robot : Robot
+            As for :meth:`drive`.
+        rate : float
+            Sample rate [Hz].
+        budget : float, optional
+            Physics: computing time [s] beyond which a model whose size alone says so is not
+            built (its size bound is the estimate). Kinematic: not used.
+        timed : bool
+            False: only what is known without sampling the plan or building a model (the
+            samples and memory of the plan; physics: ``seconds`` NaN), to refuse a run too
+            large for memory before any of it is made. Kinematic: the same either way (its
+            estimate never samples the plan).
+
+        Returns
+        -------
+        RunCost
+            ``samples``, ``bytes`` [bytes] at the peak, ``seconds`` [s] of computing time and
+            ``simulated`` [s], the simulated time (physics: its upper bound).
+        """
+        ...
+
+    def problems(self, run: SimulatedRun) -> list[str]:
+        """The ways ``run`` did not drive as commanded.
+
+        Parameters
+        ----------
+        run : SimulatedRun
+            A run of this engine's :meth:`drive`.
+
+        Returns
+        -------
+        list of str
+            One phrase per problem (physics: wheels lagging or slipping, steering or rest not
+            reached, :meth:`~omnikin.physics.run.PhysicsRun.problems`); empty when it drove as
+            commanded (kinematic: always, it drives as commanded by construction).
+        """
+        ...
+
+    def summary(self, run: SimulatedRun) -> dict[str, Any]:
+        """The counts behind :meth:`problems`, for a JSON summary.
+
+        Parameters
+        ----------
+        run : SimulatedRun
+            A run of this engine's :meth:`drive`.
+
+        Returns
+        -------
+        dict
+            JSON-ready values by name (physics: :meth:`~omnikin.physics.run.PhysicsRun.summary`:
+            saturated commands, the seconds each wheel lagged or slipped, the rim [m] each wheel
+            fell short of its command, steering not reached, at rest); empty for the kinematic
+            engine.
+        """
+        ...
+
+
+@dataclass(frozen=True)
+class KinematicEngine(Engine):
+    """The kinematic simulation (:mod:`omnikin.simulation.simulate`): each wheel turns as its motor
+    turns it when commanded, slip and floor errors from a noise model, the true robot's forward
+    kinematics and exact SE(2) integration give the ground truth. It implements :class:`Engine`
+    (the methods without a docstring of their own are documented there).
+
+    It has no options; the random errors are given to each run (:meth:`drive`'s ``noise``).
+    :meth:`drive` is :func:`~omnikin.simulation.simulate.simulate`, :meth:`backend` a
+    :class:`~omnikin.simulation.backend.SimBackend` (it never lags: ``max_lag`` does not apply),
+    :meth:`cost` :func:`~omnikin.simulation.simulate.run_cost` (computed without sampling the
+    plan, so ``timed`` changes nothing and ``budget`` is not used).
+
+    Attributes
+    ----------
+    name : str
+        ``"kinematic"``.
+    has_noise_model : bool
+        True: the random errors come from a
+        :class:`~omnikin.simulation.error_models.NoiseModel` (:meth:`noise_model`).
+    measured_cost : bool
+        False: :meth:`cost` is computed from the plan alone (microseconds).
+    drives_as_commanded : bool
+        True: :meth:`problems` is always empty.
+    default_noise : str
+        ``"typical"``, the profile of a run given no noise.
+    """
+
+    name: ClassVar[str] = "kinematic"
+    has_noise_model: ClassVar[bool] = True
+    measured_cost: ClassVar[bool] = False
+    drives_as_commanded: ClassVar[bool] = True
+    default_noise: ClassVar[str | None] = "typical"
+
+    @classmethod
+    def made_with(cls, *, noise=None, step: float | None = None) -> KinematicEngine:
+        """The engine for the options a user gave (:func:`omnikin.physics.engines.engine_named`).
+
+        Parameters
+        ----------
+        noise : str, NoiseModel or None
+            Not checked here: :meth:`noise_model` checks it where a run takes it.
+        step : float, optional
+            Must be None: a time step [s] belongs to the physics engine.
+
+        Returns
+        -------
+        KinematicEngine
+            The engine (it has no options).
+
+        Raises
+        ------
+        InputError
+            In one line, when a ``step`` is given.
+        """
+        from ..errors import InputError
+
+        if step is not None:
+            raise InputError(
+                "step (--step) is the time step of the physics engine: choose the physics engine (--engine physics) "
+                "or leave the step out"
+            )
+        return cls()
+
+    @property
+    def options(self) -> dict[str, Any]:
+        return {}
+
+    def noise_model(self, noise) -> NoiseModel:
+        if isinstance(noise, NoiseModel):
+            return noise
+        return noise_profile(str(self.default_noise) if noise is None else noise)
+
+    def check_rate(self, rate, name: str = "rate") -> float:
+        return check_rate_range(rate, name)
+
+    def drive(
+        self,
+        plan: Plan | SampledPlan,
+        true_robot: Robot,
+        command_robot: Robot,
+        *,
+        rate: float = 100.0,
+        limits: MotionLimits | None = None,
+        noise: NoiseModel | None = None,
+        rng=None,
+        progress: Progress | None = None,
+        trials: int = 1,
+    ) -> SimulatedRun:
+        """:meth:`Engine.drive` by :func:`~omnikin.simulation.simulate.simulate`, ``trials`` runs at
+        once (each its own draw of the noise).
+
+        Parameters
+        ----------
+        plan : Plan or SampledPlan
+            The path; a :class:`~omnikin.motion.plans.Plan` is timed and sampled for ``command_robot``
+            at ``rate`` within ``limits`` (:func:`~omnikin.motion.timing.sample_plan`).
+        true_robot, command_robot : Robot
+            The robot as built and the model that commands it (the same wheels).
+        rate : float
+            Sample rate [Hz] of the encoders, within :data:`~omnikin.motion.timing.RATE_RANGE`.
+        limits : MotionLimits, optional
+            Speed and acceleration limits the plan is timed with.
+        noise : NoiseModel, optional
+            Slip, floor and end-pose measurement errors (None: none; the encoders still count
+            whole ticks).
+        rng : numpy.random.Generator, int, sequence of them, or None
+            The stream of the noise (None: fresh entropy), or one per trial.
+        progress : callable, optional
+            Not called: the run is one vectorised computation.
+        trials : int
+            Number of runs of the plan, each with its own draw of the noise.
+
+        Returns
+        -------
+        SimulatedRun
+            ``t`` ``(N + 1,)`` [s], ``ticks`` and ``readings`` ``(N + 1, n_enc)`` and ``odometry``
+            ``(N + 1, 3)`` [m, m, rad], the same for every trial (the encoders count the
+            commanded turn; slip moves only the truth); ``truth`` ``(trials, N + 1, 3)`` and
+            ``measured`` ``(trials, 3)`` of each trial (world frame, starting at the origin).
+
+        Raises
+        ------
+        InputError
+            In one line: a rate outside the range, ``trials`` not a whole number >= 1, robots
+            whose wheels differ or a true wheel without encoder, a plan without motion.
+        """
+        return kinematic.simulate(  # looked up in its module when called, as a stand-in there is
+            plan, true_robot, command_robot, rate=rate, limits=limits, noise=noise, trials=trials, rng=rng
+        )
+
+    def backend(
+        self,
+        robot: Robot,
+        true_robot: Robot | None = None,
+        *,
+        noise: NoiseModel | None = None,
+        rng=None,
+        max_lag: float | None = None,
+    ) -> SimulatedBackend:
+        from .backend import SimBackend
+
+        return SimBackend(robot, true_robot, noise, rng=rng)
+
+    def cost(
+        self,
+        plan: Plan,
+        true_robot: Robot,
+        command_robot: Robot,
+        *,
+        rate: float = 100.0,
+        budget: float | None = None,
+        timed: bool = True,
+    ) -> RunCost:
+        return kinematic.run_cost(plan, command_robot, rate)
+
+    def problems(self, run: SimulatedRun) -> list[str]:
+        return []
+
+    def summary(self, run: SimulatedRun) -> dict[str, Any]:
+        return {}
