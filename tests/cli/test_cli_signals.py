@@ -116,6 +116,7 @@ def test_a_termination_a_library_turns_into_its_own_error_is_still_a_termination
     (matplotlib: 'initialization failed'): the command still ends as terminated (143), not
     with the library's message."""
     import omnikin.cli.main as cli
+    import omnikin.cli.presets as presets
 
     def library_call(args):
         try:
@@ -124,7 +125,7 @@ def test_a_termination_a_library_turns_into_its_own_error_is_still_a_termination
             raise RuntimeError("initialization failed") from None  # ... which the library rewraps
         return 0
 
-    monkeypatch.setattr(cli, "cmd_presets", library_call)
+    monkeypatch.setattr(presets, "run", library_call)
     assert cli.main(["presets"]) == 143
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["omnikin: terminated (SIGTERM)"]

@@ -311,10 +311,10 @@ def test_missing_trajectory_file(tmp_path):
 
 # --- CLI ------------------------------------------------------------------------------------------------
 def run_cli(argv):
-    from omnikin.cli import bag
+    from omnikin.cli import metrics
 
     p = argparse.ArgumentParser(prog="omnikin")
-    bag.add_parsers(p.add_subparsers(), "preset or robot file")
+    metrics.add_parser(p.add_subparsers(), "preset or robot file")
     args = p.parse_args([str(a) for a in argv])
     return args.func(args)
 

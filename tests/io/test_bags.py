@@ -101,11 +101,13 @@ def odom_arrays(path, topic="/odom"):
 
 def run_cli(argv):
     """A bag command as ``omnikin.cli.main`` runs it (outputs checked first), errors raised."""
-    from omnikin.cli import bag
+    from omnikin.cli import bag, metrics, simulate
     from omnikin.cli.common import running
 
     p = argparse.ArgumentParser(prog="omnikin")
-    bag.add_parsers(p.add_subparsers(), "preset or robot file")
+    sub = p.add_subparsers()
+    for command in (bag, simulate, metrics):
+        command.add_parser(sub, "preset or robot file")
     args = p.parse_args([str(a) for a in argv])
     with running(args):
         return args.func(args)

@@ -134,7 +134,7 @@ def never_run(monkeypatch, *targets) -> list:
     return calls
 
 
-PHYSICS_RUN = (("omnikin.physics.run", "simulate_physics"), ("omnikin.cli.bag", "_simulate_physics"))
+PHYSICS_RUN = (("omnikin.physics.run", "simulate_physics"),)
 
 
 def test_simulate_refuses_a_run_over_max_time_up_front_for_a_small_step(tmp_path, capsys, monkeypatch):

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from .calibration import Calibration, calibrate, calibration_plan
 from .common import dumps, robot_of
-from .simulation import DEFAULT_PATH, Simulation, simulate
+from .simulation import DEFAULT_PATH, Simulation, SimulationCost, simulate
 from .umbmark import DEFAULT_ROBOT, UMBmarkAnalysis, UMBmarkReport, analyze_umbmark, run_umbmark
 
 
@@ -54,7 +54,9 @@ def plot_layout(robot):
     return layout_figure(robot_of(robot))
 
 
-def run_sweep(spec, out, *, scheduler=None, workers=None, task_trials=None, force: bool = False):
+def run_sweep(
+    spec, out, *, scheduler=None, workers=None, task_trials=None, force: bool = False, progress=None, tls=None
+):
     """``omnikin sweep SPEC -o OUT``: the study of the study file ``spec`` (or a loaded
     :class:`~omnikin.sweep.study.Study`) run on Dask into the folder ``out`` (resumed when it holds
     the study); returns a :class:`~omnikin.sweep.run.SweepResult`. The embedded cluster starts
@@ -78,6 +80,12 @@ def run_sweep(spec, out, *, scheduler=None, workers=None, task_trials=None, forc
     force : bool, default False
         Start over in a folder that holds a study of another seed or other omnikin or NumPy
         versions (a folder omnikin did not write is refused even so).
+    progress : Progress, optional
+        Told where the study runs and of each task finished (:class:`~omnikin.sweep.run.Progress`:
+        ``start``, ``advance``); default none.
+    tls : TLSFiles, optional
+        The credentials of a ``tls://`` ``scheduler`` (:class:`~omnikin.sweep.cluster.TLSFiles`);
+        default Dask's configuration.
 
     Returns
     -------
@@ -102,7 +110,16 @@ def run_sweep(spec, out, *, scheduler=None, workers=None, task_trials=None, forc
         from ..sweep.spec import load_study
 
         spec = load_study(spec)
-    return run(spec, out, scheduler=scheduler, workers=workers, task_trials=task_trials, force=force)
+    return run(
+        spec,
+        out,
+        scheduler=scheduler,
+        workers=workers,
+        task_trials=task_trials,
+        force=force,
+        progress=progress,
+        tls=tls,
+    )
 
 
 __all__ = [
@@ -110,6 +127,7 @@ __all__ = [
     "DEFAULT_PATH",
     "DEFAULT_ROBOT",
     "Simulation",
+    "SimulationCost",
     "UMBmarkAnalysis",
     "UMBmarkReport",
     "analyze_umbmark",

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..kinematics.robot import Robot
-from ..simulation.simulate import SimulatedRun
+from ..simulation.error_models import SystematicErrors
+from ..simulation.simulate import RunCost, SimulatedRun
 from .common import as_built, require_viz, robot_of
 
 DEFAULT_PATH = "square cw rotate 4"
@@ -44,7 +47,7 @@ class Simulation:
 
     robot: Robot
     true_robot: Robot
-    injected: object
+    injected: SystematicErrors | None
     path: str
     run: SimulatedRun
 
@@ -65,6 +68,41 @@ class Simulation:
         return run_figure(self.run, f"{self.robot.name}: {self.path}")
 
 
+@dataclass(frozen=True)
+class SimulationCost:
+    """What a run of :func:`simulate` is estimated to cost, before it starts (its ``on_cost``).
+
+    The physics engine is estimated in two steps: first before the plan is sampled
+    (``duration`` and ``seconds`` None), then with its model built and timed (the same
+    ``samples`` and ``memory``); the kinematic engine once, with everything.
+
+    Attributes
+    ----------
+    samples : float
+        Samples of the plan at the rate (an upper bound,
+        :func:`~omnikin.simulation.simulate.run_cost`).
+    memory : float
+        The run's arrays for those samples [bytes] (physics: with room for the longest tail the
+        run may add after the plan).
+    duration : float or None
+        The simulated time [s] (physics: the run's, its steering waits and its tail at their
+        limits); None before the physics engine is timed.
+    seconds : float or None
+        The wall time [s] of the run; None before the physics engine is timed.
+    """
+
+    samples: float
+    memory: float
+    duration: float | None
+    seconds: float | None
+
+
+def _cost_of(size: RunCost, estimate: RunCost) -> SimulationCost:
+    """The :class:`SimulationCost` of an engine's estimates: ``size`` (untimed: the plan's samples
+    and memory) and ``estimate`` (timed: the simulated duration [s] and the wall time [s])."""
+    return SimulationCost(size.samples, size.bytes, estimate.simulated, estimate.seconds)
+
+
 def simulate(
     robot,
     path=DEFAULT_PATH,
@@ -78,6 +116,8 @@ def simulate(
     step: float | None = None,
     max_memory: float = DEFAULT_MEMORY,
     max_time: float = DEFAULT_TIME,
+    progress: Callable[[float, float], None] | None = None,
+    on_cost: Callable[[SimulationCost], None] | None = None,
 ) -> Simulation:
     """Simulate ``robot`` as built driving ``path`` commanded by its nominal model
     (``omnikin simulate``, without the bag).
@@ -128,6 +168,17 @@ def simulate(
         Largest memory [bytes] the run may be estimated to need.
     max_time : float, default DEFAULT_TIME
         Largest run time [s] the run may be estimated to need.
+    progress : callable, optional
+        Called now and then with the simulated time and the plan's duration [s] (the engine's
+        :meth:`~omnikin.simulation.engine.Engine.drive`: physics only; the kinematic run is one
+        vectorised computation).
+    on_cost : callable, optional
+        Called with each estimate (:class:`SimulationCost`) before this function checks it
+        against ``max_memory`` and ``max_time``; it may raise to refuse the run (``omnikin
+        simulate`` checks it against its options, with the time of writing its outputs and the
+        stamps its outputs can hold). An engine that knows the run's time without being timed
+        (kinematic) is estimated once; one that must build its model first (physics) twice:
+        its memory before the plan is sampled, then its duration and time.
 
     Returns
     -------
@@ -165,10 +216,22 @@ def simulate(
         samples = f"{size.samples:.3g} samples"
         require_within("simulate", max_memory=max_memory, max_time=max_time, names=ARGUMENTS, size=samples, **estimate)
 
+    def told(estimate: SimulationCost) -> None:
+        if on_cost is not None:
+            on_cost(estimate)
+
+    # an engine that must be timed to know the run's time (physics: its model built) is told of
+    # the memory alone first, then of the duration and time once timed
+    untimed = math.isnan(size.seconds)
+    told(SimulationCost(size.samples, size.bytes, None, None) if untimed else _cost_of(size, size))
     within(memory=size.bytes, hint="lower rate or shorten path")  # before any of the run is made
     estimate = engine.cost(plan, true, nominal, rate=rate, budget=max_time)
+    if untimed:
+        told(_cost_of(size, estimate))
     cheaper = "shorten path or raise step" if engine.measured_cost else "lower rate or shorten path"
     within(seconds=estimate.seconds, hint=cheaper)
     # the seed's second stream draws the run's random errors, for an engine with a model of them
-    run = engine.drive(plan, true, nominal, rate=rate, noise=noise_model, rng=seeds[1] if noise_model else None)
+    run = engine.drive(
+        plan, true, nominal, rate=rate, noise=noise_model, rng=seeds[1] if noise_model else None, progress=progress
+    )
     return Simulation(nominal, true, injected, path.name if isinstance(path, Plan) else str(path), run)

@@ -3,8 +3,8 @@
 Outputs (the policy is :mod:`omnikin.io.output`): a command declares each option naming an
 output with :func:`add_output` (a file, a report folder or a data folder) and the arguments
 naming its inputs with :func:`declare_inputs`; :func:`add_output_options` adds ``--force``.
-``omnikin.cli.main`` runs the command in :func:`running`, which checks its declared outputs together
-(:func:`check_command_outputs`) before the command runs: never an input, never two outputs on
+:mod:`omnikin.cli.process` runs the command in :func:`running`, which checks its declared
+outputs together (:func:`check_command_outputs`) before the command runs: never an input, never two outputs on
 the same path or one inside another, at most one thing on standard output (``--json``
 counts), an existing file only with ``--force``. The command then writes through the writers
 of :mod:`omnikin.io` (atomic, checked again) and prints its messages with
@@ -21,6 +21,8 @@ import math
 import re
 import signal
 from collections.abc import Iterator
+
+import numpy as np
 
 from ..common.messages import shorten
 from ..common.number_text import number_problem
@@ -208,9 +210,9 @@ def command_inputs(args) -> list:
 
 def check_command_outputs(args) -> None:
     """Check every output the parsed command declared (:func:`add_output`), together and against
-        its inputs (:func:`omnikin.io.output.check_outputs`); ``--json`` counts as a use of standard
-        output. Called by ``omnikin.cli.main`` before the command runs, so no command can skip it; with
-    an output ``-``, the command's messages go to standard error (:func:`console`)."""
+    its inputs (:func:`omnikin.io.output.check_outputs`); ``--json`` counts as a use of standard
+    output. Called by :mod:`omnikin.cli.process` before the command runs, so no command can skip
+    it; with an output ``-``, the command's messages go to standard error (:func:`console`)."""
     declared = getattr(args, OUTPUTS, ())
     outputs = []
     for dest, label, folder, stdout in declared:
@@ -228,7 +230,7 @@ def check_command_outputs(args) -> None:
 
 @contextlib.contextmanager
 def running(args) -> Iterator[None]:
-    """The frame ``omnikin.cli.main`` runs every parsed command in: its outputs are checked
+    """The frame ``omnikin.cli.process`` runs every parsed command in: its outputs are checked
     first (:func:`check_command_outputs`), and while it runs, its messages go to standard error
     if one of its outputs is ``-`` (:func:`console`)."""
     check_command_outputs(args)
@@ -264,8 +266,8 @@ STOPPED: list[str] = []
 @contextlib.contextmanager
 def until_stopped() -> Iterator[None]:
     """Run the block of a command that serves until the user stops it (a page, a window, a node:
-    ``omnikin.cli.main.SERVERS``): Ctrl-C, SIGTERM or SIGHUP inside it end the block as a normal
-    end, and the command goes on after it (writes its report); ``omnikin.cli.main`` then prints
+    :data:`omnikin.cli.process.SERVERS`): Ctrl-C, SIGTERM or SIGHUP inside it end the block as a
+    normal end, and the command goes on after it (writes its report); :mod:`omnikin.cli.process` then prints
     ``omnikin COMMAND: stopped (SIGTERM)`` on standard error and the exit status is 0. Without
     this block a server stopped by the user ends the same way, with nothing done after."""
     try:
@@ -274,7 +276,7 @@ def until_stopped() -> Iterator[None]:
         STOPPED.append(stop_name(exc))
 
 
-# --- JSON ------------------------------------------------------------------------------------------------
+# --- JSON and tables -------------------------------------------------------------------------------------
 def print_json(data, *, nullable=()) -> None:
     """Print ``data`` as strict JSON on standard output (:func:`omnikin.io.jsonfile.to_json`;
     ``nullable``: fields whose non-finite values print as null)."""
@@ -284,6 +286,42 @@ def print_json(data, *, nullable=()) -> None:
     print(text)
 
 
+def cell(x: float) -> str:
+    """A number as a table cell prints it: six significant digits, ``inf`` and ``nan`` as such."""
+    return f"{x:.6g}" if np.isfinite(x) else str(x)
+
+
+def denoised(matrix, scale: float | None = None) -> np.ndarray:
+    """A matrix or vector for display (text output only; ``--json`` keeps the numbers): entries
+    below 1e-12 of ``scale`` (default: its largest entry) set to 0 (rounding noise such as
+    cos(pi/2) = 6e-17)."""
+    m = np.array(matrix, dtype=float)
+    largest = np.max(np.abs(m), initial=0.0) if scale is None else abs(scale)
+    m[np.abs(m) < 1e-12 * max(largest, 1e-300)] = 0.0
+    return m
+
+
+def json_checked(data) -> str:
+    """The ``--json`` text of a result, made in text mode too: a non-finite number in a result
+    is an error naming its field either way (never a silent ``inf`` in a table)."""
+    from ..io.jsonfile import to_json
+
+    return to_json(data)
+
+
+def write_model(args, text: str, what: str) -> int:
+    """Write ``text`` (a robot model: ``omnikin mjcf``, ``omnikin urdf``) to ``args.output``
+    through the output policy and say so (unless it went to standard output); status 0.
+    ``what``: the model as the message names it (``"URDF of tomasi-omni3"``)."""
+    from ..io.output import write_text
+
+    write_text(args.output, text)
+    if not is_stdout(args.output):
+        console().print(f"{what} written to {args.output}")
+    return 0
+
+
+# --- options of several commands ------------------------------------------------------------------
 def add_method_option(parser) -> None:
     """``--method exact|midpoint|euler``: the pose integration of the odometry commands."""
     parser.add_argument(

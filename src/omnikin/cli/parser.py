@@ -1,6 +1,6 @@
 """The argument parser of every ``omnikin`` sub-command: :mod:`argparse` with three habits fixed.
 
-* **Errors are one line.** A usage error raises :class:`UsageError` (``omnikin.cli.main``
+* **Errors are one line.** A usage error raises :class:`UsageError` (``omnikin.cli.process``
   prints it as ``omnikin: error: ik: ...; see 'omnikin ik --help'`` and exits 2) instead of
   argparse's usage block followed by the message.
 * **Did you mean.** An unknown sub-command (``omnikin shwo``) or option (``omnikin ik --jsn``)
@@ -15,7 +15,7 @@
 * **Typed text is quoted shortened.** Every message that quotes an argument (an unknown command
   or option, an unexpected argument, an invalid choice, argparse's own messages) quotes at most
   :func:`omnikin.common.messages.shorten` of it, so that the reason after it survives the bounded error
-  line of ``omnikin.cli.main``.
+  line of ``omnikin.cli.process``.
 * **Options and positionals mix freely.** ``omnikin calibrate ROBOT --side 3 RUNS -o out.yaml``:
   a command without sub-commands is parsed like :meth:`argparse.ArgumentParser.parse_intermixed_args`
   (options first, then the positionals left, in order), so an optional positional after an

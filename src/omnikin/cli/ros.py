@@ -58,7 +58,8 @@ PHYSICS_MAX_LAG = 0.25
 simulation drops wall-clock time, counted in ``/diagnostics`` (``PhysicsBackend``'s ``max_lag``)."""
 
 
-def add_parsers(sub, robot_help: str) -> None:
+def add_parser(sub, robot_help: str) -> None:
+    """Add ``ros`` to ``sub``."""
     sp = sub.add_parser(
         "ros",
         help="run the ROS 2 base driver (cmd_vel in, odom and joint_states out)",
@@ -110,7 +111,7 @@ def add_parsers(sub, robot_help: str) -> None:
         default=None,
         help="ROS arguments passed to rclpy (e.g. -p publish_rate:=100.0)",
     )
-    sp.set_defaults(func=cmd_ros)
+    sp.set_defaults(func=run)
 
 
 def baud(text: str) -> int:
@@ -138,7 +139,8 @@ def link_timeout(text: str) -> float:
     return value
 
 
-def cmd_ros(args) -> int:
+def run(args) -> int:
+    """Run the node until the user stops it (or print ``--rviz-config``); status 0."""
     from ..errors import InputError
     from ..ros import require_rclpy
     from ..ros.params import check_names, load_params, ros_args_names
@@ -207,6 +209,6 @@ def cmd_ros(args) -> int:
             slow = real_time_shortfall(true or robot, "the back-end will drop simulated time (counted in /diagnostics)")
             if slow:
                 print(f"omnikin: note: ros: {slow}", file=sys.stderr)
-    from ..ros.node import run
+    from ..ros.node import run as run_node
 
-    return run(robot, backend, values, args.ros_args)
+    return run_node(robot, backend, values, args.ros_args)

@@ -55,7 +55,8 @@ examples:
   xvfb-run -a omnikin sim omni4 --duration 10 --report run.json     without a screen"""
 
 
-def add_parsers(sub, robot_help: str) -> None:
+def add_parser(sub, robot_help: str) -> None:
+    """Add ``sim`` to ``sub``."""
     sp = sub.add_parser(
         "sim",
         help="interactive simulator: drive a robot from the keyboard in MuJoCo's viewer",
@@ -90,10 +91,11 @@ def add_parsers(sub, robot_help: str) -> None:
     )
     add_output_options(sp)
     declare_inputs(sp, robots=("robot", "true_robot"))
-    sp.set_defaults(func=cmd_sim)
+    sp.set_defaults(func=run)
 
 
-def cmd_sim(args) -> int:
+def run(args) -> int:
+    """Open the window and drive until it closes or the user stops it, write ``--report``; status 0."""
     from ..errors import InputError
     from ..io.jsonfile import to_json
     from ..io.output import write_text

@@ -1,4 +1,4 @@
-"""``omnikin sweep``: a tolerance or design study on Dask (extra ``sweep``)."""
+"""``omnikin sweep``: a tolerance or design study on Dask (:func:`omnikin.run_sweep`; extra ``sweep``)."""
 
 from __future__ import annotations
 
@@ -41,7 +41,8 @@ examples:
       --tls-ca-file ca.pem --tls-cert me.pem --tls-key me.key"""
 
 
-def add_parsers(sub, robot_help: str) -> None:
+def add_parser(sub, robot_help: str) -> None:
+    """Add ``sweep`` to ``sub``."""
     sp = sub.add_parser(
         "sweep",
         help="tolerance and design studies: thousands of robots as built through UMBmark and calibration, on Dask",
@@ -99,7 +100,7 @@ def add_parsers(sub, robot_help: str) -> None:
         action="store_true",
         help="OUT_DIR holds a study of another seed: remove its results and start over",
     )
-    sp.set_defaults(func=cmd_sweep)
+    sp.set_defaults(func=run)
 
 
 class _Progress:
@@ -167,8 +168,10 @@ def _check_paths(args) -> None:
         raise InputError("--workers sets the local cluster's size: not with --scheduler (the cluster has its own)")
 
 
-def cmd_sweep(args) -> int:
-    from ..sweep.run import require_sweep, run_sweep
+def run(args) -> int:
+    """Run the study into its folder, print the answers; status 0."""
+    from ..api import run_sweep
+    from ..sweep.run import require_sweep
     from ..sweep.spec import load_study
 
     _check_paths(args)

@@ -1,7 +1,8 @@
-"""``omnikin umbmark``, ``omnikin umbmark analyze`` and ``omnikin calibrate``.
+"""``omnikin umbmark`` (:func:`omnikin.run_umbmark`) and its command ``omnikin umbmark analyze``
+(:func:`omnikin.analyze_umbmark`).
 
 Thin over the Python API (:mod:`omnikin.api`): the options' defaults are read from the
-API's signatures, so the command line and ``omnikin.run_umbmark`` & co. cannot disagree.
+API's signatures, so the command line and ``omnikin.run_umbmark`` cannot disagree.
 ``omnikin umbmark`` runs the same study for every robot (``tomasi-omni3`` when none is
 named): UMBmark of the robot as built, calibration, UMBmark again, the noise floor; the
 report folder goes through :mod:`omnikin.io.output` (checked before anything runs, replaced
@@ -15,8 +16,6 @@ import inspect
 import sys
 from pathlib import Path
 
-from ..api.calibration import calibrate as api_calibrate
-from ..api.calibration import calibration_plan
 from ..api.common import dumps
 from ..api.report import floor_limit, physics_floor_text
 from ..api.umbmark import (
@@ -26,8 +25,6 @@ from ..api.umbmark import (
     run_umbmark,
 )
 from ..common.number_text import mm_text, reduction_bounded, reduction_text
-from ..errors import InputError
-from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
 from ..motion.timing import RATE_RANGE
 from ..physics.engines import ENGINE_NAMES
 from ..simulation.error_models import NOISE, PROFILES
@@ -35,7 +32,6 @@ from ..viz import FIGURE_FORMATS, MAX_DPI, MIN_DPI, dpi_problem
 from .budget import add_budget_options, require
 from .common import (
     add_output,
-    add_output_options,
     add_step_option,
     as_built_group,
     command_inputs,
@@ -46,6 +42,7 @@ from .common import (
     physics_hint,
     whole,
 )
+from .parser import CommandParser
 
 DEFAULT_OUT = "umbmark-report"
 """The report folder of ``omnikin umbmark`` without ``-o``."""
@@ -84,7 +81,8 @@ The report gives confidence intervals of E_max,syst and of the reduction factor 
 calibrated, under the same random errors."""
 
 
-def add_parsers(sub, robot_help: str) -> None:
+def add_parser(sub, robot_help: str) -> None:
+    """Add ``umbmark`` to ``sub``, with ``analyze`` as its command (:func:`analyze_parser`)."""
     d = UMBMARK
     sp = sub.add_parser(
         "umbmark",
@@ -193,45 +191,8 @@ def add_parsers(sub, robot_help: str) -> None:
     sp.add_argument("--json", action="store_true", help="print result.json instead of tables")
     add_budget_options(sp)
     declare_inputs(sp, robots=("robot", "true_robot"))
-    sp.set_defaults(func=cmd_umbmark)
-
-    sp = sub.add_parser(
-        "calibrate",
-        help="calibrate a robot file from measured runs",
-        description="Least-squares calibration of the wheel radii, hub positions and drive "
-        "directions from runs with measured end poses (docs/umbmark.md). --plan "
-        "prints the runs to drive and a runs file to fill in.",
-        epilog="examples:\n"
-        "  omnikin calibrate tomasi-omni3 --plan > runs.csv     the runs to drive, to fill in\n"
-        "  omnikin calibrate tomasi-omni3 runs.csv -o calibrated.yaml\n"
-        "  omnikin calibrate tomasi-omni3 examples/calibration_runs.csv --json\n"
-        "RUNS columns: path, x_abs, y_abs [m], optional theta_abs_deg [deg] (or theta_abs "
-        "[rad]).\n'omnikin umbmark' writes one: umbmark-report/calibration_runs.csv.",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    sp.add_argument("robot", metavar="ROBOT", help=robot_help)
-    sp.add_argument("runs", metavar="RUNS", nargs="?", help="CSV of runs: path, x_abs, y_abs[, theta_abs_deg]")
-    add_output(
-        sp,
-        "-o",
-        "--output",
-        metavar="FILE",
-        help="write the calibrated robot file (YAML, or JSON for .json); with --plan, the runs file to fill in",
-    )
-    add_output_options(sp)
-    declare_inputs(sp, "runs", robots=("robot",))
-    sp.add_argument(
-        "--plan", action="store_true", help="print the recommended calibration runs as a runs file to fill in (no RUNS)"
-    )
-    sp.add_argument(
-        "--side",
-        type=number,
-        default=4.0,
-        metavar="M",
-        help="with --plan: side of the squares and length of the lines [m] (default 4)",
-    )
-    sp.add_argument("--json", action="store_true", help="print the result as JSON")
-    sp.set_defaults(func=cmd_calibrate)
+    sp.set_defaults(func=run)
+    _add_analyze(sp)
 
 
 def add_analyze_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -251,7 +212,7 @@ def add_analyze_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser
         help=f"side of the square [m] (default {ANALYZE['side']:g})",
     )
     p.add_argument("--json", action="store_true", help="print JSON")
-    p.set_defaults(func=cmd_umbmark_analyze)
+    p.set_defaults(func=run_analyze)
     return p
 
 
@@ -275,6 +236,21 @@ def analyze_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     return add_analyze_arguments(p)
+
+
+def _add_analyze(umbmark_parser: CommandParser) -> None:
+    """``omnikin umbmark analyze``: the options and behaviour of :func:`analyze_parser`, as a
+    command of ``umbmark`` beside its optional ROBOT (:meth:`CommandParser.add_command`)."""
+    spec = analyze_parser()
+    analyze = CommandParser(
+        prog="omnikin umbmark analyze",
+        parents=[spec],
+        add_help=False,
+        description=spec.description,
+        epilog=spec.epilog,
+        formatter_class=spec.formatter_class,
+    )
+    umbmark_parser.add_command("analyze", analyze)
 
 
 # --- helpers -----------------------------------------------------------------------------------------
@@ -318,7 +294,9 @@ class _Status:
 
 
 # --- umbmark -----------------------------------------------------------------------------------------
-def cmd_umbmark(args) -> int:
+def run(args) -> int:
+    """Run the study (:func:`omnikin.run_umbmark`), write the report folder, print a summary (or
+    ``result.json``); status 0."""
     inputs = command_inputs(args)
     engine = engine_of(args)
 
@@ -452,7 +430,9 @@ def _print_summary(report: UMBmarkReport, doc: dict, out) -> None:
 
 
 # --- analyze -------------------------------------------------------------------------------------------
-def cmd_umbmark_analyze(args) -> int:
+def run_analyze(args) -> int:
+    """``omnikin umbmark analyze``: print the analysis of the measurements (or ``--json``);
+    status 0."""
     res = analyze_umbmark(args.measurements, robot=args.robot, side=args.side)
     if args.json:
         print(dumps(res.as_dict()), end="")
@@ -488,94 +468,3 @@ def cmd_umbmark_analyze(args) -> int:
 
 
 # --- calibrate -----------------------------------------------------------------------------------------
-def cmd_calibrate(args) -> int:
-    if args.plan:
-        if args.runs is not None:
-            raise InputError("calibrate --plan prints the runs to drive; it takes no RUNS file")
-        return _print_plan(args)
-    if args.runs is None:
-        raise InputError("calibrate: give RUNS (a runs file with measured end poses), or --plan for the runs to drive")
-    from ..io.output import is_stdout
-
-    inputs = command_inputs(args)
-    to_stdout = bool(args.output) and is_stdout(args.output)
-    cal = api_calibrate(args.robot, args.runs)
-    if args.output:
-        cal.write_robot(args.output, force=args.force, inputs=inputs)
-    if args.json:
-        print(
-            dumps(
-                {
-                    **cal.as_dict(),
-                    "units": {
-                        "errors": ERROR_UNITS,
-                        "residual_rms": "measurement sigmas",
-                        "parameters": "each entry's 'unit'",
-                    },
-                    "output": args.output,
-                }
-            ),
-            end="",
-        )
-        return 0
-    from rich.table import Table
-
-    con = console(120)
-    t = Table(title=f"calibration of {cal.nominal.name} from {len(cal.runs)} runs", title_justify="left")
-    for col in ("parameter", "estimate", "sigma", "unit"):
-        t.add_column(col, justify="left" if col in ("parameter", "unit") else "right")
-    for p in cal.parameters():
-        t.add_row(p["name"], f"{p['value']:.6g}", f"{p['sigma']:.3g}", p["unit"])
-    con.print(t)
-    con.print(f"residual RMS {cal.residual_before:.3g} -> {cal.residual_after:.3g} measurement sigmas")
-    if not cal.fits:
-        con.print(
-            f"warning: the calibrated model does not fit the runs (residual RMS {cal.residual_after:.3g} "
-            f"measurement sigmas, above {FIT_LIMIT:g}): check the robot file and the runs; do not use the "
-            "calibrated robot"
-        )
-    for combo in cal.identifiability.blind:
-        con.print("not observable by these runs: " + " + ".join(f"{c['weight']:+.2f} {c['parameter']}" for c in combo))
-    if args.output and not to_stdout:
-        con.print(f"calibrated robot written to {args.output}")
-    return 0
-
-
-def _print_plan(args) -> int:
-    from ..evaluation.calibration import RECOMMENDED_REPEATS
-    from ..io.output import check_output, is_stdout, write_text
-    from ..io.runs import calibration_template
-
-    paths = calibration_plan(args.robot, args.side)
-    note = (
-        f"calibration runs for {args.robot}: drive each path {RECOMMENDED_REPEATS} times, commanded by the "
-        "robot's own (nominal) model,\n"
-        "starting at rest at the origin (x forward, y left). Measure the end pose: x_abs, y_abs [m] to about "
-        "1 mm,\n"
-        "theta_abs_deg [deg] to about 0.2 deg (delete that column if you do not measure the heading).\n"
-        "Fill in every field. Paths: square cw|ccw rotate|translate SIDE,\n"
-        "line LENGTH HEADING_DEG, spin ANGLE_DEG (positive counter-clockwise), arc RADIUS ANGLE_DEG.\n"
-        f"then: omnikin calibrate {args.robot} THIS_FILE -o calibrated.yaml"
-    )
-    text = calibration_template(paths, RECOMMENDED_REPEATS, note)
-    if args.output:
-        check_output(args.output, inputs=command_inputs(args), force=args.force)
-        write_text(args.output, text)
-        if not args.json and not is_stdout(args.output):
-            console(120, stderr=True).print(f"runs file to fill in written to {args.output}")
-    if args.json:
-        print(
-            dumps(
-                {
-                    "robot": args.robot,
-                    "paths": paths,
-                    "repeats": RECOMMENDED_REPEATS,
-                    "columns": ["path", "x_abs", "y_abs", "theta_abs_deg"],
-                    "output": args.output,
-                }
-            ),
-            end="",
-        )
-    elif not args.output:
-        print(text, end="")
-    return 0

@@ -68,7 +68,8 @@ examples:
   omnikin view tomasi-omni3 --replay run.bag"""
 
 
-def add_parsers(sub, robot_help: str) -> None:
+def add_parser(sub, robot_help: str) -> None:
+    """Add ``view`` to ``sub``."""
     sp = sub.add_parser(
         "view",
         help="3D viewer in the browser: drive the robot with the keyboard, see its wheels and odometry",
@@ -132,7 +133,7 @@ def add_parsers(sub, robot_help: str) -> None:
         )
     add_budget_options(sp, time=False)
     declare_inputs(sp, "replay", robots=("robot",))
-    sp.set_defaults(func=cmd_view)
+    sp.set_defaults(func=run)
 
 
 def require_viser():
@@ -146,7 +147,8 @@ def require_viser():
     return viser
 
 
-def cmd_view(args) -> int:
+def run(args) -> int:
+    """Serve the page (live, ``--ros`` or ``--replay``) until the user stops it; status 0."""
     from ..errors import InputError
 
     limits = teleop_limits(args)
@@ -165,7 +167,7 @@ def cmd_view(args) -> int:
             raise InputError("--ros and --replay are two different views: give one of them")
         if args.echo:
             raise InputError("--echo does not apply to --replay (no keys drive a replay)")
-        return cmd_replay(args)
+        return _run_replay(args)
     if args.robot is None:
         raise InputError("view: give ROBOT (a preset name or a robot file), or --replay REPORT_DIR")
     if args.stamped and not args.ros:
@@ -173,7 +175,7 @@ def cmd_view(args) -> int:
     if args.ros:
         if args.echo:
             raise InputError("--echo does not apply to --ros (the node keeps the time; see its topics)")
-        return cmd_ros_view(args, limits)
+        return _run_ros_view(args, limits)
     if args.step is not None and args.engine != "physics":
         raise InputError("--step applies only to --engine physics")
     require_viser()
@@ -235,7 +237,7 @@ def wildcard_note(host: str, port: int) -> None:
         )
 
 
-def cmd_ros_view(args, limits) -> int:
+def _run_ros_view(args, limits) -> int:
     """``--ros``: the page follows and drives a running node (:mod:`omnikin.viewer.ros_robot`)."""
     import os
 
@@ -266,7 +268,7 @@ LARGEST_MESSAGE_SHARE = 64
 """--replay BAG: one message may use at most 1/64 of --max-memory (as omnikin bag)."""
 
 
-def cmd_replay(args) -> int:
+def _run_replay(args) -> int:
     from ..errors import InputError
     from ..io.bags import check_topic
 
