@@ -19,7 +19,7 @@ from omnikin.evaluation.umbmark import simulate_umbmark
 from omnikin.motion.plans import umbmark_square
 from omnikin.motion.timing import sample_plan
 from omnikin.simulation.error_models import NOISE, PROFILES
-from omnikin.simulation.simulate import commanded_angles
+from omnikin.simulation.kinematic import commanded_angles
 
 
 def reference_run(true, nominal, sampled, noise, rng):

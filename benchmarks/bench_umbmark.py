@@ -30,7 +30,7 @@ from omnikin.evaluation.calibration import borenstein_calibrate, least_squares_c
 from omnikin.evaluation.umbmark import simulate_umbmark
 from omnikin.motion.plans import CalibrationRun, umbmark_square
 from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel
-from omnikin.simulation.simulate import simulate
+from omnikin.simulation.kinematic import simulate_kinematic
 
 REPEATS = 5
 """Repeats of each recommended calibration run (as UMBmark repeats each square 5 times)."""
@@ -45,7 +45,7 @@ def calibration_bar(name: str, seeds=range(1, 21)) -> dict:
         true = PROFILES["typical"].sample(nominal, seed).apply(nominal)
         runs = []
         for label, plan in recommended_runs(nominal):
-            sim = simulate(plan, true, nominal, noise=noisy, trials=REPEATS, rng=rng, keep_truth=False)
+            sim = simulate_kinematic(plan, true, nominal, noise=noisy, trials=REPEATS, rng=rng, keep_truth=False)
             runs += [CalibrationRun(plan, tuple(m), label) for m in sim.measured]
         cal = least_squares_calibration(nominal, runs)
         before = simulate_umbmark(true, nominal, noise=quiet, runs=1)[0].e_max_syst
@@ -92,7 +92,9 @@ def perfect_knowledge() -> dict:
         for rate in (10.0, 50.0, 100.0, 250.0, 1000.0):
             for quantise in (True, False):
                 for d in ("cw", "ccw"):
-                    run = simulate(umbmark_square(d), robot, robot, rate=rate, noise=NoiseModel(quantise=quantise))
+                    run = simulate_kinematic(
+                        umbmark_square(d), robot, robot, rate=rate, noise=NoiseModel(quantise=quantise)
+                    )
                     err = float(np.hypot(*run.epsilon[0, :2]))
                     key = f"{name} quantise={quantise}"
                     worst[key] = max(worst.get(key, 0.0), err)

@@ -157,11 +157,13 @@ def test_simulate_refuses_a_run_beyond_its_memory_before_starting(capsys, monkey
     'omnikin simulate' refuses. 1400 m at tomasi's default 0.3 m/s take 4667 s, 4.67e7 samples at
     10 kHz: at least 2.2e10 bytes at the smallest measured 472 bytes per sample. Python and the
     command line now refuse it alike, at once, each naming the limit its own way."""
-    import omnikin.simulation.simulate as kinematic
+    import omnikin.simulation.kinematic as kinematic
     from omnikin.errors import ResourceLimitError
 
     ran: list = []  # "at once": before the run, whatever the pace of the machine
-    monkeypatch.setattr(kinematic, "simulate", lambda *a, **k: ran.append(a) or pytest.fail("the run started"))
+    monkeypatch.setattr(
+        kinematic, "simulate_kinematic", lambda *a, **k: ran.append(a) or pytest.fail("the run started")
+    )
     with pytest.raises(ResourceLimitError) as info:
         omnikin.simulate("tomasi-omni3", "line 1400", rate=10000.0)
     assert ran == []
@@ -183,7 +185,7 @@ def test_the_memory_estimate_of_a_simulation_bounds_what_it_takes(wheels):
     import tracemalloc
 
     from omnikin.motion.plans import parse_plan
-    from omnikin.simulation.simulate import run_cost
+    from omnikin.simulation.kinematic import run_cost
 
     robot = omni_robot([360 * k / wheels for k in range(wheels)], name=f"omni{wheels}")
     robot = omnikin.Robot(

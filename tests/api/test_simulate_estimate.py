@@ -9,7 +9,7 @@ import pytest
 
 import omnikin
 
-WORK = (("omnikin.simulation.simulate", "simulate"), ("omnikin.physics.run", "simulate_physics"))
+WORK = (("omnikin.simulation.kinematic", "simulate_kinematic"), ("omnikin.physics.run", "simulate_physics"))
 
 
 class Refused(Exception):

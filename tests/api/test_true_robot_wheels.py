@@ -16,7 +16,7 @@ from omnikin import InputError, load_robot
 from omnikin.motion.plans import line
 from omnikin.presets import preset_path
 from omnikin.simulation.backend import SimBackend
-from omnikin.simulation.simulate import simulate
+from omnikin.simulation.kinematic import simulate_kinematic
 
 WHEELS = (
     "  - {name: w1, type: omni, distance: 0.113, angle_deg: 0,   radius: 0.04125, encoder: {ticks_per_rev: 600}}\n"
@@ -60,7 +60,7 @@ def test_api_refuses_a_true_robot_with_other_wheels(tmp_path, kind):
     for call in (
         lambda: omnikin.run_umbmark("tomasi-omni3", true_robot=path, noise="none", calibrate=False, runs=1),
         lambda: omnikin.simulate("tomasi-omni3", true_robot=path),
-        lambda: simulate(line(1.0), load_robot(path), load_robot("tomasi-omni3")),
+        lambda: simulate_kinematic(line(1.0), load_robot(path), load_robot("tomasi-omni3")),
         lambda: SimBackend(load_robot("tomasi-omni3"), load_robot(path)),
     ):
         with pytest.raises(InputError) as info:

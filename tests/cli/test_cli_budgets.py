@@ -19,7 +19,7 @@ from omnikin.errors import ResourceLimitError
 
 # The work a refusal must come before: each is replaced by a stand-in that fails the test if called.
 WORK = (
-    ("omnikin.simulation.simulate", "simulate"),
+    ("omnikin.simulation.kinematic", "simulate_kinematic"),
     ("omnikin.physics.run", "simulate_physics"),
     ("omnikin.io.bags", "record_run"),
     ("omnikin.api.umbmark", "umbmark_study"),  # the one study of both engines

@@ -548,12 +548,12 @@ def test_analyze_theta_columns(capsys, tmp_path):
 
 
 # =====================================================================================================
-# omnikin calibrate on a runs file written from simulate()
+# omnikin calibrate on a runs file written from simulate_kinematic()
 # =====================================================================================================
 def test_calibrate_own_runs_file(capsys, tmp_path):
     from omnikin.motion.plans import line, spin, umbmark_square
     from omnikin.simulation.error_models import NoiseModel, SystematicErrors, WheelErrors
-    from omnikin.simulation.simulate import simulate
+    from omnikin.simulation.kinematic import simulate_kinematic
 
     robot = load_robot("diff-drive")
     true = SystematicErrors(
@@ -571,7 +571,7 @@ def test_calibrate_own_runs_file(capsys, tmp_path):
         w = csv.writer(handle)
         w.writerow(["path", "x_abs", "y_abs", "theta_abs_deg"])
         for text, plan in plans.items():
-            m = simulate(plan, true, robot, noise=NoiseModel(quantise=False), rate=50.0).measured[0]
+            m = simulate_kinematic(plan, true, robot, noise=NoiseModel(quantise=False), rate=50.0).measured[0]
             w.writerow([text, f"{m[0]:.7f}", f"{m[1]:.7f}", f"{math.degrees(m[2]):.6f}"])
     out = tmp_path / "calibrated.json"
     rc, text, err = run(capsys, "calibrate", "diff-drive", path, "-o", out)
@@ -695,7 +695,7 @@ def test_calibrate_refuses_a_runs_file_with_a_path_the_robot_cannot_drive(capsys
 
 def write_runs(path, robot, true, plans):
     from omnikin.simulation.error_models import NoiseModel
-    from omnikin.simulation.simulate import simulate
+    from omnikin.simulation.kinematic import simulate_kinematic
 
     with open(path, "w", newline="", encoding="utf-8") as handle:
         w = csv.writer(handle)
@@ -703,7 +703,9 @@ def write_runs(path, robot, true, plans):
         for text in plans:
             from omnikin.motion.plans import parse_plan
 
-            m = simulate(parse_plan(text), true, robot, noise=NoiseModel(quantise=False), rate=50.0).measured[0]
+            m = simulate_kinematic(parse_plan(text), true, robot, noise=NoiseModel(quantise=False), rate=50.0).measured[
+                0
+            ]
             w.writerow([text, f"{m[0]:.7f}", f"{m[1]:.7f}", f"{math.degrees(m[2]):.6f}"])
 
 

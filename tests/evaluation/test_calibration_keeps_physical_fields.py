@@ -14,7 +14,7 @@ from omnikin.io.robot_file import parse_robot_text, robot_text
 from omnikin.kinematics.physical import PhysicalBody, PhysicalWheel
 from omnikin.motion.plans import CalibrationRun
 from omnikin.simulation.error_models import NOISE, NoiseModel, SystematicErrors, WheelErrors
-from omnikin.simulation.simulate import simulate
+from omnikin.simulation.kinematic import simulate_kinematic
 
 BODY = PhysicalBody(mass=2.5, com=(0.0, 0.01, 0.06), height=0.02)
 
@@ -36,7 +36,9 @@ def test_least_squares_calibration_keeps_physical_fields():
     true = SystematicErrors({"w1": WheelErrors(radius=0.01)}).apply(nominal)
     runs = []
     for label, plan in recommended_runs(nominal):
-        sim = simulate(plan, true, nominal, noise=NoiseModel(quantise=False), trials=1, rng=0, keep_truth=False)
+        sim = simulate_kinematic(
+            plan, true, nominal, noise=NoiseModel(quantise=False), trials=1, rng=0, keep_truth=False
+        )
         runs += [CalibrationRun(plan, tuple(m), label, (0.001, math.radians(0.2))) for m in sim.measured]
     result = least_squares_calibration(nominal, runs)
     assert result.robot.wheel("w1").radius != nominal.wheel("w1").radius  # it did calibrate

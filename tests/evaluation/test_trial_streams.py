@@ -12,7 +12,7 @@ from omnikin import load_robot
 from omnikin.evaluation.umbmark import procedure_generators, simulate_umbmark
 from omnikin.motion.plans import umbmark_square
 from omnikin.simulation.error_models import NOISE, NoiseModel
-from omnikin.simulation.simulate import simulate
+from omnikin.simulation.kinematic import simulate_kinematic
 
 FAST = dict(runs=3, rate=20.0, seed=7)
 
@@ -79,11 +79,15 @@ def test_simulate_trials_draw_in_trial_order():
     after trial k-1's, so the first trials are the same however many follow."""
     robot = load_robot("tomasi-omni3")
     square = umbmark_square("cw", 4.0, "rotate")
-    runs = {n: simulate(square, robot, robot, rate=20.0, noise=NOISE["typical"], trials=n, rng=3) for n in (1, 4)}
+    runs = {
+        n: simulate_kinematic(square, robot, robot, rate=20.0, noise=NOISE["typical"], trials=n, rng=3) for n in (1, 4)
+    }
     np.testing.assert_array_equal(runs[1].measured[0], runs[4].measured[0])
     np.testing.assert_array_equal(runs[1].truth[0], runs[4].truth[0])
     # measurement noise alone (no slip or floor): the same rule
     quiet = NoiseModel(measurement=0.001, measurement_theta=0.001)
-    ends = {n: simulate(square, robot, robot, rate=20.0, noise=quiet, trials=n, rng=3).measured for n in (1, 3)}
+    ends = {
+        n: simulate_kinematic(square, robot, robot, rate=20.0, noise=quiet, trials=n, rng=3).measured for n in (1, 3)
+    }
     np.testing.assert_array_equal(ends[1][0], ends[3][0])
     assert not np.array_equal(ends[3][0], ends[3][1])

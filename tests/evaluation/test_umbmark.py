@@ -23,7 +23,7 @@ from omnikin.evaluation.calibration import (
 from omnikin.evaluation.umbmark import analyze, borenstein, differential_pair, simulate_umbmark
 from omnikin.motion.plans import CalibrationRun, line, spin, umbmark_square
 from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel, SystematicErrors, WheelErrors
-from omnikin.simulation.simulate import simulate
+from omnikin.simulation.kinematic import simulate_kinematic
 
 EXACT = NoiseModel(quantise=False)
 SIGMA = (0.001, math.radians(0.2))
@@ -233,7 +233,7 @@ def test_run_umbmark_shapes_and_bad_runs(tomasi):
 def calibration_runs(true, robot, noise, rng, repeats=1, plans=None):
     runs = []
     for label, plan in plans or recommended_runs(robot):
-        sim = simulate(plan, true, robot, noise=noise, trials=repeats, rng=rng, keep_truth=False)
+        sim = simulate_kinematic(plan, true, robot, noise=noise, trials=repeats, rng=rng, keep_truth=False)
         runs += [CalibrationRun(plan, tuple(m), label, SIGMA) for m in sim.measured]
     return runs
 
@@ -299,7 +299,7 @@ def test_predicted_end_matches_simulation(tomasi, diff):
     for robot, seed in ((tomasi, 4), (diff, 5)):
         true = PROFILES["typical"].sample(robot, seed).apply(robot)
         for _, plan in recommended_runs(robot):
-            sim = simulate(plan, true, robot, noise=EXACT, rate=50.0)
+            sim = simulate_kinematic(plan, true, robot, noise=EXACT, rate=50.0)
             got = predicted_end(plan, true, robot)
             np.testing.assert_allclose(got[:2], sim.measured[0, :2], atol=1e-9)
             assert abs((got[2] - sim.measured[0, 2] + math.pi) % (2 * math.pi) - math.pi) < 1e-9
@@ -401,7 +401,7 @@ def simulate_refusal(plan, robot):
     from omnikin.errors import InfeasibleTwistError
 
     with pytest.raises(InfeasibleTwistError) as info:
-        simulate(plan, robot, robot, noise=EXACT, rate=20.0)
+        simulate_kinematic(plan, robot, robot, noise=EXACT, rate=20.0)
     return str(info.value).split(" (on_infeasible=")[0].removeprefix(f"robot {robot.name!r}: ")
 
 
@@ -462,7 +462,7 @@ def test_recommended_runs_are_drivable_and_read_back_from_their_text(name):
     assert runs
     for text, plan in runs:
         assert parse_plan(text) == plan
-        simulate(plan, robot, robot, noise=EXACT, rate=10.0)  # refuses what the robot cannot drive
+        simulate_kinematic(plan, robot, robot, noise=EXACT, rate=10.0)  # refuses what the robot cannot drive
     texts = [t for t, _ in runs]
     if robot.mobility.holonomic and name != "villasenor-omni3":
         assert "square cw translate 2.5" in texts and "line 2.5 90" in texts

@@ -12,7 +12,7 @@ from omnikin.errors import InputError
 from omnikin.io.logs import write_tick_log
 from omnikin.motion.plans import line
 from omnikin.simulation.error_models import NoiseModel
-from omnikin.simulation.simulate import simulate
+from omnikin.simulation.kinematic import simulate_kinematic
 
 
 @pytest.mark.parametrize("start", [-5.0, 2.0**31 - 1.0])
@@ -21,7 +21,7 @@ def test_record_run_refuses_a_start_a_ros_time_cannot_hold(tmp_path, start):
     from omnikin.io.bags import record_run
 
     robot = load_robot("diff-drive")
-    run = simulate(line(0.3), robot, robot, rate=50.0, noise=NoiseModel(quantise=False))  # 1.6 s
+    run = simulate_kinematic(line(0.3), robot, robot, rate=50.0, noise=NoiseModel(quantise=False))  # 1.6 s
     with pytest.raises(InputError, match=r"^start: stamps from .* do not fit a ROS 2 bag, whose times run from 0 to"):
         record_run(tmp_path / "s.bag", run, robot, start=start)
     assert list(tmp_path.iterdir()) == []

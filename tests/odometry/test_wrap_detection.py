@@ -26,7 +26,7 @@ from omnikin.io.logs import read_tick_log, write_tick_log
 from omnikin.motion.limits import MotionLimits
 from omnikin.motion.plans import line, spin
 from omnikin.simulation.error_models import NoiseModel
-from omnikin.simulation.simulate import simulate
+from omnikin.simulation.kinematic import simulate_kinematic
 from support.tomasi import TOMASI_R, TOMASI_RPT, assert_poses_close, cli, one_line_error, read_csv_traj, tomasi_poses
 
 TICKS_PER_M = 1 / (TOMASI_R * TOMASI_RPT)  # 2315 ticks per metre at the rim
@@ -219,7 +219,7 @@ def test_fast_runs_near_max_speed_and_hard_stops_are_accepted(rate):
     robot = _tomasi_with_max_speed(25.0)
     plan = line(2.0) + spin(math.pi) + line(1.0, math.pi / 2) + line(2.0, math.pi) + spin(-math.pi / 2) + line(1.0)
     limits = MotionLimits(linear=10.0, angular=50.0, linear_accel=9.81, angular_accel=200.0)
-    run = simulate(plan, robot, robot, rate=rate, limits=limits, noise=NoiseModel(), rng=1)
+    run = simulate_kinematic(plan, robot, robot, rate=rate, limits=limits, noise=NoiseModel(), rng=1)
     speeds = np.abs(np.diff(run.ticks, axis=0)) * TOMASI_RPT * rate
     assert speeds.max() > 0.95 * 25.0  # the wheels reach their max_speed
     expected = tomasi_poses(np.diff(run.ticks, axis=0))

@@ -36,7 +36,7 @@ from omnikin.kinematics.se2 import wrap_angle  # noqa: E402
 from omnikin.motion.plans import line  # noqa: E402
 from omnikin.physics.run import simulate_physics  # noqa: E402
 from omnikin.simulation.error_models import NoiseModel, SystematicErrors, WheelErrors  # noqa: E402
-from omnikin.simulation.simulate import simulate  # noqa: E402
+from omnikin.simulation.kinematic import simulate_kinematic  # noqa: E402
 
 ERROR = 0.05
 TOL_XY = 0.002
@@ -73,7 +73,7 @@ def test_a_robot_as_built_drives_alike_in_both_engines_as_its_motors_turn_its_wh
     true = SystematicErrors({"w2": WheelErrors(**{error: ERROR})}).apply(nominal)
     truth, odometry = closed_form(nominal, true, motor, error)
     plan = line(1.0)
-    kinematic = simulate(plan, true, nominal, noise=NoiseModel())  # whole ticks, as the physics counts
+    kinematic = simulate_kinematic(plan, true, nominal, noise=NoiseModel())  # whole ticks, as the physics counts
     physics = simulate_physics(plan, true, nominal)
     print(
         f"{motor}, {error} error: closed form truth {truth}, odometry {odometry}; kinematic truth "

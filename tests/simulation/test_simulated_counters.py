@@ -20,7 +20,7 @@ from omnikin import batch_odometry, load_robot
 from omnikin.io.logs import read_tick_log
 from omnikin.motion.plans import umbmark_square
 from omnikin.simulation.error_models import NoiseModel
-from omnikin.simulation.simulate import counter_output, simulate
+from omnikin.simulation.kinematic import counter_output, simulate_kinematic
 from support.tomasi import assert_poses_close, read_csv_traj, tomasi_file, tomasi_poses
 
 
@@ -78,7 +78,7 @@ def test_simulated_readings_are_the_counts_modulo_the_counter(tmp_path, bits):
     """SimulatedRun.readings: counts modulo 2**bits in [0, 2**bits) (uint64 for 64 bits),
     SimulatedRun.ticks the counts themselves; the odometry of the readings is the closed form."""
     robot = load_robot(counter_robot_file(tmp_path / "r.yaml", bits))
-    sim = simulate(umbmark_square("ccw", 1.0, "rotate"), robot, robot, rate=100.0, noise=NoiseModel(), rng=1)
+    sim = simulate_kinematic(umbmark_square("ccw", 1.0, "rotate"), robot, robot, rate=100.0, noise=NoiseModel(), rng=1)
     counts = np.asarray(sim.ticks, dtype=object)
     expected = counts % (2**bits)
     assert np.asarray(sim.readings, dtype=object).tolist() == expected.tolist()
@@ -94,8 +94,8 @@ def test_unquantised_readings_of_a_12_bit_robot_wrap_as_floats(tmp_path):
     robot = load_robot(counter_robot_file(tmp_path / "r.yaml", 12))
     plain = load_robot("tomasi-omni3")
     plan = umbmark_square("cw", 2.0, "rotate")
-    sim = simulate(plan, robot, robot, rate=50.0, noise=NoiseModel(quantise=False), rng=1)
-    ref = simulate(plan, plain, plain, rate=50.0, noise=NoiseModel(quantise=False), rng=1)
+    sim = simulate_kinematic(plan, robot, robot, rate=50.0, noise=NoiseModel(quantise=False), rng=1)
+    ref = simulate_kinematic(plan, plain, plain, rate=50.0, noise=NoiseModel(quantise=False), rng=1)
     assert sim.readings.dtype == np.float64 and sim.readings.min() >= -2048 and sim.readings.max() <= 2048
     assert sim.ticks.max() > 2048 or sim.ticks.min() < -2048  # they wrapped
     np.testing.assert_array_equal(sim.ticks, ref.ticks)
@@ -117,7 +117,7 @@ def test_an_odometry_robot_without_the_width_reads_the_counts_right(tmp_path):
     plain = load_robot("tomasi-omni3")
     plan = umbmark_square("cw", 2.0, "rotate")
     for command, odometry in ((cb12, plain), (plain, cb12)):
-        sim = simulate(plan, command, command, rate=50.0, noise=NoiseModel(), rng=1, odometry_robot=odometry)
+        sim = simulate_kinematic(plan, command, command, rate=50.0, noise=NoiseModel(), rng=1, odometry_robot=odometry)
         assert_poses_close(sim.odometry, tomasi_poses(np.diff(sim.ticks, axis=0)), atol=1e-9)
 
 

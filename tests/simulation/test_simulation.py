@@ -19,7 +19,7 @@ from omnikin.motion.limits import MotionLimits, saturate
 from omnikin.motion.plans import arc, line, polyline, spin, umbmark_square
 from omnikin.motion.timing import sample_plan
 from omnikin.simulation.error_models import NOISE, PROFILES, NoiseModel, SystematicErrors, WheelErrors
-from omnikin.simulation.simulate import simulate
+from omnikin.simulation.kinematic import simulate_kinematic
 
 TOMASI_L, TOMASI_R = 0.113, 0.04125
 TOMASI_BETAS = np.radians([0.0, 120.0, 240.0])
@@ -303,16 +303,16 @@ def test_a_simulation_refuses_a_rate_outside_the_range_where_it_starts(robots, r
     simulation starts, also for a plan sampled beforehand."""
     robot = robots["tomasi-omni3"]
     with pytest.raises(OmnikinError, match=r"^rate: the sample rate .*\[5, 10000\] Hz"):
-        simulate(line(1.0), robot, robot, rate=rate)
+        simulate_kinematic(line(1.0), robot, robot, rate=rate)
     if not isinstance(rate, bool) and rate < 1e6:  # sample_plan itself refuses 1e9 samples by size
         with pytest.raises(OmnikinError, match=r"^rate: the sample rate .*\[5, 10000\] Hz"):
-            simulate(sample_plan(line(0.1), robot, rate), robot, robot)
+            simulate_kinematic(sample_plan(line(0.1), robot, rate), robot, robot)
 
 
 def test_a_simulation_takes_the_ends_of_the_rate_range(robots):
     robot = robots["tomasi-omni3"]
     for rate in (5, 10000.0):
-        assert simulate(line(0.1), robot, robot, rate=rate).sampled.rate == rate
+        assert simulate_kinematic(line(0.1), robot, robot, rate=rate).sampled.rate == rate
 
 
 # =====================================================================================================
@@ -498,7 +498,7 @@ def test_perfect_knowledge_closes(robots, name, rate):
         for direction in ("cw", "ccw"):
             plan = umbmark_square(direction, 4.0, mode)
             for noise in (NOISE["none"], NoiseModel(), EXACT):
-                sim = simulate(plan, robot, robot, rate=rate, noise=noise, trials=2, rng=0)
+                sim = simulate_kinematic(plan, robot, robot, rate=rate, noise=noise, trials=2, rng=0)
                 if noise.quantise and not robot.encoded[0].counts_close_loop:
                     # steppers turn exactly as commanded; whole ticks only measure them: the truth
                     # closes, the odometry within its quantisation (a few mm on the 16 m square)
@@ -519,15 +519,15 @@ def test_perfect_knowledge_quantised_odometry_is_near_the_plan(robots):
     motor's loop holds the counts at the rounded command: the truth is what those counts say."""
     robot = robots["tomasi-omni3"]
     plan = umbmark_square("cw")
-    sim = simulate(plan, robot, robot, noise=NoiseModel(), rng=0)
-    exact = simulate(plan, robot, robot, noise=EXACT)
+    sim = simulate_kinematic(plan, robot, robot, noise=NoiseModel(), rng=0)
+    exact = simulate_kinematic(plan, robot, robot, noise=EXACT)
     assert np.issubdtype(sim.ticks.dtype, np.integer)
     np.testing.assert_array_equal(sim.ticks, np.round(exact.ticks))
     np.testing.assert_allclose(sim.truth[0], exact.truth[0], atol=1e-9)
     assert np.hypot(*sim.odometry[-1, :2]) < 0.01
     assert 1e-6 < np.max(np.abs(sim.truth[0, :, :2] - sim.odometry[:, :2])) < 0.01
     dc = with_motor(robot, "dc")
-    sim = simulate(plan, dc, dc, noise=NoiseModel(), rng=0)
+    sim = simulate_kinematic(plan, dc, dc, noise=NoiseModel(), rng=0)
     np.testing.assert_allclose(sim.truth[0], sim.odometry, atol=1e-9)
 
 
@@ -543,27 +543,27 @@ def test_all_radii_one_percent_large_line_and_spin(robots):
     body twist is (1 + e) times the commanded one: line 4 m -> 4.04 m, spin pi/2 -> 1.01 pi/2."""
     robot = robots["tomasi-omni3"]
     true = SystematicErrors({n: WheelErrors(radius=0.01) for n in ("w1", "w2", "w3")}).apply(robot)
-    sim = simulate(line(4.0), true, robot, noise=EXACT)
+    sim = simulate_kinematic(line(4.0), true, robot, noise=EXACT)
     assert_pose(sim.measured[0], [4.04, 0, 0], 1e-9)
     assert_pose(sim.odometry[-1], [4.0, 0, 0], 1e-9)
     assert_pose(sim.epsilon[0], [0.04, 0, 0], 1e-9)
-    sim = simulate(spin(math.pi / 2), true, robot, noise=EXACT)
+    sim = simulate_kinematic(spin(math.pi / 2), true, robot, noise=EXACT)
     assert_pose(sim.measured[0], [0, 0, 1.01 * math.pi / 2], 1e-9)
     # the whole rotate-mode square: every leg 4.04 m, every corner 90.9 deg
     for direction in ("cw", "ccw"):
         plan = umbmark_square(direction)
-        sim = simulate(plan, true, robot, noise=EXACT)
+        sim = simulate_kinematic(plan, true, robot, noise=EXACT)
         expected = poses_after_segments(plan, scale=(1.01, 1.01, 1.01))[-1]
         assert_pose(sim.epsilon[0], expected, 1e-9)
         assert np.hypot(*expected[:2]) > 0.1
         # the translate square closes exactly: legs scaled, heading held
-        sim = simulate(umbmark_square(direction, 4.0, "translate"), true, robot, noise=EXACT)
+        sim = simulate_kinematic(umbmark_square(direction, 4.0, "translate"), true, robot, noise=EXACT)
         assert_pose(sim.epsilon[0], [0, 0, 0], 1e-9)
     # mecanum4: the same argument holds for any layout
     mec = robots["mecanum4"]
     true = SystematicErrors({w.name: WheelErrors(radius=0.01) for w in mec.rolling}).apply(mec)
     assert_pose(
-        simulate(line(4.0, 0.5), true, mec, noise=EXACT).measured[0],
+        simulate_kinematic(line(4.0, 0.5), true, mec, noise=EXACT).measured[0],
         [4.04 * math.cos(0.5), 4.04 * math.sin(0.5), 0],
         1e-9,
     )
@@ -577,7 +577,7 @@ def test_encoder_ticks_error(robots, motor):
     4 m), so the wheels turn 1/(1 + e) of it (truth 4/(1 + e) m)."""
     robot = with_motor(robots["tomasi-omni3"], motor)
     true = SystematicErrors({n: WheelErrors(ticks=0.02) for n in ("w1", "w2", "w3")}).apply(robot)
-    sim = simulate(line(4.0), true, robot, noise=EXACT)
+    sim = simulate_kinematic(line(4.0), true, robot, noise=EXACT)
     truth, odometry = (4.0, 4.0 * 1.02) if motor == "stepper" else (4.0 / 1.02, 4.0)
     assert_pose(sim.measured[0], [truth, 0, 0], 1e-9)
     assert_pose(sim.odometry[-1], [odometry, 0, 0], 1e-9)
@@ -595,7 +595,7 @@ def test_diff_drive_right_wheel_larger_curves_left(robots, e):
     s = length * (1 + e / 2)
     expected = [s * math.sin(dth) / dth, s * (1 - math.cos(dth)) / dth, dth]
     for rate in (10.0, 100.0):
-        sim = simulate(line(length), true, robot, rate=rate, noise=EXACT)
+        sim = simulate_kinematic(line(length), true, robot, rate=rate, noise=EXACT)
         assert_pose(sim.measured[0], expected, 1e-9)
     assert (sim.measured[0, 2] > 0) == (e > 0)
 
@@ -608,10 +608,10 @@ def test_diff_drive_track_error_on_spin(robots):
     d, phi = 0.004, math.pi / 2
     true = SystematicErrors({"left": WheelErrors(dy=d)}).apply(robot)
     dth = DIFF_TRACK * phi / (DIFF_TRACK + d)
-    sim = simulate(spin(phi), true, robot, noise=EXACT)
+    sim = simulate_kinematic(spin(phi), true, robot, noise=EXACT)
     assert_pose(sim.measured[0], [d / 2 * math.sin(dth), d / 2 * (1 - math.cos(dth)), dth], 1e-9)
     true = SystematicErrors({"left": WheelErrors(dy=d / 2), "right": WheelErrors(dy=-d / 2)}).apply(robot)
-    sim = simulate(spin(-phi), true, robot, noise=EXACT)
+    sim = simulate_kinematic(spin(-phi), true, robot, noise=EXACT)
     assert_pose(sim.measured[0], [0, 0, -dth], 1e-9)
 
 
@@ -619,7 +619,7 @@ def test_typical_noise_scatter_about_10_mm(robots):
     """'typical' noise: run-to-run scatter of the return positions on the 4 m square ~ 10 mm."""
     robot = robots["tomasi-omni3"]
     for direction in ("cw", "ccw"):
-        sim = simulate(
+        sim = simulate_kinematic(
             umbmark_square(direction), robot, robot, noise=NOISE["typical"], trials=200, rng=2024, keep_truth=False
         )
         e = sim.epsilon[:, :2]
@@ -633,7 +633,7 @@ def test_measurement_noise_alone(robots):
     """Only measurement noise (sigma 2 mm, 1 deg): the truth closes, the measured end scatters with those sigmas."""
     robot = robots["tomasi-omni3"]
     noise = NoiseModel(quantise=False, measurement=0.002, measurement_theta=math.radians(1.0))
-    sim = simulate(umbmark_square("cw"), robot, robot, noise=noise, trials=2000, rng=5, keep_truth=False)
+    sim = simulate_kinematic(umbmark_square("cw"), robot, robot, noise=noise, trials=2000, rng=5, keep_truth=False)
     assert_pose(sim.truth[:, -1], np.zeros((2000, 3)), 1e-9)
     std = sim.epsilon.std(axis=0)
     np.testing.assert_allclose(std, [0.002, 0.002, math.radians(1.0)], rtol=0.06)
@@ -643,9 +643,9 @@ def test_simulate_reproducible_with_seed(robots):
     robot = robots["tomasi-omni3"]
     true = PROFILES["typical"].sample(robot, 3).apply(robot)
     plan = umbmark_square("ccw")
-    a = simulate(plan, true, robot, noise=NOISE["typical"], trials=4, rng=42)
-    b = simulate(plan, true, robot, noise=NOISE["typical"], trials=4, rng=42)
-    c = simulate(plan, true, robot, noise=NOISE["typical"], trials=4, rng=43)
+    a = simulate_kinematic(plan, true, robot, noise=NOISE["typical"], trials=4, rng=42)
+    b = simulate_kinematic(plan, true, robot, noise=NOISE["typical"], trials=4, rng=42)
+    c = simulate_kinematic(plan, true, robot, noise=NOISE["typical"], trials=4, rng=43)
     np.testing.assert_array_equal(a.truth, b.truth)
     np.testing.assert_array_equal(a.measured, b.measured)
     np.testing.assert_array_equal(a.ticks, b.ticks)
@@ -653,7 +653,7 @@ def test_simulate_reproducible_with_seed(robots):
     # trials differ from each other
     assert len({tuple(m) for m in a.measured}) == 4
     # keeping only the end draws the same random numbers
-    d = simulate(plan, true, robot, noise=NOISE["typical"], trials=4, rng=42, keep_truth=False)
+    d = simulate_kinematic(plan, true, robot, noise=NOISE["typical"], trials=4, rng=42, keep_truth=False)
     np.testing.assert_allclose(d.truth[:, 0], a.truth[:, -1], rtol=0, atol=1e-12)
     np.testing.assert_allclose(d.measured, a.measured, rtol=0, atol=1e-12)
 
@@ -663,7 +663,7 @@ def test_trial_axis_shapes(robots):
     plan = umbmark_square("cw")
     sp = sample_plan(plan, robot, 100.0)
     n = len(sp.progress)
-    sim = simulate(plan, robot, robot, noise=NOISE["typical"], trials=7, rng=1)
+    sim = simulate_kinematic(plan, robot, robot, noise=NOISE["typical"], trials=7, rng=1)
     assert sim.t.shape == (n + 1,)
     assert sim.ticks.shape == (n + 1, 3)
     assert sim.steer is None
@@ -672,28 +672,28 @@ def test_trial_axis_shapes(robots):
     assert sim.measured.shape == (7, 3)
     assert sim.epsilon.shape == (7, 3)
     np.testing.assert_array_equal(sim.truth[:, 0], 0.0)
-    sim = simulate(plan, robot, robot, noise=NOISE["typical"], trials=7, rng=1, keep_truth=False)
+    sim = simulate_kinematic(plan, robot, robot, noise=NOISE["typical"], trials=7, rng=1, keep_truth=False)
     assert sim.truth.shape == (7, 1, 3) and sim.measured.shape == (7, 3)
     # noise-free trials are all the same, with the same shapes
-    sim = simulate(plan, robot, robot, noise=NOISE["none"], trials=3, rng=1)
+    sim = simulate_kinematic(plan, robot, robot, noise=NOISE["none"], trials=3, rng=1)
     assert sim.truth.shape == (3, n + 1, 3)
     np.testing.assert_array_equal(sim.truth[0], sim.truth[2])
     # diff-drive: two encoded wheels (the castor has no encoder)
     dd = robots["diff-drive"]
-    sim = simulate(plan, dd, dd, trials=2, rng=1, rate=20.0)
+    sim = simulate_kinematic(plan, dd, dd, trials=2, rng=1, rate=20.0)
     assert sim.ticks.shape[1] == 2 and sim.epsilon.shape == (2, 3)
     # a sampled plan is accepted as is
-    sim = simulate(sp, robot, robot, trials=1)
+    sim = simulate_kinematic(sp, robot, robot, trials=1)
     assert sim.t.shape == (n + 1,)
     for bad in (0, -1, 2.0):
         with pytest.raises(OmnikinError):
-            simulate(plan, robot, robot, trials=bad)
+            simulate_kinematic(plan, robot, robot, trials=bad)
 
 
 def test_simulate_refuses_plans_the_command_model_cannot_drive(robots):
     dd = robots["diff-drive"]
     with pytest.raises(OmnikinError):
-        simulate(umbmark_square("cw", 4.0, "translate"), dd, dd)
+        simulate_kinematic(umbmark_square("cw", 4.0, "translate"), dd, dd)
 
 
 def test_a_robot_built_without_errors_is_the_robot_itself_by_its_name():

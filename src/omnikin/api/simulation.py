@@ -11,7 +11,7 @@ import numpy as np
 from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..kinematics.robot import Robot
 from ..simulation.error_models import SystematicErrors
-from ..simulation.simulate import RunCost, SimulatedRun
+from ..simulation.kinematic import RunCost, SimulatedRun
 from .common import as_built, require_viz, robot_of
 
 DEFAULT_PATH = "square cw rotate 4"
@@ -21,7 +21,7 @@ DEFAULT_PATH = "square cw rotate 4"
 @dataclass(frozen=True)
 class Simulation:
     """A simulated run (:func:`simulate`): ``run`` holds the times [s], encoder ticks, odometry,
-    ground truth and measured end pose (:class:`~omnikin.simulation.simulate.SimulatedRun`);
+    ground truth and measured end pose (:class:`~omnikin.simulation.kinematic.SimulatedRun`);
     ``injected`` the systematic errors drawn (None for a given true robot).
 
     Attributes
@@ -80,7 +80,7 @@ class SimulationCost:
     ----------
     samples : float
         Samples of the plan at the rate (an upper bound,
-        :func:`~omnikin.simulation.simulate.run_cost`).
+        :func:`~omnikin.simulation.kinematic.run_cost`).
     memory : float
         The run's arrays for those samples [bytes] (physics: with room for the longest tail the
         run may add after the plan).
@@ -131,7 +131,7 @@ def simulate(
     stream draws the robot as built (the same robot as ``omnikin umbmark --seed``), its second
     the run, as ``omnikin simulate`` does. A run estimated to need more than ``max_memory``
     [bytes] or ``max_time`` [s] is refused before it starts
-    (:func:`~omnikin.simulation.simulate.run_cost`, the estimate ``omnikin simulate`` checks
+    (:func:`~omnikin.simulation.kinematic.run_cost`, the estimate ``omnikin simulate`` checks
     against ``--max-memory`` and ``--max-time``).
 
     ``engine``: what drives the run, an :class:`~omnikin.simulation.engine.Engine` or its name

@@ -30,7 +30,7 @@ from .common import (
 
 SIM_SAMPLE_SECONDS = 4 * MESSAGE_SECONDS
 """simulate --bag: per sample, its four messages made and written (the simulation itself, and the
-memory of it all: :func:`omnikin.simulation.simulate.run_cost`)."""
+memory of it all: :func:`omnikin.simulation.kinematic.run_cost`)."""
 LOG_ROW_SECONDS = 5e-6
 """simulate --log: per sample, its row of the tick log made and written (measured 19 us)."""
 PROGRESS_AFTER = 3.0

@@ -26,8 +26,8 @@ Encoder tick-count errors act exactly like radius errors on a wheel and are not
 separable from them: the fitted radius absorbs both.
 
 A run the robot cannot drive (a sideways line for a differential drive, a turn in place
-for a car) is refused before fitting, by the check :func:`omnikin.simulation.simulate.simulate`
-uses (:func:`~omnikin.simulation.simulate.segment_rates`), naming the run.
+for a car) is refused before fitting, by the check :func:`omnikin.simulation.kinematic.simulate_kinematic`
+uses (:func:`~omnikin.simulation.kinematic.segment_rates`), naming the run.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ from ..kinematics.se2 import compose, exp, wrap_angle
 from ..motion.plans import CalibrationRun, Plan, parse_plan
 from ..odometry.batch import encoded_wheels
 from ..simulation.error_models import SystematicErrors, WheelErrors
-from ..simulation.simulate import segment_rates
+from ..simulation.kinematic import segment_rates
 from .umbmark import UMBmarkResult, check_side, differential_pair
 
 BLIND = 2.0
@@ -332,8 +332,8 @@ def run_name(run: CalibrationRun, index: int) -> str:
 
 def check_drivable(runs: Sequence[CalibrationRun], robot: Robot) -> None:
     """Refuse (:class:`InfeasibleRunError`, naming the first such run) a run ``robot`` cannot
-    drive: the check :func:`~omnikin.simulation.simulate.simulate` makes
-    (:func:`~omnikin.simulation.simulate.segment_rates`)."""
+    drive: the check :func:`~omnikin.simulation.kinematic.simulate_kinematic` makes
+    (:func:`~omnikin.simulation.kinematic.segment_rates`)."""
     seen = set()
     for k, run in enumerate(runs):
         if run.plan in seen:

@@ -64,7 +64,7 @@ from ..kinematics.robot import Robot
 from ..motion.plans import CalibrationRun, Plan, umbmark_square
 from ..simulation.engine import Engine
 from ..simulation.error_models import NOISE, NoiseModel
-from ..simulation.simulate import simulate
+from ..simulation.kinematic import simulate_kinematic
 from .calibration import (
     RECOMMENDED_REPEATS,
     CalibrationResult,
@@ -467,7 +467,7 @@ def first_procedure_poses(
         plan = umbmark_square(direction, side, mode)
         k = 0
         for run in range(1, runs + 1):
-            sim = simulate(plan, true_robot, command, rate=rate, noise=noise, trials=1, rng=generator)
+            sim = simulate_kinematic(plan, true_robot, command, rate=rate, noise=noise, trials=1, rng=generator)
             k = k or stride(len(sim.t), rate, runs)
             out.append(kept_run(phase, direction, run, sim.t, sim.truth[0], sim.odometry, k))
     return out
@@ -484,7 +484,7 @@ def simulate_calibration_runs(
     rng = np.random.default_rng(rng)
     out = []
     for text, plan in recommended_runs(robot, side):
-        sim = simulate(
+        sim = simulate_kinematic(
             plan, true_robot, robot, rate=rate, noise=noise, trials=RECOMMENDED_REPEATS, rng=rng, keep_truth=False
         )
         out += [CalibrationRun(plan, tuple(m), text) for m in sim.measured]

@@ -44,7 +44,7 @@ from ..kinematics.wheels import range_problem
 from ..motion.limits import MotionLimits
 from ..motion.plans import check_mode, umbmark_square
 from ..simulation.error_models import NoiseModel
-from ..simulation.simulate import segment_rates, simulate
+from ..simulation.kinematic import segment_rates, simulate_kinematic
 
 UNITS = {
     "side": "m",
@@ -397,7 +397,7 @@ def _seed(rng) -> int:
 
 def square_refusal(robot: Robot, side: float, mode: str) -> str | None:
     """Why ``robot`` cannot drive the UMBmark squares of ``mode`` (the check ``simulate``
-    makes: :func:`~omnikin.simulation.simulate.segment_rates`), or None if it can."""
+    makes: :func:`~omnikin.simulation.kinematic.segment_rates`), or None if it can."""
     for direction in ("cw", "ccw"):
         square = umbmark_square(direction, side, mode)
         try:
@@ -444,7 +444,7 @@ def simulate_umbmark(
     number from its own stream, the ``k``-th child of ``rng``
     (:func:`procedure_generators`): it is the same whatever ``trials``. Returns a list of
     :class:`UMBmarkResult` (one per trial) and, with ``keep_runs``, also the
-    :class:`~omnikin.simulation.simulate.SimulatedRun` of each direction (its ``truth``
+    :class:`~omnikin.simulation.kinematic.SimulatedRun` of each direction (its ``truth``
     holds the first trial's runs).
     """
     if not isinstance(runs, (int, np.integer)) or runs < 1:
@@ -454,7 +454,7 @@ def simulate_umbmark(
     per_run = [g for g in gens for _ in range(runs)]  # procedure k's runs share its generator
     sims = {}
     for direction in ("cw", "ccw"):
-        sims[direction] = simulate(
+        sims[direction] = simulate_kinematic(
             umbmark_square(direction, side, mode),
             true_robot,
             command_robot,

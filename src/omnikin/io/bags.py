@@ -814,7 +814,7 @@ def record_run(
     steer_suffix: str = STEER_SUFFIX,
     force: bool = False,
 ) -> dict:
-    """Write a simulated run (:class:`omnikin.simulation.simulate.SimulatedRun`, first trial) to a new bag.
+    """Write a simulated run (:class:`omnikin.simulation.kinematic.SimulatedRun`, first trial) to a new bag.
 
     Topics (``topics`` renames them): ``/ground_truth`` (Odometry, the true poses),
     ``/odom`` (Odometry, the robot's odometry), ``/joint_states`` (JointState: the encoded

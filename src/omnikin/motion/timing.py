@@ -27,7 +27,7 @@ MAX_SAMPLES = 50_000_000
 
 RATE_RANGE = (5.0, 10_000.0)
 """Sample rate [Hz] of every simulated run: checked where a simulation starts
-(:func:`omnikin.simulation.simulate.simulate`, so also ``omnikin simulate``, ``omnikin umbmark``,
+(:func:`omnikin.simulation.kinematic.simulate_kinematic`, so also ``omnikin simulate``, ``omnikin umbmark``,
 :func:`omnikin.simulate`, :func:`omnikin.run_umbmark`; :func:`check_rate_range`): at least 5
 samples per second (a UMBmark leg then still spans several samples; at 1e-9 Hz a run is one
 sample and the result is noise of the sampling, not odometry), at most 10 kHz (beyond any

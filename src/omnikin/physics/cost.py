@@ -49,7 +49,7 @@ from ..errors import DivergedError
 from ..kinematics.robot import Robot
 from ..kinematics.se2 import wrap_angle
 from ..motion.timing import SampledPlan
-from ..simulation.simulate import segment_rates
+from ..simulation.kinematic import segment_rates
 from .description import describe
 from .engine import PhysicsSim
 from .mjcf import DEFAULT_STEP

@@ -29,11 +29,11 @@ The model is the MJCF of :mod:`omnikin.physics.mjcf`. The simulation
   ``rpt_true / rpt_controller`` (:attr:`PhysicsSim.loop_turn`): the counts of the encoder as
   built (``rpt_true`` [rad/tick]) follow the command over the scale its controller was told
   (``controller``, default the robot's design), as in the kinematic engine
-  (:func:`omnikin.simulation.simulate.wheel_motion`);
+  (:func:`omnikin.simulation.kinematic.wheel_motion`);
 - reads **encoders** from the wheel joint angles, quantised to whole ticks of each encoder
   (``ticks_per_rev`` and ``gear_ratio``, sign of ``invert``) and wrapped like the hardware
   counter when the encoder has ``counter_bits``
-  (:func:`omnikin.simulation.simulate.counter_output`);
+  (:func:`omnikin.simulation.kinematic.counter_output`);
 - gives the **ground truth**: pose ``(x, y, theta)`` of the chassis (its frame is the robot's
   body frame; ``theta`` counted continuously, not wrapped) and body twist ``(vx, vy, omega)``
   of ``docs/conventions.md``, from MuJoCo's ``mj_objectVelocity`` for the chassis *frame*
@@ -53,7 +53,7 @@ from ..common.messages import shorten
 from ..errors import DivergedError, InputError, PhysicsError
 from ..kinematics.robot import Robot
 from ..kinematics.se2 import wrap_angle
-from ..simulation.simulate import counter_output
+from ..simulation.kinematic import counter_output
 from .description import PhysicalRobot, describe
 from .mjcf import DEFAULT_STEP, STEP_RANGE, mjcf
 

@@ -27,7 +27,7 @@ from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range
 from ..simulation.engine import Engine, KinematicEngine, Progress, SimulatedBackend
 from ..simulation.error_models import NoiseModel
-from ..simulation.simulate import RunCost, SimulatedRun, run_cost
+from ..simulation.kinematic import RunCost, SimulatedRun, run_cost
 from .mjcf import DEFAULT_STEP, time_step
 
 
@@ -66,7 +66,7 @@ class PhysicsEngine(Engine):
     :meth:`~omnikin.physics.run.PhysicsRun.problems` and
     :meth:`~omnikin.physics.run.PhysicsRun.summary` (none for a run of another engine).
     :meth:`cost`: the memory is the kinematic engine's per sample
-    (:func:`~omnikin.simulation.simulate.run_cost`) over the plan and the tail after it
+    (:func:`~omnikin.simulation.kinematic.run_cost`) over the plan and the tail after it
     (:data:`~omnikin.physics.run.TAIL_MAX`; ``timed`` False), or over the samples of the
     simulated time's upper bound; the time is :func:`~omnikin.physics.cost.physics_run_cost` (the
     plan sampled, the step's cost measured on ``true_robot``'s model unless its size alone

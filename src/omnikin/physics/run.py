@@ -1,10 +1,10 @@
 """A plan driven in the physics engine: :func:`simulate_physics`, the physics twin of
-:func:`omnikin.simulation.simulate.simulate` (``omnikin simulate --engine physics``).
+:func:`omnikin.simulation.kinematic.simulate_kinematic` (``omnikin simulate --engine physics``).
 
 The plan is timed and sampled for the commanding (nominal) robot exactly as the kinematic
 engine does it (:func:`~omnikin.motion.timing.sample_plan`, the same limits), and the
 commanded wheel angles of every rolling wheel at the samples are those of
-:func:`~omnikin.simulation.simulate.commanded_angles`. Sample ``k`` commands each wheel the
+:func:`~omnikin.simulation.kinematic.commanded_angles`. Sample ``k`` commands each wheel the
 mean speed ``(angle_{k+1} - angle_k) / dt`` [rad/s] of its interval (and the interval's
 steering), held for the interval (zero-order hold at the plan's rate, as a wheel controller
 receiving set-points does); :class:`~omnikin.physics.engine.PhysicsSim` of the robot *as built*
@@ -31,12 +31,12 @@ angle they were commanded to turn (:data:`END_ERROR`), steering not reached with
 :data:`ALIGN_MAX`, the robot not at rest after :data:`TAIL_MAX`; :meth:`PhysicsRun.problems`
 words them. Its sample ``rate`` must have a period of whole time steps (:func:`check_rate_steps`).
 
-The result is a :class:`PhysicsRun`, a :class:`~omnikin.simulation.simulate.SimulatedRun` (one
+The result is a :class:`PhysicsRun`, a :class:`~omnikin.simulation.kinematic.SimulatedRun` (one
 trial) as the kinematic
 engine gives it, so that its tick log, bag and summary are written by the same code:
 ``ticks`` are the whole ticks the encoders of the robot as built counted (never wrapped),
 ``readings`` those counts as the command robot's counters output them
-(:func:`~omnikin.simulation.simulate.counter_output`), ``steer`` the steering angles the
+(:func:`~omnikin.simulation.kinematic.counter_output`), ``steer`` the steering angles the
 steering joints reached [rad], ``odometry`` the command robot's odometry of the readings,
 ``truth`` the chassis pose (heading continuous), ``measured`` the true end pose (the physics has
 no measurement noise), ``sampled`` the plan's samples with zero-progress samples for the tail.
@@ -58,7 +58,7 @@ from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range, require_motion, sample_plan
 from ..odometry.batch import batch_odometry, encoded_wheels
 from ..odometry.plausibility import QUANTISATION_SLACK, counter_rules
-from ..simulation.simulate import SimulatedRun, commanded_angles, counter_output
+from ..simulation.kinematic import SimulatedRun, commanded_angles, counter_output
 from .description import steered_support_margin
 from .engine import TRACK_ERROR, TRACK_TIME, PhysicsSim
 from .mjcf import DEFAULT_STEP, time_step
@@ -117,7 +117,7 @@ class WheelTrouble:
 
 @dataclass(frozen=True)
 class PhysicsRun(SimulatedRun):
-    """A :class:`~omnikin.simulation.simulate.SimulatedRun` driven in the physics engine;
+    """A :class:`~omnikin.simulation.kinematic.SimulatedRun` driven in the physics engine;
     ``saturated`` counts the samples whose command a motor's speed limit or a steering end stop
     held at the limit (:attr:`omnikin.physics.engine.PhysicsSim.saturated`); ``wheels`` the
     driven wheels that lagged their set-points or slipped (:class:`WheelTrouble`);

@@ -2,7 +2,7 @@
 
 It implements :class:`omnikin.runtime.backends.WheelBackend`: the driven (encoded) wheels
 turn at the commanded speeds (ideal speed control, zero-order hold between calls) as their
-motors turn them (:func:`omnikin.simulation.simulate.wheel_motion`: a stepper the commanded
+motors turn them (:func:`omnikin.simulation.kinematic.wheel_motion`: a stepper the commanded
 angle, a dc motor so that the true encoder's counts follow the command over the nominal scale);
 the readings are the true encoders' counts converted with the nominal scale, as a driver does; each
 wheel's rolling distance slips as in :class:`omnikin.simulation.error_models.NoiseModel`,

@@ -5,7 +5,7 @@ a sweep's trials, the viewer's live robot, ``omnikin ros --backend``) asks of it
 holds one engine object and none asks which engine it holds:
 
 - :meth:`Engine.drive`: a plan driven by the robot as built, commanded by its (nominal) model,
-  gives a :class:`~omnikin.simulation.simulate.SimulatedRun` (times [s], encoder counts and the
+  gives a :class:`~omnikin.simulation.kinematic.SimulatedRun` (times [s], encoder counts and the
   counters' readings, steering [rad], the odometry of the readings, ground truth, the measured
   end pose);
 - :meth:`Engine.backend`: the runtime's wheel back-end on the robot as built, for a stream of
@@ -39,10 +39,10 @@ from ..motion.limits import MotionLimits
 from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range
 from ..runtime.backends import WheelBackend
-from . import simulate as kinematic
+from . import kinematic
 from .error_models import NoiseModel
 from .error_models import noise as noise_profile
-from .simulate import RunCost, SimulatedRun
+from .kinematic import RunCost, SimulatedRun
 
 Progress = Callable[[float, float], None]
 """Called now and then with the simulated time and the plan's duration [s]."""
@@ -299,15 +299,15 @@ class Engine(Protocol):
 
 @dataclass(frozen=True)
 class KinematicEngine(Engine):
-    """The kinematic simulation (:mod:`omnikin.simulation.simulate`): each wheel turns as its motor
+    """The kinematic simulation (:mod:`omnikin.simulation.kinematic`): each wheel turns as its motor
     turns it when commanded, slip and floor errors from a noise model, the true robot's forward
     kinematics and exact SE(2) integration give the ground truth. It implements :class:`Engine`
     (the methods without a docstring of their own are documented there).
 
     It has no options; the random errors are given to each run (:meth:`drive`'s ``noise``).
-    :meth:`drive` is :func:`~omnikin.simulation.simulate.simulate`, :meth:`backend` a
+    :meth:`drive` is :func:`~omnikin.simulation.kinematic.simulate_kinematic`, :meth:`backend` a
     :class:`~omnikin.simulation.backend.SimBackend` (it never lags: ``max_lag`` does not apply),
-    :meth:`cost` :func:`~omnikin.simulation.simulate.run_cost` (computed without sampling the
+    :meth:`cost` :func:`~omnikin.simulation.kinematic.run_cost` (computed without sampling the
     plan, so ``timed`` changes nothing and ``budget`` is not used).
 
     Attributes
@@ -386,7 +386,7 @@ class KinematicEngine(Engine):
         progress: Progress | None = None,
         trials: int = 1,
     ) -> SimulatedRun:
-        """:meth:`Engine.drive` by :func:`~omnikin.simulation.simulate.simulate`, ``trials`` runs at
+        """:meth:`Engine.drive` by :func:`~omnikin.simulation.kinematic.simulate_kinematic`, ``trials`` runs at
         once (each its own draw of the noise).
 
         Parameters
@@ -424,7 +424,7 @@ class KinematicEngine(Engine):
             In one line: a rate outside the range, ``trials`` not a whole number >= 1, robots
             whose wheels differ or a true wheel without encoder, a plan without motion.
         """
-        return kinematic.simulate(  # looked up in its module when called, as a stand-in there is
+        return kinematic.simulate_kinematic(  # looked up in its module when called, as a stand-in there is
             plan, true_robot, command_robot, rate=rate, limits=limits, noise=noise, trials=trials, rng=rng
         )
 

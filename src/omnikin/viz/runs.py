@@ -7,7 +7,7 @@ from . import new_figure
 
 def run_figure(run, title: str = ""):
     """True path (solid) and odometry (dashed) of the first trial of a
-    :class:`~omnikin.simulation.simulate.SimulatedRun` whose ground truth was kept [m]."""
+    :class:`~omnikin.simulation.kinematic.SimulatedRun` whose ground truth was kept [m]."""
     fig = new_figure(figsize=(5.6, 5.6))
     ax = fig.add_subplot(1, 1, 1)
     truth = run.truth[0]

@@ -146,7 +146,7 @@ def run_cost(plan: Plan, robot: Robot, rate: float = 100.0, limits: MotionLimits
     return RunCost(samples, samples * per_sample, samples * SAMPLE_SECONDS, samples / rate)
 
 
-def simulate(
+def simulate_kinematic(
     plan: Plan | SampledPlan,
     true_robot: Robot,
     command_robot: Robot,
