@@ -257,6 +257,21 @@ def stop_name(exc: BaseException) -> str:
     return signal.Signals(exc.signum).name if isinstance(exc, Terminated) else "Ctrl-C"
 
 
+def forget_handled_interrupt() -> None:
+    """Make sure that a Ctrl-C the command handled does not end the process by SIGINT after all.
+
+    CPython ends a process whose :class:`KeyboardInterrupt` nobody handled by killing it with
+    SIGINT (bpo-1054041: so that a shell sees death by Ctrl-C), and it notes such an interrupt in a
+    flag that is also set when a KeyboardInterrupt leaves code run from source text
+    (``exec``/``eval`` of a string, C ``PyRun_String``), even if a caller handles it later. Under
+    ``python -m omnikin`` (``Py_RunMain``) the flag is read after the interpreter finalized and
+    the process dies by SIGINT whatever status it exited with: a Ctrl-C that came while rosbags
+    compiled its generated serializers (``exec`` of a string) once turned ``omnikin: interrupted``
+    (130) into death by SIGINT. Every evaluation of source text resets the flag when it starts:
+    an empty one clears it. Call when the command's exit status is settled."""
+    exec("", {})  # noqa: S102 (an empty program: nothing runs)
+
+
 STOPPED: list[str] = []
 """How the running command was stopped inside :func:`until_stopped` (empty: it was not)."""
 

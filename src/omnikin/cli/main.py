@@ -41,6 +41,7 @@ from .common import (
     command_inputs,
     console,
     declare_inputs,
+    forget_handled_interrupt,
     load_robot,
     number,
     print_json,
@@ -696,7 +697,9 @@ def main(argv=None) -> int:
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
     STOPPED.clear()
     with _standard_streams(), _termination_unwinds() as fired:
-        return _main(argv, fired)
+        status = _main(argv, fired)
+    forget_handled_interrupt()  # a Ctrl-C handled above must not still end the process by SIGINT
+    return status
 
 
 def _main(argv: list[str], fired: list[int]) -> int:
