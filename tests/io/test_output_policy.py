@@ -235,6 +235,111 @@ def test_a_signal_during_a_critical_step_is_delivered_after_it(tmp_path):
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
+class _Stopped(Exception):
+    """What the SIGTERM handler of these tests raises (as the command line's ``Terminated`` does)."""
+
+
+@pytest.fixture
+def own_handlers():
+    """Python handlers for the three deferred signals (SIGINT: Ctrl-C's KeyboardInterrupt; SIGTERM:
+    raises :class:`_Stopped`; SIGHUP: records), the process's own ones back after the test;
+    yields the handlers and the list of SIGHUPs recorded."""
+    import signal
+
+    hups: list[int] = []
+
+    def stopped(num, frame):
+        raise _Stopped(num)
+
+    def hung_up(num, frame):
+        hups.append(num)
+
+    mine = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: stopped, signal.SIGHUP: hung_up}
+    saved = {sig: signal.signal(sig, handler) for sig, handler in mine.items()}
+    try:
+        yield mine, hups
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+
+
+@pytest.mark.parametrize("moment", range(6))
+@pytest.mark.parametrize("name", ["SIGINT", "SIGTERM", "SIGHUP"])
+def test_a_signal_while_the_handlers_are_swapped_acts_once_and_nothing_stays_swapped(
+    own_handlers, monkeypatch, name, moment
+):
+    """The signal arrives just before the handlers are swapped in (moments 0-2) or back (3-5): it
+    acts exactly once, as its own handler does (Ctrl-C: one KeyboardInterrupt), and every handler
+    is its own again after the block. (A Ctrl-C raised while the handlers were put back once left
+    SIGTERM and SIGHUP deferred for the rest of the process: a later ``kill`` did nothing.)"""
+    import signal
+
+    from omnikin.io import output
+
+    mine, hups = own_handlers
+    signum = getattr(signal, name)
+    swap = signal.signal
+    calls: list[int] = []
+
+    def swap_late(sig, handler):  # the signal comes right before the swap number ``moment``
+        if len(calls) == moment:
+            calls.append(sig)
+            signal.raise_signal(signum)  # Python runs the handler in place now: before the swap
+        else:
+            calls.append(sig)
+        return swap(sig, handler)
+
+    monkeypatch.setattr(signal, "signal", swap_late)
+    raised = []
+    try:
+        with output._uninterrupted():
+            pass
+    except (KeyboardInterrupt, _Stopped) as exc:
+        raised.append(type(exc))
+    monkeypatch.undo()
+    assert moment < len(calls), "the moment never came"
+    assert raised == {"SIGINT": [KeyboardInterrupt], "SIGTERM": [_Stopped], "SIGHUP": []}[name]
+    assert hups == ([signal.SIGHUP] if name == "SIGHUP" else [])
+    assert {sig: signal.getsignal(sig) for sig in mine} == mine
+
+
+def test_a_signal_not_handled_by_python_is_left_alone(own_handlers, monkeypatch):
+    """A handler Python did not set (C code's: ``signal.getsignal`` says None) cannot be put back
+    from Python: the block leaves that signal alone instead of restoring the default action
+    after it (which turned the next Ctrl-C into death by SIGINT)."""
+    import signal
+
+    from omnikin.io import output
+
+    getsignal = signal.getsignal
+    monkeypatch.setattr(signal, "getsignal", lambda sig: None if sig == signal.SIGINT else getsignal(sig))
+    swapped: list[int] = []
+    swap = signal.signal
+    monkeypatch.setattr(signal, "signal", lambda sig, handler: swapped.append(sig) or swap(sig, handler))
+    with output._uninterrupted():
+        pass
+    monkeypatch.undo()
+    assert signal.SIGINT not in swapped and signal.SIGTERM in swapped
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_signals_deferred_together_each_act_once_in_order(own_handlers):
+    """SIGHUP then Ctrl-C inside the block: after it, the SIGHUP handler runs, then Ctrl-C
+    interrupts; none is dropped for coming second."""
+    import signal
+
+    from omnikin.io import output
+
+    _, hups = own_handlers
+    with pytest.raises(KeyboardInterrupt):
+        with output._uninterrupted():
+            signal.raise_signal(signal.SIGHUP)
+            signal.raise_signal(signal.SIGINT)
+            signal.raise_signal(signal.SIGHUP)
+            assert hups == []
+    assert hups == [signal.SIGHUP]
+
+
 # --- the outputs of one command, together -------------------------------------------------------------------
 def test_two_outputs_on_one_path_are_refused_before_anything_is_written(tmp_path):
     """simulate --log x.csv --bag x.csv wrote a 13 MB bag and then failed: the outputs of a command

@@ -64,7 +64,9 @@ def run(argv: list[str] | None, build_parser: Callable[[], CommandParser]) -> in
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
     STOPPED.clear()
     with _standard_streams(), _termination_unwinds() as fired:
-        return _main(argv, fired, build_parser)
+        status = _main(argv, fired, build_parser)
+    forget_handled_interrupt()  # a Ctrl-C handled above must not still end the process by SIGINT
+    return status
 
 
 def _main(argv: list[str], fired: list[int], build_parser: Callable[[], CommandParser]) -> int:
@@ -279,3 +281,18 @@ def _quiet_stdout() -> None:
         os.close(devnull)
     except OSError:
         pass
+
+
+def forget_handled_interrupt() -> None:
+    """Make sure that a Ctrl-C the command handled does not end the process by SIGINT after all.
+
+    CPython ends a process whose :class:`KeyboardInterrupt` nobody handled by killing it with
+    SIGINT (bpo-1054041: so that a shell sees death by Ctrl-C), and it notes such an interrupt in a
+    flag that is also set when a KeyboardInterrupt leaves code run from source text
+    (``exec``/``eval`` of a string, C ``PyRun_String``), even if a caller handles it later. Under
+    ``python -m omnikin`` (``Py_RunMain``) the flag is read after the interpreter finalized and
+    the process dies by SIGINT whatever status it exited with: a Ctrl-C that came while rosbags
+    compiled its generated serializers (``exec`` of a string) once turned ``omnikin: interrupted``
+    (130) into death by SIGINT. Every evaluation of source text resets the flag when it starts:
+    an empty one clears it. Call when the command's exit status is settled."""
+    exec("", {})  # noqa: S102 (an empty program: nothing runs)

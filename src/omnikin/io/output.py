@@ -396,21 +396,73 @@ _DEFERRED = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHU
 @contextlib.contextmanager
 def _uninterrupted() -> Iterator[None]:
     """Defer Ctrl-C (SIGINT), SIGTERM and SIGHUP over a few file-system steps that must not be cut in
-    the middle (creating a temporary and recording its name, swapping folders); the signal is
-    delivered right after, to the handler that was there before. Outside the main thread
-    (where handlers cannot be set) it does nothing."""
+    the middle (creating a temporary and recording its name, swapping folders); the signals
+    received are delivered right after, in order, each to the handler that was there before (a
+    Python handler is called: Ctrl-C raises :class:`KeyboardInterrupt`, which ends the delivery;
+    with the default action the process ends as it would have). Outside the main thread (where
+    handlers cannot be set) it does nothing.
+
+    Neither a deferred signal nor one that arrives while the handlers are swapped is lost or
+    changes its meaning: a signal whose handler is not Python's (set by C code: it could not be
+    put back) or ignored is left alone; the handlers are recorded before they are swapped, so
+    that an exception raised by a pending signal while swapping leaves nothing swapped for good;
+    and a deferring handler still installed once the block is over (an exception while the
+    handlers are put back) passes its signal on to the previous handler instead of holding it.
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     received: list[int] = []
-    previous = {sig: signal.signal(sig, lambda num, frame: received.append(num)) for sig in _DEFERRED}
+    previous: dict[int, Any] = {}
+    deferring = True
+
+    def defer(num, frame):
+        if deferring:
+            received.append(num)
+        else:  # the block is over but this handler is not replaced yet
+            _deliver(num, previous[num], frame)
+
     try:
+        for sig in _DEFERRED:
+            handler = signal.getsignal(sig)
+            if handler is None or handler == signal.SIG_IGN:
+                continue
+            previous[sig] = handler  # before the swap: an exception inside it is undone below
+            signal.signal(sig, defer)
         yield
     finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
-        if received:
-            signal.raise_signal(received[0])
+        try:
+            _restore(previous)
+        finally:
+            deferring = False
+            for num in dict.fromkeys(received):  # each signal once, in the order they came
+                _deliver(num, previous[num], None)
+
+
+def _restore(previous: dict[int, Any]) -> None:
+    """Put the handlers ``previous`` back, all of them even if a signal pending meanwhile raises
+    (``signal.signal`` runs the handlers of pending signals before it swaps); then raise the
+    first such exception."""
+    error: BaseException | None = None
+    for sig, handler in previous.items():
+        while True:
+            try:
+                signal.signal(sig, handler)
+                break
+            except BaseException as exc:  # noqa: BLE001 (a signal's handler raised: after the rest)
+                error = error or exc
+    if error is not None:
+        raise error
+
+
+def _deliver(num: int, handler, frame) -> None:
+    """Act on signal ``num`` as ``handler`` (the one :func:`_uninterrupted` deferred it from) would
+    have: call a Python handler; for the default action, put it back and raise the signal."""
+    if callable(handler):
+        handler(num, frame)
+    elif handler == signal.SIG_DFL:
+        signal.signal(num, signal.SIG_DFL)
+        signal.raise_signal(num)
 
 
 def _umask() -> int:

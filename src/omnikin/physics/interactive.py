@@ -546,15 +546,21 @@ class InteractiveSim:
         # (Blocking the signals in this thread would not do: another thread, e.g. a BLAS
         # worker's, would take them, and Python runs the handler here all the same.)
         held: list[int] = []
-        previous = {}
-        if threading.current_thread() is threading.main_thread():
-            previous = {s: signal.signal(s, lambda signum, frame: held.append(signum)) for s in STOP_SIGNALS}
+        previous: dict = {}
 
         def restore() -> None:
             for s, handler in previous.items():
                 signal.signal(s, handler)
 
         try:
+            # a handler C code set (None: it cannot be put back from Python) or SIG_IGN is left
+            # alone; each one is recorded before it is swapped, so that a pending signal raising
+            # in the middle leaves none swapped
+            for sig in STOP_SIGNALS if threading.current_thread() is threading.main_thread() else ():
+                handler = signal.getsignal(sig)
+                if handler is not None and handler != signal.SIG_IGN:
+                    previous[sig] = handler
+                    signal.signal(sig, lambda signum, frame: held.append(signum))
             viewer = viewer_module.launch_passive(
                 sim.model, sim.data, key_callback=self._on_key, show_left_ui=False, show_right_ui=False
             )
