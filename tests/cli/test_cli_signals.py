@@ -137,6 +137,7 @@ RUNNER = """
 import sys
 
 import omnikin.cli.main as cli
+import omnikin.cli.presets as presets
 
 
 def interrupted_in_source_text(args):
@@ -145,7 +146,7 @@ def interrupted_in_source_text(args):
     return 0
 
 
-cli.cmd_presets = interrupted_in_source_text
+presets.run = interrupted_in_source_text
 sys.exit(cli.main(["presets"]))
 """
 
