@@ -28,8 +28,8 @@ import time
 from _common import best_time, save
 from omnikin import load_robot
 from omnikin.physics.description import describe
-from omnikin.physics.engine import PhysicsSim
 from omnikin.physics.mjcf import mjcf
+from omnikin.physics.simulator import PhysicsSim
 
 ROBOTS = {
     "tomasi-omni3": (0.2, 0.1, 0.5),

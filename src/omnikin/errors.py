@@ -298,7 +298,7 @@ class PhysicsError(OmnikinError, RuntimeError):
 
 class DivergedError(PhysicsError):
     """MuJoCo found the state not finite (or huge) and reset it: raised by
-    :class:`omnikin.physics.engine.PhysicsSim`. The message gives no advice about an option: a
+    :class:`omnikin.physics.simulator.PhysicsSim`. The message gives no advice about an option: a
     caller that has a ``--step`` adds it (:meth:`explained`).
 
     ``time`` [s]: the simulated time at which it did (counted from the start of settling when

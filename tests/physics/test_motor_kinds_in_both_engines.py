@@ -98,7 +98,7 @@ def test_a_robot_as_built_drives_alike_in_both_engines_as_its_motors_turn_its_wh
 def test_a_dc_motor_counts_by_the_scale_its_controller_was_told():
     """The physics engine's dc wheel turns ``rpt_true / rpt_told`` times the commanded speed (the
     counts of its encoder as built follow the command over the nominal scale); a stepper's 1."""
-    from omnikin.physics.engine import PhysicsSim
+    from omnikin.physics.simulator import PhysicsSim
 
     for motor, expected in (("dc", 1.0 / (1.0 + ERROR)), ("stepper", 1.0)):
         nominal = with_motor(load_robot("tomasi-omni3"), motor)

@@ -34,8 +34,8 @@ pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (extra 'ph
 from omnikin import load_robot  # noqa: E402
 from omnikin.odometry.streaming import Odometry  # noqa: E402
 from omnikin.physics.description import describe  # noqa: E402
-from omnikin.physics.engine import PhysicsSim  # noqa: E402
 from omnikin.physics.mjcf import DEFAULT_STEP  # noqa: E402
+from omnikin.physics.simulator import PhysicsSim  # noqa: E402
 
 DT = 0.05  # encoder read interval [s]
 HOLD = 1.0  # time each step command is held [s]

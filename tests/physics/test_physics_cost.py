@@ -21,8 +21,8 @@ from omnikin.errors import ResourceLimitError
 from omnikin.motion.plans import parse_plan
 from omnikin.motion.timing import sample_plan
 from omnikin.physics.cost import physics_run_cost, real_time_shortfall, simulated_bound
-from omnikin.physics.engine import PhysicsSim
 from omnikin.physics.run import simulate_physics
+from omnikin.physics.simulator import PhysicsSim
 from omnikin.presets import preset_path
 
 pytest.importorskip("mujoco")

@@ -1,4 +1,4 @@
-"""The robot stepped in MuJoCo (omnikin.physics.engine.PhysicsSim): rest, the motions of
+"""The robot stepped in MuJoCo (omnikin.physics.simulator.PhysicsSim): rest, the motions of
 Garcia-Sillas et al., commanded against simulated twists, encoders. Expected values come from
 the kinematics (Robot.fk of the commanded wheel speeds) and closed forms, never from the engine.
 
@@ -20,7 +20,7 @@ from omnikin import Encoder, Robot, Wheel, load_robot  # noqa: E402
 from omnikin.errors import InputError  # noqa: E402
 from omnikin.kinematics.se2 import wrap_angle  # noqa: E402
 from omnikin.physics.description import describe, steered_support_margin  # noqa: E402
-from omnikin.physics.engine import TIPPED, PhysicsSim  # noqa: E402
+from omnikin.physics.simulator import TIPPED, PhysicsSim  # noqa: E402
 from omnikin.presets import PRESET_NAMES  # noqa: E402
 
 RAMP = 0.5
@@ -335,7 +335,7 @@ def test_commands_beyond_the_motor_limits_are_held_there_and_counted():
     """A wheel speed beyond the motor's speed limit is held at the limit (as a motor would) and
     the command is counted in ``saturated`` (and the back-end's stats), never silently."""
     from omnikin.physics.backend import PhysicsBackend
-    from omnikin.physics.engine import PhysicsSim
+    from omnikin.physics.simulator import PhysicsSim
 
     robot = load_robot("tomasi-omni3")
     sim = PhysicsSim(robot)

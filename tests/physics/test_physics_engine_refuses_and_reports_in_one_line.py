@@ -19,15 +19,15 @@ from conftest import omnikin_env, run_cli, run_entry_point
 from omnikin import load_robot
 from omnikin.errors import DivergedError, InputError
 from omnikin.motion.plans import parse_plan
-from omnikin.physics.engine import ADVANCE_MAX, PhysicsSim
 from omnikin.physics.mjcf import time_step
 from omnikin.physics.run import check_rate_steps, simulate_physics
+from omnikin.physics.simulator import ADVANCE_MAX, PhysicsSim
 
 KICK = """
 import sys
 import numpy as np
 from omnikin import load_robot
-from omnikin.physics.engine import PhysicsSim, DivergedError
+from omnikin.physics.simulator import PhysicsSim, DivergedError
 sim = PhysicsSim(load_robot("diff-drive"))
 sim.advance(0.5)
 sim.data.qvel[0] = 1e11  # beyond MuJoCo's bound on a velocity (1e10): it resets the state

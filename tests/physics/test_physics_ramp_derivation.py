@@ -69,7 +69,7 @@ def test_parallel_drive_directions_off_by_mounting_errors_still_ramp_and_drive(n
     from dataclasses import replace
 
     from omnikin.physics.description import describe
-    from omnikin.physics.engine import PhysicsSim
+    from omnikin.physics.simulator import PhysicsSim
 
     robot = load_robot(name)
     errors = np.radians([0.5, -0.3, 0.2, -0.4])[: len(robot.wheels)]

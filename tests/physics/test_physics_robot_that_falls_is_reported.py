@@ -1,5 +1,5 @@
 """A simulated robot that falls over is reported by every user of the physics engine, as
-``simulate --engine physics`` does (:meth:`omnikin.physics.engine.PhysicsSim.fall`: the chassis
+``simulate --engine physics`` does (:meth:`omnikin.physics.simulator.PhysicsSim.fall`: the chassis
 tilted beyond ``TIPPED``): the runtime's physics back-end stops its wheels and says so
 (``fallen``, ``stats()``), the viewer's live robot stops and shows one line, and a study's trial
 whose robot fell is a row with that reason, not a number.
@@ -25,7 +25,7 @@ from omnikin import load_robot  # noqa: E402
 from omnikin.errors import OmnikinError, PhysicsError  # noqa: E402
 from omnikin.kinematics.physical import PhysicalBody  # noqa: E402
 from omnikin.physics.backend import PhysicsBackend  # noqa: E402
-from omnikin.physics.engine import TIPPED  # noqa: E402
+from omnikin.physics.simulator import TIPPED  # noqa: E402
 
 DT = 0.02
 PUSH = 1.5  # [N m] about world x

@@ -31,8 +31,8 @@ from omnikin import load_robot  # noqa: E402
 from omnikin.errors import InputError  # noqa: E402
 from omnikin.io.robot_file import robot_from_dict, robot_to_dict  # noqa: E402
 from omnikin.motion.plans import parse_plan  # noqa: E402
-from omnikin.physics.engine import PhysicsSim  # noqa: E402
 from omnikin.physics.run import simulate_physics  # noqa: E402
+from omnikin.physics.simulator import PhysicsSim  # noqa: E402
 
 PITCH = 2.0 * math.pi / (2 * 6)
 """Wheel angle [rad] between two hand-overs of tomasi-omni3's default rollers (2 rows of 6)."""

@@ -33,7 +33,7 @@ pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (extra 'ph
 
 from omnikin import load_robot  # noqa: E402
 from omnikin.io.robot_file import robot_from_dict, robot_to_dict  # noqa: E402
-from omnikin.physics.engine import PhysicsSim  # noqa: E402
+from omnikin.physics.simulator import PhysicsSim  # noqa: E402
 
 WIDTH = 0.034
 """Wheel width [m]: the two rows 17 mm apart, ``d = 8.5 mm`` off the mid-plane."""

@@ -40,7 +40,7 @@ from omnikin.kinematics.physical import PhysicalWheel  # noqa: E402
 from omnikin.kinematics.se2 import between, log  # noqa: E402
 from omnikin.odometry.streaming import Odometry  # noqa: E402
 from omnikin.physics.description import describe  # noqa: E402
-from omnikin.physics.engine import PhysicsSim  # noqa: E402
+from omnikin.physics.simulator import PhysicsSim  # noqa: E402
 
 DT = 0.05  # encoder sampling interval [s]
 ACCEL, SPEED = 1.0, 0.5  # commanded ramp [m/s^2] and cruise [m/s], forward

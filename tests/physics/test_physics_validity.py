@@ -25,8 +25,8 @@ from conftest import SRC, run_entry_point
 from omnikin import load_robot
 from omnikin.motion.plans import line
 from omnikin.physics.description import describe, support_margin
-from omnikin.physics.engine import PhysicsSim
 from omnikin.physics.run import simulate_physics
+from omnikin.physics.simulator import PhysicsSim
 
 TOMASI = Path(SRC) / "omnikin" / "presets" / "tomasi-omni3.yaml"
 LINE_TOLERANCE = 0.01

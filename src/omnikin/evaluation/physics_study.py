@@ -28,7 +28,7 @@ encoders count whole ticks, so a noise model is refused
 (:func:`~omnikin.physics.engines.check_physics_noise`). The
 engine is deterministic; what differs from run to run, as on a built robot, is where in their
 roller period the wheels start: every run starts each wheel at a **roller phase** drawn
-uniformly from ``[0, 1)`` of its period (:func:`~omnikin.physics.engine.roller_period`), from
+uniformly from ``[0, 1)`` of its period (:func:`~omnikin.physics.simulator.roller_period`), from
 the stage's stream of the study's seed (:func:`~omnikin.evaluation.procedure.streams`: the
 same seed gives the same runs, the cw and ccw runs of a stage their own child streams, so the
 first procedure does not depend on ``trials``). The confidence intervals and the floor thus

@@ -2,7 +2,7 @@
 
 It implements :class:`omnikin.runtime.backends.WheelBackend` as a drop-in for the kinematic
 :class:`omnikin.simulation.backend.SimBackend` (same constructor shape, same ``truth``): wheel
-commands go to the driven wheels' motors of :class:`~omnikin.physics.engine.PhysicsSim`
+commands go to the driven wheels' motors of :class:`~omnikin.physics.simulator.PhysicsSim`
 (ramped, torque-limited; zero-order hold between calls), the model is stepped up to each call's
 time, and the encoders are read from the wheel joints. Slip, wheel dynamics and roller contact
 come from the physics, so there is no noise model; ``quantise`` switches the tick
@@ -16,9 +16,9 @@ joint speeds converted with the same ratio. The clock starts at the first call, 
 ``SimBackend``; calls with a time not after the last one move nothing.
 
 Wheels turn by their motors (:attr:`omnikin.kinematics.wheels.Wheel.motor`): a dc motor's speed loop counts
-by the nominal robot's encoder scale (``controller`` of :class:`~omnikin.physics.engine.PhysicsSim`).
+by the nominal robot's encoder scale (``controller`` of :class:`~omnikin.physics.simulator.PhysicsSim`).
 
-**A robot that tips over** (:meth:`~omnikin.physics.engine.PhysicsSim.fall`, checked at every
+**A robot that tips over** (:meth:`~omnikin.physics.simulator.PhysicsSim.fall`, checked at every
 call) is reported, never driven on: :attr:`PhysicsBackend.fallen` holds the one line (also in
 ``stats()["fallen"]``, which the ROS node turns into an ERROR in ``/diagnostics`` and the viewer
 into a notice), and from then on every command is replaced by zero wheel speeds.
@@ -44,8 +44,8 @@ from ..errors import InputError
 from ..kinematics.robot import Robot, require_same_wheels
 from ..kinematics.se2 import wrap_angle
 from ..runtime.backends import WheelState
-from .engine import PhysicsSim
 from .mjcf import DEFAULT_STEP
+from .simulator import PhysicsSim
 
 
 class PhysicsBackend:

@@ -9,7 +9,7 @@ Computing time = (time steps) x (measured seconds per step) + (samples) x
   as this process's CPU time (other work on the machine stretches the clock, not the count)
   (:func:`measure_step_seconds`): the robot as built is made into its MuJoCo model, set down on
   the floor, and driven for up to :data:`PROBE_STEPS` steps (at most :data:`PROBE_SECONDS` of
-  wall time) through :class:`~omnikin.physics.engine.PhysicsSim`, its servos and ramps included.
+  wall time) through :class:`~omnikin.physics.simulator.PhysicsSim`, its servos and ramps included.
   A step's cost depends on the bodies, rollers and contacts of the model in ways no formula in
   the file's numbers captured (diff-drive 10 us a step, 12 wheels of 256 rollers 2.3 ms), so
   it is measured;
@@ -51,9 +51,9 @@ from ..kinematics.se2 import wrap_angle
 from ..motion.timing import SampledPlan
 from ..simulation.kinematic import segment_rates
 from .description import describe
-from .engine import PhysicsSim
 from .mjcf import DEFAULT_STEP
 from .run import ALIGN_MAX, STEER_ALIGNED, TAIL_MAX
+from .simulator import PhysicsSim
 
 PROBE_WARMUP = 20
 """Time steps driven before the measurement (the first steps of a run cost more)."""

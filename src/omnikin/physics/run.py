@@ -7,7 +7,7 @@ commanded wheel angles of every rolling wheel at the samples are those of
 :func:`~omnikin.simulation.kinematic.commanded_angles`. Sample ``k`` commands each wheel the
 mean speed ``(angle_{k+1} - angle_k) / dt`` [rad/s] of its interval (and the interval's
 steering), held for the interval (zero-order hold at the plan's rate, as a wheel controller
-receiving set-points does); :class:`~omnikin.physics.engine.PhysicsSim` of the robot *as built*
+receiving set-points does); :class:`~omnikin.physics.simulator.PhysicsSim` of the robot *as built*
 ramps and servos the motors and steps MuJoCo up to the next sample, where the encoders are read.
 
 Steering first: a segment whose steering differs from the angles the steering joints reached
@@ -15,8 +15,8 @@ Steering first: a segment whose steering differs from the angles the steering jo
 steering, sampled on until the joints have reached it and the robot is at rest (at most
 :data:`ALIGN_MAX`), as a controller of steered wheels does: the kinematic plan turns the wheels
 at once, which off-centred legs swinging under a moving robot cannot (Villasenor's robot tips
-over). A robot that tips over anyway (:data:`~omnikin.physics.engine.TIPPED`,
-:meth:`~omnikin.physics.engine.PhysicsSim.fall`) ends the run with
+over). A robot that tips over anyway (:data:`~omnikin.physics.simulator.TIPPED`,
+:meth:`~omnikin.physics.simulator.PhysicsSim.fall`) ends the run with
 :class:`~omnikin.errors.PhysicsError` naming the time.
 
 After the plan the wheels are commanded to stop and the run goes on, sampled at the same rate,
@@ -26,7 +26,7 @@ braking, by the same distance, so the robot ends where the plan ends only once i
 
 The run watches for not driving as commanded (docs/physics.md, "Runs that do not drive as
 commanded"): driven wheels lagging their set-points (the engine's
-:data:`~omnikin.physics.engine.TRACK_ERROR`), slipping (:data:`SLIP_ERROR`) or ending off the
+:data:`~omnikin.physics.simulator.TRACK_ERROR`), slipping (:data:`SLIP_ERROR`) or ending off the
 angle they were commanded to turn (:data:`END_ERROR`), steering not reached within
 :data:`ALIGN_MAX`, the robot not at rest after :data:`TAIL_MAX`; :meth:`PhysicsRun.problems`
 words them. Its sample ``rate`` must have a period of whole time steps (:func:`check_rate_steps`).
@@ -60,8 +60,8 @@ from ..odometry.batch import batch_odometry, encoded_wheels
 from ..odometry.plausibility import QUANTISATION_SLACK, counter_rules
 from ..simulation.kinematic import SimulatedRun, commanded_angles, counter_output
 from .description import steered_support_margin
-from .engine import TRACK_ERROR, TRACK_TIME, PhysicsSim
 from .mjcf import DEFAULT_STEP, time_step
+from .simulator import TRACK_ERROR, TRACK_TIME, PhysicsSim
 
 REST_SPEED = 1e-4
 """Speed [m/s] of the chassis below which it is at rest after the plan."""
@@ -97,7 +97,7 @@ END_SHARE = 0.01
 class WheelTrouble:
     """A driven wheel that did not do what it was commanded for ``seconds`` [s] of the run, first
     at ``start`` [s]; ``worst`` [m/s] its largest root mean square rim speed error (``kind``
-    "lagged": behind or around its set-points, :data:`~omnikin.physics.engine.TRACK_ERROR`;
+    "lagged": behind or around its set-points, :data:`~omnikin.physics.simulator.TRACK_ERROR`;
     "slipped": spinning or skidding on the floor, :data:`SLIP_ERROR`)."""
 
     wheel: str
@@ -119,7 +119,7 @@ class WheelTrouble:
 class PhysicsRun(SimulatedRun):
     """A :class:`~omnikin.simulation.kinematic.SimulatedRun` driven in the physics engine;
     ``saturated`` counts the samples whose command a motor's speed limit or a steering end stop
-    held at the limit (:attr:`omnikin.physics.engine.PhysicsSim.saturated`); ``wheels`` the
+    held at the limit (:attr:`omnikin.physics.simulator.PhysicsSim.saturated`); ``wheels`` the
     driven wheels that lagged their set-points or slipped (:class:`WheelTrouble`);
     ``steering_not_reached`` the segments (1-based) that drove after :data:`ALIGN_MAX` without
     their steering; ``at_rest`` False when the robot still moved :data:`TAIL_MAX` after the plan;
@@ -187,7 +187,7 @@ def simulate_physics(
     given, is called now and then with the simulated time and the plan's duration [s].
     ``roller_phase``: where in its roller period each wheel of ``true_robot`` starts, a fraction
     in ``[0, 1)`` for every wheel or one per rolling wheel
-    (:func:`~omnikin.physics.engine.roller_offsets`); the encoders start at zero."""
+    (:func:`~omnikin.physics.simulator.roller_offsets`); the encoders start at zero."""
     rate = check_rate_range(plan.rate if isinstance(plan, SampledPlan) else rate, "rate")
     check_rate_steps(rate, step)
     require_same_wheels(command_robot, true_robot)

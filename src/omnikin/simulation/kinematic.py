@@ -217,7 +217,7 @@ def wheel_motion(angles: np.ndarray, true_robot: Robot, command_robot: Robot, na
 
     An encoder scale error (``rpt_true != rpt_cmd``) thus moves the odometry of a stepper's wheel
     and the truth of a dc motor's; the physics engine does the same
-    (:class:`omnikin.physics.engine.PhysicsSim`)."""
+    (:class:`omnikin.physics.simulator.PhysicsSim`)."""
     cmd_rpt = command_robot.rad_per_tick(names)
     true_rpt = true_robot.rad_per_tick(names)
     closed = np.array([true_robot.wheel(n).counts_close_loop for n in names], dtype=bool)
