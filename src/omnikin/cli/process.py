@@ -190,7 +190,8 @@ def _termination_unwinds() -> Iterator[list[int]]:
     """Turn the first termination signal into :class:`Terminated` while a command runs; later
     ones are ignored, to the end of the process (the cleanup the first one started must finish,
     and the process is ending). Without a signal the previous handlers come back after. A
-    signal the caller ignores (``nohup``) stays ignored. Only in the main thread. Yields the
+    signal the caller ignores (``nohup``) stays ignored, and a handler not set from Python
+    (:func:`signal.getsignal` gives None) is left alone. Only in the main thread. Yields the
     list of signals received, so that an error a library raised in place of the termination
     (it arrived inside its C code) is still reported as the termination."""
     fired: list[int] = []
@@ -206,13 +207,14 @@ def _termination_unwinds() -> Iterator[list[int]]:
     previous = {}
     for sig in TERMINATION_SIGNALS:
         handler = signal.getsignal(sig)
-        if handler is not signal.SIG_IGN:
-            previous[sig] = signal.signal(sig, unwind)
+        if handler is not signal.SIG_IGN and handler is not None:  # None: set outside Python, left alone
+            previous[sig] = handler
+            signal.signal(sig, unwind)
     try:
         yield fired
     finally:
         for sig, handler in previous.items():
-            signal.signal(sig, signal.SIG_IGN if fired else signal.SIG_DFL if handler is None else handler)
+            signal.signal(sig, signal.SIG_IGN if fired else handler)
 
 
 class _ClosedStream(io.TextIOBase):
