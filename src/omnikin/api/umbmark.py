@@ -31,7 +31,7 @@ from ..evaluation.procedure import (
 )
 from ..evaluation.umbmark import LEVEL, UNITS, UMBmarkResult, analyze, require_square
 from ..odometry.batch import encoded_wheels
-from ..physics.engines import PhysicsEngine, as_engine
+from ..physics.engines import as_engine
 from ..physics.mjcf import DEFAULT_STEP
 from ..viz import DPI
 from .common import as_built, dumps, finite_or_none, require_viz, robot_of, setting_name
@@ -581,13 +581,14 @@ def umbmark_cost(
 ) -> Cost:
     """What :func:`run_umbmark` with these settings will take (robot-samples, memory, time):
     :func:`~omnikin.evaluation.procedure.estimate_cost`, or
-    :func:`~omnikin.evaluation.physics_study.physics_cost` for the physics engine (which
-    does not build a model whose size alone says it takes longer than ``max_time`` [s]).
+    :func:`~omnikin.evaluation.physics_study.physics_cost` for an engine whose cost is measured
+    on its model (:attr:`~omnikin.simulation.engine.Engine.measured_cost`: physics; it does not
+    build a model whose size alone says it takes longer than ``max_time`` [s]).
     ``engine``: an :class:`~omnikin.simulation.engine.Engine` or its name (with ``step``)."""
     engine = as_engine(engine, step=step)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)
     settings: dict[str, Any] = dict(side=side, mode=mode, runs=runs, rate=rate, trials=trials, calibrate=calibrate)
-    if isinstance(engine, PhysicsEngine):
+    if engine.measured_cost:  # its runs are timed on its model (physics), not counted in samples
         return physics_cost(robot_of(robot), engine=engine, budget=max_time, **settings)
     return estimate_cost(robot_of(robot), **settings)
 
