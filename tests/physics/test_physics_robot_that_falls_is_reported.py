@@ -125,10 +125,20 @@ def test_a_study_trial_whose_robot_fell_is_a_row_with_that_reason_not_a_number(t
 
 
 def test_the_physics_umbmark_study_of_a_robot_that_falls_ends_saying_so():
-    from omnikin.evaluation.physics_study import physics_umbmark_study
+    from omnikin.evaluation.physics_study import PHYSICS
+    from omnikin.evaluation.procedure import umbmark_study
 
     robot = tall_robot()
     with pytest.raises(OmnikinError, match="tipped over"):
-        physics_umbmark_study(
-            robot, robot, side=1.0, mode="rotate", runs=1, rate=100.0, trials=1, calibrate=False, seed=1
+        umbmark_study(
+            robot,
+            robot,
+            side=1.0,
+            mode="rotate",
+            runs=1,
+            rate=100.0,
+            trials=1,
+            calibrate=False,
+            seed=1,
+            engine=PHYSICS,
         )

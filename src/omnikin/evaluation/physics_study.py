@@ -20,8 +20,8 @@ robot as built, one run at a time (the physics has no trial axis: ``trials`` pro
    of the kinematic model can reach in this engine. It takes the place of the kinematic
    study's noise floor (:class:`~omnikin.evaluation.umbmark.NoiseFloor` of these procedures).
 
-This module keeps the physics study's cost estimate (:func:`physics_cost`) and its entry point
-(:func:`physics_umbmark_study`).
+This module keeps the physics study's cost estimate (:func:`physics_cost`); the study itself is
+:func:`~omnikin.evaluation.procedure.umbmark_study` with ``engine=PHYSICS``.
 
 The physics engine has no random error model: slip comes from the wheels' contacts and the
 encoders count whole ticks, so a noise model is refused
@@ -41,14 +41,11 @@ from __future__ import annotations
 from ..kinematics.robot import Robot
 from ..motion.plans import umbmark_square
 from ..physics.engines import PhysicsEngine
-from ..simulation.engine import Engine
-from ..simulation.error_models import SystematicErrors
 from .calibration import RECOMMENDED_REPEATS, recommended_runs
-from .pipeline import Progress
-from .procedure import Cost, UMBmarkStudy, umbmark_study
-from .umbmark import LEVEL, PhysicsFloor
+from .procedure import Cost
+from .umbmark import PhysicsFloor
 
-__all__ = ["BYTES", "PHYSICS", "PhysicsFloor", "physics_cost", "physics_umbmark_study"]
+__all__ = ["BYTES", "PHYSICS", "PhysicsFloor", "physics_cost"]
 
 BYTES = 256 * 1024**2
 """Memory of a physics study [bytes]: MuJoCo's model and data and the kept runs, generous."""
@@ -69,7 +66,8 @@ def physics_cost(
     engine: PhysicsEngine = PHYSICS,
     budget: float | None = None,
 ) -> Cost:
-    """Samples, memory and computing time of :func:`physics_umbmark_study`: every run's
+    """Samples, memory and computing time of the physics study
+    (:func:`~omnikin.evaluation.procedure.umbmark_study` with a physics engine): every run's
     estimate (:func:`omnikin.physics.cost.physics_run_cost`: its simulated time bounded, the
     waits for the steering and the tail at their limits, at the cost of a time step measured
     once on ``robot``'s model at ``engine``'s time step, the model's construction counted for
@@ -97,42 +95,3 @@ def physics_cost(
         samples += count * run.samples
         seconds += count * run.seconds
     return Cost(samples, float(BYTES), seconds_per_sample=seconds / max(samples, 1.0))
-
-
-def physics_umbmark_study(
-    robot: Robot,
-    true_robot: Robot,
-    *,
-    injected: SystematicErrors | None = None,
-    side: float,
-    mode: str,
-    runs: int,
-    rate: float,
-    trials: int,
-    calibrate: bool,
-    seed: int,
-    engine: Engine = PHYSICS,
-    progress: Progress | None = None,
-    level: float = LEVEL,
-) -> UMBmarkStudy:
-    """The study of the module docstring: :func:`~omnikin.evaluation.procedure.umbmark_study`
-    with ``engine`` (the physics engine) and no noise model, as a
-    :class:`~omnikin.evaluation.procedure.UMBmarkStudy` (``noise`` none, ``floor`` the nominal
-    robot's :class:`~omnikin.evaluation.umbmark.PhysicsFloor` with its interval at ``level``,
-    ``systematic`` the first procedures, no Borenstein comparison); roller phases from
-    ``seed``."""
-    return umbmark_study(
-        robot,
-        true_robot,
-        injected=injected,
-        side=side,
-        mode=mode,
-        runs=runs,
-        rate=rate,
-        trials=trials,
-        calibrate=calibrate,
-        seed=seed,
-        engine=engine,
-        progress=progress,
-        level=level,
-    )

@@ -55,7 +55,6 @@ __all__ = [  # the study's names, and the pipeline's that its users import from 
     "AS_BUILT_FROM",
     "BORENSTEIN_ITERATIONS",
     "FLOOR_PROCEDURES",
-    "STREAMS",
     "Cost",
     "UMBmarkStudy",
     "check_cost",
@@ -71,10 +70,6 @@ __all__ = [  # the study's names, and the pipeline's that its users import from 
 KINEMATIC = KinematicEngine()
 """The kinematic engine, the default engine of a study."""
 
-STREAMS = REPORT_STREAMS
-"""Random streams, in the order of the children of ``SeedSequence(seed)``
-(:data:`~omnikin.evaluation.pipeline.REPORT_STREAMS`)."""
-
 ARGUMENTS = LimitNames("max_memory", "max_time")
 """The limits of a study as the Python entry points name them (:func:`check_cost`)."""
 
@@ -86,10 +81,11 @@ BYTES_PER_PROCEDURE = 4096
 
 
 def streams(seed: int) -> dict:
-    """The random stream of each step (:data:`STREAMS`) for ``seed``."""
+    """The random stream of each step (:data:`~omnikin.evaluation.pipeline.REPORT_STREAMS`) for
+    ``seed``."""
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise InputError(f"seed (--seed) must be a whole number >= 0, got {seed!r}")
-    return seed_streams(np.random.SeedSequence(int(seed)), STREAMS)
+    return seed_streams(np.random.SeedSequence(int(seed)), REPORT_STREAMS)
 
 
 def check_settings(*, runs, trials, side, rate) -> None:
