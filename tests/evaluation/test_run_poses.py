@@ -4,7 +4,8 @@ the same random draws, so each ends where that procedure's statistics say."""
 import numpy as np
 import pytest
 
-from omnikin.evaluation.procedure import draw_as_built, first_procedure_poses, streams
+from omnikin.evaluation.pipeline import first_procedure_poses
+from omnikin.evaluation.procedure import draw_as_built, streams
 from omnikin.evaluation.umbmark import simulate_umbmark
 from omnikin.io.robot_file import load_robot
 from omnikin.simulation.error_models import NOISE, PROFILES

@@ -19,8 +19,8 @@ from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT, RECOMMENDED_REPEATS
 from ..evaluation.physics_study import physics_cost
+from ..evaluation.pipeline import FLOOR_PROCEDURES
 from ..evaluation.procedure import (
-    FLOOR_PROCEDURES,
     Cost,
     UMBmarkStudy,
     check_cost,

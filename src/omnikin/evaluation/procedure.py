@@ -42,27 +42,21 @@ from .pipeline import (
     REPORT,
     REPORT_STREAMS,
     Square,
-    first_procedure_poses,
     run_pipeline,
     seed_streams,
-    simulate_calibration_runs,
 )
 from .run_poses import RunPoses
 from .umbmark import LEVEL, NoiseFloor, check_side, differential_pair, reduction_interval
 
-__all__ = [  # the study's names, and the pipeline's that its users import from here
+__all__ = [
     "ARGUMENTS",
     "AS_BUILT_FROM",
-    "BORENSTEIN_ITERATIONS",
-    "FLOOR_PROCEDURES",
     "Cost",
     "UMBmarkStudy",
     "check_cost",
     "check_settings",
     "draw_as_built",
     "estimate_cost",
-    "first_procedure_poses",
-    "simulate_calibration_runs",
     "streams",
     "umbmark_study",
 ]
