@@ -43,9 +43,8 @@ from ..motion.plans import umbmark_square
 from ..physics.engines import PhysicsEngine
 from .calibration import RECOMMENDED_REPEATS, recommended_runs
 from .procedure import Cost
-from .umbmark import PhysicsFloor
 
-__all__ = ["BYTES", "PHYSICS", "PhysicsFloor", "physics_cost"]
+__all__ = ["BYTES", "PHYSICS", "physics_cost"]
 
 BYTES = 256 * 1024**2
 """Memory of a physics study [bytes]: MuJoCo's model and data and the kept runs, generous."""
