@@ -58,12 +58,12 @@ def _study(robot) -> Study:
 def _swept(study: Study, workers: int, folder: Path) -> dict:
     import pyarrow.parquet as pq
 
-    from omnikin.sweep import run as sweep_run
+    from omnikin.sweep import execution
 
     shutil.rmtree(folder, ignore_errors=True)
     clock = _Clock()
     t0 = time.perf_counter()
-    sweep_run.run_sweep(study, folder, workers=workers, progress=clock)
+    execution.run_sweep(study, folder, workers=workers, progress=clock)
     total = time.perf_counter() - t0
     tasks = clock.last_at - clock.start_at
     table = pq.read_table(folder / "trials.parquet").drop_columns(["seconds"])

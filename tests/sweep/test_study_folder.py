@@ -154,7 +154,7 @@ def test_a_point_no_longer_in_the_study_is_kept_on_disk_but_left_out_of_the_tabl
 def _resume(out, s: Study) -> tuple[list[str], dict]:
     """What a rerun of the sweep does without Dask: read the folder, compute the trials it lacks
     (the tasks ``plan_tasks`` cuts, each by ``run_trials`` as a worker would), build the table."""
-    from omnikin.sweep.run import arrow_columns, plan_tasks
+    from omnikin.sweep.execution import arrow_columns, plan_tasks
 
     with StudyFolder.open(out, s) as folder:
         coverage = folder.coverage()

@@ -59,7 +59,7 @@ def run_sweep(
 ):
     """``omnikin sweep SPEC -o OUT``: the study of the study file ``spec`` (or a loaded
     :class:`~omnikin.sweep.study.Study`) run on Dask into the folder ``out`` (resumed when it holds
-    the study); returns a :class:`~omnikin.sweep.run.SweepResult`. The embedded cluster starts
+    the study); returns a :class:`~omnikin.sweep.execution.SweepResult`. The embedded cluster starts
     worker processes: call it under ``if __name__ == "__main__":`` (docs/sweeps.md).
 
     Parameters
@@ -76,12 +76,12 @@ def run_sweep(
         Worker processes of the embedded cluster (1 .. 1024); default one per core.
     task_trials : int, optional
         Trials per task (1 .. 1000); default sized to about
-        :data:`~omnikin.sweep.run.TASK_SECONDS` of work.
+        :data:`~omnikin.sweep.execution.TASK_SECONDS` of work.
     force : bool, default False
         Start over in a folder that holds a study of another seed or other omnikin or NumPy
         versions (a folder omnikin did not write is refused even so).
     progress : Progress, optional
-        Told where the study runs and of each task finished (:class:`~omnikin.sweep.run.Progress`:
+        Told where the study runs and of each task finished (:class:`~omnikin.sweep.execution.Progress`:
         ``start``, ``advance``); default none.
     tls : TLSFiles, optional
         The credentials of a ``tls://`` ``scheduler`` (:class:`~omnikin.sweep.cluster.TLSFiles`);
@@ -103,7 +103,7 @@ def run_sweep(
     OutputExistsError
         A folder omnikin did not write, or (without ``force``) one that holds another study.
     """
-    from ..sweep.run import run_sweep as run
+    from ..sweep.execution import run_sweep as run
     from ..sweep.study import Study
 
     if not isinstance(spec, Study):

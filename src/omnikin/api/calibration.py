@@ -8,6 +8,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from ..evaluation.calibration import CalibrationResult, predicted_end, recommended_runs
+from ..motion.plans import UMBMARK_SIDE
 from .common import require_viz, robot_of
 
 
@@ -144,7 +145,7 @@ def calibrate(robot, runs) -> Calibration:
     return Calibration(**{f.name: getattr(res, f.name) for f in fields(res)}, runs=runs)
 
 
-def calibration_plan(robot, side: float = 4.0) -> list[str]:
+def calibration_plan(robot, side: float = UMBMARK_SIDE) -> list[str]:
     """The runs to drive to calibrate ``robot``: paths in the runs-file grammar, each to be driven
     :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times (``omnikin calibrate --plan``).
 

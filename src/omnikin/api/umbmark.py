@@ -30,6 +30,7 @@ from ..evaluation.procedure import (
     umbmark_study,
 )
 from ..evaluation.umbmark import LEVEL, UNITS, UMBmarkResult, analyze, require_square
+from ..motion.plans import UMBMARK_SIDE
 from ..odometry.batch import encoded_wheels
 from ..physics.engines import as_engine
 from ..physics.mjcf import DEFAULT_STEP
@@ -422,7 +423,7 @@ def run_umbmark(
     errors="typical",
     mode: str = "rotate",
     runs: int = 5,
-    side: float = 4.0,
+    side: float = UMBMARK_SIDE,
     noise=None,
     rate: float = 100.0,
     seed: int = 1,
@@ -571,7 +572,7 @@ def umbmark_cost(
     *,
     mode: str = "rotate",
     runs: int = 5,
-    side: float = 4.0,
+    side: float = UMBMARK_SIDE,
     rate: float = 100.0,
     trials: int = 1,
     calibrate: bool = True,
@@ -659,7 +660,7 @@ class UMBmarkAnalysis(UMBmarkResult):
         return {**UMBmarkResult.as_dict(self, level), "confidence_level": level, "units": UNITS}
 
 
-def analyze_umbmark(measurements, *, robot=None, side: float = 4.0) -> UMBmarkAnalysis:
+def analyze_umbmark(measurements, *, robot=None, side: float = UMBMARK_SIDE) -> UMBmarkAnalysis:
     """UMBmark of a real robot's runs (``omnikin umbmark analyze``).
 
     ``measurements``: a measurements file (columns ``direction, x_abs, y_abs, x_calc, y_calc``

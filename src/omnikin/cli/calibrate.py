@@ -9,6 +9,7 @@ from ..api.calibration import calibrate, calibration_plan
 from ..api.common import dumps
 from ..errors import InputError
 from ..evaluation.calibration import ERROR_UNITS, FIT_LIMIT
+from ..motion.plans import UMBMARK_SIDE
 from .common import add_output, add_output_options, command_inputs, console, declare_inputs, number
 
 
@@ -45,7 +46,7 @@ def add_parser(sub, robot_help: str) -> None:
     sp.add_argument(
         "--side",
         type=number,
-        default=4.0,
+        default=UMBMARK_SIDE,
         metavar="M",
         help="with --plan: side of the squares and length of the lines [m] (default 4)",
     )

@@ -171,7 +171,7 @@ def _check_paths(args) -> None:
 def run(args) -> int:
     """Run the study into its folder, print the answers; status 0."""
     from ..api import run_sweep
-    from ..sweep.run import require_sweep
+    from ..sweep.execution import require_sweep
     from ..sweep.spec import load_study
 
     _check_paths(args)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..motion.plans import UMBMARK_SIDE
 from ..physics.engines import ENGINE_NAMES
 from .budget import Budget, add_budget_options
 from .common import (
@@ -110,7 +111,11 @@ def add_parser(sub, robot_help: str) -> None:
         help="command timeout [s] (default 0.5; 0: none; with --ros the node's cmd_vel_timeout applies)",
     )
     sp.add_argument(
-        "--umbmark-side", type=number, default=4.0, metavar="M", help="side of the UMBmark squares drawn [m] (0: none)"
+        "--umbmark-side",
+        type=number,
+        default=UMBMARK_SIDE,
+        metavar="M",
+        help="side of the UMBmark squares drawn [m] (0: none)",
     )
     sp.add_argument("--duration", type=number, metavar="S", help="stop serving after S seconds (default: Ctrl-C)")
     sp.add_argument(

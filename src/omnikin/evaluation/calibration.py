@@ -42,7 +42,7 @@ from ..common.messages import shorten
 from ..errors import CalibrationFitError, InfeasibleRunError, InfeasibleTwistError, InputError
 from ..kinematics.robot import Robot
 from ..kinematics.se2 import compose, exp, wrap_angle
-from ..motion.plans import CalibrationRun, Plan, parse_plan
+from ..motion.plans import UMBMARK_SIDE, CalibrationRun, Plan, parse_plan
 from ..odometry.batch import encoded_wheels
 from ..simulation.error_models import SystematicErrors, WheelErrors
 from ..simulation.kinematic import segment_rates
@@ -373,7 +373,7 @@ def _identifiability(names, jac_data, jac_full, scale) -> Identifiability:
     return Identifiability(names, [float(v) for v in s], blind, sigma)
 
 
-def recommended_runs(robot: Robot, side: float = 4.0) -> list[tuple[str, Plan]]:
+def recommended_runs(robot: Robot, side: float = UMBMARK_SIDE) -> list[tuple[str, Plan]]:
     """A calibration protocol that sees every parameter it can for this layout.
 
     ``[(path, plan), ...]``, ``path`` in the runs-file grammar (:func:`omnikin.motion.plans.parse_plan`)

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..kinematics.robot import Robot
+from ..motion.plans import UMBMARK_SIDE
 from ..physics.engines import as_engine
 from ..simulation.engine import Engine, KinematicEngine
 from ..simulation.error_models import NOISE, ErrorProfile, NoiseModel
@@ -48,7 +49,7 @@ class TrialSettings:
     ``engine`` its runs are driven by (an :class:`~omnikin.simulation.engine.Engine`; a name of
     :data:`~omnikin.physics.engines.ENGINE_NAMES` is made one)."""
 
-    side: float = 4.0
+    side: float = UMBMARK_SIDE
     mode: str = "rotate"
     runs: int = 5
     rate: float = 100.0

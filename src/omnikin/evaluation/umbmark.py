@@ -42,7 +42,7 @@ from ..errors import InfeasibleTwistError, InputError
 from ..kinematics.robot import Robot
 from ..kinematics.wheels import range_problem
 from ..motion.limits import MotionLimits
-from ..motion.plans import check_mode, umbmark_square
+from ..motion.plans import UMBMARK_SIDE, check_mode, umbmark_square
 from ..simulation.error_models import NoiseModel
 from ..simulation.kinematic import segment_rates, simulate_kinematic
 
@@ -330,7 +330,9 @@ def differential_pair(robot: Robot):
     return left, right, left.y - right.y
 
 
-def analyze(eps_cw, eps_ccw, side: float = 4.0, robot: Robot | None = None, mode: str = "rotate") -> UMBmarkResult:
+def analyze(
+    eps_cw, eps_ccw, side: float = UMBMARK_SIDE, robot: Robot | None = None, mode: str = "rotate"
+) -> UMBmarkResult:
     """UMBmark from return errors ``(n, 2)`` or ``(n, 3)`` per direction [m, m(, rad)].
 
     The heading column may be NaN where it was not measured.
@@ -427,7 +429,7 @@ def simulate_umbmark(
     true_robot: Robot,
     command_robot: Robot,
     *,
-    side: float = 4.0,
+    side: float = UMBMARK_SIDE,
     mode: str = "rotate",
     runs: int = 5,
     noise: NoiseModel | None = None,

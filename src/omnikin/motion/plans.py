@@ -41,6 +41,10 @@ from ..common.number_text import plain_number
 from ..errors import InputError
 from ..kinematics.se2 import MAX_DIRECTION_DEG, wrap_angle
 
+UMBMARK_SIDE = 4.0
+"""Side of the UMBmark square [m]: Borenstein & Feng's 4 m x 4 m (UMBmark, 1996), the default
+of every square, calibration run and study that does not give its own."""
+
 MAX_SEGMENT = 1e5
 """Longest segment [m or rad]: 100 km of travel, or about 16,000 turns in place. Beyond it a
 plan is a typo (``line 1e308``), not a robot's path: refused before anything is sampled."""
@@ -173,7 +177,7 @@ def check_direction(direction: str) -> str:
     return direction
 
 
-def umbmark_square(direction: str = "cw", side: float = 4.0, mode: str = "rotate") -> Plan:
+def umbmark_square(direction: str = "cw", side: float = UMBMARK_SIDE, mode: str = "rotate") -> Plan:
     """The UMBmark square (``docs/conventions.md``): first leg along +x; ``cw`` turns right."""
     check_direction(direction)
     check_mode(mode)
@@ -227,7 +231,7 @@ def parse_plan(text: str) -> Plan:
             raise InputError(f"{where}: expected 'square cw|ccw rotate|translate [SIDE]'")
         side = _path_numbers(args[2:], where)
         try:
-            return umbmark_square(args[0].lower(), side[0] if side else 4.0, args[1].lower())
+            return umbmark_square(args[0].lower(), side[0] if side else UMBMARK_SIDE, args[1].lower())
         except InputError as exc:
             raise InputError(f"{where}: {exc}") from None
     nums = _path_numbers(args, where)

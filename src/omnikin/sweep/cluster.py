@@ -25,7 +25,7 @@
   differ, or it could not even import the task); workers that join later are checked by their
   results (:func:`run_tasks`).
 
-This module imports Dask: import it after :func:`omnikin.sweep.run.require_sweep`.
+This module imports Dask: import it after :func:`omnikin.sweep.execution.require_sweep`.
 
 Workers ignore Ctrl-C (:class:`IgnoreInterrupts`): the embedded cluster's workers share the
 terminal's process group, and a Ctrl-C meant for ``omnikin sweep`` must end the study with one

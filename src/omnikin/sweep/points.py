@@ -31,6 +31,7 @@ import numpy as np
 
 from ..evaluation.tolerance_trial import TrialSettings
 from ..kinematics.robot import Robot
+from ..motion.plans import UMBMARK_SIDE
 from ..physics.engines import engine_named
 from ..simulation.error_models import NOISE, ErrorProfile
 
@@ -55,7 +56,7 @@ class Point:
     rate: float = 100.0
     calibrate: bool = True
     engine: str = "kinematic"
-    side: float = 4.0
+    side: float = UMBMARK_SIDE
     mode: str = "rotate"
     runs: int = 5
 

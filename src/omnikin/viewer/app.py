@@ -15,6 +15,7 @@ from __future__ import annotations
 import threading
 import time
 
+from ..motion.plans import UMBMARK_SIDE
 from .live import PageRobot, Snapshot
 from .panel import CameraControl, DriveControls, FirstView, GoalMarker, Readouts, robot_extent
 from .scene import RobotView, draw_world
@@ -26,7 +27,9 @@ class LiveViewer:
     where the page is served (port 0: a free one, see :attr:`url`); ``umbmark_side`` [m] draws
     the UMBmark squares (0: none)."""
 
-    def __init__(self, live: PageRobot, host: str = "127.0.0.1", port: int = 8080, *, umbmark_side: float = 4.0):
+    def __init__(
+        self, live: PageRobot, host: str = "127.0.0.1", port: int = 8080, *, umbmark_side: float = UMBMARK_SIDE
+    ):
         self.live = live
         self._start = time.monotonic()  # the robot's clock: seconds since the viewer was made
         live.clock = self.clock
