@@ -32,13 +32,24 @@ from ..io.output import Output, check_outputs, is_stdout
 FORCE_HELP = "replace existing output files (never an input; a folder only if omnikin wrote it)"
 
 
-def robot_as_built(robot, true_robot: str | None, errors: str, seed):
+def run_streams(seed: int) -> dict:
+    """The random streams of ``--seed`` for a simulated robot, by name: ``robot`` (the robot as
+    built, the draw ``omnikin simulate``, ``omnikin umbmark`` and the Python API make for the
+    same seed) and ``run`` (its random errors), the layout
+    :data:`~omnikin.evaluation.pipeline.RUN_STREAMS`."""
+    from ..evaluation.pipeline import RUN_STREAMS
+    from ..evaluation.procedure import streams
+
+    return streams(seed, RUN_STREAMS)
+
+
+def robot_as_built(robot, true_robot: str | None, errors: str, stream):
     """The robot as built and the errors drawn: a ``--true-robot`` file, or ``robot`` with a
-    seeded draw of the ``--errors`` profile (:func:`omnikin.api.common.as_built`, the draw the
-    Python API and ``omnikin umbmark`` make). ``seed``: a SeedSequence or an int."""
+    draw of the ``--errors`` profile from ``stream`` (a SeedSequence: the ``robot`` stream of
+    :func:`run_streams`; :func:`omnikin.api.common.as_built`)."""
     from ..api.common import as_built
 
-    return as_built(robot, true_robot or None, errors, seed)
+    return as_built(robot, true_robot or None, errors, stream)
 
 
 def check_seed(seed: int | None) -> None:
