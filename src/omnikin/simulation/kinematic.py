@@ -217,7 +217,25 @@ def wheel_motion(angles: np.ndarray, true_robot: Robot, command_robot: Robot, na
 
     An encoder scale error (``rpt_true != rpt_cmd``) thus moves the odometry of a stepper's wheel
     and the truth of a dc motor's; the physics engine does the same
-    (:class:`omnikin.physics.simulator.PhysicsSim`)."""
+    (:class:`omnikin.physics.simulator.PhysicsSim`).
+
+    Parameters
+    ----------
+    angles : numpy.ndarray
+        The commanded wheel angles ``(N + 1, n)`` [rad], one column per wheel of ``names``.
+    true_robot, command_robot : Robot
+        The robot as built and the model that commands it.
+    names : sequence of str
+        The ``n`` encoded wheels, in the order of the columns.
+    quantise : bool
+        Round the counts to whole ticks (int64), as an encoder counts them.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(ticks, true_angles)``: the encoder counts ``(N + 1, n)`` [ticks] and the angles the
+        wheels truly turn ``(N + 1, n)`` [rad].
+    """
     cmd_rpt = command_robot.rad_per_tick(names)
     true_rpt = true_robot.rad_per_tick(names)
     closed = np.array([true_robot.wheel(n).counts_close_loop for n in names], dtype=bool)
