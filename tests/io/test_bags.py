@@ -673,7 +673,8 @@ def test_taken_output_fails_before_reading_or_simulating(tmp_path):
     ],
 )
 def test_frame_ids_follow_ros_naming_rules(circle_bag, tmp_path, frames, match):
-    """'' and 'a b' were written into the bag's Odometry headers, and a child frame equal to its parent."""
+    """Frame ids '' and 'a b', and a child frame equal to its parent, are refused before the bag's
+    Odometry headers are written."""
     out = tmp_path / "odom.bag"
     with pytest.raises(BagError, match=match):
         run_cli(["bag", "odometry", "tomasi-omni3", circle_bag[0], "-o", out, *frames])

@@ -73,7 +73,8 @@ def billion_laughs(levels: int = 9) -> str:
 
 
 def test_billion_laughs_robot_file_is_refused_at_once(tmp_path):
-    """Placed where the reader quotes the value (references) it expanded to gigabytes and hung."""
+    """Placed where the reader quotes the value (references), where expanding it would take
+    gigabytes and hang: refused before any expansion."""
     bomb = billion_laughs()
     refs = "references: [" + ", ".join(line.split(": ", 1)[1] for line in bomb.splitlines()) + "]\n"
     path = tmp_path / "laughs.yaml"
@@ -284,8 +285,8 @@ def test_hostile_numbers_in_json(tmp_path, literal, fragment):
 
 
 def test_long_hostile_string_scalar_is_read_in_linear_time(tmp_path):
-    """A 200 KB plain scalar of digits ending in a letter once sent the exponent pattern into
-    quadratic backtracking (minutes); now it is just a (wrong) wheel name."""
+    """A 200 KB plain scalar of digits ending in a letter (which a backtracking exponent pattern
+    reads in quadratic time, minutes) is just a (wrong) wheel name, read at once."""
     path = tmp_path / "robot.yaml"
     path.write_text("omnikin: 1\nname: x\nwheels:\n  - {name: " + "1" * 200_000 + "x, type: omni, radius: 0.05}\n")
     proc = run_python(
