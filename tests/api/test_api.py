@@ -16,8 +16,10 @@ import numpy as np
 import pytest
 
 import omnikin
-from conftest import omni_robot, omnikin_env, run_cli
 from omnikin.cli.main import build_parser
+from support.cli import run_cli
+from support.kinematics import omni_robot
+from support.paths import omnikin_env
 
 ENTRY_POINTS = ("simulate", "run_umbmark", "analyze_umbmark", "calibrate", "calibration_plan", "plot_layout")
 

@@ -12,10 +12,10 @@ from pathlib import Path
 import pytest
 import yaml
 
-from conftest import run_cli as cli
 from omnikin.cli.budget import Budget, format_bytes, parse_duration, parse_size, require
 from omnikin.cli.main import main
 from omnikin.errors import ResourceLimitError
+from support.cli import run_cli as cli
 
 # The work a refusal must come before: each is replaced by a stand-in that fails the test if called.
 WORK = (

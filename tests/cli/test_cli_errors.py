@@ -15,10 +15,11 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import omnikin_env, run_entry_point
-from conftest import run_cli as cli
 from omnikin.cli.main import main
 from omnikin.cli.process import MESSAGE_LIMIT
+from support.cli import run_cli as cli
+from support.cli import run_entry_point
+from support.paths import omnikin_env
 
 TOMASI_J = np.array([[-math.sin(b), math.cos(b), 0.113] for b in np.radians([0.0, 120.0, 240.0])]) / 0.04125
 # omni4 (preset file): hubs at 45 + 90 k deg on a 0.2 m circle, drive = counter-clockwise tangent, r = 0.05

@@ -17,9 +17,9 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import ROOT, omnikin_env
 from omnikin import load_robot
 from omnikin.cli.main import main
+from support.paths import ROOT, omnikin_env
 
 PNG = b"\x89PNG\r\n\x1a\n"
 SIDE_DEFAULT = 4.0

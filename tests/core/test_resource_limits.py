@@ -11,9 +11,9 @@ import re
 
 import pytest
 
-from conftest import run_cli
 from omnikin.common.resource_limits import LimitNames, format_bytes, format_seconds, require_within
 from omnikin.errors import InputError, ResourceLimitError
+from support.cli import run_cli
 
 OPTIONS = LimitNames("--max-memory", "--max-time")
 ARGUMENTS = LimitNames("max_memory", "max_time")

@@ -270,7 +270,7 @@ def test_bag_odometry_has_the_change_of_speed_bound_of_odometry(tmp_path):
 def test_bad_wheel_bounds_are_usage_errors_naming_the_option(capsys, tmp_path, option, value):
     """Both odometry commands refuse a bound that is no bound before reading anything, in one
     line naming the option and quoting the value as typed."""
-    from conftest import run_cli as main_cli
+    from support.cli import run_cli as main_cli
 
     for command in (
         ["bag", "odometry", "tomasi-omni3", tmp_path / "none.bag", "-o", tmp_path / "o.bag"],

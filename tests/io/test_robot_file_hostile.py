@@ -15,9 +15,9 @@ import sys
 
 import pytest
 
-from conftest import SRC  # noqa: E402
 from omnikin.errors import InputError, RobotFileError
 from omnikin.io.robot_file import load_robot, parse_robot_text
+from support.paths import SRC  # noqa: E402
 
 TIMEOUT = 60  # seconds; every case below finishes in about one
 
@@ -319,7 +319,7 @@ def test_duplicate_keys_in_json_are_refused_in_linear_time(monkeypatch):
     """20 000 keys in one object: the duplicate check once counted each key in the whole list.
     Counted in key comparisons, not timed: a few per key."""
     import omnikin.io.robot_file as robot_file
-    from conftest import CountedName
+    from support.counting import CountedName
 
     unique = robot_file._unique_json_keys
 

@@ -12,11 +12,11 @@ import sys
 
 import pytest
 
-from conftest import omnikin_env
 from omnikin import (
     RobotFileError,
     load_robot,
 )
+from support.paths import omnikin_env
 
 
 def test_duplicate_key_yaml_refused(tmp_path):

@@ -80,7 +80,7 @@ def test_a_path_spaced_with_other_white_space_is_refused_naming_file_line_and_co
 
 
 def test_simulate_refuses_other_white_space_around_a_path(capsys):
-    from conftest import run_cli
+    from support.cli import run_cli
 
     rc, out, err = run_cli(capsys, "simulate", "diff-drive", "--path", "line 0.1\u3000; spin 90", "--log", "-")
     assert rc == 2 and out == "" and "white space U+3000" in err and err.count("\n") == 1, err

@@ -12,7 +12,6 @@ import threading
 import numpy as np
 import pytest
 
-from conftest import CountedName, circle_wheels
 from omnikin import OdometryInputError, Robot, load_robot
 from omnikin.cli.main import main
 from omnikin.errors import RunsFileError, TrajectoryFileError
@@ -20,6 +19,8 @@ from omnikin.io.csvfile import column_problems, iter_fields, number, read_rows
 from omnikin.io.logs import read_tick_log
 from omnikin.io.runs import read_calibration_runs, read_umbmark_measurements
 from omnikin.io.trajectories import read_trajectory
+from support.counting import CountedName
+from support.kinematics import circle_wheels
 
 
 def cli(capsys, *argv):

@@ -8,10 +8,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import constant_twist_pose
 from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot, se2
 from omnikin.errors import OmnikinError
 from omnikin.odometry.integration import integrate
+from support.kinematics import constant_twist_pose
 
 RAD_PER_TICK = 2 * math.pi / 600  # tomasi-omni3 encoders
 

@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 import omnikin
-from conftest import run_cli, run_entry_point
 from omnikin import load_robot
 from omnikin.presets import preset_path
+from support.cli import run_cli, run_entry_point
 
 TOLERANCE = 0.005
 """Of the 1 m line: 5 mm in position, 5 mrad in heading (docs/physics.md, "Validation")."""

@@ -15,9 +15,9 @@ import math
 import numpy as np
 import pytest
 
-from conftest import run_cli
 from omnikin.errors import InputError
 from omnikin.motion.timing import STAMP_RESOLUTION, check_start
+from support.cli import run_cli
 
 
 def test_the_resolution_is_a_thousandth_of_the_sample_interval():
