@@ -6,9 +6,7 @@ import math
 import os
 
 from ..kinematics.robot import Robot, require_same_wheels
-from ..simulation.error_models import ErrorProfile, NoiseModel
-from ..simulation.error_models import noise as noise_profile
-from ..simulation.error_models import profile as error_profile
+from ..simulation.error_models import ErrorProfile, NoiseModel, error_profile, noise_profile
 
 
 def robot_of(spec) -> Robot:

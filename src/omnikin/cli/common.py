@@ -175,9 +175,9 @@ def console(width: int = 140, stderr: bool = False):
 
 def load_robot(spec):
     """A preset or robot file (:func:`omnikin.io.robot_file.load_robot`, imported on use)."""
-    from ..io.robot_file import load_robot as load
+    from ..io import robot_file
 
-    return load(spec)
+    return robot_file.load_robot(spec)
 
 
 # --- outputs -----------------------------------------------------------------------------------------

@@ -209,6 +209,6 @@ def run(args) -> int:
             slow = real_time_shortfall(true or robot, "the back-end will drop simulated time (counted in /diagnostics)")
             if slow:
                 print(f"omnikin: note: ros: {slow}", file=sys.stderr)
-    from ..ros.node import run as run_node
+    from ..ros import node
 
-    return run_node(robot, backend, values, args.ros_args)
+    return node.run(robot, backend, values, args.ros_args)

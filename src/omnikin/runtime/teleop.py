@@ -38,6 +38,10 @@ MOVES = {
 }
 """Move action -> (component of the twist, sign)."""
 
+STEER_STEP = math.radians(15.0)
+"""Steering turned by one press of ``[`` or ``]`` (``steer_left``, ``steer_right``) [rad], in the
+window of ``omnikin sim`` and the page of ``omnikin view``."""
+
 
 @dataclass
 class Teleop:

@@ -40,8 +40,7 @@ from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range
 from ..runtime.backends import WheelBackend
 from . import kinematic
-from .error_models import NoiseModel
-from .error_models import noise as noise_profile
+from .error_models import NoiseModel, noise_profile
 from .kinematic import RunCost, SimulatedRun
 
 Progress = Callable[[float, float], None]

@@ -48,7 +48,7 @@ from ..physics.engines import as_engine
 from ..physics.joint_motion import JointMotion
 from ..runtime.base import BaseRuntime, StepResult
 from ..runtime.goal import GoalSeeker
-from ..runtime.teleop import MOVES, Teleop
+from ..runtime.teleop import MOVES, STEER_STEP, Teleop
 from ..simulation.engine import Engine
 
 KEY_SILENCE = 1.0
@@ -69,8 +69,6 @@ the steps it missed, so the motion between two inputs does not depend on the wal
 MAX_CATCH_UP = 100
 """At most this many steps made up per call of :meth:`PageRobot.step` (2 s of simulated time);
 a longer stall is crossed in one step, so the work per step stays bounded."""
-STEER_STEP = math.radians(15.0)
-"""Steering turned by one press of ``[`` or ``]`` [rad]."""
 
 
 def triple(values) -> tuple[float, float, float]:
