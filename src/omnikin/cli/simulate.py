@@ -233,8 +233,8 @@ def run(args) -> int:
     }
     if simulation.injected is not None:
         summary["injected_errors"] = simulation.injected.as_dict()
-    saturated = getattr(run, "saturated", 0)
     summary.update(engine.summary(run))
+    saturated = summary.get("saturated_commands", 0)  # commands held at a limit (physics)
     for problem in engine.problems(run):  # the run did not drive as commanded: one line each
         print(f"omnikin: warning: {robot.name}: {problem}", file=sys.stderr)
     if saturated:

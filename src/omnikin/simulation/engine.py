@@ -57,6 +57,12 @@ class SimulatedBackend(WheelBackend, Protocol):
         wrapped to ``[-pi, pi)``)."""
         ...
 
+    @property
+    def fallen(self) -> str:
+        """One line saying how the robot fell (tipped over, could not stand) and that the back-end
+        stopped its wheels; empty while it stands (kinematic: always, it cannot fall)."""
+        ...
+
 
 @runtime_checkable
 class Engine(Protocol):

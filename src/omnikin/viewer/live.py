@@ -408,7 +408,7 @@ class LiveRobot(PageRobot):
         self.t = t
         result = self.runtime.step(t)
         self._last = result
-        fallen = getattr(self.backend, "fallen", "")
+        fallen = self.backend.fallen
         if fallen and not self.fallen:  # the back-end stopped the wheels: say so once, drop the targets
             self.fallen = f"{fallen}; its wheels are stopped"
             self.seeker = None
