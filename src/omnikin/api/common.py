@@ -80,7 +80,7 @@ def dumps(document: dict) -> str:
     Parameters
     ----------
     document : dict
-        A result document (e.g. :meth:`UMBmarkReport.as_dict`): numbers, text, lists and dicts.
+        A result document (e.g. :meth:`~omnikin.api.umbmark.UMBmarkReport.as_dict`): numbers, text, lists and dicts.
 
     Returns
     -------

@@ -195,7 +195,7 @@ def simulate(
     ResourceLimitError
         A run estimated to need more than ``max_memory`` or ``max_time``.
     PhysicsError
-        The physics engine failed (:class:`DivergedError`: MuJoCo's state diverged).
+        The physics engine failed (:class:`~omnikin.errors.DivergedError`: MuJoCo's state diverged).
     """
     from ..common.resource_limits import require_within
     from ..evaluation.pipeline import RUN_STREAMS

@@ -219,7 +219,7 @@ def _termination_unwinds() -> Iterator[list[int]]:
 
 class _ClosedStream(io.TextIOBase):
     """Stands for standard output when the process has none (started with ``>&-``): writing to it
-    is an ``OSError`` (EBADF), which :func:`main` reports as one line with status 1."""
+    is an ``OSError`` (EBADF), which :func:`run` reports as one line with status 1."""
 
     def writable(self) -> bool:
         return True

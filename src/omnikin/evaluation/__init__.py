@@ -1,6 +1,6 @@
 """Studies of odometry: UMBmark, calibration, trajectory metrics and tolerance trials.
 
-- :mod:`~omnikin.evaluation.run_poses`: the end poses of UMBmark runs (:class:`RunPoses`).
+- :mod:`~omnikin.evaluation.run_poses`: the end poses of UMBmark runs (:class:`~omnikin.evaluation.run_poses.RunPoses`).
 - :mod:`~omnikin.evaluation.umbmark`: UMBmark (Borenstein and Feng 1996): E_max,syst from the
   end poses of clockwise and counter-clockwise squares.
 - :mod:`~omnikin.evaluation.calibration`: Borenstein's correction and least-squares
