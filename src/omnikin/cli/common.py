@@ -19,14 +19,13 @@ import argparse
 import contextlib
 import math
 import re
-import signal
 from collections.abc import Iterator
 
 import numpy as np
 
 from ..common.messages import shorten
 from ..common.number_text import number_problem
-from ..errors import InputError, Terminated
+from ..errors import InputError
 from ..io.output import Output, check_outputs, is_stdout
 
 FORCE_HELP = "replace existing output files (never an input; a folder only if omnikin wrote it)"
@@ -261,30 +260,6 @@ def robot_inputs(*specs) -> list:
     from ..io.robot_file import robot_file_of
 
     return [f for f in map(robot_file_of, specs) if f is not None]
-
-
-# --- stopping a command -----------------------------------------------------------------------------------
-def stop_name(exc: BaseException) -> str:
-    """How the user stopped a command: ``Ctrl-C`` (:class:`KeyboardInterrupt`) or the signal's
-    name (:class:`Terminated`: ``SIGTERM``, ``SIGHUP``)."""
-    return signal.Signals(exc.signum).name if isinstance(exc, Terminated) else "Ctrl-C"
-
-
-STOPPED: list[str] = []
-"""How the running command was stopped inside :func:`until_stopped` (empty: it was not)."""
-
-
-@contextlib.contextmanager
-def until_stopped() -> Iterator[None]:
-    """Run the block of a command that serves until the user stops it (a page, a window, a node:
-    :data:`omnikin.cli.process.SERVERS`): Ctrl-C, SIGTERM or SIGHUP inside it end the block as a
-    normal end, and the command goes on after it (writes its report); :mod:`omnikin.cli.process` then prints
-    ``omnikin COMMAND: stopped (SIGTERM)`` on standard error and the exit status is 0. Without
-    this block a server stopped by the user ends the same way, with nothing done after."""
-    try:
-        yield
-    except (KeyboardInterrupt, Terminated) as exc:
-        STOPPED.append(stop_name(exc))
 
 
 # --- JSON and tables -------------------------------------------------------------------------------------

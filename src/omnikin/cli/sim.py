@@ -17,8 +17,8 @@ from .common import (
     robot_as_built,
     run_streams,
     teleop_limits,
-    until_stopped,
 )
+from .process import until_stopped
 
 EPILOG = """keys (the window must have the keyboard focus):
   W / S      drive forward / back at --speed (sets vx; the other components stay)
