@@ -63,7 +63,7 @@ def _swept(study: Study, workers: int, folder: Path) -> dict:
     shutil.rmtree(folder, ignore_errors=True)
     clock = _Clock()
     t0 = time.perf_counter()
-    execution.run_sweep(study, folder, workers=workers, progress=clock)
+    execution.execute_study(study, folder, workers=workers, progress=clock)
     total = time.perf_counter() - t0
     tasks = clock.last_at - clock.start_at
     table = pq.read_table(folder / "trials.parquet").drop_columns(["seconds"])
