@@ -47,6 +47,31 @@ Progress = Callable[[float, float], None]
 """Called now and then with the simulated time and the plan's duration [s]."""
 
 
+class SimulatedJoints(Protocol):
+    """The joints of a robot as built whose wheels are simulated, not turned as commanded
+    (:attr:`SimulatedBackend.joints`; physics: :class:`~omnikin.physics.simulator.PhysicsSim`)."""
+
+    @property
+    def wheel_angles(self) -> np.ndarray:
+        """Angles ``(n,)`` [rad] of the rolling wheels (file order) since the start."""
+        ...
+
+    @property
+    def wheel_speeds(self) -> np.ndarray:
+        """Speeds ``(n,)`` [rad/s] of the rolling wheels (file order)."""
+        ...
+
+    @property
+    def steer_angles(self) -> np.ndarray:
+        """Steering angles ``(m,)`` [rad] of the steerable wheels (file order)."""
+        ...
+
+    @property
+    def twist(self) -> np.ndarray:
+        """True body twist ``(vx [m/s], vy [m/s], omega [rad/s])`` (body frame)."""
+        ...
+
+
 class SimulatedBackend(WheelBackend, Protocol):
     """A runtime wheel back-end on a simulated robot (:meth:`Engine.backend`): a
     :class:`~omnikin.runtime.backends.WheelBackend` that also knows where the robot truly is."""
@@ -55,6 +80,13 @@ class SimulatedBackend(WheelBackend, Protocol):
     def truth(self) -> np.ndarray:
         """True pose ``(x [m], y [m], theta [rad])`` of the robot as built (world frame, heading
         wrapped to ``[-pi, pi)``)."""
+        ...
+
+    @property
+    def joints(self) -> SimulatedJoints | None:
+        """The simulated joints (physics: the wheels' and steering joints' true angles and
+        speeds, and the body's true twist), or None when the wheels turn as commanded
+        (kinematic: a front end draws them from the commands)."""
         ...
 
     @property

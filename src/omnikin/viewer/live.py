@@ -42,7 +42,6 @@ import numpy as np
 from ..errors import InputError
 from ..kinematics.robot import Robot
 from ..motion.limits import MotionLimits
-from ..physics.backend import PhysicsBackend
 from ..physics.description import PhysicalRobot, describe
 from ..physics.engines import as_engine
 from ..physics.joint_motion import JointMotion
@@ -370,8 +369,8 @@ class LiveRobot(PageRobot):
         super().__init__(robot, speed=speed, turn=turn, limits=limits)
         self.engine = engine
         self.backend = engine.backend(robot)
-        # the physics back-end's joints are simulated and read; the kinematic ones follow the commands
-        self._sim = self.backend.sim if isinstance(self.backend, PhysicsBackend) else None
+        # simulated joints (physics) are read; the others follow the commands (kinematic)
+        self._joints = self.backend.joints
         self.runtime = BaseRuntime(robot, self.backend, limits=self.limits, cmd_vel_timeout=timeout)
         self.can_steer = bool(robot.steerable)
         self.catch_up = True
@@ -423,13 +422,13 @@ class LiveRobot(PageRobot):
         slots = self.slots
         speeds = np.zeros(slots.count)
         steer = np.full(slots.count, np.nan)
-        sim = self._sim
-        if sim is not None:
-            self._angles[slots.rolling] = sim.wheel_angles
-            speeds[slots.rolling] = sim.wheel_speeds
+        joints = self._joints
+        if joints is not None:
+            self._angles[slots.rolling] = joints.wheel_angles
+            speeds[slots.rolling] = joints.wheel_speeds
             if len(slots.steered):
-                steer[slots.steered] = sim.steer_angles
-            moved = sim.twist
+                steer[slots.steered] = joints.steer_angles
+            moved = joints.twist
         else:
             moved = self._moved
             self._moved = np.asarray(result.command, dtype=float)
