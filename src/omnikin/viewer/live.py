@@ -43,13 +43,14 @@ from ..errors import InputError
 from ..kinematics.robot import Robot
 from ..motion.limits import MotionLimits
 from ..physics.description import PhysicalRobot, describe
-from ..physics.engines import as_engine
 from ..physics.joint_motion import JointMotion
 from ..runtime.base import BaseRuntime, StepResult
 from ..runtime.goal import GoalSeeker
 from ..runtime.teleop import MOVES, STEER_STEP, Teleop
-from ..simulation.engine import Engine
+from ..simulation.engine import Engine, KinematicEngine
 
+KINEMATIC = KinematicEngine()
+"""The default engine of the live robot (the kinematic one, no options)."""
 KEY_SILENCE = 1.0
 """Time [s] after which a held key whose page sent nothing (no ``alive``, sent every 0.1 s while a
 key is down) is released: ten heartbeats, so that a page whose thread is busy drawing a frame in
@@ -349,23 +350,21 @@ class PageRobot:
 
 class LiveRobot(PageRobot):
     """``robot`` simulated behind the page (module docstring): ``engine`` the
-    :class:`~omnikin.simulation.engine.Engine` whose back-end moves it (or its name, with
-    ``step`` [s] the physics engine's time step, None: its default; the kinematic engine without
-    noise: the robot moves exactly as its wheels turn), ``limits`` and ``timeout`` [s] the
-    runtime's command filter."""
+    :class:`~omnikin.simulation.engine.Engine` whose back-end moves it (default the kinematic
+    engine without noise: the robot moves exactly as its wheels turn; a name becomes an engine in
+    the argument parser, :func:`omnikin.physics.engines.engine_named`), ``limits`` and
+    ``timeout`` [s] the runtime's command filter."""
 
     def __init__(
         self,
         robot: Robot,
-        engine: Engine | str = "kinematic",
+        engine: Engine = KINEMATIC,
         *,
         speed: float = 0.2,
         turn: float = 0.5,
         limits: MotionLimits | None = None,
         timeout: float = 0.5,
-        step: float | None = None,
     ):
-        engine = as_engine(engine, step=step)
         super().__init__(robot, speed=speed, turn=turn, limits=limits)
         self.engine = engine
         self.backend = engine.backend(robot)
