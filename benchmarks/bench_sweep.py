@@ -5,7 +5,7 @@ the ``typical`` tolerances, UMBmark, calibration, UMBmark again; ``omnikin.sweep
 in a plain loop in this process, one core. The same trials are then run as a study through the
 embedded Dask cluster with 1 and with 2 worker processes (tasks of about 1.5 s: the default
 planning), timed from the first task submitted to the last part written (the cluster's start and
-stop are reported apart). Targets (issue 10): within 15 % of the bare loop with 1 worker; at least
+stop are reported apart). Targets (docs/sweeps.md): within 15 % of the bare loop with 1 worker; at least
 1.7x with 2 workers on the 2 cores of this machine. The tables are checked to be identical.
 
 Per-task overhead: ``OVERHEAD_TASKS`` tasks that do nothing through the same ``run_tasks`` on one
@@ -63,7 +63,7 @@ def _swept(study: Study, workers: int, folder: Path) -> dict:
     shutil.rmtree(folder, ignore_errors=True)
     clock = _Clock()
     t0 = time.perf_counter()
-    execution.run_sweep(study, folder, workers=workers, progress=clock)
+    execution.execute_study(study, folder, workers=workers, progress=clock)
     total = time.perf_counter() - t0
     tasks = clock.last_at - clock.start_at
     table = pq.read_table(folder / "trials.parquet").drop_columns(["seconds"])

@@ -120,9 +120,9 @@ def load_robot(spec):
     PresetShadowWarning
         A preset name that is also a file or folder in the current folder.
     """
-    from .io.robot_file import load_robot as _load
+    from .io import robot_file
 
-    return _load(spec)
+    return robot_file.load_robot(spec)
 
 
 def __getattr__(name: str):

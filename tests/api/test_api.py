@@ -16,8 +16,10 @@ import numpy as np
 import pytest
 
 import omnikin
-from conftest import omni_robot, omnikin_env, run_cli
 from omnikin.cli.main import build_parser
+from support.cli import run_cli
+from support.kinematics import omni_robot
+from support.paths import omnikin_env
 
 ENTRY_POINTS = ("simulate", "run_umbmark", "analyze_umbmark", "calibrate", "calibration_plan", "plot_layout")
 
@@ -153,10 +155,10 @@ def test_simulate_is_omnikin_simulate_without_the_bag(tmp_path):
 
 
 def test_simulate_refuses_a_run_beyond_its_memory_before_starting(capsys, monkeypatch):
-    """omnikin.simulate('tomasi-omni3', 'line 1400', rate=10000) started a 26 GB job that
-    'omnikin simulate' refuses. 1400 m at tomasi's default 0.3 m/s take 4667 s, 4.67e7 samples at
-    10 kHz: at least 2.2e10 bytes at the smallest measured 472 bytes per sample. Python and the
-    command line now refuse it alike, at once, each naming the limit its own way."""
+    """omnikin.simulate('tomasi-omni3', 'line 1400', rate=10000) is a 26 GB job: 1400 m at
+    tomasi's default 0.3 m/s take 4667 s, 4.67e7 samples at 10 kHz, at least 2.2e10 bytes at the
+    smallest measured 472 bytes per sample. Python and the command line refuse it alike, at once,
+    each naming the limit its own way."""
     import omnikin.simulation.kinematic as kinematic
     from omnikin.errors import ResourceLimitError
 

@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 
 import omnikin
-from conftest import run_entry_point
 from omnikin import InputError, load_robot
 from omnikin.motion.plans import line
 from omnikin.presets import preset_path
 from omnikin.simulation.backend import SimBackend
 from omnikin.simulation.kinematic import simulate_kinematic
+from support.cli import run_entry_point
 
 WHEELS = (
     "  - {name: w1, type: omni, distance: 0.113, angle_deg: 0,   radius: 0.04125, encoder: {ticks_per_rev: 600}}\n"

@@ -18,10 +18,10 @@ import pytest
 import yaml
 
 import omnikin
-from conftest import run_cli as cli
-from conftest import run_entry_point
 from omnikin import PRESET_NAMES
 from omnikin.presets import preset_path
+from support.cli import run_cli as cli
+from support.cli import run_entry_point
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 COMMANDS = ("presets", "show", "ik", "fk", "odometry")

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import pytest
 
-from conftest import ROOT
-from conftest import run_cli as cli
 from omnikin.cli.main import main
+from support.cli import run_cli as cli
+from support.paths import ROOT
 
 EXAMPLES = ROOT / "examples"
 

@@ -12,10 +12,10 @@ from pathlib import Path
 import pytest
 import yaml
 
-from conftest import run_cli as cli
 from omnikin.cli.budget import Budget, format_bytes, parse_duration, parse_size, require
 from omnikin.cli.main import main
 from omnikin.errors import ResourceLimitError
+from support.cli import run_cli as cli
 
 # The work a refusal must come before: each is replaced by a stand-in that fails the test if called.
 WORK = (
@@ -113,9 +113,9 @@ def test_durations(text, value):
     ],
 )
 def test_a_size_is_a_plain_number_and_a_unit_of_the_table(text, why):
-    """' 2G', '2G\\n' and Unicode blanks were read as 2 GiB, '2Gb' (gigabits elsewhere) as 2 GiB
-    and '2bb' as 2 bytes: a size is now a plain number (the grammar of every number omnikin reads)
-    followed at once by a unit of one strict table."""
+    """A size is a plain number (the grammar of every number omnikin reads) followed at once by a
+    unit of one strict table: ' 2G', '2G\\n' and Unicode blanks are not 2 GiB, nor '2Gb'
+    (gigabits elsewhere), nor '2bb' 2 bytes."""
     with pytest.raises(argparse.ArgumentTypeError, match=re.escape(why)) as info:
         parse_size(text)
     assert "powers of 1024" in str(info.value) and "\n" not in str(info.value)

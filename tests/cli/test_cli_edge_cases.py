@@ -14,11 +14,11 @@ import math
 import numpy as np
 import pytest
 
-from conftest import run_cli
 from omnikin import (
     load_robot,
 )
 from omnikin.cli.main import main
+from support.cli import run_cli
 
 
 def test_cli_villasenor_allow_infeasible(capsys):

@@ -15,10 +15,11 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import omnikin_env, run_entry_point
-from conftest import run_cli as cli
 from omnikin.cli.main import main
 from omnikin.cli.process import MESSAGE_LIMIT
+from support.cli import run_cli as cli
+from support.cli import run_entry_point
+from support.paths import omnikin_env
 
 TOMASI_J = np.array([[-math.sin(b), math.cos(b), 0.113] for b in np.radians([0.0, 120.0, 240.0])]) / 0.04125
 # omni4 (preset file): hubs at 45 + 90 k deg on a 0.2 m circle, drive = counter-clockwise tangent, r = 0.05
@@ -304,9 +305,9 @@ def test_floating_point_trouble_in_omnikin_is_an_error_not_a_wrong_number(capsys
 # --- sample rates of simulations ------------------------------------------------------------------------
 @pytest.mark.parametrize("rate", ["1e-9", "4.99", "0", "-5", "nan", "inf", "10000.5", "1e9", "1e300"])
 def test_simulate_refuses_a_rate_outside_5_hz_to_10_khz_like_umbmark(capsys, tmp_path, rate):
-    """'omnikin simulate --rate 1e-9' simulated a run of one sample (noise of the sampling, not
-    odometry); UMBmark's rate has always been bounded to 5 Hz .. 10 kHz. Both commands and the
-    Python entry points now refuse the same rates, in one line naming the option and the range."""
+    """A rate outside 5 Hz .. 10 kHz ('--rate 1e-9' would be a run of one sample: noise of the
+    sampling, not odometry): both commands and the Python entry points refuse the same rates, in
+    one line naming the option and the range."""
     log = tmp_path / "log.csv"
     for command in (["simulate", "tomasi-omni3", "--log", log], ["umbmark", "-o", tmp_path / "r"]):
         rc, out, err = cli(capsys, *command, "--rate", rate)
@@ -414,14 +415,14 @@ def test_whole_numbers_take_at_most_twenty_digits(capsys):
 
 @pytest.mark.parametrize("typed", [" -1", " 1", "-1 ", "\t-1"])
 def test_a_number_with_a_blank_is_refused_whatever_its_sign(capsys, typed):
-    """' -1' was accepted (the parser took off a blank it had not added) while ' 1' was refused."""
+    """' -1' is refused as ' 1' is: the parser takes off no blank it did not add."""
     one_line(*cli(capsys, "ik", "tomasi-omni3", typed, "0", "0"), "argument VX", "not a number", repr(typed))
     one_line(*cli(capsys, "ik", "tomasi-omni3", "0", "0", "0", "--heading", typed), "--heading", repr(typed))
 
 
 def test_every_negative_value_the_help_shows_is_a_value(capsys):
-    """'omnikin --help' gave -inf as an example of a negative number read as a value, which every
-    number option refuses: each example there is now taken by 'ik' as the twist's vx."""
+    """Each example of a negative number read as a value that 'omnikin --help' gives is taken by
+    'ik' as the twist's vx (none is one that every number option refuses, such as -inf)."""
     assert main(["--help"]) == 0
     text = capsys.readouterr().out
     line = next(line for line in text.splitlines() if line.startswith("negative numbers are values"))

@@ -17,9 +17,9 @@ import time
 import numpy as np
 import pytest
 
-from conftest import omnikin_env
-from conftest import run_cli as cli
 from omnikin.cli.main import main
+from support.cli import run_cli as cli
+from support.paths import omnikin_env
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 LOG = "t,w1,w2,w3\n0,0,0,0\n0.1,5,-3,2\n0.2,10,-6,4\n"
@@ -289,7 +289,7 @@ RUNS = "ROOT/examples/calibration_runs.csv"
 
 
 def _argv(argv, log, sim_bag=None):
-    from conftest import ROOT
+    from support.paths import ROOT
 
     swap = {"LOG": log, "BAG": sim_bag, RUNS: ROOT / "examples" / "calibration_runs.csv"}
     return [swap.get(a, a) for a in argv]

@@ -18,8 +18,8 @@ import time
 
 import pytest
 
-from conftest import omnikin_env
 from support import servers
+from support.paths import omnikin_env
 from support.ros_domain import fresh_domain
 
 

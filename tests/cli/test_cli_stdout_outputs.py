@@ -17,10 +17,10 @@ import subprocess
 
 import pytest
 
-from conftest import ROOT, omnikin_env
 from omnikin.cli.common import OUTPUTS
 from omnikin.cli.main import build_parser
 from support import servers
+from support.paths import ROOT, omnikin_env
 
 EXAMPLES = ROOT / "examples"
 

@@ -10,7 +10,7 @@ import sys
 
 import pytest
 
-from conftest import ROOT, omnikin_env
+from support.paths import ROOT, omnikin_env
 
 ROBOT = (
     "omnikin: 1\nname: café\ndescription: un robot à trois roues — ça roule\nwheels:\n"

@@ -13,7 +13,6 @@ import math
 import pytest
 import yaml
 
-from conftest import run_cli as cli
 from omnikin.io.robot_file import (
     ENCODER_KEYS,
     PHYSICAL_BODY_KEYS,
@@ -22,6 +21,7 @@ from omnikin.io.robot_file import (
     TOP_KEYS,
     WHEEL_KEYS,
 )
+from support.cli import run_cli as cli
 
 # Three wheels 0.2 m from the centre: a Swedish wheel placed by x, y; a steerable wheel placed by
 # distance and angle; an omni wheel. Whole numbers only in the fields that hold counts.

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from conftest import run_cli as cli
+from support.cli import run_cli as cli
 
 ROBOT = """\
 omnikin: 1

@@ -17,9 +17,9 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import ROOT, omnikin_env
 from omnikin import load_robot
 from omnikin.cli.main import main
+from support.paths import ROOT, omnikin_env
 
 PNG = b"\x89PNG\r\n\x1a\n"
 SIDE_DEFAULT = 4.0
@@ -640,9 +640,9 @@ def test_umbmark_bad_options(capsys, tmp_path, monkeypatch, argv, contains):
 
 @pytest.mark.parametrize("dpi", ["1", "0.5", "49.99", "1201", "1e9"])
 def test_umbmark_refuses_a_resolution_outside_screens_to_print_before_the_study(capsys, tmp_path, monkeypatch, dpi):
-    """'--dpi 1' crashed with 'internal error: RuntimeError FT_Set_Char_Size' after the whole study
-    had run; '--dpi 0.5' exited 0 with figures of a few pixels. Now a usage error naming --dpi and
-    the range (50 dpi, the coarsest screens, to 1200 dpi, print), before any simulation."""
+    """A resolution FreeType cannot draw ('--dpi 1') or that gives figures of a few pixels
+    ('--dpi 0.5') is a usage error naming --dpi and the range (50 dpi, the coarsest screens, to
+    1200 dpi, print), before any simulation."""
     _study_must_not_run(monkeypatch)
     line = assert_usage_error(
         capsys, "umbmark", "diff-drive", "--dpi", dpi, "-o", tmp_path / "r", contains=["--dpi", "[50, 1200] dpi"]

@@ -3,7 +3,7 @@ each, before anything is served."""
 
 import pytest
 
-from conftest import run_cli
+from support.cli import run_cli
 
 
 @pytest.mark.parametrize(

@@ -12,12 +12,13 @@ from urllib.parse import urlsplit
 import numpy as np
 import pytest
 
-from conftest import omnikin_env, run_entry_point
 from omnikin.io.robot_file import load_robot
 from omnikin.io.run_poses import read_run_poses
 from omnikin.physics.description import describe
 from omnikin.viewer.replay import TrackReplay
 from omnikin.viewer.replay_sources import load_report
+from support.cli import run_entry_point
+from support.paths import omnikin_env
 
 
 @pytest.fixture(scope="module")

@@ -29,9 +29,9 @@ Arabic-Indic and full-width digits, a superscript, hexadecimal, an overflow, bro
     "template", ["line {}", "line 1 {}", "spin {}", "arc 1 {}", "arc {} 90", "square cw rotate {}"]
 )
 def test_a_path_from_python_takes_plain_numbers_only(template, word):
-    """parse_plan, called from Python (and by omnikin.simulate), read its numbers with float():
-    'line 1_0' was a 10 m line, Arabic-Indic digits were numbers. It now reads them as files and
-    --path do: one line naming the path and what is wrong with the word."""
+    """parse_plan, called from Python (and by omnikin.simulate), reads its numbers as files and
+    --path do, not with float() ('line 1_0' is no 10 m line, Arabic-Indic digits are no numbers):
+    one line naming the path and what is wrong with the word."""
     from omnikin.errors import InputError
     from omnikin.motion.plans import parse_plan
 
@@ -84,8 +84,8 @@ def test_bad_paths_are_named_in_one_bounded_line(text, contains):
 # --- angles of paths ---------------------------------------------------------------------------------------
 @pytest.mark.parametrize("text", ["line 4 1e300", "line 4 -1e300", "line 4 720.001", "line 4 -1000"])
 def test_a_heading_is_a_direction_within_two_turns_like_a_robot_files(text):
-    """'line 4 1e300' was accepted with whatever direction 1e300 deg rounds to in radians. A
-    heading is a direction: within +-720 deg, the bound of a robot file's angle_deg/drive_deg."""
+    """A heading is a direction: within +-720 deg, the bound of a robot file's
+    angle_deg/drive_deg ('line 4 1e300' would be whatever direction 1e300 deg rounds to)."""
     from omnikin.errors import InputError
     from omnikin.io.robot_file import FIELD_RANGES
     from omnikin.motion.plans import parse_plan
@@ -132,9 +132,8 @@ def test_an_arc_without_a_finite_curvature_names_the_path(radius):
 
 @pytest.mark.parametrize("blank", ["\x1c", "\x1f", "\u3000", "\u00a0", "\u2003", "\n", "\r", "\x0b", "\x85"])
 def test_words_of_a_path_are_separated_by_ascii_blanks_only(blank):
-    """str.split() also split at U+001C (file separator) and U+3000 (ideographic space): such a
-    path was read as if spaced. Words are separated by spaces and tabs; any other white space is
-    refused, naming its code point."""
+    """Words are separated by spaces and tabs; any other white space (U+001C, U+3000, which
+    str.split() splits at) is refused, naming its code point."""
     from omnikin.errors import InputError
     from omnikin.motion.plans import parse_plan
 

@@ -11,9 +11,9 @@ import re
 
 import pytest
 
-from conftest import run_cli
 from omnikin.common.resource_limits import LimitNames, format_bytes, format_seconds, require_within
 from omnikin.errors import InputError, ResourceLimitError
+from support.cli import run_cli
 
 OPTIONS = LimitNames("--max-memory", "--max-time")
 ARGUMENTS = LimitNames("max_memory", "max_time")
@@ -61,7 +61,8 @@ def test_a_limit_that_is_no_limit_is_named(which, limit):
 
 @pytest.mark.parametrize("which", ["max_memory", "max_time"])
 def test_an_integer_below_every_float_is_a_negative_limit_not_none(which):
-    """-10**400 is beyond floats: it was read as +inf, no limit at all; its sign decides."""
+    """-10**400 is beyond floats: its sign decides (a negative limit, refused), not float()'s
+    +inf (no limit at all)."""
     with pytest.raises(InputError, match=rf"^{which} must be a number of .* > 0") as info:
         require_within("job", memory=1.0, seconds=1.0, hint="-", names=ARGUMENTS, **{which: -(10**400)})
     assert "\n" not in str(info.value) and len(str(info.value)) < 200

@@ -19,7 +19,7 @@ if sys.version_info >= (3, 11):
 else:  # Python 3.10: tomli, which import-linter brings there
     import tomli as tomllib
 
-from conftest import ROOT
+from support.paths import ROOT
 
 PACKAGE = ROOT / "src" / "omnikin"
 DOC = ROOT / "docs" / "architecture.md"

@@ -140,3 +140,82 @@ def test_class_documents_its_constructor_or_its_attributes(name, cls):
             declared = attribute in inspect.get_annotations(cls)
             known = attribute in fields or attribute in assigned or declared or hasattr(cls, attribute)
             assert known, f"{name} documents no attribute {attribute!r}"
+
+
+def names_in_docs() -> list[str]:
+    """Every dotted name under ``omnikin`` that docs/*.md and README.md write
+    (``omnikin.odometry.counters.wrap_scalar``), but the keys of a bag's metadata
+    (``omnikin.seed``) and file names (``omnikin.rviz``)."""
+    from support.paths import ROOT
+
+    texts = [p.read_text(encoding="utf-8") for p in sorted((ROOT / "docs").rglob("*.md"))]
+    texts.append((ROOT / "README.md").read_text(encoding="utf-8"))
+    found = set()
+    for text in texts:
+        found.update(re.findall(r"(?<![\w./-])omnikin(?:\.[A-Za-z_]\w*)+", text))
+    return sorted(found)
+
+
+def resolved(name: str):
+    """The object ``name`` names: its longest importable module, then attributes of it; None
+    when no module of omnikin and no attribute of it has that name."""
+    import importlib
+
+    parts = name.split(".")
+    for cut in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:cut]))
+        except ModuleNotFoundError as exc:
+            if exc.name is not None and exc.name.startswith("omnikin"):
+                continue
+            raise
+        for attr in parts[cut:]:
+            if not hasattr(obj, attr):
+                return None
+            obj = getattr(obj, attr)
+        return obj
+    return None
+
+
+METADATA_KEYS = {"omnikin.robot", "omnikin.seed", "omnikin.engine", "omnikin.noise", "omnikin.path", "omnikin.rate"}
+"""Keys of a bag's metadata that docs/bags.md names (not modules)."""
+
+
+def documented_objects() -> list[tuple[str, object]]:
+    """The functions and classes that the docs name by their dotted path and the exports do not
+    cover (a user imports them as the docs write them), exceptions aside."""
+    exported = {id(obj) for _, obj in public_objects()}
+    out = {}
+    for name in names_in_docs():
+        obj = resolved(name)
+        if isinstance(obj, type) and issubclass(obj, BaseException):
+            continue
+        if (inspect.isfunction(obj) or inspect.isclass(obj)) and id(obj) not in exported:
+            out[name] = obj
+    return sorted(out.items())
+
+
+def test_every_dotted_name_in_the_docs_exists():
+    """A module, function, class or constant the docs name by its dotted path is there (a moved
+    or renamed one leaves no stale path behind)."""
+    names = names_in_docs()
+    assert "omnikin.odometry.counters.wrap_scalar" in names  # the walk finds the names
+    missing = [n for n in names if n not in METADATA_KEYS and n != "omnikin.rviz" and resolved(n) is None]
+    assert not missing, f"docs name what does not exist: {missing}"
+
+
+@pytest.mark.parametrize("name, obj", documented_objects(), ids=lambda v: v if isinstance(v, str) else "")
+def test_what_the_docs_name_documents_its_arguments(name, obj):
+    """A function or class the docs name has the sections of an exported one: Parameters naming
+    its signature and Returns (a function), Parameters or Attributes (a class)."""
+    found = sections(inspect.getdoc(obj) if inspect.isfunction(obj) else obj.__doc__)
+    if inspect.isclass(obj):
+        assert "Parameters" in found or "Attributes" in found, f"{name} has neither Parameters nor Attributes"
+        if "Parameters" in found:
+            assert entry_names(found["Parameters"]) == list(inspect.signature(obj).parameters), name
+        return
+    args = arguments(obj)
+    if args:
+        assert "Parameters" in found and entry_names(found["Parameters"]) == args, f"{name}: Parameters"
+        if inspect.signature(obj).return_annotation not in (None, "None"):
+            assert "Returns" in found, f"{name} returns a value but has no Returns section"

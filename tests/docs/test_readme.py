@@ -23,9 +23,9 @@ import tempfile
 
 import pytest
 
-from conftest import ROOT, omnikin_env
 from support import servers
 from support.firmware_build import AVR_MISSING
+from support.paths import ROOT, omnikin_env
 from support.ros_domain import fresh_domain
 from support.simboard import SIMAVR_MISSING
 

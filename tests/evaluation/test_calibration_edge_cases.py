@@ -42,7 +42,7 @@ def test_lever_is_the_displacement_component_along_its_direction():
 
 def test_a_robot_without_encoders_is_refused_by_every_measuring_command(tmp_path, capsys, monkeypatch):
     """UMBmark, the calibration plan and the calibration measure through the encoders: a robot
-    file without any says so in one line (it crashed with an internal error in the plan)."""
+    file without any is refused in one line by each of them, the calibration plan included."""
     from omnikin.cli.main import main
 
     robot = tmp_path / "uni.yaml"

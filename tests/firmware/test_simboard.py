@@ -434,7 +434,7 @@ def test_a_file_that_is_not_an_avr_elf_is_refused_in_one_line(exe, tmp_path):
 def test_damaged_avr_elfs_are_refused_or_run_but_never_crash_the_board(exe, build, tmp_path):
     original = program(build, "step_toggle").read_bytes()
     damaged = [original[:20], original[:100], original[: len(original) // 2]]
-    for seed in range(8):  # bytes overwritten after the ELF header (seed 1 crashed libsimavr's reader)
+    for seed in range(8):  # bytes overwritten after the ELF header (seed 1 reaches a crash in libsimavr's reader)
         rng = random.Random(seed)
         data = bytearray(original)
         for _ in range(200):

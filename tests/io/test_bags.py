@@ -270,7 +270,7 @@ def test_bag_odometry_has_the_change_of_speed_bound_of_odometry(tmp_path):
 def test_bad_wheel_bounds_are_usage_errors_naming_the_option(capsys, tmp_path, option, value):
     """Both odometry commands refuse a bound that is no bound before reading anything, in one
     line naming the option and quoting the value as typed."""
-    from conftest import run_cli as main_cli
+    from support.cli import run_cli as main_cli
 
     for command in (
         ["bag", "odometry", "tomasi-omni3", tmp_path / "none.bag", "-o", tmp_path / "o.bag"],
@@ -673,7 +673,8 @@ def test_taken_output_fails_before_reading_or_simulating(tmp_path):
     ],
 )
 def test_frame_ids_follow_ros_naming_rules(circle_bag, tmp_path, frames, match):
-    """'' and 'a b' were written into the bag's Odometry headers, and a child frame equal to its parent."""
+    """Frame ids '' and 'a b', and a child frame equal to its parent, are refused before the bag's
+    Odometry headers are written."""
     out = tmp_path / "odom.bag"
     with pytest.raises(BagError, match=match):
         run_cli(["bag", "odometry", "tomasi-omni3", circle_bag[0], "-o", out, *frames])

@@ -11,7 +11,6 @@ from pathlib import Path
 
 import pytest
 
-from conftest import omnikin_env
 from omnikin.errors import InputError, OutputError, OutputExistsError
 from omnikin.io.output import (
     DATA_MARKER,
@@ -23,6 +22,7 @@ from omnikin.io.output import (
     data_folder,
     report_folder,
 )
+from support.paths import omnikin_env
 
 
 def test_new_file_is_accepted_and_existing_one_needs_force(tmp_path):

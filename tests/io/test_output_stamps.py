@@ -1,5 +1,5 @@
 """Outputs refuse stamps they cannot hold, whoever writes them: a simulated run recorded to a bag
-(ROS 2 times from 0 to 2**31 - 1 s, omnikin.motion.timing.check_start) and a tick log
+(ROS 2 times from 0 to 2**31 - 1 s, omnikin.motion.timing.check_start_time) and a tick log
 whose times, as written and read back, must increase (the odometry refuses any other log)."""
 
 from __future__ import annotations

@@ -15,9 +15,9 @@ import sys
 
 import pytest
 
-from conftest import SRC  # noqa: E402
 from omnikin.errors import InputError, RobotFileError
 from omnikin.io.robot_file import load_robot, parse_robot_text
+from support.paths import SRC  # noqa: E402
 
 TIMEOUT = 60  # seconds; every case below finishes in about one
 
@@ -73,7 +73,8 @@ def billion_laughs(levels: int = 9) -> str:
 
 
 def test_billion_laughs_robot_file_is_refused_at_once(tmp_path):
-    """Placed where the reader quotes the value (references) it expanded to gigabytes and hung."""
+    """Placed where the reader quotes the value (references), where expanding it would take
+    gigabytes and hang: refused before any expansion."""
     bomb = billion_laughs()
     refs = "references: [" + ", ".join(line.split(": ", 1)[1] for line in bomb.splitlines()) + "]\n"
     path = tmp_path / "laughs.yaml"
@@ -284,8 +285,8 @@ def test_hostile_numbers_in_json(tmp_path, literal, fragment):
 
 
 def test_long_hostile_string_scalar_is_read_in_linear_time(tmp_path):
-    """A 200 KB plain scalar of digits ending in a letter once sent the exponent pattern into
-    quadratic backtracking (minutes); now it is just a (wrong) wheel name."""
+    """A 200 KB plain scalar of digits ending in a letter (which a backtracking exponent pattern
+    reads in quadratic time, minutes) is just a (wrong) wheel name, read at once."""
     path = tmp_path / "robot.yaml"
     path.write_text("omnikin: 1\nname: x\nwheels:\n  - {name: " + "1" * 200_000 + "x, type: omni, radius: 0.05}\n")
     proc = run_python(
@@ -318,7 +319,7 @@ def test_duplicate_keys_in_json_are_refused_in_linear_time(monkeypatch):
     """20 000 keys in one object: the duplicate check once counted each key in the whole list.
     Counted in key comparisons, not timed: a few per key."""
     import omnikin.io.robot_file as robot_file
-    from conftest import CountedName
+    from support.counting import CountedName
 
     unique = robot_file._unique_json_keys
 

@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pytest
 
-from conftest import run_entry_point
 from omnikin import load_robot
 from omnikin.errors import PresetShadowWarning
 from omnikin.io.robot_file import is_preset_spec, robot_file_of
 from omnikin.presets import PRESET_NAMES, preset_path
+from support.cli import run_entry_point
 
 SHIPPED_WHEELS = {"omni4": 4, "mecanum4": 4, "tomasi-omni3": 3, "diff-drive": 3}
 """Wheel counts of some presets, read off their files in src/omnikin/presets."""

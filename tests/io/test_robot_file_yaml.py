@@ -12,11 +12,11 @@ import sys
 
 import pytest
 
-from conftest import omnikin_env
 from omnikin import (
     RobotFileError,
     load_robot,
 )
+from support.paths import omnikin_env
 
 
 def test_duplicate_key_yaml_refused(tmp_path):
@@ -128,8 +128,8 @@ def test_ros_parameter_files_refuse_the_same_number_forms(tmp_path, literal, mes
 
 
 # --- explicit tags: refused, never handed to PyYAML's own readers --------------------------------
-# Each of these once ended in "internal error: ValueError/IndexError" (PyYAML's int/float readers
-# fail on them) or was read past the number grammar (non-ASCII digits, blanks: 1.5).
+# PyYAML's int/float readers fail on each of these with a ValueError or IndexError, or read it past
+# the number grammar (non-ASCII digits, blanks: 1.5): omnikin refuses the tag before they see it.
 TAGGED = [
     "!!int 'abc'",
     "!!int ''",

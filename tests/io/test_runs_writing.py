@@ -71,8 +71,8 @@ def test_the_template_has_every_path_repeated_and_the_runs_file_columns():
 
 @pytest.mark.parametrize("blank", ["\u3000", "\x1c", "\u00a0"])
 def test_a_path_spaced_with_other_white_space_is_refused_naming_file_line_and_column(tmp_path, blank):
-    """The reader normalised a path with str.split() before parsing it: 'line<U+3000>4' was read
-    as 'line 4'. A path's words are separated by spaces and tabs, in a file as on the command line."""
+    """'line<U+3000>4' is not 'line 4' (as str.split() would read it): a path's words are
+    separated by spaces and tabs, in a file as on the command line."""
     path = tmp_path / "runs.csv"
     path.write_text(f"path,x_abs,y_abs\nline 4,4,0\nline{blank}4,4,0\n", encoding="utf-8")
     with pytest.raises(InputError, match=rf"runs.csv: line 3, column 'path': .*white space U\+{ord(blank):04X}"):
@@ -80,7 +80,7 @@ def test_a_path_spaced_with_other_white_space_is_refused_naming_file_line_and_co
 
 
 def test_simulate_refuses_other_white_space_around_a_path(capsys):
-    from conftest import run_cli
+    from support.cli import run_cli
 
     rc, out, err = run_cli(capsys, "simulate", "diff-drive", "--path", "line 0.1\u3000; spin 90", "--log", "-")
     assert rc == 2 and out == "" and "white space U+3000" in err and err.count("\n") == 1, err

@@ -12,7 +12,6 @@ import threading
 import numpy as np
 import pytest
 
-from conftest import CountedName, circle_wheels
 from omnikin import OdometryInputError, Robot, load_robot
 from omnikin.cli.main import main
 from omnikin.errors import RunsFileError, TrajectoryFileError
@@ -20,6 +19,8 @@ from omnikin.io.csvfile import column_problems, iter_fields, number, read_rows
 from omnikin.io.logs import read_tick_log
 from omnikin.io.runs import read_calibration_runs, read_umbmark_measurements
 from omnikin.io.trajectories import read_trajectory
+from support.counting import CountedName
+from support.kinematics import circle_wheels
 
 
 def cli(capsys, *argv):
@@ -33,7 +34,8 @@ GOOD_CSV = "t,x,y,theta\n0,0,0,0\n1,0.5,0.25,0.1\n2,1.0,0.5,0.2\n"
 
 
 def test_metrics_with_an_empty_csv_field_names_line_and_column(tmp_path, capsys):
-    """'1,0.5,,0.25,0.1' once lost its empty field and was read as t=1, x=0.5, y=0.25, theta=0.1."""
+    """'1,0.5,,0.25,0.1' keeps its empty field (it is not t=1, x=0.5, y=0.25, theta=0.1): refused
+    naming the line and the column."""
     ref = tmp_path / "ref.csv"
     ref.write_text(GOOD_CSV)
     est = tmp_path / "est.csv"
@@ -256,7 +258,8 @@ def test_plain_decimals_are_read(text, value):
 
 @pytest.mark.parametrize("text", HOSTILE_NUMBERS)
 def test_every_table_refuses_a_hostile_number(tmp_path, text):
-    """0_1 was read as 1.0 and Arabic-Indic digits as numbers in runs, measurements and trajectories."""
+    """0_1 (1.0 to float()) and Arabic-Indic digits are not numbers in runs, measurements and
+    trajectories."""
     files = {
         "measurements": (
             f"direction,x_abs,y_abs,x_calc,y_calc\ncw,{text},0,0,0\nccw,0,0,0,0\n",

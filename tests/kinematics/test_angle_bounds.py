@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import run_entry_point
 from omnikin import InputError, load_robot
 from omnikin.kinematics.se2 import MAX_ANGLE
+from support.cli import run_entry_point
 
 LIMIT = math.radians(35.0)  # ackermann: both front wheels steer within -35 .. 35 deg
 
@@ -150,7 +150,7 @@ def test_no_module_reaches_into_the_private_members_of_a_robot():
     meaning may change with the model) outside omnikin/kinematics/robot.py."""
     import ast
 
-    from conftest import SRC
+    from support.paths import SRC
 
     package = Path(SRC) / "omnikin"
     model = ast.parse((package / "kinematics" / "robot.py").read_text(encoding="utf-8"))

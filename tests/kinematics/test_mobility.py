@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from conftest import omni_robot
 from omnikin import PRESET_NAMES, Robot, SingularLayoutError, Steer, Wheel, load_robot
 from omnikin.kinematics.mobility import CONDITION_WARNING
+from support.kinematics import omni_robot
 
 CASTOR = dict(steer=Steer(offset=0.03))
 

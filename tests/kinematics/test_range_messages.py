@@ -24,7 +24,7 @@ from omnikin.kinematics.robot import heading_array
 from omnikin.kinematics.se2 import MAX_ANGLE
 from omnikin.kinematics.wheels import Steer
 from omnikin.motion.limits import MotionLimits
-from omnikin.odometry.integration import check_start
+from omnikin.odometry.integration import check_start_pose
 from omnikin.runtime.command import CommandFilter
 
 RANGE = re.compile(r"must lie in \[(\S+), (\S+)\](?: [^,]*)?, got (\S+)$")
@@ -138,7 +138,7 @@ def test_a_steering_angle_just_beyond_its_limit_prints_beyond_it():
 
 
 def test_a_start_pose_just_beyond_the_bound_prints_beyond_it():
-    text = refused(lambda: check_start([0.0, 0.0, MAX_ANGLE * (1 + 1e-12)]))
+    text = refused(lambda: check_start_pose([0.0, 0.0, MAX_ANGLE * (1 + 1e-12)]))
     m = re.search(r"theta = (\S+) rad is not a finite number within \+-(\S+) rad", text)
     assert m and float(m.group(1)) > float(m.group(2)), text
 

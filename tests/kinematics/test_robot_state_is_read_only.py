@@ -1,9 +1,9 @@
 """A robot's cached state cannot be changed through the arrays it hands out.
 
-Robot.steer_limits, jacobian() and fk_matrix() returned arrays that owned their data, flagged
-read-only: ``setflags(write=True)`` made them writeable again, and writing one changed every
-later result of the robot. They are now read-only for good (their data in immutable bytes:
-omnikin.common.arrays.frozen), or fresh copies where a robot computes them anew (steered robots).
+Robot.steer_limits, jacobian() and fk_matrix() hand out arrays that are read-only for good
+(their data in immutable bytes: omnikin.common.arrays.frozen; ``setflags(write=True)`` cannot
+make them writeable, as it could an array owning its data), or fresh copies where a robot
+computes them anew (steered robots): writing one never changes a later result of the robot.
 Expected results come from a second robot loaded from the same file, which nothing touched.
 """
 

@@ -22,11 +22,12 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import ROOT, run_entry_point  # noqa: E402
 from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
 from omnikin.errors import InputError, RobotFileError
 from omnikin.io.logs import read_tick_log, write_tick_log
 from omnikin.io.robot_file import robot_to_dict
+from support.cli import run_entry_point  # noqa: E402
+from support.paths import ROOT  # noqa: E402
 from support.tomasi import (
     TOMASI_RPT,
     assert_poses_close,

@@ -40,7 +40,7 @@ def test_float_reading_after_integer_readings_beyond_2_53_streams_exactly(tomasi
 
 
 def test_batch_takes_floats_mixed_with_integers_beyond_2_53_as_the_streaming_estimator(tomasi):
-    """A list mixing them was refused ('would be rounded'); now read exactly, as streaming does."""
+    """A list mixing them is read exactly, as streaming reads it (not refused as 'would be rounded')."""
     rows = [[float(B), 0.0, 0.0], [float(B + 2), 0.0, 0.0], [B + 5, 0, 0]]
     expected = tomasi_poses([[2, 0, 0], [3, 0, 0]])
     assert_poses_close(batch_odometry(tomasi, [0.0, 0.01, 0.02], rows).poses, expected)

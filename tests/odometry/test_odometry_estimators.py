@@ -8,10 +8,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import constant_twist_pose
 from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot, se2
 from omnikin.errors import OmnikinError
 from omnikin.odometry.integration import integrate
+from support.kinematics import constant_twist_pose
 
 RAD_PER_TICK = 2 * math.pi / 600  # tomasi-omni3 encoders
 
@@ -140,7 +140,7 @@ def test_redundant_layout_reports_residual():
     odo.update(0.0, [0, 0, 0, 0])
     odo.update(0.1, [100, 0, 0, 0])  # one wheel slips
     rad = 2 * math.pi / 2048 * 100
-    n = np.array([1, -1, 1, -1]) / 2.0  # left null space of J (see test_model)
+    n = np.array([1, -1, 1, -1]) / 2.0  # left null space of J (see kinematics/test_robot.py)
     np.testing.assert_allclose(odo.residual, n * n[0] * rad / 0.1, atol=1e-9)
 
 

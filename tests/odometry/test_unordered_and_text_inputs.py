@@ -192,8 +192,8 @@ def test_tick_log_plain_decimals_are_read(tmp_path, capsys):
     [("synchro", "3.6e17", "beyond +-1e+06 rad"), ("synchro", "1_0", "not a number"), ("ackermann", "40", "limits")],
 )
 def test_tick_log_steering_angles_are_checked(tmp_path, capsys, robot, text, why):
-    """A steering column of 3.6e17 deg was accepted; now: a plain decimal, within what the model
-    takes, or one line naming the file line and the wheel."""
+    """A steering angle is a plain decimal within what the model takes (not 3.6e17 deg), or one
+    line names the file line and the wheel."""
     r = load_robot(robot)
     n, m = len(r.encoded), len(r.steerable)
     header = "t," + ",".join(w.name for w in r.encoded) + "," + ",".join(f"{name}_steer_deg" for name in r.steer_names)

@@ -20,13 +20,13 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import ROOT, omnikin_env
 from omnikin import Odometry, OdometryInputError, batch_odometry, batch_odometry_from_angles, load_robot
 from omnikin.io.logs import read_tick_log, write_tick_log
 from omnikin.motion.limits import MotionLimits
 from omnikin.motion.plans import line, spin
 from omnikin.simulation.error_models import NoiseModel
 from omnikin.simulation.kinematic import simulate_kinematic
+from support.paths import ROOT, omnikin_env
 from support.tomasi import TOMASI_R, TOMASI_RPT, assert_poses_close, cli, one_line_error, read_csv_traj, tomasi_poses
 
 TICKS_PER_M = 1 / (TOMASI_R * TOMASI_RPT)  # 2315 ticks per metre at the rim

@@ -30,13 +30,13 @@ import pytest
 
 pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (extra 'physics')")
 
-from conftest import constant_twist_pose  # noqa: E402
 from omnikin import load_robot  # noqa: E402
 from omnikin.kinematics.se2 import wrap_angle  # noqa: E402
 from omnikin.motion.plans import line  # noqa: E402
 from omnikin.physics.run import simulate_physics  # noqa: E402
 from omnikin.simulation.error_models import NoiseModel, SystematicErrors, WheelErrors  # noqa: E402
 from omnikin.simulation.kinematic import simulate_kinematic  # noqa: E402
+from support.kinematics import constant_twist_pose  # noqa: E402
 
 ERROR = 0.05
 TOL_XY = 0.002

@@ -6,8 +6,8 @@ from __future__ import annotations
 import pytest
 import yaml
 
-from conftest import run_cli
 from omnikin.presets import preset_path
+from support.cli import run_cli
 
 
 @pytest.mark.parametrize(("option", "value"), [("--max-speed", "0"), ("--max-turn", "-1")])

@@ -15,7 +15,6 @@ import pytest
 import yaml
 
 import omnikin
-from conftest import run_cli
 from omnikin import load_robot
 from omnikin.errors import ResourceLimitError
 from omnikin.motion.plans import parse_plan
@@ -24,6 +23,7 @@ from omnikin.physics.cost import physics_run_cost, real_time_shortfall, simulate
 from omnikin.physics.run import simulate_physics
 from omnikin.physics.simulator import PhysicsSim
 from omnikin.presets import preset_path
+from support.cli import run_cli
 
 pytest.importorskip("mujoco")
 

@@ -13,12 +13,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from conftest import omnikin_env
 from omnikin import Encoder, Robot, Wheel, load_robot
 from omnikin.kinematics.physical import PhysicalBody, PhysicalWheel
 from omnikin.physics.description import describe, wheel_loads
 from omnikin.physics.mjcf import mjcf
 from omnikin.presets import PRESET_NAMES
+from support.paths import omnikin_env
 
 SWEDISH_PRESETS = ["tomasi-omni3", "garcia-sillas-omni3", "omni4", "mecanum4"]
 

@@ -15,13 +15,14 @@ import mujoco
 import numpy as np
 import pytest
 
-from conftest import omnikin_env, run_cli, run_entry_point
 from omnikin import load_robot
 from omnikin.errors import DivergedError, InputError
 from omnikin.motion.plans import parse_plan
 from omnikin.physics.mjcf import time_step
 from omnikin.physics.run import check_rate_steps, simulate_physics
 from omnikin.physics.simulator import ADVANCE_MAX, PhysicsSim
+from support.cli import run_cli, run_entry_point
+from support.paths import omnikin_env
 
 KICK = """
 import sys

@@ -72,9 +72,10 @@ def test_a_standing_physics_backend_reports_nothing_and_drives():
 
 
 def test_the_viewers_live_physics_robot_says_once_that_it_fell_and_stops():
+    from omnikin.physics.engines import PhysicsEngine
     from omnikin.viewer.live import LiveRobot
 
-    live = LiveRobot(load_robot("tomasi-omni3"), "physics")
+    live = LiveRobot(load_robot("tomasi-omni3"), PhysicsEngine())
     told: list[str] = []
     live.tell = told.append
     live.set_twist((0.2, 0.0, 0.0))

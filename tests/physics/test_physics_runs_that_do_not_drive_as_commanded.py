@@ -19,11 +19,11 @@ import re
 
 import pytest
 
-from conftest import run_cli
 from omnikin import load_robot
 from omnikin.io.robot_file import robot_to_dict
 from omnikin.motion.plans import parse_plan
 from omnikin.physics.run import ALIGN_MAX, TAIL_MAX, simulate_physics
+from support.cli import run_cli
 
 RIM = 1000.0 * math.cos(math.radians(30.0))
 """Rim distance [mm] ``line 1`` commands each of tomasi-omni3's wheels w2 and w3."""

@@ -21,12 +21,13 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import SRC, run_entry_point
 from omnikin import load_robot
 from omnikin.motion.plans import line
 from omnikin.physics.description import describe, support_margin
 from omnikin.physics.run import simulate_physics
 from omnikin.physics.simulator import PhysicsSim
+from support.cli import run_entry_point
+from support.paths import SRC
 
 TOMASI = Path(SRC) / "omnikin" / "presets" / "tomasi-omni3.yaml"
 LINE_TOLERANCE = 0.01

@@ -27,7 +27,8 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from conftest import omnikin_env, run_cli
+from support.cli import run_cli
+from support.paths import omnikin_env
 from support.servers import virtual_display
 
 SPEED = 0.2  # m/s, --speed

@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 import omnikin
-from conftest import run_cli, run_entry_point
 from omnikin import load_robot
 from omnikin.presets import preset_path
+from support.cli import run_cli, run_entry_point
 
 TOLERANCE = 0.005
 """Of the 1 m line: 5 mm in position, 5 mrad in heading (docs/physics.md, "Validation")."""
@@ -191,8 +191,8 @@ def test_physics_truth_headings_are_wrapped_like_the_kinematic_engine():
 def test_xr4000_steered_sideways_at_rest_is_carried_by_its_trail_and_its_odometry_stays_finite():
     """'line 1 90': the wheels steer from 0 to 90 deg standing, which carries the chassis by
     ``d (cos(beta) - 1, sin(beta)) = (-d, d)`` (d = 20 mm trail; the encoders do not see it),
-    then drive 1 m along y. The odometry of the parallel wheels ended kilometres away when the
-    measured steering angles differed by 0.2 urad; it now ends where the plan does."""
+    then drive 1 m along y. Measured steering angles of the parallel wheels that differ by
+    0.2 urad leave the odometry finite: it ends where the plan does."""
     import omnikin
 
     sim = omnikin.simulate("xr4000", "line 1 90", engine="physics", errors="none")

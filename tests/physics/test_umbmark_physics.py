@@ -19,9 +19,9 @@ import json
 import numpy as np
 import pytest
 
-from conftest import run_cli
 from omnikin.api.umbmark import run_umbmark, umbmark_cost
 from omnikin.errors import InputError, ResourceLimitError
+from support.cli import run_cli
 
 pytest.importorskip("mujoco")
 

@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 from urdf_parser_py.urdf import URDF
 
-from conftest import run_cli
 from omnikin import Robot, Wheel, load_robot
 from omnikin.physics.description import describe
 from omnikin.physics.urdf import urdf
 from omnikin.presets import PRESET_NAMES
+from support.cli import run_cli
 
 
 def rpy_matrix(rpy) -> np.ndarray:

@@ -52,8 +52,8 @@ from test_ros_node import (  # noqa: E402 (after the importorskips there)
     yaw_of,
 )
 
-from conftest import constant_twist_pose
 from support.firmware_build import AVR_MISSING, build_dir, firmware
+from support.kinematics import constant_twist_pose
 from support.simboard import SIMAVR_MISSING, SimBoard, build_simboard
 
 pytestmark = [
@@ -135,7 +135,7 @@ def odometry_and_counts(g, stamps: tuple[float, float]) -> tuple[np.ndarray, np.
     """Between the ``odom`` messages stamped ``stamps`` [s]: the odometry's motion (the second
     pose in the frame of the first), and the motion the published wheel positions give in closed
     form, each interval between two ``joint_states`` a constant body twist (forward kinematics of
-    the wheel increments) followed along its arc (:func:`conftest.constant_twist_pose`)."""
+    the wheel increments) followed along its arc (:func:`support.kinematics.constant_twist_pose`)."""
     with g.lock:
         poses = {stamp_s(m.header.stamp): pose(m) for _, m in g.odom}
         joints = [(stamp_s(m.header.stamp), m) for _, m in g.joints]

@@ -58,7 +58,7 @@ RELIABLE_ALL = QoSProfile(
     durability=DurabilityPolicy.VOLATILE,
 )  # the test's side never drops a message
 V, A_LIN = 0.2, 0.5  # commanded speed [m/s], linear.x.max_acceleration [m/s^2]
-from conftest import SRC  # noqa: E402  (the omnikin under test, for the node processes)
+from support.paths import SRC  # noqa: E402  (the omnikin under test, for the node processes)
 from support.ros_domain import fresh_domain  # noqa: E402
 
 pytestmark = pytest.mark.ros

@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import pytest
 
-from conftest import omnikin_env, run_cli
 from omnikin import (
     OmnikinError,
 )
+from support.cli import run_cli
+from support.paths import omnikin_env
 
 
 @pytest.mark.parametrize(

@@ -9,7 +9,7 @@ from __future__ import annotations
 import re
 
 import omnikin.ros.params as params
-from conftest import ROOT  # noqa: E402
+from support.paths import ROOT  # noqa: E402
 
 
 def _rows(text: str) -> dict:

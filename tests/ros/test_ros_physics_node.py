@@ -33,7 +33,7 @@ from test_ros_node import (  # noqa: E402 (after the importorskips there and abo
     yaw_of,
 )
 
-from conftest import constant_twist_pose  # noqa: E402 (after the importorskip above)
+from support.kinematics import constant_twist_pose  # noqa: E402 (after the importorskip above)
 
 pytestmark = pytest.mark.ros
 

@@ -138,7 +138,7 @@ def test_the_nodes_link_transforms_place_every_urdf_link_at_the_joint_positions(
     from omnikin.ros.node import BaseNode
     from omnikin.ros.params import DEFAULTS
     from omnikin.simulation.backend import SimBackend
-    from omnikin.simulation.error_models import noise
+    from omnikin.simulation.error_models import noise_profile
 
     robot = load_robot(name)
     parsed = URDF.from_xml_string(urdf(robot))
@@ -147,7 +147,7 @@ def test_the_nodes_link_transforms_place_every_urdf_link_at_the_joint_positions(
     rclpy.init(domain_id=_unused_domain(), signal_handler_options=SignalHandlerOptions.NO)  # the node's default context
     node = None
     try:
-        node = BaseNode(robot, SimBackend(robot, None, noise("none")), dict(DEFAULTS), name="rviz_probe")
+        node = BaseNode(robot, SimBackend(robot, None, noise_profile("none")), dict(DEFAULTS), name="rviz_probe")
         res = node.runtime.step(time.monotonic())
         steer = [] if res.state.steer is None else list(res.state.steer)
         implied, _ = node.joint_motion.update(res.state.t, res.twist, res.state.steer)

@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from conftest import ROOT, run_cli, run_entry_point
+from support.cli import run_cli, run_entry_point
+from support.paths import ROOT
 
 
 def displays(config: dict) -> dict:

@@ -15,7 +15,6 @@ import yaml
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from conftest import ROOT  # noqa: E402
 from omnikin.errors import InputError, ProtocolError
 from omnikin.runtime import protocol as P
 from omnikin.runtime.protocol import (
@@ -27,6 +26,7 @@ from omnikin.runtime.protocol import (
     frame_bytes,
     load_protocol,
 )
+from support.paths import ROOT  # noqa: E402
 
 FIRMWARE = ROOT / "firmware" / "omnikin_wheel"
 HOST_TESTS = ROOT / "tests" / "runtime" / "firmware"

@@ -661,7 +661,7 @@ class TestResidual:
 
     def test_a_wheel_that_spins_out_shows_in_the_residual(self):
         """One omni4 wheel turns 0.5 rad more than the others allow: the residual is that excess
-        projected on the left null space of J, n = (1, -1, 1, -1)/2 (see test_model), per second."""
+        projected on the left null space of J, n = (1, -1, 1, -1)/2 (see kinematics/test_robot.py), per second."""
         robot = load_robot("omni4")
         excess = np.array([0.5, 0.0, 0.0, 0.0])
         rt = BaseRuntime(robot, _ScriptedBackend([(np.zeros(4), None), (excess, None)]), cmd_vel_timeout=0.0)

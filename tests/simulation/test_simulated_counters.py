@@ -15,12 +15,12 @@ import json
 import numpy as np
 import pytest
 
-from conftest import run_entry_point
 from omnikin import batch_odometry, load_robot
 from omnikin.io.logs import read_tick_log
 from omnikin.motion.plans import umbmark_square
 from omnikin.simulation.error_models import NoiseModel
 from omnikin.simulation.kinematic import counter_output, simulate_kinematic
+from support.cli import run_entry_point
 from support.tomasi import assert_poses_close, read_csv_traj, tomasi_file, tomasi_poses
 
 

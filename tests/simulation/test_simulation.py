@@ -383,7 +383,7 @@ def test_saturate_shapes_zero_and_robot_max_speed(robots, tomasi_limited):
 
 def test_saturate_mecanum_general(robots):
     """mecanum4 rows from docs/conventions.md: drive 0, roller +-45 deg: omega = (vx -+ vy - (x -+ y)... ) / r;
-    checked through the robot's ik, which test_model verifies against the closed form."""
+    checked through the robot's ik, which kinematics/test_robot.py verifies against the closed form."""
     robot = robots["mecanum4"]
     limits = MotionLimits(linear=None, angular=None, wheel=10.0)
     t = np.random.default_rng(5).normal(size=(200, 3))

@@ -1,5 +1,5 @@
 """The start time of a simulated run, checked against every output that stamps its samples
-(omnikin.motion.timing.check_start): the stamps must fit what the output holds and stay
+(omnikin.motion.timing.check_start_time): the stamps must fit what the output holds and stay
 distinct at the sample rate.
 
 'omnikin simulate --start 1e16 --log a.csv' exited 0 with every row at 1e16 or 1e16 + 2 (the
@@ -15,9 +15,9 @@ import math
 import numpy as np
 import pytest
 
-from conftest import run_cli
 from omnikin.errors import InputError
-from omnikin.motion.timing import STAMP_RESOLUTION, check_start
+from omnikin.motion.timing import STAMP_RESOLUTION, check_start_time
+from support.cli import run_cli
 
 
 def test_the_resolution_is_a_thousandth_of_the_sample_interval():
@@ -30,27 +30,27 @@ def test_a_float_stamp_may_be_rounded_to_a_thousandth_of_the_interval(rate):
     stamps at or beyond 2**(e+1) (spacing 2**(e-51) > 1e-3 / rate) are refused."""
     e = math.floor(math.log2(1e-3 / rate)) + 52
     top = 2.0 ** (e + 1)
-    assert check_start(top * 0.99, 0.5, rate, "--start") == top * 0.99
-    assert check_start(-top * 0.99, 0.5, rate, "--start") == -top * 0.99
+    assert check_start_time(top * 0.99, 0.5, rate, "--start") == top * 0.99
+    assert check_start_time(-top * 0.99, 0.5, rate, "--start") == -top * 0.99
     for start in (top, -top - 1.0, top * 0.999 - 1.0):  # the last one ends beyond 2**(e+1)
         with pytest.raises(InputError, match=r"^--start: the output holds a time near .* the stamps would collapse"):
-            check_start(start, 0.5 + top * 0.002, rate, "--start")
+            check_start_time(start, 0.5 + top * 0.002, rate, "--start")
 
 
 @pytest.mark.parametrize("start", [math.inf, -math.inf, math.nan, "0", True, None])
 def test_a_start_time_is_a_finite_number(start):
     with pytest.raises(InputError, match=r"^start: the start time must be"):
-        check_start(start, 1.0, 100.0)
+        check_start_time(start, 1.0, 100.0)
 
 
 def test_integer_nanosecond_stamps_hold_any_start_within_their_span():
     """A ROS 2 bag stamps integer nanoseconds (1e-9 s, far below 1e-3 / 10 kHz) from 0 to
     2**31 - 1 s: a start of 2e9 s is fine at 10 kHz, -1 s and a run ending after 2**31 - 1 s are not."""
     span, ns = (0.0, 2.0**31 - 1), 1e-9
-    assert check_start(2e9, 60.0, 10_000.0, output="a ROS 2 bag", span=span, step=ns) == 2e9
+    assert check_start_time(2e9, 60.0, 10_000.0, output="a ROS 2 bag", span=span, step=ns) == 2e9
     for start, duration in ((-1.0, 10.0), (2.0**31 - 10, 20.0), (1e300, 1.0)):
         with pytest.raises(InputError, match=r"do not fit a ROS 2 bag, whose times run from 0 to 2147483647 s"):
-            check_start(start, duration, 100.0, output="a ROS 2 bag", span=span, step=ns)
+            check_start_time(start, duration, 100.0, output="a ROS 2 bag", span=span, step=ns)
 
 
 # --- omnikin simulate ---------------------------------------------------------------------------------------

@@ -3,9 +3,8 @@
 sweep started as a user starts it, and its trial table compared bit for bit.
 
 Importing this module skips the importing test module when ``omnikin[sweep]`` (pyarrow, Dask
-distributed) is not installed. It is a module beside ``dask_cluster.py``, not a
-``tests/sweep/conftest.py``: a second ``conftest`` module would shadow ``tests/conftest.py`` for
-every ``from conftest import ...`` of the sweep tests."""
+distributed) is not installed. It is a module beside ``dask_cluster.py``, as every helper the
+tests import, not a second ``conftest`` module."""
 
 from __future__ import annotations
 

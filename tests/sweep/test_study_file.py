@@ -15,11 +15,11 @@ import shutil
 import numpy as np
 import pytest
 
-from conftest import ROOT
 from omnikin.io.robot_file import load_robot
 from omnikin.presets import preset_path
 from omnikin.sweep.points import robot_hash
 from omnikin.sweep.spec import load_study, parse_study
+from support.paths import ROOT
 
 HEAD = "omnikin_sweep: 1\nrobots: [tomasi-omni3]\nseed: 1\ntrials: 4\n"
 

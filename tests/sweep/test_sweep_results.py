@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import ROOT, run_entry_point
+from support.cli import run_entry_point
+from support.paths import ROOT
 
 pq = pytest.importorskip("pyarrow.parquet", reason="omnikin[sweep] (pyarrow) is not installed")
 pytest.importorskip("distributed", reason="omnikin[sweep] (Dask distributed) is not installed")

@@ -24,7 +24,7 @@ import time
 import numpy as np
 import pytest
 
-from conftest import run_entry_point
+from support.cli import run_entry_point
 from support.cluster_study import HANG_S, assert_same_table, start_sweep, table, write_study
 from support.dask_cluster import dask_answers, dask_cluster, listening_ports, make_tls, wire_answer
 

@@ -92,8 +92,8 @@ def test_unsupported_format_or_dpi_is_refused(tmp_path, name, dpi, contains):
 
 @pytest.mark.parametrize("dpi", [0.5, 1, 3, 49.9, 1200.5, True, math.nan])
 def test_a_resolution_outside_screens_to_print_is_refused_before_drawing(tmp_path, dpi):
-    """dpi 1 crashed inside matplotlib (FreeType: 'invalid ppem value') after the whole study;
-    0.5 wrote a 3 x 3 pixel figure. The range is 50 (the coarsest screens) to 1200 dpi (print)."""
+    """The range is 50 (the coarsest screens) to 1200 dpi (print): dpi 1 is one FreeType refuses
+    inside matplotlib ('invalid ppem value'), 0.5 a 3 x 3 pixel figure."""
     from omnikin.errors import InputError
 
     with pytest.raises(InputError, match=r"dpi must .*screens to print"):

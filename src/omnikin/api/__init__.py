@@ -103,14 +103,14 @@ def run_sweep(
     OutputExistsError
         A folder omnikin did not write, or (without ``force``) one that holds another study.
     """
-    from ..sweep.execution import run_sweep as run
+    from ..sweep.execution import execute_study
     from ..sweep.study import Study
 
     if not isinstance(spec, Study):
         from ..sweep.spec import load_study
 
         spec = load_study(spec)
-    return run(
+    return execute_study(
         spec,
         out,
         scheduler=scheduler,

@@ -6,9 +6,7 @@ import math
 import os
 
 from ..kinematics.robot import Robot, require_same_wheels
-from ..simulation.error_models import ErrorProfile, NoiseModel
-from ..simulation.error_models import noise as noise_profile
-from ..simulation.error_models import profile as error_profile
+from ..simulation.error_models import ErrorProfile, NoiseModel, error_profile, noise_profile
 
 
 def robot_of(spec) -> Robot:
@@ -82,7 +80,7 @@ def dumps(document: dict) -> str:
     Parameters
     ----------
     document : dict
-        A result document (e.g. :meth:`UMBmarkReport.as_dict`): numbers, text, lists and dicts.
+        A result document (e.g. :meth:`~omnikin.api.umbmark.UMBmarkReport.as_dict`): numbers, text, lists and dicts.
 
     Returns
     -------

@@ -195,9 +195,10 @@ def simulate(
     ResourceLimitError
         A run estimated to need more than ``max_memory`` or ``max_time``.
     PhysicsError
-        The physics engine failed (:class:`DivergedError`: MuJoCo's state diverged).
+        The physics engine failed (:class:`~omnikin.errors.DivergedError`: MuJoCo's state diverged).
     """
     from ..common.resource_limits import require_within
+    from ..evaluation.pipeline import RUN_STREAMS
     from ..evaluation.procedure import ARGUMENTS, streams
     from ..motion.plans import Plan, parse_plan
     from ..motion.timing import check_rate_range
@@ -209,8 +210,8 @@ def simulate(
     nominal = robot_of(robot)
     plan = path if isinstance(path, Plan) else parse_plan(str(path))
     size = engine.cost(plan, nominal, nominal, rate=rate, timed=False)  # the plan's samples and memory
-    seeds = list(streams(seed).values())
-    true, injected = as_built(nominal, true_robot, errors, seeds[0])
+    seeds = streams(seed, RUN_STREAMS)
+    true, injected = as_built(nominal, true_robot, errors, seeds["robot"])
 
     def within(**estimate) -> None:  # memory, seconds and what to change: refused beyond the limits
         samples = f"{size.samples:.3g} samples"
@@ -230,8 +231,8 @@ def simulate(
         told(_cost_of(size, estimate))
     cheaper = "shorten path or raise step" if engine.measured_cost else "lower rate or shorten path"
     within(seconds=estimate.seconds, hint=cheaper)
-    # the seed's second stream draws the run's random errors, for an engine with a model of them
+    # the run's stream draws its random errors, for an engine with a model of them
     run = engine.drive(
-        plan, true, nominal, rate=rate, noise=noise_model, rng=seeds[1] if noise_model else None, progress=progress
+        plan, true, nominal, rate=rate, noise=noise_model, rng=seeds["run"] if noise_model else None, progress=progress
     )
     return Simulation(nominal, true, injected, path.name if isinstance(path, Plan) else str(path), run)

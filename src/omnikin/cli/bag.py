@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from ..errors import InputError
-from .budget import Budget, add_budget_options, explained, require
+from .budget import LARGEST_MESSAGE_SHARE, MESSAGE_SECONDS, POSE_BYTES, Budget, add_budget_options, explained, require
 from .common import (
     add_method_option,
     add_output,
@@ -27,17 +27,9 @@ from .common import (
     print_json,
 )
 
-# Measured costs of the bag commands (rosbags 0.11, CPython 3.11, tracemalloc peaks of 67,000-sample
-# runs of mecanum4): memory rounded up; times on the fast side (measured 25 us per message written,
-# 27 us read on a loaded 2-core machine), so that only clearly oversized jobs are refused.
 JOINT_STATE_BYTES = 400
-"""bag odometry: per JointState message read, its odometry and the Odometry written (measured 303)."""
-POSE_BYTES = 600
-"""bag export: per pose message read and its line of text (measured 545)."""
-MESSAGE_SECONDS = 10e-6
-"""Reading (deserializing) or writing (serializing) one message."""
-LARGEST_MESSAGE_SHARE = 64
-"""One message may use at most 1/64 of --max-memory (its bytes decoded into Python objects)."""
+"""bag odometry: per JointState message read, its odometry and the Odometry written (measured 303;
+the costs of reading a bag are in :mod:`omnikin.cli.budget`)."""
 
 BAG_EPILOG = """examples:
   omnikin bag odometry tomasi-omni3 run.bag -o odom.bag

@@ -19,26 +19,36 @@ import argparse
 import contextlib
 import math
 import re
-import signal
 from collections.abc import Iterator
 
 import numpy as np
 
 from ..common.messages import shorten
 from ..common.number_text import number_problem
-from ..errors import InputError, Terminated
+from ..errors import InputError
 from ..io.output import Output, check_outputs, is_stdout
 
 FORCE_HELP = "replace existing output files (never an input; a folder only if omnikin wrote it)"
 
 
-def robot_as_built(robot, true_robot: str | None, errors: str, seed):
+def run_streams(seed: int) -> dict:
+    """The random streams of ``--seed`` for a simulated robot, by name: ``robot`` (the robot as
+    built, the draw ``omnikin simulate``, ``omnikin umbmark`` and the Python API make for the
+    same seed) and ``run`` (its random errors), the layout
+    :data:`~omnikin.evaluation.pipeline.RUN_STREAMS`."""
+    from ..evaluation.pipeline import RUN_STREAMS
+    from ..evaluation.procedure import streams
+
+    return streams(seed, RUN_STREAMS)
+
+
+def robot_as_built(robot, true_robot: str | None, errors: str, stream):
     """The robot as built and the errors drawn: a ``--true-robot`` file, or ``robot`` with a
-    seeded draw of the ``--errors`` profile (:func:`omnikin.api.common.as_built`, the draw the
-    Python API and ``omnikin umbmark`` make). ``seed``: a SeedSequence or an int."""
+    draw of the ``--errors`` profile from ``stream`` (a SeedSequence: the ``robot`` stream of
+    :func:`run_streams`; :func:`omnikin.api.common.as_built`)."""
     from ..api.common import as_built
 
-    return as_built(robot, true_robot or None, errors, seed)
+    return as_built(robot, true_robot or None, errors, stream)
 
 
 def check_seed(seed: int | None) -> None:
@@ -164,9 +174,9 @@ def console(width: int = 140, stderr: bool = False):
 
 def load_robot(spec):
     """A preset or robot file (:func:`omnikin.io.robot_file.load_robot`, imported on use)."""
-    from ..io.robot_file import load_robot as load
+    from ..io import robot_file
 
-    return load(spec)
+    return robot_file.load_robot(spec)
 
 
 # --- outputs -----------------------------------------------------------------------------------------
@@ -250,30 +260,6 @@ def robot_inputs(*specs) -> list:
     from ..io.robot_file import robot_file_of
 
     return [f for f in map(robot_file_of, specs) if f is not None]
-
-
-# --- stopping a command -----------------------------------------------------------------------------------
-def stop_name(exc: BaseException) -> str:
-    """How the user stopped a command: ``Ctrl-C`` (:class:`KeyboardInterrupt`) or the signal's
-    name (:class:`Terminated`: ``SIGTERM``, ``SIGHUP``)."""
-    return signal.Signals(exc.signum).name if isinstance(exc, Terminated) else "Ctrl-C"
-
-
-STOPPED: list[str] = []
-"""How the running command was stopped inside :func:`until_stopped` (empty: it was not)."""
-
-
-@contextlib.contextmanager
-def until_stopped() -> Iterator[None]:
-    """Run the block of a command that serves until the user stops it (a page, a window, a node:
-    :data:`omnikin.cli.process.SERVERS`): Ctrl-C, SIGTERM or SIGHUP inside it end the block as a
-    normal end, and the command goes on after it (writes its report); :mod:`omnikin.cli.process` then prints
-    ``omnikin COMMAND: stopped (SIGTERM)`` on standard error and the exit status is 0. Without
-    this block a server stopped by the user ends the same way, with nothing done after."""
-    try:
-        yield
-    except (KeyboardInterrupt, Terminated) as exc:
-        STOPPED.append(stop_name(exc))
 
 
 # --- JSON and tables -------------------------------------------------------------------------------------

@@ -26,7 +26,7 @@ from collections.abc import Callable, Iterator
 
 from ..common.messages import one_line
 from ..errors import InfeasibleTwistError, InputError, OmnikinError, OutputError, Terminated, UsageError
-from .common import STOPPED, running, stop_name
+from .common import running
 from .parser import CommandParser
 
 MESSAGE_LIMIT = 800
@@ -44,6 +44,30 @@ WRITE_ERRORS = {
     errno.EPIPE,
 }
 """Operating-system errors that mean an output could not be written."""
+
+
+# --- stopping a command -----------------------------------------------------------------------------------
+def stop_name(exc: BaseException) -> str:
+    """How the user stopped a command: ``Ctrl-C`` (:class:`KeyboardInterrupt`) or the signal's
+    name (:class:`Terminated`: ``SIGTERM``, ``SIGHUP``)."""
+    return signal.Signals(exc.signum).name if isinstance(exc, Terminated) else "Ctrl-C"
+
+
+STOPPED: list[str] = []
+"""How the running command was stopped inside :func:`until_stopped` (empty: it was not)."""
+
+
+@contextlib.contextmanager
+def until_stopped() -> Iterator[None]:
+    """Run the block of a command that serves until the user stops it (a page, a window, a node:
+    :data:`omnikin.cli.process.SERVERS`): Ctrl-C, SIGTERM or SIGHUP inside it end the block as a
+    normal end, and the command goes on after it (writes its report); :func:`run` then prints
+    ``omnikin COMMAND: stopped (SIGTERM)`` on standard error and the exit status is 0. Without
+    this block a server stopped by the user ends the same way, with nothing done after."""
+    try:
+        yield
+    except (KeyboardInterrupt, Terminated) as exc:
+        STOPPED.append(stop_name(exc))
 
 
 def run(argv: list[str] | None, build_parser: Callable[[], CommandParser]) -> int:
@@ -219,7 +243,7 @@ def _termination_unwinds() -> Iterator[list[int]]:
 
 class _ClosedStream(io.TextIOBase):
     """Stands for standard output when the process has none (started with ``>&-``): writing to it
-    is an ``OSError`` (EBADF), which :func:`main` reports as one line with status 1."""
+    is an ``OSError`` (EBADF), which :func:`run` reports as one line with status 1."""
 
     def writable(self) -> bool:
         return True

@@ -145,7 +145,7 @@ def run(args) -> int:
     from ..ros import require_rclpy
     from ..ros.params import check_names, load_params, ros_args_names
     from ..runtime.backends import WheelBackend
-    from .common import engine_of, load_robot, robot_as_built
+    from .common import engine_of, load_robot, robot_as_built, run_streams
 
     if args.rviz_config:
         from ..ros import RVIZ_CONFIG
@@ -183,8 +183,8 @@ def run(args) -> int:
     true = None
     if engine is not None:
         # the robot as built, drawn as omnikin simulate draws it: the same robot for the same --seed
-        seeds = np.random.SeedSequence(1 if args.seed is None else args.seed).spawn(2)
-        true, _ = robot_as_built(robot, args.true_robot, args.errors or "typical", seeds[0])
+        seeds = run_streams(1 if args.seed is None else args.seed)
+        true, _ = robot_as_built(robot, args.true_robot, args.errors or "typical", seeds["robot"])
     backend: WheelBackend
     if args.backend == "serial":
         from ..runtime.serial_backend import SerialBackend
@@ -202,13 +202,13 @@ def run(args) -> int:
     else:
         assert engine is not None
         noise = engine.noise_model(args.noise)
-        backend = engine.backend(robot, true, noise=noise, rng=seeds[1], max_lag=PHYSICS_MAX_LAG)
+        backend = engine.backend(robot, true, noise=noise, rng=seeds["run"], max_lag=PHYSICS_MAX_LAG)
         if engine.measured_cost:  # a model stepped in real time: can this machine keep up?
             from ..physics.cost import real_time_shortfall
 
             slow = real_time_shortfall(true or robot, "the back-end will drop simulated time (counted in /diagnostics)")
             if slow:
                 print(f"omnikin: note: ros: {slow}", file=sys.stderr)
-    from ..ros.node import run as run_node
+    from ..ros import node
 
-    return run_node(robot, backend, values, args.ros_args)
+    return node.run(robot, backend, values, args.ros_args)

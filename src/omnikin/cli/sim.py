@@ -15,9 +15,10 @@ from .common import (
     load_robot,
     number,
     robot_as_built,
+    run_streams,
     teleop_limits,
-    until_stopped,
 )
+from .process import until_stopped
 
 EPILOG = """keys (the window must have the keyboard focus):
   W / S      drive forward / back at --speed (sets vx; the other components stay)
@@ -111,10 +112,8 @@ def run(args) -> int:
 
     require_display()  # before the model is built: the one line comes at once
     robot = load_robot(args.robot)
-    import numpy as np
-
     # the robot as built that `omnikin simulate` and `omnikin ros` draw for the same --seed
-    true_robot, _ = robot_as_built(robot, args.true_robot, args.errors, np.random.SeedSequence(args.seed).spawn(2)[0])
+    true_robot, _ = robot_as_built(robot, args.true_robot, args.errors, run_streams(args.seed)["robot"])
     slow = real_time_shortfall(robot, "the simulation will run slower than the clock")
     if slow:
         print(f"omnikin: note: sim: {slow}", file=sys.stderr)

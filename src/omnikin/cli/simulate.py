@@ -11,8 +11,7 @@ import sys
 from ..common.messages import shorten
 from ..errors import InfeasibleTwistError, InputError, OmnikinError
 from ..physics.engines import ENGINE_NAMES
-from .bag import MESSAGE_SECONDS
-from .budget import Budget, add_budget_options, require
+from .budget import MESSAGE_SECONDS, Budget, add_budget_options, require
 from .common import (
     add_as_built_options,
     add_output,
@@ -234,8 +233,8 @@ def run(args) -> int:
     }
     if simulation.injected is not None:
         summary["injected_errors"] = simulation.injected.as_dict()
-    saturated = getattr(run, "saturated", 0)
     summary.update(engine.summary(run))
+    saturated = summary.get("saturated_commands", 0)  # commands held at a limit (physics)
     for problem in engine.problems(run):  # the run did not drive as commanded: one line each
         print(f"omnikin: warning: {robot.name}: {problem}", file=sys.stderr)
     if saturated:
@@ -337,21 +336,23 @@ def _progress_bar():
 
 
 def _check_stamps(args, duration: float) -> None:
-    """Refuse a --start whose stamps an output cannot hold (:func:`~omnikin.motion.timing.check_start`),
+    """Refuse a --start whose stamps an output cannot hold (:func:`~omnikin.motion.timing.check_start_time`),
     before simulating: a bag's ROS 2 times (integer nanoseconds from 0 to 2**31 - 1 s), a tick
     log's times (read back as floats). ``duration`` [s]: at least the run's."""
     from ..io.bags import NS, ROS_TIME_SPAN
-    from ..motion.timing import check_start
+    from ..motion.timing import check_start_time
 
     if args.bag is not None:
-        check_start(args.start, duration, args.rate, "--start", output="a ROS 2 bag", span=ROS_TIME_SPAN, step=1 / NS)
+        check_start_time(
+            args.start, duration, args.rate, "--start", output="a ROS 2 bag", span=ROS_TIME_SPAN, step=1 / NS
+        )
     if args.log is not None:
-        check_start(args.start, duration, args.rate, "--start", output="a tick log")
+        check_start_time(args.start, duration, args.rate, "--start", output="a tick log")
 
 
 def _check_tick_log(args, robot) -> None:
     """Refuse a --log the --noise profile cannot give (unquantised ticks), before simulating."""
-    from ..simulation.error_models import noise as noise_profile
+    from ..simulation.error_models import noise_profile
 
     if not noise_profile(args.noise).quantise:
         raise InputError(

@@ -7,7 +7,7 @@ import sys
 
 from ..motion.plans import UMBMARK_SIDE
 from ..physics.engines import ENGINE_NAMES
-from .budget import Budget, add_budget_options
+from .budget import LARGEST_MESSAGE_SHARE, POSE_BYTES, Budget, add_budget_options
 from .common import (
     add_step_option,
     add_teleop_options,
@@ -265,12 +265,6 @@ def _run_ros_view(args, limits) -> int:
     )
     domain = os.environ.get("ROS_DOMAIN_ID", "0")
     return serve_live(live, args, f"the ROS node of {robot.name} (ROS_DOMAIN_ID {domain})")
-
-
-POSE_BYTES = 600
-"""--replay BAG: memory per pose or joint-state message read [bytes] (that of omnikin bag export)."""
-LARGEST_MESSAGE_SHARE = 64
-"""--replay BAG: one message may use at most 1/64 of --max-memory (as omnikin bag)."""
 
 
 def _run_replay(args) -> int:

@@ -6,7 +6,7 @@ Two methods:
   UMBmark result's ``c_L``, ``c_R`` scale the left/right wheel radii and ``E_b`` the track
   (both wheels moved symmetrically about the axle midpoint). Iterating it (UMBmark again
   with the corrected model) removes what the first-order formulas leave.
-* :func:`calibrate`: any layout. The robot drives known plans by its nominal model; the
+* :func:`least_squares_calibration`: any layout. The robot drives known plans by its nominal model; the
   end poses are measured (weights: :func:`_weights`). Unknowns per driven (encoded) wheel (:func:`wheel_parameters`):
   Swedish wheels: relative radius error, ``lever`` (hub displacement [m] normal to the
   roller axis; along the axis it changes nothing) and drive direction error [rad];

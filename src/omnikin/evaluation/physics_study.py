@@ -1,24 +1,13 @@
 """The UMBmark study in the physics engine (``omnikin umbmark --engine physics``).
 
-The study pipeline (:mod:`omnikin.evaluation.pipeline`) with the physics engine: every run
-driven by :func:`~omnikin.physics.run.simulate_physics` (MuJoCo, rollers and motors) on the
-robot as built, one run at a time (the physics has no trial axis: ``trials`` procedures are
-``trials * runs`` runs per direction, each simulated on its own):
-
-1. UMBmark before calibration, the robot as built commanded by its nominal model
-   (Borenstein and Feng, "Measurement and correction of systematic odometry errors in mobile
-   robots", 1996);
-2. calibration (unless switched off): every run of
-   :func:`~omnikin.evaluation.calibration.recommended_runs` driven
-   :data:`~omnikin.evaluation.calibration.RECOMMENDED_REPEATS` times, its true end pose the
-   measurement, and the least-squares calibration
-   (:func:`~omnikin.evaluation.calibration.least_squares_calibration`);
-3. UMBmark after calibration, the robot commanded by its calibrated model;
-4. the floor (:class:`~omnikin.evaluation.umbmark.PhysicsFloor`): UMBmark of the *nominal*
-   robot (no systematic errors) commanded by its own model, ``trials`` procedures of ``runs``
-   runs per direction: what the roller contact alone gives, the least E_max,syst a calibration
-   of the kinematic model can reach in this engine. It takes the place of the kinematic
-   study's noise floor (:class:`~omnikin.evaluation.umbmark.NoiseFloor` of these procedures).
+The study pipeline (:mod:`omnikin.evaluation.pipeline`, whose docstring lists the stages) with
+the physics engine: every run driven by :func:`~omnikin.physics.run.simulate_physics` (MuJoCo,
+rollers and motors) on the robot as built, one run at a time (the physics has no trial axis:
+``trials`` procedures are ``trials * runs`` runs per direction, each simulated on its own). Its
+floor is the :class:`~omnikin.evaluation.umbmark.PhysicsFloor`: UMBmark of the *nominal* robot
+commanded by its own model, what the roller contact alone gives, the least E_max,syst a
+calibration of the kinematic model can reach in this engine (in place of the kinematic study's
+:class:`~omnikin.evaluation.umbmark.NoiseFloor`).
 
 This module keeps the physics study's cost estimate (:func:`physics_cost`); the study itself is
 :func:`~omnikin.evaluation.procedure.umbmark_study` with ``engine=PHYSICS``.

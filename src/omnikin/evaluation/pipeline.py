@@ -38,14 +38,17 @@ Every stage draws from its own stream: a child of one :class:`numpy.random.SeedS
 spawned in the fixed order of a layout (:func:`seed_streams`), so a stage's draws do not depend
 on the other stages nor on ``trials`` (procedure ``k`` of a stage draws from the ``k``-th child
 of its stream, :func:`~omnikin.evaluation.umbmark.procedure_generators`; a physics stage's cw
-and ccw runs from its two spawned children). Two layouts, each fixed because its numbers are
+and ccw runs from its two spawned children). Three layouts, each fixed because its numbers are
 published:
 
 - :data:`REPORT_STREAMS` ``robot, before, trajectories, calibration, borenstein, after, floor``
   from ``SeedSequence(--seed)`` (``omnikin umbmark``; the robot stream is the first child, as
   for ``omnikin simulate``, so the same seed builds the same robot there);
 - :data:`TRIAL_STREAMS` ``robot, before, calibration, after`` from a trial's own SeedSequence
-  (``omnikin sweep``: a trial keeps no trajectories, Borenstein nor floor).
+  (``omnikin sweep``: a trial keeps no trajectories, Borenstein nor floor);
+- :data:`RUN_STREAMS` ``robot, run`` from ``SeedSequence(--seed)``: one simulated run
+  (``omnikin simulate``) and the robot as built of ``omnikin sim`` and ``omnikin ros``, the
+  robot drawn from the first child as in the report.
 
 A stage a layout does not name is not run.
 """
@@ -93,6 +96,12 @@ REPORT_STREAMS = ("robot", "before", "trajectories", "calibration", "borenstein"
 TRIAL_STREAMS = ("robot", "before", "calibration", "after")
 """The streams of a sweep's trial, spawned in this order from the trial's SeedSequence."""
 
+RUN_STREAMS = ("robot", "run")
+"""The streams of one simulated run (``omnikin simulate``; the robot as built of ``omnikin sim``
+and of ``omnikin ros``'s simulated back-ends), spawned in this order from ``SeedSequence(seed)``:
+the robot stream is the first child, as in :data:`REPORT_STREAMS`, so the same seed builds the
+same robot as built in every command; the run draws its random errors from the second."""
+
 FLOOR_PROCEDURES = 400
 """UMBmark procedures of the perfectly calibrated robot that make the noise floor."""
 
@@ -104,7 +113,8 @@ Progress = Callable[[str], None]
 
 
 def seed_streams(seed: np.random.SeedSequence, layout: tuple[str, ...]) -> dict[str, np.random.SeedSequence]:
-    """The stream of each stage of ``layout`` (:data:`REPORT_STREAMS`, :data:`TRIAL_STREAMS`):
+    """The stream of each stage of ``layout`` (:data:`REPORT_STREAMS`, :data:`TRIAL_STREAMS`,
+    :data:`RUN_STREAMS`):
     the children of ``seed`` spawned in the layout's order (module docstring)."""
     return dict(zip(layout, seed.spawn(len(layout)), strict=True))
 

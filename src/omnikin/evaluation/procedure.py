@@ -74,12 +74,31 @@ BYTES_PER_PROCEDURE = 4096
 """Memory of one kept UMBmark procedure (its result objects and return errors), generous."""
 
 
-def streams(seed: int) -> dict:
-    """The random stream of each step (:data:`~omnikin.evaluation.pipeline.REPORT_STREAMS`) for
-    ``seed``."""
+def streams(seed: int, layout: tuple[str, ...] = REPORT_STREAMS) -> dict[str, np.random.SeedSequence]:
+    """The random stream of each step of ``layout`` for ``seed``.
+
+    Parameters
+    ----------
+    seed : int
+        The study's or run's seed (``--seed``), a whole number >= 0.
+    layout : tuple of str
+        The names of the streams in the order they are spawned from ``SeedSequence(seed)``
+        (:data:`~omnikin.evaluation.pipeline.REPORT_STREAMS`, the default;
+        :data:`~omnikin.evaluation.pipeline.RUN_STREAMS` for one simulated run).
+
+    Returns
+    -------
+    dict of str to numpy.random.SeedSequence
+        The stream of each name of ``layout`` (:func:`~omnikin.evaluation.pipeline.seed_streams`).
+
+    Raises
+    ------
+    InputError
+        In one line, a ``seed`` that is not a whole number >= 0.
+    """
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise InputError(f"seed (--seed) must be a whole number >= 0, got {seed!r}")
-    return seed_streams(np.random.SeedSequence(int(seed)), REPORT_STREAMS)
+    return seed_streams(np.random.SeedSequence(int(seed)), layout)
 
 
 def check_settings(*, runs, trials, side, rate) -> None:

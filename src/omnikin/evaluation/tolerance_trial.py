@@ -30,9 +30,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..common.messages import shorten
+from ..errors import InputError
 from ..kinematics.robot import Robot
 from ..motion.plans import UMBMARK_SIDE
-from ..physics.engines import as_engine
 from ..simulation.engine import Engine, KinematicEngine
 from ..simulation.error_models import NOISE, ErrorProfile, NoiseModel
 from .pipeline import TRIAL, TRIAL_STREAMS, Square, run_pipeline, seed_streams
@@ -46,8 +47,8 @@ AS_BUILT = ("the tolerances and the trial's seed", "lower the tolerances")
 class TrialSettings:
     """How a trial runs UMBmark: square ``side`` [m], ``mode`` (rotate or translate), ``runs``
     per direction, sample ``rate`` [Hz], random errors ``noise``, whether it calibrates, and the
-    ``engine`` its runs are driven by (an :class:`~omnikin.simulation.engine.Engine`; a name of
-    :data:`~omnikin.physics.engines.ENGINE_NAMES` is made one)."""
+    ``engine`` its runs are driven by (an :class:`~omnikin.simulation.engine.Engine`; a point
+    of a study makes it from the name it stores, :attr:`omnikin.sweep.points.Point.settings`)."""
 
     side: float = UMBMARK_SIDE
     mode: str = "rotate"
@@ -59,7 +60,11 @@ class TrialSettings:
 
     def __post_init__(self):
         check_settings(runs=self.runs, trials=1, side=self.side, rate=self.rate)
-        object.__setattr__(self, "engine", as_engine(self.engine))
+        if not isinstance(self.engine, Engine):
+            raise InputError(
+                "engine must be an Engine object (omnikin.engine_named makes one from a name), "
+                f"got {shorten(self.engine)}"
+            )
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -309,7 +309,7 @@ class PhysicsFloor(NoiseFloor):
 
 def noise_floor(robot: Robot, *, procedures: int, rng=None, **options) -> NoiseFloor:
     """The :class:`NoiseFloor` of ``robot`` (the robot as built): ``procedures`` UMBmark
-    procedures of ``robot`` commanded by itself; ``options`` as :func:`run_umbmark`."""
+    procedures of ``robot`` commanded by itself; ``options`` as :func:`simulate_umbmark`."""
     results = simulate_umbmark(robot, robot, trials=procedures, rng=rng, **options)
     return NoiseFloor(values=np.array([r.e_max_syst for r in results]))
 

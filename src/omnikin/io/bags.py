@@ -58,7 +58,7 @@ from ..common.messages import one_line, shorten
 from ..errors import BagError, OmnikinError, ResourceLimitError
 from ..kinematics.robot import Robot
 from ..kinematics.se2 import between, log
-from ..motion.timing import check_start
+from ..motion.timing import check_start_time
 from .output import check_output, data_folder
 
 BAGS_EXTRA = 'pip install "omnikin[bags]"'
@@ -832,7 +832,7 @@ def record_run(
     if unknown:
         raise BagError(f"unknown run topic key(s) {unknown}; keys are {sorted(RUN_TOPICS)}")
     check_frame_ids(frame_id, child_frame_id)
-    start = check_start(
+    start = check_start_time(
         start, float(run.t[-1]), run.sampled.rate, "start", output="a ROS 2 bag", span=ROS_TIME_SPAN, step=1 / NS
     )
     t = np.asarray(run.t, dtype=float)

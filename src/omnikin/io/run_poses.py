@@ -134,7 +134,30 @@ def _ends_with_newline(path) -> bool:
 
 def read_run_poses(path, *, max_rows: int = MAX_READ_ROWS) -> list[RunPoses]:
     """The runs of a run-poses file (module docstring), in file order; theta and odom_theta
-    as written (not wrapped)."""
+    as written (not wrapped).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The run-poses file (``run_poses.csv`` of an UMBmark report).
+    max_rows : int
+        Most data rows read (default :data:`MAX_READ_ROWS`).
+
+    Returns
+    -------
+    list of RunPoses
+        One :class:`~omnikin.evaluation.run_poses.RunPoses` per run: its phase, direction and
+        number, times ``(n,)`` [s] from its start, the true and the odometry poses ``(n, 3)``
+        ``(x [m], y [m], theta [rad])`` in the start frame (first leg along +x).
+
+    Raises
+    ------
+    RunPosesFileError
+        In one line naming the file and the line: a bad column, phase, direction, run number,
+        number or time order, a run split or of one sample, a file cut short.
+    ResourceLimitError
+        More than ``max_rows`` rows or :data:`MAX_READ_BYTES` bytes.
+    """
     source = str(path)
     _check_size(path)
     announced = _announced_rows(path) if os.path.isfile(path) else None

@@ -152,7 +152,7 @@ time), which the odometry refuses; a thousandth of the interval leaves the stamp
 the speeds computed from them true to 0.1 %."""
 
 
-def check_start(
+def check_start_time(
     start,
     duration: float,
     rate: float,

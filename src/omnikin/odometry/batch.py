@@ -25,7 +25,7 @@ from ..kinematics.robot import STEER_LIMIT_SLACK, Robot, steering_beyond
 from ..kinematics.se2 import MAX_ANGLE, wrap_angle
 from .counters import as_float, as_floats, as_reading_array, counter_readings
 from .increments import Carry, block_increments, wheel_increments
-from .integration import STEP_BOUNDS, check_method, check_start, integrate_components, step_problem
+from .integration import STEP_BOUNDS, check_method, check_start_pose, integrate_components, step_problem
 from .plausibility import SAFETY, counter_rules
 from .samples import Problem, problem_at, timestamp_problem
 
@@ -250,7 +250,7 @@ def batch_odometry(
 
     Leading axes (trials) broadcast. ``steer`` ``(..., N, n_steer)`` [rad] is needed
     for robots with steerable wheels. The first sample is the zero of the ticks and
-    sits at ``start`` (default origin; :func:`omnikin.odometry.integration.check_start`). Readings of
+    sits at ``start`` (default origin; :func:`omnikin.odometry.integration.check_start_pose`). Readings of
     any integer type are exact (see :func:`omnikin.odometry.counters.counter_readings`);
     ``counter_bits`` (else each wheel's ``encoder.counter_bits``), ``max_jump`` [ticks],
     ``max_wheel_speed`` [rad/s] and ``max_wheel_accel`` [rad/s^2] are the counter, jump and
@@ -317,7 +317,7 @@ def batch_odometry(
     tt, pending = _timestamps(t, tk, "ticks", names)
     scale = np.array([r.rad_per_tick for r in rules])
     check_method(method)
-    start_pose = None if start is None else check_start(start)
+    start_pose = None if start is None else check_start_pose(start)
     if robot.steerable:
         return _steered_odometry(robot, names, rules, tt, tk, "ticks", scale, pending, steer, method, start_pose)
     _no_steer(robot, steer)
@@ -400,7 +400,7 @@ def batch_odometry_from_angles(
     a = _angle_array(angles, names)
     tt, pending = _timestamps(t, a, "angles", names)
     check_method(method)
-    start_pose = None if start is None else check_start(start)
+    start_pose = None if start is None else check_start_pose(start)
     ones = np.ones(len(wheels))
     if robot.steerable:
         return _steered_odometry(robot, names, rules, tt, a, "rad", ones, pending, steer, method, start_pose)

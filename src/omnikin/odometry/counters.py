@@ -143,7 +143,21 @@ def wrap_exact(delta, bits: int | None):
 
 def wrap_scalar(delta, bits: int | None):
     """One increment (Python int or float) wrapped into the counter's range, exactly (a float
-    result is the wrapped value of the float ``delta``, rounded once)."""
+    result is the wrapped value of the float ``delta``, rounded once).
+
+    Parameters
+    ----------
+    delta : int or float
+        The difference of two readings of the counter [ticks].
+    bits : int or None
+        The counter's width; None: a counter that does not wrap (``delta`` is returned as it is).
+
+    Returns
+    -------
+    int or float
+        ``delta`` wrapped into ``[-2**(bits-1), 2**(bits-1))`` [ticks]: an int for an int
+        ``delta``, else a float.
+    """
     if bits is None or isinstance(delta, int):
         return wrap_exact(delta, bits)
     return float(wrap_exact(Fraction(delta), bits))

@@ -43,12 +43,13 @@ def block_increments(
     motion=None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Checked increments of one block: ``(dt (..., m), delta (..., m, n))`` [s, ``unit`` as
-    float] of ``values`` ``(..., m + 1, n)`` (readings from :func:`counter_readings`, or wheel
-    angles [rad] for ``unit="rad"``) at times ``t`` ``(..., m + 1)``; row 0 is sample ``offset``.
+    float] of ``values`` ``(..., m + 1, n)`` (readings from
+    :func:`~omnikin.odometry.counters.counter_readings`, or wheel angles [rad] for
+    ``unit="rad"``) at times ``t`` ``(..., m + 1)``; row 0 is sample ``offset``.
 
-    Raises :class:`OdometryInputError` for the earliest refused sample (module docstring), or
-    ``pending`` (a :class:`Problem` found elsewhere, e.g. a steering angle) if it comes first
-    and lies in this block. ``motion(dt, delta, offset)``, if given, is called with the
+    Raises :class:`~omnikin.errors.OdometryInputError` for the earliest refused sample (module
+    docstring), or ``pending`` (a :class:`Problem` found elsewhere, e.g. a steering angle) if it
+    comes first and lies in this block. ``motion(dt, delta, offset)``, if given, is called with the
     intervals before the first of those problems and returns the first whose body increment is
     refused (a :class:`Problem` of rank ``"motion"``) or None. ``carry`` links the blocks and is
     updated. Increments beyond the float range are +-inf (refused by ``motion``).

@@ -72,7 +72,7 @@ def step_problem(a: float, b: float, phi: float, dt: float) -> str | None:
     return None
 
 
-def check_start(start, what: str = "start") -> np.ndarray:
+def check_start_pose(start, what: str = "start") -> np.ndarray:
     """A start pose ``(..., 3)`` (x, y, theta) [m, m, rad] as a float array, or
     :class:`InputError`: a list, tuple or array of finite numbers with ``|x|, |y| <=``
     :data:`POSITION_LIMIT` and ``|theta| <=`` :data:`~omnikin.kinematics.se2.MAX_ANGLE` (``1e308`` rad
@@ -99,14 +99,16 @@ def check_start(start, what: str = "start") -> np.ndarray:
 def integrate(increments: np.ndarray, start=None, method: str = "exact") -> np.ndarray:
     """Poses ``(..., N + 1, 3)`` reached from ``start`` by the increments ``(..., N, 3)``.
 
-    ``start`` ``(..., 3)`` (:func:`check_start`) defaults to the origin; the first output pose
+    ``start`` ``(..., 3)`` (:func:`check_start_pose`) defaults to the origin; the first output pose
     is ``start``. Headings are wrapped to ``[-pi, pi)``.
     """
     inc = np.asarray(increments, dtype=float)
     if inc.ndim < 2 or inc.shape[-1] != 3:
         raise InputError(f"increments: expected shape (..., N, 3), got {inc.shape}")
     comps = np.ascontiguousarray(np.moveaxis(inc, -1, 0))
-    return integrate_components(comps[0], comps[1], comps[2], None if start is None else check_start(start), method)
+    return integrate_components(
+        comps[0], comps[1], comps[2], None if start is None else check_start_pose(start), method
+    )
 
 
 def _world_steps(a, b, phi, heading0, method: str):

@@ -137,7 +137,7 @@ def check_times(t: np.ndarray, offset: int) -> np.ndarray:
 
 def non_finite(values: np.ndarray) -> np.ndarray | None:
     """Mask of the readings that are not finite numbers (float NaN or inf, also inside an object
-    array of exact readings, :func:`counter_readings`), or None for integer arrays."""
+    array of exact readings, :func:`~omnikin.odometry.counters.counter_readings`), or None for integer arrays."""
     if values.dtype.kind == "f":
         return ~np.isfinite(values)
     if values.dtype == object:

@@ -45,7 +45,7 @@ from ._stream_kernel import (
 )
 from .batch import encoded_wheels, fk_coefficients, mid_steer, steer_problem, steered_steps
 from .counters import as_float, exact_increment, exact_value, in_counter_range, show_number
-from .integration import check_method, check_start, step_problem
+from .integration import check_method, check_start_pose, step_problem
 from .plausibility import counter_rules
 from .samples import timestamp_problem
 
@@ -93,7 +93,7 @@ class Odometry:
     ``max_wheel_accel`` [rad/s^2]: the counter, jump and change-of-speed rules of
     :mod:`omnikin.odometry.plausibility`, applied exactly as batch odometry applies them; a step beyond the
     bounds of :func:`omnikin.odometry.integration.step_problem` is refused too. ``start``: the pose of
-    the first sample (:func:`omnikin.odometry.integration.check_start`).
+    the first sample (:func:`omnikin.odometry.integration.check_start_pose`).
 
     Against :func:`omnikin.odometry.batch.batch_odometry` on the same samples: the same refused sample,
     the same wheel increments, body increments and twists (to the bit without steerable wheels),
@@ -223,7 +223,7 @@ class Odometry:
 
     def reset(self, pose=(0.0, 0.0, 0.0)) -> None:
         """Forget the previous sample; the next one is the new zero, at ``pose``
-        (:func:`omnikin.odometry.integration.check_start`).
+        (:func:`omnikin.odometry.integration.check_start_pose`).
 
         Parameters
         ----------
@@ -238,7 +238,7 @@ class Odometry:
         self._start(pose, "pose")
 
     def _start(self, pose, what: str) -> None:
-        p = check_start(pose, what)
+        p = check_start_pose(pose, what)
         if p.shape != (3,):
             raise InputError(f"{what}: expected 3 numbers (x, y, theta), got shape {p.shape}")
         start = (float(p[0]), float(p[1]), float(wrap_angle(p[2])))

@@ -92,6 +92,11 @@ class PhysicsBackend:
         self.reads = 0
 
     @property
+    def joints(self) -> PhysicsSim:
+        """The simulated joints: :attr:`sim` (:class:`~omnikin.simulation.engine.SimulatedJoints`)."""
+        return self.sim
+
+    @property
     def truth(self) -> np.ndarray:
         """True pose ``(x, y, theta)`` [m, m, rad] of the robot as built, ``theta`` wrapped."""
         pose = self.sim.pose

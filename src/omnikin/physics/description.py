@@ -4,8 +4,8 @@
 :func:`describe` turns the kinematic robot (wheel positions, drive directions, radii, roller
 angles, steering) into the frozen :class:`PhysicalRobot` that :mod:`omnikin.physics.mjcf`
 writes as a MuJoCo model, :mod:`omnikin.physics.urdf` as URDF, and a viewer draws; a robot as
-built keeps the body of its design (:func:`as_built`). Every quantity the robot file does not
-give has a default (the constants below); the optional ``physical:`` fields of the file
+built keeps the body of its design (:func:`as_built_description`). Every quantity the robot file
+does not give has a default (the constants below); the optional ``physical:`` fields of the file
 (:class:`~omnikin.kinematics.physical.PhysicalBody` on the robot,
 :class:`~omnikin.kinematics.physical.PhysicalWheel` on each wheel) override them.
 
@@ -633,11 +633,11 @@ def _wheel_mass_and_width(wheel: Wheel) -> tuple[float, float, RollerSet | None,
 def describe(robot: Robot) -> PhysicalRobot:
     """The physical description of ``robot`` (docs/physics.md, "Defaults", for every default); a
     robot as built (:attr:`omnikin.kinematics.robot.Robot.design` set) keeps the body of its design
-    (:func:`as_built`)."""
+    (:func:`as_built_description`)."""
     if not isinstance(robot, Robot):
         raise InputError(f"describe: expected a Robot, got {type(robot).__name__}")
     if robot.design is not None:
-        return as_built(robot, describe(robot.design))
+        return as_built_description(robot, describe(robot.design))
     body = robot.physical
     rolling = robot.rolling
     mean_radius = float(np.mean([w.radius for w in rolling]))
@@ -756,7 +756,7 @@ def describe(robot: Robot) -> PhysicalRobot:
     )
 
 
-def as_built(robot: Robot, design: PhysicalRobot) -> PhysicalRobot:
+def as_built_description(robot: Robot, design: PhysicalRobot) -> PhysicalRobot:
     """The physical description of ``robot``, a robot as built, from ``design``, the description
     of the robot it was built to (:attr:`omnikin.kinematics.robot.Robot.design`): it differs only where the
     errors say. Kept from the design: the chassis (shape, size, mass, centre of mass, inertia),

@@ -90,13 +90,11 @@ from ..errors import InputError
 from ..kinematics.robot import Robot
 from ..motion.limits import MotionLimits
 from ..runtime.base import BaseRuntime, StepResult
-from ..runtime.teleop import MOVES, Teleop, moves_not_obeyed
+from ..runtime.teleop import MOVES, STEER_STEP, Teleop, moves_not_obeyed
 from .backend import PhysicsBackend
 
 CONTROL_PERIOD = 0.02
 """Simulated time [s] between two control steps of the runtime (50 Hz)."""
-STEER_STEP = math.radians(15.0)
-"""Steering turned by one press of ``[`` or ``]`` [rad]."""
 CATCH_UP = 0.25
 """Most simulated time [s] run between two frames when the simulation is behind the clock: the
 window stays responsive (a frame at least every 0.25 s of simulated time; software OpenGL under

@@ -1,4 +1,9 @@
-"""ROS 2 shell around :class:`omnikin.runtime.base.BaseRuntime` (extra ``omnikin[ros]``)."""
+"""ROS 2 shell around :class:`omnikin.runtime.base.BaseRuntime` (extra ``omnikin[ros]``).
+
+- :mod:`~omnikin.ros.messages`: what the node's messages contain, as plain numbers (no rclpy);
+- :mod:`~omnikin.ros.params`: the node's parameters, named as in ros2_controllers;
+- :mod:`~omnikin.ros.node`: the node of ``omnikin ros`` (imports rclpy);
+- ``omnikin.rviz``: rviz2's configuration (``omnikin ros --rviz-config``)."""
 
 from pathlib import Path
 

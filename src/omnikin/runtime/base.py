@@ -56,7 +56,24 @@ class StepResult:
 
 
 class BaseRuntime:
-    """Command filtering, inverse kinematics, odometry with covariance (module docstring)."""
+    """Command filtering, inverse kinematics, odometry with covariance (module docstring).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot driven (its nominal model: inverse kinematics and odometry).
+    backend : WheelBackend
+        The wheels (:class:`~omnikin.runtime.backends.WheelBackend`: serial, simulated, physics).
+    limits : MotionLimits, optional
+        Speed and acceleration limits of the commands (default: unlimited).
+    cmd_vel_timeout : float
+        Time [s] without a valid command after which the target becomes zero and the robot
+        decelerates to a stop (0: never; :mod:`omnikin.runtime.command`).
+    wheel_slip : float
+        The slip coefficient of the covariance [sqrt(m)], finite and >= 0 (module docstring).
+    method : {"exact", "midpoint", "euler"}
+        The odometry's integration (:class:`~omnikin.odometry.streaming.Odometry`).
+    """
 
     def __init__(
         self,

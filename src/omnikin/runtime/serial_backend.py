@@ -90,9 +90,26 @@ class _Port:
 class SerialBackend:
     """Wheel controllers on serial ports (module docstring).
 
-    ``baud``, ``link_timeout``, ``connect_timeout`` and ``heartbeat_period`` default to
-    ``protocol.yaml``; ``write_timeout`` [s] bounds a blocked write (then counted in
-    ``tx_errors``).
+    Parameters
+    ----------
+    robot : Robot
+        The robot; its rolling wheels with an encoder are driven (no steerable wheels).
+    ports : str, os.PathLike, list or dict
+        One port for every wheel, one per driven wheel in file order, or ``{wheel name: port}``
+        (pyserial URLs or device paths; module docstring).
+    baud : int, optional
+        Line rate [bit/s] (default: ``protocol.yaml``).
+    link_timeout : float, optional
+        Longest silence [s] of a wheel before the link counts as lost (default: ``protocol.yaml``).
+    connect_timeout : float, optional
+        Time [s] a wheel has to be heard from first, and after re-arming (default:
+        ``protocol.yaml``).
+    heartbeat_period : float, optional
+        Longest time [s] between two frames sent to a wheel (default: ``protocol.yaml``).
+    write_timeout : float
+        Longest blocked write [s] (then counted in ``tx_errors``).
+    protocol : Protocol, optional
+        The protocol description (default: the shipped ``protocol.yaml``).
     """
 
     MAX_READS_PER_PORT = 64  # reads of up to 4096 bytes per port and call: a flooding device cannot hang read()

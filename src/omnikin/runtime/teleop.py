@@ -38,6 +38,10 @@ MOVES = {
 }
 """Move action -> (component of the twist, sign)."""
 
+STEER_STEP = math.radians(15.0)
+"""Steering turned by one press of ``[`` or ``]`` (``steer_left``, ``steer_right``) [rad], in the
+window of ``omnikin sim`` and the page of ``omnikin view``."""
+
 
 @dataclass
 class Teleop:
@@ -103,7 +107,19 @@ def moves_not_obeyed(robot: Robot) -> dict[str, str]:
     :class:`~omnikin.runtime.command.CommandFilter` of the robot (no limits, no timeout): a
     move whose twist it projects (fixed wheels: the part they cannot make is dropped) or
     refuses (steering beyond its limits) is listed. The answer does not depend on the speed:
-    projection is linear and the steering a twist needs depends only on its direction."""
+    projection is linear and the steering a twist needs depends only on its direction.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot driven from the keys.
+
+    Returns
+    -------
+    dict of str to str
+        The reason of each move action it does not drive as asked, by action name; empty for a
+        robot that drives every move (a holonomic one).
+    """
     out = {}
     for action, (axis, sign) in MOVES.items():
         twist = np.zeros(3)

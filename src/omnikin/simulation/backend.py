@@ -55,6 +55,8 @@ class SimBackend:
         self._true_rpt = np.abs(true_rpt)
         self._reading = nominal_rpt / true_rpt  # what the driver makes of the true wheel angle [rad/rad]
         self.truth = np.asarray(start, dtype=float).copy()
+        self.fallen = ""  # a kinematic robot cannot fall (:class:`~omnikin.simulation.engine.SimulatedBackend`)
+        self.joints = None  # its wheels turn as commanded: no simulated joints
         self._angles = np.zeros(len(self.encoded))
         self._speeds = np.zeros(len(self.encoded))
         self._steer = np.zeros(len(robot.steerable)) if robot.steerable else None

@@ -40,12 +40,36 @@ from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range
 from ..runtime.backends import WheelBackend
 from . import kinematic
-from .error_models import NoiseModel
-from .error_models import noise as noise_profile
+from .error_models import NoiseModel, noise_profile
 from .kinematic import RunCost, SimulatedRun
 
 Progress = Callable[[float, float], None]
 """Called now and then with the simulated time and the plan's duration [s]."""
+
+
+class SimulatedJoints(Protocol):
+    """The joints of a robot as built whose wheels are simulated, not turned as commanded
+    (:attr:`SimulatedBackend.joints`; physics: :class:`~omnikin.physics.simulator.PhysicsSim`)."""
+
+    @property
+    def wheel_angles(self) -> np.ndarray:
+        """Angles ``(n,)`` [rad] of the rolling wheels (file order) since the start."""
+        ...
+
+    @property
+    def wheel_speeds(self) -> np.ndarray:
+        """Speeds ``(n,)`` [rad/s] of the rolling wheels (file order)."""
+        ...
+
+    @property
+    def steer_angles(self) -> np.ndarray:
+        """Steering angles ``(m,)`` [rad] of the steerable wheels (file order)."""
+        ...
+
+    @property
+    def twist(self) -> np.ndarray:
+        """True body twist ``(vx [m/s], vy [m/s], omega [rad/s])`` (body frame)."""
+        ...
 
 
 class SimulatedBackend(WheelBackend, Protocol):
@@ -56,6 +80,19 @@ class SimulatedBackend(WheelBackend, Protocol):
     def truth(self) -> np.ndarray:
         """True pose ``(x [m], y [m], theta [rad])`` of the robot as built (world frame, heading
         wrapped to ``[-pi, pi)``)."""
+        ...
+
+    @property
+    def joints(self) -> SimulatedJoints | None:
+        """The simulated joints (physics: the wheels' and steering joints' true angles and
+        speeds, and the body's true twist), or None when the wheels turn as commanded
+        (kinematic: a front end draws them from the commands)."""
+        ...
+
+    @property
+    def fallen(self) -> str:
+        """One line saying how the robot fell (tipped over, could not stand) and that the back-end
+        stopped its wheels; empty while it stands (kinematic: always, it cannot fall)."""
         ...
 
 

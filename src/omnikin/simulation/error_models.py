@@ -192,7 +192,7 @@ NOISE = {
 """Random error models by name (``--noise``)."""
 
 
-def profile(name: str) -> ErrorProfile:
+def error_profile(name: str) -> ErrorProfile:
     """The systematic error profile called ``name`` (:data:`PROFILES`)."""
     if not isinstance(name, str) or name not in PROFILES:
         raise InputError(
@@ -201,7 +201,7 @@ def profile(name: str) -> ErrorProfile:
     return PROFILES[name]
 
 
-def noise(name: str) -> NoiseModel:
+def noise_profile(name: str) -> NoiseModel:
     """The random error model called ``name`` (:data:`NOISE`)."""
     if not isinstance(name, str) or name not in NOISE:
         raise InputError(f"unknown noise profile {shorten(name)}{did_you_mean(name, NOISE)}; one of {sorted(NOISE)}")

@@ -2,7 +2,7 @@
 
 One run, for every trial at once (leading trial axis):
 
-1. the plan is timed and sampled for the *command* robot (:func:`~.motion.sample_plan`);
+1. the plan is timed and sampled for the *command* robot (:func:`~omnikin.motion.timing.sample_plan`);
    its inverse kinematics gives every encoded wheel's commanded angle at each sample;
 2. each wheel turns by its motor (:func:`wheel_motion`): a stepper turns the commanded angle
    and its encoder counts that angle over the *true* angle per tick; a dc motor's controller
@@ -58,7 +58,7 @@ clearly too long)."""
 
 @dataclass(frozen=True)
 class SimulatedRun:
-    """Result of :func:`simulate`.
+    """Result of :func:`simulate_kinematic`.
 
     ``t`` ``(N + 1,)`` [s]; ``ticks`` ``(N + 1, n_enc)`` encoder counts (the wheel turned
     ``ticks`` times the angle per tick since the start: they never wrap); ``readings`` the same
@@ -125,7 +125,7 @@ def commanded_angles(sampled: SampledPlan, robot: Robot, wheels) -> tuple[np.nda
 
 @dataclass(frozen=True)
 class RunCost:
-    """What one simulated run (:func:`simulate`, one trial) will take: ``samples``, ``bytes`` of
+    """What one simulated run (:func:`simulate_kinematic`, one trial) will take: ``samples``, ``bytes`` of
     memory at its peak, ``seconds`` of computing (:func:`run_cost`); ``simulated`` [s] the
     simulated time (the physics engine: its upper bound, :meth:`omnikin.physics.engines.PhysicsEngine.cost`)."""
 
@@ -217,7 +217,25 @@ def wheel_motion(angles: np.ndarray, true_robot: Robot, command_robot: Robot, na
 
     An encoder scale error (``rpt_true != rpt_cmd``) thus moves the odometry of a stepper's wheel
     and the truth of a dc motor's; the physics engine does the same
-    (:class:`omnikin.physics.simulator.PhysicsSim`)."""
+    (:class:`omnikin.physics.simulator.PhysicsSim`).
+
+    Parameters
+    ----------
+    angles : numpy.ndarray
+        The commanded wheel angles ``(N + 1, n)`` [rad], one column per wheel of ``names``.
+    true_robot, command_robot : Robot
+        The robot as built and the model that commands it.
+    names : sequence of str
+        The ``n`` encoded wheels, in the order of the columns.
+    quantise : bool
+        Round the counts to whole ticks (int64), as an encoder counts them.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(ticks, true_angles)``: the encoder counts ``(N + 1, n)`` [ticks] and the angles the
+        wheels truly turn ``(N + 1, n)`` [rad].
+    """
     cmd_rpt = command_robot.rad_per_tick(names)
     true_rpt = true_robot.rad_per_tick(names)
     closed = np.array([true_robot.wheel(n).counts_close_loop for n in names], dtype=bool)
@@ -263,7 +281,7 @@ def counter_output(ticks: np.ndarray, bits) -> np.ndarray:
 
 
 def trial_generators(rng, trials: int) -> list[np.random.Generator]:
-    """One Generator per trial (:func:`simulate`'s ``rng``): a sequence of ``trials`` entries,
+    """One Generator per trial (:func:`simulate_kinematic`'s ``rng``): a sequence of ``trials`` entries,
     each made a Generator (:func:`omnikin.common.rng.make_rng`; a Generator given twice stays one
     generator), or one generator shared by every trial."""
     if isinstance(rng, (list, tuple)):
@@ -287,7 +305,7 @@ def _truth(
     """Ground-truth poses ``(trials, N + 1, 3)`` (or ``(trials, 1, 3)``, the ends, if not ``keep``)
     and the standard normal variates ``(trials, 3)`` of the end-pose measurement (None without
     measurement noise). Trial ``k`` draws from ``gens[k]``: first its slip and floor variates,
-    then its measurement's (:func:`simulate`).
+    then its measurement's (:func:`simulate_kinematic`).
 
     The noise-free body increments ``base`` are computed once. Each trial's body
     increments are ``base + S_k z_k`` with ``z_k`` three standard normal variates per

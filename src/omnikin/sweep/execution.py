@@ -1,6 +1,6 @@
 """A whole study (``omnikin sweep``): plan the missing trials, run them on Dask, write the results.
 
-:func:`run_sweep`:
+:func:`execute_study`:
 
 1. opens the study folder (:class:`~omnikin.sweep.store.StudyFolder`) and reads which trials are
    already on disk (an interrupted or extended study computes only the others);
@@ -14,11 +14,12 @@
 
 A task that failed on its workers (:func:`~omnikin.sweep.cluster.run_tasks`), or whose result was
 refused because its worker runs other omnikin or NumPy versions, enters the tables as rows with
-its reason, but is not written as a part: the next run computes it again.
+its reason, but is not written as a part: the study resumed computes it again.
 
 Called from Python, the embedded cluster starts worker *processes* (``spawn``): a script that
-calls :func:`run_sweep` must do so under ``if __name__ == "__main__":``, as every program
-that starts processes with ``multiprocessing`` must.
+calls :func:`execute_study` (or :func:`omnikin.run_sweep`) must do so under
+``if __name__ == "__main__":``, as every program that starts processes with ``multiprocessing``
+must.
 """
 
 from __future__ import annotations
@@ -130,7 +131,7 @@ def plan_tasks(study: Study, coverage: Coverage, workers: int, task_trials: int 
 
 
 class Progress(Protocol):
-    """What :func:`run_sweep` tells its caller while it runs."""
+    """What :func:`execute_study` tells its caller while it runs."""
 
     def start(self, *, total: int, done: int, where: str, dashboard: str) -> None: ...
 
@@ -155,7 +156,7 @@ class SweepResult:
     answers: list = field(default_factory=list)
 
 
-def run_sweep(
+def execute_study(
     study: Study,
     out,
     *,

@@ -42,15 +42,15 @@ import numpy as np
 from ..errors import InputError
 from ..kinematics.robot import Robot
 from ..motion.limits import MotionLimits
-from ..physics.backend import PhysicsBackend
 from ..physics.description import PhysicalRobot, describe
-from ..physics.engines import as_engine
 from ..physics.joint_motion import JointMotion
 from ..runtime.base import BaseRuntime, StepResult
 from ..runtime.goal import GoalSeeker
-from ..runtime.teleop import MOVES, Teleop
-from ..simulation.engine import Engine
+from ..runtime.teleop import MOVES, STEER_STEP, Teleop
+from ..simulation.engine import Engine, KinematicEngine
 
+KINEMATIC = KinematicEngine()
+"""The default engine of the live robot (the kinematic one, no options)."""
 KEY_SILENCE = 1.0
 """Time [s] after which a held key whose page sent nothing (no ``alive``, sent every 0.1 s while a
 key is down) is released: ten heartbeats, so that a page whose thread is busy drawing a frame in
@@ -69,8 +69,6 @@ the steps it missed, so the motion between two inputs does not depend on the wal
 MAX_CATCH_UP = 100
 """At most this many steps made up per call of :meth:`PageRobot.step` (2 s of simulated time);
 a longer stall is crossed in one step, so the work per step stays bounded."""
-STEER_STEP = math.radians(15.0)
-"""Steering turned by one press of ``[`` or ``]`` [rad]."""
 
 
 def triple(values) -> tuple[float, float, float]:
@@ -352,28 +350,26 @@ class PageRobot:
 
 class LiveRobot(PageRobot):
     """``robot`` simulated behind the page (module docstring): ``engine`` the
-    :class:`~omnikin.simulation.engine.Engine` whose back-end moves it (or its name, with
-    ``step`` [s] the physics engine's time step, None: its default; the kinematic engine without
-    noise: the robot moves exactly as its wheels turn), ``limits`` and ``timeout`` [s] the
-    runtime's command filter."""
+    :class:`~omnikin.simulation.engine.Engine` whose back-end moves it (default the kinematic
+    engine without noise: the robot moves exactly as its wheels turn; a name becomes an engine in
+    the argument parser, :func:`omnikin.physics.engines.engine_named`), ``limits`` and
+    ``timeout`` [s] the runtime's command filter."""
 
     def __init__(
         self,
         robot: Robot,
-        engine: Engine | str = "kinematic",
+        engine: Engine = KINEMATIC,
         *,
         speed: float = 0.2,
         turn: float = 0.5,
         limits: MotionLimits | None = None,
         timeout: float = 0.5,
-        step: float | None = None,
     ):
-        engine = as_engine(engine, step=step)
         super().__init__(robot, speed=speed, turn=turn, limits=limits)
         self.engine = engine
         self.backend = engine.backend(robot)
-        # the physics back-end's joints are simulated and read; the kinematic ones follow the commands
-        self._sim = self.backend.sim if isinstance(self.backend, PhysicsBackend) else None
+        # simulated joints (physics) are read; the others follow the commands (kinematic)
+        self._joints = self.backend.joints
         self.runtime = BaseRuntime(robot, self.backend, limits=self.limits, cmd_vel_timeout=timeout)
         self.can_steer = bool(robot.steerable)
         self.catch_up = True
@@ -410,7 +406,7 @@ class LiveRobot(PageRobot):
         self.t = t
         result = self.runtime.step(t)
         self._last = result
-        fallen = getattr(self.backend, "fallen", "")
+        fallen = self.backend.fallen
         if fallen and not self.fallen:  # the back-end stopped the wheels: say so once, drop the targets
             self.fallen = f"{fallen}; its wheels are stopped"
             self.seeker = None
@@ -425,13 +421,13 @@ class LiveRobot(PageRobot):
         slots = self.slots
         speeds = np.zeros(slots.count)
         steer = np.full(slots.count, np.nan)
-        sim = self._sim
-        if sim is not None:
-            self._angles[slots.rolling] = sim.wheel_angles
-            speeds[slots.rolling] = sim.wheel_speeds
+        joints = self._joints
+        if joints is not None:
+            self._angles[slots.rolling] = joints.wheel_angles
+            speeds[slots.rolling] = joints.wheel_speeds
             if len(slots.steered):
-                steer[slots.steered] = sim.steer_angles
-            moved = sim.twist
+                steer[slots.steered] = joints.steer_angles
+            moved = joints.twist
         else:
             moved = self._moved
             self._moved = np.asarray(result.command, dtype=float)

@@ -7,9 +7,10 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from conftest import CountedName, circle_wheels, omni_robot
 from omnikin import Encoder, InfeasibleTwistError, InputError, Robot, SingularLayoutError, Steer, Wheel, load_robot
 from omnikin.errors import OmnikinError
+from support.counting import CountedName
+from support.kinematics import circle_wheels, omni_robot
 
 # --- ros2_controllers parity --------------------------------------------------------------
 # omni_wheel_drive_controller (test vectors: robot radius 0.5 m, wheel radius 0.1 m, twist (1, 1, 1)).
