@@ -63,8 +63,11 @@ def run(argv: list[str] | None, build_parser: Callable[[], CommandParser]) -> in
     """
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
     STOPPED.clear()
-    with _standard_streams(), _termination_unwinds() as fired:
-        status = _main(argv, fired, build_parser)
+    with _standard_streams(), _termination_unwinds() as stops:
+        try:
+            status = _main(argv, stops.fired, build_parser)
+        finally:
+            stops.over = True  # the status is settled: a stop now changes nothing
     forget_handled_interrupt()  # a Ctrl-C handled above must not still end the process by SIGINT
     return status
 
@@ -185,24 +188,63 @@ TERMINATION_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHU
 systemd, a closed terminal."""
 
 
+class _Stops:
+    """The stops a running command received (:func:`_termination_unwinds`)."""
+
+    def __init__(self) -> None:
+        self.fired: list[int] = []
+        """The termination signals that raised :class:`Terminated`, in order."""
+        self.over = False
+        """The command's status is settled (set by :func:`run`): a stop now changes nothing."""
+        self.reporting = False
+        """A stop lost in a finaliser is being reported (:func:`_termination_unwinds`)."""
+
+
 @contextlib.contextmanager
-def _termination_unwinds() -> Iterator[list[int]]:
-    """Turn the first termination signal into :class:`Terminated` while a command runs; later
-    ones are ignored, to the end of the process (the cleanup the first one started must finish,
-    and the process is ending). Without a signal the previous handlers come back after. A
-    signal the caller ignores (``nohup``) stays ignored, and a handler not set from Python
-    (:func:`signal.getsignal` gives None) is left alone. Only in the main thread. Yields the
-    list of signals received, so that an error a library raised in place of the termination
-    (it arrived inside its C code) is still reported as the termination."""
-    fired: list[int] = []
+def _termination_unwinds() -> Iterator[_Stops]:
+    """Turn a termination signal into :class:`Terminated` while a command runs. Once one unwinds
+    the command, later ones are ignored to the end of the process (the cleanup it started must
+    finish, and the process is ending); one that comes while none is unwinding raises again.
+    Without a signal the previous handlers come back after. A signal the caller ignores
+    (``nohup``) stays ignored, and a handler not set from Python (:func:`signal.getsignal` gives
+    None) is left alone. Only in the main thread. Yields the :class:`_Stops` received, so that
+    an error a library raised in place of the termination (it arrived inside its C code) is
+    still reported as the termination.
+
+    A stop is *unwinding* while a :class:`Terminated` is being handled (an ``except``,
+    ``finally`` or ``__exit__`` on its way up, or code they call: :func:`_unwinding`); a server
+    that ended on one (:data:`~omnikin.cli.common.STOPPED`) writes its report on. A stop
+    that lands in a finaliser (``__del__``, a weakref callback, a generator closed by the
+    garbage collector: Python runs signal handlers there too) cannot leave it: Python reports it
+    as "Exception ignored in ..." with a traceback and goes on. Such a stop, a Ctrl-C too, is
+    reported quietly and sent again from outside the finaliser (:func:`_send_again`); a
+    library that swallows every exception (``except BaseException: pass``) loses the first
+    stop, and the next one stops the command. Before, the first Terminated was remembered for
+    good: once lost, every later SIGTERM was ignored and the command ran on to its end."""
+    stops = _Stops()
     if threading.current_thread() is not threading.main_thread():
-        yield fired
+        yield stops
         return
 
     def unwind(signum, frame):
-        if not fired:
-            fired.append(signum)
-            raise Terminated(signum)
+        if stops.reporting:  # inside the report of a lost stop: it acts once that is over
+            _send_again(signum, stops)
+            return
+        if stops.over or (stops.fired and (STOPPED or _unwinding())):
+            return  # the stop that came first unwinds the command, or a server ended on it
+        stops.fired.append(signum)
+        raise Terminated(signum)
+
+    def lost(unraisable) -> None:  # sys.unraisablehook while the command runs
+        exc = unraisable.exc_value
+        if not isinstance(exc, (KeyboardInterrupt, Terminated)):
+            previous_hook(unraisable)
+            return
+        stops.reporting = True
+        try:
+            _send_again(exc.signum if isinstance(exc, Terminated) else signal.SIGINT, stops)
+        finally:
+            stops.reporting = False
 
     previous = {}
     for sig in TERMINATION_SIGNALS:
@@ -210,11 +252,43 @@ def _termination_unwinds() -> Iterator[list[int]]:
         if handler is not signal.SIG_IGN and handler is not None:  # None: set outside Python, left alone
             previous[sig] = handler
             signal.signal(sig, unwind)
+    previous_hook = sys.unraisablehook
+    sys.unraisablehook = lost
     try:
-        yield fired
+        yield stops
     finally:
+        stops.over = True
         for sig, handler in previous.items():
-            signal.signal(sig, signal.SIG_IGN if fired else handler)
+            signal.signal(sig, signal.SIG_IGN if stops.fired else handler)
+        sys.unraisablehook = previous_hook
+
+
+def _unwinding() -> bool:
+    """Whether a :class:`Terminated` is being handled where the signal's handler runs: the
+    exception handled (:func:`sys.exc_info`, which sees the ``except``, ``finally`` and
+    ``__exit__`` blocks of every caller) or one it was raised while handling."""
+    exc = sys.exc_info()[1]
+    for _ in range(1000):  # a cycle of contexts cannot hold the handler
+        if exc is None:
+            return False
+        if isinstance(exc, Terminated):
+            return True
+        exc = exc.__context__
+    return False
+
+
+def _send_again(signum: int, stops: _Stops) -> None:
+    """Send signal ``signum`` to this process again in a moment, from another thread (its handler
+    then runs in the main thread wherever that is, outside the finaliser or report it was lost
+    in), unless the command has ended by then."""
+
+    def send() -> None:
+        if not stops.over:
+            os.kill(os.getpid(), signum)
+
+    timer = threading.Timer(0.01, send)
+    timer.daemon = True
+    timer.start()
 
 
 class _ClosedStream(io.TextIOBase):
