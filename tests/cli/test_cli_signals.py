@@ -279,3 +279,63 @@ def test_a_sigterm_after_one_a_library_swallowed_stops_the_command(tmp_path):
     proc = run_swallowed(tmp_path, "SIGTERM", "swallowing_library()", "os.kill(os.getpid(), signal.SIGTERM)")
     assert proc.returncode == 143, proc.stderr
     assert proc.stderr == "omnikin: terminated (SIGTERM)\n"
+
+
+# --- stopped twice ------------------------------------------------------------------------------------
+# The second Ctrl-C of an impatient user comes while the first one's command ends: while omnikin
+# says so, or while Python exits (which takes a moment with NumPy and the API loaded). It must not
+# turn 'omnikin: interrupted' (130) into a traceback or a death by SIGINT.
+TWICE = """
+import atexit, os, signal, sys
+
+import omnikin.cli.main as cli
+import omnikin.cli.presets as presets
+from omnikin.cli import process
+
+
+def stopped(args):
+    os.kill(os.getpid(), signal.{sig})
+    return 0
+
+
+def again():
+    os.kill(os.getpid(), signal.{again})
+
+
+if "{when}" == "saying":
+    said = process._ended
+
+    def saying(message, status):
+        again()
+        return said(message, status)
+
+    process._ended = saying
+else:
+    atexit.register(again)
+presets.run = stopped
+sys.argv = ["omnikin", "presets"]
+sys.exit(cli.main())
+"""
+
+
+@pytest.mark.parametrize("when", ["saying", "exiting"])
+@pytest.mark.parametrize(
+    ("sig", "again", "status", "line"),
+    [
+        ("SIGINT", "SIGINT", 130, "omnikin: interrupted"),
+        ("SIGTERM", "SIGINT", 143, "omnikin: terminated (SIGTERM)"),
+        ("SIGINT", "SIGTERM", 130, "omnikin: interrupted"),
+    ],
+)
+def test_a_second_stop_while_the_command_ends_changes_nothing(tmp_path, sig, again, status, line, when):
+    (tmp_path / "twice_runner.py").write_text(TWICE.format(sig=sig, again=again, when=when), encoding="utf-8")
+    proc = subprocess.run(
+        [sys.executable, "-m", "twice_runner"],
+        cwd=tmp_path,
+        env=omnikin_env(),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == status, proc.stderr
+    assert proc.stderr == line + "\n"

@@ -61,18 +61,20 @@ def run(argv: list[str] | None, build_parser: Callable[[], CommandParser]) -> in
     failures: a server (:data:`SERVERS`) ends with status 0 (:func:`_stopped`), any other
     command with 130 or 128 + the signal (:func:`_ended`).
     """
+    process = argv is None  # the process's own command line (the console script, python -m)
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
     STOPPED.clear()
     with _standard_streams(), _termination_unwinds() as stops:
+        stops.process = process
         try:
-            status = _main(argv, stops.fired, build_parser)
+            status = _main(argv, stops, build_parser)
         finally:
             stops.over = True  # the status is settled: a stop now changes nothing
     forget_handled_interrupt()  # a Ctrl-C handled above must not still end the process by SIGINT
     return status
 
 
-def _main(argv: list[str], fired: list[int], build_parser: Callable[[], CommandParser]) -> int:
+def _main(argv: list[str], stops: _Stops, build_parser: Callable[[], CommandParser]) -> int:
     # the command's name: parsed, or before that the first argument naming a server (a server
     # stopped while omnikin still starts is stopped all the same)
     command: list[str] = [argv[0]] if argv and argv[0] in SERVERS else []
@@ -83,14 +85,16 @@ def _main(argv: list[str], fired: list[int], build_parser: Callable[[], CommandP
             try:
                 status = _run(argv, command, build_parser)
             except Exception:
-                if fired:  # a library turned the termination into an error of its own (matplotlib's
-                    raise Terminated(fired[0]) from None  # C code: 'initialization failed'): it is one
+                if stops.fired:  # a library turned the termination into an error of its own (matplotlib's
+                    raise Terminated(stops.fired[0]) from None  # C code: 'initialization failed'): it is one
                 raise
             if STOPPED and command and command[0] in SERVERS:  # stopped inside until_stopped()
+                stops.end_quietly()
                 _stopped(command[0], STOPPED[0])
             sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
             return status
     except (KeyboardInterrupt, Terminated) as exc:
+        stops.end_quietly()
         if command and command[0] in SERVERS:  # the user stops a server: its normal end
             return _stopped(command[0], stop_name(exc))
         if isinstance(exc, Terminated):
@@ -198,6 +202,30 @@ class _Stops:
         """The command's status is settled (set by :func:`run`): a stop now changes nothing."""
         self.reporting = False
         """A stop lost in a finaliser is being reported (:func:`_termination_unwinds`)."""
+        self.process = False
+        """The command line is the process's own (:func:`run` without ``argv``)."""
+        self.ending = False
+        """The command was stopped and the process is ending (:meth:`end_quietly`)."""
+
+    def end_quietly(self) -> None:
+        """The command was stopped (Ctrl-C, a termination signal) and its process is ending: from
+        now on a further stop only cut that short (Python killed itself by SIGINT on a second
+        Ctrl-C while it exited, after 'omnikin: interrupted' was printed: status -2, not 130), so
+        Ctrl-C and the termination signals are ignored to the end of the process. Only for the
+        process's own command line (:attr:`process`) and in the main thread: a program calling
+        :func:`omnikin.cli.main.main` with arguments keeps its handlers."""
+        self.ending = True
+        if not self.process or threading.current_thread() is not threading.main_thread():
+            return
+        for sig in (signal.SIGINT, *TERMINATION_SIGNALS):
+            if signal.getsignal(sig) is None:  # set outside Python: left alone
+                continue
+            while True:
+                try:
+                    signal.signal(sig, signal.SIG_IGN)
+                    break
+                except (KeyboardInterrupt, Terminated):  # one pending meanwhile: ending all the same
+                    continue
 
 
 @contextlib.contextmanager
@@ -230,7 +258,7 @@ def _termination_unwinds() -> Iterator[_Stops]:
         if stops.reporting:  # inside the report of a lost stop: it acts once that is over
             _send_again(signum, stops)
             return
-        if stops.over or (stops.fired and (STOPPED or _unwinding())):
+        if stops.over or stops.ending or (stops.fired and (STOPPED or _unwinding())):
             return  # the stop that came first unwinds the command, or a server ended on it
         stops.fired.append(signum)
         raise Terminated(signum)
@@ -259,7 +287,7 @@ def _termination_unwinds() -> Iterator[_Stops]:
     finally:
         stops.over = True
         for sig, handler in previous.items():
-            signal.signal(sig, signal.SIG_IGN if stops.fired else handler)
+            signal.signal(sig, signal.SIG_IGN if stops.fired or (stops.ending and stops.process) else handler)
         sys.unraisablehook = previous_hook
 
 
