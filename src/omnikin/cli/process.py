@@ -208,9 +208,9 @@ class _Stops:
         """The command was stopped and the process is ending (:meth:`end_quietly`)."""
 
     def end_quietly(self) -> None:
-        """The command was stopped (Ctrl-C, a termination signal) and its process is ending: from
-        now on a further stop only cut that short (Python killed itself by SIGINT on a second
-        Ctrl-C while it exited, after 'omnikin: interrupted' was printed: status -2, not 130), so
+        """The command was stopped (Ctrl-C, a termination signal) and its process is ending: a
+        further stop would only cut that short (a second Ctrl-C while Python exits would kill it
+        by SIGINT after 'omnikin: interrupted' was printed: status -2 to its parent, not 130), so
         Ctrl-C and the termination signals are ignored to the end of the process. Only for the
         process's own command line (:attr:`process`) and in the main thread: a program calling
         :func:`omnikin.cli.main.main` with arguments keeps its handlers."""
@@ -247,8 +247,8 @@ def _termination_unwinds() -> Iterator[_Stops]:
     as "Exception ignored in ..." with a traceback and goes on. Such a stop, a Ctrl-C too, is
     reported quietly and sent again from outside the finaliser (:func:`_send_again`); a
     library that swallows every exception (``except BaseException: pass``) loses the first
-    stop, and the next one stops the command. Before, the first Terminated was remembered for
-    good: once lost, every later SIGTERM was ignored and the command ran on to its end."""
+    stop, and the next one stops the command (a first stop remembered for good would leave the
+    command running to its end, deaf to every later SIGTERM)."""
     stops = _Stops()
     if threading.current_thread() is not threading.main_thread():
         yield stops
@@ -308,10 +308,10 @@ def _unwinding() -> bool:
 def _send_again(signum: int, stops: _Stops) -> None:
     """Send signal ``signum`` to this process again in a moment, from another thread (its handler
     then runs in the main thread wherever that is, outside the finaliser or report it was lost
-    in), unless the command has ended by then."""
+    in), unless the command has ended or is ending on another stop by then."""
 
     def send() -> None:
-        if not stops.over:
+        if not (stops.over or stops.ending):
             os.kill(os.getpid(), signum)
 
     timer = threading.Timer(0.01, send)
