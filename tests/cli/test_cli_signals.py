@@ -212,3 +212,130 @@ def test_stopping_the_window_writes_its_report_and_is_a_normal_end(tmp_path):
             status, _, err = servers.stop(proc, signal.SIGINT)
     servers.stopped_normally("sim", status, err, signal.SIGINT)
     assert json.loads((tmp_path / "run.json").read_text())["end"] == "stopped"
+
+
+# --- a stop that something swallows ----------------------------------------------------------------------
+# Python runs a signal's handler wherever the main thread is, a finaliser (__del__, a weakref
+# callback, a generator the garbage collector closes) included, and the exception it raises
+# cannot leave a finaliser; a library may also swallow every exception. The command must still
+# stop: with the stop it lost sent again, or at the latest with the next one.
+SWALLOWED = """
+import os, signal, sys, time
+
+import omnikin.cli.main as cli
+import omnikin.cli.presets as presets
+
+
+class Finaliser:
+    def __del__(self):
+        os.kill(os.getpid(), signal.{sig})  # the stop lands while a finaliser runs
+
+
+def swallowing_library():
+    try:
+        os.kill(os.getpid(), signal.{sig})
+    except BaseException:
+        pass
+
+
+def work(args):
+    {where}
+    {again}
+    for _ in range(400):  # 20 s of work, far longer than a stop takes to act
+        time.sleep(0.05)
+    print("finished", file=sys.stderr)
+    return 0
+
+
+presets.run = work
+sys.exit(cli.main(["presets"]))
+"""
+
+
+def run_swallowed(tmp_path, sig: str, where: str, again: str = "") -> subprocess.CompletedProcess:
+    (tmp_path / "swallowed_runner.py").write_text(SWALLOWED.format(sig=sig, where=where, again=again), encoding="utf-8")
+    return subprocess.run(
+        [sys.executable, "-m", "swallowed_runner"],
+        cwd=tmp_path,
+        env=omnikin_env(),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+@pytest.mark.parametrize(
+    ("sig", "status", "line"),
+    [("SIGTERM", 143, "omnikin: terminated (SIGTERM)"), ("SIGINT", 130, "omnikin: interrupted")],
+)
+def test_a_stop_that_lands_in_a_finaliser_still_stops_the_command_quietly(tmp_path, sig, status, line):
+    proc = run_swallowed(tmp_path, sig, "Finaliser()")
+    assert proc.returncode == status, proc.stderr
+    assert proc.stderr == line + "\n"  # no 'Exception ignored in ...' traceback, no 'finished'
+
+
+def test_a_sigterm_after_one_a_library_swallowed_stops_the_command(tmp_path):
+    """The first SIGTERM is lost inside a library; the one sent after it is not ignored."""
+    proc = run_swallowed(tmp_path, "SIGTERM", "swallowing_library()", "os.kill(os.getpid(), signal.SIGTERM)")
+    assert proc.returncode == 143, proc.stderr
+    assert proc.stderr == "omnikin: terminated (SIGTERM)\n"
+
+
+# --- stopped twice ------------------------------------------------------------------------------------
+# The second Ctrl-C of an impatient user comes while the first one's command ends: while omnikin
+# says so, or while Python exits (which takes a moment with NumPy and the API loaded). It must not
+# turn 'omnikin: interrupted' (130) into a traceback or a death by SIGINT.
+TWICE = """
+import atexit, os, signal, sys
+
+import omnikin.cli.main as cli
+import omnikin.cli.presets as presets
+from omnikin.cli import process
+
+
+def stopped(args):
+    os.kill(os.getpid(), signal.{sig})
+    return 0
+
+
+def again():
+    os.kill(os.getpid(), signal.{again})
+
+
+if "{when}" == "saying":
+    said = process._ended
+
+    def saying(message, status):
+        again()
+        return said(message, status)
+
+    process._ended = saying
+else:
+    atexit.register(again)
+presets.run = stopped
+sys.argv = ["omnikin", "presets"]
+sys.exit(cli.main())
+"""
+
+
+@pytest.mark.parametrize("when", ["saying", "exiting"])
+@pytest.mark.parametrize(
+    ("sig", "again", "status", "line"),
+    [
+        ("SIGINT", "SIGINT", 130, "omnikin: interrupted"),
+        ("SIGTERM", "SIGINT", 143, "omnikin: terminated (SIGTERM)"),
+        ("SIGINT", "SIGTERM", 130, "omnikin: interrupted"),
+    ],
+)
+def test_a_second_stop_while_the_command_ends_changes_nothing(tmp_path, sig, again, status, line, when):
+    (tmp_path / "twice_runner.py").write_text(TWICE.format(sig=sig, again=again, when=when), encoding="utf-8")
+    proc = subprocess.run(
+        [sys.executable, "-m", "twice_runner"],
+        cwd=tmp_path,
+        env=omnikin_env(),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == status, proc.stderr
+    assert proc.stderr == line + "\n"

@@ -98,14 +98,16 @@ def run_sweep(
     StudyFileError
         A study file that cannot be read or breaks its schema.
     InputError
-        A bad ``workers`` or ``task_trials``; Dask or pyarrow missing (the message names the
-        ``sweep`` extra).
+        An argument of the wrong kind (a ``spec`` that is neither a path nor a study, a
+        ``progress`` without ``start`` and ``advance``, ...), a bad ``workers`` or
+        ``task_trials``; Dask or pyarrow missing (the message names the ``sweep`` extra).
     OutputExistsError
         A folder omnikin did not write, or (without ``force``) one that holds another study.
     """
     from ..sweep.execution import execute_study
     from ..sweep.study import Study
 
+    _check_sweep_arguments(spec, out, scheduler, progress, tls, Study)
     if not isinstance(spec, Study):
         from ..sweep.spec import load_study
 
@@ -120,6 +122,33 @@ def run_sweep(
         progress=progress,
         tls=tls,
     )
+
+
+def _check_sweep_arguments(spec, out, scheduler, progress, tls, study_class) -> None:
+    """Refuse an argument of :func:`run_sweep` of the wrong kind in one
+    :class:`~omnikin.errors.InputError` naming it, before anything starts (else a TypeError or
+    AttributeError from deep inside the sweep)."""
+    import os
+
+    from ..common.messages import shorten
+    from ..errors import InputError
+
+    def refuse(name: str, value, wanted: str):
+        raise InputError(f"{name} must be {wanted}, got {shorten(value)}")
+
+    if not isinstance(spec, (str, os.PathLike, study_class)):
+        refuse("spec", spec, "a study file (str or os.PathLike) or a Study")
+    if not isinstance(out, (str, os.PathLike)):
+        refuse("out", out, "a folder (str or os.PathLike)")
+    if scheduler is not None and not isinstance(scheduler, str):
+        refuse("scheduler", scheduler, "an address such as 'tls://HOST:8786' (str) or None")
+    if progress is not None and not all(callable(getattr(progress, m, None)) for m in ("start", "advance")):
+        refuse("progress", progress, "None or an object with start() and advance() (omnikin.sweep.run.Progress)")
+    if tls is not None:
+        from ..sweep.cluster import TLSFiles
+
+        if not isinstance(tls, TLSFiles):
+            refuse("tls", tls, "None or a TLSFiles (omnikin.sweep.cluster.TLSFiles)")
 
 
 __all__ = [

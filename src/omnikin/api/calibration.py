@@ -7,6 +7,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from ..errors import InputError
 from ..evaluation.calibration import CalibrationResult, predicted_end, recommended_runs
 from ..motion.plans import UMBMARK_SIDE
 from .common import require_viz, robot_of
@@ -125,7 +126,8 @@ def calibrate(robot, runs) -> Calibration:
     Raises
     ------
     InputError
-        No run with a measured end pose.
+        No run with a measured end pose, or ``runs`` neither a runs file nor a sequence of
+        :class:`~omnikin.motion.plans.CalibrationRun`.
     RunsFileError
         A runs file that cannot be read (the message names the line and column).
     InfeasibleRunError
@@ -140,9 +142,25 @@ def calibrate(robot, runs) -> Calibration:
         from ..io.runs import read_calibration_runs
 
         runs = read_calibration_runs(runs)
-    runs = tuple(runs)
+    runs = _calibration_runs(runs)
     res = fit(nominal, runs)
     return Calibration(**{f.name: getattr(res, f.name) for f in fields(res)}, runs=runs)
+
+
+def _calibration_runs(runs) -> tuple:
+    """``runs`` as a tuple of :class:`~omnikin.motion.plans.CalibrationRun`, else an
+    :class:`~omnikin.errors.InputError` naming what was given instead."""
+    from ..common.messages import shorten
+    from ..motion.plans import CalibrationRun
+
+    given = f"an array of shape {runs.shape}" if isinstance(runs, np.ndarray) else shorten(runs)
+    if isinstance(runs, (bytes, np.ndarray)) or not hasattr(runs, "__iter__"):
+        raise InputError(f"runs must be a runs file or a sequence of CalibrationRun, got {given}")
+    runs = tuple(runs)
+    for k, run in enumerate(runs):
+        if not isinstance(run, CalibrationRun):
+            raise InputError(f"runs[{k}] must be a CalibrationRun, got {shorten(run)} (runs: {given})")
+    return runs
 
 
 def calibration_plan(robot, side: float = UMBMARK_SIDE) -> list[str]:

@@ -66,6 +66,17 @@ def as_built(robot: Robot, true_robot, errors, seed_sequence):
     return draw_as_built(robot, errors_of(errors), seed_sequence)
 
 
+def require_callable(**callbacks) -> None:
+    """Refuse, in one :class:`~omnikin.errors.InputError` naming the argument, a callback given
+    as something that cannot be called (``progress=5``); None passes."""
+    from ..common.messages import shorten
+    from ..errors import InputError
+
+    for name, function in callbacks.items():
+        if function is not None and not callable(function):
+            raise InputError(f"{name} must be a function (or None), got {shorten(function)}")
+
+
 def finite_or_none(x):
     """``x`` for JSON: non-finite numbers become None (JSON has no infinity)."""
     if isinstance(x, float) and not math.isfinite(x):

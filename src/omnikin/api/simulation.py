@@ -12,7 +12,7 @@ from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..kinematics.robot import Robot
 from ..simulation.error_models import SystematicErrors
 from ..simulation.kinematic import RunCost, SimulatedRun
-from .common import as_built, require_viz, robot_of
+from .common import as_built, require_callable, require_viz, robot_of
 
 DEFAULT_PATH = "square cw rotate 4"
 """The path of ``omnikin simulate`` without ``--path``."""
@@ -204,6 +204,7 @@ def simulate(
     from ..motion.timing import check_rate_range
     from ..physics.engines import as_engine
 
+    require_callable(progress=progress, on_cost=on_cost)
     check_rate_range(rate, "rate")
     engine = as_engine(engine, noise=noise, step=step)
     noise_model = engine.noise_model(noise)

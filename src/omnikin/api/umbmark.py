@@ -35,7 +35,7 @@ from ..odometry.batch import encoded_wheels
 from ..physics.engines import as_engine
 from ..physics.mjcf import DEFAULT_STEP
 from ..viz import DPI
-from .common import as_built, dumps, finite_or_none, require_viz, robot_of, setting_name
+from .common import as_built, dumps, finite_or_none, require_callable, require_viz, robot_of, setting_name
 
 RESULT_FORMAT = "omnikin-umbmark-result/1"
 """Name and version of the ``result.json`` document (:meth:`UMBmarkReport.as_dict`)."""
@@ -513,6 +513,7 @@ def run_umbmark(
     PhysicsError
         The physics engine failed.
     """
+    require_callable(progress=progress, on_cost=on_cost)
     engine = as_engine(engine, noise=noise, step=step)
     nominal = robot_of(robot)
     check_settings(runs=runs, trials=trials, side=side, rate=rate)

@@ -9,29 +9,12 @@ statuses, signals, standard streams) is :mod:`omnikin.cli.process`.
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 
 from .._version import __version__
 from ..presets import PRESET_NAMES
-from . import (
-    bag,
-    calibrate,
-    fk,
-    ik,
-    metrics,
-    mjcf,
-    odometry,
-    presets,
-    process,
-    ros,
-    show,
-    sim,
-    simulate,
-    sweep,
-    umbmark,
-    urdf,
-    view,
-)
+from . import process
 from .parser import CommandParser
 
 EPILOG = """examples:
@@ -76,24 +59,29 @@ stopping: view, sim and ros serve until stopped: Ctrl-C or SIGTERM ends them nor
 
 
 COMMANDS = (
-    presets,
-    show,
-    ik,
-    fk,
-    odometry,
-    umbmark,
-    calibrate,
-    bag,
-    simulate,
-    metrics,
-    ros,
-    sim,
-    view,
-    sweep,
-    mjcf,
-    urdf,
+    "presets",
+    "show",
+    "ik",
+    "fk",
+    "odometry",
+    "umbmark",
+    "calibrate",
+    "bag",
+    "simulate",
+    "metrics",
+    "ros",
+    "sim",
+    "view",
+    "sweep",
+    "mjcf",
+    "urdf",
 )
-"""The command modules, each adding its command(s) with ``add_parser(sub, robot_help)``."""
+"""The command modules of :mod:`omnikin.cli` by name, each adding its command(s) with
+``add_parser(sub, robot_help)``. They are imported by :func:`build_parser`, which
+:mod:`omnikin.cli.process` calls while it handles Ctrl-C and SIGTERM: importing them (the
+Python API behind them) is part of running a command, so a user who stops omnikin while it
+starts gets ``omnikin: interrupted`` (130) rather than a traceback, and ``import
+omnikin.cli.main`` stays as light as ``import omnikin``."""
 
 
 def build_parser() -> CommandParser:
@@ -110,8 +98,8 @@ def build_parser() -> CommandParser:
         f"preset name ({', '.join(PRESET_NAMES)}) or robot file path (YAML/JSON, schema 1); a preset "
         "name always means the preset: write ./NAME for a file of the current folder named like one"
     )
-    for command in COMMANDS:
-        command.add_parser(sub, robot_help)
+    for name in COMMANDS:
+        importlib.import_module(f"{__package__}.{name}").add_parser(sub, robot_help)
     return p
 
 

@@ -85,15 +85,20 @@ def run(argv: list[str] | None, build_parser: Callable[[], CommandParser]) -> in
     failures: a server (:data:`SERVERS`) ends with status 0 (:func:`_stopped`), any other
     command with 130 or 128 + the signal (:func:`_ended`).
     """
+    process = argv is None  # the process's own command line (the console script, python -m)
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
     STOPPED.clear()
-    with _standard_streams(), _termination_unwinds() as fired:
-        status = _main(argv, fired, build_parser)
+    with _standard_streams(), _termination_unwinds() as stops:
+        stops.process = process
+        try:
+            status = _main(argv, stops, build_parser)
+        finally:
+            stops.over = True  # the status is settled: a stop now changes nothing
     forget_handled_interrupt()  # a Ctrl-C handled above must not still end the process by SIGINT
     return status
 
 
-def _main(argv: list[str], fired: list[int], build_parser: Callable[[], CommandParser]) -> int:
+def _main(argv: list[str], stops: _Stops, build_parser: Callable[[], CommandParser]) -> int:
     # the command's name: parsed, or before that the first argument naming a server (a server
     # stopped while omnikin still starts is stopped all the same)
     command: list[str] = [argv[0]] if argv and argv[0] in SERVERS else []
@@ -104,14 +109,16 @@ def _main(argv: list[str], fired: list[int], build_parser: Callable[[], CommandP
             try:
                 status = _run(argv, command, build_parser)
             except Exception:
-                if fired:  # a library turned the termination into an error of its own (matplotlib's
-                    raise Terminated(fired[0]) from None  # C code: 'initialization failed'): it is one
+                if stops.fired:  # a library turned the termination into an error of its own (matplotlib's
+                    raise Terminated(stops.fired[0]) from None  # C code: 'initialization failed'): it is one
                 raise
             if STOPPED and command and command[0] in SERVERS:  # stopped inside until_stopped()
+                stops.end_quietly()
                 _stopped(command[0], STOPPED[0])
             sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
             return status
     except (KeyboardInterrupt, Terminated) as exc:
+        stops.end_quietly()
         if command and command[0] in SERVERS:  # the user stops a server: its normal end
             return _stopped(command[0], stop_name(exc))
         if isinstance(exc, Terminated):
@@ -209,24 +216,87 @@ TERMINATION_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHU
 systemd, a closed terminal."""
 
 
+class _Stops:
+    """The stops a running command received (:func:`_termination_unwinds`)."""
+
+    def __init__(self) -> None:
+        self.fired: list[int] = []
+        """The termination signals that raised :class:`Terminated`, in order."""
+        self.over = False
+        """The command's status is settled (set by :func:`run`): a stop now changes nothing."""
+        self.reporting = False
+        """A stop lost in a finaliser is being reported (:func:`_termination_unwinds`)."""
+        self.process = False
+        """The command line is the process's own (:func:`run` without ``argv``)."""
+        self.ending = False
+        """The command was stopped and the process is ending (:meth:`end_quietly`)."""
+
+    def end_quietly(self) -> None:
+        """The command was stopped (Ctrl-C, a termination signal) and its process is ending: a
+        further stop would only cut that short (a second Ctrl-C while Python exits would kill it
+        by SIGINT after 'omnikin: interrupted' was printed: status -2 to its parent, not 130), so
+        Ctrl-C and the termination signals are ignored to the end of the process. Only for the
+        process's own command line (:attr:`process`) and in the main thread: a program calling
+        :func:`omnikin.cli.main.main` with arguments keeps its handlers."""
+        self.ending = True
+        if not self.process or threading.current_thread() is not threading.main_thread():
+            return
+        for sig in (signal.SIGINT, *TERMINATION_SIGNALS):
+            if signal.getsignal(sig) is None:  # set outside Python: left alone
+                continue
+            while True:
+                try:
+                    signal.signal(sig, signal.SIG_IGN)
+                    break
+                except (KeyboardInterrupt, Terminated):  # one pending meanwhile: ending all the same
+                    continue
+
+
 @contextlib.contextmanager
-def _termination_unwinds() -> Iterator[list[int]]:
-    """Turn the first termination signal into :class:`Terminated` while a command runs; later
-    ones are ignored, to the end of the process (the cleanup the first one started must finish,
-    and the process is ending). Without a signal the previous handlers come back after. A
-    signal the caller ignores (``nohup``) stays ignored, and a handler not set from Python
-    (:func:`signal.getsignal` gives None) is left alone. Only in the main thread. Yields the
-    list of signals received, so that an error a library raised in place of the termination
-    (it arrived inside its C code) is still reported as the termination."""
-    fired: list[int] = []
+def _termination_unwinds() -> Iterator[_Stops]:
+    """Turn a termination signal into :class:`Terminated` while a command runs. Once one unwinds
+    the command, later ones are ignored to the end of the process (the cleanup it started must
+    finish, and the process is ending); one that comes while none is unwinding raises again.
+    Without a signal the previous handlers come back after. A signal the caller ignores
+    (``nohup``) stays ignored, and a handler not set from Python (:func:`signal.getsignal` gives
+    None) is left alone. Only in the main thread. Yields the :class:`_Stops` received, so that
+    an error a library raised in place of the termination (it arrived inside its C code) is
+    still reported as the termination.
+
+    A stop is *unwinding* while a :class:`Terminated` is being handled (an ``except``,
+    ``finally`` or ``__exit__`` on its way up, or code they call: :func:`_unwinding`); a server
+    that ended on one (:data:`~omnikin.cli.common.STOPPED`) writes its report on. A stop
+    that lands in a finaliser (``__del__``, a weakref callback, a generator closed by the
+    garbage collector: Python runs signal handlers there too) cannot leave it: Python reports it
+    as "Exception ignored in ..." with a traceback and goes on. Such a stop, a Ctrl-C too, is
+    reported quietly and sent again from outside the finaliser (:func:`_send_again`); a
+    library that swallows every exception (``except BaseException: pass``) loses the first
+    stop, and the next one stops the command (a first stop remembered for good would leave the
+    command running to its end, deaf to every later SIGTERM)."""
+    stops = _Stops()
     if threading.current_thread() is not threading.main_thread():
-        yield fired
+        yield stops
         return
 
     def unwind(signum, frame):
-        if not fired:
-            fired.append(signum)
-            raise Terminated(signum)
+        if stops.reporting:  # inside the report of a lost stop: it acts once that is over
+            _send_again(signum, stops)
+            return
+        if stops.over or stops.ending or (stops.fired and (STOPPED or _unwinding())):
+            return  # the stop that came first unwinds the command, or a server ended on it
+        stops.fired.append(signum)
+        raise Terminated(signum)
+
+    def lost(unraisable) -> None:  # sys.unraisablehook while the command runs
+        exc = unraisable.exc_value
+        if not isinstance(exc, (KeyboardInterrupt, Terminated)):
+            previous_hook(unraisable)
+            return
+        stops.reporting = True
+        try:
+            _send_again(exc.signum if isinstance(exc, Terminated) else signal.SIGINT, stops)
+        finally:
+            stops.reporting = False
 
     previous = {}
     for sig in TERMINATION_SIGNALS:
@@ -234,11 +304,43 @@ def _termination_unwinds() -> Iterator[list[int]]:
         if handler is not signal.SIG_IGN and handler is not None:  # None: set outside Python, left alone
             previous[sig] = handler
             signal.signal(sig, unwind)
+    previous_hook = sys.unraisablehook
+    sys.unraisablehook = lost
     try:
-        yield fired
+        yield stops
     finally:
+        stops.over = True
         for sig, handler in previous.items():
-            signal.signal(sig, signal.SIG_IGN if fired else handler)
+            signal.signal(sig, signal.SIG_IGN if stops.fired or (stops.ending and stops.process) else handler)
+        sys.unraisablehook = previous_hook
+
+
+def _unwinding() -> bool:
+    """Whether a :class:`Terminated` is being handled where the signal's handler runs: the
+    exception handled (:func:`sys.exc_info`, which sees the ``except``, ``finally`` and
+    ``__exit__`` blocks of every caller) or one it was raised while handling."""
+    exc = sys.exc_info()[1]
+    for _ in range(1000):  # a cycle of contexts cannot hold the handler
+        if exc is None:
+            return False
+        if isinstance(exc, Terminated):
+            return True
+        exc = exc.__context__
+    return False
+
+
+def _send_again(signum: int, stops: _Stops) -> None:
+    """Send signal ``signum`` to this process again in a moment, from another thread (its handler
+    then runs in the main thread wherever that is, outside the finaliser or report it was lost
+    in), unless the command has ended or is ending on another stop by then."""
+
+    def send() -> None:
+        if not (stops.over or stops.ending):
+            os.kill(os.getpid(), signum)
+
+    timer = threading.Timer(0.01, send)
+    timer.daemon = True
+    timer.start()
 
 
 class _ClosedStream(io.TextIOBase):

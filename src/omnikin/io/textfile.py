@@ -63,6 +63,10 @@ def _wait_for_writer(fd: int, source: str, error: type[Exception]) -> None:
 
 def _open_fd(path, error: type[Exception], what: str, *, allow_pipe: bool) -> tuple[int, os.stat_result]:
     """A file descriptor of ``path`` opened for reading, after checking what kind of file it is."""
+    if not isinstance(path, (str, bytes, os.PathLike)):  # else os.open's TypeError
+        from ..common.messages import shorten
+
+        raise error(f"{shorten(path)}: not a path to {what} (give a str or os.PathLike)")
     source = str(path)
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
     try:

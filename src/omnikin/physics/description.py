@@ -43,7 +43,6 @@ from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from ..errors import InputError
 from ..kinematics.physical import PhysicalWheel
@@ -485,6 +484,8 @@ def polytope_max(rows: np.ndarray, costs: np.ndarray) -> np.ndarray:
     values = costs @ basis  # (k, rank)
     if rank == 1:  # a segment: |y| <= 1 / max |g_i|
         return np.abs(values[:, 0]) / float(np.abs(g).max())
+    from scipy.spatial import ConvexHull, QhullError  # on use: importing omnikin stays light
+
     points = np.vstack([g, -g])
     try:
         hull = ConvexHull(points)

@@ -364,11 +364,13 @@ def as_engine(engine, *, noise=None, step: float | None = None) -> Engine:
     Raises
     ------
     InputError
-        In one line: neither a name nor an engine, an unknown name or an option it refuses, a
-        ``step`` beside an engine object.
+        In one line: neither a name nor an engine (an engine class included), an unknown name
+        or an option it refuses, a ``step`` beside an engine object.
     """
     if isinstance(engine, str):
         return engine_named(engine, noise=noise, step=step)
+    if isinstance(engine, type):  # an engine class passes the protocol's check of its methods
+        raise InputError(f"engine: give an engine object, e.g. {engine.__name__}(), not the class {engine.__name__}")
     if not isinstance(engine, Engine):
         raise InputError(f"engine must be one of {', '.join(ENGINE_NAMES)} or an Engine object, got {shorten(engine)}")
     if step is not None:
