@@ -265,7 +265,7 @@ def _termination_unwinds() -> Iterator[_Stops]:
 
     A stop is *unwinding* while a :class:`Terminated` is being handled (an ``except``,
     ``finally`` or ``__exit__`` on its way up, or code they call: :func:`_unwinding`); a server
-    that ended on one (:data:`~omnikin.cli.common.STOPPED`) writes its report on. A stop
+    that ended on one (:data:`STOPPED`) writes its report on. A stop
     that lands in a finaliser (``__del__``, a weakref callback, a generator closed by the
     garbage collector: Python runs signal handlers there too) cannot leave it: Python reports it
     as "Exception ignored in ..." with a traceback and goes on. Such a stop, a Ctrl-C too, is
