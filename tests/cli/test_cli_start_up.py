@@ -14,7 +14,7 @@ import sys
 
 import pytest
 
-from conftest import omnikin_env
+from support.paths import omnikin_env
 
 HEAVY = ("scipy", "matplotlib", "mujoco", "rosbags", "dask", "viser", "rclpy", "omnikin.api", "omnikin.evaluation")
 
