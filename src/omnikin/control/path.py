@@ -139,9 +139,7 @@ def from_samples(xy, theta, *, name: str, stops=None, closed: bool = False, rho:
 def _count(length: float, name: str) -> int:
     n = int(math.ceil(length / SPACING)) + 1
     if n > MAX_SAMPLES:
-        raise InputError(
-            f"path {name!r}: {length:.6g} m is too long (at most {MAX_SAMPLES * SPACING:.6g} m of path)"
-        )
+        raise InputError(f"path {name!r}: {length:.6g} m is too long (at most {MAX_SAMPLES * SPACING:.6g} m of path)")
     return max(n, 3)
 
 

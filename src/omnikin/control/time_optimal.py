@@ -275,8 +275,6 @@ def time_optimal(robot: Robot, path: Path, limits: WheelLimits | None = None) ->
     mean = sdot[:-1] + sdot[1:]
     if np.any(mean <= 0):
         k = int(np.argmax(mean <= 0))
-        raise InputError(
-            f"path {path.name!r}: the robot cannot move at s = {path.s[k]:.6g} m within the wheel limits"
-        )
+        raise InputError(f"path {path.name!r}: the robot cannot move at s = {path.s[k]:.6g} m within the wheel limits")
     t = np.concatenate(([0.0], np.cumsum(2.0 * ds / mean)))
     return Timing(t, sdot, u, np.sqrt(xbar))
