@@ -7,8 +7,8 @@
 - :mod:`~omnikin.control.feedback`: feedforward plus feedback on the SE(2) error.
 """
 
-from .path import Path, circle, figure8, polyline, square
 from .feedback import PoseFeedback
+from .path import Path, circle, figure8, polyline, square
 from .time_optimal import Timing, WheelLimits, time_optimal
 from .trajectory import Trajectory, plan_trajectory
 

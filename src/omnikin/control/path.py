@@ -127,7 +127,7 @@ def from_samples(xy, theta, *, name: str, stops=None, closed: bool = False, rho:
     # derivatives piece by piece between stops: a corner stopped at is a kink, and differences
     # across it would be spikes; the stop itself takes the derivatives of the piece it starts
     ends = np.flatnonzero(stop)
-    for a, b in zip(ends[:-1], ends[1:]):
+    for a, b in zip(ends[:-1], ends[1:], strict=True):
         if b - a < 2:
             raise InputError(f"path {name!r}: a piece between two stops at s = {s[a]:.6g} m has no inner point")
         piece = slice(a, b + 1)
@@ -179,15 +179,19 @@ def circle(radius: float, *, heading="fixed", turns: float = 1.0) -> Path:
 
 
 def figure8(size: float, *, heading="fixed") -> Path:
-    """A figure-eight (Gerono's lemniscate) ``x = size sin(2 phi) / 2``, ``y = size sin(phi)``
-    ... scaled so that each loop is ``size`` [m] across, started at the crossing heading into the
-    upper-right loop."""
+    """A figure-eight: Gerono's lemniscate ``(u, v) = (size sin(phi), size sin(2 phi) / 2)``
+    [m] turned by -45 deg about its crossing, so that it starts at the origin along +x (where a
+    robot at rest heading 0 stands), first into the loop on the right of the start."""
     a = _radius(size, "figure-eight size")
     name = f"figure8 {size:g}"
     n = _count(4.2 * a * 1.6, name)
     phi = np.linspace(0.0, 2 * math.pi, n)
-    xy = np.column_stack((a * np.sin(phi), 0.5 * a * np.sin(2 * phi)))
-    tangent = np.column_stack((a * np.cos(phi), a * np.cos(2 * phi)))
+    # Gerono's lemniscate leaves its crossing at 45 deg: turned by -45 deg, it leaves along +x
+    c = math.sqrt(0.5)
+    u, v = a * np.sin(phi), 0.5 * a * np.sin(2 * phi)
+    du, dv = a * np.cos(phi), a * np.cos(2 * phi)
+    xy = np.column_stack((c * (u + v), c * (v - u)))
+    tangent = np.column_stack((c * (du + dv), c * (dv - du)))
     return from_samples(xy, _heading(tangent, heading, name), name=name, closed=True)
 
 

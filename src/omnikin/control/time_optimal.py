@@ -120,7 +120,7 @@ def path_rates(robot: Robot, path: Path) -> PathRates:
     dw = np.zeros_like(w)
     dsteer = np.zeros_like(steer)
     ends = np.flatnonzero(path.stops)
-    for a, b in zip(ends[:-1], ends[1:]):
+    for a, b in zip(ends[:-1], ends[1:], strict=True):
         piece = slice(a, b + 1)
         dw[piece] = np.gradient(w[piece], path.s[piece], axis=0, edge_order=2)
         if steer.shape[1]:
@@ -241,7 +241,7 @@ def time_optimal(robot: Robot, path: Path, limits: WheelLimits | None = None) ->
     nxt = 0.0
     for i in range(n - 2, -1, -1):
         best = xm[i]
-        for a_, o_ in zip(inv_l[i], off_l[i]):
+        for a_, o_ in zip(inv_l[i], off_l[i], strict=True):
             v = nxt * a_ + o_
             if v < best:
                 best = v
@@ -259,7 +259,7 @@ def time_optimal(robot: Robot, path: Path, limits: WheelLimits | None = None) ->
     for i in range(n - 1):
         two = 2.0 * ds_l[i]
         ui = (xb[i + 1] - cur) / two
-        for pp, qq in zip(up_p[i], up_q[i]):
+        for pp, qq in zip(up_p[i], up_q[i], strict=True):
             v = pp + qq * cur
             if v < ui:
                 ui = v
