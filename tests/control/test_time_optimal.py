@@ -12,6 +12,7 @@ import pytest
 from omnikin.control import WheelLimits, circle, figure8, time_optimal
 from omnikin.control.path import from_samples
 from omnikin.errors import InputError
+from support.toppra_reference import duration, toppra_sdot
 
 R_WHEEL = 0.04125  # tomasi-omni3 (Tomasi & Todt): 82.5 mm wheels, hubs 113 mm from the centre, 120 deg apart
 L_HUB = 0.113
@@ -47,41 +48,13 @@ def test_a_turn_in_place_takes_the_trapezoid_time_of_the_hub_radius(tomasi):
     assert time_optimal(tomasi, path, LIMITS).duration == pytest.approx(trapezoid_time(angle, rate, accel), rel=2e-3)
 
 
-def toppra_duration(s, w, dw, speed, accel):
-    """toppra's time-optimal duration over the grid ``s`` for wheel rows ``w`` (per unit path
-    speed) and ``dw`` (their derivative along the path), rest to rest."""
-    import toppra
-    import toppra.algorithm
-    import toppra.constraint as tc
-
-    n, m = w.shape
-
-    class WheelRows(tc.LinearConstraint):
-        def __init__(self):
-            super().__init__()
-            self.dof = 3
-            self.identical = True
-            self.discretization_type = tc.DiscretizationType.Collocation
-
-        def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
-            with np.errstate(divide="ignore"):
-                xmax = np.min((speed / np.abs(w)) ** 2, axis=1)
-            xbound = np.column_stack((np.zeros(n), xmax))
-            return w, dw, np.zeros((n, m)), np.vstack((np.eye(m), -np.eye(m))), np.full(2 * m, accel), None, xbound
-
-    unused = toppra.SplineInterpolator(np.linspace(s[0], s[-1], 5), np.zeros((5, 3)))
-    algorithm = toppra.algorithm.TOPPRA([WheelRows()], unused, gridpoints=s, solver_wrapper="seidel")
-    _, sd, _, _ = algorithm.compute_parameterization(0, 0, return_data=True)
-    return float(np.sum(2 * np.diff(s) / (sd[:-1] + sd[1:])))
-
-
 @pytest.mark.parametrize("radius", [0.3, 1.0])
 def test_a_circle_at_a_fixed_heading_is_as_fast_as_toppra_makes_it(tomasi, radius):
     path = circle(radius)  # from the origin along +x, counter-clockwise, heading 0
     phase = path.s / radius
     tangent = np.column_stack((np.cos(phase), np.sin(phase), np.zeros_like(phase)))
     bend = np.column_stack((-np.sin(phase), np.cos(phase), np.zeros_like(phase))) / radius
-    expected = toppra_duration(path.s, tangent @ W0.T, bend @ W0.T, LIMITS.speed, LIMITS.accel)
+    expected = duration(path.s, toppra_sdot(path.s, tangent @ W0.T, bend @ W0.T, LIMITS.speed, LIMITS.accel))
     assert time_optimal(tomasi, path, LIMITS).duration == pytest.approx(expected, rel=1e-3)
 
 

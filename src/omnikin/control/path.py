@@ -14,9 +14,9 @@ A :class:`Path` holds its samples ``(n, 3)`` and the first and second derivative
 the builders sample their curves finely enough (:data:`SPACING`) that the differences are
 accurate to well below a millimetre of the curve.
 
-Builders: :func:`circle`, :func:`figure8`, :func:`polyline` (corners blended by arcs, or
-stopped at), :func:`from_points` (a curve through points, with a heading per point, along the
-tangent, fixed or free).
+Builders: :func:`circle`, :func:`figure8`, :func:`square`, :func:`polyline` (corners blended
+by arcs, or stopped at), :func:`from_samples` (any curve sampled densely), and the text form
+:func:`parse_path`.
 """
 
 from __future__ import annotations
@@ -26,6 +26,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..common.messages import shorten
+from ..common.number_text import plain_number
 from ..errors import InputError
 from ..kinematics.se2 import wrap_angle
 
@@ -196,11 +198,36 @@ def figure8(size: float, *, heading="fixed") -> Path:
 
 
 def polyline(points, *, blend: float = 0.0, heading="tangent", closed: bool = False, name: str = "polyline") -> Path:
-    """Straight segments through ``points`` ``(n, 2)`` [m]; each corner either stopped at
-    (``blend`` 0: the robot comes to rest and turns there if the heading changes) or cut by a
-    circular arc tangent to both segments, of radius ``blend`` [m] or less where the segments
-    are too short for it."""
+    """Straight segments through points; each corner either stopped at (``blend`` 0: the robot
+    comes to rest and turns there if the heading changes) or cut by a circular arc tangent to
+    both segments, of radius ``blend`` or less where the segments are too short for it.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 2)
+        The corners ``(x, y)`` [m] in the world frame, in order, ``n >= 2``.
+    blend : float, default 0
+        Radius [m] of the arcs that cut the corners (0: stop at each corner).
+    heading : str or float, default "tangent"
+        :data:`HEADINGS` or a fixed angle [rad].
+    closed : bool, default False
+        Go back to the first point at the end.
+    name : str
+        What the path is called in messages.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InputError
+        Fewer than two points, two consecutive points the same, a non-finite point, a bad
+        blend or heading, or a path longer than :data:`MAX_SAMPLES` samples allow.
+    """
     pts = _checked_points(points, name, 2)[:, :2]
+    if len(pts) < 2:
+        raise InputError(f"path {name!r}: it does not go anywhere (fewer than two points)")
     if closed:
         pts = np.vstack((pts, pts[:1]))
     seg = np.diff(pts, axis=0)
@@ -291,3 +318,54 @@ def square(side: float, *, blend: float = 0.0, heading="tangent") -> Path:
 def heading_error(a, b) -> np.ndarray:
     """``wrap(a - b)`` [rad], elementwise: the signed heading difference."""
     return wrap_angle(np.asarray(a, dtype=float) - np.asarray(b, dtype=float))
+
+
+PATH_SPECS = {
+    "circle": ("RADIUS", "a circle of RADIUS [m], counter-clockwise"),
+    "figure8": ("SIZE", "a figure-eight SIZE [m] across each loop"),
+    "square": ("SIDE [BLEND]", "a square of SIDE [m], corners stopped at or blended by arcs of BLEND [m]"),
+}
+"""The built-in paths of the text form: name -> (arguments, what it is)."""
+
+SPEC_GRAMMAR = "; ".join(f"'{name} {args}'" for name, (args, _) in PATH_SPECS.items())
+"""The text form, as messages give it."""
+
+
+def parse_path(text: str, *, heading=None) -> Path:
+    """A built-in path from its text form (:data:`PATH_SPECS`), e.g. ``"figure8 1"``,
+    ``"square 2 0.3"``; every path starts at the origin along +x.
+
+    Parameters
+    ----------
+    text : str
+        The name and its numbers [m], separated by blanks.
+    heading : str or float, optional
+        :data:`HEADINGS` or a fixed angle [rad]; default ``fixed`` for the circle and the
+        figure-eight (a robot that translates keeps its heading) and ``tangent`` for the square.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InputError
+        An unknown name, a missing or extra number, a number out of range; one line with the
+        grammar.
+    """
+    if not isinstance(text, str):
+        raise InputError(f"path must be text like 'figure8 1', got {shorten(text)}")
+    words = text.split()
+    if not words or words[0].lower() not in PATH_SPECS:
+        raise InputError(f"unknown path {shorten(text)}; one of {SPEC_GRAMMAR}, or a path file (.csv, .yaml)")
+    name = words[0].lower()
+    args = PATH_SPECS[name][0].split()
+    optional = sum(a.startswith("[") for a in args)
+    if not (len(args) - optional <= len(words) - 1 <= len(args)):
+        raise InputError(f"path {shorten(text)}: expected '{name} {PATH_SPECS[name][0]}'")
+    nums = [plain_number(w, f"path {shorten(text)}: {a.strip('[]')}") for w, a in zip(words[1:], args, strict=False)]
+    if name == "circle":
+        return circle(nums[0], heading="fixed" if heading is None else heading)
+    if name == "figure8":
+        return figure8(nums[0], heading="fixed" if heading is None else heading)
+    return square(nums[0], blend=nums[1] if len(nums) > 1 else 0.0, heading="tangent" if heading is None else heading)

@@ -17,9 +17,9 @@ The fastest timing is found on the path's samples by reachability analysis (Pham
 "A New Approach to Time-Optimal Path Parameterization Based on Reachability Analysis",
 IEEE T-RO 34(3), 2018): with ``x_{i+1} = x_i + 2 (s_{i+1} - s_i) u_i`` (``sddot`` constant over
 each interval), a backward pass gives the largest ``x_i`` from which the end can still be
-reached at rest (:func:`_controllable`), and a forward pass takes the largest ``u_i`` that stays
-inside it. Both are exact for the discretised problem; the problem's variables being two, every
-step is a few closed-form line intersections (module :func:`_row_lines`), not a solver call.
+reached at rest, and a forward pass takes the largest ``u_i`` that stays inside it. Both are
+exact for the discretised problem; the problem's variables being two, every step is a few
+closed-form line intersections (:func:`_row_lines`, :func:`_static_cap`), not a solver call.
 
 Time follows from ``dt_i = 2 ds_i / (sqrt(x_i) + sqrt(x_{i+1}))`` (constant ``sddot``).
 """
@@ -151,10 +151,10 @@ def _row_lines(a: np.ndarray, b: np.ndarray, accel: float):
 
 
 def _static_cap(p: np.ndarray, q: np.ndarray, ds: np.ndarray) -> np.ndarray:
-    """Largest ``x_i`` for which some ``u`` meets every row and ``x_{i+1} >= 0``, the rows
-    being ``u in [p + q x, -p + q x]`` ``(n, m)``: every pair of a lower and an upper bound,
-    ``(q_k - q_m) x <= -p_m - p_k``, and the lower bounds against ``u <= ... `` no: against
-    ``u >= -x / (2 ds)`` (the end of the interval not below rest) with the upper ones."""
+    """Largest ``x_i`` for which some ``u`` meets every row and ``x_{i+1} >= 0``, the rows being
+    ``u in [p + q x, -p + q x]`` ``(n, m)``: every lower bound against every upper one,
+    ``(q_k - q_m) x <= -p_m - p_k``, and ``u >= -x / (2 ds)`` (the interval does not end below
+    rest) against every upper one."""
     dq = q[:, :, None] - q[:, None, :]  # lower k against upper m
     room = -p[:, None, :] - p[:, :, None]
     with np.errstate(divide="ignore", invalid="ignore"):
