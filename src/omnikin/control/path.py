@@ -37,8 +37,9 @@ HEADING_RADIUS = 0.2
 SPACING = 0.002
 """Largest distance [m of ``s``] between the samples of a built path (2 mm)."""
 
-MAX_SAMPLES = 2_000_000
-"""Most samples a path may have (a 4 km path at :data:`SPACING`): a longer one is refused."""
+MAX_SAMPLES = 500_000
+"""Most samples a path may have (a 1 km path at :data:`SPACING`): a longer one is refused, so a
+typo (``circle 1e5``) costs a line, not the machine's memory."""
 
 HEADINGS = ("tangent", "fixed", "free")
 """How a path's heading is set when the points do not give one: along the direction of travel
@@ -186,7 +187,8 @@ def figure8(size: float, *, heading="fixed") -> Path:
     robot at rest heading 0 stands), first into the loop on the right of the start."""
     a = _radius(size, "figure-eight size")
     name = f"figure8 {size:g}"
-    n = _count(4.2 * a * 1.6, name)
+    coarse = np.linspace(0.0, 2 * math.pi, 4001)
+    n = _count(float(np.sum(np.hypot(np.diff(a * np.sin(coarse)), np.diff(0.5 * a * np.sin(2 * coarse))))), name)
     phi = np.linspace(0.0, 2 * math.pi, n)
     # Gerono's lemniscate leaves its crossing at 45 deg: turned by -45 deg, it leaves along +x
     c = math.sqrt(0.5)

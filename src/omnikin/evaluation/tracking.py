@@ -164,30 +164,38 @@ error: a turn in place puts many headings at one position, and a closed path its
 end."""
 
 
-def distance_to_path(poses: np.ndarray, path: np.ndarray, chunk: int = 512) -> tuple[np.ndarray, np.ndarray]:
+def distance_to_path(poses: np.ndarray, path: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Distance [m] of each pose's position ``(n, 3)`` to the polyline through the path's samples
-    ``(m, 3)``, and its heading error [rad] against the path's heading there: the smallest
-    ``|wrap(theta - theta_path)|`` among the samples within :data:`PATH_TIE` of the nearest,
-    signed. In chunks, so memory stays about ``chunk * m`` floats."""
+    ``(m, 3)``, and its heading error [rad] against the path's heading at the foot: the smallest
+    ``|wrap(theta - theta_path)|`` among the segments within :data:`PATH_TIE` of the nearest,
+    signed.
+
+    The segments looked at are those next to the samples within ``d0 + longest segment +``
+    :data:`PATH_TIE` of the point (``d0`` its distance to the nearest sample, by a k-d tree):
+    every segment that can hold the foot, in time ``O(n log m)`` and memory ``O(n + m)``."""
+    from scipy.spatial import cKDTree
+
     xy = path[:, :2]
-    a0 = xy[:-1]
     seg = np.diff(xy, axis=0)
     length2 = np.maximum(np.einsum("ij,ij->i", seg, seg), 1e-300)
+    turn = np.diff(path[:, 2])
+    tree = cKDTree(xy)
+    d0, _ = tree.query(poses[:, :2])
+    reach = d0 + float(np.sqrt(length2.max())) + PATH_TIE
     dist = np.empty(len(poses))
     heading = np.empty(len(poses))
-    for lo in range(0, len(poses), chunk):
-        p = poses[lo : lo + chunk]
-        rel = p[:, None, :2] - a0[None, :, :]
-        f = np.clip(np.einsum("nmj,mj->nm", rel, seg) / length2, 0.0, 1.0)
-        d = np.hypot(rel[..., 0] - f * seg[:, 0], rel[..., 1] - f * seg[:, 1])
-        near = d.min(axis=1)
-        dist[lo : lo + chunk] = near
-        # the heading along each segment at the foot, then the best of the near ones
-        along = path[:-1, 2][None, :] + f * np.diff(path[:, 2])[None, :]
-        err = wrap_angle(p[:, None, 2] - along)
-        err = np.where(d <= near[:, None] + PATH_TIE, err, np.inf)
-        k = np.argmin(np.abs(err), axis=1)
-        heading[lo : lo + chunk] = err[np.arange(len(p)), k]
+    last = len(seg) - 1
+    for i, near in enumerate(tree.query_ball_point(poses[:, :2], reach)):
+        idx = np.asarray(near, dtype=int)
+        k = np.unique(np.clip(np.concatenate((idx - 1, idx)), 0, last))
+        rel = poses[i, :2] - xy[k]
+        f = np.clip(np.einsum("ij,ij->i", rel, seg[k]) / length2[k], 0.0, 1.0)
+        d = np.hypot(rel[:, 0] - f * seg[k, 0], rel[:, 1] - f * seg[k, 1])
+        best = d.min()
+        err = wrap_angle(poses[i, 2] - (path[k, 2] + f * turn[k]))
+        err = np.where(d <= best + PATH_TIE, err, np.inf)
+        dist[i] = best
+        heading[i] = err[np.argmin(np.abs(err))]
     return dist, heading
 
 
