@@ -84,7 +84,7 @@ def test_a_differential_drive_refuses_a_path_that_needs_it_to_strafe():
 
 
 @pytest.mark.parametrize("field", ["speed", "accel", "steer_rate"])
-@pytest.mark.parametrize("value", [0.0, -1.0, float("nan"), "12"])
+@pytest.mark.parametrize("value", [0.0, -1.0, float("nan"), "12", True])
 def test_limits_that_are_not_positive_numbers_are_refused(field, value):
     with pytest.raises(InputError, match=f"WheelLimits.{field} must be a number > 0"):
         WheelLimits(**{field: value})

@@ -57,7 +57,7 @@ class WheelLimits:
     def __post_init__(self):
         for name in ("speed", "accel", "steer_rate"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and v > 0 and not math.isnan(v)):
+            if isinstance(v, bool) or not (isinstance(v, (int, float)) and v > 0 and not math.isnan(v)):
                 raise InputError(f"WheelLimits.{name} must be a number > 0 (inf: no limit), got {v!r}")
             if name != "steer_rate" and math.isinf(v):
                 raise InputError(f"WheelLimits.{name} must be finite, got {v!r}")
