@@ -114,9 +114,21 @@ class BaseRuntime:
         self._steer_cmd = a.copy()
 
     def step(self, t: float) -> StepResult:
-        """Measure, update odometry, then command the wheels, at time ``t`` [s]."""
+        """Measure, update odometry, then command the wheels, at time ``t`` [s]
+        (:meth:`sense` then :meth:`act`)."""
+        return self.act(t, self.sense(t))
+
+    def sense(self, t: float) -> WheelState:
+        """Read the wheels at time ``t`` [s] and update the odometry (:attr:`pose`), without
+        commanding them: a controller that steers by the pose commands (:meth:`command`) between
+        this and :meth:`act`, so that its command acts from ``t`` on."""
         state = self.backend.read(t)
         self._measure(state)
+        return state
+
+    def act(self, t: float, state: WheelState) -> StepResult:
+        """Command the wheels at time ``t`` [s] with the filtered command, after :meth:`sense`
+        read ``state``."""
         twist = self.filter.update(t)
         if self.robot.steerable:
             res = self.robot.ik(twist, steer_hint=self._steer_cmd, on_infeasible="return")

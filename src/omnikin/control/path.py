@@ -1,0 +1,373 @@
+"""Geometric paths in the plane with a heading: :class:`Path`, sampled densely by a path length.
+
+A path is a curve ``q(s) = (x(s), y(s), theta(s))`` in the world frame (``odom``; metres and
+radians, docs/conventions.md) with no time in it: :func:`omnikin.control.time_optimal.time_optimal`
+gives it its timing. The parameter ``s`` [m] is the length of the curve in the metric
+
+    ds^2 = dx^2 + dy^2 + (rho dtheta)^2,
+
+``rho`` [m] (:data:`HEADING_RADIUS`) turning a heading change into a length, so that a turn in
+place (no travel) has a length too and every path is parametrised the same way.
+
+A :class:`Path` holds its samples ``(n, 3)`` and the first and second derivatives ``dq/ds``,
+``d^2q/ds^2`` at them, by second-order finite differences on the samples (``numpy.gradient``);
+the builders sample their curves finely enough (:data:`SPACING`) that the differences are
+accurate to well below a millimetre of the curve.
+
+Builders: :func:`circle`, :func:`figure8`, :func:`square`, :func:`polyline` (corners blended
+by arcs, or stopped at), :func:`from_samples` (any curve sampled densely), and the text form
+:func:`parse_path`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..common.messages import shorten
+from ..common.number_text import plain_number
+from ..errors import InputError
+from ..kinematics.se2 import wrap_angle
+
+HEADING_RADIUS = 0.2
+"""``rho`` [m]: the length one radian of heading counts for in the path length ``s``."""
+
+SPACING = 0.002
+"""Largest distance [m of ``s``] between the samples of a built path (2 mm)."""
+
+MAX_SAMPLES = 500_000
+"""Most samples a path may have (a 1 km path at :data:`SPACING`): a longer one is refused, so a
+typo (``circle 1e5``) costs a line, not the machine's memory."""
+
+HEADINGS = ("tangent", "fixed", "free")
+"""How a path's heading is set when the points do not give one: along the direction of travel
+(``tangent``, the only choice of a robot that cannot strafe), held at the start's (``fixed``), or
+left to the planner (``free``: held fixed, the heading costing nothing to keep)."""
+
+
+@dataclass(frozen=True, eq=False)
+class Path:
+    """A path ``q(s)`` sampled at ``s`` (module docstring).
+
+    Attributes
+    ----------
+    s : ndarray, shape (n,)
+        Path length [m] at the samples, increasing from 0.
+    pose : ndarray, shape (n, 3)
+        ``(x, y, theta)`` [m, m, rad] at the samples, world frame; ``theta`` unwrapped
+        (continuous).
+    d1, d2 : ndarray, shape (n, 3)
+        ``dq/ds`` [m/m, rad/m] and ``d^2q/ds^2`` [1/m, rad/m^2] at the samples.
+    stops : ndarray, shape (n,), bool
+        Samples where the robot must be at rest (corners stopped at, the ends).
+    name : str
+        What the path is, for messages and plots (``"circle 1"``).
+    """
+
+    s: np.ndarray
+    pose: np.ndarray
+    d1: np.ndarray
+    d2: np.ndarray
+    stops: np.ndarray
+    name: str = "path"
+    closed: bool = field(default=False)
+
+    @property
+    def length(self) -> float:
+        """Total path length [m] (``s`` at the end)."""
+        return float(self.s[-1])
+
+    @property
+    def travel(self) -> float:
+        """Distance [m] the centre travels (the ``x, y`` part of the path, heading not counted)."""
+        return float(np.sum(np.hypot(*np.diff(self.pose[:, :2], axis=0).T)))
+
+
+def _checked_points(points, name: str, width: int) -> np.ndarray:
+    try:
+        arr = np.asarray(points, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name}: not numbers ({exc})") from None
+    if arr.ndim != 2 or arr.shape[1] not in (2, width):
+        raise InputError(f"{name}: expected rows of x, y (or x, y, theta), got shape {arr.shape}")
+    bad = np.argwhere(~np.isfinite(arr))
+    if bad.size:
+        raise InputError(f"{name}: point {int(bad[0][0])} is not finite")
+    return arr
+
+
+def from_samples(xy, theta, *, name: str, stops=None, closed: bool = False, rho: float = HEADING_RADIUS) -> Path:
+    """A :class:`Path` from dense samples of a curve: positions ``(n, 2)`` [m] and headings
+    ``(n,)`` [rad], in order along the path.
+
+    Samples that repeat the one before (no travel, no turn) are dropped. The derivatives are
+    second-order finite differences in ``s`` (module docstring).
+
+    Raises
+    ------
+    InputError
+        Fewer than two distinct samples, or non-finite values.
+    """
+    xy = np.asarray(xy, dtype=float)
+    th = np.unwrap(np.asarray(theta, dtype=float))
+    stop = np.zeros(len(th), dtype=bool) if stops is None else np.asarray(stops, dtype=bool).copy()
+    step = np.hypot(np.hypot(*np.diff(xy, axis=0).T), rho * np.diff(th))
+    keep = np.concatenate(([True], step > 1e-12))
+    # a dropped repeat keeps its stop on the sample it repeats
+    idx = np.cumsum(keep) - 1
+    merged = np.zeros(int(keep.sum()), dtype=bool)
+    np.logical_or.at(merged, idx, stop)
+    xy, th, stop = xy[keep], th[keep], merged
+    if len(th) < 2:
+        raise InputError(f"path {name!r}: it does not go anywhere (fewer than two distinct points)")
+    s = np.concatenate(([0.0], np.cumsum(step[keep[1:]])))
+    pose = np.column_stack((xy, th))
+    stop[0] = stop[-1] = True
+    d1 = np.zeros_like(pose)
+    d2 = np.zeros_like(pose)
+    # derivatives piece by piece between stops: a corner stopped at is a kink, and differences
+    # across it would be spikes; the stop itself takes the derivatives of the piece it starts
+    ends = np.flatnonzero(stop)
+    for a, b in zip(ends[:-1], ends[1:], strict=True):
+        if b - a < 2:
+            raise InputError(f"path {name!r}: a piece between two stops at s = {s[a]:.6g} m has no inner point")
+        piece = slice(a, b + 1)
+        d1[piece] = np.gradient(pose[piece], s[piece], axis=0, edge_order=2)
+        d2[piece] = np.gradient(d1[piece], s[piece], axis=0, edge_order=2)
+    return Path(s, pose, d1, d2, stop, name, closed)
+
+
+def _count(length: float, name: str) -> int:
+    n = int(math.ceil(length / SPACING)) + 1
+    if n > MAX_SAMPLES:
+        raise InputError(f"path {name!r}: {length:.6g} m is too long (at most {MAX_SAMPLES * SPACING:.6g} m of path)")
+    return max(n, 3)
+
+
+def _heading(xy_d: np.ndarray, heading, name: str, start: float = 0.0) -> np.ndarray:
+    """Headings ``(n,)`` for the tangent ``xy_d`` ``(n, 2)`` by ``heading`` (:data:`HEADINGS` or a
+    number [rad], fixed)."""
+    n = len(xy_d)
+    if isinstance(heading, str):
+        if heading == "tangent":
+            return np.unwrap(np.arctan2(xy_d[:, 1], xy_d[:, 0]))
+        if heading in ("fixed", "free"):
+            return np.full(n, start)
+        raise InputError(f"path {name!r}: unknown heading {heading!r}; one of {list(HEADINGS)} or an angle [rad]")
+    value = float(heading)
+    if not math.isfinite(value):
+        raise InputError(f"path {name!r}: heading must be finite, got {heading!r}")
+    return np.full(n, value)
+
+
+def _radius(value, what: str) -> float:
+    r = float(value)
+    if not (math.isfinite(r) and 0.0 < r <= 1e3):
+        raise InputError(f"{what} must be in (0, 1000] m, got {value!r}")
+    return r
+
+
+def circle(radius: float, *, heading="fixed", turns: float = 1.0) -> Path:
+    """A circle of ``radius`` [m] started at the origin heading along +x, counter-clockwise
+    (centre ``(0, radius)``), ``turns`` times round."""
+    r = _radius(radius, "circle radius")
+    name = f"circle {radius:g}"
+    n = _count(2 * math.pi * r * turns, name)
+    phi = np.linspace(0.0, 2 * math.pi * turns, n)
+    xy = np.column_stack((r * np.sin(phi), r * (1 - np.cos(phi))))
+    tangent = np.column_stack((np.cos(phi), np.sin(phi)))
+    return from_samples(xy, _heading(tangent, heading, name), name=name, closed=True)
+
+
+def figure8(size: float, *, heading="fixed") -> Path:
+    """A figure-eight: Gerono's lemniscate ``(u, v) = (size sin(phi), size sin(2 phi) / 2)``
+    [m] turned by -45 deg about its crossing, so that it starts at the origin along +x (where a
+    robot at rest heading 0 stands), first into the loop on the right of the start."""
+    a = _radius(size, "figure-eight size")
+    name = f"figure8 {size:g}"
+    coarse = np.linspace(0.0, 2 * math.pi, 4001)
+    n = _count(float(np.sum(np.hypot(np.diff(a * np.sin(coarse)), np.diff(0.5 * a * np.sin(2 * coarse))))), name)
+    phi = np.linspace(0.0, 2 * math.pi, n)
+    # Gerono's lemniscate leaves its crossing at 45 deg: turned by -45 deg, it leaves along +x
+    c = math.sqrt(0.5)
+    u, v = a * np.sin(phi), 0.5 * a * np.sin(2 * phi)
+    du, dv = a * np.cos(phi), a * np.cos(2 * phi)
+    xy = np.column_stack((c * (u + v), c * (v - u)))
+    tangent = np.column_stack((c * (du + dv), c * (dv - du)))
+    return from_samples(xy, _heading(tangent, heading, name), name=name, closed=True)
+
+
+def polyline(points, *, blend: float = 0.0, heading="tangent", closed: bool = False, name: str = "polyline") -> Path:
+    """Straight segments through points; each corner either stopped at (``blend`` 0: the robot
+    comes to rest and turns there if the heading changes) or cut by a circular arc tangent to
+    both segments, of radius ``blend`` or less where the segments are too short for it.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 2)
+        The corners ``(x, y)`` [m] in the world frame, in order, ``n >= 2``.
+    blend : float, default 0
+        Radius [m] of the arcs that cut the corners (0: stop at each corner).
+    heading : str or float, default "tangent"
+        :data:`HEADINGS` or a fixed angle [rad].
+    closed : bool, default False
+        Go back to the first point at the end.
+    name : str
+        What the path is called in messages.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InputError
+        Fewer than two points, two consecutive points the same, a non-finite point, a bad
+        blend or heading, or a path longer than :data:`MAX_SAMPLES` samples allow.
+    """
+    pts = _checked_points(points, name, 2)[:, :2]
+    if len(pts) < 2:
+        raise InputError(f"path {name!r}: it does not go anywhere (fewer than two points)")
+    if closed:
+        pts = np.vstack((pts, pts[:1]))
+    seg = np.diff(pts, axis=0)
+    lens = np.hypot(seg[:, 0], seg[:, 1])
+    if np.any(lens <= 1e-9):
+        k = int(np.argmax(lens <= 1e-9))
+        raise InputError(f"path {name!r}: points {k} and {k + 1} are the same")
+    dirs = seg / lens[:, None]
+    _count(float(lens.sum()), name)
+    blend = float(blend)
+    if not (math.isfinite(blend) and blend >= 0):
+        raise InputError(f"path {name!r}: blend must be a radius >= 0 [m], got {blend!r}")
+    pieces: list[np.ndarray] = []
+    headings: list[np.ndarray] = []
+    stops: list[np.ndarray] = []
+    start = float(np.arctan2(dirs[0, 1], dirs[0, 0])) if heading == "tangent" else 0.0
+    cut_in = np.zeros(len(seg))  # length cut at each segment's start and end by the blends
+    cut_out = np.zeros(len(seg))
+    arcs = {}
+    for k in range(1, len(seg)):
+        turn = math.atan2(dirs[k - 1, 0] * dirs[k, 1] - dirs[k - 1, 1] * dirs[k, 0], float(dirs[k - 1] @ dirs[k]))
+        if blend == 0 or abs(turn) < 1e-9 or abs(abs(turn) - math.pi) < 1e-9:
+            continue
+        r = blend
+        cut = r * math.tan(abs(turn) / 2)
+        room = min(lens[k - 1] / 2, lens[k] / 2)
+        if cut > room:
+            cut, r = room, room / math.tan(abs(turn) / 2)
+        cut_out[k - 1], cut_in[k] = cut, cut
+        arcs[k] = (r, turn)
+    theta = start
+    for k in range(len(seg)):
+        a = pts[k] + dirs[k] * cut_in[k]
+        b = pts[k + 1] - dirs[k] * cut_out[k]
+        m = _count(float(np.hypot(*(b - a))), name)
+        t = np.linspace(0.0, 1.0, m)[:, None]
+        line = a + (b - a) * t
+        tang = np.repeat(dirs[k][None], m, axis=0)
+        hd = _heading(tang, heading, name, start)
+        if heading == "tangent":
+            hd = hd + (theta - hd[0])  # continuous with what came before
+        pieces.append(line)
+        headings.append(hd)
+        st = np.zeros(m, dtype=bool)
+        if k + 1 < len(seg) and k + 1 not in arcs:
+            st[-1] = True
+        stops.append(st)
+        theta = float(hd[-1])
+        if k + 1 in arcs:
+            r, turn = arcs[k + 1]
+            normal = np.array([-dirs[k, 1], dirs[k, 0]]) * math.copysign(1.0, turn)
+            centre = b + normal * r
+            m = _count(r * abs(turn), name)
+            ang = np.linspace(0.0, turn, m)
+            rel = b - centre
+            c, s = np.cos(ang), np.sin(ang)
+            arc = centre + np.column_stack((c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]))
+            if heading == "tangent":
+                hd = theta + ang
+            else:
+                hd = np.full(m, theta)
+            pieces.append(arc)
+            headings.append(hd)
+            stops.append(np.zeros(m, dtype=bool))
+            theta = float(hd[-1])
+        elif k + 1 < len(seg) and heading == "tangent":
+            # stopped at a corner: turn in place to the next segment's direction
+            turn = math.atan2(dirs[k, 0] * dirs[k + 1, 1] - dirs[k, 1] * dirs[k + 1, 0], float(dirs[k] @ dirs[k + 1]))
+            m = _count(HEADING_RADIUS * abs(turn), name)
+            pieces.append(np.repeat(pts[k + 1][None], m, axis=0))
+            headings.append(theta + np.linspace(0.0, turn, m))
+            st = np.zeros(m, dtype=bool)
+            st[-1] = True
+            stops.append(st)
+            theta += turn
+    xy = np.concatenate(pieces)
+    th = np.concatenate(headings)
+    return from_samples(xy, th, name=name, stops=np.concatenate(stops), closed=closed)
+
+
+def square(side: float, *, blend: float = 0.0, heading="tangent") -> Path:
+    """The square of ``side`` [m], first leg along +x, counter-clockwise, closed."""
+    a = _radius(side, "square side")
+    pts = [(0.0, 0.0), (a, 0.0), (a, a), (0.0, a)]
+    return polyline(pts, blend=blend, heading=heading, closed=True, name=f"square {side:g}")
+
+
+def heading_error(a, b) -> np.ndarray:
+    """``wrap(a - b)`` [rad], elementwise: the signed heading difference."""
+    return wrap_angle(np.asarray(a, dtype=float) - np.asarray(b, dtype=float))
+
+
+PATH_SPECS = {
+    "circle": ("RADIUS", "a circle of RADIUS [m], counter-clockwise"),
+    "figure8": ("SIZE", "a figure-eight SIZE [m] across each loop"),
+    "square": ("SIDE [BLEND]", "a square of SIDE [m], corners stopped at or blended by arcs of BLEND [m]"),
+}
+"""The built-in paths of the text form: name -> (arguments, what it is)."""
+
+SPEC_GRAMMAR = "; ".join(f"'{name} {args}'" for name, (args, _) in PATH_SPECS.items())
+"""The text form, as messages give it."""
+
+
+def parse_path(text: str, *, heading=None) -> Path:
+    """A built-in path from its text form (:data:`PATH_SPECS`), e.g. ``"figure8 1"``,
+    ``"square 2 0.3"``; every path starts at the origin along +x.
+
+    Parameters
+    ----------
+    text : str
+        The name and its numbers [m], separated by blanks.
+    heading : str or float, optional
+        :data:`HEADINGS` or a fixed angle [rad]; default ``fixed`` for the circle and the
+        figure-eight (a robot that translates keeps its heading) and ``tangent`` for the square.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InputError
+        An unknown name, a missing or extra number, a number out of range; one line with the
+        grammar.
+    """
+    if not isinstance(text, str):
+        raise InputError(f"path must be text like 'figure8 1', got {shorten(text)}")
+    words = text.split()
+    if not words or words[0].lower() not in PATH_SPECS:
+        raise InputError(f"unknown path {shorten(text)}; one of {SPEC_GRAMMAR}, or a path file (.csv, .yaml)")
+    name = words[0].lower()
+    args = PATH_SPECS[name][0].split()
+    optional = sum(a.startswith("[") for a in args)
+    if not (len(args) - optional <= len(words) - 1 <= len(args)):
+        raise InputError(f"path {shorten(text)}: expected '{name} {PATH_SPECS[name][0]}'")
+    nums = [plain_number(w, f"path {shorten(text)}: {a.strip('[]')}") for w, a in zip(words[1:], args, strict=False)]
+    if name == "circle":
+        return circle(nums[0], heading="fixed" if heading is None else heading)
+    if name == "figure8":
+        return figure8(nums[0], heading="fixed" if heading is None else heading)
+    return square(nums[0], blend=nums[1] if len(nums) > 1 else 0.0, heading="tangent" if heading is None else heading)

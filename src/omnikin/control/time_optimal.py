@@ -1,0 +1,280 @@
+"""The fastest timing of a path under every wheel's speed and acceleration limit.
+
+Along a path ``q(s)`` (:class:`~omnikin.control.path.Path`) driven at path speed ``sdot`` and
+acceleration ``sddot``, the wheels turn at
+
+    omega(s) = w(s) sdot,                     w = J(beta(s)) R(theta)^T q'(s)  (rad per m of s)
+    omegadot = w(s) sddot + w'(s) sdot^2,
+
+``J`` the robot's wheel Jacobian at the steering ``beta(s)`` the path needs (the steering of a
+steered wheel depends only on the direction of the body's motion, not on its speed), ``R`` the
+rotation by the heading. A speed limit ``|omega_j| <= W_j`` and an acceleration limit
+``|omegadot_j| <= A_j`` per wheel, and a steering-rate limit ``|beta_k'(s) sdot| <= B_k``, are
+linear in ``(u, x) = (sddot, sdot^2)``: the limits of the wheel space (a polytope of twists for
+each heading), not boxes per axis of the body.
+
+The fastest timing is found on the path's samples by reachability analysis (Pham & Pham,
+"A New Approach to Time-Optimal Path Parameterization Based on Reachability Analysis",
+IEEE T-RO 34(3), 2018): with ``x_{i+1} = x_i + 2 (s_{i+1} - s_i) u_i`` (``sddot`` constant over
+each interval), a backward pass gives the largest ``x_i`` from which the end can still be
+reached at rest, and a forward pass takes the largest ``u_i`` that stays inside it. Both are
+exact for the discretised problem; the problem's variables being two, every step is a few
+closed-form line intersections (:func:`_row_lines`, :func:`_static_cap`), not a solver call.
+
+Time follows from ``dt_i = 2 ds_i / (sqrt(x_i) + sqrt(x_{i+1}))`` (constant ``sddot``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..kinematics.robot import Robot
+from .path import Path
+
+
+@dataclass(frozen=True)
+class WheelLimits:
+    """Limits of every rolling wheel and steering joint (``inf``: none).
+
+    Attributes
+    ----------
+    speed : float
+        Largest wheel speed ``|omega|`` [rad/s] (a wheel's own ``max_speed`` applies too).
+    accel : float
+        Largest wheel acceleration ``|omegadot|`` [rad/s^2].
+    steer_rate : float
+        Largest steering rate [rad/s] of a steerable wheel.
+    """
+
+    speed: float = 12.0
+    accel: float = 40.0
+    steer_rate: float = math.inf
+
+    def __post_init__(self):
+        for name in ("speed", "accel", "steer_rate"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not (isinstance(v, (int, float)) and v > 0 and not math.isnan(v)):
+                raise InputError(f"WheelLimits.{name} must be a number > 0 (inf: no limit), got {v!r}")
+            if name != "steer_rate" and math.isinf(v):
+                raise InputError(f"WheelLimits.{name} must be finite, got {v!r}")
+
+
+@dataclass(frozen=True)
+class PathRates:
+    """What the limits see along a path: the wheel speeds per unit path speed and their
+    derivative, at every sample.
+
+    Attributes
+    ----------
+    w : ndarray, shape (n, n_wheels)
+        ``omega / sdot`` [rad/m].
+    dw : ndarray, shape (n, n_wheels)
+        ``d w / ds`` [rad/m^2].
+    steer : ndarray, shape (n, n_steer)
+        Steering angles [rad] the path needs.
+    dsteer : ndarray, shape (n, n_steer)
+        ``d beta / ds`` [rad/m].
+    """
+
+    w: np.ndarray
+    dw: np.ndarray
+    steer: np.ndarray
+    dsteer: np.ndarray
+
+
+def path_rates(robot: Robot, path: Path) -> PathRates:
+    """:class:`PathRates` of ``robot`` along ``path`` (module docstring).
+
+    Raises
+    ------
+    InputError
+        The robot cannot drive the path: a fixed wheel would slide (a layout that cannot strafe
+        on a path that needs it) or a steering leaves its limits, named with the path length
+        ``s`` [m] where it first happens.
+    """
+    th = path.pose[:, 2]
+    c, sn = np.cos(th), np.sin(th)
+    d = path.d1
+    body = np.column_stack((c * d[:, 0] + sn * d[:, 1], -sn * d[:, 0] + c * d[:, 1], d[:, 2]))
+    res = robot.ik(body, on_infeasible="return")
+    scale = max(1e-6, 1e-6 * float(np.max(np.abs(body[:, :2]), initial=0.0)))
+    slide = np.abs(res.violation) > scale if res.violation.size else np.zeros((len(th), 0), dtype=bool)
+    bad = np.flatnonzero(np.any(slide, axis=1) | np.any(res.steer_limited, axis=1))
+    if bad.size:
+        k = int(bad[0])
+        why = (
+            "it cannot move sideways there (a fixed wheel would slide)"
+            if np.any(slide[k])
+            else "a steered wheel would leave its steering limits"
+        )
+        raise InputError(
+            f"robot {robot.name!r} cannot drive path {path.name!r}: at s = {path.s[k]:.6g} m "
+            f"(x {path.pose[k, 0]:.6g} m, y {path.pose[k, 1]:.6g} m) {why}"
+        )
+    w = res.wheel_speeds
+    steer = res.steer_angles
+    dw = np.zeros_like(w)
+    dsteer = np.zeros_like(steer)
+    ends = np.flatnonzero(path.stops)
+    for a, b in zip(ends[:-1], ends[1:], strict=True):
+        piece = slice(a, b + 1)
+        dw[piece] = np.gradient(w[piece], path.s[piece], axis=0, edge_order=2)
+        if steer.shape[1]:
+            dsteer[piece] = np.gradient(np.unwrap(steer[piece], axis=0), path.s[piece], axis=0, edge_order=2)
+    return PathRates(w, dw, steer, dsteer)
+
+
+def speed_ceiling(rates: PathRates, speed: np.ndarray, steer_rate: float) -> np.ndarray:
+    """Largest ``x = sdot^2`` [m^2/s^2] at each sample from the speed limits ``(n_wheels,)``
+    [rad/s] and the steering rate [rad/s] alone (the maximum velocity curve)."""
+    with np.errstate(divide="ignore"):
+        x = np.min((speed / np.abs(rates.w)) ** 2, axis=1, initial=np.inf)
+        if rates.dsteer.shape[1] and math.isfinite(steer_rate):
+            x = np.minimum(x, np.min((steer_rate / np.abs(rates.dsteer)) ** 2, axis=1))
+    return x
+
+
+def _row_lines(a: np.ndarray, b: np.ndarray, accel: float):
+    """The acceleration rows ``|a u + b x| <= accel`` as bounds on ``u`` linear in ``x``:
+    ``u >= p + q x`` and ``u <= -p + q x`` with ``p = -accel/|a|``, ``q = -b/a`` (rows with
+    ``a = 0`` bound ``x`` alone: returned as ``xcap``)."""
+    zero = np.abs(a) < 1e-12
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p = np.where(zero, -np.inf, -accel / np.abs(a))
+        q = np.where(zero, 0.0, -b / a)
+        xcap = np.where(zero & (np.abs(b) > 0), accel / np.abs(b), np.inf)
+    return p, q, np.min(xcap, axis=1, initial=np.inf)
+
+
+def _static_cap(p: np.ndarray, q: np.ndarray, ds: np.ndarray) -> np.ndarray:
+    """Largest ``x_i`` for which some ``u`` meets every row and ``x_{i+1} >= 0``, the rows being
+    ``u in [p + q x, -p + q x]`` ``(n, m)``: every lower bound against every upper one,
+    ``(q_k - q_m) x <= -p_m - p_k``, and ``u >= -x / (2 ds)`` (the interval does not end below
+    rest) against every upper one."""
+    dq = q[:, :, None] - q[:, None, :]  # lower k against upper m
+    room = -p[:, None, :] - p[:, :, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cap = np.where(dq > 0, room / dq, np.inf)
+        # u >= -x/(2 ds) against u <= -p_m + q_m x:  (-1/(2ds) - q_m) x <= -p_m
+        c2 = -1.0 / (2 * ds)[:, None] - q
+        cap2 = np.where(c2 > 0, -p / c2, np.inf)
+    return np.minimum(np.min(cap.reshape(len(p), -1), axis=1, initial=np.inf), np.min(cap2, axis=1, initial=np.inf))
+
+
+@dataclass(frozen=True)
+class Timing:
+    """The fastest timing of a path (:func:`time_optimal`).
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Time [s] at the path's samples, from 0.
+    sdot : ndarray, shape (n,)
+        Path speed [m/s] at the samples.
+    sddot : ndarray, shape (n,)
+        Path acceleration [m/s^2] over the interval after each sample (0 at the last).
+    ceiling : ndarray, shape (n,)
+        Largest path speed [m/s] from which the end is still reached at rest.
+    """
+
+    t: np.ndarray
+    sdot: np.ndarray
+    sddot: np.ndarray
+    ceiling: np.ndarray
+
+    @property
+    def duration(self) -> float:
+        """Time [s] from start to end."""
+        return float(self.t[-1])
+
+
+def time_optimal(robot: Robot, path: Path, limits: WheelLimits | None = None) -> Timing:
+    """The fastest timing of ``path`` by ``robot`` from rest to rest, every wheel within
+    ``limits`` (module docstring), stopping where the path says (``path.stops``).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot whose wheels turn (its Jacobian; a wheel's own ``max_speed`` applies).
+    path : Path
+        The path, with its samples and derivatives.
+    limits : WheelLimits, optional
+        Default :class:`WheelLimits` ().
+
+    Returns
+    -------
+    Timing
+        Time, path speed and acceleration at the samples.
+
+    Raises
+    ------
+    InputError
+        A path the robot cannot drive (:func:`path_rates`).
+    """
+    limits = WheelLimits() if limits is None else limits
+    rates = path_rates(robot, path)
+    speed = np.array([min(limits.speed, w.max_speed or math.inf) for w in robot.rolling])
+    ds = np.diff(path.s)
+    n = len(path.s)
+    xmax = speed_ceiling(rates, speed, limits.steer_rate)
+    p, q, xcap = _row_lines(rates.w, rates.dw, limits.accel)
+    xmax = np.minimum(xmax, xcap)
+    xmax[:-1] = np.minimum(xmax[:-1], _static_cap(p[:-1], q[:-1], ds))
+    xmax[path.stops] = 0.0
+    # backward pass: the controllable sets [0, xbar_i]
+    # u <= (xbar_{i+1} - x) / (2 ds) against each lower bound u >= p_k + q_k x:
+    #   (1 + 2 ds q_k) x <= xbar_{i+1} - 2 ds p_k
+    coef = 1.0 + 2.0 * ds[:, None] * q[:-1]
+    off = -2.0 * ds[:, None] * p[:-1]
+    valid = coef > 0
+    inv = np.where(valid, 1.0 / np.where(valid, coef, 1.0), 0.0)
+    off_over = np.where(valid, off * inv, np.inf)
+    xbar = np.empty(n)
+    xbar[-1] = 0.0
+    xm = xmax.tolist()
+    inv_l = inv.tolist()
+    off_l = off_over.tolist()
+    nxt = 0.0
+    for i in range(n - 2, -1, -1):
+        best = xm[i]
+        for a_, o_ in zip(inv_l[i], off_l[i], strict=True):
+            v = nxt * a_ + o_
+            if v < best:
+                best = v
+        nxt = best if best > 0.0 else 0.0
+        xbar[i] = nxt
+    # forward pass: the largest acceleration that stays controllable
+    x = np.empty(n)
+    u = np.zeros(n)
+    x[0] = 0.0
+    up_p = (-p[:-1]).tolist()
+    up_q = q[:-1].tolist()
+    xb = xbar.tolist()
+    ds_l = ds.tolist()
+    cur = 0.0
+    for i in range(n - 1):
+        two = 2.0 * ds_l[i]
+        ui = (xb[i + 1] - cur) / two
+        for pp, qq in zip(up_p[i], up_q[i], strict=True):
+            v = pp + qq * cur
+            if v < ui:
+                ui = v
+        new = cur + two * ui
+        if new < 0.0:
+            new = 0.0
+        elif new > xb[i + 1]:
+            new = xb[i + 1]
+        u[i] = (new - cur) / two
+        cur = new
+        x[i + 1] = cur
+    sdot = np.sqrt(x)
+    mean = sdot[:-1] + sdot[1:]
+    if np.any(mean <= 0):
+        k = int(np.argmax(mean <= 0))
+        raise InputError(f"path {path.name!r}: the robot cannot move at s = {path.s[k]:.6g} m within the wheel limits")
+    t = np.concatenate(([0.0], np.cumsum(2.0 * ds / mean)))
+    return Timing(t, sdot, u, np.sqrt(xbar))
