@@ -34,6 +34,15 @@ def start(tmp_path, *argv):
     )
 
 
+def run_module(folder, name: str, source: str) -> subprocess.CompletedProcess:
+    """``source`` written to ``folder/name.py`` and run as ``python -m name`` there (the way
+    CPython's unhandled-interrupt handling applies), its output captured."""
+    (folder / f"{name}.py").write_text(source, encoding="utf-8")
+    return subprocess.run(
+        [sys.executable, "-m", name], cwd=folder, env=omnikin_env(), capture_output=True, text=True, timeout=300
+    )
+
+
 def terminate_while_writing(proc, folder, prefix: str, timeout: float = 300.0) -> None:
     """Send SIGTERM as soon as an entry of ``folder`` starting with ``prefix`` (a temporary file
     or a staging folder) appears; fail if the command ends first."""
@@ -157,15 +166,7 @@ def test_ctrl_c_inside_code_run_from_a_string_still_exits_130(tmp_path):
     printed 'omnikin: interrupted' (``simulate --bag`` interrupted while rosbags compiled its
     serializers: status -2 about once in six runs on a busy machine). The run here is the real
     ``main`` under ``python -m`` with a real SIGINT raised inside such code."""
-    (tmp_path / "interrupted_runner.py").write_text(RUNNER, encoding="utf-8")
-    proc = subprocess.run(
-        [sys.executable, "-m", "interrupted_runner"],
-        cwd=tmp_path,
-        env=omnikin_env(),
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    proc = run_module(tmp_path, "interrupted_runner", RUNNER)
     assert proc.returncode == 130, proc.stderr
     assert proc.stderr == "omnikin: interrupted\n"
 
@@ -253,15 +254,7 @@ sys.exit(cli.main(["presets"]))
 
 
 def run_swallowed(tmp_path, sig: str, where: str, again: str = "") -> subprocess.CompletedProcess:
-    (tmp_path / "swallowed_runner.py").write_text(SWALLOWED.format(sig=sig, where=where, again=again), encoding="utf-8")
-    return subprocess.run(
-        [sys.executable, "-m", "swallowed_runner"],
-        cwd=tmp_path,
-        env=omnikin_env(),
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    return run_module(tmp_path, "swallowed_runner", SWALLOWED.format(sig=sig, where=where, again=again))
 
 
 @pytest.mark.parametrize(
@@ -328,14 +321,6 @@ sys.exit(cli.main())
     ],
 )
 def test_a_second_stop_while_the_command_ends_changes_nothing(tmp_path, sig, again, status, line, when):
-    (tmp_path / "twice_runner.py").write_text(TWICE.format(sig=sig, again=again, when=when), encoding="utf-8")
-    proc = subprocess.run(
-        [sys.executable, "-m", "twice_runner"],
-        cwd=tmp_path,
-        env=omnikin_env(),
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    proc = run_module(tmp_path, "twice_runner", TWICE.format(sig=sig, again=again, when=when))
     assert proc.returncode == status, proc.stderr
     assert proc.stderr == line + "\n"
