@@ -185,9 +185,11 @@ def hold_key(page: Page, key: str, seconds: float, repeat_every: float | None = 
     ``seconds`` [s], then release it. Playwright does not auto-repeat: without ``repeat_every``
     the page sees one keydown and one keyup; with it [s], a keydown with ``repeat`` true follows
     every ``repeat_every`` as a real keyboard's auto-repeat does. Exact durations are on the page's
-    clock (the events' time stamps), not this function's."""
-    start = time.monotonic()
+    clock (the events' time stamps), not this function's: the hold is timed from the moment the
+    browser has taken the keydown (Playwright returns once it has), so however late a loaded
+    machine delivers that first event, the page sees the key down for at least ``seconds``."""
     page.keyboard.down(key)
+    start = time.monotonic()
     if repeat_every is not None:
         for k in range(1, int(seconds / repeat_every) + 1):  # on a fixed schedule: no drift
             if k * repeat_every >= seconds:

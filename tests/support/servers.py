@@ -79,10 +79,28 @@ def virtual_display() -> Iterator[str]:
         with os.fdopen(read) as f:
             number = f.readline().strip()
         assert number.isdigit(), "Xvfb did not report its display"
-        yield f":{number}"
+        name = f":{number}"
+        _wait_for_connections(name, xvfb)
+        yield name
     finally:
         xvfb.terminate()
         xvfb.wait(30)
+
+
+def _wait_for_connections(display: str, xvfb: subprocess.Popen) -> None:
+    """Wait until ``display`` takes a client (a screen grab over its socket): a loaded machine can
+    leave a window's first connection refused between Xvfb naming its display and serving it."""
+    from PIL import ImageGrab
+
+    deadline = time.monotonic() + UP_TIMEOUT
+    while True:
+        try:
+            ImageGrab.grab(xdisplay=display)
+            return
+        except OSError as error:
+            if xvfb.poll() is not None or time.monotonic() > deadline:
+                raise AssertionError(f"Xvfb display {display} takes no client: {error}") from None
+            time.sleep(0.1)
 
 
 DISPLAY_MISSING = next(

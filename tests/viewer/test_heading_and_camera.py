@@ -263,6 +263,63 @@ def test_the_live_page_frames_the_robot_and_shows_its_heading_in_every_camera(pa
     assert page_log.external == [] and page_log.page_errors == []
 
 
+def top_aim(camera, view_size: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where the top camera looks from and at, for the robot at the origin: straight down from
+    the height ``S / (2 tan(fov / 2))`` that frames ``S = view_size`` metres (a millimetre per
+    thousand of it south, so the view's up is +y)."""
+    height = view_size / (2 * math.tan(camera.fov / 2))
+    return np.array([0.0, -1e-3 * height, height]), np.zeros(3)
+
+
+def turn_the_page_camera(page) -> None:
+    """A drag up the middle of the page's scene with the left button: viser's orbit, which tips a
+    camera looking down towards the horizon."""
+    size = page.viewport_size
+    x, y = 0.4 * size["width"], 0.5 * size["height"]
+    page.mouse.move(x, y)
+    page.mouse.down()
+    for k in range(1, 21):
+        page.mouse.move(x, y - 10 * k)
+    page.mouse.up()
+
+
+@pytest.mark.parametrize("settle", [120.0, 0.0])
+def test_a_page_whose_camera_leaves_a_preset_just_placed_is_put_back_only_while_it_settles(
+    page, page_log, live, monkeypatch, settle
+):
+    # A page's camera report can cross the preset's messages on the wire; the camera control puts
+    # a page that reports another camera back, for a settling time after the preset (and only
+    # then: afterwards the mouse is the user's). A drag stands in for the crossing report.
+    from omnikin.viewer import panel
+
+    monkeypatch.setattr(panel, "CAMERA_SETTLE", settle)
+    page.goto(live.url)
+    wait_for_viser(page, timeout=30)
+    wait_for_colour(page, TRUTH_COLOUR, timeout=60)
+    (client,) = live.server.get_clients().values()
+    position, look_at = top_aim(client.camera, live.camera.view_size.value)
+
+    def looks_top() -> bool:
+        return bool(
+            np.allclose(client.camera.position, position, atol=1e-4)
+            and np.allclose(client.camera.look_at, look_at, atol=1e-4)
+        )
+
+    page.get_by_role("button", name="top", exact=True).click()
+    wait_until(looks_top, "page reporting the top camera")
+    reported: list[np.ndarray] = []
+    client.camera.on_update(lambda camera: reported.append(np.array(camera.position)))
+    turn_the_page_camera(page)
+    wait_until(lambda: any(np.linalg.norm(p - position) > 0.01 for p in reported), "report of the turned camera")
+    if settle > 0:
+        wait_until(looks_top, "page put back on the top camera")
+    else:
+        page.wait_for_timeout(1000)  # a page put back would have reported it by now
+        assert not looks_top()
+        assert np.linalg.norm(reported[-1] - position) > 0.01
+    assert page_log.external == [] and page_log.page_errors == []
+
+
 def test_a_run_without_ground_truth_says_so_instead_of_showing_zeros():
     from omnikin.viewer.panel import readout_html
     from omnikin.viewer.replay import TrackReplay

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import html
 import math
+import time
 from collections import deque
 from collections.abc import Callable
 
@@ -41,6 +42,9 @@ CAMERAS = ("top", "follow", "free")
 VIEW_SIZE = 8.0
 """Default size of the view of the top and follow cameras, in robot extents."""
 FOLLOW_ELEVATION = math.radians(30.0)
+CAMERA_SETTLE = 5.0
+"""Time [s] after a preset places the cameras during which a page that reports a camera other
+than the one it was given is given it again (:meth:`CameraControl.follow`)."""
 PLOT_COLOURS = ("#d62728", "#1f77b4", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf")
 
 KEY_HELP = """**Keys** (click the scene first): **W/S** forward/back, **A/D** left/right,
@@ -200,6 +204,9 @@ class CameraControl:
         self.extent = extent
         self.fit = fit
         self._placed: tuple | None = None  # what a following camera was last placed for
+        # per page: the position and look-at it was given, and when [time.time(), viser's clock]
+        self._aims: dict[int, tuple[np.ndarray, np.ndarray, float]] = {}
+        self._aimed = 0.0  # when the cameras were last placed [time.monotonic()]
         gui = server.gui
         with gui.add_folder("Camera"):
             self.buttons = gui.add_button_group("preset", CAMERAS + (("run",) if fit is not None else ()))
@@ -229,13 +236,21 @@ class CameraControl:
         self._placed = None
         if self.pose is not None:
             self._place(self.pose)
+            self._placed = self._placement(self.pose)
+
+    def _placement(self, pose: tuple[float, float, float]) -> tuple:
+        """What a following camera's placement depends on (it is sent again only when this
+        changes: a camera message redraws every page)."""
+        return (pose, float(self.view_size.value), tuple(self.server.get_clients()))
 
     def follow(self, pose: tuple[float, float, float]) -> None:
-        """The robot is at ``pose``: a following camera moves with it."""
+        """The robot is at ``pose``: a following camera moves with it; a page whose camera
+        is not where it was put is given it again (:meth:`_settle`)."""
         self.pose = pose
+        self._settle()
         if self.camera in ("follow", "top"):
-            placed = (pose, float(self.view_size.value), tuple(self.server.get_clients()))
-            if placed != self._placed:  # (a camera message redraws every page: only when it moves)
+            placed = self._placement(pose)
+            if placed != self._placed:
                 self._place(pose)
                 self._placed = placed
 
@@ -253,21 +268,61 @@ class CameraControl:
             x0, y0, x1, y1 = self.fit()  # the box of the runs, a robot's reach round it
             x, y = (x0 + x1) / 2, (y0 + y1) / 2
             size = 1.1 * max(x1 - x0, y1 - y0) + 2 * self.extent
-        for client in self.server.get_clients().values():
+        for client_id, client in self.server.get_clients().items():
             camera = client.camera
             if self.camera in ("top", "run"):
                 # looking down from a height that frames `size` metres; a hair south of the
                 # robot so that the view's up is +y (straight down has no up)
                 height = size / (2 * math.tan(camera.fov / 2))
-                camera.position = (x, y - 1e-3 * height, height)
+                position = (x, y - 1e-3 * height, height)
             else:
                 back = size / 2
-                camera.position = (
+                position = (
                     x - back * math.cos(FOLLOW_ELEVATION) * math.cos(theta),
                     y - back * math.cos(FOLLOW_ELEVATION) * math.sin(theta),
                     back * math.sin(FOLLOW_ELEVATION),
                 )
-            camera.look_at = (x, y, 0.0)
+            self._aim(client_id, camera, np.array(position), np.array((x, y, 0.0)))
+        self._aimed = time.monotonic()
+
+    def _aim(self, client_id: int, camera: viser.CameraHandle, position: np.ndarray, look_at: np.ndarray) -> None:
+        before = camera.update_timestamp
+        camera.position = position  # (viser moves the look-at point with it: set it after)
+        camera.look_at = look_at
+        previous = self._aims.get(client_id)
+        if (
+            camera.update_timestamp == before  # nothing sent: viser believed the page looked there
+            and previous is not None
+            and np.array_equal(previous[0], position)
+            and np.array_equal(previous[1], look_at)
+        ):
+            return  # the same aim as before: reports since that one still count
+        self._aims[client_id] = (position, look_at, time.time())
+
+    def _settle(self) -> None:
+        """For :data:`CAMERA_SETTLE` s after :meth:`_place`, a page that reports (after it was
+        aimed) a camera other than its aim is aimed again. viser sends a camera's position or
+        look-at only when it differs from what the page last reported, so a report that crosses
+        the placement on the wire (the page telling where it looked before) makes the server
+        believe the page already looks where it was told, and skip telling it: the page would
+        keep a view between the old and the new one."""
+        if not self._aims or time.monotonic() - self._aimed > CAMERA_SETTLE:
+            return
+        clients = self.server.get_clients()
+        for client_id, (position, look_at, sent) in list(self._aims.items()):
+            client = clients.get(client_id)
+            if client is None:
+                del self._aims[client_id]
+                continue
+            camera = client.camera
+            if camera.update_timestamp <= sent:
+                continue  # nothing reported since it was aimed
+            tolerance = 1e-6 * float(np.linalg.norm(position - look_at))
+            if (
+                np.linalg.norm(np.asarray(camera.position) - position) > tolerance
+                or np.linalg.norm(np.asarray(camera.look_at) - look_at) > tolerance
+            ):  # (a report that matches may be followed by one of the look-at still on its way)
+                self._aim(client_id, camera, position, look_at)
 
 
 class Readouts:
