@@ -15,6 +15,7 @@ The tree (checked by ``tests/core/test_error_tree.py``; a class's first base is 
         │   ├── RunsFileError: a measurement file cannot be read
         │   ├── RunPosesFileError: a run-poses file cannot be read
         │   ├── TrajectoryFileError: a trajectory file cannot be read or written
+        │   ├── PathFileError: a path file cannot be read
         │   ├── BagError: a ROS 2 bag cannot be read or written as asked
         │   ├── ReplayError: something to replay in the viewer cannot be
         │   ├── ProtocolError: a wheel-link protocol description or frame is bad
@@ -109,6 +110,11 @@ class RunPosesFileError(InputError):
 class TrajectoryFileError(InputError):
     """A trajectory file (``t, x, y, theta`` in s, m, rad) that cannot be read or written:
     raised by :mod:`omnikin.io.trajectories`; the message names the file (and the line)."""
+
+
+class PathFileError(InputError):
+    """A path file (waypoints ``x, y[, theta]`` in m and rad, CSV or YAML) that cannot be read:
+    raised by :mod:`omnikin.io.path_file`; the message names the file and the line or waypoint."""
 
 
 class BagError(InputError):

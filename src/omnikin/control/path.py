@@ -15,8 +15,9 @@ the builders sample their curves finely enough (:data:`SPACING`) that the differ
 accurate to well below a millimetre of the curve.
 
 Builders: :func:`circle`, :func:`figure8`, :func:`square`, :func:`polyline` (corners blended
-by arcs, or stopped at), :func:`from_samples` (any curve sampled densely), and the text form
-:func:`parse_path`.
+by arcs, or stopped at), :func:`spline` (a smooth curve through points), :func:`from_samples`
+(any curve sampled densely), and the text form :func:`parse_path`. Headings are set by a mode
+(:data:`HEADINGS`) or given per point (:func:`given_headings`).
 """
 
 from __future__ import annotations
@@ -40,6 +41,9 @@ SPACING = 0.002
 MAX_SAMPLES = 500_000
 """Most samples a path may have (a 1 km path at :data:`SPACING`): a longer one is refused, so a
 typo (``circle 1e5``) costs a line, not the machine's memory."""
+
+MAX_COORDINATE = 1e7
+"""Largest ``|x|`` or ``|y|`` [m] of a point (map coordinates such as UTM stay below it)."""
 
 HEADINGS = ("tangent", "fixed", "free")
 """How a path's heading is set when the points do not give one: along the direction of travel
@@ -95,6 +99,9 @@ def _checked_points(points, name: str, width: int) -> np.ndarray:
     bad = np.argwhere(~np.isfinite(arr))
     if bad.size:
         raise InputError(f"{name}: point {int(bad[0][0])} is not finite")
+    far = np.argwhere(np.abs(arr[:, :2]) > MAX_COORDINATE)
+    if far.size:
+        raise InputError(f"{name}: point {int(far[0][0])} is more than {MAX_COORDINATE:g} m from the origin")
     return arr
 
 
@@ -111,6 +118,8 @@ def from_samples(xy, theta, *, name: str, stops=None, closed: bool = False, rho:
         Fewer than two distinct samples, or non-finite values.
     """
     xy = np.asarray(xy, dtype=float)
+    if len(xy) > MAX_SAMPLES:
+        raise InputError(f"path {name!r}: {len(xy)} samples is too many (at most {MAX_SAMPLES})")
     th = np.unwrap(np.asarray(theta, dtype=float))
     stop = np.zeros(len(th), dtype=bool) if stops is None else np.asarray(stops, dtype=bool).copy()
     step = np.hypot(np.hypot(*np.diff(xy, axis=0).T), rho * np.diff(th))
@@ -140,6 +149,8 @@ def from_samples(xy, theta, *, name: str, stops=None, closed: bool = False, rho:
 
 
 def _count(length: float, name: str) -> int:
+    if not length <= MAX_SAMPLES * SPACING:  # (NaN and inf too)
+        raise InputError(f"path {name!r}: {length:.6g} m is too long (at most {MAX_SAMPLES * SPACING:.6g} m of path)")
     n = int(math.ceil(length / SPACING)) + 1
     if n > MAX_SAMPLES:
         raise InputError(f"path {name!r}: {length:.6g} m is too long (at most {MAX_SAMPLES * SPACING:.6g} m of path)")
@@ -199,7 +210,15 @@ def figure8(size: float, *, heading="fixed") -> Path:
     return from_samples(xy, _heading(tangent, heading, name), name=name, closed=True)
 
 
-def polyline(points, *, blend: float = 0.0, heading="tangent", closed: bool = False, name: str = "polyline") -> Path:
+def polyline(
+    points,
+    *,
+    blend: float = 0.0,
+    heading="tangent",
+    closed: bool = False,
+    name: str = "polyline",
+    theta=None,
+) -> Path:
     """Straight segments through points; each corner either stopped at (``blend`` 0: the robot
     comes to rest and turns there if the heading changes) or cut by a circular arc tangent to
     both segments, of radius ``blend`` or less where the segments are too short for it.
@@ -211,11 +230,16 @@ def polyline(points, *, blend: float = 0.0, heading="tangent", closed: bool = Fa
     blend : float, default 0
         Radius [m] of the arcs that cut the corners (0: stop at each corner).
     heading : str or float, default "tangent"
-        :data:`HEADINGS` or a fixed angle [rad].
+        :data:`HEADINGS` or a fixed angle [rad]; not with ``theta``.
     closed : bool, default False
         Go back to the first point at the end.
     name : str
         What the path is called in messages.
+    theta : array_like, shape (n,), optional
+        A heading [rad] per point, world frame: the heading turns evenly along each segment
+        from one point's to the next's, the shorter way round (:func:`given_headings`); on a
+        blending arc it turns evenly from where the arc leaves one segment to where it joins
+        the next.
 
     Returns
     -------
@@ -230,13 +254,18 @@ def polyline(points, *, blend: float = 0.0, heading="tangent", closed: bool = Fa
     pts = _checked_points(points, name, 2)[:, :2]
     if len(pts) < 2:
         raise InputError(f"path {name!r}: it does not go anywhere (fewer than two points)")
+    given = None if theta is None else given_headings(theta, len(pts), name, closed)
+    if given is not None:
+        if heading != "tangent" and heading is not None:
+            raise InputError(f"path {name!r}: headings are given per point; a heading mode ({heading!r}) cannot be too")
+        heading = "fixed"
     if closed:
         pts = np.vstack((pts, pts[:1]))
     seg = np.diff(pts, axis=0)
     lens = np.hypot(seg[:, 0], seg[:, 1])
     if np.any(lens <= 1e-9):
         k = int(np.argmax(lens <= 1e-9))
-        raise InputError(f"path {name!r}: points {k} and {k + 1} are the same")
+        raise InputError(f"path {name!r}: points {k} and {(k + 1) % (len(pts) - closed)} are the same")
     dirs = seg / lens[:, None]
     _count(float(lens.sum()), name)
     blend = float(blend)
@@ -245,6 +274,7 @@ def polyline(points, *, blend: float = 0.0, heading="tangent", closed: bool = Fa
     pieces: list[np.ndarray] = []
     headings: list[np.ndarray] = []
     stops: list[np.ndarray] = []
+    progress: list[np.ndarray] = []  # where each sample is, in points: k + the fraction of segment k
     start = float(np.arctan2(dirs[0, 1], dirs[0, 0])) if heading == "tangent" else 0.0
     cut_in = np.zeros(len(seg))  # length cut at each segment's start and end by the blends
     cut_out = np.zeros(len(seg))
@@ -273,6 +303,7 @@ def polyline(points, *, blend: float = 0.0, heading="tangent", closed: bool = Fa
             hd = hd + (theta - hd[0])  # continuous with what came before
         pieces.append(line)
         headings.append(hd)
+        progress.append(k + (cut_in[k] + t[:, 0] * (lens[k] - cut_in[k] - cut_out[k])) / lens[k])
         st = np.zeros(m, dtype=bool)
         if k + 1 < len(seg) and k + 1 not in arcs:
             st[-1] = True
@@ -293,6 +324,8 @@ def polyline(points, *, blend: float = 0.0, heading="tangent", closed: bool = Fa
                 hd = np.full(m, theta)
             pieces.append(arc)
             headings.append(hd)
+            u0, u1 = k + 1 - cut_out[k] / lens[k], k + 1 + cut_in[k + 1] / lens[k + 1]
+            progress.append(np.linspace(u0, u1, m))
             stops.append(np.zeros(m, dtype=bool))
             theta = float(hd[-1])
         elif k + 1 < len(seg) and heading == "tangent":
@@ -301,13 +334,95 @@ def polyline(points, *, blend: float = 0.0, heading="tangent", closed: bool = Fa
             m = _count(HEADING_RADIUS * abs(turn), name)
             pieces.append(np.repeat(pts[k + 1][None], m, axis=0))
             headings.append(theta + np.linspace(0.0, turn, m))
+            progress.append(np.full(m, k + 1.0))
             st = np.zeros(m, dtype=bool)
             st[-1] = True
             stops.append(st)
             theta += turn
     xy = np.concatenate(pieces)
     th = np.concatenate(headings)
+    if given is not None:
+        th = np.interp(np.concatenate(progress), np.arange(len(given)), given)
     return from_samples(xy, th, name=name, stops=np.concatenate(stops), closed=closed)
+
+
+def given_headings(theta, n: int, name: str, closed: bool) -> np.ndarray:
+    """Headings given per point, ``(n,)`` [rad], made continuous: each one follows the one before
+    by the shorter way round (a difference of exactly half a turn goes counter-clockwise); on
+    a closed path one more, back to the first point's heading. ``(n + closed,)``."""
+    try:
+        th = np.asarray(theta, dtype=float).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"path {name!r}: headings are not numbers ({exc})") from None
+    if th.shape != (n,):
+        raise InputError(f"path {name!r}: {th.size} headings for {n} points")
+    bad = np.flatnonzero(~np.isfinite(th))
+    if bad.size:
+        raise InputError(f"path {name!r}: the heading of point {int(bad[0])} is not finite")
+    if closed:
+        th = np.append(th, th[0])
+    steps = wrap_angle(np.diff(th))
+    steps[np.isclose(steps, -math.pi)] = math.pi
+    return np.concatenate(([th[0]], th[0] + np.cumsum(steps)))
+
+
+def spline(points, *, heading="tangent", closed: bool = False, name: str = "spline", theta=None) -> Path:
+    """A smooth curve through points: the cubic spline ``(x(u), y(u))`` through them, ``u`` the
+    distance along the straight segments between them (chord length), with zero curvature at
+    the ends (natural) or, ``closed``, periodic back to the first point (SciPy's
+    :class:`~scipy.interpolate.CubicSpline`). Unlike :func:`polyline` it has no corners, so
+    the robot need not slow down at the points; it can bulge between points far apart.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 2)
+        ``(x, y)`` [m], world frame, in order; ``n >= 2`` (two points: the straight line),
+        no two consecutive ones the same.
+    heading : str or float, default "tangent"
+        :data:`HEADINGS` or a fixed angle [rad]; not with ``theta``.
+    closed, name :
+        As :func:`polyline`.
+    theta : array_like, shape (n,), optional
+        A heading [rad] per point (:func:`given_headings`), splined the same way.
+
+    Returns
+    -------
+    Path
+    """
+    from scipy.interpolate import CubicSpline
+
+    pts = _checked_points(points, name, 2)[:, :2]
+    if len(pts) < 2:
+        raise InputError(f"path {name!r}: it does not go anywhere (fewer than two points)")
+    given = None if theta is None else given_headings(theta, len(pts), name, closed)
+    if given is not None and heading != "tangent" and heading is not None:
+        raise InputError(f"path {name!r}: headings are given per point; a heading mode ({heading!r}) cannot be too")
+    if closed:
+        pts = np.vstack((pts, pts[:1]))
+    chord = np.hypot(*np.diff(pts, axis=0).T)
+    if np.any(chord <= 1e-9):
+        k = int(np.argmax(chord <= 1e-9))
+        raise InputError(f"path {name!r}: points {k} and {(k + 1) % (len(pts) - closed)} are the same")
+    _count(float(chord.sum()), name)
+    u = np.concatenate(([0.0], np.cumsum(chord)))
+    if len(pts) == 2:
+        bc = "not-a-knot"
+    else:
+        bc = "periodic" if closed else "natural"
+    curve = CubicSpline(u, pts, bc_type=bc)
+    # the spline's own length, on a grid ten times finer than the samples, then samples evenly
+    # spaced in it
+    fine_u = np.linspace(0.0, u[-1], 10 * _count(float(u[-1]), name))
+    fine_len = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(curve(fine_u), axis=0).T))))
+    n = _count(float(fine_len[-1]), name)
+    at = np.interp(np.linspace(0.0, fine_len[-1], n), fine_len, fine_u)
+    xy = curve(at)
+    if given is not None:
+        turn_bc = "periodic" if closed and len(pts) > 2 and math.isclose(given[-1], given[0]) else "not-a-knot"
+        th = CubicSpline(u, given, bc_type=turn_bc if len(pts) > 2 else "not-a-knot")(at)
+    else:
+        th = _heading(curve(at, 1), heading, name)
+    return from_samples(xy, th, name=name, closed=closed)
 
 
 def square(side: float, *, blend: float = 0.0, heading="tangent") -> Path:
