@@ -79,6 +79,8 @@ _API = (
     "UMBmarkReport",
     "UMBmarkAnalysis",
     "Calibration",
+    "track",
+    "Tracking",
 )
 """Names served lazily from :mod:`omnikin.api`."""
 
@@ -191,6 +193,7 @@ __all__ = [
     "Steer",
     "StudyFileError",
     "Terminated",
+    "Tracking",
     "TrajectoryFileError",
     "UMBmarkAnalysis",
     "UMBmarkReport",
@@ -209,5 +212,6 @@ __all__ = [
     "run_umbmark",
     "se2",
     "simulate",
+    "track",
     "__version__",
 ]

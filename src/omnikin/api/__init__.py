@@ -14,6 +14,8 @@ is imported only then, with an error naming the ``viz`` extra when it is missing
     res = omnikin.analyze_umbmark("measured.csv", robot="diff-drive")  # omnikin umbmark analyze
     omnikin.plot_layout("mecanum4").savefig("layout.pdf")              # omnikin show --plot
     study = omnikin.run_sweep("examples/tolerance.yaml", "study")      # omnikin sweep (extra sweep)
+    done = omnikin.track("tomasi-omni3", "figure8 1")                 # omnikin track
+    done.summary()["rms_error_m"]; done.plot()                         #   its --json and --plot
 
 Lengths in metres, angles in radians, unless a name says otherwise (``_deg``, ``_mm``).
 """
@@ -23,6 +25,7 @@ from __future__ import annotations
 from .calibration import Calibration, calibrate, calibration_plan
 from .common import dumps, robot_of
 from .simulation import DEFAULT_PATH, Simulation, SimulationCost, simulate
+from .tracking import Tracking, track
 from .umbmark import DEFAULT_ROBOT, UMBmarkAnalysis, UMBmarkReport, analyze_umbmark, run_umbmark
 
 
@@ -157,6 +160,7 @@ __all__ = [
     "DEFAULT_ROBOT",
     "Simulation",
     "SimulationCost",
+    "Tracking",
     "UMBmarkAnalysis",
     "UMBmarkReport",
     "analyze_umbmark",
@@ -168,4 +172,5 @@ __all__ = [
     "run_sweep",
     "run_umbmark",
     "simulate",
+    "track",
 ]

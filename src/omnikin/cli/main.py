@@ -29,6 +29,7 @@ EPILOG = """examples:
   omnikin umbmark analyze measured.csv --robot diff-drive
   omnikin calibrate tomasi-omni3 runs.csv -o calibrated.yaml
   omnikin simulate tomasi-omni3 --bag sim.bag      simulated run recorded to a ROS 2 bag
+  omnikin track tomasi-omni3 'figure8 1' --plot fig.svg   drive a path at the wheels' limits
   omnikin bag odometry tomasi-omni3 run.bag -o odom.bag
   omnikin bag export sim.bag --topic /ground_truth --format tum -o truth.tum
   omnikin metrics truth.tum odom.tum --align       ATE and RPE (evo's definitions)
@@ -68,6 +69,7 @@ COMMANDS = (
     "calibrate",
     "bag",
     "simulate",
+    "track",
     "metrics",
     "ros",
     "sim",

@@ -8,7 +8,7 @@
 """
 
 from .feedback import PoseFeedback
-from .path import Path, circle, figure8, polyline, square
+from .path import Path, circle, figure8, moved, parse_path, polyline, spline, square
 from .time_optimal import Timing, WheelLimits, time_optimal
 from .trajectory import Trajectory, plan_trajectory
 
@@ -20,8 +20,11 @@ __all__ = [
     "WheelLimits",
     "circle",
     "figure8",
+    "moved",
+    "parse_path",
     "plan_trajectory",
     "polyline",
+    "spline",
     "square",
     "time_optimal",
 ]

@@ -30,7 +30,7 @@ import numpy as np
 from ..common.messages import shorten
 from ..common.number_text import plain_number
 from ..errors import InputError
-from ..kinematics.se2 import wrap_angle
+from ..kinematics.se2 import apply, rotate, wrap_angle
 
 HEADING_RADIUS = 0.2
 """``rho`` [m]: the length one radian of heading counts for in the path length ``s``."""
@@ -87,6 +87,19 @@ class Path:
     def travel(self) -> float:
         """Distance [m] the centre travels (the ``x, y`` part of the path, heading not counted)."""
         return float(np.sum(np.hypot(*np.diff(self.pose[:, :2], axis=0).T)))
+
+
+def moved(path: Path, by) -> Path:
+    """``path`` moved rigidly by the pose ``by`` ``(x, y, theta)`` [m, m, rad]: each sample
+    ``q`` becomes ``by (+) q`` (:func:`omnikin.kinematics.se2.compose`, the heading kept
+    unwrapped), its derivatives turned with it. Lengths, stops and timings are unchanged; to
+    move a path so that it starts at the origin heading along +x, ``by`` is the inverse of its
+    first pose."""
+    x, y, theta = (float(v) for v in by)
+    pose = np.column_stack((apply((x, y, theta), path.pose[:, :2]), path.pose[:, 2] + theta))
+    d1 = np.column_stack((rotate(theta, path.d1[:, :2]), path.d1[:, 2]))
+    d2 = np.column_stack((rotate(theta, path.d2[:, :2]), path.d2[:, 2]))
+    return Path(path.s, pose, d1, d2, path.stops, path.name, path.closed)
 
 
 def _checked_points(points, name: str, width: int) -> np.ndarray:
@@ -380,8 +393,10 @@ def spline(points, *, heading="tangent", closed: bool = False, name: str = "spli
         no two consecutive ones the same.
     heading : str or float, default "tangent"
         :data:`HEADINGS` or a fixed angle [rad]; not with ``theta``.
-    closed, name :
-        As :func:`polyline`.
+    closed : bool, default False
+        Periodic, back to the first point at the end.
+    name : str
+        What the path is called in messages.
     theta : array_like, shape (n,), optional
         A heading [rad] per point (:func:`given_headings`), splined the same way.
 

@@ -1,0 +1,236 @@
+"""``omnikin track``: a robot drives a path at the speed its wheels allow, steered by a tracking
+controller (:func:`omnikin.track`); the error, the reference and the truth written out."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from ..common.messages import shorten
+from ..errors import CliError
+from ..physics.engines import ENGINE_NAMES
+from .budget import add_budget_options, require
+from .common import (
+    add_as_built_options,
+    add_output,
+    add_output_options,
+    add_step_option,
+    check_seed,
+    console,
+    declare_inputs,
+    load_robot,
+    number,
+    physics_hint,
+    print_json,
+)
+
+TRACK_EPILOG = """examples:
+  omnikin track tomasi-omni3 'figure8 1' --plot track.svg
+  omnikin track tomasi-omni3 'figure8 1' --engine physics --plot fig.svg --json
+  omnikin track mecanum4 'square 1 0.2' --max-wheel-speed 8 --reference ref.tum --truth truth.tum
+  omnikin track omni4 waypoints.csv --blend 0.3 --errors typical --noise typical --json
+  omnikin track tomasi-omni3 waypoints.yaml --smooth --heading fixed
+
+paths: a built-in path, 'circle RADIUS', 'figure8 SIZE', 'square SIDE [BLEND]' (metres; each
+starts at the origin heading along +x), or a path file of waypoints in metres and radians:
+CSV with a header x,y or x,y,theta, or YAML 'waypoints: [[x, y], [x, y, theta], ...]' (and
+'closed: true'). A CSV path whose last row repeats the first is closed. Corners are stopped at,
+cut by arcs (--blend R), or the whole path is a smooth curve through the points (--smooth). The
+robot starts at rest on the path's first point, at its heading; outputs are in the path's frame.
+
+timing: the reference is the fastest the wheels allow, every wheel within --max-wheel-speed and
+--max-wheel-accel at once (not a box per axis); the controller steers by the robot's odometry
+(as on a real robot) at --rate, and the runtime saturates its commands to the speed limit.
+
+--json: duration_s, path_length_m, rms_error_m and max_error_m (the truth's distance to the
+path), rms_heading_error_rad, max_wheel_speed_rad_s (commanded), saturated_samples,
+solve_time_ms (p50, p95, max: the controller's wall time per tick) and more."""
+
+
+def add_parser(sub, robot_help: str) -> None:
+    """Add ``track`` to ``sub``."""
+    from ..api.tracking import CONTROLLERS, DEFAULT_RATE
+    from ..control.path import HEADINGS
+    from ..simulation.error_models import NOISE
+
+    sp = sub.add_parser(
+        "track",
+        help="drive a path at the wheels' limits with a tracking controller",
+        description="ROBOT drives PATH at the fastest timing its wheel limits allow, steered by a tracking "
+        "controller from its odometry, in the kinematic or the physics engine; prints how far the truth "
+        "strayed from the path.",
+        epilog=TRACK_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sp.add_argument("robot", metavar="ROBOT", help=robot_help)
+    sp.add_argument(
+        "path", metavar="PATH", help="a built-in path ('figure8 1', see below) or a path file (.csv, .yaml)"
+    )
+    sp.add_argument(
+        "--controller",
+        choices=tuple(CONTROLLERS),
+        default="feedback",
+        help="; ".join(f"{name}: {what}" for name, what in CONTROLLERS.items()) + " (default feedback)",
+    )
+    sp.add_argument(
+        "--engine",
+        choices=ENGINE_NAMES,
+        default="kinematic",
+        help="kinematic: wheel motion and error models; physics: MuJoCo with rollers and motors (extra physics) "
+        "(default kinematic)",
+    )
+    add_step_option(sp)
+    add_as_built_options(sp, default_errors="none")
+    sp.add_argument(
+        "--noise",
+        metavar="PROFILE",
+        help=f"random errors of the kinematic engine: {', '.join(sorted(NOISE))} (default none)",
+    )
+    sp.add_argument("--rate", type=number, default=DEFAULT_RATE, metavar="HZ", help="control rate [Hz] (default 50)")
+    sp.add_argument(
+        "--max-wheel-speed",
+        type=number,
+        default=12.0,
+        metavar="RAD_S",
+        help="every wheel's speed limit [rad/s] (default 12)",
+    )
+    sp.add_argument(
+        "--max-wheel-accel",
+        type=number,
+        default=40.0,
+        metavar="RAD_S2",
+        help="every wheel's acceleration limit [rad/s^2] (default 40)",
+    )
+    sp.add_argument(
+        "--heading",
+        metavar="MODE",
+        help=f"heading along a path without one: {', '.join(HEADINGS)} or an angle [rad] (default: fixed for "
+        "circle and figure8, tangent for squares and files)",
+    )
+    sp.add_argument("--blend", type=number, metavar="R", help="path files: cut the corners by arcs of radius R [m]")
+    sp.add_argument("--smooth", action="store_true", help="path files: a smooth curve through the waypoints")
+    add_output(sp, "--truth", metavar="OUT.tum", help="write the ground truth at the ticks (TUM)")
+    add_output(sp, "--reference", metavar="OUT.tum", help="write the timed reference at the ticks (TUM)")
+    add_output(sp, "--odometry", metavar="OUT.tum", help="write the odometry at the ticks (TUM)")
+    add_output(
+        sp,
+        "--plot",
+        stdout=False,
+        metavar="FIG",
+        help="draw path, truth, odometry, error over time and wheel speeds against their limit (.png, .svg, .pdf)",
+    )
+    sp.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_output_options(sp)
+    add_budget_options(sp)
+    declare_inputs(sp, "path", robots=("robot", "true_robot"))  # (a built-in path names no file: harmless)
+    sp.set_defaults(func=run)
+
+
+def _heading(text: str | None):
+    """``--heading``: a mode name or an angle [rad]."""
+    from ..control.path import HEADINGS
+
+    if text is None or text in HEADINGS:
+        return text
+    try:
+        value = number(text)
+    except argparse.ArgumentTypeError:
+        raise CliError(f"--heading {shorten(text)}: one of {', '.join(HEADINGS)} or an angle [rad]") from None
+    return value
+
+
+def run(args) -> int:
+    """Track the path, write the outputs, print the summary (or ``--json``); status 0."""
+    from ..api.tracking import track
+    from ..io.path_file import is_path_file
+    from ..io.trajectories import write_trajectory
+
+    if args.plot is not None:
+        from ..viz import figure_format, require_matplotlib
+
+        require_matplotlib()
+        figure_format(args.plot)
+    check_seed(args.seed)
+    heading = _heading(args.heading)
+    robot = load_robot(args.robot)
+
+    def within(cost) -> None:
+        require(
+            args,
+            "track",
+            memory=cost.memory,
+            seconds=cost.seconds,
+            size=f"{cost.ticks:.3g} control ticks",
+            hint=physics_hint(cost.step, "shorten PATH or raise --max-wheel-speed")
+            if cost.step is not None
+            else "lower --rate, shorten PATH or raise --max-wheel-speed",
+        )
+
+    tracking = track(
+        robot,
+        args.path,
+        controller=args.controller,
+        engine=args.engine,
+        step=args.step,
+        true_robot=args.true_robot or None,
+        errors=args.errors,
+        noise=args.noise,
+        seed=args.seed,
+        rate=args.rate,
+        max_wheel_speed=args.max_wheel_speed,
+        max_wheel_accel=args.max_wheel_accel,
+        heading=heading,
+        blend=args.blend,
+        smooth=args.smooth,
+        max_memory=math.inf,  # (the budget options are checked by within)
+        max_time=math.inf,
+        on_cost=within,
+    )
+    run = tracking.run
+    inputs = [f for f in ((args.path if is_path_file(args.path) else None), args.true_robot) if f]
+    for option, poses in (("truth", run.truth), ("reference", run.reference), ("odometry", run.odometry)):
+        target = getattr(args, option)
+        if target is not None:
+            write_trajectory(target, run.t, poses, "tum", force=args.force, inputs=inputs)
+    if args.plot is not None:
+        _save_plot(tracking, args.plot)
+    summary = tracking.summary()
+    summary.update(
+        errors=None if args.true_robot else args.errors,
+        true_robot=args.true_robot,
+        noise=args.noise,
+        seed=args.seed,
+    )
+    if args.json:
+        print_json(summary)
+        return 0
+    solve = summary["solve_time_ms"]
+    mm = {key: summary[key] * 1e3 for key in ("rms_error_m", "max_error_m", "end_error_m")}
+    lines = [
+        f"{robot.name}: {tracking.path.name}, {summary['path_length_m']:.4g} m in {summary['duration_s']:.4g} s "
+        f"({args.controller} controller at {args.rate:g} Hz, {tracking.engine} engine)",
+        f"distance to the path: RMS {mm['rms_error_m']:.3g} mm, largest {mm['max_error_m']:.3g} mm; the end "
+        f"{mm['end_error_m']:.3g} mm off; heading RMS {math.degrees(summary['rms_heading_error_rad']):.3g} deg",
+        f"wheels: limits {args.max_wheel_speed:g} rad/s and {args.max_wheel_accel:g} rad/s^2, up to "
+        f"{summary['max_wheel_speed_rad_s']:.4g} rad/s commanded",
+        f"saturated: {summary['saturated_samples']} of {summary['samples']} commands"
+        + (f", asked at most {summary['largest_excess_percent']:.2g} % beyond" if summary["saturated_samples"] else ""),
+        f"controller: {solve['p50']:.3g} ms per tick (p95 {solve['p95']:.3g} ms, largest {solve['max']:.3g} ms)",
+    ]
+    lines += [
+        f"{option} written to {getattr(args, option)}"
+        for option in ("truth", "reference", "odometry", "plot")
+        if getattr(args, option) is not None
+    ]
+    console(120).print("\n".join(lines))
+    return 0
+
+
+def _save_plot(tracking, path: str) -> None:
+    """Draw the run (:meth:`omnikin.api.tracking.Tracking.plot`) to ``path`` whole or not at all."""
+    from ..io.output import atomic_write
+    from ..viz import figure_format, save_figure
+
+    figure = tracking.plot()
+    with atomic_write(path, "wb") as handle:
+        save_figure(figure, handle, format=figure_format(path))
