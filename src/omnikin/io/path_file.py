@@ -127,8 +127,7 @@ def _repeats(xy: np.ndarray, where, source: str) -> None:
     if same.size:
         k = int(same[0])
         raise PathFileError(
-            f"{source}: {where(k)} and {where(k + 1)} are at the same place "
-            "(a path goes somewhere between waypoints)"
+            f"{source}: {where(k)} and {where(k + 1)} are at the same place (a path goes somewhere between waypoints)"
         )
 
 
