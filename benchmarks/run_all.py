@@ -17,7 +17,7 @@ import bench_umbmark
 from _common import machine, save
 
 OPTIONAL = {
-    "control": "pip install -e '.[test]' (toppra, the reference solver)",
+    "control": "pip install -e '.[test]' (toppra and Clarabel, the reference solvers; OSQP, extra control)",
     "physics": "pip install -e '.[physics]' (MuJoCo)",
     "sweep": "pip install -e '.[sweep]' (Dask)",
     "viewer": "pip install -e '.[viewer]' and Debian's chromium",

@@ -64,7 +64,7 @@ def test_the_estimate_is_told_before_the_run_and_a_run_beyond_the_budget_is_refu
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"controller": "pid"}, r"controller must be one of feedback, got 'pid'"),
+        ({"controller": "pid"}, r"controller must be one of feedback, mpc, got 'pid'"),
         ({"seed": -1}, r"seed must be a whole number >= 0"),
         ({"rate": 0}, r"rate must be in \(0, 10000\] Hz"),
         ({"max_wheel_speed": -1}, r"WheelLimits.speed must be a number > 0"),
@@ -87,4 +87,16 @@ def test_a_robot_that_cannot_strafe_is_refused_a_path_that_needs_it():
     assert "\n" not in str(info.value)
     # along the tangent it can drive the circle, but the feedback controller needs sideways motion
     with pytest.raises(InputError, match=r"cannot move sideways.*feedback controller"):
-        omnikin.track("diff-drive", "circle 1", heading="tangent")
+        omnikin.track("diff-drive", "circle 1", heading="tangent", controller="feedback")
+
+
+def test_a_layout_with_fixed_wheels_is_tracked_by_the_mpc_along_the_tangent_by_default():
+    done = omnikin.track("diff-drive", "circle 1")
+    summary = done.summary()
+    assert summary["controller"] == "mpc"
+    # the heading along the tangent: a quarter of the way round it has turned a quarter turn
+    quarter = np.argmin(np.abs(done.path.s - done.path.length / 4))
+    assert done.path.pose[quarter, 2] == pytest.approx(math.pi / 2, abs=1e-3)
+    # the MPC keeps every wheel within its limit itself: nothing left for the runtime to saturate
+    assert summary["saturated_samples"] == 0 and summary["largest_excess_percent"] < 1e-4
+    assert summary["max_error_m"] < 1e-5

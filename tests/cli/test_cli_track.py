@@ -65,7 +65,9 @@ def test_a_path_file_with_blended_corners_is_tracked_as_a_user_runs_it(tmp_path)
         (["tomasi-omni3", "figure8 1", "--max-wheel-speed", "1e-9"], r"control ticks, more than --max-memory"),
         (["tomasi-omni3", "figure8 1", "--controller", "pid"], r"invalid choice: 'pid'"),
         (["tomasi-omni3", "figure8 1", "--engine", "physics", "--noise", "typical"], r"drop --noise"),
-        (["diff-drive", "circle 1"], r"diff-drive"),
+        (["diff-drive", "circle 1", "--heading", "fixed"], r"robot 'diff-drive' cannot drive path 'circle 1'"),
+        (["ackermann", "circle 5"], r"robot 'ackermann' steers its wheels"),
+        (["diff-drive", "circle 1", "--controller", "feedback"], r"cannot move sideways"),
         (["tomasi-omni3", "figure8 1", "--plot", "fig.xyz"], r"fig.xyz"),
     ],
 )

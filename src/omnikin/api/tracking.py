@@ -29,10 +29,14 @@ from .common import as_built, require_callable, require_viz, robot_of
 
 CONTROLLERS = {
     "feedback": "feedforward plus feedback on the SE(2) error (layouts that translate: omni, mecanum)",
+    "mpc": "model predictive control with every wheel's speed and acceleration limit as constraints "
+    "(OSQP, extra control; layouts whose wheels do not steer)",
 }
 """The controllers of :func:`track` by name, with what they are."""
 
-DEFAULT_CONTROLLER = "feedback"
+DEFAULT_CONTROLLER = None
+"""The controller of :func:`track` when none is named: ``feedback`` for a layout that translates in
+any direction, ``mpc`` for one with fixed wheels (a differential drive)."""
 DEFAULT_RATE = 50.0
 """Control rate [Hz] of :func:`track`."""
 
@@ -167,7 +171,7 @@ def track(
     robot,
     path,
     *,
-    controller: str = DEFAULT_CONTROLLER,
+    controller: str | None = DEFAULT_CONTROLLER,
     engine="kinematic",
     step: float | None = None,
     true_robot=None,
@@ -195,8 +199,9 @@ def track(
         A :class:`~omnikin.control.path.Path`, a path file (CSV or YAML waypoints,
         :mod:`omnikin.io.path_file`) or a built-in path (``"figure8 1"``, ``"circle 0.5"``,
         ``"square 1 0.2"``: :func:`~omnikin.control.path.parse_path`).
-    controller : str, default "feedback"
-        One of :data:`CONTROLLERS`.
+    controller : str, optional
+        One of :data:`CONTROLLERS`; default ``feedback`` for a layout that translates in any
+        direction, ``mpc`` for one with fixed wheels.
     engine : str or Engine, default "kinematic"
         ``"kinematic"`` or ``"physics"`` (MuJoCo, extra ``physics``), or an engine object.
     step : float, optional
@@ -216,7 +221,9 @@ def track(
         fastest within them, the runtime saturates commands to the speed limit.
     heading : str or float, optional
         How the path's heading is set (``tangent``, ``fixed``, ``free`` or an angle [rad]) when
-        ``path`` is text or a file without headings.
+        ``path`` is text or a file without headings; default that of the built-in path (fixed for
+        the circle and the figure-eight, tangent for the square) or tangent for a file, and
+        tangent for every path of a layout with fixed wheels.
     blend : float, optional
         Path files: radius [m] of the arcs that cut the corners (default: stop at them).
     smooth : bool, default False
@@ -244,6 +251,7 @@ def track(
     from ..common.messages import shorten
     from ..common.resource_limits import require_within
     from ..control.feedback import PoseFeedback
+    from ..control.mpc import PoseMPC
     from ..control.time_optimal import WheelLimits
     from ..control.trajectory import plan_trajectory
     from ..errors import InputError
@@ -255,11 +263,15 @@ def track(
     from ..physics.engines import as_engine
 
     require_callable(on_cost=on_cost)
-    if not isinstance(controller, str) or controller not in CONTROLLERS:
+    if controller is not None and (not isinstance(controller, str) or controller not in CONTROLLERS):
         raise InputError(f"controller must be one of {', '.join(CONTROLLERS)}, got {shorten(controller)}")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise InputError(f"seed must be a whole number >= 0, got {shorten(seed)}")
     nominal = robot_of(robot)
+    if controller is None:
+        controller = "mpc" if nominal.fixed else "feedback"
+    if heading is None and nominal.fixed and not isinstance(path, Path):
+        heading = "tangent"  # the only heading a layout with fixed wheels can hold along a curve
     engine = as_engine(engine, noise=noise, step=step)
     noise_model = None if noise is None else engine.noise_model(noise)
     limits = WheelLimits(speed=max_wheel_speed, accel=max_wheel_accel)
@@ -288,8 +300,11 @@ def track(
     # the run in the frame of the path's start (the robot starts there, at rest), given back in the path's
     start = trajectory.path.pose[0].copy()
     local = dataclasses.replace(trajectory, path=moved(trajectory.path, inverse(start)))
+    law: PoseFeedback | PoseMPC
     if controller == "feedback":
         law = PoseFeedback(nominal, local, rate=rate)
+    else:
+        law = PoseMPC(nominal, local, rate=rate)
     run = drive(
         nominal,
         local,

@@ -30,6 +30,7 @@ TRACK_EPILOG = """examples:
   omnikin track mecanum4 'square 1 0.2' --max-wheel-speed 8 --reference ref.tum --truth truth.tum
   omnikin track omni4 waypoints.csv --blend 0.3 --errors typical --noise typical --json
   omnikin track tomasi-omni3 waypoints.yaml --smooth --heading fixed
+  omnikin track diff-drive 'circle 1' --controller mpc --json     (extra control: OSQP)
 
 paths: a built-in path, 'circle RADIUS', 'figure8 SIZE', 'square SIDE [BLEND]' (metres; each
 starts at the origin heading along +x), or a path file of waypoints in metres and radians:
@@ -69,8 +70,8 @@ def add_parser(sub, robot_help: str) -> None:
     sp.add_argument(
         "--controller",
         choices=tuple(CONTROLLERS),
-        default="feedback",
-        help="; ".join(f"{name}: {what}" for name, what in CONTROLLERS.items()) + " (default feedback)",
+        help="; ".join(f"{name}: {what}" for name, what in CONTROLLERS.items()) + " (default feedback, or mpc for "
+        "a layout with fixed wheels)",
     )
     sp.add_argument(
         "--engine",
@@ -105,7 +106,7 @@ def add_parser(sub, robot_help: str) -> None:
         "--heading",
         metavar="MODE",
         help=f"heading along a path without one: {', '.join(HEADINGS)} or an angle [rad] (default: fixed for "
-        "circle and figure8, tangent for squares and files)",
+        "circle and figure8, tangent for squares and files, tangent for a robot with fixed wheels)",
     )
     sp.add_argument("--blend", type=number, metavar="R", help="path files: cut the corners by arcs of radius R [m]")
     sp.add_argument("--smooth", action="store_true", help="path files: a smooth curve through the waypoints")
@@ -208,7 +209,7 @@ def run(args) -> int:
     mm = {key: summary[key] * 1e3 for key in ("rms_error_m", "max_error_m", "end_error_m")}
     lines = [
         f"{robot.name}: {tracking.path.name}, {summary['path_length_m']:.4g} m in {summary['duration_s']:.4g} s "
-        f"({args.controller} controller at {args.rate:g} Hz, {tracking.engine} engine)",
+        f"({tracking.controller} controller at {args.rate:g} Hz, {tracking.engine} engine)",
         f"distance to the path: RMS {mm['rms_error_m']:.3g} mm, largest {mm['max_error_m']:.3g} mm; the end "
         f"{mm['end_error_m']:.3g} mm off; heading RMS {math.degrees(summary['rms_heading_error_rad']):.3g} deg",
         f"wheels: limits {args.max_wheel_speed:g} rad/s and {args.max_wheel_accel:g} rad/s^2, up to "
