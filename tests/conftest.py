@@ -1,11 +1,12 @@
 """What every test session shares: the fixtures of the presets and of a recorded bag, the browser
-fixtures of the viewer tests, Hypothesis' profile without wall-clock limits, and a ROS 2 domain
-of this worker's own. The helpers tests import are in ``tests/support`` (``support.paths``,
-``support.cli``, ``support.kinematics``, ...)."""
+fixtures of the viewer tests, Hypothesis' profile without wall-clock limits, a ROS 2 domain of
+this worker's own, and Ctrl-C given back to a suite started in the background. The helpers tests
+import are in ``tests/support`` (``support.paths``, ``support.cli``, ``support.kinematics``, ...)."""
 
 from __future__ import annotations
 
 import os
+import signal
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -17,6 +18,12 @@ from support.ros_domain import default_domain
 # the tests run in parallel (pytest-xdist): a ROS 2 graph of this worker's own, never the user's domain 0;
 # tests that start nodes take a domain of their own with support.ros_domain.fresh_domain()
 os.environ["ROS_DOMAIN_ID"] = str(default_domain())
+
+# a shell starts a background job (`.ci/run &`, nohup) with Ctrl-C ignored, and an ignored signal stays
+# ignored in every process started from it: the commands the signal tests stop with SIGINT would not
+# stop. Python's handler, set here, is reset to the default in each child as it starts.
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(scope="module")
