@@ -219,7 +219,7 @@ def run(args) -> int:
         f"controller: {solve['p50']:.3g} ms per tick (p95 {solve['p95']:.3g} ms, largest {solve['max']:.3g} ms)",
     ]
     lines += [
-        f"{option} written to {getattr(args, option)}"
+        f"{option} written to {'standard output' if getattr(args, option) == '-' else getattr(args, option)}"
         for option in ("truth", "reference", "odometry", "plot")
         if getattr(args, option) is not None
     ]

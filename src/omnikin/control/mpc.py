@@ -42,7 +42,7 @@ import numpy as np
 from ..errors import InputError
 from ..kinematics.robot import Robot
 from ..kinematics.se2 import compose, exp, inverse, log
-from .trajectory import Trajectory
+from .trajectory import Trajectory, control_period
 
 HORIZON = 20
 """Steps ``N`` of the prediction."""
@@ -105,13 +105,11 @@ class PoseMPC:
                 f"robot {robot.name!r} steers its wheels: the MPC's wheel constraints are linear only for wheels "
                 "that do not steer (the feedback controller drives a layout that steers all its wheels)"
             )
-        if not (isinstance(rate, (int, float)) and math.isfinite(rate) and 0 < rate <= 10_000):
-            raise InputError(f"rate must be in (0, 10000] Hz, got {rate!r}")
         if isinstance(horizon, bool) or not isinstance(horizon, int) or not 1 <= horizon <= 200:
             raise InputError(f"horizon must be a whole number of steps in [1, 200], got {horizon!r}")
         self.robot = robot
         self.trajectory = trajectory
-        self.dt = 1.0 / float(rate)
+        self.dt = control_period(rate)
         self.horizon = horizon
         self.basis = np.eye(3) if not robot.fixed else np.asarray(robot.admissible_basis, dtype=float)
         self.jacobian = np.asarray(robot.ik_matrix, dtype=float)

@@ -17,6 +17,17 @@ from ..kinematics.robot import Robot
 from .path import Path
 from .time_optimal import Timing, WheelLimits, path_rates, time_optimal
 
+MAX_CONTROL_RATE = 10_000.0
+"""Highest control rate [Hz] a controller or a tracking run takes."""
+
+
+def control_period(rate) -> float:
+    """The period ``dt = 1 / rate`` [s] of a control rate ``rate`` [Hz] in ``(0, 10000]``; any
+    other value (a bool, NaN, inf, text) an :class:`~omnikin.errors.InputError` in one line."""
+    if isinstance(rate, bool) or not (isinstance(rate, (int, float)) and 0 < rate <= MAX_CONTROL_RATE):
+        raise InputError(f"rate must be in (0, {MAX_CONTROL_RATE:g}] Hz, got {rate!r}")
+    return 1.0 / float(rate)
+
 
 @dataclass(frozen=True, eq=False)
 class Trajectory:

@@ -22,7 +22,7 @@ from typing import Protocol
 
 import numpy as np
 
-from ..control.trajectory import Trajectory
+from ..control.trajectory import Trajectory, control_period
 from ..errors import InputError
 from ..kinematics.robot import Robot
 from ..kinematics.se2 import wrap_angle
@@ -114,8 +114,7 @@ def track(
     TrackingRun
     """
     engine = KinematicEngine() if engine is None else engine
-    if not (isinstance(rate, (int, float)) and math.isfinite(rate) and 0 < rate <= 10_000):
-        raise InputError(f"rate must be in (0, 10000] Hz, got {rate!r}")
+    control_period(rate)
     if not (isinstance(settle, (int, float)) and math.isfinite(settle) and 0 <= settle <= 3600):
         raise InputError(f"settle must be in [0, 3600] s, got {settle!r}")
     backend = engine.backend(robot, true_robot, noise=noise, rng=rng)
