@@ -34,7 +34,6 @@ feedforward alone and the tick is counted in :attr:`PoseMPC.fallbacks`.
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
@@ -55,12 +54,16 @@ CORRECTION_WEIGHT = (1.0, 1.0, 0.04)
 
 
 def adjoint(pose) -> np.ndarray:
-    """``Ad(T)`` ``(3, 3)`` of the SE(2) pose ``T = (x, y, theta)``: the map of a twist
-    ``(vx, vy, omega)`` given in ``T``'s frame into its parent's, ``(R (vx, vy) + omega (y, -x),
-    omega)``."""
-    x, y, theta = (float(v) for v in pose)
-    c, s = math.cos(theta), math.sin(theta)
-    return np.array([[c, -s, y], [s, c, -x], [0.0, 0.0, 1.0]])
+    """``Ad(T)`` ``(..., 3, 3)`` of SE(2) poses ``T = (x, y, theta)`` ``(..., 3)``: the map of a
+    twist ``(vx, vy, omega)`` given in ``T``'s frame into its parent's, ``(R (vx, vy) + omega
+    (y, -x), omega)``."""
+    p = np.asarray(pose, dtype=float)
+    c, s = np.cos(p[..., 2]), np.sin(p[..., 2])
+    out = np.zeros(p.shape[:-1] + (3, 3))
+    out[..., 0, 0], out[..., 0, 1], out[..., 0, 2] = c, -s, p[..., 1]
+    out[..., 1, 0], out[..., 1, 1], out[..., 1, 2] = s, c, -p[..., 0]
+    out[..., 2, 2] = 1.0
+    return out
 
 
 class PoseMPC:
@@ -153,9 +156,10 @@ class PoseMPC:
         phi = np.zeros((3 * n, 3))
         gamma = np.zeros((3 * n, m * n))
         step = dt * self.basis
+        a_all = adjoint(exp(-xi * dt))  # (N, 3, 3)
         a_prev = np.eye(3)
         for k in range(n):  # e_{k+1} = A_k e_k + dt N z_k
-            a_k = adjoint(exp(-xi[k] * dt))
+            a_k = a_all[k]
             a_prev = a_k @ a_prev
             phi[3 * k : 3 * k + 3] = a_prev
             if k:
