@@ -218,10 +218,39 @@ def time_optimal(robot: Robot, path: Path, limits: WheelLimits | None = None) ->
     limits = WheelLimits() if limits is None else limits
     rates = path_rates(robot, path)
     speed = np.array([min(limits.speed, w.max_speed or math.inf) for w in robot.rolling])
+    return time_rates(path, rates, speed, limits.accel, limits.steer_rate)
+
+
+def time_rates(path: Path, rates: PathRates, speed, accel: float, steer_rate: float = math.inf) -> Timing:
+    """The fastest timing of ``path`` from rest to rest under rows of any meaning: each row ``j``
+    of ``rates.w`` (a rate per unit path speed, ``rates.dw`` its derivative) kept within
+    ``|w_j sdot| <= speed_j`` and ``|w_j sddot + w_j' sdot^2| <= accel`` (module docstring).
+    :func:`time_optimal` gives it the wheels' rows; other limits of the body's motion written as
+    rows (a box or a polygon of twists, :mod:`omnikin.control.twist_limits`) are timed the same way.
+
+    Parameters
+    ----------
+    path : Path
+        The path (its samples, lengths and stops).
+    rates : PathRates
+        The rows ``(n, rows)`` along the path and their derivatives; steering angles and their
+        derivative ``(n, n_steer)``.
+    speed : array_like, shape (rows,)
+        The speed limit of each row.
+    accel : float
+        The acceleration limit of every row.
+    steer_rate : float, default inf
+        Largest steering rate [rad/s].
+
+    Returns
+    -------
+    Timing
+    """
+    speed = np.asarray(speed, dtype=float)
     ds = np.diff(path.s)
     n = len(path.s)
-    xmax = speed_ceiling(rates, speed, limits.steer_rate)
-    p, q, xcap = _row_lines(rates.w, rates.dw, limits.accel)
+    xmax = speed_ceiling(rates, speed, steer_rate)
+    p, q, xcap = _row_lines(rates.w, rates.dw, accel)
     xmax = np.minimum(xmax, xcap)
     xmax[:-1] = np.minimum(xmax[:-1], _static_cap(p[:-1], q[:-1], ds))
     xmax[path.stops] = 0.0
