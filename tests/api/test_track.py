@@ -64,7 +64,7 @@ def test_the_estimate_is_told_before_the_run_and_a_run_beyond_the_budget_is_refu
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"controller": "pid"}, r"controller must be one of feedback, mpc, got 'pid'"),
+        ({"controller": "pid"}, r"controller must be one of feedback, mpc, pursuit, got 'pid'"),
         ({"seed": -1}, r"seed must be a whole number >= 0"),
         ({"rate": 0}, r"rate must be in \(0, 10000\] Hz"),
         ({"max_wheel_speed": -1}, r"WheelLimits.speed must be a number > 0"),
@@ -100,3 +100,9 @@ def test_a_layout_with_fixed_wheels_is_tracked_by_the_mpc_along_the_tangent_by_d
     # the MPC keeps every wheel within its limit itself: nothing left for the runtime to saturate
     assert summary["saturated_samples"] == 0 and summary["largest_excess_percent"] < 1e-4
     assert summary["max_error_m"] < 1e-5
+
+
+def test_a_car_is_tracked_by_pure_pursuit_by_default():
+    summary = omnikin.track("ackermann", "circle 5").summary()
+    assert summary["controller"] == "pursuit"
+    assert summary["max_error_m"] < 1e-6  # a circle started on is pure pursuit's fixed point

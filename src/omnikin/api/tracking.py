@@ -31,12 +31,14 @@ CONTROLLERS = {
     "feedback": "feedforward plus feedback on the SE(2) error (layouts that translate: omni, mecanum)",
     "mpc": "model predictive control with every wheel's speed and acceleration limit as constraints "
     "(OSQP, extra control; layouts whose wheels do not steer)",
+    "pursuit": "regulated pure pursuit (layouts that drive along their heading: differential drives, cars)",
 }
 """The controllers of :func:`track` by name, with what they are."""
 
 DEFAULT_CONTROLLER = None
 """The controller of :func:`track` when none is named: ``feedback`` for a layout that translates in
-any direction, ``mpc`` for one with fixed wheels (a differential drive)."""
+any direction, ``mpc`` for one with fixed wheels that do not steer (a differential drive),
+``pursuit`` for one with fixed and steered wheels (a car)."""
 DEFAULT_RATE = 50.0
 """Control rate [Hz] of :func:`track`."""
 
@@ -201,7 +203,8 @@ def track(
         ``"square 1 0.2"``: :func:`~omnikin.control.path.parse_path`).
     controller : str, optional
         One of :data:`CONTROLLERS`; default ``feedback`` for a layout that translates in any
-        direction, ``mpc`` for one with fixed wheels.
+        direction, ``mpc`` for a differential drive, ``pursuit`` for a car
+        (:data:`DEFAULT_CONTROLLER`).
     engine : str or Engine, default "kinematic"
         ``"kinematic"`` or ``"physics"`` (MuJoCo, extra ``physics``), or an engine object.
     step : float, optional
@@ -252,6 +255,7 @@ def track(
     from ..common.resource_limits import require_within
     from ..control.feedback import PoseFeedback
     from ..control.mpc import PoseMPC
+    from ..control.pursuit import PurePursuit
     from ..control.time_optimal import WheelLimits
     from ..control.trajectory import plan_trajectory
     from ..errors import InputError
@@ -269,7 +273,7 @@ def track(
         raise InputError(f"seed must be a whole number >= 0, got {shorten(seed)}")
     nominal = robot_of(robot)
     if controller is None:
-        controller = "mpc" if nominal.fixed else "feedback"
+        controller = ("pursuit" if nominal.steerable else "mpc") if nominal.fixed else "feedback"
     if heading is None and nominal.fixed and not isinstance(path, Path):
         heading = "tangent"  # the only heading a layout with fixed wheels can hold along a curve
     engine = as_engine(engine, noise=noise, step=step)
@@ -300,11 +304,13 @@ def track(
     # the run in the frame of the path's start (the robot starts there, at rest), given back in the path's
     start = trajectory.path.pose[0].copy()
     local = dataclasses.replace(trajectory, path=moved(trajectory.path, inverse(start)))
-    law: PoseFeedback | PoseMPC
+    law: PoseFeedback | PoseMPC | PurePursuit
     if controller == "feedback":
         law = PoseFeedback(nominal, local, rate=rate)
-    else:
+    elif controller == "mpc":
         law = PoseMPC(nominal, local, rate=rate)
+    else:
+        law = PurePursuit(nominal, local, rate=rate)
     run = drive(
         nominal,
         local,

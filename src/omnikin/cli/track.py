@@ -31,6 +31,7 @@ TRACK_EPILOG = """examples:
   omnikin track omni4 waypoints.csv --blend 0.3 --errors typical --noise typical --json
   omnikin track tomasi-omni3 waypoints.yaml --smooth --heading fixed
   omnikin track diff-drive 'circle 1' --controller mpc --json     (extra control: OSQP)
+  omnikin track ackermann 'figure8 6' --plot car.svg              (pure pursuit within its turning radius)
 
 paths: a built-in path, 'circle RADIUS', 'figure8 SIZE', 'square SIDE [BLEND]' (metres; each
 starts at the origin heading along +x), or a path file of waypoints in metres and radians:
@@ -70,8 +71,8 @@ def add_parser(sub, robot_help: str) -> None:
     sp.add_argument(
         "--controller",
         choices=tuple(CONTROLLERS),
-        help="; ".join(f"{name}: {what}" for name, what in CONTROLLERS.items()) + " (default feedback, or mpc for "
-        "a layout with fixed wheels)",
+        help="; ".join(f"{name}: {what}" for name, what in CONTROLLERS.items()) + " (default feedback; mpc for a "
+        "differential drive, pursuit for a car)",
     )
     sp.add_argument(
         "--engine",

@@ -106,7 +106,8 @@ class PoseMPC:
         if robot.steerable:
             raise InputError(
                 f"robot {robot.name!r} steers its wheels: the MPC's wheel constraints are linear only for wheels "
-                "that do not steer (the feedback controller drives a layout that steers all its wheels)"
+                "that do not steer (pure pursuit drives a car; the feedback controller a layout that steers all "
+                "its wheels)"
             )
         if isinstance(horizon, bool) or not isinstance(horizon, int) or not 1 <= horizon <= 200:
             raise InputError(f"horizon must be a whole number of steps in [1, 200], got {horizon!r}")

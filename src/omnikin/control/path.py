@@ -118,12 +118,17 @@ def _checked_points(points, name: str, width: int) -> np.ndarray:
     return arr
 
 
-def from_samples(xy, theta, *, name: str, stops=None, closed: bool = False, rho: float = HEADING_RADIUS) -> Path:
+def from_samples(
+    xy, theta, *, name: str, stops=None, breaks=None, closed: bool = False, rho: float = HEADING_RADIUS
+) -> Path:
     """A :class:`Path` from dense samples of a curve: positions ``(n, 2)`` [m] and headings
     ``(n,)`` [rad], in order along the path.
 
     Samples that repeat the one before (no travel, no turn) are dropped. The derivatives are
-    second-order finite differences in ``s`` (module docstring).
+    second-order finite differences in ``s`` (module docstring), taken piece by piece between
+    ``stops`` and ``breaks`` (``(n,)`` bool: samples where the curvature jumps, a line meeting an
+    arc, where a difference across would tilt the tangent by a quarter of the jump times the
+    spacing and the heading along it would no longer be the direction of travel).
 
     Raises
     ------
@@ -135,13 +140,16 @@ def from_samples(xy, theta, *, name: str, stops=None, closed: bool = False, rho:
         raise InputError(f"path {name!r}: {len(xy)} samples is too many (at most {MAX_SAMPLES})")
     th = np.unwrap(np.asarray(theta, dtype=float))
     stop = np.zeros(len(th), dtype=bool) if stops is None else np.asarray(stops, dtype=bool).copy()
+    cut = np.zeros(len(th), dtype=bool) if breaks is None else np.asarray(breaks, dtype=bool).copy()
     step = np.hypot(np.hypot(*np.diff(xy, axis=0).T), rho * np.diff(th))
     keep = np.concatenate(([True], step > 1e-12))
-    # a dropped repeat keeps its stop on the sample it repeats
+    # a dropped repeat keeps its stop (and break) on the sample it repeats
     idx = np.cumsum(keep) - 1
     merged = np.zeros(int(keep.sum()), dtype=bool)
     np.logical_or.at(merged, idx, stop)
-    xy, th, stop = xy[keep], th[keep], merged
+    merged_cut = np.zeros(int(keep.sum()), dtype=bool)
+    np.logical_or.at(merged_cut, idx, cut)
+    xy, th, stop, cut = xy[keep], th[keep], merged, merged_cut
     if len(th) < 2:
         raise InputError(f"path {name!r}: it does not go anywhere (fewer than two distinct points)")
     s = np.concatenate(([0.0], np.cumsum(step[keep[1:]])))
@@ -149,9 +157,10 @@ def from_samples(xy, theta, *, name: str, stops=None, closed: bool = False, rho:
     stop[0] = stop[-1] = True
     d1 = np.zeros_like(pose)
     d2 = np.zeros_like(pose)
-    # derivatives piece by piece between stops: a corner stopped at is a kink, and differences
-    # across it would be spikes; the stop itself takes the derivatives of the piece it starts
-    ends = np.flatnonzero(stop)
+    # derivatives piece by piece between stops and breaks: a corner stopped at is a kink, and
+    # differences across it would be spikes; the sample that ends one piece and starts the next
+    # takes the derivatives of the piece it starts
+    ends = np.flatnonzero(stop | cut)
     for a, b in zip(ends[:-1], ends[1:], strict=True):
         if b - a < 2:
             raise InputError(f"path {name!r}: a piece between two stops at s = {s[a]:.6g} m has no inner point")
@@ -356,7 +365,9 @@ def polyline(
     th = np.concatenate(headings)
     if given is not None:
         th = np.interp(np.concatenate(progress), np.arange(len(given)), given)
-    return from_samples(xy, th, name=name, stops=np.concatenate(stops), closed=closed)
+    breaks = np.zeros(len(xy), dtype=bool)  # where a line meets an arc: the curvature jumps
+    breaks[np.cumsum([len(piece) for piece in pieces])[:-1]] = True
+    return from_samples(xy, th, name=name, stops=np.concatenate(stops), breaks=breaks, closed=closed)
 
 
 def given_headings(theta, n: int, name: str, closed: bool) -> np.ndarray:

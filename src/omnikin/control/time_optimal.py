@@ -101,7 +101,10 @@ def path_rates(robot: Robot, path: Path) -> PathRates:
     d = path.d1
     body = np.column_stack((c * d[:, 0] + sn * d[:, 1], -sn * d[:, 0] + c * d[:, 1], d[:, 2]))
     res = robot.ik(body, on_infeasible="return")
-    scale = max(1e-6, 1e-6 * float(np.max(np.abs(body[:, :2]), initial=0.0)))
+    # a slide below 1e-4 of the path's travel is the finite differences' (a figure-eight's
+    # tangent differs from its 2 mm chords by a few 1e-6): a path that needs sideways motion
+    # needs it at the size of its travel
+    scale = max(1e-6, 1e-4 * float(np.max(np.abs(body[:, :2]), initial=0.0)))
     slide = np.abs(res.violation) > scale if res.violation.size else np.zeros((len(th), 0), dtype=bool)
     bad = np.flatnonzero(np.any(slide, axis=1) | np.any(res.steer_limited, axis=1))
     if bad.size:
