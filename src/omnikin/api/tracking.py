@@ -221,7 +221,9 @@ def track(
         Control rate [Hz].
     max_wheel_speed, max_wheel_accel : float, default 12 and 40
         Every wheel's speed [rad/s] and acceleration [rad/s^2] limit: the reference is the
-        fastest within them, the runtime saturates commands to the speed limit.
+        fastest within them, the runtime saturates commands to the speed limit. In physics the
+        motors' own limits apply too (:meth:`~omnikin.simulation.engine.Engine.motor_limits`:
+        their speed limit and their torque's acceleration, from the physical fields).
     heading : str or float, optional
         How the path's heading is set (``tangent``, ``fixed``, ``free`` or an angle [rad]) when
         ``path`` is text or a file without headings; default that of the built-in path (fixed for
@@ -279,6 +281,11 @@ def track(
     engine = as_engine(engine, noise=noise, step=step)
     noise_model = None if noise is None else engine.noise_model(noise)
     limits = WheelLimits(speed=max_wheel_speed, accel=max_wheel_accel)
+    seeds = streams(seed, RUN_STREAMS)
+    true, injected = as_built(nominal, true_robot, errors, seeds["robot"])
+    motors = engine.motor_limits(true)
+    if motors is not None:  # the motors' own limits apply too (physics: from the physical fields)
+        limits = WheelLimits(speed=min(limits.speed, motors[0]), accel=min(limits.accel, motors[1]))
     if isinstance(path, Path):
         if heading is not None or blend is not None or smooth:
             raise InputError("heading, blend and smooth shape a path given as text or a file, not a Path")
@@ -286,8 +293,6 @@ def track(
     else:
         geometry = load_path(path, heading=heading, blend=blend, smooth=smooth)
     trajectory = plan_trajectory(nominal, geometry, limits)
-    seeds = streams(seed, RUN_STREAMS)
-    true, injected = as_built(nominal, true_robot, errors, seeds["robot"])
     cost = tracking_cost(true, engine, trajectory.duration + settle, rate)
     if on_cost is not None:
         on_cost(cost)

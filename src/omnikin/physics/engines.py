@@ -278,6 +278,16 @@ class PhysicsEngine(Engine):
 
         return run.summary() if isinstance(run, PhysicsRun) else {}
 
+    def motor_limits(self, robot: Robot) -> tuple[float, float] | None:
+        from .description import describe
+
+        motors = [(w.motor, w.radius) for w in describe(robot).wheels if w.motor is not None]
+        if not motors:
+            return None
+        speed = min(motor.max_speed for motor, _ in motors)
+        accel = min(motor.max_accel / radius for motor, radius in motors)
+        return float(speed), float(accel)
+
 
 ENGINES: dict[str, type[KinematicEngine] | type[PhysicsEngine]] = {
     KinematicEngine.name: KinematicEngine,

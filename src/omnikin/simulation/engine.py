@@ -333,6 +333,25 @@ class Engine(Protocol):
         """
         ...
 
+    def motor_limits(self, robot: Robot) -> tuple[float, float] | None:
+        """The wheel speed [rad/s] and acceleration [rad/s^2] the engine's motors can give
+        ``robot``'s rolling wheels, the least over them.
+
+        Parameters
+        ----------
+        robot : Robot
+            The robot as built.
+
+        Returns
+        -------
+        tuple of float, or None
+            Physics: each motor's speed limit and its command ramp's rim acceleration over the
+            wheel's radius, from the physical fields and their defaults
+            (:func:`~omnikin.physics.description.describe`); None for the kinematic engine, whose
+            wheels turn as commanded.
+        """
+        ...
+
 
 @dataclass(frozen=True)
 class KinematicEngine(Engine):
@@ -495,3 +514,6 @@ class KinematicEngine(Engine):
 
     def summary(self, run: SimulatedRun) -> dict[str, Any]:
         return {}
+
+    def motor_limits(self, robot: Robot) -> tuple[float, float] | None:
+        return None
