@@ -155,8 +155,11 @@ class Tracking:
     def _largest_excess(self) -> float:
         """``100 (max |w| / limit - 1)`` over the wheel speeds the controller's twists ask
         (before the runtime's saturation), at least 0 [%]."""
-        asked = self.robot.ik(self.run.command).wheel_speeds
-        largest = float(np.max(np.abs(asked))) if asked.size else 0.0
+        asked = self.robot.ik(
+            self.run.command, on_infeasible="return"
+        ).wheel_speeds  # (steering not reached: as far as it goes)
+        finite = np.abs(asked[np.isfinite(asked)])
+        largest = float(np.max(finite)) if finite.size else 0.0
         return max(0.0, 100.0 * (largest / self.trajectory.limits.speed - 1.0))
 
     def plot(self):
@@ -285,7 +288,9 @@ def track(
     true, injected = as_built(nominal, true_robot, errors, seeds["robot"])
     motors = engine.motor_limits(true)
     if motors is not None:  # the motors' own limits apply too (physics: from the physical fields)
-        limits = WheelLimits(speed=min(limits.speed, motors[0]), accel=min(limits.accel, motors[1]))
+        # (not the steering servos' rate: the controllers do not model the steering's lag, and a
+        # reference slowed to it was tracked worse by steered layouts, docs/control.md)
+        limits = WheelLimits(speed=min(limits.speed, motors.speed), accel=min(limits.accel, motors.accel))
     if isinstance(path, Path):
         if heading is not None or blend is not None or smooth:
             raise InputError("heading, blend and smooth shape a path given as text or a file, not a Path")

@@ -20,6 +20,7 @@ from typing import Any, ClassVar
 
 from ..common.messages import shorten
 from ..common.rng import make_rng
+from ..control.time_optimal import WheelLimits
 from ..errors import InputError
 from ..kinematics.robot import Robot
 from ..motion.limits import MotionLimits
@@ -278,15 +279,17 @@ class PhysicsEngine(Engine):
 
         return run.summary() if isinstance(run, PhysicsRun) else {}
 
-    def motor_limits(self, robot: Robot) -> tuple[float, float] | None:
+    def motor_limits(self, robot: Robot) -> WheelLimits | None:
         from .description import describe
 
-        motors = [(w.motor, w.radius) for w in describe(robot).wheels if w.motor is not None]
+        wheels = describe(robot).wheels
+        motors = [(w.motor, w.radius) for w in wheels if w.motor is not None]
         if not motors:
             return None
         speed = min(motor.max_speed for motor, _ in motors)
         accel = min(motor.max_accel / radius for motor, radius in motors)
-        return float(speed), float(accel)
+        steering = [w.steering.max_rate for w in wheels if w.steering is not None and w.steering.actuated]
+        return WheelLimits(float(speed), float(accel), float(min(steering, default=math.inf)))
 
 
 ENGINES: dict[str, type[KinematicEngine] | type[PhysicsEngine]] = {

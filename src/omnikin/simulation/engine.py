@@ -34,6 +34,7 @@ from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
+from ..control.time_optimal import WheelLimits
 from ..kinematics.robot import Robot
 from ..motion.limits import MotionLimits
 from ..motion.plans import Plan
@@ -333,9 +334,9 @@ class Engine(Protocol):
         """
         ...
 
-    def motor_limits(self, robot: Robot) -> tuple[float, float] | None:
-        """The wheel speed [rad/s] and acceleration [rad/s^2] the engine's motors can give
-        ``robot``'s rolling wheels, the least over them.
+    def motor_limits(self, robot: Robot) -> WheelLimits | None:
+        """The wheel speed [rad/s], wheel acceleration [rad/s^2] and steering rate [rad/s] the
+        engine's motors can give ``robot``, the least over its wheels.
 
         Parameters
         ----------
@@ -344,11 +345,11 @@ class Engine(Protocol):
 
         Returns
         -------
-        tuple of float, or None
-            Physics: each motor's speed limit and its command ramp's rim acceleration over the
-            wheel's radius, from the physical fields and their defaults
-            (:func:`~omnikin.physics.description.describe`); None for the kinematic engine, whose
-            wheels turn as commanded.
+        WheelLimits or None
+            Physics: each motor's speed limit, its command ramp's rim acceleration over the
+            wheel's radius, and the steering servos' rate, from the physical fields and their
+            defaults (:func:`~omnikin.physics.description.describe`); None for the kinematic
+            engine, whose wheels turn and steer as commanded.
         """
         ...
 
@@ -515,5 +516,5 @@ class KinematicEngine(Engine):
     def summary(self, run: SimulatedRun) -> dict[str, Any]:
         return {}
 
-    def motor_limits(self, robot: Robot) -> tuple[float, float] | None:
+    def motor_limits(self, robot: Robot) -> WheelLimits | None:
         return None
