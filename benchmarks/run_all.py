@@ -19,6 +19,7 @@ from _common import machine, save
 OPTIONAL = {
     "control": "pip install -e '.[test]' (toppra and Clarabel, the reference solvers; OSQP, extra control)",
     "physics": "pip install -e '.[physics]' (MuJoCo)",
+    "tracking": "pip install -e '.[physics,control]' (MuJoCo, OSQP)",
     "sweep": "pip install -e '.[sweep]' (Dask)",
     "viewer": "pip install -e '.[viewer]' and Debian's chromium",
     "firmware": "pip install -e '.[serial]' and the AVR packages of .ci/run",
