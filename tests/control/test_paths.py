@@ -149,6 +149,8 @@ def test_a_self_crossing_polyline_is_a_path():
         (lambda: spline([(0, 0), (1e308, 0), (-1e308, 0)]), r"point 1 is more than 1e\+07 m from the origin"),
         (lambda: polyline([(0, 0), (9e6, 0), (-9e6, 0)]), r"too long"),
         (lambda: spline([(0, 0), (2000, 0)]), r"2000 m is too long"),
+        (lambda: polyline([(0, 0), (1, 0)], theta=[1e300, 0.0]), r"heading of point 0 is beyond 10000 rad"),
+        (lambda: parse_path("circle 1", heading=1e300), r"heading must be an angle within 10000 rad"),
     ],
 )
 def test_points_that_make_no_path_are_refused_in_one_line(call, message):

@@ -45,6 +45,10 @@ typo (``circle 1e5``) costs a line, not the machine's memory."""
 MAX_COORDINATE = 1e7
 """Largest ``|x|`` or ``|y|`` [m] of a point (map coordinates such as UTM stay below it)."""
 
+MAX_HEADING = 1e4
+"""Largest ``|theta|`` [rad] of a heading given (some 1600 turns: beyond it the headings' own
+rounding is centimetres of turn)."""
+
 HEADINGS = ("tangent", "fixed", "free")
 """How a path's heading is set when the points do not give one: along the direction of travel
 (``tangent``, the only choice of a robot that cannot strafe), held at the start's (``fixed``), or
@@ -190,8 +194,8 @@ def _heading(xy_d: np.ndarray, heading, name: str, start: float = 0.0) -> np.nda
             return np.full(n, start)
         raise InputError(f"path {name!r}: unknown heading {heading!r}; one of {list(HEADINGS)} or an angle [rad]")
     value = float(heading)
-    if not math.isfinite(value):
-        raise InputError(f"path {name!r}: heading must be finite, got {heading!r}")
+    if not (math.isfinite(value) and abs(value) <= MAX_HEADING):
+        raise InputError(f"path {name!r}: heading must be an angle within {MAX_HEADING:g} rad, got {heading!r}")
     return np.full(n, value)
 
 
@@ -383,6 +387,9 @@ def given_headings(theta, n: int, name: str, closed: bool) -> np.ndarray:
     bad = np.flatnonzero(~np.isfinite(th))
     if bad.size:
         raise InputError(f"path {name!r}: the heading of point {int(bad[0])} is not finite")
+    far = np.flatnonzero(np.abs(th) > MAX_HEADING)
+    if far.size:
+        raise InputError(f"path {name!r}: the heading of point {int(far[0])} is beyond {MAX_HEADING:g} rad")
     if closed:
         th = np.append(th, th[0])
     steps = wrap_angle(np.diff(th))
