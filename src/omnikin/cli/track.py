@@ -41,8 +41,9 @@ cut by arcs (--blend R), or the whole path is a smooth curve through the points 
 robot starts at rest on the path's first point, at its heading; outputs are in the path's frame.
 
 timing: the reference is the fastest the wheels allow, every wheel within --max-wheel-speed and
---max-wheel-accel at once (not a box per axis); the controller steers by the robot's odometry
-(as on a real robot) at --rate, and the runtime saturates its commands to the speed limit.
+--max-wheel-accel at once (not a box per axis; in physics the motors' own speed and torque
+limits too); the controller steers by the robot's odometry (as on a real robot) at --rate, and
+the runtime saturates its commands to the speed limit.
 
 --json: duration_s, path_length_m, rms_error_m and max_error_m (the truth's distance to the
 path), rms_heading_error_rad, max_wheel_speed_rad_s (commanded), saturated_samples,
