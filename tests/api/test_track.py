@@ -106,3 +106,13 @@ def test_a_car_is_tracked_by_pure_pursuit_by_default():
     summary = omnikin.track("ackermann", "circle 5").summary()
     assert summary["controller"] == "pursuit"
     assert summary["max_error_m"] < 1e-6  # a circle started on is pure pursuit's fixed point
+
+
+def test_a_differential_drive_takes_a_path_file_that_gives_its_headings(tmp_path):
+    # headings along the tangent, given in the file: the robot's default heading mode must not
+    # collide with them
+    f = tmp_path / "l.csv"
+    f.write_text("x,y,theta\n0,0,0\n1,0,0\n")
+    summary = omnikin.track("diff-drive", f).summary()
+    assert summary["controller"] == "mpc"
+    assert summary["max_error_m"] < 1e-9

@@ -267,7 +267,7 @@ def track(
     from ..evaluation.pipeline import RUN_STREAMS
     from ..evaluation.procedure import ARGUMENTS, streams
     from ..evaluation.tracking import track as drive
-    from ..io.path_file import load_path
+    from ..io.path_file import is_path_file, load_path
     from ..kinematics.se2 import compose, inverse
     from ..physics.engines import as_engine
 
@@ -279,8 +279,11 @@ def track(
     nominal = robot_of(robot)
     if controller is None:
         controller = ("pursuit" if nominal.steerable else "mpc") if nominal.fixed else "feedback"
-    if heading is None and nominal.fixed and not isinstance(path, Path):
-        heading = "tangent"  # the only heading a layout with fixed wheels can hold along a curve
+    if heading is None and nominal.fixed and not isinstance(path, Path) and not is_path_file(path):
+        # a built-in path's own default may be a fixed heading; tangent is the only heading a
+        # layout with fixed wheels can hold along a curve (a file's default is tangent already,
+        # and a file may give its headings)
+        heading = "tangent"
     engine = as_engine(engine, noise=noise, step=step)
     noise_model = None if noise is None else engine.noise_model(noise)
     limits = WheelLimits(speed=max_wheel_speed, accel=max_wheel_accel)
