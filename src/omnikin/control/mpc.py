@@ -168,17 +168,6 @@ class PoseMPC:
             gamma[3 * k : 3 * k + 3, m * k : m * (k + 1)] = step
         return xi, e0, phi, gamma
 
-    def problem(self, t: float, pose) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The quadratic programme of the tick at ``t`` [s] with the robot at ``pose``:
-        ``min 1/2 z^T P z + q^T z`` subject to ``l <= A z <= u``; ``(P, q, A, l, u)`` dense, for
-        reports and tests (:meth:`command` solves the same with OSQP)."""
-        p = np.asarray(pose, dtype=float)
-        xi, e0, phi, gamma = self._matrices(t, p)
-        hessian = 2.0 * (gamma.T @ self._q @ gamma + self._r)
-        linear = 2.0 * gamma.T @ self._q @ (phi @ e0)
-        lower, upper = self._bounds(xi)
-        return hessian, linear, self._a.toarray(), lower, upper
-
     def _bounds(self, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         limits = self.trajectory.limits
         wheel = xi @ self.jacobian.T  # (N, wheels): the feedforward's wheel speeds
