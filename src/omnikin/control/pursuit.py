@@ -30,6 +30,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..kinematics.robot import Robot
+from .path import SPACING, heading_error
 from .trajectory import Trajectory, control_period
 
 LOOKAHEAD_TIME = 0.25
@@ -95,7 +96,7 @@ class PurePursuit:
         path = trajectory.path
         moving = np.hypot(path.d1[:, 0], path.d1[:, 1]) > 1e-9
         along = np.arctan2(path.d1[:, 1], path.d1[:, 0])
-        off = np.abs(np.angle(np.exp(1j * (along - path.pose[:, 2]))))
+        off = np.abs(heading_error(along, path.pose[:, 2]))
         bad = np.flatnonzero(moving & (off > 1e-3))
         if bad.size:
             k = int(bad[0])
@@ -107,6 +108,7 @@ class PurePursuit:
         self.trajectory = trajectory
         self.max_curvature = max_curvature(robot)
         self._xy = path.pose[:, :2]
+        self._s = path.s
         # the reference's travel speed [m/s] at each sample: sdot times the travel per unit of s
         self._speed = trajectory.timing.sdot * np.hypot(path.d1[:, 0], path.d1[:, 1])
         self._progress = 0
@@ -118,27 +120,29 @@ class PurePursuit:
         p = np.asarray(pose, dtype=float)
         xy = self._xy
         # the point reached: the nearest sample in a window ahead (never back)
-        reach = max(8, int(4 * max(self._top, CREEP_SPEED) * self.dt / 0.002) + 8)
+        reach = max(8, int(4 * max(self._top, CREEP_SPEED) * self.dt / SPACING) + 8)
         window = slice(self._progress, min(len(xy), self._progress + reach))
         gap = np.hypot(*(xy[window] - p[:2]).T)
         self._progress += int(np.argmin(gap))
+        k = self._progress
         end_gap = float(np.hypot(*(xy[-1] - p[:2])))
-        if self._progress >= len(xy) - 1 and end_gap <= GOAL_TOLERANCE:
+        if end_gap <= GOAL_TOLERANCE and k >= len(xy) - 1 - reach:
             return np.zeros(3)
-        if end_gap <= GOAL_TOLERANCE and self._progress >= len(xy) - 1 - reach:
-            return np.zeros(3)
-        v = max(float(self._speed[self._progress]), CREEP_SPEED)
+        v = max(float(self._speed[k]), CREEP_SPEED)
         lookahead = min(max(LOOKAHEAD_TIME * v, LOOKAHEAD_MIN), LOOKAHEAD_MAX)
-        ahead = np.hypot(*(xy[self._progress :] - p[:2]).T)
+        # the target: the first sample a lookahead away, among those within three lookaheads (and
+        # the robot's distance) of path ahead, not the whole rest of the path every tick
+        last = int(np.searchsorted(self._s, self._s[k] + 3 * lookahead + float(gap.min()), side="right"))
+        ahead = np.hypot(*(xy[k:last] - p[:2]).T)
         beyond = np.flatnonzero(ahead >= lookahead)
-        target = xy[self._progress + int(beyond[0])] if beyond.size else xy[-1]
+        target = xy[k + int(beyond[0])] if beyond.size else xy[last - 1]
         c, s = math.cos(p[2]), math.sin(p[2])
         dx, dy = target - p[:2]
         forward, left = c * dx + s * dy, -s * dx + c * dy
         distance2 = forward * forward + left * left
         if distance2 <= 1e-18:
             return np.zeros(3)
-        if not beyond.size:  # the end is nearer than the lookahead: slow down onto it
+        if not beyond.size and last == len(xy):  # the end is nearer than the lookahead: slow down onto it
             v = min(v, max(CREEP_SPEED, math.sqrt(distance2) / max(self.dt, 1e-9) / 4))
         kappa = 2.0 * left / distance2
         kappa = max(-self.max_curvature, min(self.max_curvature, kappa))
