@@ -159,19 +159,43 @@ def from_samples(
     s = np.concatenate(([0.0], np.cumsum(step[keep[1:]])))
     pose = np.column_stack((xy, th))
     stop[0] = stop[-1] = True
-    d1 = np.zeros_like(pose)
-    d2 = np.zeros_like(pose)
     # derivatives piece by piece between stops and breaks: a corner stopped at is a kink, and
     # differences across it would be spikes; the sample that ends one piece and starts the next
     # takes the derivatives of the piece it starts
     ends = np.flatnonzero(stop | cut)
-    for a, b in zip(ends[:-1], ends[1:], strict=True):
-        if b - a < 2:
-            raise InputError(f"path {name!r}: a piece between two stops at s = {s[a]:.6g} m has no inner point")
-        piece = slice(a, b + 1)
-        d1[piece] = np.gradient(pose[piece], s[piece], axis=0, edge_order=2)
-        d2[piece] = np.gradient(d1[piece], s[piece], axis=0, edge_order=2)
+    short = np.flatnonzero(np.diff(ends) < 2)
+    if short.size:
+        at = s[ends[short[0]]]
+        raise InputError(f"path {name!r}: a piece between two stops at s = {at:.6g} m has no inner point")
+    d1 = _piecewise_gradient(pose, s, ends)
+    d2 = _piecewise_gradient(d1, s, ends)
     return Path(s, pose, d1, d2, stop, name, closed)
+
+
+def _piecewise_gradient(values: np.ndarray, s: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """``d values / ds`` ``(n, ...)`` by second-order differences piece by piece between the
+    sample indices ``ends`` (never across one: a stop or a join); the sample that ends one piece
+    and starts the next takes the derivative of the piece it starts."""
+    out = np.zeros_like(values, dtype=float)
+    for a, b in zip(ends[:-1], ends[1:], strict=True):
+        piece = slice(a, b + 1)
+        out[piece] = np.gradient(values[piece], s[piece], axis=0, edge_order=2)
+    return out
+
+
+def derivative(path: Path, values) -> np.ndarray:
+    """``d values / ds`` along ``path`` of values at its samples ``(n, k)``, piece by piece between
+    its stops (a corner stopped at is a kink)."""
+    return _piecewise_gradient(np.asarray(values, dtype=float), path.s, np.flatnonzero(path.stops))
+
+
+def body_rates(path: Path) -> np.ndarray:
+    """The body twist per unit path speed ``(n, 3)``: ``(R(theta)^T (x', y'), theta')`` [m/m,
+    m/m, rad/m] at the samples, what any limit of the body's or the wheels' motion sees."""
+    th = path.pose[:, 2]
+    c, sn = np.cos(th), np.sin(th)
+    d = path.d1
+    return np.column_stack((c * d[:, 0] + sn * d[:, 1], -sn * d[:, 0] + c * d[:, 1], d[:, 2]))
 
 
 def _count(length: float, name: str) -> int:

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..kinematics.robot import Robot
-from .path import Path
+from .path import Path, body_rates, derivative
 
 
 @dataclass(frozen=True)
@@ -97,9 +97,7 @@ def path_rates(robot: Robot, path: Path) -> PathRates:
         ``s`` [m] where it first happens.
     """
     th = path.pose[:, 2]
-    c, sn = np.cos(th), np.sin(th)
-    d = path.d1
-    body = np.column_stack((c * d[:, 0] + sn * d[:, 1], -sn * d[:, 0] + c * d[:, 1], d[:, 2]))
+    body = body_rates(path)
     res = robot.ik(body, on_infeasible="return")
     # a slide below 1e-4 of the path's travel is the finite differences' (a figure-eight's
     # tangent differs from its 2 mm chords by a few 1e-6): a path that needs sideways motion
@@ -120,14 +118,8 @@ def path_rates(robot: Robot, path: Path) -> PathRates:
         )
     w = res.wheel_speeds
     steer = res.steer_angles
-    dw = np.zeros_like(w)
-    dsteer = np.zeros_like(steer)
-    ends = np.flatnonzero(path.stops)
-    for a, b in zip(ends[:-1], ends[1:], strict=True):
-        piece = slice(a, b + 1)
-        dw[piece] = np.gradient(w[piece], path.s[piece], axis=0, edge_order=2)
-        if steer.shape[1]:
-            dsteer[piece] = np.gradient(np.unwrap(steer[piece], axis=0), path.s[piece], axis=0, edge_order=2)
+    dw = derivative(path, w)
+    dsteer = derivative(path, np.unwrap(steer, axis=0)) if steer.shape[1] else np.zeros_like(steer)
     return PathRates(w, dw, steer, dsteer)
 
 

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..kinematics.robot import Robot
-from .path import Path
+from .path import Path, body_rates, derivative
 from .time_optimal import PathRates, WheelLimits, path_rates, time_optimal, time_rates
 
 ELLIPSE_SIDES = 64
@@ -102,11 +102,7 @@ def shape_rates(path: Path, shape: TwistShape, speed: float) -> PathRates:
     twist is within the shape: the body twist per unit path speed ``xi(s) = (R^T (x', y'),
     theta')`` divided by the shape's axes, times ``speed``; an ellipse as the polygon of
     :data:`ELLIPSE_SIDES` sides inscribed in it."""
-    th = path.pose[:, 2]
-    c, sn = np.cos(th), np.sin(th)
-    d = path.d1
-    body = np.column_stack((c * d[:, 0] + sn * d[:, 1], -sn * d[:, 0] + c * d[:, 1], d[:, 2]))
-    unit = body / np.array([shape.a, shape.b, shape.c])
+    unit = body_rates(path) / np.array([shape.a, shape.b, shape.c])
     if shape.kind == "box":
         rows = unit
     else:  # |cos(phi) u + sin(phi) v| <= cos(pi / K) for K / 2 directions phi: the polygon inscribed in the circle
@@ -114,13 +110,8 @@ def shape_rates(path: Path, shape: TwistShape, speed: float) -> PathRates:
         flat = (unit[:, :1] * np.cos(phi) + unit[:, 1:2] * np.sin(phi)) / math.cos(math.pi / ELLIPSE_SIDES)
         rows = np.column_stack((flat, unit[:, 2]))
     rows = rows * speed
-    drows = np.zeros_like(rows)
-    ends = np.flatnonzero(path.stops)
-    for a, b in zip(ends[:-1], ends[1:], strict=True):
-        piece = slice(a, b + 1)
-        drows[piece] = np.gradient(rows[piece], path.s[piece], axis=0, edge_order=2)
-    empty = np.zeros((len(th), 0))
-    return PathRates(rows, drows, empty, empty)
+    empty = np.zeros((len(rows), 0))
+    return PathRates(rows, derivative(path, rows), empty, empty)
 
 
 def compare_limits(robot: Robot, path: Path, limits: WheelLimits | None = None) -> dict[str, float]:
