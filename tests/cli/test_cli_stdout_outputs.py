@@ -32,7 +32,7 @@ INVOCATIONS: dict[str, list[str]] = {
     "bag odometry": ["tomasi-omni3", "{bag}"],
     "bag export": ["{bag}", "--topic", "/ground_truth", "--format", "tum"],
     "simulate": ["tomasi-omni3", "--path", "line 0.2"],
-    "track": ["tomasi-omni3", "circle 0.3"],
+    "track": ["tomasi-omni3", "circle 0.3", "--noise", "typical"],
     "sim": ["tomasi-omni3", "--duration", "1"],
     "sweep": [str(EXAMPLES / "tolerance.yaml"), "--workers", "1"],
     "mjcf": ["tomasi-omni3"],

@@ -92,3 +92,79 @@ def test_an_output_on_the_path_file_or_an_existing_file_is_refused_before_the_ru
     kept.write_text("mine\n")
     rc, _, err = run_cli(capsys, "track", "tomasi-omni3", "p.csv", "--reference", "kept.tum")
     assert rc == 2 and "--force" in err and kept.read_text() == "mine\n"
+
+
+def test_the_tick_log_holds_whole_counts_whose_odometry_is_the_run_s(tmp_path, capsys):
+    log, odometry = tmp_path / "ticks.csv", tmp_path / "odom.tum"
+    rc, _, err = run_cli(
+        capsys, "track", "tomasi-omni3", "circle 0.5", "--noise", "typical", "--log", log, "--odometry", odometry
+    )
+    assert rc == 0, err
+    lines = log.read_text().splitlines()
+    assert lines[0].startswith("# encoder tick log of tomasi-omni3 written by: omnikin track tomasi-omni3 'circle 0.5'")
+    assert lines[1] == "t,w1,w2,w3"
+    rows = np.array([[float(v) for v in line.split(",")] for line in lines[2:]])
+    t_odo, poses = read_trajectory(odometry)
+    assert rows[:, 0] == pytest.approx(t_odo, abs=1e-9)  # a row per control tick
+    assert np.array_equal(rows[:, 1:], np.rint(rows[:, 1:]))  # whole counts
+    # the log read back by the batch odometry gives the pose the runtime steered by, tick by tick
+    rc, _, err = run_cli(capsys, "odometry", "tomasi-omni3", log, "-o", tmp_path / "again.tum")
+    assert rc == 0, err
+    t_again, again = read_trajectory(tmp_path / "again.tum")
+    assert np.array_equal(t_again, t_odo)
+    assert again == pytest.approx(poses, abs=2e-9)  # (TUM's nine decimals)
+
+
+def test_a_tick_log_of_exact_encoders_is_refused_before_the_run(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    rc, out, err = run_cli(capsys, "track", "tomasi-omni3", "circle 0.5", "--log", "ticks.csv", "--truth", "t.tum")
+    assert rc == 2 and out == ""
+    assert err.strip().splitlines() == [
+        "omnikin: error: --log writes whole-number encoder counts, but the kinematic engine's encoders are exact "
+        "under --noise none; give --noise typical, or --engine physics, or record --bag instead"
+    ]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_bag_holds_the_run_s_truth_odometry_wheels_and_commands(tmp_path, capsys):
+    pytest.importorskip("rosbags")
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys import Stores, get_typestore
+
+    from omnikin import load_robot
+
+    bag, truth, odometry = tmp_path / "run.bag", tmp_path / "truth.tum", tmp_path / "odom.tum"
+    rc, out, err = run_cli(
+        capsys, "track", "diff-drive", "circle 1", "--bag", bag, "--truth", truth, "--odometry", odometry, "--json"
+    )
+    assert rc == 0, err
+    summary = json.loads(out)
+    topics = ("/ground_truth", "/odom", "/joint_states", "/cmd_vel")
+    assert summary["topics"] == {topic: summary["samples"] for topic in topics}
+    for topic, written in (("/ground_truth", truth), ("/odom", odometry)):
+        exported = tmp_path / f"exported{topic.replace('/', '_')}.tum"
+        rc, _, err = run_cli(capsys, "bag", "export", bag, "--topic", topic, "--format", "tum", "-o", exported)
+        assert rc == 0, err
+        t_bag, poses_bag = read_trajectory(exported)
+        t_tum, poses_tum = read_trajectory(written)
+        assert t_bag == pytest.approx(t_tum, abs=1e-9) and poses_bag == pytest.approx(poses_tum, abs=2e-9)
+    robot = load_robot("diff-drive")
+    typestore = get_typestore(Stores.ROS2_HUMBLE)
+    with Reader(bag) as reader:
+        messages = {"/joint_states": [], "/cmd_vel": []}
+        for connection, _, raw in reader.messages():
+            if connection.topic in messages:
+                messages[connection.topic].append(typestore.deserialize_cdr(raw, connection.msgtype))
+    states, twists = messages["/joint_states"], messages["/cmd_vel"]
+    assert list(states[0].name) == list(robot.encoded_names)
+    # the wheels of a differential drive on a circle of radius R (1 m, turning left) roll
+    # R + b and R - b for every metre of the centre (b the half track): the outer (right) wheel's
+    # angle over the inner's is (R + b) / (R - b)
+    angles = np.array([s.position for s in states])
+    ys = [robot.wheel(n).y for n in robot.encoded_names]
+    outer, inner = int(np.argmin(ys)), int(np.argmax(ys))
+    b = abs(ys[0])
+    assert abs(angles[-1, outer] / angles[-1, inner]) == pytest.approx((1 + b) / (1 - b), rel=1e-2)
+    # /cmd_vel: the controller's twist, a differential drive's with no sideways speed
+    cmd = np.array([[m.linear.x, m.linear.y, m.angular.z] for m in twists])
+    assert np.all(cmd[:, 1] == 0.0) and cmd[len(cmd) // 2, 0] > 0

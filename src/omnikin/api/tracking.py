@@ -349,7 +349,8 @@ def tracking_cost(true_robot: Robot, engine, seconds: float, rate: float) -> Tra
     """The :class:`TrackingCost` of driving ``seconds`` [s] of simulated time at ``rate`` [Hz]
     in ``engine`` (for the physics engine its step cost is measured on ``true_robot``'s model)."""
     ticks = math.floor(seconds * rate) + 1.0
-    memory = ticks * (16 + len(true_robot.rolling)) * 8 * 3  # the run's arrays, moved to the path's frame
+    columns = 16 + len(true_robot.rolling) + len(true_robot.encoded_names) + len(true_robot.steerable)
+    memory = ticks * columns * 8 * 3  # the run's arrays, moved to the path's frame
     computing = ticks * TICK_SECONDS
     step = engine.options.get("step")
     if step is not None:

@@ -11,7 +11,7 @@ import sys
 from ..common.messages import shorten
 from ..errors import InfeasibleTwistError, InputError, OmnikinError
 from ..physics.engines import ENGINE_NAMES
-from .budget import MESSAGE_SECONDS, Budget, add_budget_options, require
+from .budget import LOG_ROW_SECONDS, RUN_SAMPLE_SECONDS, Budget, add_budget_options, require
 from .common import (
     add_as_built_options,
     add_output,
@@ -27,11 +27,6 @@ from .common import (
     print_json,
 )
 
-SIM_SAMPLE_SECONDS = 4 * MESSAGE_SECONDS
-"""simulate --bag: per sample, its four messages made and written (the simulation itself, and the
-memory of it all: :func:`omnikin.simulation.kinematic.run_cost`)."""
-LOG_ROW_SECONDS = 5e-6
-"""simulate --log: per sample, its row of the tick log made and written (measured 19 us)."""
 PROGRESS_AFTER = 3.0
 """simulate --engine physics shows its progress once a run has taken this long [s]."""
 
@@ -291,7 +286,7 @@ def _within_budget(args, engine, cost) -> None:
         return
     samples = cost.duration * args.rate  # in physics, the waits and the tail at their limits
     _check_stamps(args, duration=cost.duration)
-    writing = (SIM_SAMPLE_SECONDS if args.bag is not None else 0.0) + (LOG_ROW_SECONDS if args.log else 0.0)
+    writing = (RUN_SAMPLE_SECONDS if args.bag is not None else 0.0) + (LOG_ROW_SECONDS if args.log else 0.0)
     require(
         args,
         "simulate",

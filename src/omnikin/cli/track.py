@@ -9,7 +9,7 @@ import math
 from ..common.messages import shorten
 from ..errors import CliError
 from ..physics.engines import ENGINE_NAMES
-from .budget import add_budget_options, require
+from .budget import LOG_ROW_SECONDS, RUN_SAMPLE_SECONDS, add_budget_options, require
 from .common import (
     add_as_built_options,
     add_output,
@@ -32,6 +32,8 @@ TRACK_EPILOG = """examples:
   omnikin track tomasi-omni3 waypoints.yaml --smooth --heading fixed
   omnikin track diff-drive 'circle 1' --controller mpc --json     (extra control: OSQP)
   omnikin track ackermann 'figure8 6' --plot car.svg              (pure pursuit within its turning radius)
+  omnikin track tomasi-omni3 'circle 1' --noise typical --log ticks.csv --bag run.bag
+      (then: omnikin odometry tomasi-omni3 ticks.csv; omnikin view tomasi-omni3 --replay run.bag)
 
 paths: a built-in path, 'circle RADIUS', 'figure8 SIZE', 'square SIDE [BLEND]' (metres; each
 starts at the origin heading along +x), or a path file of waypoints in metres and radians:
@@ -117,6 +119,22 @@ def add_parser(sub, robot_help: str) -> None:
     add_output(sp, "--odometry", metavar="OUT.tum", help="write the odometry at the ticks (TUM)")
     add_output(
         sp,
+        "--log",
+        metavar="LOG.csv",
+        help="write the encoder tick log at the ticks, the input of 'omnikin odometry' (needs whole encoder "
+        "counts: the physics engine, or --noise typical)",
+    )
+    add_output(
+        sp,
+        "--bag",
+        folder="data",
+        metavar="OUT.bag",
+        help="write the run to a new ROS 2 bag: /ground_truth, /odom, /joint_states, /cmd_vel (extra ros; a new "
+        "name, --force replaces a bag omnikin wrote)",
+    )
+    sp.add_argument("--storage", choices=("sqlite3", "mcap"), default="sqlite3", help="bag storage (default sqlite3)")
+    add_output(
+        sp,
         "--plot",
         stdout=False,
         metavar="FIG",
@@ -153,16 +171,23 @@ def run(args) -> int:
 
         require_matplotlib()
         figure_format(args.plot)
+    if args.bag is not None:
+        from ..io.bags import require_rosbags
+
+        require_rosbags()
     check_seed(args.seed)
     heading = _heading(args.heading)
     robot = load_robot(args.robot)
+    if args.log is not None:
+        _check_tick_log(args)
+    writing = (RUN_SAMPLE_SECONDS if args.bag is not None else 0.0) + (LOG_ROW_SECONDS if args.log else 0.0)
 
     def within(cost) -> None:
         require(
             args,
             "track",
             memory=cost.memory,
-            seconds=cost.seconds,
+            seconds=cost.seconds + cost.ticks * writing,
             size=f"{cost.ticks:.3g} control ticks",
             hint=physics_hint(cost.step, "shorten PATH or raise --max-wheel-speed")
             if cost.step is not None
@@ -195,6 +220,9 @@ def run(args) -> int:
         target = getattr(args, option)
         if target is not None:
             write_trajectory(target, run.t, poses, "tum", force=args.force, inputs=inputs)
+    counts = _write_bag(args, tracking) if args.bag is not None else {}
+    if args.log is not None:
+        _write_tick_log(args, tracking)
     if args.plot is not None:
         _save_plot(tracking, args.plot)
     summary = tracking.summary()
@@ -203,6 +231,9 @@ def run(args) -> int:
         true_robot=args.true_robot,
         noise=args.noise,
         seed=args.seed,
+        log=args.log,
+        bag=args.bag,
+        topics=counts,
     )
     if args.json:
         print_json(summary)
@@ -222,7 +253,7 @@ def run(args) -> int:
     ]
     lines += [
         f"{option} written to {'standard output' if getattr(args, option) == '-' else getattr(args, option)}"
-        for option in ("truth", "reference", "odometry", "plot")
+        for option in ("truth", "reference", "odometry", "log", "bag", "plot")
         if getattr(args, option) is not None
     ]
     console(120).print("\n".join(lines))
@@ -237,3 +268,100 @@ def _save_plot(tracking, path: str) -> None:
     figure = tracking.plot()
     with atomic_write(path, "wb") as handle:
         save_figure(figure, handle, format=figure_format(path))
+
+
+def _check_tick_log(args) -> None:
+    """Refuse a ``--log`` the run cannot give, before it is driven: a tick log holds whole
+    encoder counts, and the kinematic engine's encoders count whole ticks only under a noise
+    profile that quantises them (not under none, the default)."""
+    from ..errors import InputError
+    from ..simulation.error_models import noise_profile
+
+    if args.engine == "kinematic" and (args.noise is None or not noise_profile(args.noise).quantise):
+        raise InputError(
+            f"--log writes whole-number encoder counts, but the kinematic engine's encoders are exact under "
+            f"--noise {args.noise or 'none'}; give --noise typical, or --engine physics, or record --bag instead"
+        )
+
+
+def _command(args) -> str:
+    """The command line that reproduces the run (written into the tick log and the bag)."""
+    import shlex
+
+    words = ["omnikin track", shlex.quote(args.robot), shlex.quote(args.path)]
+    for option in ("controller", "heading", "blend", "noise", "true_robot", "step"):
+        value = getattr(args, option)
+        if value is not None:
+            words += [f"--{option.replace('_', '-')}", shlex.quote(f"{value:g}" if isinstance(value, float) else value)]
+    if args.smooth:
+        words.append("--smooth")
+    if not args.true_robot:
+        words += ["--errors", shlex.quote(args.errors)]
+    words += ["--engine", args.engine, "--seed", str(args.seed), "--rate", f"{args.rate:g}"]
+    words += ["--max-wheel-speed", f"{args.max_wheel_speed:g}", "--max-wheel-accel", f"{args.max_wheel_accel:g}"]
+    return " ".join(words)
+
+
+def _counts(tracking):
+    """The encoder counts of the run ``(n, n_encoded)`` (int64, unwrapped): the angles the runtime
+    read over the nominal robot's angle per tick, whole numbers by :func:`_check_tick_log`."""
+    import numpy as np
+
+    from ..errors import InputError
+
+    robot = tracking.robot
+    ticks = tracking.run.wheel_angles / robot.rad_per_tick(robot.encoded_names)
+    counts = np.rint(ticks)
+    if not np.all(np.abs(ticks - counts) <= 1e-6 * np.maximum(1.0, np.abs(counts))):
+        raise InputError("--log: the run's encoder readings are not whole counts; give --noise typical")
+    return counts.astype(np.int64)
+
+
+def _write_tick_log(args, tracking) -> None:
+    """``--log``: the encoder counts as the robot's counters output them, at the ticks."""
+    from ..io.logs import write_tick_log
+    from ..simulation.kinematic import counter_output
+
+    robot = tracking.robot
+    names = robot.encoded_names
+    readings = counter_output(_counts(tracking), [robot.wheel(n).encoder.counter_bits for n in names])
+    write_tick_log(
+        args.log,
+        tracking.run.t,
+        readings,
+        names,
+        tracking.run.steer,
+        steer_names=robot.steer_names,
+        comment=f"encoder tick log of {robot.name} written by: {_command(args)} --log {args.log}",
+    )
+
+
+def _write_bag(args, tracking) -> dict:
+    """``--bag``: the run's truth, odometry, wheel angles and commands (:func:`omnikin.io.bags.record_samples`)."""
+    from ..io.bags import record_samples
+
+    run = tracking.run
+    custom = {
+        "omnikin.robot": tracking.robot.name,
+        "omnikin.path": args.path,
+        "omnikin.controller": tracking.controller,
+        "omnikin.engine": tracking.engine,
+        "omnikin.seed": str(args.seed),
+        "omnikin.errors": "file " + args.true_robot if args.true_robot else args.errors,
+        "omnikin.rate": f"{args.rate:g}",
+        "omnikin.command": _command(args),
+    }
+    return record_samples(
+        args.bag,
+        tracking.robot,
+        run.t,
+        truth=run.truth,
+        odometry=run.odometry,
+        wheel_angles=run.wheel_angles,
+        steer=run.steer,
+        command=run.command,
+        rate=args.rate,
+        storage=args.storage,
+        custom=custom,
+        force=args.force,
+    )

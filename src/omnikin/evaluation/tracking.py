@@ -57,6 +57,11 @@ class TrackingRun:
         The controller's body twist [m/s, m/s, rad/s].
     wheel_speeds : ndarray, shape (n, n_wheels)
         The wheel speeds commanded [rad/s] after the runtime's saturation.
+    wheel_angles : ndarray, shape (n, n_encoded)
+        The encoded wheels' angles the runtime read [rad] (the encoder counts times the
+        nominal robot's angle per tick, in ``robot.encoded_names`` order).
+    steer : ndarray, shape (n, n_steer), or None
+        The steering angles the runtime read [rad] (None for a robot without steered wheels).
     saturated : int
         Commands the runtime scaled down to the wheel limit.
     solve_time : ndarray, shape (n,)
@@ -70,6 +75,8 @@ class TrackingRun:
     reference: np.ndarray
     command: np.ndarray
     wheel_speeds: np.ndarray
+    wheel_angles: np.ndarray
+    steer: np.ndarray | None
     saturated: int
     solve_time: np.ndarray
 
@@ -128,6 +135,8 @@ def track(
     odometry = np.empty((n, 3))
     command = np.empty((n, 3))
     speeds = np.empty((n, len(robot.rolling)))
+    angles = np.empty((n, len(robot.encoded_names)))
+    steer = np.empty((n, len(robot.steerable))) if robot.steerable else None
     solve = np.empty(n)
     try:
         for k in range(n):
@@ -142,6 +151,9 @@ def track(
             odometry[k] = pose
             command[k] = twist
             speeds[k] = step.wheel_speeds
+            angles[k] = state.positions
+            if steer is not None:
+                steer[k] = state.steer
     finally:
         backend.close()
     reference, _, _ = trajectory.at(t)
@@ -152,6 +164,8 @@ def track(
         reference=reference,
         command=command,
         wheel_speeds=speeds,
+        wheel_angles=angles,
+        steer=steer,
         saturated=runtime.filter.stats.saturated,
         solve_time=solve,
     )

@@ -814,17 +814,70 @@ def record_run(
     steer_suffix: str = STEER_SUFFIX,
     force: bool = False,
 ) -> dict:
-    """Write a simulated run (:class:`omnikin.simulation.kinematic.SimulatedRun`, first trial) to a new bag.
+    """Write a simulated run (:class:`omnikin.simulation.kinematic.SimulatedRun`, first trial) to a
+    new bag (:func:`record_samples`): its encoders' counts times ``robot``'s angle per tick, and on
+    ``/cmd_vel`` the body twist of each interval of its plan. Returns ``{topic: message count}``.
+    """
+    t = np.asarray(run.t, dtype=float)
+    truth = np.asarray(run.truth)[0]
+    if truth.shape[0] != len(t):
+        raise BagError("record_run needs the full ground truth (simulate with keep_truth=True)")
+    angles = np.asarray(run.ticks, dtype=float) * robot.rad_per_tick(_encoded_names(robot))
+    command = np.zeros((len(t), 3))
+    command[:-1] = run.sampled.increments / np.diff(t)[:, None]
+    return record_samples(
+        path,
+        robot,
+        t,
+        truth=truth,
+        odometry=run.odometry,
+        wheel_angles=angles,
+        steer=run.steer,
+        command=command,
+        rate=run.sampled.rate,
+        start=start,
+        topics=topics,
+        frame_id=frame_id,
+        child_frame_id=child_frame_id,
+        storage=storage,
+        custom=custom,
+        steer_suffix=steer_suffix,
+        force=force,
+    )
 
-    Topics (``topics`` renames them): ``/ground_truth`` (Odometry, the true poses),
-    ``/odom`` (Odometry, the robot's odometry), ``/joint_states`` (JointState: the encoded
-    wheels' angles ``ticks * rad_per_tick`` of ``robot`` [rad] and their mean speeds over the
-    interval ending at the sample [rad/s]; steering joints ``W_steer``) and ``/cmd_vel``
-    (Twist: the commanded body twist of the interval that starts at the sample, zero at the
-    last). Sample k is stamped ``start + t_k`` [s]. ``robot`` is the commanding (nominal) robot
-    whose odometry ``run.odometry`` is, so reading the bag's joint states back with it
-    reproduces ``/odom``. Messages are made and written one sample at a time. Returns
-    ``{topic: message count}``.
+
+def record_samples(
+    path,
+    robot: Robot,
+    t,
+    *,
+    truth,
+    odometry,
+    wheel_angles,
+    steer,
+    command,
+    rate: float,
+    start: float = 0.0,
+    topics: dict | None = None,
+    frame_id: str = "odom",
+    child_frame_id: str = "base_link",
+    storage: str = "sqlite3",
+    custom: dict | None = None,
+    steer_suffix: str = STEER_SUFFIX,
+    force: bool = False,
+) -> dict:
+    """Write a run sampled at the times ``t`` ``(n,)`` [s] (``rate`` [Hz] apart) to a new bag.
+
+    Topics (``topics`` renames them): ``/ground_truth`` (Odometry, the true poses ``truth``
+    ``(n, 3)``), ``/odom`` (Odometry, the robot's ``odometry`` ``(n, 3)``), ``/joint_states``
+    (JointState: the encoded wheels' angles ``wheel_angles`` ``(n, n_encoded)`` [rad] of
+    ``robot``, in ``robot.encoded_names`` order, and their mean speeds over the interval ending at
+    the sample [rad/s]; the steering angles ``steer`` ``(n, n_steer)`` [rad] or None as joints
+    ``W_steer``) and ``/cmd_vel`` (Twist: the body twist ``command`` ``(n, 3)`` [m/s, m/s,
+    rad/s] held from the sample). Sample k is stamped ``start + t_k`` [s]. ``robot`` is the
+    commanding (nominal) robot whose odometry ``odometry`` is, so reading the bag's joint states
+    back with it reproduces ``/odom``. Messages are made and written one sample at a time.
+    Returns ``{topic: message count}``.
     """
     rb = _Rosbags.get()
     names = dict(RUN_TOPICS, **(topics or {}))
@@ -832,28 +885,29 @@ def record_run(
     if unknown:
         raise BagError(f"unknown run topic key(s) {unknown}; keys are {sorted(RUN_TOPICS)}")
     check_frame_ids(frame_id, child_frame_id)
-    start = check_start_time(
-        start, float(run.t[-1]), run.sampled.rate, "start", output="a ROS 2 bag", span=ROS_TIME_SPAN, step=1 / NS
-    )
-    t = np.asarray(run.t, dtype=float)
+    t = np.asarray(t, dtype=float)
+    start = check_start_time(start, float(t[-1]), rate, "start", output="a ROS 2 bag", span=ROS_TIME_SPAN, step=1 / NS)
     stamps = seconds_to_ns(t) + round(start * 1e9)
-    truth = np.asarray(run.truth)[0]
-    if truth.shape[0] != len(t):
-        raise BagError("record_run needs the full ground truth (simulate with keep_truth=True)")
-    wheels = _encoded_names(robot)
-    rpt = robot.rad_per_tick(wheels)
-    angles = np.asarray(run.ticks, dtype=float) * rpt
-    joint_names = list(wheels)
-    if run.steer is not None:
-        angles = np.concatenate([angles, np.asarray(run.steer, dtype=float)], axis=1)
+    truth = np.asarray(truth, dtype=float)
+    odometry = np.asarray(odometry, dtype=float)
+    cmd = np.asarray(command, dtype=float)
+    angles = np.asarray(wheel_angles, dtype=float)
+    joint_names = list(_encoded_names(robot))
+    if steer is not None:
+        angles = np.concatenate([angles, np.asarray(steer, dtype=float)], axis=1)
         joint_names += [f"{n}{steer_suffix}" for n in robot.steer_names]
-    dt = np.diff(t)
+    for what, value, columns in (
+        ("truth", truth, 3),
+        ("odometry", odometry, 3),
+        ("command", cmd, 3),
+        ("wheel angles", angles, len(joint_names)),
+    ):
+        if value.shape != (len(t), columns):
+            raise BagError(f"record_samples: {what} must have shape ({len(t)}, {columns}), got {value.shape}")
     speeds = np.zeros_like(angles)
-    speeds[1:] = np.diff(angles, axis=0) / dt[:, None]
-    cmd = np.zeros((len(t), 3))
-    cmd[:-1] = run.sampled.increments / dt[:, None]
+    speeds[1:] = np.diff(angles, axis=0) / np.diff(t)[:, None]
     truth_twist = interval_twists(t, truth)
-    odom_twist = interval_twists(t, run.odometry)
+    odom_twist = interval_twists(t, odometry)
     zero = np.zeros(36)
 
     def messages() -> Iterator[tuple[int, int, bytes]]:
@@ -870,7 +924,7 @@ def record_run(
                 ns,
                 _serialize(
                     rb,
-                    _odometry_msg(rb, ns, run.odometry[k], odom_twist[k], frame_id, child_frame_id, zero, zero),
+                    _odometry_msg(rb, ns, odometry[k], odom_twist[k], frame_id, child_frame_id, zero, zero),
                     ODOMETRY,
                 ),
             )
