@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
+from ..control.controllers import build_controller, check_controller, default_controller
 from ..control.path import Path, moved
 from ..control.trajectory import Trajectory
 from ..evaluation.tracking import TrackingRun
@@ -27,18 +28,11 @@ from ..kinematics.robot import Robot
 from ..simulation.error_models import SystematicErrors
 from .common import as_built, require_callable, require_viz, robot_of
 
-CONTROLLERS = {
-    "feedback": "feedforward plus feedback on the SE(2) error (layouts that translate: omni, mecanum)",
-    "mpc": "model predictive control with every wheel's speed and acceleration limit as constraints "
-    "(OSQP, extra control; layouts whose wheels do not steer)",
-    "pursuit": "regulated pure pursuit (layouts that drive along their heading: differential drives, cars)",
-}
-"""The controllers of :func:`track` by name, with what they are."""
-
 DEFAULT_CONTROLLER = None
 """The controller of :func:`track` when none is named: ``feedback`` for a layout that translates in
 any direction, ``mpc`` for one with fixed wheels that do not steer (a differential drive),
-``pursuit`` for one with fixed and steered wheels (a car)."""
+``pursuit`` for one with fixed and steered wheels (a car)
+(:func:`~omnikin.control.controllers.default_controller`)."""
 DEFAULT_RATE = 50.0
 """Control rate [Hz] of :func:`track`."""
 
@@ -87,7 +81,7 @@ class Tracking:
     trajectory : Trajectory
         The timed reference, in the path's frame.
     controller : str
-        The controller's name (:data:`CONTROLLERS`).
+        The controller's name (:data:`~omnikin.control.controllers.CONTROLLERS`).
     engine : str
         The engine's name.
     run : TrackingRun
@@ -205,9 +199,9 @@ def track(
         :mod:`omnikin.io.path_file`) or a built-in path (``"figure8 1"``, ``"circle 0.5"``,
         ``"square 1 0.2"``: :func:`~omnikin.control.path.parse_path`).
     controller : str, optional
-        One of :data:`CONTROLLERS`; default ``feedback`` for a layout that translates in any
-        direction, ``mpc`` for a differential drive, ``pursuit`` for a car
-        (:data:`DEFAULT_CONTROLLER`).
+        One of :data:`~omnikin.control.controllers.CONTROLLERS`; default ``feedback`` for a
+        layout that translates in any direction, ``mpc`` for a differential drive, ``pursuit``
+        for a car (:data:`DEFAULT_CONTROLLER`).
     engine : str or Engine, default "kinematic"
         ``"kinematic"`` or ``"physics"`` (MuJoCo, extra ``physics``), or an engine object.
     step : float, optional
@@ -258,9 +252,6 @@ def track(
     """
     from ..common.messages import shorten
     from ..common.resource_limits import require_within
-    from ..control.feedback import PoseFeedback
-    from ..control.mpc import PoseMPC
-    from ..control.pursuit import PurePursuit
     from ..control.time_optimal import WheelLimits
     from ..control.trajectory import plan_trajectory
     from ..errors import InputError
@@ -272,13 +263,13 @@ def track(
     from ..physics.engines import as_engine
 
     require_callable(on_cost=on_cost)
-    if controller is not None and (not isinstance(controller, str) or controller not in CONTROLLERS):
-        raise InputError(f"controller must be one of {', '.join(CONTROLLERS)}, got {shorten(controller)}")
+    if controller is not None:
+        check_controller(controller)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise InputError(f"seed must be a whole number >= 0, got {shorten(seed)}")
     nominal = robot_of(robot)
     if controller is None:
-        controller = ("pursuit" if nominal.steerable else "mpc") if nominal.fixed else "feedback"
+        controller = default_controller(nominal)
     if heading is None and nominal.fixed and not isinstance(path, Path) and not is_path_file(path):
         # a built-in path's own default may be a fixed heading; tangent is the only heading a
         # layout with fixed wheels can hold along a curve (a file's default is tangent already,
@@ -317,13 +308,7 @@ def track(
     # the run in the frame of the path's start (the robot starts there, at rest), given back in the path's
     start = trajectory.path.pose[0].copy()
     local = dataclasses.replace(trajectory, path=moved(trajectory.path, inverse(start)))
-    law: PoseFeedback | PoseMPC | PurePursuit
-    if controller == "feedback":
-        law = PoseFeedback(nominal, local, rate=rate)
-    elif controller == "mpc":
-        law = PoseMPC(nominal, local, rate=rate)
-    else:
-        law = PurePursuit(nominal, local, rate=rate)
+    law = build_controller(controller, nominal, local, rate=rate)
     run = drive(
         nominal,
         local,

@@ -54,7 +54,8 @@ solve_time_ms (p50, p95, max: the controller's wall time per tick) and more."""
 
 def add_parser(sub, robot_help: str) -> None:
     """Add ``track`` to ``sub``."""
-    from ..api.tracking import CONTROLLERS, DEFAULT_RATE
+    from ..api.tracking import DEFAULT_RATE
+    from ..control.controllers import CONTROLLERS
     from ..control.path import HEADINGS
     from ..simulation.error_models import NOISE
 

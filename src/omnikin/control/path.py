@@ -168,25 +168,31 @@ def from_samples(
         at = s[ends[short[0]]]
         raise InputError(f"path {name!r}: a piece between two stops at s = {at:.6g} m has no inner point")
     d1 = _piecewise_gradient(pose, s, ends)
-    d2 = _piecewise_gradient(d1, s, ends)
+    d2 = _piecewise_gradient(d1, s, ends, split=True)
     return Path(s, pose, d1, d2, stop, name, closed)
 
 
-def _piecewise_gradient(values: np.ndarray, s: np.ndarray, ends: np.ndarray) -> np.ndarray:
+def _piecewise_gradient(values: np.ndarray, s: np.ndarray, ends: np.ndarray, *, split: bool = False) -> np.ndarray:
     """``d values / ds`` ``(n, ...)`` by second-order differences piece by piece between the
     sample indices ``ends`` (never across one: a stop or a join); the sample that ends one piece
-    and starts the next takes the derivative of the piece it starts."""
+    and starts the next takes the derivative of the piece it starts. ``split``: the values
+    themselves are a piece's (derived from the derivatives, such as the direction of travel), so
+    the sample that ends a piece holds the next piece's value and each piece but the last is
+    differentiated without it; otherwise (positions, continuous across the joins) with it."""
     out = np.zeros_like(values, dtype=float)
-    for a, b in zip(ends[:-1], ends[1:], strict=True):
-        piece = slice(a, b + 1)
-        out[piece] = np.gradient(values[piece], s[piece], axis=0, edge_order=2)
+    last = len(ends) - 2
+    for k, (a, b) in enumerate(zip(ends[:-1], ends[1:], strict=True)):
+        stop = b + 1 if not split or k == last else b
+        piece = slice(a, stop)
+        out[piece] = np.gradient(values[piece], s[piece], axis=0, edge_order=2 if stop - a >= 3 else 1)
     return out
 
 
 def derivative(path: Path, values) -> np.ndarray:
-    """``d values / ds`` along ``path`` of values at its samples ``(n, k)``, piece by piece between
-    its stops (a corner stopped at is a kink)."""
-    return _piecewise_gradient(np.asarray(values, dtype=float), path.s, np.flatnonzero(path.stops))
+    """``d values / ds`` along ``path`` of values at its samples ``(n, k)`` that belong to the
+    pieces between its stops (a corner stopped at is a kink: the stop's sample holds the value of
+    the piece it starts, such as the wheel speeds per unit path speed along its direction)."""
+    return _piecewise_gradient(np.asarray(values, dtype=float), path.s, np.flatnonzero(path.stops), split=True)
 
 
 def body_rates(path: Path) -> np.ndarray:

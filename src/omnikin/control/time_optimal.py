@@ -33,7 +33,14 @@ import numpy as np
 
 from ..errors import InputError
 from ..kinematics.robot import Robot
+from ..motion.limits import MotionLimits
 from .path import Path, body_rates, derivative
+
+ACCEL_DIRECTIONS = 16
+"""Directions in which a body's linear acceleration limit is written as rows (:func:`body_rows`):
+the limit ``|a| <= A`` becomes ``|a . d_k| <= A cos(pi / (2 K))`` for ``K`` directions ``d_k``
+``pi / K`` apart, which keeps ``|a| <= A`` (every vector is within ``pi / (2 K)`` of some ``d_k``
+or its opposite) and gives up at most ``1 - cos(pi / 32)`` = 0.48 % of it."""
 
 
 @dataclass(frozen=True)
@@ -46,6 +53,9 @@ class WheelLimits:
         Largest wheel speed ``|omega|`` [rad/s] (a wheel's own ``max_speed`` applies too).
     accel : float
         Largest wheel acceleration ``|omegadot|`` [rad/s^2].
+
+    With ``inf`` speed or acceleration the wheels are not what limits the timing: the body's
+    limits of :func:`time_optimal` must then bound it.
     steer_rate : float
         Largest steering rate [rad/s] of a steerable wheel.
     """
@@ -59,8 +69,6 @@ class WheelLimits:
             v = getattr(self, name)
             if isinstance(v, bool) or not (isinstance(v, (int, float)) and v > 0 and not math.isnan(v)):
                 raise InputError(f"WheelLimits.{name} must be a number > 0 (inf: no limit), got {v!r}")
-            if name != "steer_rate" and math.isinf(v):
-                raise InputError(f"WheelLimits.{name} must be finite, got {v!r}")
 
 
 @dataclass(frozen=True)
@@ -133,7 +141,7 @@ def speed_ceiling(rates: PathRates, speed: np.ndarray, steer_rate: float) -> np.
     return x
 
 
-def _row_lines(a: np.ndarray, b: np.ndarray, accel: float):
+def _row_lines(a: np.ndarray, b: np.ndarray, accel: float | np.ndarray):
     """The acceleration rows ``|a u + b x| <= accel`` as bounds on ``u`` linear in ``x``:
     ``u >= p + q x`` and ``u <= -p + q x`` with ``p = -accel/|a|``, ``q = -b/a`` (rows with
     ``a = 0`` bound ``x`` alone: returned as ``xcap``)."""
@@ -187,9 +195,46 @@ class Timing:
         return float(self.t[-1])
 
 
-def time_optimal(robot: Robot, path: Path, limits: WheelLimits | None = None) -> Timing:
+def body_rows(path: Path, body: MotionLimits) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The limits of the body's motion (a runtime's :class:`~omnikin.motion.limits.MotionLimits`:
+    the speed ``hypot(vx, vy)``, the turn rate ``|omega|`` and their accelerations) as rows along
+    ``path`` for :func:`time_rates`, from the body twist per unit path speed ``xi(s)``
+    (:func:`~omnikin.control.path.body_rates`, body frame, as the runtime's command filter sees
+    it):
+
+    - speed: ``hypot(xi_x, xi_y) sdot <= linear`` (no acceleration of its own);
+    - turn: ``|xi_w sdot| <= angular`` and ``|xi_w sddot + xi_w' sdot^2| <= angular_accel``;
+    - linear acceleration ``|xi_xy sddot + xi_xy' sdot^2| <= linear_accel``: the rows of
+      :data:`ACCEL_DIRECTIONS` directions (no speed limit of their own).
+
+    ``body.wheel`` is not among them (a wheel limit is :class:`WheelLimits`'). Returns the rows
+    ``(n, m)``, their speed limits ``(m,)`` and their acceleration limits ``(m,)`` (``inf``:
+    none)."""
+    xi = body_rates(path)
+    rows, speed, accel = [], [], []
+    if body.linear is not None:
+        rows.append(np.hypot(xi[:, 0], xi[:, 1]))
+        speed.append(body.linear)
+        accel.append(math.inf)
+    if body.angular is not None or body.angular_accel is not None:
+        rows.append(xi[:, 2])
+        speed.append(math.inf if body.angular is None else body.angular)
+        accel.append(math.inf if body.angular_accel is None else body.angular_accel)
+    if body.linear_accel is not None:
+        phi = np.pi * np.arange(ACCEL_DIRECTIONS) / ACCEL_DIRECTIONS
+        rows.extend(list((xi[:, :1] * np.cos(phi) + xi[:, 1:2] * np.sin(phi)).T))
+        speed.extend([math.inf] * ACCEL_DIRECTIONS)
+        accel.extend([body.linear_accel * math.cos(math.pi / (2 * ACCEL_DIRECTIONS))] * ACCEL_DIRECTIONS)
+    w = np.column_stack(rows) if rows else np.zeros((len(path.s), 0))
+    return w, np.array(speed, dtype=float), np.array(accel, dtype=float)
+
+
+def time_optimal(
+    robot: Robot, path: Path, limits: WheelLimits | None = None, body: MotionLimits | None = None
+) -> Timing:
     """The fastest timing of ``path`` by ``robot`` from rest to rest, every wheel within
-    ``limits`` (module docstring), stopping where the path says (``path.stops``).
+    ``limits`` and the body within ``body`` (module docstring), stopping where the path says
+    (``path.stops``).
 
     Parameters
     ----------
@@ -199,6 +244,10 @@ def time_optimal(robot: Robot, path: Path, limits: WheelLimits | None = None) ->
         The path, with its samples and derivatives.
     limits : WheelLimits, optional
         Default :class:`WheelLimits` ().
+    body : MotionLimits, optional
+        Limits of the body's speed, turn rate and their accelerations, as a runtime's command
+        filter applies them (:func:`body_rows`); its ``wheel`` limits the wheel speeds too.
+        Default none.
 
     Returns
     -------
@@ -208,18 +257,30 @@ def time_optimal(robot: Robot, path: Path, limits: WheelLimits | None = None) ->
     Raises
     ------
     InputError
-        A path the robot cannot drive (:func:`path_rates`).
+        A path the robot cannot drive (:func:`path_rates`), or no limit that bounds its speed.
     """
     limits = WheelLimits() if limits is None else limits
     rates = path_rates(robot, path)
-    speed = np.array([min(limits.speed, w.max_speed or math.inf) for w in robot.rolling])
-    return time_rates(path, rates, speed, limits.accel, limits.steer_rate)
+    wheel = limits.speed if body is None or body.wheel is None else min(limits.speed, body.wheel)
+    speed = np.array([min(wheel, w.max_speed or math.inf) for w in robot.rolling])
+    accel = np.full(len(speed), float(limits.accel))
+    if body is not None:
+        rows, body_speed, body_accel = body_rows(path, body)
+        rates = PathRates(
+            np.column_stack((rates.w, rows)),
+            np.column_stack((rates.dw, derivative(path, rows))),
+            rates.steer,
+            rates.dsteer,
+        )
+        speed = np.concatenate((speed, body_speed))
+        accel = np.concatenate((accel, body_accel))
+    return time_rates(path, rates, speed, accel, limits.steer_rate)
 
 
-def time_rates(path: Path, rates: PathRates, speed, accel: float, steer_rate: float = math.inf) -> Timing:
+def time_rates(path: Path, rates: PathRates, speed, accel, steer_rate: float = math.inf) -> Timing:
     """The fastest timing of ``path`` from rest to rest under rows of any meaning: each row ``j``
     of ``rates.w`` (a rate per unit path speed, ``rates.dw`` its derivative) kept within
-    ``|w_j sdot| <= speed_j`` and ``|w_j sddot + w_j' sdot^2| <= accel`` (module docstring).
+    ``|w_j sdot| <= speed_j`` and ``|w_j sddot + w_j' sdot^2| <= accel_j`` (module docstring).
     :func:`time_optimal` gives it the wheels' rows; other limits of the body's motion written as
     rows (a box or a polygon of twists, :mod:`omnikin.control.twist_limits`) are timed the same way.
 
@@ -231,21 +292,28 @@ def time_rates(path: Path, rates: PathRates, speed, accel: float, steer_rate: fl
         The rows ``(n, rows)`` along the path and their derivatives; steering angles and their
         derivative ``(n, n_steer)``.
     speed : array_like, shape (rows,)
-        The speed limit of each row.
-    accel : float
-        The acceleration limit of every row.
+        The speed limit of each row (``inf``: none).
+    accel : float or array_like, shape (rows,)
+        The acceleration limit of every row, or of each (``inf``: none).
     steer_rate : float, default inf
         Largest steering rate [rad/s].
 
     Returns
     -------
     Timing
+
+    Raises
+    ------
+    InputError
+        No limit bounds the path speed somewhere (every row's limits infinite there).
     """
     speed = np.asarray(speed, dtype=float)
+    accel = np.broadcast_to(np.asarray(accel, dtype=float), speed.shape)
     ds = np.diff(path.s)
     n = len(path.s)
     xmax = speed_ceiling(rates, speed, steer_rate)
-    p, q, xcap = _row_lines(rates.w, rates.dw, accel)
+    held = np.isfinite(accel)  # the rows with an acceleration limit
+    p, q, xcap = _row_lines(rates.w[:, held], rates.dw[:, held], accel[held])
     xmax = np.minimum(xmax, xcap)
     xmax[:-1] = np.minimum(xmax[:-1], _static_cap(p[:-1], q[:-1], ds))
     xmax[path.stops] = 0.0
@@ -295,6 +363,11 @@ def time_rates(path: Path, rates: PathRates, speed, accel: float, steer_rate: fl
         u[i] = (new - cur) / two
         cur = new
         x[i + 1] = cur
+    if not np.all(np.isfinite(x)):
+        k = int(np.argmax(~np.isfinite(x)))
+        raise InputError(
+            f"path {path.name!r}: nothing limits the speed at s = {path.s[k]:.6g} m (every limit there is infinite)"
+        )
     sdot = np.sqrt(x)
     mean = sdot[:-1] + sdot[1:]
     if np.any(mean <= 0):

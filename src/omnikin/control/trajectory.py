@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..kinematics.robot import Robot
+from ..motion.limits import MotionLimits
 from .path import Path
 from .time_optimal import Timing, WheelLimits, path_rates, time_optimal
 
@@ -40,11 +41,13 @@ class Trajectory:
     timing : Timing
         Time, path speed and acceleration at the path's samples.
     limits : WheelLimits
-        The limits it was timed within.
+        The wheel limits it was timed within.
     wheel_speeds : ndarray, shape (n, n_wheels)
         Wheel speeds [rad/s] at the samples (rolling wheels, file order).
     steer : ndarray, shape (n, n_steer)
         Steering angles [rad] at the samples.
+    body : MotionLimits or None
+        The body's limits it was timed within too (None: none).
     """
 
     path: Path
@@ -52,6 +55,7 @@ class Trajectory:
     limits: WheelLimits
     wheel_speeds: np.ndarray
     steer: np.ndarray
+    body: MotionLimits | None = None
 
     @property
     def duration(self) -> float:
@@ -93,8 +97,10 @@ class Trajectory:
         return pose, d1 * speed, d2 * speed**2 + d1 * u[..., None]
 
 
-def plan_trajectory(robot: Robot, path: Path, limits: WheelLimits | None = None) -> Trajectory:
-    """The fastest :class:`Trajectory` of ``robot`` along ``path`` within ``limits``
+def plan_trajectory(
+    robot: Robot, path: Path, limits: WheelLimits | None = None, body: MotionLimits | None = None
+) -> Trajectory:
+    """The fastest :class:`Trajectory` of ``robot`` along ``path`` within ``limits`` and ``body``
     (:func:`~omnikin.control.time_optimal.time_optimal`).
 
     Parameters
@@ -105,6 +111,8 @@ def plan_trajectory(robot: Robot, path: Path, limits: WheelLimits | None = None)
         The path.
     limits : WheelLimits, optional
         Wheel speed, acceleration and steering-rate limits; default :class:`WheelLimits` ().
+    body : MotionLimits, optional
+        The body's speed, turn-rate and acceleration limits (a runtime's); default none.
 
     Returns
     -------
@@ -118,6 +126,8 @@ def plan_trajectory(robot: Robot, path: Path, limits: WheelLimits | None = None)
     limits = WheelLimits() if limits is None else limits
     if not isinstance(limits, WheelLimits):
         raise InputError(f"limits must be WheelLimits, got {type(limits).__name__}")
-    timing = time_optimal(robot, path, limits)
+    if body is not None and not isinstance(body, MotionLimits):
+        raise InputError(f"body must be MotionLimits, got {type(body).__name__}")
+    timing = time_optimal(robot, path, limits, body)
     rates = path_rates(robot, path)
-    return Trajectory(path, timing, limits, rates.w * timing.sdot[:, None], rates.steer)
+    return Trajectory(path, timing, limits, rates.w * timing.sdot[:, None], rates.steer, body)

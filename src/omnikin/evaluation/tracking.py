@@ -15,13 +15,14 @@ The errors are the ground truth's distance to the *path* (the nearest point of i
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 
+from ..control.controllers import Controller
 from ..control.trajectory import Trajectory, control_period
 from ..errors import InputError
 from ..kinematics.robot import Robot
@@ -29,17 +30,6 @@ from ..kinematics.se2 import wrap_angle
 from ..motion.limits import MotionLimits
 from ..runtime.base import BaseRuntime
 from ..simulation.engine import Engine, KinematicEngine
-
-
-class Controller(Protocol):
-    """What :func:`track` drives: a body twist from the time and the robot's pose."""
-
-    name: str
-
-    def command(self, t: float, pose) -> np.ndarray:
-        """Body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] to hold from ``t`` [s], the robot at
-        ``pose`` ``(x, y, theta)`` [m, m, rad]."""
-        ...
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -100,7 +90,7 @@ def track(
     robot : Robot
         The nominal robot: the runtime's model (inverse kinematics, odometry).
     trajectory : Trajectory
-        The timed reference; its wheel speed limit is the runtime's.
+        The timed reference; its wheel speed limit and body limits are the runtime's.
     controller : Controller
         Gives the body twist at each tick.
     engine : Engine, optional
@@ -125,9 +115,9 @@ def track(
     if not (isinstance(settle, (int, float)) and math.isfinite(settle) and 0 <= settle <= 3600):
         raise InputError(f"settle must be in [0, 3600] s, got {settle!r}")
     backend = engine.backend(robot, true_robot, noise=noise, rng=rng)
-    limits = MotionLimits(
-        linear=None, angular=None, linear_accel=None, angular_accel=None, wheel=trajectory.limits.speed
-    )
+    wheel = trajectory.limits.speed
+    body = trajectory.body or MotionLimits(linear=None, angular=None, linear_accel=None, angular_accel=None)
+    limits = dataclasses.replace(body, wheel=min(wheel, body.wheel or math.inf) if math.isfinite(wheel) else body.wheel)
     runtime = BaseRuntime(robot, backend, limits=limits, cmd_vel_timeout=0.0)
     n = int(math.floor((trajectory.duration + settle) * rate + 1e-9)) + 1
     t = np.arange(n) / rate
