@@ -205,3 +205,29 @@ def diagnostic_status(
     if problems:
         return WARN, "; ".join(problems)
     return OK, "running"
+
+
+def yaw(x: float, y: float, z: float, w: float) -> float:
+    """The heading [rad] of a quaternion ``(x, y, z, w)``: the rotation about z of its rotation
+    (ZYX Euler yaw, ``atan2(2 (w z + x y), 1 - 2 (y^2 + z^2))``); a quaternion that is not unit
+    counts by its direction, and the zero quaternion (never a rotation) reads as 0."""
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)) if (x or y or z or w) else 0.0
+
+
+def plan_frame_error(frame: str, odom_frame: str) -> str | None:
+    """Why a ``nav_msgs/Path`` in ``frame`` cannot be followed (None when it can): the node
+    follows paths in its odometry frame (an empty frame counts as it); it looks up no transform."""
+    if frame in ("", odom_frame):
+        return None
+    return (
+        f"path in frame {frame!r} refused: this node follows paths in its odometry frame {odom_frame!r} "
+        f"(it looks up no transform; publish the plan in {odom_frame!r})"
+    )
+
+
+def reference_samples(trajectory, period: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
+    """The timed reference of a followed path as ``nav_msgs/Path`` content: times ``(m,)`` [s from
+    its start], ``period`` apart and its end, and poses ``(m, 3)`` [m, m, rad] in odom."""
+    t = np.append(np.arange(0.0, trajectory.duration, period), trajectory.duration)
+    pose, _, _ = trajectory.at(t)
+    return t, pose

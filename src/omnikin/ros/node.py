@@ -19,6 +19,18 @@ once and publishes no ``/tf``; run it from a ROS 2 install (``source /opt/ros/<d
 setup.bash``) to get it. Parameters: :mod:`omnikin.ros.params`; message content:
 :mod:`omnikin.ros.messages` (this module only copies it into messages).
 
+Paths: a ``nav_msgs/Path`` on ``plan`` (in the odometry frame, or with an empty frame id) is
+followed (:mod:`omnikin.control.follower`): planned from the robot's pose on a worker thread, timed
+within 95 % of the node's limits (its body limits and ``wheel_max_velocity``, every wheel's own
+``max_speed``), tracked by the controller of ``path_controller`` steering by the odometry, each
+control cycle. While it is followed, ``reference`` (``geometry_msgs/PoseStamped``) is the
+reference pose of the cycle and ``reference_path`` (``nav_msgs/Path``, transient local) the timed
+reference, each pose stamped at the time the robot is due there; ``/diagnostics`` carries a
+second status, ``omnikin path``, with the state and the tracking error (the odometry's distance to
+the reference point and to the path). Any ``cmd_vel``, an empty path, or a new path stops the
+path followed: the person at the keyboard wins. A path in another frame, or one the robot cannot
+drive, is refused: the robot stops, the log and ``omnikin path`` (WARN) say why.
+
 The control loop runs at ``publish_rate`` on a steady-clock timer: read the wheels, update
 the odometry, filter the command (timeout, limits), command the wheels, publish. Time inside
 the runtime is the monotonic clock; message stamps are the node's ROS clock. A
@@ -50,13 +62,18 @@ first gives the one-line error naming the ``ros`` extra).
 from __future__ import annotations
 
 import dataclasses
+import math
 import signal
+import threading
 import time
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
 
 from ..common.messages import digits_apart
+from ..control.follower import MAX_WAYPOINTS, FollowPlan, PathFollower, plan_follow
+from ..control.time_optimal import WheelLimits
 from ..errors import InputError, LinkError, OmnikinError
 from ..kinematics.se2 import between, log
 from ..motion.limits import MotionLimits
@@ -71,8 +88,9 @@ from .params import DEFAULTS, check_names, validate
 try:
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-    from geometry_msgs.msg import TransformStamped, Twist, TwistStamped
+    from geometry_msgs.msg import PoseStamped, TransformStamped, Twist, TwistStamped
     from nav_msgs.msg import Odometry
+    from nav_msgs.msg import Path as PathMessage
     from rcl_interfaces.msg import ParameterDescriptor
     from rclpy.clock import Clock, ClockType
     from rclpy.executors import ExternalShutdownException
@@ -152,6 +170,7 @@ class BaseNode(Node):
         self.odom_pub = self.create_publisher(Odometry, "odom", qos)
         self.joint_pub = self.create_publisher(JointState, "joint_states", qos)
         self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self._init_following(robot, limits)
         self.truth_pub = None  # ground truth: only a simulated back-end knows it
         self._simulated: Any = backend  # its ``truth`` [m, m, rad], when it has one
         if getattr(backend, "truth", None) is not None:
@@ -195,6 +214,21 @@ class BaseNode(Node):
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(self.period, self._loop, clock=steady)
         self.create_timer(1.0, self._diagnostics, clock=steady)
+
+    def _init_following(self, robot, limits: MotionLimits) -> None:
+        """The path follower (module docstring): ``plan`` in, ``reference`` and
+        ``reference_path`` out, one planning thread."""
+        self.follower = PathFollower()
+        self._body = limits
+        self._wheels = WheelLimits(speed=limits.wheel or math.inf, accel=math.inf)
+        self._planner = ThreadPoolExecutor(max_workers=1, thread_name_prefix="omnikin-plan")
+        self._plan_lock = threading.Lock()
+        self._plan_generation = 0  # a path received, or a command that cancels it
+        self._planning: tuple[int, Future] | None = None
+        self.paths_received = 0
+        self.create_subscription(PathMessage, "plan", self._on_plan, 10)
+        self.reference_pub = self.create_publisher(PoseStamped, "reference", 10)
+        self.reference_path_pub = self.create_publisher(PathMessage, "reference_path", LATCHED)
 
     def _describe_robot(self, robot) -> None:
         """Publish ``robot_description`` (once, latched) and prepare the joints and links the
@@ -263,7 +297,117 @@ class BaseNode(Node):
             tw = msg.twist
         else:
             t, tw = received, msg
+        self._cancel_path("a cmd_vel arrived (the person at the keyboard wins)")
         self.runtime.command((tw.linear.x, tw.linear.y, tw.angular.z), t)
+
+    def _cancel_path(self, why: str) -> None:
+        """Stop the path followed and drop one being planned; the robot brakes to a stop unless
+        a command follows."""
+        with self._plan_lock:
+            self._plan_generation += 1
+            self._planning = None
+        if self.follower.stop(why):
+            self.get_logger().info(f"path stopped: {why}")
+            self.runtime.command(np.zeros(3), self.now_s())
+
+    def _on_plan(self, msg) -> None:
+        """A ``nav_msgs/Path`` on ``plan``: stop what was followed, then plan the new one from the
+        pose the robot has, on the planning thread (:meth:`_cycle` starts it when it is ready).
+        Nothing a peer sends stops the node: what cannot be followed is refused."""
+        self.paths_received += 1
+        try:
+            self._receive_plan(msg)
+        except Exception as exc:  # (a message no check foresaw: refused, the node keeps running)
+            self._refuse_path(f"path refused: {type(exc).__name__}: {exc} (a bug in omnikin: please report it)")
+
+    def _receive_plan(self, msg) -> None:
+        n = len(msg.poses)
+        if n == 0:
+            self._cancel_path("an empty path arrived")
+            return
+        self._cancel_path("a new path arrived")
+        why = messages.plan_frame_error(msg.header.frame_id, self.p["odom_frame_id"])
+        if why is None and n > MAX_WAYPOINTS:
+            why = f"path of {n} poses refused: more than {MAX_WAYPOINTS}"
+        if why is not None:
+            self._refuse_path(why)
+            return
+        waypoints = np.empty((n, 3))
+        for k, stamped in enumerate(msg.poses):
+            position, q = stamped.pose.position, stamped.pose.orientation
+            waypoints[k] = (position.x, position.y, messages.yaw(q.x, q.y, q.z, q.w))
+        with self._plan_lock:
+            generation = self._plan_generation
+            future = self._planner.submit(self._plan, generation, waypoints, np.array(self.runtime.pose, dtype=float))
+            self._planning = (generation, future)
+
+    def _plan(self, generation: int, waypoints: np.ndarray, pose: np.ndarray) -> FollowPlan | None:
+        """The planning thread: the path followed from ``pose`` (None when a newer path or a
+        command came first)."""
+        if generation != self._plan_generation:
+            return None
+        p = self.p
+        return plan_follow(
+            self.robot,
+            waypoints,
+            pose,
+            limits=self._wheels,
+            body=self._body,
+            controller=None if p["path_controller"] == "auto" else p["path_controller"],
+            heading=p["path_heading"],
+            smooth=p["path_smooth"],
+            blend=p["path_blend"],
+            rate=p["publish_rate"],
+            name="plan",
+        )
+
+    def _refuse_path(self, why: str) -> None:
+        if self.follower.refuse(why):
+            self.runtime.command(np.zeros(3), self.now_s())
+        self.get_logger().warning(why, throttle_duration_sec=1.0)
+
+    def _start_planned(self, now: float) -> None:
+        """Begin a path whose planning has finished (or report why it cannot be followed)."""
+        with self._plan_lock:
+            if self._planning is None or not self._planning[1].done():
+                return
+            generation, future = self._planning
+            self._planning = None
+            if generation != self._plan_generation:
+                return
+        try:
+            plan = future.result()
+        except OmnikinError as exc:
+            self._refuse_path(f"path refused: {exc}")
+            return
+        except Exception as exc:  # a bug in the planning: reported, the node keeps running
+            self._refuse_path(f"path refused: planning failed ({type(exc).__name__}: {exc})")
+            return
+        if plan is None:
+            return
+        self.follower.begin(plan, now)
+        self.get_logger().info(self.follower.summary())
+        self._publish_reference_path(plan)
+
+    def _publish_reference_path(self, plan: FollowPlan) -> None:
+        t, poses = messages.reference_samples(plan.trajectory)
+        start = self.get_clock().now().nanoseconds
+        msg = PathMessage()
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.frame_id = self.p["odom_frame_id"]
+        for tk, pose in zip(t, poses, strict=True):
+            msg.poses.append(self._pose_stamped(start + round(float(tk) * 1e9), pose))
+        self.reference_path_pub.publish(msg)
+
+    def _pose_stamped(self, nanoseconds: int, pose) -> Any:
+        out = PoseStamped()
+        out.header.stamp.sec, out.header.stamp.nanosec = divmod(int(nanoseconds), 1_000_000_000)
+        out.header.frame_id = self.p["odom_frame_id"]
+        x, y, theta = (float(v) for v in pose)
+        out.pose.position.x, out.pose.position.y = x, y
+        q = out.pose.orientation
+        q.x, q.y, q.z, q.w = messages.quaternion(theta)
+        return out
 
     def _loop(self):
         now = self.now_s()
@@ -284,20 +428,37 @@ class BaseNode(Node):
         if self._first_loop is None:
             self._first_loop = now
         self.loops += 1
+        self._start_planned(now)
         try:
-            res = self.runtime.step(now)
+            res = self._step(now)
         except LinkError as exc:  # link lost: the back-end already commands zero speeds
             self.link_error = str(exc)
             self.get_logger().error(str(exc), throttle_duration_sec=1.0)
+            self._cancel_path("the wheels' link was lost")
             self._retry_link()
             return
         except OmnikinError as exc:  # a bug or a bad back-end, not a lost link
+            self._cancel_path("a control step failed")
             self._step_failed(exc, now)
             return
         self.link_error = ""
         self._next_retry = None
         self._publish(res)
         self._publish_truth(now)
+
+    def _step(self, now: float):
+        """One control step: a path followed commands from the pose just measured."""
+        if not self.follower.following:
+            return self.runtime.step(now)
+        state = self.runtime.sense(now)
+        twist = self.follower.command(now, self.runtime.pose)
+        if twist is None:  # the path's end has settled: brake to a stop
+            self.get_logger().info(self.follower.summary())
+            twist = np.zeros(3)
+        else:
+            self.reference_pub.publish(self._pose_stamped(self.get_clock().now().nanoseconds, self.follower.reference))
+        self.runtime.command(twist, now)
+        return self.runtime.act(now, state)
 
     def _publish(self, res) -> None:
         stamp = self.get_clock().now().to_msg()
@@ -456,10 +617,24 @@ class BaseNode(Node):
             level=bytes([level]), name="omnikin base", message=message, hardware_id=self.robot.name
         )
         status.values = [KeyValue(key=k, value=v) for k, v in values]
+        follower = self.follower
+        path_status = DiagnosticStatus(
+            level=bytes([messages.WARN if follower.state == "refused" else messages.OK]),
+            name="omnikin path",
+            message=follower.summary(),
+            hardware_id=self.robot.name,
+        )
+        path_values = [*follower.values(), ("paths_received", str(self.paths_received))]
+        path_status.values = [KeyValue(key=k, value=v) for k, v in path_values]
         arr = DiagnosticArray()
         arr.header.stamp = self.get_clock().now().to_msg()
-        arr.status = [status]
+        arr.status = [status, path_status]
         self.diag_pub.publish(arr)
+
+    def close_planner(self) -> None:
+        """Drop the paths waiting to be planned; one being planned finishes on its own thread."""
+        self._cancel_path("the node is stopping")
+        self._planner.shutdown(wait=False, cancel_futures=True)
 
     def stop_wheels(self, now: float | None = None) -> None:
         """Command zero speed to every rolling wheel (steering left where it is)."""
@@ -501,6 +676,7 @@ def run(robot, backend, values: dict, ros_args=None) -> int:
         except OmnikinError as exc:
             node.get_logger().error(f"cannot command zero wheel speeds: {exc}")
         backend.close()
+        node.close_planner()
         node.destroy_node()
         if rclpy.ok():
             rclpy.shutdown()

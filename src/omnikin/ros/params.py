@@ -17,6 +17,10 @@
 | ``wheel_slip`` | 2e-4 | sqrt(m), per-wheel slip intensity of the odometry covariance |
 | ``reject_above`` | 100.0 | commands beyond this many times a limit are rejected as malformed |
 | ``link_retry_period`` | 1.0 | s between attempts to re-arm a lost serial link (0: stay stopped) |
+| ``path_controller`` | ``auto`` | a path's controller: feedback, mpc, pursuit, or auto (by layout, as track) |
+| ``path_heading`` | ``given`` | a path's heading: given (its poses'), tangent, fixed, free (fixed wheels: tangent) |
+| ``path_smooth`` | true | a smooth curve through a path's poses (a planner's dense path); false: straight segments |
+| ``path_blend`` | 0.0 | m, radius of the arcs that cut the corners of a path that is not smooth (0: stop at them) |
 
 A ``--params FILE`` is YAML (read with :func:`omnikin.io.robot_file.strict_yaml_loader`:
 duplicate keys and explicit tags refused, ``2e-4`` a number), either flat (``cmd_vel_timeout: 0.2``) or in the
@@ -35,6 +39,8 @@ import math
 from pathlib import Path
 
 from ..common.messages import shorten
+from ..control.controllers import CONTROLLERS
+from ..control.follower import FOLLOW_HEADINGS
 from ..errors import InputError
 
 DEFAULTS = {
@@ -53,6 +59,10 @@ DEFAULTS = {
     "wheel_slip": 2e-4,
     "reject_above": 100.0,
     "link_retry_period": 1.0,
+    "path_controller": "auto",
+    "path_heading": "given",
+    "path_smooth": True,
+    "path_blend": 0.0,
 }
 
 
@@ -149,8 +159,15 @@ RANGES = {
     "wheel_slip": (0.0, 1.0, True),
     "reject_above": (1.0, 1e9, True),
     "link_retry_period": (0.0, 3600.0, True),
+    "path_blend": (0.0, 100.0, True),
 }
 """Allowed ``(low, high, low_inclusive)`` of the numeric parameters."""
+
+CHOICES = {
+    "path_controller": ("auto", *CONTROLLERS),
+    "path_heading": FOLLOW_HEADINGS,
+}
+"""Allowed values of the text parameters that name a choice."""
 
 
 def validate(values: dict, source: str) -> dict:
@@ -175,5 +192,8 @@ def validate(values: dict, source: str) -> dict:
                 raise InputError(
                     f"{source}: parameter {key!r} must be finite, {rel} {low:g} and <= {high:g}, got {value!r}"
                 )
+        if key in CHOICES and value not in CHOICES[key]:
+            choices = ", ".join(repr(c) for c in CHOICES[key])
+            raise InputError(f"{source}: parameter {key!r} must be one of {choices}, got {shorten(value)}")
         out[key] = value
     return out
