@@ -75,3 +75,12 @@ def test_rviz_config_alone_and_robot_otherwise(capsys, argv, says):
     rc, out, err = run_cli(capsys, *argv)
     assert rc == 2 and out == ""
     assert says in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_rviz_config_draws_the_path_followed_and_its_reference_point(config_path):
+    shown = displays(yaml.safe_load(config_path.read_text()))
+    (path,) = shown["rviz_default_plugins/Path"]
+    # reference_path is published once per path, transient local: a volatile subscriber misses it
+    assert path["Topic"]["Value"] == "/reference_path" and path["Topic"]["Durability Policy"] == "Transient Local"
+    (pose,) = shown["rviz_default_plugins/Pose"]
+    assert pose["Topic"]["Value"] == "/reference" and pose["Enabled"] is True
