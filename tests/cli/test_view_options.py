@@ -25,6 +25,11 @@ from support.cli import run_cli
         (["tomasi-omni3", "--umbmark-side", "-2"], "--umbmark-side (0: none): the side of the UMBmark square"),
         (["tomasi-omni3", "--duration", "0"], "--duration must be positive"),
         ([], "give ROBOT"),
+        (["tomasi-omni3", "--ros", "--path", "circle 1"], "--path is followed by the simulated robot of a live page"),
+        (["tomasi-omni3", "--blend", "0.2"], "--blend and --smooth shape a --path file; give --path"),
+        (["tomasi-omni3", "--path", "circle 1", "--smooth"], "--blend and --smooth are for path files"),
+        (["tomasi-omni3", "--path", "figure9 1"], "unknown path 'figure9 1'"),
+        (["tomasi-omni3", "--path", "no-such.csv"], "no-such.csv"),
     ],
 )
 def test_view_refuses_in_one_line(capsys, argv, words):

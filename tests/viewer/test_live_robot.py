@@ -214,3 +214,40 @@ def test_a_loop_that_runs_late_drives_as_one_that_steps_every_control_period():
     live.step(0.02)  # the ramp from step 0 (dt 0.02), as ramp_distance with the press at step 0
     s, _ = live.step(1.02)  # a stall of 1 s (50 control periods)
     assert s.truth[0] == pytest.approx(ramp_distance(SPEED, ACCEL, 0, 10**6, 51), abs=1e-9)
+
+
+def distance_to_polyline(points, corners) -> np.ndarray:
+    """Distance of ``points`` ``(n, 2)`` to the polyline through ``corners``."""
+    corners = np.asarray(corners, dtype=float)
+    best = np.full(len(points), np.inf)
+    for a, b in zip(corners[:-1], corners[1:], strict=True):
+        d = b - a
+        f = np.clip(((points - a) @ d) / (d @ d), 0.0, 1.0)
+        best = np.minimum(best, np.hypot(*(points - a - f[:, None] * d).T))
+    return best
+
+
+def test_a_path_followed_from_the_page_ends_on_its_last_waypoint_without_leaving_the_segments():
+    live = LiveRobot(load_robot("omni4"))
+    corners = [(0.0, 0.0), (0.5, 0.0), (0.5, 0.5)]
+    live.follow(corners[1:], smooth=False, heading="fixed")  # from the robot at the origin
+    truth = []
+    drive(live, 1000, lambda k, t: truth.append(live.backend.truth.copy()) if k else None)
+    assert live.follower.state == "done" and live.notice == ""
+    truth = np.array(truth)
+    assert truth[-1] == pytest.approx([0.5, 0.5, 0.0], abs=1e-6)
+    assert distance_to_polyline(truth[:, :2], corners).max() < 1e-4
+
+
+def test_a_key_stops_the_path_followed_and_a_path_that_goes_nowhere_is_refused_in_one_line():
+    live = LiveRobot(load_robot("omni4"))
+    live.follow([(2.0, 0.0)])
+    drive(live, 50)
+    assert live.follower.following
+    drive(live, 2, lambda k, t: live.key({"type": "press", "action": "left"}) if k == 51 else None, start=51)
+    assert live.follower.state == "stopped" and live.follower.note == "a key took over"
+    live.follow([(live.pose[0] + 0.0002, live.pose[1])])
+    drive(live, 1, start=54)
+    assert live.follower.state == "refused"
+    nowhere = r"path 'plan': it does not go anywhere \(every waypoint within 1 mm of the robot\)"
+    assert re.fullmatch(nowhere, live.notice)

@@ -14,7 +14,7 @@ import msgspec
 import pytest
 
 from support.browser import wait_until
-from support.viewer_wire import ViserClient, notices, start_viewer, stop_viewer
+from support.viewer_wire import ViserClient, notices, served, start_viewer, stop_viewer
 
 CAMERA = {
     "type": "ViewerCameraMessage",
@@ -66,10 +66,31 @@ def hostile_updates(key: str, control: dict) -> list[dict]:
     return hostile
 
 
+CLICK = {
+    "type": "ScenePointerMessage",
+    "event_type": "click",
+    "ray_origin": [1.0, 2.0, 5.0],
+    "ray_direction": [0.1, -0.2, -1.0],
+    "screen_pos": [[0.5, 0.5]],
+    "modifier": "shift",
+}
+"""A shift-click on the floor, as viser's client sends it (the live page takes clicks: its Path folder)."""
+
+
 def hostile_messages() -> list[dict | bytes | str]:
     """Messages no page of omnikin sends (not of one control)."""
     nan_camera = dict(CAMERA, fov=math.nan)
     return [
+        dict(CLICK, ray_origin=[math.nan, 0.0, 5.0]),
+        dict(CLICK, ray_origin=[1e300, 0.0, 5.0]),
+        dict(CLICK, ray_direction=[0.0, 0.0, 0.0]),
+        dict(CLICK, ray_direction=[0.0, 0.0, -math.inf]),
+        dict(CLICK, event_type="rect-select", screen_pos=[[0.0, 0.0], [1.0, 1.0]]),
+        dict(CLICK, screen_pos=[[2.0, 0.5]]),
+        dict(CLICK, screen_pos=[]),
+        dict(CLICK, modifier="hyper"),
+        dict(CLICK, extra=1),
+        {k: v for k, v in CLICK.items() if k != "ray_origin"},
         update("no-such-control", value=1.0),
         update(12345, value=1.0),
         {"type": "GuiUpdateMessage", "updates": {"value": 1}},
@@ -266,3 +287,23 @@ def test_a_page_flooding_bad_messages_gets_a_notice_an_interval_with_every_refus
         with quiet():
             server.stop()
         shutil.rmtree(folder, ignore_errors=True)
+
+
+def test_a_shift_click_on_the_floor_adds_the_waypoint_where_its_ray_meets_the_floor():
+    from omnikin import load_robot
+    from omnikin.viewer.app import LiveViewer
+    from omnikin.viewer.live import LiveRobot
+
+    with served(LiveViewer(LiveRobot(load_robot("tomasi-omni3")), "127.0.0.1", 0)) as viewer:
+        client = ViserClient(viewer.url)
+        try:
+            client.controls()
+            client.send(msgspec.msgpack.encode(CAMERA))  # (viser knows a page by its camera: clicks come after)
+            wait_until(lambda: viewer.server.get_clients(), "the page known to viser")
+            client.send(msgspec.msgpack.encode(CLICK))
+            wait_until(lambda: viewer.path.waypoints, "a waypoint from the click")
+        finally:
+            client.close()
+        # the ray (1, 2, 5) + k (0.1, -0.2, -1) meets z = 0 at k = 5: (1.5, 1.0)
+        assert viewer.path.waypoints == [pytest.approx((1.5, 1.0), abs=1e-12)]
+        assert viewer.servers.inputs.refused == 0

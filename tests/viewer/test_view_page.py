@@ -199,7 +199,7 @@ def test_the_go_button_drives_to_the_marker_and_stop_stops_a_set_twist(view, pag
     after = settle(page, pose(page)["t"], 0.2)
     assert after["y"] == pytest.approx(0.0, abs=1e-3) and after["theta"] == pytest.approx(0.0, abs=0.01)
     page.get_by_role("button", name="Drive").click()  # sliders at zero: a zero twist
-    page.get_by_role("button", name="Stop").click()
+    page.get_by_role("button", name="Stop", exact=True).click()
     assert settle(page, after["t"], 0.2)["x"] == pytest.approx(after["x"], abs=1e-9)
 
 

@@ -61,6 +61,13 @@ ROS_DOMAIN_ID: the robot at its ground_truth (else its odometry), its odom and j
 the keys, controls and goal publish cmd_vel (the node's limits and cmd_vel_timeout act).
   omnikin ros tomasi-omni3 &  omnikin view tomasi-omni3 --ros
 
+paths (--path, or shift-click the floor; the Path folder's Follow starts it): the robot plans
+the path from where it is, within its --max-speed and --max-turn and their accelerations, and
+tracks it steering by its odometry; the path, its reference point and the error are drawn, and
+any key, the Drive controls or a goal stop it.
+  omnikin view tomasi-omni3 --path examples/waypoints.csv --blend 0.3
+  omnikin view omni4 --path 'figure8 1'
+
 examples:
   omnikin view tomasi-omni3
   omnikin view mecanum4 --engine physics --port 8081
@@ -124,6 +131,15 @@ def add_parser(sub, robot_help: str) -> None:
         help="print each key's action on stdout as it acts: simulated time, action, true pose (as omnikin sim)",
     )
     add_step_option(sp, "time step of the physics engine (--engine physics)")
+    path = sp.add_argument_group("paths")
+    path.add_argument(
+        "--path",
+        metavar="PATH",
+        help="a path to follow: a path file of waypoints (.csv, .yaml, as omnikin track's) or a built-in path "
+        "('figure8 1', 'circle 0.5', 'square 1'); the Path folder's Follow starts it",
+    )
+    path.add_argument("--blend", type=number, metavar="R", help="--path file: cut the corners by arcs of radius R [m]")
+    path.add_argument("--smooth", action="store_true", help="--path file: a smooth curve through the waypoints")
     replay = sp.add_argument_group("replay")
     replay.add_argument(
         "--replay",
@@ -137,7 +153,7 @@ def add_parser(sub, robot_help: str) -> None:
             f"--{role}-topic", default=default, metavar="TOPIC", help=f"--replay BAG: {role} topic (default {default})"
         )
     add_budget_options(sp, time=False)
-    declare_inputs(sp, "replay", robots=("robot",))
+    declare_inputs(sp, "replay", "path", robots=("robot",))  # (a built-in path names no file: harmless)
     sp.set_defaults(func=run)
 
 
@@ -167,6 +183,12 @@ def run(args) -> int:
         raise InputError(f"--duration must be positive [s], got {args.duration:g}")
     if not 0 <= args.port <= 65535:
         raise InputError(f"--port must be 0 to 65535, got {args.port}")
+    waypoints, path_options = _path_of(args)
+    if waypoints is not None and (args.replay is not None or args.ros):
+        raise InputError(
+            "--path is followed by the simulated robot of a live page (not --replay; with --ros the node "
+            "follows a nav_msgs/Path on its plan topic)"
+        )
     if args.replay is not None:
         if args.ros:
             raise InputError("--ros and --replay are two different views: give one of them")
@@ -198,16 +220,53 @@ def run(args) -> int:
     )
     live.tell = lambda line: print(f"omnikin view: {line}", file=sys.stderr, flush=True)  # a robot that fell
     live.echo = sys.stdout if args.echo else None
-    return serve_live(live, args, f"{robot.name} ({engine.name})")
+    return serve_live(live, args, f"{robot.name} ({engine.name})", waypoints=waypoints, path_options=path_options)
 
 
-def serve_live(live, args, what: str) -> int:
+def _path_of(args):
+    """``--path`` as waypoints ``(n, 2|3)`` [m, m, rad] and the Follow options (``smooth``,
+    ``blend``), or ``(None, {})``: a path file's waypoints as written (a closed one back to its
+    first), corners as ``--blend`` and ``--smooth`` say (default: stopped at, as omnikin track);
+    a built-in path's samples every centimetre with their headings, followed as a smooth curve."""
+    from ..errors import InputError
+
+    if args.path is None:
+        if args.blend is not None or args.smooth:
+            raise InputError("--blend and --smooth shape a --path file; give --path")
+        return None, {}
+    import numpy as np
+
+    from ..control.path import parse_path
+    from ..io.path_file import is_path_file, read_waypoints
+
+    if is_path_file(args.path):
+        if args.smooth and args.blend:
+            raise InputError("--smooth and --blend: a smooth path has no corners to blend; give one")
+        if args.blend is not None and not (0 <= args.blend <= 100):
+            raise InputError(f"--blend must be in [0, 100] m, got {args.blend:g}")
+        xy, theta, closed = read_waypoints(args.path)
+        waypoints = xy if theta is None else np.column_stack((xy, theta))
+        if closed:
+            waypoints = np.vstack((waypoints, waypoints[:1]))
+        return waypoints, {"smooth": bool(args.smooth), "blend": args.blend or 0.0}
+    if args.blend is not None or args.smooth:
+        raise InputError("--blend and --smooth are for path files; a built-in path takes its shape from its numbers")
+    path = parse_path(args.path)
+    step = max(1, int(round(0.01 / max(float(path.s[-1]) / max(len(path.s) - 1, 1), 1e-9))))
+    index = np.unique(np.append(np.arange(0, len(path.s), step), len(path.s) - 1))
+    return path.pose[index], {"smooth": True}
+
+
+def serve_live(live, args, what: str, *, waypoints=None, path_options: dict | None = None) -> int:
     """Serve the live page of ``live`` (a :class:`~omnikin.viewer.live.PageRobot`) until
-    --duration or Ctrl-C; ``what`` names it in the line with the address."""
+    --duration or Ctrl-C; ``what`` names it in the line with the address; ``waypoints`` and
+    ``path_options`` a path to follow (:func:`_path_of`)."""
     from ..viewer.app import LiveViewer
 
     try:
-        viewer = LiveViewer(live, args.host, args.port, umbmark_side=args.umbmark_side)
+        viewer = LiveViewer(
+            live, args.host, args.port, umbmark_side=args.umbmark_side, waypoints=waypoints, path_options=path_options
+        )
     except BaseException:
         live.close()
         raise

@@ -70,6 +70,19 @@ def load_path(spec, *, heading=None, blend: float | None = None, smooth: bool = 
     return parse_path(spec, heading=heading)
 
 
+def read_waypoints(path) -> tuple[np.ndarray, np.ndarray | None, bool]:
+    """The waypoints of the path file ``path`` as they are written: positions ``(n, 2)`` [m],
+    headings ``(n,)`` [rad] or None, and whether the path is closed (module docstring; the
+    same checks as :func:`read_path_file`)."""
+    source = str(path)
+    suffix = FilePath(source).suffix.lower()
+    if suffix == ".csv":
+        return _read_csv(source)
+    if suffix in (".yaml", ".yml"):
+        return _read_yaml(source)
+    raise PathFileError(f"{source}: not a path file (a .csv or .yaml of waypoints x, y[, theta])")
+
+
 def read_path_file(path, *, heading=None, blend: float = 0.0, smooth: bool = False) -> Path:
     """The path through the waypoints of the file ``path`` (module docstring).
 
@@ -98,13 +111,7 @@ def read_path_file(path, *, heading=None, blend: float = 0.0, smooth: bool = Fal
     """
     source = str(path)
     where = source
-    suffix = FilePath(source).suffix.lower()
-    if suffix == ".csv":
-        xy, theta, closed = _read_csv(source)
-    elif suffix in (".yaml", ".yml"):
-        xy, theta, closed = _read_yaml(source)
-    else:
-        raise PathFileError(f"{source}: not a path file (a .csv or .yaml of waypoints x, y[, theta])")
+    xy, theta, closed = read_waypoints(source)
     if smooth and blend:
         raise PathFileError(f"{source}: a smooth path has no corners to blend; give smooth or blend")
     name = FilePath(source).name

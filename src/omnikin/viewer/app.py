@@ -17,7 +17,7 @@ import time
 
 from ..motion.plans import UMBMARK_SIDE
 from .live import PageRobot, Snapshot
-from .panel import CameraControl, DriveControls, FirstView, GoalMarker, Readouts, robot_extent
+from .panel import CameraControl, DriveControls, FirstView, GoalMarker, PathPanel, Readouts, robot_extent
 from .scene import RobotView, draw_world
 from .serving import CONTROL_PERIOD, SLOW_PERIOD, PageServers
 
@@ -25,10 +25,19 @@ from .serving import CONTROL_PERIOD, SLOW_PERIOD, PageServers
 class LiveViewer:
     """The viewer of a live robot (module docstring): ``live`` drives it, ``host``/``port`` is
     where the page is served (port 0: a free one, see :attr:`url`); ``umbmark_side`` [m] draws
-    the UMBmark squares (0: none)."""
+    the UMBmark squares (0: none); ``waypoints`` ``(n, 2|3)`` [m, m, rad] a path to follow from
+    the start (``omnikin view --path``), ``path_options`` how (``smooth``, ``blend``: the
+    :class:`~omnikin.viewer.panel.PathPanel`'s Follow)."""
 
     def __init__(
-        self, live: PageRobot, host: str = "127.0.0.1", port: int = 8080, *, umbmark_side: float = UMBMARK_SIDE
+        self,
+        live: PageRobot,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        *,
+        umbmark_side: float = UMBMARK_SIDE,
+        waypoints=None,
+        path_options: dict | None = None,
     ):
         self.live = live
         self._start = time.monotonic()  # the robot's clock: seconds since the viewer was made
@@ -49,6 +58,7 @@ class LiveViewer:
             self.first_view.frame(live.pose)
             self.readouts = Readouts(self.server, live.description)
             self.goal = GoalMarker(self.server, live)
+            self.path = PathPanel(self.server, live, waypoints, path_options)
         except BaseException:
             self.servers.stop()
             raise
@@ -93,6 +103,7 @@ class LiveViewer:
                 self._draw(snapshot)
                 self.readouts.fast(snapshot)
                 self.goal.show(snapshot)
+                self.path.show(snapshot)
                 self.camera.follow(snapshot.truth)
                 if now >= slow_next:
                     slow_next = now + SLOW_PERIOD

@@ -16,7 +16,10 @@ viser's client sends each message as one binary WebSocket message, the msgpack o
   ``disabled``, ...) belongs to the server;
 - ``TransformControlsUpdateMessage``, ``...DragStartMessage``, ``...DragEndMessage`` of a
   transform control of this page (the goal marker), with a finite pose within
-  :data:`MAX_COORDINATE` m.
+  :data:`MAX_COORDINATE` m;
+- ``ScenePointerMessage`` of a click, while the server takes clicks in the scene (the Path
+  folder's shift-click), with a ray whose origin is within :data:`MAX_COORDINATE` m and whose
+  direction is finite and not zero, one screen position in [0, 1] and a modifier viser names.
 
 Anything else (a type viser would act on but omnikin does not serve, such as a share-URL
 request that would open a tunnel to the internet, a file upload, a form; a message that is not
@@ -45,6 +48,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+import typing
 import uuid
 
 import msgspec
@@ -152,6 +156,7 @@ class PageInputs:
             )
         self._controls = controls
         self._gizmos = gizmos
+        self._pointer = getattr(server.scene, "_scene_pointer_cb", None)  # the scene's click callbacks
         self._lock = threading.Lock()
         self.refused = 0
         """Messages refused since the start."""
@@ -193,7 +198,33 @@ class PageInputs:
             "TransformControlsDragEndMessage",
         ):
             return self._gizmo(kind, message)
+        if kind == "ScenePointerMessage" and self._pointer:
+            return self._click(message)
         return f"a message of type {shorten(kind, 50)}, which this page does not take"
+
+    @staticmethod
+    def _click(message: dict) -> str | None:
+        wrong = _fields(message, ("event_type", "ray_origin", "ray_direction", "screen_pos", "modifier"))
+        if wrong:
+            return f"a click message that {wrong}"
+        if message["event_type"] != "click":
+            return f"a pointer event {shorten(message['event_type'])}, which this page does not take"
+        if not _vector(message["ray_origin"], 3):
+            return f"a click ray origin that is {_not_vector(message['ray_origin'], 3)}"
+        direction = message["ray_direction"]
+        if not _vector(direction, 3, math.inf) or not any(direction):
+            return f"a click ray direction that is not three finite numbers, not all zero: {shorten(direction)}"
+        screen = message["screen_pos"]
+        if not (
+            isinstance(screen, (list, tuple))
+            and len(screen) == 1
+            and _vector(screen[0], 2, 1.0)
+            and all(0.0 <= v <= 1.0 for v in screen[0])
+        ):
+            return f"a click screen position that is not one point in [0, 1]: {shorten(screen)}"
+        if message["modifier"] is not None and message["modifier"] not in typing.get_args(_messages.KeyModifier):
+            return f"a click modifier viser does not name: {shorten(message['modifier'])}"
+        return None
 
     def _camera(self, message: dict) -> str | None:
         fields = ("wxyz", "position", "fov", "near", "far", "image_height", "image_width", "look_at", "up_direction")

@@ -39,6 +39,8 @@ from typing import TextIO
 
 import numpy as np
 
+from ..control.follower import PathFollower, plan_follow
+from ..control.time_optimal import WheelLimits
 from ..errors import InputError
 from ..kinematics.robot import Robot
 from ..motion.limits import MotionLimits
@@ -166,6 +168,8 @@ class PageRobot:
         self._caught_up = 0  # steps made up in this step() call
         self.echo: TextIO | None = None  # gets each key action as it acts (module docstring)
         self.events: deque[dict] = deque(maxlen=MAX_EVENTS)
+        self.follower = PathFollower()  # a path followed (:meth:`follow`)
+        self.path_options: dict = {"heading": "given", "smooth": True, "blend": 0.0}
 
     can_steer = False
     """Whether the page's steering keys and buttons turn the wheels."""
@@ -224,6 +228,18 @@ class PageRobot:
         steering by the odometry); a key, a twist or a stop cancels it."""
         self._put("goal", goal)  # checked when applied: a bad goal is refused there, in one line
 
+    def follow(self, waypoints, **options) -> None:
+        """Follow the path through ``waypoints`` ``(n, 2|3)`` [m, m, rad] (world frame) from
+        where the robot is (:func:`~omnikin.control.follower.plan_follow`: ``heading``,
+        ``smooth``, ``blend``, default :attr:`path_options`), timed within the robot's limits and
+        tracked by its controller, steering by the odometry; a key, a twist, a stop or a goal
+        stops it. A path that cannot be followed is refused in one line (:attr:`notice`)."""
+        self._put("path", (np.array(waypoints, dtype=float), dict(self.path_options, **options)))
+
+    def stop_path(self) -> None:
+        """Stop following the path; the robot brakes to a stop."""
+        self._put("path_stop", None)
+
     def steer_by(self, angle: float) -> None:
         """Turn every steerable wheel by ``angle`` [rad] (robot at rest; ignored while it moves)."""
         self._put("steer", float(angle))
@@ -235,6 +251,8 @@ class PageRobot:
         actions: list[str] = []
         if kind in ("key", "twist", "stop"):
             self.seeker = None  # the user takes over
+        if kind in ("twist", "stop", "goal"):
+            self.follower.stop(f"the page's {'goal' if kind == 'goal' else 'controls'} took over")
         if kind == "key":
             assert isinstance(value, dict)
             source = value.get("source")
@@ -248,6 +266,7 @@ class PageRobot:
                 if action in ("steer_left", "steer_right"):
                     self._turn_steering(STEER_STEP if action == "steer_left" else -STEER_STEP)
                 elif self.teleop.press(action):
+                    self.follower.stop("a key took over")
                     if action in MOVES:
                         held.add(action)
                 else:
@@ -280,7 +299,29 @@ class PageRobot:
         elif kind == "steer":
             assert isinstance(value, float)
             self._turn_steering(value)
+        elif kind == "path":
+            self._begin_path(t, *value)  # type: ignore[misc]
+        elif kind == "path_stop":
+            self.follower.stop("Stop pressed")
         return actions
+
+    def _begin_path(self, t: float, waypoints: np.ndarray, options: dict) -> None:
+        """Plan the path from the robot's pose and follow it from ``t`` [s]; the targets of the
+        keys, the controls and the goal are dropped."""
+        limits = self.limits
+        wheels = WheelLimits(speed=limits.wheel or math.inf, accel=math.inf)
+        try:
+            plan = plan_follow(
+                self.robot, waypoints, self.pose, limits=wheels, body=limits, rate=1.0 / CATCH_UP_STEP, **options
+            )
+        except InputError as exc:
+            self.follower.refuse(str(exc))
+            raise
+        self.seeker = None
+        self.teleop.release_all()
+        self._set_twist[:] = 0.0
+        self.notice = ""
+        self.follower.begin(plan, t)
 
     @property
     def target(self) -> np.ndarray:
@@ -397,19 +438,29 @@ class LiveRobot(PageRobot):
         return triple(self.backend.truth)
 
     def _control(self, t: float) -> Snapshot:
-        """One control step at ``t`` [s] with the targets as they are."""
-        seeking = self._seek(t)
-        target = self.target if seeking is None else seeking
-        if np.any(target) or np.any(self.runtime.filter.target):
-            self.runtime.command(target, t)
+        """One control step at ``t`` [s] with the targets as they are (a path followed commands
+        from the pose just measured)."""
         dt = max(0.0, t - self.t)
-        self.t = t
-        result = self.runtime.step(t)
+        if self.follower.following:
+            self.t = t
+            state = self.runtime.sense(t)
+            twist = self.follower.command(t, self.runtime.pose)
+            target = np.zeros(3) if twist is None else twist  # (None: the end settled, brake)
+            self.runtime.command(target, t)
+            result = self.runtime.act(t, state)
+        else:
+            seeking = self._seek(t)
+            target = self.target if seeking is None else seeking
+            if np.any(target) or np.any(self.runtime.filter.target):
+                self.runtime.command(target, t)
+            self.t = t
+            result = self.runtime.step(t)
         self._last = result
         fallen = self.backend.fallen
         if fallen and not self.fallen:  # the back-end stopped the wheels: say so once, drop the targets
             self.fallen = f"{fallen}; its wheels are stopped"
             self.seeker = None
+            self.follower.stop("the robot tipped over")
             self.teleop.release_all()
             self._set_twist[:] = 0.0
             self.runtime.filter.halt()

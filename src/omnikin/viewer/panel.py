@@ -149,6 +149,146 @@ class GoalMarker:
             self.status.content = text
 
 
+PATH_COLOUR = (80, 160, 255)
+"""Colour of the path followed and its waypoints (RGB)."""
+REFERENCE_COLOUR = (255, 200, 0)
+"""Colour of the reference point."""
+ERROR_COLOUR = (230, 30, 30)
+"""Colour of the segment from the robot to the reference point (the tracking error)."""
+MAX_CLICKED = 200
+"""Most waypoints a page may add by clicking (each click one; a flood stops there)."""
+PATH_DRAWN = 4000
+"""Most segments the path is drawn with (a longer path is drawn every k-th sample)."""
+
+
+class PathPanel:
+    """A path to follow: waypoints from ``--path`` or shift-clicked on the floor, and the Path
+    folder: Follow (plan from the robot's pose and track it:
+    :meth:`~omnikin.viewer.live.PageRobot.follow`), Stop, Clear, the heading along it and the
+    state with the tracking error. Drawn: the waypoints, the path followed (the trajectory's
+    samples), the reference point and a red segment from the robot's odometry to it."""
+
+    def __init__(self, server: viser.ViserServer, live: PageRobot, waypoints=None, options: dict | None = None):
+        self.server = server
+        self.live = live
+        self.options = dict(options or {})
+        self.waypoints: list[tuple[float, ...]] = [] if waypoints is None else [tuple(map(float, w)) for w in waypoints]
+        self.from_file = waypoints is not None
+        gui = server.gui
+        with gui.add_folder("Path"):
+            gui.add_markdown("**shift-click** the floor to add waypoints, then Follow")
+            self.heading = gui.add_dropdown(
+                "heading", ("tangent", "fixed", "free", "given"), initial_value=self._default_heading()
+            )
+            follow = gui.add_button("Follow the path", hint="plan from the robot's pose within its limits, track it")
+            stop = gui.add_button("Stop following", hint="the robot brakes to a stop")
+            clear = gui.add_button("Clear waypoints")
+            self.status = gui.add_markdown(self._waypoint_text())
+        follow.on_click(lambda _: self.follow())
+        stop.on_click(lambda _: live.stop_path())
+        clear.on_click(lambda _: self.clear())
+        server.scene.on_click(modifier="shift")(self._clicked)
+        self._drawn_plan: object | None = None
+        self._draw_waypoints()
+        self._reference = server.scene.add_icosphere(
+            "/path/reference", radius=0.03, color=REFERENCE_COLOUR, visible=False, cast_shadow=False
+        )
+        self._error: viser.LineSegmentsHandle | None = None
+
+    def _default_heading(self) -> str:
+        if self.waypoints and len(self.waypoints[0]) == 3:
+            return "given"
+        return "tangent"
+
+    def _waypoint_text(self) -> str:
+        n = len(self.waypoints)
+        return f"{n} waypoint{'s' if n != 1 else ''}" + (" (from --path)" if self.from_file else "")
+
+    def _clicked(self, event) -> None:
+        """A shift-click: the point where the click's ray meets the floor becomes a waypoint."""
+        origin = np.asarray(event.ray_origin, dtype=float)
+        direction = np.asarray(event.ray_direction, dtype=float)
+        if direction[2] >= 0.0 or origin[2] <= 0.0:
+            self.live.notice = "a click above the horizon: no floor there"
+            return
+        point = origin - origin[2] / direction[2] * direction
+        if len(self.waypoints) >= MAX_CLICKED:
+            self.live.notice = f"at most {MAX_CLICKED} waypoints by clicking; Clear to start again"
+            return
+        self.waypoints.append((float(point[0]), float(point[1])))
+        self.from_file = False
+        if self.heading.value == "given":
+            self.heading.value = "tangent"  # type: ignore[misc]
+        self._draw_waypoints()
+        self.status.content = self._waypoint_text()
+
+    def clear(self) -> None:
+        self.waypoints = []
+        self.from_file = False
+        self._draw_waypoints()
+        self.status.content = self._waypoint_text()
+
+    def follow(self) -> None:
+        if not self.waypoints:
+            self.live.notice = "no waypoints: shift-click the floor to add some"
+            return
+        if self.heading.value == "given" and any(len(w) < 3 for w in self.waypoints):
+            self.live.notice = "these waypoints give no headings: choose tangent, fixed or free"
+            return
+        width = min(len(w) for w in self.waypoints)
+        points = np.array([w[:width] for w in self.waypoints], dtype=float)
+        self.live.notice = ""
+        self.live.follow(points, **dict(self.options, heading=self.heading.value))
+
+    def _draw_waypoints(self) -> None:
+        scene = self.server.scene
+        if self.waypoints:
+            xy = np.array([w[:2] for w in self.waypoints], dtype=float)
+            points = np.column_stack((xy, np.full(len(xy), 0.004)))
+            scene.add_point_cloud("/path/waypoints", points, colors=PATH_COLOUR, point_size=0.04, point_shape="circle")
+        else:
+            scene.add_point_cloud("/path/waypoints", np.zeros((0, 3)), colors=PATH_COLOUR, point_size=0.04)
+
+    def show(self, s: Snapshot) -> None:
+        """The path followed, the reference point and the error segment, and the state in the
+        folder (each sent only when it changed)."""
+        follower = self.live.follower
+        plan = follower.plan
+        if plan is not self._drawn_plan:
+            self._drawn_plan = plan
+            if plan is not None:
+                pose = plan.trajectory.path.pose
+                step = max(1, len(pose) // PATH_DRAWN)
+                xy = pose[::step, :2]
+                if len(pose) > 1 and step > 1:
+                    xy = np.vstack((xy, pose[-1:, :2]))
+                z = np.full((len(xy), 1), 0.003)
+                pts = np.hstack((xy, z))
+                self.server.scene.add_line_segments(
+                    "/path/followed", np.stack((pts[:-1], pts[1:]), axis=1), colors=PATH_COLOUR, thickness=0.008
+                )
+        following = follower.following
+        self._reference.visible = following
+        if following:
+            rx, ry, _ = (float(v) for v in follower.reference)
+            self._reference.position = (rx, ry, 0.03)
+            ox, oy, _ = s.odometry
+            segment = np.array([[[ox, oy, 0.03], [rx, ry, 0.03]]])
+            self._error = self.server.scene.add_line_segments(
+                "/path/error", segment, colors=ERROR_COLOUR, thickness=0.006
+            )
+        elif self._error is not None:
+            self._error.remove()
+            self._error = None
+        text = self._waypoint_text() + "<br>" + html.escape(follower.summary())
+        if follower.state == "following" or follower.state == "done":
+            text += f"<br>error to the reference {follower.error * 1e3:.1f} mm"
+        if self.live.notice:
+            text += f"<br>refused: {html.escape(self.live.notice)}"
+        if self.status.content != text:
+            self.status.content = text
+
+
 FIRST_VIEW_AZIMUTH = math.radians(-30.0)
 """Where the first view looks from, about the vertical, from straight behind the robot [rad]."""
 FIRST_VIEW_ELEVATION = math.radians(35.0)

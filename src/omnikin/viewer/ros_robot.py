@@ -250,6 +250,14 @@ class RosRobot(PageRobot):
         body.linear.x, body.linear.y, body.angular.z = (float(v) for v in twist)
         self.publisher.publish(msg)
 
+    def follow(self, waypoints, **options) -> None:
+        """Not from here: the node follows a path itself (a ``nav_msgs/Path`` on its ``plan``);
+        the page says so."""
+        self.notice = (
+            "the page follows paths with a simulated robot (omnikin view without --ros); "
+            "a running node follows a nav_msgs/Path published on its plan topic"
+        )
+
     def _control(self, t: float) -> Snapshot:
         seeking = self._seek(t)
         target = self.target if seeking is None else seeking
