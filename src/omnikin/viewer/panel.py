@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import html
 import math
+import threading
 import time
 from collections import deque
 from collections.abc import Callable
@@ -157,6 +158,9 @@ ERROR_COLOUR = (230, 30, 30)
 """Colour of the segment from the robot to the reference point (the tracking error)."""
 MAX_CLICKED = 200
 """Most waypoints a page may add by clicking (each click one; a flood stops there)."""
+MAX_CLICK_DISTANCE = 1000.0
+"""Farthest a clicked waypoint may be from the origin [m] (a click near the horizon meets the
+floor kilometres away: no path to follow there)."""
 PATH_DRAWN = 4000
 """Most segments the path is drawn with (a longer path is drawn every k-th sample)."""
 
@@ -174,6 +178,7 @@ class PathPanel:
         self.options = dict(options or {})
         self.waypoints: list[tuple[float, ...]] = [] if waypoints is None else [tuple(map(float, w)) for w in waypoints]
         self.from_file = waypoints is not None
+        self._lock = threading.Lock()  # (clicks and buttons arrive on viser's threads)
         gui = server.gui
         with gui.add_folder("Path"):
             gui.add_markdown("**shift-click** the floor to add waypoints, then Follow")
@@ -212,19 +217,24 @@ class PathPanel:
             self.live.notice = "a click above the horizon: no floor there"
             return
         point = origin - origin[2] / direction[2] * direction
-        if len(self.waypoints) >= MAX_CLICKED:
-            self.live.notice = f"at most {MAX_CLICKED} waypoints by clicking; Clear to start again"
+        if not (np.all(np.isfinite(point)) and np.all(np.abs(point[:2]) <= MAX_CLICK_DISTANCE)):
+            self.live.notice = f"a click that meets the floor beyond {MAX_CLICK_DISTANCE:g} m"
             return
-        self.waypoints.append((float(point[0]), float(point[1])))
-        self.from_file = False
+        with self._lock:
+            if len(self.waypoints) >= MAX_CLICKED:
+                self.live.notice = f"at most {MAX_CLICKED} waypoints by clicking; Clear to start again"
+                return
+            self.waypoints.append((float(point[0]), float(point[1])))
+            self.from_file = False
         if self.heading.value == "given":
             self.heading.value = "tangent"  # type: ignore[misc]
         self._draw_waypoints()
         self.status.content = self._waypoint_text()
 
     def clear(self) -> None:
-        self.waypoints = []
-        self.from_file = False
+        with self._lock:
+            self.waypoints = []
+            self.from_file = False
         self._draw_waypoints()
         self.status.content = self._waypoint_text()
 
@@ -235,15 +245,17 @@ class PathPanel:
         if self.heading.value == "given" and any(len(w) < 3 for w in self.waypoints):
             self.live.notice = "these waypoints give no headings: choose tangent, fixed or free"
             return
-        width = min(len(w) for w in self.waypoints)
-        points = np.array([w[:width] for w in self.waypoints], dtype=float)
+        with self._lock:
+            width = min(len(w) for w in self.waypoints)
+            points = np.array([w[:width] for w in self.waypoints], dtype=float)
         self.live.notice = ""
         self.live.follow(points, **dict(self.options, heading=self.heading.value))
 
     def _draw_waypoints(self) -> None:
         scene = self.server.scene
-        if self.waypoints:
-            xy = np.array([w[:2] for w in self.waypoints], dtype=float)
+        with self._lock:
+            xy = np.array([w[:2] for w in self.waypoints], dtype=float).reshape(-1, 2)
+        if len(xy):
             points = np.column_stack((xy, np.full(len(xy), 0.004)))
             scene.add_point_cloud("/path/waypoints", points, colors=PATH_COLOUR, point_size=0.04, point_shape="circle")
         else:
