@@ -23,6 +23,7 @@ from omnikin.errors import InputError
 from omnikin.motion.limits import MotionLimits
 from omnikin.runtime.base import BaseRuntime
 from omnikin.simulation.backend import SimBackend
+from support.kinematics import distance_to_polyline
 
 V, W, A, ALPHA = 0.3, 1.0, 0.5, 2.0  # the node's default body limits [m/s, rad/s, m/s^2, rad/s^2]
 BODY = MotionLimits(linear=V, angular=W, linear_accel=A, angular_accel=ALPHA)
@@ -108,14 +109,6 @@ def drive(robot, follower, plan, seconds, rate=50.0, runtime=None):
     return np.array(truth)
 
 
-def segment_distance(points, a, b):
-    """Distance of ``points`` ``(n, 2)`` to the segment from ``a`` to ``b``."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    d = b - a
-    f = np.clip(((points - a) @ d) / (d @ d), 0.0, 1.0)
-    return np.hypot(*(points - a - f[:, None] * d).T)
-
-
 def test_a_path_beginning_away_from_the_robot_is_driven_from_the_robot_to_its_end():
     robot = load_robot("omni4")
     plan = plan_follow(robot, [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]], (0.0, 0.0, 0.0), limits=FREE, body=BODY, smooth=False)
@@ -124,7 +117,7 @@ def test_a_path_beginning_away_from_the_robot_is_driven_from_the_robot_to_its_en
     assert follower.state == "done"
     assert truth[-1] == pytest.approx([1.0, 1.0, 0.0], abs=1e-6)
     # on the two segments: robot to the first waypoint, then to the second
-    gap = np.minimum(segment_distance(truth[:, :2], (0, 0), (1, 0)), segment_distance(truth[:, :2], (1, 0), (1, 1)))
+    gap = distance_to_polyline(truth[:, :2], [(0, 0), (1, 0), (1, 1)])
     assert gap.max() < 1e-4
     # stopped at the corner; timed within MARGIN of the limits
     assert plan.trajectory.duration == pytest.approx(2 * (1.0 / (MARGIN * V) + V / (A_ROWS)), rel=1e-3)

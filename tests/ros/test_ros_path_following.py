@@ -34,6 +34,8 @@ from test_ros_node import (  # noqa: E402
     yaw_of,
 )
 
+from support.kinematics import distance_to_polyline  # noqa: E402
+
 pytestmark = pytest.mark.ros
 
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -112,17 +114,6 @@ class PathSide:
             return np.array([p for t, p in self.truth if t > after])
 
 
-def distance_to_segments(points: np.ndarray, corners) -> np.ndarray:
-    """Distance of ``points`` ``(n, 2)`` to the polyline through ``corners``."""
-    corners = np.asarray(corners, dtype=float)
-    best = np.full(len(points), np.inf)
-    for a, b in zip(corners[:-1], corners[1:], strict=True):
-        d = b - a
-        f = np.clip(((points - a) @ d) / (d @ d), 0.0, 1.0)
-        best = np.minimum(best, np.hypot(*(points - a - f[:, None] * d).T))
-    return best
-
-
 def test_a_path_on_plan_is_driven_to_its_end_with_its_reference_and_error_published(tmp_path):
     corners = [(0.0, 0.0), (0.6, 0.0), (0.6, 0.4)]
     proc, graph = start(tmp_path, ["tomasi-omni3", *EXACT, "--ros-args", "-p", "path_smooth:=false"])
@@ -136,7 +127,7 @@ def test_a_path_on_plan_is_driven_to_its_end_with_its_reference_and_error_publis
         assert done[1] == 0 and done[2].startswith("done path 'plan' (1 m in")
         truth = side.truth_since(sent)
         assert truth[-1][:2] == pytest.approx(corners[-1], abs=0.01)
-        assert distance_to_segments(truth[:, :2], corners).max() < 0.02
+        assert distance_to_polyline(truth[:, :2], corners).max() < 0.02
         assert float(done[3]["max_distance_to_path_m"]) < 0.02  # the odometry's, the node's own measure
         # the timed reference: stamped from the start to the end of the trajectory, ending at the end
         assert wait_for(lambda: side.reference_paths, 10.0), "no reference_path"

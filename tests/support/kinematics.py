@@ -49,3 +49,16 @@ def constant_twist_pose(twist, t):
     x = (vx * math.sin(th) - vy * (1 - math.cos(th))) / w
     y = (vx * (1 - math.cos(th)) + vy * math.sin(th)) / w
     return np.array([x, y, (th + math.pi) % (2 * math.pi) - math.pi])
+
+
+def distance_to_polyline(points, corners) -> np.ndarray:
+    """Distance [m] of ``points`` ``(n, 2)`` to the polyline through ``corners`` ``(m, 2)``: the
+    nearest of its segments, each point's foot clamped to the segment."""
+    points = np.asarray(points, dtype=float)
+    corners = np.asarray(corners, dtype=float)
+    best = np.full(len(points), np.inf)
+    for a, b in zip(corners[:-1], corners[1:], strict=True):
+        d = b - a
+        f = np.clip(((points - a) @ d) / (d @ d), 0.0, 1.0)
+        best = np.minimum(best, np.hypot(*(points - a - f[:, None] * d).T))
+    return best

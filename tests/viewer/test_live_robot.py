@@ -14,6 +14,7 @@ import pytest
 from omnikin.io.robot_file import load_robot
 from omnikin.motion.limits import MotionLimits
 from omnikin.viewer.live import KEY_SILENCE, LiveRobot
+from support.kinematics import distance_to_polyline
 
 DT = 0.02
 ACCEL = 0.5  # MotionLimits' default linear acceleration [m/s^2]
@@ -214,17 +215,6 @@ def test_a_loop_that_runs_late_drives_as_one_that_steps_every_control_period():
     live.step(0.02)  # the ramp from step 0 (dt 0.02), as ramp_distance with the press at step 0
     s, _ = live.step(1.02)  # a stall of 1 s (50 control periods)
     assert s.truth[0] == pytest.approx(ramp_distance(SPEED, ACCEL, 0, 10**6, 51), abs=1e-9)
-
-
-def distance_to_polyline(points, corners) -> np.ndarray:
-    """Distance of ``points`` ``(n, 2)`` to the polyline through ``corners``."""
-    corners = np.asarray(corners, dtype=float)
-    best = np.full(len(points), np.inf)
-    for a, b in zip(corners[:-1], corners[1:], strict=True):
-        d = b - a
-        f = np.clip(((points - a) @ d) / (d @ d), 0.0, 1.0)
-        best = np.minimum(best, np.hypot(*(points - a - f[:, None] * d).T))
-    return best
 
 
 def test_a_path_followed_from_the_page_ends_on_its_last_waypoint_without_leaving_the_segments():

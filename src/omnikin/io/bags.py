@@ -800,23 +800,12 @@ def bag_odometry(
 RUN_TOPICS = {"ground_truth": "/ground_truth", "odom": "/odom", "joint_states": "/joint_states", "cmd_vel": "/cmd_vel"}
 
 
-def record_run(
-    path,
-    run,
-    robot: Robot,
-    *,
-    start: float = 0.0,
-    topics: dict | None = None,
-    frame_id: str = "odom",
-    child_frame_id: str = "base_link",
-    storage: str = "sqlite3",
-    custom: dict | None = None,
-    steer_suffix: str = STEER_SUFFIX,
-    force: bool = False,
-) -> dict:
+def record_run(path, run, robot: Robot, **options) -> dict:
     """Write a simulated run (:class:`omnikin.simulation.kinematic.SimulatedRun`, first trial) to a
-    new bag (:func:`record_samples`): its encoders' counts times ``robot``'s angle per tick, and on
-    ``/cmd_vel`` the body twist of each interval of its plan. Returns ``{topic: message count}``.
+    new bag (:func:`record_samples`, whose keyword ``options`` it takes: ``start``, ``topics``,
+    frames, ``storage``, ``custom``, ``force``): its encoders' counts times ``robot``'s angle per
+    tick, and on ``/cmd_vel`` the body twist of each interval of its plan. Returns ``{topic:
+    message count}``.
     """
     t = np.asarray(run.t, dtype=float)
     truth = np.asarray(run.truth)[0]
@@ -835,14 +824,7 @@ def record_run(
         steer=run.steer,
         command=command,
         rate=run.sampled.rate,
-        start=start,
-        topics=topics,
-        frame_id=frame_id,
-        child_frame_id=child_frame_id,
-        storage=storage,
-        custom=custom,
-        steer_suffix=steer_suffix,
-        force=force,
+        **options,
     )
 
 
