@@ -168,8 +168,8 @@ def test_stop_and_refuse_end_the_following_and_say_why():
     [
         ([[0.0, 0.0], [0.0005, 0.0]], r"does not go anywhere \(every waypoint within 1 mm of the robot\)"),
         ([[0.0, 0.0], [1.0, math.nan]], r"waypoint 1 is not finite"),
-        ([[0.0, 0.0], [1e300, 0.0]], r"point 1 is more than 1e\+07 m from the origin"),
-        ([[0.0, 0.0], [2000.0, 0.0]], r"2000 m is too long \(at most 1000 m of path\)"),
+        ([[0.0, 0.0], [1e300, 0.0]], r"1e\+300 m of waypoints, longer than 200 m: send it in parts"),
+        ([[0.0, 0.0], [300.0, 0.0]], r"300 m of waypoints, longer than 200 m: send it in parts"),
         ([], r"no waypoints|shape"),
         ([[0.0, 0.0, 0.0, 0.0]], r"rows of \(x, y\) or \(x, y, theta\)"),
         ("xy", r"waypoints|shape"),
@@ -185,3 +185,76 @@ def test_too_many_waypoints_are_refused_before_any_work():
     many = np.zeros((MAX_WAYPOINTS + 1, 2))
     with pytest.raises(InputError, match=rf"{MAX_WAYPOINTS + 1} waypoints, more than {MAX_WAYPOINTS}"):
         plan_follow(load_robot("omni4"), many, (0.0, 0.0, 0.0), limits=FREE, body=BODY)
+
+
+@pytest.mark.parametrize("target", [(0.0, 1.0), (-1.0, 0.0)])
+def test_a_robot_with_fixed_wheels_is_refused_a_path_that_leaves_it_sideways_or_backwards(target):
+    with pytest.raises(InputError, match=r"leaves the robot at (90|180) deg, but robot 'diff-drive' faces 0 deg"):
+        plan_follow(load_robot("diff-drive"), [target], (0.0, 0.0, 0.0), limits=FREE, body=BODY, smooth=False)
+
+
+def test_a_smooth_path_leaves_a_robot_with_fixed_wheels_along_its_heading():
+    plan = plan_follow(load_robot("diff-drive"), [(1.0, 1.0)], (0.0, 0.0, 0.3), limits=FREE, body=BODY)
+    assert plan.trajectory.path.pose[0, 2] == pytest.approx(0.3, abs=1e-3)
+
+
+@pytest.mark.parametrize(
+    ("robot", "controller", "message"),
+    [
+        ("diff-drive", "feedback", "cannot move sideways"),
+        ("synchro", "mpc", "steers its wheels"),
+        ("omni4", "bogus", "controller must be one of feedback, mpc, pursuit"),
+    ],
+)
+def test_a_controller_the_layout_cannot_take_is_refused_before_any_path(robot, controller, message):
+    from omnikin.control.controllers import check_controller_for
+
+    with pytest.raises(InputError, match=message):
+        check_controller_for(controller, load_robot(robot))
+    assert check_controller_for(None, load_robot(robot)) in ("feedback", "mpc", "pursuit")
+
+
+def test_long_straight_stretches_are_planned_without_a_floating_point_warning():
+    # (the command line turns numpy's warnings into errors: a row that is zero along a straight
+    # stretch must not overflow the speed ceiling)
+    line = np.column_stack((np.linspace(0.0, 10.0, 1001), np.full(1001, -0.2)))
+    with np.errstate(divide="raise", over="raise", invalid="raise"):  # (numpy's warnings; underflow is silent)
+        plan = plan_follow(load_robot("omni4"), line, (0.0, 0.0, 0.0), limits=FREE, body=BODY, heading="tangent")
+    assert plan.trajectory.timing.sdot.max() == pytest.approx(MARGIN * V, rel=1e-3)
+
+
+def test_the_plan_worker_plans_the_latest_request_and_drops_the_ones_it_superseded():
+    import threading
+
+    from omnikin.control.follower import PlanWorker
+    from support.browser import wait_until
+
+    gate = threading.Event()
+    seen = []
+
+    def job(generation, value):
+        seen.append(value)
+        if value == "first":
+            gate.wait(10)
+        if value == "bad":
+            raise InputError("refused")
+        return value
+
+    worker = PlanWorker(job)
+    worker.request(value="first")
+    wait_until(lambda: seen == ["first"], "the first request taken")
+    worker.request(value="second")
+    worker.request(value="third")  # supersedes the second before it is taken
+    gate.set()
+    wait_until(lambda: not worker.busy, "the worker idle")
+    assert worker.take() == "third" and worker.take() is None
+    assert seen == ["first", "third"]
+    worker.request(value="bad")
+    wait_until(lambda: not worker.busy, "the worker idle")
+    assert str(worker.take()) == "refused"
+    worker.request(value="first")
+    wait_until(lambda: seen[-1] == "first", "taken")
+    assert worker.cancel()
+    gate.set()
+    wait_until(lambda: not worker.busy, "the worker idle")
+    assert worker.take() is None  # cancelled: its result dropped

@@ -270,3 +270,52 @@ def test_messages_module_imports_without_rclpy():
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert r.returncode == 0 and r.stdout.strip() == "ok", r.stdout + r.stderr
+
+
+@pytest.mark.parametrize("n", [0, 1, 7])
+def test_a_serialized_path_is_read_as_rclpy_wrote_it(n):
+    pytest.importorskip("rclpy", reason="the reference serializer is rclpy's (extra ros)")
+    from geometry_msgs.msg import PoseStamped
+    from nav_msgs.msg import Path
+    from rclpy.serialization import serialize_message
+
+    rng = np.random.default_rng(n)
+    msg = Path()
+    msg.header.frame_id = "odom"
+    expected = []
+    for k in range(n):
+        pose = PoseStamped()
+        pose.header.frame_id = "x" * k  # strings of every length shift the alignment
+        pose.header.stamp.sec = k
+        x, y, theta = rng.uniform(-5, 5, 3)
+        pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = x, y, 0.25
+        pose.pose.orientation.z, pose.pose.orientation.w = math.sin(theta / 2), math.cos(theta / 2)
+        msg.poses.append(pose)
+        expected.append((x, y, theta))
+    data = serialize_message(msg)
+    assert m.plan_frame(data) == "odom" and m.plan_count(data) == n
+    got, want = m.plan_poses(data, 100).reshape(-1, 3), np.array(expected).reshape(-1, 3)
+    assert got[:, :2] == pytest.approx(want[:, :2], abs=1e-12)
+    assert np.angle(np.exp(1j * (got[:, 2] - want[:, 2]))) == pytest.approx(np.zeros(n), abs=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        (b"", "not a CDR message"),
+        (b"\x00\x07\x00\x00", "not a CDR message"),
+        (b"\x00\x01\x00\x00\x00\x00", "ends early"),
+        (b"\x00\x01\x00\x00" + b"\x00" * 8 + b"\xff\xff\xff\x7f", "runs past the end"),
+        (b"\x00\x01\x00\x00" + b"\x00" * 8 + b"\x01\x00\x00\x00" + b"\x00" * 4 + b"\x10\x27\x00\x00", "says it has"),
+    ],
+)
+def test_a_path_message_cut_short_or_lying_about_its_size_is_refused_in_one_line(data, message):
+    with pytest.raises(InputError, match=message):
+        m.plan_poses(data, 100_000)
+
+
+def test_a_quaternion_that_is_not_unit_gives_the_heading_of_its_direction():
+    assert m.yaw(0.0, 0.0, 2.0, 2.0) == pytest.approx(math.pi / 2)
+    assert m.yaw(0.0, 0.0, 0.1, 0.1) == pytest.approx(math.pi / 2)
+    assert m.yaw(0.0, 0.0, 0.0, 0.0) == 0.0
+    assert math.isnan(m.yaw(0.0, 0.0, math.inf, 1.0))

@@ -713,7 +713,16 @@ def test_missing_params_file_exits_2(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "override", ["publish_rate:=0.0", "publish_rate:=-5.0", "cmd_vel_timeout:=soon", "reject_above:=-1.0"]
+    "override",
+    [
+        "publish_rate:=0.0",
+        "publish_rate:=-5.0",
+        "cmd_vel_timeout:=soon",
+        "reject_above:=-1.0",
+        "path_controller:=bogus",
+        "path_controller:=feedback",  # (a differential drive cannot move sideways: refused at start)
+        "path_blend:=-1.0",
+    ],
 )
 def test_bad_ros_args_parameter_exits_2_with_one_line(tmp_path, override):
     proc = NodeProcess(["diff-drive", "--ros-args", "-p", override], tmp_path)

@@ -168,15 +168,23 @@ def test_a_cmd_vel_or_an_empty_path_stops_the_path_followed(tmp_path):
 
 
 @pytest.mark.parametrize(
-    ("waypoints", "frame", "note"),
+    ("robot", "waypoints", "frame", "note"),
     [
-        ([(1.0, 0.0)], "map", "path in frame 'map' refused: this node follows paths in its odometry frame 'odom'"),
-        ([(1.0, 0.0), (1.0, math.nan)], "odom", "path refused: path 'plan': waypoint 1 is not finite"),
-        ([(0.0005, 0.0)], "odom", "path refused: path 'plan': it does not go anywhere"),
+        (["omni4"], [(1.0, 0.0)], "map", "a path in frame 'map': this node follows paths in its odometry frame 'odom'"),
+        (["omni4"], [(1.0, 0.0), (1.0, math.nan)], "odom", "path 'plan': waypoint 1 is not finite"),
+        (["omni4"], [(0.0005, 0.0)], "odom", "path 'plan': it does not go anywhere"),
+        (
+            ["diff-drive", "--ros-args", "-p", "path_smooth:=false"],
+            [(0.0, 1.0)],
+            "odom",
+            "path 'plan' leaves the robot at 90 deg, but robot 'diff-drive' faces 0",
+        ),
     ],
 )
-def test_a_path_that_cannot_be_followed_is_refused_with_a_warning_and_the_robot_stays(tmp_path, waypoints, frame, note):
-    proc, graph = start(tmp_path, ["omni4", *EXACT])
+def test_a_path_that_cannot_be_followed_is_refused_with_a_warning_and_the_robot_stays(
+    tmp_path, robot, waypoints, frame, note
+):
+    proc, graph = start(tmp_path, [robot[0], *EXACT, *robot[1:]])
     try:
         side = PathSide(graph)
         sent = side.send(waypoints, frame)

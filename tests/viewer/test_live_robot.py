@@ -14,6 +14,7 @@ import pytest
 from omnikin.io.robot_file import load_robot
 from omnikin.motion.limits import MotionLimits
 from omnikin.viewer.live import KEY_SILENCE, LiveRobot
+from support.browser import wait_until
 from support.kinematics import distance_to_polyline
 
 DT = 0.02
@@ -217,10 +218,18 @@ def test_a_loop_that_runs_late_drives_as_one_that_steps_every_control_period():
     assert s.truth[0] == pytest.approx(ramp_distance(SPEED, ACCEL, 0, 10**6, 51), abs=1e-9)
 
 
+def planned(live, start: int = 0) -> None:
+    """Hand the page's path to the planning thread (one control step at ``start``) and wait until
+    it is planned: the control steps after this one begin it."""
+    live.step(start * DT)
+    wait_until(lambda: not live.planning, "the path planned")
+
+
 def test_a_path_followed_from_the_page_ends_on_its_last_waypoint_without_leaving_the_segments():
     live = LiveRobot(load_robot("omni4"))
     corners = [(0.0, 0.0), (0.5, 0.0), (0.5, 0.5)]
     live.follow(corners[1:], smooth=False, heading="fixed")  # from the robot at the origin
+    planned(live)
     truth = []
     drive(live, 1000, lambda k, t: truth.append(live.backend.truth.copy()) if k else None)
     assert live.follower.state == "done" and live.notice == ""
@@ -232,12 +241,14 @@ def test_a_path_followed_from_the_page_ends_on_its_last_waypoint_without_leaving
 def test_a_key_stops_the_path_followed_and_a_path_that_goes_nowhere_is_refused_in_one_line():
     live = LiveRobot(load_robot("omni4"))
     live.follow([(2.0, 0.0)])
+    planned(live)
     drive(live, 50)
     assert live.follower.following
     drive(live, 2, lambda k, t: live.key({"type": "press", "action": "left"}) if k == 51 else None, start=51)
     assert live.follower.state == "stopped" and live.follower.note == "a key took over"
     live.follow([(live.pose[0] + 0.0002, live.pose[1])])
-    drive(live, 1, start=54)
+    planned(live, start=54)
+    drive(live, 1, start=55)
     assert live.follower.state == "refused"
     nowhere = r"path 'plan': it does not go anywhere \(every waypoint within 1 mm of the robot\)"
     assert re.fullmatch(nowhere, live.notice)

@@ -54,6 +54,24 @@ def check_controller(name) -> str:
     return name
 
 
+def check_controller_for(name: str | None, robot: Robot) -> str:
+    """The controller ``name`` (default :func:`default_controller`) if ``robot``'s layout can be
+    driven by it, before any path: ``feedback`` needs a layout that translates, ``mpc`` one whose
+    wheels do not steer, ``pursuit`` one that drives straight ahead; else an
+    :class:`~omnikin.errors.InputError` in one line (a node's parameters, checked at start)."""
+    name = default_controller(robot) if name is None else check_controller(name)
+    if name == "feedback" and robot.fixed:
+        raise InputError(
+            f"robot {robot.name!r} cannot move sideways (fixed wheels): the feedback controller needs a layout "
+            "that translates; use pursuit or mpc"
+        )
+    if name == "mpc" and robot.steerable:
+        raise InputError(f"robot {robot.name!r} steers its wheels: the MPC is for layouts whose wheels do not steer")
+    if name == "pursuit" and not robot.ik([1.0, 0.0, 0.0], on_infeasible="return").feasible.all():
+        raise InputError(f"robot {robot.name!r} cannot drive straight ahead: pure pursuit drives along the heading")
+    return name
+
+
 def build_controller(name: str | None, robot: Robot, trajectory: Trajectory, *, rate: float) -> Controller:
     """The controller ``name`` (default :func:`default_controller`) of ``robot`` tracking
     ``trajectory`` at ``rate`` [Hz].

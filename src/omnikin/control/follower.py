@@ -55,6 +55,12 @@ and, the command filter holding it, oscillates about them: 8 cm off on a 1 m squ
 kinematic engine, where with the margin it is on the path to the micrometre)."""
 MAX_WAYPOINTS = 100_000
 """Most waypoints a path may have (a planner's path of 1 km at 1 cm)."""
+MAX_LENGTH = 200.0
+"""Longest path [m] followed (waypoints to waypoints): its timing takes some 3 s of one core and
+bounded memory; a longer one is refused (send it in parts)."""
+START_HEADING = 0.1
+"""Largest difference [rad] between a robot with fixed wheels' heading and the direction in which
+a path leaves it: such a robot cannot turn onto a path that leaves sideways or backwards."""
 FOLLOW_HEADINGS = ("given", *HEADINGS)
 """How a followed path's heading is set: the waypoints' own, or a :data:`~omnikin.control.path.HEADINGS` mode."""
 
@@ -168,13 +174,30 @@ def plan_follow(
         raise InputError(
             f"path {name!r}: it does not go anywhere (every waypoint within {MERGE * 1e3:g} mm of the robot)"
         )
-    mode = "tangent" if robot.fixed else heading
+    steps = np.hypot(*np.diff(w[:, :2], axis=0).T)
+    if float(steps.sum()) > MAX_LENGTH:
+        raise InputError(
+            f"path {name!r}: {float(steps.sum()):.6g} m of waypoints, longer than {MAX_LENGTH:g} m: send it in parts"
+        )
+    pursuit = controller == "pursuit" or (controller is None and robot.fixed and robot.steerable)
+    mode = "tangent" if robot.fixed or pursuit else heading
     options: dict = {"name": name}
     if mode == "given":
         options["theta"] = w[:, 2]
     else:
         options["heading"] = mode
-    path = spline(w[:, :2], **options) if smooth else polyline(w[:, :2], blend=blend, **options)
+    if smooth:  # (a robot with fixed wheels leaves along its heading)
+        path = spline(w[:, :2], start_direction=here[2] if robot.fixed else None, **options)
+    else:
+        path = polyline(w[:, :2], blend=blend, **options)
+    if robot.fixed:  # it can only start along its heading
+        off = float(wrap_angle(path.pose[0, 2] - here[2]))
+        if abs(off) > START_HEADING:
+            raise InputError(
+                f"path {name!r} leaves the robot at {math.degrees(path.pose[0, 2]):.0f} deg, but robot {robot.name!r} "
+                f"faces {math.degrees(here[2]):.0f} deg and has fixed wheels: it cannot turn onto the path there "
+                "(turn it first, or start the path along its heading)"
+            )
     inner = WheelLimits(speed=MARGIN * limits.speed, accel=MARGIN * limits.accel, steer_rate=limits.steer_rate)
     if body is not None:
         body = MotionLimits(
@@ -244,6 +267,10 @@ class PathFollower:
             return False
         self.state, self.note = "stopped", why
         return True
+
+    def drop(self, why: str) -> None:
+        """A path being planned was dropped before it was followed (``why``)."""
+        self.state, self.note = "stopped", why
 
     def refuse(self, why: str) -> bool:
         """A path could not be followed (``why``, one line): no path is followed from now; True if
@@ -323,15 +350,99 @@ class PathFollower:
 
     def summary(self) -> str:
         """One line: what the follower is doing."""
-        if self.plan is None:
-            return "no path yet" if self.state == "idle" else f"path refused: {self.note}"
+        if self.state == "refused":
+            return f"path refused: {self.note}"
+        if self.plan is None or (self.state == "stopped" and self.note.endswith("while the path was planned")):
+            return "no path yet" if self.state == "idle" else f"path dropped: {self.note}"
         trajectory = self.plan.trajectory
         head = f"path {self.plan.name!r} ({float(trajectory.path.s[-1]):.3g} m in {trajectory.duration:.3g} s)"
         if self.state == "following":
-            return (
-                f"following {head}: {min(self.elapsed, trajectory.duration):.3g} s along, "
-                f"{self.distance * 1e3:.3g} mm from the path"
-            )
+            off = "" if math.isnan(self.distance) else f", {self.distance * 1e3:.3g} mm from the path"
+            return f"following {head}: {min(self.elapsed, trajectory.duration):.3g} s along{off}"
         if self.state == "done":
             return f"done {head}: at most {self.max_distance * 1e3:.3g} mm from the path"
         return f"stopped {head}: {self.note}"
+
+
+class PlanWorker:
+    """Plans paths on a thread of its own, one at a time, the latest request winning: a request
+    made while another is planned supersedes it (its result is dropped), and :meth:`cancel` drops
+    both. The thread is a daemon: a program that stops does not wait for a plan.
+
+    ``job`` is called on the worker thread with the keyword arguments of :meth:`request` and
+    returns a :class:`FollowPlan` (or raises: an :class:`~omnikin.errors.OmnikinError` is the
+    result; anything else becomes an :class:`~omnikin.errors.InputError` naming it)."""
+
+    def __init__(self, job):
+        import threading
+
+        self._job = job
+        self._lock = threading.Lock()
+        self._wake = threading.Event()
+        self._generation = 0
+        self._request: tuple[int, dict] | None = None
+        self._result: tuple[int, object] | None = None
+        self._thread = threading.Thread(target=self._run, name="omnikin-plan", daemon=True)
+        self._thread.start()
+
+    @property
+    def busy(self) -> bool:
+        """Whether a request is waiting or being planned."""
+        with self._lock:
+            return self._request is not None or self._planning
+
+    _planning = False
+
+    def request(self, **kwargs) -> None:
+        """Plan with ``kwargs`` (superseding any request before)."""
+        with self._lock:
+            self._generation += 1
+            self._request = (self._generation, kwargs)
+            self._result = None
+        self._wake.set()
+
+    def cancel(self) -> bool:
+        """Drop the request waiting or being planned, and a result not taken; True if there was one."""
+        with self._lock:
+            had = self._request is not None or self._planning or self._result is not None
+            self._generation += 1
+            self._request = None
+            self._result = None
+        return had
+
+    def take(self):
+        """The result of the latest request once it is planned (a :class:`FollowPlan` or the
+        exception that refused it), once; None before (or when there is none)."""
+        with self._lock:
+            if self._result is None or self._result[0] != self._generation:
+                return None
+            result, self._result = self._result[1], None
+            return result
+
+    def current(self, generation: int) -> bool:
+        """Whether ``generation`` is still the latest request (a job may stop early when not)."""
+        return generation == self._generation
+
+    def _run(self) -> None:
+        from ..errors import OmnikinError
+
+        while True:
+            self._wake.wait()
+            with self._lock:
+                self._wake.clear()
+                if self._request is None:
+                    continue
+                generation, kwargs = self._request
+                self._request = None
+                self._planning = True
+            result: object
+            try:
+                result = self._job(generation=generation, **kwargs)
+            except OmnikinError as exc:
+                result = exc
+            except Exception as exc:  # (a bug: reported as the request's refusal, the thread lives on)
+                result = InputError(f"planning failed ({type(exc).__name__}: {shorten(str(exc))}); a bug in omnikin")
+            with self._lock:
+                self._planning = False
+                if generation == self._generation:
+                    self._result = (generation, result)

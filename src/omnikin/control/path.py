@@ -427,7 +427,9 @@ def given_headings(theta, n: int, name: str, closed: bool) -> np.ndarray:
     return np.concatenate(([th[0]], th[0] + np.cumsum(steps)))
 
 
-def spline(points, *, heading="tangent", closed: bool = False, name: str = "spline", theta=None) -> Path:
+def spline(
+    points, *, heading="tangent", closed: bool = False, name: str = "spline", theta=None, start_direction=None
+) -> Path:
     """A smooth curve through points: the cubic spline ``(x(u), y(u))`` through them, ``u`` the
     distance along the straight segments between them (chord length), with zero curvature at
     the ends (natural) or, ``closed``, periodic back to the first point (SciPy's
@@ -447,6 +449,9 @@ def spline(points, *, heading="tangent", closed: bool = False, name: str = "spli
         What the path is called in messages.
     theta : array_like, shape (n,), optional
         A heading [rad] per point (:func:`given_headings`), splined the same way.
+    start_direction : float, optional
+        The direction [rad] in which the curve leaves the first point (a clamped start: a robot
+        with fixed wheels leaves along its heading); default free (natural). Not with ``closed``.
 
     Returns
     -------
@@ -468,7 +473,13 @@ def spline(points, *, heading="tangent", closed: bool = False, name: str = "spli
         raise InputError(f"path {name!r}: points {k} and {(k + 1) % (len(pts) - closed)} are the same")
     _count(float(chord.sum()), name)
     u = np.concatenate(([0.0], np.cumsum(chord)))
-    if len(pts) == 2:
+    bc: object
+    if start_direction is not None:
+        if closed:
+            raise InputError(f"path {name!r}: a closed curve has no start direction of its own")
+        lead = np.array([math.cos(float(start_direction)), math.sin(float(start_direction))])
+        bc = ((1, lead), (2, np.zeros(2)))  # (u is the chord length: |q'(u)| is about 1)
+    elif len(pts) == 2:
         bc = "not-a-knot"
     else:
         bc = "periodic" if closed else "natural"

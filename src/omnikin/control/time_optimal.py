@@ -134,7 +134,7 @@ def path_rates(robot: Robot, path: Path) -> PathRates:
 def speed_ceiling(rates: PathRates, speed: np.ndarray, steer_rate: float) -> np.ndarray:
     """Largest ``x = sdot^2`` [m^2/s^2] at each sample from the speed limits ``(n_wheels,)``
     [rad/s] and the steering rate [rad/s] alone (the maximum velocity curve)."""
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", over="ignore"):  # (a row near zero: no bound from it)
         x = np.min((speed / np.abs(rates.w)) ** 2, axis=1, initial=np.inf)
         if rates.dsteer.shape[1] and math.isfinite(steer_rate):
             x = np.minimum(x, np.min((steer_rate / np.abs(rates.dsteer)) ** 2, axis=1))
@@ -146,26 +146,38 @@ def _row_lines(a: np.ndarray, b: np.ndarray, accel: float | np.ndarray):
     ``u >= p + q x`` and ``u <= -p + q x`` with ``p = -accel/|a|``, ``q = -b/a`` (rows with
     ``a = 0`` bound ``x`` alone: returned as ``xcap``)."""
     zero = np.abs(a) < 1e-12
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         p = np.where(zero, -np.inf, -accel / np.abs(a))
         q = np.where(zero, 0.0, -b / a)
         xcap = np.where(zero & (np.abs(b) > 0), accel / np.abs(b), np.inf)
     return p, q, np.min(xcap, axis=1, initial=np.inf)
 
 
+STATIC_CAP_BLOCK = 2048
+"""Samples :func:`_static_cap` compares rows of at a time (its work is ``rows^2`` per sample:
+in blocks, its memory stays some 2048 rows^2 numbers whatever the path's length)."""
+
+
 def _static_cap(p: np.ndarray, q: np.ndarray, ds: np.ndarray) -> np.ndarray:
     """Largest ``x_i`` for which some ``u`` meets every row and ``x_{i+1} >= 0``, the rows being
     ``u in [p + q x, -p + q x]`` ``(n, m)``: every lower bound against every upper one,
     ``(q_k - q_m) x <= -p_m - p_k``, and ``u >= -x / (2 ds)`` (the interval does not end below
-    rest) against every upper one."""
-    dq = q[:, :, None] - q[:, None, :]  # lower k against upper m
-    room = -p[:, None, :] - p[:, :, None]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cap = np.where(dq > 0, room / dq, np.inf)
-        # u >= -x/(2 ds) against u <= -p_m + q_m x:  (-1/(2ds) - q_m) x <= -p_m
-        c2 = -1.0 / (2 * ds)[:, None] - q
-        cap2 = np.where(c2 > 0, -p / c2, np.inf)
-    return np.minimum(np.min(cap.reshape(len(p), -1), axis=1, initial=np.inf), np.min(cap2, axis=1, initial=np.inf))
+    rest) against every upper one; :data:`STATIC_CAP_BLOCK` samples at a time."""
+    out = np.empty(len(p))
+    for a in range(0, len(p), STATIC_CAP_BLOCK):
+        b = slice(a, a + STATIC_CAP_BLOCK)
+        pb, qb = p[b], q[b]
+        dq = qb[:, :, None] - qb[:, None, :]  # lower k against upper m
+        room = -pb[:, None, :] - pb[:, :, None]
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            cap = np.where(dq > 0, room / dq, np.inf)
+            # u >= -x/(2 ds) against u <= -p_m + q_m x:  (-1/(2ds) - q_m) x <= -p_m
+            c2 = -1.0 / (2 * ds[b])[:, None] - qb
+            cap2 = np.where(c2 > 0, -pb / c2, np.inf)
+        out[b] = np.minimum(
+            np.min(cap.reshape(len(pb), -1), axis=1, initial=np.inf), np.min(cap2, axis=1, initial=np.inf)
+        )
+    return out
 
 
 @dataclass(frozen=True)
@@ -321,10 +333,11 @@ def time_rates(path: Path, rates: PathRates, speed, accel, steer_rate: float = m
     # u <= (xbar_{i+1} - x) / (2 ds) against each lower bound u >= p_k + q_k x:
     #   (1 + 2 ds q_k) x <= xbar_{i+1} - 2 ds p_k
     coef = 1.0 + 2.0 * ds[:, None] * q[:-1]
-    off = -2.0 * ds[:, None] * p[:-1]
-    valid = coef > 0
-    inv = np.where(valid, 1.0 / np.where(valid, coef, 1.0), 0.0)
-    off_over = np.where(valid, off * inv, np.inf)
+    with np.errstate(over="ignore", invalid="ignore"):
+        off = -2.0 * ds[:, None] * p[:-1]
+        valid = coef > 0
+        inv = np.where(valid, 1.0 / np.where(valid, coef, 1.0), 0.0)
+        off_over = np.where(valid, off * inv, np.inf)
     xbar = np.empty(n)
     xbar[-1] = 0.0
     xm = xmax.tolist()

@@ -209,25 +209,118 @@ def diagnostic_status(
 
 def yaw(x: float, y: float, z: float, w: float) -> float:
     """The heading [rad] of a quaternion ``(x, y, z, w)``: the rotation about z of its rotation
-    (ZYX Euler yaw, ``atan2(2 (w z + x y), 1 - 2 (y^2 + z^2))``); a quaternion that is not unit
-    counts by its direction, and the zero quaternion (never a rotation) reads as 0."""
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)) if (x or y or z or w) else 0.0
+    (ZYX Euler yaw, ``atan2(2 (w z + x y), w^2 + x^2 - y^2 - z^2)``, which for a quaternion that
+    is not unit gives the heading of its direction); the zero quaternion (never a rotation) reads
+    as 0, and one with a component that is not finite as NaN (a waypoint refused as not finite)."""
+    if not all(math.isfinite(v) for v in (x, y, z, w)):
+        return math.nan
+    if not (x or y or z or w):
+        return 0.0
+    return math.atan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z)
 
 
 def plan_frame_error(frame: str, odom_frame: str) -> str | None:
     """Why a ``nav_msgs/Path`` in ``frame`` cannot be followed (None when it can): the node
-    follows paths in its odometry frame (an empty frame counts as it); it looks up no transform."""
+    follows paths in its odometry frame (an empty frame counts as it); it looks up no transform.
+    The frame is named in ASCII, shortened (a look-alike letter shows as its code)."""
     if frame in ("", odom_frame):
         return None
+    shown = ascii(frame if len(frame) <= 60 else frame[:60] + "...")
     return (
-        f"path in frame {frame!r} refused: this node follows paths in its odometry frame {odom_frame!r} "
+        f"a path in frame {shown}: this node follows paths in its odometry frame {odom_frame!r} "
         f"(it looks up no transform; publish the plan in {odom_frame!r})"
     )
 
 
+REFERENCE_POSES = 2000
+"""Most poses of a ``reference_path`` message (:func:`reference_samples`)."""
+
+
 def reference_samples(trajectory, period: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
     """The timed reference of a followed path as ``nav_msgs/Path`` content: times ``(m,)`` [s from
-    its start], ``period`` apart and its end, and poses ``(m, 3)`` [m, m, rad] in odom."""
+    its start], ``period`` apart (or farther, so that there are at most :data:`REFERENCE_POSES`)
+    and its end, and poses ``(m, 3)`` [m, m, rad] in odom."""
+    period = max(period, trajectory.duration / (REFERENCE_POSES - 1))
     t = np.append(np.arange(0.0, trajectory.duration, period), trajectory.duration)
     pose, _, _ = trajectory.at(t)
     return t, pose
+
+
+def _cdr_reader(data: bytes, what: str):
+    """Readers of a serialized message (CDR, as ROS 2's middleware sends it: a 4-byte
+    encapsulation header, big- or little-endian, then the fields aligned to their size from
+    after the header): ``take(fmt, align)`` and ``string()``, each an
+    :class:`~omnikin.errors.InputError` naming ``what`` past the end of ``data``."""
+    import struct
+
+    if len(data) < 4 or data[0] != 0 or data[1] not in (0, 1):
+        raise InputError(f"{what}: not a CDR message")
+    order = "<" if data[1] == 1 else ">"
+    offset = 4
+
+    def take(fmt: str, align: int) -> tuple:
+        nonlocal offset
+        offset += (-(offset - 4)) % align
+        size = struct.calcsize(order + fmt)
+        if offset + size > len(data):
+            raise InputError(f"{what}: the message ends early (at byte {len(data)})")
+        values = struct.unpack_from(order + fmt, data, offset)
+        offset += size
+        return values
+
+    def string() -> str:
+        nonlocal offset
+        (n,) = take("I", 4)
+        if n == 0 or offset + n > len(data):
+            raise InputError(f"{what}: a string runs past the end of the message")
+        text = data[offset : offset + n - 1].decode("utf-8", errors="replace")
+        offset += n
+        return text
+
+    def left() -> int:
+        return len(data) - offset
+
+    return take, string, left
+
+
+def plan_frame(data: bytes) -> str:
+    """The ``header.frame_id`` of a serialized ``nav_msgs/Path`` (read without its poses)."""
+    take, string, _ = _cdr_reader(data, "plan")
+    take("iI", 4)
+    return string()
+
+
+def plan_count(data: bytes) -> int:
+    """How many poses a serialized ``nav_msgs/Path`` says it has (read without them)."""
+    take, string, _ = _cdr_reader(data, "plan")
+    take("iI", 4)
+    string()
+    return int(take("I", 4)[0])
+
+
+PLAN_POSE_BYTES = 8 + 4 + 1 + 56
+"""The fewest bytes a serialized ``geometry_msgs/PoseStamped`` takes (stamp, an empty frame id,
+seven doubles): a count of poses beyond what the message's bytes can hold is refused."""
+
+
+def plan_poses(data: bytes, limit: int) -> np.ndarray:
+    """The poses of a serialized ``nav_msgs/Path`` as ``(n, 3)`` ``(x [m], y [m], yaw [rad])``
+    (:func:`yaw` of each orientation), read in Python (no message objects: 100,000 poses in some
+    0.2 s, a thread that reads them does not hold the interpreter as the bindings' conversion
+    does). More than ``limit`` poses, or a count the bytes cannot hold: an
+    :class:`~omnikin.errors.InputError` in one line."""
+    take, string, left = _cdr_reader(data, "plan")
+    take("iI", 4)
+    string()
+    (n,) = take("I", 4)
+    if n > limit:
+        raise InputError(f"a path of {n} poses: more than {limit}")
+    if n * PLAN_POSE_BYTES > left():
+        raise InputError(f"a path that says it has {n} poses in {len(data)} bytes")
+    out = np.empty((n, 3))
+    for k in range(n):
+        take("iI", 4)
+        string()
+        x, y, _, qx, qy, qz, qw = take("7d", 8)
+        out[k] = (x, y, yaw(qx, qy, qz, qw))
+    return out

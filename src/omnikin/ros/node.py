@@ -64,15 +64,14 @@ from __future__ import annotations
 import dataclasses
 import math
 import signal
-import threading
 import time
-from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
 
 from ..common.messages import digits_apart
-from ..control.follower import MAX_WAYPOINTS, FollowPlan, PathFollower, plan_follow
+from ..control.controllers import check_controller_for
+from ..control.follower import MAX_WAYPOINTS, FollowPlan, PathFollower, PlanWorker, plan_follow
 from ..control.time_optimal import WheelLimits
 from ..errors import InputError, LinkError, OmnikinError
 from ..kinematics.se2 import between, log
@@ -216,17 +215,18 @@ class BaseNode(Node):
         self.create_timer(1.0, self._diagnostics, clock=steady)
 
     def _init_following(self, robot, limits: MotionLimits) -> None:
-        """The path follower (module docstring): ``plan`` in, ``reference`` and
-        ``reference_path`` out, one planning thread."""
+        """The path follower (module docstring): ``plan`` in (serialized: its poses are read on
+        the planning thread, not by the bindings on the control loop's), ``reference`` and
+        ``reference_path`` out, one planning thread. A controller the layout cannot take is
+        refused here, before any path."""
+        controller = self.p["path_controller"]
+        check_controller_for(None if controller == "auto" else controller, robot)
         self.follower = PathFollower()
         self._body = limits
         self._wheels = WheelLimits(speed=limits.wheel or math.inf, accel=math.inf)
-        self._planner = ThreadPoolExecutor(max_workers=1, thread_name_prefix="omnikin-plan")
-        self._plan_lock = threading.Lock()
-        self._plan_generation = 0  # a path received, or a command that cancels it
-        self._planning: tuple[int, Future] | None = None
+        self._worker = PlanWorker(self._plan)
         self.paths_received = 0
-        self.create_subscription(PathMessage, "plan", self._on_plan, 10)
+        self.create_subscription(PathMessage, "plan", self._on_plan, 10, raw=True)
         self.reference_pub = self.create_publisher(PoseStamped, "reference", 10)
         self.reference_path_pub = self.create_publisher(PathMessage, "reference_path", LATCHED)
 
@@ -300,54 +300,48 @@ class BaseNode(Node):
         self._cancel_path("a cmd_vel arrived (the person at the keyboard wins)")
         self.runtime.command((tw.linear.x, tw.linear.y, tw.angular.z), t)
 
-    def _cancel_path(self, why: str) -> None:
+    def _cancel_path(self, why: str, log: bool = True) -> None:
         """Stop the path followed and drop one being planned; the robot brakes to a stop unless
         a command follows."""
-        with self._plan_lock:
-            self._plan_generation += 1
-            self._planning = None
+        dropped = self._worker.cancel()
         if self.follower.stop(why):
-            self.get_logger().info(f"path stopped: {why}")
+            if log:
+                self.get_logger().info(f"path stopped: {why}")
             self.runtime.command(np.zeros(3), self.now_s())
+        elif dropped:
+            self.follower.drop(f"{why} while the path was planned")
 
-    def _on_plan(self, msg) -> None:
-        """A ``nav_msgs/Path`` on ``plan``: stop what was followed, then plan the new one from the
-        pose the robot has, on the planning thread (:meth:`_cycle` starts it when it is ready).
-        Nothing a peer sends stops the node: what cannot be followed is refused."""
+    def _on_plan(self, data: bytes) -> None:
+        """A serialized ``nav_msgs/Path`` on ``plan``: stop what was followed, then plan the new
+        one from the pose the robot has, on the planning thread (:meth:`_cycle` starts it when
+        it is ready). Nothing a peer sends stops the node: what cannot be followed is refused."""
         self.paths_received += 1
         try:
-            self._receive_plan(msg)
+            self._receive_plan(data)
+        except OmnikinError as exc:
+            self._refuse_path(str(exc))
         except Exception as exc:  # (a message no check foresaw: refused, the node keeps running)
-            self._refuse_path(f"path refused: {type(exc).__name__}: {exc} (a bug in omnikin: please report it)")
+            self._refuse_path(f"{type(exc).__name__}: {exc} (a bug in omnikin: please report it)")
 
-    def _receive_plan(self, msg) -> None:
-        n = len(msg.poses)
+    def _receive_plan(self, data: bytes) -> None:
+        n = messages.plan_count(data)
         if n == 0:
             self._cancel_path("an empty path arrived")
             return
         self._cancel_path("a new path arrived")
-        why = messages.plan_frame_error(msg.header.frame_id, self.p["odom_frame_id"])
+        why = messages.plan_frame_error(messages.plan_frame(data), self.p["odom_frame_id"])
         if why is None and n > MAX_WAYPOINTS:
-            why = f"path of {n} poses refused: more than {MAX_WAYPOINTS}"
+            why = f"a path of {n} poses: more than {MAX_WAYPOINTS}"
         if why is not None:
             self._refuse_path(why)
             return
-        with self._plan_lock:
-            generation = self._plan_generation
-            future = self._planner.submit(self._plan, generation, msg.poses, np.array(self.runtime.pose, dtype=float))
-            self._planning = (generation, future)
+        self._worker.request(data=data, pose=np.array(self.runtime.pose, dtype=float))
 
-    def _plan(self, generation: int, poses, pose: np.ndarray) -> FollowPlan | None:
-        """The planning thread: the path through ``poses`` (``geometry_msgs/PoseStamped``, read
-        here: 0.15 s for 100,000 of them, time the control loop keeps) followed from ``pose``; None
-        when a newer path or a command came first."""
-        if generation != self._plan_generation:
-            return None
-        waypoints = np.empty((len(poses), 3))
-        for k, stamped in enumerate(poses):
-            position, q = stamped.pose.position, stamped.pose.orientation
-            waypoints[k] = (position.x, position.y, messages.yaw(q.x, q.y, q.z, q.w))
-        if generation != self._plan_generation:
+    def _plan(self, generation: int, data: bytes, pose: np.ndarray) -> FollowPlan | None:
+        """The planning thread: the path of the serialized message ``data`` followed from
+        ``pose``; None when a newer path or a command came first."""
+        waypoints = messages.plan_poses(data, MAX_WAYPOINTS)
+        if not self._worker.current(generation):
             return None
         p = self.p
         return plan_follow(
@@ -367,30 +361,20 @@ class BaseNode(Node):
     def _refuse_path(self, why: str) -> None:
         if self.follower.refuse(why):
             self.runtime.command(np.zeros(3), self.now_s())
-        self.get_logger().warning(why, throttle_duration_sec=1.0)
+        self.get_logger().warning(f"path refused: {why}", throttle_duration_sec=1.0)
 
     def _start_planned(self, now: float) -> None:
         """Begin a path whose planning has finished (or report why it cannot be followed)."""
-        with self._plan_lock:
-            if self._planning is None or not self._planning[1].done():
-                return
-            generation, future = self._planning
-            self._planning = None
-            if generation != self._plan_generation:
-                return
-        try:
-            plan = future.result()
-        except OmnikinError as exc:
-            self._refuse_path(f"path refused: {exc}")
+        result = self._worker.take()
+        if result is None:
             return
-        except Exception as exc:  # a bug in the planning: reported, the node keeps running
-            self._refuse_path(f"path refused: planning failed ({type(exc).__name__}: {exc})")
+        if isinstance(result, Exception):
+            self._refuse_path(str(result))
             return
-        if plan is None:
-            return
-        self.follower.begin(plan, now)
+        assert isinstance(result, FollowPlan)
+        self.follower.begin(result, now)
         self.get_logger().info(self.follower.summary())
-        self._publish_reference_path(plan)
+        self._publish_reference_path(result)
 
     def _publish_reference_path(self, plan: FollowPlan) -> None:
         t, poses = messages.reference_samples(plan.trajectory)
@@ -635,9 +619,9 @@ class BaseNode(Node):
         self.diag_pub.publish(arr)
 
     def close_planner(self) -> None:
-        """Drop the paths waiting to be planned; one being planned finishes on its own thread."""
-        self._cancel_path("the node is stopping")
-        self._planner.shutdown(wait=False, cancel_futures=True)
+        """Drop the path waiting to be planned or being planned (its thread does not hold up the
+        exit), quietly: the node's log may be gone."""
+        self._cancel_path("the node is stopping", log=False)
 
     def stop_wheels(self, now: float | None = None) -> None:
         """Command zero speed to every rolling wheel (steering left where it is)."""

@@ -39,7 +39,7 @@ from typing import TextIO
 
 import numpy as np
 
-from ..control.follower import PathFollower, plan_follow
+from ..control.follower import FollowPlan, PathFollower, PlanWorker, plan_follow
 from ..control.time_optimal import WheelLimits
 from ..errors import InputError
 from ..kinematics.robot import Robot
@@ -170,6 +170,7 @@ class PageRobot:
         self.events: deque[dict] = deque(maxlen=MAX_EVENTS)
         self.follower = PathFollower()  # a path followed (:meth:`follow`)
         self.path_options: dict = {"heading": "given", "smooth": True, "blend": 0.0}
+        self._planner = PlanWorker(self._plan)  # plans off the control loop, the latest Follow winning
 
     can_steer = False
     """Whether the page's steering keys and buttons turn the wheels."""
@@ -252,7 +253,7 @@ class PageRobot:
         if kind in ("key", "twist", "stop"):
             self.seeker = None  # the user takes over
         if kind in ("twist", "stop", "goal"):
-            self.follower.stop(f"the page's {'goal' if kind == 'goal' else 'controls'} took over")
+            self._stop_path(f"the page's {'goal' if kind == 'goal' else 'controls'} took over")
         if kind == "key":
             assert isinstance(value, dict)
             source = value.get("source")
@@ -266,7 +267,7 @@ class PageRobot:
                 if action in ("steer_left", "steer_right"):
                     self._turn_steering(STEER_STEP if action == "steer_left" else -STEER_STEP)
                 elif self.teleop.press(action):
-                    self.follower.stop("a key took over")
+                    self._stop_path("a key took over")
                     if action in MOVES:
                         held.add(action)
                 else:
@@ -300,28 +301,47 @@ class PageRobot:
             assert isinstance(value, float)
             self._turn_steering(value)
         elif kind == "path":
-            self._begin_path(t, *value)  # type: ignore[misc]
+            assert isinstance(value, tuple)
+            points, chosen = value
+            self._planner.request(waypoints=points, pose=np.array(self.pose, dtype=float), options=chosen)
         elif kind == "path_stop":
-            self.follower.stop("Stop pressed")
+            self._stop_path("Stop pressed")
         return actions
 
-    def _begin_path(self, t: float, waypoints: np.ndarray, options: dict) -> None:
-        """Plan the path from the robot's pose and follow it from ``t`` [s]; the targets of the
-        keys, the controls and the goal are dropped."""
+    def _stop_path(self, why: str) -> None:
+        """Stop the path followed, and drop one being planned."""
+        if self._planner.cancel() and not self.follower.following:
+            self.follower.drop(f"{why} while the path was planned")
+        self.follower.stop(why)
+
+    def _plan(self, generation: int, waypoints: np.ndarray, pose: np.ndarray, options: dict) -> FollowPlan:
+        """The planning thread (:class:`~omnikin.control.follower.PlanWorker`): the path from
+        ``pose``, within the robot's limits."""
         limits = self.limits
         wheels = WheelLimits(speed=limits.wheel or math.inf, accel=math.inf)
-        try:
-            plan = plan_follow(
-                self.robot, waypoints, self.pose, limits=wheels, body=limits, rate=1.0 / CATCH_UP_STEP, **options
-            )
-        except InputError as exc:
-            self.follower.refuse(str(exc))
-            raise
+        return plan_follow(self.robot, waypoints, pose, limits=wheels, body=limits, rate=1.0 / CATCH_UP_STEP, **options)
+
+    def _start_planned(self, t: float) -> None:
+        """Begin a path whose planning has finished at ``t`` [s] (the targets of the keys, the
+        controls and the goal dropped), or say in one line why it cannot be followed."""
+        result = self._planner.take()
+        if result is None:
+            return
+        if isinstance(result, Exception):
+            self.follower.refuse(str(result))
+            self.notice = str(result)
+            return
+        assert isinstance(result, FollowPlan)
         self.seeker = None
         self.teleop.release_all()
         self._set_twist[:] = 0.0
         self.notice = ""
-        self.follower.begin(plan, t)
+        self.follower.begin(result, t)
+
+    @property
+    def planning(self) -> bool:
+        """Whether a path is being planned."""
+        return self._planner.busy
 
     @property
     def target(self) -> np.ndarray:
@@ -441,6 +461,7 @@ class LiveRobot(PageRobot):
         """One control step at ``t`` [s] with the targets as they are (a path followed commands
         from the pose just measured)."""
         dt = max(0.0, t - self.t)
+        self._start_planned(t)
         if self.follower.following:
             self.t = t
             state = self.runtime.sense(t)

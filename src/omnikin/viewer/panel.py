@@ -194,7 +194,8 @@ class PathPanel:
         clear.on_click(lambda _: self.clear())
         server.scene.on_click(modifier="shift")(self._clicked)
         self._drawn_plan: object | None = None
-        self._draw_waypoints()
+        with self._lock:
+            self._draw_waypoints()
         self._reference = server.scene.add_icosphere(
             "/path/reference", radius=0.03, color=REFERENCE_COLOUR, visible=False, cast_shadow=False
         )
@@ -213,8 +214,9 @@ class PathPanel:
         """A shift-click: the point where the click's ray meets the floor becomes a waypoint."""
         origin = np.asarray(event.ray_origin, dtype=float)
         direction = np.asarray(event.ray_direction, dtype=float)
-        if direction[2] >= 0.0 or origin[2] <= 0.0:
-            self.live.notice = "a click above the horizon: no floor there"
+        length = float(np.linalg.norm(direction))
+        if not (origin[2] > 0.0 and length > 0.0 and direction[2] < -1e-6 * length):
+            self.live.notice = "a click whose ray does not go down to the floor"
             return
         point = origin - origin[2] / direction[2] * direction
         if not (np.all(np.isfinite(point)) and np.all(np.abs(point[:2]) <= MAX_CLICK_DISTANCE)):
@@ -226,17 +228,18 @@ class PathPanel:
                 return
             self.waypoints.append((float(point[0]), float(point[1])))
             self.from_file = False
-        if self.heading.value == "given":
-            self.heading.value = "tangent"  # type: ignore[misc]
-        self._draw_waypoints()
-        self.status.content = self._waypoint_text()
+            self.live.notice = ""
+            if self.heading.value == "given":
+                self.heading.value = "tangent"  # type: ignore[misc]
+            self._draw_waypoints()
+            self.status.content = self._waypoint_text()
 
     def clear(self) -> None:
         with self._lock:
             self.waypoints = []
             self.from_file = False
-        self._draw_waypoints()
-        self.status.content = self._waypoint_text()
+            self._draw_waypoints()
+            self.status.content = self._waypoint_text()
 
     def follow(self) -> None:
         if not self.waypoints:
@@ -252,9 +255,9 @@ class PathPanel:
         self.live.follow(points, **dict(self.options, heading=self.heading.value))
 
     def _draw_waypoints(self) -> None:
+        """The waypoints on the floor (called under the lock: one drawing at a time)."""
         scene = self.server.scene
-        with self._lock:
-            xy = np.array([w[:2] for w in self.waypoints], dtype=float).reshape(-1, 2)
+        xy = np.array([w[:2] for w in self.waypoints], dtype=float).reshape(-1, 2)
         if len(xy):
             points = np.column_stack((xy, np.full(len(xy), 0.004)))
             scene.add_point_cloud("/path/waypoints", points, colors=PATH_COLOUR, point_size=0.04, point_shape="circle")
@@ -292,7 +295,11 @@ class PathPanel:
         elif self._error is not None:
             self._error.remove()
             self._error = None
-        text = self._waypoint_text() + "<br>" + html.escape(follower.summary())
+        text = (
+            self._waypoint_text()
+            + "<br>"
+            + html.escape("planning the path..." if self.live.planning else follower.summary())
+        )
         if follower.state == "following" or follower.state == "done":
             text += f"<br>error to the reference {follower.error * 1e3:.1f} mm"
         if self.live.notice:
