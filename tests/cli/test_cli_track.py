@@ -61,7 +61,7 @@ def test_a_path_file_with_blended_corners_is_tracked_as_a_user_runs_it(tmp_path)
         (["tomasi-omni3", "missing.csv"], r"missing.csv"),
         (["tomasi-omni3", "figure8 1", "--heading", "sideways"], r"--heading 'sideways': one of tangent, fixed"),
         (["tomasi-omni3", "figure8 1", "--smooth"], r"smooth is for path files"),
-        (["tomasi-omni3", "figure8 1", "--max-wheel-speed", "0"], r"speed must be a number > 0"),
+        (["tomasi-omni3", "figure8 1", "--max-wheel-speed", "0"], r"speed\) must be a finite number > 0, got 0.0"),
         (["tomasi-omni3", "figure8 1", "--max-wheel-speed", "1e-9"], r"control ticks, more than --max-memory"),
         (["tomasi-omni3", "figure8 1", "--controller", "pid"], r"invalid choice: 'pid'"),
         (["tomasi-omni3", "figure8 1", "--engine", "physics", "--noise", "typical"], r"drop --noise"),
@@ -168,3 +168,23 @@ def test_the_bag_holds_the_run_s_truth_odometry_wheels_and_commands(tmp_path, ca
     # /cmd_vel: the controller's twist, a differential drive's with no sideways speed
     cmd = np.array([[m.linear.x, m.linear.y, m.angular.z] for m in twists])
     assert np.all(cmd[:, 1] == 0.0) and cmd[len(cmd) // 2, 0] > 0
+
+
+def test_the_bag_of_a_path_away_from_the_origin_is_in_the_frame_where_the_robot_started(tmp_path, capsys):
+    pytest.importorskip("rosbags")
+    path = tmp_path / "away.csv"
+    path.write_text("x,y,theta\n5,3,0.785\n6,3,0.785\n6,4,0.785\n")
+    bag, odometry = tmp_path / "away.bag", tmp_path / "odom.tum"
+    rc, _, err = run_cli(capsys, "track", "omni4", path, "--bag", bag, "--odometry", odometry)
+    assert rc == 0, err
+    exported = tmp_path / "exported.tum"
+    rc, _, err = run_cli(capsys, "bag", "export", bag, "--topic", "/odom", "--format", "tum", "-o", exported)
+    assert rc == 0, err
+    _, in_bag = read_trajectory(exported)
+    _, in_path_frame = read_trajectory(odometry)
+    assert in_bag[0] == pytest.approx([0.0, 0.0, 0.0], abs=1e-9)  # the odom frame starts at the robot
+    assert in_path_frame[0] == pytest.approx([5.0, 3.0, 0.785], abs=1e-9)  # the TUM output: the path's frame
+    # the same motion: the first leg, 1 m along the path's +x, is 1 m along cos/sin(-0.785) in the odom frame
+    end = in_bag[-1]
+    c, s = math.cos(0.785), math.sin(0.785)
+    assert end[:2] == pytest.approx([c * 1 + s * 1, -s * 1 + c * 1], abs=2e-3)

@@ -22,7 +22,7 @@ import numpy as np
 from ..common.resource_limits import DEFAULT_MEMORY, DEFAULT_TIME
 from ..control.controllers import build_controller, check_controller, default_controller
 from ..control.path import Path, moved
-from ..control.trajectory import Trajectory
+from ..control.trajectory import Trajectory, control_period
 from ..evaluation.tracking import TrackingRun
 from ..kinematics.robot import Robot
 from ..simulation.error_models import SystematicErrors
@@ -37,9 +37,13 @@ DEFAULT_RATE = 50.0
 """Control rate [Hz] of :func:`track`."""
 
 
-TICK_SECONDS = 1e-4
-"""Computing time [s] of one control tick apart from the physics engine's steps (runtime,
-controller, kinematic back-end: measured 60 us)."""
+TICK_SECONDS = {"feedback": 1e-3, "pursuit": 1e-3, "mpc": 3e-3}
+"""Computing time [s] of one control tick apart from the physics engine's steps, by controller
+(runtime, controller, back-end, the run's records: measured 0.5 to 1.4 ms with the feedback
+controller on a loaded 2-core machine, the MPC's solve 2.2 ms at p95 more)."""
+MIN_TICKS = 10
+"""Fewest control ticks a run's reference may last: a rate slower than that samples nothing of
+the motion (one tick of a 12 s circle at 0.1 Hz, a "perfect" run of a robot that never moved)."""
 
 
 @dataclass(frozen=True)
@@ -275,7 +279,19 @@ def track(
         # layout with fixed wheels can hold along a curve (a file's default is tangent already,
         # and a file may give its headings)
         heading = "tangent"
+    control_period(rate)
+    if isinstance(settle, bool) or not (isinstance(settle, (int, float)) and 0 <= settle <= 3600):
+        raise InputError(f"settle must be in [0, 3600] s, got {shorten(settle)}")
+    for option, value in (("max_wheel_speed", max_wheel_speed), ("max_wheel_accel", max_wheel_accel)):
+        if isinstance(value, bool) or not (isinstance(value, (int, float)) and 0 < value < math.inf):
+            raise InputError(
+                f"{option} (--{option.replace('_', '-')}) must be a finite number > 0, got {shorten(value)}"
+            )
     engine = as_engine(engine, noise=noise, step=step)
+    if engine.options.get("step") is not None:
+        from ..physics.run import check_rate_steps
+
+        check_rate_steps(rate, engine.options["step"])
     noise_model = None if noise is None else engine.noise_model(noise)
     limits = WheelLimits(speed=max_wheel_speed, accel=max_wheel_accel)
     seeds = streams(seed, RUN_STREAMS)
@@ -292,7 +308,12 @@ def track(
     else:
         geometry = load_path(path, heading=heading, blend=blend, smooth=smooth)
     trajectory = plan_trajectory(nominal, geometry, limits)
-    cost = tracking_cost(true, engine, trajectory.duration + settle, rate)
+    if trajectory.duration * rate < MIN_TICKS:
+        raise InputError(
+            f"rate (--rate) {rate:g} Hz gives {math.floor(trajectory.duration * rate) + 1} control tick(s) over the "
+            f"{trajectory.duration:.3g} s reference: at least {MIN_TICKS}; raise the rate"
+        )
+    cost = tracking_cost(true, engine, trajectory.duration + settle, rate, controller)
     if on_cost is not None:
         on_cost(cost)
     require_within(
@@ -330,13 +351,14 @@ def track(
     return Tracking(nominal, true, injected, trajectory, controller, engine.name, run, engine.options.get("step"))
 
 
-def tracking_cost(true_robot: Robot, engine, seconds: float, rate: float) -> TrackingCost:
+def tracking_cost(true_robot: Robot, engine, seconds: float, rate: float, controller: str = "feedback") -> TrackingCost:
     """The :class:`TrackingCost` of driving ``seconds`` [s] of simulated time at ``rate`` [Hz]
-    in ``engine`` (for the physics engine its step cost is measured on ``true_robot``'s model)."""
+    in ``engine`` with ``controller`` (for the physics engine its step cost is measured on
+    ``true_robot``'s model)."""
     ticks = math.floor(seconds * rate) + 1.0
     columns = 16 + len(true_robot.rolling) + len(true_robot.encoded_names) + len(true_robot.steerable)
     memory = ticks * columns * 8 * 3  # the run's arrays, moved to the path's frame
-    computing = ticks * TICK_SECONDS
+    computing = ticks * TICK_SECONDS[controller]
     step = engine.options.get("step")
     if step is not None:
         from ..physics.cost import measure_step_seconds

@@ -130,8 +130,8 @@ def add_parser(sub, robot_help: str) -> None:
         "--bag",
         folder="data",
         metavar="OUT.bag",
-        help="write the run to a new ROS 2 bag: /ground_truth, /odom, /joint_states, /cmd_vel (extra ros; a new "
-        "name, --force replaces a bag omnikin wrote)",
+        help="write the run to a new ROS 2 bag: /ground_truth, /odom, /joint_states, /cmd_vel, the poses in the odom "
+        "frame fixed where the robot started (extra bags; a new name, --force replaces a bag omnikin wrote)",
     )
     sp.add_argument("--storage", choices=("sqlite3", "mcap"), default="sqlite3", help="bag storage (default sqlite3)")
     add_output(
@@ -293,13 +293,13 @@ def _command(args) -> str:
     for option in ("controller", "heading", "blend", "noise", "true_robot", "step"):
         value = getattr(args, option)
         if value is not None:
-            words += [f"--{option.replace('_', '-')}", shlex.quote(f"{value:g}" if isinstance(value, float) else value)]
+            words += [f"--{option.replace('_', '-')}", shlex.quote(repr(value) if isinstance(value, float) else value)]
     if args.smooth:
         words.append("--smooth")
     if not args.true_robot:
         words += ["--errors", shlex.quote(args.errors)]
-    words += ["--engine", args.engine, "--seed", str(args.seed), "--rate", f"{args.rate:g}"]
-    words += ["--max-wheel-speed", f"{args.max_wheel_speed:g}", "--max-wheel-accel", f"{args.max_wheel_accel:g}"]
+    words += ["--engine", args.engine, "--seed", str(args.seed), "--rate", repr(args.rate)]
+    words += ["--max-wheel-speed", repr(args.max_wheel_speed), "--max-wheel-accel", repr(args.max_wheel_accel)]
     return " ".join(words)
 
 
@@ -338,10 +338,24 @@ def _write_tick_log(args, tracking) -> None:
 
 
 def _write_bag(args, tracking) -> dict:
-    """``--bag``: the run's truth, odometry, wheel angles and commands (:func:`omnikin.io.bags.record_samples`)."""
+    """``--bag``: the run's truth, odometry, wheel angles and commands
+    (:func:`omnikin.io.bags.record_samples`), the poses in the odom frame fixed where the robot
+    started (as the wheels' odometry reads them back; the TUM outputs are in the path's frame)."""
+    import numpy as np
+
     from ..io.bags import record_samples
+    from ..kinematics.se2 import compose, inverse
 
     run = tracking.run
+    # the odom frame where the robot started (REP 105), as its wheels' odometry reads back:
+    # the path's frame is the TUM outputs'
+    into_start = inverse(tracking.trajectory.path.pose[0])
+
+    def local(poses):
+        out = compose(into_start, poses)
+        out[:, 2] = np.unwrap(out[:, 2])
+        return out
+
     custom = {
         "omnikin.robot": tracking.robot.name,
         "omnikin.path": args.path,
@@ -356,8 +370,8 @@ def _write_bag(args, tracking) -> dict:
         args.bag,
         tracking.robot,
         run.t,
-        truth=run.truth,
-        odometry=run.odometry,
+        truth=local(run.truth),
+        odometry=local(run.odometry),
         wheel_angles=run.wheel_angles,
         steer=run.steer,
         command=run.command,

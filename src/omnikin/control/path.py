@@ -223,6 +223,10 @@ def _heading(xy_d: np.ndarray, heading, name: str, start: float = 0.0) -> np.nda
         if heading in ("fixed", "free"):
             return np.full(n, start)
         raise InputError(f"path {name!r}: unknown heading {heading!r}; one of {list(HEADINGS)} or an angle [rad]")
+    if isinstance(heading, bool) or not isinstance(heading, (int, float, np.integer, np.floating)):
+        raise InputError(
+            f"path {name!r}: heading must be one of {list(HEADINGS)} or an angle [rad], got {shorten(heading)}"
+        )
     value = float(heading)
     if not (math.isfinite(value) and abs(value) <= MAX_HEADING):
         raise InputError(f"path {name!r}: heading must be an angle within {MAX_HEADING:g} rad, got {heading!r}")

@@ -51,11 +51,19 @@ PATH_FILE_SUFFIXES = (".csv", ".yaml", ".yml")
 
 def is_path_file(spec) -> bool:
     """Whether the path argument ``spec`` names a file: a :class:`os.PathLike`, a name with a
-    path file's ending (:data:`PATH_FILE_SUFFIXES`) or one that exists; anything else is the
-    text form of a built-in path."""
+    path file's ending (:data:`PATH_FILE_SUFFIXES`) or one that exists and does not begin with a
+    built-in path's name (``circle 1`` is the built-in circle even beside a file of that name, as
+    a preset name always means the preset); anything else is the text form of a built-in path."""
+    from ..control.path import PATH_SPECS
+
     if isinstance(spec, os.PathLike):
         return True
-    return isinstance(spec, str) and (spec.lower().endswith(PATH_FILE_SUFFIXES) or os.path.isfile(spec))
+    if not isinstance(spec, str):
+        return False
+    if spec.lower().endswith(PATH_FILE_SUFFIXES):
+        return True
+    words = spec.split()
+    return not (words and words[0] in PATH_SPECS) and os.path.isfile(spec)
 
 
 def load_path(spec, *, heading=None, blend: float | None = None, smooth: bool = False) -> Path:
