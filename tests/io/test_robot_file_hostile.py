@@ -336,7 +336,21 @@ def test_duplicate_keys_in_json_are_refused_in_linear_time(monkeypatch):
     assert 0 < len(CountedName.counts) < 10 * n
 
 
-@pytest.mark.parametrize("value", ["yes", "no", "on", "off", "1", "2.5", "null", "2024-05-01"])
+@pytest.mark.parametrize("value", ["yes", "no", "on", "off"])
+def test_yaml_1_1_booleans_are_refused_where_they_stand_as_readers_disagree_on_them(tmp_path, value):
+    path = tmp_path / "robot.yaml"
+    path.write_text(
+        f"omnikin: 1\nname: x\nwheels:\n  - {{name: {value}, type: omni, distance: 0.1, angle_deg: 0, radius: 0.05}}\n"
+    )
+    with pytest.raises(RobotFileError) as info:
+        load_robot(path)
+    assert str(info.value) == (
+        f"{path}: line 4 column 12: '{value}' is a boolean in YAML 1.1 but text in YAML 1.2: write true or false, "
+        "or quote it for the text"
+    )
+
+
+@pytest.mark.parametrize("value", ["1", "2.5", "null", "2024-05-01"])
 def test_yaml_scalars_that_are_not_strings_as_wheel_names(tmp_path, value):
     path = tmp_path / "robot.yaml"
     path.write_text(

@@ -219,7 +219,7 @@ WHEEL_CASES = [
     ("rows-zero", "{rows: 0}", f"{W2} 'physical.rows': must be a whole number from 1 to 4, got 0"),
     ("rows-bool", "{rows: true}", f"{W2} 'physical.rows': must be a whole number from 1 to 4, got True"),
     ("mass-quoted", "{mass: '0.1'}", f"{W2} 'physical.mass': must be a number, got '0.1'"),
-    ("mass-bool", "{mass: yes}", f"{W2} 'physical.mass': must be a number, got True"),
+    ("mass-bool", "{mass: true}", f"{W2} 'physical.mass': must be a number, got True"),
     ("mass-list", "{mass: [0.1]}", f"{W2} 'physical.mass': must be a number, got [0.1]"),
     ("width-nan", "{width: .nan}", f"{W2} 'physical.width': must be finite, got nan"),
     ("friction-inf", "{friction: .inf}", f"{W2} 'physical.friction': must be finite, got inf"),

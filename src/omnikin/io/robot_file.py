@@ -438,8 +438,9 @@ def strict_yaml_loader():
 
     Refuses, with the line and column: anchors and aliases, merge keys (``<<``), explicit tags
     (``!!float '1'``: :data:`_NO_TAGS`), nesting deeper than :data:`MAX_DEPTH`, keys that are not
-    scalars, duplicate keys, and the YAML 1.1 number forms other readers read differently (octal
-    ``0120``, base-60 ``2:00`` and ``1:30.5``, hexadecimal ``0x1``, binary ``0b1``, digit
+    scalars, duplicate keys, the YAML 1.1 booleans ``yes``/``no``/``on``/``off`` (text in YAML
+    1.2: only ``true`` and ``false`` are booleans), and the YAML 1.1 number forms other readers
+    read differently (octal ``0120``, base-60 ``2:00`` and ``1:30.5``, hexadecimal ``0x1``, binary ``0b1``, digit
     separators ``1_000``; the message gives the plain decimal to write). A number is accepted
     only as the one number grammar spells it (:data:`omnikin.common.number_text.PLAIN_NUMBER`; a whole
     number as a plain decimal without leading zeros), besides YAML's ``.inf`` and ``.nan``, which
@@ -516,7 +517,18 @@ def strict_yaml_loader():
             raise _RefusedYaml(_number_form_problem(text, yaml11_value(loader, node)), node.start_mark)
         return float(text)
 
+    def boolean(loader, node):
+        text = loader.construct_scalar(node)
+        if text.lower() not in ("true", "false"):
+            raise _RefusedYaml(
+                f"{shorten(text)} is a boolean in YAML 1.1 but text in YAML 1.2: write true or false, "
+                "or quote it for the text",
+                node.start_mark,
+            )
+        return text.lower() == "true"
+
     StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
+    StrictLoader.add_constructor("tag:yaml.org,2002:bool", boolean)
     StrictLoader.add_constructor("tag:yaml.org,2002:str", scalar)
     StrictLoader.add_constructor("tag:yaml.org,2002:int", integer)
     StrictLoader.add_constructor("tag:yaml.org,2002:float", real)
