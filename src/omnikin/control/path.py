@@ -507,9 +507,9 @@ def square(side: float, *, blend: float = 0.0, heading="tangent") -> Path:
     """The square of ``side`` [m], first leg along +x, counter-clockwise, closed."""
     a = _radius(side, "square side")
     pts = [(0.0, 0.0), (a, 0.0), (a, a), (0.0, a)]
-    return polyline(
-        pts, blend=blend, heading=heading, closed=True, name=f"square {side:g}" + (f" {blend:g}" if blend else "")
-    )
+    named = isinstance(blend, (int, float)) and not isinstance(blend, bool) and blend > 0
+    name = f"square {side:g}" + (f" {blend:g}" if named else "")
+    return polyline(pts, blend=blend, heading=heading, closed=True, name=name)
 
 
 def heading_error(a, b) -> np.ndarray:
