@@ -328,6 +328,8 @@ def polyline(
         raise InputError(f"path {name!r}: points {k} and {(k + 1) % (len(pts) - closed)} are the same")
     dirs = seg / lens[:, None]
     _count(float(lens.sum()), name)
+    if isinstance(blend, bool) or not isinstance(blend, (int, float, np.integer, np.floating)):
+        raise InputError(f"path {name!r}: blend must be a radius >= 0 [m], got {shorten(blend)}")
     blend = float(blend)
     if not (math.isfinite(blend) and blend >= 0):
         raise InputError(f"path {name!r}: blend must be a radius >= 0 [m], got {blend!r}")
