@@ -1,6 +1,7 @@
-"""Tracking in physics (MuJoCo: rollers, motors, contacts): every preset whose wheels do not steer
-drives the figure-eight and a square with blended corners at 80 % of the wheel limits, with its
-default controller, close to the path; the motors' own limits bound the reference."""
+"""Tracking in physics (MuJoCo: rollers, motors, contacts): every preset drives the figure-eight
+and a square with blended corners at 80 % of the wheel limits, with its default controller, close
+to the path (those that steer their wheels within a looser tolerance: the steering swings round
+behind the corrections); the motors' own limits bound the reference."""
 
 from __future__ import annotations
 
@@ -28,6 +29,23 @@ def test_a_preset_that_does_not_steer_tracks_the_path_in_physics(name, spec):
     assert summary["rms_error_m"] < TOLERANCE_RMS, summary
     assert summary["max_error_m"] < TOLERANCE_MAX, summary
     assert summary["end_error_m"] < TOLERANCE_MAX, summary
+
+
+STEERED_RMS = 0.04
+"""RMS distance to the path [m] the presets that steer their wheels keep in physics on the paths
+within their steering limits (measured 6 to 37 mm, docs/control.md): the steering servos swing
+the wheels round behind the controller's corrections, which no controller here models."""
+STEERED_MAX = 0.1
+
+
+@pytest.mark.parametrize(
+    ("name", "spec"), [("synchro", "figure8 1"), ("synchro", "square 1 0.2"), ("xr4000", "square 1 0.2")]
+)
+def test_a_preset_that_steers_its_wheels_tracks_the_path_in_physics_within_the_looser_tolerance(name, spec):
+    done = track(name, spec, engine="physics", max_wheel_speed=12.0 * SCALE, max_wheel_accel=40.0 * SCALE)
+    summary = done.summary()
+    assert summary["rms_error_m"] < STEERED_RMS, summary
+    assert summary["max_error_m"] < STEERED_MAX, summary
 
 
 def test_the_motors_own_limits_bound_the_reference_in_physics():
