@@ -106,6 +106,13 @@ class Tracking:
     run: TrackingRun
     step: float | None = None
 
+    def in_start_frame(self, poses) -> np.ndarray:
+        """``poses`` ``(n, 3)`` of the path's frame (the run's) in the frame fixed where the robot
+        started (REP 105's odom: what its wheels' odometry reads back)."""
+        from ..kinematics.se2 import inverse
+
+        return seen_from(inverse(self.trajectory.path.pose[0]), poses)
+
     @property
     def path(self) -> Path:
         """The path, in its own frame."""
@@ -263,7 +270,7 @@ def track(
     from ..evaluation.procedure import ARGUMENTS, streams
     from ..evaluation.tracking import track as drive
     from ..io.path_file import is_path_file, load_path
-    from ..kinematics.se2 import compose, inverse
+    from ..kinematics.se2 import inverse
     from ..physics.engines import as_engine
 
     require_callable(on_cost=on_cost)
@@ -342,13 +349,23 @@ def track(
         settle=settle,
     )
 
-    def back(poses: np.ndarray) -> np.ndarray:
-        out = compose(start, poses)
-        out[:, 2] = np.unwrap(out[:, 2])
-        return out
-
-    run = dataclasses.replace(run, truth=back(run.truth), odometry=back(run.odometry), reference=back(run.reference))
+    run = dataclasses.replace(
+        run,
+        truth=seen_from(start, run.truth),
+        odometry=seen_from(start, run.odometry),
+        reference=seen_from(start, run.reference),
+    )
     return Tracking(nominal, true, injected, trajectory, controller, engine.name, run, engine.options.get("step"))
+
+
+def seen_from(frame, poses) -> np.ndarray:
+    """``poses`` ``(n, 3)`` [m, m, rad] given in the frame whose pose is ``frame`` (in the frame
+    ``frame`` is given in), headings kept continuous."""
+    from ..kinematics.se2 import compose
+
+    out = compose(np.asarray(frame, dtype=float), np.asarray(poses, dtype=float))
+    out[:, 2] = np.unwrap(out[:, 2])
+    return out
 
 
 def tracking_cost(true_robot: Robot, engine, seconds: float, rate: float, controller: str = "feedback") -> TrackingCost:

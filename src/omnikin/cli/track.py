@@ -341,21 +341,9 @@ def _write_bag(args, tracking) -> dict:
     """``--bag``: the run's truth, odometry, wheel angles and commands
     (:func:`omnikin.io.bags.record_samples`), the poses in the odom frame fixed where the robot
     started (as the wheels' odometry reads them back; the TUM outputs are in the path's frame)."""
-    import numpy as np
-
     from ..io.bags import record_samples
-    from ..kinematics.se2 import compose, inverse
 
     run = tracking.run
-    # the odom frame where the robot started (REP 105), as its wheels' odometry reads back:
-    # the path's frame is the TUM outputs'
-    into_start = inverse(tracking.trajectory.path.pose[0])
-
-    def local(poses):
-        out = compose(into_start, poses)
-        out[:, 2] = np.unwrap(out[:, 2])
-        return out
-
     custom = {
         "omnikin.robot": tracking.robot.name,
         "omnikin.path": args.path,
@@ -370,8 +358,8 @@ def _write_bag(args, tracking) -> dict:
         args.bag,
         tracking.robot,
         run.t,
-        truth=local(run.truth),
-        odometry=local(run.odometry),
+        truth=tracking.in_start_frame(run.truth),
+        odometry=tracking.in_start_frame(run.odometry),
         wheel_angles=run.wheel_angles,
         steer=run.steer,
         command=run.command,
