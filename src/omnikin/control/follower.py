@@ -114,7 +114,7 @@ def plan_follow(
     waypoints,
     pose,
     *,
-    limits: WheelLimits,
+    limits: WheelLimits | None = None,
     body: MotionLimits | None = None,
     controller: str | None = None,
     heading: str = "given",
@@ -133,8 +133,9 @@ def plan_follow(
         ``(x, y[, theta])`` [m, m, rad] in the odometry's frame, ``1 <= n <=`` :data:`MAX_WAYPOINTS`.
     pose : array_like, shape (3,)
         The robot's pose ``(x, y, theta)`` [m, m, rad] now, same frame.
-    limits : WheelLimits
-        The wheels' limits (the trajectory is timed within :data:`MARGIN` of them).
+    limits : WheelLimits, optional
+        The wheels' limits (the trajectory is timed within :data:`MARGIN` of them); default none
+        beyond the body's ``wheel`` and each wheel's ``max_speed`` (a runtime's own).
     body : MotionLimits, optional
         The body's limits (the runtime's command filter's; the same margin).
     controller : str, optional
@@ -199,6 +200,7 @@ def plan_follow(
                 f"faces {math.degrees(here[2]):.0f} deg and has fixed wheels: it cannot turn onto the path there "
                 "(turn it first, or start the path along its heading)"
             )
+    limits = WheelLimits(speed=math.inf, accel=math.inf) if limits is None else limits
     inner = WheelLimits(speed=MARGIN * limits.speed, accel=MARGIN * limits.accel, steer_rate=limits.steer_rate)
     if body is not None:
         body = MotionLimits(

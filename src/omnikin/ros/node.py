@@ -62,7 +62,6 @@ first gives the one-line error naming the ``ros`` extra).
 from __future__ import annotations
 
 import dataclasses
-import math
 import signal
 import time
 from typing import Any
@@ -72,7 +71,6 @@ import numpy as np
 from ..common.messages import digits_apart
 from ..control.controllers import check_controller_for
 from ..control.follower import MAX_WAYPOINTS, FollowPlan, PathFollower, PlanWorker, plan_follow
-from ..control.time_optimal import WheelLimits
 from ..errors import InputError, LinkError, OmnikinError
 from ..kinematics.se2 import between, log
 from ..motion.limits import MotionLimits
@@ -223,7 +221,6 @@ class BaseNode(Node):
         check_controller_for(None if controller == "auto" else controller, robot)
         self.follower = PathFollower()
         self._body = limits
-        self._wheels = WheelLimits(speed=limits.wheel or math.inf, accel=math.inf)
         self._worker = PlanWorker(self._plan)
         self.paths_received = 0
         self.create_subscription(PathMessage, "plan", self._on_plan, 10, raw=True)
@@ -348,7 +345,6 @@ class BaseNode(Node):
             self.robot,
             waypoints,
             pose,
-            limits=self._wheels,
             body=self._body,
             controller=None if p["path_controller"] == "auto" else p["path_controller"],
             heading=p["path_heading"],

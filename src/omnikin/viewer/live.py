@@ -40,7 +40,6 @@ from typing import TextIO
 import numpy as np
 
 from ..control.follower import FollowPlan, PathFollower, PlanWorker, plan_follow
-from ..control.time_optimal import WheelLimits
 from ..errors import InputError
 from ..kinematics.robot import Robot
 from ..motion.limits import MotionLimits
@@ -317,9 +316,7 @@ class PageRobot:
     def _plan(self, generation: int, waypoints: np.ndarray, pose: np.ndarray, options: dict) -> FollowPlan:
         """The planning thread (:class:`~omnikin.control.follower.PlanWorker`): the path from
         ``pose``, within the robot's limits."""
-        limits = self.limits
-        wheels = WheelLimits(speed=limits.wheel or math.inf, accel=math.inf)
-        return plan_follow(self.robot, waypoints, pose, limits=wheels, body=limits, rate=1.0 / CATCH_UP_STEP, **options)
+        return plan_follow(self.robot, waypoints, pose, body=self.limits, rate=1.0 / CATCH_UP_STEP, **options)
 
     def _start_planned(self, t: float) -> None:
         """Begin a path whose planning has finished at ``t`` [s] (the targets of the keys, the
