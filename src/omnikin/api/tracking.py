@@ -107,8 +107,19 @@ class Tracking:
     step: float | None = None
 
     def in_start_frame(self, poses) -> np.ndarray:
-        """``poses`` ``(n, 3)`` of the path's frame (the run's) in the frame fixed where the robot
-        started (REP 105's odom: what its wheels' odometry reads back)."""
+        """Poses of the path's frame (the run's) seen from the frame fixed where the robot
+        started (REP 105's odom: what its wheels' odometry reads back).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 3)
+            ``x, y, theta`` [m, m, rad] in the path's frame.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, 3)
+            The same poses in the start frame, headings kept continuous.
+        """
         from ..kinematics.se2 import inverse
 
         return seen_from(inverse(self.trajectory.path.pose[0]), poses)
