@@ -57,6 +57,7 @@ from .errors import (
     TrajectoryFileError,
     UsageError,
     WorkerMismatch,
+    WorldFileError,
 )
 from .kinematics import se2
 from .kinematics.encoder import Encoder
@@ -200,6 +201,7 @@ __all__ = [
     "UsageError",
     "Wheel",
     "WorkerMismatch",
+    "WorldFileError",
     "analyze_umbmark",
     "batch_odometry",
     "batch_odometry_from_angles",

@@ -16,6 +16,7 @@ The tree (checked by ``tests/core/test_error_tree.py``; a class's first base is 
         │   ├── RunPosesFileError: a run-poses file cannot be read
         │   ├── TrajectoryFileError: a trajectory file cannot be read or written
         │   ├── PathFileError: a path file cannot be read
+        │   ├── WorldFileError: a world file or World breaks the schema
         │   ├── BagError: a ROS 2 bag cannot be read or written as asked
         │   ├── ReplayError: something to replay in the viewer cannot be
         │   ├── ProtocolError: a wheel-link protocol description or frame is bad
@@ -115,6 +116,24 @@ class TrajectoryFileError(InputError):
 class PathFileError(InputError):
     """A path file (waypoints ``x, y[, theta]`` in m and rad, CSV or YAML) that cannot be read:
     raised by :mod:`omnikin.io.path_file`; the message names the file and the line or waypoint."""
+
+
+class WorldFileError(InputError):
+    """A world file (or a :class:`omnikin.world.World` built in Python) breaks schema version 1
+    of ``docs/world.md``: raised by :mod:`omnikin.world.model` (the fields and how the bodies
+    lie) and :mod:`omnikin.io.world_file` (the file, its line); the message names the file, the
+    line, the body and the field.
+
+    ``field``: the field of the body at fault (``thickness``, ``points``) or None; ``body``:
+    the 0-based index of the wall, obstacle, patch or mark in its list, with ``group`` the name
+    of that list (``walls``), each None when the problem is the whole world's.
+    """
+
+    def __init__(self, message: str, *, field: str | None = None, group: str | None = None, body: int | None = None):
+        super().__init__(message)
+        self.field = field
+        self.group = group
+        self.body = body
 
 
 class BagError(InputError):

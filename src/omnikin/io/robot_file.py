@@ -592,10 +592,28 @@ class _RefusedYaml(Exception):
 def parse_yaml(text: str, source: str, error: type[Exception] = RobotFileError) -> Any:
     """The data of a YAML document read with :func:`strict_yaml_loader` (None if empty); every
     problem raises ``error`` naming ``source``, the line and the column."""
+    return parse_yaml_lines(text, source, error)[0]
+
+
+def parse_yaml_lines(
+    text: str, source: str, error: type[Exception] = RobotFileError
+) -> tuple[Any, dict[tuple[Any, ...], int]]:
+    """:func:`parse_yaml`, and the 1-based line where each value of the document starts, keyed by
+    its path (``("walls", 0, "thickness")``: mapping keys as written, list indices from 0; ``()``
+    the document)."""
     import yaml
 
     try:
-        return yaml.load(text, Loader=strict_yaml_loader())
+        loader = strict_yaml_loader()(text)
+        try:
+            node = loader.get_single_node()
+            data = loader.construct_document(node) if node is not None else None
+        finally:
+            loader.dispose()
+        lines: dict[tuple[Any, ...], int] = {}
+        if node is not None:
+            _node_lines(node, (), lines)
+        return data, lines
     except _RefusedYaml as exc:
         raise error(f"{source}: line {exc.mark.line + 1} column {exc.mark.column + 1}: {exc.problem}") from None
     except yaml.YAMLError as exc:
@@ -603,6 +621,23 @@ def parse_yaml(text: str, source: str, error: type[Exception] = RobotFileError) 
         at = f" at line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
         raise error(f"{source}: invalid YAML{at}: {problem}") from None
+
+
+def _node_lines(node, path: tuple[Any, ...], lines: dict[tuple[Any, ...], int]) -> None:
+    """Record the line of ``node`` at ``path`` and of everything below it (iteratively deep:
+    the loader already bounds the nesting)."""
+    import yaml
+
+    stack = [(node, path)]
+    while stack:
+        item, where = stack.pop()
+        lines[where] = item.start_mark.line + 1
+        if isinstance(item, yaml.MappingNode):
+            for key, value in item.value:
+                stack.append((value, (*where, key.value)))
+        elif isinstance(item, yaml.SequenceNode):
+            for i, value in enumerate(item.value):
+                stack.append((value, (*where, i)))
 
 
 def load_yaml_file(path: str | Path, error: type[Exception], what: str = "a YAML file") -> Any:

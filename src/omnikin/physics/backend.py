@@ -44,14 +44,17 @@ from ..errors import InputError
 from ..kinematics.robot import Robot, require_same_wheels
 from ..kinematics.se2 import wrap_angle
 from ..runtime.backends import WheelState
+from ..world.collision import Contact
+from ..world.model import World
 from .mjcf import DEFAULT_STEP
 from .simulator import PhysicsSim
 
 
 class PhysicsBackend:
     """The robot as built (``true_robot``, default ``robot``), simulated in MuJoCo from ``start``
-    ``(x, y, theta)`` at time step ``step`` [s] (module docstring). ``truth`` is its true pose
-    (heading wrapped to ``[-pi, pi)``, as ``SimBackend``'s); ``sim`` the simulation itself."""
+    ``(x, y, theta)`` at time step ``step`` [s], in ``world`` (None: an empty floor; module
+    docstring). ``truth`` is its true pose (heading wrapped to ``[-pi, pi)``, as ``SimBackend``'s);
+    ``sim`` the simulation itself; ``contacts`` where it began to touch the world's bodies."""
 
     def __init__(
         self,
@@ -62,6 +65,7 @@ class PhysicsBackend:
         step: float = DEFAULT_STEP,
         quantise: bool = True,
         max_lag: float | None = None,
+        world: World | None = None,
     ):
         self.robot = robot
         self.true_robot = true_robot or robot
@@ -69,7 +73,7 @@ class PhysicsBackend:
         self.encoded = robot.encoded_names
         if not self.encoded:
             raise InputError(f"robot {robot.name!r}: the physics back-end needs encoded (driven) wheels")
-        self.sim = PhysicsSim(self.true_robot, start=start, step=step, controller=robot)
+        self.sim = PhysicsSim(self.true_robot, start=start, step=step, controller=robot, world=world)
         self.fallen = ""
         """Empty while the robot stands; once it tipped over (:meth:`PhysicsSim.fall`), that one
         line, and every later command is replaced by zero wheel speeds (module docstring)."""
@@ -90,6 +94,11 @@ class PhysicsBackend:
         self._t0: float | None = None
         self.writes = 0
         self.reads = 0
+
+    @property
+    def contacts(self) -> list[Contact]:
+        """Where the robot began to touch a body of the world (world frame)."""
+        return self.sim.contacts
 
     @property
     def joints(self) -> PhysicsSim:

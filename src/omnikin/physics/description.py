@@ -48,6 +48,7 @@ from ..errors import InputError
 from ..kinematics.physical import PhysicalWheel
 from ..kinematics.robot import Robot
 from ..kinematics.wheels import Wheel
+from ..world.collision import Footprint
 
 GRAVITY = 9.81
 """Standard gravity [m/s^2]."""
@@ -755,6 +756,28 @@ def describe(robot: Robot) -> PhysicalRobot:
         com=(float(robot_com[0]), float(robot_com[1]), float(robot_com[2])),
         support_margin=support_margin(contacts, robot_com[:2]),
     )
+
+
+def footprint(description: PhysicalRobot) -> Footprint:
+    """The robot of ``description`` seen from above (:class:`omnikin.world.collision.Footprint`,
+    body frame, m): the chassis (a circle, or a rectangle for a box chassis) and each wheel, a
+    fixed one as the rectangle of its side view's length ``2 max(r, reach)`` and its width, a
+    steered wheel or castor as the circle it sweeps about its steering axis (radius: the trail
+    plus the half diagonal of that rectangle)."""
+    chassis = description.chassis
+    circles, rects = [], []
+    if chassis.shape == "cylinder":
+        circles.append([chassis.centre[0], chassis.centre[1], chassis.size[0]])
+    else:
+        rects.append([chassis.centre[0], chassis.centre[1], chassis.size[0], chassis.size[1], 0.0])
+    for wheel in description.wheels:
+        half_length = max(wheel.radius, wheel.reach)
+        if wheel.steering is None:
+            rects.append([wheel.hub[0], wheel.hub[1], half_length, wheel.width / 2.0, wheel.drive])
+        else:
+            pivot = wheel.steering.pivot
+            circles.append([pivot[0], pivot[1], wheel.steering.trail + math.hypot(half_length, wheel.width / 2.0)])
+    return Footprint(np.asarray(circles, dtype=float).reshape(-1, 3), np.asarray(rects, dtype=float).reshape(-1, 5))
 
 
 def as_built_description(robot: Robot, design: PhysicalRobot) -> PhysicalRobot:

@@ -14,6 +14,7 @@ this is the lowest layer that sees both engines. Only argument parsers, the API'
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -29,6 +30,8 @@ from ..motion.timing import SampledPlan, check_rate_range
 from ..simulation.engine import Engine, KinematicEngine, Progress, SimulatedBackend
 from ..simulation.error_models import NoiseModel
 from ..simulation.kinematic import RunCost, SimulatedRun, run_cost
+from ..world.collision import Footprint
+from ..world.model import World
 from .mjcf import DEFAULT_STEP, time_step
 
 
@@ -78,6 +81,10 @@ class PhysicsEngine(Engine):
     step : float
         The time step [s] of the simulation, within :data:`~omnikin.physics.mjcf.STEP_RANGE`
         (default :data:`~omnikin.physics.mjcf.DEFAULT_STEP`, 2 ms).
+    world : World, optional
+        The world the robot drives in: its walls, obstacles and patches are bodies of the model
+        (:func:`~omnikin.physics.mjcf.mjcf`), each run starts at its start pose and reports its
+        contacts (None: an empty floor).
 
     Attributes
     ----------
@@ -94,6 +101,7 @@ class PhysicsEngine(Engine):
     """
 
     step: float = field(default=DEFAULT_STEP)
+    world: World | None = None
 
     name: ClassVar[str] = "physics"
     has_noise_model: ClassVar[bool] = False
@@ -105,7 +113,7 @@ class PhysicsEngine(Engine):
         object.__setattr__(self, "step", time_step(self.step, "step (--step)"))
 
     @classmethod
-    def made_with(cls, *, noise=None, step: float | None = None) -> PhysicsEngine:
+    def made_with(cls, *, noise=None, step: float | None = None, world: World | None = None) -> PhysicsEngine:
         """The engine for the options a user gave (:func:`engine_named`).
 
         Parameters
@@ -114,6 +122,8 @@ class PhysicsEngine(Engine):
             Must be None (:func:`check_physics_noise`).
         step : float, optional
             The time step [s], within :data:`~omnikin.physics.mjcf.STEP_RANGE` (None: 2 ms).
+        world : World, optional
+            The world the robot drives in (None: an empty floor).
 
         Returns
         -------
@@ -126,11 +136,11 @@ class PhysicsEngine(Engine):
             In one line: a ``noise`` given, a ``step`` out of range.
         """
         check_physics_noise(noise)
-        return cls(time_step(step, "step (--step)"))
+        return cls(time_step(step, "step (--step)"), world)
 
     @property
     def options(self) -> dict[str, Any]:
-        return {"step": self.step}
+        return {"step": self.step} if self.world is None else {"step": self.step, "world": self.world}
 
     def noise_model(self, noise) -> None:
         check_physics_noise(noise)
@@ -230,6 +240,7 @@ class PhysicsEngine(Engine):
             step=self.step,
             progress=progress,
             roller_phase=phase,
+            world=self.world,
         )
 
     def backend(
@@ -244,7 +255,8 @@ class PhysicsEngine(Engine):
         from .backend import PhysicsBackend
 
         check_physics_noise(noise)
-        return PhysicsBackend(robot, true_robot, step=self.step, max_lag=max_lag)
+        start = (0.0, 0.0, 0.0) if self.world is None else self.world.start
+        return PhysicsBackend(robot, true_robot, start=start, step=self.step, max_lag=max_lag, world=self.world)
 
     def cost(
         self,
@@ -326,7 +338,7 @@ def engine_class(name) -> type[KinematicEngine] | type[PhysicsEngine]:
     return ENGINES[name]
 
 
-def engine_named(name, *, noise=None, step: float | None = None) -> Engine:
+def engine_named(name, *, noise=None, step: float | None = None, world: World | None = None) -> Engine:
     """The engine called ``name`` made with the options a user gave.
 
     Parameters
@@ -338,6 +350,9 @@ def engine_named(name, *, noise=None, step: float | None = None) -> Engine:
         model); the kinematic engine takes them with each run (:meth:`Engine.noise_model`).
     step : float, optional
         The physics engine's time step [s] (None: 2 ms); the kinematic engine refuses one.
+    world : World, optional
+        The world the robot drives in (None: an empty floor); the kinematic engine gets the
+        footprints of the physics description (:func:`~omnikin.physics.description.footprint`).
 
     Returns
     -------
@@ -350,7 +365,21 @@ def engine_named(name, *, noise=None, step: float | None = None) -> Engine:
         In one line: an unknown ``name``, an option of the other engine, a ``step`` out of
         range.
     """
-    return engine_class(name).made_with(noise=noise, step=step)
+    kind = engine_class(name)
+    if world is None:
+        return kind.made_with(noise=noise, step=step)
+    if kind is KinematicEngine:
+        return KinematicEngine.made_with(noise=noise, step=step, world=world, footprint_of=robot_footprint)
+    return PhysicsEngine.made_with(noise=noise, step=step, world=world)
+
+
+@functools.lru_cache(maxsize=16)
+def robot_footprint(robot: Robot) -> Footprint:
+    """``robot`` seen from above, as its physical description has it (body frame, m); kept for
+    the last robots asked about (a study drives the same robot many times)."""
+    from .description import describe, footprint
+
+    return footprint(describe(robot))
 
 
 def as_engine(engine, *, noise=None, step: float | None = None) -> Engine:

@@ -41,13 +41,18 @@ names of the wheels and steering joints are those of ROS ``joint_states`` (``NAM
 
 from __future__ import annotations
 
+import math
 import numbers
 import xml.etree.ElementTree as ET
+
+import numpy as np
 
 from ..common.messages import shorten
 from ..errors import SMALLEST_STEP, InputError
 from ..kinematics.robot import Robot
-from .description import MAX_STEP, PhysicalRobot, WheelBody, describe
+from ..world.model import Box, World
+from ..world.plane import triangulate, wall_rects
+from .description import MAX_STEP, PhysicalRobot, WheelBody, describe, shape_volume_inertia
 from .validity import check_resolvable
 
 DEFAULT_STEP = 0.002
@@ -68,10 +73,30 @@ the rolling radius by about half as much (0.04 % on tomasi-omni3). Stiffer conta
 any depth) sink five times less but make the load of a four-wheel base jump between its wheels
 as the rollers hand over: omni4 on a curve left its kinematic twist by 1.1 % instead of 0.13 %."""
 
-ROBOT_BITS = (2, 1)
-"""``contype``, ``conaffinity`` of the robot's geoms: they collide with the floor only."""
+ROBOT_BITS = (2, 1 | 8)
+"""``contype``, ``conaffinity`` of the wheels' geoms: they collide with the floor (and its
+patches) and with a world's bodies, never with each other or the chassis."""
 FLOOR_BITS = (1, 2)
-"""``contype``, ``conaffinity`` of the floor."""
+"""``contype``, ``conaffinity`` of the floor and its friction patches."""
+CHASSIS_BITS = (4, 0)
+"""``contype``, ``conaffinity`` of the chassis in a world: it touches the world's bodies only
+(never the floor: module docstring)."""
+WORLD_BITS = (8, 1 | 2 | 4 | 8)
+"""``contype``, ``conaffinity`` of a world's walls and obstacles: they touch the robot, the floor
+(movable obstacles stand on it) and each other."""
+WORLD_GROUP = 2
+"""Geom group of a world's walls and obstacles: what a lidar's rays see."""
+PATCH_RAISE = 5e-4
+"""Height [m] of a friction patch's top above the floor: a wheel on it touches the patch only
+(MuJoCo would otherwise combine the patch's contact with the floor's under it)."""
+PATCH_DEPTH = 0.01
+"""Depth [m] of a patch's prism below the floor."""
+MARK_HEIGHT = 2e-4
+"""Height [m] of a floor mark's strip (drawn only)."""
+MARK_WIDTH = 0.02
+"""Width [m] of a floor mark's strip."""
+OBSTACLE_FRICTION = 0.5
+"""Sliding friction of a movable obstacle on the floor and against walls (wood on concrete)."""
 VISUAL_GROUP = 1
 """Geom group of the parts that are drawn but never touch anything (hubs of Swedish wheels, forks)."""
 
@@ -166,6 +191,99 @@ def _steered(parent: ET.Element, wheel: WheelBody) -> None:
     _wheel(fork, wheel, (-steering.trail, 0.0, 0.0), None)
 
 
+def _world_bodies(asset: ET.Element, parent: ET.Element, floor: ET.Element, world: World) -> None:
+    """``world``'s floor friction, patches, marks, walls and obstacles in the model.
+
+    - The floor takes the world's friction, when it gives one, by priority (MuJoCo then uses
+      the floor's coefficient, not the larger of the two geoms').
+    - Each patch is cut into triangles (:func:`omnikin.world.plane.triangulate`), each a prism
+      mesh from :data:`PATCH_DEPTH` below the floor to :data:`PATCH_RAISE` above it, with the
+      patch's friction by priority: a wheel on it rests on the patch alone.
+    - Each mark is a strip :data:`MARK_WIDTH` wide per segment, drawn only.
+    - Each wall segment and fixed obstacle is a static body of its own (MuJoCo skips pairs of
+      static geoms; one body each keeps its broad phase as cheap as on the empty floor), each
+      movable obstacle a free body of its mass, uniform; all in :data:`WORLD_GROUP` (what a
+      lidar sees) with :data:`WORLD_BITS`. Bodies and geoms are named by place, not by the
+      world's names (which may hold any character): ``world:wall:I:K`` (wall I's segment K),
+      ``world:obstacle:J``, ``world:patch:I:K``, ``world:mark:I:K``, all from 0.
+    """
+    if world.floor.friction is not None:
+        floor.set("priority", "1")
+        floor.set("friction", _vec((world.floor.friction, 0.0, 0.0)))
+    for i, patch in enumerate(world.floor.patches):
+        polygon = np.asarray(patch.polygon, dtype=float)
+        for k, tri in enumerate(triangulate(polygon)):
+            corners = polygon[tri]
+            vertices = [(x, y, z) for z in (-PATCH_DEPTH, PATCH_RAISE) for x, y in corners]
+            mesh = f"patch:{i}:{k}"
+            _sub(asset, "mesh", name=mesh, vertex=_vec(np.ravel(vertices)))
+            geom = _sub(parent, "geom", name=f"world:patch:{i}:{k}", type="mesh", mesh=mesh)
+            geom.set("contype", str(FLOOR_BITS[0]))
+            geom.set("conaffinity", str(FLOOR_BITS[1] | WORLD_BITS[0]))
+            geom.set("priority", "1")
+            geom.set("condim", "3")
+            geom.set("friction", _vec((patch.friction, 0.0, 0.0)))
+            geom.set("solref", _vec(CONTACT_SOLREF))
+            geom.set("solimp", _vec(CONTACT_SOLIMP))
+            geom.set("rgba", "0.35 0.55 0.85 0.6")
+    for i, mark in enumerate(world.marks):
+        for k, (a, b) in enumerate(zip(mark.points[:-1], mark.points[1:], strict=True)):
+            length = math.dist(a, b)
+            strip = _sub(parent, "geom", name=f"world:mark:{i}:{k}", type="box")
+            strip.set("size", _vec((length / 2.0 + MARK_WIDTH / 2.0, MARK_WIDTH / 2.0, MARK_HEIGHT / 2.0)))
+            strip.set("pos", _vec(((a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0, MARK_HEIGHT / 2.0)))
+            strip.set("euler", _vec((0.0, 0.0, math.atan2(b[1] - a[1], b[0] - a[0]))))
+            strip.set("rgba", "0.85 0.65 0.1 1")
+            _visual(strip)
+    for i, wall in enumerate(world.walls):
+        for k, rect in enumerate(wall_rects(np.asarray(wall.points, dtype=float), wall.thickness)):
+            _static_box(parent, f"world:wall:{i}:{k}", rect, wall.height, "0.75 0.72 0.68 1")
+    for j, obstacle in enumerate(world.obstacles):
+        name = f"world:obstacle:{j}"
+        if isinstance(obstacle, Box):
+            sx, sy, sz = obstacle.size
+            rect = np.array([*obstacle.center, sx / 2.0, sy / 2.0, obstacle.yaw])
+            if obstacle.fixed:
+                _static_box(parent, name, rect, sz, "0.55 0.4 0.3 1")
+                continue
+            body = _sub(parent, "body", name=name, pos=_vec((*obstacle.center, sz / 2.0)))
+            body.set("euler", _vec((0.0, 0.0, obstacle.yaw)))
+            half = (sx / 2.0, sy / 2.0, sz / 2.0)
+            geom = _sub(body, "geom", name=name, type="box", size=_vec(half))
+            _, inertia = shape_volume_inertia("box", half, float(obstacle.mass or 0.0))
+        else:
+            half_height = obstacle.height / 2.0
+            body = _sub(parent, "body", name=name, pos=_vec((*obstacle.center, half_height)))
+            geom = _sub(body, "geom", name=name, type="cylinder", size=_vec((obstacle.radius, half_height)))
+            if obstacle.fixed:
+                _world_geom(geom, "0.5 0.5 0.55 1")
+                continue
+            _, inertia = shape_volume_inertia("cylinder", (obstacle.radius, half_height), float(obstacle.mass or 0.0))
+        _sub(body, "freejoint", name=f"{name}:free")
+        _inertial(body, float(obstacle.mass or 0.0), inertia)
+        geom.set("mass", "0")
+        _world_geom(geom, "0.8 0.45 0.2 1")
+
+
+def _static_box(parent: ET.Element, name: str, rect: np.ndarray, height: float, rgba: str) -> None:
+    """A static body ``name`` holding one box: ``rect`` (x, y, half length, half width, yaw)
+    seen from above, ``height`` [m] tall, standing on the floor."""
+    x, y, hx, hy, yaw = (float(v) for v in rect)
+    body = _sub(parent, "body", name=name, pos=_vec((x, y, height / 2.0)), euler=_vec((0.0, 0.0, yaw)))
+    _world_geom(_sub(body, "geom", name=name, type="box", size=_vec((hx, hy, height / 2.0))), rgba)
+
+
+def _world_geom(geom: ET.Element, rgba: str) -> None:
+    geom.set("contype", str(WORLD_BITS[0]))
+    geom.set("conaffinity", str(WORLD_BITS[1]))
+    geom.set("condim", "3")
+    geom.set("friction", _vec((OBSTACLE_FRICTION, 0.0, 0.0)))
+    geom.set("solref", _vec(CONTACT_SOLREF))
+    geom.set("solimp", _vec(CONTACT_SOLIMP))
+    geom.set("group", str(WORLD_GROUP))
+    geom.set("rgba", rgba)
+
+
 def time_step(step: float | None = None, name: str = "time step") -> float:
     """``step`` [s] (:data:`DEFAULT_STEP` when None) if it lies in :data:`STEP_RANGE`, else
     :class:`~omnikin.errors.InputError` naming it as ``name`` (``"--step"``)."""
@@ -179,10 +297,11 @@ def time_step(step: float | None = None, name: str = "time step") -> float:
     return float(step)
 
 
-def mjcf(robot: PhysicalRobot | Robot, step: float = DEFAULT_STEP) -> str:
+def mjcf(robot: PhysicalRobot | Robot, step: float = DEFAULT_STEP, world: World | None = None) -> str:
     """The MJCF text of ``robot`` (a description, or a robot to :func:`describe`; module
-    docstring) with time step ``step`` [s] (:data:`STEP_RANGE`, :func:`time_step`). A robot the
-    engine cannot resolve is refused in one line (:func:`omnikin.physics.validity.check_resolvable`)."""
+    docstring) with time step ``step`` [s] (:data:`STEP_RANGE`, :func:`time_step`), in ``world``
+    (None: an empty floor; :func:`_world_bodies`). A robot the engine cannot resolve is refused
+    in one line (:func:`omnikin.physics.validity.check_resolvable`)."""
     if isinstance(robot, Robot):
         robot = describe(robot)
     step = time_step(step)
@@ -197,17 +316,20 @@ def mjcf(robot: PhysicalRobot | Robot, step: float = DEFAULT_STEP) -> str:
     asset[-1].set("rgb2", "0.72 0.72 0.7")
     _sub(asset, "material", name="floor", texture="floor", texrepeat="4 4", texuniform="true")
 
-    world = _sub(root, "worldbody")
-    _sub(world, "light", name="sun", directional="true", pos="0 0 5", dir="0 0 -1")
-    floor = _sub(world, "geom", name="floor", type="plane", size="0 0 0.1", material="floor")
+    world_body = _sub(root, "worldbody")
+    _sub(world_body, "light", name="sun", directional="true", pos="0 0 5", dir="0 0 -1")
+    floor = _sub(world_body, "geom", name="floor", type="plane", size="0 0 0.1", material="floor")
     floor.set("contype", str(FLOOR_BITS[0]))
     floor.set("conaffinity", str(FLOOR_BITS[1]))
     floor.set("friction", "0 0 0")
     floor.set("solref", _vec(CONTACT_SOLREF))
     floor.set("solimp", _vec(CONTACT_SOLIMP))
 
+    if world is not None:
+        _world_bodies(asset, world_body, floor, world)
+
     lift = max(0.0, max(w.reach - w.radius for w in robot.wheels))
-    chassis = _sub(world, "body", name="chassis", pos=_vec((0.0, 0.0, lift)))
+    chassis = _sub(world_body, "body", name="chassis", pos=_vec((0.0, 0.0, lift)))
     _sub(chassis, "freejoint", name="chassis:free")
     c = robot.chassis
     _inertial(chassis, c.mass, c.inertia, c.com)
@@ -215,6 +337,11 @@ def mjcf(robot: PhysicalRobot | Robot, step: float = DEFAULT_STEP) -> str:
     plate.set("mass", "0")
     plate.set("rgba", "0.3 0.45 0.65 1")
     _visual(plate)  # MuJoCo 4.0's plane-cylinder test finds a deep false contact under a level cylinder
+    if world is not None:  # it touches the world's bodies, still never the floor
+        plate.set("contype", str(CHASSIS_BITS[0]))
+        plate.set("conaffinity", str(CHASSIS_BITS[1]))
+        plate.set("condim", "3")
+        plate.set("friction", _vec((OBSTACLE_FRICTION, 0.0, 0.0)))
     for wheel in robot.wheels:
         if wheel.steering is not None:
             _steered(chassis, wheel)

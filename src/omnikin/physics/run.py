@@ -52,13 +52,14 @@ import numpy as np
 
 from ..errors import DivergedError, InputError, OdometryInputError, PhysicsError
 from ..kinematics.robot import Robot, require_same_wheels
-from ..kinematics.se2 import wrap_angle
+from ..kinematics.se2 import between, wrap_angle
 from ..motion.limits import MotionLimits
 from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range, require_motion, sample_plan
 from ..odometry.batch import batch_odometry, encoded_wheels
 from ..odometry.plausibility import QUANTISATION_SLACK, counter_rules
 from ..simulation.kinematic import SimulatedRun, commanded_angles, counter_output
+from ..world.model import World
 from .description import steered_support_margin
 from .mjcf import DEFAULT_STEP, time_step
 from .simulator import TRACK_ERROR, TRACK_TIME, PhysicsSim
@@ -181,13 +182,17 @@ def simulate_physics(
     step: float = DEFAULT_STEP,
     progress: Callable[[float, float], None] | None = None,
     roller_phase=0.0,
+    world: World | None = None,
 ) -> PhysicsRun:
     """``plan`` commanded by ``command_robot`` and driven by ``true_robot`` in MuJoCo at time step
     ``step`` [s] (module docstring); ``rate`` [Hz] as for the kinematic engine. ``progress``, if
     given, is called now and then with the simulated time and the plan's duration [s].
     ``roller_phase``: where in its roller period each wheel of ``true_robot`` starts, a fraction
     in ``[0, 1)`` for every wheel or one per rolling wheel
-    (:func:`~omnikin.physics.simulator.roller_offsets`); the encoders start at zero."""
+    (:func:`~omnikin.physics.simulator.roller_offsets`); the encoders start at zero. In a
+    ``world`` the robot starts at its start pose among its bodies; the run's ``truth`` stays in
+    the frame where it started (as the kinematic engine's) and ``contacts`` lists where touches
+    began."""
     rate = check_rate_range(plan.rate if isinstance(plan, SampledPlan) else rate, "rate")
     check_rate_steps(rate, step)
     require_same_wheels(command_robot, true_robot)
@@ -197,7 +202,7 @@ def simulate_physics(
     if [w.name for w in true_robot.encoded] != names:
         raise InputError(f"true robot {true_robot.name!r}: its encoded wheels must be {names}")
     try:
-        return _drive(sampled, true_robot, command_robot, names, step, progress, roller_phase)
+        return _drive(sampled, true_robot, command_robot, names, step, progress, roller_phase, world)
     except DivergedError as exc:
         raise exc.explained(step_option=True) from None
 
@@ -230,12 +235,16 @@ def _drive(
     step: float,
     progress: Callable[[float, float], None] | None,
     roller_phase,
+    world: World | None,
 ) -> PhysicsRun:
     """:func:`simulate_physics` after its checks."""
     angles, steer_cmd = commanded_angles(sampled, command_robot, command_robot.rolling)
     dt = np.diff(sampled.t)
     speeds = np.diff(angles, axis=0) / dt[:, None]
-    sim = PhysicsSim(true_robot, step=step, roller_phase=roller_phase, controller=command_robot)
+    start = (0.0, 0.0, 0.0) if world is None else world.start
+    sim = PhysicsSim(
+        true_robot, start=start, step=step, roller_phase=roller_phase, controller=command_robot, world=world
+    )
     steerable = bool(command_robot.steerable)
     samples = len(dt)
     duration = float(sampled.t[-1])
@@ -311,6 +320,8 @@ def _drive(
             f"the physics simulation (the wheels spun or the model was unstable), not of the robot file's encoders"
         ) from None
     truth = np.array(poses)[None]
+    if world is not None:  # in the frame where the robot started, as the kinematic engine's
+        truth[0] = between(np.asarray(start), truth[0])
     truth[..., 2] = wrap_angle(truth[..., 2])  # headings in [-pi, pi), as the kinematic engine's truth
     measured = truth[:, -1, :].copy()
     troubles = [
@@ -332,6 +343,8 @@ def _drive(
         steering_not_reached=tuple(not_reached),
         at_rest=at_rest,
         short=short,
+        contacts=(tuple(sim.contacts),) if world is not None else (),
+        start=start,
     )
 
 

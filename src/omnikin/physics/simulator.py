@@ -54,6 +54,8 @@ from ..errors import DivergedError, InputError, PhysicsError
 from ..kinematics.robot import Robot
 from ..kinematics.se2 import wrap_angle
 from ..simulation.kinematic import counter_output
+from ..world.collision import Contact
+from ..world.model import World
 from .description import PhysicalRobot, describe
 from .mjcf import DEFAULT_STEP, STEP_RANGE, mjcf
 
@@ -195,6 +197,24 @@ def _yaw(xmat: np.ndarray) -> float:
     return math.atan2(xmat[3], xmat[0])
 
 
+def _world_geom_bodies(mj, model, world: World | None) -> np.ndarray | None:
+    """Per geom of ``model``, the index of the body of ``world`` it belongs to
+    (:attr:`omnikin.world.model.World.bodies`), -1 for the rest; None without a world or with no
+    walls and obstacles (nothing to touch). The model names them by place
+    (:func:`omnikin.physics.mjcf._world_bodies`): ``world:wall:I:K``, ``world:obstacle:J``."""
+    if world is None or not world.bodies:
+        return None
+    owner = np.full(model.ngeom, -1, dtype=np.int64)
+    walls = len(world.walls)
+    for g in range(model.ngeom):
+        parts = (mj.mj_id2name(model, mj.mjtObj.mjOBJ_GEOM, g) or "").split(":")
+        if parts[:2] == ["world", "wall"]:
+            owner[g] = int(parts[2])
+        elif parts[:2] == ["world", "obstacle"]:
+            owner[g] = walls + int(parts[2])
+    return owner
+
+
 class PhysicsSim:
     """``robot`` as a MuJoCo model, settled at ``start`` ``(x, y, theta)`` [m, m, rad], stepped
     at ``step`` [s] (module docstring). ``description``: a physical description of ``robot``
@@ -214,6 +234,7 @@ class PhysicsSim:
         description: PhysicalRobot | None = None,
         roller_phase=0.0,
         controller: Robot | None = None,
+        world: World | None = None,
     ):
         mujoco = _mujoco()
         self._mj = mujoco
@@ -238,7 +259,8 @@ class PhysicsSim:
                 f"doubles no longer resolve the contacts), got {shorten(start)}"
             )
         start = pose
-        self.xml = mjcf(self.description, step)
+        self.world = world
+        self.xml = mjcf(self.description, step, world)
         self.model = mujoco.MjModel.from_xml_string(self.xml)
         self.data = mujoco.MjData(self.model)
         self.step_size = float(self.model.opt.timestep)
@@ -306,6 +328,11 @@ class PhysicsSim:
         self._steer_target = np.zeros(len(steer))
         self._steer_set = np.zeros(len(steer))
         self._velocity = np.zeros(6)
+        self.contacts: list[Contact] = []
+        """Where the robot began to touch a body of the world (:meth:`_watch_contacts`)."""
+        self._world_geoms = _world_geom_bodies(mujoco, m, world)
+        self._robot_geoms = m.body_rootid[m.geom_bodyid] == self._chassis
+        self._touching: set[int] = set()
         self.roller_offsets = roller_offsets(self.description, rolling, roller_phase)
         """Wheel joint angles [rad] of the rolling wheels (file order) at the start of settling."""
         self._settle(start)
@@ -413,11 +440,33 @@ class PhysicsSim:
                 self._steps += 1
                 if abs(d.time - self._steps * h) > h / 2 or (self._steps == 1 and self._warned()):
                     self._diverged((self._steps - 1) * h, settling=False)  # MuJoCo reset the state
+                if self._world_geoms is not None:
+                    self._watch_contacts()
                 if self._steps % UNWRAP_CHUNK == 0:
                     self._track_heading()
                     self._track_window()
         self._track_heading()
         self._check()
+
+    def _watch_contacts(self) -> None:
+        """Note each body of the world the robot begins to touch (:attr:`contacts`: the time,
+        the body's name, the contact point on the floor plane), once per touch."""
+        d = self.data
+        n = d.ncon
+        touching: set[int] = set()
+        if n:
+            contact = d.contact
+            g1, g2 = contact.geom1[:n], contact.geom2[:n]
+            bodies = self._world_geoms
+            assert bodies is not None
+            hit = np.where(self._robot_geoms[g1], bodies[g2], np.where(self._robot_geoms[g2], bodies[g1], -1))
+            for k in np.flatnonzero(hit >= 0):
+                body = int(hit[k])
+                if body not in touching and body not in self._touching:
+                    x, y = (float(v) for v in contact.pos[k, :2])
+                    self.contacts.append(Contact(float(d.time), self.world.bodies[body], (x, y)))  # type: ignore[union-attr]
+                touching.add(body)
+        self._touching = touching
 
     def _track_window(self) -> None:
         """Move the wheels' tracking window (:data:`TRACK_TIME`) on by the last

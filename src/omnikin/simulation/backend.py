@@ -22,11 +22,14 @@ from ..kinematics.robot import Robot, require_same_wheels
 from ..kinematics.se2 import compose, exp
 from ..odometry.batch import mid_steer
 from ..runtime.backends import WheelState
+from ..world.collision import Collider, Contact
 from .error_models import NoiseModel
 
 
 class SimBackend:
-    """The robot as built, simulated (module docstring). ``truth`` is its true pose."""
+    """The robot as built, simulated (module docstring). ``truth`` is its true pose; in a world
+    (``collider``) it starts at ``start`` and stops at first contact, and ``contacts`` lists
+    where touches began (:class:`~omnikin.world.collision.Contact`)."""
 
     def __init__(
         self,
@@ -35,6 +38,7 @@ class SimBackend:
         noise: NoiseModel | None = None,
         rng=None,
         start=(0.0, 0.0, 0.0),
+        collider: Collider | None = None,
     ):
         self.robot = robot
         self.true_robot = true_robot or robot
@@ -55,6 +59,11 @@ class SimBackend:
         self._true_rpt = np.abs(true_rpt)
         self._reading = nominal_rpt / true_rpt  # what the driver makes of the true wheel angle [rad/rad]
         self.truth = np.asarray(start, dtype=float).copy()
+        self.collider = collider
+        self.contacts: list[Contact] = []  # where touches began (world frame), in a world
+        self.touching = False
+        if collider is not None:
+            collider.require_clear(self.truth)
         self.fallen = ""  # a kinematic robot cannot fall (:class:`~omnikin.simulation.engine.SimulatedBackend`)
         self.joints = None  # its wheels turn as commanded: no simulated joints
         self._angles = np.zeros(len(self.encoded))
@@ -107,7 +116,13 @@ class SimBackend:
         inc = f @ d
         if self.noise.floor:
             inc[2] += self.noise.floor * np.sqrt(np.hypot(inc[0], inc[1])) * self.rng.standard_normal()
-        self.truth = compose(self.truth, exp(inc))
+        if self.collider is None:
+            self.truth = compose(self.truth, exp(inc))
+        else:
+            self.truth, touch, gone = self.collider.step(self.truth, inc)
+            if touch is not None and not self.touching:
+                self.contacts.append(self.collider.contact(self._t + gone * dt, self.truth))
+            self.touching = touch is not None
         self._t = float(t)
 
     def stats(self) -> dict:

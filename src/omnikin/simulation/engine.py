@@ -40,6 +40,8 @@ from ..motion.limits import MotionLimits
 from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range
 from ..runtime.backends import WheelBackend
+from ..world.collision import Collider, Footprint
+from ..world.model import World
 from . import kinematic
 from .error_models import NoiseModel, noise_profile
 from .kinematic import RunCost, SimulatedRun
@@ -361,7 +363,12 @@ class KinematicEngine(Engine):
     kinematics and exact SE(2) integration give the ground truth. It implements :class:`Engine`
     (the methods without a docstring of their own are documented there).
 
-    It has no options; the random errors are given to each run (:meth:`drive`'s ``noise``).
+    Its one option is the ``world`` the robot drives in (None: an empty floor), with
+    ``footprint_of``, what gives a robot's footprint there (the physics description's:
+    :func:`omnikin.physics.engines.engine_named` passes it); in a world each run starts at the
+    world's start pose and stops at first contact with a wall or obstacle
+    (:class:`~omnikin.world.collision.Collider`), its contacts kept. The random errors are
+    given to each run (:meth:`drive`'s ``noise``).
     :meth:`drive` is :func:`~omnikin.simulation.kinematic.simulate_kinematic`, :meth:`backend` a
     :class:`~omnikin.simulation.backend.SimBackend` (it never lags: ``max_lag`` does not apply),
     :meth:`cost` :func:`~omnikin.simulation.kinematic.run_cost` (computed without sampling the
@@ -382,14 +389,34 @@ class KinematicEngine(Engine):
         ``"typical"``, the profile of a run given no noise.
     """
 
+    world: World | None = None
+    footprint_of: Callable[[Robot], Footprint] | None = None
+
     name: ClassVar[str] = "kinematic"
     has_noise_model: ClassVar[bool] = True
     measured_cost: ClassVar[bool] = False
     drives_as_commanded: ClassVar[bool] = True
     default_noise: ClassVar[str | None] = "typical"
 
+    def __post_init__(self):
+        if self.world is not None and not isinstance(self.world, World):
+            from ..errors import InputError
+
+            raise InputError(f"world: expected an omnikin World, got {type(self.world).__name__}")
+        if self.world is not None and self.footprint_of is None:
+            from ..errors import InputError
+
+            raise InputError("a kinematic engine in a world needs footprint_of (engine_named gives it)")
+
     @classmethod
-    def made_with(cls, *, noise=None, step: float | None = None) -> KinematicEngine:
+    def made_with(
+        cls,
+        *,
+        noise=None,
+        step: float | None = None,
+        world: World | None = None,
+        footprint_of: Callable[[Robot], Footprint] | None = None,
+    ) -> KinematicEngine:
         """The engine for the options a user gave (:func:`omnikin.physics.engines.engine_named`).
 
         Parameters
@@ -398,6 +425,10 @@ class KinematicEngine(Engine):
             Not checked here: :meth:`noise_model` checks it where a run takes it.
         step : float, optional
             Must be None: a time step [s] belongs to the physics engine.
+        world : World, optional
+            The world the robot drives in (None: an empty floor).
+        footprint_of : callable, optional
+            A robot's :class:`~omnikin.world.collision.Footprint`; needed with a ``world``.
 
         Returns
         -------
@@ -416,11 +447,28 @@ class KinematicEngine(Engine):
                 "step (--step) is the time step of the physics engine: choose the physics engine (--engine physics) "
                 "or leave the step out"
             )
-        return cls()
+        return cls(world, footprint_of)
 
     @property
     def options(self) -> dict[str, Any]:
-        return {}
+        return {} if self.world is None else {"world": self.world}
+
+    def collider(self, robot: Robot) -> Collider | None:
+        """Where ``robot`` may go in the engine's world.
+
+        Parameters
+        ----------
+        robot : Robot
+            The robot as built (its footprint is asked of ``footprint_of``).
+
+        Returns
+        -------
+        Collider or None
+            Its footprint among the world's walls and obstacles; None on an empty floor.
+        """
+        if self.world is None or self.footprint_of is None:
+            return None
+        return Collider(self.world, self.footprint_of(robot))
 
     def noise_model(self, noise) -> NoiseModel:
         if isinstance(noise, NoiseModel):
@@ -482,7 +530,15 @@ class KinematicEngine(Engine):
             whose wheels differ or a true wheel without encoder, a plan without motion.
         """
         return kinematic.simulate_kinematic(  # looked up in its module when called, as a stand-in there is
-            plan, true_robot, command_robot, rate=rate, limits=limits, noise=noise, trials=trials, rng=rng
+            plan,
+            true_robot,
+            command_robot,
+            rate=rate,
+            limits=limits,
+            noise=noise,
+            trials=trials,
+            rng=rng,
+            collider=self.collider(true_robot),
         )
 
     def backend(
@@ -496,7 +552,9 @@ class KinematicEngine(Engine):
     ) -> SimulatedBackend:
         from .backend import SimBackend
 
-        return SimBackend(robot, true_robot, noise, rng=rng)
+        collider = self.collider(true_robot or robot)
+        start = (0.0, 0.0, 0.0) if self.world is None else self.world.start
+        return SimBackend(robot, true_robot, noise, rng=rng, start=start, collider=collider)
 
     def cost(
         self,

@@ -35,12 +35,13 @@ import numpy as np
 from ..common.rng import make_rng
 from ..errors import InputError
 from ..kinematics.robot import Robot, require_same_wheels
-from ..kinematics.se2 import TAYLOR_LIMIT, wrap_angle
+from ..kinematics.se2 import TAYLOR_LIMIT, between, wrap_angle
 from ..motion.limits import MotionLimits
 from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range, estimated_samples, require_motion, sample_plan
 from ..odometry.batch import batch_odometry, encoded_wheels
 from ..odometry.integration import integrate_components, integrate_end
+from ..world.collision import Collider, Contact
 from .error_models import NoiseModel
 
 # Measured cost of one simulated run (one trial, ground truth kept): tracemalloc peaks of
@@ -66,7 +67,10 @@ class SimulatedRun:
     :func:`counter_output`; what a tick log holds); ``steer`` ``(N + 1, n_steer)`` [rad] or None (the same in every
     trial); ``odometry`` ``(N + 1, 3)`` the odometry of ``odometry_robot`` from the readings; ``truth``
     ``(trials, N + 1, 3)`` ground truth (or only its end, ``(trials, 1, 3)``, when not
-    kept); ``measured`` ``(trials, 3)`` the end pose as measured.
+    kept); ``measured`` ``(trials, 3)`` the end pose as measured. In a world: ``contacts`` of each
+    trial (:class:`~omnikin.world.collision.Contact`, world frame) and the world's ``start``
+    pose (x, y, theta) [m, m, rad]: ``truth`` stays in the frame where the robot starts (that
+    of the odometry), the world frame's pose is ``start (+) truth``.
     """
 
     sampled: SampledPlan
@@ -77,6 +81,8 @@ class SimulatedRun:
     truth: np.ndarray
     measured: np.ndarray
     readings: np.ndarray
+    contacts: tuple[tuple[Contact, ...], ...] = ()
+    start: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     @property
     def epsilon(self) -> np.ndarray:
@@ -158,6 +164,7 @@ def simulate_kinematic(
     rng=None,
     odometry_robot: Robot | None = None,
     keep_truth: bool = True,
+    collider: Collider | None = None,
 ) -> SimulatedRun:
     """Simulate ``trials`` runs of ``plan`` by ``true_robot`` commanded by ``command_robot``.
 
@@ -170,6 +177,8 @@ def simulate_kinematic(
     ``command_robot`` (the robot executes the path by its own model); it reads the counts as
     its own encoders' counters output them (their ``counter_bits``). ``rate`` [Hz] (or the
     rate ``plan`` was sampled at) must lie in :data:`~omnikin.motion.timing.RATE_RANGE`.
+    ``collider``: the world the robot drives in (None: an empty floor): each trial's truth starts
+    at the world's start pose and stops at first contact (:meth:`Collider.follow`).
     """
     check_rate_range(plan.rate if isinstance(plan, SampledPlan) else rate, "rate")
     noise = noise or NoiseModel()
@@ -196,11 +205,23 @@ def simulate_kinematic(
     odo_widths = [w.encoder.counter_bits for w in encoded_wheels(odometry_robot)]
     seen = readings if odo_widths == widths else counter_output(ticks, odo_widths)  # as its own counters read
     odometry = batch_odometry(odometry_robot, sampled.t, seen, steer=steer, max_wheel_accel=math.inf).poses
-    truth, z = _truth(true_robot, names, dtrue, steer, noise, gens, keep_truth)
+    truth, z = _truth(true_robot, names, dtrue, steer, noise, gens, keep_truth or collider is not None)
+    contacts: tuple[tuple[Contact, ...], ...] = ()
+    start = (0.0, 0.0, 0.0)
+    if collider is not None:
+        start = collider.world.start
+        touched = []
+        for k in range(len(truth)):
+            seen_in_world, found = collider.follow(sampled.t, truth[k])
+            truth[k] = between(np.asarray(start), seen_in_world)
+            touched.append(tuple(found))
+        contacts = tuple(touched)
+        if not keep_truth:
+            truth = truth[:, -1:, :].copy()
     measured = truth[:, -1, :].copy()
     if z is not None:
         measured += z * np.array([noise.measurement, noise.measurement, noise.measurement_theta])
-    return SimulatedRun(sampled, sampled.t, ticks, steer, odometry, truth, measured, readings)
+    return SimulatedRun(sampled, sampled.t, ticks, steer, odometry, truth, measured, readings, contacts, start)
 
 
 def wheel_motion(angles: np.ndarray, true_robot: Robot, command_robot: Robot, names, quantise: bool):
