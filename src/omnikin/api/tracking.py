@@ -346,6 +346,9 @@ def track(
     )
     # the run in the frame of the path's start (the robot starts there, at rest), given back in the path's
     start = trajectory.path.pose[0].copy()
+    world = getattr(engine, "world", None)
+    if world is not None:  # the path is in the world's frame: the robot starts at its first pose
+        engine = dataclasses.replace(engine, world=dataclasses.replace(world, start=tuple(float(v) for v in start)))
     local = dataclasses.replace(trajectory, path=moved(trajectory.path, inverse(start)))
     law = build_controller(controller, nominal, local, rate=rate)
     run = drive(

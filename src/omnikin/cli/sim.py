@@ -10,6 +10,7 @@ from .common import (
     add_output,
     add_output_options,
     add_teleop_options,
+    add_world_option,
     check_seed,
     declare_inputs,
     load_robot,
@@ -53,6 +54,7 @@ examples:
   omnikin sim tomasi-omni3
   omnikin sim villasenor-omni3 --camera follow
   omnikin sim diff-drive --errors typical --seed 3      odometry (magenta) beside the truth (green)
+  omnikin sim tomasi-omni3 --world examples/worlds/room.yaml     walls, furniture, a crate to push
   xvfb-run -a omnikin sim omni4 --duration 10 --report run.json     without a screen"""
 
 
@@ -75,6 +77,7 @@ def add_parser(sub, robot_help: str) -> None:
     )
     sp.add_argument("--camera", choices=("free", "top", "follow"), default="free", help="first camera (default free)")
     add_as_built_options(sp, default_errors="none")
+    add_world_option(sp)
     add_teleop_options(sp)
     sp.add_argument(
         "--hold", type=number, default=0.0, metavar="S", help="a press drives for S seconds (default 0: until changed)"
@@ -91,7 +94,7 @@ def add_parser(sub, robot_help: str) -> None:
         help="write what the run did as JSON (final pose and steering, keys pressed)",
     )
     add_output_options(sp)
-    declare_inputs(sp, robots=("robot", "true_robot"))
+    declare_inputs(sp, "world", robots=("robot", "true_robot"))
     sp.set_defaults(func=run)
 
 
@@ -107,6 +110,7 @@ def run(args) -> int:
         raise InputError(f"--hold must be >= 0 [s], got {args.hold:g}")
     check_seed(args.seed)
     limits = teleop_limits(args)
+    from ..io.world_file import load_world
     from ..physics.cost import real_time_shortfall
     from ..physics.interactive import InteractiveSim, require_display
 
@@ -126,6 +130,7 @@ def run(args) -> int:
         camera=args.camera,
         limits=limits,
         echo=sys.stdout if args.echo else None,
+        world=load_world(args.world) if args.world is not None else None,
     )
     reason = "stopped"  # Ctrl-C or SIGTERM: the normal end of a window (the report is still written)
     with until_stopped():

@@ -17,6 +17,7 @@ from .common import (
     add_output,
     add_output_options,
     add_step_option,
+    add_world_option,
     check_seed,
     console,
     declare_inputs,
@@ -37,12 +38,17 @@ SIMULATE_EPILOG = """examples:
   omnikin simulate mecanum4 --path 'line 2 90; spin 180; arc 1 90' --rate 50 --seed 7 --bag sim.bag
   omnikin bag export sim.bag --topic /ground_truth --format tum -o truth.tum
   omnikin simulate tomasi-omni3 --engine physics --errors none --path 'line 1' --log log.csv
+  omnikin simulate tomasi-omni3 --world examples/worlds/room.yaml --path 'line 4' --bag room.bag
 
 engines: kinematic (default) integrates the wheels' motion with the --errors and --noise models;
 physics drives the robot as built (--errors or --true-robot) in MuJoCo with real rollers, motors
 and contacts (extra physics, docs/physics.md): the same plan and limits, wheel speeds commanded at
 --rate, the run sampled on until the robot stops; it has no --noise model (slip comes from the
 contacts) and takes --step, its time step.
+
+--world puts walls, obstacles and floor patches around the robot (docs/world.md): it starts at the
+world's start pose, stops at the first wall or obstacle it touches (physics: pushes what moves)
+while its wheels turn on, and the contacts are reported; poses stay in the frame where it started.
 
 paths (';' chains several): 'square cw|ccw rotate|translate [SIDE]', 'line LENGTH [HEADING_DEG]',
 'spin ANGLE_DEG', 'arc RADIUS ANGLE_DEG'. Topics: /ground_truth and /odom (nav_msgs/Odometry),
@@ -84,6 +90,7 @@ def add_parser(sub, robot_help: str) -> None:
         "(extra physics; see below) (default kinematic)",
     )
     add_step_option(sp)
+    add_world_option(sp)
     sp.add_argument(
         "--rate",
         type=number,
@@ -116,7 +123,7 @@ def add_parser(sub, robot_help: str) -> None:
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     add_output_options(sp)
     add_budget_options(sp)
-    declare_inputs(sp, robots=("robot", "true_robot"))
+    declare_inputs(sp, "world", robots=("robot", "true_robot"))
     sp.set_defaults(func=run)
 
 
@@ -228,6 +235,12 @@ def run(args) -> int:
     }
     if simulation.injected is not None:
         summary["injected_errors"] = simulation.injected.as_dict()
+    if args.world is not None:
+        summary["world"] = args.world
+        summary["start"] = list(run.start)
+        summary["contacts"] = [
+            {"time": c.time, "body": c.body, "point": list(c.point)} for c in (run.contacts[0] if run.contacts else ())
+        ]
     summary.update(engine.summary(run))
     saturated = summary.get("saturated_commands", 0)  # commands held at a limit (physics)
     for problem in engine.problems(run):  # the run did not drive as commanded: one line each
@@ -249,6 +262,7 @@ def run(args) -> int:
         f"end pose: truth x={truth_end[0]:.6g} m, y={truth_end[1]:.6g} m, theta={truth_end[2]:.6g} rad; odometry "
         f"x={odom_end[0]:.6g} m, y={odom_end[1]:.6g} m, theta={odom_end[2]:.6g} rad "
         f"(off by {summary['end_error_distance'] * 1000:.3g} mm)\n"
+        + (_contacts_text(summary["contacts"], args.world) + "\n" if args.world is not None else "")
         + (f"bag {args.bag}: " + ", ".join(f"{t} ({n})" for t, n in counts.items()) if args.bag is not None else "")
         + (
             ("\n" if args.bag is not None else "")
@@ -258,6 +272,15 @@ def run(args) -> int:
         )
     )
     return 0
+
+
+def _contacts_text(contacts: list[dict], world: str) -> str:
+    """One line on the run's contacts in ``world`` (the first few named, with their times)."""
+    if not contacts:
+        return f"world {world}: no contact with its walls or obstacles"
+    shown = ", ".join(f"{c['body']!r} at t={c['time']:.4g} s" for c in contacts[:5])
+    more = f" and {len(contacts) - 5} more" if len(contacts) > 5 else ""
+    return f"world {world}: {len(contacts)} contact(s): {shown}{more} (the truth stopped there; the odometry did not)"
 
 
 def _engine_options(args):

@@ -15,9 +15,11 @@ from .common import (
     add_output,
     add_output_options,
     add_step_option,
+    add_world_option,
     check_seed,
     console,
     declare_inputs,
+    engine_of,
     load_robot,
     number,
     physics_hint,
@@ -86,6 +88,7 @@ def add_parser(sub, robot_help: str) -> None:
         "(default kinematic)",
     )
     add_step_option(sp)
+    add_world_option(sp)
     add_as_built_options(sp, default_errors="none")
     sp.add_argument(
         "--noise",
@@ -144,7 +147,7 @@ def add_parser(sub, robot_help: str) -> None:
     sp.add_argument("--json", action="store_true", help="print the summary as JSON")
     add_output_options(sp)
     add_budget_options(sp)
-    declare_inputs(sp, "path", robots=("robot", "true_robot"))  # (a built-in path names no file: harmless)
+    declare_inputs(sp, "path", "world", robots=("robot", "true_robot"))  # (a built-in path names no file: harmless)
     sp.set_defaults(func=run)
 
 
@@ -199,8 +202,7 @@ def run(args) -> int:
         robot,
         args.path,
         controller=args.controller,
-        engine=args.engine,
-        step=args.step,
+        engine=engine_of(args),  # with --step and --world
         true_robot=args.true_robot or None,
         errors=args.errors,
         noise=args.noise,
@@ -236,6 +238,9 @@ def run(args) -> int:
         bag=args.bag,
         topics=counts,
     )
+    if args.world is not None:
+        summary["world"] = args.world
+        summary["contacts"] = [{"time": c.time, "body": c.body, "point": list(c.point)} for c in tracking.run.contacts]
     if args.json:
         print_json(summary)
         return 0
@@ -252,6 +257,16 @@ def run(args) -> int:
         + (f", asked at most {summary['largest_excess_percent']:.2g} % beyond" if summary["saturated_samples"] else ""),
         f"controller: {solve['p50']:.3g} ms per tick (p95 {solve['p95']:.3g} ms, largest {solve['max']:.3g} ms)",
     ]
+    if args.world is not None:
+        contacts = summary["contacts"]
+        lines.append(
+            f"world {args.world}: "
+            + (
+                f"{len(contacts)} contact(s), the first {contacts[0]['body']!r} at t={contacts[0]['time']:.4g} s"
+                if contacts
+                else "no contact with its walls or obstacles"
+            )
+        )
     lines += [
         f"{option} written to {'standard output' if getattr(args, option) == '-' else getattr(args, option)}"
         for option in ("truth", "reference", "odometry", "log", "bag", "plot")

@@ -11,6 +11,7 @@ from .budget import LARGEST_MESSAGE_SHARE, POSE_BYTES, Budget, add_budget_option
 from .common import (
     add_step_option,
     add_teleop_options,
+    add_world_option,
     declare_inputs,
     engine_of,
     load_robot,
@@ -131,6 +132,7 @@ def add_parser(sub, robot_help: str) -> None:
         help="print each key's action on stdout as it acts: simulated time, action, true pose (as omnikin sim)",
     )
     add_step_option(sp, "time step of the physics engine (--engine physics)")
+    add_world_option(sp)
     path = sp.add_argument_group("paths")
     path.add_argument(
         "--path",
@@ -153,7 +155,7 @@ def add_parser(sub, robot_help: str) -> None:
             f"--{role}-topic", default=default, metavar="TOPIC", help=f"--replay BAG: {role} topic (default {default})"
         )
     add_budget_options(sp, time=False)
-    declare_inputs(sp, "replay", "path", robots=("robot",))  # (a built-in path names no file: harmless)
+    declare_inputs(sp, "replay", "path", "world", robots=("robot",))  # (a built-in path names no file: harmless)
     sp.set_defaults(func=run)
 
 

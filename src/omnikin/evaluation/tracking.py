@@ -26,10 +26,11 @@ from ..control.controllers import Controller
 from ..control.trajectory import Trajectory, control_period
 from ..errors import InputError
 from ..kinematics.robot import Robot
-from ..kinematics.se2 import wrap_angle
+from ..kinematics.se2 import between, wrap_angle
 from ..motion.limits import MotionLimits
 from ..runtime.base import BaseRuntime
 from ..simulation.engine import Engine, KinematicEngine
+from ..world.collision import Contact
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -42,7 +43,7 @@ class TrackingRun:
         Tick times [s].
     truth, odometry, reference : ndarray, shape (n, 3)
         The true pose, the runtime's odometry and the reference pose ``(x, y, theta)``
-        [m, m, rad], world frame.
+        [m, m, rad], in the frame where the robot started (that of its odometry).
     command : ndarray, shape (n, 3)
         The controller's body twist [m/s, m/s, rad/s].
     wheel_speeds : ndarray, shape (n, n_wheels)
@@ -57,6 +58,9 @@ class TrackingRun:
     solve_time : ndarray, shape (n,)
         Wall time [s] of each controller call (a pace of the machine: for reports, never for
         assertions).
+    contacts : tuple of Contact
+        Where the robot began to touch a body of the engine's world (world frame; empty on an
+        empty floor).
     """
 
     t: np.ndarray
@@ -69,6 +73,7 @@ class TrackingRun:
     steer: np.ndarray | None
     saturated: int
     solve_time: np.ndarray
+    contacts: tuple[Contact, ...] = ()
 
 
 def track(
@@ -137,13 +142,14 @@ def track(
             solve[k] = time.perf_counter() - start
             runtime.command(twist, float(t[k]))
             step = runtime.act(float(t[k]), state)
-            truth[k] = backend.truth
+            truth[k] = between(backend.start, backend.truth)  # from where it started, as the odometry
             odometry[k] = pose
             command[k] = twist
             speeds[k] = step.wheel_speeds
             angles[k] = state.positions
             if steer is not None:
                 steer[k] = state.steer
+        contacts = tuple(backend.contacts)
     finally:
         backend.close()
     reference, _, _ = trajectory.at(t)
@@ -158,6 +164,7 @@ def track(
         steer=steer,
         saturated=runtime.filter.stats.saturated,
         solve_time=solve,
+        contacts=contacts,
     )
 
 

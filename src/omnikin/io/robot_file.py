@@ -51,6 +51,7 @@ from ..kinematics.physical import (
 )
 from ..kinematics.robot import Robot, name_collisions, robot_name_problem
 from ..kinematics.se2 import MAX_DIRECTION_DEG
+from ..kinematics.sensors import SENSOR_TYPES, Bumper, Imu, ImuAxes, Lidar, Mount
 from ..kinematics.wheels import (
     MAX_SPEED_RANGE,
     MOTOR_TYPES,
@@ -76,6 +77,7 @@ TOP_KEYS = {
     "references": False,
     "physical": False,
     "wheels": True,
+    "sensors": False,
 }
 WHEEL_KEYS = {
     "name",
@@ -135,6 +137,9 @@ WHOLE_RANGES: dict[str, tuple[int, int]] = {
 DEFAULT_DRIVE_DEG = {"mecanum": 0.0}
 """Drive direction of a wheel type when ``drive_deg`` is omitted [deg]; omni wheels take the
 counter-clockwise tangent, every other type must give ``drive_deg`` (docs/conventions.md)."""
+
+MAX_SENSORS = 32
+"""Most sensors of a robot file."""
 
 MAX_DEPTH = 32
 """Deepest nesting of mappings and lists in a robot or parameter file (a robot file needs 4)."""
@@ -384,6 +389,81 @@ def _wheel(where: _Where, data: Any, index: int) -> Wheel:
         raise where.error(str(exc), label) from None
 
 
+SENSOR_KEYS = {
+    "imu": ("name", "type", "mount", "rate", "gyro", "accel"),
+    "lidar": ("name", "type", "mount", "rate", "beams", "fov_deg", "range_min", "range_max", "range_noise", "dropout"),
+    "bumper": ("name", "type", "arc_deg"),
+}
+"""Keys of a sensor of each type (docs/sensors.md)."""
+MOUNT_KEYS = ("x", "y", "z", "yaw_deg")
+IMU_AXES_KEYS = ("noise_density", "bias", "bias_walk", "scale", "misalignment_deg")
+
+
+def _sensor(where: _Where, data: Any, index: int):
+    """Sensor ``index`` (1-based) of the ``sensors:`` list: its keys and types here, its values by
+    the sensor's own checks (:mod:`omnikin.kinematics.sensors`), each problem naming the sensor."""
+    label = f"sensor #{index}"
+    if not isinstance(data, Mapping):
+        raise where.error(f"must be a mapping, got {shorten(data)}", label)
+    if isinstance(data.get("name"), str) and data["name"]:
+        label = f"sensor {shorten(data['name'])} (#{index})"
+    for key in ("name", "type"):
+        if key not in data:
+            raise where.error("missing required key", label, key)
+    kind = data["type"]
+    if kind not in SENSOR_TYPES:
+        hint = did_you_mean(str(kind), SENSOR_TYPES) if isinstance(kind, str) and len(kind) <= 100 else ""
+        raise where.error(f"unknown sensor type {shorten(kind)}; one of {list(SENSOR_TYPES)}{hint}", label, "type")
+    _check_keys(where, data, SENSOR_KEYS[kind], label, None)
+
+    def degrees(value, field: str) -> float:
+        problem = range_problem(value, -MAX_DIRECTION_DEG, MAX_DIRECTION_DEG, "deg")
+        if problem:
+            raise where.error(problem, label, field)
+        return math.radians(float(value))
+
+    def mapping(value, keys, field: str) -> Mapping:
+        if not isinstance(value, Mapping):
+            raise where.error(
+                f"must be a mapping with some of the keys {list(keys)}, got {shorten(value)}", label, field
+            )
+        _check_keys(where, value, keys, label, field)
+        return value
+
+    try:
+        if kind == "bumper":
+            arc = data.get("arc_deg", [-180, 180])
+            if not isinstance(arc, list) or len(arc) != 2:
+                raise where.error(f"must be [low, high] in deg, got {shorten(arc)}", label, "arc_deg")
+            return Bumper(data["name"], (degrees(arc[0], "arc_deg"), degrees(arc[1], "arc_deg")))
+        given = mapping(data.get("mount", {}), MOUNT_KEYS, "mount")
+        mount = Mount(
+            given.get("x", 0.0),
+            given.get("y", 0.0),
+            given.get("z", 0.0),
+            degrees(given.get("yaw_deg", 0.0), "mount.yaw_deg"),
+        )
+        if kind == "imu":
+            triads = {}
+            for field in ("gyro", "accel"):
+                axes = mapping(data.get(field, {}), IMU_AXES_KEYS, field)
+                values = {k: axes[k] for k in IMU_AXES_KEYS[:-1] if k in axes}
+                if "misalignment_deg" in axes:
+                    values["misalignment"] = degrees(axes["misalignment_deg"], f"{field}.misalignment_deg")
+                triads[field] = ImuAxes(**values)
+            return Imu(data["name"], mount, data.get("rate", 100.0), triads["gyro"], triads["accel"])
+        options = {
+            k: data[k] for k in ("rate", "beams", "range_min", "range_max", "range_noise", "dropout") if k in data
+        }
+        if "fov_deg" in data:
+            options["fov"] = degrees(data["fov_deg"], "fov_deg")
+        return Lidar(data["name"], mount, **options)
+    except RobotFileError:
+        raise
+    except OmnikinError as exc:
+        raise where.error(str(exc).removeprefix(f"sensor {data['name']!r}: "), label) from None
+
+
 def robot_from_dict(data: Any, source: str = "<robot>") -> Robot:
     """Validate a schema-1 mapping and build the :class:`Robot` it describes."""
     where = _Where(source)
@@ -416,8 +496,12 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> Robot:
     parsed = [_wheel(where, w, i + 1) for i, w in enumerate(wheels)]
     for i, problem in name_collisions([w.name for w in parsed]):
         raise where.error(problem, f"wheel {shorten(parsed[i].name)} (#{i + 1})", "name")
+    sensors = data.get("sensors", [])
+    if not isinstance(sensors, list) or len(sensors) > MAX_SENSORS:
+        raise where.error(f"must be a list of at most {MAX_SENSORS} sensors, got {shorten(sensors)}", None, "sensors")
+    fitted = [_sensor(where, item, i + 1) for i, item in enumerate(sensors)]
     try:
-        return Robot(name, tuple(parsed), description, tuple(refs), physical)
+        return Robot(name, tuple(parsed), description, tuple(refs), physical, sensors=tuple(fitted))
     except OmnikinError as exc:
         raise RobotFileError(f"{source}: {exc}") from None
 
@@ -809,6 +893,39 @@ def robot_to_dict(robot: Robot) -> dict:
     if robot.physical is not None and robot.physical.given:
         out["physical"] = physical_to_dict(robot.physical)
     out["wheels"] = wheels
+    if robot.sensors:
+        out["sensors"] = [sensor_to_dict(sensor) for sensor in robot.sensors]
+    return out
+
+
+def sensor_to_dict(sensor) -> dict[str, Any]:
+    """The ``sensors:`` entry of ``sensor`` (degrees where the file has them)."""
+    out: dict[str, Any] = {"name": sensor.name, "type": sensor.type}
+    if isinstance(sensor, Bumper):
+        out["arc_deg"] = [_clean(math.degrees(a)) for a in sensor.arc]
+        return out
+    m = sensor.mount
+    out["mount"] = {"x": m.x, "y": m.y, "z": m.z, "yaw_deg": _clean(math.degrees(m.yaw))}
+    out["rate"] = sensor.rate
+    if isinstance(sensor, Imu):
+        for field in ("gyro", "accel"):
+            axes = getattr(sensor, field)
+            out[field] = {
+                "noise_density": axes.noise_density,
+                "bias": axes.bias,
+                "bias_walk": axes.bias_walk,
+                "scale": axes.scale,
+                "misalignment_deg": _clean(math.degrees(axes.misalignment)),
+            }
+        return out
+    out.update(
+        beams=sensor.beams,
+        fov_deg=_clean(math.degrees(sensor.fov)),
+        range_min=sensor.range_min,
+        range_max=sensor.range_max,
+        range_noise=sensor.range_noise,
+        dropout=sensor.dropout,
+    )
     return out
 
 

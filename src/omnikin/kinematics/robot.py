@@ -45,6 +45,7 @@ from .linalg import RANK_TOL, null_space, rank
 from .mobility import Configuration, Mobility, analyse, generic_configuration
 from .physical import PhysicalBody
 from .se2 import MAX_ANGLE
+from .sensors import Bumper, Imu, Lidar, Sensor
 from .wheels import DERIVED_SUFFIXES, Wheel
 
 STEER_LIMIT_SLACK = 1e-9
@@ -269,6 +270,8 @@ class Robot:
         Physical fields of the chassis (see the attribute below).
     design : Robot or None, default None
         For a robot as built, the robot it was built to (see the attribute below).
+    sensors : sequence of Imu, Lidar or Bumper, default ()
+        The sensors it carries (see the attribute below).
 
     Raises
     ------
@@ -293,6 +296,9 @@ class Robot:
     what they name, :func:`omnikin.physics.description.describe`), and a wheel controller whose
     speed loop closes on its encoder counts by its scale. None: this robot is its own design. A
     robot file holds no design (what it describes is one)."""
+    sensors: tuple[Sensor, ...] = ()
+    """The sensors it carries besides the encoders (:mod:`omnikin.kinematics.sensors`): IMUs,
+    lidars, bumpers; names unique, none a wheel's."""
 
     def __post_init__(self):
         problem = robot_name_problem(self.name)
@@ -310,6 +316,18 @@ class Robot:
         collisions = name_collisions([w.name for w in self.wheels])
         if collisions:
             raise InputError(f"robot {self.name!r}: {collisions[0][1]}")
+        object.__setattr__(self, "sensors", tuple(self.sensors))
+        seen = {w.name for w in self.wheels}
+        for i, sensor in enumerate(self.sensors):
+            if not isinstance(sensor, (Imu, Lidar, Bumper)):
+                raise InputError(
+                    f"robot {self.name!r}: sensor #{i + 1} is not an Imu, Lidar or Bumper, got {shorten(sensor)}"
+                )
+            if sensor.name in seen:
+                raise InputError(
+                    f"robot {self.name!r}: sensor {sensor.name!r}: its name is also a wheel's or another sensor's"
+                )
+            seen.add(sensor.name)
         if self.design is not None:
             if not isinstance(self.design, Robot) or self.design.design is not None:
                 raise InputError(

@@ -74,6 +74,7 @@ class PhysicsBackend:
         if not self.encoded:
             raise InputError(f"robot {robot.name!r}: the physics back-end needs encoded (driven) wheels")
         self.sim = PhysicsSim(self.true_robot, start=start, step=step, controller=robot, world=world)
+        self.start = np.array(start, dtype=float)  # where it started: the origin of its odometry
         self.fallen = ""
         """Empty while the robot stands; once it tipped over (:meth:`PhysicsSim.fall`), that one
         line, and every later command is replaced by zero wheel speeds (module docstring)."""

@@ -27,7 +27,7 @@ from ..kinematics.robot import Robot
 from ..motion.limits import MotionLimits
 from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range
-from ..simulation.engine import Engine, KinematicEngine, Progress, SimulatedBackend
+from ..simulation.engine import Engine, KinematicEngine, Progress, SimulatedBackend, contact_problems
 from ..simulation.error_models import NoiseModel
 from ..simulation.kinematic import RunCost, SimulatedRun, run_cost
 from ..world.collision import Footprint
@@ -284,7 +284,7 @@ class PhysicsEngine(Engine):
     def problems(self, run: SimulatedRun) -> list[str]:
         from .run import PhysicsRun
 
-        return run.problems() if isinstance(run, PhysicsRun) else []
+        return (run.problems() if isinstance(run, PhysicsRun) else []) + contact_problems(run)
 
     def summary(self, run: SimulatedRun) -> dict[str, Any]:
         from .run import PhysicsRun

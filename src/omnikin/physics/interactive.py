@@ -88,9 +88,11 @@ import numpy as np
 
 from ..errors import InputError
 from ..kinematics.robot import Robot
+from ..kinematics.se2 import compose
 from ..motion.limits import MotionLimits
 from ..runtime.base import BaseRuntime, StepResult
 from ..runtime.teleop import MOVES, STEER_STEP, Teleop, moves_not_obeyed
+from ..world.model import World
 from .backend import PhysicsBackend
 
 CONTROL_PERIOD = 0.02
@@ -186,7 +188,9 @@ class InteractiveSim:
     would on the real robot); ``limits``: the runtime's motion limits; ``hold`` [s]: the command
     timeout (0: a target holds until changed); ``camera``: the first camera preset;
     ``notices``: where the one-line notices go (default stderr); ``echo``: a text stream that gets
-    each entry of :attr:`events` as it happens, one line (:meth:`_record`)."""
+    each entry of :attr:`events` as it happens, one line (:meth:`_record`); ``world``: the world
+    drawn and driven in (the robot starts at its start pose; the odometry's arrow is drawn from
+    there, as the odometry counts from where the robot started)."""
 
     def __init__(
         self,
@@ -200,12 +204,15 @@ class InteractiveSim:
         limits: MotionLimits | None = None,
         notices=None,
         echo=None,
+        world: World | None = None,
     ):
         if camera not in CAMERAS:
             raise InputError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
         self.teleop = Teleop(speed, turn)
         self.robot = robot
-        self.backend = PhysicsBackend(robot, true_robot)
+        self.world = world
+        self.start = np.zeros(3) if world is None else np.asarray(world.start, dtype=float)
+        self.backend = PhysicsBackend(robot, true_robot, start=self.start, world=world)
         self.runtime = BaseRuntime(robot, self.backend, limits=limits, cmd_vel_timeout=hold)
         self.camera = camera
         self.events: list[dict] = []
@@ -432,7 +439,12 @@ class InteractiveSim:
         width = ARROW_WIDTH * size
         arrows = (
             (self.backend.truth, top + 0.01 * size, width, TRUTH_RGBA),
-            (self.runtime.pose, top + 0.01 * size + 1.5 * width, 0.5 * width, ODOMETRY_RGBA),
+            (
+                compose(self.start, np.asarray(self.runtime.pose)),
+                top + 0.01 * size + 1.5 * width,
+                0.5 * width,
+                ODOMETRY_RGBA,
+            ),
         )
         with viewer.lock():
             scn.ngeom = len(arrows)
@@ -641,7 +653,8 @@ class InteractiveSim:
         the window last drew them (:attr:`markers`), steering angles reached [rad], key presses
         with their simulated time, wall arrival time, true pose and twist, odometry pose, wheel
         angles and steering; the clock: simulated and wall time [s], wall time skipped while
-        nothing was driven, lowest real-time factor measured (null: the run was too short)."""
+        nothing was driven, lowest real-time factor measured (null: the run was too short); in a
+        world, the contacts (time [s], body, point [m])."""
         return {
             "robot": self.robot.name,
             "end": reason,
@@ -657,6 +670,7 @@ class InteractiveSim:
             "steer": self.steer_reached(),
             "target": self.teleop.target.tolist(),
             "fallen": self.backend.fallen,
+            "contacts": [{"time": c.time, "body": c.body, "point": list(c.point)} for c in self.backend.contacts],
             "presses": dict(self.teleop.presses),
             "releases": self.releases,
             "not_obeyed": dict(self.not_obeyed),

@@ -113,9 +113,12 @@ def _sub(parent: ET.Element, tag: str, **attrs) -> ET.Element:
     return ET.SubElement(parent, tag, {k: v for k, v in attrs.items() if v is not None})
 
 
-def _contact(geom: ET.Element, friction: float) -> None:
-    geom.set("contype", str(ROBOT_BITS[0]))
-    geom.set("conaffinity", str(ROBOT_BITS[1]))
+def _contact(geom: ET.Element, friction: float, bits: tuple[int, int] = ROBOT_BITS) -> None:
+    """Make ``geom`` touch what ``bits`` (``contype``, ``conaffinity``) let it, with sliding
+    ``friction`` only (``condim`` 3) and the contacts' softness (:data:`CONTACT_SOLREF`,
+    :data:`CONTACT_SOLIMP`); the wheels' bits unless told."""
+    geom.set("contype", str(bits[0]))
+    geom.set("conaffinity", str(bits[1]))
     geom.set("condim", "3")
     geom.set("friction", _vec((friction, 0.0, 0.0)))
     geom.set("solref", _vec(CONTACT_SOLREF))
@@ -218,13 +221,8 @@ def _world_bodies(asset: ET.Element, parent: ET.Element, floor: ET.Element, worl
             mesh = f"patch:{i}:{k}"
             _sub(asset, "mesh", name=mesh, vertex=_vec(np.ravel(vertices)))
             geom = _sub(parent, "geom", name=f"world:patch:{i}:{k}", type="mesh", mesh=mesh)
-            geom.set("contype", str(FLOOR_BITS[0]))
-            geom.set("conaffinity", str(FLOOR_BITS[1] | WORLD_BITS[0]))
+            _contact(geom, patch.friction, (FLOOR_BITS[0], FLOOR_BITS[1] | WORLD_BITS[0]))
             geom.set("priority", "1")
-            geom.set("condim", "3")
-            geom.set("friction", _vec((patch.friction, 0.0, 0.0)))
-            geom.set("solref", _vec(CONTACT_SOLREF))
-            geom.set("solimp", _vec(CONTACT_SOLIMP))
             geom.set("rgba", "0.35 0.55 0.85 0.6")
     for i, mark in enumerate(world.marks):
         for k, (a, b) in enumerate(zip(mark.points[:-1], mark.points[1:], strict=True)):
@@ -274,12 +272,7 @@ def _static_box(parent: ET.Element, name: str, rect: np.ndarray, height: float, 
 
 
 def _world_geom(geom: ET.Element, rgba: str) -> None:
-    geom.set("contype", str(WORLD_BITS[0]))
-    geom.set("conaffinity", str(WORLD_BITS[1]))
-    geom.set("condim", "3")
-    geom.set("friction", _vec((OBSTACLE_FRICTION, 0.0, 0.0)))
-    geom.set("solref", _vec(CONTACT_SOLREF))
-    geom.set("solimp", _vec(CONTACT_SOLIMP))
+    _contact(geom, OBSTACLE_FRICTION, WORLD_BITS)
     geom.set("group", str(WORLD_GROUP))
     geom.set("rgba", rgba)
 

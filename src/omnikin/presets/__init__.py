@@ -15,6 +15,7 @@ PRESET_DIR = Path(__file__).resolve().parent
 
 PRESET_NAMES = (
     "tomasi-omni3",
+    "tomasi-omni3-lidar",
     "garcia-sillas-omni3",
     "villasenor-omni3",
     "diff-drive",

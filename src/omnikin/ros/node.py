@@ -499,11 +499,15 @@ class BaseNode(Node):
         ]
 
     def _publish_truth(self, now: float) -> None:
-        """``ground_truth``: the back-end's true pose, and the mean body twist since the previous
+        """``ground_truth``: the back-end's true pose in the odom frame (in a world, seen from the
+        world's start pose, where the odometry starts), and the mean body twist since the previous
         cycle (the SE(2) logarithm of the true increment over the cycle time, as ``odom``'s)."""
         if self.truth_pub is None:
             return
         pose = np.array(self._simulated.truth, dtype=np.float64)
+        start = getattr(self._simulated, "start", None)
+        if start is not None and np.any(np.asarray(start) != 0.0):  # in a world: from where it started
+            pose = between(np.asarray(start, dtype=np.float64), pose)
         twist = np.zeros(3)
         if self._last_truth is not None and now > self._last_truth[0]:
             twist = log(between(self._last_truth[1], pose)) / (now - self._last_truth[0])

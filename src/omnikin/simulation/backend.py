@@ -59,6 +59,7 @@ class SimBackend:
         self._true_rpt = np.abs(true_rpt)
         self._reading = nominal_rpt / true_rpt  # what the driver makes of the true wheel angle [rad/rad]
         self.truth = np.asarray(start, dtype=float).copy()
+        self.start = self.truth.copy()  # where it started: the origin of its odometry
         self.collider = collider
         self.contacts: list[Contact] = []  # where touches began (world frame), in a world
         self.touching = False

@@ -40,7 +40,7 @@ from ..motion.limits import MotionLimits
 from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range
 from ..runtime.backends import WheelBackend
-from ..world.collision import Collider, Footprint
+from ..world.collision import Collider, Contact, Footprint
 from ..world.model import World
 from . import kinematic
 from .error_models import NoiseModel, noise_profile
@@ -86,6 +86,17 @@ class SimulatedBackend(WheelBackend, Protocol):
         ...
 
     @property
+    def start(self) -> np.ndarray:
+        """Where the robot started, ``(x [m], y [m], theta [rad])`` in the world frame: the origin
+        of its odometry (REP 105's odom; zero on an empty floor, the world's start pose in a world)."""
+        ...
+
+    @property
+    def contacts(self) -> list[Contact]:
+        """Where the robot began to touch a body of the world (empty on an empty floor)."""
+        ...
+
+    @property
     def joints(self) -> SimulatedJoints | None:
         """The simulated joints (physics: the wheels' and steering joints' true angles and
         speeds, and the body's true twist), or None when the wheels turn as commanded
@@ -117,8 +128,10 @@ class Engine(Protocol):
         its time steps dominate, a coarser step makes it cheaper): a caller sizing many small
         jobs treats a run of it as expensive.
     drives_as_commanded : bool
-        True when every run drives as commanded by construction (kinematic); False when a run
-        may not, and :meth:`problems` says how (physics: wheels lagging or slipping).
+        True when every run on an empty floor drives as commanded by construction (kinematic);
+        False when a run may not, and :meth:`problems` says how (physics: wheels lagging or
+        slipping). In a world, a run that touched a wall or obstacle did not, in either engine
+        (:func:`contact_problems`).
     default_noise : str or None
         The noise profile a run takes when none is given (None: no noise model).
     """
@@ -384,7 +397,8 @@ class KinematicEngine(Engine):
     measured_cost : bool
         False: :meth:`cost` is computed from the plan alone (microseconds).
     drives_as_commanded : bool
-        True: :meth:`problems` is always empty.
+        True: :meth:`problems` is empty on an empty floor (in a world, the runs that touched
+        its bodies).
     default_noise : str
         ``"typical"``, the profile of a run given no noise.
     """
@@ -569,10 +583,23 @@ class KinematicEngine(Engine):
         return kinematic.run_cost(plan, command_robot, rate)
 
     def problems(self, run: SimulatedRun) -> list[str]:
-        return []
+        return contact_problems(run)
 
     def summary(self, run: SimulatedRun) -> dict[str, Any]:
         return {}
 
     def motor_limits(self, robot: Robot) -> WheelLimits | None:
         return None
+
+
+def contact_problems(run: SimulatedRun) -> list[str]:
+    """One phrase per trial of ``run`` that touched a body of its world (the first contact
+    named): in a world, such a run did not drive as commanded (empty on an empty floor)."""
+    out = []
+    for trial, contacts in enumerate(run.contacts):
+        if contacts:
+            first = contacts[0]
+            which = f"trial {trial + 1} " if len(run.contacts) > 1 else ""
+            more = f" ({len(contacts)} contacts)" if len(contacts) > 1 else ""
+            out.append(f"{which}touched {first.body!r} at t = {first.time:.4g} s and stopped there{more}")
+    return out

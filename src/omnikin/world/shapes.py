@@ -8,7 +8,8 @@ thick), each box a rectangle, each cylinder a circle. Arrays, world frame, metre
   the rectangle's own x);
 - ``circles`` ``(k, 3)``: centre x, y, radius;
 - ``rect_body`` ``(m,)``, ``circle_body`` ``(k,)``: the index of the body each belongs to in
-  :attr:`omnikin.world.model.World.bodies` (walls first, then obstacles).
+  :attr:`omnikin.world.model.World.bodies` (walls first, then obstacles);
+- ``rect_height`` ``(m,)``, ``circle_height`` ``(k,)``: the height of that body [m] (None: not known).
 
 Distances are those of :mod:`omnikin.world.plane`. A ray ``o + t d`` (``|d| = 1``) meets a
 rectangle by the slab method in its frame and a circle at the smaller root of
@@ -37,6 +38,23 @@ class Shapes:
     rect_body: np.ndarray
     circles: np.ndarray
     circle_body: np.ndarray
+    rect_height: np.ndarray | None = None
+    circle_height: np.ndarray | None = None
+
+    def above(self, z: float) -> Shapes:
+        """The shapes of bodies taller than ``z`` [m]: what a beam at that height can meet
+        (all of them when no heights are known)."""
+        if self.rect_height is None or self.circle_height is None:
+            return self
+        r, c = self.rect_height > z, self.circle_height > z
+        return Shapes(
+            self.rects[r],
+            self.rect_body[r],
+            self.circles[c],
+            self.circle_body[c],
+            self.rect_height[r],
+            self.circle_height[c],
+        )
 
     @property
     def count(self) -> int:
@@ -52,18 +70,22 @@ class Shapes:
 
 def shapes_of(world: World) -> Shapes:
     """The plane shapes of ``world``'s walls and obstacles (:func:`omnikin.world.model.outline`)."""
-    rects, rect_body, circles, circle_body = [], [], [], []
+    rects, rect_body, circles, circle_body, rect_height, circle_height = [], [], [], [], [], []
     for i, body in enumerate((*world.walls, *world.obstacles)):
         r, c = outline(body)
         rects.append(r)
         circles.append(c)
         rect_body.extend([i] * len(r))
         circle_body.extend([i] * len(c))
+        rect_height.extend([body.height] * len(r))
+        circle_height.extend([body.height] * len(c))
     return Shapes(
         np.concatenate(rects) if rects else np.empty((0, 5)),
         np.asarray(rect_body, dtype=np.int64),
         np.concatenate(circles) if circles else np.empty((0, 3)),
         np.asarray(circle_body, dtype=np.int64),
+        np.asarray(rect_height, dtype=float),
+        np.asarray(circle_height, dtype=float),
     )
 
 
