@@ -26,10 +26,11 @@ from support.cli import run_entry_point
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 COMMANDS = ("presets", "show", "ik", "fk", "odometry")
 STEERABLE_PRESETS = ("villasenor-omni3", "ackermann", "synchro", "xr4000")
-SWEDISH_PRESETS = ("tomasi-omni3", "garcia-sillas-omni3", "mecanum4", "omni4")
+SWEDISH_PRESETS = ("tomasi-omni3", "tomasi-omni3-lidar", "garcia-sillas-omni3", "mecanum4", "omni4")
 # Campion types known from the layouts (Campion, Bastin, d'Andrea-Novel 1996)
 CAMPION = {
     "tomasi-omni3": (3, 0),
+    "tomasi-omni3-lidar": (3, 0),
     "garcia-sillas-omni3": (3, 0),
     "villasenor-omni3": (3, 0),
     "diff-drive": (2, 0),

@@ -15,6 +15,9 @@ import yaml
 
 from omnikin.io.robot_file import (
     ENCODER_KEYS,
+    IMU_AXES_KEYS,
+    MOUNT_KEYS,
+    SENSOR_KEYS,
     PHYSICAL_BODY_KEYS,
     PHYSICAL_WHEEL_KEYS,
     STEER_KEYS,
@@ -52,6 +55,24 @@ wheels:
     encoder: {ticks_per_rev: 1000, gear_ratio: 1.0, invert: false}
     steer: {offset: 0.02, min_deg: -90.0, max_deg: 90.0}
   - {name: o, type: omni, distance: 0.2, angle_deg: 240.0, radius: 0.05}
+sensors:
+  - name: imu
+    type: imu
+    mount: {x: 0.01, y: -0.02, z: 0.06, yaw_deg: 90.0}
+    rate: 200.0
+    gyro: {noise_density: 0.000087, bias: 0.005, bias_walk: 0.00004, scale: 0.01, misalignment_deg: 0.5}
+    accel: {noise_density: 0.0039, bias: 0.05, bias_walk: 0.0006, scale: 0.01, misalignment_deg: 0.5}
+  - name: laser
+    type: lidar
+    mount: {x: 0.0, y: 0.0, z: 0.12, yaw_deg: 0.0}
+    rate: 10.0
+    beams: 360
+    fov_deg: 270.0
+    range_min: 0.15
+    range_max: 12.0
+    range_noise: 0.01
+    dropout: 0.01
+  - {name: front, type: bumper, arc_deg: [-60.0, 60.0]}
 """
 
 NESTED = {"encoder": ENCODER_KEYS, "steer": STEER_KEYS, "physical": set(PHYSICAL_WHEEL_KEYS)}
@@ -72,6 +93,12 @@ def test_the_robot_file_uses_every_key_of_the_schema():
     assert set().union(*doc["wheels"]) == WHEEL_KEYS
     for key, schema in NESTED.items():
         assert set().union(*(w[key] for w in doc["wheels"] if key in w)) == schema, key
+    sensors = {s["type"]: s for s in doc["sensors"]}
+    assert set(sensors) == set(SENSOR_KEYS)
+    for kind, keys in SENSOR_KEYS.items():
+        assert set(sensors[kind]) == set(keys), kind
+    assert set(sensors["imu"]["mount"]) == set(MOUNT_KEYS)
+    assert set(sensors["imu"]["gyro"]) == set(sensors["imu"]["accel"]) == set(IMU_AXES_KEYS)
 
 
 def test_show_json_carries_every_field_of_the_robot_file_as_written(capsys, tmp_path):

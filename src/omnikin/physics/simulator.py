@@ -588,6 +588,19 @@ class PhysicsSim:
         self._track_heading()
         return np.array([q[0], q[1], self._heading])
 
+    def obstacle_poses(self) -> np.ndarray:
+        """``(n_obstacles, 3)`` pose ``(x, y, yaw)`` [m, m, rad] of each obstacle of the world
+        (world frame; movable ones where the robot pushed them), empty without a world."""
+        if self.world is None:
+            return np.zeros((0, 3))
+        mj = self._mj
+        out = np.empty((len(self.world.obstacles), 3))
+        for j in range(len(out)):
+            body = mj.mj_name2id(self.model, mj.mjtObj.mjOBJ_BODY, f"world:obstacle:{j}")
+            out[j, :2] = self.data.xpos[body][:2]
+            out[j, 2] = _yaw(self.data.xmat[body])
+        return out
+
     @property
     def tilt(self) -> float:
         """Angle [rad] between the chassis' z axis and the vertical (0 standing level)."""

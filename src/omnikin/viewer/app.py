@@ -15,10 +15,13 @@ from __future__ import annotations
 import threading
 import time
 
+import numpy as np
+
+from ..kinematics.se2 import inverse
 from ..motion.plans import UMBMARK_SIDE
 from .live import PageRobot, Snapshot
 from .panel import CameraControl, DriveControls, FirstView, GoalMarker, PathPanel, Readouts, robot_extent
-from .scene import RobotView, draw_world
+from .scene import RobotView, WorldDrawing, draw_world
 from .serving import CONTROL_PERIOD, SLOW_PERIOD, PageServers
 
 
@@ -48,7 +51,15 @@ class LiveViewer:
         self.server = self.servers.viser
         try:  # (Ctrl-C while the page is being built stops the servers too)
             self.server.on_client_disconnect(self._on_page_gone)
-            draw_world(self.server.scene, max(5.0, umbmark_side + 1.0), umbmark_side)
+            world = getattr(live, "world", None)
+            extent_of_world = 0.0
+            if world is not None:
+                low_x, low_y, high_x, high_y = world.floor_bounds
+                extent_of_world = max(abs(low_x), abs(low_y), abs(high_x), abs(high_y)) + float(
+                    np.hypot(*live.start[:2])
+                )
+            draw_world(self.server.scene, max(5.0, umbmark_side + 1.0, extent_of_world), umbmark_side)
+            self.world = WorldDrawing(self.server.scene, world, inverse(live.start)) if world is not None else None
             self.robot = RobotView(self.server.scene, live.description)
             self.trails = self.robot.trails
             self.drive = DriveControls(self.server, live)
@@ -118,6 +129,10 @@ class LiveViewer:
 
     def _draw(self, s: Snapshot) -> None:
         self.robot.show(s)
+        if self.world is not None:
+            poses = self.live.obstacle_poses()
+            if poses is not None:
+                self.world.move(poses)
         self.trails["truth"].add(s.truth[0], s.truth[1])
         self.trails["odometry"].add(s.odometry[0], s.odometry[1])
 

@@ -42,6 +42,7 @@ import numpy as np
 from ..control.follower import FollowPlan, PathFollower, PlanWorker, plan_follow
 from ..errors import InputError
 from ..kinematics.robot import Robot
+from ..kinematics.se2 import between
 from ..motion.limits import MotionLimits
 from ..physics.description import PhysicalRobot, describe
 from ..physics.joint_motion import JointMotion
@@ -49,6 +50,7 @@ from ..runtime.base import BaseRuntime, StepResult
 from ..runtime.goal import GoalSeeker
 from ..runtime.teleop import MOVES, STEER_STEP, Teleop
 from ..simulation.engine import Engine, KinematicEngine
+from ..world.model import World
 
 KINEMATIC = KinematicEngine()
 """The default engine of the live robot (the kinematic one, no options)."""
@@ -192,6 +194,20 @@ class PageRobot:
     def shown_pose(self) -> tuple[float, float, float]:
         """The pose a key action is recorded with [m, m, rad] (the true pose where there is one)."""
         return self.pose
+
+    start = np.zeros(3)
+    """Where the robot started in its world, ``(x, y, theta)`` [m, m, rad]: the page draws in the
+    frame of its odometry, which starts there (zero on an empty floor)."""
+
+    @property
+    def world(self) -> World | None:
+        """The world the robot drives in (None: an empty floor, or one the page does not know)."""
+        return None
+
+    def obstacle_poses(self) -> np.ndarray | None:
+        """Where the world's obstacles are now, ``(n, 3)`` [m, m, rad] world frame, when something
+        moves them (the physics engine); None when they stay where the world file puts them."""
+        return None
 
     def _record(self, action: str) -> None:
         """One entry of :attr:`events`: ``action`` acts from the last control step (:attr:`t` [s]);
@@ -426,6 +442,7 @@ class LiveRobot(PageRobot):
         super().__init__(robot, speed=speed, turn=turn, limits=limits)
         self.engine = engine
         self.backend = engine.backend(robot)
+        self.start = np.asarray(self.backend.start, dtype=float)  # the page's frame: where it started
         # simulated joints (physics) are read; the others follow the commands (kinematic)
         self._joints = self.backend.joints
         self.runtime = BaseRuntime(robot, self.backend, limits=self.limits, cmd_vel_timeout=timeout)
@@ -452,7 +469,19 @@ class LiveRobot(PageRobot):
 
     @property
     def shown_pose(self) -> tuple[float, float, float]:
-        return triple(self.backend.truth)
+        return triple(self._seen(self.backend.truth))
+
+    def _seen(self, pose) -> np.ndarray:
+        """``pose`` (world frame) in the page's frame, the odometry's: from where the robot started."""
+        return between(self.start, np.asarray(pose, dtype=float))
+
+    @property
+    def world(self) -> World | None:
+        return self.engine.options.get("world")
+
+    def obstacle_poses(self) -> np.ndarray | None:
+        sim = getattr(self.backend, "sim", None)
+        return None if sim is None or self.world is None else sim.obstacle_poses()
 
     def _control(self, t: float) -> Snapshot:
         """One control step at ``t`` [s] with the targets as they are (a path followed commands
@@ -512,7 +541,7 @@ class LiveRobot(PageRobot):
         rollers, roller_speeds = slots.rollers(self.joints.roller_angles, self.joints.roller_rates)
         return Snapshot(
             t=result.t,
-            truth=triple(self.backend.truth),
+            truth=triple(self._seen(self.backend.truth)),
             odometry=triple(result.pose),
             twist=triple(result.twist),
             command=triple(result.command),

@@ -36,6 +36,8 @@ import viser
 import viser.transforms as vtf
 
 from ..physics.description import PhysicalRobot, WheelBody
+from ..world.model import Box, World
+from ..world.plane import triangulate, wall_rects
 from .live import Snapshot
 from .panel import robot_extent
 
@@ -299,6 +301,79 @@ def draw_world(scene: viser.SceneApi, extent: float, umbmark_side: float) -> Non
     draw_ground(scene, extent, 0.1)
     if umbmark_side > 0:
         draw_umbmark_square(scene, umbmark_side)
+
+
+WALL_COLOUR = (190, 184, 174)
+FIXED_COLOUR = (140, 102, 76)
+MOVABLE_COLOUR = (204, 115, 51)
+PATCH_COLOUR = (90, 140, 217)
+MARK_COLOUR = (217, 166, 25)
+
+
+def _yaw_wxyz(yaw: float) -> tuple[float, float, float, float]:
+    return (math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0))
+
+
+class WorldDrawing:
+    """A world's walls, obstacles, friction patches and floor marks (``docs/world.md``) under
+    the scene node ``/world``, placed at ``origin`` (x, y, theta): the world frame's pose in the
+    scene's frame, which is the odometry's (where the robot started: the inverse of the world's
+    start pose). Movable obstacles are moved by :meth:`move` (the physics engine pushes them)."""
+
+    def __init__(self, scene: viser.SceneApi, world: World, origin):
+        x, y, theta = (float(v) for v in origin)
+        scene.add_frame("/world", show_axes=False, position=(x, y, 0.0), wxyz=_yaw_wxyz(theta))
+        for i, wall in enumerate(world.walls):
+            for k, (cx, cy, hx, hy, yaw) in enumerate(wall_rects(np.asarray(wall.points, dtype=float), wall.thickness)):
+                scene.add_box(
+                    f"/world/wall{i}/{k}",
+                    color=WALL_COLOUR,
+                    dimensions=(2 * hx, 2 * hy, wall.height),
+                    position=(cx, cy, wall.height / 2.0),
+                    wxyz=_yaw_wxyz(yaw),
+                )
+        self.obstacles: list[viser.BoxHandle | viser.CylinderHandle] = []
+        for j, obstacle in enumerate(world.obstacles):
+            colour = FIXED_COLOUR if obstacle.fixed else MOVABLE_COLOUR
+            height = obstacle.height
+            where = (*obstacle.center, height / 2.0)
+            handle: viser.BoxHandle | viser.CylinderHandle
+            if isinstance(obstacle, Box):
+                handle = scene.add_box(
+                    f"/world/obstacle{j}",
+                    color=colour,
+                    dimensions=obstacle.size,
+                    position=where,
+                    wxyz=_yaw_wxyz(obstacle.yaw),
+                )
+            else:
+                handle = scene.add_cylinder(
+                    f"/world/obstacle{j}", radius=obstacle.radius, height=height, color=colour, position=where
+                )
+            self.obstacles.append(handle)
+        for i, patch in enumerate(world.floor.patches):
+            corners = np.asarray(patch.polygon, dtype=float)
+            vertices = np.column_stack([corners, np.full(len(corners), 0.001)])
+            scene.add_mesh_simple(
+                f"/world/patch{i}",
+                vertices.astype(np.float32),
+                triangulate(corners).astype(np.uint32),
+                color=PATCH_COLOUR,
+                opacity=0.6,
+                side="double",
+            )
+        for i, mark in enumerate(world.marks):
+            points = np.column_stack([np.asarray(mark.points, dtype=float), np.full(len(mark.points), 0.002)])
+            segments = np.stack([points[:-1], points[1:]], axis=1)
+            scene.add_line_segments(f"/world/mark{i}", segments, colors=MARK_COLOUR, thickness=0.02)
+        self.heights = [o.height for o in world.obstacles]
+
+    def move(self, poses) -> None:
+        """Put each obstacle at its pose ``(x, y, yaw)`` [m, m, rad], world frame (``poses``
+        ``(n_obstacles, 3)``)."""
+        for handle, height, (x, y, yaw) in zip(self.obstacles, self.heights, poses, strict=True):
+            handle.position = (float(x), float(y), height / 2.0)
+            handle.wxyz = _yaw_wxyz(float(yaw))
 
 
 class RobotView:
