@@ -232,8 +232,17 @@ def simulate(
         told(_cost_of(size, estimate))
     cheaper = "shorten path or raise step" if engine.measured_cost else "lower rate or shorten path"
     within(seconds=estimate.seconds, hint=cheaper)
-    # the run's stream draws its random errors, for an engine with a model of them
+    # the run's stream draws its random errors, for an engine with a model of them; the sensors'
+    # stream their errors (none under a noise model without random errors: --noise none)
+    noisy_sensors = noise_model is not None and not noise_model.is_zero
     run = engine.drive(
-        plan, true, nominal, rate=rate, noise=noise_model, rng=seeds["run"] if noise_model else None, progress=progress
+        plan,
+        true,
+        nominal,
+        rate=rate,
+        noise=noise_model,
+        rng=seeds["run"] if noise_model else None,
+        progress=progress,
+        sensor_rng=np.random.default_rng(seeds["sensors"]) if noisy_sensors else None,
     )
     return Simulation(nominal, true, injected, path.name if isinstance(path, Plan) else str(path), run)

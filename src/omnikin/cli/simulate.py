@@ -119,6 +119,19 @@ def add_parser(sub, robot_help: str) -> None:
         metavar="LOG.csv",
         help="also (or only) write the encoder tick log, the input of 'omnikin odometry'",
     )
+    add_output(
+        sp,
+        "--imu-log",
+        metavar="IMU.csv",
+        help="write what the robot's IMUs read (CSV: sensor, t, gyro and accelerometer in SI units, each IMU's "
+        "frame; docs/sensors.md)",
+    )
+    add_output(
+        sp,
+        "--scan-log",
+        metavar="SCANS.npz",
+        help="write the robot's lidar scans (NumPy .npz: times, ranges, beam angles; docs/sensors.md)",
+    )
     sp.add_argument("--storage", choices=("sqlite3", "mcap"), default="sqlite3", help="bag storage (default sqlite3)")
     sp.add_argument("--json", action="store_true", help="print a JSON summary")
     add_output_options(sp)
@@ -164,12 +177,13 @@ def run(args) -> int:
     from ..io.bags import record_run, require_rosbags
     from ..motion.timing import check_rate_range
 
-    if args.bag is None and args.log is None:
-        raise InputError("simulate: give --bag OUT.bag and/or --log LOG.csv")
+    if args.bag is None and args.log is None and args.imu_log is None and args.scan_log is None:
+        raise InputError("simulate: give --bag OUT.bag, --log LOG.csv, --imu-log IMU.csv and/or --scan-log SCANS.npz")
     engine = _engine_options(args)
     if args.bag is not None:
         require_rosbags()
     robot = load_robot(args.robot)
+    _check_sensor_logs(args, engine, robot)
     if args.log is not None and engine.has_noise_model:
         _check_tick_log(args, robot)
     check_seed(args.seed)
@@ -210,6 +224,7 @@ def run(args) -> int:
     )
     if args.log is not None:
         _write_tick_log(args, engine, robot, run)
+    _write_sensor_logs(args, robot, run)
     truth_end = run.truth[0, -1]
     odom_end = run.odometry[-1]
     diff = simulation.end_error
@@ -228,6 +243,8 @@ def run(args) -> int:
         "bag": args.bag,
         "topics": counts,
         "log": args.log,
+        "imu_log": args.imu_log,
+        "scan_log": args.scan_log,
         "truth_end": truth_end.tolist(),
         "odometry_end": odom_end.tolist(),
         "end_error": diff.tolist(),
@@ -270,8 +287,22 @@ def run(args) -> int:
             if args.log is not None
             else ""
         )
+        + "".join(_sensor_lines(args, run))
     )
     return 0
+
+
+def _sensor_lines(args, run) -> list[str]:
+    """The summary's lines on the sensor logs written (each starting a new line)."""
+    sensing = run.sensing
+    lines = []
+    if args.imu_log is not None and sensing is not None:
+        readings = sum(len(r.t) for r in sensing.imus)
+        lines.append(f"\nIMU log written to {args.imu_log}: {readings} readings")
+    if args.scan_log is not None and sensing is not None:
+        scans = sum(len(r.t) for r in sensing.scans)
+        lines.append(f"\nscan log written to {args.scan_log}: {scans} scans")
+    return lines
 
 
 def _contacts_text(contacts: list[dict], world: str) -> str:
@@ -377,6 +408,39 @@ def _check_tick_log(args, robot) -> None:
             f"--log writes whole-number encoder counts, but --noise {args.noise} leaves the ticks "
             f"unquantised; choose another --noise profile"
         )
+
+
+def _check_sensor_logs(args, engine, robot) -> None:
+    """Refuse, before the run, a sensor log the robot or the engine cannot fill (one line)."""
+    from ..kinematics.sensors import Imu, Lidar
+
+    for flag, value, kind, noun in (
+        ("--imu-log", args.imu_log, Imu, "IMU"),
+        ("--scan-log", args.scan_log, Lidar, "lidar"),
+    ):
+        if value is None:
+            continue
+        if not any(isinstance(s, kind) for s in robot.sensors):
+            raise InputError(
+                f"{flag}: robot {robot.name!r} has no {noun} (declare one under sensors: in its robot file, "
+                f"docs/sensors.md; the preset tomasi-omni3-lidar has one)"
+            )
+        if not engine.has_noise_model:
+            raise InputError(
+                f"{flag}: the {engine.name} engine does not read the robot's sensors yet; use --engine kinematic"
+            )
+
+
+def _write_sensor_logs(args, robot, run) -> None:
+    """Write ``--imu-log`` and ``--scan-log`` from the run's sensor readings."""
+    from ..io.sensor_logs import write_imu_log, write_scan_log
+
+    sensing = run.sensing
+    if args.imu_log is not None and sensing is not None:
+        comment = f"IMU readings of {robot.name} written by omnikin simulate (seed {args.seed}, noise {args.noise})"
+        write_imu_log(args.imu_log, sensing.imus, comment, start=args.start)
+    if args.scan_log is not None and sensing is not None:
+        write_scan_log(args.scan_log, sensing.scans, start=args.start)
 
 
 def _write_tick_log(args, engine, robot, run) -> None:

@@ -96,11 +96,13 @@ REPORT_STREAMS = ("robot", "before", "trajectories", "calibration", "borenstein"
 TRIAL_STREAMS = ("robot", "before", "calibration", "after")
 """The streams of a sweep's trial, spawned in this order from the trial's SeedSequence."""
 
-RUN_STREAMS = ("robot", "run")
+RUN_STREAMS = ("robot", "run", "sensors")
 """The streams of one simulated run (``omnikin simulate``; the robot as built of ``omnikin sim``
 and of ``omnikin ros``'s simulated back-ends), spawned in this order from ``SeedSequence(seed)``:
 the robot stream is the first child, as in :data:`REPORT_STREAMS`, so the same seed builds the
-same robot as built in every command; the run draws its random errors from the second."""
+same robot as built in every command; the run draws its random errors from the second, the
+robot's IMUs and lidars theirs from the third (spawned last: the first two stay what they were
+before sensors existed)."""
 
 FLOOR_PROCEDURES = 400
 """UMBmark procedures of the perfectly calibrated robot that make the noise floor."""

@@ -188,6 +188,7 @@ class PhysicsEngine(Engine):
         noise: NoiseModel | None = None,
         rng=None,
         progress: Progress | None = None,
+        sensor_rng=None,
     ) -> SimulatedRun:
         """:meth:`Engine.drive` by :func:`~omnikin.physics.run.simulate_physics` at this engine's
         time step; the random stream only sets where each wheel's rollers start.
@@ -212,6 +213,9 @@ class PhysicsEngine(Engine):
             roller period (None: every wheel at phase 0, the run is deterministic).
         progress : callable, optional
             Called with the simulated time and the plan's duration [s] now and then.
+        sensor_rng : numpy.random.Generator or None
+            Not used yet: the physics engine does not read the robot's IMUs and lidars (the run's
+            ``sensing`` is None).
 
         Returns
         -------

@@ -206,6 +206,7 @@ class Engine(Protocol):
         noise: NoiseModel | None = None,
         rng=None,
         progress: Progress | None = None,
+        sensor_rng=None,
     ) -> SimulatedRun:
         """One run of ``plan`` by ``true_robot`` (the robot as built) commanded by ``command_robot``.
 
@@ -229,6 +230,10 @@ class Engine(Protocol):
         progress : callable, optional
             Called with the simulated time and the plan's duration [s] now and then (physics;
             the kinematic engine's run is one vectorised computation and does not call it).
+        sensor_rng : numpy.random.Generator or None
+            The stream of the errors of the robot's IMUs and lidars (None: exact readings); the
+            run's ``sensing`` holds what they read (kinematic; the physics engine does not read
+            them yet and keeps None).
 
         Returns
         -------
@@ -504,6 +509,7 @@ class KinematicEngine(Engine):
         rng=None,
         progress: Progress | None = None,
         trials: int = 1,
+        sensor_rng=None,
     ) -> SimulatedRun:
         """:meth:`Engine.drive` by :func:`~omnikin.simulation.kinematic.simulate_kinematic`, ``trials`` runs at
         once (each its own draw of the noise).
@@ -528,6 +534,9 @@ class KinematicEngine(Engine):
             Not called: the run is one vectorised computation.
         trials : int
             Number of runs of the plan, each with its own draw of the noise.
+        sensor_rng : numpy.random.Generator or None
+            The stream of the errors of the robot's IMUs and lidars (None: exact readings); a
+            single run keeps their readings (``sensing``), many trials none.
 
         Returns
         -------
@@ -553,6 +562,7 @@ class KinematicEngine(Engine):
             trials=trials,
             rng=rng,
             collider=self.collider(true_robot),
+            sensor_rng=sensor_rng,
         )
 
     def backend(

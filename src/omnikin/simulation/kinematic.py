@@ -36,11 +36,13 @@ from ..common.rng import make_rng
 from ..errors import InputError
 from ..kinematics.robot import Robot, require_same_wheels
 from ..kinematics.se2 import TAYLOR_LIMIT, between, wrap_angle
+from ..kinematics.sensors import Imu, Lidar
 from ..motion.limits import MotionLimits
 from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range, estimated_samples, require_motion, sample_plan
 from ..odometry.batch import batch_odometry, encoded_wheels
 from ..odometry.integration import integrate_components, integrate_end
+from ..sensors.readings import MAX_SCAN_VALUES, Readings, kinematic_readings, scan_values
 from ..world.collision import Collider, Contact
 from .error_models import NoiseModel
 
@@ -83,6 +85,7 @@ class SimulatedRun:
     readings: np.ndarray
     contacts: tuple[tuple[Contact, ...], ...] = ()
     start: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    sensing: Readings | None = None
 
     @property
     def epsilon(self) -> np.ndarray:
@@ -165,6 +168,7 @@ def simulate_kinematic(
     odometry_robot: Robot | None = None,
     keep_truth: bool = True,
     collider: Collider | None = None,
+    sensor_rng=None,
 ) -> SimulatedRun:
     """Simulate ``trials`` runs of ``plan`` by ``true_robot`` commanded by ``command_robot``.
 
@@ -179,6 +183,9 @@ def simulate_kinematic(
     rate ``plan`` was sampled at) must lie in :data:`~omnikin.motion.timing.RATE_RANGE`.
     ``collider``: the world the robot drives in (None: an empty floor): each trial's truth starts
     at the world's start pose and stops at first contact (:meth:`Collider.follow`).
+    ``sensor_rng``: the stream of the sensors' errors (None: exact readings); a single run
+    (``trials`` 1) of a robot as built with IMUs or lidars keeps their readings
+    (:func:`omnikin.sensors.readings.kinematic_readings`).
     """
     check_rate_range(plan.rate if isinstance(plan, SampledPlan) else rate, "rate")
     noise = noise or NoiseModel()
@@ -205,23 +212,44 @@ def simulate_kinematic(
     odo_widths = [w.encoder.counter_bits for w in encoded_wheels(odometry_robot)]
     seen = readings if odo_widths == widths else counter_output(ticks, odo_widths)  # as its own counters read
     odometry = batch_odometry(odometry_robot, sampled.t, seen, steer=steer, max_wheel_accel=math.inf).poses
-    truth, z = _truth(true_robot, names, dtrue, steer, noise, gens, keep_truth or collider is not None)
+    sensed = trials == 1 and any(isinstance(s, (Imu, Lidar)) for s in true_robot.sensors)
+    if sensed:
+        _require_scan_room(true_robot, float(sampled.t[-1] - sampled.t[0]))
+    truth, z = _truth(true_robot, names, dtrue, steer, noise, gens, keep_truth or collider is not None or sensed)
     contacts: tuple[tuple[Contact, ...], ...] = ()
     start = (0.0, 0.0, 0.0)
+    in_world = truth[0]
     if collider is not None:
         start = collider.world.start
         touched = []
         for k in range(len(truth)):
             seen_in_world, found = collider.follow(sampled.t, truth[k])
+            if k == 0:
+                in_world = seen_in_world
             truth[k] = between(np.asarray(start), seen_in_world)
             touched.append(tuple(found))
         contacts = tuple(touched)
-        if not keep_truth:
-            truth = truth[:, -1:, :].copy()
+    sensing = None
+    if sensed:
+        shapes = collider.shapes if collider is not None else None
+        sensing = kinematic_readings(true_robot, sampled.t, in_world, shapes, sensor_rng)
+    if not keep_truth and truth.shape[1] > 1:
+        truth = truth[:, -1:, :].copy()
     measured = truth[:, -1, :].copy()
     if z is not None:
         measured += z * np.array([noise.measurement, noise.measurement, noise.measurement_theta])
-    return SimulatedRun(sampled, sampled.t, ticks, steer, odometry, truth, measured, readings, contacts, start)
+    return SimulatedRun(sampled, sampled.t, ticks, steer, odometry, truth, measured, readings, contacts, start, sensing)
+
+
+def _require_scan_room(robot: Robot, duration: float) -> None:
+    """Refuse, in one line, a run whose lidar scans would hold more than
+    :data:`~omnikin.sensors.readings.MAX_SCAN_VALUES` ranges."""
+    values = scan_values(robot, duration)
+    if values > MAX_SCAN_VALUES:
+        raise InputError(
+            f"robot {robot.name!r}: its lidars would return {values:.3g} ranges over the {duration:.4g} s run, "
+            f"more than the {MAX_SCAN_VALUES:.3g} a run keeps; shorten the path or lower the lidars' rate or beams"
+        )
 
 
 def wheel_motion(angles: np.ndarray, true_robot: Robot, command_robot: Robot, names, quantise: bool):

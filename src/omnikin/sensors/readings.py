@@ -1,0 +1,105 @@
+"""What a robot's sensors read over a run (``docs/sensors.md``, "Readings of a run").
+
+:func:`kinematic_readings` takes a run of the kinematic engine (its times and the true poses in
+the world frame, a constant twist between samples) and gives every IMU's readings at its rate
+(:func:`omnikin.sensors.imu.kinematic_truth`, :func:`omnikin.sensors.imu.read`) and every
+lidar's scans at its rate (:func:`omnikin.sensors.lidar.scan`, the first at the run's start).
+The random errors come from one stream, drawn sensor by sensor in the robot file's order (an
+IMU's whole record, then a lidar's scans in time order), so the same seed gives the same
+readings bit for bit; no stream (``--noise none``) gives the exact readings.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kinematics.robot import Robot
+from ..kinematics.se2 import between, compose, exp, log
+from ..kinematics.sensors import Imu, Lidar
+from ..world.shapes import Shapes
+from .imu import kinematic_truth, read
+from .lidar import scan
+
+MAX_SCAN_VALUES = 50_000_000
+"""Most ranges of one run's scans, all lidars together (400 MB as float64): a run that would
+hold more is refused before it starts (:func:`scan_values`)."""
+
+
+@dataclass(frozen=True)
+class ImuReadings:
+    """One IMU's record: ``t`` ``(n,)`` [s], ``gyro`` ``(n, 3)`` [rad/s] and ``accel`` ``(n, 3)``
+    [m/s^2] in the sensor frame (each the mean over the interval before its time)."""
+
+    sensor: Imu
+    t: np.ndarray
+    gyro: np.ndarray
+    accel: np.ndarray
+
+
+@dataclass(frozen=True)
+class ScanReadings:
+    """One lidar's scans: ``t`` ``(m,)`` [s] and ``ranges`` ``(m, beams)`` [m] (REP 117's
+    ``+inf``, ``-inf``, ``nan``: :mod:`omnikin.sensors.lidar`), beams at ``sensor.angles()``."""
+
+    sensor: Lidar
+    t: np.ndarray
+    ranges: np.ndarray
+
+
+@dataclass(frozen=True)
+class Readings:
+    """Every sensor's readings of a run, in the robot file's order within each kind."""
+
+    imus: tuple[ImuReadings, ...] = ()
+    scans: tuple[ScanReadings, ...] = ()
+
+    @property
+    def empty(self) -> bool:
+        """True when the robot has no IMU and no lidar."""
+        return not self.imus and not self.scans
+
+
+def scan_times(t: np.ndarray, rate: float) -> np.ndarray:
+    """A lidar's scan times over the run's ``t`` [s]: ``t[0] + k / rate``, k = 0, 1, ... up to ``t[-1]``."""
+    count = int(math.floor((float(t[-1]) - float(t[0])) * rate + 1e-9)) + 1
+    return float(t[0]) + np.arange(count) / rate
+
+
+def scan_values(robot: Robot, duration: float) -> float:
+    """How many ranges the lidars of ``robot`` return over ``duration`` [s] (for the budget)."""
+    return sum(math.floor(duration * s.rate + 1e-9 + 1) * s.beams for s in robot.sensors if isinstance(s, Lidar))
+
+
+def poses_at(t: np.ndarray, poses: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """``(k, 3)`` poses at ``times`` [s] of a body that moves through ``poses`` ``(N + 1, 3)`` at
+    ``t`` with a constant twist between samples (exact SE(2) arcs)."""
+    steps = log(between(poses[:-1], poses[1:]))
+    dt = np.diff(t)
+    k = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(dt) - 1)
+    return compose(poses[k], exp(steps[k] * ((times - t[k]) / dt[k])[:, None]))
+
+
+def kinematic_readings(robot: Robot, t, poses, shapes: Shapes | None, rng: np.random.Generator | None) -> Readings:
+    """The readings of ``robot``'s IMUs and lidars over a kinematic run through ``poses``
+    ``(N + 1, 3)`` (world frame) at times ``t`` [s] among ``shapes`` (None: an empty floor, every
+    beam ``+inf``); ``rng`` the sensors' stream (None: exact). Module docstring."""
+    t = np.asarray(t, dtype=float)
+    poses = np.asarray(poses, dtype=float)
+    imus, scans = [], []
+    for sensor in robot.sensors:
+        if isinstance(sensor, Imu):
+            times, rates, forces = kinematic_truth(t, poses, sensor)
+            gyro, accel = read(sensor, rates, forces, rng)
+            imus.append(ImuReadings(sensor, times, gyro, accel))
+        elif isinstance(sensor, Lidar):
+            times = scan_times(t, sensor.rate)
+            at = poses_at(t, poses, times)
+            ranges = np.empty((len(times), sensor.beams))
+            empty = Shapes(np.empty((0, 5)), np.empty(0, dtype=np.int64), np.empty((0, 3)), np.empty(0, dtype=np.int64))
+            for k, pose in enumerate(at):
+                ranges[k] = scan(shapes if shapes is not None else empty, pose, sensor, rng)
+            scans.append(ScanReadings(sensor, times, ranges))
+    return Readings(tuple(imus), tuple(scans))

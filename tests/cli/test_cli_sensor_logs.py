@@ -1,0 +1,75 @@
+"""omnikin simulate --imu-log --scan-log: what the sensors read, in plain files, the same for the
+same seed bit for bit; one-line refusals where there is nothing to read."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import numpy as np
+import pytest
+
+from support.cli import run_cli
+from support.paths import ROOT
+
+ROOM = ROOT / "examples" / "worlds" / "room.yaml"
+
+
+def _simulate(capsys, tmp_path, *extra):
+    imu, scans = tmp_path / "imu.csv", tmp_path / "scans.npz"
+    rc, out, err = run_cli(
+        capsys, "simulate", "tomasi-omni3-lidar", "--imu-log", imu, "--scan-log", scans, "--force", *extra
+    )
+    assert rc == 0, err
+    return imu, scans
+
+
+def test_the_first_scan_in_the_room_reads_the_distances_to_its_walls_and_furniture(capsys, tmp_path):
+    _, scans = _simulate(capsys, tmp_path, "--world", ROOM, "--path", "line 1", "--errors", "none", "--noise", "none")
+    with np.load(scans, allow_pickle=False) as data:
+        ranges = data["laser.ranges"]
+        assert data["laser.t"][0] == 0.0
+        assert data["laser.angle_min"] == pytest.approx(-math.pi)
+        assert data["laser.angle_increment"] == pytest.approx(math.radians(1.0))
+        first = ranges[0]
+    # room.yaml by hand, from the start (-4, 0) facing +x, walls 0.1 m thick:
+    # beam 180 (0 deg) runs through the 1 m door and the corridor to the east room's far wall at x = 5.45
+    assert first[180] == pytest.approx(5.45 + 4.0, abs=1e-5)
+    assert first[270] == pytest.approx(1.95, abs=1e-5)  # +90 deg: the north wall's face at y = 1.95
+    assert first[0] == pytest.approx(2.45, abs=1e-5)  # 180 deg: the west wall's face at x = -6.45
+    assert first[90] == pytest.approx(1.2, abs=1e-5)  # -90 deg: the sofa's near side at y = -1.2
+
+
+def test_a_robot_at_rest_reads_gravity_and_no_turn_and_sees_nothing_on_an_empty_floor(capsys, tmp_path):
+    imu, scans = _simulate(capsys, tmp_path, "--path", "spin 0.001", "--errors", "none", "--noise", "none")
+    with open(imu, newline="") as handle:
+        rows = [r for r in csv.reader(line for line in handle if not line.startswith("#"))]
+    assert rows[0] == ["sensor", "t", "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"]
+    table = np.array([[float(v) for v in r[1:]] for r in rows[1:]])
+    assert {r[0] for r in rows[1:]} == {"imu"}
+    np.testing.assert_allclose(table[:, 0], np.arange(1, len(table) + 1) / 200.0)  # 200 Hz
+    np.testing.assert_array_equal(table[:, 6], 9.81)
+    with np.load(scans, allow_pickle=False) as data:
+        assert np.all(np.isposinf(data["laser.ranges"]))
+
+
+def test_the_same_seed_writes_the_same_readings_bit_for_bit_and_another_seed_others(capsys, tmp_path):
+    first = tmp_path / "a"
+    second = tmp_path / "b"
+    third = tmp_path / "c"
+    for folder, seed in ((first, "3"), (second, "3"), (third, "4")):
+        folder.mkdir()
+        _simulate(capsys, folder, "--world", ROOM, "--path", "line 1", "--seed", seed)
+    assert (first / "imu.csv").read_bytes() == (second / "imu.csv").read_bytes()
+    assert (first / "scans.npz").read_bytes() == (second / "scans.npz").read_bytes()
+    assert (first / "imu.csv").read_bytes() != (third / "imu.csv").read_bytes()
+
+
+def test_a_log_the_robot_or_engine_cannot_fill_is_refused_before_the_run(capsys, tmp_path):
+    rc, _, err = run_cli(capsys, "simulate", "tomasi-omni3", "--imu-log", tmp_path / "i.csv")
+    assert rc == 2 and "robot 'tomasi-omni3' has no IMU" in err and err.count("\n") == 1
+    rc, _, err = run_cli(
+        capsys, "simulate", "tomasi-omni3-lidar", "--engine", "physics", "--scan-log", tmp_path / "s.npz"
+    )
+    assert rc == 2 and "the physics engine does not read the robot's sensors yet" in err
+    assert not (tmp_path / "i.csv").exists() and not (tmp_path / "s.npz").exists()
