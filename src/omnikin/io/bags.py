@@ -43,6 +43,7 @@ them they raise :class:`omnikin.errors.ResourceLimitError`.
 
 from __future__ import annotations
 
+import heapq
 import math
 import os
 import re
@@ -59,6 +60,7 @@ from ..errors import BagError, OmnikinError, ResourceLimitError
 from ..kinematics.robot import Robot
 from ..kinematics.se2 import between, log
 from ..motion.timing import check_start_time
+from ..sensors.readings import Readings
 from .output import check_output, data_folder
 
 BAGS_EXTRA = 'pip install "omnikin[bags]"'
@@ -544,6 +546,28 @@ def _joint_state_msg(rb: _Rosbags, ns: int, names, position, velocity):
 class _Topic:
     name: str
     msgtype: str
+    latched: bool = False  # offered as transient local (kept for late subscribers: /tf_static)
+
+
+def _latched_qos() -> list:
+    """The QoS a latched topic is offered with (``/tf_static``'s: reliable, transient local,
+    the last message kept), as ``ros2 bag play`` replays it."""
+    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+
+    never = QosTime(sec=0, nsec=0)
+    return [
+        Qos(
+            QosHistory.KEEP_LAST,
+            1,
+            QosReliability.RELIABLE,
+            QosDurability.TRANSIENT_LOCAL,
+            never,
+            never,
+            QosLiveliness.AUTOMATIC,
+            never,
+            False,
+        )
+    ]
 
 
 def _serialize(rb: _Rosbags, msg, msgtype: str) -> bytes:
@@ -597,7 +621,12 @@ def _write_bag(
     with data_folder(path) as stage:
         try:
             with rb.Writer(stage, **kwargs) as writer:
-                conns = [writer.add_connection(t.name, t.msgtype, typestore=rb.store) for t in topics]
+                conns = [
+                    writer.add_connection(t.name, t.msgtype, typestore=rb.store, offered_qos_profiles=_latched_qos())
+                    if t.latched
+                    else writer.add_connection(t.name, t.msgtype, typestore=rb.store)
+                    for t in topics
+                ]
                 for key, value in (custom or {}).items():
                     if hasattr(writer, "set_custom_data"):
                         writer.set_custom_data(str(key), str(value))
@@ -824,6 +853,7 @@ def record_run(path, run, robot: Robot, **options) -> dict:
         steer=run.steer,
         command=command,
         rate=run.sampled.rate,
+        sensing=getattr(run, "sensing", None),
         **options,
     )
 
@@ -847,6 +877,7 @@ def record_samples(
     custom: dict | None = None,
     steer_suffix: str = STEER_SUFFIX,
     force: bool = False,
+    sensing: Readings | None = None,
 ) -> dict:
     """Write a run sampled at the times ``t`` ``(n,)`` [s] (``rate`` [Hz] apart) to a new bag.
 
@@ -859,6 +890,8 @@ def record_samples(
     rad/s] held from the sample). Sample k is stamped ``start + t_k`` [s]. ``robot`` is the
     commanding (nominal) robot whose odometry ``odometry`` is, so reading the bag's joint states
     back with it reproduces ``/odom``. Messages are made and written one sample at a time.
+    ``sensing``: the readings of the robot's IMUs and lidars (:mod:`omnikin.sensors.readings`),
+    which add ``/imu``, ``/scan``, ``/tf`` and ``/tf_static`` (:mod:`omnikin.io.bag_sensors`).
     Returns ``{topic: message count}``.
     """
     rb = _Rosbags.get()
@@ -915,5 +948,23 @@ def record_samples(
 
     types = {"ground_truth": ODOMETRY, "odom": ODOMETRY, "joint_states": JOINT_STATE, "cmd_vel": TWIST}
     keys = list(RUN_TOPICS)  # the topic indices used by messages()
-    _write_bag(path, [_Topic(names[k], types[k]) for k in keys], messages(), storage, custom, force=force)
-    return {names[k]: len(t) for k in keys}
+    written = [_Topic(names[k], types[k]) for k in keys]
+    counts = {names[k]: len(t) for k in keys}
+    stream: Iterable[tuple[int, int, bytes]] = messages()
+    if sensing is not None and not sensing.empty:
+        from .bag_sensors import sensor_messages, sensor_topics
+
+        extra = sensor_topics(sensing)
+        first = len(written)
+        written += [_Topic(name, msgtype, latched=name == "/tf_static") for name, msgtype in extra]
+        streams = sensor_messages(rb, sensing, stamps, odometry, round(start * 1e9), frame_id, child_frame_id)
+        shifted = [((first + j, ns, raw) for j, ns, raw in s) for s in streams]
+        stream = heapq.merge(stream, *shifted, key=lambda m: m[1])
+        counts["/tf"] = len(t)
+        counts["/tf_static"] = 1
+        for (name, _), size in zip(
+            extra[2:], [len(r.t) for r in sensing.imus] + [len(r.t) for r in sensing.scans], strict=True
+        ):
+            counts[name] = size
+    _write_bag(path, written, stream, storage, custom, force=force)
+    return counts
