@@ -116,3 +116,9 @@ def test_sensors_built_in_python_are_checked():
         Lidar("l", fov=7.0)
     with pytest.raises(InputError, match=r"sensor 'i': field 'mount': must be a Mount"):
         Imu("i", mount=(0, 0, 0))
+
+
+@pytest.mark.parametrize("frame", ["base_link", "odom", "map"])
+def test_a_sensor_may_not_take_a_frame_of_the_base_or_of_rep_105(frame):
+    with pytest.raises(RobotFileError, match=rf"'{frame}' is a frame of the robot's base or of REP 105"):
+        _robot(f"  - {{name: {frame}, type: imu}}\n")

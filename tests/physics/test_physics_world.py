@@ -94,3 +94,11 @@ def test_walls_and_obstacles_are_what_rays_of_the_world_group_see(tomasi):
         vec = np.array([math.cos(heading), math.sin(heading), 0.0])
         dist = mujoco.mj_ray(sim.model, sim.data, point, vec, groups, 1, -1, geom)
         assert dist == pytest.approx(expected, abs=1e-9)
+
+
+def test_a_start_inside_a_body_is_refused_before_the_model_is_built(tomasi):
+    from omnikin.errors import WorldFileError
+
+    world = make_world("inside", obstacles=[Box((0.05, 0.0), (0.1, 0.1, 0.1))])
+    with pytest.raises(WorldFileError, match=r"the robot at its start pose .* overlaps 'box 1'"):
+        PhysicsSim(tomasi, world=world)

@@ -95,3 +95,19 @@ def test_a_world_needs_a_footprint_and_a_start_clear_of_walls(tomasi):
     engine = engine_named("kinematic", world=world)
     with pytest.raises(WorldFileError, match=r"the robot at its start pose .* overlaps 'wall 1'"):
         engine.drive(line(1.0), tomasi, tomasi, noise=engine.noise_model("none"), rng=1)
+
+
+def test_a_long_robot_near_two_walls_stops_at_the_thin_one_ahead():
+    # ackermann reaches far ahead of its reference point; a wall just behind it is nearer to that
+    # point than the thin wall ahead is to its front: the clearance must not be taken from the
+    # nearer wall's side alone (it went 0.65 m through the thin wall once)
+    car = load_robot("ackermann")
+    world = make_world(
+        "near",
+        walls=[Wall(((-0.797, -2.0), (-0.797, 2.0)), 0.01), Wall(((0.8125, -2.0), (0.8125, 2.0)), 0.001)],
+    )
+    engine = engine_named("kinematic", world=world)
+    run = engine.drive(line(2.0), car, car, noise=engine.noise_model("none"), rng=1)
+    front = max(w.x + w.radius for w in car.wheels)
+    assert run.truth[0, -1, 0] + front <= 0.8125 - 0.0005 + 1e-9
+    assert [c.body for c in run.contacts[0]] == ["wall 2"]

@@ -171,3 +171,12 @@ def test_a_dict_without_lines_still_names_body_and_field():
     with pytest.raises(WorldFileError) as caught:
         world_from_dict({"omnikin_world": 1, "name": "w", "walls": [{"points": [[0, 0]]}]}, "w.yaml")
     assert str(caught.value).startswith("w.yaml: wall #1: field 'points': must be a list of 2 to")
+
+
+def test_bodies_of_the_wrong_kind_or_no_list_are_one_line_errors():
+    with pytest.raises(WorldFileError, match=r"field 'walls': must be a list, got None"):
+        make_world("w", walls=None)
+    with pytest.raises(WorldFileError, match=r"mark #1: must be a Mark, got Wall"):
+        make_world("w", marks=[Wall(((0, 0), (1, 0)))])
+    with pytest.raises(WorldFileError, match=r"field 'start': must be a pose"):
+        make_world("w", start=None)

@@ -33,7 +33,6 @@ from .budget import add_budget_options, require
 from .common import (
     add_output,
     add_step_option,
-    add_world_option,
     as_built_group,
     command_inputs,
     console,
@@ -136,7 +135,6 @@ def add_parser(sub, robot_help: str) -> None:
         f"(default {d['engine']})",
     )
     add_step_option(sp, "time step of the physics engine (--engine physics)")
-    add_world_option(sp)
     sp.add_argument(
         "--rate",
         type=number,
@@ -192,7 +190,7 @@ def add_parser(sub, robot_help: str) -> None:
     )
     sp.add_argument("--json", action="store_true", help="print result.json instead of tables")
     add_budget_options(sp)
-    declare_inputs(sp, "world", robots=("robot", "true_robot"))
+    declare_inputs(sp, robots=("robot", "true_robot"))
     sp.set_defaults(func=run)
     _add_analyze(sp)
 

@@ -10,7 +10,8 @@ interval before it, in the IMU's own frame (17 significant digits: read back exa
 Scan log: an ``.npz`` archive with, for each lidar ``NAME``, the arrays ``NAME.t`` ``(m,)`` [s]
 and ``NAME.ranges`` ``(m, beams)`` [m] (float32, REP 117's ``+inf``, ``-inf`` and ``nan`` kept),
 and the scalars ``NAME.angle_min``, ``NAME.angle_increment`` [rad], ``NAME.range_min``,
-``NAME.range_max`` [m] and ``NAME.mount`` ``(x, y, z, yaw)`` [m, rad]: what
+``NAME.range_max`` [m] (float32, as the ranges: every finite range lies within them) and
+``NAME.mount`` ``(x, y, z, yaw)`` [m, rad]: what
 ``sensor_msgs/LaserScan`` carries; ``numpy.load`` reads it with ``allow_pickle=False``.
 """
 
@@ -51,8 +52,9 @@ def write_scan_log(path, scans: tuple[ScanReadings, ...], start: float = 0.0) ->
         arrays[f"{name}.ranges"] = record.ranges.astype(np.float32)
         arrays[f"{name}.angle_min"] = np.float64(lidar.angle_min)
         arrays[f"{name}.angle_increment"] = np.float64(lidar.angle_increment)
-        arrays[f"{name}.range_min"] = np.float64(lidar.range_min)
-        arrays[f"{name}.range_max"] = np.float64(lidar.range_max)
+        # float32 like the ranges (and LaserScan): rounding keeps every range within its limits
+        arrays[f"{name}.range_min"] = np.float32(lidar.range_min)
+        arrays[f"{name}.range_max"] = np.float32(lidar.range_max)
         arrays[f"{name}.mount"] = np.array([m.x, m.y, m.z, m.yaw])
     buffer = io.BytesIO()
     np.savez_compressed(buffer, **arrays)  # type: ignore[arg-type]  # (NumPy's stub types allow_pickle alone)

@@ -73,11 +73,18 @@ def _check(owner: str, field: str, value, low: float, high: float, unit: str = "
     return float(value)
 
 
+RESERVED_FRAMES = ("base_link", "base_footprint", "odom", "map", "world", "earth")
+"""Frame names of REP 105 and of the robot's base: a sensor's frame must be another."""
+
+
 def sensor_name_problem(name) -> str | None:
     """None if ``name`` can name a sensor (and its frame in ROS: a letter, then letters, digits
-    and underscores, at most 64), else why not."""
+    and underscores, at most 64, none of :data:`RESERVED_FRAMES`), else why not."""
     if not isinstance(name, str) or not name or len(name) > 64:
         return f"must be 1 to 64 characters, got {shorten(name)}"
+    if name in RESERVED_FRAMES:
+        frames = ", ".join(RESERVED_FRAMES)
+        return f"{name!r} is a frame of the robot's base or of REP 105 ({frames}): name the sensor's own frame"
     if not (name[0].isascii() and name[0].isalpha()) or not all(
         c.isascii() and (c.isalnum() or c == "_") for c in name
     ):

@@ -372,6 +372,9 @@ def engine_named(name, *, noise=None, step: float | None = None, world: World | 
     kind = engine_class(name)
     if world is None:
         return kind.made_with(noise=noise, step=step)
+    if not isinstance(world, World):
+        raise InputError(f"world (--world): expected an omnikin World, got {type(world).__name__}")
+    world = world.checked()  # a World built by hand is checked as make_world and world files check
     if kind is KinematicEngine:
         return KinematicEngine.made_with(noise=noise, step=step, world=world, footprint_of=robot_footprint)
     return PhysicsEngine.made_with(noise=noise, step=step, world=world)

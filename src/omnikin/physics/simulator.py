@@ -260,6 +260,11 @@ class PhysicsSim:
             )
         start = pose
         self.world = world
+        if world is not None:  # a start inside a wall would throw the robot out of it
+            from ..world.collision import Collider
+            from .description import footprint
+
+            Collider(world, footprint(self.description)).require_clear(start)
         self.xml = mjcf(self.description, step, world)
         self.model = mujoco.MjModel.from_xml_string(self.xml)
         self.data = mujoco.MjData(self.model)

@@ -34,9 +34,14 @@ TOUCH = 1e-4
 """Clearance [m] at which the robot touches a body: it stops within this of the first contact."""
 NEAR = 0.05
 """Clearance [m] within which :func:`clearance` is exact (farther: a lower bound)."""
+START_TOLERANCE = 1e-9
+"""Overlap [m] a start pose may have with a body (rounding of a pose written exactly at contact)."""
+SLIDE = 1e-9
+"""Loss of clearance [m] over the first :data:`TOUCH` of a step below which a robot in contact
+slides along what it touches instead of stopping (a motion parallel to a wall)."""
 MAX_ADVANCES = 200
 """Most conservative advances in one step; a robot that needs more (grazing a wall at a tiny
-angle) stops where it got to."""
+angle) goes only as far as they took it in that step, without a contact."""
 
 
 @dataclass(frozen=True)
@@ -113,6 +118,9 @@ def clearance(shapes: Shapes, footprint: Footprint, pose, reach: float | None = 
         owner = shapes.rect_body[nearest] if nearest < len(to_rects) else shapes.circle_body[nearest - len(to_rects)]
         return Clearance(float(bound[nearest]), int(owner), (math.nan, math.nan))
     near_r, near_c = to_rects < NEAR, to_circles < NEAR
+    # the shapes left out are at least their bound away: the clearance is never more than that
+    far = np.concatenate([to_rects[~near_r], to_circles[~near_c]])
+    far_bound = float(far.min()) if len(far) else math.inf
     shapes = Shapes(shapes.rects[near_r], shapes.rect_body[near_r], shapes.circles[near_c], shapes.circle_body[near_c])
     circles, rects = footprint.placed(pose)
     candidates: list[tuple[float, int, Any]] = []
@@ -157,6 +165,8 @@ def clearance(shapes: Shapes, footprint: Footprint, pose, reach: float | None = 
                 )
             )
     distance, body, where = min(candidates, key=lambda c: c[0])
+    if distance > far_bound:  # a shape left out may be nearer than the exact ones: its bound holds
+        return Clearance(far_bound, body, (math.nan, math.nan))
     return Clearance(distance, body, where() if point else (math.nan, math.nan))
 
 
@@ -233,7 +243,7 @@ def advance(
     if here.distance < TOUCH:
         probe = min(1.0, TOUCH / speed)
         ahead = clearance(shapes, footprint, arc_pose(pose, xi, probe), reach)
-        if ahead.distance <= here.distance:
+        if ahead.distance < here.distance - SLIDE:
             return pose, here, 0.0  # pushing against what it touches: it stays
         s, here = probe, ahead
     for _ in range(MAX_ADVANCES):
@@ -247,7 +257,7 @@ def advance(
                 return arc_pose(pose, xi, s), here, s
             return arc_pose(pose, xi, s_next), there, s_next
         s, here = s_next, there
-    return arc_pose(pose, xi, s), here, s
+    return arc_pose(pose, xi, s), None, s  # grazing: slowed this step, no contact
 
 
 class Collider:
@@ -272,7 +282,7 @@ class Collider:
     def require_clear(self, pose, what: str = "its start pose") -> None:
         """Refuse, in one line, a ``pose`` where the footprint overlaps a body of the world."""
         here = clearance(self.shapes, self.footprint, pose)
-        if here.distance < 0.0:
+        if here.distance < -START_TOLERANCE:
             x, y, theta = (float(v) for v in pose)
             raise WorldFileError(
                 f"world {self.world.name!r}: the robot at {what} ({x:.4g} m, {y:.4g} m, "
