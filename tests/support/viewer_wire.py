@@ -21,8 +21,10 @@ from contextlib import contextmanager
 from typing import Protocol, TypeVar
 
 import msgspec
+import numpy as np
 import psutil
 import viser
+import viser.transforms as vtf
 import zstandard
 from websockets.sync.client import ClientConnection, connect
 
@@ -173,3 +175,17 @@ class ViserClient:
     def close(self) -> None:
         self.ws.close()
         self._reader.join(timeout=10)
+
+
+def world_transform(scene: viser.SceneApi, name: str) -> vtf.SE3:
+    """The pose in the world of scene node ``name``: the product of its own and its ancestors'
+    transforms (viser's scene tree: ``/a/b`` is a child of ``/a``), from the server's scene state."""
+    handles = scene._handle_from_node_name  # the server's scene state, by node name
+    parts = name.strip("/").split("/")
+    pose = vtf.SE3.identity()
+    for k in range(1, len(parts) + 1):
+        handle = handles.get("/" + "/".join(parts[:k]))
+        if handle is not None:
+            local = vtf.SE3.from_rotation_and_translation(vtf.SO3(np.asarray(handle.wxyz)), np.asarray(handle.position))
+            pose = pose @ local
+    return pose

@@ -26,21 +26,7 @@ from omnikin.viewer.replay_page import ReplayViewer
 from omnikin.viewer.replay_sources import ReplaySource
 from omnikin.viewer.scene import ODOMETRY_COLOUR, TRUTH_COLOUR, RobotView
 from support.browser import colour_mask, screenshot_rgb, wait_for, wait_for_colour, wait_for_viser, wait_until
-from support.viewer_wire import served
-
-
-def world_transform(scene: viser.SceneApi, name: str) -> vtf.SE3:
-    """The pose in the world of scene node ``name``: the product of its own and its ancestors'
-    transforms (viser's scene tree: ``/a/b`` is a child of ``/a``)."""
-    handles = scene._handle_from_node_name  # the server's scene state, by node name
-    parts = name.strip("/").split("/")
-    pose = vtf.SE3.identity()
-    for k in range(1, len(parts) + 1):
-        handle = handles.get("/" + "/".join(parts[:k]))
-        if handle is not None:
-            local = vtf.SE3.from_rotation_and_translation(vtf.SO3(np.asarray(handle.wxyz)), np.asarray(handle.position))
-            pose = pose @ local
-    return pose
+from support.viewer_wire import served, world_transform
 
 
 def reach(robot) -> float:

@@ -10,13 +10,13 @@ import math
 
 import numpy as np
 import pytest
-import viser.transforms as vtf
 
 from omnikin.io.robot_file import load_robot
 from omnikin.physics.engines import engine_named
 from omnikin.viewer.app import LiveViewer
 from omnikin.viewer.live import LiveRobot
 from omnikin.world import Box, Cylinder, Floor, Mark, Patch, Wall, make_world
+from support.viewer_wire import world_transform
 
 START = (1.0, 0.5, math.pi / 2)
 
@@ -30,17 +30,6 @@ def _world():
         obstacles=[Box((-1.0, 2.0), (0.4, 0.2, 0.3), yaw=0.3), Cylinder((2.0, -1.0), 0.15, height=0.6)],
         marks=[Mark(((0.0, 0.0), (1.0, 0.0)))],
     )
-
-
-def _in_scene(handles, name: str) -> vtf.SE3:
-    parts = name.strip("/").split("/")
-    pose = vtf.SE3.identity()
-    for k in range(1, len(parts) + 1):
-        handle = handles.get("/" + "/".join(parts[:k]))
-        if handle is not None:
-            local = vtf.SE3.from_rotation_and_translation(vtf.SO3(np.asarray(handle.wxyz)), np.asarray(handle.position))
-            pose = pose @ local
-    return pose
 
 
 def _seen_from_start(x: float, y: float) -> tuple[float, float]:
@@ -57,15 +46,17 @@ def test_the_world_is_drawn_where_the_file_puts_it_seen_from_where_the_robot_sta
     viewer = LiveViewer(LiveRobot(load_robot("tomasi-omni3"), engine_named(engine, world=_world())), "127.0.0.1", 0)
     try:
         handles = viewer.server.scene._handle_from_node_name
-        wall = _in_scene(handles, "/world/wall0/0")
+        wall = world_transform(viewer.server.scene, "/world/wall0/0")
         # the wall's one segment: centre (3, 0), 0.5 m high; facing +y from (1, 0.5) it lies to the right
         assert wall.translation()[:2] == pytest.approx(_seen_from_start(3.0, 0.0), abs=1e-9)
         assert wall.translation()[2] == pytest.approx(0.25)
         assert np.asarray(handles["/world/wall0/0"].dimensions) == pytest.approx([4.1, 0.1, 0.5])
-        box = _in_scene(handles, "/world/obstacle0")
+        box = world_transform(viewer.server.scene, "/world/obstacle0")
         assert box.translation()[:2] == pytest.approx(_seen_from_start(-1.0, 2.0), abs=1e-9)
         assert box.rotation().as_rpy_radians().yaw == pytest.approx(0.3 - math.pi / 2)
-        assert _in_scene(handles, "/world/obstacle1").translation()[:2] == pytest.approx(_seen_from_start(2.0, -1.0))
+        assert world_transform(viewer.server.scene, "/world/obstacle1").translation()[:2] == pytest.approx(
+            _seen_from_start(2.0, -1.0)
+        )
         assert "/world/patch0" in handles and "/world/mark0" in handles
         # the robot itself starts at the origin of the page's frame
         assert viewer.live.shown_pose == pytest.approx((0.0, 0.0, 0.0), abs=1e-6)
