@@ -31,7 +31,7 @@ INVOCATIONS: dict[str, list[str]] = {
     "calibrate": ["tomasi-omni3", str(EXAMPLES / "calibration_runs.csv")],
     "bag odometry": ["tomasi-omni3", "{bag}"],
     "bag export": ["{bag}", "--topic", "/ground_truth", "--format", "tum"],
-    "simulate": ["tomasi-omni3", "--path", "line 0.2"],
+    "simulate": ["tomasi-omni3-lidar", "--path", "line 0.2"],  # (a robot with an IMU and a lidar: every output)
     "track": ["tomasi-omni3", "circle 0.3", "--noise", "typical"],
     "sim": ["tomasi-omni3", "--duration", "1"],
     "sweep": [str(EXAMPLES / "tolerance.yaml"), "--workers", "1"],

@@ -129,6 +129,7 @@ def add_parser(sub, robot_help: str) -> None:
     add_output(
         sp,
         "--scan-log",
+        stdout=False,  # a binary archive
         metavar="SCANS.npz",
         help="write the robot's lidar scans (NumPy .npz: times, ranges, beam angles; docs/sensors.md)",
     )

@@ -22,7 +22,7 @@ import io
 import numpy as np
 
 from ..sensors.readings import ImuReadings, ScanReadings
-from .output import atomic_write, is_stdout, write_text
+from .output import atomic_write, write_text
 
 IMU_HEADER = "sensor,t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z"
 """The header row of an IMU log."""
@@ -43,7 +43,8 @@ def write_imu_log(path, imus: tuple[ImuReadings, ...], comment: str = "", start:
 
 
 def write_scan_log(path, scans: tuple[ScanReadings, ...], start: float = 0.0) -> None:
-    """Write the scan log of ``scans`` to ``path`` (module docstring), times shifted by ``start`` [s]."""
+    """Write the scan log of ``scans`` to the file ``path`` (module docstring; a binary archive,
+    never standard output), times shifted by ``start`` [s]."""
     arrays: dict[str, np.ndarray] = {}
     for record in scans:
         lidar, name = record.sensor, record.sensor.name
@@ -58,13 +59,5 @@ def write_scan_log(path, scans: tuple[ScanReadings, ...], start: float = 0.0) ->
         arrays[f"{name}.mount"] = np.array([m.x, m.y, m.z, m.yaw])
     buffer = io.BytesIO()
     np.savez_compressed(buffer, **arrays)  # type: ignore[arg-type]  # (NumPy's stub types allow_pickle alone)
-    data = buffer.getvalue()
-    if is_stdout(path):
-        import sys
-
-        sys.stdout.flush()
-        sys.stdout.buffer.write(data)
-        sys.stdout.buffer.flush()
-        return
     with atomic_write(path, "wb") as handle:
-        handle.write(data)
+        handle.write(buffer.getvalue())
