@@ -123,47 +123,43 @@ def clearance(shapes: Shapes, footprint: Footprint, pose, reach: float | None = 
     far_bound = float(far.min()) if len(far) else math.inf
     shapes = Shapes(shapes.rects[near_r], shapes.rect_body[near_r], shapes.circles[near_c], shapes.circle_body[near_c])
     circles, rects = footprint.placed(pose)
+    pairs = []  # (signed distances (footprint shape, world shape), bodies, point of the pair (i, j))
+    if len(circles) and len(shapes.rects):
+        pairs.append(
+            (
+                rect_distance(circles[:, :2], shapes.rects) - circles[:, 2:3],
+                shapes.rect_body,
+                lambda i, j: _rect_point(shapes.rects[j], circles[i, :2]),
+            )
+        )
+    if len(circles) and len(shapes.circles):
+        pairs.append(
+            (
+                circle_distance(circles[:, :2], shapes.circles) - circles[:, 2:3],
+                shapes.circle_body,
+                lambda i, j: _circle_point(shapes.circles[j], circles[i, :2]),
+            )
+        )
+    if len(rects) and len(shapes.rects):
+        pairs.append(
+            (
+                rect_rect_distance(rects, shapes.rects),
+                shapes.rect_body,
+                lambda i, j: _rect_rect_point(rects[i], shapes.rects[j]),
+            )
+        )
+    if len(rects) and len(shapes.circles):
+        pairs.append(
+            (
+                rect_distance(shapes.circles[:, :2], rects).T - shapes.circles[None, :, 2],
+                shapes.circle_body,
+                lambda i, j: _circle_point(shapes.circles[j], np.array(_rect_point(rects[i], shapes.circles[j, :2]))),
+            )
+        )
     candidates: list[tuple[float, int, Any]] = []
-    if len(circles):
-        if len(shapes.rects):
-            d = rect_distance(circles[:, :2], shapes.rects) - circles[:, 2:3]
-            i, j = np.unravel_index(np.argmin(d), d.shape)
-            candidates.append(
-                (
-                    float(d[i, j]),
-                    int(shapes.rect_body[j]),
-                    lambda i=i, j=j: _rect_point(shapes.rects[j], circles[i, :2]),
-                )
-            )
-        if len(shapes.circles):
-            d = circle_distance(circles[:, :2], shapes.circles) - circles[:, 2:3]
-            i, j = np.unravel_index(np.argmin(d), d.shape)
-            candidates.append(
-                (
-                    float(d[i, j]),
-                    int(shapes.circle_body[j]),
-                    lambda i=i, j=j: _circle_point(shapes.circles[j], circles[i, :2]),
-                )
-            )
-    if len(rects):
-        if len(shapes.rects):
-            d = rect_rect_distance(rects, shapes.rects)
-            i, j = np.unravel_index(np.argmin(d), d.shape)
-            candidates.append(
-                (float(d[i, j]), int(shapes.rect_body[j]), lambda i=i, j=j: _rect_rect_point(rects[i], shapes.rects[j]))
-            )
-        if len(shapes.circles):
-            d = rect_distance(shapes.circles[:, :2], rects).T - shapes.circles[None, :, 2]
-            i, j = np.unravel_index(np.argmin(d), d.shape)
-            candidates.append(
-                (
-                    float(d[i, j]),
-                    int(shapes.circle_body[j]),
-                    lambda i=i, j=j: _circle_point(
-                        shapes.circles[j], np.array(_rect_point(rects[i], shapes.circles[j, :2]))
-                    ),
-                )
-            )
+    for d, bodies, point_of in pairs:
+        i, j = np.unravel_index(np.argmin(d), d.shape)
+        candidates.append((float(d[i, j]), int(bodies[j]), lambda i=i, j=j, point_of=point_of: point_of(i, j)))
     distance, body, where = min(candidates, key=lambda c: c[0])
     if distance > far_bound:  # a shape left out may be nearer than the exact ones: its bound holds
         return Clearance(far_bound, body, (math.nan, math.nan))
