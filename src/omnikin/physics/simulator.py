@@ -336,6 +336,10 @@ class PhysicsSim:
         self.contacts: list[Contact] = []
         """Where the robot began to touch a body of the world (:meth:`_watch_contacts`)."""
         self._world_geoms = _world_geom_bodies(mujoco, m, world)
+        obstacles = world.obstacles if world is not None else ()
+        self._obstacle_bodies = [
+            mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, f"world:obstacle:{j}") for j in range(len(obstacles))
+        ]
         self._robot_geoms = m.body_rootid[m.geom_bodyid] == self._chassis
         self._touching: set[int] = set()
         self.roller_offsets = roller_offsets(self.description, rolling, roller_phase)
@@ -596,12 +600,8 @@ class PhysicsSim:
     def obstacle_poses(self) -> np.ndarray:
         """``(n_obstacles, 3)`` pose ``(x, y, yaw)`` [m, m, rad] of each obstacle of the world
         (world frame; movable ones where the robot pushed them), empty without a world."""
-        if self.world is None:
-            return np.zeros((0, 3))
-        mj = self._mj
-        out = np.empty((len(self.world.obstacles), 3))
-        for j in range(len(out)):
-            body = mj.mj_name2id(self.model, mj.mjtObj.mjOBJ_BODY, f"world:obstacle:{j}")
+        out = np.empty((len(self._obstacle_bodies), 3))
+        for j, body in enumerate(self._obstacle_bodies):
             out[j, :2] = self.data.xpos[body][:2]
             out[j, 2] = _yaw(self.data.xmat[body])
         return out
