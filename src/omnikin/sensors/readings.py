@@ -98,8 +98,8 @@ def kinematic_readings(robot: Robot, t, poses, shapes: Shapes | None, rng: np.ra
             times = scan_times(t, sensor.rate)
             at = poses_at(t, poses, times)
             ranges = np.empty((len(times), sensor.beams))
-            empty = Shapes(np.empty((0, 5)), np.empty(0, dtype=np.int64), np.empty((0, 3)), np.empty(0, dtype=np.int64))
+            seen = shapes if shapes is not None else Shapes.none()
             for k, pose in enumerate(at):
-                ranges[k] = scan(shapes if shapes is not None else empty, pose, sensor, rng)
+                ranges[k] = scan(seen, pose, sensor, rng)
             scans.append(ScanReadings(sensor, times, ranges))
     return Readings(tuple(imus), tuple(scans))

@@ -56,6 +56,11 @@ class Shapes:
             self.circle_height[c],
         )
 
+    @classmethod
+    def none(cls) -> Shapes:
+        """No shapes at all: an empty floor."""
+        return cls(np.empty((0, 5)), np.empty(0, dtype=np.int64), np.empty((0, 3)), np.empty(0, dtype=np.int64))
+
     @property
     def count(self) -> int:
         """Number of shapes."""
