@@ -27,7 +27,7 @@ import numpy as np
 from ..errors import WorldFileError
 from ..kinematics.se2 import between, compose, exp, log
 from .model import World
-from .plane import circle_distance, rect_closest, rect_corners, rect_distance, rect_rect_distance
+from .plane import circle_distance, rect_closest, rect_corners, rect_distance, shape_gaps
 from .shapes import Shapes, shapes_of
 
 TOUCH = 1e-4
@@ -123,41 +123,21 @@ def clearance(shapes: Shapes, footprint: Footprint, pose, reach: float | None = 
     far_bound = float(far.min()) if len(far) else math.inf
     shapes = Shapes(shapes.rects[near_r], shapes.rect_body[near_r], shapes.circles[near_c], shapes.circle_body[near_c])
     circles, rects = footprint.placed(pose)
-    pairs = []  # (signed distances (footprint shape, world shape), bodies, point of the pair (i, j))
-    if len(circles) and len(shapes.rects):
-        pairs.append(
-            (
-                rect_distance(circles[:, :2], shapes.rects) - circles[:, 2:3],
-                shapes.rect_body,
-                lambda i, j: _rect_point(shapes.rects[j], circles[i, :2]),
-            )
-        )
-    if len(circles) and len(shapes.circles):
-        pairs.append(
-            (
-                circle_distance(circles[:, :2], shapes.circles) - circles[:, 2:3],
-                shapes.circle_body,
-                lambda i, j: _circle_point(shapes.circles[j], circles[i, :2]),
-            )
-        )
-    if len(rects) and len(shapes.rects):
-        pairs.append(
-            (
-                rect_rect_distance(rects, shapes.rects),
-                shapes.rect_body,
-                lambda i, j: _rect_rect_point(rects[i], shapes.rects[j]),
-            )
-        )
-    if len(rects) and len(shapes.circles):
-        pairs.append(
-            (
-                rect_distance(shapes.circles[:, :2], rects).T - shapes.circles[None, :, 2],
-                shapes.circle_body,
-                lambda i, j: _circle_point(shapes.circles[j], np.array(_rect_point(rects[i], shapes.circles[j, :2]))),
-            )
-        )
+    rr, cr, rc, cc = shape_gaps(rects, circles, shapes.rects, shapes.circles)
+    pairs = [  # (signed distances (footprint shape, world shape), their bodies, the point of a pair (i, j))
+        (rr, shapes.rect_body, lambda i, j: _rect_rect_point(rects[i], shapes.rects[j])),
+        (cr, shapes.rect_body, lambda i, j: _rect_point(shapes.rects[j], circles[i, :2])),
+        (
+            rc,
+            shapes.circle_body,
+            lambda i, j: _circle_point(shapes.circles[j], np.array(_rect_point(rects[i], shapes.circles[j, :2]))),
+        ),
+        (cc, shapes.circle_body, lambda i, j: _circle_point(shapes.circles[j], circles[i, :2])),
+    ]
     candidates: list[tuple[float, int, Any]] = []
     for d, bodies, point_of in pairs:
+        if d.size == 0:
+            continue
         i, j = np.unravel_index(np.argmin(d), d.shape)
         candidates.append((float(d[i, j]), int(bodies[j]), lambda i=i, j=j, point_of=point_of: point_of(i, j)))
     distance, body, where = min(candidates, key=lambda c: c[0])

@@ -32,10 +32,8 @@ from ..errors import WorldFileError
 from ..kinematics.physical import FRICTION_RANGE, MASS_RANGE
 from ..kinematics.robot import robot_name_problem
 from .plane import (
-    circle_distance,
     overlapping_polygons,
-    rect_distance,
-    rect_rect_distance,
+    shape_gaps,
     simple_polygon_problem,
     wall_rects,
 )
@@ -493,16 +491,10 @@ def _check_movable_clear(world: World) -> None:
         me = first + i
         mine_r, mine_c = outlines[me]
         other_r, other_c = rect_owner != me, circle_owner != me
-        gaps = np.concatenate(
-            [
-                rect_rect_distance(mine_r, rects[other_r]).min(axis=0, initial=np.inf),
-                (rect_distance(circles[other_c][:, :2], mine_r) - circles[other_c][:, 2:3]).min(axis=1, initial=np.inf),
-                (rect_distance(mine_c[:, :2], rects[other_r]) - mine_c[:, 2:3]).min(axis=0, initial=np.inf),
-                (circle_distance(mine_c[:, :2], circles[other_c]) - mine_c[:, 2:3]).min(axis=0, initial=np.inf),
-            ]
-        )
+        rr, cr, rc, cc = shape_gaps(mine_r, mine_c, rects[other_r], circles[other_c])
+        gaps = np.concatenate([m.min(axis=0, initial=np.inf) for m in (rr, cr, rc, cc)])
         owners = np.concatenate(
-            [rect_owner[other_r], circle_owner[other_c], rect_owner[other_r], circle_owner[other_c]]
+            [rect_owner[other_r], rect_owner[other_r], circle_owner[other_c], circle_owner[other_c]]
         )
         touching = np.flatnonzero(gaps < 0.0)
         if len(touching):

@@ -204,3 +204,18 @@ def triangulate(polygon: np.ndarray) -> np.ndarray:
     if len(left) == 3:
         triangles.append((left[0], left[1], left[2]))
     return np.array(triangles, dtype=np.int64).reshape(-1, 3)
+
+
+def shape_gaps(
+    rects_a: np.ndarray, circles_a: np.ndarray, rects_b: np.ndarray, circles_b: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Signed distances [m] between two sets of shapes, each rectangles ``(m, 5)`` and circles
+    ``(k, 3)``: rectangle against rectangle ``(m_a, m_b)``, circle against rectangle
+    ``(k_a, m_b)``, rectangle against circle ``(m_a, k_b)`` and circle against circle
+    ``(k_a, k_b)``, rows the shapes of ``a``, columns those of ``b``."""
+    return (
+        rect_rect_distance(rects_a, rects_b),
+        rect_distance(circles_a[:, :2], rects_b) - circles_a[:, 2:3],
+        rect_distance(circles_b[:, :2], rects_a).T - circles_b[None, :, 2],
+        circle_distance(circles_a[:, :2], circles_b) - circles_a[:, 2:3],
+    )
