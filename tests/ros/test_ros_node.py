@@ -60,6 +60,7 @@ RELIABLE_ALL = QoSProfile(
 V, A_LIN = 0.2, 0.5  # commanded speed [m/s], linear.x.max_acceleration [m/s^2]
 from support.paths import SRC  # noqa: E402  (the omnikin under test, for the node processes)
 from support.ros_domain import fresh_domain  # noqa: E402
+from support.ros_status import pace_only, running  # noqa: E402
 
 pytestmark = pytest.mark.ros
 
@@ -559,7 +560,7 @@ def test_a_stamped_command_counts_from_its_stamp_not_its_arrival(tmp_path):
         assert status.level == DiagnosticStatus.WARN
         # (a control cycle that overran on a busy machine adds its own part to the message)
         stale, *others = status.message.split("; ")
-        assert stale == "1 stale command(s) ignored" and all("overran the period" in o for o in others), status.message
+        assert stale == "1 stale command(s) ignored" and all(pace_only(o) for o in others), status.message
         # the last command of a drive arrives 0.2 s after it was stamped: the braking still starts
         # 0.3 s after its stamp (counted from its arrival it would add 0.2 s x 0.15 m/s = 0.03 m)
         first, _ = g.drive(vy=0.15, duration=1.0)
@@ -631,19 +632,21 @@ def test_a_failing_control_step_stops_the_wheels_and_reports_error(tmp_path):
         time.sleep(0.6)  # no command for longer than cmd_vel_timeout
         n = g.n_odom()
         (tmp_path / "fail").unlink()
+        failed_for = time.monotonic() - t_fail  # 2.1 s or more
         assert wait_for(lambda: g.n_odom() > n + 10, 3.0), "no odometry after the failure"
         m = g.wait_still()
-        # the wheels ran at V only until the first failing cycle (one period, or a little more
-        # when the loop ran late), then stood still; kept running they would have gone 0.2 m further
+        # the wheels ran at V only until the first failing cycle (one period, or more when a busy
+        # machine kept the loop waiting), then stood still; kept running they would have gone
+        # V * failed_for further (0.2 m or more)
         dx = m.pose.pose.position.x - x_fail
-        assert 0.0 < dx <= V * 3 * period, dx
+        assert 0.0 < dx <= V * max(3 * period, failed_for / 4), (dx, failed_for)
         time.sleep(0.5)
         assert g.last_odom().pose.pose.position.x == m.pose.pose.position.x
-        # ERROR while a step failed since the previous status (1 Hz), OK again after that
-        assert wait_for(lambda: g.last_diag()[3].level == DiagnosticStatus.OK, 3.0), g.last_diag()[3].message
+        # ERROR while a step failed since the previous status (1 Hz), running again after that
+        assert wait_for(lambda: running(g.last_diag()[3]), 3.0), g.last_diag()[3].message
         err = proc.stderr()
         logged = [ln for ln in err.splitlines() if "control step failed" in ln]
-        assert 1 <= len(logged) <= 4, err  # ~2 s of failure, at most once a second
+        assert 1 <= len(logged) <= math.ceil(failed_for) + 1, err  # at most once a second
         assert "Traceback" not in err
         g.drive(vx=V, duration=0.5)  # a new command moves it again
         assert wait_for(lambda: g.last_odom().pose.pose.position.x > m.pose.pose.position.x + 0.01, 3.0)
@@ -847,9 +850,9 @@ def test_node_drives_wheel_controllers_over_serial_and_stops_on_link_loss(tmp_pa
             # 1 s), publishes odometry again, and keeps the wheels stopped until a new command
             x_lost = g.last_odom().pose.pose.position.x
             fake.silent = False
-            assert wait_for(
-                lambda: int(g.last_diag()[2]["link_rearms"]) >= 1 and g.last_diag()[3].level == DiagnosticStatus.OK, 8.0
-            ), f"link not re-armed: {g.last_diag()[3].message} {g.last_diag()[2]}"
+            assert wait_for(lambda: int(g.last_diag()[2]["link_rearms"]) >= 1 and running(g.last_diag()[3]), 8.0), (
+                f"link not re-armed: {g.last_diag()[3].message} {g.last_diag()[2]}"
+            )
             n = g.n_odom()
             assert wait_for(lambda: g.n_odom() > n + 10, 3.0), "no odometry after re-arming"
             time.sleep(0.5)

@@ -34,6 +34,7 @@ from test_ros_node import (  # noqa: E402 (after the importorskips there and abo
 )
 
 from support.kinematics import constant_twist_pose  # noqa: E402 (after the importorskip above)
+from support.ros_status import running  # noqa: E402 (after the importorskip above)
 
 pytestmark = pytest.mark.ros
 
@@ -155,7 +156,7 @@ sys.exit(run(robot, SlowPhysics(robot, max_lag=PHYSICS_MAX_LAG), load_params(Non
 def test_a_slow_physics_step_is_counted_and_the_simulation_drops_time_instead_of_falling_behind(tmp_path):
     """Cycles of 0.4 s at 50 Hz: each overruns the period; the next one would have 0.42 s to catch
     up, beyond max_lag 0.25 s, so about 0.17 s is dropped per cycle. /diagnostics says both (WARN),
-    the node keeps publishing, and it is OK again once the cycles are fast."""
+    the node keeps publishing, and it runs on as before once the cycles are fast."""
     script = tmp_path / "slow_node.py"
     script.write_text(SLOW_NODE)
     proc, graph = start(tmp_path, [], script=script)
@@ -178,8 +179,15 @@ def test_a_slow_physics_step_is_counted_and_the_simulation_drops_time_instead_of
         assert float(values["link_time_dropped"]) > 0.1 and int(values["link_lag_events"]) >= 1
         (tmp_path / "slow").unlink()
         t_fast = time.monotonic()
+        # running again: no 0.4 s cycle since the previous status (a busy machine may still
+        # make a fast cycle overrun the 20 ms period, which the status may warn of)
         assert wait_for(
-            lambda: graph.last_diag()[0] > t_fast + 1.5 and graph.last_diag()[3].level == DiagnosticStatus.OK, 5.0
+            lambda: (
+                graph.last_diag()[0] > t_fast + 1.5
+                and running(graph.last_diag()[3])
+                and float(graph.last_diag()[2]["loop_time_max_ms"]) < 400.0
+            ),
+            5.0,
         ), graph.last_diag()[3].message
         assert "Traceback" not in proc.stderr()
     finally:

@@ -1,7 +1,9 @@
 """SerialBackend against the fake wheel controller on pseudo-terminals.
 
-Real time, bounded: every wait polls with a deadline; the link timeout is shortened to keep the
-file well under its time budget."""
+Real time, bounded: every wait polls with a deadline. A loaded machine may starve the fake
+controller's thread for most of a second, so the tests that are not about a lost link give it
+``PATIENT`` seconds; those that are about one shorten it to ``LINK_TIMEOUT`` to keep the file well
+under its time budget, and check the back-end's own account of the silence, not the test's clock."""
 
 from __future__ import annotations
 
@@ -25,6 +27,9 @@ from omnikin.runtime.serial_backend import SerialBackend
 pytestmark = pytest.mark.serial
 
 LINK_TIMEOUT = 0.3
+"""[s] the link timeout of the tests that lose the link."""
+PATIENT = 5.0
+"""[s] the link timeout of the others, and the longest wait of a condition that should hold soon."""
 REPORT = 0.01
 TWO_PI = 2 * math.pi
 
@@ -65,13 +70,16 @@ def robot_mixed():
     )
 
 
-def poll(backend, until, timeout=2.0, speeds=None):
-    """Read (and write ``speeds``) every few ms until ``until(state)``; returns the state."""
+def poll(backend, until, timeout=PATIENT, speeds=None, reads=None):
+    """Read (and write ``speeds``) every few ms until ``until(state)``; returns the state. The
+    monotonic time of each read is appended to ``reads`` when given."""
     deadline = time.monotonic() + timeout
     while True:
         now = time.monotonic()
         if speeds is not None:
             backend.write(now, speeds)
+        if reads is not None:
+            reads.append(now)
         state = backend.read(now)
         if until(state):
             return state
@@ -80,7 +88,7 @@ def poll(backend, until, timeout=2.0, speeds=None):
         time.sleep(0.003)
 
 
-def wait_for(cond, timeout=2.0):
+def wait_for(cond, timeout=PATIENT):
     deadline = time.monotonic() + timeout
     while not cond():
         if time.monotonic() > deadline:
@@ -88,11 +96,27 @@ def wait_for(cond, timeout=2.0):
         time.sleep(0.003)
 
 
+def make_rig(tomasi, link_timeout):
+    """A fake controller of ``tomasi`` on a pseudo-terminal and a ready back-end on it."""
+    fake = FakeController.for_robot(tomasi, report_period=REPORT, link_timeout=2 * PATIENT).start()
+    backend = SerialBackend(tomasi, fake.path, link_timeout=link_timeout, connect_timeout=PATIENT)
+    backend.wait_ready(PATIENT)
+    return fake, backend
+
+
 @pytest.fixture
 def rig(tomasi):
-    fake = FakeController.for_robot(tomasi, report_period=REPORT, link_timeout=1.0).start()
-    backend = SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT, connect_timeout=1.0)
-    backend.wait_ready(2.0)
+    """A link that a busy machine does not lose (``PATIENT``)."""
+    fake, backend = make_rig(tomasi, PATIENT)
+    yield fake, backend
+    backend.close()
+    fake.close()
+
+
+@pytest.fixture
+def quick_rig(tomasi):
+    """A link that is lost after ``LINK_TIMEOUT`` of silence."""
+    fake, backend = make_rig(tomasi, LINK_TIMEOUT)
     yield fake, backend
     backend.close()
     fake.close()
@@ -124,8 +148,8 @@ def test_speeds_commanded_arrive_and_heartbeats_flow(rig):
 def test_counts_become_angles_with_each_encoder():
     robot = robot_mixed()
     with FakeController.for_robot(robot, report_period=REPORT) as fake:
-        with SerialBackend(robot, fake.path, link_timeout=LINK_TIMEOUT) as backend:
-            backend.wait_ready(2.0)
+        with SerialBackend(robot, fake.path, link_timeout=PATIENT) as backend:
+            backend.wait_ready(PATIENT)
             fake.advance(0, 600)  # one turn of a
             fake.advance(1, 1000 * 2.5)  # one turn of b (geared)
             fake.advance(2, 300)  # half a turn of c, counting backwards (invert)
@@ -137,8 +161,8 @@ def test_counter_wrap_around(tomasi):
     top = 2**31 - 1
     starts = {"w1": top - 100, "w2": -(2**31) + 50, "w3": 0}
     with FakeController.for_robot(tomasi, start_counts=starts, report_period=REPORT) as fake:
-        with SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT) as backend:
-            backend.wait_ready(2.0)
+        with SerialBackend(tomasi, fake.path, link_timeout=PATIENT) as backend:
+            backend.wait_ready(PATIENT)
             fake.advance(0, 600)  # crosses +2**31 -> -2**31
             fake.advance(1, -600)  # crosses -2**31 -> +2**31 - 1 going back
             poll(backend, lambda s: np.allclose(s.positions, [TWO_PI, -TWO_PI, 0.0], atol=1e-12))
@@ -164,9 +188,9 @@ def test_controller_reset_keeps_the_angle(rig):
     wait_for(lambda: fake.faults_pending == 0)
     # the RESET, then two rounds of reports (count 0 for this wheel) reach the back-end before the
     # wheel moves again: waited for, not slept for
-    poll(backend, lambda s: backend.stats()["resets"] == resets + 1, timeout=4.0)
+    poll(backend, lambda s: backend.stats()["resets"] == resets + 1)
     reports = backend.stats()["reports"]
-    poll(backend, lambda s: backend.stats()["reports"] >= reports + 6, timeout=4.0)
+    poll(backend, lambda s: backend.stats()["reports"] >= reports + 6)
     fake.advance(0, 150)
     state = poll(backend, lambda s: math.isclose(s.positions[0], math.pi, abs_tol=1e-12))
     s = backend.stats()
@@ -183,9 +207,9 @@ def test_a_controller_restart_whose_reset_report_is_lost_does_not_move_the_angle
     poll(backend, lambda s: math.isclose(s.positions[0], math.pi / 2, abs_tol=1e-12))
     resyncs = backend.stats()["resyncs"]
     fake.simulate_reset(0, announce=False)
-    poll(backend, lambda s: backend.stats()["resyncs"] > resyncs, timeout=4.0)
+    poll(backend, lambda s: backend.stats()["resyncs"] > resyncs)
     reports = backend.stats()["reports"]
-    poll(backend, lambda s: backend.stats()["reports"] >= reports + 6, timeout=4.0)
+    poll(backend, lambda s: backend.stats()["reports"] >= reports + 6)
     fake.advance(0, 150)
     state = poll(backend, lambda s: math.isclose(s.positions[0], math.pi, abs_tol=1e-12))
     assert state.positions[0] == pytest.approx(math.pi)
@@ -240,26 +264,25 @@ def test_error_reports_are_kept(rig):
     assert s["last_error"] == f"w2 on {fake.path}: MOTOR_FAULT (overcurrent)" and s["errors_rx"] == before + 1
 
 
-def test_silent_controller_loses_the_link_and_stops_the_wheels(rig):
-    fake, backend = rig
+def test_silent_controller_loses_the_link_and_stops_the_wheels(quick_rig):
+    fake, backend = quick_rig
     speeds = np.array([3.0, 3.0, 3.0])
-    poll(backend, lambda s: all(fake.speed(i) == 3.0 for i in range(3)), speeds=speeds)
+    reads: list[float] = []
+    poll(backend, lambda s: all(fake.speed(i) == 3.0 for i in range(3)), speeds=speeds, reads=reads)
     fake.silent = True
-    t_silent = time.monotonic()
     with pytest.raises(LinkLostError) as info:
-        poll(backend, lambda s: False, timeout=3.0, speeds=speeds)
-    detected = time.monotonic() - t_silent
-    # the back-end's own account: silent for just over link_timeout (one poll late at most);
-    # against the test's clock only loosely, as the last frame may have left early under load
+        poll(backend, lambda s: False, timeout=3.0, speeds=speeds, reads=reads)
+    # the back-end's own account: silent for just over link_timeout, found by the first read
+    # after it (the read before found the link alive, so at most the gap between the two later)
     silent = float(re.search(r"sent no valid frame for ([0-9.]+) s", str(info.value)).group(1))
-    assert LINK_TIMEOUT - 0.0005 <= silent <= LINK_TIMEOUT + 0.2, str(info.value)  # printed to 1 ms
-    assert LINK_TIMEOUT - 0.1 <= detected <= LINK_TIMEOUT + 0.5
+    gap = reads[-1] - reads[-2]
+    assert LINK_TIMEOUT - 0.0005 <= silent <= LINK_TIMEOUT + gap + 0.0005, (str(info.value), gap)  # printed to 1 ms
     err = info.value
     assert isinstance(err, OmnikinError)
     assert err.port == fake.path and err.wheel in ("w1", "w2", "w3")
     assert "link lost" in str(err) and fake.path in str(err) and repr(err.wheel) in str(err)
     # zero speeds went out at once, and keep going out whatever the runtime asks for
-    wait_for(lambda: all(fake.speed(i) == 0.0 for i in range(3)), timeout=0.5)
+    wait_for(lambda: all(fake.speed(i) == 0.0 for i in range(3)))
     backend.write(time.monotonic(), speeds)
     time.sleep(0.05)
     assert all(fake.speed(i) == 0.0 and fake.commands(i)[-1] == 0.0 for i in range(3))
@@ -270,14 +293,14 @@ def test_silent_controller_loses_the_link_and_stops_the_wheels(rig):
     # an explicit reset re-arms the link once the controller speaks again
     fake.silent = False
     backend.reset_link()
-    backend.wait_ready(2.0)
+    backend.wait_ready(PATIENT)
     assert not backend.link_lost
 
 
-def test_reconnect_re_arms_and_keeps_the_angles(rig):
+def test_reconnect_re_arms_and_keeps_the_angles(quick_rig):
     """After a loss, reconnect() re-arms the link: the controller must be heard again, and the
     wheel angles continue from where they were held (no jump back to zero)."""
-    fake, backend = rig
+    fake, backend = quick_rig
     fake.advance(0, 150)
     poll(backend, lambda s: math.isclose(s.positions[0], math.pi / 2, abs_tol=1e-12))
     fake.silent = True
@@ -285,7 +308,7 @@ def test_reconnect_re_arms_and_keeps_the_angles(rig):
         poll(backend, lambda s: False, timeout=3.0)
     fake.silent = False
     backend.reconnect()
-    state = backend.wait_ready(2.0)
+    state = backend.wait_ready(PATIENT)
     assert not backend.link_lost and backend.stats()["reconnects"] == 1
     assert state.positions[0] == pytest.approx(math.pi / 2, abs=1e-12)
     fake.advance(0, 150)
@@ -296,8 +319,8 @@ def test_failed_port_is_reopened_or_named(tomasi):
     """A port that fails (here the controller's pseudo-terminal disappears) loses the link;
     reconnect() tries to reopen it and, while it cannot, says which port and stays lost."""
     fake = FakeController.for_robot(tomasi, report_period=REPORT).start()
-    with SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT, connect_timeout=1.0) as backend:
-        backend.wait_ready(2.0)
+    with SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT, connect_timeout=PATIENT) as backend:
+        backend.wait_ready(PATIENT)
         fake.close()
         with pytest.raises(LinkLostError) as info:
             poll(backend, lambda s: False, timeout=3.0)
@@ -328,8 +351,8 @@ def test_one_port_per_wheel_and_misrouted_frames(tomasi):
     for f in fakes:
         f.start()
     try:
-        with SerialBackend(tomasi, [f.path for f in fakes], link_timeout=LINK_TIMEOUT) as backend:
-            backend.wait_ready(2.0)
+        with SerialBackend(tomasi, [f.path for f in fakes], link_timeout=PATIENT) as backend:
+            backend.wait_ready(PATIENT)
             speeds = np.array([1.0, 2.0, 3.0])
             poll(backend, lambda s: [f.speed(i) for i, f in enumerate(fakes)] == [1.0, 2.0, 3.0], speeds=speeds)
             assert fakes[0].speed(1) == 0.0  # wheel 1's commands go to its own port only
@@ -380,23 +403,24 @@ def test_port_mapping_and_set_up_errors(tomasi, tmp_path):
 
 def test_close_commands_zero(tomasi):
     with FakeController.for_robot(tomasi, report_period=REPORT) as fake:
-        backend = SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT)
-        backend.wait_ready(2.0)
+        backend = SerialBackend(tomasi, fake.path, link_timeout=PATIENT)
+        backend.wait_ready(PATIENT)
         poll(backend, lambda s: fake.speed(2) == -4.0, speeds=np.array([0.0, 0.0, -4.0]))
         backend.close()
-        wait_for(lambda: fake.speed(2) == 0.0, timeout=1.0)
+        wait_for(lambda: fake.speed(2) == 0.0)
 
 
 def test_fake_controller_stops_when_the_host_goes_quiet(tomasi):
     with FakeController.for_robot(tomasi, report_period=REPORT, link_timeout=0.15) as fake:
-        with SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT) as backend:
-            backend.wait_ready(2.0)
+        with SerialBackend(tomasi, fake.path, link_timeout=PATIENT) as backend:
+            backend.wait_ready(PATIENT)
             poll(backend, lambda s: fake.speed(0) == 2.0, speeds=np.array([2.0, 0.0, 0.0]))
+            events = fake.link_lost_events(0)  # a busy machine may have kept the host quiet before
             # the host stops calling: no commands, no heartbeats
-            wait_for(lambda: not fake.link_ok(0), timeout=1.0)
-            assert fake.speed(0) == 0.0 and fake.link_lost_events(0) == 1
+            wait_for(lambda: not fake.link_ok(0))
+            assert fake.speed(0) == 0.0 and fake.link_lost_events(0) == events + 1
             poll(
-                backend, lambda s: "LINK_LOST" in backend.stats()["last_error"] and s.velocities[0] == 0.0, timeout=1.0
+                backend, lambda s: "LINK_LOST" in backend.stats()["last_error"] and s.velocities[0] == 0.0
             )  # reported by the controller, and its reports show the wheel stopped
 
 
@@ -405,13 +429,13 @@ def test_runtime_drives_the_fake_robot(tomasi):
     odometry forward, and after the stop the odometry equals the forward kinematics of the
     counts the controllers integrated."""
     with FakeController.for_robot(tomasi, report_period=REPORT) as fake:
-        with SerialBackend(tomasi, fake.path, link_timeout=LINK_TIMEOUT) as backend:
-            backend.wait_ready(2.0)
+        with SerialBackend(tomasi, fake.path, link_timeout=PATIENT) as backend:
+            backend.wait_ready(PATIENT)
             start = np.array([fake.ticks(i) for i in range(3)])
             rt = BaseRuntime(tomasi, backend, cmd_vel_timeout=0.0)
             last = []
 
-            def drive(twist, until, timeout=4.0):
+            def drive(twist, until, timeout=2 * PATIENT):
                 deadline = time.monotonic() + timeout
                 while not until():
                     assert time.monotonic() < deadline, f"pose {rt.pose}, stats {backend.stats()}"
