@@ -65,11 +65,27 @@ def test_the_same_seed_writes_the_same_readings_bit_for_bit_and_another_seed_oth
     assert (first / "imu.csv").read_bytes() != (third / "imu.csv").read_bytes()
 
 
-def test_a_log_the_robot_or_engine_cannot_fill_is_refused_before_the_run(capsys, tmp_path):
+def test_a_log_the_robot_cannot_fill_is_refused_before_the_run(capsys, tmp_path):
     rc, _, err = run_cli(capsys, "simulate", "tomasi-omni3", "--imu-log", tmp_path / "i.csv")
     assert rc == 2 and "robot 'tomasi-omni3' has no IMU" in err and err.count("\n") == 1
-    rc, _, err = run_cli(
-        capsys, "simulate", "tomasi-omni3-lidar", "--engine", "physics", "--scan-log", tmp_path / "s.npz"
-    )
-    assert rc == 2 and "the physics engine does not read the robot's sensors yet" in err
+    rc, _, err = run_cli(capsys, "simulate", "diff-drive", "--scan-log", tmp_path / "s.npz")
+    assert rc == 2 and "robot 'diff-drive' has no lidar" in err and err.count("\n") == 1
     assert not (tmp_path / "i.csv").exists() and not (tmp_path / "s.npz").exists()
+
+
+def test_the_physics_engine_writes_the_same_logs_its_first_scan_within_the_range_noise(capsys, tmp_path):
+    """The physics engine takes no --noise: its sensors read with their robot file's errors
+    (the preset's 0.01 m range noise, 1 % dropouts) around what MuJoCo's rays measure."""
+    pytest.importorskip("mujoco", reason="the physics engine needs MuJoCo (extra 'physics')")
+    imu, scans = _simulate(capsys, tmp_path, "--world", ROOM, "--path", "line 0.3", "--engine", "physics")
+    with np.load(scans, allow_pickle=False) as data:
+        first = data["laser.ranges"][0]
+        assert data["laser.t"][0] == 0.0 and len(data["laser.t"]) >= 5
+    # room.yaml by hand, as above: 0.01 m of noise stays within 6 standard deviations
+    for beam, expected in ((180, 9.45), (270, 1.95), (0, 2.45), (90, 1.2)):
+        assert np.isnan(first[beam]) or abs(first[beam] - expected) < 0.06, (beam, first[beam])
+    assert np.mean(np.isnan(first)) < 0.05  # 1 % of the beams lost, on average
+    with open(imu, newline="") as handle:
+        rows = [r for r in csv.reader(line for line in handle if not line.startswith("#"))][1:]
+    accel_z = np.array([float(r[7]) for r in rows[:100]])  # the first 0.5 s, driving on the level floor
+    assert abs(accel_z.mean() - 9.81) < 0.2 and accel_z.std() > 1e-3  # gravity, the preset's bias and noise

@@ -233,8 +233,9 @@ def simulate(
     cheaper = "shorten path or raise step" if engine.measured_cost else "lower rate or shorten path"
     within(seconds=estimate.seconds, hint=cheaper)
     # the run's stream draws its random errors, for an engine with a model of them; the sensors'
-    # stream their errors (none under a noise model without random errors: --noise none)
-    noisy_sensors = noise_model is not None and not noise_model.is_zero
+    # stream their errors: none under a noise model without random errors (--noise none), those
+    # of the robot file's sensors in the physics engine (which takes no --noise)
+    noisy_sensors = noise_model is None or not noise_model.is_zero
     run = engine.drive(
         plan,
         true,

@@ -184,7 +184,7 @@ def run(args) -> int:
     if args.bag is not None:
         require_rosbags()
     robot = load_robot(args.robot)
-    _check_sensor_logs(args, engine, robot)
+    _check_sensor_logs(args, robot)
     if args.log is not None and engine.has_noise_model:
         _check_tick_log(args, robot)
     check_seed(args.seed)
@@ -411,8 +411,8 @@ def _check_tick_log(args, robot) -> None:
         )
 
 
-def _check_sensor_logs(args, engine, robot) -> None:
-    """Refuse, before the run, a sensor log the robot or the engine cannot fill (one line)."""
+def _check_sensor_logs(args, robot) -> None:
+    """Refuse, before the run, a sensor log the robot cannot fill (one line)."""
     from ..kinematics.sensors import Imu, Lidar
 
     for flag, value, kind, noun in (
@@ -425,10 +425,6 @@ def _check_sensor_logs(args, engine, robot) -> None:
             raise InputError(
                 f"{flag}: robot {robot.name!r} has no {noun} (declare one under sensors: in its robot file, "
                 f"docs/sensors.md; the preset tomasi-omni3-lidar has one)"
-            )
-        if not engine.has_noise_model:
-            raise InputError(
-                f"{flag}: the {engine.name} engine does not read the robot's sensors yet; use --engine kinematic"
             )
 
 

@@ -214,8 +214,8 @@ class PhysicsEngine(Engine):
         progress : callable, optional
             Called with the simulated time and the plan's duration [s] now and then.
         sensor_rng : numpy.random.Generator or None
-            Not used yet: the physics engine does not read the robot's IMUs and lidars (the run's
-            ``sensing`` is None).
+            The stream of the sensors' errors (None: exact readings); the run's ``sensing``
+            holds what the robot's IMUs and lidars read (:mod:`omnikin.physics.sensing`).
 
         Returns
         -------
@@ -245,6 +245,7 @@ class PhysicsEngine(Engine):
             progress=progress,
             roller_phase=phase,
             world=self.world,
+            sensor_rng=sensor_rng,
         )
 
     def backend(

@@ -46,22 +46,25 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..errors import DivergedError, InputError, OdometryInputError, PhysicsError
 from ..kinematics.robot import Robot, require_same_wheels
 from ..kinematics.se2 import between, wrap_angle
+from ..kinematics.sensors import Imu, Lidar
 from ..motion.limits import MotionLimits
 from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range, require_motion, sample_plan
 from ..odometry.batch import batch_odometry, encoded_wheels
 from ..odometry.plausibility import QUANTISATION_SLACK, counter_rules
+from ..sensors.readings import measured_readings, require_scan_room
 from ..simulation.kinematic import SimulatedRun, commanded_angles, counter_output
 from ..world.model import World
 from .description import steered_support_margin
 from .mjcf import DEFAULT_STEP, time_step
+from .sensing import PhysicsSensors
 from .simulator import TRACK_ERROR, TRACK_TIME, PhysicsSim
 
 REST_SPEED = 1e-4
@@ -183,6 +186,7 @@ def simulate_physics(
     progress: Callable[[float, float], None] | None = None,
     roller_phase=0.0,
     world: World | None = None,
+    sensor_rng=None,
 ) -> PhysicsRun:
     """``plan`` commanded by ``command_robot`` and driven by ``true_robot`` in MuJoCo at time step
     ``step`` [s] (module docstring); ``rate`` [Hz] as for the kinematic engine. ``progress``, if
@@ -192,7 +196,9 @@ def simulate_physics(
     (:func:`~omnikin.physics.simulator.roller_offsets`); the encoders start at zero. In a
     ``world`` the robot starts at its start pose among its bodies; the run's ``truth`` stays in
     the frame where it started (as the kinematic engine's) and ``contacts`` lists where touches
-    began."""
+    began. The IMUs and lidars of ``true_robot`` read as the run goes
+    (:mod:`omnikin.physics.sensing`), their errors drawn from ``sensor_rng`` (None: exact), into
+    the run's ``sensing``."""
     rate = check_rate_range(plan.rate if isinstance(plan, SampledPlan) else rate, "rate")
     check_rate_steps(rate, step)
     require_same_wheels(command_robot, true_robot)
@@ -201,10 +207,16 @@ def simulate_physics(
     names = [w.name for w in encoded_wheels(command_robot)]
     if [w.name for w in true_robot.encoded] != names:
         raise InputError(f"true robot {true_robot.name!r}: its encoded wheels must be {names}")
+    sensed = any(isinstance(s, (Imu, Lidar)) for s in true_robot.sensors)
+    if sensed:
+        require_scan_room(true_robot, float(sampled.t[-1] - sampled.t[0]) + TAIL_MAX)
     try:
-        return _drive(sampled, true_robot, command_robot, names, step, progress, roller_phase, world)
+        run, sensors = _drive(sampled, true_robot, command_robot, names, step, progress, roller_phase, world, sensed)
     except DivergedError as exc:
         raise exc.explained(step_option=True) from None
+    if sensors is None:
+        return run
+    return replace(run, sensing=measured_readings(true_robot, sensors.truths(), sensor_rng))
 
 
 def check_rate_steps(rate: float, step: float) -> None:
@@ -236,14 +248,22 @@ def _drive(
     progress: Callable[[float, float], None] | None,
     roller_phase,
     world: World | None,
-) -> PhysicsRun:
-    """:func:`simulate_physics` after its checks."""
+    sensed: bool,
+) -> tuple[PhysicsRun, PhysicsSensors | None]:
+    """:func:`simulate_physics` after its checks: the run without its readings, and what its
+    sensors read (``sensed``; else None)."""
     angles, steer_cmd = commanded_angles(sampled, command_robot, command_robot.rolling)
     dt = np.diff(sampled.t)
     speeds = np.diff(angles, axis=0) / dt[:, None]
     start = (0.0, 0.0, 0.0) if world is None else world.start
     sim = PhysicsSim(
-        true_robot, start=start, step=step, roller_phase=roller_phase, controller=command_robot, world=world
+        true_robot,
+        start=start,
+        step=step,
+        roller_phase=roller_phase,
+        controller=command_robot,
+        world=world,
+        sensors=sensed,
     )
     steerable = bool(command_robot.steerable)
     samples = len(dt)
@@ -329,7 +349,7 @@ def _drive(
         for i, name in enumerate(sim.driven_names)
         if sim.lag_time[i] > 0.0
     ] + slip.troubles()
-    return PhysicsRun(
+    run = PhysicsRun(
         extended,
         t,
         ticks,
@@ -346,6 +366,7 @@ def _drive(
         contacts=(tuple(sim.contacts),) if world is not None else (),
         start=start,
     )
+    return run, sim.sensors
 
 
 def _require_plausible_wheels(robot: Robot, true_robot: Robot, t: np.ndarray, ticks: np.ndarray) -> None:

@@ -53,11 +53,13 @@ from ..common.messages import shorten
 from ..errors import DivergedError, InputError, PhysicsError
 from ..kinematics.robot import Robot
 from ..kinematics.se2 import wrap_angle
+from ..kinematics.sensors import Imu, Lidar
 from ..simulation.kinematic import counter_output
 from ..world.collision import Contact
 from ..world.model import World
 from .description import PhysicalRobot, describe
 from .mjcf import DEFAULT_STEP, STEP_RANGE, mjcf
+from .sensing import PhysicsSensors
 
 SETTLE_MIN = 0.05
 """Shortest settling time [s] at the start."""
@@ -197,6 +199,13 @@ def _yaw(xmat: np.ndarray) -> float:
     return math.atan2(xmat[3], xmat[0])
 
 
+def _quat_yaw(q: np.ndarray) -> float:
+    """Heading [rad] of the x axis projected on the floor of the rotation of the unit quaternion
+    ``q`` (w, x, y, z): ``atan2(R_10, R_00)``."""
+    w, x, y, z = (float(v) for v in q)
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
 def _world_geom_bodies(mj, model, world: World | None) -> np.ndarray | None:
     """Per geom of ``model``, the index of the body of ``world`` it belongs to
     (:attr:`omnikin.world.model.World.bodies`), -1 for the rest; None without a world or with no
@@ -235,6 +244,7 @@ class PhysicsSim:
         roller_phase=0.0,
         controller: Robot | None = None,
         world: World | None = None,
+        sensors: bool = False,
     ):
         mujoco = _mujoco()
         self._mj = mujoco
@@ -332,7 +342,6 @@ class PhysicsSim:
         self._ramping = False
         self._steer_target = np.zeros(len(steer))
         self._steer_set = np.zeros(len(steer))
-        self._velocity = np.zeros(6)
         self.contacts: list[Contact] = []
         """Where the robot began to touch a body of the world (:meth:`_watch_contacts`)."""
         self._world_geoms = _world_geom_bodies(mujoco, m, world)
@@ -345,6 +354,11 @@ class PhysicsSim:
         self.roller_offsets = roller_offsets(self.description, rolling, roller_phase)
         """Wheel joint angles [rad] of the rolling wheels (file order) at the start of settling."""
         self._settle(start)
+        self.sensors: PhysicsSensors | None = None
+        """What the robot's IMUs and lidars read (:mod:`omnikin.physics.sensing`), when made
+        with ``sensors`` and the robot has some; else None."""
+        if sensors and any(isinstance(s, (Imu, Lidar)) for s in robot.sensors):
+            self.sensors = PhysicsSensors(mujoco, m, self.data, robot, self._free, self._free_dof, self.step_size)
 
     # --- start ---------------------------------------------------------------------------------
     def _settle(self, start: np.ndarray) -> None:
@@ -372,7 +386,7 @@ class PhysicsSim:
                 f"(it tips over or bounces)"
             )
         q = d.qpos[self._free : self._free + 7]
-        yaw = _yaw(d.xmat[self._chassis])
+        yaw = self._chassis_yaw()
         turn = float(start[2]) - yaw
         q[0], q[1] = start[0], start[1]  # the body origin to the start, turned about it by `turn`
         spin = np.array([math.cos(turn / 2.0), 0.0, 0.0, math.sin(turn / 2.0)])
@@ -385,7 +399,7 @@ class PhysicsSim:
         mj.mj_forward(m, d)
         self._zero = d.qpos[self._wheel_qpos].copy()
         self._heading = float(start[2])
-        self._last_yaw = _yaw(d.xmat[self._chassis])
+        self._last_yaw = self._chassis_yaw()
         self._steps = 0
 
     # --- commands ---------------------------------------------------------------------------------
@@ -442,6 +456,7 @@ class PhysicsSim:
             )
         mj, m, d = self._mj, self.model, self.data
         h = self.step_size
+        sensing = self.sensors
         with _quiet(mj):
             for _ in range(int(n)):
                 self._control()
@@ -451,6 +466,8 @@ class PhysicsSim:
                     self._diverged((self._steps - 1) * h, settling=False)  # MuJoCo reset the state
                 if self._world_geoms is not None:
                     self._watch_contacts()
+                if sensing is not None and self._steps == sensing.due:
+                    sensing.take(self._steps)
                 if self._steps % UNWRAP_CHUNK == 0:
                     self._track_heading()
                     self._track_window()
@@ -536,8 +553,13 @@ class PhysicsSim:
             f"deg): its contacts left the support of its weight"
         )
 
+    def _chassis_yaw(self) -> float:
+        """The chassis' heading [rad] in ``(-pi, pi]`` now, from its free joint (MuJoCo's
+        ``xmat`` after a step holds the pose at the step's start)."""
+        return _quat_yaw(self.data.qpos[self._free + 3 : self._free + 7])
+
     def _track_heading(self) -> None:
-        yaw = _yaw(self.data.xmat[self._chassis])
+        yaw = self._chassis_yaw()
         self._heading += wrap_angle(yaw - self._last_yaw)
         self._last_yaw = yaw
 
@@ -609,7 +631,8 @@ class PhysicsSim:
     @property
     def tilt(self) -> float:
         """Angle [rad] between the chassis' z axis and the vertical (0 standing level)."""
-        return math.acos(max(-1.0, min(1.0, float(self.data.xmat[self._chassis][8]))))
+        _, x, y, _ = (float(v) for v in self.data.qpos[self._free + 3 : self._free + 7])
+        return math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (x * x + y * y))))  # R_22 of the free joint's quaternion
 
     @property
     def height(self) -> float:
@@ -619,12 +642,15 @@ class PhysicsSim:
     @property
     def twist(self) -> np.ndarray:
         """Ground-truth body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] (module docstring)."""
-        mj = self._mj
-        mj.mj_objectVelocity(self.model, self.data, mj.mjtObj.mjOBJ_XBODY, self._chassis, self._velocity, 0)
-        w, v = self._velocity[:3], self._velocity[3:]
-        yaw = _yaw(self.data.xmat[self._chassis])
+        d = self.data
+        v = d.qvel[self._free_dof : self._free_dof + 3]  # the body origin's velocity, world axes
+        w = d.qvel[self._free_dof + 3 : self._free_dof + 6]  # the angular velocity, body axes
+        qw, qx, qy, qz = (float(u) for u in d.qpos[self._free + 3 : self._free + 7])
+        up = (2.0 * (qx * qz - qw * qy), 2.0 * (qy * qz + qw * qx), 1.0 - 2.0 * (qx * qx + qy * qy))  # R's last row
+        turn = up[0] * w[0] + up[1] * w[1] + up[2] * w[2]  # the angular velocity's vertical part
+        yaw = self._chassis_yaw()
         c, s = math.cos(yaw), math.sin(yaw)
-        return np.array([c * v[0] + s * v[1], -s * v[0] + c * v[1], w[2]])
+        return np.array([c * v[0] + s * v[1], -s * v[0] + c * v[1], turn])
 
     @property
     def wheel_angles(self) -> np.ndarray:

@@ -16,12 +16,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import InputError
 from ..kinematics.robot import Robot
 from ..kinematics.se2 import between, compose, exp, log
 from ..kinematics.sensors import Imu, Lidar
 from ..world.shapes import Shapes
 from .imu import kinematic_truth, read
-from .lidar import scan
+from .lidar import measured, true_ranges
 
 MAX_SCAN_VALUES = 50_000_000
 """Most ranges of one run's scans, all lidars together (400 MB as float64): a run that would
@@ -73,6 +74,17 @@ def scan_values(robot: Robot, duration: float) -> float:
     return sum(math.floor(duration * s.rate + 1e-9 + 1) * s.beams for s in robot.sensors if isinstance(s, Lidar))
 
 
+def require_scan_room(robot: Robot, duration: float) -> None:
+    """Refuse, in one line, a run of ``duration`` [s] whose lidar scans would hold more than
+    :data:`MAX_SCAN_VALUES` ranges."""
+    values = scan_values(robot, duration)
+    if values > MAX_SCAN_VALUES:
+        raise InputError(
+            f"robot {robot.name!r}: its lidars would return {values:.3g} ranges over the {duration:.4g} s run, "
+            f"more than the {MAX_SCAN_VALUES:.3g} a run keeps; shorten the path or lower the lidars' rate or beams"
+        )
+
+
 def poses_at(t: np.ndarray, poses: np.ndarray, times: np.ndarray) -> np.ndarray:
     """``(k, 3)`` poses at ``times`` [s] of a body that moves through ``poses`` ``(N + 1, 3)`` at
     ``t`` with a constant twist between samples (exact SE(2) arcs)."""
@@ -82,24 +94,62 @@ def poses_at(t: np.ndarray, poses: np.ndarray, times: np.ndarray) -> np.ndarray:
     return compose(poses[k], exp(steps[k] * ((times - t[k]) / dt[k])[:, None]))
 
 
+@dataclass(frozen=True)
+class ImuTruth:
+    """What one IMU would read without errors: ``t`` ``(n,)`` [s], the mean ``rates`` ``(n, 3)``
+    [rad/s] and mean specific ``forces`` ``(n, 3)`` [m/s^2] in its frame over each interval."""
+
+    sensor: Imu
+    t: np.ndarray
+    rates: np.ndarray
+    forces: np.ndarray
+
+
+@dataclass(frozen=True)
+class ScanTruth:
+    """What one lidar would read without errors: ``t`` ``(m,)`` [s] and the true ``ranges``
+    ``(m, beams)`` [m] (``inf`` where no body lies within ``range_max``)."""
+
+    sensor: Lidar
+    t: np.ndarray
+    ranges: np.ndarray
+
+
+def measured_readings(robot: Robot, truths, rng: np.random.Generator | None) -> Readings:
+    """The readings of ``robot``'s IMUs and lidars given ``truths`` (an :class:`ImuTruth` or
+    :class:`ScanTruth` per sensor name): the errors drawn from ``rng`` sensor by sensor in the
+    robot file's order, an IMU's whole record (:func:`omnikin.sensors.imu.read`), a lidar's
+    scans in time order (:func:`omnikin.sensors.lidar.measured`); None: exact. The one place
+    both engines' readings get their errors, so that a seed means the same draws in each."""
+    imus, scans = [], []
+    for sensor in robot.sensors:
+        truth = truths.get(sensor.name)
+        if isinstance(sensor, Imu) and isinstance(truth, ImuTruth):
+            gyro, accel = read(sensor, truth.rates, truth.forces, rng)
+            imus.append(ImuReadings(sensor, truth.t, gyro, accel))
+        elif isinstance(sensor, Lidar) and isinstance(truth, ScanTruth):
+            ranges = np.empty((len(truth.t), sensor.beams))
+            for k, row in enumerate(truth.ranges):
+                ranges[k] = measured(row, sensor, rng)
+            scans.append(ScanReadings(sensor, truth.t, ranges))
+    return Readings(tuple(imus), tuple(scans))
+
+
 def kinematic_readings(robot: Robot, t, poses, shapes: Shapes | None, rng: np.random.Generator | None) -> Readings:
     """The readings of ``robot``'s IMUs and lidars over a kinematic run through ``poses``
     ``(N + 1, 3)`` (world frame) at times ``t`` [s] among ``shapes`` (None: an empty floor, every
     beam ``+inf``); ``rng`` the sensors' stream (None: exact). Module docstring."""
     t = np.asarray(t, dtype=float)
     poses = np.asarray(poses, dtype=float)
-    imus, scans = [], []
+    truths: dict[str, ImuTruth | ScanTruth] = {}
     for sensor in robot.sensors:
         if isinstance(sensor, Imu):
-            times, rates, forces = kinematic_truth(t, poses, sensor)
-            gyro, accel = read(sensor, rates, forces, rng)
-            imus.append(ImuReadings(sensor, times, gyro, accel))
+            truths[sensor.name] = ImuTruth(sensor, *kinematic_truth(t, poses, sensor))
         elif isinstance(sensor, Lidar):
             times = scan_times(t, sensor.rate)
-            at = poses_at(t, poses, times)
-            ranges = np.empty((len(times), sensor.beams))
             seen = shapes if shapes is not None else Shapes.none()
-            for k, pose in enumerate(at):
-                ranges[k] = scan(seen, pose, sensor, rng)
-            scans.append(ScanReadings(sensor, times, ranges))
-    return Readings(tuple(imus), tuple(scans))
+            ranges = np.empty((len(times), sensor.beams))
+            for k, pose in enumerate(poses_at(t, poses, times)):
+                ranges[k] = true_ranges(seen, pose, sensor)[0]
+            truths[sensor.name] = ScanTruth(sensor, times, ranges)
+    return measured_readings(robot, truths, rng)

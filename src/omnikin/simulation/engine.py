@@ -232,8 +232,7 @@ class Engine(Protocol):
             the kinematic engine's run is one vectorised computation and does not call it).
         sensor_rng : numpy.random.Generator or None
             The stream of the errors of the robot's IMUs and lidars (None: exact readings); the
-            run's ``sensing`` holds what they read (kinematic; the physics engine does not read
-            them yet and keeps None).
+            run's ``sensing`` holds what they read (a single run, in either engine).
 
         Returns
         -------

@@ -42,7 +42,7 @@ from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range, estimated_samples, require_motion, sample_plan
 from ..odometry.batch import batch_odometry, encoded_wheels
 from ..odometry.integration import integrate_components, integrate_end
-from ..sensors.readings import MAX_SCAN_VALUES, Readings, kinematic_readings, scan_values
+from ..sensors.readings import Readings, kinematic_readings, require_scan_room
 from ..world.collision import Collider, Contact
 from .error_models import NoiseModel
 
@@ -214,7 +214,7 @@ def simulate_kinematic(
     odometry = batch_odometry(odometry_robot, sampled.t, seen, steer=steer, max_wheel_accel=math.inf).poses
     sensed = trials == 1 and any(isinstance(s, (Imu, Lidar)) for s in true_robot.sensors)
     if sensed:
-        _require_scan_room(true_robot, float(sampled.t[-1] - sampled.t[0]))
+        require_scan_room(true_robot, float(sampled.t[-1] - sampled.t[0]))
     truth, z = _truth(true_robot, names, dtrue, steer, noise, gens, keep_truth or collider is not None or sensed)
     contacts: tuple[tuple[Contact, ...], ...] = ()
     start = (0.0, 0.0, 0.0)
@@ -239,17 +239,6 @@ def simulate_kinematic(
     if z is not None:
         measured += z * np.array([noise.measurement, noise.measurement, noise.measurement_theta])
     return SimulatedRun(sampled, sampled.t, ticks, steer, odometry, truth, measured, readings, contacts, start, sensing)
-
-
-def _require_scan_room(robot: Robot, duration: float) -> None:
-    """Refuse, in one line, a run whose lidar scans would hold more than
-    :data:`~omnikin.sensors.readings.MAX_SCAN_VALUES` ranges."""
-    values = scan_values(robot, duration)
-    if values > MAX_SCAN_VALUES:
-        raise InputError(
-            f"robot {robot.name!r}: its lidars would return {values:.3g} ranges over the {duration:.4g} s run, "
-            f"more than the {MAX_SCAN_VALUES:.3g} a run keeps; shorten the path or lower the lidars' rate or beams"
-        )
 
 
 def wheel_motion(angles: np.ndarray, true_robot: Robot, command_robot: Robot, names, quantise: bool):
