@@ -142,3 +142,30 @@ def test_physics_readings_carry_the_sensor_errors_of_the_seed_and_repeat_bit_for
     # the readings are not the exact zero the truth gives
     assert np.std(a.imus[0].gyro[:, 2]) > 1e-4
     assert np.all(np.isposinf(a.scans[0].ranges) | np.isnan(a.scans[0].ranges))  # an empty floor
+
+
+def test_readings_drained_cycle_by_cycle_are_the_run_read_at_once_and_an_undrained_backlog_stays_bounded():
+    """A live robot's sensors are drained each cycle: the pieces put together are what the
+    same simulation kept whole; one that nobody drains keeps only its latest ``keep`` seconds."""
+    robot = _robot()
+    whole, pieces, bounded = (PhysicsSim(robot, sensors=keep) for keep in (True, True, 0.5))
+    drained = []
+    command = robot.ik((0.2, 0.0, 0.6)).wheel_speeds
+    for sim in (whole, pieces, bounded):
+        sim.command(command)
+    for k in range(1, 31):  # cycles of 33.3 ms: the samples fall anywhere between them
+        for sim in (whole, pieces, bounded):
+            sim.advance(k / 30.0)
+        drained.append(pieces.sensors.drain())
+    kept = whole.sensors.truths()
+    for name in ("imu", "laser"):
+        t = np.concatenate([d[name].t for d in drained])
+        np.testing.assert_array_equal(t, kept[name].t)
+    np.testing.assert_array_equal(np.concatenate([d["imu"].rates for d in drained]), kept["imu"].rates)
+    np.testing.assert_array_equal(np.concatenate([d["imu"].forces for d in drained]), kept["imu"].forces)
+    np.testing.assert_array_equal(np.concatenate([d["laser"].ranges for d in drained]), kept["laser"].ranges)
+    last = bounded.sensors.truths()
+    assert len(last["imu"].t) == 100 and len(last["laser"].t) == 5  # 0.5 s of each
+    np.testing.assert_array_equal(last["imu"].t, kept["imu"].t[-100:])
+    np.testing.assert_array_equal(last["imu"].rates, kept["imu"].rates[-100:])
+    assert bounded.sensors.dropped == (len(kept["imu"].t) - 100) + (len(kept["laser"].t) - 5)

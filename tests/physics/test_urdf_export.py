@@ -67,7 +67,8 @@ def test_urdf_parser_reads_the_tree_hubs_axles_and_rollers_of_every_preset(name)
     # what the ROS node publishes in joint_states: encoded wheels and NAME_steer of steerable ones
     published = set(robot.encoded_names) | {f"{n}_steer" for n in robot.steer_names}
     assert published <= set(joints)
-    assert sum(link.inertial.mass for link in model.links) == pytest.approx(describe(robot).mass, rel=1e-12)
+    massive = [link for link in model.links if link.inertial is not None]  # a sensor's link has no mass
+    assert sum(link.inertial.mass for link in massive) == pytest.approx(describe(robot).mass, rel=1e-12)
     for w in robot.wheels:
         joint = joints[w.name]
         assert joint.type == "continuous"
@@ -158,3 +159,19 @@ def test_mjcf_command_writes_a_model_mujoco_loads_with_the_given_step(tmp_path, 
     rc, _, err = run_cli(capsys, "mjcf", "tomasi-omni3", "-o", tmp_path / "fast.xml", "--step", "0.01")
     assert rc == 2 and "time step" in err and err.count("\n") == 1
     assert not (tmp_path / "fast.xml").exists()
+
+
+def test_each_imu_and_lidar_is_a_fixed_link_of_base_link_at_its_mount():
+    robot = load_robot("tomasi-omni3-lidar")
+    model = URDF.from_xml_string(urdf(robot))
+    frames = link_frames(model)
+    mounts = {s.name: s.mount for s in robot.sensors if s.type in ("imu", "lidar")}
+    assert set(mounts) == {"imu", "laser"}  # the bumper has no frame
+    joints = {j.name: j for j in model.joints}
+    for name, m in mounts.items():
+        joint = joints[f"{name}_joint"]
+        assert joint.type == "fixed" and joint.parent == "base_link" and joint.child == name
+        rot, pos = frames[name]
+        np.testing.assert_allclose(pos, [m.x, m.y, m.z], atol=1e-12)
+        np.testing.assert_allclose(rot[:2, 0], [math.cos(m.yaw), math.sin(m.yaw)], atol=1e-12)
+    assert "imu" not in urdf(describe(robot))  # a description alone carries no sensors

@@ -208,7 +208,14 @@ def run(args) -> int:
     else:
         assert engine is not None
         noise = engine.noise_model(args.noise)
-        backend = engine.backend(robot, true, noise=noise, rng=seeds["run"], max_lag=PHYSICS_MAX_LAG)
+        backend = engine.backend(
+            robot,
+            true,
+            noise=noise,
+            rng=seeds["run"],
+            max_lag=PHYSICS_MAX_LAG,
+            sensor_rng=np.random.default_rng(seeds["sensors"]),  # the sensors' errors, as omnikin simulate's
+        )
         if engine.measured_cost:  # a model stepped in real time: can this machine keep up?
             from ..physics.cost import real_time_shortfall
 

@@ -2,13 +2,11 @@
 :func:`omnikin.io.bags.record_samples` adds when the run kept its sensors' readings.
 
 - ``/imu`` (``sensor_msgs/Imu``; ``/imu/NAME`` when the robot has several IMUs): angular velocity
-  [rad/s] and linear acceleration [m/s^2] in the IMU's frame ``NAME``, their covariances the
-  white noise's variance per sample (``noise_density^2 rate`` on the diagonal), orientation
-  unknown (``orientation_covariance[0] = -1``, REP 145);
-- ``/scan`` (``sensor_msgs/LaserScan``; ``/scan/NAME`` for several lidars) in the lidar's frame:
-  ``angle_min``, ``angle_max`` (the last beam), ``angle_increment`` as
-  :meth:`~omnikin.kinematics.sensors.Lidar.angles`, ``scan_time`` ``1 / rate``,
-  ``time_increment`` ``scan_time / beams`` (a turning head), the ranges as REP 117 has them;
+  [rad/s] and linear acceleration [m/s^2] in the IMU's frame ``NAME``;
+- ``/scan`` (``sensor_msgs/LaserScan``; ``/scan/NAME`` for several lidars) in the lidar's frame,
+  the ranges as REP 117 has them;
+- their other fields (covariances, beam angles, ...) as :mod:`omnikin.sensors.message_content`
+  gives them;
 - ``/tf`` (``tf2_msgs/TFMessage``): ``odom -> base_link`` at every sample, from the odometry (what
   a SLAM or Nav2 stack reads);
 - ``/tf_static``: ``base_link -> NAME`` for every IMU and lidar, at the first stamp.
@@ -21,6 +19,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from ..sensors.message_content import imu_fields, scan_fields, sensor_topic
 from ..sensors.readings import Readings
 
 IMU = "sensor_msgs/msg/Imu"
@@ -52,9 +51,9 @@ def sensor_topics(sensing: Readings) -> list[tuple[str, str]]:
     :func:`sensor_messages`' topic indices."""
     topics = [("/tf", TF_MESSAGE), ("/tf_static", TF_MESSAGE)]
     several = len(sensing.imus) > 1
-    topics += [(f"/imu/{r.sensor.name}" if several else "/imu", IMU) for r in sensing.imus]
+    topics += [("/" + sensor_topic("imu", r.sensor.name, several), IMU) for r in sensing.imus]
     several = len(sensing.scans) > 1
-    topics += [(f"/scan/{r.sensor.name}" if several else "/scan", LASER_SCAN) for r in sensing.scans]
+    topics += [("/" + sensor_topic("scan", r.sensor.name, several), LASER_SCAN) for r in sensing.scans]
     return topics
 
 
@@ -89,38 +88,28 @@ def sensor_messages(
 
     def imu(index: int, record) -> Iterator[tuple[int, int, bytes]]:
         sensor = record.sensor
-        gyro_var = sensor.gyro.noise_density**2 * sensor.rate
-        accel_var = sensor.accel.noise_density**2 * sensor.rate
-        unknown = np.zeros(9)
-        unknown[0] = -1.0
-        for t, w, a in zip(record.t, record.gyro, record.accel, strict=True):
+        fields = imu_fields(sensor)
+        x, y, z, w = fields["orientation"]
+        covariances = {k: np.array(fields[k]) for k in fields if k.endswith("covariance")}
+        for t, gyro, accel in zip(record.t, record.gyro, record.accel, strict=True):
             ns = int(round(float(t) * 1e9)) + offset_ns
             msg = T[IMU](
                 header=T["std_msgs/msg/Header"](stamp=time(ns), frame_id=sensor.name),
-                orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
-                orientation_covariance=unknown,
-                angular_velocity=_vector(T, w),
-                angular_velocity_covariance=np.diag([gyro_var] * 3).ravel(),
-                linear_acceleration=_vector(T, a),
-                linear_acceleration_covariance=np.diag([accel_var] * 3).ravel(),
+                orientation=T["geometry_msgs/msg/Quaternion"](x=x, y=y, z=z, w=w),
+                angular_velocity=_vector(T, gyro),
+                linear_acceleration=_vector(T, accel),
+                **covariances,
             )
             yield index, ns, serialize(msg, IMU)
 
     def scan(index: int, record) -> Iterator[tuple[int, int, bytes]]:
         lidar = record.sensor
-        angles = lidar.angles()
-        period = 1.0 / lidar.rate
+        fields = scan_fields(lidar)
         for t, ranges in zip(record.t, record.ranges, strict=True):
             ns = int(round(float(t) * 1e9)) + offset_ns
             msg = T[LASER_SCAN](
                 header=T["std_msgs/msg/Header"](stamp=time(ns), frame_id=lidar.name),
-                angle_min=float(angles[0]),
-                angle_max=float(angles[-1]),
-                angle_increment=float(lidar.angle_increment),
-                time_increment=period / lidar.beams,
-                scan_time=period,
-                range_min=float(lidar.range_min),
-                range_max=float(lidar.range_max),
+                **fields,
                 ranges=np.asarray(ranges, dtype=np.float32),
                 intensities=np.zeros(0, dtype=np.float32),
             )

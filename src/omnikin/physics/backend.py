@@ -44,17 +44,23 @@ from ..errors import InputError
 from ..kinematics.robot import Robot, require_same_wheels
 from ..kinematics.se2 import wrap_angle
 from ..runtime.backends import WheelState
+from ..sensors.readings import Readings, SensorStream
 from ..world.collision import Contact
 from ..world.model import World
 from .mjcf import DEFAULT_STEP
 from .simulator import PhysicsSim
+
+SENSOR_KEEP = 10.0
+"""Seconds of sensor samples the back-end holds for :meth:`PhysicsBackend.sensor_readings`:
+a caller that never asks (the window, the viewer) leaves the older ones behind."""
 
 
 class PhysicsBackend:
     """The robot as built (``true_robot``, default ``robot``), simulated in MuJoCo from ``start``
     ``(x, y, theta)`` at time step ``step`` [s], in ``world`` (None: an empty floor; module
     docstring). ``truth`` is its true pose (heading wrapped to ``[-pi, pi)``, as ``SimBackend``'s);
-    ``sim`` the simulation itself; ``contacts`` where it began to touch the world's bodies."""
+    ``sim`` the simulation itself; ``contacts`` where it began to touch the world's bodies;
+    :meth:`sensor_readings` what its IMUs and lidars read, errors drawn from ``sensor_rng``."""
 
     def __init__(
         self,
@@ -66,6 +72,7 @@ class PhysicsBackend:
         quantise: bool = True,
         max_lag: float | None = None,
         world: World | None = None,
+        sensor_rng: np.random.Generator | None = None,
     ):
         self.robot = robot
         self.true_robot = true_robot or robot
@@ -73,7 +80,10 @@ class PhysicsBackend:
         self.encoded = robot.encoded_names
         if not self.encoded:
             raise InputError(f"robot {robot.name!r}: the physics back-end needs encoded (driven) wheels")
-        self.sim = PhysicsSim(self.true_robot, start=start, step=step, controller=robot, world=world)
+        self.sim = PhysicsSim(
+            self.true_robot, start=start, step=step, controller=robot, world=world, sensors=SENSOR_KEEP
+        )
+        self._sensor_errors = SensorStream(self.true_robot, sensor_rng)
         self.start = np.array(start, dtype=float)  # where it started: the origin of its odometry
         self.fallen = ""
         """Empty while the robot stands; once it tipped over (:meth:`PhysicsSim.fall`), that one
@@ -105,6 +115,21 @@ class PhysicsBackend:
     def joints(self) -> PhysicsSim:
         """The simulated joints: :attr:`sim` (:class:`~omnikin.simulation.engine.SimulatedJoints`)."""
         return self.sim
+
+    def sensor_readings(self) -> Readings | None:
+        """What the robot's IMUs and lidars read since the previous call (their times [s] on the
+        simulation's clock: :meth:`caller_time` on the caller's), with their errors (``sensor_rng``; None: exact);
+        None for a robot without them."""
+        sensors = self.sim.sensors
+        if sensors is None:
+            return None
+        return self._sensor_errors.apply(sensors.drain())
+
+    def caller_time(self, t: float) -> float:
+        """The caller's clock [s] (the times ``write`` and ``read`` are given) at simulated time
+        ``t`` [s] (a sensor reading's), counting the time dropped so far (module docstring);
+        before the first call, ``t`` itself."""
+        return (self._t0 or 0.0) + float(t)
 
     @property
     def truth(self) -> np.ndarray:

@@ -256,12 +256,15 @@ class PhysicsEngine(Engine):
         noise: NoiseModel | None = None,
         rng=None,
         max_lag: float | None = None,
+        sensor_rng=None,
     ) -> SimulatedBackend:
         from .backend import PhysicsBackend
 
         check_physics_noise(noise)
         start = (0.0, 0.0, 0.0) if self.world is None else self.world.start
-        return PhysicsBackend(robot, true_robot, start=start, step=self.step, max_lag=max_lag, world=self.world)
+        return PhysicsBackend(
+            robot, true_robot, start=start, step=self.step, max_lag=max_lag, world=self.world, sensor_rng=sensor_rng
+        )
 
     def cost(
         self,

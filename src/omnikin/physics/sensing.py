@@ -93,9 +93,14 @@ class PhysicsSensors:
     module, ``model`` and ``data`` the simulation, ``free``/``free_dof`` the addresses of the
     chassis' free joint in ``qpos``/``qvel``, ``step`` [s] the time step. Made at step 0 (the
     state after settling, at rest), it is told of every later step whose number :attr:`due`
-    names (:meth:`take`); :meth:`truths` gives what the sensors read so far without errors."""
+    names (:meth:`take`); :meth:`truths` gives what the sensors read so far without errors.
+    ``keep`` [s]: hold at most that much of each sensor's latest samples (a live robot's that
+    nobody drains, :meth:`drain`, stays in bounded memory; the older ones are counted in
+    :attr:`dropped`); None: all of them (a run's)."""
 
-    def __init__(self, mujoco, model, data, robot: Robot, free: int, free_dof: int, step: float):
+    def __init__(
+        self, mujoco, model, data, robot: Robot, free: int, free_dof: int, step: float, keep: float | None = None
+    ):
         self._mj, self._model, self._data = mujoco, model, data
         self._free, self._free_dof = int(free), int(free_dof)
         self._step = float(step)
@@ -108,7 +113,11 @@ class PhysicsSensors:
         self._rays = {i: _Rays(s) for i, s in enumerate(self._sensors) if isinstance(s, Lidar)}  # buffers of each lidar
         self.due = 0
         """The number of the next step whose state a sensor needs (a huge number when none)."""
-        self._start = np.zeros(13)
+        self._base = [np.zeros(13) for _ in self._sensors]  # an IMU's state before its first kept sample
+        self._drained = [0] * len(self._sensors)  # samples handed out by drain() or dropped
+        self._keep = [None if keep is None else max(1, math.ceil(keep * s.rate)) for s in self._sensors]
+        self.dropped = 0
+        """Samples let go undrained beyond ``keep``."""
         self.take(0)
 
     @property
@@ -142,7 +151,7 @@ class PhysicsSensors:
         v = d.qvel[self._free_dof : self._free_dof + 6]
         self._states[steps] = np.concatenate([q[3:7], v[:3], v[3:6], q[:3]])
         if steps == 0:
-            self._start = self._states[0]
+            self._base = [self._states[0]] * len(self._sensors)
         for i, sensor in enumerate(self._sensors):
             while True:
                 k, fraction, last = self._sample_steps(i)
@@ -154,6 +163,7 @@ class PhysicsSensors:
                 else:
                     self._samples[i].append(self._cast(i, state))
                 self._next[i] += 1
+            self._let_go(i)
         oldest = min((self._sample_steps(i)[0] for i in range(len(self._sensors))), default=steps)
         for k in [k for k in self._states if k < min(oldest, steps)]:
             del self._states[k]
@@ -189,18 +199,43 @@ class PhysicsSensors:
         return out
 
     def truths(self) -> dict[str, ImuTruth | ScanTruth]:
-        """What each IMU and lidar read so far without errors, by sensor name."""
+        """What each IMU and lidar read without errors since it was made or last drained
+        (:meth:`drain`), by sensor name."""
         out: dict[str, ImuTruth | ScanTruth] = {}
         for i, sensor in enumerate(self._sensors):
+            samples, before = self._samples[i], self._drained[i]
             if isinstance(sensor, Lidar):
-                ranges = np.array(self._samples[i]).reshape(len(self._samples[i]), sensor.beams)
-                out[sensor.name] = ScanTruth(sensor, np.arange(len(ranges)) / sensor.rate, ranges)
+                ranges = np.array(samples).reshape(len(samples), sensor.beams)
+                out[sensor.name] = ScanTruth(sensor, (before + np.arange(len(samples))) / sensor.rate, ranges)
             else:
                 out[sensor.name] = self._imu_truth(i, sensor)
         return out
 
+    def _let_go(self, i: int) -> None:
+        """Drop sensor ``i``'s oldest samples beyond its ``keep``."""
+        limit, samples = self._keep[i], self._samples[i]
+        if limit is None or len(samples) <= limit:
+            return
+        extra = len(samples) - limit
+        if isinstance(self._sensors[i], Imu):
+            self._base[i] = samples[extra - 1]
+        del samples[:extra]
+        self._drained[i] += extra
+        self.dropped += extra
+
+    def drain(self) -> dict[str, ImuTruth | ScanTruth]:
+        """:meth:`truths`, then forget them: the next call gives the samples taken after this
+        one (a live robot's sensors, read cycle by cycle in bounded memory)."""
+        out = self.truths()
+        for i, samples in enumerate(self._samples):
+            if samples and isinstance(self._sensors[i], Imu):
+                self._base[i] = samples[-1]
+            self._drained[i] += len(samples)
+            samples.clear()
+        return out
+
     def _imu_truth(self, i: int, imu: Imu) -> ImuTruth:
-        states = np.array([self._start, *self._samples[i]])
+        states = np.array([self._base[i], *self._samples[i]])
         n = len(states) - 1
         dt = 1.0 / imu.rate
         m = imu.mount
@@ -214,7 +249,8 @@ class PhysicsSensors:
         gravity = np.asarray(self._model.opt.gravity, dtype=float)
         world = np.diff(v_p, axis=0) / dt - gravity
         forces = quat_rotate(quat_conj(q_mid), world)
-        return ImuTruth(imu, np.arange(1, n + 1) * dt, turn / dt, forces)
+        times = (self._drained[i] + np.arange(1, n + 1)) / imu.rate
+        return ImuTruth(imu, times, turn.reshape(n, 3) / dt, forces.reshape(n, 3))
 
 
 class _Rays:

@@ -244,7 +244,7 @@ class PhysicsSim:
         roller_phase=0.0,
         controller: Robot | None = None,
         world: World | None = None,
-        sensors: bool = False,
+        sensors: bool | float = False,
     ):
         mujoco = _mujoco()
         self._mj = mujoco
@@ -356,9 +356,13 @@ class PhysicsSim:
         self._settle(start)
         self.sensors: PhysicsSensors | None = None
         """What the robot's IMUs and lidars read (:mod:`omnikin.physics.sensing`), when made
-        with ``sensors`` and the robot has some; else None."""
-        if sensors and any(isinstance(s, (Imu, Lidar)) for s in robot.sensors):
-            self.sensors = PhysicsSensors(mujoco, m, self.data, robot, self._free, self._free_dof, self.step_size)
+        with ``sensors`` (True: every sample kept; a number [s]: the latest that long) and the
+        robot has some; else None."""
+        if sensors is not False and any(isinstance(s, (Imu, Lidar)) for s in robot.sensors):
+            keep = None if sensors is True else float(sensors)
+            self.sensors = PhysicsSensors(
+                mujoco, m, self.data, robot, self._free, self._free_dof, self.step_size, keep=keep
+            )
 
     # --- start ---------------------------------------------------------------------------------
     def _settle(self, start: np.ndarray) -> None:

@@ -18,7 +18,9 @@ attribute, escaped by the writer, never pasted into markup); it needs neither RO
   turns all the way round (castors swivel freely); the wheel's joint hangs from the fork,
   trailing the axis by the steering offset;
 - Swedish wheels: per roller a link ``NAME_roller_ROW_K`` on a ``continuous`` joint of the same
-  name about the roller's spin axis, its origin at the roller's centre.
+  name about the roller's spin axis, its origin at the roller's centre;
+- per IMU and lidar (:mod:`omnikin.kinematics.sensors`) a link named as the sensor (its frame:
+  the mount, the frame of its messages) on a ``fixed`` joint ``NAME_joint`` from ``base_link``.
 
 Joint names of the wheels and steering joints are those the ROS node publishes in
 ``joint_states`` (``NAME``, ``NAME_steer``; :mod:`omnikin.ros.node`) and MuJoCo's model uses
@@ -41,10 +43,12 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 
 from ..common.messages import shorten
 from ..errors import InputError
 from ..kinematics.robot import Robot
+from ..kinematics.sensors import Imu, Lidar, Sensor
 from .description import PhysicalRobot, WheelBody, describe
 
 BASE_LINK = "base_link"
@@ -159,8 +163,12 @@ def _steered(tree: _Tree, wheel: WheelBody) -> None:
     _wheel(tree, wheel, fork, (-steering.trail, 0.0, 0.0), 0.0)
 
 
-def urdf(robot: PhysicalRobot | Robot) -> str:
-    """The URDF text of ``robot`` (a description, or a robot to :func:`describe`; module docstring)."""
+def urdf(robot: PhysicalRobot | Robot, sensors: Sequence[Sensor] | None = None) -> str:
+    """The URDF text of ``robot`` (a description, or a robot to :func:`describe`; module
+    docstring) with a link for each IMU and lidar of ``sensors`` (default: a robot's own, none
+    for a description)."""
+    if sensors is None:
+        sensors = robot.sensors if isinstance(robot, Robot) else ()
     if isinstance(robot, Robot):
         robot = describe(robot)
     tree = _Tree(robot.name)
@@ -179,5 +187,13 @@ def urdf(robot: PhysicalRobot | Robot) -> str:
             _steered(tree, wheel)
         else:
             _wheel(tree, wheel, BASE_LINK, wheel.hub, wheel.drive)
+    for sensor in sensors:
+        if isinstance(sensor, (Imu, Lidar)):  # a bumper has no frame of its own
+            tree.add("link", sensor.name)
+            m = sensor.mount
+            joint = tree.add("joint", f"{sensor.name}_joint", type="fixed")
+            ET.SubElement(joint, "parent", link=BASE_LINK)
+            ET.SubElement(joint, "child", link=sensor.name)
+            ET.SubElement(joint, "origin", xyz=_vec((m.x, m.y, m.z)), rpy=_vec((0.0, 0.0, m.yaw)))
     ET.indent(tree.root)
     return '<?xml version="1.0"?>\n' + ET.tostring(tree.root, encoding="unicode") + "\n"

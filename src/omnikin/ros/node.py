@@ -10,7 +10,10 @@ as measured, then the joints no sensor reads, moved as the odometry's body motio
 gets it), ``/diagnostics`` (command and link statistics, the forward-kinematics residual),
 ``ground_truth`` (``nav_msgs/Odometry``, the simulated robot's true pose and mean twist over
 the last cycle, in the frames of ``odom``; only with a simulated back-end, one that has a
-``truth`` pose) and, when ``tf2_msgs`` is importable, ``/tf``: odom -> base_link and, at most
+``truth`` pose), ``imu`` and ``scan`` (``sensor_msgs/Imu``, ``sensor_msgs/LaserScan``: what the
+robot's IMUs and lidars read, each reading stamped at its own time in the sensor's frame; only
+with a back-end that reads them, the physics one: :meth:`BaseNode._publish_sensors`) and, when
+``tf2_msgs`` is importable, ``/tf``: odom -> base_link and, at most
 ``link_tf_rate`` times a second, every URDF link in its parent link
 (:mod:`omnikin.physics.link_frames`), and ``/tf_static`` (transient local): ``base_frame_id`` ->
 the URDF's ``base_link`` when the two names differ, and the URDF's fixed joints if any.
@@ -73,12 +76,14 @@ from ..control.controllers import check_controller_for
 from ..control.follower import MAX_WAYPOINTS, FollowPlan, PathFollower, PlanWorker, plan_follow
 from ..errors import InputError, LinkError, OmnikinError
 from ..kinematics.se2 import between, log
+from ..kinematics.sensors import Imu, Lidar
 from ..motion.limits import MotionLimits
 from ..physics.description import describe
 from ..physics.joint_motion import JointMotion
 from ..physics.link_frames import LinkFrames, urdf_joints
 from ..physics.urdf import BASE_LINK, urdf
 from ..runtime.base import BaseRuntime
+from ..sensors.message_content import imu_fields, scan_fields, sensor_topic
 from . import messages, require_rclpy
 from .params import DEFAULTS, check_names, validate
 
@@ -93,7 +98,9 @@ try:
     from rclpy.executors import ExternalShutdownException
     from rclpy.node import Node
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-    from sensor_msgs.msg import JointState
+    from rclpy.time import Time
+    from sensor_msgs.msg import Imu as ImuMessage
+    from sensor_msgs.msg import JointState, LaserScan
     from std_msgs.msg import String
 except ImportError:
     require_rclpy()  # without rclpy: the one-line error naming the ros extra
@@ -105,6 +112,9 @@ except ImportError:  # not among the ROS 2 wheels on PyPI
     TFMessage = None
 
 NODE_NAME = "omnikin_base"
+CLOCK_STEP = 0.05
+"""A change [s] in the difference between the ROS clock and the runtime's beyond which the
+sensors' stamps follow it (the system clock was set)."""
 
 LATCHED = QoSProfile(
     depth=1,
@@ -186,6 +196,7 @@ class BaseNode(Node):
             else:
                 self.tf_pub = self.create_publisher(TFMessage, "/tf", qos)
                 self._publish_static_tf()
+        self._init_sensors(backend, qos)
         self.published = 0
         self.link_rearms = 0  # lost links re-armed (serial back-end)
         self._next_retry: float | None = None  # node time [s] of the next link reopen
@@ -212,6 +223,77 @@ class BaseNode(Node):
         self.create_timer(self.period, self._loop, clock=steady)
         self.create_timer(1.0, self._diagnostics, clock=steady)
 
+    def _init_sensors(self, backend, qos) -> None:
+        """``imu`` and ``scan`` (``imu/NAME``, ``scan/NAME`` with several) for the robot's IMUs
+        and lidars, when the back-end reads them (``sensor_readings``: the physics back-end);
+        a warning once when the robot has some that its back-end does not read."""
+        self._sensing: Any = None
+        self._clock_offset_ns: int | None = None  # the ROS clock minus the runtime's [ns]
+        self._imu_pubs: dict[str, tuple] = {}
+        self._scan_pubs: dict[str, tuple] = {}
+        sensors = getattr(backend, "true_robot", self.robot).sensors
+        imus = [s for s in sensors if isinstance(s, Imu)]
+        lidars = [s for s in sensors if isinstance(s, Lidar)]
+        if not imus and not lidars:
+            return
+        if not callable(getattr(backend, "sensor_readings", None)):
+            self.get_logger().warning(
+                "the robot's IMUs and lidars are read by the physics back-end only (--backend physics): "
+                "no imu or scan topics"
+            )
+            return
+        self._sensing = backend
+        for imu in imus:
+            topic = sensor_topic("imu", imu.name, len(imus) > 1)
+            self._imu_pubs[imu.name] = (self.create_publisher(ImuMessage, topic, qos), imu_fields(imu))
+        for lidar in lidars:
+            topic = sensor_topic("scan", lidar.name, len(lidars) > 1)
+            self._scan_pubs[lidar.name] = (self.create_publisher(LaserScan, topic, qos), scan_fields(lidar))
+
+    def _publish_sensors(self) -> None:
+        """Publish what the IMUs and lidars read since the previous cycle, each message stamped
+        with the node's clock at the reading's time (its simulated time on the runtime's clock,
+        :meth:`omnikin.physics.backend.PhysicsBackend.caller_time`, moved onto the ROS clock by
+        the two clocks' difference, taken once: a difference read at every cycle would carry the
+        jitter of the two reads into the stamps, and taken again only when the ROS clock has
+        stepped by more than :data:`CLOCK_STEP`)."""
+        if self._sensing is None:
+            return
+        readings = self._sensing.sensor_readings()
+        if readings is None:
+            return
+        offset_ns = self.get_clock().now().nanoseconds - int(round(self.now_s() * 1e9))
+        if self._clock_offset_ns is None or abs(offset_ns - self._clock_offset_ns) > CLOCK_STEP * 1e9:
+            self._clock_offset_ns = offset_ns
+        offset_ns = self._clock_offset_ns
+
+        def stamp(t: float):
+            return Time(nanoseconds=offset_ns + int(round(self._sensing.caller_time(t) * 1e9))).to_msg()
+
+        for record in readings.imus:
+            publisher, fields = self._imu_pubs[record.sensor.name]
+            for t, gyro, accel in zip(record.t, record.gyro, record.accel, strict=True):
+                msg = ImuMessage()
+                msg.header.stamp = stamp(t)
+                msg.header.frame_id = record.sensor.name
+                o = msg.orientation
+                o.x, o.y, o.z, o.w = fields["orientation"]
+                msg.orientation_covariance = fields["orientation_covariance"]
+                w, a = msg.angular_velocity, msg.linear_acceleration
+                w.x, w.y, w.z = (float(v) for v in gyro)
+                a.x, a.y, a.z = (float(v) for v in accel)
+                msg.angular_velocity_covariance = fields["angular_velocity_covariance"]
+                msg.linear_acceleration_covariance = fields["linear_acceleration_covariance"]
+                publisher.publish(msg)
+        for scans in readings.scans:
+            publisher, fields = self._scan_pubs[scans.sensor.name]
+            for t, ranges in zip(scans.t, scans.ranges, strict=True):
+                msg = LaserScan(**fields)
+                msg.header.stamp = stamp(t)
+                msg.header.frame_id = scans.sensor.name
+                msg.ranges = ranges.astype(np.float32).tolist()
+                publisher.publish(msg)
+
     def _init_following(self, robot, limits: MotionLimits) -> None:
         """The path follower (module docstring): ``plan`` in (serialized: its poses are read on
         the planning thread, not by the bindings on the control loop's), ``reference`` and
@@ -235,7 +317,7 @@ class BaseNode(Node):
         self.link_frames: LinkFrames | None = None
         try:
             body = describe(robot)
-            text = urdf(body)
+            text = urdf(body, robot.sensors)
             self.joint_motion = JointMotion(robot, self.runtime.encoded, body)
         except InputError as exc:
             self.get_logger().warning(f"no robot_description, link transforms or unmeasured joints: {exc}")
@@ -428,6 +510,7 @@ class BaseNode(Node):
         self._next_retry = None
         self._publish(res)
         self._publish_truth(now)
+        self._publish_sensors()
 
     def _step(self, now: float):
         """One control step: a path followed commands from the pose just measured."""

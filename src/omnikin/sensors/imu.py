@@ -52,18 +52,54 @@ def draw_triad(axes: ImuAxes, rng: np.random.Generator) -> TriadErrors:
     return TriadErrors(bias, matrix)
 
 
+class TriadStream:
+    """The errors of one triad ``axes`` sampled at ``rate`` [Hz], added to its readings chunk by
+    chunk (a live sensor's) or all at once (a run's): the constant errors drawn from ``rng`` at
+    the first chunk, the bias walk carried from one chunk to the next (module docstring); one
+    chunk of a whole record draws what :func:`with_errors` draws. ``rng`` None: exact."""
+
+    def __init__(self, axes: ImuAxes, rate: float, rng: np.random.Generator | None):
+        self.axes, self.rate = axes, float(rate)
+        self._rng = None if axes.is_zero else rng
+        self._drawn: TriadErrors | None = None
+        self._walk = np.zeros(3)
+
+    def apply(self, truth: np.ndarray) -> np.ndarray:
+        """``truth`` ``(n, 3)``, the next ``n`` samples, as the triad reads them."""
+        truth = np.asarray(truth, dtype=float)
+        rng = self._rng
+        if rng is None:
+            return truth.copy()
+        if self._drawn is None:
+            self._drawn = draw_triad(self.axes, rng)
+        n = len(truth)
+        dt = 1.0 / self.rate
+        walk = self._walk + np.cumsum(rng.standard_normal((n, 3)) * (self.axes.bias_walk * math.sqrt(dt)), axis=0)
+        if n:
+            self._walk = walk[-1].copy()
+        white = rng.standard_normal((n, 3)) * (self.axes.noise_density * math.sqrt(self.rate))
+        return truth @ self._drawn.matrix.T + self._drawn.bias + walk + white
+
+
 def with_errors(truth: np.ndarray, axes: ImuAxes, rate: float, rng: np.random.Generator | None) -> np.ndarray:
     """``truth`` ``(n, 3)`` as one triad reads it at ``rate`` [Hz] (module docstring); ``rng``
     None: exact."""
-    truth = np.asarray(truth, dtype=float)
-    if rng is None or axes.is_zero:
-        return truth.copy()
-    drawn = draw_triad(axes, rng)
-    n = len(truth)
-    dt = 1.0 / rate
-    walk = np.cumsum(rng.standard_normal((n, 3)) * (axes.bias_walk * math.sqrt(dt)), axis=0)
-    white = rng.standard_normal((n, 3)) * (axes.noise_density * math.sqrt(rate))
-    return truth @ drawn.matrix.T + drawn.bias + walk + white
+    return TriadStream(axes, rate, rng).apply(truth)
+
+
+class ImuStream:
+    """The errors of ``imu`` added chunk by chunk: its gyro's, then its accelerometer's
+    (:class:`TriadStream`); one chunk of a whole record draws what :func:`read` draws."""
+
+    def __init__(self, imu: Imu, rng: np.random.Generator | None):
+        self.imu = imu
+        self._gyro = TriadStream(imu.gyro, imu.rate, rng)
+        self._accel = TriadStream(imu.accel, imu.rate, rng)
+
+    def apply(self, rates: np.ndarray, forces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The gyro ``(n, 3)`` [rad/s] and accelerometer ``(n, 3)`` [m/s^2] readings of the next
+        ``n`` true mean ``rates`` and specific ``forces`` ``(n, 3)``."""
+        return self._gyro.apply(rates), self._accel.apply(forces)
 
 
 def read(
@@ -72,7 +108,7 @@ def read(
     """The gyro ``(n, 3)`` [rad/s] and accelerometer ``(n, 3)`` [m/s^2] readings of ``imu`` given
     the true mean ``rates`` and specific ``forces`` ``(n, 3)`` in its frame; the gyro's errors
     drawn first, then the accelerometer's (``rng`` None: exact)."""
-    return with_errors(rates, imu.gyro, imu.rate, rng), with_errors(forces, imu.accel, imu.rate, rng)
+    return ImuStream(imu, rng).apply(rates, forces)
 
 
 def sample_times(t: np.ndarray, rate: float) -> np.ndarray:

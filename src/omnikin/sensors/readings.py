@@ -21,7 +21,7 @@ from ..kinematics.robot import Robot
 from ..kinematics.se2 import between, compose, exp, log
 from ..kinematics.sensors import Imu, Lidar
 from ..world.shapes import Shapes
-from .imu import kinematic_truth, read
+from .imu import ImuStream, kinematic_truth
 from .lidar import measured, true_ranges
 
 MAX_SCAN_VALUES = 50_000_000
@@ -115,24 +115,40 @@ class ScanTruth:
     ranges: np.ndarray
 
 
+class SensorStream:
+    """The errors of ``robot``'s IMUs and lidars added to their truths chunk by chunk (a live
+    robot's) or all at once (a run's): each sensor draws from ``rng`` in the robot file's order
+    within a chunk, an IMU's chunk whole (:class:`~omnikin.sensors.imu.ImuStream`, its constant
+    errors at its first chunk), a lidar's scans in time order
+    (:func:`omnikin.sensors.lidar.measured`); ``rng`` None: exact. The one place both engines'
+    readings get their errors, so a seed means the same draws in each."""
+
+    def __init__(self, robot: Robot, rng: np.random.Generator | None):
+        self.robot = robot
+        self._rng = rng
+        self._imus = {s.name: ImuStream(s, rng) for s in robot.sensors if isinstance(s, Imu)}
+
+    def apply(self, truths) -> Readings:
+        """The readings of ``truths`` (an :class:`ImuTruth` or :class:`ScanTruth` per sensor
+        name, the next samples of each)."""
+        imus, scans = [], []
+        for sensor in self.robot.sensors:
+            truth = truths.get(sensor.name)
+            if isinstance(sensor, Imu) and isinstance(truth, ImuTruth):
+                gyro, accel = self._imus[sensor.name].apply(truth.rates, truth.forces)
+                imus.append(ImuReadings(sensor, truth.t, gyro, accel))
+            elif isinstance(sensor, Lidar) and isinstance(truth, ScanTruth):
+                ranges = np.empty((len(truth.t), sensor.beams))
+                for k, row in enumerate(truth.ranges):
+                    ranges[k] = measured(row, sensor, self._rng)
+                scans.append(ScanReadings(sensor, truth.t, ranges))
+        return Readings(tuple(imus), tuple(scans))
+
+
 def measured_readings(robot: Robot, truths, rng: np.random.Generator | None) -> Readings:
-    """The readings of ``robot``'s IMUs and lidars given ``truths`` (an :class:`ImuTruth` or
-    :class:`ScanTruth` per sensor name): the errors drawn from ``rng`` sensor by sensor in the
-    robot file's order, an IMU's whole record (:func:`omnikin.sensors.imu.read`), a lidar's
-    scans in time order (:func:`omnikin.sensors.lidar.measured`); None: exact. The one place
-    both engines' readings get their errors, so that a seed means the same draws in each."""
-    imus, scans = [], []
-    for sensor in robot.sensors:
-        truth = truths.get(sensor.name)
-        if isinstance(sensor, Imu) and isinstance(truth, ImuTruth):
-            gyro, accel = read(sensor, truth.rates, truth.forces, rng)
-            imus.append(ImuReadings(sensor, truth.t, gyro, accel))
-        elif isinstance(sensor, Lidar) and isinstance(truth, ScanTruth):
-            ranges = np.empty((len(truth.t), sensor.beams))
-            for k, row in enumerate(truth.ranges):
-                ranges[k] = measured(row, sensor, rng)
-            scans.append(ScanReadings(sensor, truth.t, ranges))
-    return Readings(tuple(imus), tuple(scans))
+    """The readings of a whole run of ``robot``'s IMUs and lidars given ``truths`` (by sensor
+    name): :class:`SensorStream` in one chunk."""
+    return SensorStream(robot, rng).apply(truths)
 
 
 def kinematic_readings(robot: Robot, t, poses, shapes: Shapes | None, rng: np.random.Generator | None) -> Readings:

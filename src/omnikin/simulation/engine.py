@@ -257,6 +257,7 @@ class Engine(Protocol):
         noise: NoiseModel | None = None,
         rng=None,
         max_lag: float | None = None,
+        sensor_rng=None,
     ) -> SimulatedBackend:
         """The runtime's wheel back-end: ``true_robot`` (default ``robot``) simulated in real time,
         commanded and read with ``robot``'s wheels.
@@ -273,6 +274,10 @@ class Engine(Protocol):
         max_lag : float, optional
             Physics: the most simulated time [s] the back-end may lag the caller's clock before it
             drops time (None: never drops). Kinematic: not used (its back-end never lags).
+        sensor_rng : numpy.random.Generator or None
+            Physics: the stream of the errors of the robot's IMUs and lidars, which its back-end
+            reads (``sensor_readings()``; None: exact). Kinematic: not used (its back-end reads
+            no sensors yet).
 
         Returns
         -------
@@ -572,6 +577,7 @@ class KinematicEngine(Engine):
         noise: NoiseModel | None = None,
         rng=None,
         max_lag: float | None = None,
+        sensor_rng=None,
     ) -> SimulatedBackend:
         from .backend import SimBackend
 

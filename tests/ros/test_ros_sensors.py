@@ -1,0 +1,113 @@
+"""``omnikin ros tomasi-omni3-lidar --backend physics --world W`` on a real ROS 2 graph: the node
+publishes ``scan`` and ``imu`` as the physics reads them, in the sensors' frames, which the
+URDF on ``robot_description`` holds as fixed links of ``base_link``.
+
+Closed form: the robot stands at the world's start pose in a square room of inner half-width
+1.95 m, its lidar at the body origin facing along the body's x axis; a beam at angle a from the
+heading meets the faces at ``min((1.95 - x) / cos, ...)`` (by hand, as in
+``tests/sensors/test_lidar.py``). The preset's range noise (0.01 m) and dropouts (1 %) are
+random: each beam within 6 standard deviations, the median error within 0.01 m.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mujoco", reason="the physics back-end needs MuJoCo (extra 'physics')")
+
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402 (after the importorskips)
+from sensor_msgs.msg import Imu, LaserScan  # noqa: E402
+from std_msgs.msg import String  # noqa: E402
+from test_ros_node import (  # noqa: E402 (after the importorskips there and above)
+    RELIABLE_ALL,
+    _ros_environment,  # noqa: F401 (the module's ROS environment, autouse)
+    start,
+    wait_for,
+)
+
+pytestmark = pytest.mark.ros
+
+WORLD = """\
+omnikin_world: 1
+name: box-room
+start: [0.3, -0.2, 20]
+walls:
+  - {points: [[-2, -2], [2, -2], [2, 2], [-2, 2], [-2, -2]], thickness: 0.1, height: 0.5}
+"""
+FACE = 1.95
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+class Collect:
+    """The test side's subscription to one topic: every message with its receive time."""
+
+    def __init__(self, graph, kind, topic: str, qos=RELIABLE_ALL):
+        self.lock = threading.Lock()
+        self.msgs: list = []
+        graph.node.create_subscription(kind, topic, self._on, qos)
+
+    def _on(self, msg):
+        with self.lock:
+            self.msgs.append(msg)
+
+    def all(self) -> list:
+        with self.lock:
+            return list(self.msgs)
+
+
+def _to_faces(x: float, y: float, angles: np.ndarray) -> np.ndarray:
+    c, s = np.cos(angles), np.sin(angles)
+    with np.errstate(divide="ignore"):
+        to_x = np.where(c > 0, (FACE - x) / c, np.where(c < 0, (-FACE - x) / c, np.inf))
+        to_y = np.where(s > 0, (FACE - y) / s, np.where(s < 0, (-FACE - y) / s, np.inf))
+    return np.minimum(to_x, to_y)
+
+
+def test_the_physics_node_publishes_scans_of_its_world_and_imu_readings_in_the_sensor_frames(tmp_path):
+    (tmp_path / "room.yaml").write_text(WORLD)
+    proc, graph = start(tmp_path, ["tomasi-omni3-lidar", "--backend", "physics", "--world", "room.yaml"])
+    try:
+        scans = Collect(graph, LaserScan, "scan")
+        imus = Collect(graph, Imu, "imu")
+        description = Collect(graph, String, "robot_description", LATCHED)
+        assert wait_for(lambda: len(scans.all()) >= 5 and len(imus.all()) >= 200, 15.0), (
+            f"{len(scans.all())} scans, {len(imus.all())} IMU readings\n{proc.stderr()}"
+        )
+        scan = scans.all()[-1]
+        assert scan.header.frame_id == "laser"
+        assert scan.angle_min == pytest.approx(-math.pi) and scan.angle_increment == pytest.approx(math.radians(1.0))
+        assert len(scan.ranges) == 360 and scan.range_max == pytest.approx(12.0)
+        assert scan.scan_time == pytest.approx(0.1)
+        # the robot stands at the start pose (the world file's heading in degrees)
+        angles = math.radians(20.0) + scan.angle_min + np.arange(360) * scan.angle_increment
+        expected = _to_faces(0.3, -0.2, angles)
+        ranges = np.array(scan.ranges, dtype=float)
+        seen = np.isfinite(ranges)
+        assert seen.sum() >= 340  # 1 % dropouts (NaN)
+        error = ranges[seen] - expected[seen]
+        assert np.all(np.abs(error) < 0.06) and abs(float(np.median(error))) < 0.01, error
+        # IMU: 200 Hz in its own frame, gravity on z, no turn
+        readings = imus.all()
+        assert {m.header.frame_id for m in readings} == {"imu"}
+        stamps = np.array([m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in readings])
+        steps = np.diff(stamps)
+        assert np.all(steps > 0) and np.median(steps) == pytest.approx(0.005, abs=2e-4)
+        accel = np.array([[v.x, v.y, v.z] for v in (m.linear_acceleration for m in readings)])
+        gyro = np.array([[v.x, v.y, v.z] for v in (m.angular_velocity for m in readings)])
+        assert accel[:, 2].mean() == pytest.approx(9.81, abs=0.3)  # the preset's bias: 0.05 m/s^2
+        assert np.abs(gyro.mean(axis=0)).max() < 0.03  # its bias: 0.005 rad/s
+        assert readings[-1].orientation_covariance[0] == -1.0  # orientation unknown (REP 145)
+        # the URDF holds the sensors' frames, fixed on base_link at their mounts
+        assert wait_for(lambda: description.all(), 5.0)
+        urdf = description.all()[-1].data
+        assert '<joint name="laser_joint" type="fixed">' in urdf and '<child link="laser" />' in urdf
+        assert '<joint name="imu_joint" type="fixed">' in urdf
+        assert "Traceback" not in proc.stderr()
+    finally:
+        graph.close()
+        rc, _ = proc.terminate()
+        assert rc == 0, proc.stderr()
