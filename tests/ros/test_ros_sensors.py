@@ -19,7 +19,9 @@ import pytest
 
 pytest.importorskip("mujoco", reason="the physics back-end needs MuJoCo (extra 'physics')")
 
+from nav_msgs.msg import Odometry  # noqa: E402
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402 (after the importorskips)
+from rosgraph_msgs.msg import Clock  # noqa: E402
 from sensor_msgs.msg import Imu, LaserScan  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 from test_ros_node import (  # noqa: E402 (after the importorskips there and above)
@@ -106,6 +108,42 @@ def test_the_physics_node_publishes_scans_of_its_world_and_imu_readings_in_the_s
         urdf = description.all()[-1].data
         assert '<joint name="laser_joint" type="fixed">' in urdf and '<child link="laser" />' in urdf
         assert '<joint name="imu_joint" type="fixed">' in urdf
+        assert "Traceback" not in proc.stderr()
+    finally:
+        graph.close()
+        rc, _ = proc.terminate()
+        assert rc == 0, proc.stderr()
+
+
+def _seconds(stamp) -> float:
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def test_with_use_sim_time_the_physics_node_is_the_clock_and_stamps_everything_in_simulated_time(tmp_path):
+    """``--ros-args -p use_sim_time:=true``: ``/clock`` counts simulated seconds from 0 (not the
+    wall clock's 1.7e9), and the odometry, the scans (at k / 10 s exactly) and the IMU readings
+    (at j / 200 s) are stamped on it."""
+    (tmp_path / "room.yaml").write_text(WORLD)
+    args = ["tomasi-omni3-lidar", "--backend", "physics", "--world", "room.yaml"]
+    proc, graph = start(tmp_path, [*args, "--ros-args", "-p", "use_sim_time:=true"])
+    try:
+        clocks = Collect(graph, Clock, "/clock")
+        scans = Collect(graph, LaserScan, "scan")
+        imus = Collect(graph, Imu, "imu")
+        odoms = Collect(graph, Odometry, "odom")
+        assert wait_for(lambda: len(scans.all()) >= 5 and min(len(odoms.all()), len(clocks.all())) >= 20, 15.0), (
+            proc.stderr()
+        )
+        ticks = np.array([_seconds(m.clock) for m in clocks.all()])
+        assert np.all(np.diff(ticks) >= 0) and ticks[-1] >= 0.3
+        assert ticks[-1] < 1000.0  # simulated seconds since the start, not the system clock
+        for stamp in (_seconds(m.header.stamp) for m in odoms.all()):
+            assert 0.0 <= stamp <= ticks[-1] + 1.0
+        scan_times = np.array([_seconds(m.header.stamp) for m in scans.all()])
+        np.testing.assert_allclose(scan_times * 10.0, np.round(scan_times * 10.0), atol=1e-6)
+        imu_times = np.array([_seconds(m.header.stamp) for m in imus.all()])
+        np.testing.assert_allclose(imu_times * 200.0, np.round(imu_times * 200.0), atol=1e-5)
+        assert np.all(np.diff(imu_times) > 0)
         assert "Traceback" not in proc.stderr()
     finally:
         graph.close()

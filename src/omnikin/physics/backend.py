@@ -125,6 +125,11 @@ class PhysicsBackend:
             return None
         return self._sensor_errors.apply(sensors.drain())
 
+    @property
+    def sim_time(self) -> float:
+        """Simulated time [s] since the start (behind the caller's clock by what was dropped)."""
+        return self.sim.time
+
     def caller_time(self, t: float) -> float:
         """The caller's clock [s] (the times ``write`` and ``read`` are given) at simulated time
         ``t`` [s] (a sensor reading's), counting the time dropped so far (module docstring);

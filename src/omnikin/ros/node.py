@@ -22,6 +22,11 @@ once and publishes no ``/tf``; run it from a ROS 2 install (``source /opt/ros/<d
 setup.bash``) to get it. Parameters: :mod:`omnikin.ros.params`; message content:
 :mod:`omnikin.ros.messages` (this module only copies it into messages).
 
+Simulated time: with ROS's ``use_sim_time`` on this node and a simulated back-end (``--backend
+sim`` or ``physics``) the node is the clock: ``/clock`` (``rosgraph_msgs/Clock``) in simulated
+time every cycle and every stamp in it (:meth:`BaseNode._init_clock`), for SLAM and Nav2 stacks
+run with ``use_sim_time``.
+
 Paths: a ``nav_msgs/Path`` on ``plan`` (in the odometry frame, or with an empty frame id) is
 followed (:mod:`omnikin.control.follower`): planned from the robot's pose on a worker thread, timed
 within 95 % of the node's limits (its body limits and ``wheel_max_velocity``, every wheel's own
@@ -99,6 +104,7 @@ try:
     from rclpy.node import Node
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
     from rclpy.time import Time
+    from rosgraph_msgs.msg import Clock as ClockMessage
     from sensor_msgs.msg import Imu as ImuMessage
     from sensor_msgs.msg import JointState, LaserScan
     from std_msgs.msg import String
@@ -166,6 +172,7 @@ class BaseNode(Node):
             wheel=p["wheel_max_velocity"] or None,
         )
         self.robot = robot
+        self._init_clock(backend)
         self.runtime = BaseRuntime(
             robot, backend, limits=limits, cmd_vel_timeout=p["cmd_vel_timeout"], wheel_slip=p["wheel_slip"]
         )
@@ -223,6 +230,28 @@ class BaseNode(Node):
         self.create_timer(self.period, self._loop, clock=steady)
         self.create_timer(1.0, self._diagnostics, clock=steady)
 
+    def _init_clock(self, backend) -> None:
+        """With ROS's ``use_sim_time`` on this node and a simulated back-end (one with a
+        ``sim_time``), the node is the clock, as a simulator is: it publishes ``/clock`` in
+        simulated time every cycle and stamps every message with it (:meth:`clock_now`), so
+        nodes run with ``use_sim_time`` (slam_toolbox, Nav2, rviz2) see one clock that slows
+        down with the simulation. Otherwise (a real robot, or ``use_sim_time`` off) stamps come
+        from the node's ROS clock, which follows an external ``/clock`` under ``use_sim_time``."""
+        self._sim_clock: Any = None
+        self.clock_pub = None
+        if not self.get_parameter("use_sim_time").value or getattr(backend, "sim_time", None) is None:
+            return
+        self._sim_clock = backend
+        self.clock_pub = self.create_publisher(
+            ClockMessage, "/clock", QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        )
+        self._publish_clock()
+
+    def _publish_clock(self) -> None:
+        """``/clock``: the simulated time now (only when the node is the clock)."""
+        if self.clock_pub is not None:
+            self.clock_pub.publish(ClockMessage(clock=self.clock_now().to_msg()))
+
     def _init_sensors(self, backend, qos) -> None:
         """``imu`` and ``scan`` (``imu/NAME``, ``scan/NAME`` with several) for the robot's IMUs
         and lidars, when the back-end reads them (``sensor_readings``: the physics back-end);
@@ -262,13 +291,19 @@ class BaseNode(Node):
         readings = self._sensing.sensor_readings()
         if readings is None:
             return
-        offset_ns = self.get_clock().now().nanoseconds - int(round(self.now_s() * 1e9))
-        if self._clock_offset_ns is None or abs(offset_ns - self._clock_offset_ns) > CLOCK_STEP * 1e9:
-            self._clock_offset_ns = offset_ns
-        offset_ns = self._clock_offset_ns
+        if self._sim_clock is not None:  # the node is the clock: stamps in simulated time
 
-        def stamp(t: float):
-            return Time(nanoseconds=offset_ns + int(round(self._sensing.caller_time(t) * 1e9))).to_msg()
+            def stamp(t: float):
+                return Time(nanoseconds=int(round(float(t) * 1e9))).to_msg()
+
+        else:
+            offset_ns = self.get_clock().now().nanoseconds - int(round(self.now_s() * 1e9))
+            if self._clock_offset_ns is None or abs(offset_ns - self._clock_offset_ns) > CLOCK_STEP * 1e9:
+                self._clock_offset_ns = offset_ns
+            offset = self._clock_offset_ns
+
+            def stamp(t: float):
+                return Time(nanoseconds=offset + int(round(self._sensing.caller_time(t) * 1e9))).to_msg()
 
         for record in readings.imus:
             publisher, fields = self._imu_pubs[record.sensor.name]
@@ -341,7 +376,7 @@ class BaseNode(Node):
     def _publish_static_tf(self) -> None:
         """``/tf_static`` once: ``base_frame_id`` -> the URDF's base link (identity) when the
         names differ, and the URDF's fixed joints."""
-        stamp = self.get_clock().now().to_msg()
+        stamp = self.clock_now().to_msg()
         transforms = []
         if self.link_frames is not None and self.p["link_tf_rate"] > 0.0:
             if self.p["base_frame_id"] != BASE_LINK:
@@ -357,9 +392,17 @@ class BaseNode(Node):
         """Runtime time [s]: the monotonic clock, the same one the back-ends use."""
         return time.monotonic()
 
+    def clock_now(self) -> Time:
+        """The time of the message stamps: the simulated time when the node is the clock
+        (``use_sim_time`` with a simulated back-end, :meth:`_init_clock`), else the node's ROS
+        clock."""
+        if self._sim_clock is not None:
+            return Time(nanoseconds=int(round(float(self._sim_clock.sim_time) * 1e9)))
+        return self.get_clock().now()
+
     def ros_now_s(self) -> float:
-        """The node's ROS clock [s] (the clock of the message stamps)."""
-        return self.get_clock().now().nanoseconds * 1e-9
+        """The clock of the message stamps [s] (:meth:`clock_now`)."""
+        return self.clock_now().nanoseconds * 1e-9
 
     def _on_cmd(self, msg):
         received = self.now_s()
@@ -456,9 +499,9 @@ class BaseNode(Node):
 
     def _publish_reference_path(self, plan: FollowPlan) -> None:
         t, poses = messages.reference_samples(plan.trajectory)
-        start = self.get_clock().now().nanoseconds
+        start = self.clock_now().nanoseconds
         msg = PathMessage()
-        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.stamp = self.clock_now().to_msg()
         msg.header.frame_id = self.p["odom_frame_id"]
         for tk, pose in zip(t, poses, strict=True):
             msg.poses.append(self._pose_stamped(start + round(float(tk) * 1e9), pose))
@@ -479,6 +522,7 @@ class BaseNode(Node):
         try:
             self._cycle(now)
         finally:
+            self._publish_clock()
             took = self.now_s() - now
             self._loop_time_max = max(self._loop_time_max, took)
             if took > self.period:
@@ -522,12 +566,12 @@ class BaseNode(Node):
             self.get_logger().info(self.follower.summary())
             twist = np.zeros(3)
         else:
-            self.reference_pub.publish(self._pose_stamped(self.get_clock().now().nanoseconds, self.follower.reference))
+            self.reference_pub.publish(self._pose_stamped(self.clock_now().nanoseconds, self.follower.reference))
         self.runtime.command(twist, now)
         return self.runtime.act(now, state)
 
     def _publish(self, res) -> None:
-        stamp = self.get_clock().now().to_msg()
+        stamp = self.clock_now().to_msg()
         c = messages.odometry_content(res.pose, res.twist, res.pose_covariance, res.twist_covariance)
         odom = Odometry()
         odom.header.stamp = stamp
@@ -597,7 +641,7 @@ class BaseNode(Node):
         self._last_truth = (now, pose)
         c = messages.odometry_content(pose, twist, self._zero3, self._zero3)
         msg = Odometry()
-        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.stamp = self.clock_now().to_msg()
         msg.header.frame_id = self.p["odom_frame_id"]
         msg.child_frame_id = self.p["base_frame_id"]
         p, tw = msg.pose.pose, msg.twist.twist
@@ -697,7 +741,7 @@ class BaseNode(Node):
         path_values = [*follower.values(), ("paths_received", str(self.paths_received))]
         path_status.values = [KeyValue(key=k, value=v) for k, v in path_values]
         arr = DiagnosticArray()
-        arr.header.stamp = self.get_clock().now().to_msg()
+        arr.header.stamp = self.clock_now().to_msg()
         arr.status = [status, path_status]
         self.diag_pub.publish(arr)
 

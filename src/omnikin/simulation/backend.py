@@ -72,6 +72,7 @@ class SimBackend:
         self._steer = np.zeros(len(robot.steerable)) if robot.steerable else None
         self._steer_start = None if self._steer is None else self._steer.copy()
         self._t: float | None = None
+        self._first = 0.0  # the caller's time [s] of the first call
         self.writes = 0
         self.reads = 0
 
@@ -99,7 +100,7 @@ class SimBackend:
 
     def _advance(self, t: float) -> None:
         if self._t is None:  # the first call starts the clock
-            self._t = float(t)
+            self._t = self._first = float(t)
             return
         dt = float(t) - self._t
         if dt <= 0:
@@ -125,6 +126,11 @@ class SimBackend:
                 self.contacts.append(self.collider.contact(self._t + gone * dt, self.truth))
             self.touching = touch is not None
         self._t = float(t)
+
+    @property
+    def sim_time(self) -> float:
+        """Simulated time [s] since the first call (the caller's clock: this back-end never lags)."""
+        return 0.0 if self._t is None else self._t - self._first
 
     def stats(self) -> dict:
         return {"backend": "sim", "writes": self.writes, "reads": self.reads}
