@@ -77,6 +77,7 @@ COMMANDS = (
     "sweep",
     "mjcf",
     "urdf",
+    "tf2_msgs",
 )
 """The command modules of :mod:`omnikin.cli` by name, each adding its command(s) with
 ``add_parser(sub, robot_help)``. They are imported by :func:`build_parser`, which

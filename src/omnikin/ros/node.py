@@ -18,7 +18,8 @@ with a back-end that reads them, the physics one: :meth:`BaseNode._publish_senso
 (:mod:`omnikin.physics.link_frames`), and ``/tf_static`` (transient local): ``base_frame_id`` ->
 the URDF's ``base_link`` when the two names differ, and the URDF's fixed joints if any.
 ``tf2_msgs`` is not among the ROS 2 wheels on PyPI: with the PyPI install the node says so
-once and publishes no ``/tf``; run it from a ROS 2 install (``source /opt/ros/<distro>/
+once and publishes no ``/tf``; build it for the wheels (``omnikin tf2-msgs``,
+:mod:`omnikin.ros.interfaces`) or run the node from a ROS 2 install (``source /opt/ros/<distro>/
 setup.bash``) to get it. Parameters: :mod:`omnikin.ros.params`; message content:
 :mod:`omnikin.ros.messages` (this module only copies it into messages).
 
@@ -198,7 +199,8 @@ class BaseNode(Node):
             if TFMessage is None:
                 self.get_logger().warning(
                     "tf2_msgs is not importable (it is not among the ROS 2 wheels on PyPI): no /tf "
-                    "(odom->base_link, the robot's links); run this node from a ROS 2 install to publish it"
+                    "(odom->base_link, the robot's links); build it with omnikin tf2-msgs, or run this node from a "
+                    "ROS 2 install"
                 )
             else:
                 self.tf_pub = self.create_publisher(TFMessage, "/tf", qos)
