@@ -17,6 +17,7 @@ from omnikin.api import simulate  # noqa: E402
 from omnikin.kinematics.sensors import Imu, Lidar, Mount  # noqa: E402
 from omnikin.physics.simulator import PhysicsSim  # noqa: E402
 from omnikin.world import Box, Cylinder, Wall, make_world  # noqa: E402
+from support.rooms import to_faces  # noqa: E402
 
 HALF, THICK = 2.0, 0.1
 FACE = HALF - THICK / 2
@@ -48,15 +49,12 @@ def _expected(pose) -> np.ndarray:
     ox, oy = x + c * m.x - s * m.y, y + s * m.x + c * m.y
     angles = th + m.yaw + LIDAR.angles()
     ca, sa = np.cos(angles), np.sin(angles)
-    with np.errstate(divide="ignore"):
-        to_x = np.where(ca > 0, (FACE - ox) / ca, np.where(ca < 0, (-FACE - ox) / ca, np.inf))
-        to_y = np.where(sa > 0, (FACE - oy) / sa, np.where(sa < 0, (-FACE - oy) / sa, np.inf))
     dx, dy = ox - 1.0, oy - 1.0
     b = dx * ca + dy * sa
     disc = b * b - (dx * dx + dy * dy - 0.2**2)
     near = -b - np.sqrt(np.maximum(disc, 0.0))
     to_cylinder = np.where((disc >= 0) & (near > 0), near, np.inf)
-    return np.minimum(np.minimum(to_x, to_y), to_cylinder)
+    return np.minimum(to_faces(ox, oy, angles, FACE), to_cylinder)
 
 
 def test_scans_read_the_distances_from_the_true_pose_to_the_walls_and_the_cylinder():

@@ -31,6 +31,8 @@ from test_ros_node import (  # noqa: E402 (after the importorskips there and abo
     wait_for,
 )
 
+from support.rooms import to_faces  # noqa: E402
+
 pytestmark = pytest.mark.ros
 
 WORLD = """\
@@ -61,14 +63,6 @@ class Collect:
             return list(self.msgs)
 
 
-def _to_faces(x: float, y: float, angles: np.ndarray) -> np.ndarray:
-    c, s = np.cos(angles), np.sin(angles)
-    with np.errstate(divide="ignore"):
-        to_x = np.where(c > 0, (FACE - x) / c, np.where(c < 0, (-FACE - x) / c, np.inf))
-        to_y = np.where(s > 0, (FACE - y) / s, np.where(s < 0, (-FACE - y) / s, np.inf))
-    return np.minimum(to_x, to_y)
-
-
 def test_the_physics_node_publishes_scans_of_its_world_and_imu_readings_in_the_sensor_frames(tmp_path):
     (tmp_path / "room.yaml").write_text(WORLD)
     proc, graph = start(tmp_path, ["tomasi-omni3-lidar", "--backend", "physics", "--world", "room.yaml"])
@@ -86,7 +80,7 @@ def test_the_physics_node_publishes_scans_of_its_world_and_imu_readings_in_the_s
         assert scan.scan_time == pytest.approx(0.1)
         # the robot stands at the start pose (the world file's heading in degrees)
         angles = math.radians(20.0) + scan.angle_min + np.arange(360) * scan.angle_increment
-        expected = _to_faces(0.3, -0.2, angles)
+        expected = to_faces(0.3, -0.2, angles, FACE)
         ranges = np.array(scan.ranges, dtype=float)
         seen = np.isfinite(ranges)
         assert seen.sum() >= 340  # 1 % dropouts (NaN)

@@ -12,6 +12,7 @@ from omnikin.kinematics.sensors import Lidar, Mount
 from omnikin.sensors.lidar import measured, scan, true_ranges
 from omnikin.world import Box, Cylinder, Wall, make_world
 from omnikin.world.shapes import shapes_of
+from support.rooms import to_faces
 
 HALF, THICK = 2.0, 0.05
 FACE = HALF - THICK / 2
@@ -23,11 +24,7 @@ def _room(*obstacles):
 
 
 def _to_faces(x: float, y: float, angles: np.ndarray) -> np.ndarray:
-    c, s = np.cos(angles), np.sin(angles)
-    with np.errstate(divide="ignore"):
-        to_x = np.where(c > 0, (FACE - x) / c, np.where(c < 0, (-FACE - x) / c, np.inf))
-        to_y = np.where(s > 0, (FACE - y) / s, np.where(s < 0, (-FACE - y) / s, np.inf))
-    return np.minimum(to_x, to_y)
+    return to_faces(x, y, angles, FACE)
 
 
 def test_ranges_are_the_distances_from_the_mount_to_the_walls_along_each_declared_beam():

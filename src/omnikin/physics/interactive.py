@@ -44,9 +44,11 @@ chassis from the robot's reference point (its body frame's origin) along the tru
 odometry estimates (the runtime's :attr:`~omnikin.runtime.base.BaseRuntime.pose`, the exact
 odometry of its encoders): where the two agree the green shows on both sides of the magenta,
 where they part (an as-built robot, ``true_robot``; slip) the magenta arrow drifts off the
-robot. The colours are the browser viewer's (``docs/viewer.md``). The window shows time and
-real-time factor, true pose, odometry pose, twist, target, wheel speeds and steering angles, and
-a legend of the two arrows.
+robot. A robot with a lidar shows its latest scan as orange points where the beams met the
+world (:meth:`InteractiveSim._scan_points`), and red points mark where touches of the world
+began (the latest :data:`CONTACTS_DRAWN`). The colours are the browser viewer's
+(``docs/viewer.md``). The window shows time and real-time factor, true pose, odometry pose,
+twist, target, wheel speeds and steering angles, and a legend of the two arrows.
 
 **Clock: keys act at their simulated time.** Simulated time ``s`` follows the wall clock ``w``
 as ``s = w - w0``; every key event is stamped with the wall time it reached the program and
@@ -83,6 +85,7 @@ import sys
 import threading
 import time
 from collections import deque
+from typing import Any
 
 import numpy as np
 
@@ -126,6 +129,14 @@ a cylinder connector drawn its full length). The arrows' connectors are ``ARROW_
 ARROW_DRAWN`` extents long; a test measures the drawn length in a screenshot."""
 ARROW_WIDTH = 0.08
 """Width of the true heading arrow in units of the robot's extent (the odometry's is half)."""
+SCAN_RGBA = (0.95, 0.35, 0.1, 1.0)
+"""Colour of the lidar's scan points (orange, the browser viewer's scan colour)."""
+SCAN_POINT = 0.012
+"""Radius [m] of a drawn scan point."""
+CONTACT_RGBA = (0.9, 0.1, 0.1, 1.0)
+"""Colour of the points where a touch of the world began (red)."""
+CONTACTS_DRAWN = 20
+"""The latest touches drawn."""
 SHUTDOWN_WAIT = 60.0
 """Longest wait [s] for the viewer's render thread to end after the window is closed (it ends
 within a frame; software OpenGL on a loaded machine may take seconds for one)."""
@@ -240,7 +251,9 @@ class InteractiveSim:
         self.rtf = 1.0
         self.slowest = math.inf  # lowest real-time factor measured over RTF_WINDOW
         self.wall = 0.0  # wall time [s] since the start
-        self.markers: dict[str, list[float]] = {}  # the arrows last drawn (:meth:`_draw_heading`)
+        self.markers: dict[str, list[Any]] = {}  # the arrows last drawn (:meth:`_draw_heading`)
+        self._scans: dict[str, tuple] = {}  # per lidar: (sensor, the ranges of its latest scan)
+        self._nearest: float | None = None  # [m] the nearest range of the latest scans
 
     # --- keys (called in the viewer's thread: only queued, with their wall time) ----------------
     def _on_key(self, key: int) -> None:
@@ -456,9 +469,51 @@ class InteractiveSim:
                 )
                 mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_ARROW, w, start, end)
             self.markers = self._read_markers(scn)
+            points = self._scan_points()
+            touches = [(c.point[0], c.point[1], 0.02) for c in self.backend.contacts[-CONTACTS_DRAWN:]]
+            spheres = [(p, SCAN_POINT, SCAN_RGBA) for p in points]
+            spheres += [(p, 2 * SCAN_POINT, CONTACT_RGBA) for p in touches]
+            spheres = spheres[: max(0, scn.maxgeom - scn.ngeom)]
+            for g, (position, radius, rgba) in zip(scn.geoms[scn.ngeom :], spheres, strict=False):
+                mujoco.mjv_initGeom(
+                    g,
+                    mujoco.mjtGeom.mjGEOM_SPHERE,
+                    np.array([radius, 0.0, 0.0]),
+                    np.asarray(position, dtype=float),
+                    np.eye(3).ravel(),
+                    np.array(rgba),
+                )
+            scn.ngeom += len(spheres)
+            self.markers["scan"] = [len(points), self._nearest]
+            self.markers["contacts"] = [len(touches)]
+
+    def _scan_points(self) -> list[tuple[float, float, float]]:
+        """Where the beams of each lidar's latest scan met a wall or an obstacle (world frame,
+        at the lidar's height), drawn from the robot's true pose of this frame (a scan is at most
+        one lidar period older); the readings since the previous frame are drained from the
+        back-end (:meth:`~omnikin.physics.backend.PhysicsBackend.sensor_readings`)."""
+        readings = self.backend.sensor_readings()
+        if readings is not None:
+            for record in readings.scans:
+                if len(record.t):
+                    self._scans[record.sensor.name] = (record.sensor, record.ranges[-1])
+        x, y, theta = (float(v) for v in self.backend.truth)
+        c, s = math.cos(theta), math.sin(theta)
+        points: list[tuple[float, float, float]] = []
+        nearest = math.inf
+        for lidar, ranges in self._scans.values():
+            m = lidar.mount
+            ox, oy = x + c * m.x - s * m.y, y + s * m.x + c * m.y
+            seen = np.isfinite(ranges) & (ranges > 0.0)
+            angles = theta + m.yaw + lidar.angles()[seen]
+            hit = ranges[seen]
+            points += [(ox + r * math.cos(a), oy + r * math.sin(a), m.z) for r, a in zip(hit, angles, strict=True)]
+            nearest = min(nearest, float(hit.min()) if len(hit) else math.inf)
+        self._nearest = nearest if math.isfinite(nearest) else None
+        return points
 
     @staticmethod
-    def _read_markers(scn) -> dict[str, list[float]]:
+    def _read_markers(scn) -> dict[str, list[Any]]:
         """The arrows in ``scn`` as drawn: ``{"truth": [x, y, heading, z, width, length], "odometry":
         [...]}`` [m, rad]: the arrow's tail, the direction of its axis (the third column of the
         geom's rotation), its width and its drawn length (``size[2]`` times :data:`ARROW_DRAWN`),
@@ -650,7 +705,8 @@ class InteractiveSim:
     def report(self, reason: str) -> dict:
         """What the run did, for ``--report``: final pose and twist (ground truth, odometry), the
         encoded wheels' angles the odometry integrated (:meth:`wheel_angles`), the two arrows as
-        the window last drew them (:attr:`markers`), steering angles reached [rad], key presses
+        the window last drew them (:attr:`markers`, with ``scan``: the scan points drawn and the
+        nearest range [m], and ``contacts``: the touches drawn), steering angles reached [rad], key presses
         with their simulated time, wall arrival time, true pose and twist, odometry pose, wheel
         angles and steering; the clock: simulated and wall time [s], wall time skipped while
         nothing was driven, lowest real-time factor measured (null: the run was too short); in a
