@@ -160,8 +160,10 @@ class Build:
 
 
 def tf2_msgs_importable() -> bool:
-    """True when ``tf2_msgs`` can be imported by this Python."""
-    return importlib.util.find_spec("tf2_msgs") is not None
+    """True when this Python finds the package ``tf2_msgs`` (a folder of that name left empty,
+    which Python takes for a namespace package, does not count)."""
+    spec = importlib.util.find_spec("tf2_msgs")
+    return spec is not None and spec.origin is not None
 
 
 def _site_packages(prefix: Path) -> Path:
