@@ -11,6 +11,7 @@ import importlib
 import bench_accuracy
 import bench_batch
 import bench_runtime
+import bench_sensors
 import bench_simulation
 import bench_streaming
 import bench_umbmark
@@ -36,7 +37,7 @@ def _firmware_missing() -> str | None:
 
 if __name__ == "__main__":
     print("machine:", machine())
-    modules = [bench_streaming, bench_batch, bench_accuracy, bench_simulation, bench_umbmark, bench_runtime]
+    modules = [bench_streaming, bench_batch, bench_accuracy, bench_simulation, bench_umbmark, bench_runtime, bench_sensors]
     for name, needs in OPTIONAL.items():
         try:
             module = importlib.import_module(f"bench_{name}")

@@ -39,6 +39,8 @@ from ..kinematics.sensors import Imu, Lidar
 from ..sensors.readings import ImuTruth, ScanTruth
 from .mjcf import WORLD_GROUP
 
+FLUSH = 256
+"""An IMU's completed samples are interpolated in batches of this many (and when read)."""
 FRACTION_SNAP = 1e-9
 """A sample time within this fraction of a step of a time step is taken at that step."""
 
@@ -108,6 +110,9 @@ class PhysicsSensors:
         self._next = [1 if isinstance(s, Imu) else 0 for s in self._sensors]  # next sample number
         self._states: dict[int, np.ndarray] = {}  # step -> (13,) q (4), v (3), w (3), p (3)
         self._samples: list[list[np.ndarray]] = [[] for _ in self._sensors]  # IMU states, lidar ranges
+        # an IMU's samples complete but not yet interpolated: (state before, state after, fraction)
+        self._pending: list[list[tuple[np.ndarray, np.ndarray, float]]] = [[] for _ in self._sensors]
+        self._upcoming = [self._next_sample(i) for i in range(len(self._sensors))]
         self._group = np.zeros(6, dtype=np.uint8)
         self._group[WORLD_GROUP] = 1
         self._rays = {i: _Rays(s) for i, s in enumerate(self._sensors) if isinstance(s, Lidar)}  # buffers of each lidar
@@ -128,6 +133,10 @@ class PhysicsSensors:
     def _sample_steps(self, i: int) -> tuple[int, float, int]:
         """Sensor ``i``'s next sample: the step at or before its time, the fraction of the step
         past it, and the last step it needs."""
+        return self._upcoming[i]
+
+    def _next_sample(self, i: int) -> tuple[int, float, int]:
+        """:meth:`_sample_steps` computed from the sample's number."""
         sensor = self._sensors[i]
         steps = self._next[i] / (sensor.rate * self._step)
         k = math.floor(steps + FRACTION_SNAP)
@@ -138,18 +147,14 @@ class PhysicsSensors:
 
     def _plan(self) -> None:
         """Set :attr:`due`: the first step whose state a sample still needs."""
-        need = []
-        for i in range(len(self._sensors)):
-            k, _, last = self._sample_steps(i)
-            need.append(last if k in self._states else k)
-        self.due = min(need, default=2**62)
+        states = self._states
+        self.due = min((last if k in states else k for k, _, last in self._upcoming), default=2**62)
 
     def take(self, steps: int) -> None:
         """Keep the chassis state after step ``steps`` and complete every sample it finishes."""
         d = self._data
         q = d.qpos[self._free : self._free + 7]
-        v = d.qvel[self._free_dof : self._free_dof + 6]
-        self._states[steps] = np.concatenate([q[3:7], v[:3], v[3:6], q[:3]])
+        self._states[steps] = np.concatenate((q[3:7], d.qvel[self._free_dof : self._free_dof + 6], q[:3]))
         if steps == 0:
             self._base = [self._states[0]] * len(self._sensors)
         for i, sensor in enumerate(self._sensors):
@@ -157,17 +162,34 @@ class PhysicsSensors:
                 k, fraction, last = self._sample_steps(i)
                 if last > steps:
                     break
-                state = self._state_at(k, fraction)
                 if isinstance(sensor, Imu):
-                    self._samples[i].append(state)
+                    self._pending[i].append((self._states[k], self._states[last], fraction))
                 else:
-                    self._samples[i].append(self._cast(i, state))
+                    self._samples[i].append(self._cast(i, self._state_at(k, fraction)))
                 self._next[i] += 1
+                self._upcoming[i] = self._next_sample(i)
+            if len(self._pending[i]) >= FLUSH:
+                self._flush(i)
             self._let_go(i)
-        oldest = min((self._sample_steps(i)[0] for i in range(len(self._sensors))), default=steps)
-        for k in [k for k in self._states if k < min(oldest, steps)]:
-            del self._states[k]
+        if len(self._states) > 3:  # the states no sample needs any more
+            oldest = min(min(u[0] for u in self._upcoming), steps)
+            for k in [k for k in self._states if k < oldest]:
+                del self._states[k]
         self._plan()
+
+    def _flush(self, i: int) -> None:
+        """Interpolate IMU ``i``'s pending samples, all at once (module docstring)."""
+        pending = self._pending[i]
+        if not pending:
+            return
+        a = np.array([p[0] for p in pending])
+        b = np.array([p[1] for p in pending])
+        fraction = np.array([p[2] for p in pending])[:, None]
+        out = a + fraction * (b - a)
+        turn = quat_log(quat_mul(quat_conj(a[:, :4]), b[:, :4]))
+        out[:, :4] = quat_mul(a[:, :4], quat_exp(fraction * turn))
+        self._samples[i].extend(out)
+        pending.clear()
 
     def _state_at(self, k: int, fraction: float) -> np.ndarray:
         """The chassis state (13,) a ``fraction`` of a step after step ``k`` (module docstring)."""
@@ -203,6 +225,8 @@ class PhysicsSensors:
         (:meth:`drain`), by sensor name."""
         out: dict[str, ImuTruth | ScanTruth] = {}
         for i, sensor in enumerate(self._sensors):
+            self._flush(i)
+            self._let_go(i)
             samples, before = self._samples[i], self._drained[i]
             if isinstance(sensor, Lidar):
                 ranges = np.array(samples).reshape(len(samples), sensor.beams)
