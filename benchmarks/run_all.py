@@ -37,7 +37,15 @@ def _firmware_missing() -> str | None:
 
 if __name__ == "__main__":
     print("machine:", machine())
-    modules = [bench_streaming, bench_batch, bench_accuracy, bench_simulation, bench_umbmark, bench_runtime, bench_sensors]
+    modules = [
+        bench_streaming,
+        bench_batch,
+        bench_accuracy,
+        bench_simulation,
+        bench_umbmark,
+        bench_runtime,
+        bench_sensors,
+    ]
     for name, needs in OPTIONAL.items():
         try:
             module = importlib.import_module(f"bench_{name}")
