@@ -212,6 +212,7 @@ def test_diagnostic_values():
         link_stats={"backend": "sim", "reads": 9},
         loop_overruns=4,
         loop_time_max_ms=21.23456,
+        joint_commands_rejected=8,
     )
     assert all(isinstance(k, str) and isinstance(v, str) for k, v in kv)
     d = dict(kv)
@@ -228,6 +229,7 @@ def test_diagnostic_values():
         "commands_saturated": "3",
         "commands_projected": "4",
         "commands_stale": "5",
+        "joint_commands_rejected": "8",
         "last_reject_reason": "vx = nan",
         "fk_residual_norm": "0.25",
         "timed_out": "True",
@@ -319,3 +321,49 @@ def test_a_quaternion_that_is_not_unit_gives_the_heading_of_its_direction():
     assert m.yaw(0.0, 0.0, 0.1, 0.1) == pytest.approx(math.pi / 2)
     assert m.yaw(0.0, 0.0, 0.0, 0.0) == 0.0
     assert math.isnan(m.yaw(0.0, 0.0, math.inf, 1.0))
+
+
+def test_wheel_speeds_on_joint_commands_become_the_twist_they_drive():
+    """tomasi-omni3's wheel speeds for a twist give that twist back (the layout's inverse and
+    forward kinematics, docs/conventions.md); speeds that fight each other give the
+    least-squares twist, not a fight; names in any order, others ignored."""
+    from omnikin import load_robot
+
+    robot = load_robot("tomasi-omni3")
+    twist = np.array([0.2, -0.1, 0.5])
+    speeds = robot.ik(twist).wheel_speeds
+    names = ["w3", "extra_joint", "w1", "w2"]
+    velocities = [speeds[2], 123.0, speeds[0], speeds[1]]
+    got = m.wheel_command_twist(robot, ["w1", "w2", "w3"], names, velocities, [])
+    np.testing.assert_allclose(got, twist, atol=1e-12)
+    # all three wheels at the same speed turn the robot in place: omega = r w / L (L = 0.113 m,
+    # r = 0.04125 m); adding a fight (one wheel off) is projected away
+    w = 2.0
+    spin = m.wheel_command_twist(robot, ["w1", "w2", "w3"], ["w1", "w2", "w3"], [w, w, w], [])
+    np.testing.assert_allclose(spin, [0.0, 0.0, 0.04125 * w / 0.113], atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "names, velocities, positions, problem",
+    [
+        (["w1", "w2"], [1.0, 2.0], [], "no velocity for the wheel joint(s) w3"),
+        (["w1", "w2", "w3"], [1.0, 2.0], [], "3 names but 2 velocities"),
+        (["w1", "w1", "w2", "w3"], [1.0, 1.0, 2.0, 3.0], [], "named twice"),
+        (["w1", "w2", "w3"], [1.0, float("nan"), 3.0], [], "not finite"),
+    ],
+)
+def test_joint_commands_the_node_cannot_take_are_refused_in_one_line(names, velocities, positions, problem):
+    from omnikin import load_robot
+
+    with pytest.raises(InputError, match="^joint_commands: ") as info:
+        m.wheel_command_twist(load_robot("tomasi-omni3"), ["w1", "w2", "w3"], names, velocities, positions)
+    assert problem in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_steered_robot_needs_its_steering_positions_on_joint_commands():
+    from omnikin import load_robot
+
+    robot = load_robot("xr4000")
+    wheels = list(robot.encoded_names)
+    with pytest.raises(InputError, match="no position for the steering joint"):
+        m.wheel_command_twist(robot, wheels, wheels, [0.0] * len(wheels), [])

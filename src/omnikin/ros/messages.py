@@ -102,6 +102,46 @@ def command_time(received: float, ros_now: float, stamp: float, timeout: float) 
     return received - age
 
 
+def wheel_command_twist(robot, wheels: Sequence[str], names, velocities, positions) -> np.ndarray:
+    """The body twist ``(vx, vy, omega)`` [m/s, m/s, rad/s] a ``sensor_msgs/JointState`` on
+    ``joint_commands`` asks for (ros2_control's topic-based hardware interface: one velocity
+    [rad/s] per wheel joint, a position [rad] per ``<wheel>_steer`` joint of a steerable robot):
+    the forward kinematics' least-squares fit of the velocities of ``wheels`` (the joints of
+    ``joint_states``), so that wheel speeds that fight each other (a slip the layout cannot make)
+    are not sent on as they are. Other names are ignored.
+
+    Raises
+    ------
+    InputError
+        In one line: names and velocities (or positions) of different lengths, a name given
+        twice, a wheel or steering joint missing, a value that is not finite.
+    """
+    names = [str(n) for n in names]
+    velocities = list(velocities)
+    positions = list(positions)
+    if len(velocities) != len(names):
+        raise InputError(f"joint_commands: {len(names)} names but {len(velocities)} velocities")
+    if len(set(names)) != len(names):
+        raise InputError("joint_commands: a joint is named twice")
+    index = {n: i for i, n in enumerate(names)}
+    missing = [w for w in wheels if w not in index]
+    if missing:
+        raise InputError(f"joint_commands: no velocity for the wheel joint(s) {', '.join(missing)}")
+    speeds = np.array([float(velocities[index[w]]) for w in wheels])
+    if not np.all(np.isfinite(speeds)):
+        raise InputError("joint_commands: a wheel velocity is not finite")
+    steer = None
+    if robot.steerable:
+        joints = [f"{n}_steer" for n in robot.steer_names]
+        absent = [j for j in joints if j not in index or index[j] >= len(positions)]
+        if absent:
+            raise InputError(f"joint_commands: no position for the steering joint(s) {', '.join(absent)}")
+        steer = np.array([float(positions[index[j]]) for j in joints])
+        if not np.all(np.isfinite(steer)):
+            raise InputError("joint_commands: a steering position is not finite")
+    return np.asarray(robot.fk(speeds, steer, wheels=list(wheels)).twist, dtype=float)
+
+
 def periods_missed(first_loop: float | None, loops: int, period: float, now: float) -> int:
     """Control periods due since the first cycle (at ``first_loop`` [s]) that did not run, at
     time ``now`` [s], with ``loops`` cycles run: rcl skips the periods of a late timer instead of
@@ -132,13 +172,15 @@ def diagnostic_values(
     link_stats: Mapping,
     loop_overruns: int = 0,
     loop_time_max_ms: float = 0.0,
+    joint_commands_rejected: int = 0,
 ) -> list:
     """``(key, value)`` strings of the ``omnikin base`` status (``docs/ros.md``, section Topics):
     ``command_stats`` holds the command filter's counts (``accepted``, ``rejected``,
     ``timeouts``, ``saturated``, ``projected``, ``last_reject_reason``), ``link_stats`` the
     back-end's statistics (keys prefixed ``link_``); ``loop_overruns`` counts the control cycles
     longer than the period since the start, ``loop_time_max_ms`` is the longest cycle [ms] since
-    the previous status."""
+    the previous status, ``joint_commands_rejected`` counts the ``joint_commands`` ignored since
+    the start."""
     values = {
         "odom_published": published,
         "loop_rate_hz": round(float(loop_rate_hz), 3),
@@ -151,6 +193,7 @@ def diagnostic_values(
         "commands_saturated": command_stats["saturated"],
         "commands_projected": command_stats["projected"],
         "commands_stale": stale_commands,
+        "joint_commands_rejected": joint_commands_rejected,
         "last_reject_reason": command_stats["last_reject_reason"],
         "fk_residual_norm": float(fk_residual_norm),
         "timed_out": bool(timed_out),

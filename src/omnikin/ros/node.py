@@ -1,7 +1,8 @@
 """``omnikin ros``: the ROS 2 base driver node.
 
 Subscribes ``cmd_vel`` (``geometry_msgs/Twist``, or ``TwistStamped`` with
-``use_stamped_vel``); publishes ``odom`` (``nav_msgs/Odometry`` with twist and a
+``use_stamped_vel``) and ``joint_commands`` (``sensor_msgs/JointState``: wheel speeds, taken as
+the twist they imply, :meth:`BaseNode._on_joint_commands`); publishes ``odom`` (``nav_msgs/Odometry`` with twist and a
 motion-dependent covariance), ``joint_states`` (every movable joint of the robot's URDF: first
 the encoded wheels' positions [rad] and speeds [rad/s] and the steering joints ``<wheel>_steer``
 as measured, then the joints no sensor reads, moved as the odometry's body motion implies:
@@ -182,6 +183,8 @@ class BaseNode(Node):
         qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
         msg_type = TwistStamped if p["use_stamped_vel"] else Twist
         self.create_subscription(msg_type, "cmd_vel", self._on_cmd, qos)
+        self.create_subscription(JointState, "joint_commands", self._on_joint_commands, qos)
+        self.joint_commands_rejected = 0  # joint_commands that named no wheel speeds the node could take
         self.odom_pub = self.create_publisher(Odometry, "odom", qos)
         self.joint_pub = self.create_publisher(JointState, "joint_states", qos)
         self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
@@ -424,6 +427,21 @@ class BaseNode(Node):
         self._cancel_path("a cmd_vel arrived (the person at the keyboard wins)")
         self.runtime.command((tw.linear.x, tw.linear.y, tw.angular.z), t)
 
+    def _on_joint_commands(self, msg) -> None:
+        """Wheel speeds on ``joint_commands`` (ros2_control's topic-based hardware interface):
+        taken as the body twist they imply (:func:`omnikin.ros.messages.wheel_command_twist`),
+        through the same limits and timeout as a ``cmd_vel``; one that names no usable speeds is
+        counted and warned of (at most every 5 s)."""
+        received = self.now_s()
+        try:
+            twist = messages.wheel_command_twist(self.robot, self.joint_names, msg.name, msg.velocity, msg.position)
+        except InputError as exc:
+            self.joint_commands_rejected += 1
+            self.get_logger().warning(f"{exc}: ignored", throttle_duration_sec=5.0)
+            return
+        self._cancel_path("joint_commands arrived (a controller commands the wheels)")
+        self.runtime.command(tuple(twist), received)
+
     def _cancel_path(self, why: str, log: bool = True) -> None:
         """Stop the path followed and drop one being planned; the robot brakes to a stop unless
         a command follows."""
@@ -523,8 +541,8 @@ class BaseNode(Node):
         now = self.now_s()
         try:
             self._cycle(now)
-        finally:
             self._publish_clock()
+        finally:
             took = self.now_s() - now
             self._loop_time_max = max(self._loop_time_max, took)
             if took > self.period:
@@ -714,6 +732,7 @@ class BaseNode(Node):
             link_stats=link_stats,
             loop_overruns=self.overruns,
             loop_time_max_ms=1e3 * loop_time_max,
+            joint_commands_rejected=self.joint_commands_rejected,
         )
         level, message = messages.diagnostic_status(
             rejected=s.rejected,
@@ -786,6 +805,10 @@ def run(robot, backend, values: dict, ros_args=None) -> int:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except Exception:
+        if rclpy.ok():
+            raise
+        # SIGINT shut the context down while a callback ran: its publish found the context gone
     finally:
         try:
             node.stop_wheels()
