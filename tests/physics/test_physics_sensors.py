@@ -40,6 +40,17 @@ def _world(start):
     )
 
 
+def _cylinder(ox: float, oy: float, angles: np.ndarray) -> np.ndarray:
+    """Distances from ``(ox, oy)`` along ``angles`` to the cylinder of radius 0.2 m at (1, 1)
+    (the near root of the ray's quadratic; ``inf`` where it misses)."""
+    ca, sa = np.cos(angles), np.sin(angles)
+    dx, dy = ox - 1.0, oy - 1.0
+    b = dx * ca + dy * sa
+    disc = b * b - (dx * dx + dy * dy - 0.2**2)
+    near = -b - np.sqrt(np.maximum(disc, 0.0))
+    return np.where((disc >= 0) & (near > 0), near, np.inf)
+
+
 def _expected(pose) -> np.ndarray:
     """Ranges from the lidar at ``pose`` to the room's faces and the cylinder (the 0.1 m box lies
     below the 0.12 m beams), by hand."""
@@ -48,13 +59,7 @@ def _expected(pose) -> np.ndarray:
     m = LIDAR.mount
     ox, oy = x + c * m.x - s * m.y, y + s * m.x + c * m.y
     angles = th + m.yaw + LIDAR.angles()
-    ca, sa = np.cos(angles), np.sin(angles)
-    dx, dy = ox - 1.0, oy - 1.0
-    b = dx * ca + dy * sa
-    disc = b * b - (dx * dx + dy * dy - 0.2**2)
-    near = -b - np.sqrt(np.maximum(disc, 0.0))
-    to_cylinder = np.where((disc >= 0) & (near > 0), near, np.inf)
-    return np.minimum(to_faces(ox, oy, angles, FACE), to_cylinder)
+    return np.minimum(to_faces(ox, oy, angles, FACE), _cylinder(ox, oy, angles))
 
 
 def test_scans_read_the_distances_from_the_true_pose_to_the_walls_and_the_cylinder():
@@ -167,3 +172,22 @@ def test_readings_drained_cycle_by_cycle_are_the_run_read_at_once_and_an_undrain
     np.testing.assert_array_equal(last["imu"].t, kept["imu"].t[-100:])
     np.testing.assert_array_equal(last["imu"].rates, kept["imu"].rates[-100:])
     assert bounded.sensors.dropped == (len(kept["imu"].t) - 100) + (len(kept["laser"].t) - 5)
+
+
+def test_a_lidar_mounted_on_the_floor_sees_every_wall_as_the_kinematic_engine_does():
+    """The default mount is on the floor (z = 0): its beams leave from half a millimetre up, so
+    they meet the room's faces, the cylinder and the low box just as the kinematic engine's 2D
+    rays do (verified against closed forms in tests/sensors/test_lidar.py); along the floor's
+    surface they found the walls' bottom edges for about a quarter of them."""
+    from omnikin.sensors.lidar import true_ranges
+    from omnikin.world.shapes import shapes_of
+
+    low = Lidar("laser", Mount(), rate=10.0, beams=360, range_max=12.0)
+    robot = dataclasses.replace(load_robot("tomasi-omni3"), name="floor-lidar", sensors=(low,))
+    start = (0.3, -0.2, 0.4)
+    world = _world(start)
+    sim = PhysicsSim(robot, start=start, world=world, sensors=True)
+    ranges = sim.sensors.truths()["laser"].ranges[0]
+    kinematic = true_ranges(shapes_of(world), sim.pose, low)[0]
+    assert np.all(np.isfinite(ranges))
+    np.testing.assert_allclose(ranges, kinematic, rtol=0, atol=1e-6)

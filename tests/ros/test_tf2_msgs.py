@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from omnikin.ros.interfaces import build_tf2_msgs, exports, tf2_msgs_importable
+from omnikin.ros.interfaces import build_stamp, build_tf2_msgs, built_here, exports, tf2_msgs_importable
 from support.cli import run_cli
 
 TF_HASH = "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087"
@@ -64,6 +64,11 @@ def test_a_build_without_its_tools_or_with_a_prefix_it_cannot_write_is_refused_i
     line = done.stderr.strip()
     assert "\n" not in line and "Traceback" not in line
     assert "missing" in line and "cmake 3.21 or later" in line and "apt-get install g++" in line
+    assert not (tmp_path / "prefix").exists()  # refused before anything was made
+    bad = (("", "--prefix is empty"), ("~no-such-user-here/x", "~no-such-user-here"), ("a:b", "holds ':'"))
+    for prefix, problem in bad:
+        rc, _, err = run_cli(capsys, "tf2-msgs", "--prefix", prefix)
+        assert rc == 2 and problem in err and err.count("\n") == 1 and "internal error" not in err, err
     blocker = tmp_path / "a-file"
     blocker.write_text("")
     rc, _, err = run_cli(capsys, "tf2-msgs", "--prefix", blocker / "below")
@@ -123,3 +128,34 @@ def test_the_node_publishes_tf_of_every_link_and_the_sensors_static_frames_with_
     finally:
         graph.close()
         proc.close()
+
+
+def test_a_build_counts_as_there_only_while_every_file_it_installed_is(tmp_path):
+    """The stamp alone does not vouch for a build: a removed (or half-installed) one is built
+    again."""
+    share = tmp_path / "share" / "tf2_msgs"
+    share.mkdir(parents=True)
+    installed = [tmp_path / "lib" / "libtf2_msgs__rosidl_generator_c.so", tmp_path / "lib" / "x.py"]
+    installed[0].parent.mkdir()
+    for f in installed:
+        f.write_text("")
+    (share / "install_manifest.txt").write_text("\n".join(str(f) for f in installed) + "\n")
+    stamp = build_stamp()
+    (share / "build_stamp.txt").write_text(stamp)
+    assert built_here(tmp_path, stamp)
+    assert not built_here(tmp_path, stamp + "another wheel 1.0\n")
+    installed[1].unlink()
+    assert not built_here(tmp_path, stamp)
+
+
+def test_the_printed_environment_lines_keep_any_prefix_as_it_is(tmp_path):
+    """A prefix with spaces, quotes, $(...) or backticks is set as it is by the lines printed for
+    the shell, and runs nothing."""
+    odd = tmp_path / 'a "b" $(touch pwned) `touch pwned2` c'
+    for line in exports(odd):
+        name = line.split()[1].split("=")[0]
+        done = subprocess.run(
+            ["bash", "-c", f'{line}; printf %s "${name}"'], cwd=tmp_path, env={}, capture_output=True, text=True
+        )
+        assert done.returncode == 0 and done.stdout.startswith(str(odd)), (line, done.stdout)
+    assert not (tmp_path / "pwned").exists() and not (tmp_path / "pwned2").exists()

@@ -434,7 +434,8 @@ def _write_sensor_logs(args, robot, run) -> None:
 
     sensing = run.sensing
     if args.imu_log is not None and sensing is not None:
-        comment = f"IMU readings of {robot.name} written by omnikin simulate (seed {args.seed}, noise {args.noise})"
+        errors = f"noise {args.noise}" if args.noise is not None else "the robot file's sensor errors"
+        comment = f"IMU readings of {robot.name} written by omnikin simulate (seed {args.seed}, {errors})"
         write_imu_log(args.imu_log, sensing.imus, comment, start=args.start)
     if args.scan_log is not None and sensing is not None:
         write_scan_log(args.scan_log, sensing.scans, start=args.start)

@@ -18,11 +18,11 @@ sensors of any rate run on any time step.
   gravity and ``q_mid`` halfway between the two orientations; on a circle the rotation of the
   force within the interval makes that ``sinc(omega dt / 2)`` of the true mean (1e-6 short at
   1 rad/s and 200 Hz). The first reading starts from the state after settling, at rest.
-- A lidar's beams leave its mount at the state of the scan time, turned with the chassis (a
-  tilted robot tilts its scan plane), and are cast by MuJoCo's ``mj_multiRay`` against the
-  world's walls and obstacles as they stand at the step after the scan time (geom group
-  :data:`~omnikin.physics.mjcf.WORLD_GROUP`, which neither the robot nor the floor is in); a
-  miss or a hit beyond ``range_max`` reads ``inf``.
+- A lidar's beams leave its mount (at least :data:`BEAM_LOWEST` above the floor) at the state of
+  the scan time, turned with the chassis (a tilted robot tilts its scan plane), and are cast by
+  MuJoCo's ``mj_multiRay`` against the world's walls and obstacles as they stand at the step
+  after the scan time (geom group :data:`~omnikin.physics.mjcf.WORLD_GROUP`, which neither the
+  robot nor the floor is in); a miss or a hit beyond ``range_max`` reads ``inf``.
 
 The errors are added afterwards, from the run's sensor stream, by the same function as the
 kinematic engine's (:func:`omnikin.sensors.readings.measured_readings`).
@@ -39,6 +39,11 @@ from ..kinematics.sensors import Imu, Lidar
 from ..sensors.readings import ImuTruth, ScanTruth
 from .mjcf import WORLD_GROUP
 
+BEAM_LOWEST = 5e-4
+"""The lowest height [m] a lidar's beams leave from in the physics engine, half the lowest body a
+world may hold (1 mm): a lidar mounted lower (the default mount is on the floor) casts from
+here, since beams along the floor's surface meet the walls' bottom edges only by chance; the
+kinematic engine sees every body taller than the mount, as from here."""
 FLUSH = 256
 """An IMU's completed samples are interpolated in batches of this many (and when read)."""
 FRACTION_SNAP = 1e-9
@@ -210,7 +215,8 @@ class PhysicsSensors:
         rays = self._rays[i]
         mount = lidar.mount
         q = state[:4]
-        origin = state[10:13] + quat_rotate(q, np.array([mount.x, mount.y, mount.z]))
+        height = max(mount.z, BEAM_LOWEST)
+        origin = state[10:13] + quat_rotate(q, np.array([mount.x, mount.y, height]))
         rays.vec[:] = quat_rotate(q, rays.directions).ravel()
         mj.mj_kinematics(m, d)  # the world's movable bodies where this step left them
         mj.mj_multiRay(

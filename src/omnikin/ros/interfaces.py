@@ -34,7 +34,9 @@ import importlib.metadata
 import importlib.util
 import os
 import re
+import shlex
 import shutil
+import signal
 import subprocess
 import sys
 import sysconfig
@@ -177,10 +179,14 @@ def exports(prefix: Path) -> tuple[str, ...]:
     here = Path(sys.prefix).resolve()
     if prefix.resolve() == here:
         return ()
+
+    def line(name: str, value: str) -> str:  # the path quoted for the shell, the old value appended
+        return f'export {name}={shlex.quote(value)}"${{{name}:+:${name}}}"'
+
     return (
-        f'export PYTHONPATH="{_site_packages(prefix)}${{PYTHONPATH:+:$PYTHONPATH}}"',
-        f'export LD_LIBRARY_PATH="{prefix / "lib"}:{here / "lib"}${{LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}}"',
-        f'export AMENT_PREFIX_PATH="{prefix}:{here}${{AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH}}"',
+        line("PYTHONPATH", str(_site_packages(prefix))),
+        line("LD_LIBRARY_PATH", f"{prefix / 'lib'}:{here / 'lib'}"),
+        line("AMENT_PREFIX_PATH", f"{prefix}:{here}"),
     )
 
 
@@ -258,44 +264,92 @@ def build_tf2_msgs(
     say = log or (lambda line: None)
     if isinstance(jobs, bool) or not isinstance(jobs, int) or not 1 <= jobs <= 64:
         raise InputError(f"tf2-msgs: jobs must be a whole number from 1 to 64, got {jobs!r}")
-    target = Path(sys.prefix if prefix is None else prefix).expanduser()
+    target = _prefix(prefix)
+    stamp = build_stamp()
+    started = time.monotonic()
+    if not force and built_here(target, stamp):
+        say(f"tf2_msgs is already built in {target} for this Python and these wheels")
+        return Build(target, False, time.monotonic() - started, exports(target))
+    missing = missing_tools()
+    if missing:
+        raise InputError("tf2-msgs: missing " + "; ".join(missing))
     try:
         target.mkdir(parents=True, exist_ok=True)
-        target = target.resolve()
         probe = tempfile.NamedTemporaryFile(dir=target, prefix=".omnikin-write-test-")
         probe.close()
     except OSError as exc:
         raise InputError(
             f"tf2-msgs: cannot write to {target}: {exc.strerror or exc}; choose another --prefix"
         ) from None
-    stamp_file = target / "share" / "tf2_msgs" / "build_stamp.txt"
-    stamp = build_stamp()
-    started = time.monotonic()
-    with _locked(target):
-        if not force and stamp_file.is_file() and stamp_file.read_text() == stamp:
+    with _locked(target, say):
+        if not force and built_here(target, stamp):  # another build finished while this one waited
             say(f"tf2_msgs is already built in {target} for this Python and these wheels")
             return Build(target, False, time.monotonic() - started, exports(target))
-        missing = missing_tools()
-        if missing:
-            raise InputError("tf2-msgs: missing " + "; ".join(missing))
+        share = target / "share" / "tf2_msgs"
+        (share / "build_stamp.txt").unlink(missing_ok=True)  # written again once the install is complete
         work = Path(tempfile.mkdtemp(prefix="omnikin-tf2-msgs-"))
-        _write_package(work / "src")
-        _run_cmake(work, target, jobs, say)
-        (target / "share" / "tf2_msgs").mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(work / "build" / "install_manifest.txt", target / "share" / "tf2_msgs" / "install_manifest.txt")
-        stamp_file.write_text(stamp)
+        try:
+            _write_package(work / "src")
+            _run_cmake(work, target, jobs, say)
+            share.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(work / "build" / "install_manifest.txt", share / "install_manifest.txt")
+            (share / "build_stamp.txt").write_text(stamp)
+        except InputError:  # a step failed: its message names the log, which stays to be read
+            raise
+        except BaseException:  # interrupted: nothing to read
+            shutil.rmtree(work, ignore_errors=True)
+            raise
         shutil.rmtree(work, ignore_errors=True)
     seconds = time.monotonic() - started
     say(f"built tf2_msgs into {target} in {seconds:.0f} s")
     return Build(target, True, seconds, exports(target))
 
 
+def _prefix(prefix) -> Path:
+    """``prefix`` as an absolute path (default the Python's own), refused in one line when it is
+    empty, names an unknown user's home, or holds a ``:`` (the separator of the search paths the
+    build is used through)."""
+    if prefix is None:
+        return Path(sys.prefix).resolve()
+    text = os.fspath(prefix)
+    if not str(text).strip():
+        raise InputError("tf2-msgs: --prefix is empty; give a folder (or leave it out for this Python's own)")
+    try:
+        path = Path(text).expanduser()
+    except RuntimeError as exc:
+        raise InputError(f"tf2-msgs: --prefix {text!r}: {exc}") from None
+    path = Path(os.path.abspath(path))
+    if ":" in str(path):
+        raise InputError(
+            f"tf2-msgs: --prefix {str(path)!r} holds ':', the separator of PYTHONPATH and LD_LIBRARY_PATH; "
+            "choose another"
+        )
+    return path
+
+
+def built_here(prefix: Path, stamp: str) -> bool:
+    """True when ``prefix`` holds a complete build for ``stamp``: its stamp says so and every
+    file its install manifest lists is there (a removed build leaves neither)."""
+    share = prefix / "share" / "tf2_msgs"
+    try:
+        if (share / "build_stamp.txt").read_text() != stamp:
+            return False
+        listed = [ln for ln in (share / "install_manifest.txt").read_text().splitlines() if ln.strip()]
+    except OSError:
+        return False
+    return bool(listed) and all(Path(f).is_file() for f in listed)
+
+
 @contextlib.contextmanager
-def _locked(prefix: Path):
+def _locked(prefix: Path, say: Callable[[str], None]):
     """Hold an exclusive lock on ``prefix``'s build: two builds into one prefix would race on
-    its files; the second waits for the first, then finds it done."""
+    its files; the second says it waits, waits for the first, then finds it done."""
     with open(prefix / ".omnikin-tf2-msgs.lock", "w") as handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            say(f"waiting for another tf2-msgs build into {prefix}")
+            fcntl.flock(handle, fcntl.LOCK_EX)
         try:
             yield
         finally:
@@ -341,10 +395,29 @@ def _run_cmake(work: Path, target: Path, jobs: int, say: Callable[[str], None]) 
         say(f"tf2_msgs: {what}")
         log_file = work / f"{what}.log"
         with open(log_file, "w") as out:
-            done = subprocess.run(command, stdout=out, stderr=subprocess.STDOUT, env=env, check=False)
-        if done.returncode != 0:
+            returncode = _run_group(command, out, env)
+        if returncode != 0:
             last = [ln for ln in log_file.read_text(errors="replace").splitlines() if ln.strip()][-1:]
             raise InputError(
-                f"tf2-msgs: {what} failed (exit {done.returncode}): {last[0][:200] if last else 'no output'}; "
+                f"tf2-msgs: {what} failed (exit {returncode}): {last[0][:200] if last else 'no output'}; "
                 f"the whole log is {log_file}"
             )
+
+
+def _run_group(command: list[str], out, env: dict) -> int:
+    """Run ``command`` in a process group of its own and wait for it; whatever ends the wait
+    (Ctrl-C, SIGTERM turned into an exception) ends the whole group too (make's compilers
+    would otherwise go on in the background, and the lock be released under them)."""
+    proc = subprocess.Popen(command, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+    try:
+        return proc.wait()
+    finally:
+        if proc.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(proc.pid, signal.SIGTERM)
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                with contextlib.suppress(ProcessLookupError):
+                    os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
