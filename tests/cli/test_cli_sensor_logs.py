@@ -89,3 +89,32 @@ def test_the_physics_engine_writes_the_same_logs_its_first_scan_within_the_range
         rows = [r for r in csv.reader(line for line in handle if not line.startswith("#"))][1:]
     accel_z = np.array([float(r[7]) for r in rows[:100]])  # the first 0.5 s, driving on the level floor
     assert abs(accel_z.mean() - 9.81) < 0.2 and accel_z.std() > 1e-3  # gravity, the preset's bias and noise
+
+
+def test_the_sensors_count_in_the_run_budget_and_a_run_without_sensor_outputs_reads_none(tmp_path):
+    """A 2000 Hz IMU and a 100 Hz lidar of 10,000 beams over a 3 m line (about 10 s): 21,000 IMU
+    samples and 1e7 ranges, some 330 MB by the measured costs per sample (IMU_SAMPLE_BYTES,
+    RANGE_BYTES): refused under 20 MB before the run; the same robot with only the tick log
+    reads no sensors, and its estimate is the robot's alone."""
+    import dataclasses
+
+    from omnikin import load_robot
+    from omnikin.api import simulate
+    from omnikin.errors import InputError
+    from omnikin.kinematics.sensors import Imu, Lidar, Mount
+    from omnikin.sensors.readings import IMU_SAMPLE_BYTES, RANGE_BYTES
+
+    base = load_robot("tomasi-omni3")
+    heavy = dataclasses.replace(
+        base, name="heavy", sensors=(Imu("i", rate=2000.0), Lidar("l", Mount(z=0.1), rate=100.0, beams=10000))
+    )
+    seen = []
+    with pytest.raises(InputError, match=r"more than max_memory .*sensors' rates or beams"):
+        simulate(heavy, "line 3", max_memory=20e6, on_cost=seen.append)
+    duration = seen[0].duration
+    sensed = math.floor(duration * 2000) * IMU_SAMPLE_BYTES + (math.floor(duration * 100) + 1) * 10000 * RANGE_BYTES
+    bare = simulate(base, "line 3", on_cost=(plain := []).append)
+    assert seen[0].memory == pytest.approx(plain[0].memory + sensed, rel=1e-9)
+    quiet = simulate(heavy, "line 3", sensors=False, on_cost=(few := []).append)
+    assert quiet.run.sensing is None and few[0].memory == pytest.approx(plain[0].memory, rel=1e-9)
+    assert bare.run.sensing is None

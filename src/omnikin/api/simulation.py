@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -118,6 +119,7 @@ def simulate(
     max_time: float = DEFAULT_TIME,
     progress: Callable[[float, float], None] | None = None,
     on_cost: Callable[[SimulationCost], None] | None = None,
+    sensors: bool = True,
 ) -> Simulation:
     """Simulate ``robot`` as built driving ``path`` commanded by its nominal model
     (``omnikin simulate``, without the bag).
@@ -179,6 +181,10 @@ def simulate(
         stamps its outputs can hold). An engine that knows the run's time without being timed
         (kinematic) is estimated once; one that must build its model first (physics) twice:
         its memory before the plan is sampled, then its duration and time.
+    sensors : bool, default True
+        Read the robot's IMUs and lidars into the run's ``sensing`` (False: the run reads none,
+        saving their time and memory when nothing uses them; the motion and the other errors
+        are the same either way).
 
     Returns
     -------
@@ -209,10 +215,14 @@ def simulate(
     engine = as_engine(engine, noise=noise, step=step)
     noise_model = engine.noise_model(noise)
     nominal = robot_of(robot)
+    if not sensors:
+        nominal = dataclasses.replace(nominal, sensors=())
     plan = path if isinstance(path, Plan) else parse_plan(str(path))
     size = engine.cost(plan, nominal, nominal, rate=rate, timed=False)  # the plan's samples and memory
     seeds = streams(seed, RUN_STREAMS)
     true, injected = as_built(nominal, true_robot, errors, seeds["robot"])
+    if not sensors:
+        true = dataclasses.replace(true, sensors=())
 
     def within(**estimate) -> None:  # memory, seconds and what to change: refused beyond the limits
         samples = f"{size.samples:.3g} samples"
@@ -226,11 +236,13 @@ def simulate(
     # the memory alone first, then of the duration and time once timed
     untimed = math.isnan(size.seconds)
     told(SimulationCost(size.samples, size.bytes, None, None) if untimed else _cost_of(size, size))
-    within(memory=size.bytes, hint="lower rate or shorten path")  # before any of the run is made
+    sensing = "the sensors' rates or beams, " if any(s.type in ("imu", "lidar") for s in nominal.sensors) else ""
+    within(memory=size.bytes, hint=f"lower rate, {sensing}or shorten path")  # before any of the run is made
     estimate = engine.cost(plan, true, nominal, rate=rate, budget=max_time)
     if untimed:
         told(_cost_of(size, estimate))
     cheaper = "shorten path or raise step" if engine.measured_cost else "lower rate or shorten path"
+    cheaper = f"lower {sensing}{cheaper}" if sensing else cheaper
     within(seconds=estimate.seconds, hint=cheaper)
     # the run's stream draws its random errors, for an engine with a model of them; the sensors'
     # stream their errors: none under a noise model without random errors (--noise none), those

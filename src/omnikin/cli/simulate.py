@@ -206,6 +206,7 @@ def run(args) -> int:
             max_time=budget.seconds,
             progress=progress,
             on_cost=lambda cost: _within_budget(args, engine, cost),
+            sensors=args.imu_log is not None or args.scan_log is not None or args.bag is not None,
         )
     run = simulation.run
     custom = {

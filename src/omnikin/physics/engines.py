@@ -27,6 +27,7 @@ from ..kinematics.robot import Robot
 from ..motion.limits import MotionLimits
 from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range
+from ..sensors.readings import sensor_cost
 from ..simulation.engine import Engine, KinematicEngine, Progress, SimulatedBackend, contact_problems
 from ..simulation.error_models import NoiseModel
 from ..simulation.kinematic import RunCost, SimulatedRun, run_cost
@@ -282,12 +283,17 @@ class PhysicsEngine(Engine):
 
         plan_cost = run_cost(plan, command_robot, rate)
         per_sample = plan_cost.bytes / max(plan_cost.samples, 1.0)
+        shapes = 0 if self.world is None else len(self.world.bodies)
         if not timed:
-            return RunCost(plan_cost.samples, plan_cost.bytes + per_sample * TAIL_MAX * rate, math.nan)
+            sensed, _ = sensor_cost(true_robot, plan_cost.simulated + TAIL_MAX, shapes)
+            return RunCost(plan_cost.samples, plan_cost.bytes + per_sample * TAIL_MAX * rate + sensed, math.nan)
         sampled = sample_plan(plan, command_robot, rate)
         estimate = physics_run_cost(sampled, true_robot, command_robot, self.step, budget=budget)
         samples = estimate.simulated * rate
-        return RunCost(samples, per_sample * samples, estimate.seconds, estimate.simulated)
+        sensed_bytes, sensed_seconds = sensor_cost(true_robot, estimate.simulated, shapes)
+        return RunCost(
+            samples, per_sample * samples + sensed_bytes, estimate.seconds + sensed_seconds, estimate.simulated
+        )
 
     def problems(self, run: SimulatedRun) -> list[str]:
         from .run import PhysicsRun

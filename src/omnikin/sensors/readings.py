@@ -63,6 +63,49 @@ class Readings:
         return not self.imus and not self.scans
 
 
+IMU_SAMPLE_BYTES = 400.0
+"""Memory [bytes] one IMU sample takes at a run's peak (measured: 143 in the kinematic engine;
+the physics engine keeps the 13 floats of its interpolated chassis state besides)."""
+IMU_SAMPLE_SECONDS = 2e-5
+"""Computing time [s] of one IMU sample (measured: 0.55 us kinematic; the physics engine's chassis
+states around it and its interpolation, about 20 us with Python's overhead)."""
+RANGE_BYTES = 32.0
+"""Memory [bytes] of one lidar range at a run's peak (measured 21: the true and the measured one)."""
+RANGE_SECONDS = 1e-6
+"""Computing time [s] of one lidar beam besides the bodies it is tested against (the physics
+engine's ray casting about 0.6 us a beam)."""
+RANGE_SHAPE_SECONDS = 3e-7
+"""Computing time [s] of one beam against one body of the world (measured 0.24 us)."""
+MAX_IMU_SAMPLES = 5_000_000
+"""Most IMU samples of one run, all IMUs together (2 GB at :data:`IMU_SAMPLE_BYTES`): a run that
+would hold more is refused before it starts (:func:`require_scan_room`)."""
+
+
+def sensor_cost(robot: Robot, duration: float, shapes: int = 0) -> tuple[float, float]:
+    """What reading ``robot``'s IMUs and lidars takes, from the measured costs per sample
+    (:data:`IMU_SAMPLE_BYTES` and friends), for a run's estimate (``--max-memory``,
+    ``--max-time``).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot as built, whose IMUs and lidars are read.
+    duration : float
+        Simulated time [s] of the run.
+    shapes : int
+        Bodies of the world (rectangles and circles) each beam is tested against.
+
+    Returns
+    -------
+    tuple of float
+        ``(bytes, seconds)``: memory at the run's peak and computing time.
+    """
+    imu = sum(math.floor(duration * s.rate + 1e-9) for s in robot.sensors if isinstance(s, Imu))
+    ranges = scan_values(robot, duration)
+    seconds = imu * IMU_SAMPLE_SECONDS + ranges * (RANGE_SECONDS + RANGE_SHAPE_SECONDS * max(0, int(shapes)))
+    return imu * IMU_SAMPLE_BYTES + ranges * RANGE_BYTES, seconds
+
+
 def scan_times(t: np.ndarray, rate: float) -> np.ndarray:
     """A lidar's scan times over the run's ``t`` [s]: ``t[0] + k / rate``, k = 0, 1, ... up to ``t[-1]``."""
     count = int(math.floor((float(t[-1]) - float(t[0])) * rate + 1e-9)) + 1
@@ -76,12 +119,18 @@ def scan_values(robot: Robot, duration: float) -> float:
 
 def require_scan_room(robot: Robot, duration: float) -> None:
     """Refuse, in one line, a run of ``duration`` [s] whose lidar scans would hold more than
-    :data:`MAX_SCAN_VALUES` ranges."""
+    :data:`MAX_SCAN_VALUES` ranges, or whose IMUs more than :data:`MAX_IMU_SAMPLES` samples."""
     values = scan_values(robot, duration)
     if values > MAX_SCAN_VALUES:
         raise InputError(
             f"robot {robot.name!r}: its lidars would return {values:.3g} ranges over the {duration:.4g} s run, "
             f"more than the {MAX_SCAN_VALUES:.3g} a run keeps; shorten the path or lower the lidars' rate or beams"
+        )
+    samples = sum(math.floor(duration * s.rate + 1e-9) for s in robot.sensors if isinstance(s, Imu))
+    if samples > MAX_IMU_SAMPLES:
+        raise InputError(
+            f"robot {robot.name!r}: its IMUs would read {samples:.3g} samples over the {duration:.4g} s run, "
+            f"more than the {MAX_IMU_SAMPLES:.3g} a run keeps; shorten the path or lower the IMUs' rate"
         )
 
 

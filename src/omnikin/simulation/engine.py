@@ -28,6 +28,7 @@ that store the name call it.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol, runtime_checkable
@@ -40,6 +41,7 @@ from ..motion.limits import MotionLimits
 from ..motion.plans import Plan
 from ..motion.timing import SampledPlan, check_rate_range
 from ..runtime.backends import WheelBackend
+from ..sensors.readings import sensor_cost
 from ..world.collision import Collider, Contact, Footprint
 from ..world.model import World
 from . import kinematic
@@ -595,7 +597,11 @@ class KinematicEngine(Engine):
         budget: float | None = None,
         timed: bool = True,
     ) -> RunCost:
-        return kinematic.run_cost(plan, command_robot, rate)
+        cost = kinematic.run_cost(plan, command_robot, rate)
+        collider = self.collider(true_robot) if self.world is not None else None
+        shapes = 0 if collider is None else len(collider.shapes.rects) + len(collider.shapes.circles)
+        extra_bytes, extra_seconds = sensor_cost(true_robot, cost.simulated, shapes)
+        return dataclasses.replace(cost, bytes=cost.bytes + extra_bytes, seconds=cost.seconds + extra_seconds)
 
     def problems(self, run: SimulatedRun) -> list[str]:
         return contact_problems(run)
