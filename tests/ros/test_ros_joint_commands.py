@@ -47,7 +47,10 @@ def test_wheel_speeds_on_joint_commands_drive_the_robot_and_bad_ones_are_counted
 
         m0 = g.wait_still()
         before = g.next_diag()[2]
-        send(["w1", "w2"], speeds[:2])  # w3 missing: ignored, counted
+        # w3 missing: ignored and counted; sent until the node counts one (it hears this publisher)
+        assert wait_for(
+            lambda: send(["w1", "w2"], speeds[:2]) and int(g.last_diag()[2]["joint_commands_rejected"]) > 0, 10.0
+        )
         first = last = send(["w3", "w1", "w2"], [speeds[2], speeds[0], speeds[1]])
         while time.monotonic() - first < 1.0:
             time.sleep(0.05)
@@ -59,7 +62,7 @@ def test_wheel_speeds_on_joint_commands_drive_the_robot_and_bad_ones_are_counted
         assert dx == pytest.approx(V * (last - first + TIMEOUT), abs=0.02), (dx, last - first)
         assert abs(dy) < 1e-3
         after = g.next_diag()[2]
-        assert int(after["joint_commands_rejected"]) == int(before["joint_commands_rejected"]) + 1
+        assert int(after["joint_commands_rejected"]) > int(before["joint_commands_rejected"])
         assert "no velocity for the wheel joint(s) w3" in proc.stderr()
         assert "Traceback" not in proc.stderr()
     finally:
