@@ -95,6 +95,16 @@ def quat_rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     return v + w * t + np.cross(u, t)
 
 
+def interpolate(a: np.ndarray, b: np.ndarray, fraction: np.ndarray) -> np.ndarray:
+    """Chassis states ``(n, 13)`` a ``fraction`` ``(n,)`` of the way from ``a`` to ``b`` (module
+    docstring): the quaternion along the rotation from one to the other, the rest linearly."""
+    f = fraction[:, None]
+    out = a + f * (b - a)
+    turn = quat_log(quat_mul(quat_conj(a[:, :4]), b[:, :4]))
+    out[:, :4] = quat_mul(a[:, :4], quat_exp(f * turn))
+    return out
+
+
 class PhysicsSensors:
     """The IMUs and lidars of ``robot`` in a MuJoCo model (module docstring). ``mujoco`` the
     module, ``model`` and ``data`` the simulation, ``free``/``free_dof`` the addresses of the
@@ -189,11 +199,8 @@ class PhysicsSensors:
             return
         a = np.array([p[0] for p in pending])
         b = np.array([p[1] for p in pending])
-        fraction = np.array([p[2] for p in pending])[:, None]
-        out = a + fraction * (b - a)
-        turn = quat_log(quat_mul(quat_conj(a[:, :4]), b[:, :4]))
-        out[:, :4] = quat_mul(a[:, :4], quat_exp(fraction * turn))
-        self._samples[i].extend(out)
+        fraction = np.array([p[2] for p in pending])
+        self._samples[i].extend(interpolate(a, b, fraction))
         pending.clear()
 
     def _state_at(self, k: int, fraction: float) -> np.ndarray:
@@ -201,11 +208,7 @@ class PhysicsSensors:
         a = self._states[k]
         if fraction == 0.0:
             return a
-        b = self._states[k + 1]
-        out = a + fraction * (b - a)
-        turn = quat_log(quat_mul(quat_conj(a[:4]), b[:4]))
-        out[:4] = quat_mul(a[:4], quat_exp(fraction * turn))
-        return out
+        return interpolate(a[None], self._states[k + 1][None], np.array([fraction]))[0]
 
     def _cast(self, i: int, state: np.ndarray) -> np.ndarray:
         """The true ranges ``(beams,)`` [m] of lidar ``i`` at the chassis ``state``."""
